@@ -1,0 +1,20 @@
+// Registration of the command groups of the `lensim` tool. Each group lives in its own file and
+// adds its subcommands to the application; the callback a subcommand sets runs after parsing and
+// returns the process exit status.
+#pragma once
+
+#include <functional>
+
+namespace CLI {
+class App;
+}
+
+namespace lensim::cmd {
+
+/// What main runs once the command line has been parsed: returns the exit status.
+using Action = std::function<int()>;
+
+/// `lensim lens ...`: lens analysis (info, trace).
+void registerLensCommands(CLI::App& app, Action& action);
+
+}  // namespace lensim::cmd

@@ -1,0 +1,40 @@
+// lensim: a physically based renderer built around real camera lenses.
+// This file only parses the command line and reports errors; the work is in the library.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include "commands.h"
+#include "lensim/util/error.h"
+#include "lensim/util/log.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"lensim: a physically based renderer built around real camera lenses"};
+  app.set_version_flag("--version", std::string("lensim ") + LENSIM_VERSION);
+  app.require_subcommand(1);
+  bool quiet = false;
+  app.add_flag("-q,--quiet", quiet, "Print no progress or information (warnings still appear)");
+
+  lensim::cmd::Action action;
+  lensim::cmd::registerLensCommands(app, action);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version exit 0; usage errors exit 1 as every other error does.
+    int status = app.exit(e);
+    return status == 0 ? 0 : 1;
+  }
+  lensim::setQuiet(quiet);
+
+  try {
+    return action ? action() : 1;
+  } catch (const lensim::Error& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lensim: error: %s\n", e.what());
+    return 1;
+  }
+}
