@@ -1,12 +1,252 @@
+// `lensim lens info|trace`: first-order data, focus and single exact rays from a prescription.
+#include <fmt/format.h>
+
 #include <CLI/CLI.hpp>
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
 
 #include "commands.h"
+#include "lens_options.h"
+#include "lensim/optics/chief_ray.h"
+#include "lensim/optics/focus.h"
+#include "lensim/optics/paraxial.h"
+#include "lensim/util/log.h"
 
 namespace lensim::cmd {
 
-void registerLensCommands(CLI::App& app, Action& /*action*/) {
-  CLI::App* lens = app.add_subcommand("lens", "Analyse a lens prescription");
+using namespace lensim::optics;
+using nlohmann::json;
+
+namespace {
+
+json vec3Json(const Vec3& v) {
+  return json::array({v.x, v.y, v.z});
+}
+
+json surfacesJson(const LensSystem& lens) {
+  json arr = json::array();
+  const auto& rows = lens.prescription().surfaces;
+  for (int i = 0; i < lens.surfaceCount(); ++i) {
+    const Interface& s = lens.interfaces()[i];
+    arr.push_back({{"index", i},
+                   {"line", rows[i].loc.line},
+                   {"radius_mm", s.radius_mm},
+                   {"thickness_mm",
+                    i + 1 < lens.surfaceCount() ? rows[i].thickness_mm : lens.filmDistance_mm()},
+                   {"ior", s.ior_after},
+                   {"aperture_diameter_mm", 2 * s.semi_aperture_mm},
+                   {"z_mm", s.z_mm},
+                   {"is_stop", s.is_stop}});
+  }
+  return arr;
+}
+
+json diagnosticsJson(const FocusedLens& fl) {
+  json arr = json::array();
+  for (const Diagnostic& d : fl.allDiagnostics()) arr.push_back(d.str());
+  return arr;
+}
+
+int runInfo(const LensArgs& args, bool as_json) {
+  FocusedLens fl = setUpLens(args);
+  const LensSystem& lens = *fl.lens;
+  const ParaxialData& p = fl.paraxial;
+  logDiagnostics(fl.allDiagnostics());
+
+  const bool at_inf = std::isinf(fl.focus_distance_m);
+  std::optional<double> object_z;
+  if (!at_inf) object_z = lens.filmZ_mm() - fl.focus_distance_m * 1000;
+  const double working_f = workingFNumber(lens, p, object_z);
+  const FieldOfView fov = fieldOfView(lens, p, args.film_diagonal_mm);
+  const double closest = closestFocusDistance_m(lens, p);
+  const auto& pr = lens.prescription();
+
+  if (as_json) {
+    json j;
+    j["lens"] = {{"path", pr.path},
+                 {"name", pr.name},
+                 {"layout", layoutName(pr.layout)},
+                 {"surface_count", lens.surfaceCount()}};
+    if (pr.nominal_focal_length_mm)
+      j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
+    j["effective_focal_length_mm"] = p.effective_focal_length_mm;
+    j["back_focal_length_mm"] = p.back_focal_length_mm;
+    j["front_focal_length_mm"] = p.front_focal_length_mm;
+    j["front_focal_point_z_mm"] = p.front_focal_point_z_mm;
+    j["back_focal_point_z_mm"] = p.back_focal_point_z_mm;
+    j["principal_plane_front_z_mm"] = p.principal_plane_front_z_mm;
+    j["principal_plane_back_z_mm"] = p.principal_plane_back_z_mm;
+    j["nodal_point_front_z_mm"] = p.nodal_point_front_z_mm;
+    j["nodal_point_back_z_mm"] = p.nodal_point_back_z_mm;
+    j["aperture_stop_surface"] = p.aperture_stop_surface;
+    j["aperture_stop_is_file_stop"] = p.stop_is_file_stop;
+    j["aperture_stop_diameter_mm"] = p.aperture_stop_diameter_mm;
+    j["axial_limit_surface"] = p.axial_limit_surface;
+    j["axial_limit_f_number"] = p.axial_limit_f_number;
+    j["entrance_pupil_diameter_mm"] = p.entrance_pupil_diameter_mm;
+    j["entrance_pupil_z_mm"] = p.entrance_pupil_z_mm;
+    j["exit_pupil_diameter_mm"] = p.exit_pupil_diameter_mm;
+    j["exit_pupil_z_mm"] = p.exit_pupil_z_mm;
+    j["f_number"] = p.f_number;
+    j["working_f_number"] = working_f;
+    j["lens_length_mm"] = lens.rearVertexZ_mm();
+    j["total_track_mm"] = lens.filmZ_mm();
+    j["film_distance_mm"] = lens.filmDistance_mm();
+    j["focus_distance_m"] = at_inf ? json(nullptr) : json(fl.focus_distance_m);
+    j["focus_at_infinity"] = at_inf;
+    j["focus_method"] = focusMethodName(args.focus_method);
+    j["closest_focus_distance_m"] = closest;
+    j["film_diagonal_mm"] = args.film_diagonal_mm;
+    j["field_of_view_deg"] = fov.real_deg ? json(*fov.real_deg) : json(nullptr);
+    j["paraxial_field_of_view_deg"] = fov.paraxial_deg;
+    if (fov.image_circle_diameter_mm) {
+      j["image_circle_diameter_mm"] = *fov.image_circle_diameter_mm;
+      j["field_of_view_max_deg"] = *fov.real_max_deg;
+    }
+    j["surfaces"] = surfacesJson(lens);
+    j["diagnostics"] = diagnosticsJson(fl);
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+
+  auto line = [](const std::string& k, const std::string& v) {
+    std::cout << fmt::format("  {:<26}{}\n", k, v);
+  };
+  std::cout << fmt::format("{}\n", pr.name);
+  line("file", fmt::format("{} ({} layout, {} surfaces)", pr.path, layoutName(pr.layout),
+                           lens.surfaceCount()));
+  if (pr.nominal_focal_length_mm)
+    line("stated focal length", fmt::format("{:.3f} mm", *pr.nominal_focal_length_mm));
+  line("effective focal length", fmt::format("{:.4f} mm", p.effective_focal_length_mm));
+  line("back focal length", fmt::format("{:.4f} mm (rear focal point z = {:.4f})",
+                                        p.back_focal_length_mm, p.back_focal_point_z_mm));
+  line("front focal length", fmt::format("{:.4f} mm (front focal point z = {:.4f})",
+                                         p.front_focal_length_mm, p.front_focal_point_z_mm));
+  line("principal planes z",
+       fmt::format("front {:.4f}, back {:.4f} mm", p.principal_plane_front_z_mm,
+                   p.principal_plane_back_z_mm));
+  line("nodal points z", fmt::format("front {:.4f}, back {:.4f} mm", p.nodal_point_front_z_mm,
+                                     p.nodal_point_back_z_mm));
+  line("aperture stop",
+       fmt::format(
+           "surface {} (line {}), diameter {:.3f} mm{}", p.aperture_stop_surface,
+           pr.surfaces[p.aperture_stop_surface].loc.line, p.aperture_stop_diameter_mm,
+           p.stop_is_file_stop ? "" : " (the file has no stop: this element limits the beam)"));
+  if (p.axial_limit_surface != p.aperture_stop_surface)
+    line("axial beam limit",
+         fmt::format("surface {} (line {}) clips the axial beam more than the stop: f/{:.3f}",
+                     p.axial_limit_surface, pr.surfaces[p.axial_limit_surface].loc.line,
+                     p.axial_limit_f_number));
+  line("entrance pupil", fmt::format("diameter {:.4f} mm at z = {:.4f} mm",
+                                     p.entrance_pupil_diameter_mm, p.entrance_pupil_z_mm));
+  line("exit pupil", fmt::format("diameter {:.4f} mm at z = {:.4f} mm", p.exit_pupil_diameter_mm,
+                                 p.exit_pupil_z_mm));
+  line("f-number",
+       fmt::format("f/{:.3f} (infinity), working f/{:.3f} at this focus", p.f_number, working_f));
+  line("focus", fmt::format("{} ({} method); closest {:.4f} m",
+                            at_inf ? std::string("infinity")
+                                   : fmt::format("{:.6g} m from the film", fl.focus_distance_m),
+                            focusMethodName(args.focus_method), closest));
+  line("film distance", fmt::format("{:.4f} mm behind the rear vertex", lens.filmDistance_mm()));
+  line("lens length / total track",
+       fmt::format("{:.4f} mm / {:.4f} mm", lens.rearVertexZ_mm(), lens.filmZ_mm()));
+  if (fov.real_deg)
+    line("field of view", fmt::format("{:.3f} deg on a {:.2f} mm diagonal (paraxial {:.3f} deg)",
+                                      *fov.real_deg, args.film_diagonal_mm, fov.paraxial_deg));
+  else
+    line("field of view",
+         fmt::format("image circle {:.3f} mm is smaller than the {:.2f} mm diagonal; {:.3f} deg "
+                     "across it (paraxial {:.3f} deg)",
+                     *fov.image_circle_diameter_mm, args.film_diagonal_mm, *fov.real_max_deg,
+                     fov.paraxial_deg));
+  std::cout << fmt::format("\n  {:>3} {:>5} {:>12} {:>11} {:>8} {:>10} {:>11}\n", "#", "line",
+                           "radius", "thickness", "index", "aperture", "z");
+  for (int i = 0; i < lens.surfaceCount(); ++i) {
+    const Interface& s = lens.interfaces()[i];
+    const double t =
+        i + 1 < lens.surfaceCount() ? pr.surfaces[i].thickness_mm : lens.filmDistance_mm();
+    std::cout << fmt::format("  {:>3} {:>5} {:>12} {:>11.4f} {:>8.4f} {:>10.4f} {:>11.4f}\n", i,
+                             pr.surfaces[i].loc.line,
+                             s.is_stop ? std::string("stop") : fmt::format("{:.4f}", s.radius_mm),
+                             t, s.ior_after, 2 * s.semi_aperture_mm, s.z_mm);
+  }
+  return 0;
+}
+
+int runTrace(const LensArgs& args, const std::string& film_s, const std::string& rear_s,
+             bool as_json) {
+  FocusedLens fl = setUpLens(args);
+  logDiagnostics(fl.allDiagnostics());
+  const Vec2 film = parsePair(film_s, "--film");
+  const Vec2 rear = parsePair(rear_s, "--rear");
+  std::vector<Vec3> path;
+  TraceResult r = fl.lens->traceFromFilmPoint(film, rear, {}, &path);
+  if (as_json) {
+    json j{{"film_mm", {film.x, film.y}},
+           {"rear_mm", {rear.x, rear.y}},
+           {"film_distance_mm", fl.lens->filmDistance_mm()}};
+    if (r.ok()) {
+      j["origin_mm"] = vec3Json(r.ray.origin);
+      j["direction"] = vec3Json(r.ray.direction);
+    } else {
+      j["blocked_at_surface"] = r.blocked_surface;
+      j["reason"] = blockReasonName(r.reason);
+    }
+    json pts = json::array();
+    for (const Vec3& v : path) pts.push_back(vec3Json(v));
+    j["path_mm"] = pts;
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+  if (r.ok()) {
+    std::cout << fmt::format("leaves the front surface at ({:.9f}, {:.9f}, {:.9f}) mm\n",
+                             r.ray.origin.x, r.ray.origin.y, r.ray.origin.z);
+    std::cout << fmt::format("direction ({:.12f}, {:.12f}, {:.12f})\n", r.ray.direction.x,
+                             r.ray.direction.y, r.ray.direction.z);
+  } else {
+    const auto& row = fl.lens->prescription().surfaces[r.blocked_surface];
+    std::cout << fmt::format("blocked at surface {} ({}): {}\n", r.blocked_surface, row.loc.str(),
+                             blockReasonName(r.reason));
+  }
+  return 0;
+}
+
+}  // namespace
+
+void registerLensCommands(CLI::App& app, Action& action) {
+  CLI::App* lens = app.add_subcommand("lens", "Analyse a lens prescription (.dat)");
   lens->require_subcommand(1);
+
+  {
+    auto* info = lens->add_subcommand("info", "First-order data, pupils, focus and field of view");
+    auto args = std::make_shared<LensArgs>();
+    auto as_json = std::make_shared<bool>(false);
+    addLensOptions(info, *args);
+    info->add_flag("--json", *as_json, "Print one JSON object");
+    info->callback([&action, args, as_json] {
+      action = [args, as_json] { return runInfo(*args, *as_json); };
+    });
+  }
+  {
+    auto* trace = lens->add_subcommand(
+        "trace", "Trace one exact ray from a film point toward a point on the rear-vertex plane");
+    auto args = std::make_shared<LensArgs>();
+    auto film = std::make_shared<std::string>();
+    auto rear = std::make_shared<std::string>();
+    auto as_json = std::make_shared<bool>(false);
+    addLensOptions(trace, *args);
+    trace->add_option("--film", *film, "Film point X,Y (mm)")->required();
+    trace->add_option("--rear", *rear, "Aim point X,Y on the plane of the rear vertex (mm)")
+        ->required();
+    trace->add_flag("--json", *as_json, "Print one JSON object");
+    trace->callback([&action, args, film, rear, as_json] {
+      action = [args, film, rear, as_json] { return runTrace(*args, *film, *rear, *as_json); };
+    });
+  }
 }
 
 }  // namespace lensim::cmd

@@ -23,7 +23,9 @@ void logWarning(std::string_view message) {
   writeLine(std::string("warning: ") + std::string(message));
 }
 
-void logDiagnostic(const Diagnostic& d) { writeLine(d.str()); }
+void logDiagnostic(const Diagnostic& d) {
+  writeLine(d.str());
+}
 
 void logDiagnostics(const std::vector<Diagnostic>& ds) {
   for (const Diagnostic& d : ds) logDiagnostic(d);
@@ -33,7 +35,11 @@ void logInfo(std::string_view message) {
   if (!g_quiet) writeLine(message);
 }
 
-void setQuiet(bool q) { g_quiet = q; }
-bool quiet() { return g_quiet; }
+void setQuiet(bool q) {
+  g_quiet = q;
+}
+bool quiet() {
+  return g_quiet;
+}
 
 }  // namespace lensim

@@ -1,0 +1,38 @@
+// Command-line options shared by the `lensim lens ...` commands.
+#pragma once
+
+#include <string>
+
+#include "lensim/optics/focus.h"
+#include "lensim/util/vec.h"
+
+namespace CLI {
+class App;
+}
+
+namespace lensim::cmd {
+
+/// The lens and how to set it up, as given on the command line.
+struct LensArgs {
+  std::string lens_path;
+  std::optional<double> aperture_diameter_mm;
+  std::string focus_distance;  ///< metres or "inf"; empty when not given
+  std::optional<double> film_distance_mm;
+  double film_diagonal_mm = 35.0;  ///< pbrt-v4's default film diagonal
+  optics::FocusMethod focus_method = optics::FocusMethod::Thick;
+};
+
+/// Adds LENS and --aperture-diameter, --focus-distance, --film-distance, --film-diagonal,
+/// --focus-method to a subcommand.
+void addLensOptions(CLI::App* cmd, LensArgs& args);
+
+/// Reads the lens file and focuses it as the arguments say.
+optics::FocusedLens setUpLens(const LensArgs& args);
+
+/// Parses "X,Y" (two numbers); throws lensim::Error naming the option otherwise.
+Vec2 parsePair(const std::string& text, const std::string& option);
+
+/// Parses a distance in metres, accepting "inf"/"infinity".
+double parseDistance_m(const std::string& text, const std::string& option);
+
+}  // namespace lensim::cmd

@@ -1,0 +1,160 @@
+#include "lensim/optics/chief_ray.h"
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+
+namespace lensim::optics {
+
+namespace {
+
+constexpr double kDeg = 180.0 / std::numbers::pi;
+
+// Finds the aim height a for which stop_x(a) = 0, scanning a bracket and bisecting. stop_x
+// returns nullopt where the ray cannot be traced.
+std::optional<double> solveAim(const std::function<std::optional<double>(double)>& stop_x,
+                               double range) {
+  constexpr int kScan = 64;
+  std::optional<double> best;
+  double prev_a = 0;
+  std::optional<double> prev_f;
+  for (int k = 0; k <= kScan; ++k) {
+    const double a = -range + 2 * range * k / kScan;
+    std::optional<double> f = stop_x(a);
+    if (f && *f == 0) return a;
+    if (f && prev_f && (*f > 0) != (*prev_f > 0)) {
+      // Bisect this bracket; keep the root nearest to the axis.
+      double lo = prev_a, hi = a, flo = *prev_f;
+      for (int it = 0; it < 100 && hi - lo > 1e-13 * range; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        std::optional<double> fm = stop_x(mid);
+        if (!fm) break;
+        if ((*fm > 0) == (flo > 0)) {
+          lo = mid;
+          flo = *fm;
+        } else {
+          hi = mid;
+        }
+      }
+      const double root = 0.5 * (lo + hi);
+      if (!best || std::abs(root) < std::abs(*best)) best = root;
+    }
+    prev_a = a;
+    prev_f = f;
+  }
+  return best;
+}
+
+double largestSemiAperture(const LensSystem& lens) {
+  double m = 0;
+  for (const Interface& s : lens.interfaces()) m = std::max(m, s.semi_aperture_mm);
+  return m;
+}
+
+}  // namespace
+
+std::optional<ChiefRay> chiefRayFromFilm(const LensSystem& lens, const ParaxialData& p,
+                                         double film_height_mm) {
+  const int n = lens.surfaceCount();
+  const int st = p.aperture_stop_surface;
+  const TraceOptions noclip{false};
+  auto trace = [&](double a, std::vector<Vec3>* path) {
+    return lens.traceFromFilmPoint({film_height_mm, 0}, {a, 0}, noclip, path);
+  };
+  auto stop_x = [&](double a) -> std::optional<double> {
+    std::vector<Vec3> path;
+    TraceResult r = trace(a, &path);
+    if (static_cast<int>(path.size()) <= n - st) return std::nullopt;
+    if (!r.ok() && r.blocked_surface >= st) return std::nullopt;  // lost before the stop
+    return path[n - st].x;
+  };
+  std::optional<double> a = solveAim(stop_x, 3 * largestSemiAperture(lens));
+  if (!a) return std::nullopt;
+  std::vector<Vec3> path;
+  TraceResult r = trace(*a, &path);
+  if (!r.ok()) return std::nullopt;
+  ChiefRay c;
+  c.scene_ray = r.ray;
+  c.film_ray = Ray{path[0], normalize(path[1] - path[0])};
+  c.field_angle_deg = std::acos(std::min(1.0, std::abs(r.ray.direction.z))) * kDeg;
+  c.film_height_mm = film_height_mm;
+  return c;
+}
+
+std::optional<ChiefRay> chiefRayFromScene(const LensSystem& lens, const ParaxialData& p,
+                                          double field_angle_deg) {
+  const int st = p.aperture_stop_surface;
+  const double th = field_angle_deg / kDeg;
+  const Vec3 dir{std::sin(th), 0, std::cos(th)};
+  const double z_start =
+      std::min(p.entrance_pupil_z_mm, 0.0) - 10 * (largestSemiAperture(lens) + 1);
+  const TraceOptions noclip{false};
+  auto make = [&](double a) {
+    const Vec3 at{a, 0, p.entrance_pupil_z_mm};
+    return Ray{at + dir * ((z_start - at.z) / dir.z), dir};
+  };
+  auto stop_x = [&](double a) -> std::optional<double> {
+    std::vector<Vec3> path;
+    TraceResult r = lens.tracer().traceFromScene(make(a), noclip, &path);
+    if (static_cast<int>(path.size()) <= 1 + st) return std::nullopt;
+    if (!r.ok() && r.blocked_surface <= st) return std::nullopt;
+    return path[1 + st].x;
+  };
+  const double range =
+      3 * largestSemiAperture(lens) + std::abs(std::tan(th)) * std::abs(p.entrance_pupil_z_mm);
+  std::optional<double> a = solveAim(stop_x, range);
+  if (!a) return std::nullopt;
+  Ray in = make(*a);
+  TraceResult r = lens.tracer().traceFromScene(in, noclip);
+  if (!r.ok() || !(r.ray.direction.z > 0)) return std::nullopt;
+  ChiefRay c;
+  c.scene_ray = in;
+  c.film_ray = r.ray;
+  c.field_angle_deg = field_angle_deg;
+  const double t = (lens.filmZ_mm() - r.ray.origin.z) / r.ray.direction.z;
+  c.film_height_mm = r.ray.origin.x + t * r.ray.direction.x;
+  return c;
+}
+
+bool filmPointSeesScene(const LensSystem& lens, double film_height_mm) {
+  const double r = 1.5 * lens.interfaces().back().semi_aperture_mm;
+  constexpr int kGrid = 41;
+  for (int iy = 0; iy < kGrid; ++iy) {
+    for (int ix = 0; ix < kGrid; ++ix) {
+      const Vec2 aim{r * (2.0 * ix / (kGrid - 1) - 1), r * (2.0 * iy / (kGrid - 1) - 1)};
+      if (aim.x * aim.x + aim.y * aim.y > r * r) continue;
+      if (lens.traceFromFilmPoint({film_height_mm, 0}, aim).ok()) return true;
+    }
+  }
+  return false;
+}
+
+FieldOfView fieldOfView(const LensSystem& lens, const ParaxialData& p, double film_diagonal_mm) {
+  FieldOfView fov;
+  const double h = film_diagonal_mm / 2;
+  fov.paraxial_deg = 2 * std::atan(h / std::abs(p.effective_focal_length_mm)) * kDeg;
+  auto covered = [&](double hh) -> std::optional<ChiefRay> {
+    if (!filmPointSeesScene(lens, hh)) return std::nullopt;
+    return chiefRayFromFilm(lens, p, hh);
+  };
+  if (auto c = covered(h)) {
+    fov.real_deg = 2 * c->field_angle_deg;
+    return fov;
+  }
+  // The corner is outside the image circle: find the largest film radius that sees the scene.
+  double lo = 0, hi = h, lo_angle = 0;
+  for (int it = 0; it < 30; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (auto c = covered(mid)) {
+      lo = mid;
+      lo_angle = c->field_angle_deg;
+    } else {
+      hi = mid;
+    }
+  }
+  fov.image_circle_diameter_mm = 2 * lo;
+  fov.real_max_deg = 2 * lo_angle;
+  return fov;
+}
+
+}  // namespace lensim::optics

@@ -1,0 +1,216 @@
+#include "lensim/optics/lens_system.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace lensim::optics {
+
+const char* blockReasonName(BlockReason r) {
+  switch (r) {
+    case BlockReason::None:
+      return "none";
+    case BlockReason::Aperture:
+      return "aperture";
+    case BlockReason::Miss:
+      return "miss";
+    case BlockReason::TotalInternalReflection:
+      return "tir";
+  }
+  return "none";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Exact tracer
+
+template <typename T>
+LensTracer<T>::LensTracer(const std::vector<Interface>& interfaces) {
+  for (const Interface& s : interfaces) {
+    radius_.push_back(T(s.radius_mm));
+    z_.push_back(T(s.z_mm));
+    semi2_.push_back(T(s.semi_aperture_mm * s.semi_aperture_mm));
+    eta_before_.push_back(T(s.ior_before));
+    eta_after_.push_back(T(s.ior_after));
+    is_stop_.push_back(s.is_stop ? 1 : 0);
+  }
+}
+
+namespace {
+
+// Refracts unit direction d at a surface with unit normal n (either orientation), going from
+// index eta_i to eta_t. Returns false on total internal reflection.
+template <typename T>
+bool refract(Vec3T<T>& d, Vec3T<T> n, T eta_i, T eta_t) {
+  if (eta_i == eta_t) return true;
+  T cos_i = -dot(n, d);
+  if (cos_i < 0) {  // make the normal face the incoming ray
+    n = -n;
+    cos_i = -cos_i;
+  }
+  T eta = eta_i / eta_t;
+  T sin2_t = eta * eta * std::max(T(0), T(1) - cos_i * cos_i);
+  if (sin2_t >= T(1)) return false;
+  T cos_t = std::sqrt(T(1) - sin2_t);
+  d = normalize(d * eta + n * (eta * cos_i - cos_t));
+  return true;
+}
+
+}  // namespace
+
+template <typename T>
+template <bool kFromFilm>
+TraceResultT<T> LensTracer<T>::trace(const RayT<T>& in, const TraceOptions& opts,
+                                     std::vector<Vec3T<T>>* path) const {
+  TraceResultT<T> res;
+  Vec3T<T> o = in.origin;
+  Vec3T<T> d = in.direction;
+  if (path) path->push_back(o);
+  const int n = size();
+  // A ray may start on the previous surface; accept roots a hair behind the origin so that
+  // surfaces touching at the rim do not lose rays to rounding.
+  const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
+  for (int k = 0; k < n; ++k) {
+    const int i = kFromFilm ? n - 1 - k : k;
+    const T R = radius_[i];
+    const Vec3T<T> rel{o.x, o.y, o.z - z_[i]};  // origin relative to the vertex
+    T t;
+    Vec3T<T> normal;
+    if (R == T(0)) {
+      // Plane at the vertex (the aperture stop).
+      if (d.z == T(0)) return {RayT<T>{o, d}, i, BlockReason::Miss};
+      t = -rel.z / d.z;
+      if (!(t >= t_min)) return {RayT<T>{o, d}, i, BlockReason::Miss};
+      normal = {T(0), T(0), T(-1)};
+    } else {
+      // Sphere through the vertex with centre at (0, 0, R) relative to it:
+      //   |rel + t d|^2 - 2 R (rel.z + t d.z) = 0,  i.e.  t^2 + 2 b t + c = 0 (|d| = 1) with
+      //   b = rel.d - R d.z,  c = |rel|^2 - 2 R rel.z.
+      // Stable roots: q = -(b + sign(b) sqrt(b^2 - c)); t = q and t = c / q.
+      const T b = dot(rel, d) - R * d.z;
+      const T c = dot(rel, rel) - T(2) * R * rel.z;
+      const T disc = b * b - c;
+      if (disc < T(0)) return {RayT<T>{o, d}, i, BlockReason::Miss};
+      const T q = -(b + std::copysign(std::sqrt(disc), b));
+      const T t0 = q;
+      const T t1 = q != T(0) ? c / q : T(0);
+      // Keep the root on the vertex-side hemisphere: (z - R) / R < 0 relative to the vertex.
+      auto onCap = [&](T tt) {
+        const T pz = rel.z + tt * d.z;
+        return tt >= t_min && (pz - R) * R < T(0);
+      };
+      const bool ok0 = onCap(t0), ok1 = onCap(t1);
+      if (!ok0 && !ok1) return {RayT<T>{o, d}, i, BlockReason::Miss};
+      t = ok0 && ok1 ? std::min(t0, t1) : (ok0 ? t0 : t1);
+      const Vec3T<T> p = rel + d * t;
+      normal = Vec3T<T>{p.x / R, p.y / R, (p.z - R) / R};  // unit; points toward -z on the cap
+    }
+    const Vec3T<T> p = o + d * t;
+    if (path) path->push_back(p);
+    if (opts.clip_apertures && p.x * p.x + p.y * p.y > semi2_[i])
+      return {RayT<T>{p, d}, i, BlockReason::Aperture};
+    const T eta_i = kFromFilm ? eta_after_[i] : eta_before_[i];
+    const T eta_t = kFromFilm ? eta_before_[i] : eta_after_[i];
+    if (!refract(d, normal, eta_i, eta_t))
+      return {RayT<T>{p, d}, i, BlockReason::TotalInternalReflection};
+    o = p;
+  }
+  res.ray = {o, d};
+  return res;
+}
+
+template <typename T>
+TraceResultT<T> LensTracer<T>::traceFromFilm(const RayT<T>& ray, const TraceOptions& opts,
+                                             std::vector<Vec3T<T>>* path) const {
+  return trace<true>(ray, opts, path);
+}
+
+template <typename T>
+TraceResultT<T> LensTracer<T>::traceFromScene(const RayT<T>& ray, const TraceOptions& opts,
+                                              std::vector<Vec3T<T>>* path) const {
+  return trace<false>(ray, opts, path);
+}
+
+template class LensTracer<double>;
+template class LensTracer<float>;
+
+// ---------------------------------------------------------------------------------------------
+// LensSystem
+
+LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& opts)
+    : prescription_(std::move(prescription)) {
+  const auto& surfaces = prescription_.surfaces;
+  if (surfaces.empty()) throw Error(FileLoc{prescription_.path}, "lens has no surfaces");
+  double z = 0;
+  double ior_before = 1.0;
+  for (size_t i = 0; i < surfaces.size(); ++i) {
+    const LensSurface& s = surfaces[i];
+    Interface in;
+    in.radius_mm = s.radius_mm;
+    in.z_mm = z;
+    in.semi_aperture_mm = s.semiAperture_mm();
+    in.ior_before = ior_before;
+    in.ior_after = s.ior;
+    in.is_stop = s.isStop();
+    interfaces_.push_back(in);
+    if (in.is_stop) {
+      stop_index_ = static_cast<int>(i);
+      max_stop_diameter_mm_ = s.aperture_diameter_mm;
+    }
+    ior_before = s.ior;
+    if (i + 1 < surfaces.size()) z += s.thickness_mm;
+  }
+
+  if (opts.aperture_diameter_mm) {
+    double d = *opts.aperture_diameter_mm;
+    if (!(d > 0) || !std::isfinite(d))
+      throw Error(fmt::format("aperture diameter {} mm must be > 0", d));
+    if (!stop_index_) {
+      diagnostics_.push_back({Severity::Warning, FileLoc{prescription_.path},
+                              fmt::format("the lens has no aperture stop (radius 0 row); the "
+                                          "aperture diameter {} mm is ignored",
+                                          d)});
+    } else if (d > *max_stop_diameter_mm_) {
+      diagnostics_.push_back(
+          {Severity::Warning, surfaces[*stop_index_].loc,
+           fmt::format("aperture diameter {} mm is larger than the stop allows; clamped to {} mm",
+                       d, *max_stop_diameter_mm_)});
+    } else {
+      interfaces_[*stop_index_].semi_aperture_mm = d / 2;
+    }
+  }
+  film_distance_mm_ =
+      opts.film_distance_mm ? *opts.film_distance_mm : prescription_.fileFilmDistance_mm();
+  if (opts.film_distance_mm && !(*opts.film_distance_mm > 0))
+    throw Error(fmt::format("film distance {} mm must be > 0", *opts.film_distance_mm));
+  rebuildTracers();
+}
+
+std::optional<double> LensSystem::stopDiameter_mm() const {
+  if (!stop_index_) return std::nullopt;
+  return 2 * interfaces_[*stop_index_].semi_aperture_mm;
+}
+
+void LensSystem::setFilmDistance_mm(double d) {
+  if (!(d > 0) || !std::isfinite(d))
+    throw Error(fmt::format("film distance {} mm must be a finite distance > 0", d));
+  film_distance_mm_ = d;
+}
+
+void LensSystem::rebuildTracers() {
+  tracer_d_ = LensTracer<double>(interfaces_);
+  tracer_f_ = LensTracer<float>(interfaces_);
+}
+
+TraceResult LensSystem::traceFromFilmPoint(Vec2 film_mm, Vec2 rear_plane_mm,
+                                           const TraceOptions& opts,
+                                           std::vector<Vec3>* path) const {
+  Vec3 from{film_mm.x, film_mm.y, filmZ_mm()};
+  Vec3 to{rear_plane_mm.x, rear_plane_mm.y, rearVertexZ_mm()};
+  Vec3 dir = to - from;
+  if (!(dir.z < 0))
+    throw Error(fmt::format("film distance {} mm: the film must lie behind the rear vertex",
+                            film_distance_mm_));
+  return tracer_d_.traceFromFilm(Ray{from, normalize(dir)}, opts, path);
+}
+
+}  // namespace lensim::optics

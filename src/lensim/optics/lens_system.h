@@ -1,0 +1,155 @@
+// A lens system in lens space, ready for exact ray tracing.
+//
+// Lens space (the one convention every optics function and CLI output uses): millimetres; z is the
+// optical axis; the vertex of the front (scene-side) surface is at z = 0; +z points toward the
+// film. Surface i has its vertex at z_i = sum of the thicknesses before it; a sphere of signed
+// radius R has its centre at z_i + R. The film is the plane z = rearVertexZ() + filmDistance().
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "lensim/optics/prescription.h"
+#include "lensim/util/vec.h"
+
+namespace lensim::optics {
+
+/// A ray in lens space: origin in millimetres, unit direction.
+template <typename T>
+struct RayT {
+  Vec3T<T> origin;
+  Vec3T<T> direction;
+};
+using Ray = RayT<double>;
+
+/// Why a traced ray did not leave the lens.
+enum class BlockReason : std::uint8_t {
+  None,      ///< not blocked
+  Aperture,  ///< hit the surface (or stop plane) outside its clear aperture
+  Miss,      ///< the line misses the sphere (or the plane) entirely
+  TotalInternalReflection,
+};
+
+/// "aperture", "miss", "tir" or "none".
+const char* blockReasonName(BlockReason r);
+
+/// The outcome of an exact trace: the ray leaving the last surface, or where and why it stopped.
+template <typename T>
+struct TraceResultT {
+  RayT<T> ray;  ///< the outgoing ray when not blocked; otherwise the ray as it was when blocked
+  int blocked_surface = -1;  ///< surface index (0 = front) where it stopped, -1 if it got through
+  BlockReason reason = BlockReason::None;
+
+  bool ok() const { return reason == BlockReason::None; }
+};
+using TraceResult = TraceResultT<double>;
+
+/// One interface of a LensSystem in lens space.
+struct Interface {
+  double radius_mm = 0;         ///< signed; 0 for the stop (a plane)
+  double z_mm = 0;              ///< vertex position on the axis
+  double semi_aperture_mm = 0;  ///< clear semi-aperture (the stop's may be overridden)
+  double ior_before = 1;        ///< index on the scene side
+  double ior_after = 1;         ///< index on the film side
+  bool is_stop = false;
+};
+
+/// What a trace records and checks.
+struct TraceOptions {
+  bool clip_apertures = true;  ///< false: ignore clear apertures (used to find chief rays)
+};
+
+/// A contiguous copy of the interfaces in precision T, with the exact tracer.
+///
+/// The tracer intersects each sphere with the numerically stable quadratic written relative to
+/// the surface vertex (no cancellation for huge radii), keeps the root on the vertex side of the
+/// sphere, clips at the clear aperture, and refracts with the vector form of Snell's law.
+template <typename T>
+class LensTracer {
+ public:
+  LensTracer() = default;
+  explicit LensTracer(const std::vector<Interface>& interfaces);
+
+  /// Traces a ray that starts behind the lens (film side, direction toward -z) out to the scene.
+  /// If `path` is given, receives the start point and every surface intersection in order.
+  TraceResultT<T> traceFromFilm(const RayT<T>& ray, const TraceOptions& opts = {},
+                                std::vector<Vec3T<T>>* path = nullptr) const;
+  /// Traces a ray from the scene (direction toward +z) through the lens to the film side.
+  TraceResultT<T> traceFromScene(const RayT<T>& ray, const TraceOptions& opts = {},
+                                 std::vector<Vec3T<T>>* path = nullptr) const;
+
+  int size() const { return static_cast<int>(radius_.size()); }
+
+ private:
+  template <bool kFromFilm>
+  TraceResultT<T> trace(const RayT<T>& ray, const TraceOptions& opts,
+                        std::vector<Vec3T<T>>* path) const;
+
+  std::vector<T> radius_, z_, semi2_, eta_before_, eta_after_;
+  std::vector<std::uint8_t> is_stop_;
+};
+
+extern template class LensTracer<double>;
+extern template class LensTracer<float>;
+
+/// Options when building a LensSystem from a prescription.
+struct LensSystemOptions {
+  /// Overrides the stop's diameter (pbrt's `aperturediameter`); clamped to the stop's maximum.
+  std::optional<double> aperture_diameter_mm;
+  /// Lens-to-film distance from the rear vertex; default: the file's last thickness.
+  std::optional<double> film_distance_mm;
+};
+
+/// A lens prescription placed in lens space, with its stop setting and film position.
+class LensSystem {
+ public:
+  /// Builds the system; throws lensim::Error for invalid options (e.g. aperture <= 0).
+  explicit LensSystem(LensPrescription prescription, const LensSystemOptions& opts = {});
+
+  const LensPrescription& prescription() const { return prescription_; }
+  const std::vector<Interface>& interfaces() const { return interfaces_; }
+  int surfaceCount() const { return static_cast<int>(interfaces_.size()); }
+
+  /// Index of the radius-0 stop, if the file has one.
+  std::optional<int> stopIndex() const { return stop_index_; }
+  /// Current stop diameter (after any override), if there is a stop.
+  std::optional<double> stopDiameter_mm() const;
+  /// The largest stop diameter the file allows.
+  std::optional<double> maxStopDiameter_mm() const { return max_stop_diameter_mm_; }
+
+  double frontVertexZ_mm() const { return 0.0; }
+  double rearVertexZ_mm() const { return interfaces_.back().z_mm; }
+  double filmDistance_mm() const { return film_distance_mm_; }
+  double filmZ_mm() const { return rearVertexZ_mm() + film_distance_mm_; }
+  /// Moves the film; the distance is measured from the rear vertex and must be > 0.
+  void setFilmDistance_mm(double d);
+  /// Index of the medium in front of the lens (air) and behind it (at the film).
+  double objectIor() const { return 1.0; }
+  double imageIor() const { return interfaces_.back().ior_after; }
+
+  /// Warnings from building (e.g. an aperture larger than the stop allows), besides the
+  /// prescription's own.
+  const std::vector<Diagnostic>& diagnostics() const { return diagnostics_; }
+
+  const LensTracer<double>& tracer() const { return tracer_d_; }
+  const LensTracer<float>& tracerFloat() const { return tracer_f_; }
+
+  /// Exact trace from a film point toward a point on the plane of the rear vertex.
+  TraceResult traceFromFilmPoint(Vec2 film_mm, Vec2 rear_plane_mm, const TraceOptions& opts = {},
+                                 std::vector<Vec3>* path = nullptr) const;
+
+ private:
+  void rebuildTracers();
+
+  LensPrescription prescription_;
+  std::vector<Interface> interfaces_;
+  std::optional<int> stop_index_;
+  std::optional<double> max_stop_diameter_mm_;
+  double film_distance_mm_ = 0;
+  std::vector<Diagnostic> diagnostics_;
+  LensTracer<double> tracer_d_;
+  LensTracer<float> tracer_f_;
+};
+
+}  // namespace lensim::optics

@@ -1,0 +1,68 @@
+// Lens prescriptions: the `.dat` tables of pbrt's realistic camera and their variants.
+//
+// Accepted layouts (all millimetres, one surface per row, front (scene side) to back (film side)):
+// - pbrt (the four classic lenses): `radius thickness index aperture`; thickness is the distance
+//   to the NEXT surface, the last row's thickness is the lens-to-film distance (0: focus decides).
+// - ISET (ISETCam's `data/lens/*.dat`): one line with the focal length (a single number) before
+//   the surface rows; the rows are as in the pbrt layout.
+// - axpos (older pbrt-v4-scenes tables at 100 mm scale): column 2 is the distance from the
+//   PREVIOUS surface, so the first row's value is 0. A file whose first row has thickness 0 (and
+//   that has more than one row, the first not being the stop) is read in this layout, with a note.
+// Radius 0 is the aperture stop (a plane disc); index 0 means air; `#` starts a comment;
+// spaces or tabs separate columns; CR, LF and CRLF line endings are all accepted.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lensim/util/error.h"
+
+namespace lensim::optics {
+
+/// The table layout a prescription was read in.
+enum class LensFileLayout { Pbrt, Iset, Axpos };
+
+const char* layoutName(LensFileLayout layout);
+
+/// One refracting surface (or the stop), as written in the file. Lengths in millimetres.
+struct LensSurface {
+  double radius_mm = 0;     ///< signed radius of curvature; > 0: centre toward the film
+  double thickness_mm = 0;  ///< axial distance to the next surface (last row: to the film)
+  double ior = 1;           ///< index of refraction of the medium after the surface (0 -> 1)
+  double aperture_diameter_mm = 0;  ///< clear aperture diameter
+  FileLoc loc;                      ///< where the row is in the file
+
+  bool isStop() const { return radius_mm == 0; }
+  double semiAperture_mm() const { return aperture_diameter_mm / 2; }
+};
+
+/// A lens prescription read from a file: surfaces front to back and what was noticed about them.
+struct LensPrescription {
+  std::string path;  ///< the file it came from
+  std::string name;  ///< first comment line, or the file name without extension
+  LensFileLayout layout = LensFileLayout::Pbrt;
+  std::optional<double> nominal_focal_length_mm;  ///< ISET files state it
+  std::vector<LensSurface> surfaces;
+  /// Warnings and notes (crossing surfaces, layout guesses); errors are thrown instead.
+  std::vector<Diagnostic> diagnostics;
+
+  /// Index of the radius-0 row, if the file has one.
+  std::optional<int> stopIndex() const;
+  /// The last row's thickness: the lens-to-film distance the file gives (0 when it gives none).
+  double fileFilmDistance_mm() const { return surfaces.empty() ? 0 : surfaces.back().thickness_mm; }
+};
+
+/// Parses prescription text; `path` is used for messages. Throws lensim::Error
+/// (`path:line:col: error: ...`) for malformed input.
+LensPrescription parseLensPrescription(std::string_view text, const std::string& path);
+
+/// Reads and parses a lens file. Throws lensim::Error when it cannot be read or is malformed.
+LensPrescription readLensFile(const std::string& path);
+
+/// Sag of a spherical surface at height h: axial distance from the vertex plane (mm), signed
+/// toward +z. Zero for a plane (radius 0). Requires |h| <= |radius|.
+double sphericalSag(double radius_mm, double h_mm);
+
+}  // namespace lensim::optics
