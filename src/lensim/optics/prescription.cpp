@@ -96,19 +96,22 @@ void checkCrossings(LensPrescription& p) {
     double zb = z + a.thickness_mm;
     double hmax = std::min(a.semiAperture_mm(), b.semiAperture_mm());
     constexpr int kSteps = 256;
+    double first_h = -1, worst = 0, worst_h = 0;
     for (int k = 0; k <= kSteps; ++k) {
-      double h = hmax * k / kSteps;
-      double za = z + sphericalSag(a.radius_mm, h);
-      double zbh = zb + sphericalSag(b.radius_mm, h);
-      if (za > zbh + 1e-9) {
-        p.diagnostics.push_back(
-            {Severity::Warning, b.loc,
-             fmt::format("this surface crosses the previous one ({}) at height {:.3f} mm, inside "
-                         "both apertures: the {} between them has {:.3f} mm thickness there",
-                         a.loc.str(), h, a.ior > 1 ? "glass" : "air gap", zbh - za)});
-        break;
+      const double h = hmax * k / kSteps;
+      const double gap = zb + sphericalSag(b.radius_mm, h) - (z + sphericalSag(a.radius_mm, h));
+      if (gap < -1e-9) {
+        if (first_h < 0) first_h = h;
+        if (gap < worst) worst = gap, worst_h = h;
       }
     }
+    if (first_h >= 0)
+      p.diagnostics.push_back(
+          {Severity::Warning, b.loc,
+           fmt::format("this surface crosses the previous one ({}) inside both apertures, from "
+                       "height {:.3f} mm outward: the {} between them reaches {:.3f} mm "
+                       "thickness at height {:.3f} mm",
+                       a.loc.str(), first_h, a.ior > 1 ? "glass" : "air gap", worst, worst_h)});
     z = zb;
   }
 }

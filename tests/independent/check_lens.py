@@ -1,0 +1,338 @@
+#!/usr/bin/env python3
+"""Independent checks of `lensim lens info|trace` against a separate implementation.
+
+Written from textbook optics, sharing no code with lensim:
+  * surfaces are intersected by Newton's method on the sag equation z = z_v + sag(r) (lensim
+    solves a quadratic);
+  * refraction uses the tangential-component form of Snell's law (lensim uses the
+    cos-based vector form);
+  * first-order data come from a y-nu ray trace, forward and on the reversed lens (lensim uses
+    2x2 transfer matrices).
+It also runs the malformed lens corpus through the CLI and checks `path:line` errors and exit 1.
+
+Usage: check_lens.py --lensim build/lensim --root <repo>
+"""
+import argparse
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+
+FAILURES = []
+
+
+def fail(msg):
+    FAILURES.append(msg)
+    print("FAIL:", msg)
+
+
+# ---------------------------------------------------------------------------- lens reading
+def read_rows(path):
+    """Rows of 4 numbers; a lone number before the rows is ISET's focal length (skipped)."""
+    rows = []
+    with open(path, "rb") as f:
+        text = f.read().decode()
+    for raw in text.replace("\r\n", "\n").replace("\r", "\n").split("\n"):
+        line = raw.split("#")[0].split()
+        if len(line) == 4:
+            rows.append([float(v) for v in line])
+    if len(rows) > 1 and rows[0][1] == 0 and rows[0][0] != 0:  # axpos layout
+        for i in range(len(rows) - 1):
+            rows[i][1] = rows[i + 1][1]
+        rows[-1][1] = 0.0
+    surfaces = []
+    z = 0.0
+    n_before = 1.0
+    for i, (R, t, N, A) in enumerate(rows):
+        N = N if N != 0 else 1.0
+        surfaces.append(dict(R=R, z=z, semi=A / 2, n0=n_before, n1=N))
+        n_before = N
+        if i + 1 < len(rows):
+            z += t
+    return surfaces
+
+
+# ---------------------------------------------------------------------------- exact tracing
+def sag(R, r):
+    if R == 0:
+        return 0.0
+    return R - math.copysign(math.sqrt(max(0.0, R * R - r * r)), R)
+
+
+def intersect(s, o, d):
+    """Geometric line/sphere roots (closest approach and half chord), the root on the vertex-side
+    cap, then Newton steps on g(t) = z(t) - z_v - sag(r(t)) to polish it."""
+    R = s["R"]
+    if R == 0:
+        if abs(d[2]) < 1e-15:
+            return None
+        return (s["z"] - o[2]) / d[2]
+    c = (0.0, 0.0, s["z"] + R)
+    oc = [c[k] - o[k] for k in range(3)]
+    t_c = sum(oc[k] * d[k] for k in range(3))
+    dist2 = sum(x * x for x in oc) - t_c * t_c
+    if dist2 > R * R:
+        return None
+    half = math.sqrt(R * R - dist2)
+    best = None
+    for t in sorted((t_c - half, t_c + half)):
+        z = o[2] + t * d[2]
+        if t >= -1e-9 and (z - c[2]) * R < 0:  # on the cap that faces the vertex
+            best = t
+            break
+    if best is None:
+        return None
+    t = best
+    for _ in range(5):
+        x, y, z = (o[k] + t * d[k] for k in range(3))
+        r2 = x * x + y * y
+        if r2 >= R * R:
+            break
+        w = math.sqrt(R * R - r2)
+        g = z - s["z"] - sag(R, math.sqrt(r2))
+        dg = d[2] - (x * d[0] + y * d[1]) / math.copysign(w, R)
+        if dg == 0:
+            break
+        t -= g / dg
+    return t
+
+
+def normal_at(s, p):
+    R = s["R"]
+    if R == 0:
+        return (0.0, 0.0, -1.0)
+    c = (0.0, 0.0, s["z"] + R)
+    v = [(p[k] - c[k]) for k in range(3)]
+    L = math.sqrt(sum(x * x for x in v))
+    v = [x / L for x in v]
+    if v[2] > 0:  # face the scene
+        v = [-x for x in v]
+    return tuple(v)
+
+
+def snell(d, n, n1, n2):
+    """Tangential form: t_parallel = (n1/n2) (d - (d.n) n); t = t_par + sqrt(1-|t_par|^2) dir."""
+    dn = sum(d[k] * n[k] for k in range(3))
+    tpar = [(n1 / n2) * (d[k] - dn * n[k]) for k in range(3)]
+    s2 = sum(x * x for x in tpar)
+    if s2 > 1:
+        return None
+    along = math.sqrt(1 - s2) * (1 if dn > 0 else -1)
+    return tuple(tpar[k] + along * n[k] for k in range(3))
+
+
+def trace_from_film(surfaces, film_z, film, rear):
+    o = (film[0], film[1], film_z)
+    tgt = (rear[0], rear[1], surfaces[-1]["z"])
+    d = [tgt[k] - o[k] for k in range(3)]
+    L = math.sqrt(sum(x * x for x in d))
+    d = tuple(x / L for x in d)
+    margin = float("inf")
+    for i in range(len(surfaces) - 1, -1, -1):
+        s = surfaces[i]
+        t = intersect(s, o, d)
+        if t is None or t < -1e-9:
+            return dict(blocked=i, reason="miss", margin=margin)
+        p = tuple(o[k] + t * d[k] for k in range(3))
+        r = math.hypot(p[0], p[1])
+        margin = min(margin, abs(r - s["semi"]))
+        if r > s["semi"]:
+            return dict(blocked=i, reason="aperture", margin=margin)
+        nd = snell(d, normal_at(s, p), s["n1"], s["n0"])
+        if nd is None:
+            return dict(blocked=i, reason="tir", margin=margin)
+        o, d = p, nd
+    return dict(origin=o, direction=d, margin=margin)
+
+
+# ---------------------------------------------------------------------------- paraxial
+def ynu_trace(surfs, y, nu):
+    """Forward y-nu trace through surfaces given as (c, n_before, n_after, t_to_next)."""
+    ys = []
+    for k, (c, n0, n1, t) in enumerate(surfs):
+        nu = nu - y * (n1 - n0) * c
+        ys.append(y)
+        if k + 1 < len(surfs):
+            y = y + t * nu / n1
+    return y, nu, ys
+
+
+def paraxial(surfaces):
+    fwd = []
+    for i, s in enumerate(surfaces):
+        c = 0.0 if s["R"] == 0 else 1.0 / s["R"]
+        t = surfaces[i + 1]["z"] - s["z"] if i + 1 < len(surfaces) else 0.0
+        fwd.append((c, s["n0"], s["n1"], t))
+    # Reversed lens: order reversed, curvatures negated, media swapped.
+    rev = []
+    for i in range(len(surfaces) - 1, -1, -1):
+        s = surfaces[i]
+        c = 0.0 if s["R"] == 0 else -1.0 / s["R"]
+        t = s["z"] - surfaces[i - 1]["z"] if i > 0 else 0.0
+        rev.append((c, s["n1"], s["n0"], t))
+    y_last, nu_last, _ = ynu_trace(fwd, 1.0, 0.0)
+    efl = -1.0 / nu_last
+    bfl = -y_last / nu_last
+    y_first, nu_first, _ = ynu_trace(rev, 1.0, 0.0)
+    ffl = -y_first / nu_first  # distance in front of the front vertex
+    return dict(efl=efl, bfl=bfl, ffl=ffl)
+
+
+def ep_check(surfaces):
+    """Entrance pupil by brute force: find the object-space axial point imaged to the stop centre
+    by intersecting two exact near-axis rays from the stop centre traced to the scene."""
+    st = [i for i, s in enumerate(surfaces) if s["R"] == 0][0]
+    if st == 0:
+        return 0.0, 2 * surfaces[0]["semi"]
+    sub = surfaces[:st]
+    u = 1e-6
+    o = (0.0, 0.0, surfaces[st]["z"])
+    d = (-u, 0.0, -1.0)
+    L = math.sqrt(sum(x * x for x in d))
+    d = tuple(x / L for x in d)
+    for i in range(len(sub) - 1, -1, -1):
+        s = sub[i]
+        t = intersect(s, o, d)
+        p = tuple(o[k] + t * d[k] for k in range(3))
+        d = snell(d, normal_at(s, p), s["n1"], s["n0"])
+        o = p
+    z_ep = o[2] - o[0] * d[2] / d[0]
+    # Rim ray from the stop edge parallel to the axis (tiny scale, then scaled up: paraxial).
+    eps = 1e-6
+    o = (eps, 0.0, surfaces[st]["z"])
+    d = (0.0, 0.0, -1.0)
+    for i in range(len(sub) - 1, -1, -1):
+        s = sub[i]
+        t = intersect(s, o, d)
+        p = tuple(o[k] + t * d[k] for k in range(3))
+        d = snell(d, normal_at(s, p), s["n1"], s["n0"])
+        o = p
+    h = o[0] + (z_ep - o[2]) * d[0] / d[2]
+    return z_ep, 2 * surfaces[st]["semi"] * abs(h / eps)
+
+
+# ---------------------------------------------------------------------------- checks
+def run(cmd):
+    return subprocess.run(cmd, capture_output=True, text=True)
+
+
+def check_lens(lensim, path, rng):
+    surfaces = read_rows(path)
+    info = run([lensim, "lens", "info", path, "--json"])
+    if info.returncode != 0:
+        fail(f"{path}: lens info exited {info.returncode}: {info.stderr}")
+        return
+    j = json.loads(info.stdout)
+    ref = paraxial(surfaces)
+    for key, mine in (("effective_focal_length_mm", ref["efl"]),
+                      ("back_focal_length_mm", ref["bfl"]),
+                      ("front_focal_length_mm", ref["ffl"])):
+        rel = abs(j[key] - mine) / abs(ref["efl"])
+        status = "ok" if rel < 1e-3 else "FAIL"
+        print(f"  {key:28s} lensim {j[key]:12.6f}  independent {mine:12.6f}  rel {rel:.1e} {status}")
+        if rel >= 1e-3:
+            fail(f"{path}: {key} {j[key]} vs {mine}")
+    if any(s["R"] == 0 for s in surfaces):
+        z_ep, d_ep = ep_check(surfaces)
+        for key, mine in (("entrance_pupil_z_mm", z_ep), ("entrance_pupil_diameter_mm", d_ep)):
+            err = abs(j[key] - mine)
+            ok = err < 1e-3 * max(1.0, abs(mine))
+            print(f"  {key:28s} lensim {j[key]:12.6f}  independent {mine:12.6f}  err {err:.1e} "
+                  f"{'ok' if ok else 'FAIL'}")
+            if not ok:
+                fail(f"{path}: {key} {j[key]} vs {mine}")
+
+    # Exact rays at two film distances.
+    film_distances = [j["film_distance_mm"], j["film_distance_mm"] * 1.05]
+    rear_semi = surfaces[-1]["semi"]
+    n_ok = n_blocked = n_skipped = 0
+    worst_pos = worst_dir = 0.0
+    for fd in film_distances:
+        film_z = surfaces[-1]["z"] + fd
+        attempts = 0
+        through_before = n_ok
+        while attempts < 200 and n_ok - through_before < 12:
+            attempts += 1
+            r, a = rear_semi * math.sqrt(rng.random()), 2 * math.pi * rng.random()
+            rear = (r * math.cos(a), r * math.sin(a))
+            fr, fa = 0.4 * fd * math.sqrt(rng.random()), 2 * math.pi * rng.random()
+            film = (fr * math.cos(fa), fr * math.sin(fa))
+            mine = trace_from_film(surfaces, film_z, film, rear)
+            if mine["margin"] < 1e-6:
+                n_skipped += 1  # too close to a rim for a fair comparison
+                continue
+            out = run([lensim, "lens", "trace", path, "--film-distance", repr(fd), "--film",
+                       f"{film[0]!r},{film[1]!r}", "--rear", f"{rear[0]!r},{rear[1]!r}", "--json"])
+            if out.returncode != 0:
+                fail(f"{path}: lens trace exited {out.returncode}: {out.stderr}")
+                continue
+            t = json.loads(out.stdout)
+            if "origin" in mine:
+                if "origin_mm" not in t:
+                    fail(f"{path}: film {film} rear {rear}: lensim blocked ({t.get('reason')}), "
+                         "independent tracer passes")
+                    continue
+                dp = max(abs(t["origin_mm"][k] - mine["origin"][k]) for k in range(3))
+                dd = max(abs(t["direction"][k] - mine["direction"][k]) for k in range(3))
+                worst_pos, worst_dir = max(worst_pos, dp), max(worst_dir, dd)
+                n_ok += 1
+                if dp > 1e-6 or dd > 1e-9:
+                    fail(f"{path}: film {film} rear {rear}: origin differs by {dp}, direction by {dd}")
+            else:
+                n_blocked += 1
+                if t.get("blocked_at_surface") != mine["blocked"] or t.get("reason") != mine["reason"]:
+                    fail(f"{path}: film {film} rear {rear}: lensim {t.get('blocked_at_surface')}/"
+                         f"{t.get('reason')}, independent {mine['blocked']}/{mine['reason']}")
+    print(f"  rays: {n_ok} through, {n_blocked} blocked, {n_skipped} skipped near rims; "
+          f"max |origin diff| {worst_pos:.1e} mm, max |direction diff| {worst_dir:.1e}")
+    if n_ok < 20:
+        fail(f"{path}: only {n_ok} rays got through; the comparison is too thin")
+
+
+def check_bad_corpus(lensim, root):
+    folder = os.path.join(root, "tests", "data", "bad_lenses")
+    count = 0
+    with open(os.path.join(folder, "expected.txt")) as f:
+        for line in f:
+            if not line.strip() or line.startswith("#"):
+                continue
+            name, ln, col, msg = [x.strip() for x in line.split("|", 3)]
+            path = os.path.join(folder, name)
+            out = run([lensim, "lens", "info", path])
+            prefix = f"{path}:{ln}:" + (f"{col}:" if col != "0" else "")
+            count += 1
+            if out.returncode != 1:
+                fail(f"{name}: exit code {out.returncode}, expected 1")
+            if not out.stderr.startswith(prefix + " error: ") or msg not in out.stderr:
+                fail(f"{name}: stderr {out.stderr!r} does not start with {prefix!r} or lacks {msg!r}")
+            if out.stdout:
+                fail(f"{name}: printed output despite the error")
+    missing = run([lensim, "lens", "info", os.path.join(folder, "does-not-exist.dat")])
+    if missing.returncode != 1 or "cannot open lens file" not in missing.stderr:
+        fail(f"missing file: {missing.returncode} {missing.stderr!r}")
+    print(f"  malformed corpus: {count} files checked")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--lensim", required=True)
+    ap.add_argument("--root", required=True)
+    args = ap.parse_args()
+    rng = random.Random(2024)
+    lenses = ["dgauss.50mm.dat", "fisheye.10mm.dat", "wide.22mm.dat", "telephoto.250mm.dat",
+              "isetcam/tessar.22deg.50.0mm.dat", "axpos/telephoto.dat"]
+    for name in lenses:
+        print(name)
+        check_lens(args.lensim, os.path.join(args.root, "lenses", name), rng)
+    check_bad_corpus(args.lensim, args.root)
+    if FAILURES:
+        print(f"{len(FAILURES)} failures")
+        return 1
+    print("all independent checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
