@@ -48,10 +48,10 @@ TEST(Focus, CloserThanPossibleNamesTheClosestDistance) {
   ParaxialData p = computeParaxial(lens);
   const double closest = closestFocusDistance_m(lens, p);
   // 4f plus the principal-plane separation.
-  EXPECT_NEAR(closest * 1000,
-              4 * p.effective_focal_length_mm + p.principal_plane_back_z_mm -
-                  p.principal_plane_front_z_mm,
-              1e-9);
+  EXPECT_NEAR(
+      closest * 1000,
+      4 * p.effective_focal_length_mm + p.principal_plane_back_z_mm - p.principal_plane_front_z_mm,
+      1e-9);
   try {
     filmDistanceForFocus(lens, p, 0.9 * closest, FocusMethod::Thick);
     FAIL() << "no error";

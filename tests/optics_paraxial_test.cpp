@@ -50,8 +50,8 @@ TEST(Paraxial, TelephotoBackFocalLengthAsPublished) {
 // A single thick lens against the lensmaker's equation and its closed-form cardinal points.
 TEST(Paraxial, ThickLensMatchesLensmakersEquation) {
   const double R1 = 50, R2 = -80, t = 8, n = 1.6;
-  LensSystem lens(parseLensPrescription(fmt::format("{} {} {} 30\n{} 0 1 30\n", R1, t, n, R2),
-                                        "thick.dat"));
+  LensSystem lens(
+      parseLensPrescription(fmt::format("{} {} {} 30\n{} 0 1 30\n", R1, t, n, R2), "thick.dat"));
   ParaxialData p = computeParaxial(lens);
   const double phi = (n - 1) * (1 / R1 - 1 / R2 + (n - 1) * t / (n * R1 * R2));
   const double f = 1 / phi;

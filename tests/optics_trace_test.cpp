@@ -90,15 +90,15 @@ TEST(LensTracer, FilmToSceneAndBackReturnsToTheStart) {
       TraceResult out = lens.traceFromFilmPoint(f, a);
       if (!out.ok()) continue;
       ++passed;
-      TraceResult back =
-          lens.tracer().traceFromScene(Ray{out.ray.origin, -out.ray.direction});
+      TraceResult back = lens.tracer().traceFromScene(Ray{out.ray.origin, -out.ray.direction});
       ASSERT_TRUE(back.ok());
       // Intersect the returning ray with the film plane.
       const double t = (lens.filmZ_mm() - back.ray.origin.z) / back.ray.direction.z;
       const Vec3 hit = back.ray.origin + back.ray.direction * t;
       EXPECT_NEAR(hit.x, f.x, 1e-9);
       EXPECT_NEAR(hit.y, f.y, 1e-9);
-      const Vec3 d0 = normalize(Vec3{a.x, a.y, lens.rearVertexZ_mm()} - Vec3{f.x, f.y, lens.filmZ_mm()});
+      const Vec3 d0 =
+          normalize(Vec3{a.x, a.y, lens.rearVertexZ_mm()} - Vec3{f.x, f.y, lens.filmZ_mm()});
       EXPECT_LT(maxAbsDiff(back.ray.direction, -d0), 1e-12);
     }
     EXPECT_GT(passed, 50);
@@ -117,7 +117,8 @@ TEST(LensTracer, EverySurfaceIsHitOnTheVertexSide) {
     int passed = 0;
     for (int k = 0; k < 3000; ++k) {
       std::vector<Vec3> path;
-      TraceResult r = lens.traceFromFilmPoint(uniformDisk(rng, 12), uniformDisk(rng, rear), {}, &path);
+      TraceResult r =
+          lens.traceFromFilmPoint(uniformDisk(rng, 12), uniformDisk(rng, rear), {}, &path);
       if (!r.ok()) continue;
       ++passed;
       ASSERT_EQ(static_cast<int>(path.size()), n + 1);

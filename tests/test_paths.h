@@ -14,7 +14,7 @@ inline std::string dataPath(const std::string& name) {
   return std::string(LENSIM_SOURCE_DIR) + "/tests/data/" + name;
 }
 /// The four classic lenses of the assignment.
-inline const char* const kClassicLenses[] = {"dgauss.50mm.dat", "fisheye.10mm.dat",
-                                             "wide.22mm.dat", "telephoto.250mm.dat"};
+inline const char* const kClassicLenses[] = {"dgauss.50mm.dat", "fisheye.10mm.dat", "wide.22mm.dat",
+                                             "telephoto.250mm.dat"};
 
 }  // namespace lensim::test

@@ -1,0 +1,91 @@
+// Exact lens traces per second (film -> scene) for the four classic lenses: random film points
+// on a 35 mm-diagonal film disc and random points on the rear element, lens focused at infinity.
+// Prints the share of traces that are vignetted (blocked by an aperture, missed or TIR), the
+// waste a renderer's camera would see without pupil sampling. This is the baseline for later
+// performance work; run it with bench/run.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "lensim/optics/focus.h"
+
+using namespace lensim;
+using namespace lensim::optics;
+
+namespace {
+
+constexpr double kFilmDiagonal_mm = 35.0;
+constexpr int kRays = 1 << 14;
+
+struct Workload {
+  std::unique_ptr<LensSystem> lens;
+  std::vector<Ray> rays;
+};
+
+Workload makeWorkload(const std::string& file) {
+  Workload w;
+  w.lens = focusLens(readLensFile(std::string(LENSIM_SOURCE_DIR) + "/lenses/" + file), {}).lens;
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0, 1);
+  auto disk = [&](double r) {
+    const double rr = r * std::sqrt(u(rng)), phi = 2 * std::numbers::pi * u(rng);
+    return Vec2{rr * std::cos(phi), rr * std::sin(phi)};
+  };
+  const double rear = w.lens->interfaces().back().semi_aperture_mm;
+  for (int i = 0; i < kRays; ++i) {
+    const Vec2 f = disk(kFilmDiagonal_mm / 2), a = disk(rear);
+    const Vec3 from{f.x, f.y, w.lens->filmZ_mm()};
+    const Vec3 to{a.x, a.y, w.lens->rearVertexZ_mm()};
+    w.rays.push_back({from, normalize(to - from)});
+  }
+  return w;
+}
+
+template <typename T>
+void BM_TraceFromFilm(benchmark::State& state, const std::string& file) {
+  Workload w = makeWorkload(file);
+  std::vector<RayT<T>> rays;
+  for (const Ray& r : w.rays) rays.push_back({Vec3T<T>(r.origin), Vec3T<T>(r.direction)});
+  const LensTracer<T>* tracer;
+  if constexpr (std::is_same_v<T, float>)
+    tracer = &w.lens->tracerFloat();
+  else
+    tracer = &w.lens->tracer();
+  size_t i = 0, blocked = 0, traced = 0;
+  for (auto _ : state) {
+    TraceResultT<T> r = tracer->traceFromFilm(rays[i]);
+    benchmark::DoNotOptimize(r);
+    blocked += !r.ok();
+    ++traced;
+    if (++i == rays.size()) i = 0;
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(traced));
+  state.counters["traces/s"] =
+      benchmark::Counter(static_cast<double>(traced), benchmark::Counter::kIsRate);
+  state.counters["vignetted"] = traced ? static_cast<double>(blocked) / traced : 0.0;
+}
+
+void registerAll() {
+  for (const char* file :
+       {"dgauss.50mm.dat", "fisheye.10mm.dat", "wide.22mm.dat", "telephoto.250mm.dat"}) {
+    benchmark::RegisterBenchmark((std::string("TraceFromFilm<double>/") + file).c_str(),
+                                 BM_TraceFromFilm<double>, std::string(file));
+    benchmark::RegisterBenchmark((std::string("TraceFromFilm<float>/") + file).c_str(),
+                                 BM_TraceFromFilm<float>, std::string(file));
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  registerAll();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
