@@ -12,6 +12,9 @@
 #include "commands.h"
 #include "lens_options.h"
 #include "lensim/optics/chief_ray.h"
+#include "lensim/optics/diagram.h"
+#include "lensim/optics/plots.h"
+#include "lensim/util/svg.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/util/log.h"
@@ -135,8 +138,13 @@ int runInfo(const LensArgs& args, bool as_json) {
        fmt::format(
            "surface {} (line {}), diameter {:.3f} mm{}", p.aperture_stop_surface,
            pr.surfaces[p.aperture_stop_surface].loc.line, p.aperture_stop_diameter_mm,
-           p.stop_is_file_stop ? "" : " (the file has no stop: this element limits the beam)"));
-  if (p.axial_limit_surface != p.aperture_stop_surface)
+           p.stop_is_file_stop ? ""
+                   : lens.stopIndex()
+                       ? fmt::format(" (the stop row at line {} does not limit the beam; this "
+                                     "element does)",
+                                     pr.surfaces[*lens.stopIndex()].loc.line)
+                       : std::string(" (the file has no stop: this element limits the beam)")));
+  if (p.axial_limit_surface != p.aperture_stop_surface && p.stop_is_file_stop)
     line("axial beam limit",
          fmt::format("surface {} (line {}) clips the axial beam more than the stop: f/{:.3f}",
                      p.axial_limit_surface, pr.surfaces[p.axial_limit_surface].loc.line,
@@ -215,6 +223,130 @@ int runTrace(const LensArgs& args, const std::string& film_s, const std::string&
   return 0;
 }
 
+std::vector<double> parseList(const std::string& text, const std::string& option) {
+  std::vector<double> out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    size_t comma = text.find(',', start);
+    if (comma == std::string::npos) comma = text.size();
+    const std::string item = text.substr(start, comma - start);
+    try {
+      size_t used = 0;
+      double v = std::stod(item, &used);
+      if (used != item.size() || !std::isfinite(v)) throw std::invalid_argument(item);
+      out.push_back(v);
+    } catch (const std::exception&) {
+      throw Error(fmt::format("{} '{}': expected comma-separated numbers", option, text));
+    }
+    start = comma + 1;
+  }
+  return out;
+}
+
+struct DrawArgs {
+  std::vector<std::string> lenses;
+  std::string output;
+  std::string fields = "0,0.7,1";
+  int rays = 11;
+  std::string from = "film";
+  bool same_scale = false;
+};
+
+int runDraw(const LensArgs& common, const DrawArgs& args) {
+  DiagramOptions opts;
+  opts.fields = parseList(args.fields, "--fields");
+  for (double f : opts.fields)
+    if (f < 0 || f > 1.5)
+      throw Error(fmt::format("--fields {}: each field is a fraction in [0, 1.5]", args.fields));
+  if (args.rays < 1 || args.rays > 1000)
+    throw Error(fmt::format("--rays {}: expected 1 to 1000", args.rays));
+  opts.rays = args.rays;
+  opts.film_diagonal_mm = common.film_diagonal_mm;
+  opts.source = args.from == "scene" ? DiagramSource::Scene : DiagramSource::Film;
+  std::vector<LensDiagram> diagrams;
+  for (const std::string& path : args.lenses) {
+    LensArgs one = common;
+    one.lens_path = path;
+    FocusedLens fl = setUpLens(one);
+    logDiagnostics(fl.allDiagnostics());
+    diagrams.push_back(buildLensDiagram(fl, opts));
+  }
+  svg::writeFileAtomically(args.output, lensDiagramSheet(diagrams, args.same_scale));
+  logInfo(fmt::format("wrote {} ({} lens{})", args.output, diagrams.size(),
+                      diagrams.size() == 1 ? "" : "es"));
+  return 0;
+}
+
+struct PlotArgs {
+  std::string kind;
+  std::string output;
+  std::string fields = "0,0.5,0.7,1";
+  bool as_json = false;
+};
+
+json pairsJson(const std::vector<double>& a, const std::vector<double>& b) {
+  json arr = json::array();
+  for (size_t i = 0; i < a.size(); ++i)
+    arr.push_back({a[i], std::isfinite(b[i]) ? json(b[i]) : json(nullptr)});
+  return arr;
+}
+
+json finiteOrNull(const std::vector<double>& v) {
+  json arr = json::array();
+  for (double x : v) arr.push_back(std::isfinite(x) ? json(x) : json(nullptr));
+  return arr;
+}
+
+int runPlot(const LensArgs& args, const PlotArgs& pa) {
+  FocusedLens fl = setUpLens(args);
+  logDiagnostics(fl.allDiagnostics());
+  std::string svg_text;
+  json j{{"kind", pa.kind}, {"lens", fl.lens->prescription().path}};
+  if (pa.kind == "spot") {
+    auto spots = computeSpots(fl, parseList(pa.fields, "--fields"), args.film_diagonal_mm);
+    svg_text = spotSvg(fl, spots);
+    json arr = json::array();
+    for (const SpotField& s : spots)
+      arr.push_back({{"film_height_mm", s.film_height_mm},
+                     {"field_angle_deg", s.field_angle_deg},
+                     {"rms_radius_mm", s.rms_radius_mm},
+                     {"centroid_mm", {s.centroid_mm.x, s.centroid_mm.y}},
+                     {"rays_through", s.points_mm.size()},
+                     {"rays_traced", s.rays_traced}});
+    j["fields"] = arr;
+  } else if (pa.kind == "distortion") {
+    DistortionData d = computeDistortion(fl, args.film_diagonal_mm);
+    const bool fisheye = !d.angle_deg.empty() && d.angle_deg.back() > 45;
+    svg_text = distortionSvg(fl, d, fisheye);
+    j["f_reference_mm"] = d.f_reference_mm;
+    j["angle_deg"] = d.angle_deg;
+    j["height_mm"] = d.height_mm;
+    j["percent_tan"] = finiteOrNull(d.percent_tan);
+    j["percent_equidistant"] = finiteOrNull(d.percent_equidistant);
+    j["percent_equisolid"] = finiteOrNull(d.percent_equisolid);
+  } else if (pa.kind == "vignetting") {
+    VignettingData v = computeVignetting(fl, args.film_diagonal_mm);
+    svg_text = vignettingSvg(fl, v);
+    j["film_radius_mm"] = v.film_radius_mm;
+    j["unobstructed"] = v.unobstructed;
+    j["cos4"] = finiteOrNull(v.cos4);
+    j["relative_illumination"] = v.relative_illumination;
+  } else {
+    FocusCurve c = computeFocusCurve(fl);
+    svg_text = focusSvg(fl, c);
+    j["closest_focus_distance_m"] = c.closest_m;
+    j["thick"] = pairsJson(c.focus_distance_m, c.film_distance_thick_mm);
+    j["exact"] = pairsJson(c.focus_distance_m, c.film_distance_exact_mm);
+    j["infinity_thick_mm"] = c.infinity_thick_mm;
+    j["infinity_exact_mm"] =
+        std::isfinite(c.infinity_exact_mm) ? json(c.infinity_exact_mm) : json(nullptr);
+  }
+  svg::writeFileAtomically(pa.output, svg_text);
+  if (pa.as_json) std::cout << j.dump(2) << "\n";
+  logInfo(fmt::format("wrote {}", pa.output));
+  return 0;
+}
+
 }  // namespace
 
 void registerLensCommands(CLI::App& app, Action& action) {
@@ -246,6 +378,39 @@ void registerLensCommands(CLI::App& app, Action& action) {
     trace->callback([&action, args, film, rear, as_json] {
       action = [args, film, rear, as_json] { return runTrace(*args, *film, *rear, *as_json); };
     });
+  }
+  {
+    auto* draw = lens->add_subcommand(
+        "draw", "Draw lens cross-sections with exactly traced ray bundles (SVG)");
+    auto args = std::make_shared<LensArgs>();
+    auto d = std::make_shared<DrawArgs>();
+    draw->add_option("LENS", d->lenses, "Lens prescriptions; several make a sheet (2 columns)")
+        ->required();
+    addLensSetupOptions(draw, *args);
+    draw->add_option("-o,--output", d->output, "Output SVG file")->required();
+    draw->add_option("--fields", d->fields,
+                     "Bundle fields: fractions of the film half-diagonal (--from film) or of the "
+                     "half field of view (--from scene); default 0,0.7,1");
+    draw->add_option("--rays", d->rays, "Rays per bundle (default 11)");
+    draw->add_option("--from", d->from, "Trace bundles from the film or from the scene")
+        ->check(CLI::IsMember({"film", "scene"}));
+    draw->add_flag("--same-scale", d->same_scale, "Draw every lens of a sheet at one scale");
+    draw->callback([&action, args, d] { action = [args, d] { return runDraw(*args, *d); }; });
+  }
+  {
+    auto* plot = lens->add_subcommand(
+        "plot", "Plot spot diagrams, distortion, relative illumination or the focus curve (SVG)");
+    auto args = std::make_shared<LensArgs>();
+    auto pa = std::make_shared<PlotArgs>();
+    plot->add_option("KIND", pa->kind, "spot, distortion, vignetting or focus")
+        ->required()
+        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus"}));
+    addLensOptions(plot, *args);
+    plot->add_option("-o,--output", pa->output, "Output SVG file")->required();
+    plot->add_option("--fields", pa->fields,
+                     "spot: fields as fractions of the film half-diagonal (default 0,0.5,0.7,1)");
+    plot->add_flag("--json", pa->as_json, "Also print the plotted numbers as JSON");
+    plot->callback([&action, args, pa] { action = [args, pa] { return runPlot(*args, *pa); }; });
   }
 }
 

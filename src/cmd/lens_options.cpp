@@ -26,6 +26,10 @@ std::optional<double> toNumber(std::string s) {
 void addLensOptions(CLI::App* cmd, LensArgs& args) {
   cmd->add_option("LENS", args.lens_path, "Lens prescription (.dat, pbrt/ISET/axpos layouts)")
       ->required();
+  addLensSetupOptions(cmd, args);
+}
+
+void addLensSetupOptions(CLI::App* cmd, LensArgs& args) {
   cmd->add_option("--aperture-diameter", args.aperture_diameter_mm,
                   "Stop diameter in mm (clamped to the stop's size)");
   cmd->add_option("--focus-distance", args.focus_distance,

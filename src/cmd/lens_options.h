@@ -22,6 +22,10 @@ struct LensArgs {
   optics::FocusMethod focus_method = optics::FocusMethod::Thick;
 };
 
+/// Adds --aperture-diameter, --focus-distance, --film-distance, --film-diagonal and
+/// --focus-method (everything but the LENS argument).
+void addLensSetupOptions(CLI::App* cmd, LensArgs& args);
+
 /// Adds LENS and --aperture-diameter, --focus-distance, --film-distance, --film-diagonal,
 /// --focus-method to a subcommand.
 void addLensOptions(CLI::App* cmd, LensArgs& args);

@@ -14,7 +14,7 @@ constexpr double kDeg = 180.0 / std::numbers::pi;
 // returns nullopt where the ray cannot be traced.
 std::optional<double> solveAim(const std::function<std::optional<double>(double)>& stop_x,
                                double range) {
-  constexpr int kScan = 64;
+  constexpr int kScan = 256;
   std::optional<double> best;
   double prev_a = 0;
   std::optional<double> prev_f;
@@ -58,8 +58,19 @@ std::optional<ChiefRay> chiefRayFromFilm(const LensSystem& lens, const ParaxialD
   const int n = lens.surfaceCount();
   const int st = p.aperture_stop_surface;
   const TraceOptions noclip{false};
+  const Vec3 from{film_height_mm, 0, lens.filmZ_mm()};
+  // Aim on the exit-pupil plane, which is conjugate to the stop: there the stop crossing is a
+  // gentle, nearly linear function of the aim point and the root sits near the pupil centre.
+  // Aiming at the rear-vertex plane is ill-conditioned when the film is close to the rear
+  // vertex or the lens is long. Fall back to it when the exit pupil lies behind the film.
+  const double eps = 0.02 * std::abs(p.effective_focal_length_mm);
+  const bool use_xp = p.exit_pupil_z_mm < from.z - eps;
+  const double z_aim = use_xp ? p.exit_pupil_z_mm : lens.rearVertexZ_mm();
+  const double range = use_xp ? 3 * p.exit_pupil_diameter_mm / 2 + 2 * std::abs(film_height_mm)
+                              : 3 * largestSemiAperture(lens);
   auto trace = [&](double a, std::vector<Vec3>* path) {
-    return lens.traceFromFilmPoint({film_height_mm, 0}, {a, 0}, noclip, path);
+    const Ray ray{from, normalize(Vec3{a, 0, z_aim} - from)};
+    return lens.tracer().traceFromFilm(ray, noclip, path);
   };
   auto stop_x = [&](double a) -> std::optional<double> {
     std::vector<Vec3> path;
@@ -68,7 +79,7 @@ std::optional<ChiefRay> chiefRayFromFilm(const LensSystem& lens, const ParaxialD
     if (!r.ok() && r.blocked_surface >= st) return std::nullopt;  // lost before the stop
     return path[n - st].x;
   };
-  std::optional<double> a = solveAim(stop_x, 3 * largestSemiAperture(lens));
+  std::optional<double> a = solveAim(stop_x, range);
   if (!a) return std::nullopt;
   std::vector<Vec3> path;
   TraceResult r = trace(*a, &path);
@@ -116,17 +127,44 @@ std::optional<ChiefRay> chiefRayFromScene(const LensSystem& lens, const Paraxial
   return c;
 }
 
-bool filmPointSeesScene(const LensSystem& lens, double film_height_mm) {
-  const double r = 1.5 * lens.interfaces().back().semi_aperture_mm;
-  constexpr int kGrid = 41;
-  for (int iy = 0; iy < kGrid; ++iy) {
-    for (int ix = 0; ix < kGrid; ++ix) {
-      const Vec2 aim{r * (2.0 * ix / (kGrid - 1) - 1), r * (2.0 * iy / (kGrid - 1) - 1)};
-      if (aim.x * aim.x + aim.y * aim.y > r * r) continue;
-      if (lens.traceFromFilmPoint({film_height_mm, 0}, aim).ok()) return true;
-    }
+std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p,
+                                   double film_height_mm) {
+  const double h = film_height_mm;
+  const Vec3 film{h, 0, lens.filmZ_mm()};
+  const double z_rear = lens.rearVertexZ_mm();
+  auto passes = [&](Vec2 a) { return lens.traceFromFilmPoint({h, 0}, a).ok(); };
+  // Where the line from the film point through `q` crosses the rear-vertex plane.
+  auto toRear = [&](const Vec3& q) {
+    const double t = (z_rear - film.z) / (q.z - film.z);
+    return Vec2{film.x + t * (q.x - film.x), film.y + t * (q.y - film.y)};
+  };
+  if (auto c = chiefRayFromFilm(lens, p, h)) {
+    const Vec2 a = toRear(c->film_ray.origin + c->film_ray.direction);
+    if (passes(a)) return a;
   }
-  return false;
+  constexpr int kGrid = 41;
+  auto scanDisc = [&](auto&& point_at) -> std::optional<Vec2> {
+    for (int iy = 0; iy < kGrid; ++iy)
+      for (int ix = 0; ix < kGrid; ++ix) {
+        const double u = 2.0 * ix / (kGrid - 1) - 1, v = 2.0 * iy / (kGrid - 1) - 1;
+        if (u * u + v * v > 1) continue;
+        const Vec2 a = point_at(u, v);
+        if (passes(a)) return a;
+      }
+    return std::nullopt;
+  };
+  // The exit pupil (paraxial), overfilled, when it lies between the lens and the film side.
+  if (p.exit_pupil_z_mm < film.z - 1e-9) {
+    const double r = 2 * p.exit_pupil_diameter_mm / 2;
+    auto at = [&](double u, double v) { return toRear(Vec3{u * r, v * r, p.exit_pupil_z_mm}); };
+    if (auto a = scanDisc(at)) return a;
+  }
+  const double rr = 1.5 * lens.interfaces().back().semi_aperture_mm;
+  return scanDisc([&](double u, double v) { return Vec2{u * rr, v * rr}; });
+}
+
+bool filmPointSeesScene(const LensSystem& lens, const ParaxialData& p, double film_height_mm) {
+  return passingRearAim(lens, p, film_height_mm).has_value();
 }
 
 FieldOfView fieldOfView(const LensSystem& lens, const ParaxialData& p, double film_diagonal_mm) {
@@ -134,7 +172,7 @@ FieldOfView fieldOfView(const LensSystem& lens, const ParaxialData& p, double fi
   const double h = film_diagonal_mm / 2;
   fov.paraxial_deg = 2 * std::atan(h / std::abs(p.effective_focal_length_mm)) * kDeg;
   auto covered = [&](double hh) -> std::optional<ChiefRay> {
-    if (!filmPointSeesScene(lens, hh)) return std::nullopt;
+    if (!filmPointSeesScene(lens, p, hh)) return std::nullopt;
     return chiefRayFromFilm(lens, p, hh);
   };
   if (auto c = covered(h)) {

@@ -30,9 +30,14 @@ std::optional<ChiefRay> chiefRayFromFilm(const LensSystem& lens, const ParaxialD
 std::optional<ChiefRay> chiefRayFromScene(const LensSystem& lens, const ParaxialData& p,
                                           double field_angle_deg);
 
-/// True if at least one ray from the film point (h, 0) gets through every clear aperture
-/// (rays aimed over a grid covering the rear element).
-bool filmPointSeesScene(const LensSystem& lens, double film_height_mm);
+/// A point on the rear-vertex plane toward which a ray from the film point (h, 0) gets through
+/// every clear aperture: the real chief ray's crossing if it gets through, else the first of
+/// grids over the exit pupil and over the rear element. nullopt: the film point sees nothing.
+std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p,
+                                   double film_height_mm);
+
+/// True if at least one ray from the film point (h, 0) gets through the lens.
+bool filmPointSeesScene(const LensSystem& lens, const ParaxialData& p, double film_height_mm);
 
 /// Field of view for a film diagonal. A film point is inside the image circle when some ray from
 /// it gets through the lens; its field angle is that of its chief ray.

@@ -4,10 +4,15 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace lensim::optics {
 
 namespace {
+
+// How much more than the most limiting element the file's stop may limit the axial beam and
+// still be the aperture stop (5% in f-number).
+constexpr double kStopTolerance = 1.05;
 
 RayMatrix refraction(const Interface& s) {
   double power = s.radius_mm == 0 ? 0.0 : (s.ior_after - s.ior_before) / s.radius_mm;
@@ -56,10 +61,13 @@ ParaxialData computeParaxial(const LensSystem& lens) {
   // height 1 parallel to the axis); the aperture stop when the file has no radius-0 row.
   double y = 1, w = 0;
   double best_ratio = std::numeric_limits<double>::infinity();
+  std::vector<double> ratios(n, std::numeric_limits<double>::infinity());
+  auto stop_ratio_of = [&](int i) { return ratios[i]; };
   for (int i = 0; i < n; ++i) {
     if (i > 0) y += (s[i].z_mm - s[i - 1].z_mm) * w / s[i].ior_before;
     if (std::abs(y) > 1e-300) {
       double ratio = s[i].semi_aperture_mm / std::abs(y);
+      ratios[i] = ratio;
       if (ratio < best_ratio) {
         best_ratio = ratio;
         p.axial_limit_surface = i;
@@ -69,7 +77,15 @@ ParaxialData computeParaxial(const LensSystem& lens) {
     w = r.c * y + w;
   }
   p.axial_limit_f_number = std::abs(p.effective_focal_length_mm) / (2 * best_ratio);
-  p.aperture_stop_surface = lens.stopIndex() ? *lens.stopIndex() : p.axial_limit_surface;
+  // The file's stop is the aperture stop when it (nearly) limits the axial beam; an element that
+  // clips a few percent more is a clear-aperture artefact and is reported, not promoted. A stop
+  // row that limits nothing (ISET's reversed telephoto puts one at the image plane) is not the
+  // aperture stop: the limiting element is.
+  p.aperture_stop_surface = p.axial_limit_surface;
+  if (lens.stopIndex()) {
+    const double stop_ratio = stop_ratio_of(*lens.stopIndex());
+    if (stop_ratio <= kStopTolerance * best_ratio) p.aperture_stop_surface = *lens.stopIndex();
+  }
   const int st = p.aperture_stop_surface;
   p.stop_is_file_stop = s[st].is_stop;
   p.aperture_stop_diameter_mm = 2 * s[st].semi_aperture_mm;

@@ -37,8 +37,10 @@ struct ParaxialData {
   double nodal_point_front_z_mm = 0;
   double nodal_point_back_z_mm = 0;
 
-  /// The aperture stop: the file's radius-0 row, or (when the file has none) the surface whose
-  /// clear aperture limits the axial bundle from infinity most. Pupils are images of it.
+  /// The aperture stop: the file's radius-0 row when it limits the axial bundle from infinity
+  /// to within 5% of the most limiting surface (an element clipping slightly more is reported in
+  /// axial_limit_*), else that most limiting surface (also when the file has no stop). Pupils
+  /// are images of it.
   int aperture_stop_surface = -1;
   bool stop_is_file_stop = false;  ///< the stop is the file's radius-0 row
   double aperture_stop_diameter_mm = 0;

@@ -1,0 +1,318 @@
+#include "lensim/optics/diagram.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "lensim/optics/chief_ray.h"
+#include "lensim/util/plot.h"
+
+namespace lensim::optics {
+
+namespace {
+
+constexpr double kDeg = 180.0 / std::numbers::pi;
+
+std::vector<Vec2> profile(const Interface& s, double h_from, double h_to, int steps = 48) {
+  std::vector<Vec2> pts;
+  for (int k = 0; k <= steps; ++k) {
+    const double h = h_from + (h_to - h_from) * k / steps;
+    pts.push_back({s.z_mm + sphericalSag(s.radius_mm, h), h});
+  }
+  return pts;
+}
+
+// Outline of the glass between surfaces a and b: front profile, rim, back profile, rim. Where
+// the apertures differ, the smaller surface continues as a flat annulus to the larger height.
+std::vector<Vec2> elementOutline(const Interface& a, const Interface& b) {
+  const double ha = a.semi_aperture_mm, hb = b.semi_aperture_mm;
+  const double za = a.z_mm + sphericalSag(a.radius_mm, ha);
+  const double zb = b.z_mm + sphericalSag(b.radius_mm, hb);
+  std::vector<Vec2> out = profile(a, ha, -ha);
+  if (ha > hb) {
+    out.push_back({zb, -ha});
+  } else if (hb > ha) {
+    out.push_back({za, -hb});
+  }
+  for (const Vec2& p : profile(b, -hb, hb)) out.push_back(p);
+  if (ha > hb) {
+    out.push_back({zb, ha});
+  } else if (hb > ha) {
+    out.push_back({za, hb});
+  }
+  return out;
+}
+
+// The aim interval along x on a plane at z_aim for which rays from `make(a)` get through,
+// scanned coarsely; nullopt if none gets through.
+template <typename Make, typename Trace>
+std::optional<std::pair<double, double>> passingRange(double lo, double hi, Make make,
+                                                      Trace trace) {
+  constexpr int kScan = 600;
+  std::optional<std::pair<double, double>> range;
+  const double step = (hi - lo) / kScan;
+  for (int k = 0; k <= kScan; ++k) {
+    const double a = lo + step * k;
+    if (trace(make(a)).ok()) {
+      if (!range) range = {a, a};
+      range->second = a;
+    }
+  }
+  if (range) {  // widen by half a step so that the edge rays sit on the rim of the beam
+    range->first -= 0.5 * step;
+    range->second += 0.5 * step;
+  }
+  return range;
+}
+
+}  // namespace
+
+LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) {
+  const LensSystem& lens = *fl.lens;
+  const ParaxialData& p = fl.paraxial;
+  const auto& s = lens.interfaces();
+  const int n = lens.surfaceCount();
+  LensDiagram d;
+  d.source = opts.source;
+  d.title = lens.prescription().name;
+  d.annotations.push_back(fmt::format(
+      "f = {:.2f} mm · f/{:.2f} · film distance {:.2f} mm · focus {}", p.effective_focal_length_mm,
+      p.f_number, lens.filmDistance_mm(),
+      std::isinf(fl.focus_distance_m) ? std::string("at infinity")
+                                      : fmt::format("{:.4g} m", fl.focus_distance_m)));
+
+  // Elements and bare surfaces.
+  std::vector<bool> in_element(n, false);
+  for (int i = 0; i + 1 < n; ++i) {
+    if (s[i].ior_after > 1.0) {
+      d.elements.push_back({i, elementOutline(s[i], s[i + 1])});
+      in_element[i] = in_element[i + 1] = true;
+    }
+  }
+  for (int i = 0; i < n; ++i)
+    if (!in_element[i] && !s[i].is_stop)
+      d.bare_surfaces.push_back(profile(s[i], -s[i].semi_aperture_mm, s[i].semi_aperture_mm));
+  if (lens.stopIndex()) {
+    const Interface& st = s[*lens.stopIndex()];
+    d.stop_z_mm = st.z_mm;
+    d.stop_opening_mm = st.semi_aperture_mm;
+    d.stop_outer_mm = std::max(*lens.maxStopDiameter_mm() / 2 * 1.25, st.semi_aperture_mm + 1.5);
+  }
+  d.film_z_mm = lens.filmZ_mm();
+  d.film_half_height_mm = opts.film_diagonal_mm / 2;
+  d.rear_vertex_z_mm = lens.rearVertexZ_mm();
+
+  double semi_max = 0;
+  for (const Interface& si : s) semi_max = std::max(semi_max, si.semi_aperture_mm);
+  const double length = lens.filmZ_mm();
+  const double extension = std::max(0.35 * length, 2.0 * semi_max);
+  const double z_front = -extension;
+  const double x_limit = 1.3 * std::max(semi_max, opts.film_diagonal_mm / 2);
+  // Continues a ray that left the lens toward the scene up to z_front, or to where it leaves
+  // the drawing (|x| = x_limit).
+  auto extendToFront = [&](DiagramRay& ray, double z_stop) {
+    const Ray& out = ray.result.ray;
+    double t = (z_stop - out.origin.z) / out.direction.z;
+    if (out.direction.x != 0)
+      t = std::min(t, (std::copysign(x_limit, out.direction.x) - out.origin.x) / out.direction.x);
+    if (t > 0) ray.points.push_back(out.origin + out.direction * t);
+  };
+
+  // Bundles.
+  const int rays = std::max(1, opts.rays);
+  FieldOfView fov = fieldOfView(lens, p, opts.film_diagonal_mm);
+  const double half_fov_deg = 0.5 * (fov.real_deg ? *fov.real_deg : *fov.real_max_deg);
+  for (size_t f = 0; f < opts.fields.size(); ++f) {
+    const double frac = opts.fields[f];
+    if (opts.source == DiagramSource::Film) {
+      const double h = frac * d.film_half_height_mm;
+      d.field_values.push_back(h);
+      const Vec3 from{h, 0, lens.filmZ_mm()};
+      auto make = [&](double a) {
+        return Ray{from, normalize(Vec3{a, 0, lens.rearVertexZ_mm()} - from)};
+      };
+      auto trace = [&](const Ray& r) { return lens.tracer().traceFromFilm(r); };
+      const double rr = 1.5 * s.back().semi_aperture_mm;
+      auto range = passingRange(-rr, rr, make, trace);
+      const auto [lo, hi] = range ? *range : std::pair<double, double>{-rr / 1.5, rr / 1.5};
+      for (int k = 0; k < rays; ++k) {
+        DiagramRay ray;
+        ray.field = static_cast<int>(f);
+        const double a = rays == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * k / (rays - 1);
+        ray.start = make(a);
+        ray.result = lens.tracer().traceFromFilm(ray.start, {}, &ray.points);
+        if (ray.result.ok())
+          extendToFront(ray, z_front);
+        else if (ray.result.reason == BlockReason::Miss)  // show where it was heading
+          extendToFront(ray, s[ray.result.blocked_surface].z_mm);
+        d.rays.push_back(std::move(ray));
+      }
+    } else {
+      const double th = frac * half_fov_deg;
+      d.field_values.push_back(th);
+      const Vec3 dir{std::sin(th / kDeg), 0, std::cos(th / kDeg)};
+      auto make = [&](double a) {
+        // Start on the plane z_front, or where the ray enters the drawing (|x| = x_limit).
+        const Vec3 at{a, 0, p.entrance_pupil_z_mm};
+        double t = (z_front - at.z) / dir.z;
+        if (dir.x != 0) t = std::max(t, (-std::copysign(x_limit, dir.x) - at.x) / dir.x);
+        return Ray{at + dir * t, dir};
+      };
+      auto trace = [&](const Ray& r) { return lens.tracer().traceFromScene(r); };
+      const double rr = 1.5 * s.front().semi_aperture_mm +
+                        std::abs(std::tan(th / kDeg)) * std::abs(p.entrance_pupil_z_mm);
+      auto range = passingRange(-rr, rr, make, trace);
+      const auto [lo, hi] = range ? *range : std::pair<double, double>{-rr / 1.5, rr / 1.5};
+      for (int k = 0; k < rays; ++k) {
+        DiagramRay ray;
+        ray.field = static_cast<int>(f);
+        const double a = rays == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * k / (rays - 1);
+        ray.start = make(a);
+        ray.result = lens.tracer().traceFromScene(ray.start, {}, &ray.points);
+        const Ray& out = ray.result.ray;
+        if (ray.result.ok() && out.direction.z > 0) {
+          const double t = (lens.filmZ_mm() - out.origin.z) / out.direction.z;
+          if (t > 0) ray.points.push_back(out.origin + out.direction * t);
+        }
+        d.rays.push_back(std::move(ray));
+      }
+    }
+  }
+
+  // Extent.
+  d.z_min = z_front;
+  d.z_max = lens.filmZ_mm() + 0.03 * length;
+  d.x_max = std::max({semi_max, d.film_half_height_mm, d.stop_outer_mm.value_or(0)});
+  for (const DiagramRay& r : d.rays)
+    for (const Vec3& q : r.points) d.x_max = std::max(d.x_max, std::abs(q.x));
+  d.x_max = std::min(d.x_max, x_limit);
+  return d;
+}
+
+double fitScale(const LensDiagram& d, double w, double h) {
+  const double usable_w = w - 40, usable_h = h - 90;  // margins, title and annotations
+  return std::min(usable_w / (d.z_max - d.z_min), usable_h / (2 * d.x_max));
+}
+
+void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double y, double w,
+                     double h, double s) {
+  // Lens space (z, x) to pixels: z to the right, x up, axis in the middle of the drawing area.
+  const double draw_top = y + 44, draw_bottom = y + h - 40;
+  const double cy = 0.5 * (draw_top + draw_bottom);
+  const double cx = x + 0.5 * w - 0.5 * s * (d.z_min + d.z_max);
+  auto P = [&](double z, double xx) { return std::pair<double, double>{cx + s * z, cy - s * xx}; };
+  const double clip = d.x_max * 1.02;
+
+  doc.beginGroup({{"class", "lens-diagram"}});
+  doc.title(d.title);
+  doc.text(x + 12, y + 20, d.title, {{"font-size", "14"}, {"font-weight", "bold"}});
+  for (size_t i = 0; i < d.annotations.size(); ++i)
+    doc.text(x + 12, y + 36 + 14 * static_cast<double>(i), d.annotations[i], {{"font-size", "11"}});
+
+  // Optical axis, rear-vertex plane, film.
+  doc.line(cx + s * d.z_min, cy, cx + s * d.z_max, cy,
+           {{"class", "axis"}, {"stroke", "#777777"}, {"stroke-dasharray", "8 3 2 3"}});
+  doc.line(cx + s * d.rear_vertex_z_mm, cy - s * clip, cx + s * d.rear_vertex_z_mm, cy + s * clip,
+           {{"class", "rear-vertex-plane"}, {"stroke", "#aaaaaa"}, {"stroke-dasharray", "2 3"}});
+  {
+    auto [fx, fy0] = P(d.film_z_mm, d.film_half_height_mm);
+    auto [fx1, fy1] = P(d.film_z_mm, -d.film_half_height_mm);
+    doc.line(fx, fy0, fx1, fy1, {{"class", "film"}, {"stroke", "#000000"}, {"stroke-width", "3"}});
+    doc.text(fx + 4, fy1 + 12, fmt::format("film ±{:.1f} mm", d.film_half_height_mm),
+             {{"font-size", "10"}, {"text-anchor", "end"}});
+  }
+
+  // Glass elements and bare surfaces.
+  for (const DiagramElement& e : d.elements) {
+    std::vector<std::pair<double, double>> pts;
+    for (const Vec2& q : e.outline) pts.push_back(P(q.x, q.y));
+    doc.polygon(pts, {{"class", "element"},
+                      {"data-surfaces", fmt::format("{}-{}", e.front_surface, e.front_surface + 1)},
+                      {"fill", "#cfe3f3"},
+                      {"stroke", "#2b5d84"},
+                      {"stroke-width", "1.2"}});
+  }
+  for (const auto& prof : d.bare_surfaces) {
+    std::vector<std::pair<double, double>> pts;
+    for (const Vec2& q : prof) pts.push_back(P(q.x, q.y));
+    doc.polyline(pts, {{"class", "surface"}, {"stroke", "#2b5d84"}, {"stroke-width", "1.2"}});
+  }
+  // Stop blades.
+  if (d.stop_z_mm) {
+    for (double sign : {1.0, -1.0}) {
+      auto [x0, y0] = P(*d.stop_z_mm, sign * *d.stop_opening_mm);
+      auto [x1, y1] = P(*d.stop_z_mm, sign * *d.stop_outer_mm);
+      doc.line(x0, y0, x1, y1, {{"class", "stop"}, {"stroke", "#222222"}, {"stroke-width", "3.5"}});
+    }
+  }
+
+  // Rays, one colour per field; blocked rays end with a mark.
+  for (const DiagramRay& r : d.rays) {
+    std::vector<std::pair<double, double>> pts;
+    for (const Vec3& q : r.points) pts.push_back(P(q.z, std::clamp(q.x, -clip, clip)));
+    svg::Attrs a{{"class", "ray"},
+                 {"data-field", std::to_string(r.field)},
+                 {"stroke", plot::paletteColor(r.field)},
+                 {"stroke-width", "0.9"},
+                 {"stroke-opacity", "0.85"}};
+    if (!r.result.ok()) {
+      a.push_back({"data-blocked-at", std::to_string(r.result.blocked_surface)});
+      a.push_back({"data-reason", blockReasonName(r.result.reason)});
+    }
+    doc.polyline(pts, a);
+    if (!r.result.ok() && !pts.empty()) {
+      auto [bx, by] = pts.back();
+      doc.line(bx - 3, by - 3, bx + 3, by + 3,
+               {{"class", "block-mark"}, {"stroke", plot::paletteColor(r.field)}, {"stroke-width", "1.5"}});
+      doc.line(bx - 3, by + 3, bx + 3, by - 3,
+               {{"class", "block-mark"}, {"stroke", plot::paletteColor(r.field)}, {"stroke-width", "1.5"}});
+    }
+  }
+
+  // Legend of the fields and a millimetre scale bar.
+  double ly = y + h - 12;
+  double lx = x + 12;
+  for (size_t f = 0; f < d.field_values.size(); ++f) {
+    const std::string label = d.source == DiagramSource::Film
+                                  ? fmt::format("film {:.1f} mm", d.field_values[f])
+                                  : fmt::format("{:.1f}°", d.field_values[f]);
+    doc.line(lx, ly - 4, lx + 16, ly - 4, {{"stroke", plot::paletteColor(static_cast<int>(f))}, {"stroke-width", "2"}});
+    doc.text(lx + 20, ly, label, {{"font-size", "10"}});
+    lx += 30 + 6.0 * static_cast<double>(label.size());
+  }
+  // The largest 1, 2 or 5 x 10^k millimetres that fits in a fifth of the cell.
+  const double room_mm = 0.2 * w / s;
+  double bar_mm = std::pow(10.0, std::floor(std::log10(room_mm)));
+  for (double m : {5.0, 2.0})
+    if (m * bar_mm <= room_mm) {
+      bar_mm *= m;
+      break;
+    }
+  const double bx = x + w - 20 - bar_mm * s;
+  doc.rect(bx, ly - 7, bar_mm * s, 4, {{"class", "scale-bar"}, {"fill", "#000000"}});
+  doc.text(bx + bar_mm * s / 2, ly - 10, fmt::format("{:g} mm", bar_mm),
+           {{"font-size", "10"}, {"text-anchor", "middle"}});
+  doc.endGroup();
+}
+
+std::string lensDiagramSheet(const std::vector<LensDiagram>& diagrams, bool same_scale) {
+  const int count = static_cast<int>(diagrams.size());
+  const int cols = count > 1 ? 2 : 1;
+  const int rows = (count + cols - 1) / cols;
+  const double cw = 720, ch = 420;
+  svg::Document doc(cw * cols, ch * rows);
+  doc.rect(0, 0, cw * cols, ch * rows, {{"fill", "#ffffff"}});
+  double common = 1e300;
+  for (const LensDiagram& d : diagrams) common = std::min(common, fitScale(d, cw, ch));
+  for (int i = 0; i < count; ++i) {
+    const double x = cw * (i % cols), y = ch * (i / cols);
+    doc.rect(x + 2, y + 2, cw - 4, ch - 4, {{"fill", "none"}, {"stroke", "#dddddd"}});
+    const double s = same_scale ? common : fitScale(diagrams[i], cw, ch);
+    drawLensDiagram(doc, diagrams[i], x, y, cw, ch, s);
+  }
+  return doc.str();
+}
+
+}  // namespace lensim::optics

@@ -1,0 +1,71 @@
+// Lens cross-section diagrams with exactly traced rays, drawn as SVG.
+//
+// The diagram is built in lens space (millimetres, meridional x-z plane) by the exact tracer
+// itself, then drawn to scale; the drawing code only maps coordinates.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lensim/optics/focus.h"
+#include "lensim/util/svg.h"
+
+namespace lensim::optics {
+
+/// Where the ray bundles start.
+enum class DiagramSource {
+  Film,   ///< bundles from film points at fractions of the film half-diagonal
+  Scene,  ///< parallel bundles from the scene at fractions of the half field of view
+};
+
+struct DiagramOptions {
+  std::vector<double> fields{0.0, 0.7, 1.0};  ///< fractions (film height or field angle)
+  int rays = 11;                               ///< rays per bundle, across the pupil
+  double film_diagonal_mm = 35.0;
+  DiagramSource source = DiagramSource::Film;
+};
+
+/// One traced ray of a bundle, in lens space (z, x; y = 0).
+struct DiagramRay {
+  int field = 0;               ///< index into the bundle fields
+  Ray start;                   ///< the ray as handed to the tracer
+  std::vector<Vec3> points;    ///< the tracer's path, then a short extension (if it got through)
+  TraceResult result;          ///< the tracer's result
+};
+
+/// A glass element: the closed outline of its cross-section, (z, x) points in mm.
+struct DiagramElement {
+  int front_surface = 0;  ///< the element lies between this surface and the next
+  std::vector<Vec2> outline;  ///< x = z (mm), y = height (mm)
+};
+
+/// Everything a lens diagram shows, in lens space.
+struct LensDiagram {
+  std::string title;
+  std::vector<std::string> annotations;
+  std::vector<DiagramElement> elements;
+  std::vector<std::vector<Vec2>> bare_surfaces;  ///< refracting surfaces not part of a glass element
+  std::optional<double> stop_z_mm, stop_opening_mm, stop_outer_mm;  ///< semi heights
+  double film_z_mm = 0, film_half_height_mm = 0, rear_vertex_z_mm = 0;
+  std::vector<double> field_values;  ///< film heights (mm) or field angles (deg) of the bundles
+  DiagramSource source = DiagramSource::Film;
+  std::vector<DiagramRay> rays;
+  double z_min = 0, z_max = 0, x_max = 0;  ///< extent of the drawing (mm)
+};
+
+/// Traces the bundles and outlines the elements of a focused lens.
+LensDiagram buildLensDiagram(const FocusedLens& lens, const DiagramOptions& opts);
+
+/// Pixels per millimetre that fit the diagram into a w x h cell.
+double fitScale(const LensDiagram& d, double w, double h);
+
+/// Draws the diagram into the cell (x, y, w, h) at `px_per_mm`.
+void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double y, double w,
+                     double h, double px_per_mm);
+
+/// A sheet of diagrams in a grid (two columns when there are several), each fitted to its cell
+/// or all at the scale of the largest (`same_scale`).
+std::string lensDiagramSheet(const std::vector<LensDiagram>& diagrams, bool same_scale);
+
+}  // namespace lensim::optics
