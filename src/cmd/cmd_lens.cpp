@@ -13,11 +13,11 @@
 #include "lens_options.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/diagram.h"
-#include "lensim/optics/plots.h"
-#include "lensim/util/svg.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/paraxial.h"
+#include "lensim/optics/plots.h"
 #include "lensim/util/log.h"
+#include "lensim/util/svg.h"
 
 namespace lensim::cmd {
 
@@ -135,10 +135,9 @@ int runInfo(const LensArgs& args, bool as_json) {
   line("nodal points z", fmt::format("front {:.4f}, back {:.4f} mm", p.nodal_point_front_z_mm,
                                      p.nodal_point_back_z_mm));
   line("aperture stop",
-       fmt::format(
-           "surface {} (line {}), diameter {:.3f} mm{}", p.aperture_stop_surface,
-           pr.surfaces[p.aperture_stop_surface].loc.line, p.aperture_stop_diameter_mm,
-           p.stop_is_file_stop ? ""
+       fmt::format("surface {} (line {}), diameter {:.3f} mm{}", p.aperture_stop_surface,
+                   pr.surfaces[p.aperture_stop_surface].loc.line, p.aperture_stop_diameter_mm,
+                   p.stop_is_file_stop ? ""
                    : lens.stopIndex()
                        ? fmt::format(" (the stop row at line {} does not limit the beam; this "
                                      "element does)",

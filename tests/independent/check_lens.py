@@ -315,6 +315,44 @@ def check_bad_corpus(lensim, root):
     print(f"  malformed corpus: {count} files checked")
 
 
+def check_pictures(lensim, root):
+    """lens draw / lens plot through the CLI: valid SVG, numbers exposed, errors exit 1."""
+    import tempfile
+    tmp = tempfile.mkdtemp(prefix="lensim-pictures-")
+    lenses = [os.path.join(root, "lenses", f) for f in
+              ("dgauss.50mm.dat", "fisheye.10mm.dat", "wide.22mm.dat", "telephoto.250mm.dat")]
+    sheet = os.path.join(tmp, "lenses.svg")
+    out = run([lensim, "lens", "draw", *lenses, "-o", sheet])
+    if out.returncode != 0 or not os.path.exists(sheet):
+        fail(f"lens draw: exit {out.returncode} {out.stderr}")
+    elif run(["xmllint", "--noout", sheet]).returncode != 0:
+        fail("lens draw: the SVG is not well-formed")
+    for kind in ("spot", "distortion", "vignetting", "focus"):
+        svg = os.path.join(tmp, kind + ".svg")
+        out = run([lensim, "lens", "plot", kind, lenses[0], "-o", svg, "--json"])
+        if out.returncode != 0:
+            fail(f"lens plot {kind}: exit {out.returncode} {out.stderr}")
+            continue
+        data = json.loads(out.stdout)
+        if data["kind"] != kind or run(["xmllint", "--noout", svg]).returncode != 0:
+            fail(f"lens plot {kind}: bad JSON or SVG")
+        if kind == "distortion" and not abs(data["percent_tan"][-1]) < 5:
+            fail(f"double Gauss distortion {data['percent_tan'][-1]}% at the corner")
+    # Errors: exit 1, a message, and no file left behind.
+    bad = os.path.join(tmp, "missing-dir", "x.svg")
+    out = run([lensim, "lens", "draw", lenses[0], "-o", bad])
+    if out.returncode != 1 or "error" not in out.stderr or os.path.exists(bad):
+        fail(f"draw into a missing directory: exit {out.returncode} {out.stderr!r}")
+    out = run([lensim, "lens", "plot", "spot", os.path.join(tmp, "nope.dat"), "-o",
+               os.path.join(tmp, "nope.svg")])
+    if out.returncode != 1 or os.path.exists(os.path.join(tmp, "nope.svg")):
+        fail(f"plot of a missing lens: exit {out.returncode}")
+    leftovers = [f for f in os.listdir(tmp) if ".tmp-" in f]
+    if leftovers:
+        fail(f"temporary files left behind: {leftovers}")
+    print("  lens draw / lens plot: SVG, JSON and errors checked")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--lensim", required=True)
@@ -327,6 +365,7 @@ def main():
         print(name)
         check_lens(args.lensim, os.path.join(args.root, "lenses", name), rng)
     check_bad_corpus(args.lensim, args.root)
+    check_pictures(args.lensim, args.root)
     if FAILURES:
         print(f"{len(FAILURES)} failures")
         return 1

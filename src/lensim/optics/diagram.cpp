@@ -77,11 +77,11 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
   LensDiagram d;
   d.source = opts.source;
   d.title = lens.prescription().name;
-  d.annotations.push_back(fmt::format(
-      "f = {:.2f} mm · f/{:.2f} · film distance {:.2f} mm · focus {}", p.effective_focal_length_mm,
-      p.f_number, lens.filmDistance_mm(),
-      std::isinf(fl.focus_distance_m) ? std::string("at infinity")
-                                      : fmt::format("{:.4g} m", fl.focus_distance_m)));
+  d.annotations.push_back(
+      fmt::format("f = {:.2f} mm · f/{:.2f} · film distance {:.2f} mm · focus {}",
+                  p.effective_focal_length_mm, p.f_number, lens.filmDistance_mm(),
+                  std::isinf(fl.focus_distance_m) ? std::string("at infinity")
+                                                  : fmt::format("{:.4g} m", fl.focus_distance_m)));
 
   // Elements and bare surfaces.
   std::vector<bool> in_element(n, false);
@@ -265,9 +265,13 @@ void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double 
     if (!r.result.ok() && !pts.empty()) {
       auto [bx, by] = pts.back();
       doc.line(bx - 3, by - 3, bx + 3, by + 3,
-               {{"class", "block-mark"}, {"stroke", plot::paletteColor(r.field)}, {"stroke-width", "1.5"}});
+               {{"class", "block-mark"},
+                {"stroke", plot::paletteColor(r.field)},
+                {"stroke-width", "1.5"}});
       doc.line(bx - 3, by + 3, bx + 3, by - 3,
-               {{"class", "block-mark"}, {"stroke", plot::paletteColor(r.field)}, {"stroke-width", "1.5"}});
+               {{"class", "block-mark"},
+                {"stroke", plot::paletteColor(r.field)},
+                {"stroke-width", "1.5"}});
     }
   }
 
@@ -278,7 +282,8 @@ void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double 
     const std::string label = d.source == DiagramSource::Film
                                   ? fmt::format("film {:.1f} mm", d.field_values[f])
                                   : fmt::format("{:.1f}°", d.field_values[f]);
-    doc.line(lx, ly - 4, lx + 16, ly - 4, {{"stroke", plot::paletteColor(static_cast<int>(f))}, {"stroke-width", "2"}});
+    doc.line(lx, ly - 4, lx + 16, ly - 4,
+             {{"stroke", plot::paletteColor(static_cast<int>(f))}, {"stroke-width", "2"}});
     doc.text(lx + 20, ly, label, {{"font-size", "10"}});
     lx += 30 + 6.0 * static_cast<double>(label.size());
   }

@@ -21,22 +21,22 @@ enum class DiagramSource {
 
 struct DiagramOptions {
   std::vector<double> fields{0.0, 0.7, 1.0};  ///< fractions (film height or field angle)
-  int rays = 11;                               ///< rays per bundle, across the pupil
+  int rays = 11;                              ///< rays per bundle, across the pupil
   double film_diagonal_mm = 35.0;
   DiagramSource source = DiagramSource::Film;
 };
 
 /// One traced ray of a bundle, in lens space (z, x; y = 0).
 struct DiagramRay {
-  int field = 0;               ///< index into the bundle fields
-  Ray start;                   ///< the ray as handed to the tracer
-  std::vector<Vec3> points;    ///< the tracer's path, then a short extension (if it got through)
-  TraceResult result;          ///< the tracer's result
+  int field = 0;             ///< index into the bundle fields
+  Ray start;                 ///< the ray as handed to the tracer
+  std::vector<Vec3> points;  ///< the tracer's path, then a short extension (if it got through)
+  TraceResult result;        ///< the tracer's result
 };
 
 /// A glass element: the closed outline of its cross-section, (z, x) points in mm.
 struct DiagramElement {
-  int front_surface = 0;  ///< the element lies between this surface and the next
+  int front_surface = 0;      ///< the element lies between this surface and the next
   std::vector<Vec2> outline;  ///< x = z (mm), y = height (mm)
 };
 
@@ -45,7 +45,8 @@ struct LensDiagram {
   std::string title;
   std::vector<std::string> annotations;
   std::vector<DiagramElement> elements;
-  std::vector<std::vector<Vec2>> bare_surfaces;  ///< refracting surfaces not part of a glass element
+  std::vector<std::vector<Vec2>>
+      bare_surfaces;  ///< refracting surfaces not part of a glass element
   std::optional<double> stop_z_mm, stop_opening_mm, stop_outer_mm;  ///< semi heights
   double film_z_mm = 0, film_half_height_mm = 0, rear_vertex_z_mm = 0;
   std::vector<double> field_values;  ///< film heights (mm) or field angles (deg) of the bundles

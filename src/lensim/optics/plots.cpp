@@ -18,10 +18,10 @@ constexpr double kDeg = 180.0 / std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string lensSubtitle(const FocusedLens& fl) {
-  return fmt::format(
-      "{} · f/{:.2f} · focus {}", fl.lens->prescription().name, fl.paraxial.f_number,
-      std::isinf(fl.focus_distance_m) ? std::string("infinity")
-                                      : fmt::format("{:.4g} m", fl.focus_distance_m));
+  return fmt::format("{} · f/{:.2f} · focus {}", fl.lens->prescription().name, fl.paraxial.f_number,
+                     std::isinf(fl.focus_distance_m)
+                         ? std::string("infinity")
+                         : fmt::format("{:.4g} m", fl.focus_distance_m));
 }
 
 }  // namespace
@@ -264,7 +264,8 @@ std::string spotSvg(const FocusedLens& fl, const std::vector<SpotField>& spots) 
 std::string distortionSvg(const FocusedLens& fl, const DistortionData& d, bool fisheye_models) {
   svg::Document doc(1000, 430);
   doc.rect(0, 0, 1000, 430, {{"fill", "#ffffff"}});
-  doc.text(12, 20, "Distortion — " + lensSubtitle(fl), {{"font-size", "14"}, {"font-weight", "bold"}});
+  doc.text(12, 20, "Distortion — " + lensSubtitle(fl),
+           {{"font-size", "14"}, {"font-weight", "bold"}});
   const double f = d.f_reference_mm;
   plot::Chart h;
   h.title = "chief-ray image height";
@@ -278,12 +279,13 @@ std::string distortionSvg(const FocusedLens& fl, const DistortionData& d, bool f
     }
     return s;
   };
-  h.series.push_back(series("traced", 0, plot::Style::Line, [&](size_t k) { return d.height_mm[k]; }));
-  h.series.push_back(series(fmt::format("f tan θ (f = {:.2f} mm)", f), 1, plot::Style::Dashed,
-                            [&](size_t k) {
-                              const double t = d.angle_deg[k] / kDeg;
-                              return d.angle_deg[k] < 80 ? f * std::tan(t) : std::nan("");
-                            }));
+  h.series.push_back(
+      series("traced", 0, plot::Style::Line, [&](size_t k) { return d.height_mm[k]; }));
+  h.series.push_back(
+      series(fmt::format("f tan θ (f = {:.2f} mm)", f), 1, plot::Style::Dashed, [&](size_t k) {
+        const double t = d.angle_deg[k] / kDeg;
+        return d.angle_deg[k] < 80 ? f * std::tan(t) : std::nan("");
+      }));
   if (fisheye_models) {
     h.series.push_back(series("f θ (equidistant)", 2, plot::Style::Dashed,
                               [&](size_t k) { return f * d.angle_deg[k] / kDeg; }));
@@ -306,7 +308,8 @@ std::string distortionSvg(const FocusedLens& fl, const DistortionData& d, bool f
                                [&](size_t k) { return d.percent_equisolid[k]; }));
   }
   if (!d.percent_tan.empty() && std::isfinite(d.percent_tan.back()))
-    pc.notes.push_back(fmt::format("{:+.2f}% at {:.1f}°", d.percent_tan.back(), d.angle_deg.back()));
+    pc.notes.push_back(
+        fmt::format("{:+.2f}% at {:.1f}°", d.percent_tan.back(), d.angle_deg.back()));
   pc.render(doc, 500, 30, 500, 400);
   return doc.str();
 }
@@ -357,10 +360,14 @@ std::string focusSvg(const FocusedLens& fl, const FocusCurve& curve) {
   const double x0 = curve.focus_distance_m.front(), x1 = curve.focus_distance_m.back();
   c.series.push_back(thick);
   c.series.push_back(exact);
-  c.series.push_back({"", plot::paletteColor(0), plot::Style::Dashed,
+  c.series.push_back({"",
+                      plot::paletteColor(0),
+                      plot::Style::Dashed,
                       {{x0, curve.infinity_thick_mm}, {x1, curve.infinity_thick_mm}}});
   if (std::isfinite(curve.infinity_exact_mm))
-    c.series.push_back({"", plot::paletteColor(1), plot::Style::Dashed,
+    c.series.push_back({"",
+                        plot::paletteColor(1),
+                        plot::Style::Dashed,
                         {{x0, curve.infinity_exact_mm}, {x1, curve.infinity_exact_mm}}});
   c.render(doc, 0, 30, 640, 420);
   return doc.str();

@@ -29,9 +29,9 @@ std::vector<SpotField> computeSpots(const FocusedLens& lens, const std::vector<d
 /// Chief-ray image height against field angle, with the projection models.
 struct DistortionData {
   std::vector<double> angle_deg;
-  std::vector<double> height_mm;       ///< real chief ray on the film
-  double f_reference_mm = 0;           ///< h / tan(theta) in the small-angle limit on this film
-  std::vector<double> percent_tan;     ///< 100 (h - f tan) / (f tan)
+  std::vector<double> height_mm;    ///< real chief ray on the film
+  double f_reference_mm = 0;        ///< h / tan(theta) in the small-angle limit on this film
+  std::vector<double> percent_tan;  ///< 100 (h - f tan) / (f tan)
   std::vector<double> percent_equidistant;  ///< relative to f theta
   std::vector<double> percent_equisolid;    ///< relative to 2 f sin(theta / 2)
 };
@@ -51,8 +51,8 @@ struct VignettingData {
 /// For each film radius, integrates the region of the rear-vertex plane through which rays get
 /// through (polar integration about its centre, boundary by bisection along `grid` * 2
 /// directions).
-VignettingData computeVignetting(const FocusedLens& lens, double film_diagonal_mm,
-                                 int samples = 40, int grid = 90);
+VignettingData computeVignetting(const FocusedLens& lens, double film_diagonal_mm, int samples = 40,
+                                 int grid = 90);
 
 /// Film distance against focus distance, both methods.
 struct FocusCurve {

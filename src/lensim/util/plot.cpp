@@ -92,7 +92,8 @@ void Chart::render(svg::Document& doc, double x, double y, double w, double h) c
     }
   }
   auto mapX = [&](double v) {
-    if (x_log) return ox + pw * (std::log10(v) - std::log10(x0)) / (std::log10(x1) - std::log10(x0));
+    if (x_log)
+      return ox + pw * (std::log10(v) - std::log10(x0)) / (std::log10(x1) - std::log10(x0));
     return ox + pw * (v - x0) / (x1 - x0);
   };
   auto mapY = [&](double v) { return oy + ph * (1 - (v - y0) / (y1 - y0)); };
@@ -134,11 +135,12 @@ void Chart::render(svg::Document& doc, double x, double y, double w, double h) c
   // Axis labels and title.
   doc.text(ox + pw / 2, oy + ph + 34, x_label,
            {{"font-size", "12"}, {"text-anchor", "middle"}, {"fill", "#000000"}});
-  doc.text(x + 14, oy + ph / 2, y_label,
-           {{"font-size", "12"},
-            {"text-anchor", "middle"},
-            {"fill", "#000000"},
-            {"transform", fmt::format("rotate(-90 {} {})", svg::num(x + 14), svg::num(oy + ph / 2))}});
+  doc.text(
+      x + 14, oy + ph / 2, y_label,
+      {{"font-size", "12"},
+       {"text-anchor", "middle"},
+       {"fill", "#000000"},
+       {"transform", fmt::format("rotate(-90 {} {})", svg::num(x + 14), svg::num(oy + ph / 2))}});
   doc.text(ox + pw / 2, y + 18, title,
            {{"font-size", "13"}, {"font-weight", "bold"}, {"text-anchor", "middle"}});
 

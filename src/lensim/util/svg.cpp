@@ -17,12 +17,23 @@ std::string escape(std::string_view s) {
   out.reserve(s.size());
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -105,7 +116,9 @@ void Document::endGroup() {
   body_ += std::string(2 * (depth_ + 1), ' ') + "</g>\n";
 }
 
-void Document::title(std::string_view content) { element("title", {}, content); }
+void Document::title(std::string_view content) {
+  element("title", {}, content);
+}
 
 std::string Document::str() const {
   std::string out = fmt::format(
@@ -123,10 +136,9 @@ void writeFileAtomically(const std::string& path, std::string_view content) {
   namespace fs = std::filesystem;
   const fs::path target(path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  const std::string tmp =
-      (dir / fmt::format(".{}.tmp-{}-{}", target.filename().string(), ::getpid(),
-                         std::random_device{}()))
-          .string();
+  const std::string tmp = (dir / fmt::format(".{}.tmp-{}-{}", target.filename().string(),
+                                             ::getpid(), std::random_device{}()))
+                              .string();
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) throw Error(FileLoc{path}, "cannot write file (directory missing or not writable)");
@@ -141,8 +153,8 @@ void writeFileAtomically(const std::string& path, std::string_view content) {
   fs::rename(tmp, target, ec);
   if (ec) {
     std::remove(tmp.c_str());
-    throw Error(FileLoc{path}, fmt::format("cannot rename the temporary file into place: {}",
-                                           ec.message()));
+    throw Error(FileLoc{path},
+                fmt::format("cannot rename the temporary file into place: {}", ec.message()));
   }
 }
 
