@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "lensim/optics/focus.h"
+#include "lensim/optics/pupil.h"
 
 using namespace lensim;
 using namespace lensim::optics;
@@ -69,6 +70,35 @@ void BM_TraceFromFilm(benchmark::State& state, const std::string& file) {
   state.counters["vignetted"] = traced ? static_cast<double>(blocked) / traced : 0.0;
 }
 
+// Building the exit-pupil bounds a realistic camera samples (start-up cost), and the share of
+// camera samples, over a 3:2 film of 35 mm diagonal, that the bounds waste (no ray gets through).
+void BM_ExitPupilBuild(benchmark::State& state, const std::string& file) {
+  FocusedLens fl = focusLens(readLensFile(std::string(LENSIM_SOURCE_DIR) + "/lenses/" + file), {});
+  long traces = 0;
+  for (auto _ : state) {
+    ExitPupilSampler sampler(*fl.lens, fl.paraxial, kFilmDiagonal_mm / 2);
+    traces = sampler.tracesAtBuild();
+    benchmark::DoNotOptimize(sampler);
+  }
+  ExitPupilSampler sampler(*fl.lens, fl.paraxial, kFilmDiagonal_mm / 2);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0, 1);
+  const double w = kFilmDiagonal_mm * 3 / std::sqrt(13.0),
+               h = kFilmDiagonal_mm * 2 / std::sqrt(13.0);
+  long samples = 0, wasted = 0;
+  for (int k = 0; k < 200000; ++k) {
+    const Vec2 film{(u(rng) - 0.5) * w, (u(rng) - 0.5) * h};
+    auto s = sampler.sample(film, {u(rng), u(rng)});
+    if (!s) continue;
+    ++samples;
+    const Vec3 from{film.x, film.y, fl.lens->filmZ_mm()};
+    wasted += !fl.lens->tracer().traceFromFilm(Ray{from, normalize(s->rear_point_mm - from)}).ok();
+  }
+  state.counters["traces"] = static_cast<double>(traces);
+  state.counters["intervals"] = sampler.intervals();
+  state.counters["wasted"] = samples ? static_cast<double>(wasted) / samples : 0.0;
+}
+
 void registerAll() {
   for (const char* file :
        {"dgauss.50mm.dat", "fisheye.10mm.dat", "wide.22mm.dat", "telephoto.250mm.dat"}) {
@@ -76,6 +106,9 @@ void registerAll() {
                                  BM_TraceFromFilm<double>, std::string(file));
     benchmark::RegisterBenchmark((std::string("TraceFromFilm<float>/") + file).c_str(),
                                  BM_TraceFromFilm<float>, std::string(file));
+    benchmark::RegisterBenchmark((std::string("ExitPupilBuild/") + file).c_str(), BM_ExitPupilBuild,
+                                 std::string(file))
+        ->Unit(benchmark::kMillisecond);
   }
 }
 
