@@ -9,6 +9,9 @@
 
 #include <unistd.h>
 
+#include <png.h>
+#include <tiffio.h>
+
 #include "lensim/io/image.h"
 #include "lensim/util/error.h"
 
@@ -173,5 +176,48 @@ TEST(Image, BadFilesGiveErrorsNamingTheFile) {
   }
   EXPECT_THROW(lensim::io::readImage((dir / "absent.exr").string()), lensim::Error);
   EXPECT_THROW(lensim::io::readImage((dir / "a.bmp").string()), lensim::Error);
+  fs::remove_all(dir);
+}
+
+// Files lensim does not write itself but must read: 8-bit TIFF (sRGB-encoded) and 16-bit PNG.
+TEST(Image, Reads8BitTiffAsSrgb) {
+  const fs::path dir = scratchDir("tiff8");
+  const std::string path = (dir / "a.tif").string();
+  TIFF* t = TIFFOpen(path.c_str(), "w");
+  ASSERT_NE(t, nullptr);
+  TIFFSetField(t, TIFFTAG_IMAGEWIDTH, 2u);
+  TIFFSetField(t, TIFFTAG_IMAGELENGTH, 1u);
+  TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, uint16_t(3));
+  TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, uint16_t(8));
+  TIFFSetField(t, TIFFTAG_PLANARCONFIG, uint16_t(PLANARCONFIG_CONTIG));
+  TIFFSetField(t, TIFFTAG_PHOTOMETRIC, uint16_t(PHOTOMETRIC_RGB));
+  unsigned char row[6] = {0, 128, 255, 10, 20, 30};
+  ASSERT_GE(TIFFWriteScanline(t, row, 0, 0), 0);
+  TIFFClose(t);
+  const Image img = lensim::io::readImage(path);
+  ASSERT_EQ(img.channels, (std::vector<std::string>{"R", "G", "B"}));
+  EXPECT_FLOAT_EQ(img.at(0, 0, 0), 0.0f);
+  EXPECT_NEAR(img.at(0, 0, 1), lensim::io::srgbToLinear(128 / 255.0f), 1e-6);
+  EXPECT_FLOAT_EQ(img.at(0, 0, 2), 1.0f);
+  EXPECT_NEAR(img.at(1, 0, 2), lensim::io::srgbToLinear(30 / 255.0f), 1e-6);
+  fs::remove_all(dir);
+}
+
+TEST(Image, Reads16BitAndGreyPng) {
+  const fs::path dir = scratchDir("png16");
+  const std::string path = (dir / "a.png").string();
+  // 16-bit grey, linear values as libpng's simplified API writes them (with a gAMA of 1.0).
+  png_image png{};
+  png.version = PNG_IMAGE_VERSION;
+  png.width = 3;
+  png.height = 1;
+  png.format = PNG_FORMAT_LINEAR_Y;
+  const uint16_t values[3] = {0, 16384, 65535};
+  ASSERT_TRUE(png_image_write_to_file(&png, path.c_str(), 0, values, 0, nullptr)) << png.message;
+  const Image img = lensim::io::readImage(path);
+  ASSERT_EQ(img.channels, (std::vector<std::string>{"Y"}));
+  EXPECT_FLOAT_EQ(img.at(0, 0, 0), 0.0f);
+  EXPECT_NEAR(img.at(1, 0, 0), 16384 / 65535.0f, 2e-4);
+  EXPECT_FLOAT_EQ(img.at(2, 0, 0), 1.0f);
   fs::remove_all(dir);
 }
