@@ -60,12 +60,14 @@ TEST(Sampler, ValuesDependOnlyOnPixelAndSampleIndex) {
 }
 
 TEST(Sampler, StartingAtADimensionMatchesDrawingUpToIt) {
-  PaddedSobolSampler s(8);
-  s.startPixelSample({1, 2}, 3);
-  s.get2D();
-  const double a = s.get1D();
-  s.startPixelSample({1, 2}, 3, 2);
-  EXPECT_EQ(s.get1D(), a);
+  for (auto& s : allSamplers(16)) {
+    s->startPixelSample({1, 2}, 3);
+    s->get2D();
+    s->get1D();
+    const Vec2 a = s->get2D();
+    s->startPixelSample({1, 2}, 3, 3);
+    EXPECT_EQ(s->get2D(), a);
+  }
 }
 
 TEST(StratifiedSampler, OneSamplePerStratumInEveryDimension) {

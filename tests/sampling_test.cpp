@@ -176,3 +176,12 @@ TEST(PermutationElement, IsAPermutation) {
     same += permutationElement(i, 100, 1) == permutationElement(i, 100, 2);
   EXPECT_LT(same, 20);
 }
+
+TEST(Rng, AdvanceSkipsOutputs) {
+  Rng a(42, 7), b(42, 7);
+  for (int i = 0; i < 1000; ++i) a.uniformU32();
+  b.advance(1000);
+  EXPECT_EQ(a.uniformU32(), b.uniformU32());
+  b.advance(0);
+  EXPECT_EQ(a.uniformU32(), b.uniformU32());
+}

@@ -27,8 +27,8 @@ IndependentSampler::IndependentSampler(int samples_per_pixel, int seed)
 
 void IndependentSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
   // Each sample index gets its own stretch of the stream (2^16 values per sample, 2 per value).
-  rng_ = Rng(hashValues({pixelKey(pixel), static_cast<uint64_t>(seed_), 1}),
-             (static_cast<uint64_t>(sample_index) << 17) + 2 * static_cast<uint64_t>(dimension));
+  rng_ = Rng(hashValues({pixelKey(pixel), static_cast<uint64_t>(seed_), 1}), 0);
+  rng_.advance((static_cast<uint64_t>(sample_index) << 17) + 2 * static_cast<uint64_t>(dimension));
 }
 
 std::unique_ptr<Sampler> IndependentSampler::clone() const {
@@ -47,8 +47,14 @@ void StratifiedSampler::startPixelSample(Point2i pixel, int sample_index, int di
   pixel_ = pixel;
   index_ = sample_index;
   dim_ = dimension;
-  rng_ = Rng(hashValues({pixelKey(pixel), static_cast<uint64_t>(seed_), 2}),
-             (static_cast<uint64_t>(sample_index) << 17) + 2 * static_cast<uint64_t>(dimension));
+}
+
+// Jitter for dimension `dim`: a PCG32 stream per pixel, positioned by sample index and
+// dimension, so a value never depends on which dimensions were drawn before it.
+Rng StratifiedSampler::jitterRng(int dim) const {
+  Rng rng(hashValues({pixelKey(pixel_), static_cast<uint64_t>(seed_), 2}), 0);
+  rng.advance((static_cast<uint64_t>(index_) << 17) + 2 * static_cast<uint64_t>(dim));
+  return rng;
 }
 
 double StratifiedSampler::get1D() {
@@ -56,9 +62,9 @@ double StratifiedSampler::get1D() {
       hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim_), static_cast<uint64_t>(seed_)});
   const int n = samplesPerPixel();
   const int stratum = permutationElement(static_cast<uint32_t>(index_ % n), n, h);
+  Rng rng = jitterRng(dim_);
   ++dim_;
-  const double delta = jitter_ ? rng_.uniform() : 0.5;
-  rng_.uniform();  // keep two stream values per dimension, as get2D
+  const double delta = jitter_ ? rng.uniform() : 0.5;
   return std::min((stratum + delta) / n, kOneMinusEpsilon);
 }
 
@@ -67,10 +73,11 @@ Vec2 StratifiedSampler::get2D() {
       hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim_), static_cast<uint64_t>(seed_)});
   const int n = samplesPerPixel();
   const int stratum = permutationElement(static_cast<uint32_t>(index_ % n), n, h);
+  Rng rng = jitterRng(dim_);
   dim_ += 2;
   const int x = stratum % xs_, y = stratum / xs_;
-  const double dx = jitter_ ? rng_.uniform() : 0.5;
-  const double dy = jitter_ ? rng_.uniform() : 0.5;
+  const double dx = jitter_ ? rng.uniform() : 0.5;
+  const double dy = jitter_ ? rng.uniform() : 0.5;
   return {std::min((x + dx) / xs_, kOneMinusEpsilon), std::min((y + dy) / ys_, kOneMinusEpsilon)};
 }
 

@@ -65,11 +65,11 @@ class StratifiedSampler final : public Sampler {
   std::unique_ptr<Sampler> clone() const override;
 
  private:
+  Rng jitterRng(int dim) const;
   int xs_, ys_, seed_;
   bool jitter_;
   Point2i pixel_{};
   int index_ = 0, dim_ = 0;
-  Rng rng_;
 };
 
 /// Padded Sobol sampler: each dimension pair is the first two Sobol dimensions (a (0,2)-sequence

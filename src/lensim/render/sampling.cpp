@@ -140,12 +140,28 @@ uint64_t hashValues(std::initializer_list<uint64_t> values) {
   return h;
 }
 
-void Rng::setSequence(uint64_t sequence_index, uint64_t offset) {
+void Rng::setSequence(uint64_t sequence_index, uint64_t seed) {
   state_ = 0;
   inc_ = (sequence_index << 1u) | 1u;
   uniformU32();
-  state_ += offset;
+  state_ += seed;
   uniformU32();
+}
+
+void Rng::advance(uint64_t delta) {
+  // Compose the LCG step x -> a x + c with itself delta times by repeated squaring.
+  uint64_t cur_mult = 6364136223846793005ULL, cur_plus = inc_;
+  uint64_t acc_mult = 1, acc_plus = 0;
+  while (delta > 0) {
+    if (delta & 1) {
+      acc_mult *= cur_mult;
+      acc_plus = acc_plus * cur_mult + cur_plus;
+    }
+    cur_plus = (cur_mult + 1) * cur_plus;
+    cur_mult *= cur_mult;
+    delta >>= 1;
+  }
+  state_ = acc_mult * state_ + acc_plus;
 }
 
 uint32_t Rng::uniformU32() {

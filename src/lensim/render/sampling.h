@@ -109,8 +109,12 @@ uint64_t hashValues(std::initializer_list<uint64_t> values);
 class Rng {
  public:
   Rng() : Rng(0x853c49e6748fea9bULL, 0xda3e39cb94b95bdbULL) {}
-  Rng(uint64_t sequence_index, uint64_t offset) { setSequence(sequence_index, offset); }
-  void setSequence(uint64_t sequence_index, uint64_t offset);
+  /// Stream `sequence_index` started from `seed` (PCG's two initialisation values).
+  Rng(uint64_t sequence_index, uint64_t seed) { setSequence(sequence_index, seed); }
+  void setSequence(uint64_t sequence_index, uint64_t seed);
+  /// Skips `delta` 32-bit outputs in O(log delta) (Brown 1994, "Random number generation with
+  /// arbitrary strides").
+  void advance(uint64_t delta);
   uint32_t uniformU32();
   /// Uniform in [0, 1).
   double uniform();
