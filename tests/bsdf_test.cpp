@@ -262,3 +262,35 @@ TEST(TrowbridgeReitz, ProjectedDistributionAndVisibleNormalsIntegrateToOne) {
   }
   EXPECT_DOUBLE_EQ(roughnessToAlpha(0.25), 0.5);
 }
+
+TEST(BSDF, RenderSpaceMatchesLocalFrame) {
+  const Vec3 n = normalize(Vec3(0.3, -0.5, 0.8));
+  const Vec3 dpdu(1, 2, 0.5);
+  auto bxdf = std::make_shared<ConductorBxDF>(TrowbridgeReitz(0.2, 0.5), kGoldEta, kGoldK);
+  const BSDF bsdf(n, dpdu, bxdf);
+  const Frame& fr = bsdf.frame();
+  // Orthonormal, right-handed, z = n, x in the plane of n and dpdu.
+  EXPECT_NEAR(dot(fr.x, fr.y), 0.0, 1e-12);
+  EXPECT_NEAR(dot(fr.x, fr.z), 0.0, 1e-12);
+  EXPECT_NEAR(length(cross(fr.x, fr.y) - fr.z), 0.0, 1e-12);
+  EXPECT_NEAR(length(fr.z - n), 0.0, 1e-12);
+  EXPECT_NEAR(dot(cross(n, dpdu), fr.x), 0.0, 1e-12);
+  Rng rng(77, 0);
+  for (int i = 0; i < 1000; ++i) {
+    const Vec3 wo = sampleUniformSphere({rng.uniform(), rng.uniform()});
+    const Vec3 wi = sampleUniformSphere({rng.uniform(), rng.uniform()});
+    EXPECT_NEAR(length(fr.fromLocal(fr.toLocal(wo)) - wo), 0.0, 1e-12);
+    EXPECT_EQ(bsdf.f(wo, wi)[1],
+              bxdf->f(fr.toLocal(wo), fr.toLocal(wi), TransportMode::Radiance)[1]);
+    const auto s = bsdf.sample_f(wo, rng.uniform(), {rng.uniform(), rng.uniform()});
+    if (s) {
+      EXPECT_NEAR(length(s->wi), 1.0, 1e-9);
+      EXPECT_NEAR(s->pdf, bsdf.pdf(wo, s->wi), 1e-9 * s->pdf);
+      EXPECT_GT(dot(s->wi, n) * dot(wo, n), 0.0);  // reflection stays on wo's side
+    }
+  }
+  // Degenerate tangent: still a valid frame.
+  const Frame f2 = Frame::fromNormalAndTangent(Vec3(0, 0, 1), Vec3(0, 0, 3));
+  EXPECT_NEAR(dot(f2.x, f2.z), 0.0, 1e-12);
+  EXPECT_NEAR(length(f2.x), 1.0, 1e-12);
+}

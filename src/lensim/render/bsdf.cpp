@@ -376,3 +376,47 @@ std::optional<BSDFSample> ThinDielectricBxDF::sample_f(const Vec3& wo, double uc
 }
 
 }  // namespace lensim::render
+
+namespace lensim::render {
+
+Frame Frame::fromNormalAndTangent(const Vec3& n, const Vec3& dpdu) {
+  Frame f;
+  f.z = normalize(n);
+  Vec3 t = dpdu - f.z * dot(dpdu, f.z);  // Gram-Schmidt
+  if (dot(t, t) < 1e-20) {
+    // Any perpendicular: cross with the axis least aligned with n.
+    const Vec3 a = std::abs(f.z.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+    t = cross(a, f.z);
+  }
+  f.x = normalize(t);
+  f.y = cross(f.z, f.x);
+  return f;
+}
+
+BSDF::BSDF(const Vec3& ns, const Vec3& dpdus, std::shared_ptr<const BxDF> bxdf)
+    : bxdf_(std::move(bxdf)), frame_(Frame::fromNormalAndTangent(ns, dpdus)) {}
+
+SampledSpectrum BSDF::f(const Vec3& wo_render, const Vec3& wi_render, TransportMode mode) const {
+  const Vec3 wo = frame_.toLocal(wo_render), wi = frame_.toLocal(wi_render);
+  if (wo.z == 0) return {};
+  return bxdf_->f(wo, wi, mode);
+}
+
+std::optional<BSDFSample> BSDF::sample_f(const Vec3& wo_render, double uc, Vec2 u,
+                                         TransportMode mode, ReflTrans allowed) const {
+  const Vec3 wo = frame_.toLocal(wo_render);
+  if (wo.z == 0 || bxdf_->flags() == BxDFFlags::Unset) return std::nullopt;
+  auto bs = bxdf_->sample_f(wo, uc, u, mode, allowed);
+  if (!bs || bs->f.isBlack() || !(bs->pdf > 0) || bs->wi.z == 0) return std::nullopt;
+  bs->wi = frame_.fromLocal(bs->wi);
+  return bs;
+}
+
+double BSDF::pdf(const Vec3& wo_render, const Vec3& wi_render, TransportMode mode,
+                 ReflTrans allowed) const {
+  const Vec3 wo = frame_.toLocal(wo_render), wi = frame_.toLocal(wi_render);
+  if (wo.z == 0) return 0;
+  return bxdf_->pdf(wo, wi, mode, allowed);
+}
+
+}  // namespace lensim::render

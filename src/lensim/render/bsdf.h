@@ -197,3 +197,44 @@ class ThinDielectricBxDF final : public BxDF {
 };
 
 }  // namespace lensim::render
+
+namespace lensim::render {
+
+/// An orthonormal frame (x, y, z) in render space; z is the shading normal.
+struct Frame {
+  Vec3 x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
+  /// The frame with normal n (unit) and x along the part of dpdu perpendicular to n; any
+  /// perpendicular x when dpdu is parallel to n or zero.
+  static Frame fromNormalAndTangent(const Vec3& n, const Vec3& dpdu);
+  Vec3 toLocal(const Vec3& v) const { return {dot(v, x), dot(v, y), dot(v, z)}; }
+  Vec3 fromLocal(const Vec3& v) const { return x * v.x + y * v.y + z * v.z; }
+};
+
+/// A BxDF placed at a surface point: converts render-space directions to the local shading
+/// frame and back. Directions are unit vectors pointing away from the surface.
+class BSDF {
+ public:
+  BSDF() = default;
+  /// ns: shading normal (unit, render space); dpdus: shading tangent (render space).
+  BSDF(const Vec3& ns, const Vec3& dpdus, std::shared_ptr<const BxDF> bxdf);
+  explicit operator bool() const { return static_cast<bool>(bxdf_); }
+  BxDFFlags flags() const { return bxdf_->flags(); }
+  const Frame& frame() const { return frame_; }
+  /// f (sr^-1) for render-space wo, wi; zero when wo is exactly tangent.
+  SampledSpectrum f(const Vec3& wo_render, const Vec3& wi_render,
+                    TransportMode mode = TransportMode::Radiance) const;
+  /// A sample with wi in render space; nullopt when the BxDF gives none or a useless one
+  /// (zero f or pdf, wi tangent).
+  std::optional<BSDFSample> sample_f(const Vec3& wo_render, double uc, Vec2 u,
+                                     TransportMode mode = TransportMode::Radiance,
+                                     ReflTrans allowed = ReflTrans::All) const;
+  double pdf(const Vec3& wo_render, const Vec3& wi_render,
+             TransportMode mode = TransportMode::Radiance,
+             ReflTrans allowed = ReflTrans::All) const;
+
+ private:
+  std::shared_ptr<const BxDF> bxdf_;
+  Frame frame_;
+};
+
+}  // namespace lensim::render
