@@ -195,6 +195,8 @@ TEST(NamedSpectrum, MetalsHavePlausibleNormalReflectance) {
   EXPECT_GT(refl("Ag", 650), 0.9);
   EXPECT_GT(refl("Al", 450), 0.85);
   EXPECT_GT(refl("Al", 650), 0.85);
+  // Copper's table (to 670 nm) and its Lorentz-Drude continuation agree where they meet.
+  EXPECT_NEAR(refl("Cu", 669.0), refl("Cu", 692.0), 0.03);
   for (const auto& name : namedSpectrumNames()) EXPECT_NE(namedSpectrum(name), nullptr) << name;
   EXPECT_EQ(namedSpectrum("metal-Unobtainium-eta"), nullptr);
 }

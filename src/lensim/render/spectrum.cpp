@@ -433,11 +433,12 @@ double RGBIlluminantSpectrum::maxValue() const {
 
 namespace {
 
-// Copper from the Lorentz-Drude model of A. D. Rakic, A. B. Djurisic, J. M. Elazar and
-// M. L. Majewski, "Optical properties of metallic films for vertical-cavity optoelectronic
-// devices", Applied Optics 37(22), 5271-5283 (1998), Table 1 (Cu): plasma energy 10.83 eV,
-// f0 = 0.575, Gamma0 = 0.030 eV, and four oscillators (f, Gamma eV, omega eV). Evaluated every
-// 5 nm from 360 to 830 nm; eta + i k = sqrt(epsilon).
+// Copper: the Hagemann, Gudat & Kunz (1974) table up to 670 nm (spectrum_data.cpp), and beyond it,
+// where the table jumps to 1240 nm and copper behaves as a free-electron metal, the
+// Lorentz-Drude model of A. D. Rakic, A. B. Djurisic, J. M. Elazar and M. L. Majewski, "Optical
+// properties of metallic films for vertical-cavity optoelectronic devices", Applied Optics
+// 37(22), 5271-5283 (1998), Table 1 (Cu): plasma energy 10.83 eV, f0 = 0.575,
+// Gamma0 = 0.030 eV, and four oscillators (f, Gamma eV, omega eV); eta + i k = sqrt(epsilon).
 std::complex<double> copperPermittivity(double lambda_nm) {
   const double w = 1239.84193 / lambda_nm;  // photon energy, eV
   const double wp = 10.83;
@@ -451,8 +452,13 @@ std::complex<double> copperPermittivity(double lambda_nm) {
 }
 
 SpectrumPtr copperSpectrum(bool want_k) {
+  const std::span<const double> table = want_k ? data::kCuKTo670 : data::kCuEtaTo670;
   std::vector<double> l, v;
-  for (double lambda = kLambdaMin_nm; lambda <= kLambdaMax_nm; lambda += 5.0) {
+  for (size_t i = 0; i < table.size(); i += 2) {
+    l.push_back(table[i]);
+    v.push_back(table[i + 1]);
+  }
+  for (double lambda = 690; lambda <= 900; lambda += 10) {
     const std::complex<double> n = std::sqrt(copperPermittivity(lambda));
     l.push_back(lambda);
     v.push_back(want_k ? std::abs(n.imag()) : n.real());

@@ -138,9 +138,10 @@ constexpr double kAuKData[] = {
     659.5, 3.697, 704.5, 4.103, 756.0, 4.542, 821.1, 5.083, 892.0, 5.663,
 };
 
-// Silver and aluminium: H.-J. Hagemann, W. Gudat and C. Kunz, "Optical constants from the far
-// infrared to the x-ray region: Mg, Al, Cu, Ag, Au, Bi, C, and Al2O3", DESY report SR-74/7
-// (1974), doi:10.3204/PUBDB-2018-00701; photon energies converted with lambda = 1239.84 nm eV / E.
+// Silver, aluminium and copper (to 670 nm): H.-J. Hagemann, W. Gudat and C. Kunz, "Optical
+// constants from the far infrared to the x-ray region: Mg, Al, Cu, Ag, Au, Bi, C, and Al2O3", DESY
+// report SR-74/7 (1974), doi:10.3204/PUBDB-2018-00701; photon energies converted with lambda =
+// 1239.84 nm eV / E.
 constexpr double kAgEtaData[] = {
     288.3, 1.729, 295.2, 1.752, 302.4, 1.729, 310.0, 1.615, 317.9,  1.295, 326.3,
     0.727, 328.9, 0.527, 335.1, 0.300, 344.4, 0.230, 354.2, 0.211,  381.5, 0.229,
@@ -150,6 +151,16 @@ constexpr double kAgKData[] = {
     288.3, 1.13,  295.2, 1.06,  302.4, 0.845, 310.0, 0.599, 317.9,  0.360, 326.3,
     0.304, 328.9, 0.399, 335.1, 0.765, 344.4, 1.13,  354.2, 1.42,   381.5, 1.86,
     413.3, 2.28,  495.9, 3.09,  619.9, 4.18,  826.6, 5.80,  1240.0, 9.02,
+};
+constexpr double kCuEtaData[] = {
+    281.8, 1.487, 295.2, 1.419, 310.0, 1.344, 326.3, 1.336, 344.4, 1.310, 364.7, 1.270,
+    387.5, 1.232, 413.3, 1.184, 442.8, 1.169, 476.9, 1.152, 516.6, 1.121, 539.1, 1.037,
+    563.6, 0.826, 590.4, 0.468, 619.9, 0.272, 652.5, 0.214, 670.2, 0.215,
+};
+constexpr double kCuKData[] = {
+    281.8, 1.64, 295.2, 1.64, 310.0, 1.72, 326.3, 1.81, 344.4, 1.87, 364.7, 1.95,
+    387.5, 2.07, 413.3, 2.21, 442.8, 2.36, 476.9, 2.50, 516.6, 2.60, 539.1, 2.59,
+    563.6, 2.60, 590.4, 2.81, 619.9, 3.24, 652.5, 3.67, 670.2, 3.86,
 };
 constexpr double kAlEtaData[] = {
     248.0, 0.183, 310.0, 0.298, 413.3, 0.548, 495.9, 0.771, 619.9, 1.292, 688.8,
@@ -163,6 +174,7 @@ constexpr double kAlKData[] = {
 }  // namespace
 
 const std::span<const double> kAuEta(kAuEtaData), kAuK(kAuKData), kAgEta(kAgEtaData),
-    kAgK(kAgKData), kAlEta(kAlEtaData), kAlK(kAlKData);
+    kAgK(kAgKData), kAlEta(kAlEtaData), kAlK(kAlKData), kCuEtaTo670(kCuEtaData),
+    kCuKTo670(kCuKData);
 
 }  // namespace lensim::render::data

@@ -18,5 +18,7 @@ extern const double kD65_5nm[95];
 
 /// Interleaved (wavelength nm, value) pairs of tabulated metal optical constants.
 extern const std::span<const double> kAuEta, kAuK, kAgEta, kAgK, kAlEta, kAlK;
+/// Copper up to 670 nm only (the source table's visible part; see spectrum.cpp for the rest).
+extern const std::span<const double> kCuEtaTo670, kCuKTo670;
 
 }  // namespace lensim::render::data
