@@ -234,6 +234,10 @@ TEST(Fresnel, ConductorMatchesNormalIncidenceFormula) {
     const double n = kGoldEta[i], k = kGoldK[i];
     EXPECT_NEAR(F[i], ((n - 1) * (n - 1) + k * k) / ((n + 1) * (n + 1) + k * k), 1e-12);
   }
+  // The "reflectance" parameterisation reproduces the requested normal-incidence reflectance.
+  const SampledSpectrum r = spectrum(0.0, 0.3, 0.9, 0.99);
+  const SampledSpectrum Fr = frComplex(1.0, SampledSpectrum(1.0), conductorKFromReflectance(r));
+  for (int i = 0; i < kSpectrumSamples; ++i) EXPECT_NEAR(Fr[i], r[i], 1e-9);
   // Total internal reflection beyond the critical angle, from inside glass.
   EXPECT_EQ(frDielectric(-0.5, 1.5), 1.0);
   EXPECT_FALSE(refract(direction(-0.5, 0.0), Vec3(0, 0, 1), 1.5).has_value());

@@ -39,6 +39,15 @@ SampledSpectrum frComplex(double cos_theta_i, const SampledSpectrum& eta,
   return r;
 }
 
+SampledSpectrum conductorKFromReflectance(const SampledSpectrum& r) {
+  SampledSpectrum k;
+  for (int i = 0; i < kSpectrumSamples; ++i) {
+    const double ri = std::clamp(r[i], 0.0, 0.9999);
+    k[i] = 2 * std::sqrt(ri) / std::sqrt(1 - ri);
+  }
+  return k;
+}
+
 std::optional<Refraction> refract(const Vec3& wi, Vec3 n, double eta) {
   double cos_i = dot(n, wi);
   if (cos_i < 0) {  // wi is inside: flip the interface

@@ -83,6 +83,9 @@ class BxDF {
 double frDielectric(double cos_theta_i, double eta);
 /// Fresnel reflectance of a conductor with complex index eta + i k (relative to the outside).
 SampledSpectrum frComplex(double cos_theta_i, const SampledSpectrum& eta, const SampledSpectrum& k);
+/// pbrt-v4's conductor "reflectance" parameterisation: with eta = 1, the absorption k whose
+/// normal-incidence Fresnel reflectance k^2 / (4 + k^2) equals r (r in [0,1)), k = 2 sqrt(r/(1-r)).
+SampledSpectrum conductorKFromReflectance(const SampledSpectrum& r);
 /// Mirror reflection of wo about n.
 inline Vec3 reflect(const Vec3& wo, const Vec3& n) {
   return -wo + n * (2 * dot(wo, n));
