@@ -87,6 +87,34 @@ TEST(RGBAlbedoSpectrum, RandomInGamutColoursRoundTrip) {
   EXPECT_LT(worst, 1e-3);
 }
 
+TEST(RGBColorSpace, TableLookupIsCloseToExactFit) {
+  // The interpolated table (for textures) reproduces random colours to about 1e-3.
+  const auto& cs = RGBColorSpace::sRGB();
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  double worst = 0, sum = 0;
+  const int n = 200;
+  for (int i = 0; i < n; ++i) {
+    const Vec3 rgb(u(rng), u(rng), u(rng));
+    const SigmoidPolynomial p = cs.tableSigmoid(rgb);
+    Vec3 xyz;
+    for (int l = 360; l <= 830; ++l) xyz += cieXyzBar(l) * (p.eval(l) * cs.illuminant()->eval(l));
+    const double err = maxAbs(cs.toRgb(xyz / cieYIntegral()) - rgb);
+    worst = std::max(worst, err);
+    sum += err;
+    for (double l = kLambdaMin_nm; l <= kLambdaMax_nm; l += 10) {
+      ASSERT_GE(p.eval(l), 0.0);
+      ASSERT_LE(p.eval(l), 1.0);
+    }
+  }
+  RecordProperty("table_worst_rgb_error", fmtG(worst));
+  RecordProperty("table_mean_rgb_error", fmtG(sum / n));
+  EXPECT_LT(sum / n, 2e-3);
+  EXPECT_LT(worst, 1e-2);
+  // Greys are exact constants.
+  EXPECT_NEAR(cs.tableSigmoid({0.3, 0.3, 0.3}).eval(500), 0.3, 1e-12);
+}
+
 TEST(RGBAlbedoSpectrum, StaysInUnitInterval) {
   const auto& cs = RGBColorSpace::sRGB();
   std::mt19937 rng(8);

@@ -1,5 +1,6 @@
 #include "lensim/render/spectrum.h"
 
+#include <algorithm>
 #include <complex>
 #include <map>
 #include <mutex>
@@ -267,6 +268,20 @@ struct RGBColorSpace::Impl {
     return rgb;
   }
   SigmoidPolynomial fit(const Vec3& target) const;
+  /// Damped Gauss-Newton from c toward goal; returns the final squared RGB error.
+  double refine(std::array<double, 3>& c, const Vec3& goal, int max_iterations) const;
+
+  // Lazily filled coefficient table (see RGBColorSpace::tableSigmoid).
+  static constexpr int kRes = 32;
+  std::vector<double> z_nodes;
+  mutable std::vector<std::array<double, 3>> table;       // [max channel][z][y][x]
+  mutable std::unique_ptr<std::once_flag[]> column_once;  // [max channel][y][x]
+  void fitColumn(int channel, int xi, int yi) const;
+  const std::array<double, 3>& tableEntry(int channel, int zi, int yi, int xi) const {
+    std::call_once(column_once[(channel * kRes + yi) * kRes + xi],
+                   [&] { fitColumn(channel, xi, yi); });
+    return table[((static_cast<size_t>(channel) * kRes + zi) * kRes + yi) * kRes + xi];
+  }
 };
 
 namespace {
@@ -313,6 +328,13 @@ RGBColorSpace::RGBColorSpace() : impl_(std::make_shared<Impl>()), illuminant_(ma
     impl_->weights.push_back(mul(xyz_to_rgb_, xyz));
     impl_->x.push_back(normalisedLambda(l));
   }
+  // z nodes crowd toward 0 and 1 (smoothstep of smoothstep), where coefficients change fastest.
+  constexpr int res = Impl::kRes;
+  auto smoothstep = [](double t) { return t * t * (3 - 2 * t); };
+  for (int k = 0; k < res; ++k)
+    impl_->z_nodes.push_back(smoothstep(smoothstep(static_cast<double>(k) / (res - 1))));
+  impl_->table.resize(static_cast<size_t>(3) * res * res * res);
+  impl_->column_once = std::make_unique<std::once_flag[]>(3 * res * res);
 }
 
 const RGBColorSpace& RGBColorSpace::sRGB() {
@@ -327,52 +349,90 @@ Vec3 RGBColorSpace::toXyz(const Vec3& rgb) const {
   return mul(rgb_to_xyz_, rgb);
 }
 
-// Levenberg-Marquardt-damped Gauss-Newton on the RGB residual, by continuation from the grey of
-// the same mean (whose exact solution is a constant) toward the target, so that each solve
-// starts close to its answer (Jakob & Hanika fit their table the same way, outward from grey).
+// Levenberg-Marquardt-damped Gauss-Newton on the linear RGB residual.
+double RGBColorSpace::Impl::refine(std::array<double, 3>& c, const Vec3& goal,
+                                   int max_iterations) const {
+  double lambda = 1e-3;
+  Vec3 r = goal - rgbOf(c);
+  double err = dot(r, r);
+  for (int it = 0; it < max_iterations && err > 1e-14; ++it) {
+    // Jacobian of rgb with respect to c (3x3, columns are d rgb / d c_k).
+    Vec3 J[3];
+    for (size_t j = 0; j < x.size(); ++j) {
+      const double t = (c[0] * x[j] + c[1]) * x[j] + c[2];
+      const Vec3 d = weights[j] * sigmoidDerivative(t);
+      J[0] += d * (x[j] * x[j]);
+      J[1] += d * x[j];
+      J[2] += d;
+    }
+    // Normal equations (J^T J + lambda diag) dc = J^T r.
+    std::array<double, 9> A;
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) A[3 * a + b] = dot(J[a], J[b]);
+      A[4 * a] *= 1.0 + lambda;
+    }
+    const Vec3 g(dot(J[0], r), dot(J[1], r), dot(J[2], r));
+    std::array<double, 9> Ainv;
+    invert3(A, Ainv);
+    const Vec3 dc = mul(Ainv, g);
+    const std::array<double, 3> trial = {c[0] + dc.x, c[1] + dc.y, c[2] + dc.z};
+    const Vec3 rt = goal - rgbOf(trial);
+    const double et = dot(rt, rt);
+    if (std::isfinite(et) && et < err) {
+      c = trial, r = rt, err = et;
+      lambda = std::max(lambda * 0.3, 1e-9);
+    } else {
+      lambda *= 10;
+      if (lambda > 1e8) break;
+    }
+  }
+  return err;
+}
+
+// Continuation from the grey of the same mean (whose exact solution is a constant) toward the
+// target, so that each solve starts close to its answer (Jakob & Hanika fit their table the same
+// way, outward from grey).
 SigmoidPolynomial RGBColorSpace::Impl::fit(const Vec3& target) const {
   const double grey = std::clamp((target.x + target.y + target.z) / 3.0, 1e-4, 1.0 - 1e-4);
   std::array<double, 3> c = {0.0, 0.0, (grey - 0.5) / std::sqrt(grey * (1.0 - grey))};
   constexpr int kSteps = 8;
   for (int step = 1; step <= kSteps; ++step) {
     const double f = static_cast<double>(step) / kSteps;
-    const Vec3 goal = Vec3(grey, grey, grey) * (1 - f) + target * f;
-    double lambda = 1e-3;
-    Vec3 r = goal - rgbOf(c);
-    double err = dot(r, r);
-    for (int it = 0; it < 60 && err > 1e-14; ++it) {
-      // Jacobian of rgb with respect to c (3x3, columns are d rgb / d c_k).
-      Vec3 J[3];
-      for (size_t j = 0; j < x.size(); ++j) {
-        const double t = (c[0] * x[j] + c[1]) * x[j] + c[2];
-        const Vec3 d = weights[j] * sigmoidDerivative(t);
-        J[0] += d * (x[j] * x[j]);
-        J[1] += d * x[j];
-        J[2] += d;
-      }
-      // Normal equations (J^T J + lambda diag) dc = J^T r.
-      std::array<double, 9> A;
-      for (int a = 0; a < 3; ++a) {
-        for (int b = 0; b < 3; ++b) A[3 * a + b] = dot(J[a], J[b]);
-        A[4 * a] *= 1.0 + lambda;
-      }
-      const Vec3 g(dot(J[0], r), dot(J[1], r), dot(J[2], r));
-      std::array<double, 9> Ainv;
-      invert3(A, Ainv);
-      const Vec3 dc = mul(Ainv, g);
-      const std::array<double, 3> trial = {c[0] + dc.x, c[1] + dc.y, c[2] + dc.z};
-      const Vec3 rt = goal - rgbOf(trial);
-      const double et = dot(rt, rt);
-      if (std::isfinite(et) && et < err) {
-        c = trial, r = rt, err = et;
-        lambda = std::max(lambda * 0.3, 1e-9);
-      } else {
-        lambda *= 10;
-        if (lambda > 1e8) break;
-      }
-    }
+    refine(c, Vec3(grey, grey, grey) * (1 - f) + target * f, 60);
   }
   return SigmoidPolynomial{c};
+}
+
+// One column of the table: fixed dominant channel and chromaticity ratios (x, y), all z nodes.
+// Solved at z = 1/5 of the grid from grey, then outward in z, each solve warm-started from its
+// neighbour (falling back to the continuation fit if that does not converge).
+void RGBColorSpace::Impl::fitColumn(int channel, int xi, int yi) const {
+  const double xr = static_cast<double>(xi) / (kRes - 1), yr = static_cast<double>(yi) / (kRes - 1);
+  auto target = [&](int zi) {
+    const double z = z_nodes[zi];
+    double rgb[3];
+    rgb[channel] = z;
+    rgb[(channel + 1) % 3] = xr * z;
+    rgb[(channel + 2) % 3] = yr * z;
+    return Vec3(rgb[0], rgb[1], rgb[2]);
+  };
+  auto store = [&](int zi, const std::array<double, 3>& c) {
+    table[((static_cast<size_t>(channel) * kRes + zi) * kRes + yi) * kRes + xi] = c;
+  };
+  const int start = kRes / 5;
+  const std::array<double, 3> c0 = fit(target(start)).c;
+  store(start, c0);
+  for (int dir : {+1, -1}) {
+    std::array<double, 3> c = c0;
+    for (int zi = start + dir; zi >= 0 && zi < kRes; zi += dir) {
+      if (refine(c, target(zi), 30) > 1e-12) {
+        std::array<double, 3> fresh = fit(target(zi)).c;
+        Vec3 r1 = target(zi) - rgbOf(fresh), r2 = target(zi) - rgbOf(c);
+        if (dot(r1, r1) < dot(r2, r2)) c = fresh;
+      }
+      store(zi, c);
+    }
+  }
 }
 
 SigmoidPolynomial RGBColorSpace::fitSigmoid(const Vec3& rgb_in) const {
@@ -393,6 +453,32 @@ SigmoidPolynomial RGBColorSpace::fitSigmoid(const Vec3& rgb_in) const {
   std::lock_guard lock(impl_->mutex);
   impl_->cache.emplace(key, poly);
   return poly;
+}
+
+SigmoidPolynomial RGBColorSpace::tableSigmoid(const Vec3& rgb_in) const {
+  const Vec3 rgb(std::clamp(rgb_in.x, 0.0, 1.0), std::clamp(rgb_in.y, 0.0, 1.0),
+                 std::clamp(rgb_in.z, 0.0, 1.0));
+  if (rgb.x == rgb.y && rgb.y == rgb.z) return fitSigmoid(rgb);  // exact constant
+  constexpr int res = Impl::kRes;
+  const double v[3] = {rgb.x, rgb.y, rgb.z};
+  const int c = (v[0] >= v[1] && v[0] >= v[2]) ? 0 : (v[1] >= v[2] ? 1 : 2);
+  const double z = v[c];
+  const double x = v[(c + 1) % 3] / z * (res - 1), y = v[(c + 2) % 3] / z * (res - 1);
+  const int xi = std::min(static_cast<int>(x), res - 2),
+            yi = std::min(static_cast<int>(y), res - 2);
+  const auto& zn = impl_->z_nodes;
+  const int zi = std::clamp(
+      static_cast<int>(std::upper_bound(zn.begin(), zn.end(), z) - zn.begin()) - 1, 0, res - 2);
+  const double dx = x - xi, dy = y - yi, dz = (z - zn[zi]) / (zn[zi + 1] - zn[zi]);
+  SigmoidPolynomial out;
+  for (int corner = 0; corner < 8; ++corner) {
+    const int ox = corner & 1, oy = (corner >> 1) & 1, oz = (corner >> 2) & 1;
+    const double w = (ox ? dx : 1 - dx) * (oy ? dy : 1 - dy) * (oz ? dz : 1 - dz);
+    if (w == 0) continue;
+    const auto& e = impl_->tableEntry(c, zi + oz, yi + oy, xi + ox);
+    for (int k = 0; k < 3; ++k) out.c[k] += w * e[k];
+  }
+  return out;
 }
 
 RGBAlbedoSpectrum::RGBAlbedoSpectrum(const RGBColorSpace& cs, const Vec3& rgb) {

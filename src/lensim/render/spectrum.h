@@ -227,6 +227,11 @@ class RGBColorSpace {
   /// Sigmoid polynomial whose reflectance spectrum, lit by the illuminant, has linear RGB `rgb`
   /// (each component in [0,1]). Fitted by Gauss-Newton on first request and cached; thread-safe.
   SigmoidPolynomial fitSigmoid(const Vec3& rgb) const;
+  /// Fast approximation of fitSigmoid for per-texel use: trilinear interpolation of coefficients
+  /// tabulated per dominant channel on a 32^3 grid (dominant value z with nodes crowded toward
+  /// 0 and 1, the other two channels as ratios to it), after Jakob & Hanika's table layout. Table
+  /// columns are fitted lazily on first use (~1 ms each); thread-safe.
+  SigmoidPolynomial tableSigmoid(const Vec3& rgb) const;
 
  private:
   RGBColorSpace();
