@@ -9,6 +9,7 @@
 
 #include "lensim/optics/diagram.h"
 #include "lensim/optics/plots.h"
+#include "lensim/util/file.h"
 #include "lensim/util/svg.h"
 #include "test_paths.h"
 
@@ -33,7 +34,7 @@ int countOf(const std::string& text, const std::string& needle) {
 // Well-formed XML, checked by xmllint (libxml2-utils, installed by scripts/install-deps).
 void expectWellFormedXml(const std::string& text, const std::string& name) {
   const auto path = std::filesystem::temp_directory_path() / ("lensim_test_" + name + ".svg");
-  svg::writeFileAtomically(path.string(), text);
+  writeFileAtomically(path.string(), text);
   const std::string cmd = "xmllint --noout '" + path.string() + "'";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << name << " is not well-formed XML";
   std::filesystem::remove(path);

@@ -17,6 +17,7 @@
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/plots.h"
 #include "lensim/util/log.h"
+#include "lensim/util/file.h"
 #include "lensim/util/svg.h"
 
 namespace lensim::cmd {
@@ -270,7 +271,7 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     logDiagnostics(fl.allDiagnostics());
     diagrams.push_back(buildLensDiagram(fl, opts));
   }
-  svg::writeFileAtomically(args.output, lensDiagramSheet(diagrams, args.same_scale));
+  writeFileAtomically(args.output, lensDiagramSheet(diagrams, args.same_scale));
   logInfo(fmt::format("wrote {} ({} lens{})", args.output, diagrams.size(),
                       diagrams.size() == 1 ? "" : "es"));
   return 0;
@@ -340,7 +341,7 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
     j["infinity_exact_mm"] =
         std::isfinite(c.infinity_exact_mm) ? json(c.infinity_exact_mm) : json(nullptr);
   }
-  svg::writeFileAtomically(pa.output, svg_text);
+  writeFileAtomically(pa.output, svg_text);
   if (pa.as_json) std::cout << j.dump(2) << "\n";
   logInfo(fmt::format("wrote {}", pa.output));
   return 0;

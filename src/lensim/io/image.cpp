@@ -8,10 +8,8 @@
 #include <ImfStringAttribute.h>
 #include <png.h>
 #include <tiffio.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdarg>
 #include <cstdint>
@@ -23,6 +21,7 @@
 #include <fmt/format.h>
 
 #include "lensim/util/error.h"
+#include "lensim/util/file.h"
 
 namespace lensim::io {
 
@@ -347,14 +346,6 @@ Image readPng(const std::string& path) {
   return image;
 }
 
-// A unique temporary name beside `path` with the same extension.
-std::string temporaryPath(const fs::path& path) {
-  static std::atomic<unsigned> counter{0};
-  fs::path tmp = path.parent_path() / fmt::format(".{}.tmp-{}-{}{}", path.stem().string(),
-                                                  ::getpid(), counter++, path.extension().string());
-  return tmp.string();
-}
-
 }  // namespace
 
 Image readImage(const std::string& path) {
@@ -384,8 +375,7 @@ void writeImage(const std::string& path, const Image& image, const ImageWriteOpt
       static_cast<size_t>(image.width) * image.height * image.channels.size())
     fail(path, "image pixel buffer does not match its size and channels");
   if (image.width <= 0 || image.height <= 0) fail(path, "cannot write an empty image");
-  const std::string tmp = temporaryPath(fs::path(path));
-  try {
+  writeAtomically(path, [&](const std::string& tmp) {
     switch (format) {
       case ImageFormat::Exr:
         writeExr(tmp, image);
@@ -397,18 +387,7 @@ void writeImage(const std::string& path, const Image& image, const ImageWriteOpt
         writePng(tmp, image);
         break;
     }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) fail(path, fmt::format("cannot rename temporary file into place: {}", ec.message()));
-  } catch (const std::exception& e) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    if (dynamic_cast<const Error*>(&e)) {
-      // Errors from the writers name the temporary file; report the destination instead.
-      fail(path, static_cast<const Error&>(e).message());
-    }
-    fail(path, fmt::format("cannot write image: {}", e.what()));
-  }
+  });
 }
 
 }  // namespace lensim::io

@@ -1,12 +1,6 @@
 #include "lensim/util/svg.h"
 
 #include <fmt/format.h>
-#include <unistd.h>
-
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <random>
 
 #include "lensim/util/error.h"
 
@@ -130,32 +124,6 @@ std::string Document::str() const {
   for (int d = depth_; d > 0; --d) out += std::string(2 * d, ' ') + "</g>\n";
   out += "</svg>\n";
   return out;
-}
-
-void writeFileAtomically(const std::string& path, std::string_view content) {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  const std::string tmp = (dir / fmt::format(".{}.tmp-{}-{}", target.filename().string(),
-                                             ::getpid(), std::random_device{}()))
-                              .string();
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(FileLoc{path}, "cannot write file (directory missing or not writable)");
-    out.write(content.data(), static_cast<std::streamsize>(content.size()));
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw Error(FileLoc{path}, "writing failed");
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    throw Error(FileLoc{path},
-                fmt::format("cannot rename the temporary file into place: {}", ec.message()));
-  }
 }
 
 }  // namespace lensim::svg

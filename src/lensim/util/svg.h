@@ -51,8 +51,4 @@ class Document {
   int depth_ = 0;
 };
 
-/// Writes text to `path` through a temporary file and a rename, so a failure never leaves a
-/// half-written file. Throws lensim::Error on failure.
-void writeFileAtomically(const std::string& path, std::string_view content);
-
 }  // namespace lensim::svg
