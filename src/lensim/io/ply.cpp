@@ -32,13 +32,17 @@ Scalar scalarFromName(const std::string& s, const std::string& name) {
 size_t scalarSize(Scalar s) {
   switch (s) {
     case Scalar::Int8:
-    case Scalar::UInt8: return 1;
+    case Scalar::UInt8:
+      return 1;
     case Scalar::Int16:
-    case Scalar::UInt16: return 2;
+    case Scalar::UInt16:
+      return 2;
     case Scalar::Int32:
     case Scalar::UInt32:
-    case Scalar::Float32: return 4;
-    case Scalar::Float64: return 8;
+    case Scalar::Float32:
+      return 4;
+    case Scalar::Float64:
+      return 8;
   }
   return 0;
 }
@@ -76,14 +80,46 @@ class BodyReader {
     if (file_le != host_le)
       for (size_t i = 0; i < n / 2; ++i) std::swap(b[i], b[n - 1 - i]);
     switch (s) {
-      case Scalar::Int8: { int8_t v; std::memcpy(&v, b, 1); return v; }
-      case Scalar::UInt8: { uint8_t v; std::memcpy(&v, b, 1); return v; }
-      case Scalar::Int16: { int16_t v; std::memcpy(&v, b, 2); return v; }
-      case Scalar::UInt16: { uint16_t v; std::memcpy(&v, b, 2); return v; }
-      case Scalar::Int32: { int32_t v; std::memcpy(&v, b, 4); return v; }
-      case Scalar::UInt32: { uint32_t v; std::memcpy(&v, b, 4); return v; }
-      case Scalar::Float32: { float v; std::memcpy(&v, b, 4); return v; }
-      case Scalar::Float64: { double v; std::memcpy(&v, b, 8); return v; }
+      case Scalar::Int8: {
+        int8_t v;
+        std::memcpy(&v, b, 1);
+        return v;
+      }
+      case Scalar::UInt8: {
+        uint8_t v;
+        std::memcpy(&v, b, 1);
+        return v;
+      }
+      case Scalar::Int16: {
+        int16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+      }
+      case Scalar::UInt16: {
+        uint16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+      }
+      case Scalar::Int32: {
+        int32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case Scalar::UInt32: {
+        uint32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case Scalar::Float32: {
+        float v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case Scalar::Float64: {
+        double v;
+        std::memcpy(&v, b, 8);
+        return v;
+      }
     }
     return 0;
   }
@@ -132,7 +168,9 @@ std::string readGzFile(const std::string& path) {
 
 }  // namespace
 
-PlyMesh readPly(const std::string& path) { return parsePly(readGzFile(path), path); }
+PlyMesh readPly(const std::string& path) {
+  return parsePly(readGzFile(path), path);
+}
 
 PlyMesh parsePly(const std::string& data, const std::string& name) {
   // Header: lines up to "end_header".
@@ -159,10 +197,14 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
     if (word == "format") {
       std::string f, version;
       ls >> f >> version;
-      if (f == "ascii") format = Format::Ascii;
-      else if (f == "binary_little_endian") format = Format::BinaryLE;
-      else if (f == "binary_big_endian") format = Format::BinaryBE;
-      else throw Error(fmt::format("{}: unknown PLY format \"{}\"", name, f));
+      if (f == "ascii")
+        format = Format::Ascii;
+      else if (f == "binary_little_endian")
+        format = Format::BinaryLE;
+      else if (f == "binary_big_endian")
+        format = Format::BinaryBE;
+      else
+        throw Error(fmt::format("{}: unknown PLY format \"{}\"", name, f));
       have_format = true;
     } else if (word == "element") {
       Element e;
@@ -170,8 +212,7 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
       if (ls.fail()) throw Error(fmt::format("{}: bad PLY element line \"{}\"", name, line));
       elements.push_back(e);
     } else if (word == "property") {
-      if (elements.empty())
-        throw Error(fmt::format("{}: PLY property before any element", name));
+      if (elements.empty()) throw Error(fmt::format("{}: PLY property before any element", name));
       Property p;
       std::string t;
       ls >> t;
@@ -201,14 +242,22 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
       for (size_t i = 0; i < e.props.size(); ++i) {
         const std::string& n = e.props[i].name;
         int k = static_cast<int>(i);
-        if (n == "x") ix = k;
-        else if (n == "y") iy = k;
-        else if (n == "z") iz = k;
-        else if (n == "nx") inx = k;
-        else if (n == "ny") iny = k;
-        else if (n == "nz") inz = k;
-        else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s") iu = k;
-        else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") iv = k;
+        if (n == "x")
+          ix = k;
+        else if (n == "y")
+          iy = k;
+        else if (n == "z")
+          iz = k;
+        else if (n == "nx")
+          inx = k;
+        else if (n == "ny")
+          iny = k;
+        else if (n == "nz")
+          inz = k;
+        else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s")
+          iu = k;
+        else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t")
+          iv = k;
       }
       if (ix < 0 || iy < 0 || iz < 0)
         throw Error(fmt::format("{}: PLY vertex element lacks x, y or z", name));

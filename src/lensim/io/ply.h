@@ -17,11 +17,11 @@ namespace lensim::io {
 /// A polygon mesh read from a PLY file, in the file's units and coordinates.
 struct PlyMesh {
   std::vector<Vec3f> positions;
-  std::vector<Vec3f> normals;               ///< empty or one per vertex
-  std::vector<std::array<float, 2>> uvs;    ///< empty or one per vertex
-  std::vector<int> triangles;               ///< 3 vertex indices per triangle
-  std::vector<int> quads;                   ///< 4 vertex indices per quad (pbrt-v4 bilinear patch order)
-  std::vector<int> face_indices;            ///< optional per-face `face_indices` values
+  std::vector<Vec3f> normals;             ///< empty or one per vertex
+  std::vector<std::array<float, 2>> uvs;  ///< empty or one per vertex
+  std::vector<int> triangles;             ///< 3 vertex indices per triangle
+  std::vector<int> quads;         ///< 4 vertex indices per quad (pbrt-v4 bilinear patch order)
+  std::vector<int> face_indices;  ///< optional per-face `face_indices` values
 };
 
 /// Reads a PLY file (gzip-compressed or not: detected from its content). Polygons with more than

@@ -17,23 +17,30 @@ namespace fs = std::filesystem;
 
 std::string_view shapeTypeName(ShapeType t) {
   switch (t) {
-    case ShapeType::Sphere: return "sphere";
-    case ShapeType::Disk: return "disk";
-    case ShapeType::Cylinder: return "cylinder";
-    case ShapeType::Cone: return "cone";
-    case ShapeType::TriangleMesh: return "trianglemesh";
-    case ShapeType::BilinearMesh: return "bilinearmesh";
+    case ShapeType::Sphere:
+      return "sphere";
+    case ShapeType::Disk:
+      return "disk";
+    case ShapeType::Cylinder:
+      return "cylinder";
+    case ShapeType::Cone:
+      return "cone";
+    case ShapeType::TriangleMesh:
+      return "trianglemesh";
+    case ShapeType::BilinearMesh:
+      return "bilinearmesh";
   }
   return "?";
 }
 
 std::string SpectrumValue::str() const {
   switch (kind) {
-    case Kind::Rgb: return fmt::format("rgb [{} {} {}]", rgb.x, rgb.y, rgb.z);
+    case Kind::Rgb:
+      return fmt::format("rgb [{} {} {}]", rgb.x, rgb.y, rgb.z);
     case Kind::Blackbody:
-      return blackbody_scale == 1 ? fmt::format("blackbody {}", temperature_k)
-                                  : fmt::format("blackbody [{} {}]", temperature_k,
-                                                blackbody_scale);
+      return blackbody_scale == 1
+                 ? fmt::format("blackbody {}", temperature_k)
+                 : fmt::format("blackbody [{} {}]", temperature_k, blackbody_scale);
     case Kind::Sampled: {
       std::string s = "spectrum [";
       for (size_t i = 0; i < samples.size(); ++i)
@@ -41,7 +48,8 @@ std::string SpectrumValue::str() const {
       return s + "]";
     }
     case Kind::Named:
-    case Kind::File: return fmt::format("spectrum \"{}\"", name);
+    case Kind::File:
+      return fmt::format("spectrum \"{}\"", name);
   }
   return {};
 }
@@ -61,7 +69,10 @@ size_t Scene::triangleCount() const {
 Bounds3 objectBounds(const Scene& scene, const Shape& s) {
   Bounds3 b;
   switch (s.type) {
-    case ShapeType::Sphere: b.extend({-s.radius, -s.radius, s.zmin}); b.extend({s.radius, s.radius, s.zmax}); break;
+    case ShapeType::Sphere:
+      b.extend({-s.radius, -s.radius, s.zmin});
+      b.extend({s.radius, s.radius, s.zmax});
+      break;
     case ShapeType::Cylinder:
       b.extend({-s.radius, -s.radius, s.zmin});
       b.extend({s.radius, s.radius, s.zmax});
@@ -97,10 +108,9 @@ Bounds3 worldBounds(const Scene& scene, const Instance& inst) {
 namespace {
 
 bool isNamedSpectrum(const std::string& n) {
-  static const char* prefixes[] = {"metal-",    "glass-",  "stdillum-", "illum-",
-                                   "canon_",    "nikon_",  "sony_",     "hasselblad_",
-                                   "fujifilm_", "dji_",    "gopro_",    "apple_",
-                                   "google_",   "samsung_", "cie-",     "aces-"};
+  static const char* prefixes[] = {
+      "metal-",    "glass-", "stdillum-", "illum-", "canon_",  "nikon_",   "sony_", "hasselblad_",
+      "fujifilm_", "dji_",   "gopro_",    "apple_", "google_", "samsung_", "cie-",  "aces-"};
   for (const char* p : prefixes)
     if (n.rfind(p, 0) == 0) return true;
   return false;
@@ -290,7 +300,8 @@ class Builder {
             s.samples.push_back({p.numbers[i], p.numbers[i + 1]});
         }
         break;
-      default: throw Error(p.loc, fmt::format("\"{}\": not a spectrum", p.name));
+      default:
+        throw Error(p.loc, fmt::format("\"{}\": not a spectrum", p.name));
     }
     return s;
   }
@@ -300,18 +311,18 @@ class Builder {
     auto it = map.find(name);
     if (it != map.end()) return it->second;
     auto& other = kind == TextureKind::Float ? spectrum_textures_ : float_textures_;
-    throw Error(loc, fmt::format("unknown {} texture \"{}\"{}",
-                                 kind == TextureKind::Float ? "float" : "spectrum", name,
-                                 other.count(name) ? fmt::format(" (\"{}\" is a {} texture)", name,
-                                                                 kind == TextureKind::Float
-                                                                     ? "spectrum"
-                                                                     : "float")
-                                                   : ""));
+    throw Error(loc,
+                fmt::format("unknown {} texture \"{}\"{}",
+                            kind == TextureKind::Float ? "float" : "spectrum", name,
+                            other.count(name)
+                                ? fmt::format(" (\"{}\" is a {} texture)", name,
+                                              kind == TextureKind::Float ? "spectrum" : "float")
+                                : ""));
   }
 
   std::optional<Input> spectrumInput(ParamSet& ps, ParamSet::Names names) {
-    const Param* p = ps.find(names, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody,
-                                     ParamType::Texture});
+    const Param* p = ps.find(
+        names, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody, ParamType::Texture});
     if (!p) return std::nullopt;
     Input in;
     if (p->type == ParamType::Texture)
@@ -356,9 +367,12 @@ class Builder {
       for (int i = 0; i < 2; ++i)
         if (g.active[i]) g.ctm[i] = concat ? g.ctm[i] * t : t;
     };
-    if (n == "Identity") apply(Transform(), false);
-    else if (n == "Translate") apply(Transform::translate({d.numbers[0], d.numbers[1], d.numbers[2]}), true);
-    else if (n == "Scale") apply(Transform::scale(d.numbers[0], d.numbers[1], d.numbers[2]), true);
+    if (n == "Identity")
+      apply(Transform(), false);
+    else if (n == "Translate")
+      apply(Transform::translate({d.numbers[0], d.numbers[1], d.numbers[2]}), true);
+    else if (n == "Scale")
+      apply(Transform::scale(d.numbers[0], d.numbers[1], d.numbers[2]), true);
     else if (n == "Rotate")
       apply(Transform::rotate(d.numbers[0], {d.numbers[1], d.numbers[2], d.numbers[3]}), true);
     else if (n == "LookAt")
@@ -411,7 +425,8 @@ class Builder {
       popState(false);
     } else if (n == "ObjectInstance") {
       if (g.ctm[0] != g.ctm[1])
-        warnOnce("motion", d.loc, "animated transforms are not rendered; the start transform is used");
+        warnOnce("motion", d.loc,
+                 "animated transforms are not rendered; the start transform is used");
       pending_instances_.push_back({d.strings[0], d.loc, g.ctm[0]});
     } else if (n == "Option") {
       option(d);
@@ -441,9 +456,9 @@ class Builder {
     } else if (n == "Accelerator") {
       ParamSet ps(d.params, d.loc, "Accelerator");
       ps.markAllUsed();
-      warnOnce("Accelerator", d.loc,
-               fmt::format("Accelerator \"{}\" is ignored: lensim builds Embree BVHs",
-                           d.strings[0]));
+      warnOnce(
+          "Accelerator", d.loc,
+          fmt::format("Accelerator \"{}\" is ignored: lensim builds Embree BVHs", d.strings[0]));
     } else if (n == "MakeNamedMedium" || n == "MediumInterface") {
       ParamSet ps(d.params, d.loc, n);
       ps.markAllUsed();
@@ -464,8 +479,9 @@ class Builder {
       ParamSet ps(d.params, d.loc, fmt::format("MakeNamedMaterial \"{}\"", d.strings[0]));
       ps.addDefaults(g.material_attrs);
       auto type = ps.findString({"type"});
-      if (!type) throw Error(d.loc, fmt::format("MakeNamedMaterial \"{}\": missing \"string type\"",
-                                                d.strings[0]));
+      if (!type)
+        throw Error(d.loc,
+                    fmt::format("MakeNamedMaterial \"{}\": missing \"string type\"", d.strings[0]));
       Material m = material(*type, ps, d.loc);
       m.name = d.strings[0];
       finish(ps);
@@ -511,13 +527,19 @@ class Builder {
   }
 
   void option(const Directive& d) {
-    static const std::set<std::string> known = {
-        "disablepixeljitter", "disabletexturefiltering", "disablewavelengthjitter",
-        "displacementedgescale", "msereferenceimage", "msereferenceout", "rendercoordsys",
-        "seed", "forcediffuse", "pixelstats", "wavefront"};
+    static const std::set<std::string> known = {"disablepixeljitter",
+                                                "disabletexturefiltering",
+                                                "disablewavelengthjitter",
+                                                "displacementedgescale",
+                                                "msereferenceimage",
+                                                "msereferenceout",
+                                                "rendercoordsys",
+                                                "seed",
+                                                "forcediffuse",
+                                                "pixelstats",
+                                                "wavefront"};
     const Param& p = d.params[0];
-    if (!known.count(p.name))
-      throw Error(p.loc, fmt::format("\"{}\": unknown option", p.name));
+    if (!known.count(p.name)) throw Error(p.loc, fmt::format("\"{}\": unknown option", p.name));
     std::string v;
     for (double x : p.numbers) v += fmt::format("{}{}", v.empty() ? "" : " ", x);
     for (const std::string& s : p.strings) v += (v.empty() ? "" : " ") + s;
@@ -533,7 +555,8 @@ class Builder {
                       : target == "texture"  ? &gs_.texture_attrs
                                              : nullptr;
     if (target == "medium") {
-      warnOnce("medium", d.loc, "Attribute \"medium\" is ignored: participating media are not rendered");
+      warnOnce("medium", d.loc,
+               "Attribute \"medium\" is ignored: participating media are not rendered");
       return;
     }
     if (!list)
@@ -571,8 +594,8 @@ class Builder {
       c.frame_aspect_ratio = ps.findFloat({"frameaspectratio"});
       if (const Param* p = ps.find({"screenwindow"}, {ParamType::Float})) {
         ps.expectCount(*p, 4);
-        c.screen_window = std::array<double, 4>{p->numbers[0], p->numbers[1], p->numbers[2],
-                                                p->numbers[3]};
+        c.screen_window =
+            std::array<double, 4>{p->numbers[0], p->numbers[1], p->numbers[2], p->numbers[3]};
       }
       c.lens_radius = ps.getFloat({"lensradius"}, 0);
       c.focal_distance = ps.getFloat({"focaldistance"}, 1e6);
@@ -674,7 +697,7 @@ class Builder {
     s.defaulted = false;
     s.type_as_written = type;
     s.loc = d.loc;
-    static const std::set<std::string> v4 = {"independent", "stratified", "halton",  "sobol",
+    static const std::set<std::string> v4 = {"independent", "stratified", "halton", "sobol",
                                              "paddedsobol", "zsobol",     "pmj02bn"};
     ps.getInt({"seed"}, 0);
     ps.getString({"randomization"}, "");
@@ -702,9 +725,9 @@ class Builder {
     } else {
       ps.markAllUsed();
       s.type = "zsobol";
-      warnOnce("sampler " + type, d.loc,
-               fmt::format("sampler \"{}\" is not rendered by lensim; it renders as \"zsobol\"",
-                           type));
+      warnOnce(
+          "sampler " + type, d.loc,
+          fmt::format("sampler \"{}\" is not rendered by lensim; it renders as \"zsobol\"", type));
     }
     if (s.pixel_samples <= 0) throw Error(d.loc, "pixelsamples must be positive");
     finish(ps);
@@ -717,7 +740,11 @@ class Builder {
     f.defaulted = false;
     f.type_as_written = type;
     f.loc = d.loc;
-    double def = type == "box" ? 0.5 : type == "gaussian" ? 1.5 : type == "mitchell" ? 2 : type == "triangle" ? 2 : 4;
+    double def = type == "box"        ? 0.5
+                 : type == "gaussian" ? 1.5
+                 : type == "mitchell" ? 2
+                 : type == "triangle" ? 2
+                                      : 4;
     f.type = type == "sinc" ? "lanczos" : type;
     f.x_radius = ps.getFloat({"xradius", "xwidth"}, def);
     f.y_radius = ps.getFloat({"yradius", "ywidth"}, def);
@@ -733,9 +760,9 @@ class Builder {
     } else if (type != "box" && type != "triangle") {
       ps.markAllUsed();
       f.type = "gaussian";
-      warnOnce("filter " + type, d.loc,
-               fmt::format("filter \"{}\" is not rendered by lensim; it renders as \"gaussian\"",
-                           type));
+      warnOnce(
+          "filter " + type, d.loc,
+          fmt::format("filter \"{}\" is not rendered by lensim; it renders as \"gaussian\"", type));
     }
     finish(ps);
   }
@@ -753,8 +780,9 @@ class Builder {
       it.regularize = ps.getBool({"regularize"}, false);
       ps.getString({"lightsampler"}, "bvh");
       if (type == "volpath")
-        warnOnce("integrator volpath", d.loc,
-                 "integrator \"volpath\" renders as \"path\": participating media are not rendered");
+        warnOnce(
+            "integrator volpath", d.loc,
+            "integrator \"volpath\" renders as \"path\": participating media are not rendered");
     } else {
       ps.markAllUsed();
       warnOnce("integrator " + type, d.loc,
@@ -772,8 +800,10 @@ class Builder {
     t.name = name;
     t.loc = d.loc;
     t.type_as_written = cls;
-    if (kind_s == "float") t.kind = TextureKind::Float;
-    else if (kind_s == "spectrum" || kind_s == "color" || kind_s == "rgb") t.kind = TextureKind::Spectrum;
+    if (kind_s == "float")
+      t.kind = TextureKind::Float;
+    else if (kind_s == "spectrum" || kind_s == "color" || kind_s == "rgb")
+      t.kind = TextureKind::Spectrum;
     else
       throw Error(d.loc, fmt::format("texture \"{}\": unknown texture type \"{}\" (expected "
                                      "\"float\" or \"spectrum\")",
@@ -798,7 +828,8 @@ class Builder {
       t.type = cls;
       mapping();
       const Param* fn = ps.find({"filename"}, {ParamType::String});
-      if (!fn) throw Error(d.loc, fmt::format("texture \"{}\": imagemap needs \"string filename\"", name));
+      if (!fn)
+        throw Error(d.loc, fmt::format("texture \"{}\": imagemap needs \"string filename\"", name));
       t.filename_as_written = fn->strings[0];
       t.filename = resolve(fn->strings[0], fn->loc, "image file");
       t.wrap = ps.getString({"wrap"}, "repeat");
@@ -807,7 +838,7 @@ class Builder {
       t.encoding = ps.getString({"encoding"}, "");
       t.filter = ps.getString({"filter"}, "bilinear");
       ps.getFloat({"maxanisotropy"}, 8);
-      ps.getBool({"trilinear"}, false);  // pbrt-v2/v3
+      ps.getBool({"trilinear"}, false);                                                // pbrt-v2/v3
       if (auto g = ps.findFloat({"gamma"})) t.encoding = fmt::format("gamma {}", *g);  // pbrt-v3
     } else if (cls == "scale") {
       t.type = cls;
@@ -865,10 +896,9 @@ class Builder {
       m.remap_roughness = ps.getBool({"remaproughness"}, true);
     };
     auto conductorDefaults = [&]() {
-      m.eta = spectrumInput(ps, {"eta"}).value_or(
-          Input{-1, 0, SpectrumValue::named("metal-Cu-eta")});
-      m.k = spectrumInput(ps, {"k"}).value_or(
-          Input{-1, 0, SpectrumValue::named("metal-Cu-k")});
+      m.eta =
+          spectrumInput(ps, {"eta"}).value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-eta")});
+      m.k = spectrumInput(ps, {"k"}).value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-k")});
     };
     auto dielectricEta = [&](ParamSet::Names names) {
       const Param* p = ps.find(names, {ParamType::Float, ParamType::Spectrum, ParamType::Texture});
@@ -890,13 +920,15 @@ class Builder {
       if (type == "matte") {
         Input sigma = floatInput(ps, {"sigma"}, 0);
         if (sigma.texture >= 0 || sigma.value != 0)
-          warnOnce("matte sigma", loc, "matte \"sigma\" (Oren-Nayar roughness) is not rendered; "
-                                       "the surface renders as Lambertian");
+          warnOnce("matte sigma", loc,
+                   "matte \"sigma\" (Oren-Nayar roughness) is not rendered; "
+                   "the surface renders as Lambertian");
       }
     } else if (type == "coateddiffuse" || type == "plastic" || type == "uber" ||
                type == "substrate") {
       m.type = "coateddiffuse";
-      m.reflectance = spectrumInput(ps, {"reflectance", "Kd"}, type == "coateddiffuse" ? 0.5 : 0.25);
+      m.reflectance =
+          spectrumInput(ps, {"reflectance", "Kd"}, type == "coateddiffuse" ? 0.5 : 0.25);
       m.has_reflectance = true;
       roughness(type == "coateddiffuse" ? 0 : 0.1);
       if (type == "coateddiffuse") {
@@ -947,8 +979,9 @@ class Builder {
                    k.spectrum.rgb != Vec3{1, 1, 1};
         }
         if (tinted)
-          warnOnce("glass tint", loc, "glass \"Kr\"/\"Kt\" tints are not rendered; the glass "
-                                      "renders clear");
+          warnOnce("glass tint", loc,
+                   "glass \"Kr\"/\"Kt\" tints are not rendered; the glass "
+                   "renders clear");
       }
     } else if (type == "interface" || type == "" || type == "none") {
       m.type = "interface";
@@ -1040,8 +1073,7 @@ class Builder {
                            "\"diffuse\" with L = 1",
                            type));
     } else {
-      const Param* p =
-          ps.find({"L"}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody});
+      const Param* p = ps.find({"L"}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody});
       if (p) l.emission = spectrumOf(*p);
       l.scale = ps.getFloat({"scale"}, 1);
       l.two_sided = ps.getBool({"twosided"}, false);
@@ -1069,7 +1101,8 @@ class Builder {
     s.reverse_orientation = gs_.reverse_orientation;
     s.alpha = floatInput(ps, {"alpha"});
     if (gs_.ctm[0] != gs_.ctm[1])
-      warnOnce("motion", d.loc, "animated transforms are not rendered; the start transform is used");
+      warnOnce("motion", d.loc,
+               "animated transforms are not rendered; the start transform is used");
     if (type == "sphere") {
       s.type = ShapeType::Sphere;
       s.radius = ps.getFloat({"radius"}, 1);
@@ -1109,7 +1142,8 @@ class Builder {
     }
     if (s.phimax_deg <= 0 || s.phimax_deg > 360) {
       const Param* p = ps.peek({"phimax"});
-      throw Error(p ? p->loc : d.loc, fmt::format("phimax {} outside (0, 360] degrees", s.phimax_deg));
+      throw Error(p ? p->loc : d.loc,
+                  fmt::format("phimax {} outside (0, 360] degrees", s.phimax_deg));
     }
     if (s.radius <= 0 && s.type != ShapeType::TriangleMesh && s.type != ShapeType::BilinearMesh) {
       const Param* p = ps.peek({"radius"});
@@ -1244,7 +1278,9 @@ class Builder {
 
 }  // namespace
 
-Scene build(const SceneDesc& desc) { return Builder(desc).run(); }
+Scene build(const SceneDesc& desc) {
+  return Builder(desc).run();
+}
 
 Scene loadScene(const std::string& path) {
   Scene s = build(parseFile(path));
@@ -1256,9 +1292,9 @@ Scene loadScene(const std::string& path) {
       ++errors;
     }
   if (first)
-    throw Error(first->loc, errors == 1 ? first->message
-                                        : fmt::format("{} (and {} more errors)", first->message,
-                                                      errors - 1));
+    throw Error(first->loc,
+                errors == 1 ? first->message
+                            : fmt::format("{} (and {} more errors)", first->message, errors - 1));
   return s;
 }
 

@@ -25,10 +25,10 @@ namespace lensim::scene {
 struct SpectrumValue {
   enum class Kind { Rgb, Blackbody, Sampled, Named, File };
   Kind kind = Kind::Rgb;
-  Vec3 rgb{0, 0, 0};                                ///< Kind::Rgb
-  double temperature_k = 0;                         ///< Kind::Blackbody
-  double blackbody_scale = 1;                       ///< pbrt-v3's second blackbody value
-  std::vector<std::pair<double, double>> samples;   ///< Kind::Sampled: (wavelength nm, value)
+  Vec3 rgb{0, 0, 0};                               ///< Kind::Rgb
+  double temperature_k = 0;                        ///< Kind::Blackbody
+  double blackbody_scale = 1;                      ///< pbrt-v3's second blackbody value
+  std::vector<std::pair<double, double>> samples;  ///< Kind::Sampled: (wavelength nm, value)
   std::string name;  ///< Kind::Named: pbrt-v4 spectrum name; Kind::File: the resolved path
 
   static SpectrumValue gray(double v) {
@@ -66,7 +66,7 @@ struct Texture {
   FileLoc loc;
   Transform texture_from_world;  ///< inverse of the transform at the declaration (3D mappings)
   // imagemap
-  std::string filename;             ///< resolved path of the image
+  std::string filename;  ///< resolved path of the image
   std::string filename_as_written;
   double uscale = 1, vscale = 1, udelta = 0, vdelta = 0;
   std::string mapping = "uv";
@@ -78,8 +78,8 @@ struct Texture {
   // scale, mix, checkerboard, constant
   Input tex1, tex2;
   bool scale_is_float = false;  ///< scale: tex2 is pbrt-v4's float `scale`
-  Input amount;  ///< mix
-  int dimension = 2;  ///< checkerboard
+  Input amount;                 ///< mix
+  int dimension = 2;            ///< checkerboard
 };
 
 /// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
@@ -110,9 +110,9 @@ struct Mesh {
   int vertices_per_face = 3;
   std::vector<Vec3f> positions;
   std::vector<int> indices;
-  std::vector<Vec3f> normals;              ///< empty or one per vertex
-  std::vector<Vec3f> tangents;             ///< `S`: empty or one per vertex
-  std::vector<std::array<float, 2>> uvs;   ///< empty or one per vertex
+  std::vector<Vec3f> normals;             ///< empty or one per vertex
+  std::vector<Vec3f> tangents;            ///< `S`: empty or one per vertex
+  std::vector<std::array<float, 2>> uvs;  ///< empty or one per vertex
   std::vector<int> face_indices;
   std::string source;  ///< PLY file it came from, if any
   size_t faceCount() const { return indices.size() / static_cast<size_t>(vertices_per_face); }
@@ -126,10 +126,10 @@ struct Shape {
   /// object → world; for shapes of an object definition, object → instance.
   Transform transform;
   bool reverse_orientation = false;
-  int material = -1;    ///< index into Scene::materials
-  int area_light = -1;  ///< index into Scene::lights, or -1
+  int material = -1;           ///< index into Scene::materials
+  int area_light = -1;         ///< index into Scene::lights, or -1
   std::optional<Input> alpha;  ///< float: 1 opaque, 0 cut out
-  int object = -1;      ///< index into Scene::objects when part of an object definition
+  int object = -1;             ///< index into Scene::objects when part of an object definition
   // Quadrics (scene units, degrees).
   double radius = 1, inner_radius = 0, height = 0, zmin = -1, zmax = 1, phimax_deg = 360;
   int mesh = -1;  ///< index into Scene::meshes for meshes
@@ -147,8 +147,8 @@ struct ObjectDef {
 
 /// One ObjectInstance.
 struct Instance {
-  int object = -1;       ///< index into Scene::objects
-  Transform transform;   ///< instance → world
+  int object = -1;      ///< index into Scene::objects
+  Transform transform;  ///< instance → world
   FileLoc loc;
 };
 
@@ -159,7 +159,8 @@ struct Light {
   std::string type_as_written;
   FileLoc loc;
   Transform transform;  ///< light → world
-  SpectrumValue emission = SpectrumValue::gray(1);  ///< L (area, distant, infinite) or I (point, spot)
+  SpectrumValue emission =
+      SpectrumValue::gray(1);  ///< L (area, distant, infinite) or I (point, spot)
   double scale = 1;
   std::optional<double> power;  ///< pbrt-v4 `power` (W), if given
   Vec3 from{0, 0, 0}, to{0, 0, 1};
@@ -171,12 +172,12 @@ struct Light {
 
 /// pbrt-v1/v2 `realistic` camera (Stanford CS348B): camera space is millimetres.
 struct LegacyRealistic {
-  std::string lens_file;             ///< resolved path of `specfile`
+  std::string lens_file;  ///< resolved path of `specfile`
   std::string lens_file_as_written;
-  double film_distance_mm = 0;       ///< `filmdistance`: last lens vertex to film
-  double aperture_diameter_mm = 0;   ///< `aperture_diameter`
-  double film_diagonal_mm = 35;      ///< `filmdiag`
-  std::string af_zones_file;         ///< resolved `af_zones`, empty if none
+  double film_distance_mm = 0;      ///< `filmdistance`: last lens vertex to film
+  double aperture_diameter_mm = 0;  ///< `aperture_diameter`
+  double film_diagonal_mm = 35;     ///< `filmdiag`
+  std::string af_zones_file;        ///< resolved `af_zones`, empty if none
 };
 
 /// pbrt-v3/v4 `realistic` camera: lens data in millimetres, scene in metres.
@@ -185,7 +186,7 @@ struct Realistic {
   std::string lens_file_as_written;
   double aperture_diameter_mm = 1;
   double focus_distance_m = 10;
-  std::string aperture;  ///< pbrt-v4 aperture shape name or image file; empty: circular
+  std::string aperture;          ///< pbrt-v4 aperture shape name or image file; empty: circular
   bool simple_weighting = true;  ///< pbrt-v3
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
@@ -239,9 +240,9 @@ struct Filter {
   std::string type_as_written;
   FileLoc loc;
   double x_radius = 1.5, y_radius = 1.5;
-  double sigma = 0.5;           ///< gaussian (pbrt-v4)
+  double sigma = 0.5;               ///< gaussian (pbrt-v4)
   double b = 1.0 / 3, c = 1.0 / 3;  ///< mitchell
-  double tau = 3;               ///< lanczos
+  double tau = 3;                   ///< lanczos
   bool defaulted = true;
 };
 

@@ -19,7 +19,7 @@ std::string inputStr(const Scene& scene, const Input& in, bool is_float) {
 }
 
 std::string plural(size_t n, std::string_view word) {
-  return fmt::format("{} {}{}", n, word, n == 1 ? "" : "s");
+  return fmt::format("{} {}{}", n, word, n == 1 ? "" : (word.ends_with("sh") ? "es" : "s"));
 }
 
 // "a ×2, b ×1" from ordered counts.
@@ -39,6 +39,7 @@ void addCount(std::vector<std::pair<std::string, int>>& counts, const std::strin
 }
 
 std::string renamed(const std::string& written, const std::string& used) {
+  if (written == "(default)") return used + " (default)";
   if (written.empty() || written == used) return used;
   return fmt::format("{} (as {})", written, used);
 }
@@ -85,28 +86,25 @@ std::string summary(const Scene& scene) {
   } else {
     line(fmt::format("camera: {} ({})", renamed(c.type_as_written, c.type), c.loc.str()));
   }
-  if (!c.defaulted)
-    line(fmt::format("  shutter {} to {}", c.shutter_open, c.shutter_close));
+  if (!c.defaulted) line(fmt::format("  shutter {} to {}", c.shutter_open, c.shutter_close));
 
   const Film& f = scene.film;
   line(fmt::format("film: {}, {}×{}, output \"{}\"{}", renamed(f.type_as_written, f.type),
-                   f.x_resolution, f.y_resolution, f.filename,
-                   f.defaulted ? " (default)" : ""));
+                   f.x_resolution, f.y_resolution, f.filename, f.defaulted ? " (default)" : ""));
   const Sampler& s = scene.sampler;
   line(fmt::format("sampler: {}, {} samples per pixel{}", renamed(s.type_as_written, s.type),
                    s.pixel_samples, s.defaulted ? " (default)" : ""));
   const Filter& fl = scene.filter;
-  line(fmt::format("pixel filter: {}, radius {} × {}{}", renamed(fl.type_as_written, fl.type),
-                   fl.x_radius, fl.y_radius,
-                   fl.defaulted ? (scene.legacy_syntax ? " (pbrt-v1–v3 default)" : " (default)")
-                                : ""));
+  line(fmt::format(
+      "pixel filter: {}, radius {} × {}{}", renamed(fl.type_as_written, fl.type), fl.x_radius,
+      fl.y_radius,
+      fl.defaulted ? (scene.legacy_syntax ? " (pbrt-v1–v3 default)" : " (default)") : ""));
   const Integrator& in = scene.integrator;
-  line(fmt::format("integrator: {}, maxdepth {}{}", renamed(in.type_as_written, in.type),
-                   in.max_depth,
-                   in.defaulted ? (scene.legacy_syntax
-                                       ? " (default; pbrt-v1–v3 would use directlighting)"
-                                       : " (default)")
-                                : ""));
+  line(fmt::format(
+      "integrator: {}, maxdepth {}{}", renamed(in.type_as_written, in.type), in.max_depth,
+      in.defaulted
+          ? (scene.legacy_syntax ? " (default; pbrt-v1–v3 would use directlighting)" : " (default)")
+          : ""));
 
   // Shapes.
   std::vector<std::pair<std::string, int>> world, inObjects;
@@ -120,7 +118,8 @@ std::string summary(const Scene& scene) {
   line(fmt::format("shapes: {} in the world{}, {} in object definitions{}", nWorld,
                    world.empty() ? "" : " (" + countList(world) + ")", nObj,
                    inObjects.empty() ? "" : " (" + countList(inObjects) + ")"));
-  line(fmt::format("triangles: {} in {}", scene.triangleCount(), plural(scene.meshes.size(), "mesh")));
+  line(fmt::format("triangles: {} in {}", scene.triangleCount(),
+                   plural(scene.meshes.size(), "mesh")));
   std::string objs;
   for (const ObjectDef& o : scene.objects) {
     std::vector<std::pair<std::string, int>> k;
@@ -139,9 +138,9 @@ std::string summary(const Scene& scene) {
   // Materials, textures, lights.
   std::vector<std::pair<std::string, int>> mats;
   for (const Material& m : scene.materials) {
-    std::string key = m.fallback ? fmt::format("{} (not rendered: as diffuse grey)",
-                                               m.type_as_written)
-                                 : renamed(m.type_as_written, m.type);
+    std::string key = m.fallback
+                          ? fmt::format("{} (not rendered: as diffuse grey)", m.type_as_written)
+                          : renamed(m.type_as_written, m.type);
     addCount(mats, key);
   }
   line(fmt::format("materials: {}{}", scene.materials.size(),
@@ -153,7 +152,8 @@ std::string summary(const Scene& scene) {
                                    renamed(t.type_as_written, t.type));
     if (t.type == "imagemap") {
       what += fmt::format(" \"{}\"", t.filename_as_written);
-      if (t.uscale != 1 || t.vscale != 1) what += fmt::format(", uv scale {} × {}", t.uscale, t.vscale);
+      if (t.uscale != 1 || t.vscale != 1)
+        what += fmt::format(", uv scale {} × {}", t.uscale, t.vscale);
     } else if (t.type == "scale") {
       what += fmt::format(": {} × {}", inputStr(scene, t.tex1, fl_kind),
                           inputStr(scene, t.tex2, fl_kind || t.scale_is_float));
@@ -177,7 +177,8 @@ std::string summary(const Scene& scene) {
           addCount(k, std::string(shapeTypeName(sh.type)));
       line(fmt::format("  area light {}: L {}{}{}, on {}{}", renamed(l.type_as_written, l.type),
                        l.emission.str(), l.scale != 1 ? fmt::format(", scale {}", l.scale) : "",
-                       l.two_sided ? ", two-sided" : "", plural(static_cast<size_t>(l.shape_count), "shape"),
+                       l.two_sided ? ", two-sided" : "",
+                       plural(static_cast<size_t>(l.shape_count), "shape"),
                        k.empty() ? "" : " (" + countList(k) + ")"));
     } else {
       line(fmt::format("  {}: {} {}{}{}", l.type, l.type == "point" || l.type == "spot" ? "I" : "L",
@@ -210,8 +211,8 @@ std::string quote(const std::string& s) {
 std::string v4ParamName(const std::string& directive, const std::string& type,
                         const std::string& name) {
   if (directive == "Material" || directive == "MakeNamedMaterial") {
-    if (name == "Kd" && (type == "matte" || type == "plastic" || type == "uber" ||
-                         type == "substrate"))
+    if (name == "Kd" &&
+        (type == "matte" || type == "plastic" || type == "uber" || type == "substrate"))
       return "reflectance";
     if (name == "Kr" && type == "mirror") return "reflectance";
     if (name == "index") return "eta";
@@ -228,8 +229,8 @@ std::string v4ParamName(const std::string& directive, const std::string& type,
 
 std::string v4TypeName(const std::string& directive, const std::string& type) {
   static const std::map<std::string, std::string> materials = {
-      {"matte", "diffuse"}, {"plastic", "coateddiffuse"}, {"uber", "coateddiffuse"},
-      {"substrate", "coateddiffuse"}, {"metal", "conductor"}, {"mirror", "conductor"},
+      {"matte", "diffuse"},           {"plastic", "coateddiffuse"}, {"uber", "coateddiffuse"},
+      {"substrate", "coateddiffuse"}, {"metal", "conductor"},       {"mirror", "conductor"},
       {"glass", "dielectric"}};
   if (directive == "Material") {
     auto it = materials.find(type);
@@ -237,8 +238,8 @@ std::string v4TypeName(const std::string& directive, const std::string& type) {
   }
   if (directive == "AreaLightSource" && type == "area") return "diffuse";
   if ((directive == "PixelFilter" || directive == "Filter") && type == "sinc") return "lanczos";
-  if (directive == "Sampler" && (type == "lowdiscrepancy" || type == "02sequence" ||
-                                 type == "bestcandidate"))
+  if (directive == "Sampler" &&
+      (type == "lowdiscrepancy" || type == "02sequence" || type == "bestcandidate"))
     return "zsobol";
   if (directive == "Sampler" && type == "random") return "independent";
   return type;
@@ -251,7 +252,8 @@ std::string paramStr(const std::string& directive, const std::string& type, cons
   if (directive == "Shape" && name == "uv" && p.type == ParamType::Float) t = "point2";
   std::string values;
   for (double v : p.numbers) values += fmt::format("{}{}", values.empty() ? "" : " ", v);
-  for (const std::string& s : p.strings) values += fmt::format("{}{}", values.empty() ? "" : " ", quote(s));
+  for (const std::string& s : p.strings)
+    values += fmt::format("{}{}", values.empty() ? "" : " ", quote(s));
   for (bool b : p.bools) values += fmt::format("{}{}", values.empty() ? "" : " ", b);
   size_t n = p.numbers.size() + p.strings.size() + p.bools.size();
   return fmt::format("{} {}", quote(t + " " + name), n == 1 ? values : "[ " + values + " ]");
@@ -260,8 +262,8 @@ std::string paramStr(const std::string& directive, const std::string& type, cons
 }  // namespace
 
 std::string formatPbrtV4(const SceneDesc& desc) {
-  std::string out = fmt::format("# {} in normalised pbrt-v4 syntax (lensim check --format)\n",
-                                desc.path);
+  std::string out =
+      fmt::format("# {} in normalised pbrt-v4 syntax (lensim check --format)\n", desc.path);
   std::string file = desc.path;
   int indent = 0;
   for (const Directive& d : desc.directives) {

@@ -62,13 +62,12 @@ void ParamSet::fail(const Param& p, std::string_view message) const {
 
 void ParamSet::expectCount(const Param& p, size_t n) const {
   size_t c = valueCount(p);
-  if (p.type == ParamType::Point3 || p.type == ParamType::Vector3 ||
-      p.type == ParamType::Normal3 || p.type == ParamType::Rgb)
+  if (p.type == ParamType::Point3 || p.type == ParamType::Vector3 || p.type == ParamType::Normal3 ||
+      p.type == ParamType::Rgb)
     c /= 3;
   else if (p.type == ParamType::Point2 || p.type == ParamType::Vector2)
     c /= 2;
-  if (c != n)
-    fail(p, fmt::format("expected {} value{}, got {}", n, n == 1 ? "" : "s", c));
+  if (c != n) fail(p, fmt::format("expected {} value{}, got {}", n, n == 1 ? "" : "s", c));
 }
 
 std::optional<double> ParamSet::findFloat(Names names) {
@@ -78,7 +77,9 @@ std::optional<double> ParamSet::findFloat(Names names) {
   return p->numbers[0];
 }
 
-double ParamSet::getFloat(Names names, double def) { return findFloat(names).value_or(def); }
+double ParamSet::getFloat(Names names, double def) {
+  return findFloat(names).value_or(def);
+}
 
 int ParamSet::getInt(Names names, int def) {
   const Param* p = find(names, {ParamType::Integer});
@@ -141,8 +142,8 @@ void ParamSet::markAllUsed() {
 void ParamSet::reportUnused(std::vector<Diagnostic>& out) const {
   for (const Entry& e : entries_)
     if (!e.used && !e.is_default)
-      out.push_back({Severity::Error, e.param->loc,
-                     fmt::format("\"{}\": unused parameter", e.param->name)});
+      out.push_back(
+          {Severity::Error, e.param->loc, fmt::format("\"{}\": unused parameter", e.param->name)});
 }
 
 }  // namespace lensim::scene

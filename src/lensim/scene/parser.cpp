@@ -17,19 +17,32 @@ namespace lensim::scene {
 
 std::string_view paramTypeName(ParamType t) {
   switch (t) {
-    case ParamType::Float: return "float";
-    case ParamType::Integer: return "integer";
-    case ParamType::Bool: return "bool";
-    case ParamType::String: return "string";
-    case ParamType::Texture: return "texture";
-    case ParamType::Point2: return "point2";
-    case ParamType::Point3: return "point3";
-    case ParamType::Vector2: return "vector2";
-    case ParamType::Vector3: return "vector3";
-    case ParamType::Normal3: return "normal3";
-    case ParamType::Rgb: return "rgb";
-    case ParamType::Spectrum: return "spectrum";
-    case ParamType::Blackbody: return "blackbody";
+    case ParamType::Float:
+      return "float";
+    case ParamType::Integer:
+      return "integer";
+    case ParamType::Bool:
+      return "bool";
+    case ParamType::String:
+      return "string";
+    case ParamType::Texture:
+      return "texture";
+    case ParamType::Point2:
+      return "point2";
+    case ParamType::Point3:
+      return "point3";
+    case ParamType::Vector2:
+      return "vector2";
+    case ParamType::Vector3:
+      return "vector3";
+    case ParamType::Normal3:
+      return "normal3";
+    case ParamType::Rgb:
+      return "rgb";
+    case ParamType::Spectrum:
+      return "spectrum";
+    case ParamType::Blackbody:
+      return "blackbody";
   }
   return "?";
 }
@@ -39,7 +52,16 @@ namespace {
 namespace fs = std::filesystem;
 
 // How a directive's positional arguments are written.
-enum class Args { None, Numbers, Word, OneString, TypeAndParams, TextureDecl, MediumInterface, Option };
+enum class Args {
+  None,
+  Numbers,
+  Word,
+  OneString,
+  TypeAndParams,
+  TextureDecl,
+  MediumInterface,
+  Option
+};
 
 struct DirectiveSpec {
   Args args;
@@ -110,14 +132,22 @@ std::optional<double> parseNumber(std::string_view s) {
 
 std::optional<ParamType> parseType(std::string_view t, bool& legacy) {
   static const std::map<std::string, std::pair<ParamType, bool>, std::less<>> types = {
-      {"float", {ParamType::Float, false}},       {"integer", {ParamType::Integer, false}},
-      {"bool", {ParamType::Bool, false}},         {"string", {ParamType::String, false}},
-      {"texture", {ParamType::Texture, false}},   {"point2", {ParamType::Point2, false}},
-      {"point3", {ParamType::Point3, false}},     {"point", {ParamType::Point3, true}},
-      {"vector2", {ParamType::Vector2, false}},   {"vector3", {ParamType::Vector3, false}},
-      {"vector", {ParamType::Vector3, true}},     {"normal3", {ParamType::Normal3, false}},
-      {"normal", {ParamType::Normal3, false}},    {"rgb", {ParamType::Rgb, false}},
-      {"color", {ParamType::Rgb, true}},          {"spectrum", {ParamType::Spectrum, false}},
+      {"float", {ParamType::Float, false}},
+      {"integer", {ParamType::Integer, false}},
+      {"bool", {ParamType::Bool, false}},
+      {"string", {ParamType::String, false}},
+      {"texture", {ParamType::Texture, false}},
+      {"point2", {ParamType::Point2, false}},
+      {"point3", {ParamType::Point3, false}},
+      {"point", {ParamType::Point3, true}},
+      {"vector2", {ParamType::Vector2, false}},
+      {"vector3", {ParamType::Vector3, false}},
+      {"vector", {ParamType::Vector3, true}},
+      {"normal3", {ParamType::Normal3, false}},
+      {"normal", {ParamType::Normal3, false}},
+      {"rgb", {ParamType::Rgb, false}},
+      {"color", {ParamType::Rgb, true}},
+      {"spectrum", {ParamType::Spectrum, false}},
       {"blackbody", {ParamType::Blackbody, false}},
   };
   auto it = types.find(t);
@@ -155,15 +185,16 @@ class Parser {
       Token t = next(tok);
       if (t.kind == Token::Kind::End) break;
       if (t.kind != Token::Kind::Word) {
-        throw Error(tok.loc(t), t.kind == Token::Kind::String
-                                    ? fmt::format("unexpected string \"{}\"; expected a directive",
-                                                  t.text)
-                                    : fmt::format("unexpected '{}'; expected a directive", t.text));
+        throw Error(tok.loc(t),
+                    t.kind == Token::Kind::String
+                        ? fmt::format("unexpected string \"{}\"; expected a directive", t.text)
+                        : fmt::format("unexpected '{}'; expected a directive", t.text));
       }
       auto it = directiveSpecs().find(t.text);
       if (it == directiveSpecs().end()) {
         if (parseNumber(t.text))
-          throw Error(tok.loc(t), fmt::format("unexpected number {}; expected a directive", t.text));
+          throw Error(tok.loc(t),
+                      fmt::format("unexpected number {}; expected a directive", t.text));
         throw Error(tok.loc(t), fmt::format("unknown directive \"{}\"", t.text));
       }
       const DirectiveSpec& spec = it->second;
@@ -177,6 +208,13 @@ class Parser {
         fs::path p(d.strings[0]);
         if (p.is_relative()) p = fs::path(file).parent_path() / p;
         std::string resolved = p.lexically_normal().string();
+        std::error_code ec;
+        if (!fs::is_regular_file(resolved, ec)) {
+          desc_.diagnostics.push_back({Severity::Error, d.loc,
+                                       fmt::format("included file \"{}\" not found (looked for {})",
+                                                   d.strings[0], resolved)});
+          continue;
+        }
         // The nested file has its own tokenizer; keep our lookahead across it.
         saved_pending = pending_;
         pending_.reset();
@@ -228,7 +266,8 @@ class Parser {
       d.strings.push_back(s.text);
     };
     switch (spec.args) {
-      case Args::None: break;
+      case Args::None:
+        break;
       case Args::Numbers: {
         bool bracket = false;
         Token open;
@@ -243,8 +282,8 @@ class Parser {
           if (!v) {
             if (bracket && (n.kind == Token::Kind::End || n.kind == Token::Kind::Word))
               throw Error(tok.loc(open), "unterminated array");
-            throw Error(d.loc, fmt::format("{}: expected {} numbers, got {}", d.name, spec.count,
-                                           i));
+            throw Error(d.loc,
+                        fmt::format("{}: expected {} numbers, got {}", d.name, spec.count, i));
           }
           d.numbers.push_back(*v);
         }
@@ -256,24 +295,25 @@ class Parser {
             throw Error(d.loc, fmt::format("{}: expected {} numbers", d.name, spec.count));
           }
         } else if (peek(tok).kind == Token::Kind::Word && parseNumber(peek(tok).text)) {
-          throw Error(d.loc, fmt::format("{}: expected {} numbers, got more", d.name,
-                                         spec.count));
+          throw Error(d.loc, fmt::format("{}: expected {} numbers, got more", d.name, spec.count));
         }
         break;
       }
       case Args::Word: {
         Token w = next(tok);
-        if (w.kind != Token::Kind::Word || (w.text != "StartTime" && w.text != "EndTime" &&
-                                            w.text != "All"))
+        if (w.kind != Token::Kind::Word ||
+            (w.text != "StartTime" && w.text != "EndTime" && w.text != "All"))
           throw Error(w.kind == Token::Kind::End ? d.loc : tok.loc(w),
                       "ActiveTransform: expected StartTime, EndTime or All");
         d.word = w.text;
         break;
       }
-      case Args::OneString: expectString("a name"); break;
+      case Args::OneString:
+        expectString("a name");
+        break;
       case Args::TypeAndParams:
         expectString(d.name == "MakeNamedMaterial" || d.name == "MakeNamedMedium" ? "a name"
-                                                                                    : "a type");
+                                                                                  : "a type");
         d.params = parseParams(tok);
         break;
       case Args::TextureDecl:
@@ -307,8 +347,8 @@ class Parser {
                                        decl.text));
       bool legacy = false;
       auto pt = parseType(type, legacy);
-      if (!pt) throw Error(p.loc, fmt::format("unknown parameter type \"{}\" in \"{}\"", type,
-                                              decl.text));
+      if (!pt)
+        throw Error(p.loc, fmt::format("unknown parameter type \"{}\" in \"{}\"", type, decl.text));
       if (legacy) desc_.legacy_syntax = true;
       p.type = *pt;
       p.type_as_written = type;
@@ -344,10 +384,10 @@ class Parser {
   void convertValues(Param& p, const std::vector<Token>& values, Tokenizer& tok) {
     const std::string decl = fmt::format("\"{} {}\"", p.type_as_written, p.name);
     auto wrongKind = [&](const Token& v, const char* expected) {
-      throw Error(tok.loc(v), fmt::format("{}: expected {}, got {}", decl, expected,
-                                          v.kind == Token::Kind::String
-                                              ? fmt::format("string \"{}\"", v.text)
-                                              : fmt::format("'{}'", v.text)));
+      throw Error(tok.loc(v),
+                  fmt::format("{}: expected {}, got {}", decl, expected,
+                              v.kind == Token::Kind::String ? fmt::format("string \"{}\"", v.text)
+                                                            : fmt::format("'{}'", v.text)));
     };
     auto numbers = [&]() {
       for (const Token& v : values) {
@@ -359,11 +399,13 @@ class Parser {
     };
     auto count = [&](size_t multiple, const char* what) {
       if (values.empty() || values.size() % multiple != 0)
-        throw Error(p.loc, fmt::format("{}: expected {}, got {} value{}", decl, what,
-                                       values.size(), values.size() == 1 ? "" : "s"));
+        throw Error(p.loc, fmt::format("{}: expected {}, got {} value{}", decl, what, values.size(),
+                                       values.size() == 1 ? "" : "s"));
     };
     switch (p.type) {
-      case ParamType::Float: numbers(); break;
+      case ParamType::Float:
+        numbers();
+        break;
       case ParamType::Integer:
         numbers();
         for (size_t i = 0; i < p.numbers.size(); ++i)
@@ -372,9 +414,12 @@ class Parser {
         break;
       case ParamType::Bool:
         for (const Token& v : values) {
-          if (v.text == "true") p.bools.push_back(true);
-          else if (v.text == "false") p.bools.push_back(false);
-          else wrongKind(v, "true or false");
+          if (v.text == "true")
+            p.bools.push_back(true);
+          else if (v.text == "false")
+            p.bools.push_back(false);
+          else
+            wrongKind(v, "true or false");
         }
         break;
       case ParamType::String:
@@ -423,8 +468,7 @@ class Parser {
 
   void checkStructure(const DirectiveSpec& spec, const Directive& d) {
     using B = DirectiveSpec::Block;
-    if (world_ended_)
-      throw Error(d.loc, fmt::format("{} after WorldEnd", d.name));
+    if (world_ended_) throw Error(d.loc, fmt::format("{} after WorldEnd", d.name));
     if (spec.block == B::Options && in_world_)
       throw Error(d.loc, fmt::format("{} is only allowed before WorldBegin", d.name));
     if (spec.block == B::World && !in_world_)
@@ -438,9 +482,9 @@ class Parser {
       in_world_ = true;
     } else if (n == "WorldEnd") {
       if (!stack_.empty())
-        throw Error(stack_.back().loc, fmt::format("{} without matching {} before WorldEnd",
-                                                   stack_.back().name,
-                                                   endName(stack_.back().name)));
+        throw Error(stack_.back().loc,
+                    fmt::format("{} without matching {} before WorldEnd", stack_.back().name,
+                                endName(stack_.back().name)));
       world_ended_ = true;
     } else if (n == "AttributeBegin" || n == "TransformBegin") {
       stack_.push_back({n, d.loc});
@@ -473,7 +517,7 @@ class Parser {
   }
 
   static const char* endName(const std::string& begin) {
-    return begin == "ObjectBegin" ? "ObjectEnd"
+    return begin == "ObjectBegin"      ? "ObjectEnd"
            : begin == "AttributeBegin" ? "AttributeEnd"
                                        : "TransformEnd";
   }

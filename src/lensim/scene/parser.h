@@ -37,10 +37,10 @@ struct Param {
   ParamType type = ParamType::Float;
   std::string type_as_written;  ///< e.g. "color" or "point" in v1–v3 files
   std::string name;
-  FileLoc loc;                        ///< where the declaration string starts
-  std::vector<double> numbers;        ///< numeric types, and spectrum given as values
-  std::vector<std::string> strings;   ///< string, texture, and spectrum given by name or file
-  std::vector<bool> bools;            ///< bool
+  FileLoc loc;                       ///< where the declaration string starts
+  std::vector<double> numbers;       ///< numeric types, and spectrum given as values
+  std::vector<std::string> strings;  ///< string, texture, and spectrum given by name or file
+  std::vector<bool> bools;           ///< bool
 };
 
 using ParamList = std::vector<Param>;

@@ -41,20 +41,31 @@ Token Tokenizer::next() {
       get();
       t.kind = Token::Kind::String;
       for (;;) {
-        if (pos_ >= text_.size() || text_[pos_] == '\n')
-          throw Error(loc(t), "unterminated string");
+        if (pos_ >= text_.size() || text_[pos_] == '\n') throw Error(loc(t), "unterminated string");
         char d = get();
         if (d == '"') break;
         if (d == '\\') {
           if (pos_ >= text_.size()) throw Error(loc(t), "unterminated string");
           char e = get();
           switch (e) {
-            case 'n': t.text += '\n'; break;
-            case 't': t.text += '\t'; break;
-            case 'r': t.text += '\r'; break;
-            case 'b': t.text += '\b'; break;
-            case 'f': t.text += '\f'; break;
-            default: t.text += e; break;  // \\, \", \' and anything else: the character
+            case 'n':
+              t.text += '\n';
+              break;
+            case 't':
+              t.text += '\t';
+              break;
+            case 'r':
+              t.text += '\r';
+              break;
+            case 'b':
+              t.text += '\b';
+              break;
+            case 'f':
+              t.text += '\f';
+              break;
+            default:
+              t.text += e;
+              break;  // \\, \", \' and anything else: the character
           }
           continue;
         }

@@ -79,7 +79,9 @@ Transform Transform::operator*(const Transform& o) const {
   return Transform(multiply(m_, o.m_), multiply(o.inv_, inv_));
 }
 
-bool Transform::isIdentity() const { return m_ == identityMatrix(); }
+bool Transform::isIdentity() const {
+  return m_ == identityMatrix();
+}
 
 bool Transform::swapsHandedness() const {
   const Matrix& m = m_;
@@ -116,8 +118,8 @@ Bounds3 Transform::applyBounds(const Bounds3& b) const {
   Bounds3 r;
   if (b.empty()) return r;
   for (int i = 0; i < 8; ++i)
-    r.extend(applyPoint({(i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y,
-                         (i & 4) ? b.max.z : b.min.z}));
+    r.extend(applyPoint(
+        {(i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y, (i & 4) ? b.max.z : b.min.z}));
   return r;
 }
 
@@ -179,7 +181,9 @@ Transform Transform::fromPbrt(const std::array<double, 16>& v) {
   return Transform(m);
 }
 
-Transform inverse(const Transform& t) { return Transform(t.inverseMatrix(), t.matrix()); }
+Transform inverse(const Transform& t) {
+  return Transform(t.inverseMatrix(), t.matrix());
+}
 
 Transform transpose(const Transform& t) {
   return Transform(transposed(t.matrix()), transposed(t.inverseMatrix()));
