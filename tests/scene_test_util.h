@@ -5,6 +5,8 @@
 #include <fstream>
 #include <string>
 
+#include <unistd.h>
+
 #include "lensim/scene/builder.h"
 #include "lensim/scene/parser.h"
 
@@ -14,10 +16,9 @@ namespace lensim::testutil {
 class TempDir {
  public:
   explicit TempDir(const std::string& name) {
+    // Unique per process: tests run in parallel, possibly from several checkouts.
     path_ = std::filesystem::temp_directory_path() /
-            (name + "-" +
-             std::to_string(std::hash<std::string>{}(
-                 name + std::to_string(reinterpret_cast<uintptr_t>(this)))));
+            (name + "-" + std::to_string(static_cast<long>(getpid())));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

@@ -242,6 +242,7 @@ std::string v4TypeName(const std::string& directive, const std::string& type) {
       (type == "lowdiscrepancy" || type == "02sequence" || type == "bestcandidate"))
     return "zsobol";
   if (directive == "Sampler" && type == "random") return "independent";
+  if (directive == "Film" && type == "image") return "rgb";
   return type;
 }
 
@@ -295,7 +296,20 @@ std::string formatPbrtV4(const SceneDesc& desc) {
     }
     for (double v : d.numbers) line += fmt::format(" {}", v);
     if (!d.word.empty()) line += fmt::format(" {}", d.word);
-    for (const Param& p : d.params) line += fmt::format(" {}", paramStr(name, type, p));
+    for (const Param& p : d.params) {
+      // pbrt-v1–v3 sample counts that pbrt-v4 does not have.
+      if ((name == "AreaLightSource" || name == "LightSource") && p.name == "nsamples") continue;
+      if (name == "Sampler" && p.name == "dimensions") continue;
+      // A grey rgb factor of a pbrt-v1–v3 scale texture is pbrt-v4's float "scale".
+      if (name == "Texture" && type == "scale" && p.name == "tex2" && p.type == ParamType::Rgb &&
+          p.numbers.size() == 3 && p.numbers[0] == p.numbers[1] && p.numbers[1] == p.numbers[2]) {
+        line += fmt::format(" \"float scale\" {}", p.numbers[0]);
+        continue;
+      }
+      line += fmt::format(" {}", paramStr(name, type, p));
+    }
+    if (name == "Shape" && (type == "cone" || type == "paraboloid" || type == "hyperboloid"))
+      line += "  # pbrt-v1–v3 shape (not in pbrt-v4); lensim reads it";
     out += line + "\n";
     if (name == "AttributeBegin" || name == "TransformBegin" || name == "ObjectBegin") ++indent;
   }
