@@ -676,12 +676,17 @@ class Builder {
       ps.expectCount(*p, 4);
       f.crop_window = {p->numbers[0], p->numbers[1], p->numbers[2], p->numbers[3]};
     }
-    if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
+    if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) {
+      ps.expectCount(*p, 4);
+      f.pixel_bounds = std::array<int, 4>{int(p->numbers[0]), int(p->numbers[1]),
+                                          int(p->numbers[2]), int(p->numbers[3])};
+    }
+    f.scale = ps.getFloat({"scale"}, 1);  // pbrt-v3 image film
     f.diagonal_mm = ps.getFloat({"diagonal"}, 35);
     f.iso = ps.getFloat({"iso"}, 100);
     f.white_balance_k = ps.getFloat({"whitebalance"}, 0);
     f.sensor = ps.getString({"sensor"}, "cie1931");
-    f.max_component_value = ps.getFloat({"maxcomponentvalue"}, 1e300);
+    f.max_component_value = ps.getFloat({"maxcomponentvalue", "maxsampleluminance"}, 1e300);
     f.save_fp16 = ps.getBool({"savefp16"}, true);
     ps.getBool({"display"}, false);  // pbrt-v2 image film: open a window
     if (type == "spectral" || type == "gbuffer") ps.markAllUsed();
@@ -699,8 +704,9 @@ class Builder {
     s.loc = d.loc;
     static const std::set<std::string> v4 = {"independent", "stratified", "halton", "sobol",
                                              "paddedsobol", "zsobol",     "pmj02bn"};
-    ps.getInt({"seed"}, 0);
-    ps.getString({"randomization"}, "");
+    s.seed = ps.getInt({"seed"}, 0);
+    s.randomization = ps.getString({"randomization"}, "");
+    ps.getBool({"samplepixelcenter"}, false);  // pbrt-v3 halton
     if (type == "stratified") {
       int x = ps.getInt({"xsamples"}, 4), y = ps.getInt({"ysamples"}, 4);
       ps.getBool({"jitter"}, true);
@@ -710,7 +716,7 @@ class Builder {
       s.type = type;
       s.pixel_samples = ps.getInt({"pixelsamples"}, 16);
     } else if (type == "lowdiscrepancy" || type == "02sequence" || type == "bestcandidate" ||
-               type == "random" || type == "adaptive") {
+               type == "maxmindist" || type == "random" || type == "adaptive") {
       s.type = type == "random" ? "independent" : "zsobol";
       s.pixel_samples = ps.getInt({"pixelsamples"}, 4);
       if (type == "adaptive") {
@@ -778,7 +784,9 @@ class Builder {
     it.max_depth = ps.getInt({"maxdepth"}, 5);
     if (type == "path" || type == "volpath") {
       it.regularize = ps.getBool({"regularize"}, false);
-      ps.getString({"lightsampler"}, "bvh");
+      it.light_sampler = ps.getString({"lightsampler", "lightsamplestrategy"}, "bvh");
+      ps.getFloat({"rrthreshold"}, 1);  // pbrt-v3
+      if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
       if (type == "volpath")
         warnOnce(
             "integrator volpath", d.loc,
@@ -837,9 +845,16 @@ class Builder {
       t.invert = ps.getBool({"invert"}, false);
       t.encoding = ps.getString({"encoding"}, "");
       t.filter = ps.getString({"filter"}, "bilinear");
-      ps.getFloat({"maxanisotropy"}, 8);
-      ps.getBool({"trilinear"}, false);                                                // pbrt-v2/v3
-      if (auto g = ps.findFloat({"gamma"})) t.encoding = fmt::format("gamma {}", *g);  // pbrt-v3
+      t.max_anisotropy = ps.getFloat({"maxanisotropy"}, 8);
+      ps.getBool({"trilinear"}, false);  // pbrt-v2/v3
+      // pbrt-v2: "float gamma"; pbrt-v3: "bool gamma" (true: sRGB).
+      if (const Param* g = ps.find({"gamma"}, {ParamType::Float, ParamType::Bool})) {
+        ps.expectCount(*g, 1);
+        if (g->type == ParamType::Float)
+          t.encoding = fmt::format("gamma {}", g->numbers[0]);
+        else
+          t.encoding = g->bools[0] ? "sRGB" : "linear";
+      }
     } else if (cls == "scale") {
       t.type = cls;
       t.tex1 = in({"tex", "tex1"}, 1);
@@ -932,11 +947,11 @@ class Builder {
       m.has_reflectance = true;
       roughness(type == "coateddiffuse" ? 0 : 0.1);
       if (type == "coateddiffuse") {
-        floatInput(ps, {"thickness"}, 0.01);
-        spectrumInput(ps, {"albedo"});
-        floatInput(ps, {"g"}, 0);
-        ps.getInt({"maxdepth"}, 10);
-        ps.getInt({"nsamples"}, 1);
+        m.thickness = floatInput(ps, {"thickness"}, 0.01);
+        m.albedo = spectrumInput(ps, {"albedo"}, 0);
+        m.g = floatInput(ps, {"g"}, 0);
+        m.max_depth = ps.getInt({"maxdepth"}, 10);
+        m.n_samples = ps.getInt({"nsamples"}, 1);
         dielectricEta({"eta"});
       } else {
         // pbrt-v1–v3 names: Ks (specular colour) and the uber extras have no coateddiffuse
@@ -1025,7 +1040,7 @@ class Builder {
     l.transform = gs_.ctm[0];
     l.scale = ps.getFloat({"scale"}, 1);
     l.power = ps.findFloat({"power", "illuminance"});
-    ps.getInt({"nsamples"}, 1);  // pbrt-v1–v3 sample count
+    ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
     auto emission = [&](ParamSet::Names names) {
       const Param* p = ps.find(names, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody});
       if (p) l.emission = spectrumOf(*p);
@@ -1046,7 +1061,9 @@ class Builder {
       emission({"L"});
       if (const Param* p = ps.find({"filename", "mapname"}, {ParamType::String}))
         if (!p->strings[0].empty()) l.filename = resolve(p->strings[0], p->loc, "environment map");
-      ps.getVec3s({"portal"}, {ParamType::Point3});
+      l.portal = ps.getVec3s({"portal"}, {ParamType::Point3});
+      if (!l.portal.empty() && l.portal.size() != 4)
+        ps.fail(*ps.peek({"portal"}), fmt::format("expected 4 points, got {}", l.portal.size()));
     } else {
       ps.markAllUsed();
       warnOnce("light " + type, d.loc,
@@ -1078,7 +1095,7 @@ class Builder {
       l.scale = ps.getFloat({"scale"}, 1);
       l.two_sided = ps.getBool({"twosided"}, false);
       l.power = ps.findFloat({"power"});
-      ps.getInt({"nsamples"}, 1);  // pbrt-v1–v3 sample count
+      ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
       if (const Param* fn = ps.find({"filename"}, {ParamType::String})) {
         l.filename = resolve(fn->strings[0], fn->loc, "image file");
         warnOnce("arealight image", fn->loc, "image area lights are not rendered; L is used");
@@ -1234,7 +1251,9 @@ class Builder {
     const Param* fn = ps.find({"filename"}, {ParamType::String});
     if (!fn) throw Error(loc, "plymesh: missing \"string filename\"");
     std::string path = resolve(fn->strings[0], fn->loc, "PLY file");
-    floatInput(ps, {"displacement"});
+    if (floatInput(ps, {"displacement"}))
+      warnOnce("plymesh displacement", ps.peek({"displacement"})->loc,
+               "plymesh \"displacement\" is not rendered; the mesh is used undisplaced");
     ps.getFloat({"edgelength"}, 1);
     io::PlyMesh ply;
     try {

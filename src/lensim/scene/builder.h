@@ -75,6 +75,7 @@ struct Texture {
   double scale = 1;
   bool invert = false;
   std::string filter = "bilinear";
+  double max_anisotropy = 8;
   // scale, mix, checkerboard, constant
   Input tex1, tex2;
   bool scale_is_float = false;  ///< scale: tex2 is pbrt-v4's float `scale`
@@ -95,6 +96,9 @@ struct Material {
   bool remap_roughness = true;
   Input eta;  ///< dielectric: float in `value`; conductor: spectrum
   Input k;    ///< conductor absorption (spectrum)
+  // coateddiffuse: coat thickness (scene units), medium albedo and asymmetry g, random walk.
+  Input thickness, albedo, g;
+  int max_depth = 10, n_samples = 1;
   std::optional<Input> displacement;
   std::string normal_map;  ///< resolved path
   /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
@@ -165,7 +169,8 @@ struct Light {
   std::optional<double> power;  ///< pbrt-v4 `power` (W), if given
   Vec3 from{0, 0, 0}, to{0, 0, 1};
   double cone_angle_deg = 30, cone_delta_deg = 5;
-  std::string filename;  ///< infinite: environment map (resolved)
+  std::string filename;      ///< infinite: environment map (resolved)
+  std::vector<Vec3> portal;  ///< infinite: 4 points of a portal quad, or empty
   bool two_sided = false;
   int shape_count = 0;  ///< area lights: shapes that emit with it
 };
@@ -216,6 +221,8 @@ struct Film {
   int x_resolution = 1280, y_resolution = 720;
   std::string filename = "pbrt.exr";
   std::array<double, 4> crop_window{0, 1, 0, 1};
+  std::optional<std::array<int, 4>> pixel_bounds;
+  double scale = 1;         ///< pbrt-v3 `scale` of pixel values
   double diagonal_mm = 35;  ///< pbrt-v4 film diagonal (v4 realistic/perspective sensor size)
   double iso = 100;
   double white_balance_k = 0;
@@ -231,6 +238,8 @@ struct Sampler {
   std::string type_as_written;
   FileLoc loc;
   int pixel_samples = 16;
+  int seed = 0;
+  std::string randomization;  ///< pbrt-v4 sobol randomization; empty: the sampler's default
   bool defaulted = true;
 };
 
@@ -253,6 +262,7 @@ struct Integrator {
   FileLoc loc;
   int max_depth = 5;
   bool regularize = false;
+  std::string light_sampler = "bvh";
   bool defaulted = true;
 };
 
