@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <filesystem>
 #include <fstream>
@@ -470,4 +471,125 @@ TEST(Format, ReprintedSceneBuildsToTheSameScene) {
     EXPECT_EQ(text.find("WorldEnd"), std::string::npos);
     EXPECT_EQ(text.find("\"matte\""), std::string::npos);
   }
+}
+
+TEST(Camera, LegacyRealisticKeepsMillimetresAndResolvesFiles) {
+  testutil::TempDir dir("lensim-legacycam");
+  dir.write("lens/d.dat", "# lens\n");
+  dir.write("zones.txt", ".3 .4 .3 .4\n");
+  std::string path = dir.write(
+      "s.pbrt",
+      "Scale 1000 1000 1000\nCamera \"realistic\" \"string specfile\" \"lens/d.dat\"\n"
+      "  \"float filmdistance\" 40.5 \"float aperture_diameter\" 10 \"float filmdiag\" 43.3\n"
+      "  \"string af_zones\" \"zones.txt\" \"float hither\" 0.01 \"float yon\" 1e5\n"
+      "  \"float shutteropen\" 0 \"float shutterclose\" 0.5\nWorldBegin\n");
+  Scene s = loadScene(path);
+  ASSERT_TRUE(s.camera.legacy_realistic);
+  const LegacyRealistic& r = *s.camera.legacy_realistic;
+  EXPECT_EQ(r.film_distance_mm, 40.5);
+  EXPECT_EQ(r.aperture_diameter_mm, 10);
+  EXPECT_EQ(r.film_diagonal_mm, 43.3);
+  EXPECT_EQ(fs::path(r.lens_file), (dir.path() / "lens/d.dat").lexically_normal());
+  EXPECT_EQ(fs::path(r.af_zones_file), (dir.path() / "zones.txt").lexically_normal());
+  EXPECT_EQ(s.camera.hither, 0.01);
+  EXPECT_EQ(s.camera.shutter_close, 0.5);
+  EXPECT_EQ(s.camera.loc.file, path);
+  EXPECT_NE(summary(s).find("camera space: millimetres, 1000 mm per world unit"), std::string::npos)
+      << summary(s);
+
+  Scene bad =
+      testutil::buildText("Camera \"realistic\" \"string specfile\" \"" + dir.file("lens/d.dat") +
+                              "\" \"float filmdistance\" 40\nWorldBegin\n",
+                          "b.pbrt");
+  EXPECT_EQ(testutil::errorsOf(bad),
+            "b.pbrt:1:1: error: realistic camera: missing \"float aperture_diameter\" (mm)\n");
+}
+
+TEST(Camera, V3RealisticParameters) {
+  testutil::TempDir dir("lensim-v3cam");
+  dir.write("wide.dat", "# lens\n");
+  std::string path = dir.write(
+      "s.pbrt",
+      "Camera \"realistic\" \"string lensfile\" \"wide.dat\" \"float aperturediameter\" 4\n"
+      "  \"float focusdistance\" 1.5 \"bool simpleweighting\" false \"string aperture\" \"star\"\n"
+      "WorldBegin\n");
+  Scene s = loadScene(path);
+  ASSERT_TRUE(s.camera.realistic);
+  EXPECT_EQ(s.camera.realistic->aperture_diameter_mm, 4);
+  EXPECT_EQ(s.camera.realistic->focus_distance_m, 1.5);
+  EXPECT_FALSE(s.camera.realistic->simple_weighting);
+  EXPECT_EQ(s.camera.realistic->aperture, "star");
+}
+
+TEST(Builder, SpectraOfAllForms) {
+  testutil::TempDir dir("lensim-spectra");
+  dir.write("spd/led.spd", "400 1\n700 2\n");
+  std::string path = dir.write("s.pbrt",
+                               "WorldBegin\nLightSource \"point\" \"spectrum I\" \"spd/led.spd\"\n"
+                               "LightSource \"point\" \"spectrum I\" [400 1 500 2 600 3]\n"
+                               "LightSource \"point\" \"blackbody I\" [5500 2]\n"
+                               "LightSource \"spot\" \"spectrum I\" \"stdillum-D65\" \"point3 "
+                               "from\" [0 1 0] \"point3 to\" [0 0 0]\n"
+                               "LightSource \"point\" \"spectrum I\" \"nothere.spd\"\n");
+  Scene s = build(parseFile(path));
+  ASSERT_EQ(s.lights.size(), 4u);
+  EXPECT_EQ(s.lights[0].emission.kind, SpectrumValue::Kind::File);
+  EXPECT_TRUE(s.lights[0].emission.name.ends_with("spd/led.spd"));
+  EXPECT_EQ(s.lights[1].emission.samples.size(), 3u);
+  EXPECT_EQ(s.lights[1].emission.samples[2], (std::pair<double, double>{600, 3}));
+  EXPECT_EQ(s.lights[2].emission.blackbody_scale, 2);
+  EXPECT_EQ(s.lights[3].emission.kind, SpectrumValue::Kind::Named);
+  EXPECT_EQ(s.lights[3].from, (Vec3{0, 1, 0}));
+  EXPECT_NE(
+      testutil::errorsOf(s).find("s.pbrt:6:21: error: spectrum file \"nothere.spd\" not found"),
+      std::string::npos)
+      << testutil::errorsOf(s);
+}
+
+TEST(Builder, OptionsAndUnknownOptions) {
+  Scene s = testutil::buildText(
+      "Option \"bool disablepixeljitter\" true\nOption \"integer seed\" 7\n"
+      "Option \"bool nosuchoption\" false\nWorldBegin\n",
+      "o.pbrt");
+  EXPECT_EQ(s.options.at("disablepixeljitter"), "true");
+  EXPECT_EQ(s.options.at("seed"), "7");
+  EXPECT_EQ(testutil::errorsOf(s), "o.pbrt:3:8: error: \"nosuchoption\": unknown option\n");
+}
+
+TEST(Builder, AlphaTexturesAndNamedMaterials) {
+  Scene s = testutil::buildText(
+      "WorldBegin\nTexture \"mask\" \"float\" \"checkerboard\"\n"
+      "MakeNamedMaterial \"glass\" \"string type\" \"dielectric\" \"spectrum eta\" \"glass-BK7\"\n"
+      "NamedMaterial \"glass\"\nShape \"sphere\" \"texture alpha\" \"mask\"\n");
+  ASSERT_EQ(s.shapes.size(), 1u) << testutil::errorsOf(s);
+  ASSERT_TRUE(s.shapes[0].alpha);
+  EXPECT_EQ(s.shapes[0].alpha->texture, 0);
+  const Material& m = s.materials[static_cast<size_t>(s.shapes[0].material)];
+  EXPECT_EQ(m.name, "glass");
+  EXPECT_EQ(m.eta.spectrum.name, "glass-BK7");
+  Scene bad = testutil::buildText(
+      "WorldBegin\nMakeNamedMaterial \"x\" \"rgb reflectance\" [1 1 1]\n", "n.pbrt");
+  EXPECT_EQ(testutil::errorsOf(bad),
+            "n.pbrt:2:1: error: MakeNamedMaterial \"x\": missing \"string type\"\n");
+}
+
+TEST(Shapes, GzippedPlyMeshInAScene) {
+  testutil::TempDir dir("lensim-plygzscene");
+  std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+      "property float u\nproperty float v\nelement face 1\n"
+      "property list uchar int vertex_indices\nend_header\n"
+      "0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 0\n0 1 0 0 0 1 0 1\n3 0 1 2\n";
+  gzFile f = gzopen(dir.file("tri.ply.gz").c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  gzwrite(f, ply.data(), static_cast<unsigned>(ply.size()));
+  gzclose(f);
+  std::string path =
+      dir.write("s.pbrt", "WorldBegin\nShape \"plymesh\" \"string filename\" \"tri.ply.gz\"\n");
+  Scene s = loadScene(path);
+  ASSERT_EQ(s.meshes.size(), 1u);
+  EXPECT_EQ(s.meshes[0].normals.size(), 3u);
+  EXPECT_EQ(s.meshes[0].uvs.size(), 3u);
+  EXPECT_EQ(s.triangleCount(), 1u);
 }
