@@ -27,7 +27,9 @@ void registerCheckCommand(CLI::App& app, Action& action) {
     action = [opts]() -> int {
       scene::SceneDesc desc = scene::parseFile(opts->scene);
       scene::Scene s = scene::build(desc);
-      logDiagnostics(s.diagnostics);
+      // Errors (with the warnings) go to stderr; a clean scene's warnings are part of the
+      // summary, or go to stderr with --format so that stdout stays a scene file.
+      if (s.hasErrors() || opts->format) logDiagnostics(s.diagnostics);
       if (s.hasErrors()) return 1;
       std::string text = opts->format ? scene::formatPbrtV4(desc) : scene::summary(s);
       std::fwrite(text.data(), 1, text.size(), stdout);

@@ -189,6 +189,8 @@ std::string summary(const Scene& scene) {
   size_t warnings = 0;
   for (const Diagnostic& d : scene.diagnostics) warnings += d.severity == Severity::Warning;
   line(fmt::format("warnings: {}", warnings));
+  for (const Diagnostic& d : scene.diagnostics)
+    if (d.severity == Severity::Warning) line("  " + d.str());
   return out;
 }
 
