@@ -358,8 +358,23 @@ TEST(Shapes, LoopSubdivisionRefinesToTheGivenLevel) {
     c += Vec3(p);
   }
   EXPECT_NEAR(length(c), 0, 1e-6);
-  // An original vertex of valence 3 moves to (1 - 3·3/16) v + 3/16 Σ neighbours = 7/16 v - 3/16 v.
-  EXPECT_NEAR(s.meshes[0].positions[0].x, 0.25f, 1e-6);
+  // Level 1: the original vertex (1,1,1) of valence 3 moves to 7/16 v + 3/16 (sum of
+  // neighbours) = (1/4, 1/4, 1/4); its new neighbours are the edge points (1/2, 0, 0),
+  // (0, 1/2, 0), (0, 0, 1/2). The limit rule (valence 3: g = 1/5) then gives
+  // 2/5 · 1/4 + 1/5 · 1/2 = 1/5 in each coordinate.
+  EXPECT_NEAR(s.meshes[0].positions[0].x, 0.2f, 1e-6);
+  EXPECT_NEAR(s.meshes[0].positions[0].z, 0.2f, 1e-6);
+  // A flat open mesh stays flat, and its straight boundary stays straight.
+  Scene flat = testutil::buildText(
+      "WorldBegin\nShape \"loopsubdiv\" \"integer levels\" 2 \"point3 P\" [0 0 0 2 0 0 2 2 0 0 2 0]"
+      " \"integer indices\" [0 1 2 0 2 3]\n");
+  ASSERT_EQ(flat.meshes.size(), 1u);
+  EXPECT_EQ(flat.meshes[0].faceCount(), 32u);
+  for (const Vec3f& p : flat.meshes[0].positions) {
+    EXPECT_EQ(p.z, 0.0f);
+    EXPECT_GE(p.x, -1e-6f);
+    EXPECT_LE(p.x, 2.0f + 1e-6f);
+  }
 }
 
 TEST(Shapes, CarryMaterialAreaLightAndObject) {

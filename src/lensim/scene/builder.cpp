@@ -116,32 +116,35 @@ bool isNamedSpectrum(const std::string& n) {
   return false;
 }
 
-// Loop subdivision (Loop 1987) of a triangle mesh, `levels` times; boundary edges use the
-// cubic B-spline rules. Vertices are not pushed to the limit surface.
-void loopSubdivide(std::vector<Vec3>& P, std::vector<int>& idx, int levels) {
-  for (int level = 0; level < levels; ++level) {
-    struct EdgeInfo {
-      int faces = 0;
-      int opposite[2] = {-1, -1};
-      int new_vertex = -1;
-    };
-    const size_t nv = P.size();
-    auto key = [](int a, int b) {
-      if (a > b) std::swap(a, b);
-      return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
-    };
-    std::unordered_map<uint64_t, EdgeInfo> edges;
+// The edges of a triangle mesh and the one-rings of its vertices.
+struct MeshTopology {
+  struct Edge {
+    int faces = 0;
+    int opposite[2] = {-1, -1};
+    int new_vertex = -1;
+  };
+  std::unordered_map<uint64_t, Edge> edges;
+  std::vector<std::set<int>> neighbours;
+  std::vector<std::vector<int>> boundary;  // neighbours across boundary edges
+
+  static uint64_t key(int a, int b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
+  }
+  static std::pair<int, int> ends(uint64_t k) {
+    return {static_cast<int>(k >> 32), static_cast<int>(k & 0xffffffffu)};
+  }
+
+  MeshTopology(size_t nv, const std::vector<int>& idx) : neighbours(nv), boundary(nv) {
     for (size_t f = 0; f + 2 < idx.size(); f += 3)
-      for (int e = 0; e < 3; ++e) {
+      for (size_t e = 0; e < 3; ++e) {
         int a = idx[f + e], b = idx[f + (e + 1) % 3], c = idx[f + (e + 2) % 3];
-        EdgeInfo& info = edges[key(a, b)];
+        Edge& info = edges[key(a, b)];
         if (info.faces < 2) info.opposite[info.faces] = c;
         ++info.faces;
       }
-    std::vector<std::set<int>> neighbours(nv);
-    std::vector<std::vector<int>> boundary(nv);
     for (const auto& [k, info] : edges) {
-      int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
+      auto [a, b] = ends(k);
       neighbours[a].insert(b);
       neighbours[b].insert(a);
       if (info.faces == 1) {
@@ -149,29 +152,36 @@ void loopSubdivide(std::vector<Vec3>& P, std::vector<int>& idx, int levels) {
         boundary[b].push_back(a);
       }
     }
+  }
+};
+
+// Loop subdivision (Loop 1987) of a triangle mesh, `levels` times, then the vertices are moved
+// to the limit surface as pbrt does; boundary edges follow the cubic B-spline rules. Vertices on
+// non-manifold or corner configurations keep their position. Normals are not computed.
+void loopSubdivide(std::vector<Vec3>& P, std::vector<int>& idx, int levels) {
+  auto beta = [](size_t n) { return n == 3 ? 3.0 / 16 : 3.0 / (8.0 * static_cast<double>(n)); };
+  for (int level = 0; level < levels; ++level) {
+    const size_t nv = P.size();
+    MeshTopology topo(nv, idx);
+    // Even (old) vertices.
     std::vector<Vec3> newP(nv);
     for (size_t v = 0; v < nv; ++v) {
-      if (!boundary[v].empty()) {
-        newP[v] = boundary[v].size() == 2
-                      ? P[v] * 0.75 + (P[boundary[v][0]] + P[boundary[v][1]]) * 0.125
-                      : P[v];
+      const auto& bnd = topo.boundary[v];
+      size_t n = topo.neighbours[v].size();
+      if (!bnd.empty() || n == 0) {
+        newP[v] = bnd.size() == 2 ? P[v] * 0.75 + (P[bnd[0]] + P[bnd[1]]) * 0.125 : P[v];
         continue;
       }
-      size_t n = neighbours[v].size();
-      if (n == 0) {
-        newP[v] = P[v];
-        continue;
-      }
-      double beta = n == 3 ? 3.0 / 16 : 3.0 / (8.0 * static_cast<double>(n));
       Vec3 sum;
-      for (int u : neighbours[v]) sum += P[u];
-      newP[v] = P[v] * (1 - static_cast<double>(n) * beta) + sum * beta;
+      for (int u : topo.neighbours[v]) sum += P[u];
+      newP[v] = P[v] * (1 - static_cast<double>(n) * beta(n)) + sum * beta(n);
     }
-    for (auto& [k, info] : edges) {
-      int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
-      info.new_vertex = static_cast<int>(newP.size());
-      if (info.faces == 2)
-        newP.push_back((P[a] + P[b]) * 0.375 + (P[info.opposite[0]] + P[info.opposite[1]]) * 0.125);
+    // Odd (edge) vertices.
+    for (auto& [k, e] : topo.edges) {
+      auto [a, b] = MeshTopology::ends(k);
+      e.new_vertex = static_cast<int>(newP.size());
+      if (e.faces == 2)
+        newP.push_back((P[a] + P[b]) * 0.375 + (P[e.opposite[0]] + P[e.opposite[1]]) * 0.125);
       else
         newP.push_back((P[a] + P[b]) * 0.5);
     }
@@ -179,13 +189,32 @@ void loopSubdivide(std::vector<Vec3>& P, std::vector<int>& idx, int levels) {
     newIdx.reserve(idx.size() * 4);
     for (size_t f = 0; f + 2 < idx.size(); f += 3) {
       int v0 = idx[f], v1 = idx[f + 1], v2 = idx[f + 2];
-      int e01 = edges[key(v0, v1)].new_vertex, e12 = edges[key(v1, v2)].new_vertex,
-          e20 = edges[key(v2, v0)].new_vertex;
+      int e01 = topo.edges[MeshTopology::key(v0, v1)].new_vertex;
+      int e12 = topo.edges[MeshTopology::key(v1, v2)].new_vertex;
+      int e20 = topo.edges[MeshTopology::key(v2, v0)].new_vertex;
       newIdx.insert(newIdx.end(), {v0, e01, e20, v1, e12, e01, v2, e20, e12, e01, e12, e20});
     }
     P = std::move(newP);
     idx = std::move(newIdx);
   }
+  if (levels == 0) return;
+  // Limit positions: interior (1 - n g) v + g sum, g = 1 / (n + 3 / (8 beta));
+  // boundary 3/5 v + 1/5 (b0 + b1).
+  MeshTopology topo(P.size(), idx);
+  std::vector<Vec3> limit(P.size());
+  for (size_t v = 0; v < P.size(); ++v) {
+    const auto& bnd = topo.boundary[v];
+    size_t n = topo.neighbours[v].size();
+    if (!bnd.empty() || n == 0) {
+      limit[v] = bnd.size() == 2 ? P[v] * 0.6 + (P[bnd[0]] + P[bnd[1]]) * 0.2 : P[v];
+      continue;
+    }
+    double g = 1 / (static_cast<double>(n) + 3 / (8 * beta(n)));
+    Vec3 sum;
+    for (int u : topo.neighbours[v]) sum += P[u];
+    limit[v] = P[v] * (1 - static_cast<double>(n) * g) + sum * g;
+  }
+  P = std::move(limit);
 }
 
 // Graphics state pushed by AttributeBegin.
