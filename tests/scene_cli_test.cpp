@@ -65,3 +65,21 @@ TEST(CheckCommand, FormatPrintsPbrtV4) {
       << r.out;
   EXPECT_NE(r.out.find("\"point2 uv\" [ 0 0 5 0 5 5 0 5 ]"), std::string::npos) << r.out;
 }
+
+TEST(CheckCommand, ReportsEveryMissingFileOfTheSanMiguelExample) {
+  // The San Miguel geometry is not in the shared folder: 21 missing Includes and the sky map.
+  Result r = run("check " + kShared +
+                 "/scenes/pbrt-v4-sanmiguel-realistic/sanmiguel-realistic-courtyard.pbrt");
+  EXPECT_EQ(r.status, 1);
+  size_t errors = 0;
+  for (size_t pos = 0; (pos = r.out.find(": error: ", pos)) != std::string::npos; ++pos) ++errors;
+  EXPECT_EQ(errors, 22u) << r.out;
+  EXPECT_NE(r.out.find("sanmiguel-realistic-courtyard.pbrt:45:1: error: included file "
+                       "\"geometry/sanmiguel-mat.pbrt\" not found"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("sanmiguel-realistic-courtyard.pbrt:38:9: error: environment map "
+                       "\"textures/sky.exr\" not found"),
+            std::string::npos)
+      << r.out;
+}

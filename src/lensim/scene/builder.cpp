@@ -425,8 +425,8 @@ class Builder {
         g.ctm[1] = it->second.second;
       }
     } else if (n == "TransformTimes") {
-      transform_start_time_ = d.numbers[0];
-      transform_end_time_ = d.numbers[1];
+      scene_.transform_start_time = d.numbers[0];
+      scene_.transform_end_time = d.numbers[1];
     } else if (n == "ActiveTransform") {
       g.active[0] = d.word != "EndTime";
       g.active[1] = d.word != "StartTime";
@@ -1315,7 +1315,6 @@ class Builder {
   std::set<std::string> warned_;
   int current_object_ = -1;
   int default_material_ = -1;
-  double transform_start_time_ = 0, transform_end_time_ = 1;
   struct PendingInstance {
     std::string name;
     FileLoc loc;

@@ -284,6 +284,7 @@ struct Scene {
   std::vector<Light> lights;
   std::map<std::string, std::string> options;  ///< `Option` values, as text
   std::string color_space = "srgb";
+  double transform_start_time = 0, transform_end_time = 1;  ///< TransformTimes
   std::vector<Diagnostic> diagnostics;  ///< warnings, and errors if the scene is invalid
 
   bool hasErrors() const;
