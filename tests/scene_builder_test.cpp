@@ -563,12 +563,14 @@ TEST(Builder, SpectraOfAllForms) {
 
 TEST(Builder, OptionsAndUnknownOptions) {
   Scene s = testutil::buildText(
-      "Option \"bool disablepixeljitter\" true\nOption \"integer seed\" 7\n"
+      "Option \"bool disablepixeljitter\" true\nOption \"seed\" 7\n"
+      "Option \"rendercoordsys\" \"world\"\n"
       "Option \"bool nosuchoption\" false\nWorldBegin\n",
       "o.pbrt");
   EXPECT_EQ(s.options.at("disablepixeljitter"), "true");
   EXPECT_EQ(s.options.at("seed"), "7");
-  EXPECT_EQ(testutil::errorsOf(s), "o.pbrt:3:8: error: \"nosuchoption\": unknown option\n");
+  EXPECT_EQ(s.options.at("rendercoordsys"), "world");
+  EXPECT_EQ(testutil::errorsOf(s), "o.pbrt:4:8: error: \"nosuchoption\": unknown option\n");
 }
 
 TEST(Builder, AlphaTexturesAndNamedMaterials) {

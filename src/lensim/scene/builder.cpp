@@ -307,6 +307,8 @@ class Builder {
                                          p.name, p.numbers.size()));
         s.kind = SpectrumValue::Kind::Rgb;
         s.rgb = {p.numbers[0], p.numbers[1], p.numbers[2]};
+        if (s.rgb.x < 0 || s.rgb.y < 0 || s.rgb.z < 0)
+          throw Error(p.loc, fmt::format("\"{}\": rgb value has a negative component", p.name));
         break;
       case ParamType::Blackbody:
         s.kind = SpectrumValue::Kind::Blackbody;
@@ -746,7 +748,10 @@ class Builder {
       s.pixel_samples = ps.getInt({"pixelsamples"}, 16);
     } else if (type == "lowdiscrepancy" || type == "02sequence" || type == "bestcandidate" ||
                type == "maxmindist" || type == "random" || type == "adaptive") {
-      s.type = type == "random" ? "independent" : "zsobol";
+      // The pbrt-v4 equivalents its --upgrade uses.
+      s.type = type == "random"                                  ? "independent"
+               : type == "maxmindist" || type == "bestcandidate" ? "pmj02bn"
+                                                                 : "paddedsobol";
       s.pixel_samples = ps.getInt({"pixelsamples"}, 4);
       if (type == "adaptive") {
         s.pixel_samples = ps.getInt({"maxsamples"}, 32);
@@ -820,6 +825,12 @@ class Builder {
         warnOnce(
             "integrator volpath", d.loc,
             "integrator \"volpath\" renders as \"path\": participating media are not rendered");
+    } else if (type == "directlighting") {
+      // As pbrt-v4's --upgrade: direct lighting is a path tracer of depth 1.
+      ps.markAllUsed();
+      it.max_depth = 1;
+      warnOnce("integrator " + type, d.loc,
+               "integrator \"directlighting\" (pbrt-v1–v3) renders as \"path\" with maxdepth 1");
     } else {
       ps.markAllUsed();
       warnOnce("integrator " + type, d.loc,

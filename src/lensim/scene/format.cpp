@@ -240,9 +240,10 @@ std::string v4TypeName(const std::string& directive, const std::string& type) {
   }
   if (directive == "AreaLightSource" && type == "area") return "diffuse";
   if ((directive == "PixelFilter" || directive == "Filter") && type == "sinc") return "lanczos";
-  if (directive == "Sampler" &&
-      (type == "lowdiscrepancy" || type == "02sequence" || type == "bestcandidate"))
-    return "zsobol";
+  if (directive == "Sampler" && (type == "lowdiscrepancy" || type == "02sequence"))
+    return "paddedsobol";
+  if (directive == "Sampler" && (type == "maxmindist" || type == "bestcandidate")) return "pmj02bn";
+  if (directive == "Integrator" && type == "directlighting") return "path";
   if (directive == "Sampler" && type == "random") return "independent";
   if (directive == "Film" && type == "image") return "rgb";
   return type;
@@ -298,10 +299,21 @@ std::string formatPbrtV4(const SceneDesc& desc) {
     }
     for (double v : d.numbers) line += fmt::format(" {}", v);
     if (!d.word.empty()) line += fmt::format(" {}", d.word);
+    if (name == "Option") {  // pbrt-v4: Option "name" value
+      const Param& p = d.params[0];
+      std::string v = !p.strings.empty() ? quote(p.strings[0])
+                      : !p.bools.empty() ? std::string(p.bools[0] ? "true" : "false")
+                                         : fmt::format("{}", p.numbers.at(0));
+      out += fmt::format("{} {} {}\n", line, quote(p.name), v);
+      continue;
+    }
     for (const Param& p : d.params) {
       // pbrt-v1–v3 sample counts that pbrt-v4 does not have.
       if ((name == "AreaLightSource" || name == "LightSource") && p.name == "nsamples") continue;
       if (name == "Sampler" && p.name == "dimensions") continue;
+      if (name == "Integrator" &&
+          (p.name == "rrthreshold" || (type == "directlighting" && p.name == "maxdepth")))
+        continue;
       // A grey rgb factor of a pbrt-v1–v3 scale texture is pbrt-v4's float "scale".
       if (name == "Texture" && type == "scale" && p.name == "tex2" && p.type == ParamType::Rgb &&
           p.numbers.size() == 3 && p.numbers[0] == p.numbers[1] && p.numbers[1] == p.numbers[2]) {
@@ -310,6 +322,7 @@ std::string formatPbrtV4(const SceneDesc& desc) {
       }
       line += fmt::format(" {}", paramStr(name, type, p));
     }
+    if (name == "Integrator" && type == "directlighting") line += " \"integer maxdepth\" 1";
     if (name == "Shape" && (type == "cone" || type == "paraboloid" || type == "hyperboloid"))
       line += "  # pbrt-v1–v3 shape (not in pbrt-v4); lensim reads it";
     out += line + "\n";

@@ -36,7 +36,7 @@ std::string_view paramTypeName(ParamType t) {
     case ParamType::Vector3:
       return "vector3";
     case ParamType::Normal3:
-      return "normal3";
+      return "normal";  // pbrt-v4 spells it "normal" (and accepts "normal3")
     case ParamType::Rgb:
       return "rgb";
     case ParamType::Spectrum:
@@ -326,10 +326,37 @@ class Parser {
         expectString("a medium name");
         if (peek(tok).kind == Token::Kind::String) expectString("a medium name");
         break;
-      case Args::Option:
+      case Args::Option: {
+        // pbrt-v4 writes `Option "name" value`; `Option "type name" value` is accepted too.
+        if (peek(tok).kind != Token::Kind::String)
+          throw Error(d.loc, "Option: expected a quoted option name");
+        if (peek(tok).text.find(' ') == std::string::npos) {
+          Token name = next(tok);
+          Token v = next(tok);
+          Param p;
+          p.loc = tok.loc(name);
+          p.name = name.text;
+          if (v.kind == Token::Kind::String) {
+            p.type = ParamType::String;
+            p.strings.push_back(v.text);
+          } else if (v.kind == Token::Kind::Word && (v.text == "true" || v.text == "false")) {
+            p.type = ParamType::Bool;
+            p.bools.push_back(v.text == "true");
+          } else if (auto x = v.kind == Token::Kind::Word ? parseNumber(v.text) : std::nullopt) {
+            p.type = *x == std::floor(*x) ? ParamType::Integer : ParamType::Float;
+            p.numbers.push_back(*x);
+          } else {
+            throw Error(v.kind == Token::Kind::End ? d.loc : tok.loc(v),
+                        fmt::format("Option \"{}\": missing value", name.text));
+          }
+          p.type_as_written = std::string(paramTypeName(p.type));
+          d.params.push_back(std::move(p));
+          break;
+        }
         d.params = parseParams(tok);
         if (d.params.size() != 1) throw Error(d.loc, "Option: expected one parameter");
         break;
+      }
     }
   }
 
