@@ -740,7 +740,7 @@ class Builder {
     ps.getBool({"samplepixelcenter"}, false);  // pbrt-v3 halton
     if (type == "stratified") {
       int x = ps.getInt({"xsamples"}, 4), y = ps.getInt({"ysamples"}, 4);
-      ps.getBool({"jitter"}, true);
+      s.jitter = ps.getBool({"jitter"}, true);
       s.pixel_samples = x * y;
       s.type = type;
     } else if (v4.count(type)) {
@@ -869,8 +869,11 @@ class Builder {
       t.vscale = ps.getFloat({"vscale"}, 1);
       t.udelta = ps.getFloat({"udelta"}, 0);
       t.vdelta = ps.getFloat({"vdelta"}, 0);
-      ps.find({"v1"}, {ParamType::Vector3});
-      ps.find({"v2"}, {ParamType::Vector3});
+      for (auto [name, v] : {std::pair{"v1", &t.v1}, std::pair{"v2", &t.v2}})
+        if (const Param* p = ps.find({name}, {ParamType::Vector3})) {
+          ps.expectCount(*p, 1);
+          *v = {p->numbers[0], p->numbers[1], p->numbers[2]};
+        }
     };
     if (cls == "imagemap") {
       t.type = cls;
@@ -886,7 +889,7 @@ class Builder {
       t.encoding = ps.getString({"encoding"}, "");
       t.filter = ps.getString({"filter"}, "bilinear");
       t.max_anisotropy = ps.getFloat({"maxanisotropy"}, 8);
-      ps.getBool({"trilinear"}, false);  // pbrt-v2/v3
+      if (ps.getBool({"trilinear"}, false)) t.filter = "trilinear";  // pbrt-v2/v3
       // pbrt-v2: "float gamma"; pbrt-v3: "bool gamma" (true: sRGB).
       if (const Param* g = ps.find({"gamma"}, {ParamType::Float, ParamType::Bool})) {
         ps.expectCount(*g, 1);

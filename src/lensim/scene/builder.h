@@ -69,7 +69,8 @@ struct Texture {
   std::string filename;  ///< resolved path of the image
   std::string filename_as_written;
   double uscale = 1, vscale = 1, udelta = 0, vdelta = 0;
-  std::string mapping = "uv";
+  std::string mapping = "uv";     ///< uv, spherical, cylindrical, planar
+  Vec3 v1{1, 0, 0}, v2{0, 1, 0};  ///< planar mapping axes
   std::string wrap = "repeat";
   std::string encoding;  ///< "sRGB", "linear", "gamma g"; empty: by file type
   double scale = 1;
@@ -239,6 +240,7 @@ struct Sampler {
   FileLoc loc;
   int pixel_samples = 16;
   int seed = 0;
+  bool jitter = true;         ///< stratified
   std::string randomization;  ///< pbrt-v4 sobol randomization; empty: the sampler's default
   bool defaulted = true;
 };
