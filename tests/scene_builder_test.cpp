@@ -215,7 +215,8 @@ TEST(SharedScenes, BoxDgaussV4RealisticCamera) {
 TEST(Params, UnusedParametersAreErrorsAtTheirLocation) {
   Scene s = testutil::buildText(
       "WorldBegin\nShape \"sphere\" \"float radius\" 1\n  \"float raduis\" 2\n", "u.pbrt");
-  EXPECT_EQ(testutil::errorsOf(s), "u.pbrt:3:3: error: \"raduis\": unused parameter\n");
+  EXPECT_EQ(testutil::errorsOf(s),
+            "u.pbrt:3:3: error: \"raduis\": unused parameter; did you mean \"radius\"?\n");
 }
 
 TEST(Params, RenamedParametersAreAcceptedUnderTheirOldNames) {

@@ -183,6 +183,10 @@ TEST(Parser, StructureErrors) {
             "s.pbrt:2:16: error: bad parameter declaration \"float\"; expected \"type name\"");
   EXPECT_EQ(msg("WorldBegin\nShape \"sphere\" \"float radius\""),
             "s.pbrt:2:16: error: \"float radius\": missing value");
+  EXPECT_EQ(
+      msg("WorldBegin\nAtributeBegin"),
+      "s.pbrt:2:1: error: unknown directive \"AtributeBegin\"; did you mean \"AttributeBegin\"?");
+  EXPECT_EQ(msg("WorldBegin\nFoo"), "s.pbrt:2:1: error: unknown directive \"Foo\"");
   EXPECT_EQ(msg("WorldBegin\n\"sphere\""),
             "s.pbrt:2:1: error: unexpected string \"sphere\"; expected a directive");
   EXPECT_EQ(msg("WorldBegin\nShape \"trianglemesh\" \"blackbody L\" [1 2 3]"),

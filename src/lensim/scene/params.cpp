@@ -29,7 +29,23 @@ void ParamSet::addDefaults(const ParamList& params) {
   }
 }
 
-const Param* ParamSet::peek(Names names) const {
+size_t editDistance(std::string_view a, std::string_view b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+const Param* ParamSet::peek(Names names) {
+  for (std::string_view n : names) queried_.emplace_back(n);
   for (std::string_view n : names)
     for (const Entry& e : entries_)
       if (e.param->name == n) return e.param;
@@ -37,6 +53,7 @@ const Param* ParamSet::peek(Names names) const {
 }
 
 const Param* ParamSet::find(Names names, std::initializer_list<ParamType> types) {
+  for (std::string_view n : names) queried_.emplace_back(n);
   for (std::string_view n : names)
     for (Entry& e : entries_) {
       if (e.param->name != n) continue;
@@ -141,9 +158,18 @@ void ParamSet::markAllUsed() {
 
 void ParamSet::reportUnused(std::vector<Diagnostic>& out) const {
   for (const Entry& e : entries_)
-    if (!e.used && !e.is_default)
-      out.push_back(
-          {Severity::Error, e.param->loc, fmt::format("\"{}\": unused parameter", e.param->name)});
+    if (!e.used && !e.is_default) {
+      // Suggest the nearest name a getter asked for (a misspelling is at most 2 edits away).
+      std::string best;
+      size_t best_d = std::min<size_t>(3, e.param->name.size() / 2 + 1);
+      for (const std::string& q : queried_) {
+        size_t d = editDistance(e.param->name, q);
+        if (d < best_d && q != e.param->name) best_d = d, best = q;
+      }
+      out.push_back({Severity::Error, e.param->loc,
+                     fmt::format("\"{}\": unused parameter{}", e.param->name,
+                                 best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best))});
+    }
 }
 
 }  // namespace lensim::scene

@@ -29,7 +29,7 @@ class ParamSet {
   /// marks it used. Throws lensim::Error if it exists with another type.
   const Param* find(Names names, std::initializer_list<ParamType> types);
   /// Like find, without marking the parameter used or checking its type.
-  const Param* peek(Names names) const;
+  const Param* peek(Names names);
 
   double getFloat(Names names, double def);
   std::optional<double> findFloat(Names names);
@@ -63,11 +63,15 @@ class ParamSet {
     bool is_default = false;  // from `Attribute`: not reported when unused
   };
   std::vector<Entry> entries_;
+  std::vector<std::string> queried_;  // every name a getter asked for
   FileLoc loc_;
   std::string directive_;
 };
 
 /// Number of values a parameter has (numbers, strings or bools).
 size_t valueCount(const Param& p);
+
+/// Levenshtein distance between two names (for "did you mean" hints).
+size_t editDistance(std::string_view a, std::string_view b);
 
 }  // namespace lensim::scene

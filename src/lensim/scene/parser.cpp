@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "lensim/scene/params.h"
 #include "lensim/scene/tokenizer.h"
 
 namespace lensim::scene {
@@ -156,6 +158,17 @@ std::optional<ParamType> parseType(std::string_view t, bool& legacy) {
   return it->second.first;
 }
 
+// "; did you mean \"Translate\"?" for a near miss of a directive name, or "".
+std::string suggestion(std::string_view word) {
+  std::string best;
+  size_t best_d = 3;  // at most two edits
+  for (const auto& [name, spec] : directiveSpecs()) {
+    size_t d = editDistance(word, name);
+    if (d < best_d) best_d = d, best = name;
+  }
+  return best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best);
+}
+
 class Parser {
  public:
   explicit Parser(SceneDesc& desc) : desc_(desc) {}
@@ -195,7 +208,8 @@ class Parser {
         if (parseNumber(t.text))
           throw Error(tok.loc(t),
                       fmt::format("unexpected number {}; expected a directive", t.text));
-        throw Error(tok.loc(t), fmt::format("unknown directive \"{}\"", t.text));
+        throw Error(tok.loc(t),
+                    fmt::format("unknown directive \"{}\"{}", t.text, suggestion(t.text)));
       }
       const DirectiveSpec& spec = it->second;
       Directive d;
