@@ -1175,6 +1175,10 @@ class Builder {
       s.height = ps.getFloat({"height"}, 0);
       s.radius = ps.getFloat({"radius"}, 1);
       s.inner_radius = ps.getFloat({"innerradius"}, 0);
+      if (s.inner_radius < 0 || s.inner_radius >= s.radius)
+        throw Error(
+            ps.peek({"innerradius"}) ? ps.peek({"innerradius"})->loc : d.loc,
+            fmt::format("disk inner radius {} outside [0, radius {})", s.inner_radius, s.radius));
       s.phimax_deg = ps.getFloat({"phimax"}, 360);
     } else if (type == "cylinder") {
       s.type = ShapeType::Cylinder;

@@ -118,8 +118,22 @@ std::string summary(const Scene& scene) {
   line(fmt::format("shapes: {} in the world{}, {} in object definitions{}", nWorld,
                    world.empty() ? "" : " (" + countList(world) + ")", nObj,
                    inObjects.empty() ? "" : " (" + countList(inObjects) + ")"));
-  line(fmt::format("triangles: {} in {}", scene.triangleCount(),
-                   plural(scene.meshes.size(), "mesh")));
+  // Triangles stored, and as rendered with every instance expanded.
+  auto meshTriangles = [&](const Shape& sh) -> size_t {
+    if (sh.mesh < 0) return 0;
+    const Mesh& m = scene.meshes[static_cast<size_t>(sh.mesh)];
+    return m.faceCount() * (m.vertices_per_face == 4 ? 2 : 1);
+  };
+  size_t expanded = 0;
+  for (const Shape& sh : scene.shapes)
+    if (sh.object < 0) expanded += meshTriangles(sh);
+  for (const Instance& i : scene.instances)
+    for (int si : scene.objects[static_cast<size_t>(i.object)].shapes)
+      expanded += meshTriangles(scene.shapes[static_cast<size_t>(si)]);
+  line(fmt::format(
+      "triangles: {} in {}{}", scene.triangleCount(), plural(scene.meshes.size(), "mesh"),
+      expanded != scene.triangleCount() ? fmt::format(" ({} with instances expanded)", expanded)
+                                        : ""));
   std::string objs;
   for (const ObjectDef& o : scene.objects) {
     std::vector<std::pair<std::string, int>> k;
