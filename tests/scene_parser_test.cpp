@@ -193,3 +193,16 @@ TEST(Parser, StructureErrors) {
             "s.pbrt:2:22: error: \"blackbody L\": expected a temperature (and, in pbrt-v3, a "
             "scale), got 3 values");
 }
+
+TEST(Parser, IncludeCyclesAreErrors) {
+  testutil::TempDir dir("lensim-cycle");
+  std::string a = dir.write("a.pbrt", "WorldBegin\nInclude \"b.pbrt\"\n");
+  dir.write("b.pbrt", "Include \"b.pbrt\"\n");
+  try {
+    parseFile(a);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(e.message().find("nested too deeply"), std::string::npos);
+    EXPECT_TRUE(e.loc().file.ends_with("b.pbrt"));
+  }
+}

@@ -158,3 +158,20 @@ TEST(Instances, WorldBoundsApplyTheInstanceTransform) {
   expectVec(r.min, {8, -4, -2}, 1e-12);
   expectVec(r.max, {12, 0, 2}, 1e-12);
 }
+
+TEST(Transform, TransformBeginScopesFollowTheSyntaxVersion) {
+  // pbrt-v1–v3: TransformEnd restores only the transform; pbrt-v4: the whole graphics state.
+  const std::string body =
+      "TransformBegin\nTranslate 1 0 0\nMaterial \"conductor\"\nTransformEnd\nShape \"sphere\"\n";
+  Scene v3 = testutil::buildText("WorldBegin\n" + body + "WorldEnd\n");
+  Scene v4 = testutil::buildText("WorldBegin\n" + body);
+  ASSERT_EQ(v3.shapes.size(), 1u);
+  ASSERT_EQ(v4.shapes.size(), 1u);
+  EXPECT_TRUE(v3.shapes[0].transform.isIdentity());
+  EXPECT_TRUE(v4.shapes[0].transform.isIdentity());
+  EXPECT_EQ(v3.materials[static_cast<size_t>(v3.shapes[0].material)].type, "conductor");
+  EXPECT_EQ(v4.materials[static_cast<size_t>(v4.shapes[0].material)].type, "diffuse");
+  EXPECT_EQ(v3.diagnostics.size(), 0u);
+  ASSERT_EQ(v4.diagnostics.size(), 1u);
+  EXPECT_NE(v4.diagnostics[0].message.find("deprecated"), std::string::npos);
+}

@@ -444,11 +444,14 @@ class Builder {
     } else if (n == "AttributeEnd") {
       popState(false);
     } else if (n == "TransformBegin") {
-      warnOnce("TransformBegin", d.loc,
-               "TransformBegin/TransformEnd are deprecated in pbrt-v4; use AttributeBegin/End");
+      // pbrt-v1–v3 save only the transform; pbrt-v4 treats it as AttributeBegin (deprecated).
+      if (!scene_.legacy_syntax)
+        warnOnce("TransformBegin", d.loc,
+                 "TransformBegin/TransformEnd are deprecated in pbrt-v4 and act as "
+                 "AttributeBegin/AttributeEnd");
       stack_.push_back(gs_);
     } else if (n == "TransformEnd") {
-      popState(true);
+      popState(scene_.legacy_syntax);
     } else if (n == "ObjectBegin") {
       objectBegin(d);
     } else if (n == "ObjectEnd") {
