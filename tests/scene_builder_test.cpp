@@ -611,3 +611,29 @@ TEST(Shapes, GzippedPlyMeshInAScene) {
   EXPECT_EQ(s.meshes[0].uvs.size(), 3u);
   EXPECT_EQ(s.triangleCount(), 1u);
 }
+
+TEST(Format, NormalisesVersionOneToThreeNames) {
+  SceneDesc d = parseString(
+      "Option \"seed\" 3\nFilter \"gaussian\" \"float xwidth\" 2\n"
+      "SurfaceIntegrator \"directlighting\" \"integer maxdepth\" 5\n"
+      "Sampler \"lowdiscrepancy\" \"integer pixelsamples\" 4\nFilm \"image\"\nWorldBegin\n"
+      "AttributeBegin\nMaterial \"glass\" \"float index\" 1.5\n"
+      "Shape \"trianglemesh\" \"point P\" [0 0 0 1 0 0 0 1 0] \"normal N\" [0 0 1 0 0 1 0 0 1]\n"
+      "AttributeEnd\nWorldEnd\n",
+      "f.pbrt");
+  std::string text = formatPbrtV4(d);
+  EXPECT_NE(text.find("Option \"seed\" 3\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("PixelFilter \"gaussian\" \"float xradius\" 2\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("Integrator \"path\" \"integer maxdepth\" 1\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("Sampler \"paddedsobol\" \"integer pixelsamples\" 4\n"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("Film \"rgb\"\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("  Material \"dielectric\" \"float eta\" 1.5\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"point3 P\" [ 0 0 0 1 0 0 0 1 0 ] \"normal N\" [ 0 0 1 0 0 1 0 0 1 ]"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("WorldEnd"), std::string::npos) << text;
+  Scene s = build(parseString(text, "f.pbrt"));
+  EXPECT_EQ(testutil::errorsOf(s), "");
+  EXPECT_EQ(s.integrator.max_depth, 1);
+}
