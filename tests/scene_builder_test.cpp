@@ -540,13 +540,15 @@ TEST(Camera, V3RealisticParameters) {
 TEST(Builder, SpectraOfAllForms) {
   testutil::TempDir dir("lensim-spectra");
   dir.write("spd/led.spd", "400 1\n700 2\n");
-  std::string path = dir.write("s.pbrt",
-                               "WorldBegin\nLightSource \"point\" \"spectrum I\" \"spd/led.spd\"\n"
-                               "LightSource \"point\" \"spectrum I\" [400 1 500 2 600 3]\n"
-                               "LightSource \"point\" \"blackbody I\" [5500 2]\n"
-                               "LightSource \"spot\" \"spectrum I\" \"stdillum-D65\" \"point3 "
-                               "from\" [0 1 0] \"point3 to\" [0 0 0]\n"
-                               "LightSource \"point\" \"spectrum I\" \"nothere.spd\"\n");
+  std::string path = dir.write(
+      "s.pbrt",
+      "WorldBegin\nLightSource \"point\" \"spectrum I\" \"spd/led.spd\"\n"
+      "LightSource \"point\" \"spectrum I\" [400 1 500 2 600 3]\n"
+      "LightSource \"point\" \"blackbody I\" [5500 2]\n"
+      "LightSource \"spot\" \"spectrum I\" \"stdillum-D65\" \"point3 "
+      "from\" [0 1 0] \"point3 to\" [0 0 0]\n"
+      "LightSource \"point\" \"spectrum I\" \"nothere.spd\"\n"
+      "Material \"conductor\" \"spectrum eta\" \"metal-Au-et\" \"spectrum k\" \"metal-Au-k\"\n");
   Scene s = build(parseFile(path));
   ASSERT_EQ(s.lights.size(), 4u);
   EXPECT_EQ(s.lights[0].emission.kind, SpectrumValue::Kind::File);
@@ -559,6 +561,10 @@ TEST(Builder, SpectraOfAllForms) {
   EXPECT_NE(
       testutil::errorsOf(s).find("s.pbrt:6:21: error: spectrum file \"nothere.spd\" not found"),
       std::string::npos)
+      << testutil::errorsOf(s);
+  EXPECT_NE(testutil::errorsOf(s).find("s.pbrt:7:22: error: \"eta\": unknown named spectrum "
+                                       "\"metal-Au-et\"; did you mean \"metal-Au-eta\"?"),
+            std::string::npos)
       << testutil::errorsOf(s);
 }
 

@@ -107,13 +107,32 @@ Bounds3 worldBounds(const Scene& scene, const Instance& inst) {
 
 namespace {
 
-bool isNamedSpectrum(const std::string& n) {
-  static const char* prefixes[] = {
-      "metal-",    "glass-", "stdillum-", "illum-", "canon_",  "nikon_",   "sony_", "hasselblad_",
-      "fujifilm_", "dji_",   "gopro_",    "apple_", "google_", "samsung_", "cie-",  "aces-"};
-  for (const char* p : prefixes)
-    if (n.rfind(p, 0) == 0) return true;
-  return false;
+// pbrt-v4's named spectra (util/spectrum.cpp): materials and illuminants by exact name; camera
+// sensor curves by maker prefix.
+const std::vector<std::string>& namedSpectra() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v = {"glass-BK7",    "glass-BAF10",  "glass-FK51A",  "glass-LASF9",
+                                  "glass-F5",     "glass-F10",    "glass-F11",    "stdillum-A",
+                                  "stdillum-D50", "stdillum-D65", "illum-acesD60"};
+    for (const char* m : {"Ag", "Al", "Au", "Cu", "CuZn", "MgO", "TiO2"})
+      for (const char* part : {"eta", "k"}) v.push_back(fmt::format("metal-{}-{}", m, part));
+    for (int i = 1; i <= 12; ++i) v.push_back(fmt::format("stdillum-F{}", i));
+    return v;
+  }();
+  return names;
+}
+
+enum class SpectrumName { Named, Unknown, NotAName };
+
+SpectrumName classifySpectrumName(const std::string& n) {
+  for (const std::string& k : namedSpectra())
+    if (n == k) return SpectrumName::Named;
+  for (const char* p : {"metal-", "glass-", "stdillum-", "illum-"})
+    if (n.rfind(p, 0) == 0) return SpectrumName::Unknown;
+  for (const char* p : {"canon_", "nikon_", "sony_", "hasselblad_", "fujifilm_", "dji_", "gopro_",
+                        "apple_", "google_", "samsung_", "phase_one_"})
+    if (n.rfind(p, 0) == 0) return SpectrumName::Named;
+  return SpectrumName::NotAName;
 }
 
 // The edges of a triangle mesh and the one-rings of its vertices.
@@ -318,9 +337,19 @@ class Builder {
       case ParamType::Spectrum:
         if (!p.strings.empty()) {
           const std::string& n = p.strings[0];
-          if (isNamedSpectrum(n)) {
+          SpectrumName c = classifySpectrumName(n);
+          if (c == SpectrumName::Named) {
             s.kind = SpectrumValue::Kind::Named;
             s.name = n;
+          } else if (c == SpectrumName::Unknown) {
+            std::string best;
+            size_t best_d = 3;
+            for (const std::string& k : namedSpectra())
+              if (size_t dist = editDistance(n, k); dist < best_d) best_d = dist, best = k;
+            throw Error(
+                p.loc,
+                fmt::format("\"{}\": unknown named spectrum \"{}\"{}", p.name, n,
+                            best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best)));
           } else {
             s.kind = SpectrumValue::Kind::File;
             s.name = resolve(n, p.loc, "spectrum file");
