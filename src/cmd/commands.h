@@ -17,4 +17,7 @@ using Action = std::function<int()>;
 /// `lensim lens ...`: lens analysis (info, trace).
 void registerLensCommands(CLI::App& app, Action& action);
 
+/// `lensim check SCENE [--format]`: parse and build a pbrt scene, print a summary.
+void registerCheckCommand(CLI::App& app, Action& action);
+
 }  // namespace lensim::cmd

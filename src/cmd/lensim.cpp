@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
 
   lensim::cmd::Action action;
   lensim::cmd::registerLensCommands(app, action);
+  lensim::cmd::registerCheckCommand(app, action);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,1398 @@
+#include "lensim/scene/builder.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <unordered_map>
+
+#include "lensim/io/ply.h"
+#include "lensim/scene/params.h"
+
+namespace lensim::scene {
+
+namespace fs = std::filesystem;
+
+std::string_view shapeTypeName(ShapeType t) {
+  switch (t) {
+    case ShapeType::Sphere:
+      return "sphere";
+    case ShapeType::Disk:
+      return "disk";
+    case ShapeType::Cylinder:
+      return "cylinder";
+    case ShapeType::Cone:
+      return "cone";
+    case ShapeType::TriangleMesh:
+      return "trianglemesh";
+    case ShapeType::BilinearMesh:
+      return "bilinearmesh";
+  }
+  return "?";
+}
+
+std::string SpectrumValue::str() const {
+  switch (kind) {
+    case Kind::Rgb:
+      return fmt::format("rgb [{} {} {}]", rgb.x, rgb.y, rgb.z);
+    case Kind::Blackbody:
+      return blackbody_scale == 1
+                 ? fmt::format("blackbody {}", temperature_k)
+                 : fmt::format("blackbody [{} {}]", temperature_k, blackbody_scale);
+    case Kind::Sampled: {
+      std::string s = "spectrum [";
+      for (size_t i = 0; i < samples.size(); ++i)
+        s += fmt::format("{}{} {}", i ? " " : "", samples[i].first, samples[i].second);
+      return s + "]";
+    }
+    case Kind::Named:
+    case Kind::File:
+      return fmt::format("spectrum \"{}\"", name);
+  }
+  return {};
+}
+
+bool Scene::hasErrors() const {
+  for (const Diagnostic& d : diagnostics)
+    if (d.severity == Severity::Error) return true;
+  return false;
+}
+
+size_t Scene::triangleCount() const {
+  size_t n = 0;
+  for (const Mesh& m : meshes) n += m.faceCount() * (m.vertices_per_face == 4 ? 2 : 1);
+  return n;
+}
+
+Bounds3 objectBounds(const Scene& scene, const Shape& s) {
+  Bounds3 b;
+  switch (s.type) {
+    case ShapeType::Sphere:
+      b.extend({-s.radius, -s.radius, s.zmin});
+      b.extend({s.radius, s.radius, s.zmax});
+      break;
+    case ShapeType::Cylinder:
+      b.extend({-s.radius, -s.radius, s.zmin});
+      b.extend({s.radius, s.radius, s.zmax});
+      break;
+    case ShapeType::Disk:
+      b.extend({-s.radius, -s.radius, s.height});
+      b.extend({s.radius, s.radius, s.height});
+      break;
+    case ShapeType::Cone:
+      b.extend({-s.radius, -s.radius, 0});
+      b.extend({s.radius, s.radius, s.height});
+      break;
+    case ShapeType::TriangleMesh:
+    case ShapeType::BilinearMesh:
+      if (s.mesh >= 0)
+        for (const Vec3f& p : scene.meshes[static_cast<size_t>(s.mesh)].positions)
+          b.extend(Vec3(p));
+      break;
+  }
+  return b;
+}
+
+Bounds3 worldBounds(const Scene& scene, const Instance& inst) {
+  Bounds3 b;
+  if (inst.object < 0) return b;
+  for (int si : scene.objects[static_cast<size_t>(inst.object)].shapes) {
+    const Shape& s = scene.shapes[static_cast<size_t>(si)];
+    b.extend((inst.transform * s.transform).applyBounds(objectBounds(scene, s)));
+  }
+  return b;
+}
+
+namespace {
+
+// pbrt-v4's named spectra (util/spectrum.cpp): materials and illuminants by exact name; camera
+// sensor curves by maker prefix.
+const std::vector<std::string>& namedSpectra() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v = {"glass-BK7",    "glass-BAF10",  "glass-FK51A",  "glass-LASF9",
+                                  "glass-F5",     "glass-F10",    "glass-F11",    "stdillum-A",
+                                  "stdillum-D50", "stdillum-D65", "illum-acesD60"};
+    for (const char* m : {"Ag", "Al", "Au", "Cu", "CuZn", "MgO", "TiO2"})
+      for (const char* part : {"eta", "k"}) v.push_back(fmt::format("metal-{}-{}", m, part));
+    for (int i = 1; i <= 12; ++i) v.push_back(fmt::format("stdillum-F{}", i));
+    return v;
+  }();
+  return names;
+}
+
+enum class SpectrumName { Named, Unknown, NotAName };
+
+SpectrumName classifySpectrumName(const std::string& n) {
+  for (const std::string& k : namedSpectra())
+    if (n == k) return SpectrumName::Named;
+  for (const char* p : {"metal-", "glass-", "stdillum-", "illum-"})
+    if (n.rfind(p, 0) == 0) return SpectrumName::Unknown;
+  for (const char* p : {"canon_", "nikon_", "sony_", "hasselblad_", "fujifilm_", "dji_", "gopro_",
+                        "apple_", "google_", "samsung_", "phase_one_"})
+    if (n.rfind(p, 0) == 0) return SpectrumName::Named;
+  return SpectrumName::NotAName;
+}
+
+// The edges of a triangle mesh and the one-rings of its vertices.
+struct MeshTopology {
+  struct Edge {
+    int faces = 0;
+    int opposite[2] = {-1, -1};
+    int new_vertex = -1;
+  };
+  std::unordered_map<uint64_t, Edge> edges;
+  std::vector<std::set<int>> neighbours;
+  std::vector<std::vector<int>> boundary;  // neighbours across boundary edges
+
+  static uint64_t key(int a, int b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b);
+  }
+  static std::pair<int, int> ends(uint64_t k) {
+    return {static_cast<int>(k >> 32), static_cast<int>(k & 0xffffffffu)};
+  }
+
+  MeshTopology(size_t nv, const std::vector<int>& idx) : neighbours(nv), boundary(nv) {
+    for (size_t f = 0; f + 2 < idx.size(); f += 3)
+      for (size_t e = 0; e < 3; ++e) {
+        int a = idx[f + e], b = idx[f + (e + 1) % 3], c = idx[f + (e + 2) % 3];
+        Edge& info = edges[key(a, b)];
+        if (info.faces < 2) info.opposite[info.faces] = c;
+        ++info.faces;
+      }
+    for (const auto& [k, info] : edges) {
+      auto [a, b] = ends(k);
+      neighbours[a].insert(b);
+      neighbours[b].insert(a);
+      if (info.faces == 1) {
+        boundary[a].push_back(b);
+        boundary[b].push_back(a);
+      }
+    }
+  }
+};
+
+// Loop subdivision (Loop 1987) of a triangle mesh, `levels` times, then the vertices are moved
+// to the limit surface as pbrt does; boundary edges follow the cubic B-spline rules. Vertices on
+// non-manifold or corner configurations keep their position. Normals are not computed.
+void loopSubdivide(std::vector<Vec3>& P, std::vector<int>& idx, int levels) {
+  auto beta = [](size_t n) { return n == 3 ? 3.0 / 16 : 3.0 / (8.0 * static_cast<double>(n)); };
+  for (int level = 0; level < levels; ++level) {
+    const size_t nv = P.size();
+    MeshTopology topo(nv, idx);
+    // Even (old) vertices.
+    std::vector<Vec3> newP(nv);
+    for (size_t v = 0; v < nv; ++v) {
+      const auto& bnd = topo.boundary[v];
+      size_t n = topo.neighbours[v].size();
+      if (!bnd.empty() || n == 0) {
+        newP[v] = bnd.size() == 2 ? P[v] * 0.75 + (P[bnd[0]] + P[bnd[1]]) * 0.125 : P[v];
+        continue;
+      }
+      Vec3 sum;
+      for (int u : topo.neighbours[v]) sum += P[u];
+      newP[v] = P[v] * (1 - static_cast<double>(n) * beta(n)) + sum * beta(n);
+    }
+    // Odd (edge) vertices.
+    for (auto& [k, e] : topo.edges) {
+      auto [a, b] = MeshTopology::ends(k);
+      e.new_vertex = static_cast<int>(newP.size());
+      if (e.faces == 2)
+        newP.push_back((P[a] + P[b]) * 0.375 + (P[e.opposite[0]] + P[e.opposite[1]]) * 0.125);
+      else
+        newP.push_back((P[a] + P[b]) * 0.5);
+    }
+    std::vector<int> newIdx;
+    newIdx.reserve(idx.size() * 4);
+    for (size_t f = 0; f + 2 < idx.size(); f += 3) {
+      int v0 = idx[f], v1 = idx[f + 1], v2 = idx[f + 2];
+      int e01 = topo.edges[MeshTopology::key(v0, v1)].new_vertex;
+      int e12 = topo.edges[MeshTopology::key(v1, v2)].new_vertex;
+      int e20 = topo.edges[MeshTopology::key(v2, v0)].new_vertex;
+      newIdx.insert(newIdx.end(), {v0, e01, e20, v1, e12, e01, v2, e20, e12, e01, e12, e20});
+    }
+    P = std::move(newP);
+    idx = std::move(newIdx);
+  }
+  if (levels == 0) return;
+  // Limit positions: interior (1 - n g) v + g sum, g = 1 / (n + 3 / (8 beta));
+  // boundary 3/5 v + 1/5 (b0 + b1).
+  MeshTopology topo(P.size(), idx);
+  std::vector<Vec3> limit(P.size());
+  for (size_t v = 0; v < P.size(); ++v) {
+    const auto& bnd = topo.boundary[v];
+    size_t n = topo.neighbours[v].size();
+    if (!bnd.empty() || n == 0) {
+      limit[v] = bnd.size() == 2 ? P[v] * 0.6 + (P[bnd[0]] + P[bnd[1]]) * 0.2 : P[v];
+      continue;
+    }
+    double g = 1 / (static_cast<double>(n) + 3 / (8 * beta(n)));
+    Vec3 sum;
+    for (int u : topo.neighbours[v]) sum += P[u];
+    limit[v] = P[v] * (1 - static_cast<double>(n) * g) + sum * g;
+  }
+  P = std::move(limit);
+}
+
+// Graphics state pushed by AttributeBegin.
+struct GraphicsState {
+  Transform ctm[2];
+  bool active[2] = {true, true};
+  bool reverse_orientation = false;
+  int material = -1;
+  int area_light = -1;
+  ParamList shape_attrs, light_attrs, material_attrs, texture_attrs;
+};
+
+class Builder {
+ public:
+  explicit Builder(const SceneDesc& desc) : desc_(desc) {
+    scene_.path = desc.path;
+    scene_.legacy_syntax = desc.legacy_syntax;
+    scene_.diagnostics = desc.diagnostics;
+    top_dir_ = fs::path(desc.path).parent_path();
+    if (desc.legacy_syntax) {
+      // pbrt-v2 defaults where the file does not say.
+      scene_.film.type = "rgb";
+      scene_.film.type_as_written = "image";
+      scene_.film.x_resolution = 640;
+      scene_.film.y_resolution = 480;
+      scene_.filter.type = "box";
+      scene_.filter.x_radius = scene_.filter.y_radius = 0.5;
+    }
+  }
+
+  Scene run() {
+    for (const Directive& d : desc_.directives) {
+      try {
+        directive(d);
+      } catch (const Error& e) {
+        scene_.diagnostics.push_back(
+            {Severity::Error, e.loc().valid() ? e.loc() : d.loc, e.message()});
+      }
+    }
+    for (const auto& [name, loc, transform] : pending_instances_) {
+      auto it = object_index_.find(name);
+      if (it == object_index_.end()) {
+        scene_.diagnostics.push_back(
+            {Severity::Error, loc, fmt::format("ObjectInstance of unknown object \"{}\"", name)});
+        continue;
+      }
+      scene_.instances.push_back({it->second, transform, loc});
+    }
+    return std::move(scene_);
+  }
+
+ private:
+  // ---- diagnostics -------------------------------------------------------------------------
+  void warn(const FileLoc& loc, std::string msg) {
+    scene_.diagnostics.push_back({Severity::Warning, loc, std::move(msg)});
+  }
+  void warnOnce(const std::string& key, const FileLoc& loc, std::string msg) {
+    if (warned_.insert(key).second) warn(loc, std::move(msg));
+  }
+  void finish(ParamSet& ps) { ps.reportUnused(scene_.diagnostics); }
+
+  // ---- files ---------------------------------------------------------------------------------
+  // pbrt resolves file names relative to the top-level scene file's directory; lensim also
+  // accepts them relative to the file that names them.
+  std::string resolve(const std::string& name, const FileLoc& loc, std::string_view what) {
+    fs::path p(name);
+    std::vector<fs::path> candidates;
+    if (p.is_absolute()) {
+      candidates.push_back(p);
+    } else {
+      candidates.push_back((top_dir_ / p).lexically_normal());
+      fs::path local = (fs::path(loc.file).parent_path() / p).lexically_normal();
+      if (local != candidates[0]) candidates.push_back(local);
+    }
+    for (const fs::path& c : candidates) {
+      std::error_code ec;
+      if (fs::is_regular_file(c, ec)) return c.string();
+    }
+    throw Error(loc, fmt::format("{} \"{}\" not found (looked for {})", what, name,
+                                 candidates[0].string()));
+  }
+
+  // ---- values --------------------------------------------------------------------------------
+  SpectrumValue spectrumOf(const Param& p) {
+    SpectrumValue s;
+    switch (p.type) {
+      case ParamType::Rgb:
+        if (p.numbers.size() != 3)
+          throw Error(p.loc, fmt::format("\"{}\": expected one rgb value (3 numbers), got {}",
+                                         p.name, p.numbers.size()));
+        s.kind = SpectrumValue::Kind::Rgb;
+        s.rgb = {p.numbers[0], p.numbers[1], p.numbers[2]};
+        if (s.rgb.x < 0 || s.rgb.y < 0 || s.rgb.z < 0)
+          throw Error(p.loc, fmt::format("\"{}\": rgb value has a negative component", p.name));
+        break;
+      case ParamType::Blackbody:
+        s.kind = SpectrumValue::Kind::Blackbody;
+        s.temperature_k = p.numbers[0];
+        if (p.numbers.size() > 1) s.blackbody_scale = p.numbers[1];
+        break;
+      case ParamType::Spectrum:
+        if (!p.strings.empty()) {
+          const std::string& n = p.strings[0];
+          SpectrumName c = classifySpectrumName(n);
+          if (c == SpectrumName::Named) {
+            s.kind = SpectrumValue::Kind::Named;
+            s.name = n;
+          } else if (c == SpectrumName::Unknown) {
+            std::string best;
+            size_t best_d = 3;
+            for (const std::string& k : namedSpectra())
+              if (size_t dist = editDistance(n, k); dist < best_d) best_d = dist, best = k;
+            throw Error(
+                p.loc,
+                fmt::format("\"{}\": unknown named spectrum \"{}\"{}", p.name, n,
+                            best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best)));
+          } else {
+            s.kind = SpectrumValue::Kind::File;
+            s.name = resolve(n, p.loc, "spectrum file");
+          }
+        } else {
+          s.kind = SpectrumValue::Kind::Sampled;
+          for (size_t i = 0; i + 1 < p.numbers.size(); i += 2)
+            s.samples.push_back({p.numbers[i], p.numbers[i + 1]});
+        }
+        break;
+      default:
+        throw Error(p.loc, fmt::format("\"{}\": not a spectrum", p.name));
+    }
+    return s;
+  }
+
+  int textureIndex(const std::string& name, TextureKind kind, const FileLoc& loc) {
+    auto& map = kind == TextureKind::Float ? float_textures_ : spectrum_textures_;
+    auto it = map.find(name);
+    if (it != map.end()) return it->second;
+    auto& other = kind == TextureKind::Float ? spectrum_textures_ : float_textures_;
+    throw Error(loc,
+                fmt::format("unknown {} texture \"{}\"{}",
+                            kind == TextureKind::Float ? "float" : "spectrum", name,
+                            other.count(name)
+                                ? fmt::format(" (\"{}\" is a {} texture)", name,
+                                              kind == TextureKind::Float ? "spectrum" : "float")
+                                : ""));
+  }
+
+  std::optional<Input> spectrumInput(ParamSet& ps, ParamSet::Names names) {
+    const Param* p = ps.find(
+        names, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody, ParamType::Texture});
+    if (!p) return std::nullopt;
+    Input in;
+    if (p->type == ParamType::Texture)
+      in.texture = textureIndex(p->strings[0], TextureKind::Spectrum, p->loc);
+    else
+      in.spectrum = spectrumOf(*p);
+    return in;
+  }
+  Input spectrumInput(ParamSet& ps, ParamSet::Names names, double def) {
+    auto in = spectrumInput(ps, names);
+    if (in) return *in;
+    Input d;
+    d.spectrum = SpectrumValue::gray(def);
+    return d;
+  }
+
+  std::optional<Input> floatInput(ParamSet& ps, ParamSet::Names names) {
+    const Param* p = ps.find(names, {ParamType::Float, ParamType::Texture});
+    if (!p) return std::nullopt;
+    Input in;
+    if (p->type == ParamType::Texture) {
+      in.texture = textureIndex(p->strings[0], TextureKind::Float, p->loc);
+    } else {
+      ps.expectCount(*p, 1);
+      in.value = p->numbers[0];
+    }
+    return in;
+  }
+  Input floatInput(ParamSet& ps, ParamSet::Names names, double def) {
+    auto in = floatInput(ps, names);
+    if (in) return *in;
+    Input d;
+    d.value = def;
+    return d;
+  }
+
+  // ---- directives ----------------------------------------------------------------------------
+  void directive(const Directive& d) {
+    const std::string& n = d.name;
+    GraphicsState& g = gs_;
+    auto apply = [&](const Transform& t, bool concat) {
+      for (int i = 0; i < 2; ++i)
+        if (g.active[i]) g.ctm[i] = concat ? g.ctm[i] * t : t;
+    };
+    if (n == "Identity")
+      apply(Transform(), false);
+    else if (n == "Translate")
+      apply(Transform::translate({d.numbers[0], d.numbers[1], d.numbers[2]}), true);
+    else if (n == "Scale")
+      apply(Transform::scale(d.numbers[0], d.numbers[1], d.numbers[2]), true);
+    else if (n == "Rotate")
+      apply(Transform::rotate(d.numbers[0], {d.numbers[1], d.numbers[2], d.numbers[3]}), true);
+    else if (n == "LookAt")
+      apply(Transform::lookAt({d.numbers[0], d.numbers[1], d.numbers[2]},
+                              {d.numbers[3], d.numbers[4], d.numbers[5]},
+                              {d.numbers[6], d.numbers[7], d.numbers[8]}),
+            true);
+    else if (n == "Transform" || n == "ConcatTransform") {
+      std::array<double, 16> v{};
+      std::copy(d.numbers.begin(), d.numbers.end(), v.begin());
+      apply(Transform::fromPbrt(v), n == "ConcatTransform");
+    } else if (n == "CoordinateSystem") {
+      named_cs_[d.strings[0]] = {g.ctm[0], g.ctm[1]};
+    } else if (n == "CoordSysTransform") {
+      auto it = named_cs_.find(d.strings[0]);
+      if (it == named_cs_.end()) {
+        warn(d.loc, fmt::format("unknown coordinate system \"{}\"; the transform is unchanged",
+                                d.strings[0]));
+      } else {
+        g.ctm[0] = it->second.first;
+        g.ctm[1] = it->second.second;
+      }
+    } else if (n == "TransformTimes") {
+      scene_.transform_start_time = d.numbers[0];
+      scene_.transform_end_time = d.numbers[1];
+    } else if (n == "ActiveTransform") {
+      g.active[0] = d.word != "EndTime";
+      g.active[1] = d.word != "StartTime";
+    } else if (n == "ReverseOrientation") {
+      g.reverse_orientation = !g.reverse_orientation;
+    } else if (n == "WorldBegin") {
+      g.ctm[0] = g.ctm[1] = Transform();
+      named_cs_["world"] = {g.ctm[0], g.ctm[1]};
+    } else if (n == "WorldEnd") {
+      // pbrt v1–v3: end of the scene; nothing to do.
+    } else if (n == "AttributeBegin") {
+      stack_.push_back(gs_);
+    } else if (n == "AttributeEnd") {
+      popState(false);
+    } else if (n == "TransformBegin") {
+      // pbrt-v1–v3 save only the transform; pbrt-v4 treats it as AttributeBegin (deprecated).
+      if (!scene_.legacy_syntax)
+        warnOnce("TransformBegin", d.loc,
+                 "TransformBegin/TransformEnd are deprecated in pbrt-v4 and act as "
+                 "AttributeBegin/AttributeEnd");
+      stack_.push_back(gs_);
+    } else if (n == "TransformEnd") {
+      popState(scene_.legacy_syntax);
+    } else if (n == "ObjectBegin") {
+      objectBegin(d);
+    } else if (n == "ObjectEnd") {
+      current_object_ = -1;
+      popState(false);
+    } else if (n == "ObjectInstance") {
+      if (g.ctm[0] != g.ctm[1])
+        warnOnce("motion", d.loc,
+                 "animated transforms are not rendered; the start transform is used");
+      pending_instances_.push_back({d.strings[0], d.loc, g.ctm[0]});
+    } else if (n == "Option") {
+      option(d);
+    } else if (n == "ColorSpace") {
+      scene_.color_space = d.strings[0];
+      if (d.strings[0] != "srgb")
+        warnOnce("colorspace", d.loc,
+                 fmt::format("color space \"{}\" is not rendered; colours are read as sRGB",
+                             d.strings[0]));
+    } else if (n == "Camera") {
+      camera(d);
+    } else if (n == "Film") {
+      film(d);
+    } else if (n == "Sampler") {
+      sampler(d);
+    } else if (n == "PixelFilter" || n == "Filter") {
+      filter(d);
+    } else if (n == "Integrator" || n == "SurfaceIntegrator") {
+      integrator(d);
+    } else if (n == "VolumeIntegrator") {
+      ParamSet ps(d.params, d.loc, "VolumeIntegrator");
+      ps.markAllUsed();
+      warnOnce("VolumeIntegrator", d.loc,
+               fmt::format("VolumeIntegrator \"{}\" is ignored: participating media are not "
+                           "rendered",
+                           d.strings[0]));
+    } else if (n == "Accelerator") {
+      ParamSet ps(d.params, d.loc, "Accelerator");
+      ps.markAllUsed();
+      warnOnce(
+          "Accelerator", d.loc,
+          fmt::format("Accelerator \"{}\" is ignored: lensim builds Embree BVHs", d.strings[0]));
+    } else if (n == "MakeNamedMedium" || n == "MediumInterface") {
+      ParamSet ps(d.params, d.loc, n);
+      ps.markAllUsed();
+      warnOnce("medium", d.loc,
+               fmt::format("{} is ignored: participating media are not rendered", n));
+    } else if (n == "Attribute") {
+      attribute(d);
+    } else if (n == "Shape") {
+      shape(d);
+    } else if (n == "Material") {
+      ParamSet ps(d.params, d.loc, fmt::format("Material \"{}\"", d.strings[0]));
+      ps.addDefaults(g.material_attrs);
+      Material m = material(d.strings[0], ps, d.loc);
+      finish(ps);
+      scene_.materials.push_back(std::move(m));
+      g.material = static_cast<int>(scene_.materials.size()) - 1;
+    } else if (n == "MakeNamedMaterial") {
+      ParamSet ps(d.params, d.loc, fmt::format("MakeNamedMaterial \"{}\"", d.strings[0]));
+      ps.addDefaults(g.material_attrs);
+      auto type = ps.findString({"type"});
+      if (!type)
+        throw Error(d.loc,
+                    fmt::format("MakeNamedMaterial \"{}\": missing \"string type\"", d.strings[0]));
+      Material m = material(*type, ps, d.loc);
+      m.name = d.strings[0];
+      finish(ps);
+      if (named_materials_.count(m.name))
+        warn(d.loc, fmt::format("named material \"{}\" redefined", m.name));
+      scene_.materials.push_back(std::move(m));
+      named_materials_[d.strings[0]] = static_cast<int>(scene_.materials.size()) - 1;
+    } else if (n == "NamedMaterial") {
+      auto it = named_materials_.find(d.strings[0]);
+      if (it == named_materials_.end())
+        throw Error(d.loc, fmt::format("NamedMaterial: unknown material \"{}\"", d.strings[0]));
+      g.material = it->second;
+    } else if (n == "Texture") {
+      texture(d);
+    } else if (n == "LightSource") {
+      light(d);
+    } else if (n == "AreaLightSource") {
+      areaLight(d);
+    } else {
+      throw Error(d.loc, fmt::format("directive \"{}\" is not handled", n));
+    }
+  }
+
+  void popState(bool transform_only) {
+    if (stack_.empty()) return;  // the parser checked the nesting
+    if (transform_only) {
+      gs_.ctm[0] = stack_.back().ctm[0];
+      gs_.ctm[1] = stack_.back().ctm[1];
+    } else {
+      gs_ = stack_.back();
+    }
+    stack_.pop_back();
+  }
+
+  void objectBegin(const Directive& d) {
+    stack_.push_back(gs_);
+    ObjectDef o;
+    o.name = d.strings[0];
+    o.loc = d.loc;
+    scene_.objects.push_back(o);
+    current_object_ = static_cast<int>(scene_.objects.size()) - 1;
+    object_index_[o.name] = current_object_;
+  }
+
+  void option(const Directive& d) {
+    static const std::set<std::string> known = {"disablepixeljitter",
+                                                "disabletexturefiltering",
+                                                "disablewavelengthjitter",
+                                                "displacementedgescale",
+                                                "msereferenceimage",
+                                                "msereferenceout",
+                                                "rendercoordsys",
+                                                "seed",
+                                                "forcediffuse",
+                                                "pixelstats",
+                                                "wavefront"};
+    const Param& p = d.params[0];
+    if (!known.count(p.name)) throw Error(p.loc, fmt::format("\"{}\": unknown option", p.name));
+    std::string v;
+    for (double x : p.numbers) v += fmt::format("{}{}", v.empty() ? "" : " ", x);
+    for (const std::string& s : p.strings) v += (v.empty() ? "" : " ") + s;
+    for (bool b : p.bools) v += (v.empty() ? "" : " ") + std::string(b ? "true" : "false");
+    scene_.options[p.name] = v;
+  }
+
+  void attribute(const Directive& d) {
+    const std::string& target = d.strings[0];
+    ParamList* list = target == "shape"      ? &gs_.shape_attrs
+                      : target == "light"    ? &gs_.light_attrs
+                      : target == "material" ? &gs_.material_attrs
+                      : target == "texture"  ? &gs_.texture_attrs
+                                             : nullptr;
+    if (target == "medium") {
+      warnOnce("medium", d.loc,
+               "Attribute \"medium\" is ignored: participating media are not rendered");
+      return;
+    }
+    if (!list)
+      throw Error(d.loc, fmt::format("Attribute: unknown target \"{}\" (expected shape, light, "
+                                     "material, medium or texture)",
+                                     target));
+    for (const Param& p : d.params) {
+      std::erase_if(*list, [&](const Param& q) { return q.name == p.name; });
+      list->push_back(p);
+    }
+  }
+
+  // ---- camera and options --------------------------------------------------------------------
+  void camera(const Directive& d) {
+    const std::string& type = d.strings[0];
+    if (!scene_.camera.defaulted)
+      warn(d.loc, fmt::format("second Camera (the first is at {}); the last one is used",
+                              scene_.camera.loc.str()));
+    ParamSet ps(d.params, d.loc, fmt::format("Camera \"{}\"", type));
+    Camera c;
+    c.defaulted = false;
+    c.type_as_written = type;
+    c.loc = d.loc;
+    c.camera_from_world = gs_.ctm[0];
+    c.camera_from_world_end = gs_.ctm[1];
+    named_cs_["camera"] = {inverse(gs_.ctm[0]), inverse(gs_.ctm[1])};
+    c.shutter_open = ps.getFloat({"shutteropen"}, 0);
+    c.shutter_close = ps.getFloat({"shutterclose"}, 1);
+    c.hither = ps.getFloat({"hither"}, 1e-3);
+    c.yon = ps.getFloat({"yon"}, 1e30);
+    if (c.shutter_close < c.shutter_open)
+      warn(d.loc, "shutterclose is before shutteropen; they are swapped");
+    if (c.shutter_close < c.shutter_open) std::swap(c.shutter_open, c.shutter_close);
+    auto screen = [&]() {
+      c.frame_aspect_ratio = ps.findFloat({"frameaspectratio"});
+      if (const Param* p = ps.find({"screenwindow"}, {ParamType::Float})) {
+        ps.expectCount(*p, 4);
+        c.screen_window =
+            std::array<double, 4>{p->numbers[0], p->numbers[1], p->numbers[2], p->numbers[3]};
+      }
+      c.lens_radius = ps.getFloat({"lensradius"}, 0);
+      c.focal_distance = ps.getFloat({"focaldistance"}, 1e6);
+    };
+    if (type == "perspective") {
+      c.type = "perspective";
+      screen();
+      c.fov_deg = ps.getFloat({"fov"}, 90);
+      if (auto half = ps.findFloat({"halffov"})) c.fov_deg = 2 * *half;  // pbrt-v1/v2
+    } else if (type == "orthographic") {
+      c.type = "orthographic";
+      screen();
+    } else if (type == "realistic") {
+      c.type = "realistic";
+      if (ps.peek({"specfile"})) {
+        // pbrt-v1/v2 (CS348B): camera-space millimetres.
+        LegacyRealistic r;
+        const Param* spec = ps.find({"specfile"}, {ParamType::String});
+        r.lens_file_as_written = spec->strings[0];
+        r.lens_file = resolve(spec->strings[0], spec->loc, "lens file");
+        const Param* fd = ps.find({"filmdistance"}, {ParamType::Float});
+        if (!fd) throw Error(d.loc, "realistic camera: missing \"float filmdistance\" (mm)");
+        ps.expectCount(*fd, 1);
+        r.film_distance_mm = fd->numbers[0];
+        const Param* ad = ps.find({"aperture_diameter"}, {ParamType::Float});
+        if (!ad) throw Error(d.loc, "realistic camera: missing \"float aperture_diameter\" (mm)");
+        ps.expectCount(*ad, 1);
+        r.aperture_diameter_mm = ad->numbers[0];
+        r.film_diagonal_mm = ps.getFloat({"filmdiag"}, 35);
+        if (const Param* af = ps.find({"af_zones"}, {ParamType::String}))
+          r.af_zones_file = resolve(af->strings[0], af->loc, "autofocus zone file");
+        if (r.film_distance_mm <= 0) ps.fail(*fd, "film distance must be positive (mm)");
+        if (r.aperture_diameter_mm <= 0) ps.fail(*ad, "aperture diameter must be positive (mm)");
+        c.legacy_realistic = r;
+      } else {
+        Realistic r;
+        const Param* lf = ps.find({"lensfile"}, {ParamType::String});
+        if (!lf) throw Error(d.loc, "realistic camera: missing \"string lensfile\"");
+        r.lens_file_as_written = lf->strings[0];
+        r.lens_file = resolve(lf->strings[0], lf->loc, "lens file");
+        r.aperture_diameter_mm = ps.getFloat({"aperturediameter"}, 1.0);
+        r.focus_distance_m = ps.getFloat({"focusdistance"}, 10.0);
+        r.simple_weighting = ps.getBool({"simpleweighting"}, true);
+        if (const Param* ap = ps.find({"aperture"}, {ParamType::String})) {
+          const std::string& a = ap->strings[0];
+          static const std::set<std::string> builtin = {"gaussian", "square", "pentagon", "star"};
+          r.aperture = builtin.count(a) ? a : resolve(a, ap->loc, "aperture image");
+        }
+        c.realistic = r;
+      }
+    } else {
+      ps.markAllUsed();
+      warnOnce("camera " + type, d.loc,
+               fmt::format("camera \"{}\" is not rendered by lensim; it renders as a perspective "
+                           "camera with a 90 degree field of view",
+                           type));
+    }
+    finish(ps);
+    scene_.camera = std::move(c);
+  }
+
+  void film(const Directive& d) {
+    const std::string& type = d.strings[0];
+    ParamSet ps(d.params, d.loc, fmt::format("Film \"{}\"", type));
+    Film& f = scene_.film;
+    f.defaulted = false;
+    f.type_as_written = type;
+    f.loc = d.loc;
+    f.type = "rgb";
+    if (type != "rgb" && type != "image")
+      warnOnce("film " + type, d.loc,
+               fmt::format("film \"{}\" is not rendered by lensim; it renders as an \"rgb\" film",
+                           type));
+    f.x_resolution = ps.getInt({"xresolution"}, f.x_resolution);
+    f.y_resolution = ps.getInt({"yresolution"}, f.y_resolution);
+    f.filename = ps.getString({"filename"}, f.filename);
+    if (const Param* p = ps.find({"cropwindow"}, {ParamType::Float})) {
+      ps.expectCount(*p, 4);
+      f.crop_window = {p->numbers[0], p->numbers[1], p->numbers[2], p->numbers[3]};
+    }
+    if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) {
+      ps.expectCount(*p, 4);
+      f.pixel_bounds = std::array<int, 4>{int(p->numbers[0]), int(p->numbers[1]),
+                                          int(p->numbers[2]), int(p->numbers[3])};
+    }
+    f.scale = ps.getFloat({"scale"}, 1);  // pbrt-v3 image film
+    f.diagonal_mm = ps.getFloat({"diagonal"}, 35);
+    f.iso = ps.getFloat({"iso"}, 100);
+    f.white_balance_k = ps.getFloat({"whitebalance"}, 0);
+    f.sensor = ps.getString({"sensor"}, "cie1931");
+    f.max_component_value = ps.getFloat({"maxcomponentvalue", "maxsampleluminance"}, 1e300);
+    f.save_fp16 = ps.getBool({"savefp16"}, true);
+    ps.getBool({"display"}, false);  // pbrt-v2 image film: open a window
+    if (type == "spectral" || type == "gbuffer") ps.markAllUsed();
+    if (f.x_resolution <= 0 || f.y_resolution <= 0)
+      throw Error(d.loc, "film resolution must be positive");
+    finish(ps);
+  }
+
+  void sampler(const Directive& d) {
+    const std::string& type = d.strings[0];
+    ParamSet ps(d.params, d.loc, fmt::format("Sampler \"{}\"", type));
+    Sampler& s = scene_.sampler;
+    s.defaulted = false;
+    s.type_as_written = type;
+    s.loc = d.loc;
+    static const std::set<std::string> v4 = {"independent", "stratified", "halton", "sobol",
+                                             "paddedsobol", "zsobol",     "pmj02bn"};
+    s.seed = ps.getInt({"seed"}, 0);
+    s.randomization = ps.getString({"randomization"}, "");
+    ps.getBool({"samplepixelcenter"}, false);  // pbrt-v3 halton
+    if (type == "stratified") {
+      int x = ps.getInt({"xsamples"}, 4), y = ps.getInt({"ysamples"}, 4);
+      s.jitter = ps.getBool({"jitter"}, true);
+      s.pixel_samples = x * y;
+      s.type = type;
+    } else if (v4.count(type)) {
+      s.type = type;
+      s.pixel_samples = ps.getInt({"pixelsamples"}, 16);
+    } else if (type == "lowdiscrepancy" || type == "02sequence" || type == "bestcandidate" ||
+               type == "maxmindist" || type == "random" || type == "adaptive") {
+      // The pbrt-v4 equivalents its --upgrade uses.
+      s.type = type == "random"                                  ? "independent"
+               : type == "maxmindist" || type == "bestcandidate" ? "pmj02bn"
+                                                                 : "paddedsobol";
+      s.pixel_samples = ps.getInt({"pixelsamples"}, 4);
+      if (type == "adaptive") {
+        s.pixel_samples = ps.getInt({"maxsamples"}, 32);
+        ps.markAllUsed();
+      }
+      ps.getInt({"dimensions"}, 4);
+      warnOnce("sampler " + type, d.loc,
+               fmt::format("sampler \"{}\" (pbrt-v1–v3) renders as \"{}\" with {} samples per "
+                           "pixel",
+                           type, s.type, s.pixel_samples));
+    } else {
+      ps.markAllUsed();
+      s.type = "zsobol";
+      warnOnce(
+          "sampler " + type, d.loc,
+          fmt::format("sampler \"{}\" is not rendered by lensim; it renders as \"zsobol\"", type));
+    }
+    if (s.pixel_samples <= 0) throw Error(d.loc, "pixelsamples must be positive");
+    finish(ps);
+  }
+
+  void filter(const Directive& d) {
+    const std::string& type = d.strings[0];
+    ParamSet ps(d.params, d.loc, fmt::format("PixelFilter \"{}\"", type));
+    Filter& f = scene_.filter;
+    f.defaulted = false;
+    f.type_as_written = type;
+    f.loc = d.loc;
+    double def = type == "box"        ? 0.5
+                 : type == "gaussian" ? 1.5
+                 : type == "mitchell" ? 2
+                 : type == "triangle" ? 2
+                                      : 4;
+    f.type = type == "sinc" ? "lanczos" : type;
+    f.x_radius = ps.getFloat({"xradius", "xwidth"}, def);
+    f.y_radius = ps.getFloat({"yradius", "ywidth"}, def);
+    if (type == "gaussian") {
+      f.sigma = ps.getFloat({"sigma"}, 0.5);
+      if (auto alpha = ps.findFloat({"alpha"}))  // pbrt-v2: exp(-alpha x^2) = exp(-x^2/(2 sigma^2))
+        f.sigma = 1 / std::sqrt(2 * *alpha);
+    } else if (type == "mitchell") {
+      f.b = ps.getFloat({"B"}, 1.0 / 3);
+      f.c = ps.getFloat({"C"}, 1.0 / 3);
+    } else if (type == "sinc" || type == "lanczos") {
+      f.tau = ps.getFloat({"tau"}, 3);
+    } else if (type != "box" && type != "triangle") {
+      ps.markAllUsed();
+      f.type = "gaussian";
+      warnOnce(
+          "filter " + type, d.loc,
+          fmt::format("filter \"{}\" is not rendered by lensim; it renders as \"gaussian\"", type));
+    }
+    finish(ps);
+  }
+
+  void integrator(const Directive& d) {
+    const std::string& type = d.strings[0];
+    ParamSet ps(d.params, d.loc, fmt::format("{} \"{}\"", d.name, type));
+    Integrator& it = scene_.integrator;
+    it.defaulted = false;
+    it.type_as_written = type;
+    it.loc = d.loc;
+    it.type = "path";
+    it.max_depth = ps.getInt({"maxdepth"}, 5);
+    if (type == "path" || type == "volpath") {
+      it.regularize = ps.getBool({"regularize"}, false);
+      it.light_sampler = ps.getString({"lightsampler", "lightsamplestrategy"}, "bvh");
+      ps.getFloat({"rrthreshold"}, 1);  // pbrt-v3
+      if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
+      if (type == "volpath")
+        warnOnce(
+            "integrator volpath", d.loc,
+            "integrator \"volpath\" renders as \"path\": participating media are not rendered");
+    } else if (type == "directlighting") {
+      // As pbrt-v4's --upgrade: direct lighting is a path tracer of depth 1.
+      ps.markAllUsed();
+      it.max_depth = 1;
+      warnOnce("integrator " + type, d.loc,
+               "integrator \"directlighting\" (pbrt-v1–v3) renders as \"path\" with maxdepth 1");
+    } else {
+      ps.markAllUsed();
+      warnOnce("integrator " + type, d.loc,
+               fmt::format("integrator \"{}\" is not rendered by lensim; it renders as \"path\" "
+                           "with maxdepth {}",
+                           type, it.max_depth));
+    }
+    finish(ps);
+  }
+
+  // ---- textures and materials ----------------------------------------------------------------
+  void texture(const Directive& d) {
+    const std::string &name = d.strings[0], &kind_s = d.strings[1], &cls = d.strings[2];
+    Texture t;
+    t.name = name;
+    t.loc = d.loc;
+    t.type_as_written = cls;
+    if (kind_s == "float")
+      t.kind = TextureKind::Float;
+    else if (kind_s == "spectrum" || kind_s == "color" || kind_s == "rgb")
+      t.kind = TextureKind::Spectrum;
+    else
+      throw Error(d.loc, fmt::format("texture \"{}\": unknown texture type \"{}\" (expected "
+                                     "\"float\" or \"spectrum\")",
+                                     name, kind_s));
+    t.texture_from_world = inverse(gs_.ctm[0]);
+    ParamSet ps(d.params, d.loc, fmt::format("Texture \"{}\"", cls));
+    ps.addDefaults(gs_.texture_attrs);
+    const bool f = t.kind == TextureKind::Float;
+    auto in = [&](ParamSet::Names names, double def) {
+      return f ? floatInput(ps, names, def) : spectrumInput(ps, names, def);
+    };
+    auto mapping = [&]() {
+      t.mapping = ps.getString({"mapping"}, "uv");
+      t.uscale = ps.getFloat({"uscale"}, 1);
+      t.vscale = ps.getFloat({"vscale"}, 1);
+      t.udelta = ps.getFloat({"udelta"}, 0);
+      t.vdelta = ps.getFloat({"vdelta"}, 0);
+      for (auto [name, v] : {std::pair{"v1", &t.v1}, std::pair{"v2", &t.v2}})
+        if (const Param* p = ps.find({name}, {ParamType::Vector3})) {
+          ps.expectCount(*p, 1);
+          *v = {p->numbers[0], p->numbers[1], p->numbers[2]};
+        }
+    };
+    if (cls == "imagemap") {
+      t.type = cls;
+      mapping();
+      const Param* fn = ps.find({"filename"}, {ParamType::String});
+      if (!fn)
+        throw Error(d.loc, fmt::format("texture \"{}\": imagemap needs \"string filename\"", name));
+      t.filename_as_written = fn->strings[0];
+      t.filename = resolve(fn->strings[0], fn->loc, "image file");
+      t.wrap = ps.getString({"wrap"}, "repeat");
+      t.scale = ps.getFloat({"scale"}, 1);
+      t.invert = ps.getBool({"invert"}, false);
+      t.encoding = ps.getString({"encoding"}, "");
+      t.filter = ps.getString({"filter"}, "bilinear");
+      t.max_anisotropy = ps.getFloat({"maxanisotropy"}, 8);
+      if (ps.getBool({"trilinear"}, false)) t.filter = "trilinear";  // pbrt-v2/v3
+      // pbrt-v2: "float gamma"; pbrt-v3: "bool gamma" (true: sRGB).
+      if (const Param* g = ps.find({"gamma"}, {ParamType::Float, ParamType::Bool})) {
+        ps.expectCount(*g, 1);
+        if (g->type == ParamType::Float)
+          t.encoding = fmt::format("gamma {}", g->numbers[0]);
+        else
+          t.encoding = g->bools[0] ? "sRGB" : "linear";
+      }
+    } else if (cls == "scale") {
+      t.type = cls;
+      t.tex1 = in({"tex", "tex1"}, 1);
+      if (auto s = floatInput(ps, {"scale"})) {
+        t.tex2 = *s;
+        t.scale_is_float = true;
+      } else {
+        t.tex2 = in({"tex2"}, 1);
+      }
+    } else if (cls == "mix") {
+      t.type = cls;
+      t.tex1 = in({"tex1"}, 0);
+      t.tex2 = in({"tex2"}, 1);
+      t.amount = floatInput(ps, {"amount"}, 0.5);
+    } else if (cls == "checkerboard") {
+      t.type = cls;
+      mapping();
+      t.tex1 = in({"tex1"}, 1);
+      t.tex2 = in({"tex2"}, 0);
+      t.dimension = ps.getInt({"dimension"}, 2);
+      ps.getString({"aamode"}, "closedform");  // pbrt-v2/v3
+      if (t.dimension != 2 && t.dimension != 3)
+        throw Error(d.loc, fmt::format("checkerboard dimension {} (expected 2 or 3)", t.dimension));
+    } else if (cls == "constant") {
+      t.type = cls;
+      t.tex1 = in({"value"}, 1);
+    } else {
+      ps.markAllUsed();
+      t.type = "constant";
+      t.tex1 = f ? floatInput(ps, {"__none__"}, 0.5) : spectrumInput(ps, {"__none__"}, 0.5);
+      warnOnce("texture " + cls, d.loc,
+               fmt::format("texture \"{}\" is not rendered by lensim; it renders as a constant 0.5",
+                           cls));
+    }
+    finish(ps);
+    auto& map = f ? float_textures_ : spectrum_textures_;
+    if (map.count(name))
+      warn(d.loc, fmt::format("{} texture \"{}\" redefined", f ? "float" : "spectrum", name));
+    scene_.textures.push_back(std::move(t));
+    map[name] = static_cast<int>(scene_.textures.size()) - 1;
+  }
+
+  Material material(const std::string& type, ParamSet& ps, const FileLoc& loc) {
+    Material m;
+    m.type_as_written = type;
+    m.loc = loc;
+    m.displacement = floatInput(ps, {"displacement", "bumpmap"});
+    if (const Param* nm = ps.find({"normalmap"}, {ParamType::String}))
+      if (!nm->strings[0].empty()) m.normal_map = resolve(nm->strings[0], nm->loc, "normal map");
+    auto roughness = [&](double def) {
+      Input r = floatInput(ps, {"roughness"}, def);
+      m.uroughness = floatInput(ps, {"uroughness"}).value_or(r);
+      m.vroughness = floatInput(ps, {"vroughness"}).value_or(r);
+      m.remap_roughness = ps.getBool({"remaproughness"}, true);
+    };
+    auto conductorDefaults = [&]() {
+      m.eta =
+          spectrumInput(ps, {"eta"}).value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-eta")});
+      m.k = spectrumInput(ps, {"k"}).value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-k")});
+    };
+    auto dielectricEta = [&](ParamSet::Names names) {
+      const Param* p = ps.find(names, {ParamType::Float, ParamType::Spectrum, ParamType::Texture});
+      m.eta.value = 1.5;
+      if (!p) return;
+      if (p->type == ParamType::Float) {
+        ps.expectCount(*p, 1);
+        m.eta.value = p->numbers[0];
+      } else if (p->type == ParamType::Texture) {
+        m.eta.texture = textureIndex(p->strings[0], TextureKind::Float, p->loc);
+      } else {
+        m.eta.spectrum = spectrumOf(*p);
+      }
+    };
+    if (type == "diffuse" || type == "matte") {
+      m.type = "diffuse";
+      m.reflectance = spectrumInput(ps, {"reflectance", "Kd"}, 0.5);
+      m.has_reflectance = true;
+      if (type == "matte") {
+        Input sigma = floatInput(ps, {"sigma"}, 0);
+        if (sigma.texture >= 0 || sigma.value != 0)
+          warnOnce("matte sigma", loc,
+                   "matte \"sigma\" (Oren-Nayar roughness) is not rendered; "
+                   "the surface renders as Lambertian");
+      }
+    } else if (type == "coateddiffuse" || type == "plastic" || type == "uber" ||
+               type == "substrate") {
+      m.type = "coateddiffuse";
+      m.reflectance =
+          spectrumInput(ps, {"reflectance", "Kd"}, type == "coateddiffuse" ? 0.5 : 0.25);
+      m.has_reflectance = true;
+      roughness(type == "coateddiffuse" ? 0 : 0.1);
+      if (type == "coateddiffuse") {
+        m.thickness = floatInput(ps, {"thickness"}, 0.01);
+        m.albedo = spectrumInput(ps, {"albedo"}, 0);
+        m.g = floatInput(ps, {"g"}, 0);
+        m.max_depth = ps.getInt({"maxdepth"}, 10);
+        m.n_samples = ps.getInt({"nsamples"}, 1);
+        dielectricEta({"eta"});
+      } else {
+        // pbrt-v1–v3 names: Ks (specular colour) and the uber extras have no coateddiffuse
+        // equivalent; the coat is a clear dielectric of index 1.5.
+        m.eta.value = 1.5;
+        bool extra = spectrumInput(ps, {"Ks"}).has_value();
+        if (type == "uber") {
+          extra = spectrumInput(ps, {"Kr"}).has_value() || extra;
+          extra = spectrumInput(ps, {"Kt"}).has_value() || extra;
+          extra = spectrumInput(ps, {"opacity"}).has_value() || extra;
+          dielectricEta({"eta", "index"});
+        }
+        if (extra)
+          warnOnce("material " + type + " Ks", loc,
+                   fmt::format("material \"{}\": \"Ks\" (and Kr, Kt, opacity) are not rendered; it "
+                               "renders as \"coateddiffuse\" with a clear coat",
+                               type));
+      }
+    } else if (type == "conductor" || type == "metal") {
+      m.type = "conductor";
+      conductorDefaults();
+      if (auto r = spectrumInput(ps, {"reflectance"})) {
+        m.reflectance = *r;
+        m.has_reflectance = true;
+      }
+      roughness(type == "metal" ? 0.01 : 0);
+    } else if (type == "mirror") {
+      m.type = "conductor";
+      m.reflectance = spectrumInput(ps, {"Kr", "reflectance"}, 0.9);
+      m.has_reflectance = true;
+    } else if (type == "dielectric" || type == "glass" || type == "thindielectric") {
+      m.type = type == "thindielectric" ? "thindielectric" : "dielectric";
+      dielectricEta({"eta", "index"});
+      if (type != "thindielectric") roughness(0);
+      if (type == "glass") {
+        bool tinted = false;
+        for (auto n : {"Kr", "Kt"}) {
+          Input k = spectrumInput(ps, {n}, 1);
+          tinted = tinted || k.texture >= 0 || k.spectrum.kind != SpectrumValue::Kind::Rgb ||
+                   k.spectrum.rgb != Vec3{1, 1, 1};
+        }
+        if (tinted)
+          warnOnce("glass tint", loc,
+                   "glass \"Kr\"/\"Kt\" tints are not rendered; the glass "
+                   "renders clear");
+      }
+    } else if (type == "interface" || type == "" || type == "none") {
+      m.type = "interface";
+    } else {
+      ps.markAllUsed();
+      m.type = "diffuse";
+      m.reflectance.spectrum = SpectrumValue::gray(0.5);
+      m.has_reflectance = true;
+      m.fallback = true;
+      warnOnce("material " + type, loc,
+               fmt::format("material \"{}\" is not rendered by lensim; it renders as diffuse grey "
+                           "(reflectance 0.5)",
+                           type));
+    }
+    return m;
+  }
+
+  int currentMaterial() {
+    if (gs_.material >= 0) return gs_.material;
+    if (default_material_ < 0) {
+      Material m;
+      m.type = "diffuse";
+      m.type_as_written = "(default)";
+      m.reflectance.spectrum = SpectrumValue::gray(0.5);
+      m.has_reflectance = true;
+      scene_.materials.push_back(m);
+      default_material_ = static_cast<int>(scene_.materials.size()) - 1;
+    }
+    return default_material_;
+  }
+
+  // ---- lights --------------------------------------------------------------------------------
+  void light(const Directive& d) {
+    const std::string& type = d.strings[0];
+    ParamSet ps(d.params, d.loc, fmt::format("LightSource \"{}\"", type));
+    ps.addDefaults(gs_.light_attrs);
+    Light l;
+    l.type = type;
+    l.type_as_written = type;
+    l.loc = d.loc;
+    l.transform = gs_.ctm[0];
+    l.scale = ps.getFloat({"scale"}, 1);
+    l.power = ps.findFloat({"power", "illuminance"});
+    ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
+    auto emission = [&](ParamSet::Names names) {
+      const Param* p = ps.find(names, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody});
+      if (p) l.emission = spectrumOf(*p);
+    };
+    if (type == "point" || type == "spot") {
+      emission({"I"});
+      l.from = ps.findPoint3({"from"}).value_or(Vec3{0, 0, 0});
+      if (type == "spot") {
+        l.to = ps.findPoint3({"to"}).value_or(Vec3{0, 0, 1});
+        l.cone_angle_deg = ps.getFloat({"coneangle"}, 30);
+        l.cone_delta_deg = ps.getFloat({"conedeltaangle"}, 5);
+      }
+    } else if (type == "distant") {
+      emission({"L"});
+      l.from = ps.findPoint3({"from"}).value_or(Vec3{0, 0, 0});
+      l.to = ps.findPoint3({"to"}).value_or(Vec3{0, 0, 1});
+    } else if (type == "infinite") {
+      emission({"L"});
+      if (const Param* p = ps.find({"filename", "mapname"}, {ParamType::String}))
+        if (!p->strings[0].empty()) l.filename = resolve(p->strings[0], p->loc, "environment map");
+      l.portal = ps.getVec3s({"portal"}, {ParamType::Point3});
+      if (!l.portal.empty() && l.portal.size() != 4)
+        ps.fail(*ps.peek({"portal"}), fmt::format("expected 4 points, got {}", l.portal.size()));
+    } else {
+      ps.markAllUsed();
+      warnOnce("light " + type, d.loc,
+               fmt::format("light \"{}\" is not rendered by lensim; it is left out", type));
+      return;
+    }
+    finish(ps);
+    scene_.lights.push_back(std::move(l));
+  }
+
+  void areaLight(const Directive& d) {
+    const std::string& type = d.strings[0];
+    ParamSet ps(d.params, d.loc, fmt::format("AreaLightSource \"{}\"", type));
+    ps.addDefaults(gs_.light_attrs);
+    Light l;
+    l.type = "diffuse";
+    l.type_as_written = type;
+    l.loc = d.loc;
+    l.transform = gs_.ctm[0];
+    if (type != "diffuse" && type != "area") {
+      ps.markAllUsed();
+      warnOnce("arealight " + type, d.loc,
+               fmt::format("area light \"{}\" is not rendered by lensim; it renders as "
+                           "\"diffuse\" with L = 1",
+                           type));
+    } else {
+      const Param* p = ps.find({"L"}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody});
+      if (p) l.emission = spectrumOf(*p);
+      l.scale = ps.getFloat({"scale"}, 1);
+      l.two_sided = ps.getBool({"twosided"}, false);
+      l.power = ps.findFloat({"power"});
+      ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
+      if (const Param* fn = ps.find({"filename"}, {ParamType::String})) {
+        l.filename = resolve(fn->strings[0], fn->loc, "image file");
+        warnOnce("arealight image", fn->loc, "image area lights are not rendered; L is used");
+      }
+    }
+    finish(ps);
+    scene_.lights.push_back(std::move(l));
+    gs_.area_light = static_cast<int>(scene_.lights.size()) - 1;
+  }
+
+  // ---- shapes --------------------------------------------------------------------------------
+  void shape(const Directive& d) {
+    const std::string& type = d.strings[0];
+    ParamSet ps(d.params, d.loc, fmt::format("Shape \"{}\"", type));
+    ps.addDefaults(gs_.shape_attrs);
+    Shape s;
+    s.type_as_written = type;
+    s.loc = d.loc;
+    s.transform = gs_.ctm[0];
+    s.reverse_orientation = gs_.reverse_orientation;
+    s.alpha = floatInput(ps, {"alpha"});
+    if (gs_.ctm[0] != gs_.ctm[1])
+      warnOnce("motion", d.loc,
+               "animated transforms are not rendered; the start transform is used");
+    if (type == "sphere") {
+      s.type = ShapeType::Sphere;
+      s.radius = ps.getFloat({"radius"}, 1);
+      s.zmin = std::clamp(ps.getFloat({"zmin"}, -s.radius), -s.radius, s.radius);
+      s.zmax = std::clamp(ps.getFloat({"zmax"}, s.radius), -s.radius, s.radius);
+      if (s.zmin > s.zmax) std::swap(s.zmin, s.zmax);
+      s.phimax_deg = ps.getFloat({"phimax"}, 360);
+    } else if (type == "disk") {
+      s.type = ShapeType::Disk;
+      s.height = ps.getFloat({"height"}, 0);
+      s.radius = ps.getFloat({"radius"}, 1);
+      s.inner_radius = ps.getFloat({"innerradius"}, 0);
+      if (s.inner_radius < 0 || s.inner_radius >= s.radius)
+        throw Error(
+            ps.peek({"innerradius"}) ? ps.peek({"innerradius"})->loc : d.loc,
+            fmt::format("disk inner radius {} outside [0, radius {})", s.inner_radius, s.radius));
+      s.phimax_deg = ps.getFloat({"phimax"}, 360);
+    } else if (type == "cylinder") {
+      s.type = ShapeType::Cylinder;
+      s.radius = ps.getFloat({"radius"}, 1);
+      s.zmin = ps.getFloat({"zmin"}, -1);
+      s.zmax = ps.getFloat({"zmax"}, 1);
+      if (s.zmin > s.zmax) std::swap(s.zmin, s.zmax);
+      s.phimax_deg = ps.getFloat({"phimax"}, 360);
+    } else if (type == "cone") {
+      s.type = ShapeType::Cone;
+      s.height = ps.getFloat({"height"}, 1);
+      s.radius = ps.getFloat({"radius"}, 1);
+      s.phimax_deg = ps.getFloat({"phimax"}, 360);
+    } else if (type == "trianglemesh" || type == "bilinearmesh" || type == "loopsubdiv") {
+      s.type = type == "bilinearmesh" ? ShapeType::BilinearMesh : ShapeType::TriangleMesh;
+      s.mesh = inlineMesh(type, ps, d.loc);
+    } else if (type == "plymesh") {
+      s.type = ShapeType::TriangleMesh;
+      s.mesh = plyMesh(ps, d.loc);
+    } else {
+      ps.markAllUsed();
+      warnOnce("shape " + type, d.loc,
+               fmt::format("shape \"{}\" is not rendered by lensim; it is left out", type));
+      return;
+    }
+    if (s.phimax_deg <= 0 || s.phimax_deg > 360) {
+      const Param* p = ps.peek({"phimax"});
+      throw Error(p ? p->loc : d.loc,
+                  fmt::format("phimax {} outside (0, 360] degrees", s.phimax_deg));
+    }
+    if (s.radius <= 0 && s.type != ShapeType::TriangleMesh && s.type != ShapeType::BilinearMesh) {
+      const Param* p = ps.peek({"radius"});
+      throw Error(p ? p->loc : d.loc, fmt::format("radius {} must be positive", s.radius));
+    }
+    finish(ps);
+    s.material = currentMaterial();
+    if (gs_.area_light >= 0) {
+      if (current_object_ >= 0) {
+        warnOnce("instanced area light", d.loc,
+                 "area lights in object definitions are not supported (as in pbrt-v4); the shape "
+                 "does not emit");
+      } else {
+        s.area_light = gs_.area_light;
+        ++scene_.lights[static_cast<size_t>(gs_.area_light)].shape_count;
+      }
+    }
+    if (current_object_ >= 0) {
+      s.object = current_object_;
+      scene_.objects[static_cast<size_t>(current_object_)].shapes.push_back(
+          static_cast<int>(scene_.shapes.size()));
+    }
+    scene_.shapes.push_back(std::move(s));
+  }
+
+  int inlineMesh(const std::string& type, ParamSet& ps, const FileLoc& loc) {
+    Mesh m;
+    const int fv = type == "bilinearmesh" ? 4 : 3;
+    m.vertices_per_face = fv;
+    const Param* P = ps.find({"P"}, {ParamType::Point3});
+    if (!P) throw Error(loc, fmt::format("{}: missing \"point3 P\"", type));
+    std::vector<Vec3> pos;
+    for (size_t i = 0; i + 2 < P->numbers.size(); i += 3)
+      pos.push_back({P->numbers[i], P->numbers[i + 1], P->numbers[i + 2]});
+    const Param* I = ps.find({"indices"}, {ParamType::Integer});
+    std::vector<int> idx;
+    if (I) {
+      for (double v : I->numbers) idx.push_back(static_cast<int>(v));
+      if (idx.size() % static_cast<size_t>(fv) != 0)
+        ps.fail(*I, fmt::format("expected a multiple of {} indices, got {}", fv, idx.size()));
+      for (int i : idx)
+        if (i < 0 || static_cast<size_t>(i) >= pos.size())
+          ps.fail(*I, fmt::format("index {} out of range: there are {} vertices", i, pos.size()));
+    } else if (pos.size() == static_cast<size_t>(fv)) {
+      for (int i = 0; i < fv; ++i) idx.push_back(i);
+    } else {
+      throw Error(loc, fmt::format("{}: missing \"integer indices\" (only a single {} may omit "
+                                   "them)",
+                                   type, fv == 3 ? "triangle" : "patch"));
+    }
+    if (type == "loopsubdiv") {
+      int levels = ps.getInt({"levels", "nlevels"}, 3);
+      if (levels < 0 || levels > 8) throw Error(loc, fmt::format("loopsubdiv: {} levels", levels));
+      loopSubdivide(pos, idx, levels);
+    }
+    for (const Vec3& p : pos) m.positions.push_back(Vec3f(p));
+    m.indices = std::move(idx);
+    auto perVertex = [&](const Param* p, size_t per) {
+      if (p && p->numbers.size() != pos.size() * per)
+        ps.fail(*p, fmt::format("expected one value per vertex ({}), got {}", pos.size(),
+                                p->numbers.size() / per));
+    };
+    if (type != "loopsubdiv") {
+      const Param* N = ps.find({"N"}, {ParamType::Normal3});
+      perVertex(N, 3);
+      if (N)
+        for (size_t i = 0; i + 2 < N->numbers.size(); i += 3)
+          m.normals.push_back(Vec3f(Vec3{N->numbers[i], N->numbers[i + 1], N->numbers[i + 2]}));
+      const Param* UV = ps.find({"uv", "st"}, {ParamType::Point2, ParamType::Float});
+      perVertex(UV, 2);
+      if (UV)
+        for (size_t i = 0; i + 1 < UV->numbers.size(); i += 2)
+          m.uvs.push_back({float(UV->numbers[i]), float(UV->numbers[i + 1])});
+      if (fv == 3) {
+        const Param* S = ps.find({"S"}, {ParamType::Vector3});
+        perVertex(S, 3);
+        if (S)
+          for (size_t i = 0; i + 2 < S->numbers.size(); i += 3)
+            m.tangents.push_back(Vec3f(Vec3{S->numbers[i], S->numbers[i + 1], S->numbers[i + 2]}));
+      }
+      m.face_indices = ps.getInts({"faceIndices"});
+    }
+    scene_.meshes.push_back(std::move(m));
+    return static_cast<int>(scene_.meshes.size()) - 1;
+  }
+
+  int plyMesh(ParamSet& ps, const FileLoc& loc) {
+    const Param* fn = ps.find({"filename"}, {ParamType::String});
+    if (!fn) throw Error(loc, "plymesh: missing \"string filename\"");
+    std::string path = resolve(fn->strings[0], fn->loc, "PLY file");
+    if (floatInput(ps, {"displacement"}))
+      warnOnce("plymesh displacement", ps.peek({"displacement"})->loc,
+               "plymesh \"displacement\" is not rendered; the mesh is used undisplaced");
+    ps.getFloat({"edgelength"}, 1);
+    io::PlyMesh ply;
+    try {
+      ply = io::readPly(path);
+    } catch (const Error& e) {
+      throw Error(fn->loc, e.message());
+    }
+    Mesh m;
+    m.source = path;
+    m.positions = std::move(ply.positions);
+    m.normals = std::move(ply.normals);
+    m.uvs = std::move(ply.uvs);
+    m.indices = std::move(ply.triangles);
+    // Quads (pbrt-v4 bilinear order p00 p10 p01 p11) become two triangles each.
+    for (size_t q = 0; q + 3 < ply.quads.size(); q += 4) {
+      const int* v = &ply.quads[q];
+      m.indices.insert(m.indices.end(), {v[0], v[1], v[3], v[0], v[3], v[2]});
+    }
+    scene_.meshes.push_back(std::move(m));
+    return static_cast<int>(scene_.meshes.size()) - 1;
+  }
+
+  const SceneDesc& desc_;
+  Scene scene_;
+  fs::path top_dir_;
+  GraphicsState gs_;
+  std::vector<GraphicsState> stack_;
+  std::map<std::string, std::pair<Transform, Transform>> named_cs_;
+  std::map<std::string, int> float_textures_, spectrum_textures_, named_materials_, object_index_;
+  std::set<std::string> warned_;
+  int current_object_ = -1;
+  int default_material_ = -1;
+  struct PendingInstance {
+    std::string name;
+    FileLoc loc;
+    Transform transform;
+  };
+  std::vector<PendingInstance> pending_instances_;
+};
+
+}  // namespace
+
+Scene build(const SceneDesc& desc) {
+  return Builder(desc).run();
+}
+
+Scene loadScene(const std::string& path) {
+  Scene s = build(parseFile(path));
+  const Diagnostic* first = nullptr;
+  int errors = 0;
+  for (const Diagnostic& d : s.diagnostics)
+    if (d.severity == Severity::Error) {
+      if (!first) first = &d;
+      ++errors;
+    }
+  if (first)
+    throw Error(first->loc,
+                errors == 1 ? first->message
+                            : fmt::format("{} (and {} more errors)", first->message, errors - 1));
+  return s;
+}
+
+}  // namespace lensim::scene

@@ -1,0 +1,313 @@
+// Phase 2 of scene loading: validates a SceneDesc and builds the typed descriptions the renderer
+// consumes (shapes and meshes, object instances, materials, textures, lights, camera, film,
+// sampler, filter, integrator).
+//
+// Units: scene space is metres, as in pbrt-v4. Camera parameters keep the units the file uses,
+// named in the field (`film_distance_mm`); pbrt-v1/v2 `realistic` cameras work in camera-space
+// millimetres (their scenes put `Scale 5000 5000 5000` or similar before the camera).
+#pragma once
+
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lensim/scene/parser.h"
+#include "lensim/util/error.h"
+#include "lensim/util/transform.h"
+#include "lensim/util/vec.h"
+
+namespace lensim::scene {
+
+/// A colour or spectral distribution as written in the scene.
+struct SpectrumValue {
+  enum class Kind { Rgb, Blackbody, Sampled, Named, File };
+  Kind kind = Kind::Rgb;
+  Vec3 rgb{0, 0, 0};                               ///< Kind::Rgb
+  double temperature_k = 0;                        ///< Kind::Blackbody
+  double blackbody_scale = 1;                      ///< pbrt-v3's second blackbody value
+  std::vector<std::pair<double, double>> samples;  ///< Kind::Sampled: (wavelength nm, value)
+  std::string name;  ///< Kind::Named: pbrt-v4 spectrum name; Kind::File: the resolved path
+
+  static SpectrumValue gray(double v) {
+    SpectrumValue s;
+    s.rgb = {v, v, v};
+    return s;
+  }
+  static SpectrumValue named(std::string n) {
+    SpectrumValue s;
+    s.kind = Kind::Named;
+    s.name = std::move(n);
+    return s;
+  }
+  /// pbrt-v4 syntax of the value: `rgb [0.5 0.5 0.5]`, `blackbody 6500`, ...
+  std::string str() const;
+};
+
+/// A texturable material or texture input: a texture (index into Scene::textures) or a constant.
+struct Input {
+  int texture = -1;        ///< index into Scene::textures, or -1 for the constant
+  double value = 0;        ///< the constant of a float input
+  SpectrumValue spectrum;  ///< the constant of a spectrum input
+};
+
+/// Texture value kind, as in pbrt's `Texture "name" "float"|"spectrum" ...`.
+enum class TextureKind { Float, Spectrum };
+
+/// A texture description. `type` is the pbrt-v4 class lensim renders: imagemap, scale (product
+/// of tex1 and tex2), mix, checkerboard or constant (tex1).
+struct Texture {
+  std::string name;
+  TextureKind kind = TextureKind::Spectrum;
+  std::string type;             ///< rendered class
+  std::string type_as_written;  ///< class in the file
+  FileLoc loc;
+  Transform texture_from_world;  ///< inverse of the transform at the declaration (3D mappings)
+  // imagemap
+  std::string filename;  ///< resolved path of the image
+  std::string filename_as_written;
+  double uscale = 1, vscale = 1, udelta = 0, vdelta = 0;
+  std::string mapping = "uv";     ///< uv, spherical, cylindrical, planar
+  Vec3 v1{1, 0, 0}, v2{0, 1, 0};  ///< planar mapping axes
+  std::string wrap = "repeat";
+  std::string encoding;  ///< "sRGB", "linear", "gamma g"; empty: by file type
+  double scale = 1;
+  bool invert = false;
+  std::string filter = "bilinear";
+  double max_anisotropy = 8;
+  // scale, mix, checkerboard, constant
+  Input tex1, tex2;
+  bool scale_is_float = false;  ///< scale: tex2 is pbrt-v4's float `scale`
+  Input amount;                 ///< mix
+  int dimension = 2;            ///< checkerboard
+};
+
+/// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
+/// coateddiffuse, conductor, dielectric, thindielectric, interface.
+struct Material {
+  std::string name;  ///< set for MakeNamedMaterial
+  std::string type;
+  std::string type_as_written;
+  FileLoc loc;
+  Input reflectance;  ///< spectrum: diffuse, coateddiffuse; conductor when given
+  bool has_reflectance = false;
+  Input uroughness, vroughness;  ///< float (roughness; 0 = smooth)
+  bool remap_roughness = true;
+  Input eta;  ///< dielectric: float in `value`; conductor: spectrum
+  Input k;    ///< conductor absorption (spectrum)
+  // coateddiffuse: coat thickness (scene units), medium albedo and asymmetry g, random walk.
+  Input thickness, albedo, g;
+  int max_depth = 10, n_samples = 1;
+  std::optional<Input> displacement;
+  std::string normal_map;  ///< resolved path
+  /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
+  bool fallback = false;
+};
+
+/// Kinds of shape lensim builds; meshes live in Scene::meshes.
+enum class ShapeType { Sphere, Disk, Cylinder, Cone, TriangleMesh, BilinearMesh };
+std::string_view shapeTypeName(ShapeType t);
+
+/// A triangle (3 indices per face) or bilinear-patch (4) mesh in object space.
+struct Mesh {
+  int vertices_per_face = 3;
+  std::vector<Vec3f> positions;
+  std::vector<int> indices;
+  std::vector<Vec3f> normals;             ///< empty or one per vertex
+  std::vector<Vec3f> tangents;            ///< `S`: empty or one per vertex
+  std::vector<std::array<float, 2>> uvs;  ///< empty or one per vertex
+  std::vector<int> face_indices;
+  std::string source;  ///< PLY file it came from, if any
+  size_t faceCount() const { return indices.size() / static_cast<size_t>(vertices_per_face); }
+};
+
+/// A shape with everything that applies to it. Quadrics are in object space (z is their axis).
+struct Shape {
+  ShapeType type = ShapeType::Sphere;
+  std::string type_as_written;
+  FileLoc loc;
+  /// object → world; for shapes of an object definition, object → instance.
+  Transform transform;
+  bool reverse_orientation = false;
+  int material = -1;           ///< index into Scene::materials
+  int area_light = -1;         ///< index into Scene::lights, or -1
+  std::optional<Input> alpha;  ///< float: 1 opaque, 0 cut out
+  int object = -1;             ///< index into Scene::objects when part of an object definition
+  // Quadrics (scene units, degrees).
+  double radius = 1, inner_radius = 0, height = 0, zmin = -1, zmax = 1, phimax_deg = 360;
+  int mesh = -1;  ///< index into Scene::meshes for meshes
+
+  /// pbrt's rule: normals are flipped if ReverseOrientation xor the transform swaps handedness.
+  bool flipNormals() const { return reverse_orientation != transform.swapsHandedness(); }
+};
+
+/// An object definition (ObjectBegin/ObjectEnd): shapes stored once, referenced by instances.
+struct ObjectDef {
+  std::string name;
+  FileLoc loc;
+  std::vector<int> shapes;  ///< indices into Scene::shapes
+};
+
+/// One ObjectInstance.
+struct Instance {
+  int object = -1;      ///< index into Scene::objects
+  Transform transform;  ///< instance → world
+  FileLoc loc;
+};
+
+/// A light description. `type` is the pbrt-v4 light type: point, spot, distant, infinite,
+/// diffuse (area lights, attached to shapes through Shape::area_light).
+struct Light {
+  std::string type;
+  std::string type_as_written;
+  FileLoc loc;
+  Transform transform;  ///< light → world
+  SpectrumValue emission =
+      SpectrumValue::gray(1);  ///< L (area, distant, infinite) or I (point, spot)
+  double scale = 1;
+  std::optional<double> power;  ///< pbrt-v4 `power` (W), if given
+  Vec3 from{0, 0, 0}, to{0, 0, 1};
+  double cone_angle_deg = 30, cone_delta_deg = 5;
+  std::string filename;      ///< infinite: environment map (resolved)
+  std::vector<Vec3> portal;  ///< infinite: 4 points of a portal quad, or empty
+  bool two_sided = false;
+  int shape_count = 0;  ///< area lights: shapes that emit with it
+};
+
+/// pbrt-v1/v2 `realistic` camera (Stanford CS348B): camera space is millimetres.
+struct LegacyRealistic {
+  std::string lens_file;  ///< resolved path of `specfile`
+  std::string lens_file_as_written;
+  double film_distance_mm = 0;      ///< `filmdistance`: last lens vertex to film
+  double aperture_diameter_mm = 0;  ///< `aperture_diameter`
+  double film_diagonal_mm = 35;     ///< `filmdiag`
+  std::string af_zones_file;        ///< resolved `af_zones`, empty if none
+};
+
+/// pbrt-v3/v4 `realistic` camera: lens data in millimetres, scene in metres.
+struct Realistic {
+  std::string lens_file;  ///< resolved path of `lensfile`
+  std::string lens_file_as_written;
+  double aperture_diameter_mm = 1;
+  double focus_distance_m = 10;
+  std::string aperture;          ///< pbrt-v4 aperture shape name or image file; empty: circular
+  bool simple_weighting = true;  ///< pbrt-v3
+  static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
+};
+
+/// The camera description. `type`: perspective, orthographic or realistic.
+struct Camera {
+  std::string type = "perspective";
+  std::string type_as_written;
+  FileLoc loc;  ///< also the file relative to which lens files were resolved
+  Transform camera_from_world, camera_from_world_end;  ///< CTM at Camera (shutter open/close)
+  double shutter_open = 0, shutter_close = 1;
+  double hither = 1e-3, yon = 1e30;  ///< camera-space units (mm for LegacyRealistic)
+  double fov_deg = 90;
+  double lens_radius = 0, focal_distance = 1e6;
+  std::optional<double> frame_aspect_ratio;
+  std::optional<std::array<double, 4>> screen_window;
+  std::optional<LegacyRealistic> legacy_realistic;
+  std::optional<Realistic> realistic;
+  bool defaulted = true;  ///< no Camera directive
+};
+
+/// The film (image) description.
+struct Film {
+  std::string type = "rgb";
+  std::string type_as_written;
+  FileLoc loc;
+  int x_resolution = 1280, y_resolution = 720;
+  std::string filename = "pbrt.exr";
+  std::array<double, 4> crop_window{0, 1, 0, 1};
+  std::optional<std::array<int, 4>> pixel_bounds;
+  double scale = 1;         ///< pbrt-v3 `scale` of pixel values
+  double diagonal_mm = 35;  ///< pbrt-v4 film diagonal (v4 realistic/perspective sensor size)
+  double iso = 100;
+  double white_balance_k = 0;
+  std::string sensor = "cie1931";
+  double max_component_value = 1e300;
+  bool save_fp16 = true;
+  bool defaulted = true;
+};
+
+/// The sampler description; `type` is the pbrt-v4 sampler lensim uses.
+struct Sampler {
+  std::string type = "zsobol";
+  std::string type_as_written;
+  FileLoc loc;
+  int pixel_samples = 16;
+  int seed = 0;
+  bool jitter = true;         ///< stratified
+  std::string randomization;  ///< pbrt-v4 sobol randomization; empty: the sampler's default
+  bool defaulted = true;
+};
+
+/// The pixel reconstruction filter; radii in pixels.
+struct Filter {
+  std::string type = "gaussian";
+  std::string type_as_written;
+  FileLoc loc;
+  double x_radius = 1.5, y_radius = 1.5;
+  double sigma = 0.5;               ///< gaussian (pbrt-v4)
+  double b = 1.0 / 3, c = 1.0 / 3;  ///< mitchell
+  double tau = 3;                   ///< lanczos
+  bool defaulted = true;
+};
+
+/// The light transport algorithm.
+struct Integrator {
+  std::string type = "path";
+  std::string type_as_written;
+  FileLoc loc;
+  int max_depth = 5;
+  bool regularize = false;
+  std::string light_sampler = "bvh";
+  bool defaulted = true;
+};
+
+/// Everything a scene file describes, built and validated.
+struct Scene {
+  std::string path;            ///< the top-level scene file as given
+  bool legacy_syntax = false;  ///< written for pbrt v1–v3
+  Camera camera;
+  Film film;
+  Sampler sampler;
+  Filter filter;
+  Integrator integrator;
+  std::vector<Shape> shapes;  ///< world shapes and shapes of object definitions
+  std::vector<Mesh> meshes;
+  std::vector<ObjectDef> objects;
+  std::vector<Instance> instances;
+  std::vector<Material> materials;
+  std::vector<Texture> textures;
+  std::vector<Light> lights;
+  std::map<std::string, std::string> options;  ///< `Option` values, as text
+  std::string color_space = "srgb";
+  double transform_start_time = 0, transform_end_time = 1;  ///< TransformTimes
+  std::vector<Diagnostic> diagnostics;  ///< warnings, and errors if the scene is invalid
+
+  bool hasErrors() const;
+  /// Triangles of all meshes, each stored mesh counted once (bilinear patches count 2).
+  size_t triangleCount() const;
+};
+
+/// Bounds of a shape in its object space.
+Bounds3 objectBounds(const Scene& scene, const Shape& shape);
+/// World bounds of an instance (its object's shapes, through the instance transform).
+Bounds3 worldBounds(const Scene& scene, const Instance& instance);
+
+/// Builds a Scene from a parsed description. Errors do not stop the build (each directive that
+/// fails is skipped); they and the warnings are in Scene::diagnostics, parse diagnostics first.
+Scene build(const SceneDesc& desc);
+
+/// Parses and builds a scene file; throws lensim::Error (the first error, with a count of the
+/// others) if there are errors. Warnings are left in Scene::diagnostics.
+Scene loadScene(const std::string& path);
+
+/// The human-readable summary `lensim check` prints.
+std::string summary(const Scene& scene);
+
+}  // namespace lensim::scene
