@@ -1,0 +1,61 @@
+// Cameras: turn a film sample into a world-space ray and its weight.
+//
+// Conventions (as pbrt): raster space has (0, 0) at the top-left corner of the full image, x to
+// the right and y down, in pixels; camera space looks down +z with +y up; world rays are in scene
+// units (metres in pbrt-v4 scenes). A camera sample that yields no ray (the lens blocks it, or
+// the film point lies outside the image circle) returns nullopt: it contributes nothing, and the
+// renderer counts it.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "lensim/util/vec.h"
+
+namespace lensim::scene {
+struct Scene;
+}
+
+namespace lensim::camera {
+
+/// What the renderer hands a camera for one sample.
+struct CameraSample {
+  Vec2 film_raster;    ///< continuous raster position in the full image (pixels)
+  Vec2 lens{0.5, 0.5};  ///< [0,1)^2: position on the lens / exit pupil
+  double time = 0;      ///< [0,1): position in the shutter interval
+};
+
+/// A camera ray in world space and the weight of its radiance estimate.
+///
+/// The film accumulates weight x L. For a pinhole-style camera weight is 1 and the film holds
+/// radiance; for the realistic camera it is the importance of the ray for the film irradiance
+/// (Kolb et al.: shutter time x cos^4(theta) x A / z^2 for a uniformly sampled pupil region of
+/// area A at axial distance z), so the film holds exposure, as pbrt-v4's does with that camera.
+struct CameraRay {
+  Vec3 origin;     ///< world space, scene units
+  Vec3 direction;  ///< world space, unit length
+  double weight = 1;
+  double time = 0;  ///< shutter time of the ray (seconds from shutter open)
+};
+
+/// The interface every camera implements.
+class Camera {
+ public:
+  virtual ~Camera() = default;
+  /// A ray for the sample, or nullopt when the sample yields none.
+  virtual std::optional<CameraRay> generateRay(const CameraSample& sample) const = 0;
+  /// Seconds spent building the camera (lens set-up, pupil bounds), for render statistics.
+  virtual double startupSeconds() const { return 0; }
+  /// One line for logs: the type and its main settings.
+  virtual std::string describe() const = 0;
+};
+
+/// Builds the camera the scene describes (its film gives the resolution and sensor size).
+/// Throws lensim::Error, located at the Camera directive, for settings that cannot work.
+std::unique_ptr<Camera> makeCamera(const scene::Scene& scene);
+
+/// The realistic camera (pbrt-v1/v2 and v3/v4 parameters); see realistic.h.
+std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene);
+
+}  // namespace lensim::camera

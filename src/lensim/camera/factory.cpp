@@ -1,0 +1,16 @@
+// One factory for the camera family: an explicit switch on the type name.
+#include <fmt/format.h>
+
+#include "lensim/camera/camera.h"
+#include "lensim/scene/builder.h"
+#include "lensim/util/error.h"
+
+namespace lensim::camera {
+
+std::unique_ptr<Camera> makeCamera(const scene::Scene& scene) {
+  const scene::Camera& c = scene.camera;
+  if (c.type == "realistic") return makeRealisticCamera(scene);
+  throw Error(c.loc, fmt::format("camera \"{}\" is not rendered yet", c.type));
+}
+
+}  // namespace lensim::camera
