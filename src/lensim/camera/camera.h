@@ -21,7 +21,7 @@ namespace lensim::camera {
 
 /// What the renderer hands a camera for one sample.
 struct CameraSample {
-  Vec2 film_raster;    ///< continuous raster position in the full image (pixels)
+  Vec2 film_raster;     ///< continuous raster position in the full image (pixels)
   Vec2 lens{0.5, 0.5};  ///< [0,1)^2: position on the lens / exit pupil
   double time = 0;      ///< [0,1): position in the shutter interval
 };

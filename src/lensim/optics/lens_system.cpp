@@ -106,12 +106,13 @@ TraceResultT<T> LensTracer<T>::trace(const RayT<T>& in, const TraceOptions& opts
     }
     const Vec3T<T> p = o + d * t;
     if (path) path->push_back(p);
+    if (is_stop_[i]) res.stop_point = {p.x, p.y};
     if (opts.clip_apertures && p.x * p.x + p.y * p.y > semi2_[i])
-      return {RayT<T>{p, d}, i, BlockReason::Aperture};
+      return {RayT<T>{p, d}, i, BlockReason::Aperture, res.stop_point};
     const T eta_i = kFromFilm ? eta_after_[i] : eta_before_[i];
     const T eta_t = kFromFilm ? eta_before_[i] : eta_after_[i];
     if (!refract(d, normal, eta_i, eta_t))
-      return {RayT<T>{p, d}, i, BlockReason::TotalInternalReflection};
+      return {RayT<T>{p, d}, i, BlockReason::TotalInternalReflection, res.stop_point};
     o = p;
   }
   res.ray = {o, d};

@@ -40,6 +40,9 @@ struct TraceResultT {
   RayT<T> ray;  ///< the outgoing ray when not blocked; otherwise the ray as it was when blocked
   int blocked_surface = -1;  ///< surface index (0 = front) where it stopped, -1 if it got through
   BlockReason reason = BlockReason::None;
+  /// Where the ray crossed the plane of the aperture stop (lens space x, y in mm), if it got
+  /// that far: shaped apertures test it.
+  Vec2T<T> stop_point{};
 
   bool ok() const { return reason == BlockReason::None; }
 };

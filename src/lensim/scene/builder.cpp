@@ -702,6 +702,25 @@ class Builder {
         r.aperture_diameter_mm = ps.getFloat({"aperturediameter"}, 1.0);
         r.focus_distance_m = ps.getFloat({"focusdistance"}, 10.0);
         r.simple_weighting = ps.getBool({"simpleweighting"}, true);
+        if (const Param* fd = ps.find({"filmdistance"}, {ParamType::Float})) {
+          ps.expectCount(*fd, 1);
+          if (!(fd->numbers[0] > 0)) ps.fail(*fd, "film distance must be positive (mm)");
+          if (ps.peek({"focusdistance"}))
+            ps.fail(*fd, "give filmdistance or focusdistance, not both");
+          r.film_distance_mm = fd->numbers[0];
+        }
+        if (const Param* fm = ps.find({"focusmethod"}, {ParamType::String})) {
+          if (fm->strings[0] != "thick" && fm->strings[0] != "exact")
+            ps.fail(*fm, fmt::format("\"{}\": expected \"thick\" or \"exact\"", fm->strings[0]));
+          r.focus_method = fm->strings[0];
+        }
+        if (const Param* b = ps.find({"blades"}, {ParamType::Integer})) {
+          ps.expectCount(*b, 1);
+          if (b->numbers[0] != 0 && b->numbers[0] < 3)
+            ps.fail(*b, "a polygonal stop needs at least 3 blades (0: round)");
+          r.blades = static_cast<int>(b->numbers[0]);
+        }
+        r.blade_rotation_deg = ps.getFloat({"bladerotation"}, 0);
         if (const Param* ap = ps.find({"aperture"}, {ParamType::String})) {
           const std::string& a = ap->strings[0];
           static const std::set<std::string> builtin = {"gaussian", "square", "pentagon", "star"};

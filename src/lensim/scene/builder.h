@@ -194,6 +194,11 @@ struct Realistic {
   double focus_distance_m = 10;
   std::string aperture;          ///< pbrt-v4 aperture shape name or image file; empty: circular
   bool simple_weighting = true;  ///< pbrt-v3
+  // lensim's own extras (documented in docs/scene-support.md):
+  std::optional<double> film_distance_mm;  ///< `filmdistance` (mm), instead of focusdistance
+  std::string focus_method = "thick";      ///< `focusmethod`: thick (pbrt-v4) or exact
+  int blades = 0;                          ///< `blades`: polygonal stop (0: round)
+  double blade_rotation_deg = 0;           ///< `bladerotation`
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 

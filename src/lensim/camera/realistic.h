@@ -1,0 +1,72 @@
+// The realistic camera: every camera ray traced through a real lens prescription (Kolb, Mitchell
+// & Hanrahan 1995; pbrt's RealisticCamera), with lensim's exact tracer and exit-pupil bounds.
+//
+// Camera space is pbrt's: the film lies in the plane z = 0 and the lens in front of it along +z;
+// lens space (optics/lens_system.h) maps to it by (x, y, z) -> (x, y, z_film - z), scaled from
+// millimetres to camera units (metres for pbrt-v3/v4 scenes, millimetres for the v1/v2 scenes of
+// the CS348B assignment, whose camera space is millimetres). A raster point at the right of the
+// image lies at -x on the film, so that, after the lens inverts the image, a scene point on the
+// camera's right appears on the image's right (as with pbrt's perspective camera).
+//
+// What the film stores: each ray's radiance times its weight
+//   w = [shutter time] x T x cos^4(theta) x A / z^2,
+// the Monte Carlo estimate of the film irradiance integral E = L cos^4(theta) / z^2 dA over the
+// sampled region of the rear-vertex plane (area A, at axial distance z from the film; theta is the
+// angle of the film-side ray to the axis; T the aperture shape's transmission). The film thus
+// holds exposure H = E t (pbrt-v4 scenes: t = shutterclose - shutteropen) in the units of L; the
+// pixel value of a pinhole render of a surface of radiance L is L, the realistic camera's is about
+// L pi / (4 N^2) t at the centre of the image for working f-number N. The v1/v2 scenes have no
+// exposure time (their shutter is 0 to 0): their pixels hold irradiance, as the assignment's
+// reference renderer did.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "lensim/camera/aperture.h"
+#include "lensim/camera/camera.h"
+#include "lensim/optics/focus.h"
+#include "lensim/optics/pupil.h"
+#include "lensim/util/transform.h"
+
+namespace lensim::camera {
+
+/// Everything the realistic camera needs, resolved from a scene description.
+struct RealisticSettings {
+  std::string lens_path;
+  optics::LensSetup setup;       ///< stop diameter, focus or film distance, focus method
+  double film_diagonal_mm = 35;  ///< sensor diagonal
+  int x_resolution = 256, y_resolution = 256;
+  double camera_units_per_mm = 0.001;  ///< 0.001: metres (v3/v4); 1: millimetres (v1/v2)
+  Transform world_from_camera;
+  double exposure_time = 1;  ///< seconds; multiplies the weight
+  ApertureShape aperture = ApertureShape::round();
+};
+
+class RealisticCamera final : public Camera {
+ public:
+  /// Reads the lens, focuses it, opens the stop to the aperture shape and builds the pupil
+  /// bounds. Throws lensim::Error for a bad lens file or settings the lens cannot meet.
+  explicit RealisticCamera(RealisticSettings settings);
+
+  std::optional<CameraRay> generateRay(const CameraSample& sample) const override;
+  double startupSeconds() const override { return startup_seconds_; }
+  std::string describe() const override;
+
+  /// The lens as set up (film position, stop, paraxial data).
+  const optics::FocusedLens& lens() const { return lens_; }
+  /// Film position in lens space (mm) of a raster position.
+  Vec2 filmPoint(Vec2 raster) const;
+  /// Diagnostics from setting up the lens (e.g. an aperture clamped to the stop's size).
+  std::vector<Diagnostic> diagnostics() const { return lens_.allDiagnostics(); }
+
+ private:
+  RealisticSettings settings_;
+  optics::FocusedLens lens_;
+  std::optional<optics::ExitPupilSampler> pupil_;
+  double half_width_mm_ = 0, half_height_mm_ = 0;
+  double stop_radius_mm_ = 0;  // the set stop radius: the aperture shape's unit
+  double startup_seconds_ = 0;
+};
+
+}  // namespace lensim::camera

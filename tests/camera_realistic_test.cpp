@@ -1,0 +1,161 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "lensim/camera/realistic.h"
+#include "lensim/optics/plots.h"
+#include "test_paths.h"
+
+using namespace lensim;
+using namespace lensim::camera;
+using lensim::test::lensPath;
+
+namespace {
+
+RealisticSettings settings(const std::string& lens, std::optional<double> aperture_mm = {},
+                           double focus_m = 2.0) {
+  RealisticSettings s;
+  s.lens_path = lensPath(lens);
+  s.setup.aperture_diameter_mm = aperture_mm;
+  s.setup.focus_distance_m = focus_m;
+  s.film_diagonal_mm = 35;
+  s.x_resolution = 300;
+  s.y_resolution = 200;
+  return s;
+}
+
+struct WeightStats {
+  double mean = 0, se = 0;
+  double no_ray = 0;  // share of samples without a ray
+};
+
+// Mean weight (the film irradiance per unit radiance) at a raster point, over uniform lens samples.
+WeightStats meanWeight(const RealisticCamera& cam, Vec2 raster, int n = 200000, int seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  double sum = 0, sum2 = 0;
+  int none = 0;
+  for (int k = 0; k < n; ++k) {
+    auto r = cam.generateRay({raster, {u(rng), u(rng)}, 0});
+    const double w = r ? r->weight : 0;
+    none += !r;
+    sum += w;
+    sum2 += w * w;
+  }
+  const double mean = sum / n;
+  return {mean, std::sqrt((sum2 / n - mean * mean) / n), static_cast<double>(none) / n};
+}
+
+}  // namespace
+
+// Looking down +z from the origin, the centre of the film sees straight ahead, a raster point on
+// the right sees to the right (+x, as pbrt's cameras) and one at the top sees up (+y).
+TEST(RealisticCamera, ImageIsOrientedAsPbrt) {
+  RealisticCamera cam(settings("dgauss.50mm.dat", 4.0));
+  // Average over the pupil to get the chief direction of an off-centre pixel.
+  auto dirAt = [&](Vec2 raster) {
+    Vec3 sum{0, 0, 0};
+    for (int i = 0; i < 16; ++i)
+      for (int j = 0; j < 16; ++j)
+        if (auto r = cam.generateRay({raster, {(i + 0.5) / 16, (j + 0.5) / 16}, 0}))
+          sum += r->direction;
+    return normalize(sum);
+  };
+  const Vec3 centre = dirAt({150, 100}), right = dirAt({290, 100}), top = dirAt({150, 5});
+  EXPECT_NEAR(centre.x, 0, 1e-3);
+  EXPECT_NEAR(centre.y, 0, 1e-3);
+  EXPECT_GT(right.x, 0.2);
+  EXPECT_NEAR(right.y, 0, 1e-3);
+  EXPECT_GT(top.y, 0.1);
+  EXPECT_NEAR(top.x, 0, 1e-3);
+  // Rays start on the front surface of the lens, its vertex being filmZ in front of the film
+  // (camera space metres); the stopped-down on-axis bundle leaves near the vertex.
+  std::mt19937_64 rng(2);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::optional<CameraRay> c;
+  while (!c) c = cam.generateRay({{150, 100}, {u(rng), u(rng)}, 0});
+  EXPECT_NEAR(c->origin.z, cam.lens().lens->filmZ_mm() * 1e-3, 1e-4);
+}
+
+// The camera's mean weight at the film centre is the traced irradiance integral of the optics
+// core (relative illumination, cos^4 / z^2 over the pupil), and paraxially pi / (4 N_w^2).
+TEST(RealisticCamera, CentreIrradianceMatchesTheOpticsCore) {
+  for (const char* lens : {"dgauss.50mm.dat", "telephoto.250mm.dat"}) {
+    SCOPED_TRACE(lens);
+    RealisticCamera cam(settings(lens));
+    const WeightStats w = meanWeight(cam, {150, 100});
+    const optics::LensSystem& ls = *cam.lens().lens;
+    const double n_w = optics::workingFNumber(ls, cam.lens().paraxial,
+                                              ls.filmZ_mm() - cam.lens().focus_distance_m * 1000);
+    const double paraxial = std::numbers::pi / (4 * n_w * n_w);
+    EXPECT_NEAR(w.mean, paraxial, 0.08 * paraxial) << "N_w " << n_w;
+    EXPECT_LT(w.no_ray, 0.05);
+  }
+}
+
+// Exposure: half the stop diameter passes a quarter of the light at the centre.
+TEST(RealisticCamera, HalfTheStopDiameterQuartersTheExposure) {
+  RealisticCamera full(settings("dgauss.50mm.dat", 12.0));
+  RealisticCamera half(settings("dgauss.50mm.dat", 6.0));
+  const WeightStats a = meanWeight(full, {150, 100}), b = meanWeight(half, {150, 100});
+  const double ratio = a.mean / b.mean;
+  const double se = ratio * std::hypot(a.se / a.mean, b.se / b.mean);
+  EXPECT_NEAR(ratio, 4.0, 0.04 * 4 + 4.5 * se);
+}
+
+// Towards the corners the camera's irradiance follows the optics core's relative illumination.
+TEST(RealisticCamera, FallOffFollowsRelativeIllumination) {
+  RealisticCamera cam(settings("wide.22mm.dat"));
+  // Along the +x film axis; the raster point whose film point is (-h, 0) mirrors it, same value.
+  const optics::VignettingData v = optics::computeVignetting(cam.lens(), 35, 4);
+  const WeightStats c = meanWeight(cam, {150, 100});
+  for (size_t k = 1; k < v.film_radius_mm.size(); ++k) {
+    const double h = v.film_radius_mm[k];
+    // Film width is 35 / sqrt(1 + (2/3)^2) = 29.1 mm over 300 pixels.
+    const double half_w = 35 / std::sqrt(1 + 4.0 / 9) / 2;
+    if (h >= half_w) break;
+    const Vec2 raster{150 + h / half_w * 150, 100};
+    const WeightStats w = meanWeight(cam, raster, 200000, 7 + static_cast<int>(k));
+    const double measured = w.mean / c.mean;
+    const double se = measured * std::hypot(w.se / w.mean, c.se / c.mean);
+    EXPECT_NEAR(measured, v.relative_illumination[k], 4.5 * se + 0.01) << "h " << h;
+  }
+}
+
+TEST(RealisticCamera, PolygonalStopKeepsTheExposure) {
+  RealisticSettings round = settings("dgauss.50mm.dat", 8.0);
+  RealisticSettings penta = settings("dgauss.50mm.dat", 8.0);
+  penta.aperture = ApertureShape::polygon(5, 90);
+  RealisticCamera a(round), b(penta);
+  const WeightStats wa = meanWeight(a, {150, 100}), wb = meanWeight(b, {150, 100});
+  EXPECT_NEAR(wb.mean / wa.mean, 1.0, 0.02 + 4.5 * std::hypot(wa.se / wa.mean, wb.se / wb.mean));
+}
+
+TEST(ApertureShape, EveryShapeTransmitsAsMuchAsTheRoundStop) {
+  std::vector<ApertureShape> shapes = {
+      ApertureShape::round(),         ApertureShape::polygon(6, 0),
+      ApertureShape::named("square"), ApertureShape::named("pentagon"),
+      ApertureShape::named("star"),   ApertureShape::named("gaussian")};
+  for (const ApertureShape& s : shapes) {
+    SCOPED_TRACE(s.describe());
+    // Midpoint quadrature over the square around the extent.
+    const int n = 800;
+    const double e = s.extent() * 1.01, cell = 2 * e / n;
+    double sum = 0;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j)
+        sum += s.transmission({-e + (i + 0.5) * cell, -e + (j + 0.5) * cell});
+    EXPECT_NEAR(sum * cell * cell, std::numbers::pi, 0.01);
+    EXPECT_EQ(s.transmission({1.02 * s.extent(), 0}), 0.0);
+  }
+  EXPECT_THROW(ApertureShape::named("hexagon"), Error);
+  EXPECT_THROW(ApertureShape::polygon(2, 0), Error);
+}
+
+TEST(RealisticCamera, ClearErrorsForImpossibleSettings) {
+  EXPECT_THROW(RealisticCamera(settings("dgauss.50mm.dat", {}, 0.05)), Error);  // too close
+  RealisticSettings bad = settings("no-such-lens.dat");
+  EXPECT_THROW(RealisticCamera{bad}, Error);
+}
