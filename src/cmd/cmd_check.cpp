@@ -5,6 +5,7 @@
 #include <string>
 
 #include "commands.h"
+#include "lensim/camera/realistic.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/format.h"
 #include "lensim/scene/parser.h"
@@ -32,6 +33,12 @@ void registerCheckCommand(CLI::App& app, Action& action) {
       if (s.hasErrors() || opts->format) logDiagnostics(s.diagnostics);
       if (s.hasErrors()) return 1;
       std::string text = opts->format ? scene::formatPbrtV4(desc) : scene::summary(s);
+      // A realistic camera is set up as the renderer will (lens file, focus, pupil bounds), so
+      // that check reports a bad lens or an unreachable focus too.
+      if (!opts->format && s.camera.type == "realistic") {
+        auto camera = camera::makeRealisticCamera(s);
+        text += "lens set-up: " + camera->describe() + "\n";
+      }
       std::fwrite(text.data(), 1, text.size(), stdout);
       return 0;
     };
