@@ -159,3 +159,82 @@ TEST(RealisticCamera, ClearErrorsForImpossibleSettings) {
   RealisticSettings bad = settings("no-such-lens.dat");
   EXPECT_THROW(RealisticCamera{bad}, Error);
 }
+
+// Flat field: under uniform radiance L the film centre receives E = pi L sin^2(theta), theta the
+// half-angle of the cone of real rays that reach the film centre through the lens.
+TEST(RealisticCamera, FlatFieldCentreIrradianceIsPiSinSquared) {
+  for (const char* lens : {"dgauss.50mm.dat", "wide.22mm.dat", "telephoto.250mm.dat"}) {
+    SCOPED_TRACE(lens);
+    RealisticCamera cam(settings(lens, 6.0, 3.0));
+    const optics::LensSystem& ls = *cam.lens().lens;
+    // The real marginal ray from the film centre: the largest angle that gets through (bisection
+    // on the aim height at the rear-vertex plane).
+    double lo = 0, hi = ls.interfaces().back().semi_aperture_mm * 1.5;
+    for (int it = 0; it < 60; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (ls.traceFromFilmPoint({0, 0}, {mid, 0}).ok() ? lo : hi) = mid;
+    }
+    const double sin_theta = lo / std::hypot(lo, ls.filmDistance_mm());
+    const double expected = std::numbers::pi * sin_theta * sin_theta;
+    const WeightStats w = meanWeight(cam, {150, 100}, 400000);
+    EXPECT_NEAR(w.mean, expected, 0.02 * expected + 4.5 * w.se);
+  }
+}
+
+// Bokeh: a small bright disc far out of focus images as the stop's shape. With a pentagonal stop
+// the blur has the pentagon's area (the round stop's, by the normalisation rule) and turns with
+// the blades.
+TEST(RealisticCamera, BokehShowsTheStopShape) {
+  struct Blur {
+    double area_px = 0;
+    double corner_deg = 0;  // direction of the farthest lit pixel from the centroid
+  };
+  auto bokeh = [](int blades, double rotation) {
+    RealisticSettings s = settings("dgauss.50mm.dat", 10.0, 3.0);
+    constexpr int kRes = 64;
+    s.x_resolution = s.y_resolution = kRes;
+    s.film_diagonal_mm = 4;  // a small film around the axis: 0.044 mm pixels
+    if (blades) s.aperture = ApertureShape::polygon(blades, rotation);
+    RealisticCamera cam(s);
+    // A disc of radius 2 mm, 0.6 m from the film on the axis: its sharp image is 4 pixels
+    // across, its blur about 21.
+    const double z = 0.6, radius = 0.002;
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::vector<int> lit;
+    double cx = 0, cy = 0;
+    for (int y = 0; y < kRes; ++y)
+      for (int x = 0; x < kRes; ++x) {
+        int hits = 0;
+        for (int k = 0; k < 256; ++k) {
+          auto r = cam.generateRay({{x + u(rng), y + u(rng)}, {u(rng), u(rng)}, 0});
+          if (!r) continue;
+          const double t = (z - r->origin.z) / r->direction.z;
+          const Vec3 p = r->origin + r->direction * t;
+          hits += std::hypot(p.x, p.y) < radius;
+        }
+        if (hits >= 3) {
+          lit.push_back(y * kRes + x);
+          cx += x, cy += y;
+        }
+      }
+    Blur b;
+    b.area_px = static_cast<double>(lit.size());
+    cx /= lit.size();
+    cy /= lit.size();
+    double far = 0;
+    for (int i : lit) {
+      const double dx = i % kRes - cx, dy = i / kRes - cy, d = std::hypot(dx, dy);
+      if (d > far) far = d, b.corner_deg = std::atan2(-dy, dx) * 180 / std::numbers::pi;
+    }
+    return b;
+  };
+  const Blur round = bokeh(0, 0), penta = bokeh(5, 90), turned = bokeh(5, 126);
+  ASSERT_GT(round.area_px, 150);
+  EXPECT_NEAR(penta.area_px / round.area_px, 1.0, 0.06);
+  // A pentagon's corners repeat every 72 degrees; turning the blades by 36 degrees turns the
+  // blur's corners by 36 degrees (either way round, as the image is flipped).
+  auto mod72 = [](double a) { return std::fmod(std::fmod(a, 72.0) + 72.0, 72.0); };
+  const double turn = std::abs(mod72(turned.corner_deg - penta.corner_deg) - 36.0);
+  EXPECT_LT(turn, 8.0) << penta.corner_deg << " -> " << turned.corner_deg;
+}
