@@ -45,8 +45,8 @@ std::vector<Vec2> elementOutline(const Interface& a, const Interface& b) {
   return out;
 }
 
-// The aim interval along x on a plane at z_aim for which rays from `make(a)` get through,
-// scanned coarsely; nullopt if none gets through.
+// The interval of aim parameters a for which the ray `make(a)` gets through, scanned finely;
+// nullopt if none gets through.
 template <typename Make, typename Trace>
 std::optional<std::pair<double, double>> passingRange(double lo, double hi, Make make,
                                                       Trace trace) {
@@ -124,60 +124,76 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
   const int rays = std::max(1, opts.rays);
   FieldOfView fov = fieldOfView(lens, p, opts.film_diagonal_mm);
   const double half_fov_deg = 0.5 * (fov.real_deg ? *fov.real_deg : *fov.real_max_deg);
+  // Spreads `rays` rays across the range of aim parameters that gets through, traces them, and
+  // lets `finish` extend the ones that got out.
+  auto bundle = [&](int field, double range_mm, auto make, auto trace, auto finish) {
+    auto passing =
+        passingRange(-range_mm, range_mm, make, [&](const Ray& r) { return trace(r, nullptr); });
+    const auto [lo, hi] =
+        passing ? *passing : std::pair<double, double>{-range_mm / 1.5, range_mm / 1.5};
+    for (int k = 0; k < rays; ++k) {
+      DiagramRay ray;
+      ray.field = field;
+      const double a = rays == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * k / (rays - 1);
+      ray.start = make(a);
+      ray.result = trace(ray.start, &ray.points);
+      finish(ray);
+      d.rays.push_back(std::move(ray));
+    }
+  };
+  // Film-side aim plane: the exit pupil when it lies in front of the film (aiming there is well
+  // conditioned even when the film sits close to the rear vertex), else the rear vertex.
+  const bool aim_at_xp =
+      p.exit_pupil_z_mm < lens.filmZ_mm() - 0.02 * std::abs(p.effective_focal_length_mm);
+  const double z_aim = aim_at_xp ? p.exit_pupil_z_mm : lens.rearVertexZ_mm();
   for (size_t f = 0; f < opts.fields.size(); ++f) {
     const double frac = opts.fields[f];
+    const int field = static_cast<int>(f);
     if (opts.source == DiagramSource::Film) {
       const double h = frac * d.film_half_height_mm;
       d.field_values.push_back(h);
       const Vec3 from{h, 0, lens.filmZ_mm()};
-      auto make = [&](double a) {
-        return Ray{from, normalize(Vec3{a, 0, lens.rearVertexZ_mm()} - from)};
-      };
-      auto trace = [&](const Ray& r) { return lens.tracer().traceFromFilm(r); };
-      const double rr = 1.5 * s.back().semi_aperture_mm;
-      auto range = passingRange(-rr, rr, make, trace);
-      const auto [lo, hi] = range ? *range : std::pair<double, double>{-rr / 1.5, rr / 1.5};
-      for (int k = 0; k < rays; ++k) {
-        DiagramRay ray;
-        ray.field = static_cast<int>(f);
-        const double a = rays == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * k / (rays - 1);
-        ray.start = make(a);
-        ray.result = lens.tracer().traceFromFilm(ray.start, {}, &ray.points);
-        if (ray.result.ok())
-          extendToFront(ray, z_front);
-        else if (ray.result.reason == BlockReason::Miss)  // show where it was heading
-          extendToFront(ray, s[ray.result.blocked_surface].z_mm);
-        d.rays.push_back(std::move(ray));
-      }
+      const double range = aim_at_xp ? 1.5 * p.exit_pupil_diameter_mm / 2 + std::abs(h)
+                                     : 1.5 * s.back().semi_aperture_mm;
+      bundle(
+          field, range,
+          [&](double a) {
+            return Ray{from, normalize(Vec3{a, 0, z_aim} - from)};
+          },
+          [&](const Ray& r, std::vector<Vec3>* path) {
+            return lens.tracer().traceFromFilm(r, {}, path);
+          },
+          [&](DiagramRay& ray) {
+            if (ray.result.ok())
+              extendToFront(ray, z_front);
+            else if (ray.result.reason == BlockReason::Miss)  // show where it was heading
+              extendToFront(ray, s[ray.result.blocked_surface].z_mm);
+          });
     } else {
       const double th = frac * half_fov_deg;
       d.field_values.push_back(th);
       const Vec3 dir{std::sin(th / kDeg), 0, std::cos(th / kDeg)};
-      auto make = [&](double a) {
-        // Start on the plane z_front, or where the ray enters the drawing (|x| = x_limit).
-        const Vec3 at{a, 0, p.entrance_pupil_z_mm};
-        double t = (z_front - at.z) / dir.z;
-        if (dir.x != 0) t = std::max(t, (-std::copysign(x_limit, dir.x) - at.x) / dir.x);
-        return Ray{at + dir * t, dir};
-      };
-      auto trace = [&](const Ray& r) { return lens.tracer().traceFromScene(r); };
-      const double rr = 1.5 * s.front().semi_aperture_mm +
-                        std::abs(std::tan(th / kDeg)) * std::abs(p.entrance_pupil_z_mm);
-      auto range = passingRange(-rr, rr, make, trace);
-      const auto [lo, hi] = range ? *range : std::pair<double, double>{-rr / 1.5, rr / 1.5};
-      for (int k = 0; k < rays; ++k) {
-        DiagramRay ray;
-        ray.field = static_cast<int>(f);
-        const double a = rays == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * k / (rays - 1);
-        ray.start = make(a);
-        ray.result = lens.tracer().traceFromScene(ray.start, {}, &ray.points);
-        const Ray& out = ray.result.ray;
-        if (ray.result.ok() && out.direction.z > 0) {
-          const double t = (lens.filmZ_mm() - out.origin.z) / out.direction.z;
-          if (t > 0) ray.points.push_back(out.origin + out.direction * t);
-        }
-        d.rays.push_back(std::move(ray));
-      }
+      const double range = 1.5 * s.front().semi_aperture_mm +
+                           std::abs(std::tan(th / kDeg)) * std::abs(p.entrance_pupil_z_mm);
+      bundle(
+          field, range,
+          [&](double a) {
+            // Start on the plane z_front, or where the ray enters the drawing (|x| = x_limit).
+            const Vec3 at{a, 0, p.entrance_pupil_z_mm};
+            double t = (z_front - at.z) / dir.z;
+            if (dir.x != 0) t = std::max(t, (-std::copysign(x_limit, dir.x) - at.x) / dir.x);
+            return Ray{at + dir * t, dir};
+          },
+          [&](const Ray& r, std::vector<Vec3>* path) {
+            return lens.tracer().traceFromScene(r, {}, path);
+          },
+          [&](DiagramRay& ray) {
+            const Ray& out = ray.result.ray;
+            if (ray.result.ok() && out.direction.z > 0) {
+              const double t = (lens.filmZ_mm() - out.origin.z) / out.direction.z;
+              if (t > 0) ray.points.push_back(out.origin + out.direction * t);
+            }
+          });
     }
   }
 
