@@ -296,6 +296,16 @@ MeasuredBRDF::WavelengthWeight MeasuredBRDF::wavelengthWeight(double lambda_nm) 
 
 namespace {
 
+// acos to about 7e-5 rad (Abramowitz & Stegun 1964, 4.4.45: acos x = sqrt(1 - x) (a0 + a1 x +
+// a2 x^2 + a3 x^3) on [0, 1], |error| <= 6.7e-5), extended by acos(-x) = pi - acos(x); far below
+// the table spacing and several times faster than std::acos.
+inline double fastAcos(double x) {
+  const double ax = std::min(1.0, std::abs(x));
+  const double r =
+      std::sqrt(1 - ax) * (1.5707288 + ax * (-0.2121144 + ax * (0.0742610 - 0.0187293 * ax)));
+  return x < 0 ? kPi - r : r;
+}
+
 // Continuous grid coordinate of x in [0, range] over n nodes: lower node and fraction.
 inline void gridCoord(double x, double range, int n, int& i, double& f) {
   const double u = std::clamp(x / range, 0.0, 1.0) * (n - 1);
@@ -327,12 +337,12 @@ SampledSpectrum MeasuredBRDF::eval(
     const std::array<WavelengthWeight, kSpectrumSamples>& lambda) const {
   const int nt = options_.n_theta, np = options_.n_phi;
   const std::size_t nw = data_.numWavelengths();
-  const double theta_o = std::acos(std::min(1.0, std::abs(wo.z)));
-  const double theta_i = std::acos(std::min(1.0, std::abs(wi.z)));
+  const double theta_o = fastAcos(std::abs(wo.z));
+  const double theta_i = fastAcos(std::abs(wi.z));
   const double ho2 = wo.x * wo.x + wo.y * wo.y, hi2 = wi.x * wi.x + wi.y * wi.y;
   const double den = std::sqrt(ho2 * hi2);
   const double dphi =
-      den > 0 ? std::acos(std::clamp((wo.x * wi.x + wo.y * wi.y) / den, -1.0, 1.0)) : 0.0;
+      den > 0 ? fastAcos((wo.x * wi.x + wo.y * wi.y) / den) : 0.0;
   int a, b, p;
   double fa, fb, fp;
   gridCoord(theta_i, kPi / 2, nt, a, fa);
