@@ -158,6 +158,23 @@ double foldPhi(double dphi) {
   return dphi > kPi ? 2 * kPi - dphi : dphi;
 }
 
+// acos to about 7e-5 rad (Abramowitz & Stegun 1964, 4.4.45: acos x = sqrt(1 - x) (a0 + a1 x +
+// a2 x^2 + a3 x^3) on [0, 1], |error| <= 6.7e-5), extended by acos(-x) = pi - acos(x); far below
+// the table spacing and several times faster than std::acos.
+inline double fastAcos(double x) {
+  const double ax = std::min(1.0, std::abs(x));
+  const double r =
+      std::sqrt(1 - ax) * (1.5707288 + ax * (-0.2121144 + ax * (0.0742610 - 0.0187293 * ax)));
+  return x < 0 ? kPi - r : r;
+}
+
+// Continuous grid coordinate of x in [0, range] over n nodes: lower node and fraction.
+inline void gridCoord(double x, double range, int n, int& i, double& f) {
+  const double u = std::clamp(x / range, 0.0, 1.0) * (n - 1);
+  i = std::min(int(u), n - 2);
+  f = u - i;
+}
+
 }  // namespace
 
 MeasuredBRDF::MeasuredBRDF(IrregularBRDFData data, Options options)
@@ -189,6 +206,43 @@ MeasuredBRDF::MeasuredBRDF(IrregularBRDFData data, Options options)
         float* ba = &table_[((std::size_t(b) * nt + a) * np + p) * nw];
         for (std::size_t w = 0; w < nw; ++w) ab[w] = ba[w] = float(v[w]);
       }
+  buildLobes();
+}
+
+void MeasuredBRDF::buildLobes() {
+  const int nt = options_.n_theta, np = options_.n_phi;
+  const std::size_t nw = data_.numWavelengths();
+  // The table averaged over wavelengths.
+  std::vector<double> avg(std::size_t(nt) * nt * np);
+  for (std::size_t n = 0; n < avg.size(); ++n) {
+    double sum = 0;
+    for (std::size_t w = 0; w < nw; ++w) sum += table_[n * nw + w];
+    avg[n] = sum / double(nw);
+  }
+  auto lookupAvg = [&](double theta_i, int b, double dphi) {
+    int a, p;
+    double fa, fp;
+    gridCoord(theta_i, kPi / 2, nt, a, fa);
+    gridCoord(dphi, kPi, np, p, fp);
+    double v = 0;
+    for (int c = 0; c < 4; ++c) {
+      const int da = c & 1, dp = c >> 1;
+      v += (da ? fa : 1 - fa) * (dp ? fp : 1 - fp) *
+           avg[(std::size_t(a + da) * nt + b) * np + (p + dp)];
+    }
+    return v;
+  };
+  std::vector<double> g(std::size_t(kLobeCos) * kLobePhi);
+  lobes_.clear();
+  lobes_.reserve(nt);
+  for (int b = 0; b < nt; ++b) {
+    for (int ip = 0; ip < kLobePhi; ++ip)
+      for (int ix = 0; ix < kLobeCos; ++ix) {
+        const double x = (ix + 0.5) / kLobeCos, dphi = kPi * (ip + 0.5) / kLobePhi;
+        g[std::size_t(ip) * kLobeCos + ix] = lookupAvg(std::acos(x), b, dphi) * x;
+      }
+    lobes_.emplace_back(g, kLobeCos, kLobePhi, Vec2(0, 0), Vec2(1, kPi));
+  }
 }
 
 std::shared_ptr<const MeasuredBRDF> MeasuredBRDF::loadCached(const std::string& path) {
@@ -207,6 +261,53 @@ std::vector<double> MeasuredBRDF::interpolate(double theta_i, double theta_o, do
   std::vector<double> v(data_.numWavelengths());
   interpolateInto(theta_i, theta_o, dphi, v.data());
   return v;
+}
+
+namespace {
+
+// Where wo falls between the table's theta_o nodes (wo.z >= 0).
+inline void thetaNode(const Vec3& wo, int nt, int& b, double& fb) {
+  gridCoord(fastAcos(std::min(1.0, wo.z)), kPi / 2, nt, b, fb);
+}
+
+// |dphi| in [0, pi] between the azimuths of wo and wi (0 when either is along the normal).
+inline double relativeAzimuth(const Vec3& wo, const Vec3& wi) {
+  const double den = std::sqrt((wo.x * wo.x + wo.y * wo.y) * (wi.x * wi.x + wi.y * wi.y));
+  return den > 0 ? fastAcos((wo.x * wi.x + wo.y * wi.y) / den) : 0.0;
+}
+
+}  // namespace
+
+Vec3 MeasuredBRDF::sampleWi(const Vec3& wo, double uc, Vec2 u) const {
+  if (uc < kCosineFraction) return sampleCosineHemisphere(u);
+  uc = std::min((uc - kCosineFraction) / (1 - kCosineFraction), 1 - 1e-16);
+  int b;
+  double fb;
+  thetaNode(wo, options_.n_theta, b, fb);
+  int node = b;
+  if (uc < 1 - fb) {
+    uc /= 1 - fb;
+  } else {
+    node = b + 1;
+    uc = (uc - (1 - fb)) / fb;
+  }
+  const double sign = uc < 0.5 ? 1.0 : -1.0;
+  const auto s = lobes_[node].sample(u);
+  const double cos_i = std::clamp(s.p.x, 0.0, 1.0), sin_i = std::sqrt(1 - cos_i * cos_i);
+  const double phi = std::atan2(wo.y, wo.x) + sign * s.p.y;
+  return {sin_i * std::cos(phi), sin_i * std::sin(phi), cos_i};
+}
+
+double MeasuredBRDF::pdfWi(const Vec3& wo, const Vec3& wi) const {
+  int b;
+  double fb;
+  thetaNode(wo, options_.n_theta, b, fb);
+  const Vec2 p(std::clamp(wi.z, 0.0, 1.0), relativeAzimuth(wo, wi));
+  double lobe = (1 - fb) * lobes_[b].pdf(p);
+  if (fb > 0) lobe += fb * lobes_[b + 1].pdf(p);
+  // The lobe density is per unit (cos theta_i, |dphi|); dphi's sign halves it, and
+  // d omega = d cos theta d phi.
+  return kCosineFraction * cosineHemispherePdf(wi.z) + (1 - kCosineFraction) * lobe / 2;
 }
 
 void MeasuredBRDF::interpolateInto(double theta_i, double theta_o, double dphi, double* out) const {
@@ -294,27 +395,6 @@ MeasuredBRDF::WavelengthWeight MeasuredBRDF::wavelengthWeight(double lambda_nm) 
   return {i0, i1, (lambda_nm - wl[i0]) / (wl[i1] - wl[i0])};
 }
 
-namespace {
-
-// acos to about 7e-5 rad (Abramowitz & Stegun 1964, 4.4.45: acos x = sqrt(1 - x) (a0 + a1 x +
-// a2 x^2 + a3 x^3) on [0, 1], |error| <= 6.7e-5), extended by acos(-x) = pi - acos(x); far below
-// the table spacing and several times faster than std::acos.
-inline double fastAcos(double x) {
-  const double ax = std::min(1.0, std::abs(x));
-  const double r =
-      std::sqrt(1 - ax) * (1.5707288 + ax * (-0.2121144 + ax * (0.0742610 - 0.0187293 * ax)));
-  return x < 0 ? kPi - r : r;
-}
-
-// Continuous grid coordinate of x in [0, range] over n nodes: lower node and fraction.
-inline void gridCoord(double x, double range, int n, int& i, double& f) {
-  const double u = std::clamp(x / range, 0.0, 1.0) * (n - 1);
-  i = std::min(int(u), n - 2);
-  f = u - i;
-}
-
-}  // namespace
-
 double MeasuredBRDF::lookup(double theta_i, double theta_o, double dphi, std::size_t w) const {
   const int nt = options_.n_theta, np = options_.n_phi;
   const std::size_t nw = data_.numWavelengths();
@@ -341,8 +421,7 @@ SampledSpectrum MeasuredBRDF::eval(
   const double theta_i = fastAcos(std::abs(wi.z));
   const double ho2 = wo.x * wo.x + wo.y * wo.y, hi2 = wi.x * wi.x + wi.y * wi.y;
   const double den = std::sqrt(ho2 * hi2);
-  const double dphi =
-      den > 0 ? fastAcos((wo.x * wi.x + wo.y * wi.y) / den) : 0.0;
+  const double dphi = den > 0 ? fastAcos((wo.x * wi.x + wo.y * wi.y) / den) : 0.0;
   int a, b, p;
   double fa, fb, fp;
   gridCoord(theta_i, kPi / 2, nt, a, fa);
@@ -380,19 +459,23 @@ SampledSpectrum MeasuredBxDF::f(const Vec3& wo, const Vec3& wi, TransportMode) c
   return brdf_->eval(wo, wi, lambda_);
 }
 
-std::optional<BSDFSample> MeasuredBxDF::sample_f(const Vec3& wo, double, Vec2 u, TransportMode,
+std::optional<BSDFSample> MeasuredBxDF::sample_f(const Vec3& wo, double uc, Vec2 u, TransportMode,
                                                  ReflTrans allowed) const {
   if (!allows(allowed, ReflTrans::Reflection) || wo.z == 0) return std::nullopt;
-  Vec3 wi = sampleCosineHemisphere(u);
-  if (wo.z < 0) wi.z = -wi.z;
-  const double pdf = cosineHemispherePdf(absCosTheta(wi));
-  if (pdf == 0) return std::nullopt;
-  return BSDFSample{brdf_->eval(wo, wi, lambda_), wi, pdf, flags()};
+  // Two-sided: work above the surface and mirror back.
+  const double side = wo.z < 0 ? -1.0 : 1.0;
+  const Vec3 wo_up(wo.x, wo.y, side * wo.z);
+  const Vec3 wi_up = brdf_->sampleWi(wo_up, uc, u);
+  const double pdf = brdf_->pdfWi(wo_up, wi_up);
+  if (pdf == 0 || wi_up.z <= 0) return std::nullopt;
+  return BSDFSample{brdf_->eval(wo_up, wi_up, lambda_), Vec3(wi_up.x, wi_up.y, side * wi_up.z), pdf,
+                    flags()};
 }
 
 double MeasuredBxDF::pdf(const Vec3& wo, const Vec3& wi, TransportMode, ReflTrans allowed) const {
   if (!allows(allowed, ReflTrans::Reflection) || !sameHemisphere(wo, wi)) return 0;
-  return cosineHemispherePdf(absCosTheta(wi));
+  const double side = wo.z < 0 ? -1.0 : 1.0;
+  return brdf_->pdfWi(Vec3(wo.x, wo.y, side * wo.z), Vec3(wi.x, wi.y, side * wi.z));
 }
 
 }  // namespace lensim::render

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "lensim/render/bsdf.h"
+#include "lensim/render/sampling.h"
 #include "lensim/render/spectrum.h"
 #include "lensim/util/vec.h"
 
@@ -100,6 +101,19 @@ class MeasuredBRDF {
   SampledSpectrum eval(const Vec3& wo, const Vec3& wi,
                        const std::array<WavelengthWeight, kSpectrumSamples>& lambda) const;
 
+  /// Importance sampling of wi given wo, both above the surface (wo.z > 0): with probability
+  /// kCosineFraction the cosine-weighted hemisphere, otherwise a tabulated lobe: for each
+  /// theta_o node of the table, a piecewise-constant density over (cos theta_i, |dphi|)
+  /// (64 x 64 cells) proportional to the wavelength-averaged f cos theta_i, mixed linearly
+  /// between the two theta_o nodes around wo, with a random sign of dphi. uc picks the branch,
+  /// the node and the sign; u the direction.
+  static constexpr double kCosineFraction = 0.2;
+  /// Cells of the tabulated lobes: cos theta_i in [0, 1], |dphi| in [0, pi].
+  static constexpr int kLobeCos = 64, kLobePhi = 64;
+  Vec3 sampleWi(const Vec3& wo, double uc, Vec2 u) const;
+  /// The exact density (sr^-1) of sampleWi producing wi (both with z > 0).
+  double pdfWi(const Vec3& wo, const Vec3& wi) const;
+
  private:
   IrregularBRDFData data_;
   Options options_;
@@ -108,12 +122,16 @@ class MeasuredBRDF {
     double si, ci, so, co, cp, sp;
   };
   std::vector<Config> configs_;
-  std::vector<float> table_;  // [theta_i][theta_o][dphi][wavelength]
+  std::vector<float> table_;                // [theta_i][theta_o][dphi][wavelength]
+  std::vector<PiecewiseConstant2D> lobes_;  // per theta_o node; u = cos theta_i, v = |dphi|
   void interpolateInto(double theta_i, double theta_o, double dphi, double* out) const;
+  void buildLobes();
 };
 
 /// The BxDF of the "measured" material at one path's wavelengths: reflection only, isotropic,
-/// f(wo, wi) = f(wi, wo); sampled by the cosine-weighted hemisphere (pdf = |cos theta_i| / pi).
+/// f(wo, wi) = f(wi, wo); sampled by MeasuredBRDF::sampleWi (cosine-weighted hemisphere mixed
+/// with a tabulated lobe), with its exact pdf. Two-sided: below the surface both directions are
+/// mirrored.
 class MeasuredBxDF final : public BxDF {
  public:
   MeasuredBxDF(std::shared_ptr<const MeasuredBRDF> brdf, const SampledWavelengths& lambda);
