@@ -52,7 +52,7 @@ std::string Chi2Result::summary() const {
 }
 
 Chi2Result chi2TestBxDF(const BxDF& bxdf, const Vec3& wo, TransportMode mode, int n, uint64_t seed,
-                        int theta_res, int phi_res) {
+                        int theta_res, int phi_res, int quadrature) {
   Chi2Result res;
   const int nbins = theta_res * phi_res;
   auto binOf = [&](const Vec3& w) {
@@ -88,7 +88,7 @@ Chi2Result chi2TestBxDF(const BxDF& bxdf, const Vec3& wo, TransportMode mode, in
   }
 
   // Expected counts: midpoint rule in (theta, phi) inside each bin, dw = sin theta dtheta dphi.
-  constexpr int kSub = 48;
+  const int kSub = quadrature;
   std::vector<double> expected(nbins + 1, 0.0);
   for (int t = 0; t < theta_res; ++t) {
     const double th0 = std::acos(1 - 2.0 * t / theta_res);

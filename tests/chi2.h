@@ -37,8 +37,11 @@ struct Chi2Result {
 };
 
 /// Draws n samples from bxdf.sample_f(wo, ...) with a seeded PCG32 and tests them against
-/// bxdf.pdf on a theta_res x phi_res grid. Specular samples are not allowed.
+/// bxdf.pdf on a theta_res x phi_res grid. Specular samples are not allowed. Each bin's pdf
+/// integral uses quadrature x quadrature midpoints; tabulated (piecewise-constant) pdfs, whose
+/// cell edges cut the bins, need more than the default to keep the quadrature error below the
+/// sampling noise.
 Chi2Result chi2TestBxDF(const render::BxDF& bxdf, const Vec3& wo, render::TransportMode mode, int n,
-                        uint64_t seed, int theta_res = 10, int phi_res = 20);
+                        uint64_t seed, int theta_res = 10, int phi_res = 20, int quadrature = 48);
 
 }  // namespace lensim::test
