@@ -671,6 +671,18 @@ class Builder {
     } else if (type == "orthographic") {
       c.type = "orthographic";
       screen();
+    } else if (type == "spherical") {
+      c.type = "spherical";
+      ps.find({"screenwindow"}, {ParamType::Float});
+      ps.getFloat({"lensradius"}, 0);
+      ps.getFloat({"focaldistance"}, 1e6);
+      ps.findFloat({"frameaspectratio"});
+      const std::string mapping = ps.getString({"mapping"}, "equalarea");
+      if (mapping != "equirectangular")
+        warnOnce("spherical mapping", d.loc,
+                 fmt::format("spherical camera mapping \"{}\" is not rendered; it renders as "
+                             "\"equirectangular\"",
+                             mapping));
     } else if (type == "realistic") {
       c.type = "realistic";
       if (ps.peek({"specfile"})) {
