@@ -159,8 +159,9 @@ TEST(RenderCommand, ErrorsExitWithStatusOne) {
   EXPECT_EQ(missing.status, 1);
   Result ext = run("render " + dir.write("s.pbrt", kScene) + " --outfile " + dir.file("x.bmp"));
   EXPECT_EQ(ext.status, 1) << ext.out;
-  const std::string fov = dir.write("fov.pbrt", "Camera \"perspective\" \"float fov\" 190\n"
-                                                "WorldBegin\nShape \"sphere\"\n");
+  const std::string fov = dir.write("fov.pbrt",
+                                    "Camera \"perspective\" \"float fov\" 190\n"
+                                    "WorldBegin\nShape \"sphere\"\n");
   Result bad = run("render " + fov + " --quiet");
   EXPECT_EQ(bad.status, 1);
   EXPECT_NE(bad.out.find("fov.pbrt:1:1: error: perspective camera: fov 190"), std::string::npos)
@@ -195,8 +196,8 @@ TEST(SharedScenes, EveryPresentSceneRendersAtLowSpp) {
       const size_t i = line.find("Include \"");
       if (i == std::string::npos || line.find('#') < i) continue;
       const size_t a = i + 9, b = line.find('"', a);
-      included.insert(std::filesystem::weakly_canonical(e.path().parent_path() /
-                                                        line.substr(a, b - a)));
+      included.insert(
+          std::filesystem::weakly_canonical(e.path().parent_path() / line.substr(a, b - a)));
     }
   }
   for (const auto& e : std::filesystem::recursive_directory_iterator(root)) {
@@ -241,4 +242,19 @@ TEST(SharedScenes, EveryPresentSceneRendersAtLowSpp) {
   std::printf("shared scenes: %d rendered, %d skipped (realistic camera), %d with missing files\n",
               rendered, skipped, missing);
   EXPECT_GT(rendered + skipped + missing, 0);
+}
+
+TEST(RenderCommand, InterruptWritesThePartialImageAndFails) {
+  lensim::testutil::TempDir dir("lensim-render-int");
+  const std::string scene = dir.write("scene.pbrt", kScene);
+  const std::string out = dir.file("partial.exr");
+  // Enough samples to run for many seconds; SIGINT after half a second.
+  const std::string cmd = "sh -c '" + std::string(LENSIM_BINARY) + " render " + scene +
+                          " --spp 100000 --quiet --outfile " + out +
+                          " & p=$!; sleep 0.5; kill -INT $p; wait $p; echo rc=$?'";
+  Result r = run("--version >/dev/null; " + cmd);
+  EXPECT_NE(r.out.find("rc=130"), std::string::npos) << r.out;
+  ASSERT_TRUE(std::filesystem::exists(out)) << r.out;
+  const Image im = lensim::io::readImage(out);
+  EXPECT_EQ(im.metadata.at("lensim:partial"), "true");
 }

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.h"
 #include "lensim/io/image.h"
@@ -29,7 +30,8 @@ extern "C" void onSigint(int) {
 
 void registerRenderCommand(CLI::App& app, Action& action) {
   struct Options {
-    std::string scene, outfile;
+    std::string scene;
+    std::vector<std::string> outfiles;
     int spp = 0, threads = 0, seed = 0;
     bool has_seed = false;
     std::vector<double> crop;
@@ -41,9 +43,11 @@ void registerRenderCommand(CLI::App& app, Action& action) {
   r->add_option("scene", o->scene, "Scene file (.pbrt)")->required();
   r->add_option("--spp", o->spp, "Samples per pixel (overrides the scene's sampler)")
       ->check(CLI::PositiveNumber);
-  r->add_option("--outfile,-o", o->outfile,
+  r->add_option("--outfile,-o", o->outfiles,
                 "Output image (.exr: 32-bit float RGB; .tif/.tiff: 32-bit float; .png: 8-bit "
-                "sRGB); default: the film's filename");
+                "sRGB); default: the film's filename. Repeat to write several files")
+      ->expected(1)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   r->add_option("--threads,--nthreads", o->threads, "Worker threads (default: all cores)")
       ->check(CLI::NonNegativeNumber);
   auto* seed = r->add_option("--seed", o->seed, "Sampler seed (overrides the scene's)");
@@ -71,24 +75,25 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       ro.progress = !quiet;
       ro.cancel = &g_interrupted;
       // The film's filename is relative to the directory lensim runs in, as in pbrt.
-      const std::string out = o->outfile.empty() ? s.film.filename : o->outfile;
-      io::imageFormatFromPath(out);  // fail early on an unknown extension
+      std::vector<std::string> outs = o->outfiles;
+      if (outs.empty()) outs.push_back(s.film.filename);
+      for (const std::string& out : outs) io::imageFormatFromPath(out);  // fail early
       auto previous = std::signal(SIGINT, onSigint);
       render::RenderResult res = render::render(s, ro);
       std::signal(SIGINT, previous);
       io::ImageWriteOptions wo;
       wo.tiff_format = io::TiffSampleFormat::Float32;
-      io::writeImage(out, res.image, wo);
-      if (!quiet || o->stats) {
-        std::fputs(render::formatStats(res.stats).c_str(), stderr);
-        std::fprintf(stderr, "wrote %s (%dx%d%s)\n", out.c_str(), res.image.width, res.image.height,
-                     res.stats.partial ? ", partial" : "");
+      for (const std::string& out : outs) io::writeImage(out, res.image, wo);
+      if (!quiet || o->stats) std::fputs(render::formatStats(res.stats).c_str(), stderr);
+      for (const std::string& out : outs) {
+        if (!quiet || o->stats)
+          std::fprintf(stderr, "wrote %s (%dx%d%s)\n", out.c_str(), res.image.width,
+                       res.image.height, res.stats.partial ? ", partial" : "");
+        if (res.stats.partial)
+          std::fprintf(stderr, "lensim: interrupted; the partial image was written to %s\n",
+                       out.c_str());
       }
-      if (res.stats.partial) {
-        std::fprintf(stderr, "lensim: interrupted; the partial image was written to %s\n",
-                     out.c_str());
-        return 130;
-      }
+      if (res.stats.partial) return 130;
       return 0;
     };
   });

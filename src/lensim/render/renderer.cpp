@@ -175,6 +175,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x)
           for (int i = 0; i < spp; ++i) {
+            if ((i & 63) == 0 && opt.cancel && opt.cancel->load()) {
+              cancelled = true;
+              break;
+            }
             sampler->startPixelSample({x, y}, i);
             // Dimension order: wavelength, film (filter), lens, time, then the path.
             const double u_lambda = sampler->get1D();

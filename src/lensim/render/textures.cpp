@@ -7,13 +7,16 @@
 
 #include <fmt/format.h>
 
+#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <mutex>
 #include <sstream>
+#include <unordered_map>
 
 #include "lensim/io/image.h"
+#include "lensim/render/sampling.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 
@@ -58,6 +61,7 @@ RgbImage loadRgb(const scene::Texture& t) {
 
 struct Textures::Impl {
   const scene::Scene* scene = nullptr;
+  uint64_t serial = 0;
   std::vector<std::shared_ptr<RgbImage>> images;  ///< per texture (null for non-image)
   mutable std::mutex mutex;
   mutable std::map<std::pair<const scene::SpectrumValue*, int>, SpectrumPtr> constants;
@@ -167,7 +171,9 @@ double luminance(const Spectrum& s) {
 }
 
 Textures::Textures(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
+  static std::atomic<uint64_t> next_serial{1};
   impl_->scene = &scene;
+  impl_->serial = next_serial++;
   impl_->images.resize(scene.textures.size());
   std::map<std::string, std::shared_ptr<RgbImage>> by_key;
   for (size_t i = 0; i < scene.textures.size(); ++i) {
@@ -189,12 +195,38 @@ Textures::Textures(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) 
 Textures::~Textures() = default;
 
 SpectrumPtr Textures::constant(const scene::SpectrumValue& v, SpectrumType type) const {
-  std::lock_guard lock(impl_->mutex);
-  auto key = std::make_pair(&v, int(type));
-  auto it = impl_->constants.find(key);
-  if (it != impl_->constants.end()) return it->second;
-  SpectrumPtr s = makeSpectrum(v, type);
-  impl_->constants.emplace(key, s);
+  // A per-thread cache in front of the shared one: material constants are looked up at every
+  // hit, and a lock there serialises the threads. Keys carry this object's serial number so
+  // that a later Textures at the same address never sees stale entries.
+  struct Key {
+    uint64_t serial;
+    const void* value;
+    int type;
+    bool operator==(const Key&) const = default;
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      return size_t(
+          hashValues({k.serial, uint64_t(reinterpret_cast<uintptr_t>(k.value)), uint64_t(k.type)}));
+    }
+  };
+  thread_local std::unordered_map<Key, SpectrumPtr, KeyHash> local;
+  const Key key{impl_->serial, &v, int(type)};
+  if (auto it = local.find(key); it != local.end()) return it->second;
+  SpectrumPtr s;
+  {
+    std::lock_guard lock(impl_->mutex);
+    auto shared_key = std::make_pair(&v, int(type));
+    auto it = impl_->constants.find(shared_key);
+    if (it != impl_->constants.end()) {
+      s = it->second;
+    } else {
+      s = makeSpectrum(v, type);
+      impl_->constants.emplace(shared_key, s);
+    }
+  }
+  if (local.size() > 4096) local.clear();
+  local.emplace(key, s);
   return s;
 }
 
