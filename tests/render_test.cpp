@@ -85,12 +85,30 @@ TEST(Furnace, DiffuseSphereReadsItsAlbedo) {
   }
 }
 
+TEST(Furnace, MixChoosesBetweenItsMaterials) {
+  // Half the points shade as albedo 0.2, half as 0.8: the sphere reads 0.2 + 0.3 = 0.5 for
+  // amount 0.5 and 0.2 + 0.6 x 0.25 = 0.35 for amount 0.25.
+  for (double amount : {0.5, 0.25}) {
+    Furnace f = furnace(
+        "MakeNamedMaterial \"dark\" \"string type\" \"diffuse\" \"rgb reflectance\" [.2 .2 .2]\n"
+        "MakeNamedMaterial \"light\" \"string type\" \"diffuse\" \"rgb reflectance\" [.8 .8 .8]\n"
+        "Material \"mix\" \"string materials\" [\"dark\" \"light\"] \"float amount\" " +
+        std::to_string(amount));
+    const double expect = 0.2 + 0.6 * amount;
+    std::printf("mix amount %.2f: %.4f +- %.4f (expect %.3f)\n", amount, f.centre[1].mean,
+                f.centre[1].sem, expect);
+    EXPECT_NEAR(f.centre[1].mean, expect, 5 * f.centre[1].sem + 0.005);
+  }
+}
+
 TEST(Furnace, LosslessMaterialsConserveEnergy) {
   // No absorption: a smooth glass sphere (refraction scales radiance by 1/eta^2 going in and
   // eta^2 coming out), a thin dielectric, a white diffuse transmitter.
   for (const char* m : {"Material \"dielectric\" \"float eta\" 1.5",
                         "Material \"thindielectric\" \"float eta\" 1.5",
-                        "Material \"dielectric\" \"float eta\" 1.33 \"float roughness\" 0.0001"}) {
+                        "Material \"dielectric\" \"float eta\" 1.33 \"float roughness\" 0.0001",
+                        "Material \"diffusetransmission\" \"rgb reflectance\" [0.5 0.5 0.5] "
+                        "\"rgb transmittance\" [0.5 0.5 0.5]"}) {
     Furnace f = furnace(m);
     for (int c = 0; c < 3; ++c) {
       std::printf("%s channel %d: %.4f +- %.4f\n", m, c, f.centre[c].mean, f.centre[c].sem);
@@ -106,7 +124,10 @@ TEST(Furnace, LossyMaterialsStayBelowOne) {
   for (const char* m : {"Material \"dielectric\" \"float eta\" 1.5 \"float roughness\" 0.3",
                         "Material \"coateddiffuse\" \"rgb reflectance\" [1 1 1]",
                         "Material \"conductor\" \"rgb reflectance\" [0.9 0.9 0.9] "
-                        "\"float roughness\" 0.2"}) {
+                        "\"float roughness\" 0.2",
+                        "Material \"coatedconductor\" \"rgb reflectance\" [0.95 0.95 0.95] "
+                        "\"float interface.roughness\" 0.05",
+                        "Material \"matte\" \"color Kd\" [1 1 1] \"float sigma\" 20"}) {
     Furnace f = furnace(m);
     for (int c = 0; c < 3; ++c) {
       std::printf("%s channel %d: %.4f +- %.4f\n", m, c, f.centre[c].mean, f.centre[c].sem);
@@ -256,4 +277,45 @@ LightSource "infinite" "rgb L" [1 1 1]
     std::printf("light %zu: integral of pdf %.4f +- %.4f\n", li, mean, sem);
     EXPECT_NEAR(mean, 1.0, 5 * sem + 0.002) << "light " << li;
   }
+}
+
+TEST(NormalMap, TiltsTheShadingNormal) {
+  // A plane lit by a point light straight above the viewed spot. A flat normal map (RGB 0.5 0.5 1
+  // read linearly) changes nothing; one tilted by 60 degrees halves the diffuse reflection.
+  lensim::testutil::TempDir dir("lensim-normalmap");
+  auto mapFile = [&](const std::string& name, lensim::Vec3 n) {
+    lensim::io::Image im(4, 4, {"R", "G", "B"});
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x)
+        for (int c = 0; c < 3; ++c)
+          im.at(x, y, c) = float((n[c] + 1) / 2);  // linear values, stored as EXR
+    const std::string path = dir.file(name);
+    lensim::io::writeImage(path, im);
+    return path;
+  };
+  const double t = 60 * M_PI / 180;
+  const std::string flat = mapFile("flat.exr", {0, 0, 1});
+  const std::string tilted = mapFile("tilted.exr", {std::sin(t), 0, std::cos(t)});
+  auto scene = [&](const std::string& map) {
+    return std::string(R"(
+LookAt 0 0.5 0  0 0 0  0 0 1
+Camera "orthographic" "float screenwindow" [-0.01 0.01 -0.01 0.01]
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "n.exr"
+Sampler "independent" "integer pixelsamples" 4
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+LightSource "point" "rgb I" [1 1 1] "point3 from" [0 1 0]
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5])") +
+           (map.empty() ? "" : " \"string normalmap\" \"" + map + "\"") + R"(
+Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2 0 2 3]
+)";
+  };
+  const double plain = regionStats(renderText(scene("")).image, 1, 0, 4, 0, 4).mean;
+  const double with_flat = regionStats(renderText(scene(flat)).image, 1, 0, 4, 0, 4).mean;
+  const double with_tilt = regionStats(renderText(scene(tilted)).image, 1, 0, 4, 0, 4).mean;
+  std::printf("normal map: plain %.5f flat %.5f tilted %.5f (ratio %.4f, expect 0.5)\n", plain,
+              with_flat, with_tilt, with_tilt / plain);
+  EXPECT_NEAR(plain, 0.5 / M_PI, 0.002);
+  EXPECT_NEAR(with_flat / plain, 1.0, 0.002);
+  EXPECT_NEAR(with_tilt / plain, 0.5, 0.01);
 }

@@ -112,15 +112,18 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
         }
       }
     }
-    const int material = sc.scene->shapes[size_t(h.shape)].material;
+    const TextureEvalContext tctx{h.p, h.uv};
+    const int material =
+        sc.materials->resolve(sc.scene->shapes[size_t(h.shape)].material, tctx, wo);
     if (sc.materials->isInterface(material)) {
       if (++interfaces > 100) break;
       ray.o = offsetOrigin(h.p, h.ng, ray.d);
       continue;
     }
     if (depth++ == sc.max_depth) break;
-    auto bxdf = sc.materials->bxdf(material, {h.p, h.uv}, lambda);
-    const BSDF bsdf(h.ns, h.dpdu, bxdf);
+    auto bxdf = sc.materials->bxdf(material, tctx, lambda);
+    Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
+    const BSDF bsdf(ns, h.dpdu, bxdf);
     // Next-event estimation.
     const double u_light = sampler.get1D();
     const Vec2 u_light2 = sampler.get2D();
@@ -128,7 +131,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
       if (auto choice = sc.lights->sample(u_light)) {
         if (auto ls = choice->light->sampleLi(h.p, u_light2, lambda)) {
           if (ls->pdf > 0 && !ls->L.isBlack()) {
-            const SampledSpectrum f = bsdf.f(wo, ls->wi) * std::abs(dot(ls->wi, h.ns));
+            const SampledSpectrum f = bsdf.f(wo, ls->wi) * std::abs(dot(ls->wi, ns));
             if (!f.isBlack() &&
                 !occludedScene(sc, h.p, h.ng, ls->p_light, ls->infinite, ls->wi, counts)) {
               const double pl = choice->pmf * ls->pdf;
@@ -148,7 +151,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
     const Vec2 u = sampler.get2D();
     auto bs = bsdf.sample_f(wo, uc, u);
     if (!bs) break;
-    beta *= bs->f * (std::abs(dot(bs->wi, h.ns)) / bs->pdf);
+    beta *= bs->f * (std::abs(dot(bs->wi, ns)) / bs->pdf);
     prev_pdf = bs->pdf_is_proportional ? bsdf.pdf(wo, bs->wi) : bs->pdf;
     specular_bounce = bs->isSpecular();
     if (bs->isTransmission()) eta_scale *= bs->eta * bs->eta;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "lensim/render/bsdf.h"
 #include "lensim/render/textures.h"
@@ -17,7 +18,16 @@ namespace lensim::render {
 
 class Materials {
  public:
+  /// Loads the normal maps; throws lensim::Error (at the material) for unreadable ones.
   Materials(const scene::Scene& scene, const Textures& textures);
+  ~Materials();
+  /// The material that shades the point: `mix` materials choose one of theirs with probability
+  /// `amount` for the second, by a hash of the point (deterministic); others are themselves.
+  int resolve(int material, const TextureEvalContext& ctx, const Vec3& wo) const;
+  /// The shading normal after the material's normal map (pbrt-v4: tangent-space RGB 2c - 1 in
+  /// the frame of dp/du and the shading normal, read linearly); ns itself without a map.
+  Vec3 shadingNormal(int material, const TextureEvalContext& ctx, const Vec3& ns,
+                     const Vec3& dpdu) const;
   /// Whether the material only marks a boundary (pbrt's "interface" / ""): rays pass through.
   bool isInterface(int material) const;
   /// The BxDF of `material` at ctx. May terminate secondary wavelengths (dispersive eta).
@@ -27,6 +37,8 @@ class Materials {
  private:
   const scene::Scene* scene_;
   const Textures* textures_;
+  struct NormalMap;
+  std::vector<std::shared_ptr<NormalMap>> normal_maps_;  ///< per material, or null
 };
 
 }  // namespace lensim::render

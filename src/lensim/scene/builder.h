@@ -85,7 +85,8 @@ struct Texture {
 };
 
 /// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
-/// coateddiffuse, conductor, dielectric, thindielectric, interface.
+/// coateddiffuse, coatedconductor, conductor, dielectric, thindielectric, diffusetransmission,
+/// mix, interface.
 struct Material {
   std::string name;  ///< set for MakeNamedMaterial
   std::string type;
@@ -100,6 +101,18 @@ struct Material {
   // coateddiffuse: coat thickness (scene units), medium albedo and asymmetry g, random walk.
   Input thickness, albedo, g;
   int max_depth = 10, n_samples = 1;
+  Input sigma;  ///< diffuse (pbrt-v1–v3 matte): Oren–Nayar facet slope deviation, degrees
+  // diffusetransmission: reflectance above, transmittance here, both times `scale`.
+  Input transmittance;
+  double scale = 1;
+  // coatedconductor: the conductor under the coat (the coat uses uroughness/vroughness, eta).
+  Input conductor_eta, conductor_k, conductor_reflectance;
+  bool conductor_has_reflectance = false;
+  Input conductor_uroughness, conductor_vroughness;
+  // mix: the two materials (indices into Scene::materials) and the float amount (probability
+  // of the second).
+  std::array<int, 2> mix{-1, -1};
+  Input amount;
   std::optional<Input> displacement;
   std::string normal_map;  ///< resolved path
   /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
