@@ -319,3 +319,138 @@ Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indice
   EXPECT_NEAR(with_flat / plain, 1.0, 0.002);
   EXPECT_NEAR(with_tilt / plain, 0.5, 0.01);
 }
+
+namespace {
+
+/// Luminance of the centre of a tiny patch of a diffuse plane (albedo 0.5) seen from above,
+/// lit by `light` (pbrt-v4 syntax), direct lighting only.
+double planeLuminance(const std::string& light) {
+  const std::string text = R"(
+LookAt 0 0.5 0  0 0 0  0 0 1
+Camera "orthographic" "float screenwindow" [-0.01 0.01 -0.01 0.01]
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "l.exr"
+Sampler "independent" "integer pixelsamples" 16
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+)" + light + R"(
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2 0 2 3]
+)";
+  const Image im = renderText(text).image;
+  double y = 0;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) y += lensim::testutil::luminanceAt(im, i, j) / 16;
+  return y;
+}
+
+}  // namespace
+
+TEST(LightUnits, ScaleAndPowerFollowPbrtV4) {
+  const double a_pi = 0.5 / M_PI;  // diffuse BRDF of the plane
+  struct Case {
+    std::string light;
+    double expect;  // luminance of the plane under the light (height 1 where it applies)
+  };
+  const double cs = std::cos(25 * M_PI / 180), ce = std::cos(30 * M_PI / 180);
+  const std::vector<Case> cases = {
+      {R"(LightSource "point" "rgb I" [2 2 2] "point3 from" [0 1 0])", a_pi * 2},
+      {R"(LightSource "point" "rgb I" [1 1 1] "float scale" 3 "point3 from" [0 2 0])",
+       a_pi * 3 / 4},
+      // power: I = P / 4 pi (after normalising the spectrum to unit luminance).
+      {R"(LightSource "point" "blackbody I" 3000 "float power" 100 "point3 from" [0 1 0])",
+       a_pi * 100 / (4 * M_PI)},
+      {R"(LightSource "spot" "rgb I" [2 2 2] "point3 from" [0 1 0] "point3 to" [0 0 0])", a_pi * 2},
+      {R"(LightSource "spot" "rgb I" [1 1 1] "float power" 10 "point3 from" [0 1 0]
+         "point3 to" [0 0 0] "float coneangle" 30 "float conedeltaangle" 5)",
+       a_pi * 10 / (2 * M_PI * ((1 - cs) + (cs - ce) / 2))},
+      {R"(LightSource "distant" "rgb L" [2 2 2] "point3 from" [0 1 0] "point3 to" [0 0 0])",
+       a_pi * 2},
+      // A blackbody spectrum is normalised to unit luminance, then scaled.
+      {R"(LightSource "distant" "blackbody L" 5500 "float scale" 1.5 "point3 from" [0 1 0]
+         "point3 to" [0 0 0])",
+       a_pi * 1.5},
+      // Tilted: irradiance times cos 60 degrees.
+      {R"(LightSource "distant" "rgb L" [1 1 1] "point3 from" [0 1 1.7320508] "point3 to" [0 0 0])",
+       a_pi * 0.5},
+  };
+  for (const Case& c : cases) {
+    const double got = planeLuminance(c.light);
+    std::printf("%-60.60s %.5f (expect %.5f)\n", c.light.c_str(), got, c.expect);
+    // Delta lights: no noise; 1% for the RGB/spectrum round trip of the film.
+    EXPECT_NEAR(got, c.expect, 0.01 * c.expect) << c.light;
+  }
+}
+
+TEST(ImageTexture, ReadsSrgbPngTopRowAtVOne) {
+  // A 2x2 PNG (top row red, bottom row blue) on a unit quad with uv (0,0) at the bottom-left:
+  // pbrt puts the image's top row at v = 1. The 8-bit values are sRGB-decoded.
+  lensim::testutil::TempDir dir("lensim-imagetex");
+  lensim::io::Image im(2, 2, {"R", "G", "B"});
+  for (int x = 0; x < 2; ++x) {
+    im.at(x, 0, 0) = 0.5f;  // top: red 0.5 (linear), stored as sRGB 188
+    im.at(x, 1, 2) = 0.5f;  // bottom: blue
+  }
+  lensim::io::writeImage(dir.file("rb.png"), im);
+  const std::string text = R"(
+LookAt 0 0 -1  0 0 0  0 1 0
+Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
+Film "rgb" "integer xresolution" 8 "integer yresolution" 8 "string filename" "t.exr"
+Sampler "independent" "integer pixelsamples" 4
+PixelFilter "box"
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+Texture "img" "spectrum" "imagemap" "string filename" ")" +
+                           dir.file("rb.png") + R"(" "string filter" "point"
+Material "diffusetransmission" "texture reflectance" "img" "rgb transmittance" [0 0 0]
+Shape "bilinearmesh" "point3 P" [0.5 -0.5 0  -0.5 -0.5 0  0.5 0.5 0  -0.5 0.5 0]
+  "point2 uv" [0 0 1 0 0 1 1 1]
+)";
+  const Image out = renderText(text).image;
+  // Rows 0-1 (top of the picture) are red, rows 6-7 blue: a diffuse transmitter under a
+  // uniform sky reflects its reflectance (half of the hemisphere is the sky behind the quad:
+  // it transmits nothing, so the reading is the reflectance exactly).
+  const RegionStats top_r = regionStats(out, 0, 0, 8, 0, 2),
+                    top_b = regionStats(out, 2, 0, 8, 0, 2);
+  const RegionStats bot_r = regionStats(out, 0, 0, 8, 6, 8),
+                    bot_b = regionStats(out, 2, 0, 8, 6, 8);
+  std::printf("image texture: top R %.4f B %.4f, bottom R %.4f B %.4f\n", top_r.mean, top_b.mean,
+              bot_r.mean, bot_b.mean);
+  EXPECT_NEAR(top_r.mean, 0.5, 5 * top_r.sem + 0.02);
+  EXPECT_NEAR(bot_b.mean, 0.5, 5 * bot_b.sem + 0.02);
+  EXPECT_LT(top_b.mean, 0.05);
+  EXPECT_LT(bot_r.mean, 0.05);
+}
+
+TEST(Alpha, CutOutSurfacesAreInvisibleToCameraAndShadowRays) {
+  // A plane with alpha 0 between the camera, a point light and a lit plane: the image is the
+  // same as without it (same samples; only float rounding of the hit points differs).
+  const std::string base = R"(
+LookAt 0 0.5 0  0 0 0  0 0 1
+Camera "orthographic" "float screenwindow" [-0.01 0.01 -0.01 0.01]
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "a.exr"
+Sampler "independent" "integer pixelsamples" 4
+Integrator "path" "integer maxdepth" 2
+WorldBegin
+LightSource "point" "rgb I" [2 2 2] "point3 from" [0 1 0]
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2 0 2 3]
+)";
+  const std::string cut =
+      base + R"(Shape "trianglemesh" "point3 P" [-5 0.3 -5  5 0.3 -5  5 0.3 5  -5 0.3 5]
+  "integer indices" [0 1 2 0 2 3] "float alpha" 0
+)";
+  const std::string opaque =
+      base + R"(Shape "trianglemesh" "point3 P" [-5 0.3 -5  5 0.3 -5  5 0.3 5  -5 0.3 5]
+  "integer indices" [0 1 2 0 2 3] "float alpha" 1
+)";
+  const Image a = renderText(base).image, b = renderText(cut).image, c = renderText(opaque).image;
+  ASSERT_EQ(a.pixels.size(), b.pixels.size());
+  double diff_cut = 0, diff_opaque = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    diff_cut = std::max(diff_cut, double(std::abs(a.pixels[i] - b.pixels[i])));
+    diff_opaque = std::max(diff_opaque, double(std::abs(a.pixels[i] - c.pixels[i])));
+  }
+  EXPECT_LT(diff_cut, 1e-4);
+  EXPECT_GT(diff_opaque, 0.05);  // the opaque plane (lit, nearer the light) is what one sees
+}

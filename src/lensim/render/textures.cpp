@@ -80,7 +80,8 @@ struct Textures::Impl {
     return {t.uscale * ctx.uv.x + t.udelta, t.vscale * ctx.uv.y + t.vdelta};
   }
 
-  /// Bilinear RGB lookup at st (pbrt's orientation: t = 0 at the bottom row).
+  /// RGB lookup at st (pbrt's orientation: t = 0 at the bottom row): nearest texel for the
+  /// "point" filter, bilinear for the others (no MIP-mapping: lensim has no ray differentials).
   Vec3 lookup(const scene::Texture& t, const RgbImage& im, Vec2 st) const {
     const double x = st.x * im.width - 0.5, y = (1 - st.y) * im.height - 0.5;
     const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
@@ -98,8 +99,12 @@ struct Textures::Impl {
       const float* c = &im.rgb[(size_t(yi) * im.width + xi) * 3];
       return {c[0], c[1], c[2]};
     };
-    Vec3 v = (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
-             (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;
+    Vec3 v;
+    if (t.filter == "point")
+      v = texel(int(std::floor(st.x * im.width)), int(std::floor((1 - st.y) * im.height)));
+    else
+      v = (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
+          (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;
     v = v * t.scale;
     if (t.invert) v = {std::max(0.0, 1 - v.x), std::max(0.0, 1 - v.y), std::max(0.0, 1 - v.z)};
     return v;
