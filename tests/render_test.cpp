@@ -454,3 +454,67 @@ Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indice
   EXPECT_LT(diff_cut, 1e-4);
   EXPECT_GT(diff_opaque, 0.05);  // the opaque plane (lit, nearer the light) is what one sees
 }
+
+TEST(Lights, EnvironmentMapSamplingMatchesItsRadiance) {
+  // For equal-area (square) and latitude-longitude environment maps: the pdf of sampleLi
+  // integrates to 1 over the sphere, and the importance-sampled estimate of the integral of Le
+  // (E[Le / pdf]) equals the uniform-sampling estimate.
+  lensim::testutil::TempDir dir("lensim-envmap");
+  for (auto [w, h] : {std::pair{16, 16}, std::pair{32, 16}}) {
+    lensim::io::Image im(w, h, {"R", "G", "B"});
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float v =
+            0.05f + float((x * 7 + y * 3) % 11) / 5.0f + (x == 3 && y == 4 ? 20.f : 0.f);
+        im.at(x, y, 0) = v;
+        im.at(x, y, 1) = 0.5f * v;
+        im.at(x, y, 2) = 0.25f * v + 0.1f;
+      }
+    const std::string file = dir.file("env" + std::to_string(w) + ".exr");
+    lensim::io::writeImage(file, im);
+    const std::string text = R"(
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "x.exr"
+WorldBegin
+AttributeBegin
+  Rotate 30 1 0 0
+  LightSource "infinite" "string filename" ")" +
+                             file + R"("
+AttributeEnd
+)";
+    lensim::scene::Scene s = lensim::testutil::buildText(text);
+    lensim::render::Accel accel(s);
+    lensim::render::Textures tex(s);
+    lensim::render::LightSet lights(s, accel, tex);
+    ASSERT_EQ(lights.size(), 1u);
+    const lensim::render::Light& light = lights.light(0);
+    const auto lambda = lensim::render::SampledWavelengths::sampleUniform(0.3);
+    lensim::render::Rng rng(3, 5);
+    const int n = 200000;
+    double pdf_sum = 0, pdf_sum2 = 0, uni = 0, uni2 = 0, imp = 0, imp2 = 0;
+    for (int i = 0; i < n; ++i) {
+      const lensim::Vec2 u{rng.uniform(), rng.uniform()};
+      const lensim::Vec3 wdir = lensim::render::sampleUniformSphere(u);
+      const double p = light.pdfLi({0, 0, 0}, wdir, nullptr) * 4 * M_PI;
+      pdf_sum += p, pdf_sum2 += p * p;
+      const double lu = light.Le(wdir, lambda)[0] * 4 * M_PI;
+      uni += lu, uni2 += lu * lu;
+      auto ls = light.sampleLi({0, 0, 0}, {rng.uniform(), rng.uniform()}, lambda);
+      ASSERT_TRUE(ls);
+      const double li = ls->L[0] / ls->pdf;
+      imp += li, imp2 += li * li;
+      // The sample's pdf is the pdf of its direction.
+      ASSERT_NEAR(ls->pdf, light.pdfLi({0, 0, 0}, ls->wi, nullptr), 1e-6 * ls->pdf + 1e-9);
+    }
+    auto sem = [&](double s, double s2) { return std::sqrt((s2 / n - (s / n) * (s / n)) / n); };
+    std::printf(
+        "env %dx%d: pdf integral %.4f +- %.4f; integral of Le: uniform %.4f +- %.4f, "
+        "importance %.4f +- %.4f\n",
+        w, h, pdf_sum / n, sem(pdf_sum, pdf_sum2), uni / n, sem(uni, uni2), imp / n,
+        sem(imp, imp2));
+    EXPECT_NEAR(pdf_sum / n, 1.0, 5 * sem(pdf_sum, pdf_sum2));
+    const double tol = 5 * std::hypot(sem(uni, uni2), sem(imp, imp2));
+    EXPECT_NEAR(imp / n, uni / n, tol);
+    // Importance sampling must help: its error is smaller.
+    EXPECT_LT(sem(imp, imp2), sem(uni, uni2));
+  }
+}
