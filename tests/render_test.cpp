@@ -518,3 +518,15 @@ AttributeEnd
     EXPECT_LT(sem(imp, imp2), sem(uni, uni2));
   }
 }
+
+TEST(DirectionMix, BlendsByTheNormalsAlignment) {
+  // A sphere under a uniform sky: where the normal is along "dir" it shows tex1 (white), where it
+  // is perpendicular tex2 (black). Seen along dir, the sphere's centre is near 1, its rim near 0.
+  Furnace f = furnace(R"(Texture "dm" "spectrum" "directionmix" "rgb tex1" [0.8 0.8 0.8]
+  "rgb tex2" [0 0 0] "vector3 dir" [0 0 1]
+Material "diffuse" "texture reflectance" "dm")");
+  std::printf("directionmix: centre %.4f\n", f.centre[1].mean);
+  // The central 12x12 pixels see normals within ~40 degrees of dir: |cos| > 0.75.
+  EXPECT_GT(f.centre[1].mean, 0.6);
+  EXPECT_LT(f.centre[1].mean, 0.8 + 5 * f.centre[1].sem);
+}

@@ -35,7 +35,7 @@ double hashUniform(const Vec3& p, const Vec3& d) {
 bool cutOut(const SceneContext& sc, const SurfaceHit& h, const Vec3& d) {
   const scene::Shape& s = sc.scene->shapes[size_t(h.shape)];
   if (!s.alpha) return false;
-  const double a = sc.textures->evalFloat(*s.alpha, {h.p, h.uv});
+  const double a = sc.textures->evalFloat(*s.alpha, {h.p, h.uv, h.ns});
   if (a >= 1) return false;
   if (a <= 0) return true;
   return hashUniform(h.p, d) > a;
@@ -112,7 +112,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
         }
       }
     }
-    const TextureEvalContext tctx{h.p, h.uv};
+    const TextureEvalContext tctx{h.p, h.uv, h.ns};
     const int material =
         sc.materials->resolve(sc.scene->shapes[size_t(h.shape)].material, tctx, wo);
     if (sc.materials->isInterface(material)) {

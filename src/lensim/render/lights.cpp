@@ -491,6 +491,9 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
           throw Error(l.loc, e.what());
         }
       } else {
+        // pbrt-v4 "illuminance": the irradiance E at an upward-facing point, pi L for a
+        // uniform sky.
+        if (l.power && *l.power > 0) scale *= *l.power / M_PI;
         lights_.push_back(std::make_unique<UniformInfiniteLight>(spec, scale, radius));
       }
       infinite_.push_back(lights_.back().get());

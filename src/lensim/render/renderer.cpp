@@ -99,6 +99,15 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   sc.max_depth = scene.integrator.max_depth;
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
 
+  if (scene.film.white_balance_k != 0)
+    logWarning(fmt::format("{}: film \"whitebalance\" {} K is not applied", scene.film.loc.str(),
+                           scene.film.white_balance_k));
+  if (scene.film.sensor != "cie1931")
+    logWarning(
+        fmt::format("{}: film \"sensor\" \"{}\" is not simulated; the film records CIE "
+                    "1931 XYZ",
+                    scene.film.loc.str(), scene.film.sensor));
+
   const int spp_req = opt.spp.value_or(scene.sampler.pixel_samples);
   const int seed = opt.seed.value_or(scene.sampler.seed);
   std::unique_ptr<Sampler> proto = makeSampler(scene, spp_req, seed);

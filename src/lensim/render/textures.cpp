@@ -244,6 +244,10 @@ double Textures::evalFloat(const scene::Input& in, const TextureEvalContext& ctx
     const double a = evalFloat(t.amount, ctx);
     return (1 - a) * evalFloat(t.tex1, ctx) + a * evalFloat(t.tex2, ctx);
   }
+  if (t.type == "directionmix") {
+    const double a = std::abs(dot(ctx.n, t.direction));
+    return a * evalFloat(t.tex1, ctx) + (1 - a) * evalFloat(t.tex2, ctx);
+  }
   if (t.type == "checkerboard")
     return impl_->checker(t, ctx) ? evalFloat(t.tex1, ctx) : evalFloat(t.tex2, ctx);
   if (t.type == "imagemap") {
@@ -267,6 +271,11 @@ SampledSpectrum Textures::evalSpectrum(const scene::Input& in, const TextureEval
     const double a = evalFloat(t.amount, ctx);
     return evalSpectrum(t.tex1, ctx, lambda, type) * (1 - a) +
            evalSpectrum(t.tex2, ctx, lambda, type) * a;
+  }
+  if (t.type == "directionmix") {
+    const double a = std::abs(dot(ctx.n, t.direction));
+    return evalSpectrum(t.tex1, ctx, lambda, type) * a +
+           evalSpectrum(t.tex2, ctx, lambda, type) * (1 - a);
   }
   if (t.type == "checkerboard")
     return impl_->checker(t, ctx) ? evalSpectrum(t.tex1, ctx, lambda, type)

@@ -2,7 +2,7 @@
 // for evaluation at surface points over sampled wavelengths (pbrt-v4 semantics: textures
 // evaluate to spectra; RGB values become spectra through the sigmoid-polynomial upsampling).
 //
-// Texture classes: constant, scale, mix, checkerboard (2-D and 3-D), imagemap (EXR/PNG/TIFF;
+// Texture classes: constant, scale, mix, directionmix (|n . dir| of tex1), checkerboard (2-D and 3-D), imagemap (EXR/PNG/TIFF;
 // bilinear lookup, wrap repeat/clamp/black/octahedralsphere as repeat, scale, invert; 8-bit
 // files are sRGB-decoded unless "encoding" says otherwise). Mappings: uv, spherical,
 // cylindrical, planar with uscale/vscale/udelta/vdelta.
@@ -29,6 +29,7 @@ enum class SpectrumType { Albedo, Unbounded, Illuminant };
 struct TextureEvalContext {
   Vec3 p;
   Vec2 uv;
+  Vec3 n{0, 0, 0};  ///< shading normal (for directionmix); zero when unknown
 };
 
 /// A spectrum from a scene value (RGB, blackbody, tabulated, named or file).

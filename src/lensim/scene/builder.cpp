@@ -956,6 +956,18 @@ class Builder {
       t.tex1 = in({"tex1"}, 0);
       t.tex2 = in({"tex2"}, 1);
       t.amount = floatInput(ps, {"amount"}, 0.5);
+    } else if (cls == "directionmix") {
+      t.type = cls;
+      t.tex1 = in({"tex1"}, 0);
+      t.tex2 = in({"tex2"}, 1);
+      if (const Param* p = ps.find({"dir"}, {ParamType::Vector3})) {
+        ps.expectCount(*p, 1);
+        t.direction = {p->numbers[0], p->numbers[1], p->numbers[2]};
+      }
+      // pbrt-v4: the direction is given in the texture's space; kept in world space here.
+      t.direction = inverse(t.texture_from_world).applyVector(t.direction);
+      if (length(t.direction) == 0) throw Error(d.loc, "directionmix: \"dir\" must not be zero");
+      t.direction = normalize(t.direction);
     } else if (cls == "checkerboard") {
       t.type = cls;
       mapping();

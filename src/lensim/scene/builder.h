@@ -57,7 +57,7 @@ struct Input {
 enum class TextureKind { Float, Spectrum };
 
 /// A texture description. `type` is the pbrt-v4 class lensim renders: imagemap, scale (product
-/// of tex1 and tex2), mix, checkerboard or constant (tex1).
+/// of tex1 and tex2), mix, directionmix, checkerboard or constant (tex1).
 struct Texture {
   std::string name;
   TextureKind kind = TextureKind::Spectrum;
@@ -81,6 +81,7 @@ struct Texture {
   Input tex1, tex2;
   bool scale_is_float = false;  ///< scale: tex2 is pbrt-v4's float `scale`
   Input amount;                 ///< mix
+  Vec3 direction{0, 1, 0};      ///< directionmix: world-space unit direction
   int dimension = 2;            ///< checkerboard
 };
 
