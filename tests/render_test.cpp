@@ -234,6 +234,12 @@ AttributeBegin
 AttributeEnd
 AttributeBegin
   AreaLightSource "diffuse" "rgb L" [1 1 1] "bool twosided" true
+  Translate -2 0 0
+  Rotate 90 0 1 0
+  Shape "cone" "float radius" 0.5 "float height" 0.8 "float phimax" 300
+AttributeEnd
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [1 1 1] "bool twosided" true
   Shape "bilinearmesh" "point3 P" [-1 -1 -3  1 -1 -3  -1 1 -3  1 1 -3.5]
 AttributeEnd
 LightSource "infinite" "rgb L" [1 1 1]
@@ -242,7 +248,7 @@ LightSource "infinite" "rgb L" [1 1 1]
   lensim::render::Accel accel(s);
   lensim::render::Textures tex(s);
   lensim::render::LightSet lights(s, accel, tex);
-  ASSERT_EQ(lights.size(), 6u);
+  ASSERT_EQ(lights.size(), 7u);
   const lensim::Vec3 p{0.1, 0.05, -0.1};
   lensim::render::Rng rng(7, 11);
   const int n = 400000;

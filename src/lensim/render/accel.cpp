@@ -389,11 +389,17 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
     const Vec3 &p00 = r.p[size_t(f[0])], &p10 = r.p[size_t(f[1])], &p01 = r.p[size_t(f[2])],
                &p11 = r.p[size_t(f[3])];
     const double u = rh.hit.u, v = rh.hit.v;
-    p = (p00 * (1 - u) + p10 * u) * (1 - v) + (p01 * (1 - u) + p11 * u) * v;
+    // The point on the triangle Embree hit (a warped patch's bilinear point at (u, v) is off
+    // that surface).
+    p = o + d * h.t;
     dpdu = (p10 - p00) * (1 - v) + (p11 - p01) * v;
     const Vec3 dpdv = (p01 - p00) * (1 - u) + (p11 - p10) * u;
     Vec3 n = cross(dpdu, dpdv);
     ng = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
+    // The surface Embree intersects is one of the patch's two triangles: its normal (oriented as
+    // the patch's) is the geometric normal, so light pdfs use the surface actually hit.
+    const Vec3 tn{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    if (length(tn) > 0) ng = dot(tn, ng) < 0 ? -normalize(tn) : normalize(tn);
     uv = {u, v};
     if (!r.uv.empty()) {
       const Vec2 &a = r.uv[size_t(f[0])], &b = r.uv[size_t(f[1])], &c = r.uv[size_t(f[2])],

@@ -350,8 +350,11 @@ class FaceLight final : public AreaLightBase {
             bool two_sided)
       : AreaLightBase(std::move(L), scale, two_sided), tris_(std::move(tris)), n_(n) {
     for (const auto& t : tris_) {
-      area_ += 0.5 * length(cross(t[1] - t[0], t[2] - t[0]));
+      const Vec3 c = cross(t[1] - t[0], t[2] - t[0]);
+      area_ += 0.5 * length(c);
       cum_.push_back(area_);
+      Vec3 nt = length(c) > 0 ? normalize(c) : n_;
+      normals_.push_back(dot(nt, n_) < 0 ? -nt : nt);
     }
   }
   double area() const override { return area_; }
@@ -369,18 +372,16 @@ class FaceLight final : public AreaLightBase {
     const double su = std::sqrt(u.x);
     const double b0 = 1 - su, b1 = u.y * su;
     const Vec3 pl = t[0] * b0 + t[1] * b1 + t[2] * (1 - b0 - b1);
-    return finish(p, pl, n_, 1 / area_, lambda);
+    return finish(p, pl, normals_[k], 1 / area_, lambda);
   }
   double pdfLi(const Vec3& p, const Vec3& wi, const SurfaceHit* hit) const override {
-    if (!hit) return 0;
-    SurfaceHit h = *hit;
-    h.ng = n_;
-    return solidAnglePdf(p, wi, h);
+    return hit ? solidAnglePdf(p, wi, *hit) : 0;
   }
 
  private:
   std::vector<std::array<Vec3, 3>> tris_;
   std::vector<double> cum_;
+  std::vector<Vec3> normals_;  ///< per triangle, on the side of n_
   Vec3 n_;
   double area_ = 0;
 };
@@ -539,11 +540,12 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
         if (fv == 3) {
           add({{q[0], q[1], q[2]}}, normal(q[0], q[1], q[2], {0, 1, 2}));
         } else {
-          // A (planar) bilinear patch p00 p10 p01 p11 with the patch normal cross(dp/du, dp/dv).
+          // A bilinear patch p00 p10 p01 p11 as the two triangles Embree intersects (split along
+          // p10-p01), oriented by the patch normal cross(dp/du, dp/dv).
           Vec3 n = cross(q[1] - q[0], q[2] - q[0]);
           n = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
           if (m->flip) n = -n;
-          add({{q[0], q[1], q[3]}, {q[0], q[3], q[2]}}, n);
+          add({{q[0], q[1], q[2]}, {q[3], q[2], q[1]}}, n);
         }
       }
     } else if (s.type != scene::ShapeType::TriangleMesh &&

@@ -205,6 +205,12 @@ std::optional<LocalGeometry> sampleQuadricArea(const scene::Shape& s, Vec2 u) {
       p = {r * std::cos(phi), r * std::sin(phi), s.height};
       break;
     }
+    case ShapeType::Cone: {
+      // Area grows linearly with the distance t = sqrt(u) from the apex.
+      const double t = std::sqrt(u.y);
+      p = {s.radius * t * std::cos(phi), s.radius * t * std::sin(phi), s.height * (1 - t)};
+      break;
+    }
     default:
       return std::nullopt;
   }

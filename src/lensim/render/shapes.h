@@ -40,8 +40,7 @@ std::optional<double> intersectQuadric(const scene::Shape& shape, const Vec3& o,
 LocalGeometry quadricGeometry(const scene::Shape& shape, Vec3 p);
 /// Surface area of the quadric in object space (scene units squared).
 double quadricArea(const scene::Shape& shape);
-/// A point drawn uniformly by area on the quadric, u in [0,1)^2 (object space); nullopt for
-/// shapes that are not sampled (cones).
+/// A point drawn uniformly by area on the quadric, u in [0,1)^2 (object space).
 std::optional<LocalGeometry> sampleQuadricArea(const scene::Shape& shape, Vec2 u);
 
 }  // namespace lensim::render

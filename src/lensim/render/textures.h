@@ -2,10 +2,10 @@
 // for evaluation at surface points over sampled wavelengths (pbrt-v4 semantics: textures
 // evaluate to spectra; RGB values become spectra through the sigmoid-polynomial upsampling).
 //
-// Texture classes: constant, scale, mix, directionmix (|n . dir| of tex1), checkerboard (2-D and 3-D), imagemap (EXR/PNG/TIFF;
-// bilinear lookup, wrap repeat/clamp/black/octahedralsphere as repeat, scale, invert; 8-bit
-// files are sRGB-decoded unless "encoding" says otherwise). Mappings: uv, spherical,
-// cylindrical, planar with uscale/vscale/udelta/vdelta.
+// Texture classes: constant, scale, mix, directionmix (|n . dir| of tex1), checkerboard (2-D and
+// 3-D), imagemap (EXR/PNG/TIFF; bilinear lookup, wrap repeat/clamp/black/octahedralsphere as
+// repeat, scale, invert; 8-bit files are sRGB-decoded unless "encoding" says otherwise). Mappings:
+// uv, spherical, cylindrical, planar with uscale/vscale/udelta/vdelta.
 #pragma once
 
 #include <memory>
