@@ -20,4 +20,7 @@ void registerLensCommands(CLI::App& app, Action& action);
 /// `lensim check SCENE [--format]`: parse and build a pbrt scene, print a summary.
 void registerCheckCommand(CLI::App& app, Action& action);
 
+/// `lensim render SCENE [--spp N] [--outfile F] ...`: render a pbrt scene to an image.
+void registerRenderCommand(CLI::App& app, Action& action);
+
 }  // namespace lensim::cmd

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   lensim::cmd::Action action;
   lensim::cmd::registerLensCommands(app, action);
   lensim::cmd::registerCheckCommand(app, action);
+  lensim::cmd::registerRenderCommand(app, action);
 
   try {
     app.parse(argc, argv);

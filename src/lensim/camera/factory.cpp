@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "lensim/camera/camera.h"
+#include "lensim/camera/projective.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 
@@ -10,6 +11,9 @@ namespace lensim::camera {
 std::unique_ptr<Camera> makeCamera(const scene::Scene& scene) {
   const scene::Camera& c = scene.camera;
   if (c.type == "realistic") return makeRealisticCamera(scene);
+  if (c.type == "perspective") return makePerspectiveCamera(scene);
+  if (c.type == "orthographic") return makeOrthographicCamera(scene);
+  if (c.type == "spherical") return makeSphericalCamera(scene);
   throw Error(c.loc, fmt::format("camera \"{}\" is not rendered yet", c.type));
 }
 

@@ -97,6 +97,17 @@ uint32_t sobolDimension0(uint32_t index) {
   return (v >> 16) | (v << 16);
 }
 
+namespace {
+uint32_t reverseBits(uint32_t x) {
+  x = (x << 16) | (x >> 16);
+  x = ((x & 0x00ff00ffU) << 8) | ((x & 0xff00ff00U) >> 8);
+  x = ((x & 0x0f0f0f0fU) << 4) | ((x & 0xf0f0f0f0U) >> 4);
+  x = ((x & 0x33333333U) << 2) | ((x & 0xccccccccU) >> 2);
+  x = ((x & 0x55555555U) << 1) | ((x & 0xaaaaaaaaU) >> 1);
+  return x;
+}
+}  // namespace
+
 uint32_t sobolDimension1(uint32_t index) {
   // Second Sobol dimension (primitive polynomial x + 1, m_1 = 1): direction numbers
   // v_0 = 2^31, v_k = v_{k-1} xor (v_{k-1} >> 1); the value is the xor of v_k over set bits k.
@@ -107,17 +118,20 @@ uint32_t sobolDimension1(uint32_t index) {
 }
 
 uint32_t owenScramble(uint32_t v, uint64_t seed) {
-  // Nested uniform scrambling: the flip of bit (31 - i) depends on the i higher bits of the
-  // input, so every elementary interval is permuted as a whole (Owen 1995).
-  uint32_t out = v;
-  for (int i = 0; i < 32; ++i) {
-    const int bit = 31 - i;
-    const uint32_t prefix = i == 0 ? 0u : (v >> (bit + 1));
-    const uint64_t h =
-        mixBits(seed ^ mixBits((static_cast<uint64_t>(prefix) << 6) | static_cast<uint64_t>(i)));
-    out ^= static_cast<uint32_t>(h & 1u) << bit;
-  }
-  return out;
+  // Nested uniform scrambling by a hash on the bit-reversed value (Laine & Karras 2011, "Stratified
+  // sampling for stochastic transparency", with the constants of Burley 2020, "Practical
+  // Hash-based Owen Scrambling", JCGT 9(4)): after reversal, multiplication and addition only
+  // carry toward higher bits, so the flip of each original bit depends only on the bits above
+  // it and every elementary interval is permuted as a whole (Owen 1995). A few operations per
+  // value instead of one hash per bit.
+  const uint32_t s = static_cast<uint32_t>(mixBits(seed));
+  uint32_t x = reverseBits(v);
+  x ^= x * 0x3d20adeaU;
+  x += s;
+  x *= (s >> 16) | 1U;
+  x ^= x * 0x05526c56U;
+  x ^= x * 0x53a22864U;
+  return reverseBits(x);
 }
 
 PaddedSobolSampler::PaddedSobolSampler(int samples_per_pixel, int seed) : seed_(seed) {

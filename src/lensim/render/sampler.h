@@ -95,8 +95,8 @@ class PaddedSobolSampler final : public Sampler {
 /// The unscrambled first (van der Corput) and second Sobol dimensions as 32-bit fractions.
 uint32_t sobolDimension0(uint32_t index);
 uint32_t sobolDimension1(uint32_t index);
-/// Owen (nested uniform) scrambling of a 32-bit fraction: bit i is flipped by a hash of seed
-/// and the bits above it.
+/// Owen (nested uniform) scrambling of a 32-bit fraction: the flip of each bit depends only on
+/// the seed and the bits above it (hash-based, Laine-Karras / Burley 2020).
 uint32_t owenScramble(uint32_t v, uint64_t seed);
 
 }  // namespace lensim::render

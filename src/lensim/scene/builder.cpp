@@ -671,6 +671,18 @@ class Builder {
     } else if (type == "orthographic") {
       c.type = "orthographic";
       screen();
+    } else if (type == "spherical") {
+      c.type = "spherical";
+      ps.find({"screenwindow"}, {ParamType::Float});
+      ps.getFloat({"lensradius"}, 0);
+      ps.getFloat({"focaldistance"}, 1e6);
+      ps.findFloat({"frameaspectratio"});
+      const std::string mapping = ps.getString({"mapping"}, "equalarea");
+      if (mapping != "equirectangular")
+        warnOnce("spherical mapping", d.loc,
+                 fmt::format("spherical camera mapping \"{}\" is not rendered; it renders as "
+                             "\"equirectangular\"",
+                             mapping));
     } else if (type == "realistic") {
       c.type = "realistic";
       if (ps.peek({"specfile"})) {
@@ -963,6 +975,18 @@ class Builder {
       t.tex1 = in({"tex1"}, 0);
       t.tex2 = in({"tex2"}, 1);
       t.amount = floatInput(ps, {"amount"}, 0.5);
+    } else if (cls == "directionmix") {
+      t.type = cls;
+      t.tex1 = in({"tex1"}, 0);
+      t.tex2 = in({"tex2"}, 1);
+      if (const Param* p = ps.find({"dir"}, {ParamType::Vector3})) {
+        ps.expectCount(*p, 1);
+        t.direction = {p->numbers[0], p->numbers[1], p->numbers[2]};
+      }
+      // pbrt-v4: the direction is given in the texture's space; kept in world space here.
+      t.direction = inverse(t.texture_from_world).applyVector(t.direction);
+      if (length(t.direction) == 0) throw Error(d.loc, "directionmix: \"dir\" must not be zero");
+      t.direction = normalize(t.direction);
     } else if (cls == "checkerboard") {
       t.type = cls;
       mapping();
@@ -996,6 +1020,10 @@ class Builder {
     m.type_as_written = type;
     m.loc = loc;
     m.displacement = floatInput(ps, {"displacement", "bumpmap"});
+    if (m.displacement)
+      warnOnce("material displacement", loc,
+               "material \"displacement\" (bump mapping) is not rendered; the shading normal is "
+               "the surface's");
     if (const Param* nm = ps.find({"normalmap"}, {ParamType::String}))
       if (!nm->strings[0].empty()) m.normal_map = resolve(nm->strings[0], nm->loc, "normal map");
     auto roughness = [&](double def) {
@@ -1026,13 +1054,7 @@ class Builder {
       m.type = "diffuse";
       m.reflectance = spectrumInput(ps, {"reflectance", "Kd"}, 0.5);
       m.has_reflectance = true;
-      if (type == "matte") {
-        Input sigma = floatInput(ps, {"sigma"}, 0);
-        if (sigma.texture >= 0 || sigma.value != 0)
-          warnOnce("matte sigma", loc,
-                   "matte \"sigma\" (Oren-Nayar roughness) is not rendered; "
-                   "the surface renders as Lambertian");
-      }
+      if (type == "matte") m.sigma = floatInput(ps, {"sigma"}, 0);  // Oren–Nayar, degrees
     } else if (type == "coateddiffuse" || type == "plastic" || type == "uber" ||
                type == "substrate") {
       m.type = "coateddiffuse";
@@ -1092,6 +1114,74 @@ class Builder {
                    "glass \"Kr\"/\"Kt\" tints are not rendered; the glass "
                    "renders clear");
       }
+    } else if (type == "coatedconductor") {
+      m.type = type;
+      Input r = floatInput(ps, {"interface.roughness"}, 0);
+      m.uroughness = floatInput(ps, {"interface.uroughness"}).value_or(r);
+      m.vroughness = floatInput(ps, {"interface.vroughness"}).value_or(r);
+      Input cr = floatInput(ps, {"conductor.roughness"}, 0);
+      m.conductor_uroughness = floatInput(ps, {"conductor.uroughness"}).value_or(cr);
+      m.conductor_vroughness = floatInput(ps, {"conductor.vroughness"}).value_or(cr);
+      m.remap_roughness = ps.getBool({"remaproughness"}, true);
+      dielectricEta({"interface.eta"});
+      m.conductor_eta = spectrumInput(ps, {"conductor.eta"})
+                            .value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-eta")});
+      m.conductor_k = spectrumInput(ps, {"conductor.k"})
+                          .value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-k")});
+      if (auto rr = spectrumInput(ps, {"reflectance"})) {
+        m.conductor_reflectance = *rr;
+        m.conductor_has_reflectance = true;
+      }
+      m.thickness = floatInput(ps, {"thickness"}, 0.01);
+      m.albedo = spectrumInput(ps, {"albedo"}, 0);
+      m.g = floatInput(ps, {"g"}, 0);
+      m.max_depth = ps.getInt({"maxdepth"}, 10);
+      m.n_samples = ps.getInt({"nsamples"}, 1);
+    } else if (type == "diffusetransmission" || type == "translucent") {
+      m.type = "diffusetransmission";
+      if (type == "diffusetransmission") {
+        m.reflectance = spectrumInput(ps, {"reflectance"}, 0.25);
+        m.transmittance = spectrumInput(ps, {"transmittance"}, 0.25);
+        m.scale = ps.getFloat({"scale"}, 1);
+      } else {
+        // pbrt-v2/v3 translucent: diffuse part Kd split by "reflect" and "transmit"; the glossy
+        // part (Ks, roughness) has no diffusetransmission equivalent.
+        Input kd = spectrumInput(ps, {"Kd"}, 0.25);
+        Input refl = spectrumInput(ps, {"reflect"}, 0.5), trans = spectrumInput(ps, {"transmit"}, 0.5);
+        auto product = [&](const Input& a, const Input& b) {
+          Input out = a;
+          if (a.texture < 0 && b.texture < 0 && a.spectrum.kind == SpectrumValue::Kind::Rgb &&
+              b.spectrum.kind == SpectrumValue::Kind::Rgb)
+            out.spectrum.rgb = {a.spectrum.rgb.x * b.spectrum.rgb.x, a.spectrum.rgb.y * b.spectrum.rgb.y,
+                                a.spectrum.rgb.z * b.spectrum.rgb.z};
+          return out;
+        };
+        m.reflectance = product(kd, refl);
+        m.transmittance = product(kd, trans);
+        spectrumInput(ps, {"Ks"});
+        floatInput(ps, {"roughness"});
+        ps.getBool({"remaproughness"}, true);
+        warnOnce("material translucent", loc,
+                 "material \"translucent\" (pbrt-v1–v3) renders as \"diffusetransmission\" "
+                 "(Kd x reflect, Kd x transmit); its glossy Ks part is not rendered");
+      }
+      m.has_reflectance = true;
+    } else if (type == "mix") {
+      m.type = "mix";
+      std::vector<std::string> names;
+      if (const Param* p = ps.find({"materials"}, {ParamType::String}))
+        names = p->strings;
+      else
+        names = {ps.getString({"namedmaterial1"}, ""), ps.getString({"namedmaterial2"}, "")};
+      if (names.size() != 2)
+        throw Error(loc, fmt::format("mix: expected 2 materials, got {}", names.size()));
+      for (int i = 0; i < 2; ++i) {
+        auto it = named_materials_.find(names[size_t(i)]);
+        if (it == named_materials_.end())
+          throw Error(loc, fmt::format("mix: unknown material \"{}\"", names[size_t(i)]));
+        m.mix[size_t(i)] = it->second;
+      }
+      m.amount = floatInput(ps, {"amount"}, 0.5);
     } else if (type == "interface" || type == "" || type == "none") {
       m.type = "interface";
     } else {

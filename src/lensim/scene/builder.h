@@ -57,7 +57,7 @@ struct Input {
 enum class TextureKind { Float, Spectrum };
 
 /// A texture description. `type` is the pbrt-v4 class lensim renders: imagemap, scale (product
-/// of tex1 and tex2), mix, checkerboard or constant (tex1).
+/// of tex1 and tex2), mix, directionmix, checkerboard or constant (tex1).
 struct Texture {
   std::string name;
   TextureKind kind = TextureKind::Spectrum;
@@ -81,11 +81,13 @@ struct Texture {
   Input tex1, tex2;
   bool scale_is_float = false;  ///< scale: tex2 is pbrt-v4's float `scale`
   Input amount;                 ///< mix
+  Vec3 direction{0, 1, 0};      ///< directionmix: world-space unit direction
   int dimension = 2;            ///< checkerboard
 };
 
 /// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
-/// coateddiffuse, conductor, dielectric, thindielectric, interface.
+/// coateddiffuse, coatedconductor, conductor, dielectric, thindielectric, diffusetransmission,
+/// mix, interface.
 struct Material {
   std::string name;  ///< set for MakeNamedMaterial
   std::string type;
@@ -100,6 +102,18 @@ struct Material {
   // coateddiffuse: coat thickness (scene units), medium albedo and asymmetry g, random walk.
   Input thickness, albedo, g;
   int max_depth = 10, n_samples = 1;
+  Input sigma;  ///< diffuse (pbrt-v1–v3 matte): Oren–Nayar facet slope deviation, degrees
+  // diffusetransmission: reflectance above, transmittance here, both times `scale`.
+  Input transmittance;
+  double scale = 1;
+  // coatedconductor: the conductor under the coat (the coat uses uroughness/vroughness, eta).
+  Input conductor_eta, conductor_k, conductor_reflectance;
+  bool conductor_has_reflectance = false;
+  Input conductor_uroughness, conductor_vroughness;
+  // mix: the two materials (indices into Scene::materials) and the float amount (probability
+  // of the second).
+  std::array<int, 2> mix{-1, -1};
+  Input amount;
   std::optional<Input> displacement;
   std::string normal_map;  ///< resolved path
   /// The type in the file is not rendered; the material renders as diffuse grey 0.5.

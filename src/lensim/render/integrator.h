@@ -1,0 +1,52 @@
+// Light transport: pbrt-v4's "path" integrator (unidirectional path tracing with next-event
+// estimation, multiple importance sampling by the power heuristic and Russian roulette).
+// "directlighting" is the same with maxdepth 1 (mapped by the scene builder).
+#pragma once
+
+#include <cstdint>
+
+#include "lensim/render/accel.h"
+#include "lensim/render/lights.h"
+#include "lensim/render/materials.h"
+#include "lensim/render/sampler.h"
+#include "lensim/render/textures.h"
+
+namespace lensim::scene {
+struct Scene;
+}
+
+namespace lensim::render {
+
+/// Everything the integrator reads; all of it is immutable during a render.
+struct SceneContext {
+  const scene::Scene* scene = nullptr;
+  const Accel* accel = nullptr;
+  const Textures* textures = nullptr;
+  const Materials* materials = nullptr;
+  const LightSet* lights = nullptr;
+  int max_depth = 5;
+  bool has_alpha = false;  ///< some shape has an alpha texture
+};
+
+/// Per-thread ray counts.
+struct RayCounts {
+  uint64_t intersect = 0, shadow = 0;
+};
+
+/// The closest hit along the ray, skipping surfaces cut out by alpha textures.
+std::optional<SurfaceHit> intersectScene(const SceneContext& sc, Ray ray, RayCounts& counts);
+/// Whether the segment from p (offset along n) to p_light is blocked; infinite: toward
+/// direction wi without end.
+bool occludedScene(const SceneContext& sc, const Vec3& p, const Vec3& n, const Vec3& p_light,
+                   bool infinite, const Vec3& wi, RayCounts& counts);
+
+/// Radiance along the camera ray (origin o, unit direction d) at the sampled wavelengths
+/// (which may be reduced to the hero wavelength by dispersive materials).
+SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
+                       SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts);
+
+/// A ray origin moved off the surface at p (normal n) to the side of direction w, far enough
+/// to escape the surface's float-precision error.
+Vec3 offsetOrigin(const Vec3& p, const Vec3& n, const Vec3& w);
+
+}  // namespace lensim::render

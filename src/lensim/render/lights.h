@@ -1,0 +1,97 @@
+// Lights with pbrt-v4's semantics: point, spot, distant, diffuse area lights on any shape
+// (one-sided unless "twosided"), uniform infinite lights and image infinite lights (environment
+// maps: equal-area octahedral for square images as pbrt-v4 writes them, else latitude-longitude
+// as pbrt-v2's "mapname"), importance sampled by luminance. Emission spectra are normalised to
+// unit luminance except RGB (whose illuminant already has Y = 1), then multiplied by "scale", and
+// "power" (or illuminance for distant lights) rescales them as pbrt-v4 does.
+//
+// Units: radiance L in the film's units (an RGB L of (1,1,1) reads (1,1,1) on the film),
+// intensity I = radiance x m^2; pdfs per steradian of the direction from the shading point.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "lensim/render/accel.h"
+#include "lensim/render/sampling.h"
+#include "lensim/render/spectrum.h"
+
+namespace lensim::scene {
+struct Scene;
+}
+
+namespace lensim::render {
+
+class Textures;
+
+/// Incident radiance sampled from a light toward a point.
+struct LightLiSample {
+  SampledSpectrum L;  ///< radiance arriving along -wi (weighted by 1/r^2 for point lights)
+  Vec3 wi;            ///< unit direction from the point toward the light
+  double pdf = 0;     ///< per steradian, or 1 for delta lights
+  Vec3 p_light;       ///< point on the light (far away for distant/infinite lights)
+  bool infinite = false;
+};
+
+class Light {
+ public:
+  virtual ~Light() = default;
+  /// Point and directional lights (no surface to hit).
+  virtual bool isDelta() const { return false; }
+  virtual bool isInfinite() const { return false; }
+  /// A sample of incident light at world point p.
+  virtual std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2 u,
+                                                const SampledWavelengths& lambda) const = 0;
+  /// Solid-angle density of sampleLi at p producing direction wi that reaches the light at
+  /// `hit` (area lights) or escapes (infinite lights; hit is null).
+  virtual double pdfLi(const Vec3& p, const Vec3& wi, const SurfaceHit* hit) const {
+    (void)p, (void)wi, (void)hit;
+    return 0;
+  }
+  /// Radiance an area light emits from its surface point `hit` toward w.
+  virtual SampledSpectrum L(const SurfaceHit& hit, const Vec3& w,
+                            const SampledWavelengths& lambda) const {
+    (void)hit, (void)w, (void)lambda;
+    return {};
+  }
+  /// Radiance an infinite light sends along a ray that escapes in direction dir.
+  virtual SampledSpectrum Le(const Vec3& dir, const SampledWavelengths& lambda) const {
+    (void)dir, (void)lambda;
+    return {};
+  }
+  /// Emitted power (luminance-weighted), for choosing lights in proportion to it.
+  virtual double power() const = 0;
+};
+
+/// All lights of a scene and the power-proportional light choice.
+class LightSet {
+ public:
+  LightSet(const scene::Scene& scene, const Accel& accel, const Textures& textures);
+  ~LightSet();
+  size_t size() const { return lights_.size(); }
+  const Light& light(size_t i) const { return *lights_[i]; }
+  /// Lights that rays escaping the scene see.
+  const std::vector<const Light*>& infinite() const { return infinite_; }
+  /// The area light of a shape's face, or nullptr.
+  const Light* areaLight(int shape, int prim) const;
+  /// Chooses a light with probability proportional to its power; nullopt without lights.
+  struct Choice {
+    const Light* light;
+    double pmf;
+  };
+  std::optional<Choice> sample(double u) const;
+  /// Probability that sample() chooses `light`.
+  double pmf(const Light* light) const;
+
+ private:
+  std::vector<std::unique_ptr<Light>> lights_;
+  std::vector<const Light*> infinite_;
+  std::vector<int> shape_first_light_;  ///< per shape: index of its first light, or -1
+  std::vector<double> cdf_;
+  std::vector<double> pmf_;
+  std::unordered_map<const Light*, size_t> index_of_;
+};
+
+}  // namespace lensim::render

@@ -1,0 +1,44 @@
+// Materials: the BSDF at a surface point from the scene's material description (pbrt-v4
+// materials; the builder has already mapped pbrt-v1–v3 names: matte -> diffuse, plastic /
+// substrate / uber -> coateddiffuse, metal -> conductor, mirror -> conductor with a reflectance,
+// glass -> dielectric).
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "lensim/render/bsdf.h"
+#include "lensim/render/textures.h"
+
+namespace lensim::scene {
+struct Scene;
+}
+
+namespace lensim::render {
+
+class Materials {
+ public:
+  /// Loads the normal maps; throws lensim::Error (at the material) for unreadable ones.
+  Materials(const scene::Scene& scene, const Textures& textures);
+  ~Materials();
+  /// The material that shades the point: `mix` materials choose one of theirs with probability
+  /// `amount` for the second, by a hash of the point (deterministic); others are themselves.
+  int resolve(int material, const TextureEvalContext& ctx, const Vec3& wo) const;
+  /// The shading normal after the material's normal map (pbrt-v4: tangent-space RGB 2c - 1 in
+  /// the frame of dp/du and the shading normal, read linearly); ns itself without a map.
+  Vec3 shadingNormal(int material, const TextureEvalContext& ctx, const Vec3& ns,
+                     const Vec3& dpdu) const;
+  /// Whether the material only marks a boundary (pbrt's "interface" / ""): rays pass through.
+  bool isInterface(int material) const;
+  /// The BxDF of `material` at ctx. May terminate secondary wavelengths (dispersive eta).
+  std::shared_ptr<const BxDF> bxdf(int material, const TextureEvalContext& ctx,
+                                   SampledWavelengths& lambda) const;
+
+ private:
+  const scene::Scene* scene_;
+  const Textures* textures_;
+  struct NormalMap;
+  std::vector<std::shared_ptr<NormalMap>> normal_maps_;  ///< per material, or null
+};
+
+}  // namespace lensim::render

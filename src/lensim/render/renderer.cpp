@@ -1,0 +1,270 @@
+// Tiles, threads, progress and statistics. See renderer.h.
+#include "lensim/render/renderer.h"
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <mutex>
+#include <thread>
+
+#include "lensim/camera/camera.h"
+#include "lensim/render/filter.h"
+#include "lensim/render/integrator.h"
+#include "lensim/scene/builder.h"
+#include "lensim/util/error.h"
+#include "lensim/util/log.h"
+
+namespace lensim::render {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::unique_ptr<Sampler> makeSampler(const scene::Scene& scene, int spp, int seed) {
+  const std::string& t = scene.sampler.type;
+  if (t == "independent") return std::make_unique<IndependentSampler>(spp, seed);
+  if (t == "stratified") {
+    int xs = int(std::lround(std::sqrt(double(spp))));
+    if (xs * xs != spp) xs = spp;
+    return std::make_unique<StratifiedSampler>(xs, spp / xs, scene.sampler.jitter, seed);
+  }
+  if (t != "paddedsobol") {
+    static std::once_flag once;
+    std::call_once(once, [&] {
+      logWarning(
+          fmt::format("sampler \"{}\" renders as lensim's padded Owen-scrambled Sobol "
+                      "sampler",
+                      t));
+    });
+  }
+  return std::make_unique<PaddedSobolSampler>(spp, seed);
+}
+
+std::unique_ptr<Filter> makeFilter(const scene::Filter& f) {
+  const Vec2 r{f.x_radius, f.y_radius};
+  if (f.type == "box") return std::make_unique<BoxFilter>(r);
+  if (f.type == "mitchell") return std::make_unique<MitchellFilter>(r, f.b, f.c);
+  if (f.type == "lanczos") return std::make_unique<LanczosSincFilter>(r, f.tau);
+  if (f.type == "triangle") return std::make_unique<TriangleFilter>(r);
+  return std::make_unique<GaussianFilter>(r, f.sigma);
+}
+
+std::string fmtDuration(double s) {
+  if (s < 60) return fmt::format("{:.1f}s", s);
+  const int m = int(s / 60);
+  if (m < 60) return fmt::format("{}m{:02d}s", m, int(s) % 60);
+  return fmt::format("{}h{:02d}m", m / 60, m % 60);
+}
+
+}  // namespace
+
+RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
+  const auto t_setup = Clock::now();
+  std::unique_ptr<camera::Camera> cam = camera::makeCamera(scene);
+  const int x_res = scene.film.x_resolution, y_res = scene.film.y_resolution;
+  PixelBounds bounds{0, x_res, 0, y_res};
+  if (opt.pixelbounds) {
+    const auto& b = *opt.pixelbounds;
+    bounds = {b[0], b[1], b[2], b[3]};
+  } else if (opt.crop) {
+    bounds = cropWindowBounds(x_res, y_res, *opt.crop);
+  } else if (scene.film.pixel_bounds) {
+    const auto& b = *scene.film.pixel_bounds;
+    bounds = {b[0], b[1], b[2], b[3]};
+  } else {
+    bounds = cropWindowBounds(x_res, y_res, scene.film.crop_window);
+  }
+  bounds.x0 = std::clamp(bounds.x0, 0, x_res), bounds.x1 = std::clamp(bounds.x1, 0, x_res);
+  bounds.y0 = std::clamp(bounds.y0, 0, y_res), bounds.y1 = std::clamp(bounds.y1, 0, y_res);
+  if (bounds.width() <= 0 || bounds.height() <= 0)
+    throw Error(scene.film.loc, fmt::format("empty pixel bounds [{}, {}) x [{}, {})", bounds.x0,
+                                            bounds.x1, bounds.y0, bounds.y1));
+
+  Accel accel(scene);
+  Textures textures(scene);
+  Materials materials(scene, textures);
+  LightSet lights(scene, accel, textures);
+  SceneContext sc;
+  sc.scene = &scene;
+  sc.accel = &accel;
+  sc.textures = &textures;
+  sc.materials = &materials;
+  sc.lights = &lights;
+  sc.max_depth = scene.integrator.max_depth;
+  for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
+
+  if (scene.film.white_balance_k != 0)
+    logWarning(fmt::format("{}: film \"whitebalance\" {} K is not applied", scene.film.loc.str(),
+                           scene.film.white_balance_k));
+  if (scene.film.sensor != "cie1931")
+    logWarning(
+        fmt::format("{}: film \"sensor\" \"{}\" is not simulated; the film records CIE "
+                    "1931 XYZ",
+                    scene.film.loc.str(), scene.film.sensor));
+
+  const int spp_req = opt.spp.value_or(scene.sampler.pixel_samples);
+  const int seed = opt.seed.value_or(scene.sampler.seed);
+  std::unique_ptr<Sampler> proto = makeSampler(scene, spp_req, seed);
+  const int spp = proto->samplesPerPixel();
+  std::unique_ptr<Filter> filter = makeFilter(scene.filter);
+  Film film(scene, bounds);
+
+  RenderResult result;
+  result.bounds = bounds;
+  RenderStats& st = result.stats;
+  st.spp = spp;
+  st.camera = cam->describe();
+  st.camera_startup_s = cam->startupSeconds();
+  st.setup_s = std::chrono::duration<double>(Clock::now() - t_setup).count();
+
+  constexpr int kTile = 16;
+  const int tiles_x = (bounds.width() + kTile - 1) / kTile;
+  const int tiles_y = (bounds.height() + kTile - 1) / kTile;
+  const int n_tiles = tiles_x * tiles_y;
+  std::atomic<int> tiles_done{0};
+  std::atomic<uint64_t> camera_samples{0}, camera_rays{0}, no_ray{0}, nonfinite{0}, rays{0};
+  std::atomic<bool> cancelled{false};
+  const int threads =
+      opt.threads > 0 ? opt.threads : std::max(1, int(std::thread::hardware_concurrency()));
+  st.threads = threads;
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+
+  // Progress reporter.
+  const auto t0 = Clock::now();
+  std::mutex pm;
+  std::condition_variable pcv;
+  bool finished = false;
+  std::thread progress;
+  if (opt.progress) {
+    progress = std::thread([&] {
+      const bool tty = isatty(STDERR_FILENO);
+      int last_reported = -1;
+      std::unique_lock lock(pm);
+      while (!finished) {
+        pcv.wait_for(lock, std::chrono::milliseconds(tty ? 250 : 1000));
+        const int done = tiles_done.load();
+        const double el = std::chrono::duration<double>(Clock::now() - t0).count();
+        const double frac = double(done) / n_tiles;
+        const std::string eta = done > 0 ? fmtDuration(el / frac - el) : "?";
+        if (tty) {
+          const int w = 40, fill = int(frac * w);
+          std::fprintf(stderr, "\r[%s%s] %5.1f%%  elapsed %s  ETA %s ",
+                       std::string(fill, '=').c_str(), std::string(w - fill, ' ').c_str(),
+                       100 * frac, fmtDuration(el).c_str(),
+                       finished || done == n_tiles ? "0.0s" : eta.c_str());
+        } else if (int(frac * 10) != last_reported) {
+          last_reported = int(frac * 10);
+          std::fprintf(stderr, "render: %3.0f%% of %d tiles, elapsed %s, ETA %s\n", 100 * frac,
+                       n_tiles, fmtDuration(el).c_str(), eta.c_str());
+        }
+        std::fflush(stderr);
+      }
+      if (tty) std::fprintf(stderr, "\n");
+    });
+  }
+
+  tbb::parallel_for(tbb::blocked_range<int>(0, n_tiles, 1), [&](const tbb::blocked_range<int>& r) {
+    std::unique_ptr<Sampler> sampler = proto->clone();
+    for (int tile = r.begin(); tile != r.end(); ++tile) {
+      if (opt.cancel && opt.cancel->load()) {
+        cancelled = true;
+        return;
+      }
+      RayCounts counts;
+      uint64_t n_samples = 0, n_rays = 0, n_none = 0, n_bad = 0;
+      const int tx = tile % tiles_x, ty = tile / tiles_x;
+      const int x0 = bounds.x0 + tx * kTile, y0 = bounds.y0 + ty * kTile;
+      const int x1 = std::min(x0 + kTile, bounds.x1), y1 = std::min(y0 + kTile, bounds.y1);
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+          for (int i = 0; i < spp; ++i) {
+            if ((i & 63) == 0 && opt.cancel && opt.cancel->load()) {
+              cancelled = true;
+              break;
+            }
+            sampler->startPixelSample({x, y}, i);
+            // Dimension order: wavelength, film (filter), lens, time, then the path.
+            const double u_lambda = sampler->get1D();
+            const FilterSample fs = filter->sample(sampler->getPixel2D());
+            const Vec2 u_lens = sampler->get2D();
+            const double u_time = sampler->get1D();
+            ++n_samples;
+            camera::CameraSample cs;
+            cs.film_raster = {x + 0.5 + fs.p.x, y + 0.5 + fs.p.y};
+            cs.lens = u_lens;
+            cs.time = u_time;
+            SampledWavelengths lambda = SampledWavelengths::sampleVisible(u_lambda);
+            auto ray = cam->generateRay(cs);
+            SampledSpectrum L(0.0);
+            if (!ray) {
+              ++n_none;
+            } else {
+              ++n_rays;
+              L = pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts) * ray->weight;
+            }
+            bool finite = true;
+            for (int k = 0; k < kSpectrumSamples; ++k) finite = finite && std::isfinite(L[k]);
+            if (!finite) {
+              ++n_bad;
+              continue;
+            }
+            film.addSample(x, y, L, lambda, fs.weight);
+          }
+      camera_samples += n_samples;
+      camera_rays += n_rays;
+      no_ray += n_none;
+      nonfinite += n_bad;
+      rays += counts.intersect + counts.shadow;
+      ++tiles_done;
+    }
+  });
+  {
+    std::lock_guard lock(pm);
+    finished = true;
+  }
+  pcv.notify_all();
+  if (progress.joinable()) progress.join();
+
+  st.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  st.camera_samples = camera_samples;
+  st.camera_rays = camera_rays;
+  st.no_ray_samples = no_ray;
+  st.nonfinite_samples = nonfinite;
+  st.rays = rays;
+  st.partial = cancelled.load() || tiles_done.load() < n_tiles;
+  result.image = film.image();
+  auto& md = result.image.metadata;
+  md["lensim:spp"] = std::to_string(spp);
+  md["lensim:camera"] = st.camera;
+  md["lensim:pixelbounds"] = fmt::format("{} {} {} {}", bounds.x0, bounds.x1, bounds.y0, bounds.y1);
+  md["lensim:resolution"] = fmt::format("{} {}", x_res, y_res);
+  md["lensim:colorspace"] = "linear sRGB (Rec. 709 primaries, D65)";
+  if (st.partial) md["lensim:partial"] = "true";
+  return result;
+}
+
+std::string formatStats(const RenderStats& s) {
+  const double w = std::max(s.wall_s, 1e-9);
+  std::string out;
+  out += fmt::format("render time          {:.3f} s ({} threads, {} spp){}\n", s.wall_s, s.threads,
+                     s.spp, s.partial ? " -- interrupted, image partial" : "");
+  out += fmt::format("setup time           {:.3f} s (camera startup {:.3f} s)\n", s.setup_s,
+                     s.camera_startup_s);
+  out += fmt::format("camera               {}\n", s.camera);
+  out += fmt::format("camera samples       {} ({:.3g} samples/s)\n", s.camera_samples,
+                     double(s.camera_samples) / w);
+  out += fmt::format("camera rays          {} ({:.3g} camera rays/s)\n", s.camera_rays,
+                     double(s.camera_rays) / w);
+  out += fmt::format("samples without ray  {}\n", s.no_ray_samples);
+  out += fmt::format("rays traced          {} ({:.3g} rays/s)\n", s.rays, double(s.rays) / w);
+  out += fmt::format("NaN/inf samples      {} (discarded)\n", s.nonfinite_samples);
+  return out;
+}
+
+}  // namespace lensim::render
