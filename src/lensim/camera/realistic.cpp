@@ -53,6 +53,11 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
   const Vec2 film = filmPoint(sample.film_raster);
   const std::optional<optics::PupilSample> ps = pupil_->sample(film, sample.lens);
   if (!ps) return std::nullopt;
+  if (settings_.rear_disc_only) {
+    const double rr = lens.interfaces().back().semi_aperture_mm;
+    const Vec3& q = ps->rear_point_mm;
+    if (q.x * q.x + q.y * q.y > rr * rr) return std::nullopt;
+  }
   const double z_film = lens.filmZ_mm();
   const Vec3 from{film.x, film.y, z_film};
   const Vec3 to_rear = ps->rear_point_mm - from;
@@ -110,6 +115,7 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene) {
       s.film_diagonal_mm = r.film_diagonal_mm;
       s.camera_units_per_mm = 1.0;
       s.exposure_time = 1.0;
+      s.rear_disc_only = true;
     } else if (c.realistic) {
       const scene::Realistic& r = *c.realistic;
       s.lens_path = r.lens_file;

@@ -17,7 +17,8 @@
 // pixel value of a pinhole render of a surface of radiance L is L, the realistic camera's is about
 // L pi / (4 N^2) t at the centre of the image for working f-number N. The v1/v2 scenes have no
 // exposure time (their shutter is 0 to 0): their pixels hold irradiance, as the assignment's
-// reference renderer did.
+// reference renderer did. Like that renderer, v1/v2 cameras aim rays only at the rear element's
+// disc (see RealisticSettings::rear_disc_only).
 #pragma once
 
 #include <optional>
@@ -41,6 +42,11 @@ struct RealisticSettings {
   Transform world_from_camera;
   double exposure_time = 1;  ///< seconds; multiplies the weight
   ApertureShape aperture = ApertureShape::round();
+  /// Aim camera rays only at the disc of the rear element on its vertex plane, as the CS348B
+  /// assignment's reference renderer did (set for v1/v2 scenes, whose reference images show the
+  /// resulting darker corners). The complete region is sampled otherwise: rays that pass the
+  /// curved rear surface through that plane outside the disc carry light too.
+  bool rear_disc_only = false;
 };
 
 class RealisticCamera final : public Camera {

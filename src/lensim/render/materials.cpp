@@ -3,6 +3,7 @@
 // normal-incidence reflectance; a dielectric eta that varies with wavelength keeps only the
 // hero wavelength).
 #include "lensim/render/materials.h"
+#include "lensim/render/measured.h"
 
 #include <fmt/format.h>
 
@@ -131,6 +132,9 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
     if (s->eval(lambda.lambda(1)) != e) lambda.terminateSecondary();
     return e;
   };
+  if (m.type == "measured") {
+    return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
+  }
   if (m.type == "diffuse") {
     const SampledSpectrum r =
         clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo));

@@ -261,6 +261,11 @@ class Builder {
       scene_.film.y_resolution = 480;
       scene_.filter.type = "box";
       scene_.filter.x_radius = scene_.filter.y_radius = 0.5;
+      // pbrt-v2's default surface integrator is directlighting: a path tracer of depth 1 here,
+      // as for an explicit directlighting (the reference renders of the assignment's scenes
+      // have no indirect light).
+      scene_.integrator.type_as_written = "directlighting";
+      scene_.integrator.max_depth = 1;
     }
   }
 
@@ -1184,6 +1189,16 @@ class Builder {
       m.amount = floatInput(ps, {"amount"}, 0.5);
     } else if (type == "interface" || type == "" || type == "none") {
       m.type = "interface";
+    } else if (type == "measured") {
+      // pbrt-v2: measured BRDF data; the irregular isotropic `.brdf` format is rendered.
+      const Param* f = ps.find({"filename"}, {ParamType::String});
+      if (!f) throw Error(loc, "measured: missing \"string filename\"");
+      const std::string& name = f->strings[0];
+      if (name.size() < 5 || name.substr(name.size() - 5) != ".brdf")
+        ps.fail(*f, "only pbrt-v2's irregular isotropic .brdf files are rendered (expected a "
+                    "file name ending in .brdf)");
+      m.type = "measured";
+      m.measured_file = resolve(name, f->loc, "measured BRDF file");
     } else {
       ps.markAllUsed();
       m.type = "diffuse";

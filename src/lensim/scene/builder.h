@@ -116,6 +116,7 @@ struct Material {
   Input amount;
   std::optional<Input> displacement;
   std::string normal_map;  ///< resolved path
+  std::string measured_file;  ///< measured (pbrt-v2): resolved `filename` of the .brdf data
   /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
   bool fallback = false;
 };

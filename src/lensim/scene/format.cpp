@@ -103,7 +103,7 @@ std::string summary(const Scene& scene) {
   line(fmt::format(
       "integrator: {}, maxdepth {}{}", renamed(in.type_as_written, in.type), in.max_depth,
       in.defaulted
-          ? (scene.legacy_syntax ? " (default; pbrt-v1–v3 would use directlighting)" : " (default)")
+          ? (scene.legacy_syntax ? " (pbrt-v1–v3 default)" : " (default)")
           : ""));
 
   // Shapes.
