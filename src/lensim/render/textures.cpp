@@ -80,10 +80,12 @@ struct Textures::Impl {
     return {t.uscale * ctx.uv.x + t.udelta, t.vscale * ctx.uv.y + t.vdelta};
   }
 
-  /// RGB lookup at st (pbrt's orientation: t = 0 at the bottom row): nearest texel for the
-  /// "point" filter, bilinear for the others (no MIP-mapping: lensim has no ray differentials).
+  /// RGB lookup at st (pbrt-v3/v4 orientation: t = 0 at the bottom row; pbrt-v1/v2 scenes: at
+  /// the top row): nearest texel for the "point" filter, bilinear for the others (no
+  /// MIP-mapping: lensim has no ray differentials).
   Vec3 lookup(const scene::Texture& t, const RgbImage& im, Vec2 st) const {
-    const double x = st.x * im.width - 0.5, y = (1 - st.y) * im.height - 0.5;
+    const double row_t = t.rows_from_top ? st.y : 1 - st.y;
+    const double x = st.x * im.width - 0.5, y = row_t * im.height - 0.5;
     const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
     const double fx = x - x0, fy = y - y0;
     auto texel = [&](int xi, int yi) -> Vec3 {
@@ -101,7 +103,7 @@ struct Textures::Impl {
     };
     Vec3 v;
     if (t.filter == "point")
-      v = texel(int(std::floor(st.x * im.width)), int(std::floor((1 - st.y) * im.height)));
+      v = texel(int(std::floor(st.x * im.width)), int(std::floor(row_t * im.height)));
     else
       v = (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
           (texel(x0, y0 + 1) * (1 - fx) + texel(x0 + 1, y0 + 1) * fx) * fy;

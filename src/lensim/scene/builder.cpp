@@ -269,6 +269,8 @@ class Builder {
     }
   }
 
+  bool pbrt_v2_ = false;  // the file uses syntax only pbrt-v1/v2 have
+
   Scene run() {
     for (const Directive& d : desc_.directives) {
       try {
@@ -287,6 +289,11 @@ class Builder {
       }
       scene_.instances.push_back({it->second, transform, loc});
     }
+    // pbrt-v1/v2 looked image textures up with t = 0 at the image's first (top) row; pbrt-v3
+    // and v4 flip it. Files with syntax only v1/v2 have (a `specfile` realistic camera, a
+    // SurfaceIntegrator or VolumeIntegrator) keep the v1/v2 orientation.
+    if (pbrt_v2_)
+      for (Texture& t : scene_.textures) t.rows_from_top = true;
     return std::move(scene_);
   }
 
@@ -513,8 +520,10 @@ class Builder {
     } else if (n == "PixelFilter" || n == "Filter") {
       filter(d);
     } else if (n == "Integrator" || n == "SurfaceIntegrator") {
+      if (n == "SurfaceIntegrator") pbrt_v2_ = true;
       integrator(d);
     } else if (n == "VolumeIntegrator") {
+      pbrt_v2_ = true;
       ParamSet ps(d.params, d.loc, "VolumeIntegrator");
       ps.markAllUsed();
       warnOnce("VolumeIntegrator", d.loc,
@@ -692,6 +701,7 @@ class Builder {
       c.type = "realistic";
       if (ps.peek({"specfile"})) {
         // pbrt-v1/v2 (CS348B): camera-space millimetres.
+        pbrt_v2_ = true;
         LegacyRealistic r;
         const Param* spec = ps.find({"specfile"}, {ParamType::String});
         r.lens_file_as_written = spec->strings[0];
@@ -1152,12 +1162,14 @@ class Builder {
         // pbrt-v2/v3 translucent: diffuse part Kd split by "reflect" and "transmit"; the glossy
         // part (Ks, roughness) has no diffusetransmission equivalent.
         Input kd = spectrumInput(ps, {"Kd"}, 0.25);
-        Input refl = spectrumInput(ps, {"reflect"}, 0.5), trans = spectrumInput(ps, {"transmit"}, 0.5);
+        Input refl = spectrumInput(ps, {"reflect"}, 0.5),
+              trans = spectrumInput(ps, {"transmit"}, 0.5);
         auto product = [&](const Input& a, const Input& b) {
           Input out = a;
           if (a.texture < 0 && b.texture < 0 && a.spectrum.kind == SpectrumValue::Kind::Rgb &&
               b.spectrum.kind == SpectrumValue::Kind::Rgb)
-            out.spectrum.rgb = {a.spectrum.rgb.x * b.spectrum.rgb.x, a.spectrum.rgb.y * b.spectrum.rgb.y,
+            out.spectrum.rgb = {a.spectrum.rgb.x * b.spectrum.rgb.x,
+                                a.spectrum.rgb.y * b.spectrum.rgb.y,
                                 a.spectrum.rgb.z * b.spectrum.rgb.z};
           return out;
         };
@@ -1195,8 +1207,9 @@ class Builder {
       if (!f) throw Error(loc, "measured: missing \"string filename\"");
       const std::string& name = f->strings[0];
       if (name.size() < 5 || name.substr(name.size() - 5) != ".brdf")
-        ps.fail(*f, "only pbrt-v2's irregular isotropic .brdf files are rendered (expected a "
-                    "file name ending in .brdf)");
+        ps.fail(*f,
+                "only pbrt-v2's irregular isotropic .brdf files are rendered (expected a "
+                "file name ending in .brdf)");
       m.type = "measured";
       m.measured_file = resolve(name, f->loc, "measured BRDF file");
     } else {

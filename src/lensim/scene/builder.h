@@ -73,6 +73,8 @@ struct Texture {
   Vec3 v1{1, 0, 0}, v2{0, 1, 0};  ///< planar mapping axes
   std::string wrap = "repeat";
   std::string encoding;  ///< "sRGB", "linear", "gamma g"; empty: by file type
+  /// Image rows run with t from the top (pbrt-v1/v2) instead of from the bottom (v3/v4).
+  bool rows_from_top = false;
   double scale = 1;
   bool invert = false;
   std::string filter = "bilinear";
@@ -115,7 +117,7 @@ struct Material {
   std::array<int, 2> mix{-1, -1};
   Input amount;
   std::optional<Input> displacement;
-  std::string normal_map;  ///< resolved path
+  std::string normal_map;     ///< resolved path
   std::string measured_file;  ///< measured (pbrt-v2): resolved `filename` of the .brdf data
   /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
   bool fallback = false;

@@ -1,0 +1,223 @@
+// The realistic camera in the renderer (issue 6): pbrt-v4's box-dgauss reference, the
+// assignment's NTU reference renders through all four lenses, exposure and flat field, and
+// repeated renders that must not hang.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+
+#include "lensim/camera/realistic.h"
+#include "lensim/io/image.h"
+#include "lensim/optics/lens_system.h"
+#include "lensim/render/renderer.h"
+#include "lensim/scene/builder.h"
+#include "test_paths.h"
+
+using namespace lensim;
+
+namespace {
+
+const std::string kShared = LENSIM_SHARED_DIR;
+
+/// Block comparison of two renders (different seeds) of a scene against a reference image.
+struct Match {
+  int blocks = 0;
+  double mean_ratio = 0;    ///< sum of lensim / sum of the reference (RGB)
+  double mad_rel = 0;       ///< mean |block mean difference| / reference image mean
+  double z_fail_share = 0;  ///< share of blocks outside the Bonferroni z bound
+  double z_bound = 0;
+  /// Share of blocks differing by more than 5 standard errors plus 2% of the reference (a 2%
+  /// allowance for deliberate differences, e.g. lensim's metal tables are not pbrt-v4's).
+  double outlier_share = 0;
+};
+
+Match compare(const io::Image& a, const io::Image& b, const io::Image& ref, int spp_ours,
+              int spp_ref, int block) {
+  Match m;
+  const int bw = ref.width / block, bh = ref.height / block;
+  m.blocks = bw * bh;
+  // Two-sided bound for a 1% family-wise error over all blocks (Bonferroni), normal quantile by
+  // bisection on erfc.
+  const double alpha = 0.01 / m.blocks;
+  double lo = 0, hi = 10;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
+  }
+  m.z_bound = hi;
+  double sum_a = 0, sum_r = 0, sum_abs = 0;
+  int fails = 0, outliers = 0;
+  for (int by = 0; by < bh; ++by)
+    for (int bx = 0; bx < bw; ++bx) {
+      double ma = 0, mr = 0, d2 = 0;
+      for (int y = by * block; y < (by + 1) * block; ++y)
+        for (int x = bx * block; x < (bx + 1) * block; ++x)
+          for (int c = 0; c < 3; ++c) {
+            ma += 0.5 * (a.at(x, y, c) + b.at(x, y, c));
+            mr += ref.at(x, y, c);
+            const double d = a.at(x, y, c) - b.at(x, y, c);
+            d2 += d * d;
+          }
+      const double n = block * block * 3.0;
+      ma /= n, mr /= n;
+      const double pixel_var = d2 / n / 2;
+      const double var = pixel_var / n / 2 + pixel_var / n * spp_ours / spp_ref;
+      const double z = std::abs(ma - mr) / std::max(std::sqrt(var), 1e-12);
+      fails += z > m.z_bound;
+      outliers += std::abs(ma - mr) > 5 * std::sqrt(var) + 0.02 * mr;
+      if (z > m.z_bound && getenv("LENSIM_TEST_VERBOSE"))
+        std::printf("  block (%d,%d): lensim %.5f reference %.5f z %.1f\n", bx, by, ma, mr, z);
+      sum_a += ma, sum_r += mr, sum_abs += std::abs(ma - mr);
+    }
+  m.mean_ratio = sum_a / sum_r;
+  m.mad_rel = sum_abs / sum_r;
+  m.z_fail_share = static_cast<double>(fails) / m.blocks;
+  m.outlier_share = static_cast<double>(outliers) / m.blocks;
+  return m;
+}
+
+bool present(const std::string& path) {
+  return std::filesystem::exists(path);
+}
+
+}  // namespace
+
+// pbrt-v4's own render of the box through the double Gauss (realistic camera, 1024 spp): absolute
+// brightness and every 20x20 block within 5 standard errors plus 2%.
+TEST(RealisticRender, BoxDgaussMatchesPbrtV4) {
+  const std::string dir = kShared + "/scenes/pbrt-v4-refs/";
+  if (!present(dir + "box-dgauss.pbrt") || !present(dir + "box-dgauss.exr"))
+    GTEST_SKIP() << "shared scene or reference not present in " << dir;
+  const scene::Scene s = scene::loadScene(dir + "box-dgauss.pbrt");
+  const io::Image ref = io::readImage(dir + "box-dgauss.exr");
+  render::RenderOptions o;
+  o.spp = 16;
+  o.seed = 1;
+  const render::RenderResult a = render::render(s, o);
+  o.seed = 2;
+  const io::Image b = render::render(s, o).image;
+  const Match m = compare(a.image, b, ref, 16, 1024, 20);
+  std::printf(
+      "box-dgauss vs pbrt-v4: mean ratio %.4f, mean |block diff| %.4f of the mean, %.0f%% of "
+      "blocks beyond z %.2f, %.0f%% beyond 5 sigma + 2%%, no-ray samples %.2f%%\n",
+      m.mean_ratio, m.mad_rel, 100 * m.z_fail_share, m.z_bound, 100 * m.outlier_share,
+      100.0 * a.stats.no_ray_samples / a.stats.camera_samples);
+  EXPECT_NEAR(m.mean_ratio, 1.0, 0.02);
+  EXPECT_EQ(m.outlier_share, 0.0);
+  EXPECT_LE(static_cast<double>(a.stats.no_ray_samples) / a.stats.camera_samples, 0.05);
+}
+
+// The assignment's scenes through the four lenses against the NTU references (512 spp). Metric:
+// 10x10-pixel block means; the image-mean ratio, the mean absolute block difference relative to
+// the image mean, and the share of blocks outside a Bonferroni-corrected z bound derived from
+// the noise of two renders. They do NOT yet agree within noise everywhere (see the issue notes:
+// the reference renderer filtered textures with MIP maps and its foreground blur differs); the
+// bounds are the measured values with a margin, so that a regression shows.
+TEST(RealisticRender, AssignmentScenesAgreeWithTheirReferences) {
+  const std::string dir = kShared + "/scenes/ntu-dis-2015-dof-dragons/";
+  struct Case {
+    const char* lens;
+    double max_mad_rel, max_fail_share;
+  } cases[] = {{"dgauss", 0.16, 0.45},
+               {"telephoto", 0.23, 0.55},
+               {"wide", 0.20, 0.35},
+               {"fisheye", 0.11, 0.16}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.lens);
+    const std::string scene_path = dir + "dof-dragons." + c.lens + ".pbrt";
+    const std::string ref_path = dir + "dof-dragons." + c.lens + "_512ref.exr";
+    if (!present(scene_path) || !present(ref_path)) GTEST_SKIP() << "not present: " << scene_path;
+    const scene::Scene s = scene::loadScene(scene_path);
+    const io::Image ref = io::readImage(ref_path);
+    render::RenderOptions o;
+    o.spp = 8;
+    o.seed = 1;
+    const io::Image a = render::render(s, o).image;
+    o.seed = 2;
+    const io::Image b = render::render(s, o).image;
+    const Match m = compare(a, b, ref, 8, 512, 10);
+    std::printf(
+        "%-9s vs NTU reference: mean ratio %.4f, mean |block diff| %.4f of the mean, "
+        "%.1f%% of %d blocks beyond z %.2f, %.1f%% beyond 5 sigma + 2%%\n",
+        c.lens, m.mean_ratio, m.mad_rel, 100 * m.z_fail_share, m.blocks, m.z_bound,
+        100 * m.outlier_share);
+    EXPECT_NEAR(m.mean_ratio, 1.0, 0.06);
+    EXPECT_LE(m.mad_rel, c.max_mad_rel);
+    EXPECT_LE(m.z_fail_share, c.max_fail_share);
+  }
+}
+
+namespace {
+
+// A scene file under the test's temporary directory: the camera inside a uniform environment
+// (radiance 1 everywhere), the realistic camera looking at it through the double Gauss.
+std::string writeFlatField(const std::string& name, double aperture_mm) {
+  const auto dir = std::filesystem::temp_directory_path() / "lensim_render_realistic_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / name).string();
+  std::ofstream f(path);
+  f << "Camera \"realistic\" \"string lensfile\" \"" << lensim::test::lensPath("dgauss.50mm.dat")
+    << "\" \"float aperturediameter\" " << aperture_mm << " \"float focusdistance\" 3\n"
+    << "Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24 \"float diagonal\" 35\n"
+    << "Sampler \"independent\" \"integer pixelsamples\" 64\n"
+    << "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
+    << "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n";
+  return path;
+}
+
+double centreMean(const io::Image& im) {
+  double sum = 0;
+  int n = 0;
+  for (int y = 10; y < 14; ++y)
+    for (int x = 10; x < 14; ++x, ++n)
+      for (int c = 0; c < 3; ++c) sum += im.at(x, y, c) / 3;
+  return sum / n;
+}
+
+}  // namespace
+
+// Through the whole renderer: the flat field's centre reads pi L sin^2(theta) (theta the real
+// marginal-ray angle at the film) within 2%, and half the stop diameter passes a quarter of it.
+TEST(RealisticRender, FlatFieldAndExposure) {
+  render::RenderOptions o;
+  o.seed = 3;
+  const scene::Scene full = scene::loadScene(writeFlatField("full.pbrt", 12));
+  const scene::Scene half = scene::loadScene(writeFlatField("half.pbrt", 6));
+  const double e_full = centreMean(render::render(full, o).image);
+  const double e_half = centreMean(render::render(half, o).image);
+  camera::RealisticSettings s;
+  s.lens_path = lensim::test::lensPath("dgauss.50mm.dat");
+  s.setup.aperture_diameter_mm = 12;
+  s.setup.focus_distance_m = 3;
+  camera::RealisticCamera cam(s);
+  const optics::LensSystem& ls = *cam.lens().lens;
+  double lo = 0, hi = 1.5 * ls.interfaces().back().semi_aperture_mm;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (ls.traceFromFilmPoint({0, 0}, {mid, 0}).ok() ? lo : hi) = mid;
+  }
+  const double sin_theta = lo / std::hypot(lo, ls.filmDistance_mm());
+  const double expected = std::numbers::pi * sin_theta * sin_theta;
+  std::printf("flat field centre %.5f, pi sin^2 %.5f; full/half stop %.3f\n", e_full, expected,
+              e_full / e_half);
+  EXPECT_NEAR(e_full, expected, 0.02 * expected);
+  EXPECT_NEAR(e_full / e_half, 4.0, 0.15);
+}
+
+// Camera construction happens before the render's parallel work: rendering a small
+// realistic-camera scene many times in a row with 2 threads never hangs (ctest's timeout
+// catches a hang; pbrt-v4 hangs in about one start in three on this machine kind).
+TEST(RealisticRender, ManyRendersInARowDoNotHang) {
+  const scene::Scene s = scene::loadScene(writeFlatField("repeat.pbrt", 8));
+  render::RenderOptions o;
+  o.threads = 2;
+  o.spp = 1;
+  for (int k = 0; k < 50; ++k) {
+    o.seed = k;
+    const render::RenderResult r = render::render(s, o);
+    ASSERT_EQ(r.image.width, 24);
+  }
+}
