@@ -169,23 +169,31 @@ TEST(RenderCommand, ErrorsExitWithStatusOne) {
 }
 
 TEST(RenderCommand, RealisticCameraErrorIsReportedCleanly) {
-  // Until the realistic camera lands (another issue), rendering such a scene must fail with a
-  // located error and exit status 1, not crash.
-  const std::string scene = kShared + "/scenes/pbrt-v4-refs/box-dgauss.pbrt";
-  if (!std::filesystem::exists(scene)) GTEST_SKIP() << scene << " is not present";
+  // A focus distance the lens cannot reach: a located error at the Camera directive naming the
+  // closest possible distance, exit status 1, and no image.
   lensim::testutil::TempDir dir("lensim-render-real");
+  const std::string scene = dir.file("close.pbrt");
+  {
+    std::ofstream f(scene);
+    f << "Camera \"realistic\" \"string lensfile\" \"" << LENSIM_SOURCE_DIR
+      << "/lenses/dgauss.50mm.dat\" \"float focusdistance\" 0.05\n"
+      << "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+      << "WorldBegin\nLightSource \"infinite\"\n";
+  }
   Result r = run("render " + scene + " --spp 1 --quiet --outfile " + dir.file("x.exr"));
-  if (r.status == 0) GTEST_SKIP() << "the realistic camera is available; nothing to check";
   EXPECT_EQ(r.status, 1) << r.out;
-  EXPECT_NE(r.out.find("error:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(scene + ":1:1: error: realistic camera: focus distance 0.05 m is closer"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("the closest is 0.1960 m"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("x.exr")));
 }
 
 TEST(SharedScenes, EveryPresentSceneRendersAtLowSpp) {
-  // Each shared scene renders at 1 spp on a small crop. Scenes with a realistic camera are
-  // skipped (with a message) while makeRealisticCamera is not available.
+  // Each shared scene renders at 1 spp on a small crop, realistic cameras included.
   const std::filesystem::path root = kShared + "/scenes";
   if (!std::filesystem::exists(root)) GTEST_SKIP() << root << " is not present";
-  int rendered = 0, skipped = 0, missing = 0;
+  int rendered = 0, missing = 0;
   // Files that others Include are parts of scenes, not scenes.
   std::set<std::filesystem::path> included;
   for (const auto& e : std::filesystem::recursive_directory_iterator(root)) {
@@ -223,25 +231,11 @@ TEST(SharedScenes, EveryPresentSceneRendersAtLowSpp) {
       EXPECT_EQ(r.stats.nonfinite_samples, 0u) << path;
       ++rendered;
     } catch (const lensim::Error& err) {
-      if (s.camera.type == "realistic" &&
-          std::string(err.what()).find("realistic") != std::string::npos) {
-        std::printf("skipped %s: the realistic camera is not available yet (%s)\n", path.c_str(),
-                    err.what());
-        ++skipped;
-        // The rest of the scene (shapes, textures, lights) still renders through a perspective
-        // camera standing in for the lens.
-        s.camera.type = "perspective";
-        s.camera.fov_deg = 40;
-        auto r = lensim::render::render(s, o);
-        EXPECT_EQ(r.stats.nonfinite_samples, 0u) << path;
-        continue;
-      }
       ADD_FAILURE() << path << ": " << err.what();
     }
   }
-  std::printf("shared scenes: %d rendered, %d skipped (realistic camera), %d with missing files\n",
-              rendered, skipped, missing);
-  EXPECT_GT(rendered + skipped + missing, 0);
+  std::printf("shared scenes: %d rendered, %d with missing files\n", rendered, missing);
+  EXPECT_GE(rendered, 8);  // hw3 x2, dof-dragons x4, box x2
 }
 
 TEST(RenderCommand, InterruptWritesThePartialImageAndFails) {
