@@ -12,6 +12,7 @@
 #include "lensim/camera/realistic.h"
 #include "lensim/io/image.h"
 #include "lensim/optics/lens_system.h"
+#include "lensim/render/autofocus_scene.h"
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
 #include "test_paths.h"
@@ -220,4 +221,46 @@ TEST(RealisticRender, ManyRendersInARowDoNotHang) {
     const render::RenderResult r = render::render(s, o);
     ASSERT_EQ(r.image.width, 24);
   }
+}
+
+// Autofocus through the renderer: a checkerboard plane facing the camera at a known distance;
+// the film distance found lies within the depth of focus of the optics core's exact film
+// distance for that distance.
+TEST(RealisticRender, AutofocusFindsAPlaneThroughTheRenderer) {
+  const auto dir = std::filesystem::temp_directory_path() / "lensim_render_realistic_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "plane.pbrt").string(), zones = (dir / "zones.txt").string();
+  {
+    std::ofstream f(path);
+    f << "Camera \"realistic\" \"string lensfile\" \"" << lensim::test::lensPath("dgauss.50mm.dat")
+      << "\" \"float aperturediameter\" 17.1 \"float focusdistance\" 10\n"
+      << "Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 150 \"float diagonal\" "
+         "35\n"
+      << "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+      << "Texture \"checks\" \"spectrum\" \"checkerboard\" \"float uscale\" 100 \"float vscale\" "
+         "100\n"
+      << "  \"rgb tex1\" [0.9 0.9 0.9] \"rgb tex2\" [0.1 0.1 0.1]\n"
+      << "Material \"diffuse\" \"texture reflectance\" \"checks\"\n"
+      << "Shape \"bilinearmesh\" \"point3 P\" [-1 -1 1.5  1 -1 1.5  -1 1 1.5  1 1 1.5]\n"
+      << "  \"point2 uv\" [0 0 1 0 0 1 1 1]\n";
+    std::ofstream z(zones);
+    z << "# centre\n0.45 0.55 0.43 0.57\n";
+  }
+  const scene::Scene s = scene::loadScene(path);
+  render::SceneAutofocusOptions o;
+  o.zones_file = zones;
+  o.spp = 4;
+  const render::SceneAutofocusResult r = render::autofocusScene(s, o);
+  const optics::FocusedLens fl =
+      optics::focusLens(optics::readLensFile(lensim::test::lensPath("dgauss.50mm.dat")),
+                        {.aperture_diameter_mm = 17.1,
+                         .focus_distance_m = 1.5,
+                         .focus_method = optics::FocusMethod::Exact});
+  const double n_w = optics::workingFNumber(*fl.lens, fl.paraxial, fl.lens->filmZ_mm() - 1500);
+  const double pitch = 35 / std::sqrt(1 + 0.75 * 0.75) / 200;
+  const double tolerance = n_w * 2 * pitch;
+  std::printf("autofocus: %.4f mm (%d renders, %.1f s); optics core %.4f mm +- %.3f\n",
+              r.film_distance_mm, r.renders, r.seconds, fl.lens->filmDistance_mm(), tolerance);
+  EXPECT_NEAR(r.film_distance_mm, fl.lens->filmDistance_mm(), tolerance);
+  EXPECT_NEAR(r.focus_distance_m, 1.5, 0.15);
 }

@@ -23,4 +23,7 @@ void registerCheckCommand(CLI::App& app, Action& action);
 /// `lensim render SCENE [--spp N] [--outfile F] ...`: render a pbrt scene to an image.
 void registerRenderCommand(CLI::App& app, Action& action);
 
+/// `lensim autofocus SCENE`.
+void registerAutofocusCommand(CLI::App& app, Action& action);
+
 }  // namespace lensim::cmd

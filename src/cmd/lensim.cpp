@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   lensim::cmd::registerLensCommands(app, action);
   lensim::cmd::registerCheckCommand(app, action);
   lensim::cmd::registerRenderCommand(app, action);
+  lensim::cmd::registerAutofocusCommand(app, action);
 
   try {
     app.parse(argc, argv);
