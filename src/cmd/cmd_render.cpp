@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "lensim/render/autofocus_scene.h"
 #include "lensim/io/image.h"
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
@@ -37,6 +38,8 @@ void registerRenderCommand(CLI::App& app, Action& action) {
     std::vector<double> crop;
     std::vector<int> pixelbounds;
     bool quiet = false, stats = false;
+    bool autofocus = false;
+    std::string zones;
   };
   auto o = std::make_shared<Options>();
   CLI::App* r = app.add_subcommand("render", "Render a pbrt scene (v4, or the v1–v3 syntax)");
@@ -57,12 +60,25 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       ->expected(4);
   r->add_flag("--quiet", o->quiet, "No progress bar or statistics");
   r->add_flag("--stats", o->stats, "Print render statistics (also printed unless --quiet)");
+  r->add_flag("--autofocus", o->autofocus,
+              "Focus the realistic camera on its autofocus zones first (see lensim autofocus)");
+  r->add_option("--zones", o->zones, "Zone file for --autofocus (default: the camera's af_zones)");
   r->callback([o, seed, &action]() {
     o->has_seed = seed->count() > 0;
     action = [o]() -> int {
       const bool quiet = o->quiet || lensim::quiet();
       scene::Scene s = scene::loadScene(o->scene);
       logDiagnostics(s.diagnostics);
+      if (o->autofocus) {
+        render::SceneAutofocusOptions af;
+        af.zones_file = o->zones;
+        af.threads = o->threads;
+        const render::SceneAutofocusResult f = render::autofocusScene(s, af);
+        render::setFilmDistance(s, f.film_distance_mm);
+        if (!quiet)
+          logInfo(fmt::format("autofocus: film distance {:.4f} mm ({} zone renders, {:.1f} s)",
+                              f.film_distance_mm, f.renders, f.seconds));
+      }
       render::RenderOptions ro;
       if (o->spp > 0) ro.spp = o->spp;
       if (o->has_seed) ro.seed = o->seed;
