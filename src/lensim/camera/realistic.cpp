@@ -78,11 +78,12 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
   CameraRay ray;
   ray.origin = settings_.world_from_camera.applyPoint(o_cam);
   ray.direction = normalize(settings_.world_from_camera.applyVector(d_cam));
-  // w = t T cos^4(theta) A / z^2 (z: film to the rear-vertex plane, where the pupil is sampled).
+  // w = T cos^4(theta) A / z^2 (z: film to the rear-vertex plane, where the pupil is sampled);
+  // the film multiplies by the exposure time (and ISO / 100), as pbrt-v4's imaging ratio does.
   const double cos_theta = -dir.z;
   const double z = lens.filmDistance_mm();
   const double c2 = cos_theta * cos_theta;
-  ray.weight = settings_.exposure_time * transmission * c2 * c2 * ps->area_mm2 / (z * z);
+  ray.weight = transmission * c2 * c2 * ps->area_mm2 / (z * z);
   ray.time = sample.time * settings_.exposure_time;
   return ray;
 }

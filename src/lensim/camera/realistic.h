@@ -9,16 +9,17 @@
 // camera's right appears on the image's right (as with pbrt's perspective camera).
 //
 // What the film stores: each ray's radiance times its weight
-//   w = [shutter time] x T x cos^4(theta) x A / z^2,
+//   w = T x cos^4(theta) x A / z^2,
 // the Monte Carlo estimate of the film irradiance integral E = L cos^4(theta) / z^2 dA over the
 // sampled region of the rear-vertex plane (area A, at axial distance z from the film; theta is the
-// angle of the film-side ray to the axis; T the aperture shape's transmission). The film thus
-// holds exposure H = E t (pbrt-v4 scenes: t = shutterclose - shutteropen) in the units of L; the
-// pixel value of a pinhole render of a surface of radiance L is L, the realistic camera's is about
-// L pi / (4 N^2) t at the centre of the image for working f-number N. The v1/v2 scenes have no
-// exposure time (their shutter is 0 to 0): their pixels hold irradiance, as the assignment's
-// reference renderer did. Like that renderer, v1/v2 cameras aim rays only at the rear element's
-// disc (see RealisticSettings::rear_disc_only).
+// angle of the film-side ray to the axis; T the aperture shape's transmission). The film then
+// multiplies by its imaging ratio, exposure time x ISO / 100 (pbrt-v4's sensor; exposure time =
+// shutterclose - shutteropen, taken as 1 when the scene gives none), so a pixel holds exposure
+// H = E t in the units of L. Where a pinhole render of a surface of radiance L reads L, the
+// realistic camera reads about L pi / (4 N^2) t at the image centre for working f-number N: a
+// photographer's exposure. The v1/v2 scenes have no exposure time (their shutter is 0 to 0):
+// their pixels hold irradiance, as the assignment's reference renderer did. Like that renderer,
+// v1/v2 cameras aim rays only at the rear element's disc (see RealisticSettings::rear_disc_only).
 #pragma once
 
 #include <optional>
@@ -40,7 +41,7 @@ struct RealisticSettings {
   int x_resolution = 256, y_resolution = 256;
   double camera_units_per_mm = 0.001;  ///< 0.001: metres (v3/v4); 1: millimetres (v1/v2)
   Transform world_from_camera;
-  double exposure_time = 1;  ///< seconds; multiplies the weight
+  double exposure_time = 1;  ///< seconds (the film applies it); ray times lie in [0, it)
   ApertureShape aperture = ApertureShape::round();
   /// Aim camera rays only at the disc of the rear element on its vertex plane, as the CS348B
   /// assignment's reference renderer did (set for v1/v2 scenes, whose reference images show the
