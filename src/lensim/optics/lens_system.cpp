@@ -27,6 +27,7 @@ template <typename T>
 LensTracer<T>::LensTracer(const std::vector<Interface>& interfaces) {
   for (const Interface& s : interfaces) {
     radius_.push_back(T(s.radius_mm));
+    inv_radius_.push_back(s.radius_mm != 0 ? T(1 / s.radius_mm) : T(0));
     z_.push_back(T(s.z_mm));
     semi2_.push_back(T(s.semi_aperture_mm * s.semi_aperture_mm));
     eta_before_.push_back(T(s.ior_before));
@@ -40,7 +41,7 @@ namespace {
 // Refracts unit direction d at a surface with unit normal n (either orientation), going from
 // index eta_i to eta_t. Returns false on total internal reflection.
 template <typename T>
-bool refract(Vec3T<T>& d, Vec3T<T> n, T eta_i, T eta_t) {
+[[gnu::always_inline]] inline bool refract(Vec3T<T>& d, Vec3T<T> n, T eta_i, T eta_t) {
   if (eta_i == eta_t) return true;
   T cos_i = -dot(n, d);
   if (cos_i < 0) {  // make the normal face the incoming ray
@@ -51,7 +52,8 @@ bool refract(Vec3T<T>& d, Vec3T<T> n, T eta_i, T eta_t) {
   T sin2_t = eta * eta * std::max(T(0), T(1) - cos_i * cos_i);
   if (sin2_t >= T(1)) return false;
   T cos_t = std::sqrt(T(1) - sin2_t);
-  d = normalize(d * eta + n * (eta * cos_i - cos_t));
+  // Unit length for unit d and n (|eta d_tangential|^2 + cos_t^2 = 1); not renormalised.
+  d = d * eta + n * (eta * cos_i - cos_t);
   return true;
 }
 
@@ -102,7 +104,8 @@ TraceResultT<T> LensTracer<T>::trace(const RayT<T>& in, const TraceOptions& opts
       if (!ok0 && !ok1) return {RayT<T>{o, d}, i, BlockReason::Miss};
       t = ok0 && ok1 ? std::min(t0, t1) : (ok0 ? t0 : t1);
       const Vec3T<T> p = rel + d * t;
-      normal = Vec3T<T>{p.x / R, p.y / R, (p.z - R) / R};  // unit; points toward -z on the cap
+      const T inv_r = inv_radius_[i];
+      normal = Vec3T<T>{p.x * inv_r, p.y * inv_r, (p.z - R) * inv_r};  // unit; toward -z on the cap
     }
     const Vec3T<T> p = o + d * t;
     if (path) path->push_back(p);

@@ -89,7 +89,7 @@ class LensTracer {
   TraceResultT<T> trace(const RayT<T>& ray, const TraceOptions& opts,
                         std::vector<Vec3T<T>>* path) const;
 
-  std::vector<T> radius_, z_, semi2_, eta_before_, eta_after_;
+  std::vector<T> radius_, inv_radius_, z_, semi2_, eta_before_, eta_after_;
   std::vector<std::uint8_t> is_stop_;
 };
 

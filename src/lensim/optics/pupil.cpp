@@ -26,6 +26,8 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       z_rear_mm_(lens.rearVertexZ_mm()),
       directions_(std::max(8, opts.directions)) {
   const auto t0 = std::chrono::steady_clock::now();
+  for (int j = 0; j < directions_; ++j)
+    dirs_.push_back(unit(2 * std::numbers::pi * j / directions_));
   const int ni = std::max(1, opts.radial_bins);
   const int nd = directions_;
   const double dphi = 2 * std::numbers::pi / nd;
@@ -250,8 +252,7 @@ std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u) const 
   double ca, sa;
   if (!boundFor(film_mm, poly, ca, sa)) return std::nullopt;
   const int nd = directions_;
-  const double dphi = 2 * std::numbers::pi / nd;
-  const double sin_d = std::sin(dphi);
+  const double sin_d = dirs_[1].y;
   // Pick a triangle of the fan by area, reusing u.x for the position inside it.
   double total = 0;
   for (int j = 0; j < nd; ++j) total += poly.radius[j] * poly.radius[(j + 1) % nd];
@@ -265,8 +266,9 @@ std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u) const 
   }
   const double ux = tri > 0 ? std::clamp((target - acc) / tri, 0.0, 1.0) : 0.0;
   const double s = std::sqrt(ux);
-  const Vec2 a = unit(j * dphi) * poly.radius[j];
-  const Vec2 b = unit((j + 1) * dphi) * poly.radius[(j + 1) % nd];
+  const int j1 = (j + 1) % nd;
+  const Vec2 a = dirs_[j] * poly.radius[j];
+  const Vec2 b = dirs_[j1] * poly.radius[j1];
   const Vec2 local = poly.centre + (a * (1 - u.y) + b * u.y) * s;
   // Rotate from the +x film frame to the film point's azimuth.
   return PupilSample{{ca * local.x - sa * local.y, sa * local.x + ca * local.y, z_rear_mm_},

@@ -79,6 +79,7 @@ class ExitPupilSampler {
   double film_radius_mm_;
   double z_rear_mm_;
   int directions_;
+  std::vector<Vec2> dirs_;                  // unit vectors of the polygon directions
   std::vector<Polygon> nodes_;              // sorted by radius, from 0 to the film radius
   std::vector<std::vector<double>> scale_;  // per interval between consecutive nodes, per vertex
   double build_seconds_ = 0;
