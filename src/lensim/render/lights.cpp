@@ -556,15 +556,30 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
       lights_.push_back(std::make_unique<QuadricLight>(s, spec, scale, l.two_sided));
     }
   }
-  // Power-proportional choice.
-  double total = 0;
-  pmf_.resize(lights_.size());
+  // Light choice as pbrt-v4's BVH light sampler splits it: each light without a position
+  // (infinite, distant) gets 1 / (their count + 1), the lights in the scene share the rest in
+  // proportion to their power. (Power alone would hand a sky, whose power grows with the scene's
+  // size, nearly every sample.)
+  pmf_.assign(lights_.size(), 0.0);
+  std::vector<size_t> bounded, unbounded;
   for (size_t i = 0; i < lights_.size(); ++i) {
-    pmf_[i] = std::max(0.0, lights_[i]->power());
-    if (!std::isfinite(pmf_[i])) pmf_[i] = 0;
-    total += pmf_[i];
+    const bool far = lights_[i]->isInfinite() || dynamic_cast<DistantLight*>(lights_[i].get());
+    (far ? unbounded : bounded).push_back(i);
   }
-  for (double& p : pmf_) p = total > 0 ? p / total : 1.0 / double(lights_.size());
+  const double p_unbounded =
+      unbounded.empty()
+          ? 0
+          : double(unbounded.size()) / double(unbounded.size() + (bounded.empty() ? 0 : 1));
+  for (size_t i : unbounded) pmf_[i] = p_unbounded / double(unbounded.size());
+  double total = 0;
+  for (size_t i : bounded) {
+    double p = std::max(0.0, lights_[i]->power());
+    if (!std::isfinite(p)) p = 0;
+    pmf_[i] = p;
+    total += p;
+  }
+  for (size_t i : bounded)
+    pmf_[i] = (1 - p_unbounded) * (total > 0 ? pmf_[i] / total : 1.0 / double(bounded.size()));
   cdf_.resize(lights_.size());
   double c = 0;
   for (size_t i = 0; i < lights_.size(); ++i) cdf_[i] = (c += pmf_[i]);

@@ -65,7 +65,8 @@ class Light {
   virtual double power() const = 0;
 };
 
-/// All lights of a scene and the power-proportional light choice.
+/// All lights of a scene and the light choice: lights without a position (infinite, distant)
+/// 1 / (their count + 1) each, the others the rest in proportion to their power.
 class LightSet {
  public:
   LightSet(const scene::Scene& scene, const Accel& accel, const Textures& textures);
@@ -76,7 +77,7 @@ class LightSet {
   const std::vector<const Light*>& infinite() const { return infinite_; }
   /// The area light of a shape's face, or nullptr.
   const Light* areaLight(int shape, int prim) const;
-  /// Chooses a light with probability proportional to its power; nullopt without lights.
+  /// Chooses a light (see the class comment); nullopt without lights.
   struct Choice {
     const Light* light;
     double pmf;
