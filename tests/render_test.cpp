@@ -536,3 +536,37 @@ Material "diffuse" "texture reflectance" "dm")");
   EXPECT_GT(f.centre[1].mean, 0.6);
   EXPECT_LT(f.centre[1].mean, 0.8 + 5 * f.centre[1].sem);
 }
+
+TEST(LightUnits, GoniometricLightScalesByItsImage) {
+  // A latitude-longitude image (8x4): rows near the light's +y pole 2, rows near -y 0.5. The
+  // plane below the light is seen along -y: it gets I x 0.5. Without an image it is a point
+  // light; with "power" P the intensity is P / (4 pi x the image's mean over the sphere).
+  lensim::testutil::TempDir dir("lensim-gonio");
+  lensim::io::Image im(8, 4, {"R", "G", "B"});
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 8; ++x)
+      for (int c = 0; c < 3; ++c) im.at(x, y, c) = y < 2 ? 2.0f : 0.5f;
+  const std::string file = dir.file("gonio.exr");
+  lensim::io::writeImage(file, im);
+  const double a_pi = 0.5 / M_PI;
+  const double plain = planeLuminance(
+      R"(AttributeBegin
+  Translate 0 1 0
+  LightSource "goniometric" "rgb I" [2 2 2]
+AttributeEnd)");
+  EXPECT_NEAR(plain, a_pi * 2, 0.01 * a_pi * 2);
+  const double imaged = planeLuminance(R"(AttributeBegin
+  Translate 0 1 0
+  LightSource "goniometric" "rgb I" [2 2 2] "string filename" ")" +
+                                       file + R"("
+AttributeEnd)");
+  EXPECT_NEAR(imaged, a_pi * 2 * 0.5, 0.01 * a_pi);
+  // The image's mean over the sphere is 1.25 (half the solid angle each).
+  const double powered = planeLuminance(R"(AttributeBegin
+  Translate 0 1 0
+  LightSource "goniometric" "rgb I" [1 1 1] "float power" 50 "string filename" ")" +
+                                        file + R"("
+AttributeEnd)");
+  EXPECT_NEAR(powered, a_pi * 50 / (4 * M_PI * 1.25) * 0.5, 0.01 * a_pi);
+  std::printf("goniometric: plain %.4f imaged %.4f powered %.4f\n", plain, imaged, powered);
+}

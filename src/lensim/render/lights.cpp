@@ -43,6 +43,8 @@ double uniformScale(const Transform& t) {
   return std::cbrt(std::abs(det));
 }
 
+Vec2 equalAreaSphereToSquareFn(const Vec3& d);
+
 double smoothStep(double a, double b, double x) {
   if (a == b) return x < a ? 0 : 1;
   const double t = std::clamp((x - a) / (b - a), 0.0, 1.0);
@@ -106,6 +108,84 @@ class SpotLight final : public Light {
   Vec3 p_, axis_;
   SpectrumPtr I_;
   double scale_, cos_end_, cos_start_;
+};
+
+/// pbrt's goniometric light: a point light whose intensity is I times an image of directions
+/// (light space with y and z swapped, so the image's pole is the light's +y axis): square images
+/// use pbrt-v4's equal-area octahedral mapping, others pbrt-v2's latitude-longitude one.
+class GoniometricLight final : public Light {
+ public:
+  GoniometricLight(const scene::Light& desc, SpectrumPtr I, double scale)
+      : world_from_light_(desc.transform),
+        light_from_world_(inverse(desc.transform)),
+        p_(desc.transform.applyPoint({0, 0, 0})),
+        I_(std::move(I)),
+        scale_(scale) {
+    if (!desc.filename.empty()) {
+      io::Image im = io::readImage(desc.filename);
+      w_ = im.width;
+      h_ = im.height;
+      const int nc = im.channelCount();
+      for (int y = 0; y < h_; ++y)
+        for (int x = 0; x < w_; ++x) {
+          double v = 0;
+          for (int c = 0; c < std::min(nc, 3); ++c) v += im.at(x, y, c);
+          values_.push_back(std::max(0.0, v / std::min(nc, 3)));
+        }
+      // Mean intensity factor over the sphere (lat-long texels weighted by their solid angle).
+      double sum = 0, wsum = 0;
+      for (int y = 0; y < h_; ++y)
+        for (int x = 0; x < w_; ++x) {
+          const double wt = w_ == h_ ? 1 : std::sin(M_PI * (y + 0.5) / h_);
+          sum += wt * values_[size_t(y) * w_ + x];
+          wsum += wt;
+        }
+      mean_ = wsum > 0 ? sum / wsum : 0;
+    }
+  }
+  /// Mean of the image factor over all directions (1 without an image).
+  double meanFactor() const { return mean_; }
+  bool isDelta() const override { return true; }
+  std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
+                                        const SampledWavelengths& lambda) const override {
+    const Vec3 d = p_ - p;
+    const double r2 = dot(d, d);
+    if (r2 == 0) return std::nullopt;
+    LightLiSample s;
+    s.wi = d / std::sqrt(r2);
+    const double f = factor(-s.wi);
+    if (f <= 0) return std::nullopt;
+    s.L = I_->sample(lambda) * (scale_ * f / r2);
+    s.pdf = 1;
+    s.p_light = p_;
+    return s;
+  }
+  double power() const override { return 4 * M_PI * scale_ * luminanceOf(*I_) * mean_; }
+  /// The image factor for world direction w leaving the light.
+  double factor(const Vec3& w) const {
+    if (values_.empty()) return 1;
+    Vec3 wl = normalize(light_from_world_.applyVector(w));
+    std::swap(wl.y, wl.z);
+    Vec2 uv;
+    if (w_ == h_) {
+      uv = equalAreaSphereToSquareFn(wl);
+    } else {
+      double phi = std::atan2(wl.y, wl.x);
+      if (phi < 0) phi += 2 * M_PI;
+      uv = {phi / (2 * M_PI), std::acos(std::clamp(wl.z, -1.0, 1.0)) / M_PI};
+    }
+    const int x = std::clamp(int(uv.x * w_), 0, w_ - 1), y = std::clamp(int(uv.y * h_), 0, h_ - 1);
+    return values_[size_t(y) * w_ + x];
+  }
+
+ private:
+  Transform world_from_light_, light_from_world_;
+  Vec3 p_;
+  SpectrumPtr I_;
+  double scale_;
+  int w_ = 0, h_ = 0;
+  std::vector<double> values_;
+  double mean_ = 1;
 };
 
 class DistantLight final : public Light {
@@ -175,6 +255,11 @@ Vec3 equalAreaSquareToSphere(Vec2 p) {
   const double sin_phi = std::copysign(std::sin(phi), v);
   const double s = r * std::sqrt(std::max(0.0, 2 - r * r));
   return {cos_phi * s, sin_phi * s, z};
+}
+
+Vec2 equalAreaSphereToSquare(const Vec3& d);
+Vec2 equalAreaSphereToSquareFn(const Vec3& d) {
+  return equalAreaSphereToSquare(d);
 }
 
 Vec2 equalAreaSphereToSquare(const Vec3& d) {
@@ -480,6 +565,17 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
       lights_.push_back(std::make_unique<SpotLight>(
           l.transform.applyPoint(l.from), normalize(l.transform.applyVector(l.to - l.from)), spec,
           scale, cos_end, cos_start));
+    } else if (l.type == "goniometric") {
+      std::unique_ptr<GoniometricLight> g;
+      try {
+        g = std::make_unique<GoniometricLight>(l, spec, scale);
+      } catch (const Error& e) {
+        throw Error(l.loc, e.what());
+      }
+      if (l.power && *l.power > 0 && g->meanFactor() > 0)
+        g = std::make_unique<GoniometricLight>(l, spec,
+                                               scale * *l.power / (4 * M_PI * g->meanFactor()));
+      lights_.push_back(std::move(g));
     } else if (l.type == "distant") {
       if (l.power && *l.power > 0) scale *= *l.power;
       lights_.push_back(std::make_unique<DistantLight>(

@@ -1,9 +1,9 @@
-// Lights with pbrt-v4's semantics: point, spot, distant, diffuse area lights on any shape
-// (one-sided unless "twosided"), uniform infinite lights and image infinite lights (environment
-// maps: equal-area octahedral for square images as pbrt-v4 writes them, else latitude-longitude
-// as pbrt-v2's "mapname"), importance sampled by luminance. Emission spectra are normalised to
-// unit luminance except RGB (whose illuminant already has Y = 1), then multiplied by "scale", and
-// "power" (or illuminance for distant lights) rescales them as pbrt-v4 does.
+// Lights with pbrt-v4's semantics: point, spot, goniometric, distant, diffuse area lights on any
+// shape (one-sided unless "twosided"), uniform infinite lights and image infinite lights
+// (environment maps: equal-area octahedral for square images as pbrt-v4 writes them, else
+// latitude-longitude as pbrt-v2's "mapname"), importance sampled by luminance. Emission spectra are
+// normalised to unit luminance except RGB (whose illuminant already has Y = 1), then multiplied by
+// "scale", and "power" (or illuminance for distant lights) rescales them as pbrt-v4 does.
 //
 // Units: radiance L in the film's units (an RGB L of (1,1,1) reads (1,1,1) on the film),
 // intensity I = radiance x m^2; pdfs per steradian of the direction from the shading point.

@@ -1128,12 +1128,14 @@ class Builder {
         // pbrt-v2/v3 translucent: diffuse part Kd split by "reflect" and "transmit"; the glossy
         // part (Ks, roughness) has no diffusetransmission equivalent.
         Input kd = spectrumInput(ps, {"Kd"}, 0.25);
-        Input refl = spectrumInput(ps, {"reflect"}, 0.5), trans = spectrumInput(ps, {"transmit"}, 0.5);
+        Input refl = spectrumInput(ps, {"reflect"}, 0.5),
+              trans = spectrumInput(ps, {"transmit"}, 0.5);
         auto product = [&](const Input& a, const Input& b) {
           Input out = a;
           if (a.texture < 0 && b.texture < 0 && a.spectrum.kind == SpectrumValue::Kind::Rgb &&
               b.spectrum.kind == SpectrumValue::Kind::Rgb)
-            out.spectrum.rgb = {a.spectrum.rgb.x * b.spectrum.rgb.x, a.spectrum.rgb.y * b.spectrum.rgb.y,
+            out.spectrum.rgb = {a.spectrum.rgb.x * b.spectrum.rgb.x,
+                                a.spectrum.rgb.y * b.spectrum.rgb.y,
                                 a.spectrum.rgb.z * b.spectrum.rgb.z};
           return out;
         };
@@ -1218,6 +1220,11 @@ class Builder {
         l.cone_angle_deg = ps.getFloat({"coneangle"}, 30);
         l.cone_delta_deg = ps.getFloat({"conedeltaangle"}, 5);
       }
+    } else if (type == "goniometric") {
+      emission({"I"});
+      if (const Param* p = ps.find({"filename", "mapname"}, {ParamType::String}))
+        if (!p->strings[0].empty())
+          l.filename = resolve(p->strings[0], p->loc, "goniometric image");
     } else if (type == "distant") {
       emission({"L"});
       l.from = ps.findPoint3({"from"}).value_or(Vec3{0, 0, 0});
