@@ -677,12 +677,12 @@ class Builder {
       ps.getFloat({"lensradius"}, 0);
       ps.getFloat({"focaldistance"}, 1e6);
       ps.findFloat({"frameaspectratio"});
-      const std::string mapping = ps.getString({"mapping"}, "equalarea");
-      if (mapping != "equirectangular")
-        warnOnce("spherical mapping", d.loc,
-                 fmt::format("spherical camera mapping \"{}\" is not rendered; it renders as "
-                             "\"equirectangular\"",
-                             mapping));
+      c.spherical_mapping = ps.getString({"mapping"}, "equalarea");
+      if (c.spherical_mapping != "equirectangular" && c.spherical_mapping != "equalarea")
+        throw Error(ps.peek({"mapping"})->loc,
+                    fmt::format("spherical camera: unknown mapping \"{}\" (expected "
+                                "\"equalarea\" or \"equirectangular\")",
+                                c.spherical_mapping));
     } else if (type == "realistic") {
       c.type = "realistic";
       if (ps.peek({"specfile"})) {

@@ -211,7 +211,7 @@ struct Realistic {
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 
-/// The camera description. `type`: perspective, orthographic or realistic.
+/// The camera description. `type`: perspective, orthographic, spherical or realistic.
 struct Camera {
   std::string type = "perspective";
   std::string type_as_written;
@@ -223,6 +223,7 @@ struct Camera {
   double lens_radius = 0, focal_distance = 1e6;
   std::optional<double> frame_aspect_ratio;
   std::optional<std::array<double, 4>> screen_window;
+  std::string spherical_mapping = "equalarea";  ///< spherical: "equalarea" or "equirectangular"
   std::optional<LegacyRealistic> legacy_realistic;
   std::optional<Realistic> realistic;
   bool defaulted = true;  ///< no Camera directive
