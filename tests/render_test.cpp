@@ -585,3 +585,50 @@ TEST(NamedSpectra, UntabulatedPbrtNamesStillRender) {
     EXPECT_NEAR(f.centre[c].mean, 1.0, 5 * f.centre[c].sem + 0.01);
   }
 }
+
+TEST(LightUnits, ProjectionLightProjectsItsImage) {
+  // A 2x1 image (left white, right black) projected straight down from (0, 1, 0) with a 90
+  // degree field of view: the light's +x is the world's +x, so the floor at x < 0 is lit with
+  // intensity 1 (RGB white is unit-luminance D65), the floor at x > 0 is dark, and points
+  // outside the frustum get nothing.
+  lensim::testutil::TempDir dir("lensim-projection");
+  lensim::io::Image im(2, 1, {"R", "G", "B"});
+  for (int c = 0; c < 3; ++c) im.at(0, 0, c) = 1;
+  const std::string file = dir.file("proj.exr");
+  lensim::io::writeImage(file, im);
+  const std::string text = R"(
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "x.exr"
+WorldBegin
+AttributeBegin
+  Translate 0 1 0
+  Rotate 90 1 0 0
+  LightSource "projection" "float fov" 90 "string filename" ")" +
+                           file + R"("
+AttributeEnd
+Shape "sphere" "float radius" 0.01
+)";
+  lensim::scene::Scene s = lensim::testutil::buildText(text);
+  ASSERT_EQ(lensim::testutil::errorsOf(s), "");
+  lensim::render::Accel accel(s);
+  lensim::render::Textures tex(s);
+  lensim::render::LightSet lights(s, accel, tex);
+  ASSERT_EQ(lights.size(), 1u);
+  const auto& light = lights.light(0);
+  double y_left = 0, y_right = 0;
+  int left_hits = 0;
+  for (int i = 0; i < 64; ++i) {
+    const auto lambda = lensim::render::SampledWavelengths::sampleVisible((i + 0.5) / 64);
+    if (auto ls = light.sampleLi({-0.5, 0, 0.3}, {0.5, 0.5}, lambda)) {
+      y_left += lensim::render::sampledToXyz(ls->L, lambda).y / 64;
+      ++left_hits;
+    }
+    if (auto ls = light.sampleLi({0.5, 0, 0.3}, {0.5, 0.5}, lambda))
+      y_right += lensim::render::sampledToXyz(ls->L, lambda).y / 64;
+    EXPECT_FALSE(light.sampleLi({3, 0, 0}, {0.5, 0.5}, lambda).has_value());
+  }
+  EXPECT_EQ(left_hits, 64);
+  const double r2 = 0.25 + 1 + 0.09;
+  std::printf("projection: left %.4f (expect %.4f), right %.4f\n", y_left, 1 / r2, y_right);
+  EXPECT_NEAR(y_left, 1 / r2, 0.03 / r2);  // spectral noise of 64 wavelength sets
+  EXPECT_EQ(y_right, 0);
+}

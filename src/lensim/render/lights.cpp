@@ -18,6 +18,7 @@
 #include "lensim/render/textures.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
+#include "lensim/util/log.h"
 
 namespace lensim::render {
 
@@ -185,6 +186,86 @@ class GoniometricLight final : public Light {
   int w_ = 0, h_ = 0;
   std::vector<double> values_;
   double mean_ = 1;
+};
+
+/// pbrt-v4's projection light: a point light at the light-space origin projecting an image
+/// through a pinhole looking down +z. The shorter image axis spans `fov`; a direction's screen
+/// position (x/z, y/z) / tan(fov/2) is mapped to the image with the screen's (min x, min y) at
+/// (u, v) = (0, 0) and v indexing rows from the top, as pbrt-v4 looks the image up. The texel's
+/// RGB becomes an illuminant spectrum (RGB (1,1,1) is D65 of unit luminance) times "scale".
+class ProjectionLight final : public Light {
+ public:
+  ProjectionLight(const scene::Light& desc, double scale)
+      : light_from_world_(inverse(desc.transform)),
+        p_(desc.transform.applyPoint({0, 0, 0})),
+        scale_(scale),
+        tan_half_(std::tan(desc.fov_deg * M_PI / 360)) {
+    io::Image im = io::readImage(desc.filename);
+    w_ = im.width;
+    h_ = im.height;
+    const int nc = im.channelCount();
+    auto ch = [&](const char* n, int f) {
+      auto c = im.channelIndex(n);
+      return c ? *c : std::min(f, nc - 1);
+    };
+    const int cr = ch("R", 0), cg = ch("G", 1), cb = ch("B", 2);
+    double lum = 0;
+    for (int y = 0; y < h_; ++y)
+      for (int x = 0; x < w_; ++x) {
+        const Vec3 c{std::max(0.0f, im.at(x, y, cr)), std::max(0.0f, im.at(x, y, cg)),
+                     std::max(0.0f, im.at(x, y, cb))};
+        rgb_.push_back(c);
+        lum += RGBColorSpace::sRGB().toXyz(c).y;
+      }
+    mean_lum_ = lum / (double(w_) * h_);
+    const double aspect = double(w_) / h_;
+    if (aspect > 1)
+      bounds_ = {-aspect, aspect, -1, 1};
+    else
+      bounds_ = {-1, 1, -1 / aspect, 1 / aspect};
+  }
+  bool isDelta() const override { return true; }
+  std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
+                                        const SampledWavelengths& lambda) const override {
+    const Vec3 d = p_ - p;
+    const double r2 = dot(d, d);
+    if (r2 == 0) return std::nullopt;
+    LightLiSample s;
+    s.wi = d / std::sqrt(r2);
+    const Vec3 wl = light_from_world_.applyVector(-s.wi);
+    if (wl.z <= 0) return std::nullopt;
+    const double sx = wl.x / wl.z / tan_half_, sy = wl.y / wl.z / tan_half_;
+    if (sx < bounds_[0] || sx > bounds_[1] || sy < bounds_[2] || sy > bounds_[3])
+      return std::nullopt;
+    const double u = (sx - bounds_[0]) / (bounds_[1] - bounds_[0]);
+    const double v = (sy - bounds_[2]) / (bounds_[3] - bounds_[2]);
+    const int x = std::clamp(int(u * w_), 0, w_ - 1), y = std::clamp(int(v * h_), 0, h_ - 1);
+    const Vec3 c = rgb_[size_t(y) * w_ + x];
+    const double m = std::max({c.x, c.y, c.z});
+    if (m <= 0) return std::nullopt;
+    const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(c / (2 * m));
+    const SampledSpectrum illum = RGBColorSpace::sRGB().illuminant()->sample(lambda);
+    for (int i = 0; i < kSpectrumSamples; ++i) s.L[i] = 2 * m * poly.eval(lambda.lambda(i));
+    s.L *= illum * (scale_ / r2);
+    s.pdf = 1;
+    s.p_light = p_;
+    return s;
+  }
+  double power() const override {
+    // The projected image's mean luminance over the solid angle of the frustum (approximate).
+    const double area =
+        (bounds_[1] - bounds_[0]) * (bounds_[3] - bounds_[2]) * tan_half_ * tan_half_;
+    return scale_ * mean_lum_ * area;
+  }
+
+ private:
+  Transform light_from_world_;
+  Vec3 p_;
+  double scale_, tan_half_;
+  int w_ = 0, h_ = 0;
+  std::vector<Vec3> rgb_;
+  double mean_lum_ = 0;
+  std::array<double, 4> bounds_{};
 };
 
 class DistantLight final : public Light {
@@ -525,6 +606,15 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
       lights_.push_back(std::make_unique<SpotLight>(
           l.transform.applyPoint(l.from), normalize(l.transform.applyVector(l.to - l.from)), spec,
           scale, cos_end, cos_start));
+    } else if (l.type == "projection") {
+      if (l.power)
+        logWarning(fmt::format("{}: projection light \"power\" is not applied; \"scale\" is",
+                               l.loc.str()));
+      try {
+        lights_.push_back(std::make_unique<ProjectionLight>(l, l.scale));
+      } catch (const Error& e) {
+        throw Error(l.loc, e.what());
+      }
     } else if (l.type == "goniometric") {
       std::unique_ptr<GoniometricLight> g;
       try {

@@ -1,4 +1,4 @@
-// Lights with pbrt-v4's semantics: point, spot, goniometric, distant, diffuse area lights on any
+// Lights with pbrt-v4's semantics: point, spot, goniometric, projection, distant, diffuse area lights on any
 // shape (one-sided unless "twosided"), uniform infinite lights and image infinite lights
 // (environment maps: equal-area octahedral for square images as pbrt-v4 writes them, else
 // latitude-longitude as pbrt-v2's "mapname"), importance sampled by luminance. Emission spectra are

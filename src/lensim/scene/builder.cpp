@@ -1220,6 +1220,14 @@ class Builder {
         l.cone_angle_deg = ps.getFloat({"coneangle"}, 30);
         l.cone_delta_deg = ps.getFloat({"conedeltaangle"}, 5);
       }
+    } else if (type == "projection") {
+      l.fov_deg = ps.getFloat({"fov"}, 90);
+      const Param* p = ps.find({"filename", "mapname"}, {ParamType::String});
+      if (!p || p->strings[0].empty())
+        throw Error(d.loc, "projection light: missing \"string filename\"");
+      l.filename = resolve(p->strings[0], p->loc, "projection image");
+      if (l.fov_deg <= 0 || l.fov_deg >= 180)
+        throw Error(d.loc, fmt::format("projection light: fov {} is not in (0, 180)", l.fov_deg));
     } else if (type == "goniometric") {
       emission({"I"});
       if (const Param* p = ps.find({"filename", "mapname"}, {ParamType::String}))

@@ -171,8 +171,8 @@ struct Instance {
   FileLoc loc;
 };
 
-/// A light description. `type` is the pbrt-v4 light type: point, spot, goniometric, distant,
-/// infinite, diffuse (area lights, attached to shapes through Shape::area_light).
+/// A light description. `type` is the pbrt-v4 light type: point, spot, goniometric, projection,
+/// distant, infinite, diffuse (area lights, attached to shapes through Shape::area_light).
 struct Light {
   std::string type;
   std::string type_as_written;
@@ -184,7 +184,8 @@ struct Light {
   std::optional<double> power;  ///< pbrt-v4 `power` (W), if given
   Vec3 from{0, 0, 0}, to{0, 0, 1};
   double cone_angle_deg = 30, cone_delta_deg = 5;
-  std::string filename;      ///< infinite: environment map; goniometric: its image (resolved)
+  double fov_deg = 90;  ///< projection: field of view of the shorter image axis
+  std::string filename;  ///< infinite: environment map; goniometric, projection: image (resolved)
   std::vector<Vec3> portal;  ///< infinite: 4 points of a portal quad, or empty
   bool two_sided = false;
   int shape_count = 0;  ///< area lights: shapes that emit with it
