@@ -9,6 +9,7 @@
 
 #include "lensim/render/accel.h"
 #include "lensim/render/lights.h"
+#include "lensim/render/materials.h"
 #include "lensim/render/renderer.h"
 #include "lensim/render/sampling.h"
 #include "lensim/render/textures.h"
@@ -631,4 +632,26 @@ Shape "sphere" "float radius" 0.01
   std::printf("projection: left %.4f (expect %.4f), right %.4f\n", y_left, 1 / r2, y_right);
   EXPECT_NEAR(y_left, 1 / r2, 0.03 / r2);  // spectral noise of 64 wavelength sets
   EXPECT_EQ(y_right, 0);
+}
+
+TEST(Materials, RegularizeRoughensSpecularLobes) {
+  lensim::scene::Scene s = lensim::testutil::buildText(R"(
+Integrator "path" "bool regularize" true
+WorldBegin
+Material "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"
+Shape "sphere"
+Material "dielectric" "float roughness" 0.5
+Shape "sphere"
+)");
+  EXPECT_TRUE(s.integrator.regularize);
+  lensim::render::Textures tex(s);
+  lensim::render::Materials mats(s, tex);
+  auto lambda = lensim::render::SampledWavelengths::sampleUniform(0.5);
+  const lensim::render::TextureEvalContext ctx{};
+  using lensim::render::BxDFFlags;
+  const int smooth = s.shapes[0].material, rough = s.shapes[1].material;
+  EXPECT_TRUE(any(mats.bxdf(smooth, ctx, lambda, false)->flags(), BxDFFlags::Specular));
+  EXPECT_TRUE(any(mats.bxdf(smooth, ctx, lambda, true)->flags(), BxDFFlags::Glossy));
+  // Already rough (alpha = sqrt(0.5) > 0.3): unchanged.
+  EXPECT_TRUE(any(mats.bxdf(rough, ctx, lambda, true)->flags(), BxDFFlags::Glossy));
 }

@@ -1,6 +1,6 @@
-// Lights with pbrt-v4's semantics: point, spot, goniometric, projection, distant, diffuse area lights on any
-// shape (one-sided unless "twosided"), uniform infinite lights and image infinite lights
-// (environment maps: equal-area octahedral for square images as pbrt-v4 writes them, else
+// Lights with pbrt-v4's semantics: point, spot, goniometric, projection, distant, diffuse area
+// lights on any shape (one-sided unless "twosided"), uniform infinite lights and image infinite
+// lights (environment maps: equal-area octahedral for square images as pbrt-v4 writes them, else
 // latitude-longitude as pbrt-v2's "mapname"), importance sampled by luminance. Emission spectra are
 // normalised to unit luminance except RGB (whose illuminant already has Y = 1), then multiplied by
 // "scale", and "power" (or illuminance for distant lights) rescales them as pbrt-v4 does.

@@ -97,6 +97,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   sc.materials = &materials;
   sc.lights = &lights;
   sc.max_depth = scene.integrator.max_depth;
+  sc.regularize = scene.integrator.regularize;
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
 
   if (scene.film.white_balance_k != 0)
