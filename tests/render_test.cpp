@@ -8,6 +8,7 @@
 #include <string>
 
 #include "lensim/render/accel.h"
+#include "lensim/render/film.h"
 #include "lensim/render/lights.h"
 #include "lensim/render/materials.h"
 #include "lensim/render/renderer.h"
@@ -654,4 +655,41 @@ Shape "sphere"
   EXPECT_TRUE(any(mats.bxdf(smooth, ctx, lambda, true)->flags(), BxDFFlags::Glossy));
   // Already rough (alpha = sqrt(0.5) > 0.3): unchanged.
   EXPECT_TRUE(any(mats.bxdf(rough, ctx, lambda, true)->flags(), BxDFFlags::Glossy));
+}
+
+TEST(Film, WhiteBalanceNeutralisesItsIlluminant) {
+  // A white plane under a 3000 K blackbody: without white balance it is orange; with
+  // "whitebalance" 3000 it is neutral (lensim's white for a temperature is the CIE daylight
+  // locus from 4000 K, where pbrt-v4 uses its D illuminant, and the blackbody below, where the
+  // locus is not defined).
+  auto render = [&](const std::string& film_extra) {
+    const std::string text = R"(
+LookAt 0 0.5 0  0 0 0  0 0 1
+Camera "orthographic" "float screenwindow" [-0.01 0.01 -0.01 0.01]
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "w.exr" )" +
+                             film_extra + R"(
+Sampler "independent" "integer pixelsamples" 64
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+LightSource "distant" "blackbody L" 3000 "point3 from" [0 1 0] "point3 to" [0 0 0]
+Material "diffuse" "rgb reflectance" [1 1 1]
+Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2 0 2 3]
+)";
+    const Image im = renderText(text).image;
+    lensim::Vec3 m{0, 0, 0};
+    for (int c = 0; c < 3; ++c)
+      (c == 0 ? m.x : c == 1 ? m.y : m.z) = regionStats(im, c, 0, 4, 0, 4).mean;
+    return m;
+  };
+  const lensim::Vec3 raw = render(""), balanced = render("\"float whitebalance\" 3000");
+  std::printf("white balance: raw %.3f %.3f %.3f, balanced %.3f %.3f %.3f\n", raw.x, raw.y, raw.z,
+              balanced.x, balanced.y, balanced.z);
+  EXPECT_GT(raw.x / raw.z, 1.2);
+  // 64 wavelength sets per pixel: ~1% spectral noise.
+  EXPECT_NEAR(balanced.x / balanced.y, 1.0, 0.03);
+  EXPECT_NEAR(balanced.z / balanced.y, 1.0, 0.03);
+  // D65 balance leaves the image as it is.
+  const lensim::Vec2 d65 = lensim::render::daylightChromaticity(6504);
+  EXPECT_NEAR(d65.x, 0.3127, 5e-4);
+  EXPECT_NEAR(d65.y, 0.3291, 5e-4);
 }

@@ -100,9 +100,6 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   sc.regularize = scene.integrator.regularize;
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
 
-  if (scene.film.white_balance_k != 0)
-    logWarning(fmt::format("{}: film \"whitebalance\" {} K is not applied", scene.film.loc.str(),
-                           scene.film.white_balance_k));
   if (scene.film.sensor != "cie1931")
     logWarning(
         fmt::format("{}: film \"sensor\" \"{}\" is not simulated; the film records CIE "
