@@ -226,7 +226,7 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
           for (int c = 0; c < 3; ++c) idx[3 * f + c] = unsigned(r.indices[3 * f + c]);
         }
       }
-      if (s.object < 0) {
+      if (s.object < 0 && s.area_light >= 0) {  // kept only for emitters (light sampling)
         WorldMesh wm;
         wm.vertices_per_face = r.vertices_per_face;
         wm.p = r.p;

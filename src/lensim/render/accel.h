@@ -32,7 +32,7 @@ struct SurfaceHit {
   int instance = -1;  ///< index into Scene::instances, or -1 for world shapes
 };
 
-/// A world-space mesh of a shape outside object definitions, for area light sampling.
+/// A world-space mesh of an emissive shape outside object definitions, for light sampling.
 struct WorldMesh {
   int vertices_per_face = 3;
   std::vector<Vec3> p;
@@ -55,7 +55,7 @@ class Accel {
   bool occluded(const Ray& ray) const;
   /// World bounds of all geometry (empty for an empty scene).
   Bounds3 bounds() const { return bounds_; }
-  /// The world-space mesh of a world (non-instanced) mesh shape; nullptr for others.
+  /// The world-space mesh of a world (non-instanced) emissive mesh shape; nullptr for others.
   const WorldMesh* worldMesh(int shape) const;
 
   struct Impl;
