@@ -693,3 +693,50 @@ Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indice
   EXPECT_NEAR(d65.x, 0.3127, 5e-4);
   EXPECT_NEAR(d65.y, 0.3291, 5e-4);
 }
+
+TEST(LightUnits, ImageAreaLightEmitsItsTexels) {
+  // A one-sided 1x1 quad light facing down at height 1 over a diffuse plane. With a uniform white
+  // image it equals "rgb L" [1 1 1]; with the image's right half black it equals a quad of the
+  // left half alone (u runs along +x, the image's left column is u < 0.5).
+  lensim::testutil::TempDir dir("lensim-imagelight");
+  auto image = [&](const std::string& name, float right) {
+    lensim::io::Image im(2, 1, {"R", "G", "B"});
+    for (int c = 0; c < 3; ++c) im.at(0, 0, c) = 1, im.at(1, 0, c) = right;
+    lensim::io::writeImage(dir.file(name), im);
+    return dir.file(name);
+  };
+  auto lum = [&](const std::string& light, const std::string& quad) {
+    const std::string text = R"(
+LookAt 0 0.5 0  0 0 0  0 0 1
+Camera "orthographic" "float screenwindow" [-0.01 0.01 -0.01 0.01]
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "l.exr"
+Sampler "independent" "integer pixelsamples" 256
+PixelFilter "box"
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+AttributeBegin
+  AreaLightSource "diffuse" )" +
+                             light + R"(
+  Shape "bilinearmesh" "point3 P" [)" +
+                             quad + R"(]
+AttributeEnd
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2 0 2 3]
+)";
+    const Image im = renderText(text).image;
+    return regionStats(im, 1, 0, 4, 0, 4);
+  };
+  const std::string full = "-0.5 1 -0.5  0.5 1 -0.5  -0.5 1 0.5  0.5 1 0.5";
+  const std::string left = "-0.5 1 -0.5  0 1 -0.5  -0.5 1 0.5  0 1 0.5";
+  const RegionStats a = lum("\"rgb L\" [1 1 1]", full);
+  const RegionStats b = lum("\"string filename\" \"" + image("white.exr", 1) + "\"", full);
+  const RegionStats c = lum("\"rgb L\" [1 1 1]", left);
+  const RegionStats d = lum("\"string filename\" \"" + image("half.exr", 0) + "\"", full);
+  std::printf(
+      "image area light: L %.4f +- %.4f, white image %.4f +- %.4f; half quad %.4f +- "
+      "%.4f, half image %.4f +- %.4f\n",
+      a.mean, a.sem, b.mean, b.sem, c.mean, c.sem, d.mean, d.sem);
+  EXPECT_NEAR(a.mean, b.mean, 5 * std::hypot(a.sem, b.sem) + 0.005 * a.mean);
+  EXPECT_NEAR(c.mean, d.mean, 5 * std::hypot(c.sem, d.sem) + 0.005 * c.mean);
+  EXPECT_GT(c.mean, 0.3 * a.mean);
+}

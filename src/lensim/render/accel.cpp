@@ -231,6 +231,7 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
         wm.vertices_per_face = r.vertices_per_face;
         wm.p = r.p;
         wm.n = r.n;
+        wm.uv = r.uv;
         wm.flip = r.flip;
         wm.indices = r.indices;
         m.shape_world_mesh[static_cast<size_t>(r.shape)] = static_cast<int>(m.world_meshes.size());

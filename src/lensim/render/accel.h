@@ -36,7 +36,8 @@ struct SurfaceHit {
 struct WorldMesh {
   int vertices_per_face = 3;
   std::vector<Vec3> p;
-  std::vector<Vec3> n;  ///< per-vertex shading normals, or empty
+  std::vector<Vec3> n;   ///< per-vertex shading normals, or empty
+  std::vector<Vec2> uv;  ///< per-vertex (u, v), or empty
   std::vector<int> indices;
   bool flip = false;  ///< the shape's ReverseOrientation xor handedness swap
 };

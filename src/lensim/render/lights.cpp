@@ -425,23 +425,66 @@ class ImageInfiniteLight final : public Light {
 
 // ---- area lights ---------------------------------------------------------------------------
 
+/// The image of an image area light ("filename"): RGB texels, looked up at the surface's (u, v)
+/// with v flipped (row 0 is the top, as pbrt-v4 does), nearest texel, repeat wrap.
+struct EmissionImage {
+  int w = 0, h = 0;
+  std::vector<Vec3> rgb;
+  double mean_luminance = 0;
+
+  explicit EmissionImage(const std::string& path) {
+    io::Image im = io::readImage(path);
+    w = im.width;
+    h = im.height;
+    const int nc = im.channelCount();
+    auto ch = [&](const char* n, int f) {
+      auto c = im.channelIndex(n);
+      return c ? *c : std::min(f, nc - 1);
+    };
+    const int cr = ch("R", 0), cg = ch("G", 1), cb = ch("B", 2);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const Vec3 c{std::max(0.0f, im.at(x, y, cr)), std::max(0.0f, im.at(x, y, cg)),
+                     std::max(0.0f, im.at(x, y, cb))};
+        rgb.push_back(c);
+        mean_luminance += RGBColorSpace::sRGB().toXyz(c).y / (double(w) * h);
+      }
+  }
+  SampledSpectrum lookup(Vec2 uv, const SampledWavelengths& lambda) const {
+    int x = int(std::floor(uv.x * w)), y = int(std::floor((1 - uv.y) * h));
+    x = ((x % w) + w) % w;
+    y = ((y % h) + h) % h;
+    const Vec3 c = rgb[size_t(y) * size_t(w) + size_t(x)];
+    const double m = std::max({c.x, c.y, c.z});
+    if (m <= 0) return {};
+    const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(c / (2 * m));
+    SampledSpectrum s;
+    for (int i = 0; i < kSpectrumSamples; ++i) s[i] = 2 * m * poly.eval(lambda.lambda(i));
+    return s * RGBColorSpace::sRGB().illuminant()->sample(lambda);
+  }
+};
+
 class AreaLightBase : public Light {
  public:
   AreaLightBase(SpectrumPtr L, double scale, bool two_sided)
       : L_(std::move(L)), scale_(scale), two_sided_(two_sided) {}
+  void setImage(std::shared_ptr<const EmissionImage> image) { image_ = std::move(image); }
   SampledSpectrum L(const SurfaceHit& hit, const Vec3& w,
                     const SampledWavelengths& lambda) const override {
     if (!two_sided_ && dot(hit.ng, w) < 0) return {};
+    if (image_) return image_->lookup(hit.uv, lambda) * scale_;
     return L_->sample(lambda) * scale_;
   }
   double power() const override {
-    return scale_ * luminanceOf(*L_) * area() * M_PI * (two_sided_ ? 2 : 1);
+    const double lum = image_ ? image_->mean_luminance : luminanceOf(*L_);
+    return scale_ * lum * area() * M_PI * (two_sided_ ? 2 : 1);
   }
   virtual double area() const = 0;
 
  protected:
-  /// Converts an area sample (point pl, normal nl, area pdf) into a solid-angle sample at p.
-  std::optional<LightLiSample> finish(const Vec3& p, const Vec3& pl, const Vec3& nl,
+  /// Converts an area sample (point pl, normal nl, surface (u, v), area pdf) into a solid-angle
+  /// sample at p.
+  std::optional<LightLiSample> finish(const Vec3& p, const Vec3& pl, const Vec3& nl, Vec2 uv,
                                       double pdf_area, const SampledWavelengths& lambda) const {
     const Vec3 d = pl - p;
     const double r2 = dot(d, d);
@@ -453,6 +496,7 @@ class AreaLightBase : public Light {
     s.pdf = pdf_area * r2 / cos_l;
     SurfaceHit h;
     h.ng = nl;
+    h.uv = uv;
     s.L = L(h, -s.wi, lambda);
     if (s.L.isBlack()) return std::nullopt;
     s.p_light = pl;
@@ -467,14 +511,18 @@ class AreaLightBase : public Light {
   SpectrumPtr L_;
   double scale_;
   bool two_sided_;
+  std::shared_ptr<const EmissionImage> image_;
 };
 
 /// A planar face: one triangle, or a bilinear patch as two triangles, sampled uniformly by area.
 class FaceLight final : public AreaLightBase {
  public:
-  FaceLight(std::vector<std::array<Vec3, 3>> tris, Vec3 n, SpectrumPtr L, double scale,
-            bool two_sided)
-      : AreaLightBase(std::move(L), scale, two_sided), tris_(std::move(tris)), n_(n) {
+  FaceLight(std::vector<std::array<Vec3, 3>> tris, std::vector<std::array<Vec2, 3>> uvs, Vec3 n,
+            SpectrumPtr L, double scale, bool two_sided)
+      : AreaLightBase(std::move(L), scale, two_sided),
+        tris_(std::move(tris)),
+        uvs_(std::move(uvs)),
+        n_(n) {
     for (const auto& t : tris_) {
       const Vec3 c = cross(t[1] - t[0], t[2] - t[0]);
       area_ += 0.5 * length(c);
@@ -498,7 +546,9 @@ class FaceLight final : public AreaLightBase {
     const double su = std::sqrt(u.x);
     const double b0 = 1 - su, b1 = u.y * su;
     const Vec3 pl = t[0] * b0 + t[1] * b1 + t[2] * (1 - b0 - b1);
-    return finish(p, pl, normals_[k], 1 / area_, lambda);
+    const auto& tuv = uvs_[k];
+    const Vec2 uv = tuv[0] * b0 + tuv[1] * b1 + tuv[2] * (1 - b0 - b1);
+    return finish(p, pl, normals_[k], uv, 1 / area_, lambda);
   }
   double pdfLi(const Vec3& p, const Vec3& wi, const SurfaceHit* hit) const override {
     return hit ? solidAnglePdf(p, wi, *hit) : 0;
@@ -506,6 +556,7 @@ class FaceLight final : public AreaLightBase {
 
  private:
   std::vector<std::array<Vec3, 3>> tris_;
+  std::vector<std::array<Vec2, 3>> uvs_;  ///< per triangle: the surface (u, v) of its vertices
   std::vector<double> cum_;
   std::vector<Vec3> normals_;  ///< per triangle, on the side of n_
   Vec3 n_;
@@ -551,6 +602,7 @@ class QuadricLight final : public AreaLightBase {
         SurfaceHit h;
         h.ng = normalize(pl - center_);
         if (shape_->flipNormals()) h.ng = -h.ng;
+        if (image_) h.uv = quadricGeometry(*shape_, inverse(shape_->transform).applyPoint(pl)).uv;
         s.L = L(h, -wi, lambda);
         if (s.L.isBlack()) return std::nullopt;
         s.p_light = pl;
@@ -562,7 +614,7 @@ class QuadricLight final : public AreaLightBase {
     const Vec3 pl = shape_->transform.applyPoint(g->p);
     Vec3 nl = normalize(shape_->transform.applyNormal(g->n));
     if (shape_->flipNormals()) nl = -nl;
-    return finish(p, pl, nl, 1 / area_, lambda);
+    return finish(p, pl, nl, g->uv, 1 / area_, lambda);
   }
   double pdfLi(const Vec3& p, const Vec3& wi, const SurfaceHit* hit) const override {
     if (full_sphere_) {
@@ -655,7 +707,17 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
     const bool rgb = l.emission.kind == scene::SpectrumValue::Kind::Rgb;
     SpectrumPtr spec =
         textures.constant(l.emission, rgb ? SpectrumType::Illuminant : SpectrumType::Unbounded);
-    const double base_scale = l.scale * photometricNorm(l.emission, *spec);
+    std::shared_ptr<const EmissionImage> image;
+    if (!l.filename.empty()) {
+      try {
+        image = std::make_shared<EmissionImage>(l.filename);
+      } catch (const Error& e) {
+        throw Error(l.loc, e.what());
+      }
+    }
+    // pbrt-v4: an image light's texels are RGB illuminants (D65 of unit luminance for white).
+    const double base_scale = l.scale * (image ? 1.0 : photometricNorm(l.emission, *spec));
+    const double k_e = image ? image->mean_luminance : 1.0;
     const double sides = l.two_sided ? 2 : 1;
     shape_first_light_[si] = static_cast<int>(lights_.size());
     if (const WorldMesh* m = accel.worldMesh(static_cast<int>(si))) {
@@ -675,31 +737,47 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
           }
           return n;
         };
-        auto add = [&](std::vector<std::array<Vec3, 3>> tris, Vec3 n) {
+        std::vector<Vec2> quv(fv);
+        for (size_t k = 0; k < fv; ++k)
+          quv[k] = m->uv.empty()
+                       ? (fv == 3 ? std::array<Vec2, 3>{Vec2{0, 0}, Vec2{1, 0}, Vec2{1, 1}}[k]
+                                  : std::array<Vec2, 4>{Vec2{0, 0}, Vec2{1, 0}, Vec2{0, 1},
+                                                        Vec2{1, 1}}[k])
+                       : m->uv[size_t(m->indices[f * fv + k])];
+        auto add = [&](std::vector<std::array<Vec3, 3>> tris, std::vector<std::array<Vec2, 3>> uvs,
+                       Vec3 n) {
           double area = 0;
           for (const auto& t : tris) area += 0.5 * length(cross(t[1] - t[0], t[2] - t[0]));
           double scale = base_scale;
-          if (l.power && *l.power > 0 && area > 0) scale *= *l.power / (sides * area * M_PI);
-          lights_.push_back(
-              std::make_unique<FaceLight>(std::move(tris), n, spec, scale, l.two_sided));
+          if (l.power && *l.power > 0 && area > 0 && k_e > 0)
+            scale *= *l.power / (k_e * sides * area * M_PI);
+          auto light = std::make_unique<FaceLight>(std::move(tris), std::move(uvs), n, spec, scale,
+                                                   l.two_sided);
+          light->setImage(image);
+          lights_.push_back(std::move(light));
         };
         if (fv == 3) {
-          add({{q[0], q[1], q[2]}}, normal(q[0], q[1], q[2], {0, 1, 2}));
+          add({{q[0], q[1], q[2]}}, {{quv[0], quv[1], quv[2]}},
+              normal(q[0], q[1], q[2], {0, 1, 2}));
         } else {
           // A bilinear patch p00 p10 p01 p11 as the two triangles Embree intersects (split along
           // p10-p01), oriented by the patch normal cross(dp/du, dp/dv).
           Vec3 n = cross(q[1] - q[0], q[2] - q[0]);
           n = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
           if (m->flip) n = -n;
-          add({{q[0], q[1], q[2]}, {q[3], q[2], q[1]}}, n);
+          add({{q[0], q[1], q[2]}, {q[3], q[2], q[1]}},
+              {{quv[0], quv[1], quv[2]}, {quv[3], quv[2], quv[1]}}, n);
         }
       }
     } else if (s.type != scene::ShapeType::TriangleMesh &&
                s.type != scene::ShapeType::BilinearMesh) {
       const double area = quadricArea(s) * std::pow(uniformScale(s.transform), 2);
       double scale = base_scale;
-      if (l.power && *l.power > 0 && area > 0) scale *= *l.power / (sides * area * M_PI);
-      lights_.push_back(std::make_unique<QuadricLight>(s, spec, scale, l.two_sided));
+      if (l.power && *l.power > 0 && area > 0 && k_e > 0)
+        scale *= *l.power / (k_e * sides * area * M_PI);
+      auto light = std::make_unique<QuadricLight>(s, spec, scale, l.two_sided);
+      light->setImage(image);
+      lights_.push_back(std::move(light));
     }
   }
   // Light choice as pbrt-v4's BVH light sampler splits it: each light without a position

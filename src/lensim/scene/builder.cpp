@@ -1278,7 +1278,6 @@ class Builder {
       ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
       if (const Param* fn = ps.find({"filename"}, {ParamType::String})) {
         l.filename = resolve(fn->strings[0], fn->loc, "image file");
-        warnOnce("arealight image", fn->loc, "image area lights are not rendered; L is used");
       }
     }
     finish(ps);

@@ -184,8 +184,8 @@ struct Light {
   std::optional<double> power;  ///< pbrt-v4 `power` (W), if given
   Vec3 from{0, 0, 0}, to{0, 0, 1};
   double cone_angle_deg = 30, cone_delta_deg = 5;
-  double fov_deg = 90;  ///< projection: field of view of the shorter image axis
-  std::string filename;  ///< infinite: environment map; goniometric, projection: image (resolved)
+  double fov_deg = 90;       ///< projection: field of view of the shorter image axis
+  std::string filename;      ///< infinite: environment map; goniometric, projection, diffuse: image
   std::vector<Vec3> portal;  ///< infinite: 4 points of a portal quad, or empty
   bool two_sided = false;
   int shape_count = 0;  ///< area lights: shapes that emit with it
