@@ -112,3 +112,25 @@ TEST(CameraFactory, RejectsImpossibleSettingsWithTheirLocation) {
     EXPECT_NE(std::string(e.what()).find("fov"), std::string::npos);
   }
 }
+
+TEST(SphericalCamera, EqualAreaMappingCoversEveryDirectionUniformly) {
+  lensim::scene::Scene s;
+  auto cam = cameraOf(R"(Camera "spherical"
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32)",
+                      &s);
+  // Equal raster areas are equal solid angles: the mean of unweighted directions is 0 and the
+  // mean of y^2 is 1/3 (uniform on the sphere).
+  Vec3 sum{0, 0, 0};
+  double yy = 0;
+  int n = 0;
+  for (int y = 0; y < 256; ++y)
+    for (int x = 0; x < 256; ++x) {
+      const auto r = cam->generateRay({Vec2{(x + 0.5) / 8, (y + 0.5) / 8}});
+      sum += r->direction;
+      yy += r->direction.y * r->direction.y;
+      ++n;
+    }
+  EXPECT_NEAR(length(sum) / n, 0, 1e-3);
+  EXPECT_NEAR(yy / n, 1.0 / 3, 2e-3);
+  EXPECT_NE(cam->describe().find("equal-area"), std::string::npos);
+}

@@ -8,7 +8,9 @@
 #include <string>
 
 #include "lensim/render/accel.h"
+#include "lensim/render/film.h"
 #include "lensim/render/lights.h"
+#include "lensim/render/materials.h"
 #include "lensim/render/renderer.h"
 #include "lensim/render/sampling.h"
 #include "lensim/render/textures.h"
@@ -535,4 +537,206 @@ Material "diffuse" "texture reflectance" "dm")");
   // The central 12x12 pixels see normals within ~40 degrees of dir: |cos| > 0.75.
   EXPECT_GT(f.centre[1].mean, 0.6);
   EXPECT_LT(f.centre[1].mean, 0.8 + 5 * f.centre[1].sem);
+}
+
+TEST(LightUnits, GoniometricLightScalesByItsImage) {
+  // A latitude-longitude image (8x4): rows near the light's +y pole 2, rows near -y 0.5. The
+  // plane below the light is seen along -y: it gets I x 0.5. Without an image it is a point
+  // light; with "power" P the intensity is P / (4 pi x the image's mean over the sphere).
+  lensim::testutil::TempDir dir("lensim-gonio");
+  lensim::io::Image im(8, 4, {"R", "G", "B"});
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 8; ++x)
+      for (int c = 0; c < 3; ++c) im.at(x, y, c) = y < 2 ? 2.0f : 0.5f;
+  const std::string file = dir.file("gonio.exr");
+  lensim::io::writeImage(file, im);
+  const double a_pi = 0.5 / M_PI;
+  const double plain = planeLuminance(
+      R"(AttributeBegin
+  Translate 0 1 0
+  LightSource "goniometric" "rgb I" [2 2 2]
+AttributeEnd)");
+  EXPECT_NEAR(plain, a_pi * 2, 0.01 * a_pi * 2);
+  const double imaged = planeLuminance(R"(AttributeBegin
+  Translate 0 1 0
+  LightSource "goniometric" "rgb I" [2 2 2] "string filename" ")" +
+                                       file + R"("
+AttributeEnd)");
+  EXPECT_NEAR(imaged, a_pi * 2 * 0.5, 0.01 * a_pi);
+  // The image's mean over the sphere is 1.25 (half the solid angle each).
+  const double powered = planeLuminance(R"(AttributeBegin
+  Translate 0 1 0
+  LightSource "goniometric" "rgb I" [1 1 1] "float power" 50 "string filename" ")" +
+                                        file + R"("
+AttributeEnd)");
+  EXPECT_NEAR(powered, a_pi * 50 / (4 * M_PI * 1.25) * 0.5, 0.01 * a_pi);
+  std::printf("goniometric: plain %.4f imaged %.4f powered %.4f\n", plain, imaged, powered);
+}
+
+TEST(NamedSpectra, UntabulatedPbrtNamesStillRender) {
+  // BK7 from Schott's Sellmeier formula: n_d = 1.5168 at 587.56 nm, n_F = 1.5224 at 486.13 nm.
+  auto bk7 = lensim::render::makeSpectrum(lensim::scene::SpectrumValue::named("glass-BK7"),
+                                          lensim::render::SpectrumType::Unbounded);
+  EXPECT_NEAR(bk7->eval(587.56), 1.5168, 1e-4);
+  EXPECT_NEAR(bk7->eval(486.13), 1.5224, 1e-4);
+  // A dispersive glass sphere is still lossless in the furnace (only the hero wavelength
+  // survives refraction, so it is noisier).
+  Furnace f = furnace(R"(Material "dielectric" "spectrum eta" "glass-BK7")", 64);
+  for (int c = 0; c < 3; ++c) {
+    std::printf("BK7 sphere channel %d: %.4f +- %.4f\n", c, f.centre[c].mean, f.centre[c].sem);
+    EXPECT_NEAR(f.centre[c].mean, 1.0, 5 * f.centre[c].sem + 0.01);
+  }
+}
+
+TEST(LightUnits, ProjectionLightProjectsItsImage) {
+  // A 2x1 image (left white, right black) projected straight down from (0, 1, 0) with a 90
+  // degree field of view: the light's +x is the world's +x, so the floor at x < 0 is lit with
+  // intensity 1 (RGB white is unit-luminance D65), the floor at x > 0 is dark, and points
+  // outside the frustum get nothing.
+  lensim::testutil::TempDir dir("lensim-projection");
+  lensim::io::Image im(2, 1, {"R", "G", "B"});
+  for (int c = 0; c < 3; ++c) im.at(0, 0, c) = 1;
+  const std::string file = dir.file("proj.exr");
+  lensim::io::writeImage(file, im);
+  const std::string text = R"(
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "x.exr"
+WorldBegin
+AttributeBegin
+  Translate 0 1 0
+  Rotate 90 1 0 0
+  LightSource "projection" "float fov" 90 "string filename" ")" +
+                           file + R"("
+AttributeEnd
+Shape "sphere" "float radius" 0.01
+)";
+  lensim::scene::Scene s = lensim::testutil::buildText(text);
+  ASSERT_EQ(lensim::testutil::errorsOf(s), "");
+  lensim::render::Accel accel(s);
+  lensim::render::Textures tex(s);
+  lensim::render::LightSet lights(s, accel, tex);
+  ASSERT_EQ(lights.size(), 1u);
+  const auto& light = lights.light(0);
+  double y_left = 0, y_right = 0;
+  int left_hits = 0;
+  for (int i = 0; i < 64; ++i) {
+    const auto lambda = lensim::render::SampledWavelengths::sampleVisible((i + 0.5) / 64);
+    if (auto ls = light.sampleLi({-0.5, 0, 0.3}, {0.5, 0.5}, lambda)) {
+      y_left += lensim::render::sampledToXyz(ls->L, lambda).y / 64;
+      ++left_hits;
+    }
+    if (auto ls = light.sampleLi({0.5, 0, 0.3}, {0.5, 0.5}, lambda))
+      y_right += lensim::render::sampledToXyz(ls->L, lambda).y / 64;
+    EXPECT_FALSE(light.sampleLi({3, 0, 0}, {0.5, 0.5}, lambda).has_value());
+  }
+  EXPECT_EQ(left_hits, 64);
+  const double r2 = 0.25 + 1 + 0.09;
+  std::printf("projection: left %.4f (expect %.4f), right %.4f\n", y_left, 1 / r2, y_right);
+  EXPECT_NEAR(y_left, 1 / r2, 0.03 / r2);  // spectral noise of 64 wavelength sets
+  EXPECT_EQ(y_right, 0);
+}
+
+TEST(Materials, RegularizeRoughensSpecularLobes) {
+  lensim::scene::Scene s = lensim::testutil::buildText(R"(
+Integrator "path" "bool regularize" true
+WorldBegin
+Material "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"
+Shape "sphere"
+Material "dielectric" "float roughness" 0.5
+Shape "sphere"
+)");
+  EXPECT_TRUE(s.integrator.regularize);
+  lensim::render::Textures tex(s);
+  lensim::render::Materials mats(s, tex);
+  auto lambda = lensim::render::SampledWavelengths::sampleUniform(0.5);
+  const lensim::render::TextureEvalContext ctx{};
+  using lensim::render::BxDFFlags;
+  const int smooth = s.shapes[0].material, rough = s.shapes[1].material;
+  EXPECT_TRUE(any(mats.bxdf(smooth, ctx, lambda, false)->flags(), BxDFFlags::Specular));
+  EXPECT_TRUE(any(mats.bxdf(smooth, ctx, lambda, true)->flags(), BxDFFlags::Glossy));
+  // Already rough (alpha = sqrt(0.5) > 0.3): unchanged.
+  EXPECT_TRUE(any(mats.bxdf(rough, ctx, lambda, true)->flags(), BxDFFlags::Glossy));
+}
+
+TEST(Film, WhiteBalanceNeutralisesItsIlluminant) {
+  // A white plane under a 3000 K blackbody: without white balance it is orange; with
+  // "whitebalance" 3000 it is neutral (lensim's white for a temperature is the CIE daylight
+  // locus from 4000 K, where pbrt-v4 uses its D illuminant, and the blackbody below, where the
+  // locus is not defined).
+  auto render = [&](const std::string& film_extra) {
+    const std::string text = R"(
+LookAt 0 0.5 0  0 0 0  0 0 1
+Camera "orthographic" "float screenwindow" [-0.01 0.01 -0.01 0.01]
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "w.exr" )" +
+                             film_extra + R"(
+Sampler "independent" "integer pixelsamples" 64
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+LightSource "distant" "blackbody L" 3000 "point3 from" [0 1 0] "point3 to" [0 0 0]
+Material "diffuse" "rgb reflectance" [1 1 1]
+Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2 0 2 3]
+)";
+    const Image im = renderText(text).image;
+    lensim::Vec3 m{0, 0, 0};
+    for (int c = 0; c < 3; ++c)
+      (c == 0 ? m.x : c == 1 ? m.y : m.z) = regionStats(im, c, 0, 4, 0, 4).mean;
+    return m;
+  };
+  const lensim::Vec3 raw = render(""), balanced = render("\"float whitebalance\" 3000");
+  std::printf("white balance: raw %.3f %.3f %.3f, balanced %.3f %.3f %.3f\n", raw.x, raw.y, raw.z,
+              balanced.x, balanced.y, balanced.z);
+  EXPECT_GT(raw.x / raw.z, 1.2);
+  // 64 wavelength sets per pixel: ~1% spectral noise.
+  EXPECT_NEAR(balanced.x / balanced.y, 1.0, 0.03);
+  EXPECT_NEAR(balanced.z / balanced.y, 1.0, 0.03);
+  // D65 balance leaves the image as it is.
+  const lensim::Vec2 d65 = lensim::render::daylightChromaticity(6504);
+  EXPECT_NEAR(d65.x, 0.3127, 5e-4);
+  EXPECT_NEAR(d65.y, 0.3291, 5e-4);
+}
+
+TEST(LightUnits, ImageAreaLightEmitsItsTexels) {
+  // A one-sided 1x1 quad light facing down at height 1 over a diffuse plane. With a uniform white
+  // image it equals "rgb L" [1 1 1]; with the image's right half black it equals a quad of the
+  // left half alone (u runs along +x, the image's left column is u < 0.5).
+  lensim::testutil::TempDir dir("lensim-imagelight");
+  auto image = [&](const std::string& name, float right) {
+    lensim::io::Image im(2, 1, {"R", "G", "B"});
+    for (int c = 0; c < 3; ++c) im.at(0, 0, c) = 1, im.at(1, 0, c) = right;
+    lensim::io::writeImage(dir.file(name), im);
+    return dir.file(name);
+  };
+  auto lum = [&](const std::string& light, const std::string& quad) {
+    const std::string text = R"(
+LookAt 0 0.5 0  0 0 0  0 0 1
+Camera "orthographic" "float screenwindow" [-0.01 0.01 -0.01 0.01]
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "l.exr"
+Sampler "independent" "integer pixelsamples" 256
+PixelFilter "box"
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+AttributeBegin
+  AreaLightSource "diffuse" )" +
+                             light + R"(
+  Shape "bilinearmesh" "point3 P" [)" +
+                             quad + R"(]
+AttributeEnd
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2 0 2 3]
+)";
+    const Image im = renderText(text).image;
+    return regionStats(im, 1, 0, 4, 0, 4);
+  };
+  const std::string full = "-0.5 1 -0.5  0.5 1 -0.5  -0.5 1 0.5  0.5 1 0.5";
+  const std::string left = "-0.5 1 -0.5  0 1 -0.5  -0.5 1 0.5  0 1 0.5";
+  const RegionStats a = lum("\"rgb L\" [1 1 1]", full);
+  const RegionStats b = lum("\"string filename\" \"" + image("white.exr", 1) + "\"", full);
+  const RegionStats c = lum("\"rgb L\" [1 1 1]", left);
+  const RegionStats d = lum("\"string filename\" \"" + image("half.exr", 0) + "\"", full);
+  std::printf(
+      "image area light: L %.4f +- %.4f, white image %.4f +- %.4f; half quad %.4f +- "
+      "%.4f, half image %.4f +- %.4f\n",
+      a.mean, a.sem, b.mean, b.sem, c.mean, c.sem, d.mean, d.sem);
+  EXPECT_NEAR(a.mean, b.mean, 5 * std::hypot(a.sem, b.sem) + 0.005 * a.mean);
+  EXPECT_NEAR(c.mean, d.mean, 5 * std::hypot(c.sem, d.sem) + 0.005 * c.mean);
+  EXPECT_GT(c.mean, 0.3 * a.mean);
 }

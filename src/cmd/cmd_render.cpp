@@ -24,7 +24,9 @@ namespace {
 std::atomic<bool> g_interrupted{false};
 
 extern "C" void onSigint(int) {
+  // The first Ctrl-C asks the renderer to stop and write what it has; a second one kills.
   g_interrupted.store(true);
+  std::signal(SIGINT, SIG_DFL);
 }
 
 }  // namespace

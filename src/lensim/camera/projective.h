@@ -22,8 +22,8 @@ Vec2 rasterToScreen(const scene::Scene& scene, const std::array<double, 4>& wind
 std::unique_ptr<Camera> makePerspectiveCamera(const scene::Scene& scene);
 /// `orthographic`: the screen window in camera-space units, optional thin lens.
 std::unique_ptr<Camera> makeOrthographicCamera(const scene::Scene& scene);
-/// `spherical`: the whole sphere of directions, equirectangular (raster x: azimuth, raster y:
-/// polar angle from the camera's +y axis; see spherical.cpp).
+/// `spherical`: the whole sphere of directions, equal-area (pbrt-v4's default) or
+/// equirectangular (raster x: azimuth, raster y: polar angle from the camera's +y axis).
 std::unique_ptr<Camera> makeSphericalCamera(const scene::Scene& scene);
 
 }  // namespace lensim::camera

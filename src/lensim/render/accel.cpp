@@ -226,11 +226,12 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
           for (int c = 0; c < 3; ++c) idx[3 * f + c] = unsigned(r.indices[3 * f + c]);
         }
       }
-      if (s.object < 0) {
+      if (s.object < 0 && s.area_light >= 0) {  // kept only for emitters (light sampling)
         WorldMesh wm;
         wm.vertices_per_face = r.vertices_per_face;
         wm.p = r.p;
         wm.n = r.n;
+        wm.uv = r.uv;
         wm.flip = r.flip;
         wm.indices = r.indices;
         m.shape_world_mesh[static_cast<size_t>(r.shape)] = static_cast<int>(m.world_meshes.size());

@@ -32,11 +32,12 @@ struct SurfaceHit {
   int instance = -1;  ///< index into Scene::instances, or -1 for world shapes
 };
 
-/// A world-space mesh of a shape outside object definitions, for area light sampling.
+/// A world-space mesh of an emissive shape outside object definitions, for light sampling.
 struct WorldMesh {
   int vertices_per_face = 3;
   std::vector<Vec3> p;
-  std::vector<Vec3> n;  ///< per-vertex shading normals, or empty
+  std::vector<Vec3> n;   ///< per-vertex shading normals, or empty
+  std::vector<Vec2> uv;  ///< per-vertex (u, v), or empty
   std::vector<int> indices;
   bool flip = false;  ///< the shape's ReverseOrientation xor handedness swap
 };
@@ -55,7 +56,7 @@ class Accel {
   bool occluded(const Ray& ray) const;
   /// World bounds of all geometry (empty for an empty scene).
   Bounds3 bounds() const { return bounds_; }
-  /// The world-space mesh of a world (non-instanced) mesh shape; nullptr for others.
+  /// The world-space mesh of a world (non-instanced) emissive mesh shape; nullptr for others.
   const WorldMesh* worldMesh(int shape) const;
 
   struct Impl;

@@ -20,15 +20,72 @@ PixelBounds cropWindowBounds(int x_res, int y_res, const std::array<double, 4>& 
   return b;
 }
 
+Vec2 daylightChromaticity(double t) {
+  if (t < 4000) {
+    const Vec3 xyz = spectrumToXyz(BlackbodySpectrum(t));
+    const double sum = xyz.x + xyz.y + xyz.z;
+    return {xyz.x / sum, xyz.y / sum};
+  }
+  // CIE 15:2004, eq. 3.3-3.4 (daylight locus).
+  const double t2 = t * t, t3 = t2 * t;
+  const double x = t <= 7000 ? -4.6070e9 / t3 + 2.9678e6 / t2 + 0.09911e3 / t + 0.244063
+                             : -2.0064e9 / t3 + 1.9018e6 / t2 + 0.24748e3 / t + 0.237040;
+  return {x, -3.0 * x * x + 2.870 * x - 0.275};
+}
+
+namespace {
+
+using Mat3 = std::array<double, 9>;
+Mat3 mul(const Mat3& a, const Mat3& b) {
+  Mat3 r{};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) r[3 * i + j] += a[3 * i + k] * b[3 * k + j];
+  return r;
+}
+Vec3 mulVec(const Mat3& m, const Vec3& v) {
+  return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
+          m[6] * v.x + m[7] * v.y + m[8] * v.z};
+}
+Mat3 invert(const Mat3& m) {
+  const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
+                     m[2] * (m[3] * m[7] - m[4] * m[6]);
+  return {(m[4] * m[8] - m[5] * m[7]) / det, (m[2] * m[7] - m[1] * m[8]) / det,
+          (m[1] * m[5] - m[2] * m[4]) / det, (m[5] * m[6] - m[3] * m[8]) / det,
+          (m[0] * m[8] - m[2] * m[6]) / det, (m[2] * m[3] - m[0] * m[5]) / det,
+          (m[3] * m[7] - m[4] * m[6]) / det, (m[1] * m[6] - m[0] * m[7]) / det,
+          (m[0] * m[4] - m[1] * m[3]) / det};
+}
+
+/// Bradford von Kries adaptation from white xy `src` to white XYZ `dst` (Lam 1985; the matrix
+/// as published by Lindbloom).
+Mat3 bradford(Vec2 src, const Vec3& dst) {
+  const Mat3 mb{0.8951, 0.2664, -0.1614, -0.7502, 1.7135, 0.0367, 0.0389, -0.0685, 1.0296};
+  const Vec3 src_xyz{src.x / src.y, 1.0, (1 - src.x - src.y) / src.y};
+  const Vec3 ls = mulVec(mb, src_xyz), ld = mulVec(mb, dst / dst.y);
+  const Mat3 d{ld.x / ls.x, 0, 0, 0, ld.y / ls.y, 0, 0, 0, ld.z / ls.z};
+  return mul(invert(mb), mul(d, mb));
+}
+
+}  // namespace
+
 Film::Film(const scene::Scene& scene, PixelBounds bounds)
     : bounds_(bounds), pixels_(size_t(std::max(0LL, bounds.area()))) {
   const double exposure = scene.camera.shutter_close - scene.camera.shutter_open;
   imaging_ratio_ = (exposure > 0 ? exposure : 1) * scene.film.iso / 100 * scene.film.scale;
   max_component_ = scene.film.max_component_value;
+  if (scene.film.white_balance_k > 0) {
+    // pbrt-v4's cie1931 sensor with "whitebalance": adapt the scene white (daylight of that
+    // temperature) to the output colour space's white.
+    white_balance_ = true;
+    xyz_balance_ = bradford(daylightChromaticity(scene.film.white_balance_k),
+                            RGBColorSpace::sRGB().toXyz({1, 1, 1}));
+  }
 }
 
 Vec3 Film::toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const {
   Vec3 xyz = sampledToXyz(L, lambda) * imaging_ratio_;
+  if (white_balance_) xyz = mulVec(xyz_balance_, xyz);
   Vec3 rgb = RGBColorSpace::sRGB().toRgb(xyz);
   const double m = std::max({rgb.x, rgb.y, rgb.z});
   if (m > max_component_) rgb = rgb * (max_component_ / m);

@@ -25,13 +25,17 @@ struct PixelBounds {
   bool operator==(const PixelBounds&) const = default;
 };
 
+/// Chromaticity (x, y) of CIE daylight of correlated colour temperature T (the CIE daylight
+/// locus, 4000-25000 K); below 4000 K, of a blackbody at T.
+Vec2 daylightChromaticity(double temperature_k);
+
 /// The pixel bounds of a crop window (fractions of the full image, pbrt's rounding: ceil).
 PixelBounds cropWindowBounds(int x_res, int y_res, const std::array<double, 4>& crop);
 
 class Film {
  public:
   /// A film over `bounds` for the scene's film settings (exposure from the camera's shutter and
-  /// the film's ISO, pbrt-v3 "scale", maxcomponentvalue).
+  /// the film's ISO, pbrt-v3 "scale", maxcomponentvalue, whitebalance).
   Film(const scene::Scene& scene, PixelBounds bounds);
   const PixelBounds& bounds() const { return bounds_; }
   /// Adds radiance L (carried by `lambda`) to pixel (x, y) (full-image raster) with filter
@@ -51,6 +55,8 @@ class Film {
   PixelBounds bounds_;
   std::vector<Pixel> pixels_;
   double imaging_ratio_ = 1, max_component_ = 1e300;
+  bool white_balance_ = false;
+  std::array<double, 9> xyz_balance_{};  ///< von Kries (Bradford) adaptation, row-major
 };
 
 }  // namespace lensim::render

@@ -83,6 +83,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
   double prev_pdf = 0;  // BSDF pdf of the last sampled direction (solid angle)
   Vec3 prev_p;
   int depth = 0, interfaces = 0;
+  bool any_non_specular = false;
   Ray ray{o, d, INFINITY};
   for (;;) {
     auto hit = intersectScene(sc, ray, counts);
@@ -121,7 +122,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
       continue;
     }
     if (depth++ == sc.max_depth) break;
-    auto bxdf = sc.materials->bxdf(material, tctx, lambda);
+    auto bxdf = sc.materials->bxdf(material, tctx, lambda, sc.regularize && any_non_specular);
     Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
     const BSDF bsdf(ns, h.dpdu, bxdf);
     // Next-event estimation.
@@ -154,6 +155,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
     beta *= bs->f * (std::abs(dot(bs->wi, ns)) / bs->pdf);
     prev_pdf = bs->pdf_is_proportional ? bsdf.pdf(wo, bs->wi) : bs->pdf;
     specular_bounce = bs->isSpecular();
+    any_non_specular = any_non_specular || !specular_bounce;
     if (bs->isTransmission()) eta_scale *= bs->eta * bs->eta;
     prev_p = h.p;
     ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};

@@ -25,7 +25,9 @@ struct SceneContext {
   const Materials* materials = nullptr;
   const LightSet* lights = nullptr;
   int max_depth = 5;
-  bool has_alpha = false;  ///< some shape has an alpha texture
+  bool regularize = false;  ///< pbrt-v4's "regularize": roughen near-specular BSDFs after a
+                            ///< non-specular bounce
+  bool has_alpha = false;   ///< some shape has an alpha texture
 };
 
 /// Per-thread ray counts.

@@ -13,10 +13,12 @@
 #include <unordered_map>
 
 #include "lensim/io/image.h"
+#include "lensim/render/equal_area.h"
 #include "lensim/render/shapes.h"
 #include "lensim/render/textures.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
+#include "lensim/util/log.h"
 
 namespace lensim::render {
 
@@ -108,6 +110,164 @@ class SpotLight final : public Light {
   double scale_, cos_end_, cos_start_;
 };
 
+/// pbrt's goniometric light: a point light whose intensity is I times an image of directions
+/// (light space with y and z swapped, so the image's pole is the light's +y axis): square images
+/// use pbrt-v4's equal-area octahedral mapping, others pbrt-v2's latitude-longitude one.
+class GoniometricLight final : public Light {
+ public:
+  GoniometricLight(const scene::Light& desc, SpectrumPtr I, double scale)
+      : world_from_light_(desc.transform),
+        light_from_world_(inverse(desc.transform)),
+        p_(desc.transform.applyPoint({0, 0, 0})),
+        I_(std::move(I)),
+        scale_(scale) {
+    if (!desc.filename.empty()) {
+      io::Image im = io::readImage(desc.filename);
+      w_ = im.width;
+      h_ = im.height;
+      const int nc = im.channelCount();
+      for (int y = 0; y < h_; ++y)
+        for (int x = 0; x < w_; ++x) {
+          double v = 0;
+          for (int c = 0; c < std::min(nc, 3); ++c) v += im.at(x, y, c);
+          values_.push_back(std::max(0.0, v / std::min(nc, 3)));
+        }
+      // Mean intensity factor over the sphere (lat-long texels weighted by their solid angle).
+      double sum = 0, wsum = 0;
+      for (int y = 0; y < h_; ++y)
+        for (int x = 0; x < w_; ++x) {
+          const double wt = w_ == h_ ? 1 : std::sin(M_PI * (y + 0.5) / h_);
+          sum += wt * values_[size_t(y) * w_ + x];
+          wsum += wt;
+        }
+      mean_ = wsum > 0 ? sum / wsum : 0;
+    }
+  }
+  /// Mean of the image factor over all directions (1 without an image).
+  double meanFactor() const { return mean_; }
+  bool isDelta() const override { return true; }
+  std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
+                                        const SampledWavelengths& lambda) const override {
+    const Vec3 d = p_ - p;
+    const double r2 = dot(d, d);
+    if (r2 == 0) return std::nullopt;
+    LightLiSample s;
+    s.wi = d / std::sqrt(r2);
+    const double f = factor(-s.wi);
+    if (f <= 0) return std::nullopt;
+    s.L = I_->sample(lambda) * (scale_ * f / r2);
+    s.pdf = 1;
+    s.p_light = p_;
+    return s;
+  }
+  double power() const override { return 4 * M_PI * scale_ * luminanceOf(*I_) * mean_; }
+  /// The image factor for world direction w leaving the light.
+  double factor(const Vec3& w) const {
+    if (values_.empty()) return 1;
+    Vec3 wl = normalize(light_from_world_.applyVector(w));
+    std::swap(wl.y, wl.z);
+    Vec2 uv;
+    if (w_ == h_) {
+      uv = equalAreaSphereToSquare(wl);
+    } else {
+      double phi = std::atan2(wl.y, wl.x);
+      if (phi < 0) phi += 2 * M_PI;
+      uv = {phi / (2 * M_PI), std::acos(std::clamp(wl.z, -1.0, 1.0)) / M_PI};
+    }
+    const int x = std::clamp(int(uv.x * w_), 0, w_ - 1), y = std::clamp(int(uv.y * h_), 0, h_ - 1);
+    return values_[size_t(y) * w_ + x];
+  }
+
+ private:
+  Transform world_from_light_, light_from_world_;
+  Vec3 p_;
+  SpectrumPtr I_;
+  double scale_;
+  int w_ = 0, h_ = 0;
+  std::vector<double> values_;
+  double mean_ = 1;
+};
+
+/// pbrt-v4's projection light: a point light at the light-space origin projecting an image
+/// through a pinhole looking down +z. The shorter image axis spans `fov`; a direction's screen
+/// position (x/z, y/z) / tan(fov/2) is mapped to the image with the screen's (min x, min y) at
+/// (u, v) = (0, 0) and v indexing rows from the top, as pbrt-v4 looks the image up. The texel's
+/// RGB becomes an illuminant spectrum (RGB (1,1,1) is D65 of unit luminance) times "scale".
+class ProjectionLight final : public Light {
+ public:
+  ProjectionLight(const scene::Light& desc, double scale)
+      : light_from_world_(inverse(desc.transform)),
+        p_(desc.transform.applyPoint({0, 0, 0})),
+        scale_(scale),
+        tan_half_(std::tan(desc.fov_deg * M_PI / 360)) {
+    io::Image im = io::readImage(desc.filename);
+    w_ = im.width;
+    h_ = im.height;
+    const int nc = im.channelCount();
+    auto ch = [&](const char* n, int f) {
+      auto c = im.channelIndex(n);
+      return c ? *c : std::min(f, nc - 1);
+    };
+    const int cr = ch("R", 0), cg = ch("G", 1), cb = ch("B", 2);
+    double lum = 0;
+    for (int y = 0; y < h_; ++y)
+      for (int x = 0; x < w_; ++x) {
+        const Vec3 c{std::max(0.0f, im.at(x, y, cr)), std::max(0.0f, im.at(x, y, cg)),
+                     std::max(0.0f, im.at(x, y, cb))};
+        rgb_.push_back(c);
+        lum += RGBColorSpace::sRGB().toXyz(c).y;
+      }
+    mean_lum_ = lum / (double(w_) * h_);
+    const double aspect = double(w_) / h_;
+    if (aspect > 1)
+      bounds_ = {-aspect, aspect, -1, 1};
+    else
+      bounds_ = {-1, 1, -1 / aspect, 1 / aspect};
+  }
+  bool isDelta() const override { return true; }
+  std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
+                                        const SampledWavelengths& lambda) const override {
+    const Vec3 d = p_ - p;
+    const double r2 = dot(d, d);
+    if (r2 == 0) return std::nullopt;
+    LightLiSample s;
+    s.wi = d / std::sqrt(r2);
+    const Vec3 wl = light_from_world_.applyVector(-s.wi);
+    if (wl.z <= 0) return std::nullopt;
+    const double sx = wl.x / wl.z / tan_half_, sy = wl.y / wl.z / tan_half_;
+    if (sx < bounds_[0] || sx > bounds_[1] || sy < bounds_[2] || sy > bounds_[3])
+      return std::nullopt;
+    const double u = (sx - bounds_[0]) / (bounds_[1] - bounds_[0]);
+    const double v = (sy - bounds_[2]) / (bounds_[3] - bounds_[2]);
+    const int x = std::clamp(int(u * w_), 0, w_ - 1), y = std::clamp(int(v * h_), 0, h_ - 1);
+    const Vec3 c = rgb_[size_t(y) * w_ + x];
+    const double m = std::max({c.x, c.y, c.z});
+    if (m <= 0) return std::nullopt;
+    const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(c / (2 * m));
+    const SampledSpectrum illum = RGBColorSpace::sRGB().illuminant()->sample(lambda);
+    for (int i = 0; i < kSpectrumSamples; ++i) s.L[i] = 2 * m * poly.eval(lambda.lambda(i));
+    s.L *= illum * (scale_ / r2);
+    s.pdf = 1;
+    s.p_light = p_;
+    return s;
+  }
+  double power() const override {
+    // The projected image's mean luminance over the solid angle of the frustum (approximate).
+    const double area =
+        (bounds_[1] - bounds_[0]) * (bounds_[3] - bounds_[2]) * tan_half_ * tan_half_;
+    return scale_ * mean_lum_ * area;
+  }
+
+ private:
+  Transform light_from_world_;
+  Vec3 p_;
+  double scale_, tan_half_;
+  int w_ = 0, h_ = 0;
+  std::vector<Vec3> rgb_;
+  double mean_lum_ = 0;
+  std::array<double, 4> bounds_{};
+};
+
 class DistantLight final : public Light {
  public:
   DistantLight(Vec3 w, SpectrumPtr L, double scale, double scene_radius)
@@ -162,40 +322,6 @@ class UniformInfiniteLight final : public Light {
 };
 
 // ---- environment maps ----------------------------------------------------------------------
-
-Vec3 equalAreaSquareToSphere(Vec2 p) {
-  const double u = 2 * p.x - 1, v = 2 * p.y - 1;
-  const double up = std::abs(u), vp = std::abs(v);
-  const double signed_distance = 1 - (up + vp);
-  const double d = std::abs(signed_distance);
-  const double r = 1 - d;
-  const double phi = (r == 0 ? 1 : (vp - up) / r + 1) * M_PI / 4;
-  const double z = std::copysign(1 - r * r, signed_distance);
-  const double cos_phi = std::copysign(std::cos(phi), u);
-  const double sin_phi = std::copysign(std::sin(phi), v);
-  const double s = r * std::sqrt(std::max(0.0, 2 - r * r));
-  return {cos_phi * s, sin_phi * s, z};
-}
-
-Vec2 equalAreaSphereToSquare(const Vec3& d) {
-  const double x = std::abs(d.x), y = std::abs(d.y), z = std::abs(d.z);
-  const double r = std::sqrt(std::max(0.0, 1 - z));
-  const double a = std::max(x, y);
-  double b = std::min(x, y);
-  b = a == 0 ? 0 : b / a;
-  double phi = std::atan(b) * 2 / M_PI;
-  if (x < y) phi = 1 - phi;
-  double v = phi * r;
-  double u = r - v;
-  if (d.z < 0) {
-    std::swap(u, v);
-    u = 1 - u;
-    v = 1 - v;
-  }
-  u = std::copysign(u, d.x);
-  v = std::copysign(v, d.y);
-  return {(u + 1) / 2, (v + 1) / 2};
-}
 
 class ImageInfiniteLight final : public Light {
  public:
@@ -299,23 +425,66 @@ class ImageInfiniteLight final : public Light {
 
 // ---- area lights ---------------------------------------------------------------------------
 
+/// The image of an image area light ("filename"): RGB texels, looked up at the surface's (u, v)
+/// with v flipped (row 0 is the top, as pbrt-v4 does), nearest texel, repeat wrap.
+struct EmissionImage {
+  int w = 0, h = 0;
+  std::vector<Vec3> rgb;
+  double mean_luminance = 0;
+
+  explicit EmissionImage(const std::string& path) {
+    io::Image im = io::readImage(path);
+    w = im.width;
+    h = im.height;
+    const int nc = im.channelCount();
+    auto ch = [&](const char* n, int f) {
+      auto c = im.channelIndex(n);
+      return c ? *c : std::min(f, nc - 1);
+    };
+    const int cr = ch("R", 0), cg = ch("G", 1), cb = ch("B", 2);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const Vec3 c{std::max(0.0f, im.at(x, y, cr)), std::max(0.0f, im.at(x, y, cg)),
+                     std::max(0.0f, im.at(x, y, cb))};
+        rgb.push_back(c);
+        mean_luminance += RGBColorSpace::sRGB().toXyz(c).y / (double(w) * h);
+      }
+  }
+  SampledSpectrum lookup(Vec2 uv, const SampledWavelengths& lambda) const {
+    int x = int(std::floor(uv.x * w)), y = int(std::floor((1 - uv.y) * h));
+    x = ((x % w) + w) % w;
+    y = ((y % h) + h) % h;
+    const Vec3 c = rgb[size_t(y) * size_t(w) + size_t(x)];
+    const double m = std::max({c.x, c.y, c.z});
+    if (m <= 0) return {};
+    const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(c / (2 * m));
+    SampledSpectrum s;
+    for (int i = 0; i < kSpectrumSamples; ++i) s[i] = 2 * m * poly.eval(lambda.lambda(i));
+    return s * RGBColorSpace::sRGB().illuminant()->sample(lambda);
+  }
+};
+
 class AreaLightBase : public Light {
  public:
   AreaLightBase(SpectrumPtr L, double scale, bool two_sided)
       : L_(std::move(L)), scale_(scale), two_sided_(two_sided) {}
+  void setImage(std::shared_ptr<const EmissionImage> image) { image_ = std::move(image); }
   SampledSpectrum L(const SurfaceHit& hit, const Vec3& w,
                     const SampledWavelengths& lambda) const override {
     if (!two_sided_ && dot(hit.ng, w) < 0) return {};
+    if (image_) return image_->lookup(hit.uv, lambda) * scale_;
     return L_->sample(lambda) * scale_;
   }
   double power() const override {
-    return scale_ * luminanceOf(*L_) * area() * M_PI * (two_sided_ ? 2 : 1);
+    const double lum = image_ ? image_->mean_luminance : luminanceOf(*L_);
+    return scale_ * lum * area() * M_PI * (two_sided_ ? 2 : 1);
   }
   virtual double area() const = 0;
 
  protected:
-  /// Converts an area sample (point pl, normal nl, area pdf) into a solid-angle sample at p.
-  std::optional<LightLiSample> finish(const Vec3& p, const Vec3& pl, const Vec3& nl,
+  /// Converts an area sample (point pl, normal nl, surface (u, v), area pdf) into a solid-angle
+  /// sample at p.
+  std::optional<LightLiSample> finish(const Vec3& p, const Vec3& pl, const Vec3& nl, Vec2 uv,
                                       double pdf_area, const SampledWavelengths& lambda) const {
     const Vec3 d = pl - p;
     const double r2 = dot(d, d);
@@ -327,6 +496,7 @@ class AreaLightBase : public Light {
     s.pdf = pdf_area * r2 / cos_l;
     SurfaceHit h;
     h.ng = nl;
+    h.uv = uv;
     s.L = L(h, -s.wi, lambda);
     if (s.L.isBlack()) return std::nullopt;
     s.p_light = pl;
@@ -341,14 +511,18 @@ class AreaLightBase : public Light {
   SpectrumPtr L_;
   double scale_;
   bool two_sided_;
+  std::shared_ptr<const EmissionImage> image_;
 };
 
 /// A planar face: one triangle, or a bilinear patch as two triangles, sampled uniformly by area.
 class FaceLight final : public AreaLightBase {
  public:
-  FaceLight(std::vector<std::array<Vec3, 3>> tris, Vec3 n, SpectrumPtr L, double scale,
-            bool two_sided)
-      : AreaLightBase(std::move(L), scale, two_sided), tris_(std::move(tris)), n_(n) {
+  FaceLight(std::vector<std::array<Vec3, 3>> tris, std::vector<std::array<Vec2, 3>> uvs, Vec3 n,
+            SpectrumPtr L, double scale, bool two_sided)
+      : AreaLightBase(std::move(L), scale, two_sided),
+        tris_(std::move(tris)),
+        uvs_(std::move(uvs)),
+        n_(n) {
     for (const auto& t : tris_) {
       const Vec3 c = cross(t[1] - t[0], t[2] - t[0]);
       area_ += 0.5 * length(c);
@@ -372,7 +546,9 @@ class FaceLight final : public AreaLightBase {
     const double su = std::sqrt(u.x);
     const double b0 = 1 - su, b1 = u.y * su;
     const Vec3 pl = t[0] * b0 + t[1] * b1 + t[2] * (1 - b0 - b1);
-    return finish(p, pl, normals_[k], 1 / area_, lambda);
+    const auto& tuv = uvs_[k];
+    const Vec2 uv = tuv[0] * b0 + tuv[1] * b1 + tuv[2] * (1 - b0 - b1);
+    return finish(p, pl, normals_[k], uv, 1 / area_, lambda);
   }
   double pdfLi(const Vec3& p, const Vec3& wi, const SurfaceHit* hit) const override {
     return hit ? solidAnglePdf(p, wi, *hit) : 0;
@@ -380,6 +556,7 @@ class FaceLight final : public AreaLightBase {
 
  private:
   std::vector<std::array<Vec3, 3>> tris_;
+  std::vector<std::array<Vec2, 3>> uvs_;  ///< per triangle: the surface (u, v) of its vertices
   std::vector<double> cum_;
   std::vector<Vec3> normals_;  ///< per triangle, on the side of n_
   Vec3 n_;
@@ -425,6 +602,7 @@ class QuadricLight final : public AreaLightBase {
         SurfaceHit h;
         h.ng = normalize(pl - center_);
         if (shape_->flipNormals()) h.ng = -h.ng;
+        if (image_) h.uv = quadricGeometry(*shape_, inverse(shape_->transform).applyPoint(pl)).uv;
         s.L = L(h, -wi, lambda);
         if (s.L.isBlack()) return std::nullopt;
         s.p_light = pl;
@@ -436,7 +614,7 @@ class QuadricLight final : public AreaLightBase {
     const Vec3 pl = shape_->transform.applyPoint(g->p);
     Vec3 nl = normalize(shape_->transform.applyNormal(g->n));
     if (shape_->flipNormals()) nl = -nl;
-    return finish(p, pl, nl, 1 / area_, lambda);
+    return finish(p, pl, nl, g->uv, 1 / area_, lambda);
   }
   double pdfLi(const Vec3& p, const Vec3& wi, const SurfaceHit* hit) const override {
     if (full_sphere_) {
@@ -480,6 +658,26 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
       lights_.push_back(std::make_unique<SpotLight>(
           l.transform.applyPoint(l.from), normalize(l.transform.applyVector(l.to - l.from)), spec,
           scale, cos_end, cos_start));
+    } else if (l.type == "projection") {
+      if (l.power)
+        logWarning(fmt::format("{}: projection light \"power\" is not applied; \"scale\" is",
+                               l.loc.str()));
+      try {
+        lights_.push_back(std::make_unique<ProjectionLight>(l, l.scale));
+      } catch (const Error& e) {
+        throw Error(l.loc, e.what());
+      }
+    } else if (l.type == "goniometric") {
+      std::unique_ptr<GoniometricLight> g;
+      try {
+        g = std::make_unique<GoniometricLight>(l, spec, scale);
+      } catch (const Error& e) {
+        throw Error(l.loc, e.what());
+      }
+      if (l.power && *l.power > 0 && g->meanFactor() > 0)
+        g = std::make_unique<GoniometricLight>(l, spec,
+                                               scale * *l.power / (4 * M_PI * g->meanFactor()));
+      lights_.push_back(std::move(g));
     } else if (l.type == "distant") {
       if (l.power && *l.power > 0) scale *= *l.power;
       lights_.push_back(std::make_unique<DistantLight>(
@@ -509,7 +707,17 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
     const bool rgb = l.emission.kind == scene::SpectrumValue::Kind::Rgb;
     SpectrumPtr spec =
         textures.constant(l.emission, rgb ? SpectrumType::Illuminant : SpectrumType::Unbounded);
-    const double base_scale = l.scale * photometricNorm(l.emission, *spec);
+    std::shared_ptr<const EmissionImage> image;
+    if (!l.filename.empty()) {
+      try {
+        image = std::make_shared<EmissionImage>(l.filename);
+      } catch (const Error& e) {
+        throw Error(l.loc, e.what());
+      }
+    }
+    // pbrt-v4: an image light's texels are RGB illuminants (D65 of unit luminance for white).
+    const double base_scale = l.scale * (image ? 1.0 : photometricNorm(l.emission, *spec));
+    const double k_e = image ? image->mean_luminance : 1.0;
     const double sides = l.two_sided ? 2 : 1;
     shape_first_light_[si] = static_cast<int>(lights_.size());
     if (const WorldMesh* m = accel.worldMesh(static_cast<int>(si))) {
@@ -529,42 +737,73 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
           }
           return n;
         };
-        auto add = [&](std::vector<std::array<Vec3, 3>> tris, Vec3 n) {
+        std::vector<Vec2> quv(fv);
+        for (size_t k = 0; k < fv; ++k)
+          quv[k] = m->uv.empty()
+                       ? (fv == 3 ? std::array<Vec2, 3>{Vec2{0, 0}, Vec2{1, 0}, Vec2{1, 1}}[k]
+                                  : std::array<Vec2, 4>{Vec2{0, 0}, Vec2{1, 0}, Vec2{0, 1},
+                                                        Vec2{1, 1}}[k])
+                       : m->uv[size_t(m->indices[f * fv + k])];
+        auto add = [&](std::vector<std::array<Vec3, 3>> tris, std::vector<std::array<Vec2, 3>> uvs,
+                       Vec3 n) {
           double area = 0;
           for (const auto& t : tris) area += 0.5 * length(cross(t[1] - t[0], t[2] - t[0]));
           double scale = base_scale;
-          if (l.power && *l.power > 0 && area > 0) scale *= *l.power / (sides * area * M_PI);
-          lights_.push_back(
-              std::make_unique<FaceLight>(std::move(tris), n, spec, scale, l.two_sided));
+          if (l.power && *l.power > 0 && area > 0 && k_e > 0)
+            scale *= *l.power / (k_e * sides * area * M_PI);
+          auto light = std::make_unique<FaceLight>(std::move(tris), std::move(uvs), n, spec, scale,
+                                                   l.two_sided);
+          light->setImage(image);
+          lights_.push_back(std::move(light));
         };
         if (fv == 3) {
-          add({{q[0], q[1], q[2]}}, normal(q[0], q[1], q[2], {0, 1, 2}));
+          add({{q[0], q[1], q[2]}}, {{quv[0], quv[1], quv[2]}},
+              normal(q[0], q[1], q[2], {0, 1, 2}));
         } else {
           // A bilinear patch p00 p10 p01 p11 as the two triangles Embree intersects (split along
           // p10-p01), oriented by the patch normal cross(dp/du, dp/dv).
           Vec3 n = cross(q[1] - q[0], q[2] - q[0]);
           n = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
           if (m->flip) n = -n;
-          add({{q[0], q[1], q[2]}, {q[3], q[2], q[1]}}, n);
+          add({{q[0], q[1], q[2]}, {q[3], q[2], q[1]}},
+              {{quv[0], quv[1], quv[2]}, {quv[3], quv[2], quv[1]}}, n);
         }
       }
     } else if (s.type != scene::ShapeType::TriangleMesh &&
                s.type != scene::ShapeType::BilinearMesh) {
       const double area = quadricArea(s) * std::pow(uniformScale(s.transform), 2);
       double scale = base_scale;
-      if (l.power && *l.power > 0 && area > 0) scale *= *l.power / (sides * area * M_PI);
-      lights_.push_back(std::make_unique<QuadricLight>(s, spec, scale, l.two_sided));
+      if (l.power && *l.power > 0 && area > 0 && k_e > 0)
+        scale *= *l.power / (k_e * sides * area * M_PI);
+      auto light = std::make_unique<QuadricLight>(s, spec, scale, l.two_sided);
+      light->setImage(image);
+      lights_.push_back(std::move(light));
     }
   }
-  // Power-proportional choice.
-  double total = 0;
-  pmf_.resize(lights_.size());
+  // Light choice as pbrt-v4's BVH light sampler splits it: each light without a position
+  // (infinite, distant) gets 1 / (their count + 1), the lights in the scene share the rest in
+  // proportion to their power. (Power alone would hand a sky, whose power grows with the scene's
+  // size, nearly every sample.)
+  pmf_.assign(lights_.size(), 0.0);
+  std::vector<size_t> bounded, unbounded;
   for (size_t i = 0; i < lights_.size(); ++i) {
-    pmf_[i] = std::max(0.0, lights_[i]->power());
-    if (!std::isfinite(pmf_[i])) pmf_[i] = 0;
-    total += pmf_[i];
+    const bool far = lights_[i]->isInfinite() || dynamic_cast<DistantLight*>(lights_[i].get());
+    (far ? unbounded : bounded).push_back(i);
   }
-  for (double& p : pmf_) p = total > 0 ? p / total : 1.0 / double(lights_.size());
+  const double p_unbounded =
+      unbounded.empty()
+          ? 0
+          : double(unbounded.size()) / double(unbounded.size() + (bounded.empty() ? 0 : 1));
+  for (size_t i : unbounded) pmf_[i] = p_unbounded / double(unbounded.size());
+  double total = 0;
+  for (size_t i : bounded) {
+    double p = std::max(0.0, lights_[i]->power());
+    if (!std::isfinite(p)) p = 0;
+    pmf_[i] = p;
+    total += p;
+  }
+  for (size_t i : bounded)
+    pmf_[i] = (1 - p_unbounded) * (total > 0 ? pmf_[i] / total : 1.0 / double(bounded.size()));
   cdf_.resize(lights_.size());
   double c = 0;
   for (size_t i = 0; i < lights_.size(); ++i) cdf_[i] = (c += pmf_[i]);

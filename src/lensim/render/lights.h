@@ -1,9 +1,9 @@
-// Lights with pbrt-v4's semantics: point, spot, distant, diffuse area lights on any shape
-// (one-sided unless "twosided"), uniform infinite lights and image infinite lights (environment
-// maps: equal-area octahedral for square images as pbrt-v4 writes them, else latitude-longitude
-// as pbrt-v2's "mapname"), importance sampled by luminance. Emission spectra are normalised to
-// unit luminance except RGB (whose illuminant already has Y = 1), then multiplied by "scale", and
-// "power" (or illuminance for distant lights) rescales them as pbrt-v4 does.
+// Lights with pbrt-v4's semantics: point, spot, goniometric, projection, distant, diffuse area
+// lights on any shape (one-sided unless "twosided"), uniform infinite lights and image infinite
+// lights (environment maps: equal-area octahedral for square images as pbrt-v4 writes them, else
+// latitude-longitude as pbrt-v2's "mapname"), importance sampled by luminance. Emission spectra are
+// normalised to unit luminance except RGB (whose illuminant already has Y = 1), then multiplied by
+// "scale", and "power" (or illuminance for distant lights) rescales them as pbrt-v4 does.
 //
 // Units: radiance L in the film's units (an RGB L of (1,1,1) reads (1,1,1) on the film),
 // intensity I = radiance x m^2; pdfs per steradian of the direction from the shading point.
@@ -65,7 +65,8 @@ class Light {
   virtual double power() const = 0;
 };
 
-/// All lights of a scene and the power-proportional light choice.
+/// All lights of a scene and the light choice: lights without a position (infinite, distant)
+/// 1 / (their count + 1) each, the others the rest in proportion to their power.
 class LightSet {
  public:
   LightSet(const scene::Scene& scene, const Accel& accel, const Textures& textures);
@@ -76,7 +77,7 @@ class LightSet {
   const std::vector<const Light*>& infinite() const { return infinite_; }
   /// The area light of a shape's face, or nullptr.
   const Light* areaLight(int shape, int prim) const;
-  /// Chooses a light with probability proportional to its power; nullopt without lights.
+  /// Chooses a light (see the class comment); nullopt without lights.
   struct Choice {
     const Light* light;
     double pmf;

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -113,14 +114,17 @@ bool Materials::isInterface(int material) const {
 }
 
 std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalContext& ctx,
-                                            SampledWavelengths& lambda) const {
+                                            SampledWavelengths& lambda, bool regularize) const {
+  auto reg = [&](double alpha) {
+    return regularize && alpha < 0.3 ? std::clamp(2 * alpha, 0.1, 0.3) : alpha;
+  };
   if (material < 0) return std::make_shared<DiffuseBxDF>(SampledSpectrum(0.5));
   const scene::Material& m = scene_->materials[size_t(material)];
   const Textures& tx = *textures_;
   auto distribution = [&]() {
     double ur = tx.evalFloat(m.uroughness, ctx), vr = tx.evalFloat(m.vroughness, ctx);
     if (m.remap_roughness) ur = roughnessToAlpha(ur), vr = roughnessToAlpha(vr);
-    return TrowbridgeReitz(ur, vr);
+    return TrowbridgeReitz(reg(ur), reg(vr));
   };
   auto dielectricEta = [&]() -> double {
     if (m.eta.texture >= 0) return tx.evalFloat(m.eta, ctx);
@@ -176,7 +180,7 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
     lp.n_samples = m.n_samples;
     return std::make_shared<CoatedBxDF>(
         DielectricBxDF(eta, distribution()),
-        std::make_shared<ConductorBxDF>(TrowbridgeReitz(cu, cv), ceta, ck), lp);
+        std::make_shared<ConductorBxDF>(TrowbridgeReitz(reg(cu), reg(cv)), ceta, ck), lp);
   }
   if (m.type == "conductor") {
     SampledSpectrum eta, k;

@@ -30,9 +30,11 @@ class Materials {
                      const Vec3& dpdu) const;
   /// Whether the material only marks a boundary (pbrt's "interface" / ""): rays pass through.
   bool isInterface(int material) const;
-  /// The BxDF of `material` at ctx. May terminate secondary wavelengths (dispersive eta).
+  /// The BxDF of `material` at ctx. May terminate secondary wavelengths (dispersive eta). With
+  /// `regularize` (pbrt-v4's path "regularize", after a non-specular bounce) microfacet widths
+  /// below 0.3 become clamp(2 alpha, 0.1, 0.3), so near-specular lobes blur.
   std::shared_ptr<const BxDF> bxdf(int material, const TextureEvalContext& ctx,
-                                   SampledWavelengths& lambda) const;
+                                   SampledWavelengths& lambda, bool regularize = false) const;
 
  private:
   const scene::Scene* scene_;

@@ -97,11 +97,9 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   sc.materials = &materials;
   sc.lights = &lights;
   sc.max_depth = scene.integrator.max_depth;
+  sc.regularize = scene.integrator.regularize;
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
 
-  if (scene.film.white_balance_k != 0)
-    logWarning(fmt::format("{}: film \"whitebalance\" {} K is not applied", scene.film.loc.str(),
-                           scene.film.white_balance_k));
   if (scene.film.sensor != "cie1931")
     logWarning(
         fmt::format("{}: film \"sensor\" \"{}\" is not simulated; the film records CIE "
@@ -169,67 +167,77 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     });
   }
 
-  tbb::parallel_for(tbb::blocked_range<int>(0, n_tiles, 1), [&](const tbb::blocked_range<int>& r) {
-    std::unique_ptr<Sampler> sampler = proto->clone();
-    for (int tile = r.begin(); tile != r.end(); ++tile) {
-      if (opt.cancel && opt.cancel->load()) {
-        cancelled = true;
-        return;
-      }
-      RayCounts counts;
-      uint64_t n_samples = 0, n_rays = 0, n_none = 0, n_bad = 0;
-      const int tx = tile % tiles_x, ty = tile / tiles_x;
-      const int x0 = bounds.x0 + tx * kTile, y0 = bounds.y0 + ty * kTile;
-      const int x1 = std::min(x0 + kTile, bounds.x1), y1 = std::min(y0 + kTile, bounds.y1);
-      for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x)
-          for (int i = 0; i < spp; ++i) {
-            if ((i & 63) == 0 && opt.cancel && opt.cancel->load()) {
-              cancelled = true;
-              break;
-            }
-            sampler->startPixelSample({x, y}, i);
-            // Dimension order: wavelength, film (filter), lens, time, then the path.
-            const double u_lambda = sampler->get1D();
-            const FilterSample fs = filter->sample(sampler->getPixel2D());
-            const Vec2 u_lens = sampler->get2D();
-            const double u_time = sampler->get1D();
-            ++n_samples;
-            camera::CameraSample cs;
-            cs.film_raster = {x + 0.5 + fs.p.x, y + 0.5 + fs.p.y};
-            cs.lens = u_lens;
-            cs.time = u_time;
-            SampledWavelengths lambda = SampledWavelengths::sampleVisible(u_lambda);
-            auto ray = cam->generateRay(cs);
-            SampledSpectrum L(0.0);
-            if (!ray) {
-              ++n_none;
-            } else {
-              ++n_rays;
-              L = pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts) * ray->weight;
-            }
-            bool finite = true;
-            for (int k = 0; k < kSpectrumSamples; ++k) finite = finite && std::isfinite(L[k]);
-            if (!finite) {
-              ++n_bad;
-              continue;
-            }
-            film.addSample(x, y, L, lambda, fs.weight);
-          }
-      camera_samples += n_samples;
-      camera_rays += n_rays;
-      no_ray += n_none;
-      nonfinite += n_bad;
-      rays += counts.intersect + counts.shadow;
-      ++tiles_done;
+  auto stopProgress = [&] {
+    {
+      std::lock_guard lock(pm);
+      finished = true;
     }
-  });
-  {
-    std::lock_guard lock(pm);
-    finished = true;
+    pcv.notify_all();
+    if (progress.joinable()) progress.join();
+  };
+  try {
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, n_tiles, 1), [&](const tbb::blocked_range<int>& r) {
+          std::unique_ptr<Sampler> sampler = proto->clone();
+          for (int tile = r.begin(); tile != r.end(); ++tile) {
+            if (opt.cancel && opt.cancel->load()) {
+              cancelled = true;
+              return;
+            }
+            RayCounts counts;
+            uint64_t n_samples = 0, n_rays = 0, n_none = 0, n_bad = 0;
+            const int tx = tile % tiles_x, ty = tile / tiles_x;
+            const int x0 = bounds.x0 + tx * kTile, y0 = bounds.y0 + ty * kTile;
+            const int x1 = std::min(x0 + kTile, bounds.x1), y1 = std::min(y0 + kTile, bounds.y1);
+            for (int y = y0; y < y1; ++y)
+              for (int x = x0; x < x1; ++x)
+                for (int i = 0; i < spp; ++i) {
+                  if ((i & 63) == 0 && opt.cancel && opt.cancel->load()) {
+                    cancelled = true;
+                    break;
+                  }
+                  sampler->startPixelSample({x, y}, i);
+                  // Dimension order: wavelength, film (filter), lens, time, then the path.
+                  const double u_lambda = sampler->get1D();
+                  const FilterSample fs = filter->sample(sampler->getPixel2D());
+                  const Vec2 u_lens = sampler->get2D();
+                  const double u_time = sampler->get1D();
+                  ++n_samples;
+                  camera::CameraSample cs;
+                  cs.film_raster = {x + 0.5 + fs.p.x, y + 0.5 + fs.p.y};
+                  cs.lens = u_lens;
+                  cs.time = u_time;
+                  SampledWavelengths lambda = SampledWavelengths::sampleVisible(u_lambda);
+                  auto ray = cam->generateRay(cs);
+                  SampledSpectrum L(0.0);
+                  if (!ray) {
+                    ++n_none;
+                  } else {
+                    ++n_rays;
+                    L = pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts) *
+                        ray->weight;
+                  }
+                  bool finite = true;
+                  for (int k = 0; k < kSpectrumSamples; ++k) finite = finite && std::isfinite(L[k]);
+                  if (!finite) {
+                    ++n_bad;
+                    continue;
+                  }
+                  film.addSample(x, y, L, lambda, fs.weight);
+                }
+            camera_samples += n_samples;
+            camera_rays += n_rays;
+            no_ray += n_none;
+            nonfinite += n_bad;
+            rays += counts.intersect + counts.shadow;
+            ++tiles_done;
+          }
+        });
+  } catch (...) {
+    stopProgress();  // a joinable thread must not outlive the render
+    throw;
   }
-  pcv.notify_all();
-  if (progress.joinable()) progress.join();
+  stopProgress();
 
   st.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
   st.camera_samples = camera_samples;

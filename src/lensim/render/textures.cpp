@@ -12,6 +12,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <unordered_map>
 
@@ -19,6 +20,7 @@
 #include "lensim/render/sampling.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
+#include "lensim/util/log.h"
 
 namespace lensim::render {
 
@@ -124,6 +126,62 @@ struct Textures::Impl {
   }
 };
 
+namespace {
+
+/// BK7's refractive index by Schott's Sellmeier formula (published catalogue coefficients,
+/// wavelength in micrometres): n^2 = 1 + sum B_i l^2 / (l^2 - C_i).
+class SellmeierSpectrum final : public Spectrum {
+ public:
+  SellmeierSpectrum(std::array<double, 3> b, std::array<double, 3> c) : b_(b), c_(c) {}
+  double eval(double lambda_nm) const override {
+    const double l2 = (lambda_nm / 1000) * (lambda_nm / 1000);
+    double n2 = 1;
+    for (int i = 0; i < 3; ++i) n2 += b_[size_t(i)] * l2 / (l2 - c_[size_t(i)]);
+    return std::sqrt(n2);
+  }
+  double maxValue() const override { return eval(kLambdaMin_nm); }
+
+ private:
+  std::array<double, 3> b_, c_;
+};
+
+}  // namespace
+
+SpectrumPtr fallbackNamedSpectrum(const std::string& name) {
+  // pbrt-v4 names whose data lensim does not tabulate: what can be computed exactly is, the
+  // rest falls back (said once per name).
+  if (name == "glass-BK7")
+    return std::make_shared<SellmeierSpectrum>(
+        std::array<double, 3>{1.03961212, 0.231792344, 1.01046945},
+        std::array<double, 3>{0.00600069867, 0.0200179144, 103.560653});
+  if (name == "stdillum-A") {
+    // CIE illuminant A is by definition Planckian radiation at 2856 K.
+    return std::make_shared<BlackbodySpectrum>(2856);
+  }
+  static std::mutex mutex;
+  static std::set<std::string> warned;
+  SpectrumPtr fallback;
+  std::string what;
+  if (name.rfind("glass-", 0) == 0) {
+    fallback = std::make_shared<ConstantSpectrum>(1.5);
+    what = "a constant index of 1.5";
+  } else if (name.rfind("metal-", 0) == 0) {
+    fallback = namedSpectrum(
+        name.size() > 2 && name.substr(name.size() - 2) == "-k" ? "metal-Cu-k" : "metal-Cu-eta");
+    what = "copper's";
+  } else {
+    fallback = RGBColorSpace::sRGB().illuminant();
+    what = "D65";
+  }
+  {
+    std::lock_guard lock(mutex);
+    if (warned.insert(name).second)
+      logWarning(
+          fmt::format("named spectrum \"{}\" is not tabulated in lensim; {} is used", name, what));
+  }
+  return fallback;
+}
+
 SpectrumPtr makeSpectrum(const scene::SpectrumValue& v, SpectrumType type) {
   using K = scene::SpectrumValue::Kind;
   const RGBColorSpace& cs = RGBColorSpace::sRGB();
@@ -153,9 +211,8 @@ SpectrumPtr makeSpectrum(const scene::SpectrumValue& v, SpectrumType type) {
       return std::make_shared<PiecewiseLinearSpectrum>(l, s);
     }
     case K::Named: {
-      SpectrumPtr s = namedSpectrum(v.name);
-      if (!s) throw Error(fmt::format("unknown named spectrum \"{}\"", v.name));
-      return s;
+      if (SpectrumPtr s = namedSpectrum(v.name)) return s;
+      return fallbackNamedSpectrum(v.name);
     }
     case K::File: {
       std::ifstream in(v.name);

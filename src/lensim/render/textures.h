@@ -9,6 +9,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "lensim/render/spectrum.h"
@@ -34,6 +35,10 @@ struct TextureEvalContext {
 
 /// A spectrum from a scene value (RGB, blackbody, tabulated, named or file).
 SpectrumPtr makeSpectrum(const scene::SpectrumValue& v, SpectrumType type);
+/// pbrt-v4 named spectra that render/spectrum.h does not tabulate: glass-BK7 (Schott's Sellmeier
+/// formula) and stdillum-A (blackbody 2856 K) exactly; other glasses a constant 1.5, other metals
+/// copper, other illuminants D65, each with a warning (once per name).
+SpectrumPtr fallbackNamedSpectrum(const std::string& name);
 /// Luminance Y of a spectrum relative to an equal-energy spectrum of value 1 (lensim's
 /// normalisation of CIE Y); the factor pbrt-v4 divides light spectra by is this Y.
 double luminance(const Spectrum& s);

@@ -691,12 +691,12 @@ class Builder {
       ps.getFloat({"lensradius"}, 0);
       ps.getFloat({"focaldistance"}, 1e6);
       ps.findFloat({"frameaspectratio"});
-      const std::string mapping = ps.getString({"mapping"}, "equalarea");
-      if (mapping != "equirectangular")
-        warnOnce("spherical mapping", d.loc,
-                 fmt::format("spherical camera mapping \"{}\" is not rendered; it renders as "
-                             "\"equirectangular\"",
-                             mapping));
+      c.spherical_mapping = ps.getString({"mapping"}, "equalarea");
+      if (c.spherical_mapping != "equirectangular" && c.spherical_mapping != "equalarea")
+        throw Error(ps.peek({"mapping"})->loc,
+                    fmt::format("spherical camera: unknown mapping \"{}\" (expected "
+                                "\"equalarea\" or \"equirectangular\")",
+                                c.spherical_mapping));
     } else if (type == "realistic") {
       c.type = "realistic";
       if (ps.peek({"specfile"})) {
@@ -1265,6 +1265,19 @@ class Builder {
         l.cone_angle_deg = ps.getFloat({"coneangle"}, 30);
         l.cone_delta_deg = ps.getFloat({"conedeltaangle"}, 5);
       }
+    } else if (type == "projection") {
+      l.fov_deg = ps.getFloat({"fov"}, 90);
+      const Param* p = ps.find({"filename", "mapname"}, {ParamType::String});
+      if (!p || p->strings[0].empty())
+        throw Error(d.loc, "projection light: missing \"string filename\"");
+      l.filename = resolve(p->strings[0], p->loc, "projection image");
+      if (l.fov_deg <= 0 || l.fov_deg >= 180)
+        throw Error(d.loc, fmt::format("projection light: fov {} is not in (0, 180)", l.fov_deg));
+    } else if (type == "goniometric") {
+      emission({"I"});
+      if (const Param* p = ps.find({"filename", "mapname"}, {ParamType::String}))
+        if (!p->strings[0].empty())
+          l.filename = resolve(p->strings[0], p->loc, "goniometric image");
     } else if (type == "distant") {
       emission({"L"});
       l.from = ps.findPoint3({"from"}).value_or(Vec3{0, 0, 0});
@@ -1310,7 +1323,6 @@ class Builder {
       ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
       if (const Param* fn = ps.find({"filename"}, {ParamType::String})) {
         l.filename = resolve(fn->strings[0], fn->loc, "image file");
-        warnOnce("arealight image", fn->loc, "image area lights are not rendered; L is used");
       }
     }
     finish(ps);

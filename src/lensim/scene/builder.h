@@ -174,8 +174,8 @@ struct Instance {
   FileLoc loc;
 };
 
-/// A light description. `type` is the pbrt-v4 light type: point, spot, distant, infinite,
-/// diffuse (area lights, attached to shapes through Shape::area_light).
+/// A light description. `type` is the pbrt-v4 light type: point, spot, goniometric, projection,
+/// distant, infinite, diffuse (area lights, attached to shapes through Shape::area_light).
 struct Light {
   std::string type;
   std::string type_as_written;
@@ -187,7 +187,8 @@ struct Light {
   std::optional<double> power;  ///< pbrt-v4 `power` (W), if given
   Vec3 from{0, 0, 0}, to{0, 0, 1};
   double cone_angle_deg = 30, cone_delta_deg = 5;
-  std::string filename;      ///< infinite: environment map (resolved)
+  double fov_deg = 90;       ///< projection: field of view of the shorter image axis
+  std::string filename;      ///< infinite: environment map; goniometric, projection, diffuse: image
   std::vector<Vec3> portal;  ///< infinite: 4 points of a portal quad, or empty
   bool two_sided = false;
   int shape_count = 0;  ///< area lights: shapes that emit with it
@@ -219,7 +220,7 @@ struct Realistic {
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 
-/// The camera description. `type`: perspective, orthographic or realistic.
+/// The camera description. `type`: perspective, orthographic, spherical or realistic.
 struct Camera {
   std::string type = "perspective";
   std::string type_as_written;
@@ -231,6 +232,7 @@ struct Camera {
   double lens_radius = 0, focal_distance = 1e6;
   std::optional<double> frame_aspect_ratio;
   std::optional<std::array<double, 4>> screen_window;
+  std::string spherical_mapping = "equalarea";  ///< spherical: "equalarea" or "equirectangular"
   std::optional<LegacyRealistic> legacy_realistic;
   std::optional<Realistic> realistic;
   bool defaulted = true;  ///< no Camera directive
