@@ -242,10 +242,10 @@ TEST(RenderCommand, InterruptWritesThePartialImageAndFails) {
   lensim::testutil::TempDir dir("lensim-render-int");
   const std::string scene = dir.write("scene.pbrt", kScene);
   const std::string out = dir.file("partial.exr");
-  // Enough samples to run for many seconds; SIGINT after half a second.
+  // Enough samples to run for many seconds; SIGINT after 1.5 s (well after start-up).
   const std::string cmd = "sh -c '" + std::string(LENSIM_BINARY) + " render " + scene +
                           " --spp 100000 --quiet --outfile " + out +
-                          " & p=$!; sleep 0.5; kill -INT $p; wait $p; echo rc=$?'";
+                          " & p=$!; sleep 1.5; kill -INT $p; wait $p; echo rc=$?'";
   Result r = run("--version >/dev/null; " + cmd);
   EXPECT_NE(r.out.find("rc=130"), std::string::npos) << r.out;
   ASSERT_TRUE(std::filesystem::exists(out)) << r.out;
