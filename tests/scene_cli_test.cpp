@@ -4,25 +4,14 @@
 #include <sys/wait.h>
 #include <cstdio>
 #include <string>
+#include "cli_run.h"
 
 namespace {
 
-struct Result {
-  int status = -1;
-  std::string out;
-};
+using Result = lensim::test::CliResult;
 
 Result run(const std::string& args) {
-  std::string cmd = std::string(LENSIM_BINARY) + " " + args + " 2>&1";
-  Result r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int st = pclose(p);
-  r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-  return r;
+  return lensim::test::runLensim(args);
 }
 
 const std::string kShared = LENSIM_SHARED_DIR;
