@@ -58,6 +58,10 @@ ApertureShape ApertureShape::polygon(int blades, double rotation_deg) {
   return s;
 }
 
+bool ApertureShape::isNamed(const std::string& name) {
+  return name == "gaussian" || name == "square" || name == "pentagon" || name == "star";
+}
+
 ApertureShape ApertureShape::named(const std::string& name) {
   if (name == "square") {
     ApertureShape s = polygon(4, 45);

@@ -23,6 +23,8 @@ class ApertureShape {
   static ApertureShape polygon(int blades, double rotation_deg);
   /// pbrt-v4's built-in shapes: "gaussian", "square", "pentagon", "star".
   static ApertureShape named(const std::string& name);
+  /// Whether `name` is one of the built-in shapes (otherwise it names an image file).
+  static bool isNamed(const std::string& name);
   /// A transmission image (grey, or the mean of its channels), centred on the axis, filling the
   /// square around the shape's extent. Throws lensim::Error if it cannot be read or is black.
   static ApertureShape image(const std::string& path);

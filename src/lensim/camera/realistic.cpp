@@ -132,10 +132,8 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene) {
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())
-        s.aperture = (r.aperture == "gaussian" || r.aperture == "square" ||
-                      r.aperture == "pentagon" || r.aperture == "star")
-                         ? ApertureShape::named(r.aperture)
-                         : ApertureShape::image(r.aperture);
+        s.aperture = ApertureShape::isNamed(r.aperture) ? ApertureShape::named(r.aperture)
+                                                        : ApertureShape::image(r.aperture);
     } else {
       throw Error(c.loc, "realistic camera without lens parameters");
     }
