@@ -63,7 +63,9 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
   const Vec3 to_rear = ps->rear_point_mm - from;
   const double len = length(to_rear);
   const Vec3 dir = to_rear / len;
-  const optics::TraceResult r = lens.tracer().traceFromFilm(optics::Ray{from, dir});
+  // The float tracer: it agrees with the double one to ~1e-4 mm (optics tests) and is faster.
+  const optics::TraceResultT<float> r =
+      lens.tracerFloat().traceFromFilm(optics::RayT<float>{Vec3f(from), Vec3f(dir)});
   if (!r.ok()) return std::nullopt;
   double transmission = 1;
   if (!settings_.aperture.isRound() && stop_radius_mm_ > 0) {
@@ -74,7 +76,7 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
   // Lens space (mm, +z toward the film) to camera space (camera units, +z toward the scene).
   const double u = settings_.camera_units_per_mm;
   const Vec3 o_cam{r.ray.origin.x * u, r.ray.origin.y * u, (z_film - r.ray.origin.z) * u};
-  const Vec3 d_cam{r.ray.direction.x, r.ray.direction.y, -r.ray.direction.z};
+  const Vec3 d_cam{double(r.ray.direction.x), double(r.ray.direction.y), -double(r.ray.direction.z)};
   CameraRay ray;
   ray.origin = settings_.world_from_camera.applyPoint(o_cam);
   ray.direction = normalize(settings_.world_from_camera.applyVector(d_cam));
