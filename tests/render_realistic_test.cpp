@@ -113,19 +113,20 @@ TEST(RealisticRender, BoxDgaussMatchesPbrtV4) {
 
 // The assignment's scenes through the four lenses against the NTU references (512 spp). Metric:
 // 10x10-pixel block means; the image-mean ratio, the mean absolute block difference relative to
-// the image mean, and the share of blocks outside a Bonferroni-corrected z bound derived from
-// the noise of two renders. They do NOT yet agree within noise everywhere (see the issue notes:
-// the reference renderer filtered textures with MIP maps and its foreground blur differs); the
-// bounds are the measured values with a margin, so that a regression shows.
+// the image mean, the share of blocks outside a Bonferroni-corrected z bound derived from the
+// noise of two renders, and the share beyond 5 sigma + 2%. lensim's renders come out 1.6-4%
+// brighter than the references and a minority of blocks differ by more than the noise (see the
+// issue notes), so the bounds are the measured values with a margin: a regression guard, not a
+// claim of agreement within noise.
 TEST(RealisticRender, AssignmentScenesAgreeWithTheirReferences) {
   const std::string dir = kShared + "/scenes/ntu-dis-2015-dof-dragons/";
   struct Case {
     const char* lens;
-    double max_mad_rel, max_fail_share;
-  } cases[] = {{"dgauss", 0.16, 0.45},
-               {"telephoto", 0.23, 0.55},
-               {"wide", 0.20, 0.35},
-               {"fisheye", 0.11, 0.16}};
+    double max_mad_rel, max_fail_share, max_outlier_share;
+  } cases[] = {{"dgauss", 0.03, 0.22, 0.12},
+               {"telephoto", 0.035, 0.16, 0.10},
+               {"wide", 0.055, 0.32, 0.13},
+               {"fisheye", 0.035, 0.12, 0.07}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.lens);
     const std::string scene_path = dir + "dof-dragons." + c.lens + ".pbrt";
@@ -145,9 +146,10 @@ TEST(RealisticRender, AssignmentScenesAgreeWithTheirReferences) {
         "%.1f%% of %d blocks beyond z %.2f, %.1f%% beyond 5 sigma + 2%%\n",
         c.lens, m.mean_ratio, m.mad_rel, 100 * m.z_fail_share, m.blocks, m.z_bound,
         100 * m.outlier_share);
-    EXPECT_NEAR(m.mean_ratio, 1.0, 0.06);
+    EXPECT_NEAR(m.mean_ratio, 1.0, 0.05);
     EXPECT_LE(m.mad_rel, c.max_mad_rel);
     EXPECT_LE(m.z_fail_share, c.max_fail_share);
+    EXPECT_LE(m.outlier_share, c.max_outlier_share);
   }
 }
 

@@ -75,8 +75,12 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
   }
   // Lens space (mm, +z toward the film) to camera space (camera units, +z toward the scene).
   const double u = settings_.camera_units_per_mm;
-  const Vec3 o_cam{r.ray.origin.x * u, r.ray.origin.y * u, (z_film - r.ray.origin.z) * u};
-  const Vec3 d_cam{double(r.ray.direction.x), double(r.ray.direction.y), -double(r.ray.direction.z)};
+  // Camera-space z: distance toward the scene from the film (pbrt-v3/v4) or from the front
+  // vertex (the v1/v2 assignment's convention).
+  const double z0 = settings_.origin_at_front_vertex ? 0.0 : z_film;
+  const Vec3 o_cam{r.ray.origin.x * u, r.ray.origin.y * u, (z0 - r.ray.origin.z) * u};
+  const Vec3 d_cam{double(r.ray.direction.x), double(r.ray.direction.y),
+                   -double(r.ray.direction.z)};
   CameraRay ray;
   ray.origin = settings_.world_from_camera.applyPoint(o_cam);
   ray.direction = normalize(settings_.world_from_camera.applyVector(d_cam));
@@ -119,6 +123,7 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene) {
       s.camera_units_per_mm = 1.0;
       s.exposure_time = 1.0;
       s.rear_disc_only = true;
+      s.origin_at_front_vertex = true;
     } else if (c.realistic) {
       const scene::Realistic& r = *c.realistic;
       s.lens_path = r.lens_file;

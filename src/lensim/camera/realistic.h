@@ -1,12 +1,14 @@
 // The realistic camera: every camera ray traced through a real lens prescription (Kolb, Mitchell
 // & Hanrahan 1995; pbrt's RealisticCamera), with lensim's exact tracer and exit-pupil bounds.
 //
-// Camera space is pbrt's: the film lies in the plane z = 0 and the lens in front of it along +z;
-// lens space (optics/lens_system.h) maps to it by (x, y, z) -> (x, y, z_film - z), scaled from
-// millimetres to camera units (metres for pbrt-v3/v4 scenes, millimetres for the v1/v2 scenes of
-// the CS348B assignment, whose camera space is millimetres). A raster point at the right of the
-// image lies at -x on the film, so that, after the lens inverts the image, a scene point on the
-// camera's right appears on the image's right (as with pbrt's perspective camera).
+// Camera space is pbrt-v3/v4's: the film lies in the plane z = 0 and the lens in front of it along
+// +z; lens space (optics/lens_system.h) maps to it by (x, y, z) -> (x, y, z_film - z), scaled from
+// millimetres to camera units (metres for pbrt-v3/v4 scenes). The v1/v2 scenes of the CS348B
+// assignment have camera space in millimetres with the origin at the lens's front vertex
+// ((x, y, z) -> (x, y, -z)): the assignment's reference images match only that placement. A raster
+// point at the right of the image lies at -x on the film, so that, after the lens inverts the
+// image, a scene point on the camera's right appears on the image's right (as with pbrt's
+// perspective camera).
 //
 // What the film stores: each ray's radiance times its weight
 //   w = T x cos^4(theta) x A / z^2,
@@ -19,7 +21,8 @@
 // realistic camera reads about L pi / (4 N^2) t at the image centre for working f-number N: a
 // photographer's exposure. The v1/v2 scenes have no exposure time (their shutter is 0 to 0):
 // their pixels hold irradiance, as the assignment's reference renderer did. Like that renderer,
-// v1/v2 cameras aim rays only at the rear element's disc (see RealisticSettings::rear_disc_only).
+// v1/v2 cameras aim rays only at the rear element's disc (see RealisticSettings::rear_disc_only)
+// and put the camera origin at the front vertex (RealisticSettings::origin_at_front_vertex).
 #pragma once
 
 #include <optional>
@@ -48,6 +51,10 @@ struct RealisticSettings {
   /// resulting darker corners). The complete region is sampled otherwise: rays that pass the
   /// curved rear surface through that plane outside the disc carry light too.
   bool rear_disc_only = false;
+  /// Put the camera-space origin at the lens's front vertex (the film lies behind it, at
+  /// z = -(lens length + film distance)), as the CS348B assignment's renderer did; set for v1/v2
+  /// scenes. Otherwise the film is at the origin, as in pbrt-v3/v4.
+  bool origin_at_front_vertex = false;
 };
 
 class RealisticCamera final : public Camera {
