@@ -143,7 +143,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     for (int j = 0; j < nd; ++j) poly.radius[j] *= f[j];
     return poly;
   };
-  auto area = [&](const Polygon& poly) { return poly.empty ? 0.0 : polygonArea(poly); };
+  auto area = [&](const Polygon& poly) {
+    if (poly.empty) return 0.0;
+    double sum = 0;
+    for (int j = 0; j < nd; ++j) sum += poly.radius[j] * poly.radius[(j + 1) % nd];
+    return 0.5 * sum * std::sin(dphi);
+  };
 
   // Uniform nodes first; then each interval is checked half-way: the interpolated polygon must
   // contain the true region there. Where it would have to grow by more than a few percent, or
@@ -199,6 +204,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   }
   nodes_ = std::move(done);
   scale_ = std::move(scales);
+  buildIntervals();
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -228,75 +234,111 @@ int ExitPupilSampler::intervalFor(double r) const {
   return std::clamp(k, 0, static_cast<int>(scale_.size()) - 1);
 }
 
-bool ExitPupilSampler::boundFor(Vec2 film_mm, Polygon& poly, double& cos_a, double& sin_a) const {
-  const double r = std::hypot(film_mm.x, film_mm.y);
-  if (r > film_radius_mm_ * (1 + 1e-9) || scale_.empty()) return false;
-  const int k = intervalFor(r);
-  if (!interpolateBetween(nodes_[k], nodes_[k + 1], r, poly)) return false;
-  for (size_t j = 0; j < poly.radius.size(); ++j) poly.radius[j] *= scale_[k][j];
-  cos_a = r > 0 ? film_mm.x / r : 1.0;
-  sin_a = r > 0 ? film_mm.y / r : 0.0;
-  return true;
+void ExitPupilSampler::buildIntervals() {
+  const int nd = directions_;
+  for (size_t k = 0; k + 1 < nodes_.size(); ++k) {
+    const Polygon& a = nodes_[k];
+    const Polygon& b = nodes_[k + 1];
+    Interval iv;
+    iv.r0 = a.r;
+    iv.r1 = b.r;
+    iv.empty = a.empty && b.empty;
+    if (!iv.empty) {
+      const Polygon& pa = a.empty ? b : a;
+      const Polygon& pb = b.empty ? a : b;
+      iv.c0 = pa.centre;
+      iv.c1 = pb.centre;
+      iv.A.resize(nd);
+      iv.B.resize(nd);
+      for (int j = 0; j < nd; ++j) {
+        iv.A[j] = pa.radius[j] * scale_[k][j];
+        iv.B[j] = pb.radius[j] * scale_[k][j];
+      }
+      iv.P0.assign(nd + 1, 0.0);
+      iv.P1.assign(nd + 1, 0.0);
+      iv.P2.assign(nd + 1, 0.0);
+      for (int j = 0; j < nd; ++j) {
+        const int j1 = (j + 1) % nd;
+        iv.P0[j + 1] = iv.P0[j] + iv.A[j] * iv.A[j1];
+        iv.P1[j + 1] = iv.P1[j] + iv.A[j] * iv.B[j1] + iv.B[j] * iv.A[j1];
+        iv.P2[j + 1] = iv.P2[j] + iv.B[j] * iv.B[j1];
+      }
+    }
+    intervals_.push_back(std::move(iv));
+  }
 }
 
-double ExitPupilSampler::polygonArea(const Polygon& poly) const {
-  const int nd = directions_;
-  const double sin_d = std::sin(2 * std::numbers::pi / nd);
-  double sum = 0;
-  for (int j = 0; j < nd; ++j) sum += 0.5 * poly.radius[j] * poly.radius[(j + 1) % nd] * sin_d;
-  return sum;
+const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double& t, double& cos_a,
+                                                           double& sin_a) const {
+  const double r = std::hypot(film_mm.x, film_mm.y);
+  if (r > film_radius_mm_ * (1 + 1e-9) || intervals_.empty()) return nullptr;
+  const Interval& iv = intervals_[intervalFor(r)];
+  if (iv.empty) return nullptr;
+  t = iv.r1 > iv.r0 ? std::clamp((r - iv.r0) / (iv.r1 - iv.r0), 0.0, 1.0) : 0.0;
+  cos_a = r > 0 ? film_mm.x / r : 1.0;
+  sin_a = r > 0 ? film_mm.y / r : 0.0;
+  return &iv;
 }
 
 std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u) const {
-  thread_local Polygon poly;
-  double ca, sa;
-  if (!boundFor(film_mm, poly, ca, sa)) return std::nullopt;
+  double t, ca, sa;
+  const Interval* iv = locate(film_mm, t, ca, sa);
+  if (!iv) return std::nullopt;
   const int nd = directions_;
-  const double sin_d = dirs_[1].y;
-  // Pick a triangle of the fan by area, reusing u.x for the position inside it.
-  double total = 0;
-  for (int j = 0; j < nd; ++j) total += poly.radius[j] * poly.radius[(j + 1) % nd];
-  double target = u.x * total, acc = 0;
-  int j = 0;
-  double tri = 0;
-  for (; j < nd; ++j) {
-    tri = poly.radius[j] * poly.radius[(j + 1) % nd];
-    if (acc + tri > target || j == nd - 1) break;
-    acc += tri;
+  const double w0 = (1 - t) * (1 - t), w1 = t * (1 - t), w2 = t * t;
+  auto cum = [&](int j) { return w0 * iv->P0[j] + w1 * iv->P1[j] + w2 * iv->P2[j]; };
+  // Pick a triangle of the fan by area (binary search on the cumulative areas), reusing u.x for
+  // the position inside it.
+  const double total = cum(nd);
+  const double target = u.x * total;
+  int lo = 0, hi = nd - 1;
+  while (lo < hi) {
+    const int mid = (lo + hi) / 2;
+    if (cum(mid + 1) > target)
+      hi = mid;
+    else
+      lo = mid + 1;
   }
-  const double ux = tri > 0 ? std::clamp((target - acc) / tri, 0.0, 1.0) : 0.0;
+  const int j = lo, j1 = (j + 1) % nd;
+  const double c_lo = cum(j), tri = cum(j + 1) - c_lo;
+  const double ux = tri > 0 ? std::clamp((target - c_lo) / tri, 0.0, 1.0) : 0.0;
   const double s = std::sqrt(ux);
-  const int j1 = (j + 1) % nd;
-  const Vec2 a = dirs_[j] * poly.radius[j];
-  const Vec2 b = dirs_[j1] * poly.radius[j1];
-  const Vec2 local = poly.centre + (a * (1 - u.y) + b * u.y) * s;
+  const Vec2 a = dirs_[j] * (iv->A[j] * (1 - t) + iv->B[j] * t);
+  const Vec2 b = dirs_[j1] * (iv->A[j1] * (1 - t) + iv->B[j1] * t);
+  const Vec2 centre = iv->c0 * (1 - t) + iv->c1 * t;
+  const Vec2 local = centre + (a * (1 - u.y) + b * u.y) * s;
   // Rotate from the +x film frame to the film point's azimuth.
   return PupilSample{{ca * local.x - sa * local.y, sa * local.x + ca * local.y, z_rear_mm_},
-                     0.5 * total * sin_d};
+                     0.5 * total * dirs_[1].y};
 }
 
 bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm) const {
-  Polygon poly;
-  double ca, sa;
-  if (!boundFor(film_mm, poly, ca, sa)) return false;
+  double t, ca, sa;
+  const Interval* iv = locate(film_mm, t, ca, sa);
+  if (!iv) return false;
+  const Vec2 centre = iv->c0 * (1 - t) + iv->c1 * t;
   // Into the +x frame, relative to the centre.
-  const Vec2 q{ca * rear_mm.x + sa * rear_mm.y - poly.centre.x,
-               -sa * rear_mm.x + ca * rear_mm.y - poly.centre.y};
+  const Vec2 q{ca * rear_mm.x + sa * rear_mm.y - centre.x,
+               -sa * rear_mm.x + ca * rear_mm.y - centre.y};
   const int nd = directions_;
   const double dphi = 2 * std::numbers::pi / nd;
   double ang = std::atan2(q.y, q.x);
   if (ang < 0) ang += 2 * std::numbers::pi;
-  const int j = std::min(static_cast<int>(ang / dphi), nd - 1);
-  const Vec2 a = unit(j * dphi) * poly.radius[j];
-  const Vec2 b = unit((j + 1) * dphi) * poly.radius[(j + 1) % nd];
+  const int j = std::min(static_cast<int>(ang / dphi), nd - 1), j1 = (j + 1) % nd;
+  const Vec2 a = dirs_[j] * (iv->A[j] * (1 - t) + iv->B[j] * t);
+  const Vec2 b = dirs_[j1] * (iv->A[j1] * (1 - t) + iv->B[j1] * t);
   // Inside the fan triangle (0, a, b): on the origin's side of the edge a-b.
   return cross2(b - a, q - a) >= 0;
 }
 
 double ExitPupilSampler::area_mm2(Vec2 film_mm) const {
-  Polygon poly;
-  double ca, sa;
-  return boundFor(film_mm, poly, ca, sa) ? polygonArea(poly) : 0.0;
+  double t, ca, sa;
+  const Interval* iv = locate(film_mm, t, ca, sa);
+  if (!iv) return 0.0;
+  const int nd = directions_;
+  const double total =
+      (1 - t) * (1 - t) * iv->P0[nd] + t * (1 - t) * iv->P1[nd] + t * t * iv->P2[nd];
+  return 0.5 * total * dirs_[1].y;
 }
 
 }  // namespace lensim::optics

@@ -69,12 +69,22 @@ class ExitPupilSampler {
     Vec2 centre;
     std::vector<double> radius;
   };
-  // The unscaled polygon interpolated between two nodes at radius r.
+  // The unscaled polygon interpolated between two nodes at radius r (used while building).
   bool interpolateBetween(const Polygon& a, const Polygon& b, double r, Polygon& poly) const;
   int intervalFor(double r) const;
-  // The bound for a film point: the polygon and the rotation to the point's azimuth.
-  bool boundFor(Vec2 film_mm, Polygon& poly, double& cos_a, double& sin_a) const;
-  double polygonArea(const Polygon& poly) const;
+  // Sampling tables of one interval: the scaled vertex distances at its two ends (the distance
+  // at film radius r is A (1 - t) + B t), and prefix sums of the fan's triangle products split by
+  // powers of t, so that the fan's cumulative area at any t costs three multiplies.
+  struct Interval {
+    double r0 = 0, r1 = 0;
+    bool empty = true;
+    Vec2 c0, c1;
+    std::vector<double> A, B;        // per vertex
+    std::vector<double> P0, P1, P2;  // prefix sums, size n + 1
+  };
+  void buildIntervals();
+  // The interval, t and rotation for a film point; nullptr where it sees nothing.
+  const Interval* locate(Vec2 film_mm, double& t, double& cos_a, double& sin_a) const;
 
   double film_radius_mm_;
   double z_rear_mm_;
@@ -82,6 +92,7 @@ class ExitPupilSampler {
   std::vector<Vec2> dirs_;                  // unit vectors of the polygon directions
   std::vector<Polygon> nodes_;              // sorted by radius, from 0 to the film radius
   std::vector<std::vector<double>> scale_;  // per interval between consecutive nodes, per vertex
+  std::vector<Interval> intervals_;
   double build_seconds_ = 0;
   long traces_ = 0;
 };
