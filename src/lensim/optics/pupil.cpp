@@ -202,9 +202,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     stack.pop_back();
     left = right;
   }
-  nodes_ = std::move(done);
-  scale_ = std::move(scales);
-  buildIntervals();
+  buildIntervals(done, scales);
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -227,18 +225,19 @@ bool ExitPupilSampler::interpolateBetween(const Polygon& a, const Polygon& b, do
 }
 
 int ExitPupilSampler::intervalFor(double r) const {
-  // Nodes are sorted by radius; the interval k spans nodes k and k + 1.
-  auto it = std::upper_bound(nodes_.begin(), nodes_.end(), r,
-                             [](double v, const Polygon& n) { return v < n.r; });
-  const int k = static_cast<int>(it - nodes_.begin()) - 1;
-  return std::clamp(k, 0, static_cast<int>(scale_.size()) - 1);
+  // Intervals are sorted by radius; the first whose upper end reaches r.
+  auto it = std::lower_bound(intervals_.begin(), intervals_.end(), r,
+                             [](const Interval& iv, double v) { return iv.r1 < v; });
+  const int k = static_cast<int>(it - intervals_.begin());
+  return std::clamp(k, 0, static_cast<int>(intervals_.size()) - 1);
 }
 
-void ExitPupilSampler::buildIntervals() {
+void ExitPupilSampler::buildIntervals(const std::vector<Polygon>& nodes,
+                                      const std::vector<std::vector<double>>& scales) {
   const int nd = directions_;
-  for (size_t k = 0; k + 1 < nodes_.size(); ++k) {
-    const Polygon& a = nodes_[k];
-    const Polygon& b = nodes_[k + 1];
+  for (size_t k = 0; k + 1 < nodes.size(); ++k) {
+    const Polygon& a = nodes[k];
+    const Polygon& b = nodes[k + 1];
     Interval iv;
     iv.r0 = a.r;
     iv.r1 = b.r;
@@ -251,8 +250,8 @@ void ExitPupilSampler::buildIntervals() {
       iv.A.resize(nd);
       iv.B.resize(nd);
       for (int j = 0; j < nd; ++j) {
-        iv.A[j] = pa.radius[j] * scale_[k][j];
-        iv.B[j] = pb.radius[j] * scale_[k][j];
+        iv.A[j] = pa.radius[j] * scales[k][j];
+        iv.B[j] = pb.radius[j] * scales[k][j];
       }
       iv.P0.assign(nd + 1, 0.0);
       iv.P1.assign(nd + 1, 0.0);

@@ -58,7 +58,7 @@ class ExitPupilSampler {
   double buildSeconds() const { return build_seconds_; }
   long tracesAtBuild() const { return traces_; }
   /// Intervals of film radius after adaptive refinement.
-  int intervals() const { return static_cast<int>(scale_.size()); }
+  int intervals() const { return static_cast<int>(intervals_.size()); }
 
  private:
   // A star-shaped polygon in the frame of a film point on the +x axis: vertices
@@ -82,16 +82,15 @@ class ExitPupilSampler {
     std::vector<double> A, B;        // per vertex
     std::vector<double> P0, P1, P2;  // prefix sums, size n + 1
   };
-  void buildIntervals();
+  void buildIntervals(const std::vector<Polygon>& nodes,
+                      const std::vector<std::vector<double>>& scales);
   // The interval, t and rotation for a film point; nullptr where it sees nothing.
   const Interval* locate(Vec2 film_mm, double& t, double& cos_a, double& sin_a) const;
 
   double film_radius_mm_;
   double z_rear_mm_;
   int directions_;
-  std::vector<Vec2> dirs_;                  // unit vectors of the polygon directions
-  std::vector<Polygon> nodes_;              // sorted by radius, from 0 to the film radius
-  std::vector<std::vector<double>> scale_;  // per interval between consecutive nodes, per vertex
+  std::vector<Vec2> dirs_;  // unit vectors of the polygon directions
   std::vector<Interval> intervals_;
   double build_seconds_ = 0;
   long traces_ = 0;
