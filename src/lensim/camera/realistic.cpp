@@ -21,8 +21,10 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   // extent, and the shape decides what passes.
   optics::LensSetup setup = settings_.setup;
   {
-    optics::LensSystem probe(prescription);
-    const std::optional<double> max_d = probe.maxStopDiameter_mm();
+    const std::optional<int> stop = prescription.stopIndex();
+    const std::optional<double> max_d =
+        stop ? std::optional<double>(prescription.surfaces[*stop].aperture_diameter_mm)
+             : std::nullopt;
     double d = setup.aperture_diameter_mm ? *setup.aperture_diameter_mm : max_d.value_or(0);
     if (max_d && d > *max_d) d = *max_d;  // focusLens warns about the clamp below
     stop_radius_mm_ = d / 2;
