@@ -62,15 +62,14 @@ class PointLight final : public Light {
     if (r2 == 0) return std::nullopt;
     LightLiSample s;
     s.wi = d / std::sqrt(r2);
-    s.L = I_->sample(lambda) * (scale_ * falloff(-s.wi) / r2);
+    s.L = I_->sample(lambda) * (scale_ / r2);
     s.pdf = 1;
     s.p_light = p_;
     return s;
   }
   double power() const override { return 4 * M_PI * scale_ * luminanceOf(*I_); }
-  virtual double falloff(const Vec3&) const { return 1; }
 
- protected:
+ private:
   Vec3 p_;
   SpectrumPtr I_;
   double scale_;
