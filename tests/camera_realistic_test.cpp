@@ -167,14 +167,7 @@ TEST(RealisticCamera, FlatFieldCentreIrradianceIsPiSinSquared) {
     SCOPED_TRACE(lens);
     RealisticCamera cam(settings(lens, 6.0, 3.0));
     const optics::LensSystem& ls = *cam.lens().lens;
-    // The real marginal ray from the film centre: the largest angle that gets through (bisection
-    // on the aim height at the rear-vertex plane).
-    double lo = 0, hi = ls.interfaces().back().semi_aperture_mm * 1.5;
-    for (int it = 0; it < 60; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (ls.traceFromFilmPoint({0, 0}, {mid, 0}).ok() ? lo : hi) = mid;
-    }
-    const double sin_theta = lo / std::hypot(lo, ls.filmDistance_mm());
+    const double sin_theta = lensim::test::realMarginalSin(ls);
     const double expected = std::numbers::pi * sin_theta * sin_theta;
     const WeightStats w = meanWeight(cam, {150, 100}, 400000);
     EXPECT_NEAR(w.mean, expected, 0.02 * expected + 4.5 * w.se);
