@@ -231,3 +231,65 @@ TEST(RealisticCamera, BokehShowsTheStopShape) {
   const double turn = std::abs(mod72(turned.corner_deg - penta.corner_deg) - 36.0);
   EXPECT_LT(turn, 8.0) << penta.corner_deg << " -> " << turned.corner_deg;
 }
+
+// --pbrt-v2-quirks: pbrt-v2's Camera::GenerateRayDifferential gives a sample weight 0 when the
+// ray one pixel to the right or one pixel down, through the same lens point, is blocked; the
+// assignment's realistic camera inherits it. The camera keeps exactly the rays it would give
+// anyway, and the share it keeps agrees with an independent count on the rear disc (double
+// tracer, uniform points) of the points through which all three rays pass.
+TEST(RealisticCamera, PbrtV2QuirkDropsSamplesWhoseNeighbourRaysAreBlocked) {
+  RealisticSettings s = settings("wide.22mm.dat", 8.756);
+  s.setup.focus_distance_m.reset();
+  s.setup.film_distance_mm = 14.54;  // the assignment's wide-angle scene
+  s.film_diagonal_mm = 70;
+  s.x_resolution = s.y_resolution = 300;
+  s.rear_disc_only = true;
+  s.origin_at_front_vertex = true;
+  const RealisticCamera plain(s);
+  s.zero_if_neighbour_blocked = true;
+  const RealisticCamera quirky(s);
+  const optics::LensSystem& lens = *plain.lens().lens;
+  const double rear_r = lens.interfaces().back().semi_aperture_mm;
+
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (const Vec2 raster : {Vec2{150.5, 150.5}, Vec2{40.5, 150.5}, Vec2{80.5, 225.5}}) {
+    SCOPED_TRACE(::testing::Message() << "raster " << raster.x << ", " << raster.y);
+    // The camera: rays with and without the rule, same samples.
+    int plain_rays = 0, kept = 0;
+    for (int k = 0; k < 100000; ++k) {
+      const CameraSample cs{raster, {u(rng), u(rng)}, 0};
+      const auto a = plain.generateRay(cs);
+      const auto b = quirky.generateRay(cs);
+      plain_rays += a.has_value();
+      kept += b.has_value();
+      if (b) {
+        ASSERT_TRUE(a.has_value());
+        EXPECT_EQ(a->weight, b->weight);
+        EXPECT_EQ(a->direction.x, b->direction.x);
+      }
+    }
+    // Independent: uniform points on the rear disc, traced from the three film points.
+    const Vec2 p0 = plain.filmPoint(raster), px = plain.filmPoint(raster + Vec2{1, 0}),
+               py = plain.filmPoint(raster + Vec2{0, 1});
+    int pass = 0, all3 = 0;
+    for (int k = 0; k < 200000; ++k) {
+      const double r = rear_r * std::sqrt(u(rng)), phi = 2 * std::numbers::pi * u(rng);
+      const Vec2 q{r * std::cos(phi), r * std::sin(phi)};
+      if (!lens.traceFromFilmPoint(p0, q).ok()) continue;
+      ++pass;
+      all3 += lens.traceFromFilmPoint(px, q).ok() && lens.traceFromFilmPoint(py, q).ok();
+    }
+    ASSERT_GT(plain_rays, 1000);
+    ASSERT_GT(pass, 1000);
+    const double share_cam = double(kept) / plain_rays, share_ref = double(all3) / pass;
+    const double se =
+        std::sqrt(share_ref * (1 - share_ref) / pass + share_cam * (1 - share_cam) / plain_rays);
+    std::printf("raster (%.1f, %.1f): camera keeps %.4f of its rays, rear-disc count %.4f\n",
+                raster.x, raster.y, share_cam, share_ref);
+    EXPECT_NEAR(share_cam, share_ref, 4 * se + 1e-3);
+    if (raster.x < 100) {
+      EXPECT_LT(share_cam, 0.999);  // off-axis: the rule drops samples
+    }
+  }
+}

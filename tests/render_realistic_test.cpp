@@ -35,8 +35,12 @@ struct Match {
   double outlier_share = 0;
 };
 
+/// a, b: lensim at spp_ours with two seeds; ref: the reference at spp_ref. The noise of the
+/// reference's block means is taken from ref_low, a render of the same reference renderer at
+/// spp_low (var of ref = (ref_low - ref)^2 / (spp_ref / spp_low - 1) per pixel), or, without
+/// it, assumed to have lensim's variance per sample.
 Match compare(const io::Image& a, const io::Image& b, const io::Image& ref, int spp_ours,
-              int spp_ref, int block) {
+              int spp_ref, int block, const io::Image* ref_low = nullptr, int spp_low = 0) {
   Match m;
   const int bw = ref.width / block, bh = ref.height / block;
   m.blocks = bw * bh;
@@ -49,11 +53,14 @@ Match compare(const io::Image& a, const io::Image& b, const io::Image& ref, int 
     (std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
   }
   m.z_bound = hi;
+  double image_mean = 0;
+  for (float v : ref.pixels) image_mean += v;
+  image_mean /= double(ref.pixels.size());
   double sum_a = 0, sum_r = 0, sum_abs = 0;
   int fails = 0, outliers = 0;
   for (int by = 0; by < bh; ++by)
     for (int bx = 0; bx < bw; ++bx) {
-      double ma = 0, mr = 0, d2 = 0;
+      double ma = 0, mr = 0, d2 = 0, r2 = 0;
       for (int y = by * block; y < (by + 1) * block; ++y)
         for (int x = bx * block; x < (bx + 1) * block; ++x)
           for (int c = 0; c < 3; ++c) {
@@ -61,15 +68,25 @@ Match compare(const io::Image& a, const io::Image& b, const io::Image& ref, int 
             mr += ref.at(x, y, c);
             const double d = a.at(x, y, c) - b.at(x, y, c);
             d2 += d * d;
+            if (ref_low) {
+              const double dr = ref_low->at(x, y, c) - ref.at(x, y, c);
+              r2 += dr * dr;
+            }
           }
       const double n = block * block * 3.0;
       ma /= n, mr /= n;
       const double pixel_var = d2 / n / 2;
-      const double var = pixel_var / n / 2 + pixel_var / n * spp_ours / spp_ref;
+      const double ref_pixel_var =
+          ref_low ? r2 / n / (double(spp_ref) / spp_low - 1) : pixel_var * spp_ours / spp_ref;
+      const double var = pixel_var / n / 2 + ref_pixel_var / n;
       const double z = std::abs(ma - mr) / std::max(std::sqrt(var), 1e-12);
-      fails += z > m.z_bound;
+      // Blocks whose difference is below 0.1% of the image mean do not count: where both of
+      // lensim's renders are black (e.g. just outside an image circle) their sample variance
+      // is 0 and says nothing about the noise.
+      const bool material = std::abs(ma - mr) > 1e-3 * image_mean;
+      fails += z > m.z_bound && material;
       outliers += std::abs(ma - mr) > 5 * std::sqrt(var) + 0.02 * mr;
-      if (z > m.z_bound && getenv("LENSIM_TEST_VERBOSE"))
+      if (z > m.z_bound && material && getenv("LENSIM_TEST_VERBOSE"))
         std::printf("  block (%d,%d): lensim %.5f reference %.5f z %.1f\n", bx, by, ma, mr, z);
       sum_a += ma, sum_r += mr, sum_abs += std::abs(ma - mr);
     }
@@ -111,45 +128,41 @@ TEST(RealisticRender, BoxDgaussMatchesPbrtV4) {
   EXPECT_LE(static_cast<double>(a.stats.no_ray_samples) / a.stats.camera_samples, 0.05);
 }
 
-// The assignment's scenes through the four lenses against the NTU references (512 spp). Metric:
-// 10x10-pixel block means; the image-mean ratio, the mean absolute block difference relative to
-// the image mean, the share of blocks outside a Bonferroni-corrected z bound derived from the
-// noise of two renders, and the share beyond 5 sigma + 2%. lensim's renders come out 1.6-4%
-// brighter than the references and a minority of blocks differ by more than the noise (see the
-// issue notes), so the bounds are the measured values with a margin: a regression guard, not a
-// claim of agreement within noise.
+// The assignment's scenes through the four lenses against the NTU references (512 spp), with
+// --pbrt-v2-quirks (the references carry two pbrt-v2 artefacts, see renderer.h; without them
+// lensim is 1-4% brighter, most in the far floor and near vignetting edges). Metric: 10x10-pixel
+// block means; the image-mean ratio, the mean absolute block difference relative to the image
+// mean, the share of blocks beyond a Bonferroni bound for a 1% family-wise error (noise of
+// lensim from two seeds, noise of the reference from its 32-spp sibling; differences under 0.1%
+// of the image mean do not count), and the share beyond 5 sigma + 2%. Measured at 2 x 8 spp:
+// ratios 1.001-1.002, mean |block diff| 0.8-1.1%, 0-2 of 900 blocks beyond the bound.
 TEST(RealisticRender, AssignmentScenesAgreeWithTheirReferences) {
   const std::string dir = kShared + "/scenes/ntu-dis-2015-dof-dragons/";
-  struct Case {
-    const char* lens;
-    double max_mad_rel, max_fail_share, max_outlier_share;
-  } cases[] = {{"dgauss", 0.03, 0.22, 0.12},
-               {"telephoto", 0.035, 0.16, 0.10},
-               {"wide", 0.055, 0.32, 0.13},
-               {"fisheye", 0.035, 0.12, 0.07}};
-  for (const Case& c : cases) {
-    SCOPED_TRACE(c.lens);
-    const std::string scene_path = dir + "dof-dragons." + c.lens + ".pbrt";
-    const std::string ref_path = dir + "dof-dragons." + c.lens + "_512ref.exr";
-    if (!present(scene_path) || !present(ref_path)) GTEST_SKIP() << "not present: " << scene_path;
-    const scene::Scene s = scene::loadScene(scene_path);
-    const io::Image ref = io::readImage(ref_path);
+  for (const char* lens : {"dgauss", "telephoto", "wide", "fisheye"}) {
+    SCOPED_TRACE(lens);
+    const std::string stem = dir + "dof-dragons." + lens;
+    if (!present(stem + ".pbrt") || !present(stem + "_512ref.exr") || !present(stem + "_32ref.exr"))
+      GTEST_SKIP() << "not present: " << stem << ".pbrt and its references";
+    const scene::Scene s = scene::loadScene(stem + ".pbrt");
+    const io::Image ref = io::readImage(stem + "_512ref.exr");
+    const io::Image ref32 = io::readImage(stem + "_32ref.exr");
     render::RenderOptions o;
     o.spp = 8;
     o.seed = 1;
+    o.pbrt_v2_quirks = true;
     const io::Image a = render::render(s, o).image;
     o.seed = 2;
     const io::Image b = render::render(s, o).image;
-    const Match m = compare(a, b, ref, 8, 512, 10);
+    const Match m = compare(a, b, ref, *o.spp, 512, 10, &ref32, 32);
     std::printf(
         "%-9s vs NTU reference: mean ratio %.4f, mean |block diff| %.4f of the mean, "
         "%.1f%% of %d blocks beyond z %.2f, %.1f%% beyond 5 sigma + 2%%\n",
-        c.lens, m.mean_ratio, m.mad_rel, 100 * m.z_fail_share, m.blocks, m.z_bound,
+        lens, m.mean_ratio, m.mad_rel, 100 * m.z_fail_share, m.blocks, m.z_bound,
         100 * m.outlier_share);
-    EXPECT_NEAR(m.mean_ratio, 1.0, 0.05);
-    EXPECT_LE(m.mad_rel, c.max_mad_rel);
-    EXPECT_LE(m.z_fail_share, c.max_fail_share);
-    EXPECT_LE(m.outlier_share, c.max_outlier_share);
+    EXPECT_NEAR(m.mean_ratio, 1.0, 0.01);
+    EXPECT_LE(m.mad_rel, 0.015);
+    EXPECT_LE(m.z_fail_share, 0.005);  // at most 4 of 900 blocks
+    EXPECT_LE(m.outlier_share, 0.005);
   }
 }
 

@@ -740,3 +740,53 @@ Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indice
   EXPECT_NEAR(c.mean, d.mean, 5 * std::hypot(c.sem, d.sem) + 0.005 * c.mean);
   EXPECT_GT(c.mean, 0.3 * a.mean);
 }
+
+// --pbrt-v2-quirks, the ray epsilon: pbrt-v2 gives a hit at camera-ray parameter t (counted in
+// camera-space units) the epsilon 1e-3 t, and its shadow and BSDF rays skip everything nearer.
+// A camera between a floor and a large opaque roof, looking down at the floor 0.3 away, under a
+// disc light 4 above: physically the floor is black. With a camera transform scaled by 5000
+// (epsilon 1.5) pbrt-v2 skips the roof, and the floor reads as if there were no roof; scaled by
+// 20000 (epsilon 6) it also loses the light hits of BSDF sampling, so it is darker than that but
+// not black; unscaled (epsilon 3e-4) the roof still shadows.
+TEST(PbrtV2Quirks, RayEpsilonGrowsWithTheCameraRayParameter) {
+  auto sceneText = [](double scale, bool roof) {
+    std::string s = "Scale " + std::to_string(scale) + " " + std::to_string(scale) + " " +
+                    std::to_string(scale) + R"(
+LookAt 0 0.3 0  0 0 0  0 0 1
+Camera "perspective" "float fov" 10
+Film "rgb" "integer xresolution" 8 "integer yresolution" 8 "string filename" "a.exr"
+Sampler "independent" "integer pixelsamples" 64
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [4 4 4]
+Translate 0 4 0
+Rotate 90 1 0 0
+Shape "disk" "float radius" 8
+AttributeEnd
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2 0 2 3]
+)";
+    if (roof)
+      s += R"(Shape "trianglemesh" "point3 P" [-3 0.5 -3  3 0.5 -3  3 0.5 3  -3 0.5 3]
+  "integer indices" [0 1 2 0 2 3]
+)";
+    return s;
+  };
+  auto mean = [](const Image& im) { return regionStats(im, 1, 0, im.width, 0, im.height).mean; };
+  RenderOptions physical, quirks;
+  quirks.pbrt_v2_quirks = true;
+  const double open = mean(renderText(sceneText(1, false), physical).image);
+  const double roofed = mean(renderText(sceneText(5000, true), physical).image);
+  const double q1 = mean(renderText(sceneText(1, true), quirks).image);
+  const double q5000 = mean(renderText(sceneText(5000, true), quirks).image);
+  const double q20000 = mean(renderText(sceneText(20000, true), quirks).image);
+  std::printf("floor: open %.4f, roofed %.4f; quirks: unscaled %.4f, x5000 %.4f, x20000 %.4f\n",
+              open, roofed, q1, q5000, q20000);
+  ASSERT_GT(open, 0.01);
+  EXPECT_LT(roofed, 1e-6);
+  EXPECT_LT(q1, 1e-6);
+  EXPECT_NEAR(q5000, open, 0.03 * open);
+  EXPECT_GT(q20000, 0.1 * open);
+  EXPECT_LT(q20000, 0.9 * open);
+}

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "commands.h"
-#include "lensim/render/autofocus_scene.h"
 #include "lensim/io/image.h"
+#include "lensim/render/autofocus_scene.h"
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/log.h"
@@ -41,6 +41,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
     std::vector<int> pixelbounds;
     bool quiet = false, stats = false;
     bool autofocus = false;
+    bool pbrt_v2_quirks = false;
     std::string zones;
   };
   auto o = std::make_shared<Options>();
@@ -65,6 +66,11 @@ void registerRenderCommand(CLI::App& app, Action& action) {
   r->add_flag("--autofocus", o->autofocus,
               "Focus the realistic camera on its autofocus zones first (see lensim autofocus)");
   r->add_option("--zones", o->zones, "Zone file for --autofocus (default: the camera's af_zones)");
+  r->add_flag("--pbrt-v2-quirks", o->pbrt_v2_quirks,
+              "Reproduce two artefacts of pbrt-v2 that old reference images carry: its ray "
+              "epsilon of 1e-3 x the camera-ray parameter (loses shadows and light hits under a "
+              "scaled camera transform) and its realistic camera's zero-weight samples next to "
+              "vignetting edges. For comparing with such references; physically wrong");
   r->callback([o, seed, &action]() {
     o->has_seed = seed->count() > 0;
     action = [o]() -> int {
@@ -91,6 +97,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
         ro.pixelbounds = std::array<int, 4>{o->pixelbounds[0], o->pixelbounds[1], o->pixelbounds[2],
                                             o->pixelbounds[3]};
       ro.progress = !quiet;
+      ro.pbrt_v2_quirks = o->pbrt_v2_quirks;
       ro.cancel = &g_interrupted;
       // The film's filename is relative to the directory lensim runs in, as in pbrt.
       std::vector<std::string> outs = o->outfiles;

@@ -51,11 +51,21 @@ class Camera {
   virtual std::string describe() const = 0;
 };
 
+/// Choices the scene file does not make.
+struct CameraOptions {
+  /// Reproduce pbrt-v2's camera-ray artefact that the assignment's reference images carry: a
+  /// sample yields no ray when the ray one pixel to the right or one pixel down, through the same
+  /// lens point, is blocked (pbrt-v2's Camera::GenerateRayDifferential returns weight 0 then; the
+  /// assignment's realistic camera inherits it). Realistic camera only; off by default.
+  bool pbrt_v2_quirks = false;
+};
+
 /// Builds the camera the scene describes (its film gives the resolution and sensor size).
 /// Throws lensim::Error, located at the Camera directive, for settings that cannot work.
-std::unique_ptr<Camera> makeCamera(const scene::Scene& scene);
+std::unique_ptr<Camera> makeCamera(const scene::Scene& scene, const CameraOptions& options = {});
 
 /// The realistic camera (pbrt-v1/v2 and v3/v4 parameters); see realistic.h.
-std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene);
+std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
+                                            const CameraOptions& options = {});
 
 }  // namespace lensim::camera

@@ -8,9 +8,9 @@
 
 namespace lensim::camera {
 
-std::unique_ptr<Camera> makeCamera(const scene::Scene& scene) {
+std::unique_ptr<Camera> makeCamera(const scene::Scene& scene, const CameraOptions& options) {
   const scene::Camera& c = scene.camera;
-  if (c.type == "realistic") return makeRealisticCamera(scene);
+  if (c.type == "realistic") return makeRealisticCamera(scene, options);
   if (c.type == "perspective") return makePerspectiveCamera(scene);
   if (c.type == "orthographic") return makeOrthographicCamera(scene);
   if (c.type == "spherical") return makeSphericalCamera(scene);

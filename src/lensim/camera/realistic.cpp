@@ -62,6 +62,15 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
   }
   const double z_film = lens.filmZ_mm();
   const Vec3 from{film.x, film.y, z_film};
+  if (settings_.zero_if_neighbour_blocked) {
+    for (const Vec2 shift : {Vec2{1, 0}, Vec2{0, 1}}) {
+      const Vec2 f = filmPoint(sample.film_raster + shift);
+      const Vec3 o{f.x, f.y, z_film};
+      const Vec3 d = normalize(ps->rear_point_mm - o);
+      if (!lens.tracerFloat().traceFromFilm(optics::RayT<float>{Vec3f(o), Vec3f(d)}).ok())
+        return std::nullopt;
+    }
+  }
   const Vec3 to_rear = ps->rear_point_mm - from;
   const double len = length(to_rear);
   const Vec3 dir = to_rear / len;
@@ -108,12 +117,14 @@ std::string RealisticCamera::describe() const {
       2 * half_width_mm_, 2 * half_height_mm_, settings_.aperture.describe());
 }
 
-std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene) {
+std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
+                                            const CameraOptions& options) {
   const scene::Camera& c = scene.camera;
   RealisticSettings s;
   s.x_resolution = scene.film.x_resolution;
   s.y_resolution = scene.film.y_resolution;
   s.world_from_camera = inverse(c.camera_from_world);
+  s.zero_if_neighbour_blocked = options.pbrt_v2_quirks;
   try {
     if (c.legacy_realistic) {
       // pbrt-v1/v2 (CS348B): camera space in millimetres, film distance given, no exposure time.

@@ -55,6 +55,10 @@ struct RealisticSettings {
   /// z = -(lens length + film distance)), as the CS348B assignment's renderer did; set for v1/v2
   /// scenes. Otherwise the film is at the origin, as in pbrt-v3/v4.
   bool origin_at_front_vertex = false;
+  /// pbrt-v2's differential rule (CameraOptions::pbrt_v2_quirks): a sample yields no ray when
+  /// the ray from the film point one pixel to the right (+x raster) or one pixel down (+y
+  /// raster), aimed at the same rear-plane point, is blocked by the lens.
+  bool zero_if_neighbour_blocked = false;
 };
 
 class RealisticCamera final : public Camera {

@@ -41,6 +41,25 @@ bool cutOut(const SceneContext& sc, const SurfaceHit& h, const Vec3& d) {
   return hashUniform(h.p, d) > a;
 }
 
+/// pbrt-v2's ray epsilon at a hit (see SceneContext::pbrt_v2_epsilon), in scene units.
+double pbrtV2Epsilon(const SceneContext& sc, const SurfaceHit& h, const Ray& ray, bool camera_ray) {
+  const double len = length(ray.d);
+  double t = h.t * len;  // scene units
+  if (camera_ray) t *= length(sc.camera_from_world.applyVector(ray.d / len));
+  const bool triangles = sc.scene->shapes[size_t(h.shape)].type == scene::ShapeType::TriangleMesh ||
+                         sc.scene->shapes[size_t(h.shape)].type == scene::ShapeType::BilinearMesh;
+  return (triangles ? 1e-3 : 5e-4) * t;
+}
+
+/// Whether the light sample is blocked, the segment starting `skip` scene units from the hit (as
+/// pbrt-v2's VisibilityTester: from epsilon to (1 - 1e-3) of the distance; empty, hence
+/// unblocked, when epsilon is longer).
+bool shadowed(const SceneContext& sc, const SurfaceHit& h, const LightLiSample& ls, double skip,
+              RayCounts& counts) {
+  if (skip > 0 && !ls.infinite && skip >= length(ls.p_light - h.p) * (1 - 1e-3)) return false;
+  return occludedScene(sc, h.p + ls.wi * skip, h.ng, ls.p_light, ls.infinite, ls.wi, counts);
+}
+
 }  // namespace
 
 std::optional<SurfaceHit> intersectScene(const SceneContext& sc, Ray ray, RayCounts& counts) {
@@ -102,6 +121,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
     }
     const SurfaceHit& h = *hit;
     const Vec3 wo = -ray.d;
+    const double skip = sc.pbrt_v2_epsilon ? pbrtV2Epsilon(sc, h, ray, depth == 0) : 0.0;
     if (const Light* area = sc.lights->areaLight(h.shape, h.prim)) {
       const SampledSpectrum Le = area->L(h, wo, lambda);
       if (!Le.isBlack()) {
@@ -133,8 +153,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
         if (auto ls = choice->light->sampleLi(h.p, u_light2, lambda)) {
           if (ls->pdf > 0 && !ls->L.isBlack()) {
             const SampledSpectrum f = bsdf.f(wo, ls->wi) * std::abs(dot(ls->wi, ns));
-            if (!f.isBlack() &&
-                !occludedScene(sc, h.p, h.ng, ls->p_light, ls->infinite, ls->wi, counts)) {
+            if (!f.isBlack() && !shadowed(sc, h, *ls, skip, counts)) {
               const double pl = choice->pmf * ls->pdf;
               if (choice->light->isDelta()) {
                 L += beta * f * ls->L / pl;
@@ -158,7 +177,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
     any_non_specular = any_non_specular || !specular_bounce;
     if (bs->isTransmission()) eta_scale *= bs->eta * bs->eta;
     prev_p = h.p;
-    ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
+    ray = Ray{offsetOrigin(h.p + bs->wi * skip, h.ng, bs->wi), bs->wi, INFINITY};
     if (beta.isBlack()) break;
     const SampledSpectrum rr_beta = beta * eta_scale;
     const double u_rr = sampler.get1D();

@@ -10,6 +10,7 @@
 #include "lensim/render/materials.h"
 #include "lensim/render/sampler.h"
 #include "lensim/render/textures.h"
+#include "lensim/util/transform.h"
 
 namespace lensim::scene {
 struct Scene;
@@ -28,6 +29,13 @@ struct SceneContext {
   bool regularize = false;  ///< pbrt-v4's "regularize": roughen near-specular BSDFs after a
                             ///< non-specular bounce
   bool has_alpha = false;   ///< some shape has an alpha texture
+  /// Reproduce pbrt-v2's ray epsilon (RenderOptions::pbrt_v2_quirks): a hit at ray parameter t
+  /// gets epsilon 1e-3 t (triangles) or 5e-4 t (quadrics), where a camera ray's parameter is
+  /// counted in camera-space units (pbrt-v2 normalises camera rays there), and shadow and
+  /// BSDF-sampled rays from the hit skip everything closer than epsilon (scene units). With a
+  /// scaled camera transform this skips shadows and distant light hits.
+  bool pbrt_v2_epsilon = false;
+  Transform camera_from_world;  ///< for pbrt_v2_epsilon
 };
 
 /// Per-thread ray counts.

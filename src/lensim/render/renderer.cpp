@@ -66,7 +66,9 @@ std::string fmtDuration(double s) {
 
 RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const auto t_setup = Clock::now();
-  std::unique_ptr<camera::Camera> cam = camera::makeCamera(scene);
+  camera::CameraOptions camera_options;
+  camera_options.pbrt_v2_quirks = opt.pbrt_v2_quirks;
+  std::unique_ptr<camera::Camera> cam = camera::makeCamera(scene, camera_options);
   const int x_res = scene.film.x_resolution, y_res = scene.film.y_resolution;
   PixelBounds bounds{0, x_res, 0, y_res};
   if (opt.pixelbounds) {
@@ -98,6 +100,8 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   sc.lights = &lights;
   sc.max_depth = scene.integrator.max_depth;
   sc.regularize = scene.integrator.regularize;
+  sc.pbrt_v2_epsilon = opt.pbrt_v2_quirks;
+  sc.camera_from_world = scene.camera.camera_from_world;
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
 
   if (scene.film.sensor != "cie1931")
