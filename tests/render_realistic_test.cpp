@@ -13,6 +13,7 @@
 #include "lensim/io/image.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/render/autofocus_scene.h"
+#include "lensim/render/image_compare.h"
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
 #include "test_paths.h"
@@ -23,78 +24,21 @@ namespace {
 
 const std::string kShared = LENSIM_SHARED_DIR;
 
-/// Block comparison of two renders (different seeds) of a scene against a reference image.
-struct Match {
-  int blocks = 0;
-  double mean_ratio = 0;    ///< sum of lensim / sum of the reference (RGB)
-  double mad_rel = 0;       ///< mean |block mean difference| / reference image mean
-  double z_fail_share = 0;  ///< share of blocks outside the Bonferroni z bound
-  double z_bound = 0;
-  /// Share of blocks differing by more than 5 standard errors plus 2% of the reference (a 2%
-  /// allowance for deliberate differences, e.g. lensim's metal tables are not pbrt-v4's).
-  double outlier_share = 0;
-};
-
-/// a, b: lensim at spp_ours with two seeds; ref: the reference at spp_ref. The noise of the
-/// reference's block means is taken from ref_low, a render of the same reference renderer at
-/// spp_low (var of ref = (ref_low - ref)^2 / (spp_ref / spp_low - 1) per pixel), or, without
-/// it, assumed to have lensim's variance per sample.
-Match compare(const io::Image& a, const io::Image& b, const io::Image& ref, int spp_ours,
-              int spp_ref, int block, const io::Image* ref_low = nullptr, int spp_low = 0) {
-  Match m;
-  const int bw = ref.width / block, bh = ref.height / block;
-  m.blocks = bw * bh;
-  // Two-sided bound for a 1% family-wise error over all blocks (Bonferroni), normal quantile by
-  // bisection on erfc.
-  const double alpha = 0.01 / m.blocks;
-  double lo = 0, hi = 10;
-  for (int it = 0; it < 60; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
-  }
-  m.z_bound = hi;
-  double image_mean = 0;
-  for (float v : ref.pixels) image_mean += v;
-  image_mean /= double(ref.pixels.size());
-  double sum_a = 0, sum_r = 0, sum_abs = 0;
-  int fails = 0, outliers = 0;
-  for (int by = 0; by < bh; ++by)
-    for (int bx = 0; bx < bw; ++bx) {
-      double ma = 0, mr = 0, d2 = 0, r2 = 0;
-      for (int y = by * block; y < (by + 1) * block; ++y)
-        for (int x = bx * block; x < (bx + 1) * block; ++x)
-          for (int c = 0; c < 3; ++c) {
-            ma += 0.5 * (a.at(x, y, c) + b.at(x, y, c));
-            mr += ref.at(x, y, c);
-            const double d = a.at(x, y, c) - b.at(x, y, c);
-            d2 += d * d;
-            if (ref_low) {
-              const double dr = ref_low->at(x, y, c) - ref.at(x, y, c);
-              r2 += dr * dr;
-            }
-          }
-      const double n = block * block * 3.0;
-      ma /= n, mr /= n;
-      const double pixel_var = d2 / n / 2;
-      const double ref_pixel_var =
-          ref_low ? r2 / n / (double(spp_ref) / spp_low - 1) : pixel_var * spp_ours / spp_ref;
-      const double var = pixel_var / n / 2 + ref_pixel_var / n;
-      const double z = std::abs(ma - mr) / std::max(std::sqrt(var), 1e-12);
-      // Blocks whose difference is below 0.1% of the image mean do not count: where both of
-      // lensim's renders are black (e.g. just outside an image circle) their sample variance
-      // is 0 and says nothing about the noise.
-      const bool material = std::abs(ma - mr) > 1e-3 * image_mean;
-      fails += z > m.z_bound && material;
-      outliers += std::abs(ma - mr) > 5 * std::sqrt(var) + 0.02 * mr;
-      if (z > m.z_bound && material && getenv("LENSIM_TEST_VERBOSE"))
-        std::printf("  block (%d,%d): lensim %.5f reference %.5f z %.1f\n", bx, by, ma, mr, z);
-      sum_a += ma, sum_r += mr, sum_abs += std::abs(ma - mr);
-    }
-  m.mean_ratio = sum_a / sum_r;
-  m.mad_rel = sum_abs / sum_r;
-  m.z_fail_share = static_cast<double>(fails) / m.blocks;
-  m.outlier_share = static_cast<double>(outliers) / m.blocks;
-  return m;
+/// Block comparison (lensim/render/image_compare.h) of two renders (different seeds) against a
+/// reference; the reference's noise from a low-sample sibling when there is one.
+render::CompareResult compare(const io::Image& a, const io::Image& b, const io::Image& ref,
+                              int spp_ours, int spp_ref, int block,
+                              const io::Image* ref_low = nullptr, int spp_low = 0) {
+  render::CompareOptions o;
+  o.block = block;
+  o.second = &b;
+  o.spp = spp_ours;
+  o.reference_spp = spp_ref;
+  o.reference_low = ref_low;
+  o.reference_low_spp = spp_low;
+  const render::CompareResult r = render::compareImages(a, ref, o);
+  if (getenv("LENSIM_TEST_VERBOSE")) std::printf("%s", render::formatCompare(r).c_str());
+  return r;
 }
 
 bool present(const std::string& path) {
@@ -117,14 +61,14 @@ TEST(RealisticRender, BoxDgaussMatchesPbrtV4) {
   const render::RenderResult a = render::render(s, o);
   o.seed = 2;
   const io::Image b = render::render(s, o).image;
-  const Match m = compare(a.image, b, ref, 16, 1024, 20);
+  const render::CompareResult m = compare(a.image, b, ref, 16, 1024, 20);
   std::printf(
       "box-dgauss vs pbrt-v4: mean ratio %.4f, mean |block diff| %.4f of the mean, %.0f%% of "
       "blocks beyond z %.2f, %.0f%% beyond 5 sigma + 2%%, no-ray samples %.2f%%\n",
-      m.mean_ratio, m.mad_rel, 100 * m.z_fail_share, m.z_bound, 100 * m.outlier_share,
+      m.mean_ratio, m.mad_rel, 100 * m.zFailShare(), m.z_bound, 100 * m.outlierShare(),
       100.0 * a.stats.no_ray_samples / a.stats.camera_samples);
   EXPECT_NEAR(m.mean_ratio, 1.0, 0.02);
-  EXPECT_EQ(m.outlier_share, 0.0);
+  EXPECT_EQ(m.outliers, 0);
   EXPECT_LE(static_cast<double>(a.stats.no_ray_samples) / a.stats.camera_samples, 0.05);
 }
 
@@ -153,16 +97,16 @@ TEST(RealisticRender, AssignmentScenesAgreeWithTheirReferences) {
     const io::Image a = render::render(s, o).image;
     o.seed = 2;
     const io::Image b = render::render(s, o).image;
-    const Match m = compare(a, b, ref, *o.spp, 512, 10, &ref32, 32);
+    const render::CompareResult m = compare(a, b, ref, *o.spp, 512, 10, &ref32, 32);
     std::printf(
         "%-9s vs NTU reference: mean ratio %.4f, mean |block diff| %.4f of the mean, "
         "%.1f%% of %d blocks beyond z %.2f, %.1f%% beyond 5 sigma + 2%%\n",
-        lens, m.mean_ratio, m.mad_rel, 100 * m.z_fail_share, m.blocks, m.z_bound,
-        100 * m.outlier_share);
+        lens, m.mean_ratio, m.mad_rel, 100 * m.zFailShare(), m.blocks, m.z_bound,
+        100 * m.outlierShare());
     EXPECT_NEAR(m.mean_ratio, 1.0, 0.01);
     EXPECT_LE(m.mad_rel, 0.015);
-    EXPECT_LE(m.z_fail_share, 0.005);  // at most 4 of 900 blocks
-    EXPECT_LE(m.outlier_share, 0.005);
+    EXPECT_LE(m.zFailShare(), 0.005);  // at most 4 of 900 blocks
+    EXPECT_LE(m.outlierShare(), 0.005);
   }
 }
 

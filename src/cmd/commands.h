@@ -26,4 +26,7 @@ void registerRenderCommand(CLI::App& app, Action& action);
 /// `lensim autofocus SCENE`.
 void registerAutofocusCommand(CLI::App& app, Action& action);
 
+/// `lensim compare IMAGE REFERENCE [--second IMAGE2] ...`: agreement within noise.
+void registerCompareCommand(CLI::App& app, Action& action);
+
 }  // namespace lensim::cmd

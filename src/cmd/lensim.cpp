@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   lensim::cmd::registerCheckCommand(app, action);
   lensim::cmd::registerRenderCommand(app, action);
   lensim::cmd::registerAutofocusCommand(app, action);
+  lensim::cmd::registerCompareCommand(app, action);
 
   try {
     app.parse(argc, argv);
