@@ -70,6 +70,27 @@ void BM_TraceFromFilm(benchmark::State& state, const std::string& file) {
   state.counters["vignetted"] = traced ? static_cast<double>(blocked) / traced : 0.0;
 }
 
+// The same rays traced in batches of LensTracer::kBatch (traceFromFilmBatch).
+void BM_TraceFromFilmBatch(benchmark::State& state, const std::string& file) {
+  Workload w = makeWorkload(file);
+  std::vector<RayT<float>> rays;
+  for (const Ray& r : w.rays) rays.push_back({Vec3f(r.origin), Vec3f(r.direction)});
+  const LensTracer<float>& tracer = w.lens->tracerFloat();
+  constexpr int kB = LensTracer<float>::kBatch;
+  TraceResultT<float> out[kB];
+  size_t i = 0, traced = 0;
+  for (auto _ : state) {
+    tracer.traceFromFilmBatch(&rays[i], kB, out);
+    benchmark::DoNotOptimize(out);
+    traced += kB;
+    i += kB;
+    if (i + kB > rays.size()) i = 0;
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(traced));
+  state.counters["traces/s"] =
+      benchmark::Counter(static_cast<double>(traced), benchmark::Counter::kIsRate);
+}
+
 // Building the exit-pupil bounds a realistic camera samples (start-up cost), and the share of
 // camera samples, over a 3:2 film of 35 mm diagonal, that the bounds waste (no ray gets through).
 void BM_ExitPupilBuild(benchmark::State& state, const std::string& file) {
@@ -106,6 +127,8 @@ void registerAll() {
                                  BM_TraceFromFilm<double>, std::string(file));
     benchmark::RegisterBenchmark((std::string("TraceFromFilm<float>/") + file).c_str(),
                                  BM_TraceFromFilm<float>, std::string(file));
+    benchmark::RegisterBenchmark((std::string("TraceFromFilmBatch<float>/") + file).c_str(),
+                                 BM_TraceFromFilmBatch, std::string(file));
     benchmark::RegisterBenchmark((std::string("ExitPupilBuild/") + file).c_str(), BM_ExitPupilBuild,
                                  std::string(file))
         ->Unit(benchmark::kMillisecond);

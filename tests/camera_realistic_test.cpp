@@ -293,3 +293,39 @@ TEST(RealisticCamera, PbrtV2QuirkDropsSamplesWhoseNeighbourRaysAreBlocked) {
     }
   }
 }
+
+// generateRays (the lens traced for a batch of samples side by side) gives exactly the rays
+// generateRay gives one at a time, with a shaped stop and in the pbrt-v2 quirk mode too.
+TEST(RealisticCamera, BatchedRaysEqualSingleRays) {
+  for (int variant = 0; variant < 3; ++variant) {
+    RealisticSettings s = settings(variant == 2 ? "wide.22mm.dat" : "dgauss.50mm.dat", 10.0);
+    if (variant == 1) s.aperture = ApertureShape::polygon(5, 10);
+    if (variant == 2) {
+      s.rear_disc_only = true;
+      s.zero_if_neighbour_blocked = true;
+    }
+    const RealisticCamera cam(s);
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(0, 1);
+    int rays = 0;
+    for (int batch = 0; batch < 400; ++batch) {
+      const int n = 1 + batch % Camera::kMaxBatch;
+      CameraSample cs[Camera::kMaxBatch];
+      std::optional<CameraRay> out[Camera::kMaxBatch];
+      for (int i = 0; i < n; ++i) cs[i] = {{300 * u(rng), 200 * u(rng)}, {u(rng), u(rng)}, u(rng)};
+      cam.generateRays(cs, n, out);
+      for (int i = 0; i < n; ++i) {
+        const auto one = cam.generateRay(cs[i]);
+        ASSERT_EQ(one.has_value(), out[i].has_value()) << "variant " << variant;
+        if (!one) continue;
+        ++rays;
+        EXPECT_EQ(one->origin.x, out[i]->origin.x);
+        EXPECT_EQ(one->origin.z, out[i]->origin.z);
+        EXPECT_EQ(one->direction.y, out[i]->direction.y);
+        EXPECT_EQ(one->weight, out[i]->weight);
+        EXPECT_EQ(one->time, out[i]->time);
+      }
+    }
+    EXPECT_GT(rays, 1000);
+  }
+}

@@ -70,6 +70,28 @@ TEST(Sampler, StartingAtADimensionMatchesDrawingUpToIt) {
   }
 }
 
+// dimension() says where a restart continues: the renderer draws a batch of samples' camera
+// values, then restarts each sample there for its path.
+TEST(Sampler, RestartingAtTheReportedDimensionContinuesTheSample) {
+  for (auto& s : allSamplers(16)) {
+    s->startPixelSample({4, 7}, 5);
+    EXPECT_EQ(s->dimension(), 0);
+    s->get1D();
+    s->getPixel2D();
+    s->get2D();
+    s->get1D();
+    const int d = s->dimension();
+    EXPECT_EQ(d, 6);
+    const double a = s->get1D();
+    const Vec2 b = s->get2D();
+    s->startPixelSample({0, 0}, 1);  // other work in between
+    s->get2D();
+    s->startPixelSample({4, 7}, 5, d);
+    EXPECT_EQ(s->get1D(), a);
+    EXPECT_EQ(s->get2D(), b);
+  }
+}
+
 TEST(StratifiedSampler, OneSamplePerStratumInEveryDimension) {
   StratifiedSampler s(4, 4, true, 0);
   for (Point2i p : {Point2i(0, 0), Point2i(13, 7)}) {

@@ -45,6 +45,14 @@ class Camera {
   virtual ~Camera() = default;
   /// A ray for the sample, or nullopt when the sample yields none.
   virtual std::optional<CameraRay> generateRay(const CameraSample& sample) const = 0;
+  /// The most samples generateRays takes at once.
+  static constexpr int kMaxBatch = 16;
+  /// Rays for n <= kMaxBatch samples, each exactly what generateRay gives (a camera may work
+  /// on them together: the realistic camera traces them through the lens side by side).
+  virtual void generateRays(const CameraSample* samples, int n,
+                            std::optional<CameraRay>* rays) const {
+    for (int i = 0; i < n; ++i) rays[i] = generateRay(samples[i]);
+  }
   /// Seconds spent building the camera (lens set-up, pupil bounds), for render statistics.
   virtual double startupSeconds() const { return 0; }
   /// One line for logs: the type and its main settings.

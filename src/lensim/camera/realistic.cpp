@@ -50,7 +50,7 @@ Vec2 RealisticCamera::filmPoint(Vec2 raster) const {
   return {-fx, fy};
 }
 
-std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample) const {
+std::optional<RealisticCamera::FilmRay> RealisticCamera::filmRay(const CameraSample& sample) const {
   const optics::LensSystem& lens = *lens_.lens;
   const Vec2 film = filmPoint(sample.film_raster);
   const std::optional<optics::PupilSample> ps = pupil_->sample(film, sample.lens);
@@ -72,23 +72,25 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
     }
   }
   const Vec3 to_rear = ps->rear_point_mm - from;
-  const double len = length(to_rear);
-  const Vec3 dir = to_rear / len;
+  const Vec3 dir = to_rear / length(to_rear);
   // The float tracer: it agrees with the double one to ~1e-4 mm (optics tests) and is faster.
-  const optics::TraceResultT<float> r =
-      lens.tracerFloat().traceFromFilm(optics::RayT<float>{Vec3f(from), Vec3f(dir)});
-  if (!r.ok()) return std::nullopt;
+  return FilmRay{optics::RayT<float>{Vec3f(from), Vec3f(dir)}, -dir.z, ps->area_mm2};
+}
+
+std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<float>& r,
+                                                 const FilmRay& f, double time) const {
   double transmission = 1;
   if (!settings_.aperture.isRound() && stop_radius_mm_ > 0) {
     transmission = settings_.aperture.transmission(
         Vec2{r.stop_point.x / stop_radius_mm_, r.stop_point.y / stop_radius_mm_});
     if (transmission <= 0) return std::nullopt;
   }
+  const optics::LensSystem& lens = *lens_.lens;
   // Lens space (mm, +z toward the film) to camera space (camera units, +z toward the scene).
   const double u = settings_.camera_units_per_mm;
   // Camera-space z: distance toward the scene from the film (pbrt-v3/v4) or from the front
   // vertex (the v1/v2 assignment's convention).
-  const double z0 = settings_.origin_at_front_vertex ? 0.0 : z_film;
+  const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens.filmZ_mm();
   const Vec3 o_cam{r.ray.origin.x * u, r.ray.origin.y * u, (z0 - r.ray.origin.z) * u};
   const Vec3 d_cam{double(r.ray.direction.x), double(r.ray.direction.y),
                    -double(r.ray.direction.z)};
@@ -97,12 +99,41 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
   ray.direction = normalize(settings_.world_from_camera.applyVector(d_cam));
   // w = T cos^4(theta) A / z^2 (z: film to the rear-vertex plane, where the pupil is sampled);
   // the film multiplies by the exposure time (and ISO / 100), as pbrt-v4's imaging ratio does.
-  const double cos_theta = -dir.z;
   const double z = lens.filmDistance_mm();
-  const double c2 = cos_theta * cos_theta;
-  ray.weight = transmission * c2 * c2 * ps->area_mm2 / (z * z);
-  ray.time = sample.time * settings_.exposure_time;
+  const double c2 = f.cos_theta * f.cos_theta;
+  ray.weight = transmission * c2 * c2 * f.area_mm2 / (z * z);
+  ray.time = time * settings_.exposure_time;
   return ray;
+}
+
+std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample) const {
+  const std::optional<FilmRay> f = filmRay(sample);
+  if (!f) return std::nullopt;
+  const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f->ray);
+  if (!r.ok()) return std::nullopt;
+  return finish(r, *f, sample.time);
+}
+
+void RealisticCamera::generateRays(const CameraSample* samples, int n,
+                                   std::optional<CameraRay>* rays) const {
+  constexpr int kB = optics::LensTracer<float>::kBatch;
+  static_assert(kB >= kMaxBatch);
+  FilmRay lanes[kB];
+  optics::RayT<float> in[kB];
+  optics::TraceResultT<float> out[kB];
+  int index[kB];
+  int m = 0;
+  for (int i = 0; i < std::min(n, int(kMaxBatch)); ++i) {
+    rays[i].reset();
+    if (std::optional<FilmRay> f = filmRay(samples[i])) {
+      lanes[m] = *f;
+      in[m] = f->ray;
+      index[m++] = i;
+    }
+  }
+  lens_.lens->tracerFloat().traceFromFilmBatch(in, m, out);
+  for (int k = 0; k < m; ++k)
+    if (out[k].ok()) rays[index[k]] = finish(out[k], lanes[k], samples[index[k]].time);
 }
 
 std::string RealisticCamera::describe() const {

@@ -68,6 +68,10 @@ class RealisticCamera final : public Camera {
   explicit RealisticCamera(RealisticSettings settings);
 
   std::optional<CameraRay> generateRay(const CameraSample& sample) const override;
+  /// Traces the samples' rays through the lens side by side (LensTracer::traceFromFilmBatch);
+  /// the same rays as generateRay.
+  void generateRays(const CameraSample* samples, int n,
+                    std::optional<CameraRay>* rays) const override;
   double startupSeconds() const override { return startup_seconds_; }
   std::string describe() const override;
 
@@ -79,6 +83,17 @@ class RealisticCamera final : public Camera {
   std::vector<Diagnostic> diagnostics() const { return lens_.allDiagnostics(); }
 
  private:
+  /// A sample's ray from the film toward its pupil point, before the lens.
+  struct FilmRay {
+    optics::RayT<float> ray;
+    double cos_theta = 1;  ///< to the axis
+    double area_mm2 = 0;   ///< of the sampled pupil region
+  };
+  std::optional<FilmRay> filmRay(const CameraSample& sample) const;
+  /// The camera ray from the lens's exit ray, weighted; nullopt if the aperture shape stops it.
+  std::optional<CameraRay> finish(const optics::TraceResultT<float>& r, const FilmRay& f,
+                                  double time) const;
+
   RealisticSettings settings_;
   optics::FocusedLens lens_;
   std::optional<optics::ExitPupilSampler> pupil_;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace lensim::optics {
@@ -120,6 +121,131 @@ TraceResultT<T> LensTracer<T>::trace(const RayT<T>& in, const TraceOptions& opts
   }
   res.ray = {o, d};
   return res;
+}
+
+template <typename T>
+void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<T>* results) const {
+  // Structure of arrays. Per surface, a branch-free loop over all lanes that the compiler
+  // vectorises (blocked lanes keep computing, their values are ignored; conditions are 0/1
+  // values of type T because GCC does not vectorise mixed bool masks here; the library is
+  // built with -fno-math-errno -fno-trapping-math so that square roots, divisions and selects
+  // can be), then a short loop that records the lanes blocked at that surface.
+  T ox[kBatch], oy[kBatch], oz[kBatch], dx[kBatch], dy[kBatch], dz[kBatch];
+  T px[kBatch], py[kBatch], pz[kBatch], ex[kBatch], ey[kBatch], ez[kBatch];
+  T fate[kBatch];  // 0 through, 1 miss, 2 aperture, 3 total internal reflection
+  T sx[kBatch] = {}, sy[kBatch] = {};
+  bool alive[kBatch];
+  n = std::min(n, kBatch);
+  for (int j = 0; j < kBatch; ++j) {
+    const RayT<T>& r = rays[j < n ? j : 0];
+    ox[j] = r.origin.x, oy[j] = r.origin.y, oz[j] = r.origin.z;
+    dx[j] = r.direction.x, dy[j] = r.direction.y, dz[j] = r.direction.z;
+    alive[j] = j < n;
+  }
+  const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
+  const T zero(0), one(1);
+  for (int i = size() - 1; i >= 0; --i) {
+    const T R = radius_[i], inv_r = inv_radius_[i], zv = z_[i], semi2 = semi2_[i];
+    const T eta_i = eta_after_[i], eta_t = eta_before_[i];
+    const T eta = eta_i / eta_t;
+    const T refracts = eta_i != eta_t ? one : zero;
+    if (R == zero && refracts == zero) {
+      // A plane between equal indices (the stop): no refraction.
+      for (int j = 0; j < kBatch; ++j) {
+        const T rz = oz[j] - zv;
+        const T tq = -rz / dz[j];  // inf or NaN when dz is 0: dropped by the select
+        const T t = dz[j] != zero ? tq : zero;
+        const T hit = dz[j] != zero ? (t >= t_min ? one : zero) : zero;
+        px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
+        const T inside = px[j] * px[j] + py[j] * py[j] <= semi2 ? one : zero;
+        ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
+        fate[j] = hit != zero ? (inside != zero ? zero : T(2)) : one;
+      }
+    } else if (R == zero) {
+      for (int j = 0; j < kBatch; ++j) {
+        const T rz = oz[j] - zv;
+        const T tq = -rz / dz[j];  // inf or NaN when dz is 0: dropped by the select
+        const T t = dz[j] != zero ? tq : zero;
+        const T hit = dz[j] != zero ? (t >= t_min ? one : zero) : zero;
+        px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
+        const T inside = px[j] * px[j] + py[j] * py[j] <= semi2 ? one : zero;
+        T cos_i = dz[j];  // -(n . d) with the normal (0, 0, -1)
+        const T s = cos_i < zero ? -one : one;
+        cos_i *= s;
+        const T sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
+        const T tir = sin2_t >= one ? refracts : zero;
+        const T cos_t = std::sqrt(std::max(zero, one - sin2_t));
+        const T k = (eta * cos_i - cos_t) * s;
+        // n * k = (0, 0, -k)
+        ex[j] = refracts != zero ? dx[j] * eta : dx[j];
+        ey[j] = refracts != zero ? dy[j] * eta : dy[j];
+        ez[j] = refracts != zero ? dz[j] * eta - k : dz[j];
+        fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
+      }
+    } else {
+      for (int j = 0; j < kBatch; ++j) {
+        const T rz = oz[j] - zv;
+        const T b = ox[j] * dx[j] + oy[j] * dy[j] + rz * dz[j] - R * dz[j];
+        const T c = ox[j] * ox[j] + oy[j] * oy[j] + rz * rz - T(2) * R * rz;
+        const T disc = b * b - c;
+        const T root = std::sqrt(std::max(disc, zero));
+        const T q = -(b + (b < zero ? -root : root));  // copysign(root, b) for b != -0
+        const T cq = c / q;  // inf or NaN when q is 0: dropped by the select
+        const T t0 = q, t1 = q != zero ? cq : zero;
+        const T ok0 = t0 >= t_min ? ((rz + t0 * dz[j] - R) * R < zero ? one : zero) : zero;
+        const T ok1 = t1 >= t_min ? ((rz + t1 * dz[j] - R) * R < zero ? one : zero) : zero;
+        const T hit = disc >= zero ? std::max(ok0, ok1) : zero;
+        const T t01 = std::min(t0, t1);
+        const T t = ok0 != zero ? (ok1 != zero ? t01 : t0) : t1;
+        const T nx = (ox[j] + dx[j] * t) * inv_r, ny = (oy[j] + dy[j] * t) * inv_r,
+                nz = (rz + dz[j] * t - R) * inv_r;
+        px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
+        const T inside = px[j] * px[j] + py[j] * py[j] <= semi2 ? one : zero;
+        T cos_i = -(nx * dx[j] + ny * dy[j] + nz * dz[j]);
+        const T s = cos_i < zero ? -one : one;
+        cos_i *= s;
+        const T sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
+        const T tir = sin2_t >= one ? refracts : zero;
+        const T cos_t = std::sqrt(std::max(zero, one - sin2_t));
+        const T k = (eta * cos_i - cos_t) * s;
+        ex[j] = refracts != zero ? dx[j] * eta + nx * k : dx[j];
+        ey[j] = refracts != zero ? dy[j] * eta + ny * k : dy[j];
+        ez[j] = refracts != zero ? dz[j] * eta + nz * k : dz[j];
+        fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
+      }
+    }
+    const bool stop = is_stop_[i] != 0;
+    for (int j = 0; j < n; ++j) {
+      if (!alive[j]) continue;
+      if (fate[j] == one) {
+        results[j] = {RayT<T>{{ox[j], oy[j], oz[j]}, {dx[j], dy[j], dz[j]}},
+                      i,
+                      BlockReason::Miss,
+                      {sx[j], sy[j]}};
+        alive[j] = false;
+        continue;
+      }
+      if (stop) sx[j] = px[j], sy[j] = py[j];
+      if (fate[j] != zero) {
+        results[j] = {
+            RayT<T>{{px[j], py[j], pz[j]}, {dx[j], dy[j], dz[j]}},
+            i,
+            fate[j] == T(2) ? BlockReason::Aperture : BlockReason::TotalInternalReflection,
+            {sx[j], sy[j]}};
+        alive[j] = false;
+      }
+    }
+    for (int j = 0; j < kBatch; ++j) {
+      ox[j] = px[j], oy[j] = py[j], oz[j] = pz[j];
+      dx[j] = ex[j], dy[j] = ey[j], dz[j] = ez[j];
+    }
+  }
+  for (int j = 0; j < n; ++j)
+    if (alive[j])
+      results[j] = {RayT<T>{{ox[j], oy[j], oz[j]}, {dx[j], dy[j], dz[j]}},
+                    -1,
+                    BlockReason::None,
+                    {sx[j], sy[j]}};
 }
 
 template <typename T>

@@ -82,6 +82,13 @@ class LensTracer {
   TraceResultT<T> traceFromScene(const RayT<T>& ray, const TraceOptions& opts = {},
                                  std::vector<Vec3T<T>>* path = nullptr) const;
 
+  /// The most rays traceFromFilmBatch takes at once.
+  static constexpr int kBatch = 16;
+  /// Traces n <= kBatch rays from the film as traceFromFilm does each (same operations, same
+  /// results), surface by surface across the rays: independent rays overlap in the processor,
+  /// which hides the latency of each trace's chain of square roots and divisions.
+  void traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<T>* results) const;
+
   int size() const { return static_cast<int>(radius_.size()); }
 
  private:

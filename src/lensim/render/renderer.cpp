@@ -193,41 +193,57 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             const int tx = tile % tiles_x, ty = tile / tiles_x;
             const int x0 = bounds.x0 + tx * kTile, y0 = bounds.y0 + ty * kTile;
             const int x1 = std::min(x0 + kTile, bounds.x1), y1 = std::min(y0 + kTile, bounds.y1);
+            // A pixel's samples go in batches: first the camera dimensions of each sample, then
+            // the camera rays of the batch together (the realistic camera traces them through
+            // the lens side by side), then each sample's path, the sampler restarted at the
+            // dimension after the camera's. The values are those of one sample at a time.
+            constexpr int kB = camera::Camera::kMaxBatch;
+            camera::CameraSample cs[kB];
+            FilterSample fs[kB];
+            double u_lambda[kB];
+            std::optional<camera::CameraRay> cam_rays[kB];
             for (int y = y0; y < y1; ++y)
               for (int x = x0; x < x1; ++x)
-                for (int i = 0; i < spp; ++i) {
-                  if ((i & 63) == 0 && opt.cancel && opt.cancel->load()) {
+                for (int i0 = 0; i0 < spp; i0 += kB) {
+                  if ((i0 & 63) == 0 && opt.cancel && opt.cancel->load()) {
                     cancelled = true;
                     break;
                   }
-                  sampler->startPixelSample({x, y}, i);
-                  // Dimension order: wavelength, film (filter), lens, time, then the path.
-                  const double u_lambda = sampler->get1D();
-                  const FilterSample fs = filter->sample(sampler->getPixel2D());
-                  const Vec2 u_lens = sampler->get2D();
-                  const double u_time = sampler->get1D();
-                  ++n_samples;
-                  camera::CameraSample cs;
-                  cs.film_raster = {x + 0.5 + fs.p.x, y + 0.5 + fs.p.y};
-                  cs.lens = u_lens;
-                  cs.time = u_time;
-                  SampledWavelengths lambda = SampledWavelengths::sampleVisible(u_lambda);
-                  auto ray = cam->generateRay(cs);
-                  SampledSpectrum L(0.0);
-                  if (!ray) {
-                    ++n_none;
-                  } else {
-                    ++n_rays;
-                    L = pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts) *
-                        ray->weight;
+                  const int m = std::min(kB, spp - i0);
+                  int path_dimension = 0;
+                  for (int k = 0; k < m; ++k) {
+                    sampler->startPixelSample({x, y}, i0 + k);
+                    // Dimension order: wavelength, film (filter), lens, time, then the path.
+                    u_lambda[k] = sampler->get1D();
+                    fs[k] = filter->sample(sampler->getPixel2D());
+                    cs[k].lens = sampler->get2D();
+                    cs[k].time = sampler->get1D();
+                    cs[k].film_raster = {x + 0.5 + fs[k].p.x, y + 0.5 + fs[k].p.y};
+                    path_dimension = sampler->dimension();
                   }
-                  bool finite = true;
-                  for (int k = 0; k < kSpectrumSamples; ++k) finite = finite && std::isfinite(L[k]);
-                  if (!finite) {
-                    ++n_bad;
-                    continue;
+                  cam->generateRays(cs, m, cam_rays);
+                  for (int k = 0; k < m; ++k) {
+                    ++n_samples;
+                    SampledWavelengths lambda = SampledWavelengths::sampleVisible(u_lambda[k]);
+                    const std::optional<camera::CameraRay>& ray = cam_rays[k];
+                    SampledSpectrum L(0.0);
+                    if (!ray) {
+                      ++n_none;
+                    } else {
+                      ++n_rays;
+                      sampler->startPixelSample({x, y}, i0 + k, path_dimension);
+                      L = pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts) *
+                          ray->weight;
+                    }
+                    bool finite = true;
+                    for (int c = 0; c < kSpectrumSamples; ++c)
+                      finite = finite && std::isfinite(L[c]);
+                    if (!finite) {
+                      ++n_bad;
+                      continue;
+                    }
+                    film.addSample(x, y, L, lambda, fs[k].weight);
                   }
-                  film.addSample(x, y, L, lambda, fs.weight);
                 }
             camera_samples += n_samples;
             camera_rays += n_rays;

@@ -29,6 +29,7 @@ void IndependentSampler::startPixelSample(Point2i pixel, int sample_index, int d
   // Each sample index gets its own stretch of the stream (2^16 values per sample, 2 per value).
   rng_ = Rng(hashValues({pixelKey(pixel), static_cast<uint64_t>(seed_), 1}), 0);
   rng_.advance((static_cast<uint64_t>(sample_index) << 17) + 2 * static_cast<uint64_t>(dimension));
+  dim_ = dimension;
 }
 
 std::unique_ptr<Sampler> IndependentSampler::clone() const {

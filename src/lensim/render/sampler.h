@@ -33,6 +33,9 @@ class Sampler {
   virtual Vec2 get2D() = 0;
   /// The 2-D value for the film position within the pixel (the first dimensions).
   virtual Vec2 getPixel2D() { return get2D(); }
+  /// The dimension the next value comes from (as startPixelSample counts them): drawing up to
+  /// here and restarting the sample at this dimension give the same values from then on.
+  virtual int dimension() const = 0;
   /// An independent copy with the same parameters, for another thread.
   virtual std::unique_ptr<Sampler> clone() const = 0;
 };
@@ -43,12 +46,21 @@ class IndependentSampler final : public Sampler {
   explicit IndependentSampler(int samples_per_pixel, int seed = 0);
   int samplesPerPixel() const override { return spp_; }
   void startPixelSample(Point2i pixel, int sample_index, int dimension = 0) override;
-  double get1D() override { return rng_.uniform(); }
-  Vec2 get2D() override { return {rng_.uniform(), rng_.uniform()}; }
+  double get1D() override {
+    ++dim_;
+    return rng_.uniform();
+  }
+  Vec2 get2D() override {
+    dim_ += 2;
+    const double a = rng_.uniform();
+    return {a, rng_.uniform()};
+  }
+  int dimension() const override { return dim_; }
   std::unique_ptr<Sampler> clone() const override;
 
  private:
   int spp_, seed_;
+  int dim_ = 0;
   Rng rng_;
 };
 
@@ -62,6 +74,7 @@ class StratifiedSampler final : public Sampler {
   void startPixelSample(Point2i pixel, int sample_index, int dimension = 0) override;
   double get1D() override;
   Vec2 get2D() override;
+  int dimension() const override { return dim_; }
   std::unique_ptr<Sampler> clone() const override;
 
  private:
@@ -83,6 +96,7 @@ class PaddedSobolSampler final : public Sampler {
   void startPixelSample(Point2i pixel, int sample_index, int dimension = 0) override;
   double get1D() override;
   Vec2 get2D() override;
+  int dimension() const override { return dim_; }
   std::unique_ptr<Sampler> clone() const override;
 
  private:

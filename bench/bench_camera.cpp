@@ -1,0 +1,63 @@
+// The realistic camera's cost per sample (film point -> pupil sample -> exact trace -> weight),
+// for the four assignment (dof-dragons) set-ups: 300x300 pixels, 70 mm film diagonal, the
+// scenes' film distances and stops, pbrt-v1/v2 conventions. Counters: samples/s, and the share of
+// samples that yield a ray. Run with bench/run.
+#include <benchmark/benchmark.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "lensim/camera/realistic.h"
+
+using namespace lensim;
+using namespace lensim::camera;
+
+namespace {
+
+struct Setup {
+  const char* lens;
+  double film_distance_mm, aperture_mm;
+};
+
+void BM_RealisticCameraSample(benchmark::State& state, Setup setup) {
+  RealisticSettings s;
+  s.lens_path = std::string(LENSIM_SOURCE_DIR) + "/lenses/" + setup.lens;
+  s.setup.film_distance_mm = setup.film_distance_mm;
+  s.setup.aperture_diameter_mm = setup.aperture_mm;
+  s.film_diagonal_mm = 70;
+  s.x_resolution = s.y_resolution = 300;
+  s.camera_units_per_mm = 1;
+  s.exposure_time = 1;
+  s.rear_disc_only = s.origin_at_front_vertex = true;
+  const RealisticCamera cam(s);
+  std::mt19937_64 rng(1);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<CameraSample> samples(1 << 14);
+  for (CameraSample& c : samples) c = {{300 * u(rng), 300 * u(rng)}, {u(rng), u(rng)}, 0};
+  size_t i = 0, n = 0, rays = 0;
+  for (auto _ : state) {
+    const auto r = cam.generateRay(samples[i]);
+    benchmark::DoNotOptimize(r);
+    rays += r.has_value();
+    ++n;
+    if (++i == samples.size()) i = 0;
+  }
+  state.counters["samples/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
+  state.counters["rays"] = n ? double(rays) / n : 0.0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  for (const Setup& s :
+       {Setup{"dgauss.50mm.dat", 36.77, 17.1}, Setup{"telephoto.250mm.dat", 123.7439, 40.5},
+        Setup{"wide.22mm.dat", 14.54, 8.756}, Setup{"fisheye.10mm.dat", 23.192, 6.08}})
+    benchmark::RegisterBenchmark((std::string("RealisticCameraSample/") + s.lens).c_str(),
+                                 BM_RealisticCameraSample, s);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
