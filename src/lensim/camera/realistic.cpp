@@ -50,10 +50,9 @@ Vec2 RealisticCamera::filmPoint(Vec2 raster) const {
   return {-fx, fy};
 }
 
-std::optional<RealisticCamera::FilmRay> RealisticCamera::filmRay(const CameraSample& sample) const {
+std::optional<RealisticCamera::FilmRay> RealisticCamera::filmRay(
+    const CameraSample& sample, Vec2 film, const std::optional<optics::PupilSample>& ps) const {
   const optics::LensSystem& lens = *lens_.lens;
-  const Vec2 film = filmPoint(sample.film_raster);
-  const std::optional<optics::PupilSample> ps = pupil_->sample(film, sample.lens);
   if (!ps) return std::nullopt;
   if (settings_.rear_disc_only) {
     const double rr = lens.interfaces().back().semi_aperture_mm;
@@ -107,7 +106,8 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
 }
 
 std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample) const {
-  const std::optional<FilmRay> f = filmRay(sample);
+  const Vec2 film = filmPoint(sample.film_raster);
+  const std::optional<FilmRay> f = filmRay(sample, film, pupil_->sample(film, sample.lens));
   if (!f) return std::nullopt;
   const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f->ray);
   if (!r.ok()) return std::nullopt;
@@ -121,11 +121,20 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
   FilmRay lanes[kB];
   optics::RayT<float> in[kB];
   optics::TraceResultT<float> out[kB];
+  static_assert(optics::ExitPupilSampler::kBatch >= kMaxBatch);
   int index[kB];
+  Vec2 film[kB], u[kB];
+  std::optional<optics::PupilSample> ps[kB];
+  n = std::min(n, int(kMaxBatch));
+  for (int i = 0; i < n; ++i) {
+    film[i] = filmPoint(samples[i].film_raster);
+    u[i] = samples[i].lens;
+  }
+  pupil_->sampleBatch(film, u, n, ps);
   int m = 0;
-  for (int i = 0; i < std::min(n, int(kMaxBatch)); ++i) {
+  for (int i = 0; i < n; ++i) {
     rays[i].reset();
-    if (std::optional<FilmRay> f = filmRay(samples[i])) {
+    if (std::optional<FilmRay> f = filmRay(samples[i], film[i], ps[i])) {
       lanes[m] = *f;
       in[m] = f->ray;
       index[m++] = i;

@@ -89,7 +89,10 @@ class RealisticCamera final : public Camera {
     double cos_theta = 1;  ///< to the axis
     double area_mm2 = 0;   ///< of the sampled pupil region
   };
-  std::optional<FilmRay> filmRay(const CameraSample& sample) const;
+  /// The ray from the sample's film point toward its pupil point (ps: the pupil sample drawn
+  /// for that film point).
+  std::optional<FilmRay> filmRay(const CameraSample& sample, Vec2 film,
+                                 const std::optional<optics::PupilSample>& ps) const;
   /// The camera ray from the lens's exit ray, weighted; nullopt if the aperture shape stops it.
   std::optional<CameraRay> finish(const optics::TraceResultT<float>& r, const FilmRay& f,
                                   double time) const;

@@ -136,7 +136,9 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
   T sx[kBatch] = {}, sy[kBatch] = {};
   bool alive[kBatch];
   n = std::min(n, kBatch);
-  for (int j = 0; j < kBatch; ++j) {
+  // Lanes computed: n rounded up to a multiple of 4 (a vector of floats), the rest copies.
+  const int nv = std::min(kBatch, (n + 3) & ~3);
+  for (int j = 0; j < nv; ++j) {
     const RayT<T>& r = rays[j < n ? j : 0];
     ox[j] = r.origin.x, oy[j] = r.origin.y, oz[j] = r.origin.z;
     dx[j] = r.direction.x, dy[j] = r.direction.y, dz[j] = r.direction.z;
@@ -151,7 +153,7 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
     const T refracts = eta_i != eta_t ? one : zero;
     if (R == zero && refracts == zero) {
       // A plane between equal indices (the stop): no refraction.
-      for (int j = 0; j < kBatch; ++j) {
+      for (int j = 0; j < nv; ++j) {
         const T rz = oz[j] - zv;
         const T tq = -rz / dz[j];  // inf or NaN when dz is 0: dropped by the select
         const T t = dz[j] != zero ? tq : zero;
@@ -162,7 +164,7 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         fate[j] = hit != zero ? (inside != zero ? zero : T(2)) : one;
       }
     } else if (R == zero) {
-      for (int j = 0; j < kBatch; ++j) {
+      for (int j = 0; j < nv; ++j) {
         const T rz = oz[j] - zv;
         const T tq = -rz / dz[j];  // inf or NaN when dz is 0: dropped by the select
         const T t = dz[j] != zero ? tq : zero;
@@ -183,7 +185,7 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
     } else {
-      for (int j = 0; j < kBatch; ++j) {
+      for (int j = 0; j < nv; ++j) {
         const T rz = oz[j] - zv;
         const T b = ox[j] * dx[j] + oy[j] * dy[j] + rz * dz[j] - R * dz[j];
         const T c = ox[j] * ox[j] + oy[j] * oy[j] + rz * rz - T(2) * R * rz;
@@ -235,7 +237,7 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         alive[j] = false;
       }
     }
-    for (int j = 0; j < kBatch; ++j) {
+    for (int j = 0; j < nv; ++j) {
       ox[j] = px[j], oy[j] = py[j], oz[j] = pz[j];
       dx[j] = ex[j], dy[j] = ey[j], dz[j] = ez[j];
     }

@@ -253,14 +253,13 @@ void ExitPupilSampler::buildIntervals(const std::vector<Polygon>& nodes,
         iv.A[j] = pa.radius[j] * scales[k][j];
         iv.B[j] = pb.radius[j] * scales[k][j];
       }
-      iv.P0.assign(nd + 1, 0.0);
-      iv.P1.assign(nd + 1, 0.0);
-      iv.P2.assign(nd + 1, 0.0);
+      iv.P.assign(3 * size_t(nd + 1), 0.0);
       for (int j = 0; j < nd; ++j) {
         const int j1 = (j + 1) % nd;
-        iv.P0[j + 1] = iv.P0[j] + iv.A[j] * iv.A[j1];
-        iv.P1[j + 1] = iv.P1[j] + iv.A[j] * iv.B[j1] + iv.B[j] * iv.A[j1];
-        iv.P2[j + 1] = iv.P2[j] + iv.B[j] * iv.B[j1];
+        double* p = &iv.P[3 * size_t(j)];
+        p[3] = p[0] + iv.A[j] * iv.A[j1];
+        p[4] = p[1] + iv.A[j] * iv.B[j1] + iv.B[j] * iv.A[j1];
+        p[5] = p[2] + iv.B[j] * iv.B[j1];
       }
     }
     intervals_.push_back(std::move(iv));
@@ -269,46 +268,76 @@ void ExitPupilSampler::buildIntervals(const std::vector<Polygon>& nodes,
 
 const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double& t, double& cos_a,
                                                            double& sin_a) const {
-  const double r = std::hypot(film_mm.x, film_mm.y);
+  // Film coordinates are millimetres: no overflow for hypot to guard against.
+  const double r = std::sqrt(film_mm.x * film_mm.x + film_mm.y * film_mm.y);
   if (r > film_radius_mm_ * (1 + 1e-9) || intervals_.empty()) return nullptr;
   const Interval& iv = intervals_[intervalFor(r)];
   if (iv.empty) return nullptr;
   t = iv.r1 > iv.r0 ? std::clamp((r - iv.r0) / (iv.r1 - iv.r0), 0.0, 1.0) : 0.0;
-  cos_a = r > 0 ? film_mm.x / r : 1.0;
-  sin_a = r > 0 ? film_mm.y / r : 0.0;
+  const double inv_r = r > 0 ? 1 / r : 0.0;
+  cos_a = r > 0 ? film_mm.x * inv_r : 1.0;
+  sin_a = r > 0 ? film_mm.y * inv_r : 0.0;
   return &iv;
 }
 
 std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u) const {
-  double t, ca, sa;
-  const Interval* iv = locate(film_mm, t, ca, sa);
-  if (!iv) return std::nullopt;
+  std::optional<PupilSample> out;
+  sampleBatch(&film_mm, &u, 1, &out);
+  return out;
+}
+
+void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
+                                   std::optional<PupilSample>* out) const {
   const int nd = directions_;
-  const double w0 = (1 - t) * (1 - t), w1 = t * (1 - t), w2 = t * t;
-  auto cum = [&](int j) { return w0 * iv->P0[j] + w1 * iv->P1[j] + w2 * iv->P2[j]; };
-  // Pick a triangle of the fan by area (binary search on the cumulative areas), reusing u.x for
-  // the position inside it.
-  const double total = cum(nd);
-  const double target = u.x * total;
-  int lo = 0, hi = nd - 1;
-  while (lo < hi) {
-    const int mid = (lo + hi) / 2;
-    if (cum(mid + 1) > target)
-      hi = mid;
-    else
-      lo = mid + 1;
+  const Interval* iv[kBatch];
+  double t[kBatch], ca[kBatch], sa[kBatch], w0[kBatch], w1[kBatch], w2[kBatch], target[kBatch],
+      total[kBatch];
+  int lo[kBatch], lane[kBatch];
+  int m = 0;
+  auto cum = [&](int k, int j) {
+    const double* P = iv[k]->P.data() + 3 * j;
+    return w0[k] * P[0] + w1[k] * P[1] + w2[k] * P[2];
+  };
+  for (int i = 0; i < std::min(n, kBatch); ++i) {
+    out[i].reset();
+    const Interval* v = locate(film_mm[i], t[m], ca[m], sa[m]);
+    if (!v) continue;
+    iv[m] = v;
+    const double tt = t[m];
+    w0[m] = (1 - tt) * (1 - tt), w1[m] = tt * (1 - tt), w2[m] = tt * tt;
+    total[m] = cum(m, nd);
+    target[m] = u[i].x * total[m];
+    lo[m] = 0;
+    lane[m++] = i;
   }
-  const int j = lo, j1 = (j + 1) % nd;
-  const double c_lo = cum(j), tri = cum(j + 1) - c_lo;
-  const double ux = tri > 0 ? std::clamp((target - c_lo) / tri, 0.0, 1.0) : 0.0;
-  const double s = std::sqrt(ux);
-  const Vec2 a = dirs_[j] * (iv->A[j] * (1 - t) + iv->B[j] * t);
-  const Vec2 b = dirs_[j1] * (iv->A[j1] * (1 - t) + iv->B[j1] * t);
-  const Vec2 centre = iv->c0 * (1 - t) + iv->c1 * t;
-  const Vec2 local = centre + (a * (1 - u.y) + b * u.y) * s;
-  // Rotate from the +x film frame to the film point's azimuth.
-  return PupilSample{{ca * local.x - sa * local.y, sa * local.x + ca * local.y, z_rear_mm_},
-                     0.5 * total * dirs_[1].y};
+  // Pick a triangle of the fan by area, reusing u.x for the position inside it: j is the first
+  // triangle whose cumulative area cum(j + 1) exceeds the target (the last if none does), found
+  // by a branch-free binary search over cum(1 .. nd - 1) (its comparisons are unpredictable), the
+  // same number of steps for every point.
+  for (int len = nd - 1; len > 1;) {
+    const int half = len / 2;
+    for (int k = 0; k < m; ++k)
+      lo[k] = cum(k, lo[k] + half + 1) <= target[k] ? lo[k] + half : lo[k];
+    len -= half;
+  }
+  for (int k = 0; k < m; ++k) {
+    const int j = std::min(lo[k] + (cum(k, lo[k] + 1) <= target[k] ? 1 : 0), nd - 1);
+    const int j1 = (j + 1) % nd;
+    const double c_lo = cum(k, j), tri = cum(k, j + 1) - c_lo;
+    const double ux = tri > 0 ? std::clamp((target[k] - c_lo) / tri, 0.0, 1.0) : 0.0;
+    const double s = std::sqrt(ux);
+    const double tt = t[k];
+    const Interval& v = *iv[k];
+    const Vec2 a = dirs_[j] * (v.A[j] * (1 - tt) + v.B[j] * tt);
+    const Vec2 b = dirs_[j1] * (v.A[j1] * (1 - tt) + v.B[j1] * tt);
+    const Vec2 centre = v.c0 * (1 - tt) + v.c1 * tt;
+    const double uy = u[lane[k]].y;
+    const Vec2 local = centre + (a * (1 - uy) + b * uy) * s;
+    // Rotate from the +x film frame to the film point's azimuth.
+    out[lane[k]] = PupilSample{
+        {ca[k] * local.x - sa[k] * local.y, sa[k] * local.x + ca[k] * local.y, z_rear_mm_},
+        0.5 * total[k] * dirs_[1].y};
+  }
 }
 
 bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm) const {
@@ -335,8 +364,8 @@ double ExitPupilSampler::area_mm2(Vec2 film_mm) const {
   const Interval* iv = locate(film_mm, t, ca, sa);
   if (!iv) return 0.0;
   const int nd = directions_;
-  const double total =
-      (1 - t) * (1 - t) * iv->P0[nd] + t * (1 - t) * iv->P1[nd] + t * t * iv->P2[nd];
+  const double total = (1 - t) * (1 - t) * iv->P[3 * nd] + t * (1 - t) * iv->P[3 * nd + 1] +
+                       t * t * iv->P[3 * nd + 2];
   return 0.5 * total * dirs_[1].y;
 }
 

@@ -48,6 +48,12 @@ class ExitPupilSampler {
   /// A uniformly distributed point of the bound for the film point, from u in [0,1)^2; nullopt
   /// where the film point sees nothing (outside the image circle).
   std::optional<PupilSample> sample(Vec2 film_mm, Vec2 u) const;
+  /// The most film points sampleBatch takes at once.
+  static constexpr int kBatch = 16;
+  /// sample() for n <= kBatch film points, the same results; the binary searches of the points
+  /// run side by side, so that their chains of dependent loads overlap.
+  void sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
+                   std::optional<PupilSample>* out) const;
 
   /// Whether the bound for the film point contains the rear-plane point.
   bool contains(Vec2 film_mm, Vec2 rear_mm) const;
@@ -79,8 +85,8 @@ class ExitPupilSampler {
     double r0 = 0, r1 = 0;
     bool empty = true;
     Vec2 c0, c1;
-    std::vector<double> A, B;        // per vertex
-    std::vector<double> P0, P1, P2;  // prefix sums, size n + 1
+    std::vector<double> A, B;  // per vertex
+    std::vector<double> P;     // prefix sums P0, P1, P2 interleaved: 3 (n + 1) values
   };
   void buildIntervals(const std::vector<Polygon>& nodes,
                       const std::vector<std::vector<double>>& scales);
