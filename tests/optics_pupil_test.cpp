@@ -125,3 +125,59 @@ TEST(ExitPupilSampler, BuildsQuickly) {
     EXPECT_LT(sampler.tracesAtBuild(), 400000) << c.file;
   }
 }
+
+// Bounds limited to the rear element's disc (the pbrt-v1/v2 assignment's aiming rule), in the
+// assignment's four set-ups (70 mm film, its film distances and stops): every ray through the
+// disc that gets through the lens lies inside them, and at most 5% of the samples they give are
+// blocked (by the lens or by falling outside the disc).
+TEST(ExitPupilSampler, RearDiscBoundsForTheAssignmentSetUps) {
+  struct SetUp {
+    const char* file;
+    double film_distance_mm, aperture_mm;
+  } setups[] = {{"dgauss.50mm.dat", 36.77, 17.1},
+                {"telephoto.250mm.dat", 123.7439, 40.5},
+                {"wide.22mm.dat", 14.54, 8.756},
+                {"fisheye.10mm.dat", 23.192, 6.08}};
+  for (const SetUp& s : setups) {
+    SCOPED_TRACE(s.file);
+    FocusedLens fl =
+        focusLens(readLensFile(lensPath(s.file)),
+                  {.aperture_diameter_mm = s.aperture_mm, .film_distance_mm = s.film_distance_mm});
+    const double disc = fl.lens->interfaces().back().semi_aperture_mm;
+    ExitPupilOptions o;
+    o.rear_disc_radius_mm = disc;
+    o.radial_bins = 48;  // as the realistic camera builds them in this mode
+    const double film_radius = 35.0;
+    ExitPupilSampler sampler(*fl.lens, fl.paraxial, film_radius, o);
+    std::mt19937_64 rng(23);
+    std::uniform_real_distribution<double> u(0, 1);
+    auto squareFilm = [&] {  // uniform over the square 300x300 film of 70 mm diagonal
+      const double half = film_radius / std::sqrt(2.0);
+      return Vec2{(2 * u(rng) - 1) * half, (2 * u(rng) - 1) * half};
+    };
+    int passing = 0, outside = 0;
+    for (int k = 0; k < 200000; ++k) {
+      const Vec2 film = squareFilm();
+      const double r = disc * std::sqrt(u(rng)), phi = 2 * std::numbers::pi * u(rng);
+      const Vec2 a{r * std::cos(phi), r * std::sin(phi)};
+      if (!fl.lens->traceFromFilmPoint(film, a).ok()) continue;
+      ++passing;
+      outside += !sampler.contains(film, a);
+    }
+    EXPECT_GT(passing, 1000);
+    EXPECT_EQ(outside, 0) << outside << " of " << passing << " passing rays outside the bounds";
+    int samples = 0, wasted = 0;
+    for (int k = 0; k < 100000; ++k) {
+      const Vec2 film = squareFilm();
+      auto p = sampler.sample(film, {u(rng), u(rng)});
+      if (!p) continue;
+      ++samples;
+      const Vec3& q = p->rear_point_mm;
+      wasted += q.x * q.x + q.y * q.y > disc * disc ||
+                !fl.lens->traceFromFilmPoint(film, {q.x, q.y}).ok();
+    }
+    std::printf("%s: %d passing rays, %.2f%% of %d samples wasted\n", s.file, passing,
+                100.0 * wasted / samples, samples);
+    EXPECT_LE(double(wasted) / samples, 0.05);
+  }
+}

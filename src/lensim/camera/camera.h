@@ -53,6 +53,9 @@ class Camera {
                             std::optional<CameraRay>* rays) const {
     for (int i = 0; i < n; ++i) rays[i] = generateRay(samples[i]);
   }
+  /// Whether light reaches the film at this raster position at all (false outside a lens's
+  /// image circle), for render statistics: samples there yield no ray by design.
+  virtual bool reachesFilm(Vec2 /*film_raster*/) const { return true; }
   /// Seconds spent building the camera (lens set-up, pupil bounds), for render statistics.
   virtual double startupSeconds() const { return 0; }
   /// One line for logs: the type and its main settings.

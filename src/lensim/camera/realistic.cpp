@@ -38,7 +38,15 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   const double width = settings_.film_diagonal_mm / std::sqrt(1 + aspect * aspect);
   half_width_mm_ = width / 2;
   half_height_mm_ = aspect * width / 2;
-  pupil_.emplace(*lens_.lens, lens_.paraxial, std::hypot(half_width_mm_, half_height_mm_));
+  optics::ExitPupilOptions pupil_options;
+  if (settings_.rear_disc_only) {
+    // The disc's edge makes the region change faster across the film: twice the radial nodes
+    // keep the waste under 5% (fisheye: 5.1% with the default 24, 4.3% with 48).
+    pupil_options.rear_disc_radius_mm = lens_.lens->interfaces().back().semi_aperture_mm;
+    pupil_options.radial_bins = 48;
+  }
+  pupil_.emplace(*lens_.lens, lens_.paraxial, std::hypot(half_width_mm_, half_height_mm_),
+                 pupil_options);
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -143,6 +151,10 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
   lens_.lens->tracerFloat().traceFromFilmBatch(in, m, out);
   for (int k = 0; k < m; ++k)
     if (out[k].ok()) rays[index[k]] = finish(out[k], lanes[k], samples[index[k]].time);
+}
+
+bool RealisticCamera::reachesFilm(Vec2 film_raster) const {
+  return pupil_->area_mm2(filmPoint(film_raster)) > 0;
 }
 
 std::string RealisticCamera::describe() const {

@@ -73,6 +73,7 @@ class RealisticCamera final : public Camera {
   void generateRays(const CameraSample* samples, int n,
                     std::optional<CameraRay>* rays) const override;
   double startupSeconds() const override { return startup_seconds_; }
+  bool reachesFilm(Vec2 film_raster) const override;
   std::string describe() const override;
 
   /// The lens as set up (film position, stop, paraxial data).

@@ -33,7 +33,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   const double dphi = 2 * std::numbers::pi / nd;
   const double rr = 1.5 * lens.interfaces().back().semi_aperture_mm;
 
+  const double disc2 = opts.rear_disc_radius_mm * opts.rear_disc_radius_mm;
   auto passes = [&](double h, Vec2 a) {
+    if (disc2 > 0 && a.x * a.x + a.y * a.y > disc2) return false;
     ++traces_;
     return lens.traceFromFilmPoint({h, 0}, a).ok();
   };

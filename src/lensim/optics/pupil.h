@@ -31,6 +31,10 @@ struct ExitPupilOptions {
   int radial_bins = 24;  ///< intervals across the film radius (before refinement)
   int directions = 48;   ///< polygon vertices
   double margin = 0.01;  ///< relative widening beyond the traced boundary
+  /// If > 0, only rear-plane points within this distance of the axis count as passing: the
+  /// bounds then cover the part of the region inside that disc (for a camera that aims only at
+  /// the rear element's disc, as the CS348B assignment's did).
+  double rear_disc_radius_mm = 0;
 };
 
 /// A point to aim a camera ray at, and the area of the region it was drawn from (pdf = 1/area).

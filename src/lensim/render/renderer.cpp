@@ -130,7 +130,8 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const int tiles_y = (bounds.height() + kTile - 1) / kTile;
   const int n_tiles = tiles_x * tiles_y;
   std::atomic<int> tiles_done{0};
-  std::atomic<uint64_t> camera_samples{0}, camera_rays{0}, no_ray{0}, nonfinite{0}, rays{0};
+  std::atomic<uint64_t> camera_samples{0}, camera_rays{0}, no_ray{0}, outside{0}, nonfinite{0},
+      rays{0};
   std::atomic<bool> cancelled{false};
   const int threads =
       opt.threads > 0 ? opt.threads : std::max(1, int(std::thread::hardware_concurrency()));
@@ -189,7 +190,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
               return;
             }
             RayCounts counts;
-            uint64_t n_samples = 0, n_rays = 0, n_none = 0, n_bad = 0;
+            uint64_t n_samples = 0, n_rays = 0, n_none = 0, n_outside = 0, n_bad = 0;
             const int tx = tile % tiles_x, ty = tile / tiles_x;
             const int x0 = bounds.x0 + tx * kTile, y0 = bounds.y0 + ty * kTile;
             const int x1 = std::min(x0 + kTile, bounds.x1), y1 = std::min(y0 + kTile, bounds.y1);
@@ -229,6 +230,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     SampledSpectrum L(0.0);
                     if (!ray) {
                       ++n_none;
+                      n_outside += !cam->reachesFilm(cs[k].film_raster);
                     } else {
                       ++n_rays;
                       sampler->startPixelSample({x, y}, i0 + k, path_dimension);
@@ -248,6 +250,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             camera_samples += n_samples;
             camera_rays += n_rays;
             no_ray += n_none;
+            outside += n_outside;
             nonfinite += n_bad;
             rays += counts.intersect + counts.shadow;
             ++tiles_done;
@@ -263,6 +266,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   st.camera_samples = camera_samples;
   st.camera_rays = camera_rays;
   st.no_ray_samples = no_ray;
+  st.outside_samples = outside;
   st.nonfinite_samples = nonfinite;
   st.rays = rays;
   st.partial = cancelled.load() || tiles_done.load() < n_tiles;
@@ -289,7 +293,11 @@ std::string formatStats(const RenderStats& s) {
                      double(s.camera_samples) / w);
   out += fmt::format("camera rays          {} ({:.3g} camera rays/s)\n", s.camera_rays,
                      double(s.camera_rays) / w);
-  out += fmt::format("samples without ray  {}\n", s.no_ray_samples);
+  const uint64_t inside = s.camera_samples - s.outside_samples;
+  out += fmt::format(
+      "samples without ray  {} ({} where no light reaches the film; {:.2f}% of the other {})\n",
+      s.no_ray_samples, s.outside_samples,
+      inside ? 100.0 * double(s.no_ray_samples - s.outside_samples) / double(inside) : 0.0, inside);
   out += fmt::format("rays traced          {} ({:.3g} rays/s)\n", s.rays, double(s.rays) / w);
   out += fmt::format("NaN/inf samples      {} (discarded)\n", s.nonfinite_samples);
   return out;

@@ -43,6 +43,8 @@ struct RenderStats {
   uint64_t camera_samples = 0;     ///< camera samples taken
   uint64_t camera_rays = 0;        ///< camera samples that produced a ray
   uint64_t no_ray_samples = 0;     ///< camera samples without a ray (blocked by the lens)
+  uint64_t outside_samples = 0;    ///< of those, samples where no light reaches the film (outside
+                                   ///< the image circle: camera::Camera::reachesFilm)
   uint64_t nonfinite_samples = 0;  ///< NaN/inf radiance samples, discarded
   uint64_t rays = 0;               ///< all rays traced (intersection and shadow)
   int spp = 0;
