@@ -205,6 +205,15 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     left = right;
   }
   buildIntervals(done, scales);
+  // A table from film radius to the first interval that can hold it, so that a lookup is a
+  // table read and a step or two instead of a binary search.
+  if (!intervals_.empty() && film_radius_mm_ > 0) {
+    constexpr int kLut = 512;
+    std::vector<int> lut(kLut + 1);
+    for (int k = 0; k <= kLut; ++k) lut[size_t(k)] = intervalFor(film_radius_mm_ * k / kLut);
+    lut_scale_ = kLut / film_radius_mm_;
+    radius_lut_ = std::move(lut);
+  }
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -228,6 +237,15 @@ bool ExitPupilSampler::interpolateBetween(const Polygon& a, const Polygon& b, do
 
 int ExitPupilSampler::intervalFor(double r) const {
   // Intervals are sorted by radius; the first whose upper end reaches r.
+  const int last = static_cast<int>(intervals_.size()) - 1;
+  if (!radius_lut_.empty()) {
+    // The table's entry for the radius below r is the first interval reaching that radius, at
+    // or before the answer.
+    const double x = std::max(0.0, r * lut_scale_);
+    int k = radius_lut_[std::min(size_t(x), radius_lut_.size() - 1)];
+    while (k < last && intervals_[size_t(k)].r1 < r) ++k;
+    return k;
+  }
   auto it = std::lower_bound(intervals_.begin(), intervals_.end(), r,
                              [](const Interval& iv, double v) { return iv.r1 < v; });
   const int k = static_cast<int>(it - intervals_.begin());

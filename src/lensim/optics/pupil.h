@@ -102,6 +102,8 @@ class ExitPupilSampler {
   int directions_;
   std::vector<Vec2> dirs_;  // unit vectors of the polygon directions
   std::vector<Interval> intervals_;
+  std::vector<int> radius_lut_;  // first interval for film radii k / lut_scale_
+  double lut_scale_ = 0;
   double build_seconds_ = 0;
   long traces_ = 0;
 };
