@@ -62,6 +62,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // A point inside the region at film radius h: the chief ray or pupil grids, else (near the
   // edge of the image circle, where the region is tiny) a fine grid around a neighbour's polygon.
   auto findInside = [&](double h, const Polygon* hint) -> std::optional<Vec2> {
+    // The neighbouring polygon's centre usually lies inside; the real chief ray's search costs
+    // many traces.
+    if (hint && !hint->empty && passes(h, hint->centre)) return hint->centre;
     std::optional<Vec2> c = passingRearAim(lens, p, h);
     if (c && passes(h, *c)) return c;
     if (!hint || hint->empty) return std::nullopt;
