@@ -174,6 +174,58 @@ TEST(RealisticRender, FlatFieldAndExposure) {
   EXPECT_NEAR(e_full / e_half, 4.0, 0.15);
 }
 
+// pbrt-v3's "simpleweighting" (the default in v3 files): pixel values on a pinhole's scale. The
+// same flat field written in v3 syntax reads about L = 1 at the centre (0.94: the mean cos^4 of
+// the rays and the 2% of samples the lens blocks), exactly the irradiance render's value times
+// z^2 / A0 (film distance, sampled area at the centre), and falls off toward the corner as the
+// irradiance render does.
+TEST(RealisticRender, SimpleWeightingOfPbrtV3ReadsRadianceAtTheCentre) {
+  const auto dir = std::filesystem::temp_directory_path() / "lensim_render_realistic_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "v3.pbrt").string();
+  {
+    std::ofstream f(path);
+    f << "Camera \"realistic\" \"string lensfile\" \"" << lensim::test::lensPath("dgauss.50mm.dat")
+      << "\" \"float aperturediameter\" 12 \"float focusdistance\" 3\n"
+      << "Film \"image\" \"integer xresolution\" 24 \"integer yresolution\" 24 "
+         "\"float diagonal\" 35\n"
+      << "Sampler \"random\" \"integer pixelsamples\" 64\n"
+      << "PixelFilter \"box\" \"float xwidth\" 0.5 \"float ywidth\" 0.5\n"
+      << "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nWorldEnd\n";
+  }
+  render::RenderOptions o;
+  o.seed = 4;
+  const scene::Scene v3 = scene::loadScene(path);
+  ASSERT_TRUE(v3.camera.realistic && v3.camera.realistic->simple_weighting);
+  const io::Image simple = render::render(v3, o).image;
+  const io::Image irradiance =
+      render::render(scene::loadScene(writeFlatField("v4.pbrt", 12)), o).image;
+  auto corner = [](const io::Image& im) {
+    double sum = 0;
+    for (int y = 0; y < 3; ++y)
+      for (int x = 0; x < 3; ++x)
+        for (int c = 0; c < 3; ++c) sum += im.at(x, y, c) / 27;
+    return sum;
+  };
+  const double centre = centreMean(simple);
+  camera::RealisticSettings s;
+  s.lens_path = lensim::test::lensPath("dgauss.50mm.dat");
+  s.setup.aperture_diameter_mm = 12;
+  s.setup.focus_distance_m = 3;
+  s.film_diagonal_mm = 35;
+  s.x_resolution = s.y_resolution = 24;
+  const camera::RealisticCamera cam(s);
+  const double z = cam.lens().lens->filmDistance_mm();
+  const double expected = centreMean(irradiance) * z * z / cam.centreAreaMm2();
+  std::printf(
+      "simple weighting: centre %.4f (irradiance x z^2/A0: %.4f), corner/centre %.4f "
+      "(irradiance %.4f)\n",
+      centre, expected, corner(simple) / centre, corner(irradiance) / centreMean(irradiance));
+  EXPECT_NEAR(centre, expected, 0.01 * expected);
+  EXPECT_NEAR(centre, 0.95, 0.04);
+  EXPECT_NEAR(corner(simple) / centre, corner(irradiance) / centreMean(irradiance), 0.03);
+}
+
 // Camera construction happens before the render's parallel work: rendering a small
 // realistic-camera scene many times in a row with 2 threads never hangs (ctest's timeout
 // catches a hang; pbrt-v4 hangs in about one start in three on this machine kind).

@@ -47,6 +47,9 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   }
   pupil_.emplace(*lens_.lens, lens_.paraxial, std::hypot(half_width_mm_, half_height_mm_),
                  pupil_options);
+  centre_area_mm2_ = pupil_->area_mm2({0, 0});
+  if (settings_.simple_weighting && !(centre_area_mm2_ > 0))
+    throw Error("simpleweighting: no light reaches the centre of the film to normalise by");
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -108,7 +111,8 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
   // the film multiplies by the exposure time (and ISO / 100), as pbrt-v4's imaging ratio does.
   const double z = lens.filmDistance_mm();
   const double c2 = f.cos_theta * f.cos_theta;
-  ray.weight = transmission * c2 * c2 * f.area_mm2 / (z * z);
+  const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
+  ray.weight = transmission * c2 * c2 * f.area_mm2 / norm;
   ray.time = time * settings_.exposure_time;
   return ray;
 }
@@ -201,6 +205,7 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.film_diagonal_mm = scene.film.diagonal_mm;
       s.camera_units_per_mm = scene::Realistic::kSceneUnitsPerLensUnit;
       s.exposure_time = c.shutter_close - c.shutter_open;
+      s.simple_weighting = r.simple_weighting;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

@@ -728,7 +728,8 @@ class Builder {
         r.lens_file = resolve(lf->strings[0], lf->loc, "lens file");
         r.aperture_diameter_mm = ps.getFloat({"aperturediameter"}, 1.0);
         r.focus_distance_m = ps.getFloat({"focusdistance"}, 10.0);
-        r.simple_weighting = ps.getBool({"simpleweighting"}, true);
+        // pbrt-v3's default is true; pbrt-v4 has no such parameter (always irradiance).
+        r.simple_weighting = ps.getBool({"simpleweighting"}, scene_.legacy_syntax);
         if (const Param* fd = ps.find({"filmdistance"}, {ParamType::Float})) {
           ps.expectCount(*fd, 1);
           if (!(fd->numbers[0] > 0)) ps.fail(*fd, "film distance must be positive (mm)");

@@ -210,8 +210,9 @@ struct Realistic {
   std::string lens_file_as_written;
   double aperture_diameter_mm = 1;
   double focus_distance_m = 10;
-  std::string aperture;          ///< pbrt-v4 aperture shape name or image file; empty: circular
-  bool simple_weighting = true;  ///< pbrt-v3
+  std::string aperture;  ///< pbrt-v4 aperture shape name or image file; empty: circular
+  /// pbrt-v3's `simpleweighting` (its default true in v1–v3 files; false, irradiance, in v4).
+  bool simple_weighting = false;
   // lensim's own extras (documented in docs/scene-support.md):
   std::optional<double> film_distance_mm;  ///< `filmdistance` (mm), instead of focusdistance
   std::string focus_method = "thick";      ///< `focusmethod`: thick (pbrt-v4) or exact
