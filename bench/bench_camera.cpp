@@ -20,7 +20,7 @@ struct Setup {
   double film_distance_mm, aperture_mm;
 };
 
-void BM_RealisticCameraSample(benchmark::State& state, Setup setup) {
+RealisticSettings settingsFor(const Setup& setup) {
   RealisticSettings s;
   s.lens_path = std::string(LENSIM_SOURCE_DIR) + "/lenses/" + setup.lens;
   s.setup.film_distance_mm = setup.film_distance_mm;
@@ -30,11 +30,21 @@ void BM_RealisticCameraSample(benchmark::State& state, Setup setup) {
   s.camera_units_per_mm = 1;
   s.exposure_time = 1;
   s.rear_disc_only = s.origin_at_front_vertex = true;
-  const RealisticCamera cam(s);
+  return s;
+}
+
+// Random samples over the whole film.
+std::vector<CameraSample> randomSamples() {
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<CameraSample> samples(1 << 14);
   for (CameraSample& c : samples) c = {{300 * u(rng), 300 * u(rng)}, {u(rng), u(rng)}, 0};
+  return samples;
+}
+
+void BM_RealisticCameraSample(benchmark::State& state, Setup setup) {
+  const RealisticCamera cam(settingsFor(setup));
+  const std::vector<CameraSample> samples = randomSamples();
   size_t i = 0, n = 0, rays = 0;
   for (auto _ : state) {
     const auto r = cam.generateRay(samples[i]);
@@ -50,21 +60,9 @@ void BM_RealisticCameraSample(benchmark::State& state, Setup setup) {
 // The same samples 16 at a time through generateRays (the lens traced side by side), as the
 // renderer calls it.
 void BM_RealisticCameraBatch(benchmark::State& state, Setup setup) {
-  RealisticSettings s;
-  s.lens_path = std::string(LENSIM_SOURCE_DIR) + "/lenses/" + setup.lens;
-  s.setup.film_distance_mm = setup.film_distance_mm;
-  s.setup.aperture_diameter_mm = setup.aperture_mm;
-  s.film_diagonal_mm = 70;
-  s.x_resolution = s.y_resolution = 300;
-  s.camera_units_per_mm = 1;
-  s.exposure_time = 1;
-  s.rear_disc_only = s.origin_at_front_vertex = true;
-  const RealisticCamera cam(s);
-  std::mt19937_64 rng(1);
-  std::uniform_real_distribution<double> u(0, 1);
+  const RealisticCamera cam(settingsFor(setup));
   constexpr int kB = Camera::kMaxBatch;
-  std::vector<CameraSample> samples(1 << 14);
-  for (CameraSample& c : samples) c = {{300 * u(rng), 300 * u(rng)}, {u(rng), u(rng)}, 0};
+  const std::vector<CameraSample> samples = randomSamples();
   std::optional<CameraRay> out[kB];
   size_t i = 0, n = 0;
   for (auto _ : state) {

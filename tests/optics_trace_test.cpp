@@ -317,4 +317,16 @@ TEST(LensTracer, BatchMatchesSingleTraces) {
     checkBatch(lens.tracer(), lens, rng);
     checkBatch(lens.tracerFloat(), lens, rng);
   }
+  // A stop between glass and air refracts (the batch's other plane loop).
+  SCOPED_TRACE("stop in glass");
+  const FocusedLens fl = focusLens(parseLensPrescription("40 6 1.6 24\n"
+                                                         "0 4 1 14\n"
+                                                         "-60 3 1.7 22\n"
+                                                         "-200 30 1 22\n",
+                                                         "glass-stop.dat"),
+                                   {});
+  ASSERT_TRUE(fl.lens->interfaces()[1].is_stop);
+  ASSERT_NE(fl.lens->interfaces()[1].ior_before, fl.lens->interfaces()[1].ior_after);
+  checkBatch(fl.lens->tracer(), *fl.lens, rng);
+  checkBatch(fl.lens->tracerFloat(), *fl.lens, rng);
 }

@@ -124,12 +124,17 @@ TEST(RealisticRender, AssignmentScenesAgreeWithTheirReferences) {
 
 namespace {
 
+/// A path in this test's temporary directory (created).
+std::string testFile(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "lensim_render_realistic_test";
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
 // A scene file under the test's temporary directory: the camera inside a uniform environment
 // (radiance 1 everywhere), the realistic camera looking at it through the double Gauss.
 std::string writeFlatField(const std::string& name, double aperture_mm) {
-  const auto dir = std::filesystem::temp_directory_path() / "lensim_render_realistic_test";
-  std::filesystem::create_directories(dir);
-  const std::string path = (dir / name).string();
+  const std::string path = testFile(name);
   std::ofstream f(path);
   f << "Camera \"realistic\" \"string lensfile\" \"" << lensim::test::lensPath("dgauss.50mm.dat")
     << "\" \"float aperturediameter\" " << aperture_mm << " \"float focusdistance\" 3\n"
@@ -180,9 +185,7 @@ TEST(RealisticRender, FlatFieldAndExposure) {
 // z^2 / A0 (film distance, sampled area at the centre), and falls off toward the corner as the
 // irradiance render does.
 TEST(RealisticRender, SimpleWeightingOfPbrtV3ReadsRadianceAtTheCentre) {
-  const auto dir = std::filesystem::temp_directory_path() / "lensim_render_realistic_test";
-  std::filesystem::create_directories(dir);
-  const std::string path = (dir / "v3.pbrt").string();
+  const std::string path = testFile("v3.pbrt");
   {
     std::ofstream f(path);
     f << "Camera \"realistic\" \"string lensfile\" \"" << lensim::test::lensPath("dgauss.50mm.dat")
@@ -245,9 +248,7 @@ TEST(RealisticRender, ManyRendersInARowDoNotHang) {
 // the film distance found lies within the depth of focus of the optics core's exact film
 // distance for that distance.
 TEST(RealisticRender, AutofocusFindsAPlaneThroughTheRenderer) {
-  const auto dir = std::filesystem::temp_directory_path() / "lensim_render_realistic_test";
-  std::filesystem::create_directories(dir);
-  const std::string path = (dir / "plane.pbrt").string(), zones = (dir / "zones.txt").string();
+  const std::string path = testFile("plane.pbrt"), zones = testFile("zones.txt");
   {
     std::ofstream f(path);
     f << "Camera \"realistic\" \"string lensfile\" \"" << lensim::test::lensPath("dgauss.50mm.dat")

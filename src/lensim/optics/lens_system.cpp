@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace lensim::optics {
 
@@ -151,8 +152,10 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
     const T eta_i = eta_after_[i], eta_t = eta_before_[i];
     const T eta = eta_i / eta_t;
     const T refracts = eta_i != eta_t ? one : zero;
-    if (R == zero && refracts == zero) {
-      // A plane between equal indices (the stop): no refraction.
+    // A plane (the stop); refracting only between different indices, which a stop rarely has:
+    // the common case gets its own loop without the refraction, which vectorises.
+    auto planeLanes = [&](auto refract_tag) {
+      constexpr bool kRefract = decltype(refract_tag)::value;
       for (int j = 0; j < nv; ++j) {
         const T rz = oz[j] - zv;
         const T tq = -rz / dz[j];  // inf or NaN when dz is 0: dropped by the select
@@ -160,30 +163,27 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         const T hit = dz[j] != zero ? (t >= t_min ? one : zero) : zero;
         px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
         const T inside = px[j] * px[j] + py[j] * py[j] <= semi2 ? one : zero;
-        ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
-        fate[j] = hit != zero ? (inside != zero ? zero : T(2)) : one;
-      }
-    } else if (R == zero) {
-      for (int j = 0; j < nv; ++j) {
-        const T rz = oz[j] - zv;
-        const T tq = -rz / dz[j];  // inf or NaN when dz is 0: dropped by the select
-        const T t = dz[j] != zero ? tq : zero;
-        const T hit = dz[j] != zero ? (t >= t_min ? one : zero) : zero;
-        px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
-        const T inside = px[j] * px[j] + py[j] * py[j] <= semi2 ? one : zero;
-        T cos_i = dz[j];  // -(n . d) with the normal (0, 0, -1)
-        const T s = cos_i < zero ? -one : one;
-        cos_i *= s;
-        const T sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
-        const T tir = sin2_t >= one ? refracts : zero;
-        const T cos_t = std::sqrt(std::max(zero, one - sin2_t));
-        const T k = (eta * cos_i - cos_t) * s;
-        // n * k = (0, 0, -k)
-        ex[j] = refracts != zero ? dx[j] * eta : dx[j];
-        ey[j] = refracts != zero ? dy[j] * eta : dy[j];
-        ez[j] = refracts != zero ? dz[j] * eta - k : dz[j];
+        T tir = zero;
+        if constexpr (kRefract) {
+          T cos_i = dz[j];  // -(n . d) with the normal (0, 0, -1)
+          const T s = cos_i < zero ? -one : one;
+          cos_i *= s;
+          const T sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
+          tir = sin2_t >= one ? one : zero;
+          const T cos_t = std::sqrt(std::max(zero, one - sin2_t));
+          const T k = (eta * cos_i - cos_t) * s;
+          // n * k = (0, 0, -k)
+          ex[j] = dx[j] * eta, ey[j] = dy[j] * eta, ez[j] = dz[j] * eta - k;
+        } else {
+          ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
+        }
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
+    };
+    if (R == zero && refracts == zero) {
+      planeLanes(std::false_type{});
+    } else if (R == zero) {
+      planeLanes(std::true_type{});
     } else {
       for (int j = 0; j < nv; ++j) {
         const T rz = oz[j] - zv;
