@@ -45,6 +45,20 @@ double uniformScale(const Transform& t) {
   return std::cbrt(std::abs(det));
 }
 
+/// The start of a sample of a light at the point pl (point, spot, goniometric and projection
+/// lights): the unit direction from p toward it, pdf 1 (a delta distribution) and the light's
+/// position; the caller sets L from r2, the squared distance. nullopt when p is at the light.
+std::optional<LightLiSample> towardPoint(const Vec3& p, const Vec3& pl, double& r2) {
+  const Vec3 d = pl - p;
+  r2 = dot(d, d);
+  if (r2 == 0) return std::nullopt;
+  LightLiSample s;
+  s.wi = d / std::sqrt(r2);
+  s.pdf = 1;
+  s.p_light = pl;
+  return s;
+}
+
 double smoothStep(double a, double b, double x) {
   if (a == b) return x < a ? 0 : 1;
   const double t = std::clamp((x - a) / (b - a), 0.0, 1.0);
@@ -57,14 +71,9 @@ class PointLight final : public Light {
   bool isDelta() const override { return true; }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
                                         const SampledWavelengths& lambda) const override {
-    const Vec3 d = p_ - p;
-    const double r2 = dot(d, d);
-    if (r2 == 0) return std::nullopt;
-    LightLiSample s;
-    s.wi = d / std::sqrt(r2);
-    s.L = I_->sample(lambda) * (scale_ / r2);
-    s.pdf = 1;
-    s.p_light = p_;
+    double r2;
+    std::optional<LightLiSample> s = towardPoint(p, p_, r2);
+    if (s) s->L = I_->sample(lambda) * (scale_ / r2);
     return s;
   }
   double power() const override { return 4 * M_PI * scale_ * luminanceOf(*I_); }
@@ -87,16 +96,12 @@ class SpotLight final : public Light {
   bool isDelta() const override { return true; }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
                                         const SampledWavelengths& lambda) const override {
-    const Vec3 d = p_ - p;
-    const double r2 = dot(d, d);
-    if (r2 == 0) return std::nullopt;
-    LightLiSample s;
-    s.wi = d / std::sqrt(r2);
-    const double f = smoothStep(cos_end_, cos_start_, dot(-s.wi, axis_));
+    double r2;
+    std::optional<LightLiSample> s = towardPoint(p, p_, r2);
+    if (!s) return std::nullopt;
+    const double f = smoothStep(cos_end_, cos_start_, dot(-s->wi, axis_));
     if (f <= 0) return std::nullopt;
-    s.L = I_->sample(lambda) * (scale_ * f / r2);
-    s.pdf = 1;
-    s.p_light = p_;
+    s->L = I_->sample(lambda) * (scale_ * f / r2);
     return s;
   }
   double power() const override {
@@ -147,16 +152,12 @@ class GoniometricLight final : public Light {
   bool isDelta() const override { return true; }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
                                         const SampledWavelengths& lambda) const override {
-    const Vec3 d = p_ - p;
-    const double r2 = dot(d, d);
-    if (r2 == 0) return std::nullopt;
-    LightLiSample s;
-    s.wi = d / std::sqrt(r2);
-    const double f = factor(-s.wi);
+    double r2;
+    std::optional<LightLiSample> s = towardPoint(p, p_, r2);
+    if (!s) return std::nullopt;
+    const double f = factor(-s->wi);
     if (f <= 0) return std::nullopt;
-    s.L = I_->sample(lambda) * (scale_ * f / r2);
-    s.pdf = 1;
-    s.p_light = p_;
+    s->L = I_->sample(lambda) * (scale_ * f / r2);
     return s;
   }
   double power() const override { return 4 * M_PI * scale_ * luminanceOf(*I_) * mean_; }
@@ -226,12 +227,10 @@ class ProjectionLight final : public Light {
   bool isDelta() const override { return true; }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
                                         const SampledWavelengths& lambda) const override {
-    const Vec3 d = p_ - p;
-    const double r2 = dot(d, d);
-    if (r2 == 0) return std::nullopt;
-    LightLiSample s;
-    s.wi = d / std::sqrt(r2);
-    const Vec3 wl = light_from_world_.applyVector(-s.wi);
+    double r2;
+    std::optional<LightLiSample> s = towardPoint(p, p_, r2);
+    if (!s) return std::nullopt;
+    const Vec3 wl = light_from_world_.applyVector(-s->wi);
     if (wl.z <= 0) return std::nullopt;
     const double sx = wl.x / wl.z / tan_half_, sy = wl.y / wl.z / tan_half_;
     if (sx < bounds_[0] || sx > bounds_[1] || sy < bounds_[2] || sy > bounds_[3])
@@ -244,10 +243,8 @@ class ProjectionLight final : public Light {
     if (m <= 0) return std::nullopt;
     const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(c / (2 * m));
     const SampledSpectrum illum = RGBColorSpace::sRGB().illuminant()->sample(lambda);
-    for (int i = 0; i < kSpectrumSamples; ++i) s.L[i] = 2 * m * poly.eval(lambda.lambda(i));
-    s.L *= illum * (scale_ / r2);
-    s.pdf = 1;
-    s.p_light = p_;
+    for (int i = 0; i < kSpectrumSamples; ++i) s->L[i] = 2 * m * poly.eval(lambda.lambda(i));
+    s->L *= illum * (scale_ / r2);
     return s;
   }
   double power() const override {
