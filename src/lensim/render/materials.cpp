@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <utility>
 
 #include "lensim/io/image.h"
 #include "lensim/render/layered.h"
@@ -136,6 +137,18 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
     if (s->eval(lambda.lambda(1)) != e) lambda.terminateSecondary();
     return e;
   };
+  // A conductor's complex index eta + i k: from its "reflectance" (eta 1 and the k that gives it)
+  // when one was given, else from its eta and k spectra.
+  auto conductorIndex = [&](bool has_reflectance, const scene::Input& reflectance,
+                            const scene::Input& eta_in, const scene::Input& k_in) {
+    if (has_reflectance) {
+      const SampledSpectrum r =
+          clampZero(tx.evalSpectrum(reflectance, ctx, lambda, SpectrumType::Albedo));
+      return std::pair{SampledSpectrum(1.0), conductorKFromReflectance(r)};
+    }
+    return std::pair{tx.evalSpectrum(eta_in, ctx, lambda, SpectrumType::Unbounded),
+                     tx.evalSpectrum(k_in, ctx, lambda, SpectrumType::Unbounded)};
+  };
   if (m.type == "measured") {
     return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
   }
@@ -154,16 +167,8 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
     return std::make_shared<DiffuseTransmissionBxDF>(r, t);
   }
   if (m.type == "coatedconductor") {
-    SampledSpectrum ceta, ck;
-    if (m.conductor_has_reflectance) {
-      const SampledSpectrum r =
-          clampZero(tx.evalSpectrum(m.conductor_reflectance, ctx, lambda, SpectrumType::Albedo));
-      ceta = SampledSpectrum(1.0);
-      ck = conductorKFromReflectance(r);
-    } else {
-      ceta = tx.evalSpectrum(m.conductor_eta, ctx, lambda, SpectrumType::Unbounded);
-      ck = tx.evalSpectrum(m.conductor_k, ctx, lambda, SpectrumType::Unbounded);
-    }
+    auto [ceta, ck] = conductorIndex(m.conductor_has_reflectance, m.conductor_reflectance,
+                                     m.conductor_eta, m.conductor_k);
     double eta = dielectricEta();
     if (eta == 0) eta = 1;
     // pbrt-v4: the conductor sits under a medium of index eta, so its index is relative to it.
@@ -183,16 +188,7 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
         std::make_shared<ConductorBxDF>(TrowbridgeReitz(reg(cu), reg(cv)), ceta, ck), lp);
   }
   if (m.type == "conductor") {
-    SampledSpectrum eta, k;
-    if (m.has_reflectance) {
-      const SampledSpectrum r =
-          clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo));
-      eta = SampledSpectrum(1.0);
-      k = conductorKFromReflectance(r);
-    } else {
-      eta = tx.evalSpectrum(m.eta, ctx, lambda, SpectrumType::Unbounded);
-      k = tx.evalSpectrum(m.k, ctx, lambda, SpectrumType::Unbounded);
-    }
+    const auto [eta, k] = conductorIndex(m.has_reflectance, m.reflectance, m.eta, m.k);
     return std::make_shared<ConductorBxDF>(distribution(), eta, k);
   }
   if (m.type == "dielectric") {
