@@ -46,8 +46,9 @@ double pbrtV2Epsilon(const SceneContext& sc, const SurfaceHit& h, const Ray& ray
   const double len = length(ray.d);
   double t = h.t * len;  // scene units
   if (camera_ray) t *= length(sc.camera_from_world.applyVector(ray.d / len));
-  const bool triangles = sc.scene->shapes[size_t(h.shape)].type == scene::ShapeType::TriangleMesh ||
-                         sc.scene->shapes[size_t(h.shape)].type == scene::ShapeType::BilinearMesh;
+  const scene::ShapeType type = sc.scene->shapes[size_t(h.shape)].type;
+  const bool triangles =
+      type == scene::ShapeType::TriangleMesh || type == scene::ShapeType::BilinearMesh;
   return (triangles ? 1e-3 : 5e-4) * t;
 }
 
