@@ -26,12 +26,25 @@ enum class LensFileLayout { Pbrt, Iset, Axpos };
 
 const char* layoutName(LensFileLayout layout);
 
+/// The medium after a surface as the lens file names it. Readers fill what the file says; the
+/// glass module resolves it to n(lambda) (catalogue name -> dispersion formula; n_d and V_d ->
+/// model glass; neither -> the constant `LensSurface::ior`).
+struct GlassSpec {
+  std::string name;           ///< catalogue name as written ("N-BK7", "schott:N-BK7"); empty: none
+  std::optional<double> n_d;  ///< index at the d line (587.56 nm), when the file gives it
+  std::optional<double> v_d;  ///< Abbe number V_d, when the file gives it
+  FileLoc loc;                ///< where the glass is named (for errors about it)
+
+  bool empty() const { return name.empty() && !v_d; }
+};
+
 /// One refracting surface (or the stop), as written in the file. Lengths in millimetres.
 struct LensSurface {
   double radius_mm = 0;     ///< signed radius of curvature; > 0: centre toward the film
   double thickness_mm = 0;  ///< axial distance to the next surface (last row: to the film)
   double ior = 1;           ///< index of refraction of the medium after the surface (0 -> 1)
   double aperture_diameter_mm = 0;  ///< clear aperture diameter
+  GlassSpec glass;                  ///< the glass after the surface, when the file names one
   FileLoc loc;                      ///< where the row is in the file
 
   bool isStop() const { return radius_mm == 0; }
@@ -44,6 +57,10 @@ struct LensPrescription {
   std::string name;  ///< first comment line, or the file name without extension
   LensFileLayout layout = LensFileLayout::Pbrt;
   std::optional<double> nominal_focal_length_mm;  ///< ISET files state it
+  /// Wavelengths the file lists (Zemax WAVL) and its primary one (PWAV), in nanometres; empty and
+  /// unset when the file gives none (the workbench then uses the d line, 587.56 nm).
+  std::vector<double> wavelengths_nm;
+  std::optional<double> primary_wavelength_nm;
   std::vector<LensSurface> surfaces;
   /// Warnings and notes (crossing surfaces, layout guesses); errors are thrown instead.
   std::vector<Diagnostic> diagnostics;
