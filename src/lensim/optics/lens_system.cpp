@@ -38,6 +38,11 @@ LensTracer<T>::LensTracer(const std::vector<Interface>& interfaces) {
   }
 }
 
+template <typename T>
+void LensTracer<T>::setIndices(const double* before, const double* after) {
+  for (int i = 0; i < size(); ++i) eta_before_[i] = T(before[i]), eta_after_[i] = T(after[i]);
+}
+
 namespace {
 
 // Refracts unit direction d at a surface with unit normal n (either orientation), going from
@@ -314,7 +319,50 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
       opts.film_distance_mm ? *opts.film_distance_mm : prescription_.fileFilmDistance_mm();
   if (opts.film_distance_mm && !(*opts.film_distance_mm > 0))
     throw Error(fmt::format("film distance {} mm must be > 0", *opts.film_distance_mm));
+  resolveMedia();
   rebuildTracers();
+}
+
+void LensSystem::resolveMedia() {
+  // Media from the GlassSpecs; the indices are set at the primary wavelength (the one focus is
+  // solved at). Non-dispersive media keep the file's index exactly.
+  glasses_ = resolveGlasses(prescription_, &diagnostics_);
+  dispersive_ = false;
+  for (const Glass& g : glasses_) dispersive_ = dispersive_ || g.dispersive();
+  wavelength_nm_ = primaryWavelength_nm(prescription_);
+  if (dispersive_) {
+    std::vector<double> before(interfaces_.size()), after(interfaces_.size());
+    indicesAt(wavelength_nm_, before.data(), after.data());
+    for (size_t i = 0; i < interfaces_.size(); ++i)
+      interfaces_[i].ior_before = before[i], interfaces_[i].ior_after = after[i];
+  }
+}
+
+void LensSystem::indicesAt(double lambda_nm, double* before, double* after) const {
+  double n_before = 1.0;
+  for (size_t i = 0; i < interfaces_.size(); ++i) {
+    const double n_after = glasses_[i].index(lambda_nm);
+    before[i] = n_before, after[i] = n_after;
+    n_before = n_after;
+  }
+}
+
+void LensSystem::setWavelength(double lambda_nm) {
+  if (!(lambda_nm > 0) || !std::isfinite(lambda_nm))
+    throw Error(fmt::format("wavelength {} nm must be > 0", lambda_nm));
+  wavelength_nm_ = lambda_nm;
+  if (!dispersive_) return;
+  std::vector<double> before(interfaces_.size()), after(interfaces_.size());
+  indicesAt(lambda_nm, before.data(), after.data());
+  for (size_t i = 0; i < interfaces_.size(); ++i)
+    interfaces_[i].ior_before = before[i], interfaces_[i].ior_after = after[i];
+  rebuildTracers();
+}
+
+LensSystem LensSystem::atWavelength(double lambda_nm) const {
+  LensSystem s = *this;
+  s.setWavelength(lambda_nm);
+  return s;
 }
 
 std::optional<double> LensSystem::stopDiameter_mm() const {

@@ -10,6 +10,7 @@
 #include <optional>
 #include <vector>
 
+#include "lensim/optics/glass.h"
 #include "lensim/optics/prescription.h"
 #include "lensim/util/vec.h"
 
@@ -91,6 +92,10 @@ class LensTracer {
 
   int size() const { return static_cast<int>(radius_.size()); }
 
+  /// Replaces the indices of the interfaces (size() values each, the media before and after
+  /// each surface): the realistic camera re-indexes a per-thread copy for each wavelength.
+  void setIndices(const double* before, const double* after);
+
  private:
   template <bool kFromFilm>
   TraceResultT<T> trace(const RayT<T>& ray, const TraceOptions& opts,
@@ -142,6 +147,24 @@ class LensSystem {
   /// prescription's own.
   const std::vector<Diagnostic>& diagnostics() const { return diagnostics_; }
 
+  /// Dispersion. The medium after each surface (glass.h; resolved from the prescription's
+  /// GlassSpecs, air and constant indices included), and the wavelength the interfaces' indices
+  /// (Interface::ior_before/after, the tracers, paraxial data, focus) are at: the prescription's
+  /// primary wavelength (else the d line, 587.56 nm) until setWavelength.
+  const std::vector<Glass>& glasses() const { return glasses_; }
+  /// Whether any medium's index varies with wavelength.
+  bool dispersive() const { return dispersive_; }
+  double wavelength_nm() const { return wavelength_nm_; }
+  /// Sets every interface's indices to the media's indices at lambda_nm, and rebuilds the
+  /// tracers. A no-op for the indices of a non-dispersive lens.
+  void setWavelength(double lambda_nm);
+  /// A copy of this system (stop, film distance kept) at another wavelength: the per-wavelength
+  /// system for ray fans, spot diagrams, MTF and plots at several wavelengths.
+  LensSystem atWavelength(double lambda_nm) const;
+  /// The indices before and after every interface at lambda_nm (arrays of surfaceCount()),
+  /// without building a system (for LensTracer::setIndices).
+  void indicesAt(double lambda_nm, double* before, double* after) const;
+
   const LensTracer<double>& tracer() const { return tracer_d_; }
   const LensTracer<float>& tracerFloat() const { return tracer_f_; }
 
@@ -151,6 +174,7 @@ class LensSystem {
 
  private:
   void rebuildTracers();
+  void resolveMedia();
 
   LensPrescription prescription_;
   std::vector<Interface> interfaces_;
@@ -160,6 +184,9 @@ class LensSystem {
   std::vector<Diagnostic> diagnostics_;
   LensTracer<double> tracer_d_;
   LensTracer<float> tracer_f_;
+  std::vector<Glass> glasses_;
+  bool dispersive_ = false;
+  double wavelength_nm_ = kDefaultPrimaryWavelength_nm;
 };
 
 }  // namespace lensim::optics

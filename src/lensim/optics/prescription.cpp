@@ -157,9 +157,10 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
       p.layout = LensFileLayout::Iset;
       continue;
     }
-    if (cols.size() != 4)
+    if (cols.size() < 4 || cols.size() > 6)
       throw Error(loc, fmt::format("expected 4 numbers (radius, thickness, index of refraction, "
-                                   "aperture diameter), found {}",
+                                   "aperture diameter), optionally followed by the Abbe number "
+                                   "V_d and a glass name, found {} columns",
                                    cols.size()));
 
     double v[4];
@@ -191,6 +192,25 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
         throw Error(at(0), fmt::format("second aperture stop (radius 0); the first is at {}:{}",
                                        path, *stopLine));
       stopLine = lineNo;
+    }
+    // Optional columns 5 (Abbe number V_d, '-' for none) and 6 (catalogue glass name): the
+    // medium after the surface disperses (optics/glass.h resolves them).
+    if (cols.size() >= 5) {
+      if (v[2] == 0 || v[2] == 1)
+        throw Error(at(4), fmt::format("'{}': air (index {}) takes no Abbe number or glass",
+                                       cols[4].text, v[2]));
+      s.glass.n_d = s.ior;
+      s.glass.loc = at(4);
+      if (cols[4].text != "-") {
+        const double vd = parseNumber(cols[4], at(4), "Abbe number V_d");
+        if (!(vd > 0))
+          throw Error(at(4), fmt::format("Abbe number V_d {} must be > 0 (or '-' for none)", vd));
+        s.glass.v_d = vd;
+      }
+      if (cols.size() == 6) {
+        s.glass.name = std::string(cols[5].text);
+        s.glass.loc = at(5);
+      }
     }
     p.surfaces.push_back(s);
   }

@@ -8,6 +8,9 @@
 // - axpos (older pbrt-v4-scenes tables at 100 mm scale): column 2 is the distance from the
 //   PREVIOUS surface, so the first row's value is 0. A file whose first row has thickness 0 (and
 //   that has more than one row, the first not being the stop) is read in this layout, with a note.
+// Optional columns (any layout): a fifth, the Abbe number V_d of the medium after the surface
+// ('-' for none), and a sixth, its catalogue glass name ("N-BK7", "schott:N-BK7"); a row with
+// V_d alone is a model glass through (index, V_d); rows without them do not disperse.
 // Radius 0 is the aperture stop (a plane disc); index 0 means air; `#` starts a comment;
 // spaces or tabs separate columns; CR, LF and CRLF line endings are all accepted.
 #pragma once

@@ -1,0 +1,393 @@
+#include "lensim/optics/glass.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <tuple>
+
+namespace lensim::embedded {
+extern const char* const kGlassCatalogCsv;
+}
+
+namespace lensim::optics {
+
+// ---------------------------------------------------------------------------------------------
+// Glass
+
+Glass Glass::constant(double n) {
+  Glass g;
+  g.c_[0] = n;
+  return g;
+}
+
+Glass Glass::model(double n_d, double v_d, const FileLoc& loc) {
+  if (!std::isfinite(n_d) || n_d < 1)
+    throw Error(loc, fmt::format("model glass: n_d {} is not physical; expected a value >= 1", n_d));
+  if (!std::isfinite(v_d) || v_d <= 0)
+    throw Error(loc, fmt::format("model glass: Abbe number V_d {} must be > 0", v_d));
+  // n(l) = A + B / l^2 (l in micrometres) with n(d) = n_d and n(F) - n(C) = (n_d - 1) / V_d.
+  const double lf = kLineF_nm / 1000, lc = kLineC_nm / 1000, ld = kLineD_nm / 1000;
+  const double b = (n_d - 1) / v_d / (1 / (lf * lf) - 1 / (lc * lc));
+  Glass g;
+  g.formula_ = DispersionFormula::Cauchy2;
+  g.c_ = {n_d - b / (ld * ld), b, 0, 0, 0, 0, 0, 0, 0};
+  g.name_ = fmt::format("model {:.6g}/{:.4g}", n_d, v_d);
+  // A two-term Cauchy fit is good through the visible; say so outside it.
+  g.min_nm_ = 360, g.max_nm_ = 1000;
+  return g;
+}
+
+Glass Glass::formula(std::string vendor, std::string name, DispersionFormula f,
+                     const std::array<double, 9>& c, double min_nm, double max_nm) {
+  Glass g;
+  g.formula_ = f;
+  g.c_ = c;
+  g.vendor_ = std::move(vendor);
+  g.name_ = std::move(name);
+  g.min_nm_ = min_nm, g.max_nm_ = max_nm;
+  return g;
+}
+
+double Glass::index(double lambda_nm) const {
+  const double l = lambda_nm * 1e-3, l2 = l * l;
+  const auto& c = c_;
+  switch (formula_) {
+    case DispersionFormula::Constant:
+      return c[0];
+    case DispersionFormula::Cauchy2:
+      return c[0] + c[1] / l2;
+    case DispersionFormula::Sellmeier3:
+      return std::sqrt(1 + c[0] * l2 / (l2 - c[3]) + c[1] * l2 / (l2 - c[4]) +
+                       c[2] * l2 / (l2 - c[5]));
+    case DispersionFormula::Schott6: {
+      const double i2 = 1 / l2;
+      return std::sqrt(c[0] + c[1] * l2 + i2 * (c[2] + i2 * (c[3] + i2 * (c[4] + i2 * c[5]))));
+    }
+    case DispersionFormula::Hikari9: {
+      const double i2 = 1 / l2;
+      return std::sqrt(
+          c[0] + l2 * (c[1] + l2 * c[2]) +
+          i2 * (c[3] + i2 * (c[4] + i2 * (c[5] + i2 * (c[6] + i2 * (c[7] + i2 * c[8]))))));
+    }
+  }
+  return c[0];
+}
+
+double Glass::v_d() const {
+  if (!dispersive()) return std::numeric_limits<double>::infinity();
+  return (n_d() - 1) / (index(kLineF_nm) - index(kLineC_nm));
+}
+
+const char* Glass::kind() const {
+  switch (formula_) {
+    case DispersionFormula::Constant:
+      return "constant";
+    case DispersionFormula::Cauchy2:
+      return "model";
+    default:
+      return "catalogue";
+  }
+}
+
+std::string Glass::describe() const {
+  switch (formula_) {
+    case DispersionFormula::Constant:
+      return isAir() ? "air" : fmt::format("constant {:.6g}", c_[0]);
+    case DispersionFormula::Cauchy2:
+      return fmt::format("model n_d {:.6g} V_d {:.4g} (Cauchy)", n_d(), v_d());
+    default: {
+      std::string v = vendor_;
+      for (char& ch : v) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+      return v + ":" + name_;
+    }
+  }
+}
+
+std::string CatalogGlass::qualifiedName() const { return glass.describe(); }
+
+// ---------------------------------------------------------------------------------------------
+// Catalogue
+
+namespace {
+
+std::string upper(std::string_view s) {
+  std::string u(s);
+  for (char& c : u) c = char(std::toupper(static_cast<unsigned char>(c)));
+  return u;
+}
+
+// Upper-case letters and digits only: "n-bk 7" and "NBK7" compare equal for hints.
+std::string folded(std::string_view s) {
+  std::string u;
+  for (char c : s)
+    if (std::isalnum(static_cast<unsigned char>(c)))
+      u += char(std::toupper(static_cast<unsigned char>(c)));
+  return u;
+}
+
+int editDistance(const std::string& a, const std::string& b) {
+  std::vector<int> prev(b.size() + 1), cur(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) prev[j] = int(j);
+  for (size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = int(i);
+    for (size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+// Lookup preference for a bare name that several vendors use.
+int vendorRank(const std::string& vendor) {
+  static const char* order[] = {"SCHOTT", "OHARA", "HOYA", "CDGM", "SUMITA", "HIKARI"};
+  const std::string v = upper(vendor);
+  for (int i = 0; i < 6; ++i)
+    if (v == order[i]) return i;
+  return 6;
+}
+
+std::vector<std::string_view> splitCsv(std::string_view line) {
+  std::vector<std::string_view> out;
+  size_t pos = 0;
+  while (true) {
+    const size_t comma = line.find(',', pos);
+    out.push_back(line.substr(pos, comma == std::string_view::npos ? line.npos : comma - pos));
+    if (comma == std::string_view::npos) break;
+    pos = comma + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+GlassCatalog GlassCatalog::parse(std::string_view csv, const std::string& path) {
+  GlassCatalog cat;
+  int line_no = 0;
+  size_t pos = 0;
+  while (pos < csv.size()) {
+    size_t end = csv.find('\n', pos);
+    if (end == std::string_view::npos) end = csv.size();
+    std::string_view line = csv.substr(pos, end - pos);
+    pos = end + 1;
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.empty() || line_no == 1) continue;  // the header
+    const std::vector<std::string_view> f = splitCsv(line);
+    auto column = [&](size_t i) {
+      int col = 1;
+      for (size_t k = 0; k < i; ++k) col += int(f[k].size()) + 1;
+      return FileLoc{path, line_no, col};
+    };
+    if (f.size() < 6)
+      throw Error(column(0), fmt::format("expected vendor,glass,nd,vd,formula,c1..., found {} "
+                                         "fields",
+                                         f.size()));
+    auto number = [&](size_t i) {
+      double v = 0;
+      const std::string_view t = f[i];
+      auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+      if (ec != std::errc() || p != t.data() + t.size() || !std::isfinite(v))
+        throw Error(column(i), fmt::format("expected a number, found '{}'", t));
+      return v;
+    };
+    CatalogGlass g;
+    g.vendor = std::string(f[0]);
+    g.name = std::string(f[1]);
+    g.listed_n_d = number(2);
+    g.listed_v_d = number(3);
+    std::array<double, 9> c{};
+    size_t nc = 0;
+    for (size_t i = 5; i < f.size() && nc < 9; ++i)
+      if (!f[i].empty()) c[nc++] = number(i);
+    DispersionFormula formula;
+    size_t needed;
+    if (f[4] == "sellmeier3") {
+      formula = DispersionFormula::Sellmeier3, needed = 6;
+      // CDGM's spreadsheet gives B1 C1 B2 C2 B3 C3; only that order reproduces its n_d, V_d.
+      if (upper(g.vendor) == "CDGM") c = {c[0], c[2], c[4], c[1], c[3], c[5], 0, 0, 0};
+    } else if (f[4] == "schott6") {
+      formula = DispersionFormula::Schott6, needed = 6;
+    } else if (f[4] == "hikari9") {
+      formula = DispersionFormula::Hikari9, needed = 9;
+    } else {
+      throw Error(column(4), fmt::format("unknown dispersion formula '{}'; expected sellmeier3, "
+                                         "schott6 or hikari9",
+                                         f[4]));
+    }
+    if (nc < needed)
+      throw Error(column(4), fmt::format("formula {} needs {} coefficients, found {}", f[4],
+                                         needed, nc));
+    g.glass = Glass::formula(g.vendor, g.name, formula, c);
+    cat.glasses_.push_back(std::move(g));
+  }
+  return cat;
+}
+
+const GlassCatalog& GlassCatalog::builtin() {
+  static const GlassCatalog cat = parse(embedded::kGlassCatalogCsv, "<built-in glass catalogue>");
+  return cat;
+}
+
+const CatalogGlass* GlassCatalog::find(std::string_view name) const {
+  std::string vendor;
+  std::string_view bare = name;
+  if (const size_t colon = name.find(':'); colon != std::string_view::npos) {
+    vendor = upper(name.substr(0, colon));
+    bare = name.substr(colon + 1);
+  }
+  const std::string key = upper(bare);
+  const CatalogGlass* best = nullptr;
+  for (const CatalogGlass& g : glasses_) {
+    if (upper(g.name) != key) continue;
+    if (!vendor.empty()) {
+      if (upper(g.vendor) == vendor) return &g;
+      continue;
+    }
+    if (!best || vendorRank(g.vendor) < vendorRank(best->vendor)) best = &g;
+  }
+  return best;
+}
+
+std::vector<std::string> GlassCatalog::suggestions(std::string_view name, int count) const {
+  std::string_view bare = name;
+  if (const size_t colon = name.find(':'); colon != std::string_view::npos)
+    bare = name.substr(colon + 1);
+  const std::string key = folded(bare);
+  // Ranked by: whether the name contains the key (BK7 in N-BK7, an old name's successor), then
+  // edit distance, then vendor order.
+  struct Scored {
+    int contains, distance, rank;
+    const CatalogGlass* g;
+  };
+  std::vector<Scored> scored;
+  for (const CatalogGlass& g : glasses_) {
+    const std::string f = folded(g.name);
+    const bool contains = !key.empty() && f.find(key) != std::string::npos;
+    scored.push_back({contains ? 0 : 1, editDistance(key, f), vendorRank(g.vendor), &g});
+  }
+  std::stable_sort(scored.begin(), scored.end(), [](const Scored& a, const Scored& b) {
+    return std::tie(a.contains, a.distance, a.rank) < std::tie(b.contains, b.distance, b.rank);
+  });
+  std::vector<std::string> out;
+  const int max_distance = std::max<int>(3, int(key.size()) / 2);
+  for (const Scored& s : scored) {
+    if (int(out.size()) >= count) break;
+    if (s.contains && s.distance > max_distance) continue;
+    if (!s.contains && s.distance > max_distance) break;
+    out.push_back(s.g->qualifiedName());
+  }
+  return out;
+}
+
+const CatalogGlass& GlassCatalog::nearest(double n_d, double v_d) const {
+  const CatalogGlass* best = nullptr;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (const CatalogGlass& g : glasses_) {
+    double d;
+    if (std::isnan(v_d)) {
+      if (vendorRank(g.vendor) != 0) continue;
+      d = std::abs(g.listed_n_d - n_d);
+    } else {
+      d = std::hypot(100 * (g.listed_n_d - n_d), g.listed_v_d - v_d);
+    }
+    if (d < best_d) best_d = d, best = &g;
+  }
+  if (!best) throw Error("the glass catalogue is empty");
+  return *best;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Resolving a lens file's glass
+
+Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagnostic>* diags) {
+  auto note = [&](Severity s, std::string msg) {
+    if (diags) diags->push_back({s, spec.loc, std::move(msg)});
+  };
+  if (!spec.name.empty()) {
+    const GlassCatalog& cat = GlassCatalog::builtin();
+    if (const CatalogGlass* g = cat.find(spec.name)) {
+      const double n_d = g->glass.n_d();
+      if (spec.n_d && std::abs(*spec.n_d - n_d) > 1e-3)
+        note(Severity::Note,
+             fmt::format("glass '{}': the file gives n_d {}, the catalogue's {} has {:.6f}; the "
+                         "catalogue's formula is used",
+                         spec.name, *spec.n_d, g->qualifiedName(), n_d));
+      return g->glass;
+    }
+    if (spec.n_d && spec.v_d) {
+      Glass m = Glass::model(*spec.n_d, *spec.v_d, spec.loc);
+      note(Severity::Warning,
+           fmt::format("glass '{}' is not in the catalogue; using a model glass from the file's "
+                       "n_d {} and V_d {} (two-term Cauchy)",
+                       spec.name, *spec.n_d, *spec.v_d));
+      return m;
+    }
+    const std::vector<std::string> hints = cat.suggestions(spec.name);
+    std::string msg = fmt::format("unknown glass '{}'", spec.name);
+    if (!hints.empty()) {
+      msg += "; did you mean ";
+      for (size_t i = 0; i < hints.size(); ++i)
+        msg += (i == 0 ? "" : (i + 1 == hints.size() ? " or " : ", ")) + hints[i];
+      msg += "?";
+    }
+    msg += " (give n_d and V_d instead for a model glass)";
+    throw Error(spec.loc, msg);
+  }
+  if (spec.v_d) {
+    const double n_d = spec.n_d ? *spec.n_d : constant_ior;
+    return Glass::model(n_d, *spec.v_d, spec.loc);
+  }
+  if (spec.n_d) return Glass::constant(*spec.n_d);
+  return Glass::constant(constant_ior == 0 ? 1.0 : constant_ior);
+}
+
+std::vector<Glass> resolveGlasses(const LensPrescription& p, std::vector<Diagnostic>* diags) {
+  std::vector<Glass> out;
+  out.reserve(p.surfaces.size());
+  for (const LensSurface& s : p.surfaces) {
+    GlassSpec spec = s.glass;
+    if (!spec.loc.valid()) spec.loc = s.loc;
+    out.push_back(resolveGlass(spec, s.ior, diags));
+  }
+  return out;
+}
+
+std::vector<Diagnostic> matchCatalogGlasses(LensPrescription& p) {
+  std::vector<Diagnostic> notes;
+  const GlassCatalog& cat = GlassCatalog::builtin();
+  for (size_t i = 0; i < p.surfaces.size(); ++i) {
+    LensSurface& s = p.surfaces[i];
+    if (!s.glass.name.empty() || s.ior == 1.0 || s.ior == 0.0) continue;
+    const double n = s.glass.n_d.value_or(s.ior);
+    const double v = s.glass.v_d.value_or(std::numeric_limits<double>::quiet_NaN());
+    const CatalogGlass& g = cat.nearest(n, v);
+    notes.push_back(
+        {Severity::Note, s.loc,
+         fmt::format("glass match: the medium after surface {} (n {:.5g}{}) -> {} (n_d {:.6f}, "
+                     "V_d {:.2f}){}",
+                     i + 1, n, std::isnan(v) ? "" : fmt::format(", V_d {:.4g}", v),
+                     g.qualifiedName(), g.listed_n_d, g.listed_v_d,
+                     std::isnan(v) ? "; the file gives no V_d: nearest n_d among Schott glasses"
+                                   : "")});
+    s.glass.name = g.qualifiedName();
+    s.glass.n_d = g.listed_n_d;
+    s.glass.v_d = g.listed_v_d;
+    if (!s.glass.loc.valid()) s.glass.loc = s.loc;
+    s.ior = g.listed_n_d;
+  }
+  return notes;
+}
+
+double primaryWavelength_nm(const LensPrescription& p) {
+  return p.primary_wavelength_nm ? *p.primary_wavelength_nm : kDefaultPrimaryWavelength_nm;
+}
+
+void checkWavelength(double lambda_nm, const std::string& what) {
+  if (!std::isfinite(lambda_nm) || lambda_nm < 200 || lambda_nm > 2500)
+    throw Error(fmt::format("{}: wavelength {} nm is outside 200-2500 nm", what, lambda_nm));
+}
+
+}  // namespace lensim::optics

@@ -1,0 +1,146 @@
+// Optical glasses: index of refraction as a function of wavelength.
+//
+// A lens medium is one of
+// - a catalogue glass: a vendor's dispersion formula from the built-in catalogue
+//   (data/glass/catalog.csv: Schott, Ohara, Hoya, CDGM, Sumita, Hikari; see data/glass/SOURCES.md),
+//   looked up by name case-insensitively, with or without a vendor prefix ("schott:N-BK7");
+// - a model glass from n_d and V_d: the two-term Cauchy formula n(l) = A + B / l^2 whose n(d) is
+//   n_d and whose n(F) - n(C) is (n_d - 1) / V_d, so its V_d is exactly the one given;
+// - a constant index (the classic `.dat` lenses: no dispersion).
+//
+// Wavelengths are in nanometres. The lines: d 587.5618 nm (helium), F 486.1327 nm and
+// C 656.2725 nm (hydrogen); V_d = (n_d - 1) / (n_F - n_C).
+#pragma once
+
+#include <array>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "lensim/optics/prescription.h"
+#include "lensim/util/error.h"
+
+namespace lensim::optics {
+
+inline constexpr double kLineD_nm = 587.5618;
+inline constexpr double kLineF_nm = 486.1327;
+inline constexpr double kLineC_nm = 656.2725;
+/// The wavelength the workbench uses when a file names no primary wavelength: the d line.
+inline constexpr double kDefaultPrimaryWavelength_nm = kLineD_nm;
+
+/// The dispersion formulas of the catalogue (lambda in micrometres, coefficients c1..c9).
+enum class DispersionFormula {
+  Constant,    ///< n = c1
+  Sellmeier3,  ///< n^2 = 1 + sum_i B_i l^2 / (l^2 - C_i)
+  Schott6,     ///< n^2 = c1 + c2 l^2 + c3 l^-2 + c4 l^-4 + c5 l^-6 + c6 l^-8
+  Hikari9,     ///< n^2 = c1 + c2 l^2 + c3 l^4 + c4 l^-2 + ... + c9 l^-12
+  Cauchy2,     ///< n = c1 + c2 / l^2 (the model glass)
+};
+
+/// A medium with its index of refraction n(lambda).
+class Glass {
+ public:
+  /// Air (index 1).
+  Glass() = default;
+  /// A constant index (no dispersion).
+  static Glass constant(double n);
+  /// The model glass through n_d and V_d (two-term Cauchy). Throws lensim::Error (at loc) for
+  /// n_d < 1 or V_d <= 0 (or not finite).
+  static Glass model(double n_d, double v_d, const FileLoc& loc = {});
+  /// A catalogue glass from its formula; Sellmeier3 coefficients are B1 B2 B3 C1 C2 C3.
+  static Glass formula(std::string vendor, std::string name, DispersionFormula f,
+                       const std::array<double, 9>& c, double min_nm = 365, double max_nm = 1014);
+
+  /// Index of refraction at the wavelength (nm). Any wavelength gives a value; the formula is
+  /// valid between minWavelength_nm() and maxWavelength_nm().
+  double index(double lambda_nm) const;
+  double n_d() const { return index(kLineD_nm); }
+  /// Abbe number; infinity for a non-dispersive medium.
+  double v_d() const;
+  bool dispersive() const { return formula_ != DispersionFormula::Constant; }
+  bool isAir() const { return !dispersive() && c_[0] == 1.0; }
+  DispersionFormula formula() const { return formula_; }
+
+  /// "catalogue", "model" or "constant".
+  const char* kind() const;
+  /// Catalogue glasses: the vendor's name ("N-BK7") and the vendor ("Schott"); model glasses a
+  /// generated name ("model 1.5168/64.17"); constants "".
+  const std::string& name() const { return name_; }
+  const std::string& vendor() const { return vendor_; }
+  /// "schott:N-BK7", "model n_d 1.5168 V_d 64.17 (Cauchy)", "constant 1.5", "air".
+  std::string describe() const;
+  double minWavelength_nm() const { return min_nm_; }
+  double maxWavelength_nm() const { return max_nm_; }
+  bool inRange(double lambda_nm) const { return lambda_nm >= min_nm_ && lambda_nm <= max_nm_; }
+
+ private:
+  DispersionFormula formula_ = DispersionFormula::Constant;
+  std::array<double, 9> c_{1, 0, 0, 0, 0, 0, 0, 0, 0};
+  std::string vendor_, name_;
+  double min_nm_ = 0, max_nm_ = std::numeric_limits<double>::infinity();
+};
+
+/// One glass of a catalogue, with the n_d and V_d the catalogue lists.
+struct CatalogGlass {
+  std::string vendor;  ///< "Schott", "Ohara", ...
+  std::string name;    ///< "N-BK7"
+  double listed_n_d = 0, listed_v_d = 0;
+  Glass glass;
+  /// "schott:N-BK7"
+  std::string qualifiedName() const;
+};
+
+/// A glass catalogue: the built-in one, or one parsed from a CSV file in the same layout
+/// (vendor,glass,nd,vd,formula,c1..c9).
+class GlassCatalog {
+ public:
+  /// The catalogue compiled into lensim (data/glass/catalog.csv).
+  static const GlassCatalog& builtin();
+  /// Parses the CSV text; throws lensim::Error (`path:line:col`) for malformed rows.
+  static GlassCatalog parse(std::string_view csv, const std::string& path);
+
+  const std::vector<CatalogGlass>& glasses() const { return glasses_; }
+  /// Looks a name up: case-insensitive, "vendor:name" or a bare name (the first vendor in
+  /// the order Schott, Ohara, Hoya, CDGM, Sumita, Hikari that has it). nullptr if none.
+  const CatalogGlass* find(std::string_view name) const;
+  /// Up to `count` catalogue names closest to `name` (edit distance on upper-case letters
+  /// and digits), for did-you-mean hints.
+  std::vector<std::string> suggestions(std::string_view name, int count = 3) const;
+  /// The glass nearest in the (n_d, V_d) plane: distance sqrt((100 dn)^2 + dV^2) (0.01 in
+  /// index weighs as one Abbe unit). Without V_d (NaN): nearest n_d among Schott glasses.
+  const CatalogGlass& nearest(double n_d, double v_d) const;
+
+ private:
+  std::vector<CatalogGlass> glasses_;
+};
+
+/// Resolves a lens file's GlassSpec into a medium:
+/// - a name found in the catalogue: that glass (a note when the file's n_d differs from the
+///   catalogue's by more than 1e-3);
+/// - a name not found, with n_d and V_d given: the model glass from them, with a warning;
+/// - a name not found alone: lensim::Error at spec.loc with did-you-mean hints;
+/// - no name, V_d given: the model glass from n_d (spec.n_d, else constant_ior) and V_d;
+/// - nothing: Glass::constant(constant_ior) (air when it is 1 or 0).
+/// Warnings and notes go to `diagnostics` when given.
+Glass resolveGlass(const GlassSpec& spec, double constant_ior,
+                   std::vector<Diagnostic>* diagnostics = nullptr);
+
+/// The medium after each surface of a prescription (resolveGlass on each; air rows stay air).
+std::vector<Glass> resolveGlasses(const LensPrescription& p,
+                                  std::vector<Diagnostic>* diagnostics = nullptr);
+
+/// `--glass-match`: gives every non-air medium of the prescription that names no glass the
+/// catalogue glass nearest to its (index, V_d) (GlassSpec filled with the catalogue name and
+/// n_d, V_d). Returns one note per element saying which glass was chosen.
+std::vector<Diagnostic> matchCatalogGlasses(LensPrescription& p);
+
+/// The wavelength the workbench and focusing use for a prescription: its primary wavelength,
+/// else the d line.
+double primaryWavelength_nm(const LensPrescription& p);
+
+/// Throws lensim::Error unless 200 nm <= lambda <= 2500 nm (a finite wavelength for the
+/// workbench); `what` names the option.
+void checkWavelength(double lambda_nm, const std::string& what);
+
+}  // namespace lensim::optics
