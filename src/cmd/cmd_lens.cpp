@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "lens_options.h"
 #include "lensim/optics/chief_ray.h"
+#include "lensim/optics/chromatic.h"
 #include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/paraxial.h"
@@ -45,6 +46,27 @@ json surfacesJson(const LensSystem& lens) {
                    {"aperture_diameter_mm", 2 * s.semi_aperture_mm},
                    {"z_mm", s.z_mm},
                    {"is_stop", s.is_stop}});
+  }
+  return arr;
+}
+
+json numberOrNull(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+// The glass elements: each medium other than air, with its glass and indices.
+json elementsJson(const LensSystem& lens) {
+  json arr = json::array();
+  const auto& rows = lens.prescription().surfaces;
+  for (int i = 0; i + 1 < lens.surfaceCount(); ++i) {
+    const Glass& g = lens.glasses()[i];
+    if (g.isAir()) continue;
+    arr.push_back({{"front_surface", i},
+                   {"back_surface", i + 1},
+                   {"line", rows[i].loc.line},
+                   {"glass", g.describe()},
+                   {"kind", g.kind()},
+                   {"n_d", g.n_d()},
+                   {"v_d", numberOrNull(g.v_d())},
+                   {"n", lens.interfaces()[i].ior_after}});
   }
   return arr;
 }
@@ -112,6 +134,10 @@ int runInfo(const LensArgs& args, bool as_json) {
       j["field_of_view_max_deg"] = *fov.real_max_deg;
     }
     j["surfaces"] = surfacesJson(lens);
+    j["wavelength_nm"] = lens.wavelength_nm();
+    j["primary_wavelength_nm"] = primaryWavelength_nm(pr);
+    j["dispersive"] = lens.dispersive();
+    j["elements"] = elementsJson(lens);
     j["diagnostics"] = diagnosticsJson(fl);
     std::cout << j.dump(2) << "\n";
     return 0;
@@ -160,6 +186,12 @@ int runInfo(const LensArgs& args, bool as_json) {
                                    : fmt::format("{:.6g} m from the film", fl.focus_distance_m),
                             focusMethodName(args.focus_method), closest));
   line("film distance", fmt::format("{:.4f} mm behind the rear vertex", lens.filmDistance_mm()));
+  line("wavelength",
+       fmt::format("{:.2f} nm{} (focus solved at the primary wavelength, {:.2f} nm){}",
+                   lens.wavelength_nm(),
+                   lens.wavelength_nm() == primaryWavelength_nm(pr) ? " (primary)" : "",
+                   primaryWavelength_nm(pr),
+                   lens.dispersive() ? "" : "; no element disperses"));
   line("lens length / total track",
        fmt::format("{:.4f} mm / {:.4f} mm", lens.rearVertexZ_mm(), lens.filmZ_mm()));
   if (fov.real_deg)
@@ -182,6 +214,18 @@ int runInfo(const LensArgs& args, bool as_json) {
                              s.is_stop ? std::string("stop") : fmt::format("{:.4f}", s.radius_mm),
                              t, s.ior_after, 2 * s.semi_aperture_mm, s.z_mm);
   }
+  // Per element: the glass, n_d, V_d and the index at the analysis wavelength.
+  std::cout << fmt::format("\n  {:>8} {:>5}  {:<28} {:>9} {:>8} {:>10}\n", "element", "line",
+                           "glass", "n_d", "V_d", fmt::format("n({:.0f})", lens.wavelength_nm()));
+  for (int i = 0; i + 1 < lens.surfaceCount(); ++i) {
+    const Glass& g = lens.glasses()[i];
+    if (g.isAir()) continue;
+    std::cout << fmt::format("  {:>8} {:>5}  {:<28} {:>9.6f} {:>8} {:>10.6f}\n",
+                             fmt::format("{}-{}", i, i + 1), pr.surfaces[i].loc.line,
+                             g.describe(), g.n_d(),
+                             std::isfinite(g.v_d()) ? fmt::format("{:.3f}", g.v_d()) : "-",
+                             lens.interfaces()[i].ior_after);
+  }
   return 0;
 }
 
@@ -196,7 +240,8 @@ int runTrace(const LensArgs& args, const std::string& film_s, const std::string&
   if (as_json) {
     json j{{"film_mm", {film.x, film.y}},
            {"rear_mm", {rear.x, rear.y}},
-           {"film_distance_mm", fl.lens->filmDistance_mm()}};
+           {"film_distance_mm", fl.lens->filmDistance_mm()},
+           {"wavelength_nm", fl.lens->wavelength_nm()}};
     if (r.ok()) {
       j["origin_mm"] = vec3Json(r.ray.origin);
       j["direction"] = vec3Json(r.ray.direction);
@@ -250,6 +295,7 @@ struct DrawArgs {
   int rays = 11;
   std::string from = "film";
   bool same_scale = false;
+  std::string wavelengths;  ///< --wavelengths: bundles at each, in their colours
 };
 
 int runDraw(const LensArgs& common, const DrawArgs& args) {
@@ -269,7 +315,27 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     one.lens_path = path;
     FocusedLens fl = setUpLens(one);
     logDiagnostics(fl.allDiagnostics());
-    diagrams.push_back(buildLensDiagram(fl, opts));
+    if (args.wavelengths.empty()) {
+      diagrams.push_back(buildLensDiagram(fl, opts));
+      continue;
+    }
+    // One bundle set per wavelength, drawn in its colour, on the lens focused at the primary.
+    LensDiagram d;
+    std::string names;
+    for (double l : parseList(args.wavelengths, "--wavelengths")) {
+      checkWavelength(l, "--wavelengths");
+      const FocusedLens at = focusedAtWavelength(fl, l);
+      LensDiagram dl = buildLensDiagram(at, opts);
+      for (DiagramRay& r : dl.rays) r.color = wavelengthColor(l);
+      names += fmt::format("{}{:.1f}", names.empty() ? "" : ", ", l);
+      if (d.rays.empty() && d.elements.empty()) {
+        d = std::move(dl);
+      } else {
+        d.rays.insert(d.rays.end(), dl.rays.begin(), dl.rays.end());
+      }
+    }
+    d.annotations.push_back(fmt::format("wavelengths {} nm (in their colours)", names));
+    diagrams.push_back(std::move(d));
   }
   writeFileAtomically(args.output, lensDiagramSheet(diagrams, args.same_scale));
   logInfo(fmt::format("wrote {} ({} lens{})", args.output, diagrams.size(),
@@ -282,6 +348,7 @@ struct PlotArgs {
   std::string output;
   std::string fields = "0,0.5,0.7,1";
   bool as_json = false;
+  std::string wavelengths;  ///< spot: --wavelengths
 };
 
 json pairsJson(const std::vector<double>& a, const std::vector<double>& b) {
@@ -301,8 +368,49 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
   FocusedLens fl = setUpLens(args);
   logDiagnostics(fl.allDiagnostics());
   std::string svg_text;
-  json j{{"kind", pa.kind}, {"lens", fl.lens->prescription().path}};
-  if (pa.kind == "spot") {
+  json j{{"kind", pa.kind},
+         {"lens", fl.lens->prescription().path},
+         {"wavelength_nm", fl.lens->wavelength_nm()}};
+  if (pa.kind == "spot" && !pa.wavelengths.empty()) {
+    std::vector<double> ls = parseList(pa.wavelengths, "--wavelengths");
+    for (double l : ls) checkWavelength(l, "--wavelengths");
+    auto spots = computeSpotsAtWavelengths(fl, parseList(pa.fields, "--fields"),
+                                           args.film_diagonal_mm, ls);
+    svg_text = colorSpotSvg(fl, spots);
+    json arr = json::array();
+    for (const ColorSpotField& s : spots) {
+      json per = json::array();
+      for (size_t w = 0; w < s.wavelength_nm.size(); ++w)
+        per.push_back({{"wavelength_nm", s.wavelength_nm[w]},
+                       {"centroid_mm", {numberOrNull(s.centroid_mm[w].x),
+                                        numberOrNull(s.centroid_mm[w].y)}},
+                       {"rms_radius_mm", numberOrNull(s.rms_radius_mm[w])},
+                       {"rays_through", s.points_mm[w].size()}});
+      arr.push_back({{"film_height_mm", s.film_height_mm},
+                     {"field_angle_deg", s.field_angle_deg},
+                     {"wavelengths", per}});
+    }
+    j["fields"] = arr;
+  } else if (pa.kind == "chromatic") {
+    ChromaticFocus c = computeChromaticFocus(fl);
+    svg_text = chromaticFocusSvg(fl, c);
+    j["primary_wavelength_nm"] = c.primary_nm;
+    j["wavelength_nm"] = c.wavelength_nm;
+    j["paraxial_film_distance_mm"] = c.paraxial_mm;
+    j["real_film_distance_mm"] = finiteOrNull(c.real_mm);
+    j["paraxial_primary_mm"] = c.paraxial_primary_mm;
+    j["real_primary_mm"] = numberOrNull(c.real_primary_mm);
+  } else if (pa.kind == "lateral-color") {
+    LateralColor c = computeLateralColor(fl, args.film_diagonal_mm);
+    svg_text = lateralColorSvg(fl, c);
+    j["short_nm"] = c.short_nm;
+    j["long_nm"] = c.long_nm;
+    j["primary_wavelength_nm"] = c.primary_nm;
+    j["field_deg"] = c.field_deg;
+    j["height_primary_mm"] = c.height_primary_mm;
+    j["short_minus_primary_mm"] = finiteOrNull(c.short_minus_primary_mm);
+    j["long_minus_primary_mm"] = finiteOrNull(c.long_minus_primary_mm);
+  } else if (pa.kind == "spot") {
     auto spots = computeSpots(fl, parseList(pa.fields, "--fields"), args.film_diagonal_mm);
     svg_text = spotSvg(fl, spots);
     json arr = json::array();
@@ -395,6 +503,9 @@ void registerLensCommands(CLI::App& app, Action& action) {
     draw->add_option("--from", d->from, "Trace bundles from the film or from the scene")
         ->check(CLI::IsMember({"film", "scene"}));
     draw->add_flag("--same-scale", d->same_scale, "Draw every lens of a sheet at one scale");
+    draw->add_option("--wavelengths", d->wavelengths,
+                     "Trace the bundles at each wavelength (nm, comma-separated), drawn in their "
+                     "colours, e.g. 486.1,587.6,656.3");
     draw->callback([&action, args, d] { action = [args, d] { return runDraw(*args, *d); }; });
   }
   {
@@ -402,9 +513,15 @@ void registerLensCommands(CLI::App& app, Action& action) {
         "plot", "Plot spot diagrams, distortion, relative illumination or the focus curve (SVG)");
     auto args = std::make_shared<LensArgs>();
     auto pa = std::make_shared<PlotArgs>();
-    plot->add_option("KIND", pa->kind, "spot, distortion, vignetting or focus")
+    plot->add_option("KIND", pa->kind,
+                     "spot, distortion, vignetting, focus, chromatic (focal shift against "
+                     "wavelength) or lateral-color (F and C image height minus d)")
         ->required()
-        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus"}));
+        ->check(CLI::IsMember(
+            {"spot", "distortion", "vignetting", "focus", "chromatic", "lateral-color"}));
+    plot->add_option("--wavelengths", pa->wavelengths,
+                     "spot: one spot per wavelength (nm, comma-separated) in its colour, e.g. "
+                     "486.1,587.6,656.3");
     addLensOptions(plot, *args);
     plot->add_option("-o,--output", pa->output, "Output SVG file")->required();
     plot->add_option("--fields", pa->fields,

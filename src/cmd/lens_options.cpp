@@ -7,6 +7,10 @@
 #include <cmath>
 #include <limits>
 
+#include "lensim/optics/glass.h"
+#include "lensim/optics/paraxial.h"
+#include "lensim/util/log.h"
+
 namespace lensim::cmd {
 
 namespace {
@@ -42,6 +46,12 @@ void addLensSetupOptions(CLI::App* cmd, LensArgs& args) {
           std::map<std::string, optics::FocusMethod>{{"thick", optics::FocusMethod::Thick},
                                                      {"exact", optics::FocusMethod::Exact}},
           CLI::ignore_case));
+  cmd->add_option("--wavelength", args.wavelength_nm,
+                  "Wavelength in nm to analyse at (default: the file's primary wavelength, else "
+                  "587.56, the d line); focus is solved at the primary wavelength");
+  cmd->add_flag("--glass-match", args.glass_match,
+                "Give each element the catalogue glass nearest its index and Abbe number (prints "
+                "the choice)");
 }
 
 optics::FocusedLens setUpLens(const LensArgs& args) {
@@ -53,7 +63,25 @@ optics::FocusedLens setUpLens(const LensArgs& args) {
     setup.focus_distance_m = parseDistance_m(args.focus_distance, "--focus-distance");
   if (!(args.film_diagonal_mm > 0))
     throw Error(fmt::format("--film-diagonal {} mm must be > 0", args.film_diagonal_mm));
-  return optics::focusLens(optics::readLensFile(args.lens_path), setup);
+  optics::LensPrescription prescription = optics::readLensFile(args.lens_path);
+  if (args.glass_match)
+    for (const Diagnostic& d : optics::matchCatalogGlasses(prescription)) logDiagnostic(d);
+  // Focus at the primary wavelength, then the indices (and paraxial data) at --wavelength.
+  optics::FocusedLens fl = optics::focusLens(std::move(prescription), setup);
+  if (args.wavelength_nm) {
+    const double l = *args.wavelength_nm;
+    optics::checkWavelength(l, "--wavelength");
+    for (const optics::Glass& g : fl.lens->glasses())
+      if (g.dispersive() && !g.inRange(l)) {
+        logWarning(fmt::format("--wavelength {} nm is outside the valid range of {} ({}-{} nm); "
+                               "its formula is used there anyway",
+                               l, g.describe(), g.minWavelength_nm(), g.maxWavelength_nm()));
+        break;
+      }
+    fl.lens->setWavelength(l);
+    fl.paraxial = optics::computeParaxial(*fl.lens);
+  }
+  return fl;
 }
 
 Vec2 parsePair(const std::string& text, const std::string& option) {

@@ -20,6 +20,11 @@ struct LensArgs {
   std::optional<double> film_distance_mm;
   double film_diagonal_mm = 35.0;  ///< pbrt-v4's default film diagonal
   optics::FocusMethod focus_method = optics::FocusMethod::Thick;
+  /// `--wavelength` (nm): the wavelength the lens is analysed at (focus stays solved at the
+  /// primary wavelength); default the file's primary wavelength, else the d line.
+  std::optional<double> wavelength_nm;
+  /// `--glass-match`: each element gets the nearest catalogue glass.
+  bool glass_match = false;
 };
 
 /// Adds --aperture-diameter, --focus-distance, --film-distance, --film-diagonal and

@@ -24,6 +24,9 @@ struct CameraSample {
   Vec2 film_raster;     ///< continuous raster position in the full image (pixels)
   Vec2 lens{0.5, 0.5};  ///< [0,1)^2: position on the lens / exit pupil
   double time = 0;      ///< [0,1): position in the shutter interval
+  /// The path's hero wavelength (nm), for a camera whose lens disperses; 0: not given (a
+  /// dispersive lens then refracts at its primary wavelength).
+  double lambda_nm = 0;
 };
 
 /// A camera ray in world space and the weight of its radiance estimate.
@@ -37,6 +40,10 @@ struct CameraRay {
   Vec3 direction;  ///< world space, unit length
   double weight = 1;
   double time = 0;  ///< shutter time of the ray (seconds from shutter open)
+  /// The ray was refracted at the sample's hero wavelength only (a dispersive lens): the path
+  /// must terminate its secondary wavelengths (SampledWavelengths::terminateSecondary), whose
+  /// rays would leave the lens in other directions.
+  bool hero_only = false;
 };
 
 /// The interface every camera implements.

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 
@@ -31,7 +32,15 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
     if (!settings_.aperture.isRound() && setup.aperture_diameter_mm)
       setup.aperture_diameter_mm = *setup.aperture_diameter_mm * settings_.aperture.extent();
   }
+  if (settings_.glass_match)
+    for (const Diagnostic& d : optics::matchCatalogGlasses(prescription)) logDiagnostic(d);
+  // Focus is solved at the lens's primary wavelength (the file's, else the d line).
   lens_ = optics::focusLens(std::move(prescription), setup);
+  dispersive_ = lens_.lens->dispersive();
+  {
+    static std::atomic<std::uint64_t> next_id{1};
+    id_ = next_id++;
+  }
 
   // Film extent from the diagonal and the image's aspect ratio.
   const double aspect = static_cast<double>(settings_.y_resolution) / settings_.x_resolution;
@@ -45,6 +54,10 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
     pupil_options.rear_disc_radius_mm = lens_.lens->interfaces().back().semi_aperture_mm;
     pupil_options.radial_bins = 48;
   }
+  // The bounds are traced at the primary wavelength; other wavelengths shift the region slightly
+  // (by under 1% of its size for the lenses tested, tests/camera_dispersion_test.cpp), so a
+  // dispersive lens widens them by 5% instead of 1%: no passing ray of 360-830 nm is lost.
+  if (dispersive_) pupil_options.margin = 0.05;
   pupil_.emplace(*lens_.lens, lens_.paraxial, std::hypot(half_width_mm_, half_height_mm_),
                  pupil_options);
   centre_area_mm2_ = pupil_->area_mm2({0, 0});
@@ -117,13 +130,61 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
   return ray;
 }
 
+// Dispersive lenses. With hero-wavelength sampling a path carries N wavelengths, but through a
+// dispersive lens each leaves the lens in its own direction. Choices (all unbiased):
+// (a) one camera ray per wavelength: N scene paths per sample, each single-wavelength: N times
+//     the path cost for the same information as (b) with N samples;
+// (b) refract at the hero wavelength and terminate the secondary ones, as pbrt-v4 does at a
+//     dispersive dielectric: one path per sample, the hero's pdf divided by N, so the estimate
+//     stays unbiased; the price is colour noise (one wavelength per path instead of N);
+// (c) keep the secondaries with MIS over the film points where their rays would have started:
+//     their rays through the same lens point start at other film points (lateral colour moves
+//     them by up to pixels), so each would splat elsewhere, and the weights need the lens map's
+//     Jacobian per wavelength: complex, and it pays off only where the lens barely disperses.
+// lensim does (b). The sampler stratifies the hero wavelength over a pixel's samples (its first
+// dimension), which keeps the colour noise down; the measured cost is in README.md ("Glass and
+// chromatic aberration"). A non-dispersive lens takes none of this: the batched tracer, and
+// every wavelength kept.
+//
+// Each sample's tracer must carry the indices at its wavelength: every thread keeps a copy of the
+// float tracer and re-indexes it (n(lambda) of each medium, a few flops per surface), exact at
+// every wavelength, no locks, no allocation per sample.
+const optics::LensTracer<float>& RealisticCamera::tracerAt(double lambda_nm) const {
+  struct PerThread {
+    std::uint64_t owner = 0;
+    optics::LensTracer<float> tracer;
+    std::vector<double> before, after;
+    double lambda_nm = -1;
+  };
+  thread_local PerThread t;
+  const optics::LensSystem& lens = *lens_.lens;
+  if (t.owner != id_) {
+    t.owner = id_;
+    t.tracer = lens.tracerFloat();
+    t.before.resize(lens.surfaceCount());
+    t.after.resize(lens.surfaceCount());
+    t.lambda_nm = -1;
+  }
+  if (t.lambda_nm != lambda_nm) {
+    lens.indicesAt(lambda_nm, t.before.data(), t.after.data());
+    t.tracer.setIndices(t.before.data(), t.after.data());
+    t.lambda_nm = lambda_nm;
+  }
+  return t.tracer;
+}
+
 std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample) const {
   const Vec2 film = filmPoint(sample.film_raster);
   const std::optional<FilmRay> f = filmRay(sample, film, pupil_->sample(film, sample.lens));
   if (!f) return std::nullopt;
-  const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f->ray);
+  const bool per_wavelength = dispersive_ && sample.lambda_nm > 0;
+  const optics::TraceResultT<float> r =
+      per_wavelength ? tracerAt(sample.lambda_nm).traceFromFilm(f->ray)
+                     : lens_.lens->tracerFloat().traceFromFilm(f->ray);
   if (!r.ok()) return std::nullopt;
-  return finish(r, *f, sample.time);
+  std::optional<CameraRay> ray = finish(r, *f, sample.time);
+  if (ray) ray->hero_only = per_wavelength;
+  return ray;
 }
 
 void RealisticCamera::generateRays(const CameraSample* samples, int n,
@@ -152,6 +213,20 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
       index[m++] = i;
     }
   }
+  if (dispersive_) {
+    // One wavelength per sample: each its own trace (see "Dispersive lenses" above).
+    for (int k = 0; k < m; ++k) {
+      const CameraSample& sk = samples[index[k]];
+      const bool per_wavelength = sk.lambda_nm > 0;
+      const optics::TraceResultT<float> r =
+          per_wavelength ? tracerAt(sk.lambda_nm).traceFromFilm(in[k])
+                         : lens_.lens->tracerFloat().traceFromFilm(in[k]);
+      if (!r.ok()) continue;
+      rays[index[k]] = finish(r, lanes[k], sk.time);
+      if (rays[index[k]]) rays[index[k]]->hero_only = per_wavelength;
+    }
+    return;
+  }
   lens_.lens->tracerFloat().traceFromFilmBatch(in, m, out);
   for (int k = 0; k < m; ++k)
     if (out[k].ok()) rays[index[k]] = finish(out[k], lanes[k], samples[index[k]].time);
@@ -165,12 +240,15 @@ std::string RealisticCamera::describe() const {
   const optics::LensSystem& lens = *lens_.lens;
   return fmt::format(
       "realistic: {} ({}), f = {:.2f} mm, f/{:.2f}, film distance {:.3f} mm, focus {}, "
-      "{:.1f} x {:.1f} mm film, aperture {}",
+      "{:.1f} x {:.1f} mm film, aperture {}{}",
       lens.prescription().name, lens.prescription().path, lens_.paraxial.effective_focal_length_mm,
       lens_.paraxial.f_number, lens.filmDistance_mm(),
       std::isinf(lens_.focus_distance_m) ? std::string("at infinity")
                                          : fmt::format("{:.4g} m", lens_.focus_distance_m),
-      2 * half_width_mm_, 2 * half_height_mm_, settings_.aperture.describe());
+      2 * half_width_mm_, 2 * half_height_mm_, settings_.aperture.describe(),
+      dispersive_ ? fmt::format(", dispersive (focused at {:.2f} nm; hero wavelength only)",
+                                lens.wavelength_nm())
+                  : std::string());
 }
 
 std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
@@ -206,6 +284,7 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.camera_units_per_mm = scene::Realistic::kSceneUnitsPerLensUnit;
       s.exposure_time = c.shutter_close - c.shutter_open;
       s.simple_weighting = r.simple_weighting;
+      s.glass_match = r.glass_match;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

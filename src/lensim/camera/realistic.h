@@ -25,6 +25,7 @@
 // and put the camera origin at the front vertex (RealisticSettings::origin_at_front_vertex).
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -66,6 +67,9 @@ struct RealisticSettings {
   /// rays and the share of the centre's samples that get through: 0.94 for the double Gauss at
   /// f/4) and falls off toward the corners as the irradiance does.
   bool simple_weighting = false;
+  /// Give every element of the lens the catalogue glass nearest to its index (and V_d), as
+  /// `lens info --glass-match` does (the scene's "bool glassmatch"), so an old lens disperses.
+  bool glass_match = false;
 };
 
 class RealisticCamera final : public Camera {
@@ -115,6 +119,12 @@ class RealisticCamera final : public Camera {
   double centre_area_mm2_ = 0;  // sampled region at the film centre (simple weighting)  // the set
                                 // stop radius: the aperture shape's unit
   double startup_seconds_ = 0;
+  /// Dispersion (see realistic.cpp, "Dispersive lenses"): whether the lens disperses, and an id
+  /// that keys each thread's re-indexed copy of the tracer to this camera.
+  bool dispersive_ = false;
+  std::uint64_t id_ = 0;
+  /// The float tracer at the wavelength, a per-thread copy re-indexed for it.
+  const optics::LensTracer<float>& tracerAt(double lambda_nm) const;
 };
 
 }  // namespace lensim::camera

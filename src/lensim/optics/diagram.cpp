@@ -266,11 +266,12 @@ void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double 
 
   // Rays, one colour per field; blocked rays end with a mark.
   for (const DiagramRay& r : d.rays) {
+    const std::string colour = r.color.empty() ? plot::paletteColor(r.field) : r.color;
     std::vector<std::pair<double, double>> pts;
     for (const Vec3& q : r.points) pts.push_back(P(q.z, std::clamp(q.x, -clip, clip)));
     svg::Attrs a{{"class", "ray"},
                  {"data-field", std::to_string(r.field)},
-                 {"stroke", plot::paletteColor(r.field)},
+                 {"stroke", colour},
                  {"stroke-width", "0.9"},
                  {"stroke-opacity", "0.85"}};
     if (!r.result.ok()) {
@@ -282,11 +283,11 @@ void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double 
       auto [bx, by] = pts.back();
       doc.line(bx - 3, by - 3, bx + 3, by + 3,
                {{"class", "block-mark"},
-                {"stroke", plot::paletteColor(r.field)},
+                {"stroke", colour},
                 {"stroke-width", "1.5"}});
       doc.line(bx - 3, by + 3, bx + 3, by - 3,
                {{"class", "block-mark"},
-                {"stroke", plot::paletteColor(r.field)},
+                {"stroke", colour},
                 {"stroke-width", "1.5"}});
     }
   }

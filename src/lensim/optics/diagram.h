@@ -32,6 +32,7 @@ struct DiagramRay {
   Ray start;                 ///< the ray as handed to the tracer
   std::vector<Vec3> points;  ///< the tracer's path, then a short extension (if it got through)
   TraceResult result;        ///< the tracer's result
+  std::string color;         ///< SVG colour; empty: the field's palette colour
 };
 
 /// A glass element: the closed outline of its cross-section, (z, x) points in mm.

@@ -202,6 +202,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             camera::CameraSample cs[kB];
             FilterSample fs[kB];
             double u_lambda[kB];
+            SampledWavelengths lambdas[kB];
             std::optional<camera::CameraRay> cam_rays[kB];
             for (int y = y0; y < y1; ++y)
               for (int x = x0; x < x1; ++x)
@@ -220,13 +221,17 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     cs[k].lens = sampler->get2D();
                     cs[k].time = sampler->get1D();
                     cs[k].film_raster = {x + 0.5 + fs[k].p.x, y + 0.5 + fs[k].p.y};
+                    lambdas[k] = SampledWavelengths::sampleVisible(u_lambda[k]);
+                    cs[k].lambda_nm = lambdas[k].lambda(0);
                     path_dimension = sampler->dimension();
                   }
                   cam->generateRays(cs, m, cam_rays);
                   for (int k = 0; k < m; ++k) {
                     ++n_samples;
-                    SampledWavelengths lambda = SampledWavelengths::sampleVisible(u_lambda[k]);
+                    SampledWavelengths& lambda = lambdas[k];
                     const std::optional<camera::CameraRay>& ray = cam_rays[k];
+                    // A dispersive lens refracted the ray at the hero wavelength only.
+                    if (ray && ray->hero_only) lambda.terminateSecondary();
                     SampledSpectrum L(0.0);
                     if (!ray) {
                       ++n_none;

@@ -730,6 +730,7 @@ class Builder {
         r.focus_distance_m = ps.getFloat({"focusdistance"}, 10.0);
         // pbrt-v3's default is true; pbrt-v4 has no such parameter (always irradiance).
         r.simple_weighting = ps.getBool({"simpleweighting"}, scene_.legacy_syntax);
+        r.glass_match = ps.getBool({"glassmatch"}, false);
         if (const Param* fd = ps.find({"filmdistance"}, {ParamType::Float})) {
           ps.expectCount(*fd, 1);
           if (!(fd->numbers[0] > 0)) ps.fail(*fd, "film distance must be positive (mm)");

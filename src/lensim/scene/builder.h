@@ -218,6 +218,8 @@ struct Realistic {
   std::string focus_method = "thick";      ///< `focusmethod`: thick (pbrt-v4) or exact
   int blades = 0;                          ///< `blades`: polygonal stop (0: round)
   double blade_rotation_deg = 0;           ///< `bladerotation`
+  /// `glassmatch`: each element gets the nearest catalogue glass (dispersion for old lenses)
+  bool glass_match = false;
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 
