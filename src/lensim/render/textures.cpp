@@ -17,6 +17,7 @@
 #include <unordered_map>
 
 #include "lensim/io/image.h"
+#include "lensim/optics/glass.h"
 #include "lensim/render/sampling.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
@@ -145,6 +146,17 @@ class SellmeierSpectrum final : public Spectrum {
   std::array<double, 3> b_, c_;
 };
 
+/// The index of a catalogue glass (optics/glass.h): its vendor's dispersion formula.
+class GlassSpectrum final : public Spectrum {
+ public:
+  explicit GlassSpectrum(optics::Glass g) : g_(std::move(g)) {}
+  double eval(double lambda_nm) const override { return g_.index(lambda_nm); }
+  double maxValue() const override { return g_.index(kLambdaMin_nm); }
+
+ private:
+  optics::Glass g_;
+};
+
 }  // namespace
 
 SpectrumPtr fallbackNamedSpectrum(const std::string& name) {
@@ -154,6 +166,16 @@ SpectrumPtr fallbackNamedSpectrum(const std::string& name) {
     return std::make_shared<SellmeierSpectrum>(
         std::array<double, 3>{1.03961212, 0.231792344, 1.01046945},
         std::array<double, 3>{0.00600069867, 0.0200179144, 103.560653});
+  // pbrt-v4's other glasses (its tables are these Schott glasses' formulas, sampled): the
+  // formulas themselves from the glass catalogue.
+  static const std::pair<const char*, const char*> kGlasses[] = {
+      {"glass-BAF10", "schott:N-BAF10"}, {"glass-FK51A", "schott:N-FK51A"},
+      {"glass-LASF9", "schott:N-LASF9"}, {"glass-F5", "schott:SF5"},
+      {"glass-F10", "schott:SF10"},      {"glass-F11", "schott:SF11"}};
+  for (const auto& [pbrt_name, catalogue_name] : kGlasses)
+    if (name == pbrt_name)
+      if (const optics::CatalogGlass* g = optics::GlassCatalog::builtin().find(catalogue_name))
+        return std::make_shared<GlassSpectrum>(g->glass);
   if (name == "stdillum-A") {
     // CIE illuminant A is by definition Planckian radiation at 2856 K.
     return std::make_shared<BlackbodySpectrum>(2856);

@@ -36,7 +36,9 @@ struct TextureEvalContext {
 /// A spectrum from a scene value (RGB, blackbody, tabulated, named or file).
 SpectrumPtr makeSpectrum(const scene::SpectrumValue& v, SpectrumType type);
 /// pbrt-v4 named spectra that render/spectrum.h does not tabulate: glass-BK7 (Schott's Sellmeier
-/// formula) and stdillum-A (blackbody 2856 K) exactly; other glasses a constant 1.5, other metals
+/// formula), glass-BAF10, -FK51A, -LASF9, -F5, -F10, -F11 (Schott N-BAF10, N-FK51A, N-LASF9, SF5,
+/// SF10, SF11 from the glass catalogue) and stdillum-A (blackbody 2856 K) exactly; other glasses
+/// a constant 1.5, other metals
 /// copper, other illuminants D65, each with a warning (once per name).
 SpectrumPtr fallbackNamedSpectrum(const std::string& name);
 /// Luminance Y of a spectrum relative to an equal-energy spectrum of value 1 (lensim's
