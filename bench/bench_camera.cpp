@@ -75,6 +75,32 @@ void BM_RealisticCameraBatch(benchmark::State& state, Setup setup) {
   state.counters["samples/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
 }
 
+// Dispersion (issue 10): the same lens with every element given its nearest catalogue glass
+// (glassmatch), each sample carrying its hero wavelength: one re-indexed scalar trace per sample
+// instead of the batched trace. Against the same samples through the non-dispersive lens.
+void BM_RealisticCameraDispersion(benchmark::State& state, Setup setup, bool dispersive) {
+  RealisticSettings st = settingsFor(setup);
+  st.glass_match = dispersive;
+  const RealisticCamera cam(st);
+  constexpr int kB = Camera::kMaxBatch;
+  std::vector<CameraSample> samples = randomSamples();
+  std::mt19937_64 rng(2);
+  std::uniform_real_distribution<double> u(360, 830);
+  for (CameraSample& c : samples) c.lambda_nm = u(rng);
+  std::optional<CameraRay> out[kB];
+  size_t i = 0, n = 0, rays = 0;
+  for (auto _ : state) {
+    cam.generateRays(&samples[i], kB, out);
+    benchmark::DoNotOptimize(out);
+    for (const auto& r : out) rays += r.has_value();
+    n += kB;
+    i += kB;
+    if (i + kB > samples.size()) i = 0;
+  }
+  state.counters["camera rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+  state.counters["samples/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -85,6 +111,14 @@ int main(int argc, char** argv) {
                                  BM_RealisticCameraSample, s);
     benchmark::RegisterBenchmark((std::string("RealisticCameraBatch16/") + s.lens).c_str(),
                                  BM_RealisticCameraBatch, s);
+  }
+  for (bool dispersive : {false, true}) {
+    const Setup s{"dgauss.50mm.dat", 36.77, 17.1};
+    benchmark::RegisterBenchmark(
+        (std::string("RealisticCameraBatch16/") + s.lens +
+         (dispersive ? "/dispersive (glassmatch)" : "/non-dispersive"))
+            .c_str(),
+        BM_RealisticCameraDispersion, s, dispersive);
   }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

@@ -320,7 +320,8 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
       continue;
     }
     // One bundle set per wavelength, drawn in its colour, on the lens focused at the primary.
-    LensDiagram d;
+    LensDiagram d = buildLensDiagram(fl, opts);
+    d.rays.clear();
     std::string names;
     for (double l : parseList(args.wavelengths, "--wavelengths")) {
       checkWavelength(l, "--wavelengths");
@@ -328,11 +329,7 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
       LensDiagram dl = buildLensDiagram(at, opts);
       for (DiagramRay& r : dl.rays) r.color = wavelengthColor(l);
       names += fmt::format("{}{:.1f}", names.empty() ? "" : ", ", l);
-      if (d.rays.empty() && d.elements.empty()) {
-        d = std::move(dl);
-      } else {
-        d.rays.insert(d.rays.end(), dl.rays.begin(), dl.rays.end());
-      }
+      d.rays.insert(d.rays.end(), dl.rays.begin(), dl.rays.end());
     }
     d.annotations.push_back(fmt::format("wavelengths {} nm (in their colours)", names));
     diagrams.push_back(std::move(d));
@@ -399,6 +396,7 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
     j["paraxial_film_distance_mm"] = c.paraxial_mm;
     j["real_film_distance_mm"] = finiteOrNull(c.real_mm);
     j["paraxial_primary_mm"] = c.paraxial_primary_mm;
+    j["paraxial_f_minus_c_mm"] = c.paraxial_F_mm - c.paraxial_C_mm;
     j["real_primary_mm"] = numberOrNull(c.real_primary_mm);
   } else if (pa.kind == "lateral-color") {
     LateralColor c = computeLateralColor(fl, args.film_diagonal_mm);

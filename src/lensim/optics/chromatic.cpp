@@ -50,6 +50,9 @@ ChromaticFocus computeChromaticFocus(const FocusedLens& fl, double from_nm, doub
     }
   };
   at(primary, c.paraxial_primary_mm, c.real_primary_mm);
+  double unused;
+  at(kLineF_nm, c.paraxial_F_mm, unused);
+  at(kLineC_nm, c.paraxial_C_mm, unused);
   for (int k = 0; k < samples; ++k) {
     const double l = from_nm + (to_nm - from_nm) * k / std::max(1, samples - 1);
     double p, r;
@@ -227,17 +230,7 @@ std::string chromaticFocusSvg(const FocusedLens& fl, const ChromaticFocus& c) {
   }
   ch.series.push_back(par);
   ch.series.push_back(real);
-  auto near = [&](double l) {
-    size_t best = 0;
-    for (size_t k = 0; k < c.wavelength_nm.size(); ++k)
-      if (std::abs(c.wavelength_nm[k] - l) < std::abs(c.wavelength_nm[best] - l)) best = k;
-    return best;
-  };
-  if (!c.wavelength_nm.empty())
-    ch.notes.push_back(fmt::format("paraxial {:.0f}-{:.0f} nm: {:+.4f} mm",
-                                   c.wavelength_nm[near(kLineF_nm)],
-                                   c.wavelength_nm[near(kLineC_nm)],
-                                   c.paraxial_mm[near(kLineF_nm)] - c.paraxial_mm[near(kLineC_nm)]));
+  ch.notes.push_back(fmt::format("paraxial F − C: {:+.4f} mm", c.paraxial_F_mm - c.paraxial_C_mm));
   ch.render(doc, 0, 30, 640, 420);
   return doc.str();
 }
@@ -288,21 +281,19 @@ std::string colorSpotSvg(const FocusedLens& fl, const std::vector<ColorSpotField
     const ColorSpotField& s = spots[i];
     plot::Chart chart;
     chart.title = fmt::format("film {:.2f} mm · {:.2f}°", s.film_height_mm, s.field_angle_deg);
-    chart.x_label = "x − centroid (mm)";
+    chart.x_label = "x − primary wavelength's centroid (mm)";
     chart.y_label = "y − centroid (mm)";
     chart.equal_aspect = true;
     chart.x_range = {-extent, extent};
     chart.y_range = {-extent, extent};
     for (size_t w = 0; w < s.wavelength_nm.size(); ++w) {
       plot::Series pts;
-      pts.name = fmt::format("{:.1f} nm", s.wavelength_nm[w]);
       pts.style = plot::Style::Markers;
       pts.color = wavelengthColor(s.wavelength_nm[w]);
+      pts.name = fmt::format("{:.1f} nm · RMS {:.4f} mm", s.wavelength_nm[w], s.rms_radius_mm[w]);
       pts.marker_radius = 0.9;
       for (const Vec2& q : s.points_mm[w]) pts.points.push_back({q.x, q.y});
       chart.series.push_back(std::move(pts));
-      chart.notes.push_back(
-          fmt::format("{:.1f} nm: RMS {:.4f} mm", s.wavelength_nm[w], s.rms_radius_mm[w]));
     }
     chart.render(doc, pw * i, 30, pw, ph);
   }

@@ -28,6 +28,7 @@ struct ChromaticFocus {
   std::vector<double> real_mm;      ///< film distance of the real best focus (NaN: none)
   double primary_nm = 0;
   double paraxial_primary_mm = 0, real_primary_mm = 0;
+  double paraxial_F_mm = 0, paraxial_C_mm = 0;  ///< at the F and C lines
 };
 ChromaticFocus computeChromaticFocus(const FocusedLens& fl, double from_nm = 400,
                                      double to_nm = 700, int samples = 31);
