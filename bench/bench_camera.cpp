@@ -4,11 +4,13 @@
 // samples that yield a ray. Run with bench/run.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "lensim/camera/realistic.h"
+#include "lensim/render/filter.h"
 
 using namespace lensim;
 using namespace lensim::camera;
@@ -86,7 +88,17 @@ void BM_RealisticCameraDispersion(benchmark::State& state, Setup setup, bool dis
   std::vector<CameraSample> samples = randomSamples();
   std::mt19937_64 rng(2);
   std::uniform_real_distribution<double> u(360, 830);
-  for (CameraSample& c : samples) c.lambda_nm = u(rng);
+  // As the renderer hands them over: the path's four wavelengths (the hero and three others
+  // equally spaced, wrapping around), the pixel and its filter.
+  const render::GaussianFilter filter;
+  for (CameraSample& c : samples) {
+    const double l0 = u(rng);
+    for (int i = 0; i < kCameraWavelengths; ++i)
+      c.lambda_nm[size_t(i)] = 360 + std::fmod(l0 - 360 + i * 470.0 / kCameraWavelengths, 470.0);
+    c.pixel_centre = {std::floor(c.film_raster.x) + 0.5, std::floor(c.film_raster.y) + 0.5};
+    c.filter = &filter;
+    c.filter_weight = filter.integral();
+  }
   std::optional<CameraRay> out[kB];
   size_t i = 0, n = 0, rays = 0;
   for (auto _ : state) {

@@ -7,6 +7,7 @@
 // renderer counts it.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,16 +18,30 @@ namespace lensim::scene {
 struct Scene;
 }
 
+namespace lensim::render {
+class Filter;
+}
+
 namespace lensim::camera {
+
+/// Wavelengths per camera path (render::kSpectrumSamples; the renderer checks they agree).
+inline constexpr int kCameraWavelengths = 4;
 
 /// What the renderer hands a camera for one sample.
 struct CameraSample {
   Vec2 film_raster;     ///< continuous raster position in the full image (pixels)
   Vec2 lens{0.5, 0.5};  ///< [0,1)^2: position on the lens / exit pupil
   double time = 0;      ///< [0,1): position in the shutter interval
-  /// The path's hero wavelength (nm), for a camera whose lens disperses; 0: not given (a
-  /// dispersive lens then refracts at its primary wavelength).
-  double lambda_nm = 0;
+  /// For a camera whose lens disperses: the path's wavelengths (nm), the hero first; 0: not
+  /// given (a dispersive lens then refracts at its primary wavelength).
+  std::array<double, kCameraWavelengths> lambda_nm{};
+  /// The pixel the sample belongs to (raster position of its centre), the pixel filter and the
+  /// sample's filter weight f/pdf: a dispersive lens weighs each wavelength by where its ray
+  /// meets the film (realistic.cpp, "Dispersive lenses"). Without a filter it keeps only the
+  /// hero wavelength.
+  Vec2 pixel_centre;
+  const render::Filter* filter = nullptr;
+  double filter_weight = 1;
 };
 
 /// A camera ray in world space and the weight of its radiance estimate.
@@ -44,6 +59,12 @@ struct CameraRay {
   /// must terminate its secondary wavelengths (SampledWavelengths::terminateSecondary), whose
   /// rays would leave the lens in other directions.
   bool hero_only = false;
+  /// A dispersive lens with the sample's pixel filter known: wavelength i of the path's estimate
+  /// is weighted by wavelength_weight[i] instead of weight (spectral MIS over the wavelengths'
+  /// film points); `weight` stays the hero's own, for a path that drops its other wavelengths
+  /// later (at a dispersive material).
+  bool per_wavelength = false;
+  std::array<double, kCameraWavelengths> wavelength_weight{};
 };
 
 /// The interface every camera implements.

@@ -125,6 +125,10 @@ class RealisticCamera final : public Camera {
   std::uint64_t id_ = 0;
   /// The float tracer at the wavelength, a per-thread copy re-indexed for it.
   const optics::LensTracer<float>& tracerAt(double lambda_nm) const;
+  /// A dispersive lens's camera ray for a sample whose film ray is f (realistic.cpp).
+  std::optional<CameraRay> dispersiveRay(const CameraSample& sample, const FilmRay& f) const;
+  /// Raster position of a film point (lens space, mm): the inverse of filmPoint.
+  Vec2 rasterPoint(Vec2 film_mm) const;
 };
 
 }  // namespace lensim::camera

@@ -222,7 +222,12 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     cs[k].time = sampler->get1D();
                     cs[k].film_raster = {x + 0.5 + fs[k].p.x, y + 0.5 + fs[k].p.y};
                     lambdas[k] = SampledWavelengths::sampleVisible(u_lambda[k]);
-                    cs[k].lambda_nm = lambdas[k].lambda(0);
+                    static_assert(camera::kCameraWavelengths == kSpectrumSamples);
+                    for (int c = 0; c < kSpectrumSamples; ++c)
+                      cs[k].lambda_nm[size_t(c)] = lambdas[k].lambda(c);
+                    cs[k].pixel_centre = {x + 0.5, y + 0.5};
+                    cs[k].filter = opt.dispersion_hero_only ? nullptr : filter.get();
+                    cs[k].filter_weight = fs[k].weight;
                     path_dimension = sampler->dimension();
                   }
                   cam->generateRays(cs, m, cam_rays);
@@ -239,8 +244,13 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     } else {
                       ++n_rays;
                       sampler->startPixelSample({x, y}, i0 + k, path_dimension);
-                      L = pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts) *
-                          ray->weight;
+                      L = pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts);
+                      if (ray->per_wavelength && !lambda.secondaryTerminated()) {
+                        for (int c = 0; c < kSpectrumSamples; ++c)
+                          L[c] *= ray->wavelength_weight[size_t(c)];
+                      } else {
+                        L = L * ray->weight;
+                      }
                     }
                     bool finite = true;
                     for (int c = 0; c < kSpectrumSamples; ++c)

@@ -33,6 +33,10 @@ struct RenderOptions {
   /// (SceneContext::pbrt_v2_epsilon) and its realistic camera's zero-weight samples
   /// (camera::CameraOptions::pbrt_v2_quirks). Off by default: both are physically wrong.
   bool pbrt_v2_quirks = false;
+  /// A dispersive lens keeps only each path's hero wavelength (pbrt-v4's way) instead of
+  /// weighting every wavelength by its own film point (realistic.cpp, "Dispersive lenses"); for
+  /// comparing the two (bench/dispersion).
+  bool dispersion_hero_only = false;
 };
 
 /// What happened during a render.
