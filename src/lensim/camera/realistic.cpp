@@ -38,6 +38,16 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   // Focus is solved at the lens's primary wavelength (the file's, else the d line).
   lens_ = optics::focusLens(std::move(prescription), setup);
   dispersive_ = lens_.lens->dispersive();
+  if (dispersive_) {
+    const int n = lens_.lens->surfaceCount();
+    const int steps = int(std::lround((kIndexTo_nm - kIndexFrom_nm) / kIndexStep_nm));
+    std::vector<double> before(size_t(n), 1.0), after(size_t(n), 1.0);
+    index_table_.resize(size_t(steps + 1) * size_t(n));
+    for (int k = 0; k <= steps; ++k) {
+      lens_.lens->indicesAt(kIndexFrom_nm + k * kIndexStep_nm, before.data(), after.data());
+      std::copy(after.begin(), after.end(), index_table_.begin() + ptrdiff_t(k) * n);
+    }
+  }
   {
     static std::atomic<std::uint64_t> next_id{1};
     id_ = next_id++;
@@ -162,8 +172,9 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
 // A non-dispersive lens takes none of this: the batched tracer, and every wavelength kept.
 //
 // Each wavelength's tracer must carry the indices at that wavelength: every thread keeps a copy
-// of the float tracer and re-indexes it (n(lambda) of each medium, a few flops per surface),
-// exact at every wavelength, no locks, no allocation per sample.
+// of the float tracer and re-indexes it from a table of the media's indices every 0.25 nm
+// (linear interpolation, error under 2e-8: below the float tracer's rounding), no locks, no
+// allocation per sample.
 const optics::LensTracer<float>& RealisticCamera::tracerAt(double lambda_nm) const {
   struct PerThread {
     std::uint64_t owner = 0;
@@ -181,7 +192,23 @@ const optics::LensTracer<float>& RealisticCamera::tracerAt(double lambda_nm) con
     t.lambda_nm = -1;
   }
   if (t.lambda_nm != lambda_nm) {
-    lens.indicesAt(lambda_nm, t.before.data(), t.after.data());
+    const double u = (lambda_nm - kIndexFrom_nm) / kIndexStep_nm;
+    const int n = lens.surfaceCount();
+    const int last = int(index_table_.size()) / n - 1;
+    if (u >= 0 && u < last) {
+      const int k = int(u);
+      const double a = u - k;
+      const double* r0 = index_table_.data() + ptrdiff_t(k) * n;
+      const double* r1 = r0 + n;
+      double before = 1.0;
+      for (int i = 0; i < n; ++i) {
+        const double after = r0[i] + a * (r1[i] - r0[i]);
+        t.before[size_t(i)] = before, t.after[size_t(i)] = after;
+        before = after;
+      }
+    } else {
+      lens.indicesAt(lambda_nm, t.before.data(), t.after.data());
+    }
     t.tracer.setIndices(t.before.data(), t.after.data());
     t.lambda_nm = lambda_nm;
   }
