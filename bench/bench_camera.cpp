@@ -126,11 +126,10 @@ int main(int argc, char** argv) {
   }
   for (bool dispersive : {false, true}) {
     const Setup s{"dgauss.50mm.dat", 36.77, 17.1};
-    benchmark::RegisterBenchmark(
-        (std::string("RealisticCameraBatch16/") + s.lens +
-         (dispersive ? "/dispersive (glassmatch)" : "/non-dispersive"))
-            .c_str(),
-        BM_RealisticCameraDispersion, s, dispersive);
+    benchmark::RegisterBenchmark((std::string("RealisticCameraBatch16/") + s.lens +
+                                  (dispersive ? "/dispersive (glassmatch)" : "/non-dispersive"))
+                                     .c_str(),
+                                 BM_RealisticCameraDispersion, s, dispersive);
   }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

@@ -86,18 +86,24 @@ Measure measure(const scene::Scene& scene, int spp, int seeds, int threads,
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s SCENE [--spp N] [--seeds K] [--threads T] "
-                         "[--pixelbounds x0 x1 y0 y1]\n", argv[0]);
+    std::fprintf(stderr,
+                 "usage: %s SCENE [--spp N] [--seeds K] [--threads T] "
+                 "[--pixelbounds x0 x1 y0 y1]\n",
+                 argv[0]);
     return 2;
   }
   int spp = 16, seeds = 8, threads = 0;
   std::optional<std::array<int, 4>> bounds;
   std::string lens;
   for (int i = 2; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--spp") && i + 1 < argc) spp = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc) seeds = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) threads = std::atoi(argv[++i]);
-    else if (!std::strcmp(argv[i], "--lens") && i + 1 < argc) lens = argv[++i];
+    if (!std::strcmp(argv[i], "--spp") && i + 1 < argc)
+      spp = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--seeds") && i + 1 < argc)
+      seeds = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc)
+      threads = std::atoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--lens") && i + 1 < argc)
+      lens = argv[++i];
     else if (!std::strcmp(argv[i], "--pixelbounds") && i + 4 < argc) {
       bounds = std::array<int, 4>{std::atoi(argv[i + 1]), std::atoi(argv[i + 2]),
                                   std::atoi(argv[i + 3]), std::atoi(argv[i + 4])};
@@ -140,13 +146,13 @@ int main(int argc, char** argv) {
                               "dispersive: every wavelength, MIS (lensim)",
                               "dispersive: hero wavelength only (pbrt-v4)"};
       std::printf("%-44s %9.3f %10.4g %10.4g %11.4g %11.4g %11.4g\n", names[variant], m.seconds,
-                  m.mean_y, m.var_y, m.var_chroma, m.var_y * m.seconds,
-                  m.var_chroma * m.seconds);
+                  m.mean_y, m.var_y, m.var_chroma, m.var_y * m.seconds, m.var_chroma * m.seconds);
       if (variant > 0)
-        std::printf("  at equal time: %.2fx the colour variance, %.2fx the luminance variance of "
-                    "the non-dispersive lens\n",
-                    m.var_chroma * m.seconds / (base.var_chroma * base.seconds),
-                    m.var_y * m.seconds / (base.var_y * base.seconds));
+        std::printf(
+            "  at equal time: %.2fx the colour variance, %.2fx the luminance variance of "
+            "the non-dispersive lens\n",
+            m.var_chroma * m.seconds / (base.var_chroma * base.seconds),
+            m.var_y * m.seconds / (base.var_y * base.seconds));
     }
   } catch (const Error& e) {
     std::fprintf(stderr, "%s\n", e.what());

@@ -63,8 +63,8 @@ TEST(LensGlassCli, WavelengthChangesIndicesNotFocus) {
             d["effective_focal_length_mm"].get<double>() - 0.3);
   EXPECT_EQ(f["film_distance_mm"].get<double>(), d["film_distance_mm"].get<double>());
   // The trace reports its wavelength too.
-  const json t = jsonOf(runLensim("lens trace " + kLandscape +
-                                  " --film 0,0 --rear 1,0 --wavelength 450 --json"));
+  const json t = jsonOf(
+      runLensim("lens trace " + kLandscape + " --film 0,0 --rear 1,0 --wavelength 450 --json"));
   EXPECT_EQ(t["wavelength_nm"].get<double>(), 450);
   // A non-dispersive lens ignores the wavelength.
   const json a = jsonOf(runLensim("lens info " + lensPath("dgauss.50mm.dat") + " --json"));
@@ -81,7 +81,8 @@ TEST(LensGlassCli, GlassMatchPrintsItsChoices) {
   const json j = jsonOf(r);
   EXPECT_TRUE(j["dispersive"].get<bool>());
   ASSERT_EQ(j["elements"].size(), 6u);
-  for (const json& e : j["elements"]) EXPECT_EQ(e["glass"].get<std::string>().rfind("schott:", 0), 0u);
+  for (const json& e : j["elements"])
+    EXPECT_EQ(e["glass"].get<std::string>().rfind("schott:", 0), 0u);
 }
 
 TEST(LensGlassCli, ChromaticAndLateralColourPlots) {
@@ -122,7 +123,8 @@ TEST(LensGlassCli, SpotsAndDrawingsPerWavelength) {
 }
 
 TEST(LensGlassCli, ErrorsAreLocatedAndExitOne) {
-  const std::string bad = tempFile("badglass.dat", "0 12 0 5\n-40 5 1.9 22 - N-SF666\n-18 0 0 26\n");
+  const std::string bad =
+      tempFile("badglass.dat", "0 12 0 5\n-40 5 1.9 22 - N-SF666\n-18 0 0 26\n");
   const auto r = runLensim("lens info " + bad);
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.out.find(bad + ":2:16: error: unknown glass 'N-SF666'; did you mean schott:N-SF66"),

@@ -185,8 +185,7 @@ TEST(DatGlassColumns, ErrorsAreLocated) {
                 .find("bad.dat:1:15: error: unknown glass 'N-BKK7'; did you mean schott:N-BK7"),
             std::string::npos)
       << errorOf("50 4 1.5 20 - N-BKK7\n-50 0 0 20\n");
-  EXPECT_NE(errorOf("50 4 0 20 60\n-50 0 0 20\n").find("bad.dat:1:11: error:"),
-            std::string::npos);
+  EXPECT_NE(errorOf("50 4 0 20 60\n-50 0 0 20\n").find("bad.dat:1:11: error:"), std::string::npos);
   EXPECT_NE(errorOf("50 4 1.5 20 60 N-BK7 x\n-50 0 0 20\n").find("bad.dat:1:1: error:"),
             std::string::npos);
 }
@@ -219,9 +218,7 @@ TEST(Dispersion, ThinSingletFocalShiftMatchesLensmaker) {
       fmt::format("{} {} 1.5168 10 - N-BK7\n{} 0 0 10\n", R, t, -R), "singlet.dat"));
   ASSERT_TRUE(lens.dispersive());
   const Glass& bk7 = GlassCatalog::builtin().find("N-BK7")->glass;
-  auto lensmaker = [&](double n) {
-    return 1 / ((n - 1) * (2 / R - (n - 1) * t / (n * R * R)));
-  };
+  auto lensmaker = [&](double n) { return 1 / ((n - 1) * (2 / R - (n - 1) * t / (n * R * R))); };
   const double fF = efl(lens, kLineF_nm), fC = efl(lens, kLineC_nm), fd = efl(lens, kLineD_nm);
   EXPECT_NEAR(fF, lensmaker(bk7.index(kLineF_nm)), 1e-9 * fF);
   EXPECT_NEAR(fC, lensmaker(bk7.index(kLineC_nm)), 1e-9 * fC);
@@ -238,8 +235,8 @@ TEST(Dispersion, AchromaticDoubletCorrectsFocalShift) {
   const Glass& flint = GlassCatalog::builtin().find("F2")->glass;
   const double f = 100, v1 = crown.v_d(), v2 = flint.v_d(), n1 = crown.n_d(), n2 = flint.n_d();
   const double phi1 = (1 / f) * v1 / (v1 - v2), phi2 = -(1 / f) * v2 / (v1 - v2);
-  const double r1 = 2 * (n1 - 1) / phi1, r2 = -r1;           // equiconvex crown
-  const double r3 = 1 / (1 / r2 - phi2 / (n2 - 1));           // flint: phi2 = (n2-1)(1/r2 - 1/r3)
+  const double r1 = 2 * (n1 - 1) / phi1, r2 = -r1;   // equiconvex crown
+  const double r3 = 1 / (1 / r2 - phi2 / (n2 - 1));  // flint: phi2 = (n2-1)(1/r2 - 1/r3)
   LensSystem doublet(parseLensPrescription(
       fmt::format("{} 4 {} 25 - N-BK7\n{} 1.5 {} 25 - F2\n{} 0 0 25\n", r1, n1, r2, n2, r3),
       "achromat.dat"));

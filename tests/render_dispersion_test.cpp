@@ -14,6 +14,7 @@
 #include "lensim/render/bsdf.h"
 #include "lensim/render/spectrum.h"
 #include "lensim/render/textures.h"
+#include "lensim/scene/builder.h"
 #include "render_test_util.h"
 #include "test_paths.h"
 
@@ -35,10 +36,10 @@ std::string writeLens(bool dispersive) {
   return path;
 }
 
-constexpr int kRes = 1400;          // film pixels across
-constexpr double kDiagonal = 35;    // mm
-constexpr double kFieldDeg = 15;    // the light's field angle
-constexpr double kDistance = 100;   // m
+constexpr int kRes = 1400;                                // film pixels across
+constexpr double kDiagonal = 35;                          // mm
+constexpr double kFieldDeg = 15;                          // the light's field angle
+constexpr double kDistance = 100;                         // m
 const double kPitch = kDiagonal / std::sqrt(2.0) / kRes;  // mm per pixel
 
 // A small sphere light (3 mrad) at 15 degrees off axis, emitting a narrow band around
@@ -89,15 +90,16 @@ TEST(DispersionRender, LateralColourMatchesTheWorkbench) {
   setup.aperture_diameter_mm = 5;
   setup.focus_distance_m = 1000;
   const optics::FocusedLens fl = optics::focusLens(optics::readLensFile(disp), setup);
-  const double hF = optics::chiefRayHeightAt(fl, kFieldDeg, 486), hC =
-      optics::chiefRayHeightAt(fl, kFieldDeg, 656);
+  const double hF = optics::chiefRayHeightAt(fl, kFieldDeg, 486),
+               hC = optics::chiefRayHeightAt(fl, kFieldDeg, 656);
   const double predicted = hF - hC;  // about -0.22 mm: 12 pixels
   ASSERT_LT(predicted, -10 * kPitch);
 
   const double rF = imageCentroid_mm(disp, 486, 48), rC = imageCentroid_mm(disp, 656, 48);
   const double rendered = rF - rC;
-  std::printf("lateral colour F-C at %.0f deg: rendered %.4f mm, chief rays %.4f mm, pitch %.4f mm\n",
-              kFieldDeg, rendered, predicted, kPitch);
+  std::printf(
+      "lateral colour F-C at %.0f deg: rendered %.4f mm, chief rays %.4f mm, pitch %.4f mm\n",
+      kFieldDeg, rendered, predicted, kPitch);
   EXPECT_NEAR(rendered, predicted, kPitch);
   // And where: the image height itself agrees with the chief ray to a few pixels (the blur of a
   // defocused band is not exactly centred on its chief ray).
@@ -212,4 +214,29 @@ TEST(DispersionRender, PrismMinimumDeviationAtThreeWavelengths) {
   // Blue deviates most.
   EXPECT_GT(deviations[0], deviations[1]);
   EXPECT_GT(deviations[1], deviations[2]);
+}
+
+// The prism scene of the README (scenes/chromatic/prism.pbrt): a white slit seen through a
+// glass-F11 prism spreads into a spectrum, blue deviated most (to the left in the image), red
+// least; the band's width against the prism's dispersion between 450 and 650 nm.
+TEST(DispersionRender, PrismSceneShowsASpectrum) {
+  const std::string path = std::string(LENSIM_SOURCE_DIR) + "/scenes/chromatic/prism.pbrt";
+  scene::Scene s = scene::loadScene(path);
+  render::RenderOptions o;
+  o.spp = 8;
+  o.seed = 1;
+  const render::RenderResult r = render::render(s, o);
+  const io::Image& im = r.image;
+  // Centroids of red and blue over the left 80% (the slit itself shows, white, at the right).
+  double sr = 0, xr = 0, sb = 0, xb = 0;
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width * 8 / 10; ++x) {
+      const double R = std::max(0.0f, im.at(x, y, 0)), B = std::max(0.0f, im.at(x, y, 2));
+      sr += R, xr += R * x, sb += B, xb += B * x;
+    }
+  ASSERT_GT(sr, 0);
+  ASSERT_GT(sb, 0);
+  const double red_x = xr / sr, blue_x = xb / sb;
+  std::printf("prism: red centroid x %.1f, blue %.1f (pixels)\n", red_x, blue_x);
+  EXPECT_GT(red_x, blue_x + 3);  // a spectrum, red to the right of blue
 }

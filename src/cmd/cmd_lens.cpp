@@ -50,7 +50,9 @@ json surfacesJson(const LensSystem& lens) {
   return arr;
 }
 
-json numberOrNull(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json numberOrNull(double v) {
+  return std::isfinite(v) ? json(v) : json(nullptr);
+}
 
 // The glass elements: each medium other than air, with its glass and indices.
 json elementsJson(const LensSystem& lens) {
@@ -190,8 +192,7 @@ int runInfo(const LensArgs& args, bool as_json) {
        fmt::format("{:.2f} nm{} (focus solved at the primary wavelength, {:.2f} nm){}",
                    lens.wavelength_nm(),
                    lens.wavelength_nm() == primaryWavelength_nm(pr) ? " (primary)" : "",
-                   primaryWavelength_nm(pr),
-                   lens.dispersive() ? "" : "; no element disperses"));
+                   primaryWavelength_nm(pr), lens.dispersive() ? "" : "; no element disperses"));
   line("lens length / total track",
        fmt::format("{:.4f} mm / {:.4f} mm", lens.rearVertexZ_mm(), lens.filmZ_mm()));
   if (fov.real_deg)
@@ -221,9 +222,8 @@ int runInfo(const LensArgs& args, bool as_json) {
     const Glass& g = lens.glasses()[i];
     if (g.isAir()) continue;
     std::cout << fmt::format("  {:>8} {:>5}  {:<28} {:>9.6f} {:>8} {:>10.6f}\n",
-                             fmt::format("{}-{}", i, i + 1), pr.surfaces[i].loc.line,
-                             g.describe(), g.n_d(),
-                             std::isfinite(g.v_d()) ? fmt::format("{:.3f}", g.v_d()) : "-",
+                             fmt::format("{}-{}", i, i + 1), pr.surfaces[i].loc.line, g.describe(),
+                             g.n_d(), std::isfinite(g.v_d()) ? fmt::format("{:.3f}", g.v_d()) : "-",
                              lens.interfaces()[i].ior_after);
   }
   return 0;
@@ -368,11 +368,16 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
   json j{{"kind", pa.kind},
          {"lens", fl.lens->prescription().path},
          {"wavelength_nm", fl.lens->wavelength_nm()}};
+  if (!pa.wavelengths.empty() && pa.kind != "spot")
+    throw Error(
+        fmt::format("--wavelengths applies to spot diagrams only (use --wavelength for "
+                    "one wavelength), not to '{}'",
+                    pa.kind));
   if (pa.kind == "spot" && !pa.wavelengths.empty()) {
     std::vector<double> ls = parseList(pa.wavelengths, "--wavelengths");
     for (double l : ls) checkWavelength(l, "--wavelengths");
-    auto spots = computeSpotsAtWavelengths(fl, parseList(pa.fields, "--fields"),
-                                           args.film_diagonal_mm, ls);
+    auto spots =
+        computeSpotsAtWavelengths(fl, parseList(pa.fields, "--fields"), args.film_diagonal_mm, ls);
     svg_text = colorSpotSvg(fl, spots);
     json arr = json::array();
     for (const ColorSpotField& s : spots) {

@@ -71,13 +71,17 @@ optics::FocusedLens setUpLens(const LensArgs& args) {
   if (args.wavelength_nm) {
     const double l = *args.wavelength_nm;
     optics::checkWavelength(l, "--wavelength");
-    for (const optics::Glass& g : fl.lens->glasses())
+    for (size_t i = 0; i < fl.lens->glasses().size(); ++i) {
+      const optics::Glass& g = fl.lens->glasses()[i];
       if (g.dispersive() && !g.inRange(l)) {
-        logWarning(fmt::format("--wavelength {} nm is outside the valid range of {} ({}-{} nm); "
-                               "its formula is used there anyway",
-                               l, g.describe(), g.minWavelength_nm(), g.maxWavelength_nm()));
-        break;
+        const auto& row = fl.lens->prescription().surfaces[i];
+        logDiagnostic({Severity::Warning, row.glass.loc.valid() ? row.glass.loc : row.loc,
+                       fmt::format("--wavelength {} nm is outside the valid range of {} ({}-{} "
+                                   "nm); its formula is used there anyway",
+                                   l, g.describe(), g.minWavelength_nm(), g.maxWavelength_nm())});
+        break;  // once
       }
+    }
     fl.lens->setWavelength(l);
     fl.paraxial = optics::computeParaxial(*fl.lens);
   }

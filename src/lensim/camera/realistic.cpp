@@ -242,7 +242,8 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
   const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
   auto transmission = [&](Vec2T<float> stop) {
     if (settings_.aperture.isRound() || !(stop_radius_mm_ > 0)) return 1.0;
-    return settings_.aperture.transmission(Vec2{stop.x / stop_radius_mm_, stop.y / stop_radius_mm_});
+    return settings_.aperture.transmission(
+        Vec2{stop.x / stop_radius_mm_, stop.y / stop_radius_mm_});
   };
   std::array<double, kCameraWavelengths> w{}, p{};
   {

@@ -14,13 +14,11 @@ namespace lensim::optics {
 
 namespace {
 
-
 std::string subtitle(const FocusedLens& fl) {
   return fmt::format("{} · f/{:.2f} · focus {} at {:.1f} nm", fl.lens->prescription().name,
                      fl.paraxial.f_number,
-                     std::isinf(fl.focus_distance_m)
-                         ? std::string("infinity")
-                         : fmt::format("{:.4g} m", fl.focus_distance_m),
+                     std::isinf(fl.focus_distance_m) ? std::string("infinity")
+                                                     : fmt::format("{:.4g} m", fl.focus_distance_m),
                      primaryWavelength_nm(fl.lens->prescription()));
 }
 
@@ -116,8 +114,8 @@ std::vector<ColorSpotField> computeSpotsAtWavelengths(const FocusedLens& fl,
     sf.field_angle_deg = chief->field_angle_deg;
     // The object point (or direction) of the primary wavelength's chief ray, as computeSpots.
     const Ray& c = chief->scene_ray;
-    const Vec3 pupil_centre = c.origin + c.direction * ((p.entrance_pupil_z_mm - c.origin.z) /
-                                                        c.direction.z);
+    const Vec3 pupil_centre =
+        c.origin + c.direction * ((p.entrance_pupil_z_mm - c.origin.z) / c.direction.z);
     std::optional<Vec3> object;
     if (!std::isinf(fl.focus_distance_m)) {
       const double z_obj = fp.lens->filmZ_mm() - fl.focus_distance_m * 1000;
@@ -197,16 +195,26 @@ std::string wavelengthColor(double l) {
   // A hue ramp over the visible spectrum (violet-blue-cyan-green-yellow-red), dimmed toward the
   // ends, for telling wavelengths apart on plots (not a colorimetric conversion).
   double r = 0, g = 0, b = 0;
-  if (l < 440) r = -(l - 440) / 60, b = 1;
-  else if (l < 490) g = (l - 440) / 50, b = 1;
-  else if (l < 510) g = 1, b = -(l - 510) / 20;
-  else if (l < 580) r = (l - 510) / 70, g = 1;
-  else if (l < 645) r = 1, g = -(l - 645) / 65;
-  else r = 1;
+  if (l < 440)
+    r = -(l - 440) / 60, b = 1;
+  else if (l < 490)
+    g = (l - 440) / 50, b = 1;
+  else if (l < 510)
+    g = 1, b = -(l - 510) / 20;
+  else if (l < 580)
+    r = (l - 510) / 70, g = 1;
+  else if (l < 645)
+    r = 1, g = -(l - 645) / 65;
+  else
+    r = 1;
   double f = 1;
-  if (l < 420) f = 0.3 + 0.7 * std::max(0.0, l - 380) / 40;
-  else if (l > 680) f = 0.3 + 0.7 * std::max(0.0, 780 - l) / 100;
-  auto c = [&](double x) { return std::clamp(int(std::lround(255 * std::clamp(x * f, 0.0, 1.0) * 0.85)), 0, 255); };
+  if (l < 420)
+    f = 0.3 + 0.7 * std::max(0.0, l - 380) / 40;
+  else if (l > 680)
+    f = 0.3 + 0.7 * std::max(0.0, 780 - l) / 100;
+  auto c = [&](double x) {
+    return std::clamp(int(std::lround(255 * std::clamp(x * f, 0.0, 1.0) * 0.85)), 0, 255);
+  };
   return fmt::format("#{:02x}{:02x}{:02x}", c(r), c(g), c(b));
 }
 
@@ -246,9 +254,13 @@ std::string lateralColorSvg(const FocusedLens& fl, const LateralColor& c) {
   ch.y_label = "image height difference (µm)";
   ch.include_zero_y = true;
   plot::Series s{fmt::format("{:.1f} nm − {:.1f} nm", c.short_nm, c.primary_nm),
-                 wavelengthColor(c.short_nm), plot::Style::Line, {}};
+                 wavelengthColor(c.short_nm),
+                 plot::Style::Line,
+                 {}};
   plot::Series l{fmt::format("{:.1f} nm − {:.1f} nm", c.long_nm, c.primary_nm),
-                 wavelengthColor(c.long_nm), plot::Style::Line, {}};
+                 wavelengthColor(c.long_nm),
+                 plot::Style::Line,
+                 {}};
   for (size_t k = 0; k < c.field_deg.size(); ++k) {
     if (std::isfinite(c.short_minus_primary_mm[k]))
       s.points.push_back({c.field_deg[k], 1000 * c.short_minus_primary_mm[k]});

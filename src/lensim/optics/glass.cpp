@@ -25,7 +25,8 @@ Glass Glass::constant(double n) {
 
 Glass Glass::model(double n_d, double v_d, const FileLoc& loc) {
   if (!std::isfinite(n_d) || n_d < 1)
-    throw Error(loc, fmt::format("model glass: n_d {} is not physical; expected a value >= 1", n_d));
+    throw Error(loc,
+                fmt::format("model glass: n_d {} is not physical; expected a value >= 1", n_d));
   if (!std::isfinite(v_d) || v_d <= 0)
     throw Error(loc, fmt::format("model glass: Abbe number V_d {} must be > 0", v_d));
   // n(l) = A + B / l^2 (l in micrometres) with n(d) = n_d and n(F) - n(C) = (n_d - 1) / V_d.
@@ -106,7 +107,9 @@ std::string Glass::describe() const {
   }
 }
 
-std::string CatalogGlass::qualifiedName() const { return glass.describe(); }
+std::string CatalogGlass::qualifiedName() const {
+  return glass.describe();
+}
 
 // ---------------------------------------------------------------------------------------------
 // Catalogue
@@ -218,8 +221,8 @@ GlassCatalog GlassCatalog::parse(std::string_view csv, const std::string& path) 
                                          f[4]));
     }
     if (nc < needed)
-      throw Error(column(4), fmt::format("formula {} needs {} coefficients, found {}", f[4],
-                                         needed, nc));
+      throw Error(column(4),
+                  fmt::format("formula {} needs {} coefficients, found {}", f[4], needed, nc));
     g.glass = Glass::formula(g.vendor, g.name, formula, c);
     cat.glasses_.push_back(std::move(g));
   }
@@ -366,12 +369,12 @@ std::vector<Diagnostic> matchCatalogGlasses(LensPrescription& p) {
     const CatalogGlass& g = cat.nearest(n, v);
     notes.push_back(
         {Severity::Note, s.loc,
-         fmt::format("glass match: the medium after surface {} (n {:.5g}{}) -> {} (n_d {:.6f}, "
-                     "V_d {:.2f}){}",
-                     i + 1, n, std::isnan(v) ? "" : fmt::format(", V_d {:.4g}", v),
-                     g.qualifiedName(), g.listed_n_d, g.listed_v_d,
-                     std::isnan(v) ? "; the file gives no V_d: nearest n_d among Schott glasses"
-                                   : "")});
+         fmt::format(
+             "glass match: the medium after surface {} (n {:.5g}{}) -> {} (n_d {:.6f}, "
+             "V_d {:.2f}){}",
+             i + 1, n, std::isnan(v) ? "" : fmt::format(", V_d {:.4g}", v), g.qualifiedName(),
+             g.listed_n_d, g.listed_v_d,
+             std::isnan(v) ? "; the file gives no V_d: nearest n_d among Schott glasses" : "")});
     s.glass.name = g.qualifiedName();
     s.glass.n_d = g.listed_n_d;
     s.glass.v_d = g.listed_v_d;

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "lensim/optics/glass.h"
+
 namespace lensim::optics {
 
 const char* layoutName(LensFileLayout layout) {
@@ -211,6 +213,7 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
         s.glass.name = std::string(cols[5].text);
         s.glass.loc = at(5);
       }
+      resolveGlass(s.glass, s.ior);  // an unknown name is an error here, at its column
     }
     p.surfaces.push_back(s);
   }
