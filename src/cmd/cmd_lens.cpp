@@ -383,11 +383,11 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
     for (const ColorSpotField& s : spots) {
       json per = json::array();
       for (size_t w = 0; w < s.wavelength_nm.size(); ++w)
-        per.push_back({{"wavelength_nm", s.wavelength_nm[w]},
-                       {"centroid_mm", {numberOrNull(s.centroid_mm[w].x),
-                                        numberOrNull(s.centroid_mm[w].y)}},
-                       {"rms_radius_mm", numberOrNull(s.rms_radius_mm[w])},
-                       {"rays_through", s.points_mm[w].size()}});
+        per.push_back(
+            {{"wavelength_nm", s.wavelength_nm[w]},
+             {"centroid_mm", {numberOrNull(s.centroid_mm[w].x), numberOrNull(s.centroid_mm[w].y)}},
+             {"rms_radius_mm", numberOrNull(s.rms_radius_mm[w])},
+             {"rays_through", s.points_mm[w].size()}});
       arr.push_back({{"film_height_mm", s.film_height_mm},
                      {"field_angle_deg", s.field_angle_deg},
                      {"wavelengths", per}});
