@@ -68,6 +68,23 @@ int runInfo(const LensArgs& args, bool as_json) {
   const FieldOfView fov = fieldOfView(lens, p, args.film_diagonal_mm);
   const double closest = closestFocusDistance_m(lens, p);
   const auto& pr = lens.prescription();
+  // Where the film sits relative to the infinity focus (same method): a film in front of it
+  // focuses "beyond infinity" (no real object is sharp), which `focus infinity` would hide.
+  std::optional<double> beyond_infinity_mm;
+  if (at_inf) {
+    try {
+      const double inf_film = filmDistanceForFocus(lens, p, fl.focus_distance_m, args.focus_method);
+      const double offset = lens.filmDistance_mm() - inf_film;
+      if (offset < -1e-6 * std::max(1.0, std::abs(p.effective_focal_length_mm)))
+        beyond_infinity_mm = -offset;
+    } catch (const Error&) {
+      // no infinity focus behind the rear vertex: nothing to compare with
+    }
+  }
+  // 1/s_o (dioptres) of the film's conjugate, thick-lens model: 0 at infinity, negative beyond
+  // it (the film is focused for a beam converging toward a point behind the lens).
+  const double s_i = lens.filmZ_mm() - p.principal_plane_back_z_mm;
+  const double vergence_dpt = 1000 * (1 / p.effective_focal_length_mm - 1 / s_i);
 
   if (as_json) {
     json j;
@@ -91,6 +108,11 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["aperture_stop_diameter_mm"] = p.aperture_stop_diameter_mm;
     j["axial_limit_surface"] = p.axial_limit_surface;
     j["axial_limit_f_number"] = p.axial_limit_f_number;
+    j["paraxial_f_number"] = p.f_number;
+    j["real_f_number"] = std::abs(p.effective_focal_length_mm) / (2 * p.real_marginal_height_mm);
+    j["real_image_space_f_number"] = p.real_f_number;
+    j["real_marginal_ray_height_mm"] = p.real_marginal_height_mm;
+    j["real_limit_surface"] = p.real_limit_surface;
     j["entrance_pupil_diameter_mm"] = p.entrance_pupil_diameter_mm;
     j["entrance_pupil_z_mm"] = p.entrance_pupil_z_mm;
     j["exit_pupil_diameter_mm"] = p.exit_pupil_diameter_mm;
@@ -101,7 +123,11 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["total_track_mm"] = lens.filmZ_mm();
     j["film_distance_mm"] = lens.filmDistance_mm();
     j["focus_distance_m"] = at_inf ? json(nullptr) : json(fl.focus_distance_m);
-    j["focus_at_infinity"] = at_inf;
+    j["focus_at_infinity"] = at_inf && !beyond_infinity_mm;
+    j["focus_beyond_infinity"] = beyond_infinity_mm.has_value();
+    j["film_in_front_of_infinity_focus_mm"] =
+        beyond_infinity_mm ? json(*beyond_infinity_mm) : json(nullptr);
+    j["object_vergence_dpt"] = vergence_dpt;
     j["focus_method"] = focusMethodName(args.focus_method);
     j["closest_focus_distance_m"] = closest;
     j["film_diagonal_mm"] = args.film_diagonal_mm;
@@ -144,20 +170,31 @@ int runInfo(const LensArgs& args, bool as_json) {
                                      "element does)",
                                      pr.surfaces[*lens.stopIndex()].loc.line)
                        : std::string(" (the file has no stop: this element limits the beam)")));
-  if (p.axial_limit_surface != p.aperture_stop_surface && p.stop_is_file_stop)
+  const double real_f = std::abs(p.effective_focal_length_mm) / (2 * p.real_marginal_height_mm);
+  if (p.real_limit_surface != p.aperture_stop_surface && p.stop_is_file_stop)
     line("axial beam limit",
-         fmt::format("surface {} (line {}) clips the axial beam more than the stop: f/{:.3f}",
-                     p.axial_limit_surface, pr.surfaces[p.axial_limit_surface].loc.line,
-                     p.axial_limit_f_number));
+         fmt::format("surface {} (line {}) clips the real axial beam more than the stop: f/{:.3f}",
+                     p.real_limit_surface, pr.surfaces[p.real_limit_surface].loc.line, real_f));
   line("entrance pupil", fmt::format("diameter {:.4f} mm at z = {:.4f} mm",
                                      p.entrance_pupil_diameter_mm, p.entrance_pupil_z_mm));
   line("exit pupil", fmt::format("diameter {:.4f} mm at z = {:.4f} mm", p.exit_pupil_diameter_mm,
                                  p.exit_pupil_z_mm));
   line("f-number",
-       fmt::format("f/{:.3f} (infinity), working f/{:.3f} at this focus", p.f_number, working_f));
-  line("focus", fmt::format("{} ({} method); closest {:.4f} m",
-                            at_inf ? std::string("infinity")
-                                   : fmt::format("{:.6g} m from the film", fl.focus_distance_m),
+       fmt::format("f/{:.3f} paraxial (infinity), working f/{:.3f} at this focus", p.f_number,
+                   working_f));
+  line("real f-number",
+       fmt::format("f/{:.3f}: real marginal ray from infinity at {:.4f} mm, stopped by surface {} "
+                   "(line {}); image space 1/(2 sin u') f/{:.3f}",
+                   real_f, p.real_marginal_height_mm, p.real_limit_surface,
+                   pr.surfaces[p.real_limit_surface].loc.line, p.real_f_number));
+  const std::string focus_text =
+      beyond_infinity_mm
+          ? fmt::format("beyond infinity: the film is {:.4f} mm in front of the infinity focus "
+                        "(object conjugate 1/s = {:.4f} dioptres; no real object is sharp)",
+                        *beyond_infinity_mm, vergence_dpt)
+      : at_inf ? std::string("infinity")
+               : fmt::format("{:.6g} m from the film", fl.focus_distance_m);
+  line("focus", fmt::format("{} ({} method); closest {:.4f} m", focus_text,
                             focusMethodName(args.focus_method), closest));
   line("film distance", fmt::format("{:.4f} mm behind the rear vertex", lens.filmDistance_mm()));
   line("lens length / total track",
