@@ -10,6 +10,7 @@
 #include <string>
 
 #include "commands.h"
+#include "lens_analysis.h"
 #include "lens_options.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/diagram.h"
@@ -318,7 +319,9 @@ struct PlotArgs {
   std::string kind;
   std::string output;
   std::string fields = "0,0.5,0.7,1";
+  bool fields_given = false;
   bool as_json = false;
+  AnalysisArgs analysis;
 };
 
 json pairsJson(const std::vector<double>& a, const std::vector<double>& b) {
@@ -339,7 +342,12 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
   logDiagnostics(fl.allDiagnostics());
   std::string svg_text;
   json j{{"kind", pa.kind}, {"lens", fl.lens->prescription().path}};
-  if (pa.kind == "spot") {
+  if (isAnalysisKind(pa.kind)) {
+    // mtf, fans and psf default to three fields (axis, 70%, corner).
+    const std::string fields = pa.fields_given ? pa.fields : std::string("0,0.7,1");
+    runAnalysis(pa.kind, fl, args.film_diagonal_mm, parseList(fields, "--fields"), pa.analysis,
+                svg_text, j);
+  } else if (pa.kind == "spot") {
     auto spots = computeSpots(fl, parseList(pa.fields, "--fields"), args.film_diagonal_mm);
     svg_text = spotSvg(fl, spots);
     json arr = json::array();
@@ -349,6 +357,7 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
                      {"rms_radius_mm", s.rms_radius_mm},
                      {"centroid_mm", {s.centroid_mm.x, s.centroid_mm.y}},
                      {"rays_through", s.points_mm.size()},
+                     {"hexapolar_rings", s.rings},
                      {"rays_traced", s.rays_traced}});
     j["fields"] = arr;
   } else if (pa.kind == "distortion") {
@@ -436,16 +445,23 @@ void registerLensCommands(CLI::App& app, Action& action) {
   }
   {
     auto* plot = lens->add_subcommand(
-        "plot", "Plot spot diagrams, distortion, relative illumination or the focus curve (SVG)");
+        "plot",
+        "Plot spot diagrams, distortion, relative illumination, the focus curve, MTF, "
+        "through-focus MTF, ray fans, field curvature or the PSF (SVG)");
     auto args = std::make_shared<LensArgs>();
     auto pa = std::make_shared<PlotArgs>();
-    plot->add_option("KIND", pa->kind, "spot, distortion, vignetting or focus")
+    plot->add_option("KIND", pa->kind,
+                     "spot, distortion, vignetting, focus, mtf, mtf-focus, fans, field or psf")
         ->required()
-        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus"}));
+        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus", "mtf", "mtf-focus",
+                               "fans", "field", "psf"}));
     addLensOptions(plot, *args);
     plot->add_option("-o,--output", pa->output, "Output SVG file")->required();
     plot->add_option("--fields", pa->fields,
-                     "spot: fields as fractions of the film half-diagonal (default 0,0.5,0.7,1)");
+                     "spot, mtf, mtf-focus, fans, psf: fields as fractions of the film "
+                     "half-diagonal (default 0,0.5,0.7,1 for spot, else 0,0.7,1)")
+        ->each([pa](const std::string&) { pa->fields_given = true; });
+    addAnalysisOptions(plot, pa->analysis);
     plot->add_flag("--json", pa->as_json, "Also print the plotted numbers as JSON");
     plot->callback([&action, args, pa] { action = [args, pa] { return runPlot(*args, *pa); }; });
   }

@@ -1,0 +1,271 @@
+// The engineer's analyses (issue 17): converged spots, the real-ray stop and f-number, the
+// diffraction MTF against closed forms, PSF, ray fans and field curves against independent
+// facts (paraxial focus, symmetry, published figures of an optical design library).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "lensim/optics/chief_ray.h"
+#include "lensim/optics/fans.h"
+#include "lensim/optics/field_curves.h"
+#include "lensim/optics/mtf.h"
+#include "lensim/optics/plots.h"
+#include "lensim/optics/psf.h"
+#include "lensim/optics/wavefront.h"
+#include "test_paths.h"
+
+using namespace lensim;
+using namespace lensim::optics;
+
+namespace {
+
+std::string shared(const std::string& name) {
+  return std::string(LENSIM_SHARED_DIR) + "/lenses/" + name;
+}
+
+FocusedLens focused(const std::string& path, LensSetup setup = {}) {
+  return focusLens(readLensFile(path), setup);
+}
+
+// The aberration-free MTF of a circular pupil, written out here (not the library's).
+double circleMtf(double v) {
+  if (v >= 1) return 0;
+  return 2 / std::numbers::pi * (std::acos(v) - v * std::sqrt(1 - v * v));
+}
+
+// A synthetic pupil: radius `na` in direction cosines, n x n cells, edge coverage by 8x8
+// sub-samples, wave aberration w20 rho^2 (waves).
+PupilFunction syntheticPupil(int n, double na, double w20, double nm) {
+  PupilFunction pf;
+  pf.n = n;
+  pf.step = 2.06 * na / n;
+  pf.wavelength_nm = nm;
+  pf.amplitude.assign(size_t(n) * n, 0);
+  pf.opd_waves.assign(size_t(n) * n, 0);
+  for (int iy = 0; iy < n; ++iy)
+    for (int ix = 0; ix < n; ++ix) {
+      int in = 0;
+      for (int sy = 0; sy < 8; ++sy)
+        for (int sx = 0; sx < 8; ++sx) {
+          const double x = (ix - 0.5 * n + (sx + 0.5) / 8) * pf.step;
+          const double y = (iy - 0.5 * n + (sy + 0.5) / 8) * pf.step;
+          in += x * x + y * y <= na * na;
+        }
+      const double x = (ix + 0.5 - 0.5 * n) * pf.step, y = (iy + 0.5 - 0.5 * n) * pf.step;
+      pf.amplitude[size_t(iy) * n + ix] = in / 64.0;
+      pf.opd_waves[size_t(iy) * n + ix] = w20 * (x * x + y * y) / (na * na);
+    }
+  return pf;
+}
+
+// The OTF of a circular pupil with defocus W = w20 rho^2 (waves) at v = nu / cutoff, by direct
+// quadrature of the overlap integral (4/pi) int_0^{1-v} sqrt(1 - (x + v)^2) cos(8 pi w20 v x) dx
+// (shift s = 2v of the unit pupil; the phase difference across the overlap is 4 pi w20 s x).
+double defocusOtf(double v, double w20) {
+  const double a = 1 - v;
+  if (a <= 0) return 0;
+  const int n = 20000;
+  double sum = 0;
+  for (int k = 0; k < n; ++k) {
+    const double x = (k + 0.5) * a / n;
+    const double r = 1 - (x + v) * (x + v);
+    sum += std::sqrt(std::max(0.0, r)) * std::cos(8 * std::numbers::pi * w20 * v * x);
+  }
+  return 4 / std::numbers::pi * sum * a / n;
+}
+
+}  // namespace
+
+TEST(RealAperture, FNumbersAndStopsOfTheIndependentComparison) {
+  // Figures of the independent comparison with an optical design library (issue 17).
+  const FocusedLens dg = focused(lensim::test::lensPath("dgauss.50mm.dat"));
+  EXPECT_NEAR(std::abs(dg.paraxial.effective_focal_length_mm) /
+                  (2 * dg.paraxial.real_marginal_height_mm),
+              2.018, 0.001);
+  EXPECT_EQ(dg.paraxial.aperture_stop_surface, 5);  // the file's stop, 2% from the limit
+  EXPECT_EQ(dg.paraxial.real_limit_surface, 2);
+  const FocusedLens wide = focused(lensim::test::lensPath("wide.22mm.dat"));
+  EXPECT_NEAR(std::abs(wide.paraxial.effective_focal_length_mm) /
+                  (2 * wide.paraxial.real_marginal_height_mm),
+              2.788, 0.001);
+  EXPECT_EQ(wide.paraxial.real_limit_surface, 6);
+  // The ISET Petzval: real rays above 17.84 mm are stopped by its stop row (f/1.40); the
+  // paraxial trace would pick the front element.
+  const FocusedLens pz = focused(shared("isetcam/petzval.12deg.50.0mm.dat"));
+  EXPECT_EQ(pz.paraxial.aperture_stop_surface, 5);
+  EXPECT_TRUE(pz.paraxial.stop_is_file_stop);
+  EXPECT_NEAR(pz.paraxial.real_marginal_height_mm, 17.84, 0.01);
+  EXPECT_NEAR(std::abs(pz.paraxial.effective_focal_length_mm) /
+                  (2 * pz.paraxial.real_marginal_height_mm),
+              1.40, 0.005);
+  // ... and its chief rays pass the stop: distortion -5.03% at 14.53 deg (+2.27% through the
+  // front vertex).
+  auto c0 = chiefRayFromScene(*pz.lens, pz.paraxial, 0.05);
+  auto c = chiefRayFromScene(*pz.lens, pz.paraxial, 14.5335);
+  ASSERT_TRUE(c0 && c);
+  const double f = c0->film_height_mm / std::tan(0.05 * std::numbers::pi / 180);
+  const double dist = 100 * (c->film_height_mm / (f * std::tan(14.5335 * std::numbers::pi / 180)) - 1);
+  EXPECT_NEAR(dist, -5.03, 0.03);
+  // The ISET reversed telephoto's stop row marks the image plane: an element is the stop.
+  const FocusedLens rt = focused(shared("isetcam/reversed.telephoto.37deg.100mm.dat"));
+  EXPECT_FALSE(rt.paraxial.stop_is_file_stop);
+  EXPECT_LT(rt.paraxial.aperture_stop_surface, 10);
+}
+
+TEST(Spots, RmsRadiusConvergesWithHexapolarRings) {
+  // The square grid this replaced was off by up to 6% (dgauss.22deg +6.2%).
+  for (const std::string& path : {shared("isetcam/dgauss.22deg.50.0mm.dat"),
+                                  shared("isetcam/wide.40deg.50.0mm.dat"),
+                                  lensim::test::lensPath("dgauss.50mm.dat")}) {
+    const FocusedLens fl = focused(path);
+    const auto a = computeSpots(fl, {0, 0.7, 1}, 35);  // the default, 48 rings
+    const auto b = computeSpots(fl, {0, 0.7, 1}, 35, 192);
+    ASSERT_EQ(a.size(), b.size()) << path;
+    ASSERT_FALSE(a.empty());
+    for (size_t i = 0; i < a.size(); ++i) {
+      EXPECT_NEAR(a[i].rms_radius_mm / b[i].rms_radius_mm, 1, 0.005)
+          << path << " field " << a[i].film_height_mm;
+      EXPECT_EQ(a[i].rays_traced, 3 * 48 * 49);
+      EXPECT_LE(a[i].display.size(), a[i].points_mm.size());
+    }
+  }
+}
+
+TEST(Wavefront, PerfectCircularPupilGivesTheClosedFormMtf) {
+  const double nm = 550, na = 0.2;
+  const FourierOptics fo = fourierOptics(syntheticPupil(128, na, 0, nm));
+  const double cutoff = 2 * na / (nm * 1e-6);
+  for (double v = 0; v <= 1.0001; v += 0.05) {
+    EXPECT_NEAR(std::abs(fo.otfAt(v * cutoff, 0)), circleMtf(v), 0.01) << v;
+    EXPECT_NEAR(std::abs(fo.otfAt(0, v * cutoff)), circleMtf(v), 0.01) << v;
+  }
+  EXPECT_NEAR(fo.strehl, 1, 0.02);
+  // The PSF on its grid nodes is the Airy pattern [2 J1(x) / x]^2, x = 2 pi NA r / lambda.
+  const double peak = fo.psfAt(0, 0);
+  for (int k = 1; k <= 8; ++k) {
+    const double r = k * fo.psf_pitch_mm;
+    const double x = 2 * std::numbers::pi * na * r / (nm * 1e-6);
+    const double airy = std::pow(2 * std::cyl_bessel_j(1.0, x) / x, 2);
+    EXPECT_NEAR(fo.psfAt(r, 0) / peak, airy, 0.01) << r;
+  }
+}
+
+TEST(Wavefront, DefocusedPupilHasTheKnownMtfZero) {
+  const double nm = 550, na = 0.1, w20 = 1.0;  // one wave of defocus at the rim
+  const FourierOptics fo = fourierOptics(syntheticPupil(128, na, w20, nm));
+  const double cutoff = 2 * na / (nm * 1e-6);
+  // The whole curve, and the first zero of the defocus MTF.
+  double first_zero_quad = 0;
+  for (double v = 0.005; v < 1; v += 0.0025)
+    if (defocusOtf(v, w20) < 0) {
+      first_zero_quad = v;
+      break;
+    }
+  ASSERT_GT(first_zero_quad, 0.05);
+  ASSERT_LT(first_zero_quad, 0.5);
+  for (double v = 0; v < 1; v += 0.05)
+    EXPECT_NEAR(std::abs(fo.otfAt(v * cutoff, 0)), std::abs(defocusOtf(v, w20)), 0.01) << v;
+  double v_min = 0, m_min = 1;
+  for (double v = first_zero_quad - 0.05; v < first_zero_quad + 0.05; v += 0.0005) {
+    const double m = std::abs(fo.otfAt(v * cutoff, 0));
+    if (m < m_min) {
+      m_min = m;
+      v_min = v;
+    }
+  }
+  EXPECT_NEAR(v_min, first_zero_quad, 0.01);
+  EXPECT_LT(m_min, 0.01);
+}
+
+TEST(Wavefront, StoppedDownLensOnAxisIsDiffractionLimited) {
+  LensSetup setup;
+  setup.aperture_diameter_mm = 2.0;  // about f/25: spherical aberration far below a wave
+  const FocusedLens fl = focused(lensim::test::lensPath("dgauss.50mm.dat"), setup);
+  MtfOptions o;
+  o.fields = {0};
+  o.geometric = false;
+  const MtfData d = computeMtf(monochromatic(fl), 35, o);
+  ASSERT_EQ(d.fields.size(), 1u);
+  // The cone's NA is the real marginal ray's, EFL / (2 N) about.
+  EXPECT_NEAR(d.working_f_number,
+              std::abs(fl.paraxial.effective_focal_length_mm) / fl.paraxial.entrance_pupil_diameter_mm,
+              0.02 * d.working_f_number);
+  for (size_t k = 0; k < d.frequency.size(); ++k)
+    EXPECT_NEAR(d.fields[0].diffraction_tangential[k],
+                circleMtf(d.frequency[k] / d.cutoff), 0.015)
+        << d.frequency[k];
+  EXPECT_GT(d.fields[0].strehl, 0.95);
+}
+
+TEST(Wavefront, PsfCentroidIsTheSpotCentroid) {
+  // Off axis the PSF's energy centroid (wave optics) and the spot's centroid (geometric) are
+  // both offset from the chief ray's image point by the same coma: this checks the sign and
+  // scale of the Fourier relation between pupil and film.
+  LensSetup setup;
+  setup.aperture_diameter_mm = 8.0;
+  const FocusedLens fl = focused(lensim::test::lensPath("dgauss.50mm.dat"), setup);
+  const auto spots = computeSpots(fl, {0.9}, 35, 64);
+  const auto psf = computePsf(monochromatic(fl), 35, {0.9});
+  ASSERT_EQ(spots.size(), 1u);
+  ASSERT_EQ(psf.size(), 1u);
+  const Vec2 spot_offset = spots[0].centroid_mm - psf[0].image_point_mm;
+  EXPECT_GT(std::abs(spot_offset.x), 2 * psf[0].airy_radius_mm / 10);  // a real coma offset
+  EXPECT_NEAR(psf[0].centroid_mm.x, spot_offset.x, 0.1 * std::abs(spot_offset.x) + 2e-4);
+  EXPECT_NEAR(psf[0].centroid_mm.y, 0, 1e-4);
+}
+
+TEST(Mtf, GeometricAndDiffractionAgreeForALargeAberration) {
+  // Far from the diffraction limit (the wide-open double Gauss off axis) the diffraction MTF at
+  // low frequencies tends to the geometric one.
+  const FocusedLens fl = focused(lensim::test::lensPath("dgauss.50mm.dat"));
+  MtfOptions o;
+  o.fields = {0.7};
+  o.max_frequency = 40;
+  o.samples = 5;
+  const MtfData d = computeMtf(monochromatic(fl), 35, o);
+  ASSERT_EQ(d.fields.size(), 1u);
+  for (size_t k = 0; k < d.frequency.size(); ++k)
+    EXPECT_NEAR(d.fields[0].diffraction_sagittal[k], d.fields[0].geometric_sagittal[k], 0.06)
+        << d.frequency[k];
+}
+
+TEST(FieldCurves, AxialFociAreTheParaxialFocus) {
+  const FocusedLens fl = focused(lensim::test::lensPath("dgauss.50mm.dat"));  // film at the BFL
+  const FieldCurves c = computeFieldCurves(monochromatic(fl), 35, 10);
+  ASSERT_FALSE(c.field_angle_deg.empty());
+  EXPECT_NEAR(c.field_angle_deg[0], 0, 1e-9);
+  // Thin bundles about the axis focus at the paraxial back focal point, which is the film.
+  EXPECT_NEAR(c.tangential_mm[0][0], 0, 1e-4);
+  EXPECT_NEAR(c.sagittal_mm[0][0], 0, 1e-4);
+  // Off axis the astigmatic foci separate.
+  EXPECT_GT(std::abs(c.tangential_mm[0].back() - c.sagittal_mm[0].back()), 1e-3);
+}
+
+TEST(RayFans, AxialFansAreOddAndEqual) {
+  const FocusedLens fl = focused(lensim::test::lensPath("dgauss.50mm.dat"));
+  const auto fans = computeRayFans(monochromatic(fl), 35, {0}, 41, 1.0);
+  ASSERT_EQ(fans.size(), 1u);
+  const RayFan& r = fans[0].fans[0];
+  ASSERT_EQ(r.tangential_pupil.size(), r.sagittal_pupil.size());
+  const size_t n = r.tangential_pupil.size();
+  ASSERT_GT(n, 20u);
+  for (size_t k = 0; k < n; ++k) {
+    EXPECT_NEAR(r.tangential_ex_mm[k], -r.tangential_ex_mm[n - 1 - k], 1e-9);
+    EXPECT_NEAR(r.tangential_ex_mm[k], r.sagittal_ey_mm[k], 1e-9);
+  }
+}
+
+TEST(ThroughFocus, StoppedDownLensPeaksAtTheFilm) {
+  LensSetup setup;
+  setup.aperture_diameter_mm = 4.0;
+  const FocusedLens fl = focused(lensim::test::lensPath("dgauss.50mm.dat"), setup);
+  const ThroughFocusData d = computeThroughFocusMtf(monochromatic(fl), 35, {0}, 40, 0.3, 31);
+  ASSERT_EQ(d.fields.size(), 1u);
+  const auto& t = d.fields[0].diffraction_tangential;
+  const size_t best = std::max_element(t.begin(), t.end()) - t.begin();
+  // Symmetric about the paraxial focus within a step (little spherical aberration at f/12).
+  EXPECT_LE(std::abs(d.defocus_mm[best]), 0.02 + 1e-12);
+  EXPECT_LT(t.front(), 0.5 * t[best]);
+}
