@@ -201,13 +201,46 @@ std::optional<FieldBundle::PupilRegion> FieldBundle::pupilRegion(const LensSyste
   return region;
 }
 
+namespace {
+
+// Gauss-Legendre nodes and weights on [-1, 1] (Newton's iteration on P_n from the Chebyshev
+// guesses; the textbook algorithm, a few lines, so not worth a dependency).
+void gaussLegendre(int n, std::vector<double>& x, std::vector<double>& w) {
+  x.assign(n, 0);
+  w.assign(n, 0);
+  for (int i = 0; i < n; ++i) {
+    double z = std::cos(std::numbers::pi * (i + 0.75) / (n + 0.5)), dp = 1;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1, p1 = z;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      if (n == 1) p0 = 1;
+      dp = n * (z * p1 - p0) / (z * z - 1);
+      const double dz = p1 / dp;
+      z -= dz;
+      if (std::abs(dz) < 1e-15) break;
+    }
+    x[i] = z;
+    w[i] = 2 / ((1 - z * z) * dp * dp);
+  }
+}
+
+}  // namespace
+
 std::vector<PupilPoint> hexapolarPupil(const FieldBundle::PupilRegion& region, int rings) {
+  std::vector<double> gx, gw;
+  gaussLegendre(rings, gx, gw);
   std::vector<PupilPoint> pts;
   for (int k = 1; k <= rings; ++k) {
     const int count = 6 * k;
-    const double rho = (k - 0.5) / rings;
-    // The annulus [k - 1, k] / rings has area pi (2k - 1) / rings^2 of the unit disc.
-    const double share = std::numbers::pi * (2 * k - 1) / (double(rings) * rings) / count;
+    // Ring k of `rings`, innermost first: the Gauss-Legendre node on [0, 1] in radius, whose
+    // weight times rho integrates the annulus (rho d rho d phi).
+    const int g = rings - k;  // nodes come out largest first
+    const double rho = 0.5 * (gx[g] + 1);
+    const double share = 0.5 * gw[g] * rho * 2 * std::numbers::pi / count;
     for (int j = 0; j < count; ++j) {
       const double phi = 2 * std::numbers::pi * (j + 0.5 * (k % 2)) / count;
       const double R = region.radiusAt(phi);

@@ -91,11 +91,11 @@ struct PupilPoint {
 };
 
 /// Hexapolar sampling of a pupil region mapped onto a unit disc (radius r at azimuth phi goes to
-/// r R(phi)): ring k = 1..rings at radius (k - 1/2) / rings with 6k points, each weighted by its
-/// share of the annulus's area times R(phi)^2 (the mapping's area element). The midpoint rule in
-/// radius on a region whose boundary is the disc's rim converges as 1/rings^2, where equally
-/// weighted points on rings reaching the rim over-weight the rim (an error of order 1/rings).
-/// 3 rings (rings + 1) points.
+/// r R(phi)): `rings` rings at the Gauss-Legendre nodes in radius, ring k (innermost 1) with 6k
+/// points, each weighted by its share of the ring's quadrature weight times R(phi)^2 (the
+/// mapping's area element). Equally weighted points on rings out to the rim over-weight the rim
+/// (an error of order 1/rings, the 6% of a 48x48 square grid); this quadrature is exact in
+/// radius for polynomial aberrations of degree < 2 rings. 3 rings (rings + 1) points.
 std::vector<PupilPoint> hexapolarPupil(const FieldBundle::PupilRegion& region, int rings);
 
 /// Film-plane point where the chief ray of the bundle meets z = film_z (the image point that
