@@ -269,3 +269,32 @@ TEST(ThroughFocus, StoppedDownLensPeaksAtTheFilm) {
   EXPECT_LE(std::abs(d.defocus_mm[best]), 0.02 + 1e-12);
   EXPECT_LT(t.front(), 0.5 * t[best]);
 }
+
+TEST(Mtf, PolychromaticIsTheWeightedMeanOverTheSystemsOfEachWavelength) {
+  // Each wavelength traces the system `lens_for` gives (glass dispersion plugs in here); on the
+  // stopped-down lens each is diffraction limited at its own cutoff.
+  LensSetup setup;
+  setup.aperture_diameter_mm = 2.0;
+  const FocusedLens fl = focused(lensim::test::lensPath("dgauss.50mm.dat"), setup);
+  SpectralLens sl = monochromatic(fl, {{450, 1}, {650, 3}});
+  int calls = 0;
+  sl.lens_for = [&](double) -> const LensSystem& {
+    ++calls;
+    return *fl.lens;
+  };
+  MtfOptions o;
+  o.fields = {0};
+  o.geometric = false;
+  o.samples = 21;
+  const MtfData d = computeMtf(sl, 35, o);
+  ASSERT_EQ(d.fields.size(), 1u);
+  EXPECT_GT(calls, 1);
+  const double na = d.image_space_na;
+  for (size_t k = 0; k < d.frequency.size(); ++k) {
+    const double nu = d.frequency[k];
+    const double expect =
+        (circleMtf(nu * 450e-6 / (2 * na)) + 3 * circleMtf(nu * 650e-6 / (2 * na))) / 4;
+    EXPECT_NEAR(d.fields[0].diffraction_tangential[k], expect, 0.015) << nu;
+    EXPECT_NEAR(d.diffraction_limit[k], expect, 1e-12) << nu;
+  }
+}

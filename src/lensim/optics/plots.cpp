@@ -31,8 +31,8 @@ std::vector<SpotField> computeSpots(const FocusedLens& fl, const std::vector<dou
                                     double film_diagonal_mm, int rings) {
   const LensSystem& lens = *fl.lens;
   std::vector<SpotField> out;
-  // Drawn: every step-th ring and every step-th ray on it, a hexapolar pattern of ~12 rings.
-  const int step = std::max(1, rings / 12);
+  // Drawn: every step-th ring and every step-th ray on it, a hexapolar pattern of ~16 rings.
+  const int step = std::max(1, rings / 16);
   for (double frac : fields) {
     const double h = frac * film_diagonal_mm / 2;
     auto bundle = FieldBundle::fromFilmHeight(fl, lens, h);
