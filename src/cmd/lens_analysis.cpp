@@ -66,7 +66,16 @@ void runAnalysis(const std::string& kind, const FocusedLens& fl, double diag,
   if (a.pupil_cells != 0 && (a.pupil_cells < 8 || a.pupil_cells > 1024))
     throw Error(fmt::format("--pupil-cells {}: expected 8 to 1024 (or 0: automatic)",
                             a.pupil_cells));
+  for (double f : fields)
+    if (!(f >= 0 && f <= 1.5))
+      throw Error(fmt::format("--fields: {} is not a fraction of the half-diagonal in [0, 1.5]", f));
   const SpectralLens sl = monochromatic(fl, parseWavelengths(a.wavelengths, "--wavelengths"));
+  auto need = [&](bool any) {
+    if (!any)
+      throw Error(fmt::format(
+          "lens plot {}: no field of --fields lies inside the image circle (no ray gets through)",
+          kind));
+  };
   j["wavelengths"] = wavelengthsJson(sl.wavelengths);
   if (kind == "mtf") {
     MtfOptions o;
@@ -75,6 +84,7 @@ void runAnalysis(const std::string& kind, const FocusedLens& fl, double diag,
     o.pupil_cells = a.pupil_cells;
     o.diffraction = !a.geometric_only;
     const MtfData d = computeMtf(sl, diag, o);
+    need(!d.fields.empty());
     svg = mtfSvg(fl, d);
     j["frequency_cycles_per_mm"] = d.frequency;
     j["diffraction_limit"] = d.diffraction_limit;
@@ -106,6 +116,7 @@ void runAnalysis(const std::string& kind, const FocusedLens& fl, double diag,
     }
     const ThroughFocusData d =
         computeThroughFocusMtf(sl, diag, fields, nu, a.focus_range_mm, 31, a.pupil_cells);
+    need(!d.fields.empty());
     svg = throughFocusSvg(fl, d);
     j["frequency_cycles_per_mm"] = d.frequency;
     j["defocus_mm"] = d.defocus_mm;
@@ -120,6 +131,7 @@ void runAnalysis(const std::string& kind, const FocusedLens& fl, double diag,
     j["fields"] = arr;
   } else if (kind == "fans") {
     const std::vector<FanField> fans = computeRayFans(sl, diag, fields);
+    need(!fans.empty());
     svg = rayFanSvg(fl, fans, sl.wavelengths);
     json arr = json::array();
     for (const FanField& f : fans) {
@@ -154,6 +166,7 @@ void runAnalysis(const std::string& kind, const FocusedLens& fl, double diag,
     j["distortion_percent_tan"] = finite(c.distortion.percent_tan);
   } else {  // psf
     const std::vector<PsfField> psfs = computePsf(sl, diag, fields, 0, 80, a.pupil_cells);
+    need(!psfs.empty());
     svg = psfSvg(fl, psfs, sl.wavelengths);
     json arr = json::array();
     for (const PsfField& p : psfs)

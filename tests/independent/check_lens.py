@@ -420,7 +420,8 @@ def check_analyses(lensim, root):
         check_mtf_json("dgauss.50mm (3 wavelengths)", data)
         if len(data["wavelengths"]) != 3 or abs(data["frequency_cycles_per_mm"][-1] - 200) > 1e-9:
             fail("mtf: --wavelengths or --max-frequency ignored")
-    for bad in (["--wavelengths", "abc"], ["--wavelengths", "587:-1"], ["--pupil-cells", "3"]):
+    for bad in (["--wavelengths", "abc"], ["--wavelengths", "587:-1"], ["--pupil-cells", "3"],
+                ["--fields", "-1"], ["--fields", "1.4", "--film-diagonal", "200"]):
         out = run([lensim, "lens", "plot", "mtf", os.path.join(root, "lenses", "dgauss.50mm.dat"),
                    "-o", os.path.join(tmp, "bad.svg"), *bad])
         if out.returncode != 1 or "error" not in out.stderr or os.path.exists(os.path.join(tmp, "bad.svg")):
