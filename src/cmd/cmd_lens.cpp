@@ -184,8 +184,8 @@ int runInfo(const LensArgs& args, bool as_json) {
        fmt::format("f/{:.3f} paraxial (infinity), working f/{:.3f} at this focus", p.f_number,
                    working_f));
   line("real f-number",
-       fmt::format("f/{:.3f}: real marginal ray from infinity at {:.4f} mm, stopped by surface {} "
-                   "(line {}); image space 1/(2 sin u') f/{:.3f}",
+       fmt::format("f/{:.3f} (marginal ray from infinity at {:.4f} mm, stopped by surface {} "
+                   "line {}; 1/(2 sin u') f/{:.3f})",
                    real_f, p.real_marginal_height_mm, p.real_limit_surface,
                    pr.surfaces[p.real_limit_surface].loc.line, p.real_f_number));
   const std::string focus_text =

@@ -123,7 +123,14 @@ MtfData computeMtf(const SpectralLens& sl, double film_diagonal_mm, const MtfOpt
         for (const auto& [q, a] : hits) pts.push_back({q, w.weight * a / area});
       }
       double total = 0;
-      for (const auto& p : pts) total += p.second;
+      Vec2 mean{0, 0};
+      for (const auto& p : pts) {
+        total += p.second;
+        mean = mean + p.first * p.second;
+      }
+      // About the centroid: the same modulus, and small phase arguments.
+      if (total > 0)
+        for (auto& p : pts) p.first = p.first - mean * (1 / total);
       for (double nu : d.frequency) {
         std::complex<double> t = 0, s = 0;
         for (const auto& [q, w] : pts) {
