@@ -298,3 +298,71 @@ TEST(Mtf, PolychromaticIsTheWeightedMeanOverTheSystemsOfEachWavelength) {
     EXPECT_NEAR(d.diffraction_limit[k], expect, 1e-12) << nu;
   }
 }
+
+namespace {
+
+// Coddington's equations along a real chief ray (written here, independent of the thin-bundle
+// crossings the library uses): at each surface, with incidence and refraction angles I, I' and
+// the oblique power P = c (n' cos I' - n cos I),
+//   sagittal   n' / s' = n / s + P,   tangential  n' cos^2 I' / t' = n cos^2 I / t + P,
+// then s and t shrink by the distance to the next intersection. Returns the axial positions of
+// the tangential and sagittal foci (z) for an object at infinity.
+std::pair<double, double> coddingtonFoci(const LensSystem& lens, const Ray& chief) {
+  std::vector<Vec3> path;
+  TraceResult r = lens.tracer().traceFromScene(chief, TraceOptions{false}, &path);
+  EXPECT_TRUE(r.ok());
+  const auto& s = lens.interfaces();
+  double inv_s = 0, inv_t = 0;  // n / s and n cos^2 I / t before the surface: object at infinity
+  Vec3 d = chief.direction;
+  double s_dist = 0, t_dist = 0;
+  for (int i = 0; i < lens.surfaceCount(); ++i) {
+    const Vec3 p = path[i + 1];
+    if (i > 0) {
+      const double D = length(p - path[i]);
+      // Transfer: the distances from the previous surface, less D, in the medium before i.
+      s_dist -= D;
+      t_dist -= D;
+      const double n = s[i].ior_before;
+      inv_s = n / s_dist;
+      inv_t = n / t_dist;  // times cos^2 I below
+    }
+    const Vec3 dir_in = d;
+    Vec3 normal{0, 0, -1};
+    double c = 0;
+    if (s[i].radius_mm != 0) {
+      c = 1 / s[i].radius_mm;
+      normal = normalize(p - Vec3{0, 0, s[i].z_mm + s[i].radius_mm});
+    }
+    const double n = s[i].ior_before, n2 = s[i].ior_after;
+    const double cos_i = std::abs(dot(dir_in, normal));
+    const double sin2_r = (n / n2) * (n / n2) * (1 - cos_i * cos_i);
+    const double cos_r = std::sqrt(1 - sin2_r);
+    // The signed power: a positive curvature bends toward the axis for n2 > n.
+    const double P = c * (n2 * cos_r - n * cos_i);
+    const double ns = (i == 0 ? 0.0 : inv_s) + P;
+    const double nt = (i == 0 ? 0.0 : inv_t * cos_i * cos_i) + P;
+    s_dist = n2 / ns;
+    t_dist = n2 * cos_r * cos_r / nt;
+    // The refracted direction: the next segment of the path (or the outgoing ray).
+    d = i + 2 < static_cast<int>(path.size()) ? normalize(path[i + 2] - p) : r.ray.direction;
+  }
+  const Vec3 last = path.back();
+  return {last.z + d.z * t_dist, last.z + d.z * s_dist};
+}
+
+}  // namespace
+
+TEST(FieldCurves, ThinBundleFociAgreeWithCoddington) {
+  for (const char* name : {"dgauss.50mm.dat", "wide.22mm.dat"}) {
+    const FocusedLens fl = focused(lensim::test::lensPath(name));
+    const FieldCurves c = computeFieldCurves(monochromatic(fl), 35, 8);
+    ASSERT_GE(c.film_height_mm.size(), 8u);
+    for (size_t k = 1; k < c.film_height_mm.size(); k += 2) {
+      auto b = FieldBundle::fromFilmHeight(fl, *fl.lens, c.film_height_mm[k]);
+      ASSERT_TRUE(b);
+      const auto [zt, zs] = coddingtonFoci(*fl.lens, b->sceneRay({0, 0}));
+      EXPECT_NEAR(c.tangential_mm[0][k], zt - fl.lens->filmZ_mm(), 1e-5) << name << " " << k;
+      EXPECT_NEAR(c.sagittal_mm[0][k], zs - fl.lens->filmZ_mm(), 1e-5) << name << " " << k;
+    }
+  }
+}
