@@ -429,6 +429,34 @@ def check_analyses(lensim, root):
     print(f"  lens plot mtf/mtf-focus/fans/field/psf: {count} plots on {len(lenses)} lenses checked")
 
 
+def check_real_f_numbers(lensim, root):
+    """lens info --json: the real-ray f-numbers and stops of the independent comparison with an
+    optical design library (issue 17), and the ISET reversed telephoto's focus beyond infinity."""
+    shared = os.path.join(root, "..", "shared", "lenses")
+    cases = [(os.path.join(root, "lenses", "dgauss.50mm.dat"), 2.018, 2, 5),
+             (os.path.join(root, "lenses", "wide.22mm.dat"), 2.788, 6, 5),
+             (os.path.join(shared, "isetcam", "petzval.12deg.50.0mm.dat"), 1.400, 5, 5)]
+    for path, f_real, limit, stop in cases:
+        out = run([lensim, "lens", "info", path, "--json"])
+        if out.returncode != 0:
+            fail(f"lens info {path}: exit {out.returncode}")
+            continue
+        j = json.loads(out.stdout)
+        if abs(j["real_f_number"] - f_real) > 0.0015 or j["real_limit_surface"] != limit or \
+                j["aperture_stop_surface"] != stop or j["paraxial_f_number"] != j["f_number"]:
+            fail(f"{os.path.basename(path)}: real f/{j['real_f_number']:.4f} limited by "
+                 f"{j['real_limit_surface']}, stop {j['aperture_stop_surface']}; expected "
+                 f"f/{f_real} by {limit}, stop {stop}")
+    out = run([lensim, "lens", "info", "--json",
+               os.path.join(shared, "isetcam", "reversed.telephoto.37deg.100mm.dat")])
+    j = json.loads(out.stdout) if out.returncode == 0 else {}
+    if not j.get("focus_beyond_infinity") or j.get("focus_at_infinity") or \
+            abs(j.get("film_in_front_of_infinity_focus_mm", 0) - 0.224) > 0.001 or \
+            j.get("aperture_stop_is_file_stop"):
+        fail(f"reversed telephoto: focus/stop report {out.returncode} {out.stdout[:200]}")
+    print("  real f-numbers, real-ray stops and the focus beyond infinity checked")
+
+
 def check_mtf_json(name, data):
     for f in data["fields"]:
         for key in ("diffraction_tangential", "diffraction_sagittal", "geometric_tangential",
@@ -458,6 +486,7 @@ def main():
     check_bad_corpus(args.lensim, args.root)
     check_pictures(args.lensim, args.root)
     check_analyses(args.lensim, args.root)
+    check_real_f_numbers(args.lensim, args.root)
     if FAILURES:
         print(f"{len(FAILURES)} failures")
         return 1
