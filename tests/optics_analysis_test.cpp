@@ -366,3 +366,25 @@ TEST(FieldCurves, ThinBundleFociAgreeWithCoddington) {
     }
   }
 }
+
+TEST(ThroughFocus, OneWaveOfDefocusGivesTheDefocusOtf) {
+  // The stopped-down (diffraction-limited) lens with its film moved by dz = 2 lambda / NA^2: one
+  // wave of defocus at the rim, W = -dz NA^2 rho^2 / (2 lambda) to within NA^2 / 4.
+  LensSetup setup;
+  setup.aperture_diameter_mm = 2.0;
+  const FocusedLens fl = focused(lensim::test::lensPath("dgauss.50mm.dat"), setup);
+  const SpectralLens sl = monochromatic(fl);
+  MtfOptions o;
+  o.fields = {};
+  const MtfData axis = computeMtf(sl, 35, o);
+  const double na = axis.image_space_na, lambda = kDLineNm * 1e-6;
+  const double dz = 2 * lambda / (na * na);
+  for (double v : {0.05, 0.1, 0.15, 0.2, 0.3, 0.5}) {
+    const ThroughFocusData d = computeThroughFocusMtf(sl, 35, {0}, v * axis.cutoff, dz, 3);
+    ASSERT_EQ(d.fields.size(), 1u);
+    const double expect = std::abs(defocusOtf(v, 1.0));
+    EXPECT_NEAR(d.fields[0].diffraction_tangential[2], expect, 0.02) << v;
+    EXPECT_NEAR(d.fields[0].diffraction_tangential[0], expect, 0.02) << v;
+    EXPECT_NEAR(d.fields[0].diffraction_tangential[1], circleMtf(v), 0.02) << v;
+  }
+}

@@ -125,6 +125,7 @@ void runAnalysis(const std::string& kind, const FocusedLens& fl, double diag,
       json x = fieldHead(f);
       x["tangential"] = f.diffraction_tangential;
       x["sagittal"] = f.diffraction_sagittal;
+      x["pupil_cells"] = f.pupil_cells;
       x["rays_traced"] = f.rays;
       arr.push_back(x);
     }

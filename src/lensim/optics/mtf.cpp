@@ -154,6 +154,7 @@ ThroughFocusData computeThroughFocusMtf(const SpectralLens& sl, double film_diag
   const double primary = sl.primaryNm();
   const LensSystem& lens0 = sl.at(primary);
   const double film_z = fl.lens->filmZ_mm();
+  const double n_img = lens0.imageIor();
   ThroughFocusData d;
   d.frequency = frequency;
   d.wavelengths = sl.wavelengths;
@@ -173,42 +174,77 @@ ThroughFocusData computeThroughFocusMtf(const SpectralLens& sl, double film_diag
   for (double frac : fields) {
     auto bundle = FieldBundle::fromFilmHeight(fl, lens0, frac * film_diagonal_mm / 2);
     if (!bundle) continue;
+    auto p = chiefImagePoint(lens0, *bundle, film_z);
+    if (!p) continue;
     MtfField f;
     f.field_fraction = frac;
     f.film_height_mm = bundle->film_height_mm;
     f.field_angle_deg = bundle->field_angle_deg;
-    int cells = pupil_cells;
-    if (cells == 0) {
-      auto p = chiefImagePoint(lens0, *bundle, film_z);
-      if (!p) continue;
-      auto pf = computePupilFunction(lens0, *bundle, film_z, *p, primary, 0, 0.5, 256);
-      if (!pf) continue;
-      cells = pf->n;
-      f.rays += pf->rays_traced;
-    }
-    f.pupil_cells = cells;
-    bool ok = true;
-    for (double dz : d.defocus_mm) {
-      auto p = chiefImagePoint(lens0, *bundle, film_z + dz);
-      if (!p) {
-        ok = false;
-        break;
+    // The pupil of each wavelength is traced once, for the fixed object and the nominal film. A
+    // film moved by dz sees the same angular spectrum with each plane wave advanced by
+    // n' gamma dz (Debye: U(x, dz) = sum P(a) exp(i k (a . x + n' gamma dz)), n' gamma =
+    // sqrt(n'^2 - |a|^2)); the chief ray's lateral move is a linear phase, which leaves the MTF.
+    // The OTF is the pupil's autocorrelation, summed cell by cell: at a shift of m cells its
+    // integrand's phase changes between neighbouring cells by about m times the second
+    // difference of W, so the grid is refined until that stays below half a wave, with the
+    // largest defocus term added.
+    std::vector<std::pair<PupilFunction, double>> pupils;
+    for (const WeightedWavelength& w : sl.wavelengths) {
+      const LensSystem& lens = sl.at(w.nm);
+      const double lambda_mm = w.nm * 1e-6;
+      std::optional<PupilFunction> pf;
+      for (int cells = pupil_cells > 0 ? pupil_cells : 64;; cells *= 2) {
+        pf = computePupilFunction(lens, *bundle, film_z, *p, w.nm, cells);
+        if (!pf) break;
+        f.rays += pf->rays_traced;
+        const int n = pf->n;
+        double d2 = 0;
+        auto full = [&](int x, int y) { return pf->amplitude[size_t(y) * n + x] >= 1; };
+        auto W = [&](int x, int y) { return pf->opd_waves[size_t(y) * n + x]; };
+        for (int y = 1; y + 1 < n; ++y)
+          for (int x = 1; x + 1 < n; ++x) {
+            if (!full(x, y)) continue;
+            if (full(x - 1, y) && full(x + 1, y))
+              d2 = std::max(d2, std::abs(W(x + 1, y) - 2 * W(x, y) + W(x - 1, y)));
+            if (full(x, y - 1) && full(x, y + 1))
+              d2 = std::max(d2, std::abs(W(x, y + 1) - 2 * W(x, y) + W(x, y - 1)));
+          }
+        const double na = std::min(0.99 * n_img, pf->halfWidth() + std::hypot(pf->centre.x, pf->centre.y));
+        const double g = std::sqrt(n_img * n_img - na * na);
+        const double defocus_d2 = range_mm * pf->step * pf->step * n_img * n_img / (g * g * g) /
+                                  lambda_mm;
+        const double shift_cells = frequency * lambda_mm / pf->step;
+        if (pupil_cells > 0 || shift_cells * (d2 + defocus_d2) < 0.5 || 2 * cells > 512) break;
       }
+      if (!pf) continue;
+      if (w.nm == primary) f.pupil_cells = pf->n;
+      pupils.push_back({std::move(*pf), w.weight});
+    }
+    if (pupils.empty()) continue;
+    for (double dz : d.defocus_mm) {
       std::complex<double> t = 0, s = 0;
       double wused = 0;
-      for (const WeightedWavelength& w : sl.wavelengths) {
-        auto pf = computePupilFunction(sl.at(w.nm), *bundle, film_z + dz, *p, w.nm, cells);
-        if (!pf) continue;
-        f.rays += pf->rays_traced;
-        const FourierOptics fo = fourierOptics(*pf);
-        t += w.weight * fo.otfAt(frequency, 0);
-        s += w.weight * fo.otfAt(0, frequency);
-        wused += w.weight;
+      for (const auto& [pf0, weight] : pupils) {
+        PupilFunction pf = pf0;
+        const double lambda_mm = pf.wavelength_nm * 1e-6;
+        for (int iy = 0; iy < pf.n; ++iy)
+          for (int ix = 0; ix < pf.n; ++ix) {
+            const size_t k = size_t(iy) * pf.n + ix;
+            if (pf.amplitude[k] <= 0) continue;
+            const double ax = pf.centre.x + (ix + 0.5 - 0.5 * pf.n) * pf.step;
+            const double ay = pf.centre.y + (iy + 0.5 - 0.5 * pf.n) * pf.step;
+            const double g2 = n_img * n_img - ax * ax - ay * ay;
+            pf.opd_waves[k] += std::sqrt(std::max(0.0, g2)) * dz / lambda_mm;
+          }
+        const FourierOptics fo = fourierOptics(pf);
+        t += weight * fo.otfAt(frequency, 0);
+        s += weight * fo.otfAt(0, frequency);
+        wused += weight;
       }
-      f.diffraction_tangential.push_back(wused > 0 ? std::abs(t) / wused : 0.0);
-      f.diffraction_sagittal.push_back(wused > 0 ? std::abs(s) / wused : 0.0);
+      f.diffraction_tangential.push_back(std::abs(t) / wused);
+      f.diffraction_sagittal.push_back(std::abs(s) / wused);
     }
-    if (ok) d.fields.push_back(std::move(f));
+    d.fields.push_back(std::move(f));
   }
   return d;
 }

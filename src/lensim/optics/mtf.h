@@ -58,7 +58,10 @@ struct ThroughFocusData {
 
 /// range_mm: half-width of the defocus range; 0 picks the larger of 12 lambda N^2, 0.02 mm and
 /// the defocus that blurs a point into 3 axial RMS spot radii (6 N rms).
-/// pupil_cells 0: each field's automatic grid at the nominal film, at most 256, for every shift.
+/// Each wavelength's pupil is traced once (fixed object, nominal film); a film shift dz advances
+/// each plane wave of the angular spectrum by n' gamma dz (Debye), exact for a moving film.
+/// pupil_cells 0: automatic, refined (to 512) until the wavefront plus the largest defocus
+/// term is not aliased.
 ThroughFocusData computeThroughFocusMtf(const SpectralLens& lens, double film_diagonal_mm,
                                         const std::vector<double>& fields, double frequency,
                                         double range_mm = 0, int steps = 31, int pupil_cells = 0);
