@@ -10,7 +10,10 @@
 // direction-cosine grid the film-plane field is the plain 2-D Fourier transform
 //   U(dx) = sum A exp(i 2 pi (W + n' alpha . dx) / lambda),
 // so the PSF pitch is lambda / (M step) for an M-point transform and the OTF at grid shift k is at
-// spatial frequency k step / lambda. Cells on the pupil's edge are supersampled (4x4) into a
+// spatial frequency k step / lambda. The amplitude is uniform over the passing cone (no
+// apodization: the small change of the irradiance across the pupil, a few percent at f/2, is
+// left out, as in the usual FFT MTF), and W is taken to first order in the aberration (the
+// optical path along each traced ray to the reference, Hopkins' definition). Cells on the pupil's edge are supersampled (4x4) into a
 // fractional amplitude. The grid is refined (64 to 512 cells across) until W changes by less than
 // half a wave (a quarter for PSF images) between neighbouring cells, so that the phase is not
 // aliased.
