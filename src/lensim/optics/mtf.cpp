@@ -262,7 +262,8 @@ std::string mtfSvg(const FocusedLens& fl, const MtfData& d) {
            {{"font-size", "14"}, {"font-weight", "bold"}});
   auto panel = [&](bool diffraction, double x0) {
     plot::Chart c;
-    c.title = diffraction ? "diffraction MTF (FFT of the pupil function)"
+    c.title = diffraction ? fmt::format("diffraction MTF (FFT of the pupil); cutoff {:.0f} cy/mm",
+                                        d.cutoff)
                           : "geometric MTF (Fourier transform of the spot)";
     c.x_label = "spatial frequency (cycles/mm)";
     c.y_label = "modulation";
@@ -276,7 +277,9 @@ std::string mtfSvg(const FocusedLens& fl, const MtfData& d) {
       const MtfField& f = d.fields[i];
       const auto& t = diffraction ? f.diffraction_tangential : f.geometric_tangential;
       const auto& s = diffraction ? f.diffraction_sagittal : f.geometric_sagittal;
-      plot::Series st{fmt::format("{:.1f}° T", f.field_angle_deg),
+      const std::string strehl =
+          diffraction ? fmt::format(" · Strehl {:.3f}", f.strehl) : std::string();
+      plot::Series st{fmt::format("{:.1f}° T{}", f.field_angle_deg, strehl),
                       plot::paletteColor(static_cast<int>(i)), plot::Style::Line, {}};
       plot::Series ss{fmt::format("{:.1f}° S", f.field_angle_deg),
                       plot::paletteColor(static_cast<int>(i)), plot::Style::Dashed, {}};
@@ -286,11 +289,7 @@ std::string mtfSvg(const FocusedLens& fl, const MtfData& d) {
       }
       c.series.push_back(std::move(st));
       c.series.push_back(std::move(ss));
-      if (diffraction)
-        c.notes.push_back(fmt::format("{:.1f}°: Strehl {:.3f}, {} pupil cells", f.field_angle_deg,
-                                      f.strehl, f.pupil_cells));
     }
-    if (diffraction) c.notes.push_back(fmt::format("cutoff {:.0f} cycles/mm", d.cutoff));
     c.render(doc, x0, 30, pw, ph);
   };
   double x = 0;
