@@ -81,15 +81,18 @@ double defocusOtf(double v, double w20) {
 TEST(RealAperture, FNumbersAndStopsOfTheIndependentComparison) {
   // Figures of the independent comparison with an optical design library (issue 17).
   const FocusedLens dg = focused(lensim::test::lensPath("dgauss.50mm.dat"));
-  EXPECT_NEAR(std::abs(dg.paraxial.effective_focal_length_mm) /
-                  (2 * dg.paraxial.real_marginal_height_mm),
-              2.018, 0.001);
+  EXPECT_NEAR(dg.paraxial.real_f_number, 2.018, 0.001);
   EXPECT_EQ(dg.paraxial.aperture_stop_surface, 5);  // the file's stop, 2% from the limit
   EXPECT_EQ(dg.paraxial.real_limit_surface, 2);
   const FocusedLens wide = focused(lensim::test::lensPath("wide.22mm.dat"));
-  EXPECT_NEAR(std::abs(wide.paraxial.effective_focal_length_mm) /
-                  (2 * wide.paraxial.real_marginal_height_mm),
-              2.788, 0.001);
+  EXPECT_NEAR(wide.paraxial.real_f_number, 2.788, 0.001);
+  // The real marginal ray's height is that of the traced ray that just gets through.
+  EXPECT_TRUE(wide.lens->tracer()
+                  .traceFromScene({{0.999 * wide.paraxial.real_marginal_height_mm, 0, -1}, {0, 0, 1}})
+                  .ok());
+  EXPECT_FALSE(wide.lens->tracer()
+                   .traceFromScene({{1.001 * wide.paraxial.real_marginal_height_mm, 0, -1}, {0, 0, 1}})
+                   .ok());
   EXPECT_EQ(wide.paraxial.real_limit_surface, 6);
   // The ISET Petzval: real rays above 17.84 mm are stopped by its stop row (f/1.40); the
   // paraxial trace would pick the front element.
@@ -97,9 +100,8 @@ TEST(RealAperture, FNumbersAndStopsOfTheIndependentComparison) {
   EXPECT_EQ(pz.paraxial.aperture_stop_surface, 5);
   EXPECT_TRUE(pz.paraxial.stop_is_file_stop);
   EXPECT_NEAR(pz.paraxial.real_marginal_height_mm, 17.84, 0.01);
-  EXPECT_NEAR(std::abs(pz.paraxial.effective_focal_length_mm) /
-                  (2 * pz.paraxial.real_marginal_height_mm),
-              1.40, 0.005);
+  EXPECT_NEAR(pz.paraxial.real_f_number, 1.40, 0.005);
+  EXPECT_NEAR(pz.paraxial.real_image_space_f_number, 1.40, 0.005);
   // ... and its chief rays pass the stop: distortion -5.03% at 14.53 deg (+2.27% through the
   // front vertex).
   auto c0 = chiefRayFromScene(*pz.lens, pz.paraxial, 0.05);

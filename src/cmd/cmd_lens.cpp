@@ -110,8 +110,8 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["axial_limit_surface"] = p.axial_limit_surface;
     j["axial_limit_f_number"] = p.axial_limit_f_number;
     j["paraxial_f_number"] = p.f_number;
-    j["real_f_number"] = std::abs(p.effective_focal_length_mm) / (2 * p.real_marginal_height_mm);
-    j["real_image_space_f_number"] = p.real_f_number;
+    j["real_f_number"] = p.real_f_number;
+    j["real_image_space_f_number"] = p.real_image_space_f_number;
     j["real_marginal_ray_height_mm"] = p.real_marginal_height_mm;
     j["real_limit_surface"] = p.real_limit_surface;
     j["entrance_pupil_diameter_mm"] = p.entrance_pupil_diameter_mm;
@@ -171,7 +171,7 @@ int runInfo(const LensArgs& args, bool as_json) {
                                      "element does)",
                                      pr.surfaces[*lens.stopIndex()].loc.line)
                        : std::string(" (the file has no stop: this element limits the beam)")));
-  const double real_f = std::abs(p.effective_focal_length_mm) / (2 * p.real_marginal_height_mm);
+  const double real_f = p.real_f_number;
   if (p.real_limit_surface != p.aperture_stop_surface && p.stop_is_file_stop)
     line("axial beam limit",
          fmt::format("surface {} (line {}) clips the real axial beam more than the stop: f/{:.3f}",
@@ -187,7 +187,7 @@ int runInfo(const LensArgs& args, bool as_json) {
        fmt::format("f/{:.3f} (marginal ray from infinity at {:.4f} mm, stopped by surface {} "
                    "line {}; 1/(2 sin u') f/{:.3f})",
                    real_f, p.real_marginal_height_mm, p.real_limit_surface,
-                   pr.surfaces[p.real_limit_surface].loc.line, p.real_f_number));
+                   pr.surfaces[p.real_limit_surface].loc.line, p.real_image_space_f_number));
   const std::string focus_text =
       beyond_infinity_mm
           ? fmt::format("beyond infinity: the film is {:.4f} mm in front of the infinity focus "

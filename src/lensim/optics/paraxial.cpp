@@ -85,7 +85,8 @@ ParaxialData computeParaxial(const LensSystem& lens) {
   const RealAxialBeam real = realAxialBeam(lens, p.effective_focal_length_mm);
   p.real_limit_surface = real.limit_surface;
   p.real_marginal_height_mm = real.marginal_height_mm;
-  p.real_f_number = real.f_number;
+  p.real_f_number = real.f_number_entrance;
+  p.real_image_space_f_number = real.f_number;
   p.aperture_stop_surface = real.limit_surface;
   if (lens.stopIndex()) {
     const double stop_h = real.surface_limit_height_mm[*lens.stopIndex()];

@@ -56,10 +56,12 @@ struct ParaxialData {
   double exit_pupil_diameter_mm = 0;
   double f_number = 0;  ///< at infinity: EFL / entrance pupil diameter
   /// The real on-axis beam from infinity (real_aperture.h): the surface that stops the real
-  /// marginal ray, its entrance height, and its image-space f-number 1 / (2 n' sin u').
+  /// marginal ray, its entrance height h, the real f-number EFL / (2 h), and the image-space
+  /// f-number 1 / (2 n' sin u') of that ray.
   int real_limit_surface = -1;
   double real_marginal_height_mm = 0;
   double real_f_number = 0;
+  double real_image_space_f_number = 0;
 };
 
 /// Computes the paraxial data. Throws lensim::Error for an afocal system.
