@@ -37,7 +37,8 @@ void Spots(benchmark::State& state) {
 void Mtf(benchmark::State& state) {
   MtfOptions o;
   o.fields = kFields;
-  for (auto _ : state) benchmark::DoNotOptimize(computeMtf(monochromatic(lens(state.range(0))), 35, o));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(computeMtf(monochromatic(lens(state.range(0))), 35, o));
 }
 void ThroughFocus(benchmark::State& state) {
   for (auto _ : state)

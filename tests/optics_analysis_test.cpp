@@ -87,12 +87,14 @@ TEST(RealAperture, FNumbersAndStopsOfTheIndependentComparison) {
   const FocusedLens wide = focused(lensim::test::lensPath("wide.22mm.dat"));
   EXPECT_NEAR(wide.paraxial.real_f_number, 2.788, 0.001);
   // The real marginal ray's height is that of the traced ray that just gets through.
-  EXPECT_TRUE(wide.lens->tracer()
-                  .traceFromScene({{0.999 * wide.paraxial.real_marginal_height_mm, 0, -1}, {0, 0, 1}})
-                  .ok());
-  EXPECT_FALSE(wide.lens->tracer()
-                   .traceFromScene({{1.001 * wide.paraxial.real_marginal_height_mm, 0, -1}, {0, 0, 1}})
-                   .ok());
+  EXPECT_TRUE(
+      wide.lens->tracer()
+          .traceFromScene({{0.999 * wide.paraxial.real_marginal_height_mm, 0, -1}, {0, 0, 1}})
+          .ok());
+  EXPECT_FALSE(
+      wide.lens->tracer()
+          .traceFromScene({{1.001 * wide.paraxial.real_marginal_height_mm, 0, -1}, {0, 0, 1}})
+          .ok());
   EXPECT_EQ(wide.paraxial.real_limit_surface, 6);
   // The ISET Petzval: real rays above 17.84 mm are stopped by its stop row (f/1.40); the
   // paraxial trace would pick the front element.
@@ -108,7 +110,8 @@ TEST(RealAperture, FNumbersAndStopsOfTheIndependentComparison) {
   auto c = chiefRayFromScene(*pz.lens, pz.paraxial, 14.5335);
   ASSERT_TRUE(c0 && c);
   const double f = c0->film_height_mm / std::tan(0.05 * std::numbers::pi / 180);
-  const double dist = 100 * (c->film_height_mm / (f * std::tan(14.5335 * std::numbers::pi / 180)) - 1);
+  const double dist =
+      100 * (c->film_height_mm / (f * std::tan(14.5335 * std::numbers::pi / 180)) - 1);
   EXPECT_NEAR(dist, -5.03, 0.03);
   // The ISET reversed telephoto's stop row marks the image plane: an element is the stop.
   const FocusedLens rt = focused(shared("isetcam/reversed.telephoto.37deg.100mm.dat"));
@@ -118,9 +121,9 @@ TEST(RealAperture, FNumbersAndStopsOfTheIndependentComparison) {
 
 TEST(Spots, RmsRadiusConvergesWithHexapolarRings) {
   // The square grid this replaced was off by up to 6% (dgauss.22deg +6.2%).
-  for (const std::string& path : {shared("isetcam/dgauss.22deg.50.0mm.dat"),
-                                  shared("isetcam/wide.40deg.50.0mm.dat"),
-                                  lensim::test::lensPath("dgauss.50mm.dat")}) {
+  for (const std::string& path :
+       {shared("isetcam/dgauss.22deg.50.0mm.dat"), shared("isetcam/wide.40deg.50.0mm.dat"),
+        lensim::test::lensPath("dgauss.50mm.dat")}) {
     const FocusedLens fl = focused(path);
     const auto a = computeSpots(fl, {0, 0.7, 1}, 35);  // the default, 48 rings
     const auto b = computeSpots(fl, {0, 0.7, 1}, 35, 192);
@@ -191,12 +194,12 @@ TEST(Wavefront, StoppedDownLensOnAxisIsDiffractionLimited) {
   const MtfData d = computeMtf(monochromatic(fl), 35, o);
   ASSERT_EQ(d.fields.size(), 1u);
   // The cone's NA is the real marginal ray's, EFL / (2 N) about.
-  EXPECT_NEAR(d.working_f_number,
-              std::abs(fl.paraxial.effective_focal_length_mm) / fl.paraxial.entrance_pupil_diameter_mm,
-              0.02 * d.working_f_number);
+  EXPECT_NEAR(
+      d.working_f_number,
+      std::abs(fl.paraxial.effective_focal_length_mm) / fl.paraxial.entrance_pupil_diameter_mm,
+      0.02 * d.working_f_number);
   for (size_t k = 0; k < d.frequency.size(); ++k)
-    EXPECT_NEAR(d.fields[0].diffraction_tangential[k],
-                circleMtf(d.frequency[k] / d.cutoff), 0.015)
+    EXPECT_NEAR(d.fields[0].diffraction_tangential[k], circleMtf(d.frequency[k] / d.cutoff), 0.015)
         << d.frequency[k];
   EXPECT_GT(d.fields[0].strehl, 0.95);
 }

@@ -38,8 +38,7 @@ json fieldHead(const MtfField& f) {
 }  // namespace
 
 bool isAnalysisKind(const std::string& kind) {
-  return kind == "mtf" || kind == "mtf-focus" || kind == "fans" || kind == "field" ||
-         kind == "psf";
+  return kind == "mtf" || kind == "mtf-focus" || kind == "fans" || kind == "field" || kind == "psf";
 }
 
 void addAnalysisOptions(CLI::App* cmd, AnalysisArgs& a) {
@@ -48,8 +47,9 @@ void addAnalysisOptions(CLI::App* cmd, AnalysisArgs& a) {
                   "e.g. 486.13:1,587.56:2,656.27:1 (default 587.56)");
   cmd->add_option("--max-frequency", a.max_frequency,
                   "mtf: highest spatial frequency, cycles/mm (default: the diffraction cutoff)");
-  cmd->add_option("--frequency", a.frequency,
-                  "mtf-focus: spatial frequency, cycles/mm (default 50, or a quarter of the cutoff if lower)");
+  cmd->add_option(
+      "--frequency", a.frequency,
+      "mtf-focus: spatial frequency, cycles/mm (default 50, or a quarter of the cutoff if lower)");
   cmd->add_option("--focus-range", a.focus_range_mm,
                   "mtf-focus: half-width of the film shift, mm (default 12 lambda N^2)");
   cmd->add_option("--pupil-cells", a.pupil_cells,
@@ -64,11 +64,12 @@ void runAnalysis(const std::string& kind, const FocusedLens& fl, double diag,
   if (a.max_frequency < 0 || a.frequency < 0 || a.focus_range_mm < 0)
     throw Error("--max-frequency, --frequency and --focus-range must be >= 0");
   if (a.pupil_cells != 0 && (a.pupil_cells < 8 || a.pupil_cells > 1024))
-    throw Error(fmt::format("--pupil-cells {}: expected 8 to 1024 (or 0: automatic)",
-                            a.pupil_cells));
+    throw Error(
+        fmt::format("--pupil-cells {}: expected 8 to 1024 (or 0: automatic)", a.pupil_cells));
   for (double f : fields)
     if (!(f >= 0 && f <= 1.5))
-      throw Error(fmt::format("--fields: {} is not a fraction of the half-diagonal in [0, 1.5]", f));
+      throw Error(
+          fmt::format("--fields: {} is not a fraction of the half-diagonal in [0, 1.5]", f));
   const SpectralLens sl = monochromatic(fl, parseWavelengths(a.wavelengths, "--wavelengths"));
   auto need = [&](bool any) {
     if (!any)

@@ -80,7 +80,9 @@ std::string rayFanSvg(const FocusedLens& fl, const std::vector<FanField>& fans,
         const auto& px = side == 0 ? r.tangential_pupil : r.sagittal_pupil;
         const auto& py = side == 0 ? r.tangential_ex_mm : r.sagittal_ey_mm;
         plot::Series s{i == 0 ? fmt::format("{:.1f} nm", r.wavelength_nm) : std::string(),
-                       plot::paletteColor(static_cast<int>(j)), plot::Style::Line, {}};
+                       plot::paletteColor(static_cast<int>(j)),
+                       plot::Style::Line,
+                       {}};
         // Break the line where blocked rays leave a gap.
         double step = 1e300;
         for (size_t k = 1; k < px.size(); ++k) step = std::min(step, px[k] - px[k - 1]);

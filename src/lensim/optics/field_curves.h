@@ -25,8 +25,7 @@ struct FieldCurves {
 };
 
 /// Fields from the axis to the film corner (or the edge of the image circle) in `samples` steps.
-FieldCurves computeFieldCurves(const SpectralLens& lens, double film_diagonal_mm,
-                               int samples = 40);
+FieldCurves computeFieldCurves(const SpectralLens& lens, double film_diagonal_mm, int samples = 40);
 
 std::string fieldCurvesSvg(const FocusedLens& lens, const FieldCurves& c);
 

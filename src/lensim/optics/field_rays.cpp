@@ -105,9 +105,7 @@ std::optional<Vec2> FieldBundle::hitPlane(const LensSystem& lens, const Ray& ray
 }
 
 std::optional<std::pair<Vec2, double>> FieldBundle::pupilCircle(const LensSystem& lens) const {
-  auto passes = [&](Vec2 o) {
-    return lens.tracer().traceFromScene(sceneRay(o)).ok();
-  };
+  auto passes = [&](Vec2 o) { return lens.tracer().traceFromScene(sceneRay(o)).ok(); };
   const double reach = 4 * pupil_radius_mm + 1e-3;
   // A passing point: the chief ray, else a search over a grid.
   std::optional<Vec2> c;

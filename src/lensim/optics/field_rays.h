@@ -38,8 +38,8 @@ struct SpectralLens {
 };
 
 /// A SpectralLens tracing the focused lens at every wavelength.
-SpectralLens monochromatic(const FocusedLens& fl, const std::vector<WeightedWavelength>& wl = {
-                                                      {kDLineNm, 1}});
+SpectralLens monochromatic(const FocusedLens& fl,
+                           const std::vector<WeightedWavelength>& wl = {{kDLineNm, 1}});
 
 /// Parses "587.56" or "486.13:1,587.56:2,656.27:1" (nm, optional weights). Throws lensim::Error.
 std::vector<WeightedWavelength> parseWavelengths(const std::string& text,
@@ -75,12 +75,12 @@ class FieldBundle {
   };
   std::optional<PupilRegion> pupilRegion(const LensSystem& lens, int directions = 256) const;
 
-  double film_height_mm = 0;     ///< of the chief ray on the nominal film
-  double field_angle_deg = 0;    ///< chief ray angle in object space
-  Ray chief_scene;               ///< entering the lens (toward +z), through the stop centre
-  Vec3 pupil_centre;             ///< chief ray on the paraxial entrance-pupil plane
-  std::optional<Vec3> object;    ///< object point; nullopt: at infinity
-  double pupil_radius_mm = 0;    ///< paraxial entrance-pupil radius
+  double film_height_mm = 0;   ///< of the chief ray on the nominal film
+  double field_angle_deg = 0;  ///< chief ray angle in object space
+  Ray chief_scene;             ///< entering the lens (toward +z), through the stop centre
+  Vec3 pupil_centre;           ///< chief ray on the paraxial entrance-pupil plane
+  std::optional<Vec3> object;  ///< object point; nullopt: at infinity
+  double pupil_radius_mm = 0;  ///< paraxial entrance-pupil radius
 };
 
 /// A point of the entrance-pupil plane with its share of the pupil's area.
@@ -100,7 +100,6 @@ std::vector<PupilPoint> hexapolarPupil(const FieldBundle::PupilRegion& region, i
 
 /// Film-plane point where the chief ray of the bundle meets z = film_z (the image point that
 /// spots, PSFs and fans are measured from).
-std::optional<Vec2> chiefImagePoint(const LensSystem& lens, const FieldBundle& b,
-                                    double film_z_mm);
+std::optional<Vec2> chiefImagePoint(const LensSystem& lens, const FieldBundle& b, double film_z_mm);
 
 }  // namespace lensim::optics

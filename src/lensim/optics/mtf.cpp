@@ -90,8 +90,8 @@ MtfData computeMtf(const SpectralLens& sl, double film_diagonal_mm, const MtfOpt
       std::vector<std::complex<double>> tan(ns), sag(ns);
       double wused = 0;
       for (const WeightedWavelength& w : sl.wavelengths) {
-        auto pf =
-            computePupilFunction(sl.at(w.nm), *bundle, film_z, *image_point, w.nm, opts.pupil_cells);
+        auto pf = computePupilFunction(sl.at(w.nm), *bundle, film_z, *image_point, w.nm,
+                                       opts.pupil_cells);
         if (!pf) continue;
         f.rays += pf->rays_traced;
         if (w.nm == primary) {
@@ -170,7 +170,8 @@ ThroughFocusData computeThroughFocusMtf(const SpectralLens& sl, double film_diag
     range_mm = std::max({0.02, 12 * primary * 1e-6 * N * N, spread});
   }
   steps = std::max(3, steps);
-  for (int k = 0; k < steps; ++k) d.defocus_mm.push_back(-range_mm + 2 * range_mm * k / (steps - 1));
+  for (int k = 0; k < steps; ++k)
+    d.defocus_mm.push_back(-range_mm + 2 * range_mm * k / (steps - 1));
   for (double frac : fields) {
     auto bundle = FieldBundle::fromFilmHeight(fl, lens0, frac * film_diagonal_mm / 2);
     if (!bundle) continue;
@@ -209,10 +210,11 @@ ThroughFocusData computeThroughFocusMtf(const SpectralLens& sl, double film_diag
             if (full(x, y - 1) && full(x, y + 1))
               d2 = std::max(d2, std::abs(W(x, y + 1) - 2 * W(x, y) + W(x, y - 1)));
           }
-        const double na = std::min(0.99 * n_img, pf->halfWidth() + std::hypot(pf->centre.x, pf->centre.y));
+        const double na =
+            std::min(0.99 * n_img, pf->halfWidth() + std::hypot(pf->centre.x, pf->centre.y));
         const double g = std::sqrt(n_img * n_img - na * na);
-        const double defocus_d2 = range_mm * pf->step * pf->step * n_img * n_img / (g * g * g) /
-                                  lambda_mm;
+        const double defocus_d2 =
+            range_mm * pf->step * pf->step * n_img * n_img / (g * g * g) / lambda_mm;
         const double shift_cells = frequency * lambda_mm / pf->step;
         if (pupil_cells > 0 || shift_cells * (d2 + defocus_d2) < 0.5 || 2 * cells > 512) break;
       }
@@ -262,14 +264,16 @@ std::string mtfSvg(const FocusedLens& fl, const MtfData& d) {
            {{"font-size", "14"}, {"font-weight", "bold"}});
   auto panel = [&](bool diffraction, double x0) {
     plot::Chart c;
-    c.title = diffraction ? fmt::format("diffraction MTF (FFT of the pupil); cutoff {:.0f} cy/mm",
-                                        d.cutoff)
-                          : "geometric MTF (Fourier transform of the spot)";
+    c.title = diffraction
+                  ? fmt::format("diffraction MTF (FFT of the pupil); cutoff {:.0f} cy/mm", d.cutoff)
+                  : "geometric MTF (Fourier transform of the spot)";
     c.x_label = "spatial frequency (cycles/mm)";
     c.y_label = "modulation";
     c.y_range = {0, 1.02};
-    plot::Series lim{fmt::format("diffraction limit f/{:.2f}", d.working_f_number), "#555555",
-                     plot::Style::Dashed, {}};
+    plot::Series lim{fmt::format("diffraction limit f/{:.2f}", d.working_f_number),
+                     "#555555",
+                     plot::Style::Dashed,
+                     {}};
     for (size_t k = 0; k < d.frequency.size(); ++k)
       lim.points.push_back({d.frequency[k], d.diffraction_limit[k]});
     c.series.push_back(std::move(lim));
@@ -280,9 +284,13 @@ std::string mtfSvg(const FocusedLens& fl, const MtfData& d) {
       const std::string strehl =
           diffraction ? fmt::format(" · Strehl {:.3f}", f.strehl) : std::string();
       plot::Series st{fmt::format("{:.1f}° T{}", f.field_angle_deg, strehl),
-                      plot::paletteColor(static_cast<int>(i)), plot::Style::Line, {}};
+                      plot::paletteColor(static_cast<int>(i)),
+                      plot::Style::Line,
+                      {}};
       plot::Series ss{fmt::format("{:.1f}° S", f.field_angle_deg),
-                      plot::paletteColor(static_cast<int>(i)), plot::Style::Dashed, {}};
+                      plot::paletteColor(static_cast<int>(i)),
+                      plot::Style::Dashed,
+                      {}};
       for (size_t k = 0; k < d.frequency.size() && k < t.size(); ++k) {
         st.points.push_back({d.frequency[k], t[k]});
         ss.points.push_back({d.frequency[k], s[k]});
@@ -314,9 +322,13 @@ std::string throughFocusSvg(const FocusedLens& fl, const ThroughFocusData& d) {
   for (size_t i = 0; i < d.fields.size(); ++i) {
     const MtfField& f = d.fields[i];
     plot::Series st{fmt::format("{:.1f}° T", f.field_angle_deg),
-                    plot::paletteColor(static_cast<int>(i)), plot::Style::Line, {}};
+                    plot::paletteColor(static_cast<int>(i)),
+                    plot::Style::Line,
+                    {}};
     plot::Series ss{fmt::format("{:.1f}° S", f.field_angle_deg),
-                    plot::paletteColor(static_cast<int>(i)), plot::Style::Dashed, {}};
+                    plot::paletteColor(static_cast<int>(i)),
+                    plot::Style::Dashed,
+                    {}};
     for (size_t k = 0; k < d.defocus_mm.size(); ++k) {
       st.points.push_back({d.defocus_mm[k], f.diffraction_tangential[k]});
       ss.points.push_back({d.defocus_mm[k], f.diffraction_sagittal[k]});

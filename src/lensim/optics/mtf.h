@@ -29,10 +29,10 @@ struct MtfField {
   double field_fraction = 0, film_height_mm = 0, field_angle_deg = 0;
   std::vector<double> diffraction_tangential, diffraction_sagittal;
   std::vector<double> geometric_tangential, geometric_sagittal;
-  int pupil_cells = 0;      ///< of the primary wavelength
-  double strehl = 0;        ///< weighted over the wavelengths
-  double rms_opd_waves = 0; ///< primary wavelength
-  long rays = 0;            ///< rays traced for this field (all wavelengths, both MTFs)
+  int pupil_cells = 0;       ///< of the primary wavelength
+  double strehl = 0;         ///< weighted over the wavelengths
+  double rms_opd_waves = 0;  ///< primary wavelength
+  long rays = 0;             ///< rays traced for this field (all wavelengths, both MTFs)
 };
 
 struct MtfData {

@@ -33,8 +33,7 @@ std::vector<PsfField> computePsf(const SpectralLens& sl, double film_diagonal_mm
     std::vector<std::pair<FourierOptics, double>> fos;
     double wsum = 0;
     for (const WeightedWavelength& w : sl.wavelengths) {
-      auto pupil =
-          computePupilFunction(sl.at(w.nm), *b, film_z, *p0, w.nm, pupil_cells, 0.25, 512);
+      auto pupil = computePupilFunction(sl.at(w.nm), *b, film_z, *p0, w.nm, pupil_cells, 0.25, 512);
       if (!pupil) continue;
       if (w.nm == primary) {
         pf.pupil_cells = pupil->n;
@@ -162,8 +161,7 @@ std::string psfSvg(const FocusedLens& fl, const std::vector<PsfField>& psfs,
              {{"font-size", "11"}});
     // Colour bar.
     for (int k = 0; k < 20; ++k)
-      doc.rect(x0 + k * img / 20, y0 + img + 40, img / 20 + 0.01, 8,
-               {{"fill", ramp(k / 19.0)}});
+      doc.rect(x0 + k * img / 20, y0 + img + 40, img / 20 + 0.01, 8, {{"fill", ramp(k / 19.0)}});
   }
   return doc.str();
 }

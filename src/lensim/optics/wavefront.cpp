@@ -75,8 +75,7 @@ std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const 
   // direction), bisect its boundary along 64 directions, and take the bounding square.
   std::optional<Vec2> c;
   {
-    TraceResult r =
-        lens.tracer().traceFromScene(b.sceneRay({0, 0}), TraceOptions{false});
+    TraceResult r = lens.tracer().traceFromScene(b.sceneRay({0, 0}), TraceOptions{false});
     if (r.ok() && r.ray.direction.z > 0) {
       const Vec2 a{n_img * r.ray.direction.x, n_img * r.ray.direction.y};
       if (opl(a)) c = a;

@@ -13,10 +13,10 @@
 // spatial frequency k step / lambda. The amplitude is uniform over the passing cone (no
 // apodization: the small change of the irradiance across the pupil, a few percent at f/2, is
 // left out, as in the usual FFT MTF), and W is taken to first order in the aberration (the
-// optical path along each traced ray to the reference, Hopkins' definition). Cells on the pupil's edge are supersampled (4x4) into a
-// fractional amplitude. The grid is refined (64 to 512 cells across) until W changes by less than
-// half a wave (a quarter for PSF images) between neighbouring cells, so that the phase is not
-// aliased.
+// optical path along each traced ray to the reference, Hopkins' definition). Cells on the
+// pupil's edge are supersampled (4x4) into a fractional amplitude. The grid is refined (64 to
+// 512 cells across) until W changes by less than half a wave (a quarter for PSF images) between
+// neighbouring cells, so that the phase is not aliased.
 //
 // The FFTs use FFTW3 (Debian's libfftw3-dev): a well-kept, fast library for arbitrary sizes;
 // the transforms here are 128^2 to 1024^2 complex points.
@@ -33,14 +33,14 @@ namespace lensim::optics {
 /// Pupil samples on an n x n grid of n' direction cosines (row-major, x fastest).
 struct PupilFunction {
   int n = 0;
-  double step = 0;   ///< n' direction-cosine spacing between samples
-  Vec2 centre;       ///< n' (alpha, beta) at the grid centre
+  double step = 0;                ///< n' direction-cosine spacing between samples
+  Vec2 centre;                    ///< n' (alpha, beta) at the grid centre
   std::vector<double> amplitude;  ///< 0 (blocked) to 1, fractional on the edge
   std::vector<double> opd_waves;  ///< W / lambda where the amplitude is > 0, else 0
   double wavelength_nm = kDLineNm;
   Vec2 image_point_mm;  ///< P' on the film
   long rays_traced = 0;
-  double rms_opd_waves = 0;  ///< RMS of W over the pupil, piston removed (amplitude weighted)
+  double rms_opd_waves = 0;   ///< RMS of W over the pupil, piston removed (amplitude weighted)
   double max_step_waves = 0;  ///< largest change of W between neighbouring passing cells
 
   /// The numerical aperture n' sin u of the passing cone's half-width about the grid centre
@@ -57,15 +57,14 @@ struct PupilFunction {
 std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const FieldBundle& b,
                                                   double film_z_mm, Vec2 image_point_mm,
                                                   double wavelength_nm, int cells = 0,
-                                                  double max_step_waves = 0.5,
-                                                  int max_cells = 512);
+                                                  double max_step_waves = 0.5, int max_cells = 512);
 
 /// PSF and OTF of a pupil function, on an M x M grid with M = 2 n (no wrap-around in the OTF).
 struct FourierOptics {
   int m = 0;
-  double psf_pitch_mm = 0;        ///< lambda / (M step)
-  double frequency_step = 0;      ///< cycles/mm per OTF sample: step / lambda
-  std::vector<double> psf;        ///< M x M, centred: P' at (M/2, M/2); sums to 1
+  double psf_pitch_mm = 0;                ///< lambda / (M step)
+  double frequency_step = 0;              ///< cycles/mm per OTF sample: step / lambda
+  std::vector<double> psf;                ///< M x M, centred: P' at (M/2, M/2); sums to 1
   std::vector<std::complex<double>> otf;  ///< M x M, zero frequency at (0, 0), wrapped; 1 there
   double strehl = 0;  ///< PSF peak on the grid over that of the same pupil without aberration
 
