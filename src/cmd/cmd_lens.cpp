@@ -10,6 +10,7 @@
 #include <string>
 
 #include "commands.h"
+#include "lens_analysis.h"
 #include "lens_options.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/chromatic.h"
@@ -92,6 +93,23 @@ int runInfo(const LensArgs& args, bool as_json) {
   const FieldOfView fov = fieldOfView(lens, p, args.film_diagonal_mm);
   const double closest = closestFocusDistance_m(lens, p);
   const auto& pr = lens.prescription();
+  // Where the film sits relative to the infinity focus (same method): a film in front of it
+  // focuses "beyond infinity" (no real object is sharp), which `focus infinity` would hide.
+  std::optional<double> beyond_infinity_mm;
+  if (at_inf) {
+    try {
+      const double inf_film = filmDistanceForFocus(lens, p, fl.focus_distance_m, args.focus_method);
+      const double offset = lens.filmDistance_mm() - inf_film;
+      if (offset < -1e-6 * std::max(1.0, std::abs(p.effective_focal_length_mm)))
+        beyond_infinity_mm = -offset;
+    } catch (const Error&) {
+      // no infinity focus behind the rear vertex: nothing to compare with
+    }
+  }
+  // 1/s_o (dioptres) of the film's conjugate, thick-lens model: 0 at infinity, negative beyond
+  // it (the film is focused for a beam converging toward a point behind the lens).
+  const double s_i = lens.filmZ_mm() - p.principal_plane_back_z_mm;
+  const double vergence_dpt = 1000 * (1 / p.effective_focal_length_mm - 1 / s_i);
 
   if (as_json) {
     json j;
@@ -115,6 +133,11 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["aperture_stop_diameter_mm"] = p.aperture_stop_diameter_mm;
     j["axial_limit_surface"] = p.axial_limit_surface;
     j["axial_limit_f_number"] = p.axial_limit_f_number;
+    j["paraxial_f_number"] = p.f_number;
+    j["real_f_number"] = p.real_f_number;
+    j["real_image_space_f_number"] = p.real_image_space_f_number;
+    j["real_marginal_ray_height_mm"] = p.real_marginal_height_mm;
+    j["real_limit_surface"] = p.real_limit_surface;
     j["entrance_pupil_diameter_mm"] = p.entrance_pupil_diameter_mm;
     j["entrance_pupil_z_mm"] = p.entrance_pupil_z_mm;
     j["exit_pupil_diameter_mm"] = p.exit_pupil_diameter_mm;
@@ -125,7 +148,11 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["total_track_mm"] = lens.filmZ_mm();
     j["film_distance_mm"] = lens.filmDistance_mm();
     j["focus_distance_m"] = at_inf ? json(nullptr) : json(fl.focus_distance_m);
-    j["focus_at_infinity"] = at_inf;
+    j["focus_at_infinity"] = at_inf && !beyond_infinity_mm;
+    j["focus_beyond_infinity"] = beyond_infinity_mm.has_value();
+    j["film_in_front_of_infinity_focus_mm"] =
+        beyond_infinity_mm ? json(*beyond_infinity_mm) : json(nullptr);
+    j["object_vergence_dpt"] = vergence_dpt;
     j["focus_method"] = focusMethodName(args.focus_method);
     j["closest_focus_distance_m"] = closest;
     j["film_diagonal_mm"] = args.film_diagonal_mm;
@@ -172,20 +199,31 @@ int runInfo(const LensArgs& args, bool as_json) {
                                      "element does)",
                                      pr.surfaces[*lens.stopIndex()].loc.line)
                        : std::string(" (the file has no stop: this element limits the beam)")));
-  if (p.axial_limit_surface != p.aperture_stop_surface && p.stop_is_file_stop)
+  const double real_f = p.real_f_number;
+  if (p.real_limit_surface != p.aperture_stop_surface && p.stop_is_file_stop)
     line("axial beam limit",
-         fmt::format("surface {} (line {}) clips the axial beam more than the stop: f/{:.3f}",
-                     p.axial_limit_surface, pr.surfaces[p.axial_limit_surface].loc.line,
-                     p.axial_limit_f_number));
+         fmt::format("surface {} (line {}) clips the real axial beam more than the stop: f/{:.3f}",
+                     p.real_limit_surface, pr.surfaces[p.real_limit_surface].loc.line, real_f));
   line("entrance pupil", fmt::format("diameter {:.4f} mm at z = {:.4f} mm",
                                      p.entrance_pupil_diameter_mm, p.entrance_pupil_z_mm));
   line("exit pupil", fmt::format("diameter {:.4f} mm at z = {:.4f} mm", p.exit_pupil_diameter_mm,
                                  p.exit_pupil_z_mm));
   line("f-number",
-       fmt::format("f/{:.3f} (infinity), working f/{:.3f} at this focus", p.f_number, working_f));
-  line("focus", fmt::format("{} ({} method); closest {:.4f} m",
-                            at_inf ? std::string("infinity")
-                                   : fmt::format("{:.6g} m from the film", fl.focus_distance_m),
+       fmt::format("f/{:.3f} paraxial (infinity), working f/{:.3f} at this focus", p.f_number,
+                   working_f));
+  line("real f-number",
+       fmt::format("f/{:.3f} (marginal ray from infinity at {:.4f} mm, stopped by surface {} "
+                   "line {}; 1/(2 sin u') f/{:.3f})",
+                   real_f, p.real_marginal_height_mm, p.real_limit_surface,
+                   pr.surfaces[p.real_limit_surface].loc.line, p.real_image_space_f_number));
+  const std::string focus_text =
+      beyond_infinity_mm
+          ? fmt::format("beyond infinity: the film is {:.4f} mm in front of the infinity focus "
+                        "(object conjugate 1/s = {:.4f} dioptres; no real object is sharp)",
+                        *beyond_infinity_mm, vergence_dpt)
+      : at_inf ? std::string("infinity")
+               : fmt::format("{:.6g} m from the film", fl.focus_distance_m);
+  line("focus", fmt::format("{} ({} method); closest {:.4f} m", focus_text,
                             focusMethodName(args.focus_method), closest));
   line("film distance", fmt::format("{:.4f} mm behind the rear vertex", lens.filmDistance_mm()));
   line("wavelength",
@@ -344,8 +382,9 @@ struct PlotArgs {
   std::string kind;
   std::string output;
   std::string fields = "0,0.5,0.7,1";
+  bool fields_given = false;
   bool as_json = false;
-  std::string wavelengths;  ///< spot: --wavelengths
+  AnalysisArgs analysis;  ///< also holds --wavelengths (spot: one spot per wavelength)
 };
 
 json pairsJson(const std::vector<double>& a, const std::vector<double>& b) {
@@ -368,13 +407,13 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
   json j{{"kind", pa.kind},
          {"lens", fl.lens->prescription().path},
          {"wavelength_nm", fl.lens->wavelength_nm()}};
-  if (!pa.wavelengths.empty() && pa.kind != "spot")
+  if (!pa.analysis.wavelengths.empty() && pa.kind != "spot" && !isAnalysisKind(pa.kind))
     throw Error(
-        fmt::format("--wavelengths applies to spot diagrams only (use --wavelength for "
-                    "one wavelength), not to '{}'",
+        fmt::format("--wavelengths applies to spot, mtf, mtf-focus, fans, field and psf (use "
+                    "--wavelength for one wavelength), not to '{}'",
                     pa.kind));
-  if (pa.kind == "spot" && !pa.wavelengths.empty()) {
-    std::vector<double> ls = parseList(pa.wavelengths, "--wavelengths");
+  if (pa.kind == "spot" && !pa.analysis.wavelengths.empty()) {
+    std::vector<double> ls = parseList(pa.analysis.wavelengths, "--wavelengths");
     for (double l : ls) checkWavelength(l, "--wavelengths");
     auto spots =
         computeSpotsAtWavelengths(fl, parseList(pa.fields, "--fields"), args.film_diagonal_mm, ls);
@@ -413,6 +452,11 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
     j["height_primary_mm"] = c.height_primary_mm;
     j["short_minus_primary_mm"] = finiteOrNull(c.short_minus_primary_mm);
     j["long_minus_primary_mm"] = finiteOrNull(c.long_minus_primary_mm);
+  } else if (isAnalysisKind(pa.kind)) {
+    // mtf, fans and psf default to three fields (axis, 70%, corner).
+    const std::string fields = pa.fields_given ? pa.fields : std::string("0,0.7,1");
+    runAnalysis(pa.kind, fl, args.film_diagonal_mm, parseList(fields, "--fields"), pa.analysis,
+                svg_text, j);
   } else if (pa.kind == "spot") {
     auto spots = computeSpots(fl, parseList(pa.fields, "--fields"), args.film_diagonal_mm);
     svg_text = spotSvg(fl, spots);
@@ -423,6 +467,7 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
                      {"rms_radius_mm", s.rms_radius_mm},
                      {"centroid_mm", {s.centroid_mm.x, s.centroid_mm.y}},
                      {"rays_through", s.points_mm.size()},
+                     {"hexapolar_rings", s.rings},
                      {"rays_traced", s.rays_traced}});
     j["fields"] = arr;
   } else if (pa.kind == "distortion") {
@@ -513,22 +558,25 @@ void registerLensCommands(CLI::App& app, Action& action) {
   }
   {
     auto* plot = lens->add_subcommand(
-        "plot", "Plot spot diagrams, distortion, relative illumination or the focus curve (SVG)");
+        "plot",
+        "Plot spot diagrams, distortion, relative illumination, the focus curve, MTF, "
+        "through-focus MTF, ray fans, field curvature or the PSF (SVG)");
     auto args = std::make_shared<LensArgs>();
     auto pa = std::make_shared<PlotArgs>();
     plot->add_option("KIND", pa->kind,
                      "spot, distortion, vignetting, focus, chromatic (focal shift against "
-                     "wavelength) or lateral-color (F and C image height minus d)")
+                     "wavelength), lateral-color (F and C image height minus d), mtf, mtf-focus, "
+                     "fans, field or psf")
         ->required()
-        ->check(CLI::IsMember(
-            {"spot", "distortion", "vignetting", "focus", "chromatic", "lateral-color"}));
-    plot->add_option("--wavelengths", pa->wavelengths,
-                     "spot: one spot per wavelength (nm, comma-separated) in its colour, e.g. "
-                     "486.1,587.6,656.3");
+        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus", "chromatic",
+                               "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf"}));
     addLensOptions(plot, *args);
     plot->add_option("-o,--output", pa->output, "Output SVG file")->required();
     plot->add_option("--fields", pa->fields,
-                     "spot: fields as fractions of the film half-diagonal (default 0,0.5,0.7,1)");
+                     "spot, mtf, mtf-focus, fans, psf: fields as fractions of the film "
+                     "half-diagonal (default 0,0.5,0.7,1 for spot, else 0,0.7,1)")
+        ->each([pa](const std::string&) { pa->fields_given = true; });
+    addAnalysisOptions(plot, pa->analysis);
     plot->add_flag("--json", pa->as_json, "Also print the plotted numbers as JSON");
     plot->callback([&action, args, pa] { action = [args, pa] { return runPlot(*args, *pa); }; });
   }

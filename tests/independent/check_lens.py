@@ -353,6 +353,125 @@ def check_pictures(lensim, root):
     print("  lens draw / lens plot: SVG, JSON and errors checked")
 
 
+def check_analyses(lensim, root):
+    """lens plot mtf|mtf-focus|fans|field|psf on every classic and ISET lens of ../shared: valid
+    SVG, finite JSON numbers, MTF 1 at zero frequency and within [0, 1], the on-axis diffraction
+    MTF below the aberration-free MTF of its own cone (|OTF| <= the pupil's autocorrelation)."""
+    import glob
+    import tempfile
+    tmp = tempfile.mkdtemp(prefix="lensim-analyses-")
+    shared = os.path.join(root, "..", "shared", "lenses")
+    lenses = sorted(glob.glob(os.path.join(shared, "*.dat")) +
+                    glob.glob(os.path.join(shared, "isetcam", "*.dat")))
+    if len(lenses) < 10:
+        fail(f"expected the classic and ISET lenses in {shared}, found {len(lenses)}")
+    count = 0
+    for lens in lenses:
+        name = os.path.basename(lens)
+        for kind in ("mtf", "mtf-focus", "fans", "field", "psf"):
+            svg = os.path.join(tmp, f"{name}-{kind}.svg")
+            # A small pupil grid keeps the sweep fast; the default (automatic) grid is checked
+            # on the double Gauss below.
+            extra = ["--pupil-cells", "48"] if kind in ("mtf", "mtf-focus", "psf") else []
+            out = run([lensim, "lens", "plot", kind, lens, "-o", svg, "--json", *extra])
+            count += 1
+            if out.returncode != 0:
+                fail(f"{name} {kind}: exit {out.returncode} {out.stderr}")
+                continue
+            if run(["xmllint", "--noout", svg]).returncode != 0:
+                fail(f"{name} {kind}: the SVG is not well-formed")
+            data = json.loads(out.stdout)
+            if data["kind"] != kind or not data.get("wavelengths"):
+                fail(f"{name} {kind}: bad JSON header")
+            if kind != "field" and not data["fields"]:
+                fail(f"{name} {kind}: no field computed")
+            if kind == "mtf":
+                check_mtf_json(name, data)
+            elif kind == "mtf-focus":
+                for f in data["fields"]:
+                    vals = f["tangential"] + f["sagittal"]
+                    if len(f["tangential"]) != len(data["defocus_mm"]) or \
+                            not all(-1e-9 <= v <= 1 + 1e-9 for v in vals):
+                        fail(f"{name} mtf-focus: bad values")
+            elif kind == "fans":
+                for f in data["fields"]:
+                    for fan in f["fans"]:
+                        if len(fan["tangential_pupil"]) != len(fan["tangential_ex_mm"]) or \
+                                not fan["tangential_pupil"]:
+                            fail(f"{name} fans: empty or mismatched fan")
+            elif kind == "field":
+                n = len(data["field_angle_deg"])
+                if n < 2 or len(data["tangential_focus_mm"][0]) != n or \
+                        abs(data["tangential_focus_mm"][0][0] - data["sagittal_focus_mm"][0][0]) > 1e-6:
+                    fail(f"{name} field: bad curves (axial T and S foci must coincide)")
+            elif kind == "psf":
+                for f in data["fields"]:
+                    if not 0 < f["strehl"] <= 1.0001 or f["pixels"] <= 0:
+                        fail(f"{name} psf: Strehl {f['strehl']}")
+    # The default automatic pupil grid, and polychromatic weights.
+    svg = os.path.join(tmp, "auto.svg")
+    out = run([lensim, "lens", "plot", "mtf", os.path.join(root, "lenses", "dgauss.50mm.dat"),
+               "-o", svg, "--json", "--wavelengths", "486.13:1,587.56:2,656.27:1",
+               "--max-frequency", "200"])
+    if out.returncode != 0:
+        fail(f"mtf with three wavelengths: exit {out.returncode} {out.stderr}")
+    else:
+        data = json.loads(out.stdout)
+        check_mtf_json("dgauss.50mm (3 wavelengths)", data)
+        if len(data["wavelengths"]) != 3 or abs(data["frequency_cycles_per_mm"][-1] - 200) > 1e-9:
+            fail("mtf: --wavelengths or --max-frequency ignored")
+    for bad in (["--wavelengths", "abc"], ["--wavelengths", "587:-1"], ["--pupil-cells", "3"],
+                ["--fields", "-1"], ["--fields", "1.4", "--film-diagonal", "200"]):
+        out = run([lensim, "lens", "plot", "mtf", os.path.join(root, "lenses", "dgauss.50mm.dat"),
+                   "-o", os.path.join(tmp, "bad.svg"), *bad])
+        if out.returncode != 1 or "error" not in out.stderr or os.path.exists(os.path.join(tmp, "bad.svg")):
+            fail(f"mtf {bad}: exit {out.returncode} {out.stderr!r}")
+    print(f"  lens plot mtf/mtf-focus/fans/field/psf: {count} plots on {len(lenses)} lenses checked")
+
+
+def check_real_f_numbers(lensim, root):
+    """lens info --json: the real-ray f-numbers and stops of the independent comparison with an
+    optical design library (issue 17), and the ISET reversed telephoto's focus beyond infinity."""
+    shared = os.path.join(root, "..", "shared", "lenses")
+    cases = [(os.path.join(root, "lenses", "dgauss.50mm.dat"), 2.018, 2, 5),
+             (os.path.join(root, "lenses", "wide.22mm.dat"), 2.788, 6, 5),
+             (os.path.join(shared, "isetcam", "petzval.12deg.50.0mm.dat"), 1.400, 5, 5)]
+    for path, f_real, limit, stop in cases:
+        out = run([lensim, "lens", "info", path, "--json"])
+        if out.returncode != 0:
+            fail(f"lens info {path}: exit {out.returncode}")
+            continue
+        j = json.loads(out.stdout)
+        if abs(j["real_f_number"] - f_real) > 0.0015 or j["real_limit_surface"] != limit or \
+                j["aperture_stop_surface"] != stop or j["paraxial_f_number"] != j["f_number"]:
+            fail(f"{os.path.basename(path)}: real f/{j['real_f_number']:.4f} limited by "
+                 f"{j['real_limit_surface']}, stop {j['aperture_stop_surface']}; expected "
+                 f"f/{f_real} by {limit}, stop {stop}")
+    out = run([lensim, "lens", "info", "--json",
+               os.path.join(shared, "isetcam", "reversed.telephoto.37deg.100mm.dat")])
+    j = json.loads(out.stdout) if out.returncode == 0 else {}
+    if not j.get("focus_beyond_infinity") or j.get("focus_at_infinity") or \
+            abs(j.get("film_in_front_of_infinity_focus_mm", 0) - 0.224) > 0.001 or \
+            j.get("aperture_stop_is_file_stop"):
+        fail(f"reversed telephoto: focus/stop report {out.returncode} {out.stdout[:200]}")
+    print("  real f-numbers, real-ray stops and the focus beyond infinity checked")
+
+
+def check_mtf_json(name, data):
+    for f in data["fields"]:
+        for key in ("diffraction_tangential", "diffraction_sagittal", "geometric_tangential",
+                    "geometric_sagittal"):
+            v = f[key]
+            if len(v) != len(data["frequency_cycles_per_mm"]) or abs(v[0] - 1) > 1e-9 or \
+                    not all(-1e-9 <= x <= 1 + 1e-9 for x in v):
+                fail(f"{name} mtf: {key} not an MTF")
+        if f["field_fraction"] == 0:
+            for a, b in zip(f["diffraction_tangential"], data["diffraction_limit"]):
+                if a > b + 0.03:
+                    fail(f"{name} mtf: on-axis MTF {a} above the diffraction limit {b}")
+                    break
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--lensim", required=True)
@@ -366,6 +485,8 @@ def main():
         check_lens(args.lensim, os.path.join(args.root, "lenses", name), rng)
     check_bad_corpus(args.lensim, args.root)
     check_pictures(args.lensim, args.root)
+    check_analyses(args.lensim, args.root)
+    check_real_f_numbers(args.lensim, args.root)
     if FAILURES:
         print(f"{len(FAILURES)} failures")
         return 1

@@ -1,5 +1,7 @@
 #include "lensim/optics/paraxial.h"
 
+#include "lensim/optics/real_aperture.h"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -61,13 +63,10 @@ ParaxialData computeParaxial(const LensSystem& lens) {
   // height 1 parallel to the axis); the aperture stop when the file has no radius-0 row.
   double y = 1, w = 0;
   double best_ratio = std::numeric_limits<double>::infinity();
-  std::vector<double> ratios(n, std::numeric_limits<double>::infinity());
-  auto stop_ratio_of = [&](int i) { return ratios[i]; };
   for (int i = 0; i < n; ++i) {
     if (i > 0) y += (s[i].z_mm - s[i - 1].z_mm) * w / s[i].ior_before;
     if (std::abs(y) > 1e-300) {
       double ratio = s[i].semi_aperture_mm / std::abs(y);
-      ratios[i] = ratio;
       if (ratio < best_ratio) {
         best_ratio = ratio;
         p.axial_limit_surface = i;
@@ -77,14 +76,22 @@ ParaxialData computeParaxial(const LensSystem& lens) {
     w = r.c * y + w;
   }
   p.axial_limit_f_number = std::abs(p.effective_focal_length_mm) / (2 * best_ratio);
-  // The file's stop is the aperture stop when it (nearly) limits the axial beam; an element that
-  // clips a few percent more is a clear-aperture artefact and is reported, not promoted. A stop
-  // row that limits nothing (ISET's reversed telephoto puts one at the image plane) is not the
-  // aperture stop: the limiting element is.
-  p.aperture_stop_surface = p.axial_limit_surface;
+  // The aperture stop is decided with real rays: a paraxial trace extrapolates the first-order
+  // beam to the rim and can name the wrong surface (the ISET Petzval's front element, while
+  // real rays above 17.84 mm are stopped by its stop row). The file's stop is the aperture stop
+  // when it (nearly) limits the real axial beam; an element that clips a few percent more is
+  // reported (real_limit_surface), not promoted. A stop row that limits nothing (ISET's reversed
+  // telephoto puts one at the image plane) is not the aperture stop: the limiting element is.
+  const RealAxialBeam real = realAxialBeam(lens, p.effective_focal_length_mm);
+  p.real_limit_surface = real.limit_surface;
+  p.real_marginal_height_mm = real.marginal_height_mm;
+  p.real_f_number = real.f_number_entrance;
+  p.real_image_space_f_number = real.f_number;
+  p.aperture_stop_surface = real.limit_surface;
   if (lens.stopIndex()) {
-    const double stop_ratio = stop_ratio_of(*lens.stopIndex());
-    if (stop_ratio <= kStopTolerance * best_ratio) p.aperture_stop_surface = *lens.stopIndex();
+    const double stop_h = real.surface_limit_height_mm[*lens.stopIndex()];
+    if (stop_h <= kStopTolerance * real.marginal_height_mm)
+      p.aperture_stop_surface = *lens.stopIndex();
   }
   const int st = p.aperture_stop_surface;
   p.stop_is_file_stop = s[st].is_stop;

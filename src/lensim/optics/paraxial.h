@@ -37,10 +37,11 @@ struct ParaxialData {
   double nodal_point_front_z_mm = 0;
   double nodal_point_back_z_mm = 0;
 
-  /// The aperture stop: the file's radius-0 row when it limits the axial bundle from infinity
-  /// to within 5% of the most limiting surface (an element clipping slightly more is reported in
-  /// axial_limit_*), else that most limiting surface (also when the file has no stop). Pupils
-  /// are images of it.
+  /// The aperture stop, decided with real rays (real_aperture.h): the file's radius-0 row when
+  /// it limits the real axial beam from infinity to within 5% of the surface that stops the real
+  /// marginal ray (an element clipping slightly more is reported in real_limit_surface), else
+  /// that surface (also when the file has no stop, or its stop row limits nothing, as an
+  /// image-plane marker). Pupils are paraxial images of it.
   int aperture_stop_surface = -1;
   bool stop_is_file_stop = false;  ///< the stop is the file's radius-0 row
   double aperture_stop_diameter_mm = 0;
@@ -54,6 +55,13 @@ struct ParaxialData {
   double exit_pupil_z_mm = 0;
   double exit_pupil_diameter_mm = 0;
   double f_number = 0;  ///< at infinity: EFL / entrance pupil diameter
+  /// The real on-axis beam from infinity (real_aperture.h): the surface that stops the real
+  /// marginal ray, its entrance height h, the real f-number EFL / (2 h), and the image-space
+  /// f-number 1 / (2 n' sin u') of that ray.
+  int real_limit_surface = -1;
+  double real_marginal_height_mm = 0;
+  double real_f_number = 0;
+  double real_image_space_f_number = 0;
 };
 
 /// Computes the paraxial data. Throws lensim::Error for an afocal system.

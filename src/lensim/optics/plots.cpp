@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "lensim/optics/chief_ray.h"
+#include "lensim/optics/field_rays.h"
 #include "lensim/util/plot.h"
 
 namespace lensim::optics {
@@ -27,61 +28,49 @@ std::string lensSubtitle(const FocusedLens& fl) {
 }  // namespace
 
 std::vector<SpotField> computeSpots(const FocusedLens& fl, const std::vector<double>& fields,
-                                    double film_diagonal_mm, int grid) {
+                                    double film_diagonal_mm, int rings) {
   const LensSystem& lens = *fl.lens;
-  const ParaxialData& p = fl.paraxial;
   std::vector<SpotField> out;
-  const double r_aim = 2.0 * p.entrance_pupil_diameter_mm / 2;
+  // Drawn: every step-th ring and every step-th ray on it, a hexapolar pattern of ~16 rings.
+  const int step = std::max(1, rings / 16);
   for (double frac : fields) {
     const double h = frac * film_diagonal_mm / 2;
-    auto chief = chiefRayFromFilm(lens, p, h);
-    if (!chief) continue;
+    auto bundle = FieldBundle::fromFilmHeight(fl, lens, h);
+    if (!bundle) continue;
+    auto region = bundle->pupilRegion(lens);
+    if (!region) continue;
     SpotField sf;
     sf.film_height_mm = h;
-    sf.field_angle_deg = chief->field_angle_deg;
-    // The chief ray leaves toward the scene; the object point lies on it at the focus distance
-    // (or at infinity, where the bundle is parallel to it).
-    const Ray& c = chief->scene_ray;
-    const double t_ep = (p.entrance_pupil_z_mm - c.origin.z) / c.direction.z;
-    const Vec3 pupil_centre = c.origin + c.direction * t_ep;
-    std::optional<Vec3> object;
-    if (!std::isinf(fl.focus_distance_m)) {
-      const double z_obj = lens.filmZ_mm() - fl.focus_distance_m * 1000;
-      object = c.origin + c.direction * ((z_obj - c.origin.z) / c.direction.z);
-    }
+    sf.field_angle_deg = bundle->field_angle_deg;
+    sf.rings = rings;
     std::vector<Vec2> hits;
-    for (int iy = 0; iy < grid; ++iy) {
-      for (int ix = 0; ix < grid; ++ix) {
-        const double u = (2.0 * (ix + 0.5) / grid - 1), v = (2.0 * (iy + 0.5) / grid - 1);
-        if (u * u + v * v > 1) continue;
-        const Vec3 aim = pupil_centre + Vec3{u * r_aim, v * r_aim, 0};
-        Ray ray;
-        if (object) {
-          ray = {*object, normalize(aim - *object)};
-        } else {
-          const Vec3 d = -c.direction;  // parallel bundle travelling toward the lens
-          ray = {aim - d * ((aim.z + 10 * r_aim + 10) / d.z), d};
-        }
-        ++sf.rays_traced;
-        TraceResult r = lens.tracer().traceFromScene(ray);
-        if (!r.ok() || !(r.ray.direction.z > 0)) continue;
-        const double t = (lens.filmZ_mm() - r.ray.origin.z) / r.ray.direction.z;
-        const Vec3 q = r.ray.origin + r.ray.direction * t;
-        hits.push_back({q.x, q.y});
-      }
+    std::vector<double> weights;
+    for (const PupilPoint& pp : hexapolarPupil(*region, rings)) {
+      ++sf.rays_traced;
+      auto q = FieldBundle::hitPlane(lens, bundle->sceneRay(pp.offset_mm), lens.filmZ_mm());
+      if (!q) continue;
+      if (pp.ring % step == 0 && pp.index % step == 0)
+        sf.display.push_back(static_cast<int>(hits.size()));
+      hits.push_back(*q);
+      weights.push_back(pp.weight);
     }
     if (hits.empty()) continue;
+    // Centroid and RMS radius weighted by each ray's share of the pupil's area.
     Vec2 mean{0, 0};
-    for (const Vec2& q : hits) mean = mean + q;
-    mean = mean * (1.0 / hits.size());
+    double wsum = 0;
+    for (size_t k = 0; k < hits.size(); ++k) {
+      mean = mean + hits[k] * weights[k];
+      wsum += weights[k];
+    }
+    mean = mean * (1.0 / wsum);
     double s2 = 0;
-    for (const Vec2& q : hits) {
-      const Vec2 dq = q - mean;
+    for (size_t k = 0; k < hits.size(); ++k) {
+      const Vec2 dq = hits[k] - mean;
       sf.points_mm.push_back(dq);
-      s2 += dq.x * dq.x + dq.y * dq.y;
+      s2 += weights[k] * (dq.x * dq.x + dq.y * dq.y);
     }
     sf.centroid_mm = mean;
-    sf.rms_radius_mm = std::sqrt(s2 / hits.size());
+    sf.rms_radius_mm = std::sqrt(s2 / wsum);
     out.push_back(std::move(sf));
   }
   return out;
@@ -249,12 +238,13 @@ std::string spotSvg(const FocusedLens& fl, const std::vector<SpotField>& spots) 
     chart.x_range = {-extent, extent};
     chart.y_range = {-extent, extent};
     chart.notes.push_back(fmt::format("RMS radius {:.4f} mm", s.rms_radius_mm));
-    chart.notes.push_back(fmt::format("{} rays", s.points_mm.size()));
+    chart.notes.push_back(fmt::format("{} of {} rays through ({} drawn)", s.points_mm.size(),
+                                      s.rays_traced, s.display.size()));
     plot::Series pts;
     pts.style = plot::Style::Markers;
     pts.color = plot::paletteColor(static_cast<int>(i));
     pts.marker_radius = 1.0;
-    for (const Vec2& q : s.points_mm) pts.points.push_back({q.x, q.y});
+    for (int k : s.display) pts.points.push_back({s.points_mm[k].x, s.points_mm[k].y});
     chart.series.push_back(std::move(pts));
     chart.render(doc, pw * i, 30, pw, ph);
   }

@@ -15,16 +15,25 @@ namespace lensim::optics {
 struct SpotField {
   double film_height_mm = 0;    ///< target image height (chief ray on the film)
   double field_angle_deg = 0;   ///< chief ray angle in object space
-  std::vector<Vec2> points_mm;  ///< film-plane hits (x, y) relative to the centroid
+  std::vector<Vec2> points_mm;  ///< film-plane hits (x, y) relative to the centroid, all rays
+  /// Indices into points_mm of a coarser hexapolar pattern (every `step`-th ring and ray), for
+  /// drawing: the full set is thousands of points.
+  std::vector<int> display;
   Vec2 centroid_mm;             ///< centroid on the film
   double rms_radius_mm = 0;
   int rays_traced = 0;
+  int rings = 0;                ///< hexapolar rings across the pupil circle
 };
 
 /// Spot diagrams at fractions of the film half-diagonal, for the lens's current focus and stop.
+/// The rays sample the region of the entrance pupil that gets through (its boundary bisected in
+/// 256 directions) on hexapolar rings mapped onto it, each ray weighted by its share of the area
+/// (field_rays.h: hexapolarPupil; 3 rings (rings + 1) rays), so that the centroid and RMS radius
+/// converge (tests/optics_analysis_test.cpp: 48 rings are within 0.5% of 192; measured within
+/// 0.06% on the ISET double Gauss and wide-angle, and 12 rings within 0.1%).
 /// Fields that have no chief ray (outside the image circle) are left out.
 std::vector<SpotField> computeSpots(const FocusedLens& lens, const std::vector<double>& fields,
-                                    double film_diagonal_mm, int grid = 48);
+                                    double film_diagonal_mm, int rings = 48);
 
 /// Chief-ray image height against field angle, with the projection models.
 struct DistortionData {

@@ -1,0 +1,263 @@
+#include "lensim/optics/wavefront.h"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace lensim::optics {
+
+namespace {
+
+// Optical path (mm) from P' back through the lens to the object-side reference, or nullopt when
+// the ray is blocked. `a` is n' times the forward direction cosines (alpha, beta) at P'.
+struct BackTracer {
+  const LensSystem& lens;
+  const FieldBundle& b;
+  Vec3 start;
+  double n_img;
+
+  std::optional<double> opl(Vec2 a) const {
+    const double ax = a.x / n_img, ay = a.y / n_img;
+    const double s2 = ax * ax + ay * ay;
+    if (s2 >= 1) return std::nullopt;
+    const Vec3 dir{-ax, -ay, -std::sqrt(1 - s2)};
+    thread_local std::vector<Vec3> path;
+    path.clear();
+    TraceResult r = lens.tracer().traceFromFilm({start, dir}, {}, &path);
+    if (!r.ok() || !(r.ray.direction.z < 0)) return std::nullopt;
+    const auto& s = lens.interfaces();
+    const int n = lens.surfaceCount();
+    // path[0] = P', path[k] = surface n - k; the medium before path[k + 1] (toward the film side)
+    // is the one behind surface n - k - 1 ... ior_before of surface n - k for k >= 1.
+    double L = n_img * length(path[1] - path[0]);
+    for (int k = 1; k < n; ++k) L += s[n - k].ior_before * length(path[k + 1] - path[k]);
+    const Vec3 q = r.ray.origin, e = r.ray.direction;
+    const double n_obj = lens.objectIor();
+    if (b.object) return L + n_obj * length(*b.object - q);
+    // Plane through a point of the chief ray in front of the lens, normal to it.
+    const Vec3 d = b.chief_scene.direction;
+    const double t = dot(b.chief_scene.origin - q, d) / dot(e, d);
+    return L + n_obj * t;
+  }
+};
+
+}  // namespace
+
+double perfectMtf(double v) {
+  if (v <= 0) return 1;
+  if (v >= 1) return 0;
+  return 2 / std::numbers::pi * (std::acos(v) - v * std::sqrt(1 - v * v));
+}
+
+double PupilFunction::halfWidth() const {
+  double r = 0;
+  for (int iy = 0; iy < n; ++iy)
+    for (int ix = 0; ix < n; ++ix)
+      if (amplitude[size_t(iy) * n + ix] > 0.5)
+        r = std::max(r, std::hypot((ix + 0.5 - 0.5 * n) * step, (iy + 0.5 - 0.5 * n) * step));
+  return r + 0.5 * step;
+}
+
+std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const FieldBundle& b,
+                                                  double film_z_mm, Vec2 image_point_mm,
+                                                  double wavelength_nm, int cells,
+                                                  double max_step_waves, int max_cells) {
+  const double n_img = lens.imageIor();
+  BackTracer bt{lens, b, {image_point_mm.x, image_point_mm.y, film_z_mm}, n_img};
+  long traced = 0;
+  auto opl = [&](Vec2 a) {
+    ++traced;
+    return bt.opl(a);
+  };
+  // The passing cone: start from the chief ray's direction at P' (or search for a passing
+  // direction), bisect its boundary along 64 directions, and take the bounding square.
+  std::optional<Vec2> c;
+  {
+    TraceResult r = lens.tracer().traceFromScene(b.sceneRay({0, 0}), TraceOptions{false});
+    if (r.ok() && r.ray.direction.z > 0) {
+      const Vec2 a{n_img * r.ray.direction.x, n_img * r.ray.direction.y};
+      if (opl(a)) c = a;
+    }
+  }
+  for (int grid : {16, 64}) {
+    for (int iy = 0; iy < grid && !c; ++iy)
+      for (int ix = 0; ix < grid && !c; ++ix) {
+        const Vec2 a{0.98 * n_img * (2.0 * (ix + 0.5) / grid - 1),
+                     0.98 * n_img * (2.0 * (iy + 0.5) / grid - 1)};
+        if (opl(a)) c = a;
+      }
+  }
+  if (!c) return std::nullopt;
+  Vec2 lo_pt = *c, hi_pt = *c;
+  for (int j = 0; j < 64; ++j) {
+    const double ang = 2 * std::numbers::pi * j / 64;
+    const Vec2 u{std::cos(ang), std::sin(ang)};
+    double lo = 0, hi = 1e-4 * n_img;
+    while (hi < 2 * n_img && opl(*c + u * hi)) {
+      lo = hi;
+      hi *= 2;
+    }
+    for (int it = 0; it < 30; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (opl(*c + u * mid) ? lo : hi) = mid;
+    }
+    const Vec2 q = *c + u * hi;
+    lo_pt = {std::min(lo_pt.x, q.x), std::min(lo_pt.y, q.y)};
+    hi_pt = {std::max(hi_pt.x, q.x), std::max(hi_pt.y, q.y)};
+  }
+  const Vec2 centre = (lo_pt + hi_pt) * 0.5;
+  const double half = 1.03 * 0.5 * std::max(hi_pt.x - lo_pt.x, hi_pt.y - lo_pt.y);
+  const double ref = opl(centre).value_or(*opl(*c));
+
+  PupilFunction pf;
+  for (int n = cells > 0 ? cells : 64;; n *= 2) {
+    pf = PupilFunction{};
+    pf.n = n;
+    pf.step = 2 * half / n;
+    pf.centre = centre;
+    pf.wavelength_nm = wavelength_nm;
+    pf.image_point_mm = image_point_mm;
+    const double lambda_mm = wavelength_nm * 1e-6;
+    pf.amplitude.assign(size_t(n) * n, 0.0);
+    pf.opd_waves.assign(size_t(n) * n, 0.0);
+    auto cellPoint = [&](double ix, double iy) {
+      return Vec2{centre.x + (ix + 0.5 - 0.5 * n) * pf.step,
+                  centre.y + (iy + 0.5 - 0.5 * n) * pf.step};
+    };
+    std::vector<std::uint8_t> pass(size_t(n) * n, 0);
+    for (int iy = 0; iy < n; ++iy)
+      for (int ix = 0; ix < n; ++ix) {
+        const size_t k = size_t(iy) * n + ix;
+        if (auto L = opl(cellPoint(ix, iy))) {
+          pass[k] = 1;
+          pf.amplitude[k] = 1;
+          pf.opd_waves[k] = (*L - ref) / lambda_mm;
+        }
+      }
+    // Edge cells (a 4-neighbour differs): 4x4 sub-rays give the covered fraction and mean W.
+    for (int iy = 0; iy < n; ++iy)
+      for (int ix = 0; ix < n; ++ix) {
+        const size_t k = size_t(iy) * n + ix;
+        bool edge = false;
+        const int nb[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+        for (const auto& d : nb) {
+          const int jx = ix + d[0], jy = iy + d[1];
+          const bool other = jx >= 0 && jy >= 0 && jx < n && jy < n && pass[size_t(jy) * n + jx];
+          if (other != bool(pass[k])) edge = true;
+        }
+        if (!edge) continue;
+        int hits = 0;
+        double sum = 0;
+        for (int sy = 0; sy < 4; ++sy)
+          for (int sx = 0; sx < 4; ++sx)
+            if (auto L = opl(cellPoint(ix - 0.5 + (sx + 0.5) / 4, iy - 0.5 + (sy + 0.5) / 4))) {
+              ++hits;
+              sum += (*L - ref) / lambda_mm;
+            }
+        pf.amplitude[k] = hits / 16.0;
+        pf.opd_waves[k] = hits > 0 ? sum / hits : 0.0;
+      }
+    // Aliasing check: the largest step of W between neighbouring passing cells.
+    double max_step = 0, sw = 0, swx = 0, swxx = 0;
+    for (int iy = 0; iy < n; ++iy)
+      for (int ix = 0; ix < n; ++ix) {
+        const size_t k = size_t(iy) * n + ix;
+        const double a = pf.amplitude[k];
+        if (a <= 0) continue;
+        sw += a;
+        swx += a * pf.opd_waves[k];
+        swxx += a * pf.opd_waves[k] * pf.opd_waves[k];
+        if (ix + 1 < n && pass[k] && pass[k + 1])
+          max_step = std::max(max_step, std::abs(pf.opd_waves[k + 1] - pf.opd_waves[k]));
+        if (iy + 1 < n && pass[k] && pass[k + n])
+          max_step = std::max(max_step, std::abs(pf.opd_waves[k + n] - pf.opd_waves[k]));
+      }
+    pf.max_step_waves = max_step;
+    const double mean = sw > 0 ? swx / sw : 0;
+    pf.rms_opd_waves = sw > 0 ? std::sqrt(std::max(0.0, swxx / sw - mean * mean)) : 0;
+    if (cells > 0 || max_step < max_step_waves || 2 * n > max_cells) break;
+  }
+  pf.rays_traced = traced;
+  return pf;
+}
+
+FourierOptics fourierOptics(const PupilFunction& pf) {
+  const int n = pf.n, m = 2 * n;
+  const double lambda_mm = pf.wavelength_nm * 1e-6;
+  FourierOptics fo;
+  fo.m = m;
+  fo.psf_pitch_mm = lambda_mm / (m * pf.step);
+  fo.frequency_step = pf.step / lambda_mm;
+  const size_t mm = size_t(m) * m;
+  auto* buf = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * mm));
+  fftw_plan plan = fftw_plan_dft_2d(m, m, buf, buf, FFTW_BACKWARD, FFTW_ESTIMATE);
+  // The pupil, placed so that its centre cell sits at index 0 (a linear phase only moves the
+  // PSF; this keeps P' at index 0 of the transform).
+  std::fill(reinterpret_cast<double*>(buf), reinterpret_cast<double*>(buf) + 2 * mm, 0.0);
+  double amp_sum = 0;
+  for (int iy = 0; iy < n; ++iy)
+    for (int ix = 0; ix < n; ++ix) {
+      const double a = pf.amplitude[size_t(iy) * n + ix];
+      if (a <= 0) continue;
+      amp_sum += a;
+      const double ph = 2 * std::numbers::pi * pf.opd_waves[size_t(iy) * n + ix];
+      const int jx = (ix - n / 2 + m) % m, jy = (iy - n / 2 + m) % m;
+      buf[size_t(jy) * m + jx][0] = a * std::cos(ph);
+      buf[size_t(jy) * m + jx][1] = a * std::sin(ph);
+    }
+  fftw_execute(plan);
+  // PSF = |U|^2, centred (fftshift), normalised to sum 1. The aberration-free peak is
+  // (sum a)^2 at the same scale.
+  std::vector<double> raw(mm);
+  double total = 0, peak = 0;
+  for (size_t k = 0; k < mm; ++k) {
+    raw[k] = buf[k][0] * buf[k][0] + buf[k][1] * buf[k][1];
+    total += raw[k];
+    peak = std::max(peak, raw[k]);
+  }
+  fo.strehl = amp_sum > 0 ? peak / (amp_sum * amp_sum) : 0;
+  fo.psf.assign(mm, 0.0);
+  for (int y = 0; y < m; ++y)
+    for (int x = 0; x < m; ++x)
+      fo.psf[size_t((y + m / 2) % m) * m + (x + m / 2) % m] = raw[size_t(y) * m + x] / total;
+  // OTF = transform of the PSF (the pupil's autocorrelation), normalised to 1 at zero frequency.
+  // The sign of the transform gives OTF(nu) = sum PSF(x) exp(-i 2 pi nu x).
+  for (size_t k = 0; k < mm; ++k) {
+    buf[k][0] = raw[k];
+    buf[k][1] = 0;
+  }
+  fftw_plan fwd = fftw_plan_dft_2d(m, m, buf, buf, FFTW_FORWARD, FFTW_ESTIMATE);
+  fftw_execute(fwd);
+  fo.otf.resize(mm);
+  const double o0 = buf[0][0];
+  for (size_t k = 0; k < mm; ++k) fo.otf[k] = {buf[k][0] / o0, buf[k][1] / o0};
+  fftw_destroy_plan(fwd);
+  fftw_destroy_plan(plan);
+  fftw_free(buf);
+  return fo;
+}
+
+std::complex<double> FourierOptics::otfAt(double nu_x, double nu_y) const {
+  const double fx = nu_x / frequency_step, fy = nu_y / frequency_step;
+  const double half = m / 2 - 1;
+  if (std::abs(fx) > half || std::abs(fy) > half) return 0;
+  const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+  const double tx = fx - x0, ty = fy - y0;
+  auto at = [&](int x, int y) { return otf[size_t((y + m) % m) * m + size_t((x + m) % m)]; };
+  return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
+         ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1));
+}
+
+double FourierOptics::psfAt(double dx, double dy) const {
+  const double fx = dx / psf_pitch_mm + m / 2, fy = dy / psf_pitch_mm + m / 2;
+  if (fx < 0 || fy < 0 || fx > m - 1 || fy > m - 1) return 0;
+  const int x0 = std::min(static_cast<int>(fx), m - 2), y0 = std::min(static_cast<int>(fy), m - 2);
+  const double tx = fx - x0, ty = fy - y0;
+  auto at = [&](int x, int y) { return psf[size_t(y) * m + x]; };
+  return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
+         ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1));
+}
+
+}  // namespace lensim::optics
