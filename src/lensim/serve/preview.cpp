@@ -2,9 +2,14 @@
 
 #include <fmt/format.h>
 #include <png.h>
+#include <sys/resource.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_scheduler_observer.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
@@ -13,6 +18,7 @@
 namespace lensim::serve {
 
 using Clock = std::chrono::steady_clock;
+constexpr int kPreviewNice = 10;
 
 namespace {
 
@@ -21,6 +27,19 @@ void appendPng(png_structp png, png_bytep data, png_size_t n) {
 }
 
 void flushPng(png_structp) {}
+
+/// Lowers the calling thread's priority (Linux: nice is per thread).
+void lowerThisThread() { setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kPreviewNice); }
+
+/// Lowers the priority of the worker threads that join the preview's arena.
+class NiceWorkers : public tbb::task_scheduler_observer {
+ public:
+  explicit NiceWorkers(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) { observe(true); }
+  ~NiceWorkers() override { observe(false); }
+  void on_scheduler_entry(bool is_worker) override {
+    if (is_worker) lowerThisThread();
+  }
+};
 
 }  // namespace
 
@@ -108,46 +127,60 @@ bool PreviewRenderer::run(const scene::Scene& s, const PreviewRequest& rq,
                           const std::atomic<bool>& cancel,
                           const std::function<bool(const PreviewFrame&)>& on_frame) {
   const auto t0 = Clock::now();
-  io::Image sum;
-  int total = 0;
-  for (int pass = 0; total < rq.max_spp; ++pass) {
-    if (cancel.load()) return false;
-    // 1, 1, 2, 4, 8, ... samples: a first frame at once, then about doubling the total.
-    const int n = std::min(rq.max_spp - total, pass == 0 ? 1 : std::max(1, total));
-    render::RenderOptions ro;
-    ro.spp = n;
-    ro.seed = rq.seed + pass;  // independent passes: their average is an estimate with total spp
-    ro.cancel = &cancel;
-    const auto t_pass = Clock::now();
-    render::RenderResult res = render::render(s, ro);
-    if (res.stats.partial) return false;
-    if (sum.pixels.empty()) {
-      sum = res.image;
-      for (float& v : sum.pixels) v *= float(n);
-    } else {
-      for (size_t i = 0; i < sum.pixels.size(); ++i) sum.pixels[i] += float(n) * res.image.pixels[i];
-    }
-    total += n;
-    io::Image mean = sum;
-    for (float& v : mean.pixels) v /= float(total);
+  // The preview renders below the priority of the optics requests, so that the diagram and the
+  // plots of a slider move are not slowed down by the render it also starts.
+  lowerThisThread();
+  tbb::task_arena arena;
+  NiceWorkers nice(arena);
+  // One render in progressive passes (1, 1, 2, 4, ... samples per pixel): the scene, the camera
+  // and the acceleration structure are set up once.
+  render::RenderOptions ro;
+  ro.spp = rq.max_spp;
+  ro.seed = rq.seed;
+  ro.cancel = &cancel;
+  int pass = 0;
+  auto t_pass = Clock::now();
+  bool stopped_by_caller = false;
+  ro.on_pass = [&](const io::Image& image, int spp_done) {
     PreviewFrame f;
-    f.pass = pass;
-    f.spp = total;
-    f.width = mean.width;
-    f.height = mean.height;
+    f.pass = pass++;
+    f.spp = spp_done;
+    f.width = image.width;
+    f.height = image.height;
     f.render_ms = std::chrono::duration<double, std::milli>(Clock::now() - t_pass).count();
-    f.png = encodePngSrgb(mean);
+    f.png = encodePngSrgb(image);
     f.elapsed_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-    if (!on_frame(f)) return false;
-  }
-  return true;
+    const bool go_on = on_frame(f);
+    stopped_by_caller = !go_on;
+    t_pass = Clock::now();
+    return go_on;
+  };
+  render::RenderResult res;
+  arena.execute([&] { res = render::render(s, ro); });
+  return !res.stats.partial && !stopped_by_caller;
+}
+
+namespace {
+
+void cancelTicket(const PreviewViews::Ticket& t) {
+  t.cancelled_at_ns->store(Clock::now().time_since_epoch().count());
+  t.cancel->store(true);
+}
+
+}  // namespace
+
+double PreviewViews::Ticket::msSinceCancel() const {
+  if (!cancel->load()) return std::numeric_limits<double>::quiet_NaN();
+  return double(Clock::now().time_since_epoch().count() - cancelled_at_ns->load()) * 1e-6 *
+         (double(Clock::period::num) / Clock::period::den) * 1e9;
 }
 
 PreviewViews::Ticket PreviewViews::start(const std::string& view) {
   std::lock_guard lock(mutex_);
   auto it = views_.find(view);
-  if (it != views_.end()) it->second.cancel->store(true);
-  Ticket t{std::make_shared<std::atomic<bool>>(false), next_++};
+  if (it != views_.end()) cancelTicket(it->second);
+  Ticket t{std::make_shared<std::atomic<bool>>(false), std::make_shared<std::atomic<int64_t>>(0),
+           next_++};
   views_[view] = t;
   return t;
 }
@@ -156,7 +189,7 @@ bool PreviewViews::cancel(const std::string& view) {
   std::lock_guard lock(mutex_);
   auto it = views_.find(view);
   if (it == views_.end()) return false;
-  it->second.cancel->store(true);
+  cancelTicket(it->second);
   views_.erase(it);
   return true;
 }

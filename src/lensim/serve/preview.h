@@ -57,7 +57,8 @@ class PreviewRenderer {
   /// scaled to the preview size. Throws lensim::Error.
   scene::Scene previewScene(const PreviewRequest& request);
 
-  /// Renders `prepared` (from previewScene(request)) pass after pass, calling `on_frame` after each, until max_spp, until `cancel` is
+  /// Renders `prepared` (from previewScene(request)) pass after pass, at a lower priority (the
+  /// calling thread and the render's workers are given nice 10: call it from a thread of its own), calling `on_frame` after each, until max_spp, until `cancel` is
   /// set or `on_frame` returns false. Returns true if it ran to the end. Throws lensim::Error.
   bool run(const scene::Scene& prepared, const PreviewRequest& request,
            const std::atomic<bool>& cancel,
@@ -78,7 +79,10 @@ class PreviewViews {
  public:
   struct Ticket {
     std::shared_ptr<std::atomic<bool>> cancel;
+    std::shared_ptr<std::atomic<int64_t>> cancelled_at_ns;  ///< steady clock, when cancelled
     uint64_t generation = 0;
+    /// Milliseconds since the cancellation (NaN if not cancelled).
+    double msSinceCancel() const;
   };
   /// Cancels the view's running preview (if any) and registers a new one.
   Ticket start(const std::string& view);

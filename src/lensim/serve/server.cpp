@@ -2,9 +2,14 @@
 
 #include <fmt/format.h>
 #include <httplib.h>
+#include <sys/socket.h>
 
 #include <algorithm>
 #include <charconv>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -119,6 +124,7 @@ struct Server::Impl {
   PreviewViews views;
   httplib::Server http;
   int port = 0;
+  int listen_socket = -1;
 
   explicit Impl(ServerConfig c) : config(std::move(c)), catalog(config.lens_folders) {
     std::error_code ec;
@@ -131,11 +137,20 @@ struct Server::Impl {
     routes();
     http.new_task_queue = [n = config.threads] { return new httplib::ThreadPool(size_t(n)); };
     http.set_payload_max_length(1 << 16);
+    // cpp-httplib 0.11 listens with a backlog of 5, compiled into Debian's library: a burst of
+    // connections beyond that waits for the client's SYN retry (1 s, then 3 s). The socket is
+    // recorded when it is made, and listen() is called again with a deeper queue once bound.
+    http.set_socket_options([this](int sock) {
+      int yes = 1;
+      setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+      listen_socket = sock;
+    });
     port = config.port == 0 ? http.bind_to_any_port(config.host)
                             : (http.bind_to_port(config.host, config.port) ? config.port : -1);
     if (port < 0)
       throw Error(fmt::format("cannot listen on {}:{} (in use, or not an address of this machine)",
                               config.host, config.port));
+    if (listen_socket >= 0) ::listen(listen_socket, SOMAXCONN);
   }
 
   fs::path lensPath(const httplib::Request& rq) {
@@ -203,6 +218,101 @@ struct Server::Impl {
       }
     };
   }
+
+  void startPreview(const httplib::Request& rq, httplib::Response& res, const std::string& view,
+                    const PreviewViews::Ticket& ticket) {
+      LensSettings ls = lensSettings(rq);
+      const fs::path scene_path = scenePath(rq);
+      auto shown = previews.scene(scene_path.string());
+      if (!param(rq, "diagonal")) ls.film_diagonal_mm = shown->film.diagonal_mm;
+      if (!ls.focus_distance_m)
+        ls.focus_distance_m = shown->camera.realistic ? shown->camera.realistic->focus_distance_m : 10.0;
+      const SetUpLens lens = setUpLens(ls);  // a lens that cannot focus there fails here, as 422
+      PreviewRequest pr;
+      pr.scene_path = scene_path.string();
+      pr.lens_path = ls.path;
+      pr.aperture_diameter_mm = lens.stop_diameter_mm;
+      pr.focus_distance_m = *ls.focus_distance_m;
+      pr.width = integer(rq, "width", 16, 1920, 320);
+      pr.max_spp = integer(rq, "spp", 1, 4096, 64);
+      pr.seed = integer(rq, "seed", 0, 1 << 30, 0);
+      auto prepared = std::make_shared<scene::Scene>(previews.previewScene(pr));
+      res.set_header("Cache-Control", "no-store");
+      res.set_header("X-Accel-Buffering", "no");
+      res.set_chunked_content_provider(
+          "text/event-stream",
+          [this, pr, prepared, ticket, view](size_t, httplib::DataSink& sink) {
+            // The render runs on a thread of its own (at a lower priority, see
+            // PreviewRenderer::run); this thread writes its events, and cancels the render when
+            // the client has gone.
+            struct Queue {
+              std::mutex m;
+              std::condition_variable cv;
+              std::deque<std::string> events;
+              bool end = false;
+            };
+            auto q = std::make_shared<Queue>();
+            auto push = [q](const std::string& event, const json& data) {
+              {
+                std::lock_guard lock(q->m);
+                q->events.push_back(fmt::format("event: {}\ndata: {}\n\n", event, data.dump()));
+              }
+              q->cv.notify_one();
+            };
+            std::thread worker([this, pr, prepared, ticket, q, push] {
+              const auto t_start = std::chrono::steady_clock::now();
+              try {
+                const bool finished =
+                    previews.run(*prepared, pr, *ticket.cancel, [&](const PreviewFrame& f) {
+                      push("frame", {{"pass", f.pass},
+                                     {"spp", f.spp},
+                                     {"width", f.width},
+                                     {"height", f.height},
+                                     {"render_ms", f.render_ms},
+                                     {"elapsed_ms", f.elapsed_ms},
+                                     {"png", base64(f.png)}});
+                      return !ticket.cancel->load();
+                    });
+                if (finished)
+                  push("done", {{"elapsed_ms", std::chrono::duration<double, std::milli>(
+                                                   std::chrono::steady_clock::now() - t_start)
+                                                   .count()}});
+                else
+                  push("cancelled", {{"cancel_latency_ms", ticket.msSinceCancel()}});
+              } catch (const std::exception& e) {
+                push("error", {{"error", e.what()}});
+              }
+              {
+                std::lock_guard lock(q->m);
+                q->end = true;
+              }
+              q->cv.notify_one();
+            });
+            bool gone = false;
+            for (;;) {
+              std::unique_lock lock(q->m);
+              q->cv.wait_for(lock, std::chrono::milliseconds(50),
+                             [&] { return !q->events.empty() || q->end; });
+              if (!q->events.empty()) {
+                const std::string msg = std::move(q->events.front());
+                q->events.pop_front();
+                lock.unlock();
+                if (!gone && !sink.write(msg.data(), msg.size())) gone = true;
+              } else if (q->end) {
+                break;
+              } else {
+                lock.unlock();
+                if (!gone && sink.is_writable && !sink.is_writable()) gone = true;
+              }
+              if (gone) ticket.cancel->store(true);
+            }
+            worker.join();
+            views.finish(view, ticket);
+            if (!gone) sink.done();
+            return !gone;
+          },
+          [this, view, ticket](bool) { views.finish(view, ticket); });
+      }
 
   void routes() {
     size_t n = 0;
@@ -294,61 +404,16 @@ struct Server::Impl {
       if (view.empty() || view.size() > 32 ||
           !std::all_of(view.begin(), view.end(), [](char c) { return std::isalnum(uint8_t(c)) || c == '-' || c == '_'; }))
         throw ApiError{400, "parameter view: 1 to 32 letters, digits, '-' or '_'"};
-      LensSettings ls = lensSettings(rq);
-      const fs::path scene_path = scenePath(rq);
-      auto shown = previews.scene(scene_path.string());
-      if (!param(rq, "diagonal")) ls.film_diagonal_mm = shown->film.diagonal_mm;
-      if (!ls.focus_distance_m)
-        ls.focus_distance_m = shown->camera.realistic ? shown->camera.realistic->focus_distance_m : 10.0;
-      const SetUpLens lens = setUpLens(ls);  // a lens that cannot focus there fails here, as 422
-      PreviewRequest pr;
-      pr.scene_path = scene_path.string();
-      pr.lens_path = ls.path;
-      pr.aperture_diameter_mm = lens.stop_diameter_mm;
-      pr.focus_distance_m = *ls.focus_distance_m;
-      pr.width = integer(rq, "width", 16, 1920, 320);
-      pr.max_spp = integer(rq, "spp", 1, 4096, 64);
-      pr.seed = integer(rq, "seed", 0, 1 << 30, 0);
-      auto prepared = std::make_shared<scene::Scene>(previews.previewScene(pr));
-      if (views.running() >= config.max_previews && !views.cancel(view))
-        throw ApiError{503, fmt::format("{} previews are rendering; try again", config.max_previews)};
+      // A new preview of a view cancels the view's old one at once, before anything else.
       auto ticket = views.start(view);
-      res.set_header("Cache-Control", "no-store");
-      res.set_header("X-Accel-Buffering", "no");
-      res.set_chunked_content_provider(
-          "text/event-stream",
-          [this, pr, prepared, ticket, view](size_t, httplib::DataSink& sink) {
-            auto send = [&sink](const std::string& event, const json& data) {
-              const std::string msg = fmt::format("event: {}\ndata: {}\n\n", event, data.dump());
-              return sink.write(msg.data(), msg.size());
-            };
-            const auto t_start = std::chrono::steady_clock::now();
-            bool finished = false;
-            try {
-              finished = previews.run(*prepared, pr, *ticket.cancel, [&](const PreviewFrame& f) {
-                return send("frame", {{"pass", f.pass},
-                                      {"spp", f.spp},
-                                      {"width", f.width},
-                                      {"height", f.height},
-                                      {"render_ms", f.render_ms},
-                                      {"elapsed_ms", f.elapsed_ms},
-                                      {"png", base64(f.png)}});
-              });
-              if (finished) {
-                send("done", {{"elapsed_ms", std::chrono::duration<double, std::milli>(
-                                                 std::chrono::steady_clock::now() - t_start)
-                                                 .count()}});
-              } else if (ticket.cancel->load()) {
-                send("cancelled", json::object());
-              }
-            } catch (const std::exception& e) {
-              send("error", {{"error", e.what()}});
-            }
-            views.finish(view, ticket);
-            sink.done();
-            return true;
-          },
-          [this, view, ticket](bool) { views.finish(view, ticket); });
+      try {
+        if (views.running() > config.max_previews)
+          throw ApiError{503, fmt::format("{} previews are rendering; try again", config.max_previews)};
+        startPreview(rq, res, view, ticket);
+      } catch (...) {
+        views.finish(view, ticket);
+        throw;
+      }
     }));
 
     http.Post("/api/cancel", guard([this](const httplib::Request& rq, httplib::Response& res) {
