@@ -278,6 +278,13 @@ TEST_F(ServeTest, DiagramAndEveryPlotAreSvgThatFollowTheSettings) {
     EXPECT_EQ(r->status, 200) << kind << ": " << r->body;
     EXPECT_NE(r->body.find("<svg"), std::string::npos) << kind;
   }
+  // Everything at once, as the page asks for it: the same SVG as the separate endpoints.
+  json view = getJson("/api/view?" + q + "&fnumber=4");
+  EXPECT_NEAR(view["lens"]["f_number"].get<double>(), 4, 1e-9);
+  EXPECT_EQ(view["diagram"], get("/api/diagram?" + q + "&fnumber=4")->body);
+  for (const char* kind : {"spot", "distortion", "vignetting", "focus"})
+    EXPECT_EQ(view["plots"][kind], get(std::string("/api/plot?kind=") + kind + "&" + q + "&fnumber=4")->body) << kind;
+  expectRefused("/api/view?lens=dgauss.50mm.dat&fnumber=0", 400);
   EXPECT_NE(get("/api/plot?kind=spot&" + q + "&fnumber=2.8")->body,
             get("/api/plot?kind=spot&" + q + "&fnumber=11")->body);
 }
@@ -350,6 +357,20 @@ TEST_F(ServeTest, PreviewStreamsRefiningFramesOfTheSceneThroughTheLens) {
   double mean = 0;
   for (uint8_t v : last.rgb) mean += v;
   EXPECT_GT(mean / last.rgb.size(), 5);  // the scene is lit and seen through the lens
+  // Exposure: +2 stops brightens the same render; auto exposure meters the first frame.
+  auto bright = get("/api/preview?lens=dgauss.50mm.dat&fnumber=4&width=48&spp=1&view=t1&exposure=2");
+  auto metered = get("/api/preview?lens=dgauss.50mm.dat&fnumber=4&width=48&spp=1&view=t1&exposure=auto");
+  ASSERT_TRUE(bright && metered);
+  auto be = parseEvents(bright->body), me = parseEvents(metered->body);
+  ASSERT_EQ(be.front().first, "frame");
+  ASSERT_EQ(me.front().first, "frame");
+  EXPECT_DOUBLE_EQ(be.front().second["exposure_stops"].get<double>(), 2.0);
+  EXPECT_NE(me.front().second["exposure_stops"].get<double>(), 0.0);
+  double m1 = 0, m4 = 0;
+  for (uint8_t v : decodePng(decodeBase64(events.front().second["png"])).rgb) m1 += v;
+  for (uint8_t v : decodePng(decodeBase64(be.front().second["png"])).rgb) m4 += v;
+  EXPECT_GT(m4, 1.3 * m1);
+  expectRefused("/api/preview?lens=dgauss.50mm.dat&exposure=bright", 400);
   // A different lens makes a different picture.
   auto tele = get("/api/preview?lens=sub/telephoto.250mm.dat&width=48&spp=1&view=t1");
   ASSERT_TRUE(tele);

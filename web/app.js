@@ -74,22 +74,28 @@ function showError(v, err) {
   v.error.textContent = err ? String(err.message || err) : '';
 }
 
-// Diagram, numbers and plots: fetched together; a newer slider move aborts the older fetches.
+// Diagram, numbers and plots: one request (/api/view); a newer slider move aborts the older one.
 async function updateOptics(v) {
   if (v.opticsCtrl) v.opticsCtrl.abort();
   const ctrl = new AbortController();
   v.opticsCtrl = ctrl;
   const q = query(v);
-  const t0 = performance.now();
+  const t0 = v.changedAt || performance.now();  // from the slider move
+  v.changedAt = null;
   try {
-    const [info, diagram, ...plots] = await Promise.all([
-      getJson(`/api/lens?${q}`, ctrl.signal),
-      getText(`/api/diagram?${q}`, ctrl.signal),
-      ...state.plotKinds.map((k) => getText(`/api/plot?kind=${k.name}&${q}`, ctrl.signal)),
-    ]);
+    const tFetch = performance.now();
+    const view = await getJson(`/api/view?${q}`, ctrl.signal);
+    v.el.dataset.fetchMs = (performance.now() - tFetch).toFixed(1);
+    v.el.dataset.waitMs = (tFetch - t0).toFixed(1);
+    const info = view.lens;
+    const plots = state.plotKinds.map((k) => view.plots[k.name]);
+    const diagram = view.diagram;
     numbersTable(v, info);
     v.diagram.innerHTML = diagram;
     state.plotKinds.forEach((k, i) => { $(v.plots, `[data-kind="${k.name}"] .svg`).innerHTML = plots[i]; });
+    // Timed to the frame that shows them (after layout and paint).
+    await new Promise((resolve) => requestAnimationFrame(() => setTimeout(resolve, 0)));
+    if (ctrl.signal.aborted) return;
     const ms = performance.now() - t0;
     v.el.dataset.opticsQuery = q;
     v.el.dataset.opticsMs = ms.toFixed(1);
@@ -111,7 +117,8 @@ async function updatePreview(v) {
   const q = query(v);
   const t0 = performance.now();
   let first = true;
-  const url = `/api/preview?view=${v.id}&scene=${encodeURIComponent(state.scene.id)}&width=320&spp=256&${q}`;
+  const exposure = $(document, '#autoexposure').checked ? 'auto' : '0';
+  const url = `/api/preview?view=${v.id}&scene=${encodeURIComponent(state.scene.id)}&width=320&spp=256&exposure=${exposure}&${q}`;
   v.pstatus.textContent = 'rendering…';
   try {
     const res = await fetch(url, { signal: ctrl.signal });
@@ -137,6 +144,7 @@ async function updatePreview(v) {
           v.el.dataset.previewSpp = data.spp;
           v.el.dataset.previewFrames = String(Number(v.el.dataset.previewFrames || 0) + 1);
           v.pstatus.textContent = `${data.width}×${data.height}, ${data.spp} spp, ${(ms / 1000).toFixed(2)} s` +
+            (data.exposure_stops ? `, ${data.exposure_stops > 0 ? '+' : ''}${data.exposure_stops.toFixed(1)} EV` : '') +
             (v.el.dataset.firstFrameMs ? ` (first frame ${Number(v.el.dataset.firstFrameMs).toFixed(0)} ms)` : '');
         } else if (ev === 'error') {
           throw new Error(data.error);
@@ -200,9 +208,9 @@ function makeView(id, lensId) {
   }
   v.plots.innerHTML = state.plotKinds.map((k) =>
     `<figure data-kind="${k.name}"><figcaption>${k.title}</figcaption><div class="svg"></div></figure>`).join('');
-  v.lensSelect.addEventListener('change', () => chooseLens(v, v.lensSelect.value));
-  v.fSlider.addEventListener('input', () => { v.fWanted = fNumberFor(v); schedule(v); });
-  v.focusSlider.addEventListener('input', () => { v.focusWanted = focusFor(v); schedule(v); });
+  v.lensSelect.addEventListener('change', () => { v.changedAt = performance.now(); chooseLens(v, v.lensSelect.value); });
+  v.fSlider.addEventListener('input', () => { v.changedAt ??= performance.now(); v.fWanted = fNumberFor(v); schedule(v); });
+  v.focusSlider.addEventListener('input', () => { v.changedAt ??= performance.now(); v.focusWanted = focusFor(v); schedule(v); });
   state.views.push(v);
   chooseLens(v, lensId);
   return v;
@@ -233,6 +241,7 @@ async function start() {
     const first = usable.find((l) => l.id === info.scene.lens) || usable[0];
     const second = usable.find((l) => l.id !== first.id && /telephoto|wide/.test(l.id)) || usable[0];
     makeView('a', first.id);
+    $(document, '#autoexposure').addEventListener('change', () => state.views.forEach((v) => updatePreview(v)));
     const compare = $(document, '#compare');
     compare.addEventListener('change', () => {
       $(document, '#views').classList.toggle('compare', compare.checked);

@@ -43,14 +43,33 @@ class NiceWorkers : public tbb::task_scheduler_observer {
 
 }  // namespace
 
-std::string encodePngSrgb(const io::Image& image) {
+double autoExposureGain(const io::Image& image) {
+  const auto r = image.channelIndex("R"), g = image.channelIndex("G"), b = image.channelIndex("B");
+  if (!r || !g || !b) return 1;
+  double sum_log = 0;
+  size_t n = 0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const double lum =
+          0.2126 * image.at(x, y, *r) + 0.7152 * image.at(x, y, *g) + 0.0722 * image.at(x, y, *b);
+      if (!std::isfinite(lum)) continue;
+      sum_log += std::log(1e-4 + std::max(0.0, lum));
+      ++n;
+    }
+  if (n == 0) return 1;
+  const double key = std::exp(sum_log / double(n));
+  if (key <= 2e-4) return 1;  // black: nothing to meter
+  return std::clamp(0.18 / key, std::exp2(-10.0), std::exp2(10.0));
+}
+
+std::string encodePngSrgb(const io::Image& image, double gain) {
   const auto r = image.channelIndex("R"), g = image.channelIndex("G"), b = image.channelIndex("B");
   if (!r || !g || !b) throw Error("preview: the image has no R, G, B channels");
   std::vector<uint8_t> rows(size_t(image.width) * image.height * 3);
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x)
       for (int c = 0; c < 3; ++c) {
-        const float v = image.at(x, y, c == 0 ? *r : c == 1 ? *g : *b);
+        const float v = float(gain) * image.at(x, y, c == 0 ? *r : c == 1 ? *g : *b);
         const float e = io::linearToSrgb(std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f);
         rows[(size_t(y) * image.width + x) * 3 + c] = uint8_t(std::lround(e * 255));
       }
@@ -141,6 +160,7 @@ bool PreviewRenderer::run(const scene::Scene& s, const PreviewRequest& rq,
   int pass = 0;
   auto t_pass = Clock::now();
   bool stopped_by_caller = false;
+  double gain = std::exp2(rq.exposure_stops);
   ro.on_pass = [&](const io::Image& image, int spp_done) {
     PreviewFrame f;
     f.pass = pass++;
@@ -148,7 +168,9 @@ bool PreviewRenderer::run(const scene::Scene& s, const PreviewRequest& rq,
     f.width = image.width;
     f.height = image.height;
     f.render_ms = std::chrono::duration<double, std::milli>(Clock::now() - t_pass).count();
-    f.png = encodePngSrgb(image);
+    if (rq.auto_exposure && f.pass == 0) gain = autoExposureGain(image);
+    f.exposure_stops = std::log2(gain);
+    f.png = encodePngSrgb(image, gain);
     f.elapsed_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     const bool go_on = on_frame(f);
     stopped_by_caller = !go_on;

@@ -23,8 +23,12 @@ struct Scene;
 
 namespace lensim::serve {
 
-/// Encodes linear RGB as an 8-bit sRGB PNG in memory (values clamped to [0, 1]).
-std::string encodePngSrgb(const io::Image& image);
+/// Encodes linear RGB times `gain` as an 8-bit sRGB PNG in memory (values clamped to [0, 1]).
+std::string encodePngSrgb(const io::Image& image, double gain = 1);
+
+/// The gain that brings the image's log-average luminance to middle grey (0.18), as a camera's
+/// averaging meter would; 1 for a black image. Clamped to 2^-10 .. 2^10.
+double autoExposureGain(const io::Image& image);
 
 struct PreviewRequest {
   std::string scene_path;  ///< resolved
@@ -34,6 +38,8 @@ struct PreviewRequest {
   int width = 320;               ///< the height follows the scene's aspect ratio
   int max_spp = 64;              ///< stop refining at this many samples per pixel
   int seed = 0;
+  double exposure_stops = 0;   ///< brightens (or darkens) the image by 2^stops
+  bool auto_exposure = false;  ///< meter the first frame instead (then fixed for the stream)
 };
 
 struct PreviewFrame {
@@ -42,6 +48,7 @@ struct PreviewFrame {
   int width = 0, height = 0;
   double render_ms = 0;   ///< this pass
   double elapsed_ms = 0;  ///< since the request started
+  double exposure_stops = 0;  ///< the exposure applied to the PNG
   std::string png;
 };
 

@@ -8,6 +8,7 @@
 #include <charconv>
 #include <condition_variable>
 #include <deque>
+#include <future>
 #include <mutex>
 #include <thread>
 #include <cmath>
@@ -236,6 +237,10 @@ struct Server::Impl {
       pr.width = integer(rq, "width", 16, 1920, 320);
       pr.max_spp = integer(rq, "spp", 1, 4096, 64);
       pr.seed = integer(rq, "seed", 0, 1 << 30, 0);
+      if (param(rq, "exposure").value_or("") == "auto")
+        pr.auto_exposure = true;
+      else
+        pr.exposure_stops = number(rq, "exposure", -20, 20).value_or(0.0);
       auto prepared = std::make_shared<scene::Scene>(previews.previewScene(pr));
       res.set_header("Cache-Control", "no-store");
       res.set_header("X-Accel-Buffering", "no");
@@ -270,6 +275,7 @@ struct Server::Impl {
                                      {"height", f.height},
                                      {"render_ms", f.render_ms},
                                      {"elapsed_ms", f.elapsed_ms},
+                                     {"exposure_stops", f.exposure_stops},
                                      {"png", base64(f.png)}});
                       return !ticket.cancel->load();
                     });
@@ -397,6 +403,25 @@ struct Server::Impl {
       const LensSettings s = lensSettings(rq);
       res.set_header("Cache-Control", "no-store");
       res.set_content(k->svg(setUpLens(s).lens, s.film_diagonal_mm), "image/svg+xml");
+    }));
+
+    // Everything a slider move redraws, in one request: the numbers, the diagram and every plot,
+    // computed in parallel (one lens set-up shared by all).
+    http.Get("/api/view", guard([this](const httplib::Request& rq, httplib::Response& res) {
+      const LensSettings s = lensSettings(rq);
+      const SetUpLens lens = setUpLens(s);
+      std::vector<std::future<std::string>> plots;
+      for (const PlotKind& k : plotKinds())
+        plots.push_back(std::async(std::launch::async, [&lens, &k, &s] {
+          return k.svg(lens.lens, s.film_diagonal_mm);
+        }));
+      json j;
+      j["lens"] = firstOrderJson(lens, s.film_diagonal_mm);
+      j["lens"]["id"] = *param(rq, "lens");
+      j["diagram"] = diagramSvg(lens, s.film_diagonal_mm, 11, false);
+      j["plots"] = json::object();
+      for (size_t i = 0; i < plots.size(); ++i) j["plots"][plotKinds()[i].name] = plots[i].get();
+      sendJson(res, j);
     }));
 
     http.Get("/api/preview", guard([this](const httplib::Request& rq, httplib::Response& res) {
