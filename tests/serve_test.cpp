@@ -50,7 +50,8 @@ struct Fixture {
     writeFile(root / "secret.dat", "# outside the lens folder\n");
     fs::create_symlink(root / "secret.dat", lenses / "link.dat");
     writeFile(scenes / "small.pbrt", R"(LookAt 0 0.5 -3  0 0.3 0  0 1 0
-Camera "realistic" "string lensfile" ")" + (lenses / "dgauss.50mm.dat").string() + R"("
+Camera "realistic" "string lensfile" ")" +
+                                         (lenses / "dgauss.50mm.dat").string() + R"("
   "float aperturediameter" 8 "float focusdistance" 3
 Film "rgb" "integer xresolution" 96 "integer yresolution" 64 "float diagonal" 35
 Sampler "zsobol" "integer pixelsamples" 4
@@ -128,7 +129,8 @@ std::thread* ServeTest::thread = nullptr;
 std::vector<std::pair<std::string, json>> parseEvents(const std::string& body) {
   std::vector<std::pair<std::string, json>> out;
   std::regex re("event: (\\w+)\ndata: (.*)\n\n");
-  for (auto it = std::sregex_iterator(body.begin(), body.end(), re); it != std::sregex_iterator(); ++it)
+  for (auto it = std::sregex_iterator(body.begin(), body.end(), re); it != std::sregex_iterator();
+       ++it)
     out.push_back({(*it)[1], json::parse((*it)[2].str())});
   return out;
 }
@@ -187,9 +189,11 @@ long rssKiB() {
 }  // namespace
 
 TEST_F(ServeTest, ServesThePageFromTheBinary) {
-  for (auto [path, type] : std::vector<std::pair<std::string, std::string>>{
-           {"/", "text/html"}, {"/index.html", "text/html"}, {"/app.js", "text/javascript"},
-           {"/style.css", "text/css"}}) {
+  for (auto [path, type] :
+       std::vector<std::pair<std::string, std::string>>{{"/", "text/html"},
+                                                        {"/index.html", "text/html"},
+                                                        {"/app.js", "text/javascript"},
+                                                        {"/style.css", "text/css"}}) {
     auto r = get(path);
     ASSERT_TRUE(r) << path;
     EXPECT_EQ(r->status, 200) << path;
@@ -240,10 +244,10 @@ TEST_F(ServeTest, LensNumbersAgreeWithLensInfoAndTheFNumberIsTheOneAskedFor) {
   json j = getJson("/api/lens?lens=dgauss.50mm.dat&fnumber=5.6&focus=2&diagonal=43.3");
   // Paraxially the entrance pupil scales with the stop: the f-number asked for is the one set.
   EXPECT_NEAR(j["f_number"].get<double>(), 5.6, 1e-9);
-  EXPECT_NEAR(j["f_number"].get<double>(),
-              j["effective_focal_length_mm"].get<double>() /
-                  j["entrance_pupil_diameter_mm"].get<double>(),
-              1e-9);
+  EXPECT_NEAR(
+      j["f_number"].get<double>(),
+      j["effective_focal_length_mm"].get<double>() / j["entrance_pupil_diameter_mm"].get<double>(),
+      1e-9);
   EXPECT_LT(j["stop_diameter_mm"].get<double>(), j["max_stop_diameter_mm"].get<double>());
   EXPECT_DOUBLE_EQ(j["focus_distance_m"].get<double>(), 2.0);
   // The command line, given the stop diameter the server chose, prints the same numbers.
@@ -251,13 +255,14 @@ TEST_F(ServeTest, LensNumbersAgreeWithLensInfoAndTheFNumberIsTheOneAskedFor) {
       fmt_args(kSource + "/lenses/dgauss.50mm.dat", j["stop_diameter_mm"].get<double>()));
   ASSERT_EQ(cli.status, 0) << cli.out;
   json info = json::parse(cli.out);
-  for (const char* key : {"f_number", "working_f_number", "effective_focal_length_mm",
-                          "entrance_pupil_diameter_mm", "film_distance_mm", "field_of_view_deg",
-                          "closest_focus_distance_m"})
+  for (const char* key :
+       {"f_number", "working_f_number", "effective_focal_length_mm", "entrance_pupil_diameter_mm",
+        "film_distance_mm", "field_of_view_deg", "closest_focus_distance_m"})
     EXPECT_NEAR(j[key].get<double>(), info[key].get<double>(), 1e-9) << key;
   // Wide open, and a stop larger than the lens's is clamped to it.
   json open = getJson("/api/lens?lens=dgauss.50mm.dat&aperture=1000");
-  EXPECT_DOUBLE_EQ(open["stop_diameter_mm"].get<double>(), open["max_stop_diameter_mm"].get<double>());
+  EXPECT_DOUBLE_EQ(open["stop_diameter_mm"].get<double>(),
+                   open["max_stop_diameter_mm"].get<double>());
   EXPECT_NEAR(open["f_number"].get<double>(), open["min_f_number"].get<double>(), 1e-9);
   EXPECT_TRUE(getJson("/api/lens?lens=sub/telephoto.250mm.dat&focus=inf")["focus_at_infinity"]);
 }
@@ -283,7 +288,9 @@ TEST_F(ServeTest, DiagramAndEveryPlotAreSvgThatFollowTheSettings) {
   EXPECT_NEAR(view["lens"]["f_number"].get<double>(), 4, 1e-9);
   EXPECT_EQ(view["diagram"], get("/api/diagram?" + q + "&fnumber=4")->body);
   for (const char* kind : {"spot", "distortion", "vignetting", "focus"})
-    EXPECT_EQ(view["plots"][kind], get(std::string("/api/plot?kind=") + kind + "&" + q + "&fnumber=4")->body) << kind;
+    EXPECT_EQ(view["plots"][kind],
+              get(std::string("/api/plot?kind=") + kind + "&" + q + "&fnumber=4")->body)
+        << kind;
   expectRefused("/api/view?lens=dgauss.50mm.dat&fnumber=0", 400);
   EXPECT_NE(get("/api/plot?kind=spot&" + q + "&fnumber=2.8")->body,
             get("/api/plot?kind=spot&" + q + "&fnumber=11")->body);
@@ -291,16 +298,28 @@ TEST_F(ServeTest, DiagramAndEveryPlotAreSvgThatFollowTheSettings) {
 
 TEST_F(ServeTest, BadParametersGet400WithAMessage) {
   const std::string l = "lens=dgauss.50mm.dat";
-  for (const std::string& q : std::vector<std::string>{
-       "/api/lens", "/api/lens?" + l + "&fnumber=abc", "/api/lens?" + l + "&fnumber=-2",
-        "/api/lens?" + l + "&fnumber=nan", "/api/lens?" + l + "&fnumber=1e999",
-        "/api/lens?" + l + "&fnumber=4x", "/api/lens?" + l + "&fnumber=", "/api/lens?" + l + "&focus=0",
-        "/api/lens?" + l + "&focus=-1", "/api/lens?" + l + "&focus=far",
-        "/api/lens?" + l + "&diagonal=0", "/api/lens?" + l + "&fnumber=4&aperture=3",
-        "/api/plot?" + l, "/api/plot?kind=%3Cscript%3E&" + l, "/api/diagram?" + l + "&rays=1.5",
-        "/api/diagram?" + l + "&rays=100000", "/api/diagram?" + l + "&from=moon",
-        "/api/preview?" + l + "&width=100000", "/api/preview?" + l + "&spp=0",
-        "/api/preview?" + l + "&view=../a", "/api/preview?" + l + "&view=" + std::string(40, 'x')})
+  for (const std::string& q :
+       std::vector<std::string>{"/api/lens",
+                                "/api/lens?" + l + "&fnumber=abc",
+                                "/api/lens?" + l + "&fnumber=-2",
+                                "/api/lens?" + l + "&fnumber=nan",
+                                "/api/lens?" + l + "&fnumber=1e999",
+                                "/api/lens?" + l + "&fnumber=4x",
+                                "/api/lens?" + l + "&fnumber=",
+                                "/api/lens?" + l + "&focus=0",
+                                "/api/lens?" + l + "&focus=-1",
+                                "/api/lens?" + l + "&focus=far",
+                                "/api/lens?" + l + "&diagonal=0",
+                                "/api/lens?" + l + "&fnumber=4&aperture=3",
+                                "/api/plot?" + l,
+                                "/api/plot?kind=%3Cscript%3E&" + l,
+                                "/api/diagram?" + l + "&rays=1.5",
+                                "/api/diagram?" + l + "&rays=100000",
+                                "/api/diagram?" + l + "&from=moon",
+                                "/api/preview?" + l + "&width=100000",
+                                "/api/preview?" + l + "&spp=0",
+                                "/api/preview?" + l + "&view=../a",
+                                "/api/preview?" + l + "&view=" + std::string(40, 'x')})
     expectRefused(q, 400);
   // A lens that cannot focus that close, or cannot be read: 422 with the optics' message.
   expectRefused("/api/lens?" + l + "&focus=0.01", 422);
@@ -335,6 +354,19 @@ TEST_F(ServeTest, NoPathLeavesTheLensAndSceneFolders) {
   expectRefused("/api/preview?lens=dgauss.50mm.dat&scene=..%2Fsecret.dat", 403);
 }
 
+TEST_F(ServeTest, AnswersOnlyToLoopbackHostNames) {
+  auto c = client();
+  for (const char* host : {"127.0.0.1", "localhost:8080", "[::1]:80"}) {
+    auto r = c.Get("/api/info", {{"Host", host}});
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200) << host;
+  }
+  auto r = c.Get("/api/lenses", {{"Host", "evil.example:8080"}});
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 403);
+  EXPECT_NE(r->body.find("refused"), std::string::npos);
+}
+
 TEST_F(ServeTest, PreviewStreamsRefiningFramesOfTheSceneThroughTheLens) {
   auto r = get("/api/preview?lens=dgauss.50mm.dat&fnumber=4&width=48&spp=8&view=t1");
   ASSERT_TRUE(r);
@@ -358,8 +390,10 @@ TEST_F(ServeTest, PreviewStreamsRefiningFramesOfTheSceneThroughTheLens) {
   for (uint8_t v : last.rgb) mean += v;
   EXPECT_GT(mean / last.rgb.size(), 5);  // the scene is lit and seen through the lens
   // Exposure: +2 stops brightens the same render; auto exposure meters the first frame.
-  auto bright = get("/api/preview?lens=dgauss.50mm.dat&fnumber=4&width=48&spp=1&view=t1&exposure=2");
-  auto metered = get("/api/preview?lens=dgauss.50mm.dat&fnumber=4&width=48&spp=1&view=t1&exposure=auto");
+  auto bright =
+      get("/api/preview?lens=dgauss.50mm.dat&fnumber=4&width=48&spp=1&view=t1&exposure=2");
+  auto metered =
+      get("/api/preview?lens=dgauss.50mm.dat&fnumber=4&width=48&spp=1&view=t1&exposure=auto");
   ASSERT_TRUE(bright && metered);
   auto be = parseEvents(bright->body), me = parseEvents(metered->body);
   ASSERT_EQ(be.front().first, "frame");
@@ -406,9 +440,10 @@ TEST_F(ServeTest, ANewPreviewOfTheSameViewCancelsTheOldOne) {
   double server_ms = -1;
   for (auto& [ev, data] : parseEvents(first_body))
     if (ev == "cancelled") server_ms = data["cancel_latency_ms"];
-  std::printf("old preview ended %.1f ms after the new request was sent; the server's render "
-              "stopped %.1f ms after the cancellation\n",
-              ms, server_ms);
+  std::printf(
+      "old preview ended %.1f ms after the new request was sent; the server's render "
+      "stopped %.1f ms after the cancellation\n",
+      ms, server_ms);
   EXPECT_GE(server_ms, 0);
   EXPECT_LT(ms, 1000);  // the target is 100 ms on an idle machine (bench/serve-latency)
   // The explicit cancel endpoint.
@@ -436,12 +471,17 @@ TEST_F(ServeTest, FiftyConcurrentRequestsAllAnswered) {
       const auto t0 = std::chrono::steady_clock::now();
       auto r = get(path);
       if (getenv("LENSIM_SERVE_TEST_VERBOSE"))
-        std::printf("%6.0f ms %s\n", std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(), path.c_str());
+        std::printf("%6.0f ms %s\n",
+                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                        .count(),
+                    path.c_str());
       // Previews of the same view cancel each other, or get 503 beyond --max-previews.
-      if (r && (r->status == status || (path.find("preview") != std::string::npos && r->status == 503)))
+      if (r &&
+          (r->status == status || (path.find("preview") != std::string::npos && r->status == 503)))
         ++ok;
       else
-        ADD_FAILURE() << path << ": " << (r ? std::to_string(r->status) + " " + r->body : "no answer");
+        ADD_FAILURE() << path << ": "
+                      << (r ? std::to_string(r->status) + " " + r->body : "no answer");
     });
   for (auto& t : threads) t.join();
   EXPECT_EQ(ok.load(), 50);
@@ -449,11 +489,14 @@ TEST_F(ServeTest, FiftyConcurrentRequestsAllAnswered) {
 }
 
 TEST_F(ServeTest, MemoryStaysFlatOver500Requests) {
-  const std::vector<std::string> mix = {
-      "/api/lens?lens=dgauss.50mm.dat&fnumber=4&focus=2", "/api/diagram?lens=dgauss.50mm.dat",
-      "/api/plot?kind=spot&lens=sub/telephoto.250mm.dat", "/api/lenses",
-      "/api/lens?lens=../secret.dat", "/api/lens?lens=dgauss.50mm.dat&focus=0.01",
-      "/api/preview?lens=dgauss.50mm.dat&width=16&spp=1&view=m", "/app.js"};
+  const std::vector<std::string> mix = {"/api/lens?lens=dgauss.50mm.dat&fnumber=4&focus=2",
+                                        "/api/diagram?lens=dgauss.50mm.dat",
+                                        "/api/plot?kind=spot&lens=sub/telephoto.250mm.dat",
+                                        "/api/lenses",
+                                        "/api/lens?lens=../secret.dat",
+                                        "/api/lens?lens=dgauss.50mm.dat&focus=0.01",
+                                        "/api/preview?lens=dgauss.50mm.dat&width=16&spp=1&view=m",
+                                        "/app.js"};
   auto c = client();
   for (int i = 0; i < 100; ++i) c.Get(mix[size_t(i) % mix.size()].c_str());  // warm up
   const long before = rssKiB();
@@ -470,7 +513,8 @@ TEST_F(ServeTest, MemoryStaysFlatOver500Requests) {
 TEST(ServeCli, RefusesMissingFoldersAndScenes) {
   auto r = lensim::test::runLensim("serve --port 0 --lenses /nonexistent/lenses");
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.out.find("lens folder '/nonexistent/lenses' does not exist"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("lens folder '/nonexistent/lenses' does not exist"), std::string::npos)
+      << r.out;
   r = lensim::test::runLensim("serve --port 0 --scene /nonexistent/scene.pbrt");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.out.find("does not exist"), std::string::npos) << r.out;

@@ -67,8 +67,8 @@ void registerServeCommand(CLI::App& app, Action& action) {
       pthread_sigmask(SIG_BLOCK, &set, nullptr);
       serve::Server server(c);
       if (c.host != "127.0.0.1" && c.host != "localhost" && c.host != "::1")
-        logWarning(fmt::format("listening on {}: anyone who can reach it can use the server",
-                               c.host));
+        logWarning(
+            fmt::format("listening on {}: anyone who can reach it can use the server", c.host));
       std::printf("lensim serve: http://%s:%d/\n", c.host.c_str(), server.port());
       std::fflush(stdout);
       std::thread([set, &server] {

@@ -54,7 +54,8 @@ std::variant<fs::path, PathError> resolveInside(const fs::path& root, const std:
   for (unsigned char c : relative)
     if (c < 0x20 || c == 0x7f || c == '\\')
       return PathError{400, "file name with a control character or a backslash"};
-  if (relative.front() == '/') return PathError{403, fmt::format("'{}': absolute paths are not served", relative)};
+  if (relative.front() == '/')
+    return PathError{403, fmt::format("'{}': absolute paths are not served", relative)};
   const fs::path rel(relative);
   for (const fs::path& part : rel)
     if (part == "..")
@@ -90,10 +91,10 @@ std::vector<LensEntry> LensCatalog::list() const {
   for (size_t i = 0; i < folders_.size(); ++i) {
     std::vector<fs::path> files;
     std::error_code ec;
-    fs::recursive_directory_iterator it(
-        folders_[i],
-        fs::directory_options::follow_directory_symlink | fs::directory_options::skip_permission_denied,
-        ec);
+    fs::recursive_directory_iterator it(folders_[i],
+                                        fs::directory_options::follow_directory_symlink |
+                                            fs::directory_options::skip_permission_denied,
+                                        ec);
     for (; !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
       if (it.depth() >= kMaxDepth) it.disable_recursion_pending();
       if (it->is_regular_file(ec) && extensions().count(lowerExtension(it->path())))
@@ -133,7 +134,8 @@ std::variant<fs::path, PathError> LensCatalog::resolve(const std::string& id) co
   std::string rel = id;
   const size_t colon = id.find(':');
   if (colon != std::string::npos && colon > 0 &&
-      std::all_of(id.begin(), id.begin() + colon, [](char c) { return std::isdigit(uint8_t(c)); })) {
+      std::all_of(id.begin(), id.begin() + colon,
+                  [](char c) { return std::isdigit(uint8_t(c)); })) {
     folder = std::stoul(id.substr(0, std::min<size_t>(colon, 6)));
     rel = id.substr(colon + 1);
     if (folder == 0 || folder >= folders_.size())

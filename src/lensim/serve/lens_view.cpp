@@ -33,10 +33,9 @@ SetUpLens setUpLens(const LensSettings& st) {
       throw Error(fmt::format("aperture {} mm: expected > 0", *st.aperture_diameter_mm));
     out.stop_diameter_mm = std::min(*st.aperture_diameter_mm, out.max_stop_diameter_mm);
   } else if (st.f_number) {
-    if (!(*st.f_number > 0))
-      throw Error(fmt::format("f-number {}: expected > 0", *st.f_number));
-    out.stop_diameter_mm =
-        std::min(out.max_stop_diameter_mm, out.max_stop_diameter_mm * out.min_f_number / *st.f_number);
+    if (!(*st.f_number > 0)) throw Error(fmt::format("f-number {}: expected > 0", *st.f_number));
+    out.stop_diameter_mm = std::min(out.max_stop_diameter_mm,
+                                    out.max_stop_diameter_mm * out.min_f_number / *st.f_number);
   }
   LensSetup setup;
   setup.aperture_diameter_mm = out.stop_diameter_mm;
@@ -55,9 +54,10 @@ json firstOrderJson(const SetUpLens& s, double film_diagonal_mm) {
   const FieldOfView fov = fieldOfView(lens, p, film_diagonal_mm);
   const auto& pr = lens.prescription();
   json j;
-  j["lens"] = {{"name", pr.name}, {"layout", layoutName(pr.layout)},
-               {"surface_count", lens.surfaceCount()}};
-  if (pr.nominal_focal_length_mm) j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
+  j["lens"] = {
+      {"name", pr.name}, {"layout", layoutName(pr.layout)}, {"surface_count", lens.surfaceCount()}};
+  if (pr.nominal_focal_length_mm)
+    j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
   j["effective_focal_length_mm"] = p.effective_focal_length_mm;
   j["back_focal_length_mm"] = p.back_focal_length_mm;
   j["front_focal_length_mm"] = p.front_focal_length_mm;

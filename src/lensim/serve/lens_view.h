@@ -15,10 +15,10 @@ namespace lensim::serve {
 
 /// A lens set up as a request asks. Either an f-number or a stop diameter (or neither: wide open).
 struct LensSettings {
-  std::string path;                         ///< resolved lens file
-  std::optional<double> f_number;           ///< wanted f-number at infinity focus
+  std::string path;                            ///< resolved lens file
+  std::optional<double> f_number;              ///< wanted f-number at infinity focus
   std::optional<double> aperture_diameter_mm;  ///< wanted stop diameter
-  std::optional<double> focus_distance_m;   ///< from the film; infinity allowed; none: the file's
+  std::optional<double> focus_distance_m;  ///< from the film; infinity allowed; none: the file's
   double film_diagonal_mm = 35;
 };
 

@@ -29,12 +29,16 @@ void appendPng(png_structp png, png_bytep data, png_size_t n) {
 void flushPng(png_structp) {}
 
 /// Lowers the calling thread's priority (Linux: nice is per thread).
-void lowerThisThread() { setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kPreviewNice); }
+void lowerThisThread() {
+  setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), kPreviewNice);
+}
 
 /// Lowers the priority of the worker threads that join the preview's arena.
 class NiceWorkers : public tbb::task_scheduler_observer {
  public:
-  explicit NiceWorkers(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) { observe(true); }
+  explicit NiceWorkers(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) {
+    observe(true);
+  }
   ~NiceWorkers() override { observe(false); }
   void on_scheduler_entry(bool is_worker) override {
     if (is_worker) lowerThisThread();
@@ -214,6 +218,12 @@ bool PreviewViews::cancel(const std::string& view) {
   cancelTicket(it->second);
   views_.erase(it);
   return true;
+}
+
+void PreviewViews::cancelAll() {
+  std::lock_guard lock(mutex_);
+  for (auto& [view, ticket] : views_) cancelTicket(ticket);
+  views_.clear();
 }
 
 void PreviewViews::finish(const std::string& view, const Ticket& t) {

@@ -46,8 +46,8 @@ struct PreviewFrame {
   int pass = 0;
   int spp = 0;  ///< samples per pixel so far
   int width = 0, height = 0;
-  double render_ms = 0;   ///< this pass
-  double elapsed_ms = 0;  ///< since the request started
+  double render_ms = 0;       ///< this pass
+  double elapsed_ms = 0;      ///< since the request started
   double exposure_stops = 0;  ///< the exposure applied to the PNG
   std::string png;
 };
@@ -65,8 +65,9 @@ class PreviewRenderer {
   scene::Scene previewScene(const PreviewRequest& request);
 
   /// Renders `prepared` (from previewScene(request)) pass after pass, at a lower priority (the
-  /// calling thread and the render's workers are given nice 10: call it from a thread of its own), calling `on_frame` after each, until max_spp, until `cancel` is
-  /// set or `on_frame` returns false. Returns true if it ran to the end. Throws lensim::Error.
+  /// calling thread and the render's workers are given nice 10: call it from a thread of its own),
+  /// calling `on_frame` after each, until max_spp, until `cancel` is set or `on_frame` returns
+  /// false. Returns true if it ran to the end. Throws lensim::Error.
   bool run(const scene::Scene& prepared, const PreviewRequest& request,
            const std::atomic<bool>& cancel,
            const std::function<bool(const PreviewFrame&)>& on_frame);
@@ -95,6 +96,8 @@ class PreviewViews {
   Ticket start(const std::string& view);
   /// Cancels the view's running preview; false if there was none.
   bool cancel(const std::string& view);
+  /// Cancels every running preview (the server is stopping).
+  void cancelAll();
   /// Forgets the ticket if it is still the view's current one.
   void finish(const std::string& view, const Ticket& ticket);
   int running() const;

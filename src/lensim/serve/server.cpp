@@ -6,15 +6,15 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <condition_variable>
 #include <deque>
-#include <future>
-#include <mutex>
-#include <thread>
-#include <cmath>
 #include <fstream>
+#include <future>
 #include <limits>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "lensim/scene/builder.h"
 #include "lensim/serve/catalog.h"
@@ -104,6 +104,10 @@ json entryJson(const LensEntry& e) {
     j["error"] = e.error;
   }
   return j;
+}
+
+bool isLoopback(const std::string& host) {
+  return host == "127.0.0.1" || host == "localhost" || host == "::1" || host == "[::1]";
 }
 
 bool looksLikeScene(const fs::path& p) {
@@ -222,105 +226,124 @@ struct Server::Impl {
 
   void startPreview(const httplib::Request& rq, httplib::Response& res, const std::string& view,
                     const PreviewViews::Ticket& ticket) {
-      LensSettings ls = lensSettings(rq);
-      const fs::path scene_path = scenePath(rq);
-      auto shown = previews.scene(scene_path.string());
-      if (!param(rq, "diagonal")) ls.film_diagonal_mm = shown->film.diagonal_mm;
-      if (!ls.focus_distance_m)
-        ls.focus_distance_m = shown->camera.realistic ? shown->camera.realistic->focus_distance_m : 10.0;
-      const SetUpLens lens = setUpLens(ls);  // a lens that cannot focus there fails here, as 422
-      PreviewRequest pr;
-      pr.scene_path = scene_path.string();
-      pr.lens_path = ls.path;
-      pr.aperture_diameter_mm = lens.stop_diameter_mm;
-      pr.focus_distance_m = *ls.focus_distance_m;
-      pr.width = integer(rq, "width", 16, 1920, 320);
-      pr.max_spp = integer(rq, "spp", 1, 4096, 64);
-      pr.seed = integer(rq, "seed", 0, 1 << 30, 0);
-      if (param(rq, "exposure").value_or("") == "auto")
-        pr.auto_exposure = true;
-      else
-        pr.exposure_stops = number(rq, "exposure", -20, 20).value_or(0.0);
-      auto prepared = std::make_shared<scene::Scene>(previews.previewScene(pr));
-      res.set_header("Cache-Control", "no-store");
-      res.set_header("X-Accel-Buffering", "no");
-      res.set_chunked_content_provider(
-          "text/event-stream",
-          [this, pr, prepared, ticket, view](size_t, httplib::DataSink& sink) {
-            // The render runs on a thread of its own (at a lower priority, see
-            // PreviewRenderer::run); this thread writes its events, and cancels the render when
-            // the client has gone.
-            struct Queue {
-              std::mutex m;
-              std::condition_variable cv;
-              std::deque<std::string> events;
-              bool end = false;
-            };
-            auto q = std::make_shared<Queue>();
-            auto push = [q](const std::string& event, const json& data) {
-              {
-                std::lock_guard lock(q->m);
-                q->events.push_back(fmt::format("event: {}\ndata: {}\n\n", event, data.dump()));
-              }
-              q->cv.notify_one();
-            };
-            std::thread worker([this, pr, prepared, ticket, q, push] {
-              const auto t_start = std::chrono::steady_clock::now();
-              try {
-                const bool finished =
-                    previews.run(*prepared, pr, *ticket.cancel, [&](const PreviewFrame& f) {
-                      push("frame", {{"pass", f.pass},
-                                     {"spp", f.spp},
-                                     {"width", f.width},
-                                     {"height", f.height},
-                                     {"render_ms", f.render_ms},
-                                     {"elapsed_ms", f.elapsed_ms},
-                                     {"exposure_stops", f.exposure_stops},
-                                     {"png", base64(f.png)}});
-                      return !ticket.cancel->load();
-                    });
-                if (finished)
-                  push("done", {{"elapsed_ms", std::chrono::duration<double, std::milli>(
-                                                   std::chrono::steady_clock::now() - t_start)
-                                                   .count()}});
-                else
-                  push("cancelled", {{"cancel_latency_ms", ticket.msSinceCancel()}});
-              } catch (const std::exception& e) {
-                push("error", {{"error", e.what()}});
-              }
-              {
-                std::lock_guard lock(q->m);
-                q->end = true;
-              }
-              q->cv.notify_one();
-            });
-            bool gone = false;
-            for (;;) {
-              std::unique_lock lock(q->m);
-              q->cv.wait_for(lock, std::chrono::milliseconds(50),
-                             [&] { return !q->events.empty() || q->end; });
-              if (!q->events.empty()) {
-                const std::string msg = std::move(q->events.front());
-                q->events.pop_front();
-                lock.unlock();
-                if (!gone && !sink.write(msg.data(), msg.size())) gone = true;
-              } else if (q->end) {
-                break;
-              } else {
-                lock.unlock();
-                if (!gone && sink.is_writable && !sink.is_writable()) gone = true;
-              }
-              if (gone) ticket.cancel->store(true);
+    LensSettings ls = lensSettings(rq);
+    const fs::path scene_path = scenePath(rq);
+    auto shown = previews.scene(scene_path.string());
+    if (!param(rq, "diagonal")) ls.film_diagonal_mm = shown->film.diagonal_mm;
+    if (!ls.focus_distance_m)
+      ls.focus_distance_m =
+          shown->camera.realistic ? shown->camera.realistic->focus_distance_m : 10.0;
+    const SetUpLens lens = setUpLens(ls);  // a lens that cannot focus there fails here, as 422
+    PreviewRequest pr;
+    pr.scene_path = scene_path.string();
+    pr.lens_path = ls.path;
+    pr.aperture_diameter_mm = lens.stop_diameter_mm;
+    pr.focus_distance_m = *ls.focus_distance_m;
+    pr.width = integer(rq, "width", 16, 1920, 320);
+    pr.max_spp = integer(rq, "spp", 1, 4096, 64);
+    pr.seed = integer(rq, "seed", 0, 1 << 30, 0);
+    if (param(rq, "exposure").value_or("") == "auto")
+      pr.auto_exposure = true;
+    else
+      pr.exposure_stops = number(rq, "exposure", -20, 20).value_or(0.0);
+    auto prepared = std::make_shared<scene::Scene>(previews.previewScene(pr));
+    res.set_header("Cache-Control", "no-store");
+    res.set_header("X-Accel-Buffering", "no");
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [this, pr, prepared, ticket, view](size_t, httplib::DataSink& sink) {
+          // The render runs on a thread of its own (at a lower priority, see
+          // PreviewRenderer::run); this thread writes its events, and cancels the render when
+          // the client has gone.
+          struct Queue {
+            std::mutex m;
+            std::condition_variable cv;
+            std::deque<std::string> events;
+            bool end = false;
+          };
+          auto q = std::make_shared<Queue>();
+          auto push = [q](const std::string& event, const json& data) {
+            {
+              std::lock_guard lock(q->m);
+              q->events.push_back(fmt::format("event: {}\ndata: {}\n\n", event, data.dump()));
             }
-            worker.join();
-            views.finish(view, ticket);
-            if (!gone) sink.done();
-            return !gone;
-          },
-          [this, view, ticket](bool) { views.finish(view, ticket); });
-      }
+            q->cv.notify_one();
+          };
+          std::thread worker([this, pr, prepared, ticket, q, push] {
+            const auto t_start = std::chrono::steady_clock::now();
+            try {
+              const bool finished =
+                  previews.run(*prepared, pr, *ticket.cancel, [&](const PreviewFrame& f) {
+                    push("frame", {{"pass", f.pass},
+                                   {"spp", f.spp},
+                                   {"width", f.width},
+                                   {"height", f.height},
+                                   {"render_ms", f.render_ms},
+                                   {"elapsed_ms", f.elapsed_ms},
+                                   {"exposure_stops", f.exposure_stops},
+                                   {"png", base64(f.png)}});
+                    return !ticket.cancel->load();
+                  });
+              if (finished)
+                push("done", {{"elapsed_ms", std::chrono::duration<double, std::milli>(
+                                                 std::chrono::steady_clock::now() - t_start)
+                                                 .count()}});
+              else
+                push("cancelled", {{"cancel_latency_ms", ticket.msSinceCancel()}});
+            } catch (const std::exception& e) {
+              push("error", {{"error", e.what()}});
+            }
+            {
+              std::lock_guard lock(q->m);
+              q->end = true;
+            }
+            q->cv.notify_one();
+          });
+          bool gone = false;
+          for (;;) {
+            std::unique_lock lock(q->m);
+            q->cv.wait_for(lock, std::chrono::milliseconds(50),
+                           [&] { return !q->events.empty() || q->end; });
+            if (!q->events.empty()) {
+              const std::string msg = std::move(q->events.front());
+              q->events.pop_front();
+              lock.unlock();
+              if (!gone && !sink.write(msg.data(), msg.size())) gone = true;
+            } else if (q->end) {
+              break;
+            } else {
+              lock.unlock();
+              if (!gone && sink.is_writable && !sink.is_writable()) gone = true;
+            }
+            if (gone) ticket.cancel->store(true);
+          }
+          worker.join();
+          views.finish(view, ticket);
+          if (!gone) sink.done();
+          return !gone;
+        },
+        [this, view, ticket](bool) { views.finish(view, ticket); });
+  }
 
   void routes() {
+    // Bound to this machine, the server answers only requests addressed to it by a loopback name:
+    // a web page elsewhere cannot reach it through a DNS name that resolves to 127.0.0.1.
+    const bool loopback = isLoopback(config.host);
+    http.set_pre_routing_handler([loopback](const httplib::Request& rq, httplib::Response& res) {
+      if (!loopback) return httplib::Server::HandlerResponse::Unhandled;
+      std::string host = rq.get_header_value("Host");
+      if (host.starts_with("["))
+        host = host.substr(0, host.find(']') + 1);
+      else
+        host = host.substr(0, host.find(':'));
+      if (host.empty() || isLoopback(host)) return httplib::Server::HandlerResponse::Unhandled;
+      sendJson(res,
+               {{"error", fmt::format("Host '{}' refused: this server answers only to "
+                                      "127.0.0.1, localhost and [::1]",
+                                      host.substr(0, 64))}},
+               403);
+      return httplib::Server::HandlerResponse::Handled;
+    });
     size_t n = 0;
     const WebAsset* assets = webAssets(&n);
     for (size_t i = 0; i < n; ++i) {
@@ -338,130 +361,149 @@ struct Server::Impl {
     }
 
     http.Get("/api/info", guard([this](const httplib::Request&, httplib::Response& res) {
-      json kinds = json::array();
-      for (const PlotKind& k : plotKinds()) kinds.push_back({{"name", k.name}, {"title", k.title}});
-      json folders = json::array();
-      for (const fs::path& f : catalog.folders()) folders.push_back(f.string());
-      sendJson(res, {{"version", LENSIM_VERSION_STRING},
-                     {"lens_folders", folders},
-                     {"scene_folder", scene_folder.string()},
-                     {"scene", sceneJson(default_scene_id)},
-                     {"plot_kinds", kinds},
-                     {"max_previews", config.max_previews}});
-    }));
+               json kinds = json::array();
+               for (const PlotKind& k : plotKinds())
+                 kinds.push_back({{"name", k.name}, {"title", k.title}});
+               json folders = json::array();
+               for (const fs::path& f : catalog.folders()) folders.push_back(f.string());
+               sendJson(res, {{"version", LENSIM_VERSION_STRING},
+                              {"lens_folders", folders},
+                              {"scene_folder", scene_folder.string()},
+                              {"scene", sceneJson(default_scene_id)},
+                              {"plot_kinds", kinds},
+                              {"max_previews", config.max_previews}});
+             }));
 
     http.Get("/api/lenses", guard([this](const httplib::Request&, httplib::Response& res) {
-      json arr = json::array();
-      for (const LensEntry& e : catalog.list()) arr.push_back(entryJson(e));
-      sendJson(res, {{"lenses", arr}});
-    }));
+               json arr = json::array();
+               for (const LensEntry& e : catalog.list()) arr.push_back(entryJson(e));
+               sendJson(res, {{"lenses", arr}});
+             }));
 
     http.Get("/api/scenes", guard([this](const httplib::Request&, httplib::Response& res) {
-      json arr = json::array();
-      std::error_code ec;
-      std::vector<std::string> ids;
-      for (const auto& e : fs::directory_iterator(scene_folder, ec))
-        if (e.is_regular_file(ec) && e.path().extension() == ".pbrt" && looksLikeScene(e.path()))
-          ids.push_back(e.path().filename().string());
-      std::sort(ids.begin(), ids.end());
-      for (const std::string& id : ids) arr.push_back({{"id", id}, {"default", id == default_scene_id}});
-      sendJson(res, {{"scenes", arr}});
-    }));
+               json arr = json::array();
+               std::error_code ec;
+               std::vector<std::string> ids;
+               for (const auto& e : fs::directory_iterator(scene_folder, ec))
+                 if (e.is_regular_file(ec) && e.path().extension() == ".pbrt" &&
+                     looksLikeScene(e.path()))
+                   ids.push_back(e.path().filename().string());
+               std::sort(ids.begin(), ids.end());
+               for (const std::string& id : ids)
+                 arr.push_back({{"id", id}, {"default", id == default_scene_id}});
+               sendJson(res, {{"scenes", arr}});
+             }));
 
     http.Get("/api/scene", guard([this](const httplib::Request& rq, httplib::Response& res) {
-      const fs::path p = scenePath(rq);
-      sendJson(res, sceneJson(p.lexically_relative(scene_folder).generic_string()));
-    }));
+               const fs::path p = scenePath(rq);
+               sendJson(res, sceneJson(p.lexically_relative(scene_folder).generic_string()));
+             }));
 
     http.Get("/api/lens", guard([this](const httplib::Request& rq, httplib::Response& res) {
-      const LensSettings s = lensSettings(rq);
-      json j = firstOrderJson(setUpLens(s), s.film_diagonal_mm);
-      j["id"] = *param(rq, "lens");
-      sendJson(res, j);
-    }));
+               const LensSettings s = lensSettings(rq);
+               json j = firstOrderJson(setUpLens(s), s.film_diagonal_mm);
+               j["id"] = *param(rq, "lens");
+               sendJson(res, j);
+             }));
 
     http.Get("/api/diagram", guard([this](const httplib::Request& rq, httplib::Response& res) {
-      const LensSettings s = lensSettings(rq);
-      const int rays = integer(rq, "rays", 1, 101, 11);
-      const std::string from = param(rq, "from").value_or("film");
-      if (from != "film" && from != "scene")
-        throw ApiError{400, "parameter from: expected 'film' or 'scene'"};
-      res.set_header("Cache-Control", "no-store");
-      res.set_content(diagramSvg(setUpLens(s), s.film_diagonal_mm, rays, from == "scene"),
-                      "image/svg+xml");
-    }));
+               const LensSettings s = lensSettings(rq);
+               const int rays = integer(rq, "rays", 1, 101, 11);
+               const std::string from = param(rq, "from").value_or("film");
+               if (from != "film" && from != "scene")
+                 throw ApiError{400, "parameter from: expected 'film' or 'scene'"};
+               res.set_header("Cache-Control", "no-store");
+               res.set_content(diagramSvg(setUpLens(s), s.film_diagonal_mm, rays, from == "scene"),
+                               "image/svg+xml");
+             }));
 
     http.Get("/api/plot", guard([this](const httplib::Request& rq, httplib::Response& res) {
-      const std::string kind = param(rq, "kind").value_or("");
-      const PlotKind* k = findPlotKind(kind);
-      if (!k) {
-        std::string names;
-        for (const PlotKind& p : plotKinds()) names += (names.empty() ? "" : ", ") + p.name;
-        throw ApiError{400, fmt::format("parameter kind='{}': expected one of {}",
-                                        kind.substr(0, 64), names)};
-      }
-      const LensSettings s = lensSettings(rq);
-      res.set_header("Cache-Control", "no-store");
-      res.set_content(k->svg(setUpLens(s).lens, s.film_diagonal_mm), "image/svg+xml");
-    }));
+               const std::string kind = param(rq, "kind").value_or("");
+               const PlotKind* k = findPlotKind(kind);
+               if (!k) {
+                 std::string names;
+                 for (const PlotKind& p : plotKinds())
+                   names += (names.empty() ? "" : ", ") + p.name;
+                 throw ApiError{400, fmt::format("parameter kind='{}': expected one of {}",
+                                                 kind.substr(0, 64), names)};
+               }
+               const LensSettings s = lensSettings(rq);
+               res.set_header("Cache-Control", "no-store");
+               res.set_content(k->svg(setUpLens(s).lens, s.film_diagonal_mm), "image/svg+xml");
+             }));
 
     // Everything a slider move redraws, in one request: the numbers, the diagram and every plot,
     // computed in parallel (one lens set-up shared by all).
     http.Get("/api/view", guard([this](const httplib::Request& rq, httplib::Response& res) {
-      const LensSettings s = lensSettings(rq);
-      const SetUpLens lens = setUpLens(s);
-      std::vector<std::future<std::string>> plots;
-      for (const PlotKind& k : plotKinds())
-        plots.push_back(std::async(std::launch::async, [&lens, &k, &s] {
-          return k.svg(lens.lens, s.film_diagonal_mm);
-        }));
-      json j;
-      j["lens"] = firstOrderJson(lens, s.film_diagonal_mm);
-      j["lens"]["id"] = *param(rq, "lens");
-      j["diagram"] = diagramSvg(lens, s.film_diagonal_mm, 11, false);
-      j["plots"] = json::object();
-      for (size_t i = 0; i < plots.size(); ++i) j["plots"][plotKinds()[i].name] = plots[i].get();
-      sendJson(res, j);
-    }));
+               const LensSettings s = lensSettings(rq);
+               const SetUpLens lens = setUpLens(s);
+               std::vector<std::future<std::string>> plots;
+               for (const PlotKind& k : plotKinds())
+                 plots.push_back(std::async(std::launch::async, [&lens, &k, &s] {
+                   return k.svg(lens.lens, s.film_diagonal_mm);
+                 }));
+               json j;
+               j["lens"] = firstOrderJson(lens, s.film_diagonal_mm);
+               j["lens"]["id"] = *param(rq, "lens");
+               j["diagram"] = diagramSvg(lens, s.film_diagonal_mm, 11, false);
+               j["plots"] = json::object();
+               for (size_t i = 0; i < plots.size(); ++i)
+                 j["plots"][plotKinds()[i].name] = plots[i].get();
+               sendJson(res, j);
+             }));
 
     http.Get("/api/preview", guard([this](const httplib::Request& rq, httplib::Response& res) {
-      const std::string view = param(rq, "view").value_or("default");
-      if (view.empty() || view.size() > 32 ||
-          !std::all_of(view.begin(), view.end(), [](char c) { return std::isalnum(uint8_t(c)) || c == '-' || c == '_'; }))
-        throw ApiError{400, "parameter view: 1 to 32 letters, digits, '-' or '_'"};
-      // A new preview of a view cancels the view's old one at once, before anything else.
-      auto ticket = views.start(view);
-      try {
-        if (views.running() > config.max_previews)
-          throw ApiError{503, fmt::format("{} previews are rendering; try again", config.max_previews)};
-        startPreview(rq, res, view, ticket);
-      } catch (...) {
-        views.finish(view, ticket);
-        throw;
-      }
-    }));
+               const std::string view = param(rq, "view").value_or("default");
+               if (view.empty() || view.size() > 32 ||
+                   !std::all_of(view.begin(), view.end(), [](char c) {
+                     return std::isalnum(uint8_t(c)) || c == '-' || c == '_';
+                   }))
+                 throw ApiError{400, "parameter view: 1 to 32 letters, digits, '-' or '_'"};
+               // A new preview of a view cancels the view's old one at once, before anything else.
+               auto ticket = views.start(view);
+               try {
+                 if (views.running() > config.max_previews)
+                   throw ApiError{503, fmt::format("{} previews are rendering; try again",
+                                                   config.max_previews)};
+                 startPreview(rq, res, view, ticket);
+               } catch (...) {
+                 views.finish(view, ticket);
+                 throw;
+               }
+             }));
 
     http.Post("/api/cancel", guard([this](const httplib::Request& rq, httplib::Response& res) {
-      const std::string view = param(rq, "view").value_or("default");
-      sendJson(res, {{"cancelled", views.cancel(view)}});
-    }));
+                const std::string view = param(rq, "view").value_or("default");
+                sendJson(res, {{"cancelled", views.cancel(view)}});
+              }));
 
     http.set_error_handler([](const httplib::Request& rq, httplib::Response& res) {
       if (res.body.empty())
-        sendJson(res, {{"error", fmt::format("{} {}: {}", rq.method, rq.path.substr(0, 200),
-                                             res.status == 404 ? "not found" : "refused")}},
+        sendJson(res,
+                 {{"error", fmt::format("{} {}: {}", rq.method, rq.path.substr(0, 200),
+                                        res.status == 404 ? "not found" : "refused")}},
                  res.status);
     });
-    http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr) {
-      sendJson(res, {{"error", "internal error"}}, 500);
-    });
+    http.set_exception_handler(
+        [](const httplib::Request&, httplib::Response& res, std::exception_ptr) {
+          sendJson(res, {{"error", "internal error"}}, 500);
+        });
   }
 };
 
 Server::Server(ServerConfig config) : impl_(std::make_unique<Impl>(std::move(config))) {}
-Server::~Server() { stop(); }
-int Server::port() const { return impl_->port; }
-void Server::run() { impl_->http.listen_after_bind(); }
-void Server::stop() { impl_->http.stop(); }
+Server::~Server() {
+  stop();
+}
+int Server::port() const {
+  return impl_->port;
+}
+void Server::run() {
+  impl_->http.listen_after_bind();
+}
+void Server::stop() {
+  impl_->views.cancelAll();
+  impl_->http.stop();
+}
 
 }  // namespace lensim::serve

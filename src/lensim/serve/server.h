@@ -10,11 +10,11 @@ namespace lensim::serve {
 
 struct ServerConfig {
   std::string host = "127.0.0.1";
-  int port = 8080;                      ///< 0: any free port (see Server::port())
+  int port = 8080;                        ///< 0: any free port (see Server::port())
   std::vector<std::string> lens_folders;  ///< at least one
-  std::string scene;                    ///< the default scene; its folder is the scene folder
-  int max_previews = 4;                 ///< previews rendering at once; more get 503
-  int threads = 16;                     ///< HTTP worker threads
+  std::string scene;                      ///< the default scene; its folder is the scene folder
+  int max_previews = 4;                   ///< previews rendering at once; more get 503
+  int threads = 16;                       ///< HTTP worker threads
 };
 
 class Server {
