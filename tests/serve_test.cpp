@@ -429,7 +429,14 @@ TEST_F(ServeTest, ANewPreviewOfTheSameViewCancelsTheOldOne) {
           });
     ended = std::chrono::steady_clock::now();
   });
-  while (!first_frame) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  for (int i = 0; i < 30000 && !first_frame; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  if (!first_frame) {  // no frame in a minute: say so rather than hang
+    client().Post("/api/cancel?view=c");
+    old.join();
+    ADD_FAILURE() << "no first frame: " << first_body.substr(0, 300);
+    return;
+  }
   const auto t0 = std::chrono::steady_clock::now();
   std::thread fresh([] { get("/api/preview?lens=dgauss.50mm.dat&width=32&spp=1&view=c"); });
   old.join();
