@@ -65,6 +65,24 @@ AttributeBegin
   Shape "sphere" "float radius" 0.4
 AttributeEnd
 )");
+    // The same world through a thin lens: the preview puts the chosen lens in its place.
+    writeFile(scenes / "pinhole.pbrt", R"(LookAt 0 0.5 -3  0 0.3 0  0 1 0
+Camera "perspective" "float fov" 40
+Film "rgb" "integer xresolution" 90 "integer yresolution" 60
+WorldBegin
+LightSource "infinite" "rgb L" [0.5 0.5 0.5]
+Shape "sphere" "float radius" 0.4
+)");
+    // A pbrt-v2 realistic camera works in millimetres: not previewable.
+    writeFile(scenes / "legacy.pbrt", R"(Scale -1 1 1
+LookAt 0 0.5 -3  0 0.3 0  0 1 0
+Camera "realistic" "string specfile" ")" + (lenses / "dgauss.50mm.dat").string() + R"("
+  "float filmdistance" 36 "float aperture_diameter" 8
+Film "image" "integer xresolution" 90 "integer yresolution" 60
+WorldBegin
+LightSource "infinite" "color L" [0.5 0.5 0.5]
+Shape "sphere" "float radius" 0.4
+)");
     writeFile(scenes / "include-only.pbrt", "# no scene here\nShape \"sphere\"\n");
   }
   ~Fixture() { fs::remove_all(root); }
@@ -235,8 +253,11 @@ TEST_F(ServeTest, ListsEveryLensFileWithErrorsForUnreadableOnes) {
   EXPECT_TRUE(byId["broken.zmx"].contains("error"));
   EXPECT_FALSE(byId["broken.zmx"].contains("f_number"));
   json scenes = getJson("/api/scenes");
-  ASSERT_EQ(scenes["scenes"].size(), 1u) << scenes.dump();  // the include-only file is not one
-  EXPECT_EQ(scenes["scenes"][0]["id"], "small.pbrt");
+  ASSERT_EQ(scenes["scenes"].size(), 3u) << scenes.dump();  // the include-only file is not one
+  EXPECT_EQ(scenes["scenes"][0]["id"], "legacy.pbrt");
+  EXPECT_EQ(scenes["scenes"][1]["id"], "pinhole.pbrt");
+  EXPECT_EQ(scenes["scenes"][2]["id"], "small.pbrt");
+  EXPECT_EQ(scenes["scenes"][2]["default"], true);
   EXPECT_EQ(getJson("/api/scene?scene=small.pbrt")["width"], 96);
 }
 
@@ -405,6 +426,17 @@ TEST_F(ServeTest, PreviewStreamsRefiningFramesOfTheSceneThroughTheLens) {
   for (uint8_t v : decodePng(decodeBase64(be.front().second["png"])).rgb) m4 += v;
   EXPECT_GT(m4, 1.3 * m1);
   expectRefused("/api/preview?lens=dgauss.50mm.dat&exposure=bright", 400);
+  // A scene with a thin-lens camera is seen through the chosen lens; a pbrt-v2 realistic camera
+  // (millimetre camera space) cannot be previewed.
+  auto pin = get("/api/preview?lens=dgauss.50mm.dat&scene=pinhole.pbrt&width=30&spp=1&view=t2");
+  ASSERT_TRUE(pin);
+  ASSERT_EQ(pin->status, 200) << pin->body;
+  auto pe = parseEvents(pin->body);
+  ASSERT_EQ(pe.front().first, "frame") << pin->body.substr(0, 300);
+  EXPECT_EQ(pe.front().second["height"], 20);
+  expectRefused("/api/preview?lens=dgauss.50mm.dat&scene=legacy.pbrt&width=30&spp=1", 422);
+  EXPECT_NE(get("/api/preview?lens=dgauss.50mm.dat&scene=legacy.pbrt")->body.find("millimetre"),
+            std::string::npos);
   // A different lens makes a different picture.
   auto tele = get("/api/preview?lens=sub/telephoto.250mm.dat&width=48&spp=1&view=t1");
   ASSERT_TRUE(tele);
