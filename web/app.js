@@ -198,13 +198,23 @@ function makeView(id, lensId) {
     plots: $(el, '.plots'), timing: $(el, '.timing'), error: $(el, '.error'),
     minF: 2, closest: 0.5, fWanted: null, focusWanted: state.scene.focus_distance_m || 3,
   };
+  // Grouped by folder (the catalogue's subfolders: classic lenses at the top level).
+  const groups = new Map();
   for (const l of state.lenses) {
+    const slash = l.id.lastIndexOf('/');
+    const group = slash < 0 ? 'lenses' : l.id.slice(0, slash);
+    if (!groups.has(group)) {
+      const g = document.createElement('optgroup');
+      g.label = group;
+      groups.set(group, g);
+      v.lensSelect.appendChild(g);
+    }
     const o = document.createElement('option');
     o.value = l.id;
     o.textContent = l.error ? `${l.id} (cannot be read)` : `${l.id} — ${l.name}, ${fmt(l.focal_length_mm, 1)} mm f/${fmt(l.f_number, 1)}`;
     o.disabled = !!l.error;
     if (l.error) o.title = l.error;
-    v.lensSelect.appendChild(o);
+    groups.get(group).appendChild(o);
   }
   v.plots.innerHTML = state.plotKinds.map((k) =>
     `<figure data-kind="${k.name}"><figcaption>${k.title}</figcaption><div class="svg"></div></figure>`).join('');

@@ -50,20 +50,20 @@ class NiceWorkers : public tbb::task_scheduler_observer {
 double autoExposureGain(const io::Image& image) {
   const auto r = image.channelIndex("R"), g = image.channelIndex("G"), b = image.channelIndex("B");
   if (!r || !g || !b) return 1;
-  double sum_log = 0;
+  // The arithmetic mean: a 1-spp frame is mostly noise, black pixels included, and its mean is
+  // still the image's (a log average would be dragged down by every black pixel).
+  double sum = 0;
   size_t n = 0;
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x) {
       const double lum =
           0.2126 * image.at(x, y, *r) + 0.7152 * image.at(x, y, *g) + 0.0722 * image.at(x, y, *b);
       if (!std::isfinite(lum)) continue;
-      sum_log += std::log(1e-4 + std::max(0.0, lum));
+      sum += std::max(0.0, lum);
       ++n;
     }
-  if (n == 0) return 1;
-  const double key = std::exp(sum_log / double(n));
-  if (key <= 2e-4) return 1;  // black: nothing to meter
-  return std::clamp(0.18 / key, std::exp2(-10.0), std::exp2(10.0));
+  if (n == 0 || !(sum > 0)) return 1;  // black: nothing to meter
+  return std::clamp(0.18 * double(n) / sum, std::exp2(-10.0), std::exp2(10.0));
 }
 
 std::string encodePngSrgb(const io::Image& image, double gain) {

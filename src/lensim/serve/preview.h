@@ -26,7 +26,7 @@ namespace lensim::serve {
 /// Encodes linear RGB times `gain` as an 8-bit sRGB PNG in memory (values clamped to [0, 1]).
 std::string encodePngSrgb(const io::Image& image, double gain = 1);
 
-/// The gain that brings the image's log-average luminance to middle grey (0.18), as a camera's
+/// The gain that brings the image's mean luminance to middle grey (0.18), as a camera's
 /// averaging meter would; 1 for a black image. Clamped to 2^-10 .. 2^10.
 double autoExposureGain(const io::Image& image);
 
