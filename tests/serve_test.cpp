@@ -47,6 +47,8 @@ struct Fixture {
     fs::copy_file(kSource + "/lenses/telephoto.250mm.dat", lenses / "sub" / "telephoto.250mm.dat");
     writeFile(lenses / "broken.zmx", "this is not a lens\n");
     writeFile(lenses / "notes.txt", "not listed\n");
+    // Zemax writes UTF-16: its error message quotes bytes that are not UTF-8.
+    writeFile(lenses / "utf16.zmx", std::string("\xff\xfeV\0E\0R\0S\0", 10));
     writeFile(root / "secret.dat", "# outside the lens folder\n");
     fs::create_symlink(root / "secret.dat", lenses / "link.dat");
     writeFile(scenes / "small.pbrt", R"(LookAt 0 0.5 -3  0 0.3 0  0 1 0
@@ -76,7 +78,8 @@ Shape "sphere" "float radius" 0.4
     // A pbrt-v2 realistic camera works in millimetres: not previewable.
     writeFile(scenes / "legacy.pbrt", R"(Scale -1 1 1
 LookAt 0 0.5 -3  0 0.3 0  0 1 0
-Camera "realistic" "string specfile" ")" + (lenses / "dgauss.50mm.dat").string() + R"("
+Camera "realistic" "string specfile" ")" + (lenses / "dgauss.50mm.dat").string() +
+                                          R"("
   "float filmdistance" 36 "float aperture_diameter" 8
 Film "image" "integer xresolution" 90 "integer yresolution" 60
 WorldBegin
@@ -243,7 +246,9 @@ TEST_F(ServeTest, ListsEveryLensFileWithErrorsForUnreadableOnes) {
   std::map<std::string, json> byId;
   for (const json& l : j["lenses"]) byId[l["id"]] = l;
   // The .txt file is not a lens file; the link leaves the folder and is not listed.
-  EXPECT_EQ(byId.size(), 3u) << j.dump(1);
+  EXPECT_EQ(byId.size(), 4u) << j.dump(1);
+  ASSERT_TRUE(byId.count("utf16.zmx"));
+  EXPECT_TRUE(byId["utf16.zmx"].contains("error"));
   ASSERT_TRUE(byId.count("dgauss.50mm.dat"));
   ASSERT_TRUE(byId.count("sub/telephoto.250mm.dat"));
   ASSERT_TRUE(byId.count("broken.zmx"));

@@ -204,7 +204,7 @@ struct Server::Impl {
   static void sendJson(httplib::Response& res, const json& j, int status = 200) {
     res.status = status;
     res.set_header("Cache-Control", "no-store");
-    res.set_content(j.dump(), "application/json");
+    res.set_content(j.dump(-1, ' ', false, json::error_handler_t::replace), "application/json");
   }
 
   /// Wraps a handler: ApiError -> its status, lensim::Error (a lens or scene that cannot be used
@@ -265,7 +265,9 @@ struct Server::Impl {
           auto push = [q](const std::string& event, const json& data) {
             {
               std::lock_guard lock(q->m);
-              q->events.push_back(fmt::format("event: {}\ndata: {}\n\n", event, data.dump()));
+              q->events.push_back(
+                  fmt::format("event: {}\ndata: {}\n\n", event,
+                              data.dump(-1, ' ', false, json::error_handler_t::replace)));
             }
             q->cv.notify_one();
           };
