@@ -66,6 +66,10 @@ function numbersTable(v, d) {
     ['Field of view', d.field_of_view_deg === null ? `image circle ⌀ ${fmt(d.image_circle_diameter_mm)} mm` : `${fmt(d.field_of_view_deg)}° diagonal`],
     ['Total track', `${fmt(d.total_track_mm)} mm`],
   ];
+  const esc = (t) => String(t).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' })[c]);
+  rows[0][1] = esc(rows[0][1]);
+  // The lens file's notes and warnings (as `lensim lens info` prints them).
+  for (const note of d.diagnostics || []) rows.push(['Note', `<span class="diagnostic">${esc(note)}</span>`]);
   v.table.innerHTML = rows.map(([k, x]) => `<tr><td>${k}</td><td>${x}</td></tr>`).join('');
 }
 
