@@ -29,4 +29,7 @@ void registerAutofocusCommand(CLI::App& app, Action& action);
 /// `lensim compare IMAGE REFERENCE [--second IMAGE2] ...`: agreement within noise.
 void registerCompareCommand(CLI::App& app, Action& action);
 
+/// `lensim serve [--port N] [--scene S] [--lenses DIR]`: the lens explorer web page.
+void registerServeCommand(CLI::App& app, Action& action);
+
 }  // namespace lensim::cmd

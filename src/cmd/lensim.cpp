@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   lensim::cmd::registerRenderCommand(app, action);
   lensim::cmd::registerAutofocusCommand(app, action);
   lensim::cmd::registerCompareCommand(app, action);
+  lensim::cmd::registerServeCommand(app, action);
 
   try {
     app.parse(argc, argv);

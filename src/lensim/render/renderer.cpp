@@ -180,6 +180,12 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     pcv.notify_all();
     if (progress.joinable()) progress.join();
   };
+  // Passes over sample indices [pass_begin, pass_end) of every pixel: one pass over all of them,
+  // or, with RenderOptions::on_pass, 1, 1, 2, 4, ... samples (the total doubling), the image
+  // handed out after each. Each pixel's samples are the same and added in the same order.
+  int pass_begin = 0, pass_end = 0, passes = 0;
+  for (; pass_begin < spp && !cancelled.load(); pass_begin = pass_end, ++passes) {
+  pass_end = !opt.on_pass ? spp : pass_begin == 0 ? 1 : std::min(spp, 2 * pass_begin);
   try {
     tbb::parallel_for(
         tbb::blocked_range<int>(0, n_tiles, 1), [&](const tbb::blocked_range<int>& r) {
@@ -206,12 +212,12 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             std::optional<camera::CameraRay> cam_rays[kB];
             for (int y = y0; y < y1; ++y)
               for (int x = x0; x < x1; ++x)
-                for (int i0 = 0; i0 < spp; i0 += kB) {
+                for (int i0 = pass_begin; i0 < pass_end; i0 += kB) {
                   if ((i0 & 63) == 0 && opt.cancel && opt.cancel->load()) {
                     cancelled = true;
                     break;
                   }
-                  const int m = std::min(kB, spp - i0);
+                  const int m = std::min(kB, pass_end - i0);
                   int path_dimension = 0;
                   for (int k = 0; k < m; ++k) {
                     sampler->startPixelSample({x, y}, i0 + k);
@@ -275,6 +281,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     stopProgress();  // a joinable thread must not outlive the render
     throw;
   }
+  if (opt.on_pass && !cancelled.load() && (opt.cancel == nullptr || !opt.cancel->load()) &&
+      !opt.on_pass(film.image(), pass_end))
+    cancelled = true;
+  }
   stopProgress();
 
   st.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -284,7 +294,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   st.outside_samples = outside;
   st.nonfinite_samples = nonfinite;
   st.rays = rays;
-  st.partial = cancelled.load() || tiles_done.load() < n_tiles;
+  st.partial = cancelled.load() || tiles_done.load() < n_tiles * passes || pass_begin < spp;
   result.image = film.image();
   auto& md = result.image.metadata;
   md["lensim:spp"] = std::to_string(spp);

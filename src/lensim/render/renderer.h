@@ -7,6 +7,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -28,6 +29,11 @@ struct RenderOptions {
   std::optional<std::array<int, 4>> pixelbounds;  ///< pixel bounds x0 x1 y0 y1
   bool progress = false;                          ///< print a progress bar to stderr
   const std::atomic<bool>* cancel = nullptr;      ///< set to stop early (Ctrl-C)
+  /// Progressive rendering (the explorer's preview): the samples go in passes of 1, 1, 2, 4, ...
+  /// per pixel (the total doubling up to spp) and this is called after each with the image so
+  /// far and its samples per pixel. Returning false stops the render (the result is partial).
+  /// Unset: one pass. Either way each pixel gets the same samples in the same order.
+  std::function<bool(const io::Image& image, int spp_done)> on_pass;
   /// Reproduce two numerical artefacts of pbrt-v2 that old reference images carry (the CS348B /
   /// NTU assignment's references): its ray epsilon proportional to the camera-ray parameter
   /// (SceneContext::pbrt_v2_epsilon) and its realistic camera's zero-weight samples
