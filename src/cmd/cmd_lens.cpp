@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
+#include "lensim/optics/lens_formats.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/plots.h"
 #include "lensim/util/log.h"
@@ -45,6 +47,17 @@ json surfacesJson(const LensSystem& lens) {
                    {"aperture_diameter_mm", 2 * s.semi_aperture_mm},
                    {"z_mm", s.z_mm},
                    {"is_stop", s.is_stop}});
+    if (!s.shape.isSpherical()) {
+      json& e = arr.back();
+      e["conic"] = s.shape.conic;
+      if (s.shape.hasPolynomial()) {
+        json a = json::object();
+        for (size_t k = 1; k < s.shape.poly.size(); ++k)
+          if (s.shape.poly[k] != 0) a[std::to_string(k)] = s.shape.poly[k];
+        e["aspheric"] = a;
+      }
+      if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
+    }
   }
   return arr;
 }
@@ -74,7 +87,10 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["lens"] = {{"path", pr.path},
                  {"name", pr.name},
                  {"layout", layoutName(pr.layout)},
+                 {"format", pr.format},
                  {"surface_count", lens.surfaceCount()}};
+    if (!pr.aperture_spec.empty()) j["lens"]["aperture_spec"] = pr.aperture_spec;
+    if (pr.object_distance_mm) j["lens"]["object_distance_mm"] = *pr.object_distance_mm;
     if (pr.nominal_focal_length_mm)
       j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
     j["effective_focal_length_mm"] = p.effective_focal_length_mm;
@@ -121,8 +137,12 @@ int runInfo(const LensArgs& args, bool as_json) {
     std::cout << fmt::format("  {:<26}{}\n", k, v);
   };
   std::cout << fmt::format("{}\n", pr.name);
-  line("file", fmt::format("{} ({} layout, {} surfaces)", pr.path, layoutName(pr.layout),
-                           lens.surfaceCount()));
+  if (pr.format == "dat")
+    line("file", fmt::format("{} ({} layout, {} surfaces)", pr.path, layoutName(pr.layout),
+                             lens.surfaceCount()));
+  else
+    line("file", fmt::format("{} ({}, {} surfaces{})", pr.path, pr.format, lens.surfaceCount(),
+                             pr.aperture_spec.empty() ? "" : ", aperture " + pr.aperture_spec));
   if (pr.nominal_focal_length_mm)
     line("stated focal length", fmt::format("{:.3f} mm", *pr.nominal_focal_length_mm));
   line("effective focal length", fmt::format("{:.4f} mm", p.effective_focal_length_mm));
@@ -182,6 +202,34 @@ int runInfo(const LensArgs& args, bool as_json) {
                              s.is_stop ? std::string("stop") : fmt::format("{:.4f}", s.radius_mm),
                              t, s.ior_after, 2 * s.semi_aperture_mm, s.z_mm);
   }
+  for (int i = 0; i < lens.surfaceCount(); ++i) {
+    const SurfaceShape& sh = lens.interfaces()[i].shape;
+    if (sh.isSpherical()) continue;
+    std::string d = fmt::format("  surface {}: ", i);
+    if (sh.radius_x_mm) d += fmt::format("x-section radius {:.4f} mm, ", *sh.radius_x_mm);
+    d += fmt::format("conic {:.6g}", sh.conic);
+    for (size_t k = 1; k < sh.poly.size(); ++k)
+      if (sh.poly[k] != 0) d += fmt::format(", r^{} {:.6g}", k, sh.poly[k]);
+    std::cout << d << "\n";
+  }
+  return 0;
+}
+
+int runConvert(const std::string& in, const std::string& out) {
+  const LensPrescription p = readLensFile(in);
+  logDiagnostics(p.diagnostics);
+  std::string ext = std::filesystem::path(out).extension().string();
+  std::string text;
+  if (ext == ".json")
+    text = writeLensJson(p);
+  else if (ext == ".dat")
+    text = writeLensDat(p);
+  else
+    throw Error(fmt::format("cannot write '{}': lensim writes lenses as .json (any lens) or .dat "
+                            "(spherical lenses)",
+                            out));
+  writeFileAtomically(out, text);
+  logInfo(fmt::format("wrote {} ({} surfaces)", out, p.surfaces.size()));
   return 0;
 }
 
@@ -350,7 +398,7 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
 }  // namespace
 
 void registerLensCommands(CLI::App& app, Action& action) {
-  CLI::App* lens = app.add_subcommand("lens", "Analyse a lens prescription (.dat)");
+  CLI::App* lens = app.add_subcommand("lens", "Analyse a lens prescription (.dat, .zmx, .json, lentil:KEY)");
   lens->require_subcommand(1);
 
   {
@@ -411,6 +459,17 @@ void registerLensCommands(CLI::App& app, Action& action) {
                      "spot: fields as fractions of the film half-diagonal (default 0,0.5,0.7,1)");
     plot->add_flag("--json", pa->as_json, "Also print the plotted numbers as JSON");
     plot->callback([&action, args, pa] { action = [args, pa] { return runPlot(*args, *pa); }; });
+  }
+  {
+    auto* convert = lens->add_subcommand(
+        "convert", "Convert a lens between formats by extension (.json always; .dat spherical)");
+    auto in = std::make_shared<std::string>();
+    auto out = std::make_shared<std::string>();
+    convert->add_option("IN", *in, "Lens file (.dat, .zmx, .json) or name (lentil:0003)")
+        ->required();
+    convert->add_option("OUT", *out, "Output .json or .dat")->required();
+    convert->callback(
+        [&action, in, out] { action = [in, out] { return runConvert(*in, *out); }; });
   }
 }
 
