@@ -213,6 +213,103 @@ def ep_check(surfaces):
     return z_ep, 2 * surfaces[st]["semi"] * abs(h / eps)
 
 
+# ---------------------------------------------------------------------------- Zemax files
+def read_zmx(path):
+    """A .zmx file's surfaces for a paraxial trace, read here with Python's own decoding and a
+    whitespace tokeniser (nothing shared with lensim's reader): per lens surface the vertex
+    curvature (CURV plus twice the r^2 term of an aspheric polynomial), the index after it (the
+    GLAS line's n_d; air without GLAS) and the thickness to the next surface, in mm; the stop;
+    and the system aperture (ENPD or FNUM)."""
+    raw = open(path, "rb").read()
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        text = raw.decode("utf-16")
+    else:
+        text = raw.decode("utf-8-sig")
+    scale = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "M": 1000.0}
+    unit = 1.0
+    surfs, cur = [], None
+    aperture = None
+    for line in text.splitlines():
+        tok = line.split()
+        if not tok:
+            continue
+        key = tok[0]
+        if key == "SURF":
+            cur = dict(curv=0.0, disz=None, glass=None, n=None, stop=False, type="STANDARD",
+                       parm={})
+            surfs.append(cur)
+        elif cur is None:
+            if key == "UNIT":
+                unit = scale[tok[1]]
+            elif key == "ENPD":
+                aperture = ("ENPD", float(tok[1]))
+            elif key == "FNUM":
+                aperture = ("FNUM", float(tok[1]))
+        elif key == "TYPE":
+            cur["type"] = tok[1]
+        elif key == "CURV":
+            cur["curv"] = float(tok[1])
+        elif key == "DISZ":
+            cur["disz"] = None if tok[1] == "INFINITY" else float(tok[1])
+        elif key == "GLAS":
+            cur["glass"] = tok[1]
+            cur["n"] = float(tok[4])
+        elif key == "STOP":
+            cur["stop"] = True
+        elif key == "PARM":
+            cur["parm"][int(tok[1])] = float(tok[2])
+    lens = []
+    stop = None
+    for k, z in enumerate(surfs[1:-1]):
+        c = z["curv"] / unit
+        # r^2 coefficient: EVENASPH PARM 1, ODDASPH PARM 2 (1/length).
+        a2 = {"EVENASPH": z["parm"].get(1, 0.0), "ODDASPH": z["parm"].get(2, 0.0)}.get(z["type"], 0.0)
+        c += 2 * a2 / unit
+        n = z["n"] if z["glass"] else 1.0
+        lens.append(dict(c=c, n1=n, t=z["disz"] * unit))
+        if z["stop"]:
+            stop = k
+    if aperture and aperture[0] == "ENPD":
+        aperture = ("ENPD", aperture[1] * unit)
+    return lens, (stop if stop is not None else 0), aperture
+
+
+def zmx_paraxial(lens):
+    fwd, n0 = [], 1.0
+    for s in lens:
+        fwd.append((s["c"], n0, s["n1"], s["t"]))
+        n0 = s["n1"]
+    rev = []
+    for i in range(len(fwd) - 1, -1, -1):
+        c, a, b, _ = fwd[i]
+        rev.append((-c, b, a, fwd[i - 1][3] if i > 0 else 0.0))
+    y_last, nu_last, _ = ynu_trace(fwd, 1.0, 0.0)
+    y_first, nu_first, _ = ynu_trace(rev, 1.0, 0.0)
+    return dict(efl=-1.0 / nu_last, bfl=-y_last / nu_last, ffl=-y_first / nu_first)
+
+
+def check_zmx(lensim, path):
+    lens, stop, aperture = read_zmx(path)
+    ref = zmx_paraxial(lens)
+    info = run([lensim, "lens", "info", path, "--json"])
+    if info.returncode != 0:
+        fail(f"{path}: lens info exited {info.returncode}: {info.stderr}")
+        return
+    j = json.loads(info.stdout)
+    checks = [("effective_focal_length_mm", ref["efl"]), ("back_focal_length_mm", ref["bfl"]),
+              ("front_focal_length_mm", ref["ffl"])]
+    if aperture and aperture[0] == "ENPD":
+        checks.append(("entrance_pupil_diameter_mm", aperture[1]))
+    elif aperture:
+        checks.append(("f_number", aperture[1]))
+    for key, mine in checks:
+        rel = abs(j[key] - mine) / abs(mine)
+        status = "ok" if rel < 1e-6 else "FAIL"
+        print(f"  {key:28s} lensim {j[key]:14.8f}  independent {mine:14.8f}  rel {rel:.1e} {status}")
+        if rel >= 1e-6:
+            fail(f"{path}: {key} {j[key]} vs {mine}")
+
+
 # ---------------------------------------------------------------------------- checks
 def run(cmd):
     return subprocess.run(cmd, capture_output=True, text=True)
@@ -364,6 +461,10 @@ def main():
     for name in lenses:
         print(name)
         check_lens(args.lensim, os.path.join(args.root, "lenses", name), rng)
+    shared = os.path.join(args.root, "..", "shared", "lenses", "zmx")
+    for name in ("ACL3026U-Zemax(ZMX).zmx", "US00583336-2-scaled.zmx"):
+        print(name)
+        check_zmx(args.lensim, os.path.join(shared, name))
     check_bad_corpus(args.lensim, args.root)
     check_pictures(args.lensim, args.root)
     if FAILURES:

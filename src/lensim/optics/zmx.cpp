@@ -56,11 +56,7 @@ std::string decodeTextFile(std::string_view bytes, const std::string& path) {
               : ((std::uint32_t(u8(i)) << 8) | std::uint32_t(u8(i + 1)));
   };
   const char* enc = le ? "UTF-16 LE" : "UTF-16 BE";
-  if (bytes.size() % 2 != 0)
-    throw Error(FileLoc{path, line, 0},
-                fmt::format("malformed {} file: odd number of bytes ({}); the file is truncated "
-                            "or not UTF-16",
-                            enc, bytes.size()));
+  const bool odd = bytes.size() % 2 != 0;
   for (size_t i = 2; i + 1 < bytes.size(); i += 2) {
     std::uint32_t cu = unit(i);
     if (cu >= 0xD800 && cu <= 0xDBFF) {
@@ -80,6 +76,11 @@ std::string decodeTextFile(std::string_view bytes, const std::string& path) {
     if (cu == '\n') ++line;
     appendUtf8(out, cu);
   }
+  if (odd)
+    throw Error(FileLoc{path, line, 0},
+                fmt::format("malformed {} file: odd number of bytes ({}); the file is truncated "
+                            "in the middle of a character or is not UTF-16",
+                            enc, bytes.size()));
   return out;
 }
 
