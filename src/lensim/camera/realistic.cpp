@@ -45,6 +45,8 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
     pupil_options.rear_disc_radius_mm = lens_.lens->interfaces().back().semi_aperture_mm;
     pupil_options.radial_bins = 48;
   }
+  for (const optics::Interface& in : lens_.lens->interfaces())
+    if (!in.shape.isRotational()) pupil_options.rotational = false;  // anamorphic: 2-D bound
   pupil_.emplace(*lens_.lens, lens_.paraxial, std::hypot(half_width_mm_, half_height_mm_),
                  pupil_options);
   centre_area_mm2_ = pupil_->area_mm2({0, 0});

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/chief_ray.h"
 
 namespace lensim::optics {
@@ -23,6 +24,7 @@ double cross2(Vec2 a, Vec2 b) {
 ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p,
                                    double film_radius_mm, const ExitPupilOptions& opts)
     : film_radius_mm_(film_radius_mm),
+      rotational_(opts.rotational),
       z_rear_mm_(lens.rearVertexZ_mm()),
       directions_(std::max(8, opts.directions)) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -34,10 +36,34 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   const double rr = 1.5 * lens.interfaces().back().semi_aperture_mm;
 
   const double disc2 = opts.rear_disc_radius_mm * opts.rear_disc_radius_mm;
-  auto passes = [&](double h, Vec2 a) {
+  // Anamorphic: the paraxial chief ray from film height h crosses the rear plane at kappa h
+  // (aimed at the exit pupil's centre).
+  if (!rotational_) {
+    const double z_film = lens.filmZ_mm();
+    auto kappa = [&](double z_xp) {
+      return std::abs(z_xp - z_film) > 1e-9 ? (z_xp - z_rear_mm_) / (z_xp - z_film) : 0.0;
+    };
+    kappa_y_ = kappa(p.exit_pupil_z_mm);
+    const AnamorphicData ad = anamorphicData(lens);
+    kappa_x_ = ad.x ? kappa(ad.x->exit_pupil_z_mm) : kappa_y_;
+  }
+  const int n_az = rotational_ ? 1 : std::max(4, opts.azimuths);
+  auto passes1 = [&](Vec2 film, Vec2 a) {
     if (disc2 > 0 && a.x * a.x + a.y * a.y > disc2) return false;
     ++traces_;
-    return lens.traceFromFilmPoint({h, 0}, a).ok();
+    return lens.traceFromFilmPoint(film, a).ok();
+  };
+  // The checks of a polygon (below) use the azimuths half-way between the polygon's own, so
+  // that the regions of film points between them are covered too.
+  double az_shift = 0;
+  auto passes = [&](double h, Vec2 a) {
+    if (rotational_) return passes1({h, 0}, a);
+    for (int k = 0; k < n_az; ++k) {
+      const double phi = 2 * std::numbers::pi * (k + az_shift) / n_az;
+      const double ca = std::cos(phi), sa = std::sin(phi);
+      if (passes1({h * ca, h * sa}, toFilmAzimuth(a, h, ca, sa))) return true;
+    }
+    return false;
   };
   // Distance from c (inside the region) to the region's boundary along u: the first blocked
   // point, bisected to 1e-3 relative; starts from a guess and grows or shrinks geometrically.
@@ -134,6 +160,18 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     return f;
   };
 
+  // Boundary points that check a polygon: its own azimuths, and for anamorphic bounds also the
+  // azimuths between them.
+  auto checkPoints = [&](double h, double offset, const Polygon* hint) {
+    std::vector<Vec2> pts = boundaryPoints(h, nd, offset, nullptr, hint);
+    if (!rotational_) {
+      az_shift = 0.5;
+      std::vector<Vec2> more = boundaryPoints(h, nd, offset, nullptr, hint);
+      az_shift = 0;
+      pts.insert(pts.end(), more.begin(), more.end());
+    }
+    return pts;
+  };
   // A node: the region's polygon at radius h, checked at the half-way directions.
   auto makeNode = [&](double h, const Polygon* hint) {
     Polygon poly;
@@ -143,8 +181,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     poly.empty = false;
     for (const Vec2& q : pts)
       poly.radius.push_back(std::hypot(q.x - poly.centre.x, q.y - poly.centre.y));
-    const std::vector<double> f =
-        coverFactors(poly, boundaryPoints(h, nd, 0.5 * dphi, nullptr, &poly));
+    const std::vector<double> f = coverFactors(poly, checkPoints(h, 0.5 * dphi, &poly));
     for (int j = 0; j < nd; ++j) poly.radius[j] *= f[j];
     return poly;
   };
@@ -176,7 +213,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     std::vector<double> f(nd, 1.0);
     bool split = false;
     if (any) {
-      f = coverFactors(interp, boundaryPoints(h, nd, 0.25 * dphi, nullptr, &interp));
+      f = coverFactors(interp, checkPoints(h, 0.25 * dphi, &interp));
       const double worst = *std::max_element(f.begin(), f.end());
       const double a0 = area(left), a1 = area(right);
       const bool fast = left.empty != right.empty || std::max(a0, a1) > 1.25 * std::min(a0, a1);
@@ -194,13 +231,16 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         Polygon at;
         interpolateBetween(left, right, ht, at);
         const std::vector<double> g =
-            coverFactors(at, boundaryPoints(ht, nd, 0.25 * dphi, nullptr, &at));
+            coverFactors(at, checkPoints(ht, 0.25 * dphi, &at));
         for (int j = 0; j < nd; ++j) f[j] = std::max(f[j], g[j]);
       }
     }
     // Where the region vanishes (the edge of the image circle) it changes shape fastest: triple
     // the margin there.
-    const double margin = left.empty != right.empty ? 3 * opts.margin : opts.margin;
+    // Anamorphic bounds cover several azimuths' regions at once and change shape faster: a
+    // wider margin.
+    const double base_margin = opts.margin;
+    const double margin = left.empty != right.empty ? 3 * base_margin : base_margin;
     for (double& v : f) v *= 1 + margin;
     scales.push_back(std::move(f));
     done.push_back(right);
@@ -356,10 +396,10 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
     const Vec2 centre = v.c0 * (1 - tt) + v.c1 * tt;
     const double uy = u[lane[k]].y;
     const Vec2 local = centre + (a * (1 - uy) + b * uy) * s;
-    // Rotate from the +x film frame to the film point's azimuth.
-    out[lane[k]] = PupilSample{
-        {ca[k] * local.x - sa[k] * local.y, sa[k] * local.x + ca[k] * local.y, z_rear_mm_},
-        0.5 * total[k] * dirs_[1].y};
+    // From the +x film frame to the film point's azimuth.
+    const Vec2 rear = toFilmAzimuth(local, std::hypot(film_mm[lane[k]].x, film_mm[lane[k]].y),
+                                    ca[k], sa[k]);
+    out[lane[k]] = PupilSample{{rear.x, rear.y, z_rear_mm_}, 0.5 * total[k] * dirs_[1].y};
   }
 }
 
@@ -369,8 +409,12 @@ bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm) const {
   if (!iv) return false;
   const Vec2 centre = iv->c0 * (1 - t) + iv->c1 * t;
   // Into the +x frame, relative to the centre.
-  const Vec2 q{ca * rear_mm.x + sa * rear_mm.y - centre.x,
-               -sa * rear_mm.x + ca * rear_mm.y - centre.y};
+  Vec2 q{ca * rear_mm.x + sa * rear_mm.y - centre.x, -sa * rear_mm.x + ca * rear_mm.y - centre.y};
+  if (!rotational_) {
+    const double r = std::hypot(film_mm.x, film_mm.y);
+    q = {rear_mm.x - (kappa_x_ * ca - kappa_x_) * r - centre.x,
+         rear_mm.y - kappa_y_ * sa * r - centre.y};
+  }
   const int nd = directions_;
   const double dphi = 2 * std::numbers::pi / nd;
   double ang = std::atan2(q.y, q.x);

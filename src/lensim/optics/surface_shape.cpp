@@ -119,6 +119,15 @@ ShapeIntersector::ShapeIntersector(double radius_mm, const SurfaceShape& shape,
   }
   const double pad = 0.02 * (hi - lo) + 1e-7;
   z_lo_ = lo - pad, z_hi_ = hi + pad;
+  // Quadric when (1 + k) c is the same for every curved section.
+  if (!shape.hasPolynomial()) {
+    const Coeffs k = coeffsOf(radius_mm, shape);
+    const double ex = k.cx != 0 ? k.ax / k.cx : 0.0, ey = k.cy != 0 ? k.ay / k.cy : 0.0;
+    if (k.cx == 0 || k.cy == 0 || std::abs(ex - ey) <= 1e-12 * std::max(std::abs(ex), 1e-300)) {
+      quadric_ = true;
+      qcx_ = k.cx, qcy_ = k.cy, qe_ = k.cx != 0 ? ex : ey;
+    }
+  }
 }
 
 SagGradient ShapeIntersector::sagContinued(double x, double y) const {
@@ -147,6 +156,35 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
   }
   ta = std::max(ta, t_min);
   if (!(ta <= tb)) return std::nullopt;
+  if (quadric_) {
+    // A t^2 + 2 B t + C = 0; stable roots; the nearest on the vertex sheet inside bound_r.
+    const double A = qcx_ * d.x * d.x + qcy_ * d.y * d.y + qe_ * d.z * d.z;
+    const double B = qcx_ * o.x * d.x + qcy_ * o.y * d.y + qe_ * o.z * d.z - d.z;
+    const double C = qcx_ * o.x * o.x + qcy_ * o.y * o.y + qe_ * o.z * o.z - 2 * o.z;
+    double roots[2];
+    int nr = 0;
+    if (A == 0) {
+      if (B != 0) roots[nr++] = -C / (2 * B);
+    } else {
+      const double disc = B * B - A * C;
+      if (disc >= 0) {
+        const double q = -(B + std::copysign(std::sqrt(disc), B));
+        roots[nr++] = q / A;
+        if (q != 0) roots[nr++] = C / q;
+      }
+    }
+    if (nr == 2 && roots[1] < roots[0]) std::swap(roots[0], roots[1]);
+    for (int i = 0; i < nr; ++i) {
+      const double t = roots[i];
+      if (!(t >= t_min)) continue;
+      const Vec3 p = o + d * t;
+      if (1 - qe_ * p.z <= 0) continue;  // the other sheet
+      // Normal from the quadric's gradient (2 cx x, 2 cy y, 2 e z - 2), facing -z.
+      Vec3 n{qcx_ * p.x, qcy_ * p.y, qe_ * p.z - 1};
+      return Hit{t, normalize(n)};
+    }
+    // No vertex-sheet hit: the general search below finds the continuation beyond bound_r.
+  }
   auto g = [&](double t, SagGradient* sg) {
     const double x = o.x + t * d.x, y = o.y + t * d.y;
     const SagGradient s = sagContinued(x, y);

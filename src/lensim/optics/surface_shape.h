@@ -69,6 +69,9 @@ double sagDomainRadius(double radius_mm, const SurfaceShape& shape);
 /// the ray is found by sampling g(t) = z(t) - sag(x(t), y(t)) across the slab for the first sign
 /// change, then refined by Newton steps kept inside the bracket (bisection when a step leaves
 /// it), to ~1e-12 mm. There is only one sheet (the sag function's), so no wrong-sheet hits.
+/// Conics and cylinders without polynomial terms are quadrics: their hits come from the
+/// quadratic, on the vertex sheet (hits beyond bound_r on the true quadric; the flat
+/// continuation only where the line misses the vertex sheet).
 class ShapeIntersector {
  public:
   ShapeIntersector() = default;
@@ -87,6 +90,10 @@ class ShapeIntersector {
  private:
   double radius_ = 0;
   SurfaceShape shape_;
+  // Quadrics (rotational conics and cylinders without polynomial terms) have a closed form:
+  // cx x^2 + cy y^2 + e z^2 - 2 z = 0, the vertex sheet where 1 - e z > 0.
+  bool quadric_ = false;
+  double qcx_ = 0, qcy_ = 0, qe_ = 0;
   double bound_r_ = 0;
   double z_lo_ = 0, z_hi_ = 0;  // slab of the (continued) surface relative to the vertex
 };
