@@ -12,6 +12,7 @@
 
 #include "commands.h"
 #include "lens_options.h"
+#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
@@ -127,6 +128,17 @@ int runInfo(const LensArgs& args, bool as_json) {
       j["image_circle_diameter_mm"] = *fov.image_circle_diameter_mm;
       j["field_of_view_max_deg"] = *fov.real_max_deg;
     }
+    if (!isRotationallySymmetric(pr)) {
+      const AnamorphicData ad = anamorphicData(lens);
+      j["anamorphic"] = {
+          {"effective_focal_length_x_mm",
+           ad.x ? json(ad.x->effective_focal_length_mm) : json(nullptr)},
+          {"effective_focal_length_y_mm",
+           ad.y ? json(ad.y->effective_focal_length_mm) : json(nullptr)},
+          {"back_focal_length_x_mm", ad.x ? json(ad.x->back_focal_length_mm) : json(nullptr)},
+          {"back_focal_length_y_mm", ad.y ? json(ad.y->back_focal_length_mm) : json(nullptr)},
+          {"squeeze", ad.squeeze}};
+    }
     j["surfaces"] = surfacesJson(lens);
     j["diagnostics"] = diagnosticsJson(fl);
     std::cout << j.dump(2) << "\n";
@@ -146,6 +158,15 @@ int runInfo(const LensArgs& args, bool as_json) {
   if (pr.nominal_focal_length_mm)
     line("stated focal length", fmt::format("{:.3f} mm", *pr.nominal_focal_length_mm));
   line("effective focal length", fmt::format("{:.4f} mm", p.effective_focal_length_mm));
+  if (!isRotationallySymmetric(pr)) {
+    const AnamorphicData ad = anamorphicData(lens);
+    line("anamorphic (x / y)",
+         fmt::format("EFL_x {} mm, EFL_y {:.4f} mm, squeeze {:.4f}; BFL_x {} mm (the other data "
+                     "below are the y-z section's)",
+                     ad.x ? fmt::format("{:.4f}", ad.x->effective_focal_length_mm) : "afocal",
+                     p.effective_focal_length_mm, ad.squeeze,
+                     ad.x ? fmt::format("{:.4f}", ad.x->back_focal_length_mm) : "-"));
+  }
   line("back focal length", fmt::format("{:.4f} mm (rear focal point z = {:.4f})",
                                         p.back_focal_length_mm, p.back_focal_point_z_mm));
   line("front focal length", fmt::format("{:.4f} mm (front focal point z = {:.4f})",
@@ -318,6 +339,17 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     FocusedLens fl = setUpLens(one);
     logDiagnostics(fl.allDiagnostics());
     diagrams.push_back(buildLensDiagram(fl, opts));
+    if (!isRotationallySymmetric(fl.lens->prescription())) {
+      // Anamorphic: the x-z section too (meridional rays of a biconic surface in the x-z plane
+      // are those of its x-section profile), with the same film plane.
+      LensPrescription x = xSection(fl.lens->prescription());
+      x.name += " (x-z section)";
+      LensSetup setup;
+      setup.film_distance_mm = fl.lens->filmDistance_mm();
+      if (fl.lens->stopDiameter_mm()) setup.aperture_diameter_mm = fl.lens->stopDiameter_mm();
+      FocusedLens fx = focusLens(std::move(x), setup);
+      diagrams.push_back(buildLensDiagram(fx, opts));
+    }
   }
   writeFileAtomically(args.output, lensDiagramSheet(diagrams, args.same_scale));
   logInfo(fmt::format("wrote {} ({} lens{})", args.output, diagrams.size(),
