@@ -388,6 +388,38 @@ def check_lens(lensim, path, rng):
         fail(f"{path}: only {n_ok} rays got through; the comparison is too thin")
 
 
+def check_convert(lensim, root):
+    """`lens convert` to lensim JSON validates against docs/lens.schema.json (python3-jsonschema,
+    not lensim's code) and reads back with the same first-order data; .dat refuses aspheres."""
+    import tempfile
+    import jsonschema
+    schema = json.load(open(os.path.join(root, "docs", "lens.schema.json")))
+    tmp = tempfile.mkdtemp(prefix="lensim-convert-")
+    sources = [os.path.join(root, "lenses", "dgauss.50mm.dat"), "lentil:0014", "lentil:2004",
+               os.path.join(root, "..", "shared", "lenses", "zmx", "ACL3026U-Zemax(ZMX).zmx"),
+               os.path.join(root, "tests", "data", "iset", "dgauss.77deg.3.5201mm.json")]
+    for k, src in enumerate(sources):
+        out = os.path.join(tmp, f"lens{k}.json")
+        r = run([lensim, "lens", "convert", src, out])
+        if r.returncode != 0:
+            fail(f"convert {src}: exit {r.returncode} {r.stderr}")
+            continue
+        try:
+            jsonschema.validate(json.load(open(out)), schema)
+        except jsonschema.ValidationError as e:
+            fail(f"convert {src}: the JSON does not follow the schema: {e.message}")
+        a = json.loads(run([lensim, "lens", "info", src, "--json"]).stdout)
+        b = json.loads(run([lensim, "lens", "info", out, "--json"]).stdout)
+        if abs(a["effective_focal_length_mm"] - b["effective_focal_length_mm"]) > 1e-9 * abs(
+                a["effective_focal_length_mm"]):
+            fail(f"convert {src}: EFL {a['effective_focal_length_mm']} -> {b['effective_focal_length_mm']}")
+    r = run([lensim, "lens", "convert", "lentil:0014", os.path.join(tmp, "x.dat")])
+    if r.returncode != 1 or "cannot be written to .dat" not in r.stderr or os.path.exists(
+            os.path.join(tmp, "x.dat")):
+        fail(f"convert asphere to .dat: exit {r.returncode} {r.stderr!r}")
+    print(f"  lens convert: {len(sources)} lenses to schema-valid JSON, same EFL; .dat refuses aspheres")
+
+
 def check_bad_corpus(lensim, root):
     folder = os.path.join(root, "tests", "data", "bad_lenses")
     count = 0
@@ -465,6 +497,7 @@ def main():
     for name in ("ACL3026U-Zemax(ZMX).zmx", "US00583336-2-scaled.zmx"):
         print(name)
         check_zmx(args.lensim, os.path.join(shared, name))
+    check_convert(args.lensim, args.root)
     check_bad_corpus(args.lensim, args.root)
     check_pictures(args.lensim, args.root)
     if FAILURES:
