@@ -120,14 +120,43 @@ ShapeIntersector::ShapeIntersector(double radius_mm, const SurfaceShape& shape,
   const double pad = 0.02 * (hi - lo) + 1e-7;
   z_lo_ = lo - pad, z_hi_ = hi + pad;
   // Quadric when (1 + k) c is the same for every curved section.
-  if (!shape.hasPolynomial()) {
+  {
     const Coeffs k = coeffsOf(radius_mm, shape);
     const double ex = k.cx != 0 ? k.ax / k.cx : 0.0, ey = k.cy != 0 ? k.ay / k.cy : 0.0;
     if (k.cx == 0 || k.cy == 0 || std::abs(ex - ey) <= 1e-12 * std::max(std::abs(ex), 1e-300)) {
-      quadric_ = true;
+      base_quadric_ = true;
+      quadric_ = !shape.hasPolynomial();
       qcx_ = k.cx, qcy_ = k.cy, qe_ = k.cx != 0 ? ex : ey;
     }
   }
+}
+
+std::optional<double> ShapeIntersector::quadricRoot(const Vec3& o, const Vec3& d,
+                                                    double t_min) const {
+  // A t^2 + 2 B t + C = 0; stable roots; the nearest on the vertex sheet.
+  const double A = qcx_ * d.x * d.x + qcy_ * d.y * d.y + qe_ * d.z * d.z;
+  const double B = qcx_ * o.x * d.x + qcy_ * o.y * d.y + qe_ * o.z * d.z - d.z;
+  const double C = qcx_ * o.x * o.x + qcy_ * o.y * o.y + qe_ * o.z * o.z - 2 * o.z;
+  double roots[2];
+  int nr = 0;
+  if (A == 0) {
+    if (B != 0) roots[nr++] = -C / (2 * B);
+  } else {
+    const double disc = B * B - A * C;
+    if (disc >= 0) {
+      const double q = -(B + std::copysign(std::sqrt(disc), B));
+      roots[nr++] = q / A;
+      if (q != 0) roots[nr++] = C / q;
+    }
+  }
+  if (nr == 2 && roots[1] < roots[0]) std::swap(roots[0], roots[1]);
+  for (int i = 0; i < nr; ++i) {
+    const double t = roots[i];
+    if (!(t >= t_min)) continue;
+    if (1 - qe_ * (o.z + t * d.z) <= 0) continue;  // the other sheet
+    return t;
+  }
+  return std::nullopt;
 }
 
 SagGradient ShapeIntersector::sagContinued(double x, double y) const {
@@ -157,31 +186,10 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
   ta = std::max(ta, t_min);
   if (!(ta <= tb)) return std::nullopt;
   if (quadric_) {
-    // A t^2 + 2 B t + C = 0; stable roots; the nearest on the vertex sheet inside bound_r.
-    const double A = qcx_ * d.x * d.x + qcy_ * d.y * d.y + qe_ * d.z * d.z;
-    const double B = qcx_ * o.x * d.x + qcy_ * o.y * d.y + qe_ * o.z * d.z - d.z;
-    const double C = qcx_ * o.x * o.x + qcy_ * o.y * o.y + qe_ * o.z * o.z - 2 * o.z;
-    double roots[2];
-    int nr = 0;
-    if (A == 0) {
-      if (B != 0) roots[nr++] = -C / (2 * B);
-    } else {
-      const double disc = B * B - A * C;
-      if (disc >= 0) {
-        const double q = -(B + std::copysign(std::sqrt(disc), B));
-        roots[nr++] = q / A;
-        if (q != 0) roots[nr++] = C / q;
-      }
-    }
-    if (nr == 2 && roots[1] < roots[0]) std::swap(roots[0], roots[1]);
-    for (int i = 0; i < nr; ++i) {
-      const double t = roots[i];
-      if (!(t >= t_min)) continue;
-      const Vec3 p = o + d * t;
-      if (1 - qe_ * p.z <= 0) continue;  // the other sheet
+    if (auto t = quadricRoot(o, d, t_min)) {
+      const Vec3 p = o + d * *t;
       // Normal from the quadric's gradient (2 cx x, 2 cy y, 2 e z - 2), facing -z.
-      Vec3 n{qcx_ * p.x, qcy_ * p.y, qe_ * p.z - 1};
-      return Hit{t, normalize(n)};
+      return Hit{*t, normalize(Vec3{qcx_ * p.x, qcy_ * p.y, qe_ * p.z - 1})};
     }
     // No vertex-sheet hit: the general search below finds the continuation beyond bound_r.
   }
@@ -191,6 +199,43 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
     if (sg) *sg = s;
     return o.z + t * d.z - s.z;
   };
+  // Aspheres on a quadric base: Newton's method from the base quadric's hit, accepted when it
+  // converges inside the slab and g keeps its sign from the slab's entry to just before the root
+  // (checked at 4 points; so the root is the first crossing); else the bracketing search below.
+  if (base_quadric_ && !quadric_) {
+    if (auto tq = quadricRoot(o, d, t_min); tq && *tq >= ta && *tq <= tb) {
+      double t = *tq;
+      bool converged = false;
+      for (int it = 0; it < 12; ++it) {
+        SagGradient s;
+        const double gt = g(t, &s);
+        const double dg = d.z - s.dzdx * d.x - s.dzdy * d.y;
+        if (dg == 0 || !std::isfinite(dg)) break;
+        const double tn = t - gt / dg;
+        if (!(tn >= ta && tn <= tb)) break;
+        const double step = std::abs(tn - t);
+        t = tn;
+        if (step <= 1e-13 * (1 + std::abs(t))) {
+          converged = true;
+          break;
+        }
+      }
+      if (converged) {
+        const double g0 = g(ta, nullptr);
+        bool first = g0 != 0;
+        for (int k = 1; k <= 4 && first; ++k) {
+          const double gk = g(ta + (t - ta) * k / 5.0, nullptr);
+          first = gk != 0 && (gk < 0) == (g0 < 0);
+        }
+        if (first) {
+          SagGradient s;
+          g(t, &s);
+          const Vec3 n{s.dzdx, s.dzdy, -1.0};
+          if (std::isfinite(n.x) && std::isfinite(n.y)) return Hit{t, normalize(n)};
+        }
+      }
+    }
+  }
   // First sign change along the ray: the nearest crossing.
   constexpr int kSamples = 16;
   double a = ta, ga = g(ta, nullptr);

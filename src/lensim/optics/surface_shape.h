@@ -93,7 +93,11 @@ class ShapeIntersector {
   // Quadrics (rotational conics and cylinders without polynomial terms) have a closed form:
   // cx x^2 + cy y^2 + e z^2 - 2 z = 0, the vertex sheet where 1 - e z > 0.
   bool quadric_ = false;
+  // The base quadric (the shape without its polynomial terms), when it is one: its hit predicts
+  // the aspheric one, which Newton's method then refines.
+  bool base_quadric_ = false;
   double qcx_ = 0, qcy_ = 0, qe_ = 0;
+  std::optional<double> quadricRoot(const Vec3& o, const Vec3& d, double t_min) const;
   double bound_r_ = 0;
   double z_lo_ = 0, z_hi_ = 0;  // slab of the (continued) surface relative to the vertex
 };
