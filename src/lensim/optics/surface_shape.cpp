@@ -102,6 +102,12 @@ double sagDomainRadius(double radius_mm, const SurfaceShape& shape) {
 ShapeIntersector::ShapeIntersector(double radius_mm, const SurfaceShape& shape,
                                    double semi_aperture_mm)
     : radius_(radius_mm), shape_(shape) {
+  {
+    const Coeffs k = coeffsOf(radius_mm, shape);
+    cx_ = k.cx, cy_ = k.cy, ax_ = k.ax, ay_ = k.ay;
+    for (size_t p = 1; p < shape.poly.size(); ++p)
+      if (shape.poly[p] != 0) terms_.push_back({int(p), shape.poly[p]});
+  }
   const double domain = sagDomainRadius(radius_mm, shape);
   const double semi = std::max(semi_aperture_mm, 1e-6);
   bound_r_ = std::min(1.25 * semi, domain * (1 - 1e-9));
@@ -167,8 +173,39 @@ SagGradient ShapeIntersector::sagContinued(double x, double y) const {
     auto g = surfaceSag(radius_, shape_, x * s, y * s);
     return {g ? g->z : 0.0, 0.0, 0.0};
   }
-  if (auto g = surfaceSag(radius_, shape_, x, y)) return *g;
-  return {};  // not reached: bound_r_ lies inside the domain
+  // surfaceSag's formula with the coefficients cached (the hot path of the Newton solve).
+  const double arg = std::max(0.0, 1 - ax_ * x * x - ay_ * y * y);
+  const double S = std::sqrt(arg), N = cx_ * x * x + cy_ * y * y, den = 1 + S;
+  SagGradient g;
+  g.z = N / den;
+  if (S > 0) {
+    const double inv = 1 / (den * den), nS = N / S;
+    g.dzdx = (2 * cx_ * x * den + nS * ax_ * x) * inv;
+    g.dzdy = (2 * cy_ * y * den + nS * ay_ * y) * inv;
+  } else {
+    return *surfaceSag(radius_, shape_, x, y);  // the domain's rim (not inside bound_r_)
+  }
+  if (!terms_.empty()) {
+    const double r = std::sqrt(r2);
+    double z = 0, slope_over_r = 0;
+    double rk = 1;  // r^k; the terms come in increasing powers
+    int k = 0;
+    for (const auto& [p, a] : terms_) {
+      if (p == 1) {
+        z += a * r;
+        if (r > 0) slope_over_r += a / r;
+      } else {
+        while (k < p - 2) rk *= r, ++k;
+        const double rpm2 = rk;
+        z += a * rpm2 * r2;
+        slope_over_r += p * a * rpm2;
+      }
+    }
+    g.z += z;
+    g.dzdx += slope_over_r * x;
+    g.dzdy += slope_over_r * y;
+  }
+  return g;
 }
 
 std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, const Vec3& d,

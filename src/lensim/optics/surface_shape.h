@@ -15,6 +15,7 @@
 #pragma once
 
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "lensim/util/vec.h"
@@ -90,6 +91,8 @@ class ShapeIntersector {
  private:
   double radius_ = 0;
   SurfaceShape shape_;
+  double cx_ = 0, cy_ = 0, ax_ = 0, ay_ = 0;    // cached section curvatures and (1 + k) c^2
+  std::vector<std::pair<int, double>> terms_;  // the non-zero polynomial terms (power, coeff)
   // Quadrics (rotational conics and cylinders without polynomial terms) have a closed form:
   // cx x^2 + cy y^2 + e z^2 - 2 z = 0, the vertex sheet where 1 - e z > 0.
   bool quadric_ = false;
