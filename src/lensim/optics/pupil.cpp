@@ -56,12 +56,17 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // The checks of a polygon (below) use the azimuths half-way between the polygon's own, so
   // that the regions of film points between them are covered too.
   double az_shift = 0;
+  int last_az = 0;  // the azimuth that passed last: neighbouring points usually pass there too
   auto passes = [&](double h, Vec2 a) {
     if (rotational_) return passes1({h, 0}, a);
-    for (int k = 0; k < n_az; ++k) {
+    for (int i = 0; i < n_az; ++i) {
+      const int k = (last_az + i) % n_az;
       const double phi = 2 * std::numbers::pi * (k + az_shift) / n_az;
       const double ca = std::cos(phi), sa = std::sin(phi);
-      if (passes1({h * ca, h * sa}, toFilmAzimuth(a, h, ca, sa))) return true;
+      if (passes1({h * ca, h * sa}, toFilmAzimuth(a, h, ca, sa))) {
+        last_az = k;
+        return true;
+      }
     }
     return false;
   };
