@@ -29,8 +29,29 @@ def fail(msg):
 
 
 # ---------------------------------------------------------------------------- lens reading
+def read_lensim_json(path):
+    """A lens in lensim's JSON format, read with Python's json module: spheres as read_rows gives
+    them, plus the conic k and the polynomial terms {power: coefficient} of aspheric surfaces."""
+    lens = json.load(open(path))
+    surfaces, z, n_before = [], 0.0, 1.0
+    rows = lens["surfaces"]
+    for i, r in enumerate(rows):
+        n = r.get("ior", 1.0)
+        s = dict(R=r["radius_mm"], z=z, semi=r["semi_aperture_mm"], n0=n_before, n1=n)
+        if "conic" in r or "aspheric" in r:
+            s["k"] = r.get("conic", 0.0)
+            s["poly"] = {int(p): c for p, c in r.get("aspheric", {}).items()}
+        surfaces.append(s)
+        n_before = n
+        if i + 1 < len(rows):
+            z += r["thickness_mm"]
+    return surfaces
+
+
 def read_rows(path):
     """Rows of 4 numbers; a lone number before the rows is ISET's focal length (skipped)."""
+    if path.endswith(".json"):
+        return read_lensim_json(path)
     rows = []
     with open(path, "rb") as f:
         text = f.read().decode()
@@ -61,9 +82,65 @@ def sag(R, r):
     return R - math.copysign(math.sqrt(max(0.0, R * R - r * r)), R)
 
 
+def asph_sag(s, r):
+    """Sag of a conic + polynomial surface and its derivative d sag / d r."""
+    c = 1.0 / s["R"] if s["R"] != 0 else 0.0
+    k = s["k"]
+    w = math.sqrt(max(0.0, 1 - (1 + k) * c * c * r * r))
+    z = c * r * r / (1 + w)
+    dz = c * r / w if w > 0 else float("inf")
+    for p, a in s["poly"].items():
+        z += a * r ** p
+        dz += p * a * r ** (p - 1)
+    return z, dz
+
+
+def asph_intersect(s, o, d):
+    """Newton's method on g(t) = z(t) - z_v - sag(r(t)), started where the ray meets the vertex
+    plane, with step halving when |g| grows (lensim: closed-form base conic, then Newton)."""
+    if abs(d[2]) < 1e-15:
+        return None
+    t = (s["z"] - o[2]) / d[2]
+
+    def g_of(t):
+        x, y, z = (o[k] + t * d[k] for k in range(3))
+        r = math.hypot(x, y)
+        sg, dsg = asph_sag(s, r)
+        g = z - s["z"] - sg
+        dg = d[2] - (dsg * (x * d[0] + y * d[1]) / r if r > 0 else 0.0)
+        return g, dg
+
+    g, dg = g_of(t)
+    for _ in range(100):
+        if dg == 0:
+            return None
+        step = -g / dg
+        while True:
+            g1, dg1 = g_of(t + step)
+            if abs(g1) < abs(g) or abs(step) < 1e-15:
+                break
+            step *= 0.5
+        t += step
+        g, dg = g1, dg1
+        if abs(step) < 1e-13:
+            break
+    return t if abs(g) < 1e-9 and t >= -1e-9 else None
+
+
+def asph_normal(s, p):
+    x, y = p[0], p[1]
+    r = math.hypot(x, y)
+    _, dsg = asph_sag(s, r)
+    gx, gy = (dsg * x / r, dsg * y / r) if r > 0 else (0.0, 0.0)
+    L = math.sqrt(gx * gx + gy * gy + 1)
+    return (gx / L, gy / L, -1 / L)
+
+
 def intersect(s, o, d):
     """Geometric line/sphere roots (closest approach and half chord), the root on the vertex-side
     cap, then Newton steps on g(t) = z(t) - z_v - sag(r(t)) to polish it."""
+    if "k" in s:
+        return asph_intersect(s, o, d)
     R = s["R"]
     if R == 0:
         if abs(d[2]) < 1e-15:
@@ -100,6 +177,8 @@ def intersect(s, o, d):
 
 
 def normal_at(s, p):
+    if "k" in s:
+        return asph_normal(s, p)
     R = s["R"]
     if R == 0:
         return (0.0, 0.0, -1.0)
@@ -493,6 +572,10 @@ def main():
     for name in lenses:
         print(name)
         check_lens(args.lensim, os.path.join(args.root, "lenses", name), rng)
+    # Aspheric surfaces (conic + polynomial), traced by the Newton solver above.
+    print("tests/data/lenses/asphere-doublet.json")
+    check_lens(args.lensim, os.path.join(args.root, "tests", "data", "lenses", "asphere-doublet.json"),
+               rng)
     shared = os.path.join(args.root, "..", "shared", "lenses", "zmx")
     for name in ("ACL3026U-Zemax(ZMX).zmx", "US00583336-2-scaled.zmx"):
         print(name)
