@@ -109,11 +109,15 @@ TEST(Asphere, FloatBatchTracerCollimatesThePointAtTheFocus) {
   }
 }
 
-TEST(Asphere, HitsLieOnTheSurfaceWithTheSagGradientAsNormal) {
-  // An even asphere with a strong r^4 term and an odd asphere term; random rays near the rim.
+class AsphereShapes : public ::testing::TestWithParam<int> {};
+
+TEST_P(AsphereShapes, HitsLieOnTheSurfaceWithTheSagGradientAsNormal) {
+  // An even asphere with r^2, r^4 and r^6 terms; an odd one (Zemax ODDASPH) with r^1, r^3, r^5
+  // terms on an oblate conic; random rays, many near the rim.
   SurfaceShape shape;
-  shape.conic = -0.6;
-  shape.poly = {0, 0, 0.001, 0, 2e-5, 0, -3e-8};
+  shape.conic = GetParam() == 0 ? -0.6 : 0.4;
+  shape.poly = GetParam() == 0 ? std::vector<double>{0, 0, 0.001, 0, 2e-5, 0, -3e-8}
+                               : std::vector<double>{0, 2e-4, 0, -3e-5, 0, 4e-7};
   const double R = 18, semi = 9;
   const ShapeIntersector isect(R, shape, semi);
   std::mt19937_64 rng(7);
@@ -136,6 +140,8 @@ TEST(Asphere, HitsLieOnTheSurfaceWithTheSagGradientAsNormal) {
   }
   EXPECT_GT(hits, 1500);
 }
+
+INSTANTIATE_TEST_SUITE_P(EvenAndOdd, AsphereShapes, ::testing::Values(0, 1));
 
 TEST(Asphere, FirstCrossingIsTaken) {
   // A steep concave-to-the-ray conic: a ray that crosses the surface twice must stop at the
