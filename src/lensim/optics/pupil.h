@@ -36,13 +36,16 @@ struct ExitPupilOptions {
   /// bounds then cover the part of the region inside that disc (for a camera that aims only at
   /// the rear element's disc, as the CS348B assignment's did).
   double rear_disc_radius_mm = 0;
-  /// false for lenses that are not rotationally symmetric (anamorphic): the bound at film radius
-  /// h then covers the regions of film points at `azimuths` angles around the axis, each moved
-  /// (not rotated) so that its paraxial chief-ray crossing lies on the +x axis; sampling moves
-  /// the bound back to the film point's azimuth without rotating it (a 2-D bound: an anamorphic
-  /// lens's elliptical exit pupil keeps its orientation across the film).
+  /// false for lenses that are not rotationally symmetric (anamorphic, symmetric under x -> -x
+  /// and y -> -y): film points are mirrored into the first quadrant, which is cut into `sectors`
+  /// wedges; a wedge's bound at film radius h covers the regions of film points at `azimuths`
+  /// angles across it, each moved (not rotated) so that its paraxial chief-ray crossing (x and y
+  /// exit pupils apart) lies on the +x axis, and is checked at the angles between them; sampling
+  /// moves the bound back to the film point's azimuth without rotating it and mirrors it back (a
+  /// 2-D bound: an anamorphic lens's elliptical exit pupil keeps its orientation).
   bool rotational = true;
-  int azimuths = 8;
+  int sectors = 4;   ///< anamorphic: wedges of the first quadrant with bounds of their own
+  int azimuths = 2;  ///< anamorphic: film azimuths per wedge (its edges included)
 };
 
 /// A point to aim a camera ray at, and the area of the region it was drawn from (pdf = 1/area).
@@ -100,6 +103,8 @@ class ExitPupilSampler {
     std::vector<double> A, B;  // per vertex
     std::vector<double> P;     // prefix sums P0, P1, P2 interleaved: 3 (n + 1) values
   };
+  static int intervalIn(const std::vector<Interval>& intervals,
+                        const std::vector<int>& radius_lut, double lut_scale, double r);
   void buildIntervals(const std::vector<Polygon>& nodes,
                       const std::vector<std::vector<double>>& scales);
   // The interval, t and rotation for a film point; nullptr where it sees nothing.
@@ -122,6 +127,14 @@ class ExitPupilSampler {
   std::vector<Interval> intervals_;
   std::vector<int> radius_lut_;  // first interval for film radii k / lut_scale_
   double lut_scale_ = 0;
+  // The bounds: one set for rotationally symmetric lenses; one per wedge of the first quadrant
+  // for anamorphic ones (film points elsewhere are mirrored into it).
+  struct Sector {
+    std::vector<Interval> intervals;
+    std::vector<int> lut;
+    double lut_scale = 0;
+  };
+  std::vector<Sector> sectors_;
   double build_seconds_ = 0;
   long traces_ = 0;
 };
