@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -12,10 +13,12 @@
 #include "commands.h"
 #include "lens_analysis.h"
 #include "lens_options.h"
+#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/chromatic.h"
 #include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
+#include "lensim/optics/lens_formats.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/plots.h"
 #include "lensim/util/log.h"
@@ -47,6 +50,17 @@ json surfacesJson(const LensSystem& lens) {
                    {"aperture_diameter_mm", 2 * s.semi_aperture_mm},
                    {"z_mm", s.z_mm},
                    {"is_stop", s.is_stop}});
+    if (!s.shape.isSpherical()) {
+      json& e = arr.back();
+      e["conic"] = s.shape.conic;
+      if (s.shape.hasPolynomial()) {
+        json a = json::object();
+        for (size_t k = 1; k < s.shape.poly.size(); ++k)
+          if (s.shape.poly[k] != 0) a[std::to_string(k)] = s.shape.poly[k];
+        e["aspheric"] = a;
+      }
+      if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
+    }
   }
   return arr;
 }
@@ -116,7 +130,10 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["lens"] = {{"path", pr.path},
                  {"name", pr.name},
                  {"layout", layoutName(pr.layout)},
+                 {"format", pr.format},
                  {"surface_count", lens.surfaceCount()}};
+    if (!pr.aperture_spec.empty()) j["lens"]["aperture_spec"] = pr.aperture_spec;
+    if (pr.object_distance_mm) j["lens"]["object_distance_mm"] = *pr.object_distance_mm;
     if (pr.nominal_focal_length_mm)
       j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
     j["effective_focal_length_mm"] = p.effective_focal_length_mm;
@@ -162,6 +179,17 @@ int runInfo(const LensArgs& args, bool as_json) {
       j["image_circle_diameter_mm"] = *fov.image_circle_diameter_mm;
       j["field_of_view_max_deg"] = *fov.real_max_deg;
     }
+    if (!isRotationallySymmetric(pr)) {
+      const AnamorphicData ad = anamorphicData(lens);
+      j["anamorphic"] = {
+          {"effective_focal_length_x_mm",
+           ad.x ? json(ad.x->effective_focal_length_mm) : json(nullptr)},
+          {"effective_focal_length_y_mm",
+           ad.y ? json(ad.y->effective_focal_length_mm) : json(nullptr)},
+          {"back_focal_length_x_mm", ad.x ? json(ad.x->back_focal_length_mm) : json(nullptr)},
+          {"back_focal_length_y_mm", ad.y ? json(ad.y->back_focal_length_mm) : json(nullptr)},
+          {"squeeze", ad.squeeze}};
+    }
     j["surfaces"] = surfacesJson(lens);
     j["wavelength_nm"] = lens.wavelength_nm();
     j["primary_wavelength_nm"] = primaryWavelength_nm(pr);
@@ -176,11 +204,24 @@ int runInfo(const LensArgs& args, bool as_json) {
     std::cout << fmt::format("  {:<26}{}\n", k, v);
   };
   std::cout << fmt::format("{}\n", pr.name);
-  line("file", fmt::format("{} ({} layout, {} surfaces)", pr.path, layoutName(pr.layout),
-                           lens.surfaceCount()));
+  if (pr.format == "dat")
+    line("file", fmt::format("{} ({} layout, {} surfaces)", pr.path, layoutName(pr.layout),
+                             lens.surfaceCount()));
+  else
+    line("file", fmt::format("{} ({}, {} surfaces{})", pr.path, pr.format, lens.surfaceCount(),
+                             pr.aperture_spec.empty() ? "" : ", aperture " + pr.aperture_spec));
   if (pr.nominal_focal_length_mm)
     line("stated focal length", fmt::format("{:.3f} mm", *pr.nominal_focal_length_mm));
   line("effective focal length", fmt::format("{:.4f} mm", p.effective_focal_length_mm));
+  if (!isRotationallySymmetric(pr)) {
+    const AnamorphicData ad = anamorphicData(lens);
+    line("anamorphic (x / y)",
+         fmt::format("EFL_x {} mm, EFL_y {:.4f} mm, squeeze {:.4f}; BFL_x {} mm (the other data "
+                     "below are the y-z section's)",
+                     ad.x ? fmt::format("{:.4f}", ad.x->effective_focal_length_mm) : "afocal",
+                     p.effective_focal_length_mm, ad.squeeze,
+                     ad.x ? fmt::format("{:.4f}", ad.x->back_focal_length_mm) : "-"));
+  }
   line("back focal length", fmt::format("{:.4f} mm (rear focal point z = {:.4f})",
                                         p.back_focal_length_mm, p.back_focal_point_z_mm));
   line("front focal length", fmt::format("{:.4f} mm (front focal point z = {:.4f})",
@@ -264,6 +305,34 @@ int runInfo(const LensArgs& args, bool as_json) {
                              g.n_d(), std::isfinite(g.v_d()) ? fmt::format("{:.3f}", g.v_d()) : "-",
                              lens.interfaces()[i].ior_after);
   }
+  for (int i = 0; i < lens.surfaceCount(); ++i) {
+    const SurfaceShape& sh = lens.interfaces()[i].shape;
+    if (sh.isSpherical()) continue;
+    std::string d = fmt::format("  surface {}: ", i);
+    if (sh.radius_x_mm) d += fmt::format("x-section radius {:.4f} mm, ", *sh.radius_x_mm);
+    d += fmt::format("conic {:.6g}", sh.conic);
+    for (size_t k = 1; k < sh.poly.size(); ++k)
+      if (sh.poly[k] != 0) d += fmt::format(", r^{} {:.6g}", k, sh.poly[k]);
+    std::cout << d << "\n";
+  }
+  return 0;
+}
+
+int runConvert(const std::string& in, const std::string& out) {
+  const LensPrescription p = readLensFile(in);
+  logDiagnostics(p.diagnostics);
+  std::string ext = std::filesystem::path(out).extension().string();
+  std::string text;
+  if (ext == ".json")
+    text = writeLensJson(p);
+  else if (ext == ".dat")
+    text = writeLensDat(p);
+  else
+    throw Error(fmt::format("cannot write '{}': lensim writes lenses as .json (any lens) or .dat "
+                            "(spherical lenses)",
+                            out));
+  writeFileAtomically(out, text);
+  logInfo(fmt::format("wrote {} ({} surfaces)", out, p.surfaces.size()));
   return 0;
 }
 
@@ -355,6 +424,17 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     logDiagnostics(fl.allDiagnostics());
     if (args.wavelengths.empty()) {
       diagrams.push_back(buildLensDiagram(fl, opts));
+      if (!isRotationallySymmetric(fl.lens->prescription())) {
+        // Anamorphic: the x-z section too (meridional rays of a biconic surface in the x-z plane
+        // are those of its x-section profile), with the same film plane.
+        LensPrescription x = xSection(fl.lens->prescription());
+        x.name += " (x-z section)";
+        LensSetup setup;
+        setup.film_distance_mm = fl.lens->filmDistance_mm();
+        if (fl.lens->stopDiameter_mm()) setup.aperture_diameter_mm = fl.lens->stopDiameter_mm();
+        FocusedLens fx = focusLens(std::move(x), setup);
+        diagrams.push_back(buildLensDiagram(fx, opts));
+      }
       continue;
     }
     // One bundle set per wavelength, drawn in its colour, on the lens focused at the primary.
@@ -506,7 +586,7 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
 }  // namespace
 
 void registerLensCommands(CLI::App& app, Action& action) {
-  CLI::App* lens = app.add_subcommand("lens", "Analyse a lens prescription (.dat)");
+  CLI::App* lens = app.add_subcommand("lens", "Analyse a lens prescription (.dat, .zmx, .json, lentil:KEY)");
   lens->require_subcommand(1);
 
   {
@@ -579,6 +659,17 @@ void registerLensCommands(CLI::App& app, Action& action) {
     addAnalysisOptions(plot, pa->analysis);
     plot->add_flag("--json", pa->as_json, "Also print the plotted numbers as JSON");
     plot->callback([&action, args, pa] { action = [args, pa] { return runPlot(*args, *pa); }; });
+  }
+  {
+    auto* convert = lens->add_subcommand(
+        "convert", "Convert a lens between formats by extension (.json always; .dat spherical)");
+    auto in = std::make_shared<std::string>();
+    auto out = std::make_shared<std::string>();
+    convert->add_option("IN", *in, "Lens file (.dat, .zmx, .json) or name (lentil:0003)")
+        ->required();
+    convert->add_option("OUT", *out, "Output .json or .dat")->required();
+    convert->callback(
+        [&action, in, out] { action = [in, out] { return runConvert(*in, *out); }; });
   }
 }
 

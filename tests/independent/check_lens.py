@@ -29,8 +29,29 @@ def fail(msg):
 
 
 # ---------------------------------------------------------------------------- lens reading
+def read_lensim_json(path):
+    """A lens in lensim's JSON format, read with Python's json module: spheres as read_rows gives
+    them, plus the conic k and the polynomial terms {power: coefficient} of aspheric surfaces."""
+    lens = json.load(open(path))
+    surfaces, z, n_before = [], 0.0, 1.0
+    rows = lens["surfaces"]
+    for i, r in enumerate(rows):
+        n = r.get("ior", 1.0)
+        s = dict(R=r["radius_mm"], z=z, semi=r["semi_aperture_mm"], n0=n_before, n1=n)
+        if "conic" in r or "aspheric" in r:
+            s["k"] = r.get("conic", 0.0)
+            s["poly"] = {int(p): c for p, c in r.get("aspheric", {}).items()}
+        surfaces.append(s)
+        n_before = n
+        if i + 1 < len(rows):
+            z += r["thickness_mm"]
+    return surfaces
+
+
 def read_rows(path):
     """Rows of 4 numbers; a lone number before the rows is ISET's focal length (skipped)."""
+    if path.endswith(".json"):
+        return read_lensim_json(path)
     rows = []
     with open(path, "rb") as f:
         text = f.read().decode()
@@ -61,9 +82,65 @@ def sag(R, r):
     return R - math.copysign(math.sqrt(max(0.0, R * R - r * r)), R)
 
 
+def asph_sag(s, r):
+    """Sag of a conic + polynomial surface and its derivative d sag / d r."""
+    c = 1.0 / s["R"] if s["R"] != 0 else 0.0
+    k = s["k"]
+    w = math.sqrt(max(0.0, 1 - (1 + k) * c * c * r * r))
+    z = c * r * r / (1 + w)
+    dz = c * r / w if w > 0 else float("inf")
+    for p, a in s["poly"].items():
+        z += a * r ** p
+        dz += p * a * r ** (p - 1)
+    return z, dz
+
+
+def asph_intersect(s, o, d):
+    """Newton's method on g(t) = z(t) - z_v - sag(r(t)), started where the ray meets the vertex
+    plane, with step halving when |g| grows (lensim: closed-form base conic, then Newton)."""
+    if abs(d[2]) < 1e-15:
+        return None
+    t = (s["z"] - o[2]) / d[2]
+
+    def g_of(t):
+        x, y, z = (o[k] + t * d[k] for k in range(3))
+        r = math.hypot(x, y)
+        sg, dsg = asph_sag(s, r)
+        g = z - s["z"] - sg
+        dg = d[2] - (dsg * (x * d[0] + y * d[1]) / r if r > 0 else 0.0)
+        return g, dg
+
+    g, dg = g_of(t)
+    for _ in range(100):
+        if dg == 0:
+            return None
+        step = -g / dg
+        while True:
+            g1, dg1 = g_of(t + step)
+            if abs(g1) < abs(g) or abs(step) < 1e-15:
+                break
+            step *= 0.5
+        t += step
+        g, dg = g1, dg1
+        if abs(step) < 1e-13:
+            break
+    return t if abs(g) < 1e-9 and t >= -1e-9 else None
+
+
+def asph_normal(s, p):
+    x, y = p[0], p[1]
+    r = math.hypot(x, y)
+    _, dsg = asph_sag(s, r)
+    gx, gy = (dsg * x / r, dsg * y / r) if r > 0 else (0.0, 0.0)
+    L = math.sqrt(gx * gx + gy * gy + 1)
+    return (gx / L, gy / L, -1 / L)
+
+
 def intersect(s, o, d):
     """Geometric line/sphere roots (closest approach and half chord), the root on the vertex-side
     cap, then Newton steps on g(t) = z(t) - z_v - sag(r(t)) to polish it."""
+    if "k" in s:
+        return asph_intersect(s, o, d)
     R = s["R"]
     if R == 0:
         if abs(d[2]) < 1e-15:
@@ -100,6 +177,8 @@ def intersect(s, o, d):
 
 
 def normal_at(s, p):
+    if "k" in s:
+        return asph_normal(s, p)
     R = s["R"]
     if R == 0:
         return (0.0, 0.0, -1.0)
@@ -213,6 +292,104 @@ def ep_check(surfaces):
     return z_ep, 2 * surfaces[st]["semi"] * abs(h / eps)
 
 
+# ---------------------------------------------------------------------------- Zemax files
+def read_zmx(path):
+    """A .zmx file's surfaces for a paraxial trace, read here with Python's own decoding and a
+    whitespace tokeniser (nothing shared with lensim's reader): per lens surface the vertex
+    curvature (CURV plus twice the r^2 term of an aspheric polynomial), the index after it (the
+    GLAS line's n_d; air without GLAS) and the thickness to the next surface, in mm; the stop;
+    and the system aperture (ENPD or FNUM)."""
+    raw = open(path, "rb").read()
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        text = raw.decode("utf-16")
+    else:
+        text = raw.decode("utf-8-sig")
+    scale = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "M": 1000.0}
+    unit = 1.0
+    surfs, cur = [], None
+    aperture = None
+    for line in text.splitlines():
+        tok = line.split()
+        if not tok:
+            continue
+        key = tok[0]
+        if key == "SURF":
+            cur = dict(curv=0.0, disz=None, glass=None, n=None, stop=False, type="STANDARD",
+                       parm={})
+            surfs.append(cur)
+        elif cur is None:
+            if key == "UNIT":
+                unit = scale[tok[1]]
+            elif key == "ENPD":
+                aperture = ("ENPD", float(tok[1]))
+            elif key == "FNUM":
+                aperture = ("FNUM", float(tok[1]))
+        elif key == "TYPE":
+            cur["type"] = tok[1]
+        elif key == "CURV":
+            cur["curv"] = float(tok[1])
+        elif key == "DISZ":
+            cur["disz"] = None if tok[1] == "INFINITY" else float(tok[1])
+        elif key == "GLAS":
+            cur["glass"] = tok[1]
+            cur["n"] = float(tok[4])
+        elif key == "STOP":
+            cur["stop"] = True
+        elif key == "PARM":
+            cur["parm"][int(tok[1])] = float(tok[2])
+    lens = []
+    stop = None
+    for k, z in enumerate(surfs[1:-1]):
+        c = z["curv"] / unit
+        # r^2 coefficient: EVENASPH PARM 1, ODDASPH PARM 2 (1/length).
+        a2 = {"EVENASPH": z["parm"].get(1, 0.0), "ODDASPH": z["parm"].get(2, 0.0)}.get(z["type"], 0.0)
+        c += 2 * a2 / unit
+        n = z["n"] if z["glass"] else 1.0
+        lens.append(dict(c=c, n1=n, t=z["disz"] * unit))
+        if z["stop"]:
+            stop = k
+    if aperture and aperture[0] == "ENPD":
+        aperture = ("ENPD", aperture[1] * unit)
+    return lens, (stop if stop is not None else 0), aperture
+
+
+def zmx_paraxial(lens):
+    fwd, n0 = [], 1.0
+    for s in lens:
+        fwd.append((s["c"], n0, s["n1"], s["t"]))
+        n0 = s["n1"]
+    rev = []
+    for i in range(len(fwd) - 1, -1, -1):
+        c, a, b, _ = fwd[i]
+        rev.append((-c, b, a, fwd[i - 1][3] if i > 0 else 0.0))
+    y_last, nu_last, _ = ynu_trace(fwd, 1.0, 0.0)
+    y_first, nu_first, _ = ynu_trace(rev, 1.0, 0.0)
+    return dict(efl=-1.0 / nu_last, bfl=-y_last / nu_last, ffl=-y_first / nu_first)
+
+
+def check_zmx(lensim, path):
+    lens, stop, aperture = read_zmx(path)
+    ref = zmx_paraxial(lens)
+    # At the d line, where the GLAS line's n_d holds (the file's primary wavelength may differ).
+    info = run([lensim, "lens", "info", path, "--json", "--wavelength", "587.5618"])
+    if info.returncode != 0:
+        fail(f"{path}: lens info exited {info.returncode}: {info.stderr}")
+        return
+    j = json.loads(info.stdout)
+    checks = [("effective_focal_length_mm", ref["efl"]), ("back_focal_length_mm", ref["bfl"]),
+              ("front_focal_length_mm", ref["ffl"])]
+    if aperture and aperture[0] == "ENPD":
+        checks.append(("entrance_pupil_diameter_mm", aperture[1]))
+    elif aperture:
+        checks.append(("f_number", aperture[1]))
+    for key, mine in checks:
+        rel = abs(j[key] - mine) / abs(mine)
+        status = "ok" if rel < 1e-6 else "FAIL"
+        print(f"  {key:28s} lensim {j[key]:14.8f}  independent {mine:14.8f}  rel {rel:.1e} {status}")
+        if rel >= 1e-6:
+            fail(f"{path}: {key} {j[key]} vs {mine}")
+
+
 # ---------------------------------------------------------------------------- checks
 def run(cmd):
     return subprocess.run(cmd, capture_output=True, text=True)
@@ -289,6 +466,38 @@ def check_lens(lensim, path, rng):
           f"max |origin diff| {worst_pos:.1e} mm, max |direction diff| {worst_dir:.1e}")
     if n_ok < 20:
         fail(f"{path}: only {n_ok} rays got through; the comparison is too thin")
+
+
+def check_convert(lensim, root):
+    """`lens convert` to lensim JSON validates against docs/lens.schema.json (python3-jsonschema,
+    not lensim's code) and reads back with the same first-order data; .dat refuses aspheres."""
+    import tempfile
+    import jsonschema
+    schema = json.load(open(os.path.join(root, "docs", "lens.schema.json")))
+    tmp = tempfile.mkdtemp(prefix="lensim-convert-")
+    sources = [os.path.join(root, "lenses", "dgauss.50mm.dat"), "lentil:0014", "lentil:2004",
+               os.path.join(root, "..", "shared", "lenses", "zmx", "ACL3026U-Zemax(ZMX).zmx"),
+               os.path.join(root, "tests", "data", "iset", "dgauss.77deg.3.5201mm.json")]
+    for k, src in enumerate(sources):
+        out = os.path.join(tmp, f"lens{k}.json")
+        r = run([lensim, "lens", "convert", src, out])
+        if r.returncode != 0:
+            fail(f"convert {src}: exit {r.returncode} {r.stderr}")
+            continue
+        try:
+            jsonschema.validate(json.load(open(out)), schema)
+        except jsonschema.ValidationError as e:
+            fail(f"convert {src}: the JSON does not follow the schema: {e.message}")
+        a = json.loads(run([lensim, "lens", "info", src, "--json"]).stdout)
+        b = json.loads(run([lensim, "lens", "info", out, "--json"]).stdout)
+        if abs(a["effective_focal_length_mm"] - b["effective_focal_length_mm"]) > 1e-9 * abs(
+                a["effective_focal_length_mm"]):
+            fail(f"convert {src}: EFL {a['effective_focal_length_mm']} -> {b['effective_focal_length_mm']}")
+    r = run([lensim, "lens", "convert", "lentil:0014", os.path.join(tmp, "x.dat")])
+    if r.returncode != 1 or "cannot be written to .dat" not in r.stderr or os.path.exists(
+            os.path.join(tmp, "x.dat")):
+        fail(f"convert asphere to .dat: exit {r.returncode} {r.stderr!r}")
+    print(f"  lens convert: {len(sources)} lenses to schema-valid JSON, same EFL; .dat refuses aspheres")
 
 
 def check_bad_corpus(lensim, root):
@@ -483,6 +692,15 @@ def main():
     for name in lenses:
         print(name)
         check_lens(args.lensim, os.path.join(args.root, "lenses", name), rng)
+    # Aspheric surfaces (conic + polynomial), traced by the Newton solver above.
+    print("tests/data/lenses/asphere-doublet.json")
+    check_lens(args.lensim, os.path.join(args.root, "tests", "data", "lenses", "asphere-doublet.json"),
+               rng)
+    shared = os.path.join(args.root, "..", "shared", "lenses", "zmx")
+    for name in ("ACL3026U-Zemax(ZMX).zmx", "US00583336-2-scaled.zmx"):
+        print(name)
+        check_zmx(args.lensim, os.path.join(shared, name))
+    check_convert(args.lensim, args.root)
     check_bad_corpus(args.lensim, args.root)
     check_pictures(args.lensim, args.root)
     check_analyses(args.lensim, args.root)

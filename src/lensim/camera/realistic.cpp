@@ -70,6 +70,8 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   // them by 5% instead of 1%, so that rays of 360-830 nm are not lost (checked through the film
   // irradiance at 450 and 620 nm in tests/render_dispersion_test.cpp).
   if (dispersive_) pupil_options.margin = 0.05;
+  for (const optics::Interface& in : lens_.lens->interfaces())
+    if (!in.shape.isRotational()) pupil_options.rotational = false;  // anamorphic: 2-D bound
   pupil_.emplace(*lens_.lens, lens_.paraxial, std::hypot(half_width_mm_, half_height_mm_),
                  pupil_options);
   centre_area_mm2_ = pupil_->area_mm2({0, 0});

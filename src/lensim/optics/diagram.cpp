@@ -15,11 +15,18 @@ namespace {
 
 constexpr double kDeg = 180.0 / std::numbers::pi;
 
+// Sag of an interface at height h in the y-z section (aspheric profiles included).
+double interfaceSag(const Interface& s, double h) {
+  if (s.shape.isSpherical()) return sphericalSag(s.radius_mm, h);
+  if (auto g = surfaceSag(s.radius_mm, s.shape, 0.0, h)) return g->z;
+  return sphericalSag(s.radius_mm, h);
+}
+
 std::vector<Vec2> profile(const Interface& s, double h_from, double h_to, int steps = 48) {
   std::vector<Vec2> pts;
   for (int k = 0; k <= steps; ++k) {
     const double h = h_from + (h_to - h_from) * k / steps;
-    pts.push_back({s.z_mm + sphericalSag(s.radius_mm, h), h});
+    pts.push_back({s.z_mm + interfaceSag(s, h), h});
   }
   return pts;
 }
@@ -28,8 +35,8 @@ std::vector<Vec2> profile(const Interface& s, double h_from, double h_to, int st
 // the apertures differ, the smaller surface continues as a flat annulus to the larger height.
 std::vector<Vec2> elementOutline(const Interface& a, const Interface& b) {
   const double ha = a.semi_aperture_mm, hb = b.semi_aperture_mm;
-  const double za = a.z_mm + sphericalSag(a.radius_mm, ha);
-  const double zb = b.z_mm + sphericalSag(b.radius_mm, hb);
+  const double za = a.z_mm + interfaceSag(a, ha);
+  const double zb = b.z_mm + interfaceSag(b, hb);
   std::vector<Vec2> out = profile(a, ha, -ha);
   if (ha > hb) {
     out.push_back({zb, -ha});

@@ -35,6 +35,12 @@ LensTracer<T>::LensTracer(const std::vector<Interface>& interfaces) {
     eta_before_.push_back(T(s.ior_before));
     eta_after_.push_back(T(s.ior_after));
     is_stop_.push_back(s.is_stop ? 1 : 0);
+    if (s.shape.isSpherical()) {
+      shape_index_.push_back(-1);
+    } else {
+      shape_index_.push_back(static_cast<int>(shapes_.size()));
+      shapes_.emplace_back(s.radius_mm, s.shape, s.semi_aperture_mm);
+    }
   }
 }
 
@@ -80,6 +86,16 @@ TraceResultT<T> LensTracer<T>::trace(const RayT<T>& in, const TraceOptions& opts
   const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
   for (int k = 0; k < n; ++k) {
     const int i = kFromFilm ? n - 1 - k : k;
+    if (shape_index_[i] >= 0) {
+      Vec3T<T> p;
+      const BlockReason why = traceShaped(i, kFromFilm, opts.clip_apertures, o, d, p);
+      if (why == BlockReason::Miss) return {RayT<T>{o, d}, i, why, res.stop_point};
+      if (path) path->push_back(p);
+      if (is_stop_[i]) res.stop_point = {p.x, p.y};
+      if (why != BlockReason::None) return {RayT<T>{p, d}, i, why, res.stop_point};
+      o = p;
+      continue;
+    }
     const T R = radius_[i];
     const Vec3T<T> rel{o.x, o.y, o.z - z_[i]};  // origin relative to the vertex
     T t;
@@ -185,7 +201,22 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
     };
-    if (R == zero && refracts == zero) {
+    if (shape_index_[i] >= 0) {
+      // A non-spherical surface: lane by lane with the bracketed Newton solve (spherical
+      // lenses never come here).
+      for (int j = 0; j < nv; ++j) {
+        Vec3T<T> o{ox[j], oy[j], oz[j]}, d{dx[j], dy[j], dz[j]}, p{};
+        const BlockReason why = traceShaped(i, true, true, o, d, p);
+        px[j] = p.x, py[j] = p.y, pz[j] = p.z;
+        ex[j] = d.x, ey[j] = d.y, ez[j] = d.z;
+        fate[j] = why == BlockReason::None       ? zero
+                  : why == BlockReason::Miss     ? one
+                  : why == BlockReason::Aperture ? T(2)
+                                                 : T(3);
+        if (why == BlockReason::Aperture || why == BlockReason::TotalInternalReflection)
+          ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
+      }
+    } else if (R == zero && refracts == zero) {
       planeLanes(std::false_type{});
     } else if (R == zero) {
       planeLanes(std::true_type{});
@@ -256,6 +287,26 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
 }
 
 template <typename T>
+BlockReason LensTracer<T>::traceShaped(int i, bool from_film, bool clip, Vec3T<T>& o,
+                                       Vec3T<T>& d, Vec3T<T>& hit) const {
+  const ShapeIntersector& shape = shapes_[size_t(shape_index_[i])];
+  const double t_min = std::is_same_v<T, float> ? -1e-4 : -1e-9;
+  const Vec3 rel{double(o.x), double(o.y), double(o.z) - double(z_[i])};
+  Vec3 dir{double(d.x), double(d.y), double(d.z)};
+  dir = normalize(dir);
+  const auto h = shape.intersect(rel, dir, t_min);
+  if (!h) return BlockReason::Miss;
+  const Vec3 p = rel + dir * h->t;
+  hit = {T(p.x), T(p.y), T(p.z + double(z_[i]))};
+  if (clip && p.x * p.x + p.y * p.y > double(semi2_[i])) return BlockReason::Aperture;
+  const double eta_i = from_film ? double(eta_after_[i]) : double(eta_before_[i]);
+  const double eta_t = from_film ? double(eta_before_[i]) : double(eta_after_[i]);
+  if (!refract(dir, h->normal, eta_i, eta_t)) return BlockReason::TotalInternalReflection;
+  d = {T(dir.x), T(dir.y), T(dir.z)};
+  return BlockReason::None;
+}
+
+template <typename T>
 TraceResultT<T> LensTracer<T>::traceFromFilm(const RayT<T>& ray, const TraceOptions& opts,
                                              std::vector<Vec3T<T>>* path) const {
   return trace<true>(ray, opts, path);
@@ -288,6 +339,7 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
     in.ior_before = ior_before;
     in.ior_after = s.ior;
     in.is_stop = s.isStop();
+    in.shape = s.shape;
     interfaces_.push_back(in);
     if (in.is_stop) {
       stop_index_ = static_cast<int>(i);

@@ -57,6 +57,12 @@ struct Interface {
   double ior_before = 1;        ///< index on the scene side
   double ior_after = 1;         ///< index on the film side
   bool is_stop = false;
+  /// Non-spherical shape (conic, asphere, cylinder); spherical by default. Non-spherical
+  /// interfaces are traced by ShapeIntersector, spherical ones by the quadratic as before.
+  SurfaceShape shape;
+
+  /// Vertex curvature of the y-z section (1/mm), what paraxial optics uses.
+  double paraxialCurvature() const { return vertexCurvatureY(radius_mm, shape); }
 };
 
 /// What a trace records and checks.
@@ -101,8 +107,15 @@ class LensTracer {
   TraceResultT<T> trace(const RayT<T>& ray, const TraceOptions& opts,
                         std::vector<Vec3T<T>>* path) const;
 
+  // Traces surface i with its ShapeIntersector (in double precision): hit point and refracted
+  // direction, or why it stopped.
+  BlockReason traceShaped(int i, bool from_film, bool clip, Vec3T<T>& o, Vec3T<T>& d,
+                          Vec3T<T>& hit) const;
+
   std::vector<T> radius_, inv_radius_, z_, semi2_, eta_before_, eta_after_;
   std::vector<std::uint8_t> is_stop_;
+  std::vector<int> shape_index_;            // -1: spherical (the quadratic); else into shapes_
+  std::vector<ShapeIntersector> shapes_;
 };
 
 extern template class LensTracer<double>;

@@ -17,7 +17,7 @@ namespace {
 constexpr double kStopTolerance = 1.05;
 
 RayMatrix refraction(const Interface& s) {
-  double power = s.radius_mm == 0 ? 0.0 : (s.ior_after - s.ior_before) / s.radius_mm;
+  double power = (s.ior_after - s.ior_before) * s.paraxialCurvature();
   return {1, 0, -power, 1};
 }
 

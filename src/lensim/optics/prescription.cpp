@@ -1,7 +1,10 @@
 #include "lensim/optics/prescription.h"
 
+#include "lensim/optics/lens_formats.h"
+
 #include <fmt/format.h>
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -240,12 +243,21 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
   return p;
 }
 
-LensPrescription readLensFile(const std::string& path) {
+LensPrescription readLensFile(const std::string& spec) {
+  // Names from the catalogue (lentil:KEY, lenses:NAME) and the format by extension:
+  // .zmx Zemax, .json lensim / ISET3d / lentil, anything else the .dat table.
+  const LensRef ref = resolveLensName(spec);
+  const std::string& path = ref.path;
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(FileLoc{path, 0, 0}, "cannot open lens file");
   std::ostringstream ss;
   ss << in.rdbuf();
   if (in.bad()) throw Error(FileLoc{path, 0, 0}, "cannot read lens file");
+  if (!ref.lentil_key.empty() || ext == ".json")
+    return parseLensJson(ss.str(), path, ref.lentil_key);
+  if (ext == ".zmx") return parseZmx(ss.str(), path);
   return parseLensPrescription(ss.str(), path);
 }
 

@@ -20,6 +20,7 @@
 #include <string_view>
 #include <vector>
 
+#include "lensim/optics/surface_shape.h"
 #include "lensim/util/error.h"
 
 namespace lensim::optics {
@@ -49,8 +50,14 @@ struct LensSurface {
   double aperture_diameter_mm = 0;  ///< clear aperture diameter
   GlassSpec glass;                  ///< the glass after the surface, when the file names one
   FileLoc loc;                      ///< where the row is in the file
+  /// Conic, aspheric or cylindrical shape beyond the base sphere (Zemax, JSON readers); the
+  /// default is the sphere of radius_mm.
+  SurfaceShape shape;
+  /// Readers that mark the aperture stop explicitly (Zemax STOP, JSON) set this, so that a plane
+  /// surface need not be the stop; unset (.dat): the radius-0 row is the stop.
+  std::optional<bool> stop_flag;
 
-  bool isStop() const { return radius_mm == 0; }
+  bool isStop() const { return stop_flag ? *stop_flag : radius_mm == 0; }
   double semiAperture_mm() const { return aperture_diameter_mm / 2; }
 };
 
@@ -65,6 +72,14 @@ struct LensPrescription {
   std::vector<double> wavelengths_nm;
   std::optional<double> primary_wavelength_nm;
   std::vector<LensSurface> surfaces;
+  /// The file format it was read from: "dat", "zmx", "lentil", "iset-json" or "lensim-json".
+  std::string format = "dat";
+  /// Object distance from the front vertex the file gives (Zemax object thickness); unset:
+  /// infinity or not given.
+  std::optional<double> object_distance_mm;
+  /// The file's system aperture, when it states one (Zemax ENPD / FNUM): the stop diameter has
+  /// already been set from it; kept for reports.
+  std::string aperture_spec;
   /// Warnings and notes (crossing surfaces, layout guesses); errors are thrown instead.
   std::vector<Diagnostic> diagnostics;
 
@@ -78,7 +93,10 @@ struct LensPrescription {
 /// (`path:line:col: error: ...`) for malformed input.
 LensPrescription parseLensPrescription(std::string_view text, const std::string& path);
 
-/// Reads and parses a lens file. Throws lensim::Error when it cannot be read or is malformed.
+/// Reads and parses a lens file in any format lensim reads, chosen by extension (.zmx Zemax,
+/// .json lensim/ISET3d/lentil, else the .dat table), or a catalogue name (`lentil:0003`,
+/// `lenses:NAME`; see lens_formats.h). Throws lensim::Error when it cannot be read or is
+/// malformed.
 LensPrescription readLensFile(const std::string& path);
 
 /// Sag of a spherical surface at height h: axial distance from the vertex plane (mm), signed

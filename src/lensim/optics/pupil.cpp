@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/chief_ray.h"
 
 namespace lensim::optics {
@@ -23,6 +24,7 @@ double cross2(Vec2 a, Vec2 b) {
 ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p,
                                    double film_radius_mm, const ExitPupilOptions& opts)
     : film_radius_mm_(film_radius_mm),
+      rotational_(opts.rotational),
       z_rear_mm_(lens.rearVertexZ_mm()),
       directions_(std::max(8, opts.directions)) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -34,10 +36,44 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   const double rr = 1.5 * lens.interfaces().back().semi_aperture_mm;
 
   const double disc2 = opts.rear_disc_radius_mm * opts.rear_disc_radius_mm;
-  auto passes = [&](double h, Vec2 a) {
+  // Anamorphic: the paraxial chief ray from film height h crosses the rear plane at kappa h
+  // (aimed at the exit pupil's centre).
+  if (!rotational_) {
+    const double z_film = lens.filmZ_mm();
+    auto kappa = [&](double z_xp) {
+      return std::abs(z_xp - z_film) > 1e-9 ? (z_xp - z_rear_mm_) / (z_xp - z_film) : 0.0;
+    };
+    kappa_y_ = kappa(p.exit_pupil_z_mm);
+    const AnamorphicData ad = anamorphicData(lens);
+    kappa_x_ = ad.x ? kappa(ad.x->exit_pupil_z_mm) : kappa_y_;
+  }
+  // Anamorphic lenses are symmetric under x -> -x and y -> -y: bounds are built for film points
+  // in the first quadrant, in `sectors` wedges, each covering the regions at `per` azimuths
+  // across it (edges included) and checked at the azimuths half-way between those.
+  const int n_sectors = rotational_ ? 1 : std::max(1, opts.sectors);
+  const int per = std::max(2, opts.azimuths);
+  std::vector<double> az, az_main, az_check;
+  auto passes1 = [&](Vec2 film, Vec2 a) {
     if (disc2 > 0 && a.x * a.x + a.y * a.y > disc2) return false;
     ++traces_;
-    return lens.traceFromFilmPoint({h, 0}, a).ok();
+    return lens.traceFromFilmPoint(film, a).ok();
+  };
+  // The checks of a polygon (below) use the azimuths half-way between the polygon's own, so
+  // that the regions of film points between them are covered too.
+  int last_az = 0;  // the azimuth that passed last: neighbouring points usually pass there too
+  auto passes = [&](double h, Vec2 a) {
+    if (rotational_) return passes1({h, 0}, a);
+    const int n_az = static_cast<int>(az.size());
+    for (int i = 0; i < n_az; ++i) {
+      const int k = (last_az + i) % n_az;
+      const double phi = az[size_t(k)];
+      const double ca = std::cos(phi), sa = std::sin(phi);
+      if (passes1({h * ca, h * sa}, toFilmAzimuth(a, h, ca, sa))) {
+        last_az = k;
+        return true;
+      }
+    }
+    return false;
   };
   // Distance from c (inside the region) to the region's boundary along u: the first blocked
   // point, bisected to 1e-3 relative; starts from a guess and grows or shrinks geometrically.
@@ -134,6 +170,20 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     return f;
   };
 
+  // Boundary points that check a polygon: its own azimuths, and for anamorphic bounds also the
+  // azimuths between them.
+  auto checkPoints = [&](double h, double offset, const Polygon* hint) {
+    std::vector<Vec2> pts = boundaryPoints(h, nd, offset, nullptr, hint);
+    if (!rotational_) {
+      az = az_check;
+      last_az = 0;
+      std::vector<Vec2> more = boundaryPoints(h, nd, offset, nullptr, hint);
+      az = az_main;
+      last_az = 0;
+      pts.insert(pts.end(), more.begin(), more.end());
+    }
+    return pts;
+  };
   // A node: the region's polygon at radius h, checked at the half-way directions.
   auto makeNode = [&](double h, const Polygon* hint) {
     Polygon poly;
@@ -143,8 +193,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     poly.empty = false;
     for (const Vec2& q : pts)
       poly.radius.push_back(std::hypot(q.x - poly.centre.x, q.y - poly.centre.y));
-    const std::vector<double> f =
-        coverFactors(poly, boundaryPoints(h, nd, 0.5 * dphi, nullptr, &poly));
+    const std::vector<double> f = coverFactors(poly, checkPoints(h, 0.5 * dphi, &poly));
     for (int j = 0; j < nd; ++j) poly.radius[j] *= f[j];
     return poly;
   };
@@ -159,6 +208,15 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // contain the true region there. Where it would have to grow by more than a few percent, or
   // the region changes fast (at the edge of the image circle), the interval is split.
   const double min_width = film_radius_mm / (ni * 16.0);
+  for (int sec = 0; sec < n_sectors; ++sec) {
+  if (!rotational_) {
+    const double w = (std::numbers::pi / 2) / n_sectors, a0 = sec * w;
+    az_main.clear(), az_check.clear();
+    for (int k = 0; k < per; ++k) az_main.push_back(a0 + w * k / (per - 1));
+    for (int k = 0; k + 1 < per; ++k) az_check.push_back(a0 + w * (k + 0.5) / (per - 1));
+    az = az_main;
+    last_az = 0;
+  }
   std::vector<Polygon> done;
   std::vector<std::vector<double>> scales;
   std::vector<Polygon> stack;  // right ends still to process, nearest last
@@ -176,7 +234,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     std::vector<double> f(nd, 1.0);
     bool split = false;
     if (any) {
-      f = coverFactors(interp, boundaryPoints(h, nd, 0.25 * dphi, nullptr, &interp));
+      f = coverFactors(interp, checkPoints(h, 0.25 * dphi, &interp));
       const double worst = *std::max_element(f.begin(), f.end());
       const double a0 = area(left), a1 = area(right);
       const bool fast = left.empty != right.empty || std::max(a0, a1) > 1.25 * std::min(a0, a1);
@@ -194,13 +252,16 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         Polygon at;
         interpolateBetween(left, right, ht, at);
         const std::vector<double> g =
-            coverFactors(at, boundaryPoints(ht, nd, 0.25 * dphi, nullptr, &at));
+            coverFactors(at, checkPoints(ht, 0.25 * dphi, &at));
         for (int j = 0; j < nd; ++j) f[j] = std::max(f[j], g[j]);
       }
     }
     // Where the region vanishes (the edge of the image circle) it changes shape fastest: triple
     // the margin there.
-    const double margin = left.empty != right.empty ? 3 * opts.margin : opts.margin;
+    // Anamorphic bounds cover several azimuths' regions at once and change shape faster: a
+    // wider margin.
+    const double base_margin = opts.margin;
+    const double margin = left.empty != right.empty ? 3 * base_margin : base_margin;
     for (double& v : f) v *= 1 + margin;
     scales.push_back(std::move(f));
     done.push_back(right);
@@ -217,6 +278,13 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     lut_scale_ = kLut / film_radius_mm_;
     radius_lut_ = std::move(lut);
   }
+  sectors_.push_back({std::move(intervals_), std::move(radius_lut_), lut_scale_});
+  intervals_.clear();
+  radius_lut_.clear();
+  }  // sectors
+  intervals_ = sectors_.front().intervals;
+  radius_lut_ = sectors_.front().lut;
+  lut_scale_ = sectors_.front().lut_scale;
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -239,20 +307,26 @@ bool ExitPupilSampler::interpolateBetween(const Polygon& a, const Polygon& b, do
 }
 
 int ExitPupilSampler::intervalFor(double r) const {
+  return intervalIn(intervals_, radius_lut_, lut_scale_, r);
+}
+
+int ExitPupilSampler::intervalIn(const std::vector<Interval>& intervals,
+                                 const std::vector<int>& radius_lut, double lut_scale,
+                                 double r) {
   // Intervals are sorted by radius; the first whose upper end reaches r.
-  const int last = static_cast<int>(intervals_.size()) - 1;
-  if (!radius_lut_.empty()) {
+  const int last = static_cast<int>(intervals.size()) - 1;
+  if (!radius_lut.empty()) {
     // The table's entry for the radius below r is the first interval reaching that radius, at
     // or before the answer.
-    const double x = std::max(0.0, r * lut_scale_);
-    int k = radius_lut_[std::min(size_t(x), radius_lut_.size() - 1)];
-    while (k < last && intervals_[size_t(k)].r1 < r) ++k;
+    const double x = std::max(0.0, r * lut_scale);
+    int k = radius_lut[std::min(size_t(x), radius_lut.size() - 1)];
+    while (k < last && intervals[size_t(k)].r1 < r) ++k;
     return k;
   }
-  auto it = std::lower_bound(intervals_.begin(), intervals_.end(), r,
+  auto it = std::lower_bound(intervals.begin(), intervals.end(), r,
                              [](const Interval& iv, double v) { return iv.r1 < v; });
-  const int k = static_cast<int>(it - intervals_.begin());
-  return std::clamp(k, 0, static_cast<int>(intervals_.size()) - 1);
+  const int k = static_cast<int>(it - intervals.begin());
+  return std::clamp(k, 0, static_cast<int>(intervals.size()) - 1);
 }
 
 void ExitPupilSampler::buildIntervals(const std::vector<Polygon>& nodes,
@@ -293,8 +367,18 @@ const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double&
                                                            double& sin_a) const {
   // Film coordinates are millimetres: no overflow for hypot to guard against.
   const double r = std::sqrt(film_mm.x * film_mm.x + film_mm.y * film_mm.y);
-  if (r > film_radius_mm_ * (1 + 1e-9) || intervals_.empty()) return nullptr;
-  const Interval& iv = intervals_[intervalFor(r)];
+  if (r > film_radius_mm_ * (1 + 1e-9) || sectors_.empty()) return nullptr;
+  const Sector* sec = &sectors_.front();
+  if (!rotational_) {
+    // Anamorphic: the film point mirrored into the first quadrant picks its wedge; the caller
+    // mirrors the rear point back.
+    film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
+    const double phi = std::atan2(film_mm.y, film_mm.x);
+    const int n = static_cast<int>(sectors_.size());
+    sec = &sectors_[size_t(std::clamp(int(phi / (std::numbers::pi / 2) * n), 0, n - 1))];
+  }
+  if (sec->intervals.empty()) return nullptr;
+  const Interval& iv = sec->intervals[size_t(intervalIn(sec->intervals, sec->lut, sec->lut_scale, r))];
   if (iv.empty) return nullptr;
   t = iv.r1 > iv.r0 ? std::clamp((r - iv.r0) / (iv.r1 - iv.r0), 0.0, 1.0) : 0.0;
   const double inv_r = r > 0 ? 1 / r : 0.0;
@@ -356,21 +440,30 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
     const Vec2 centre = v.c0 * (1 - tt) + v.c1 * tt;
     const double uy = u[lane[k]].y;
     const Vec2 local = centre + (a * (1 - uy) + b * uy) * s;
-    // Rotate from the +x film frame to the film point's azimuth.
-    out[lane[k]] = PupilSample{
-        {ca[k] * local.x - sa[k] * local.y, sa[k] * local.x + ca[k] * local.y, z_rear_mm_},
-        0.5 * total[k] * dirs_[1].y};
+    // From the +x film frame to the film point's azimuth.
+    const Vec2 f = film_mm[lane[k]];
+    Vec2 rear = toFilmAzimuth(local, std::hypot(f.x, f.y), ca[k], sa[k]);
+    if (!rotational_) rear = {f.x < 0 ? -rear.x : rear.x, f.y < 0 ? -rear.y : rear.y};
+    out[lane[k]] = PupilSample{{rear.x, rear.y, z_rear_mm_}, 0.5 * total[k] * dirs_[1].y};
   }
 }
 
 bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm) const {
+  if (!rotational_) {
+    rear_mm = {film_mm.x < 0 ? -rear_mm.x : rear_mm.x, film_mm.y < 0 ? -rear_mm.y : rear_mm.y};
+    film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
+  }
   double t, ca, sa;
   const Interval* iv = locate(film_mm, t, ca, sa);
   if (!iv) return false;
   const Vec2 centre = iv->c0 * (1 - t) + iv->c1 * t;
   // Into the +x frame, relative to the centre.
-  const Vec2 q{ca * rear_mm.x + sa * rear_mm.y - centre.x,
-               -sa * rear_mm.x + ca * rear_mm.y - centre.y};
+  Vec2 q{ca * rear_mm.x + sa * rear_mm.y - centre.x, -sa * rear_mm.x + ca * rear_mm.y - centre.y};
+  if (!rotational_) {
+    const double r = std::hypot(film_mm.x, film_mm.y);
+    q = {rear_mm.x - (kappa_x_ * ca - kappa_x_) * r - centre.x,
+         rear_mm.y - kappa_y_ * sa * r - centre.y};
+  }
   const int nd = directions_;
   const double dphi = 2 * std::numbers::pi / nd;
   double ang = std::atan2(q.y, q.x);

@@ -10,7 +10,8 @@
 // between the radii; where the region changes fast (near the edge of the image circle) the
 // interval is split, and wherever the true boundary reaches beyond an edge of the polygon, that
 // edge's vertices are moved out until it contains it; then all by a small safety margin. Film
-// points off the x axis use the bound rotated about the axis (the lens is rotationally symmetric).
+// points off the x axis use the bound rotated about the axis (the lens is rotationally symmetric;
+// for anamorphic lenses see ExitPupilOptions::rotational).
 // Sampling is uniform in the polygon, so a camera's estimator weight uses its area.
 //
 // Measured (tests/optics_pupil_test.cpp and a 2-million-ray check): no passing ray outside the
@@ -35,6 +36,16 @@ struct ExitPupilOptions {
   /// bounds then cover the part of the region inside that disc (for a camera that aims only at
   /// the rear element's disc, as the CS348B assignment's did).
   double rear_disc_radius_mm = 0;
+  /// false for lenses that are not rotationally symmetric (anamorphic, symmetric under x -> -x
+  /// and y -> -y): film points are mirrored into the first quadrant, which is cut into `sectors`
+  /// wedges; a wedge's bound at film radius h covers the regions of film points at `azimuths`
+  /// angles across it, each moved (not rotated) so that its paraxial chief-ray crossing (x and y
+  /// exit pupils apart) lies on the +x axis, and is checked at the angles between them; sampling
+  /// moves the bound back to the film point's azimuth without rotating it and mirrors it back (a
+  /// 2-D bound: an anamorphic lens's elliptical exit pupil keeps its orientation).
+  bool rotational = true;
+  int sectors = 4;   ///< anamorphic: wedges of the first quadrant with bounds of their own
+  int azimuths = 2;  ///< anamorphic: film azimuths per wedge (its edges included)
 };
 
 /// A point to aim a camera ray at, and the area of the region it was drawn from (pdf = 1/area).
@@ -92,18 +103,38 @@ class ExitPupilSampler {
     std::vector<double> A, B;  // per vertex
     std::vector<double> P;     // prefix sums P0, P1, P2 interleaved: 3 (n + 1) values
   };
+  static int intervalIn(const std::vector<Interval>& intervals,
+                        const std::vector<int>& radius_lut, double lut_scale, double r);
   void buildIntervals(const std::vector<Polygon>& nodes,
                       const std::vector<std::vector<double>>& scales);
   // The interval, t and rotation for a film point; nullptr where it sees nothing.
   const Interval* locate(Vec2 film_mm, double& t, double& cos_a, double& sin_a) const;
 
+  // Where the rear-plane point `local` of the +x frame lies for a film point at distance r and
+  // azimuth (ca, sa): rotated (symmetric lenses) or moved by the chief-ray model (anamorphic).
+  Vec2 toFilmAzimuth(Vec2 local, double r, double ca, double sa) const {
+    if (rotational_) return {ca * local.x - sa * local.y, sa * local.x + ca * local.y};
+    return {local.x + (kappa_x_ * ca - kappa_x_) * r, local.y + kappa_y_ * sa * r};
+  }
+
   double film_radius_mm_;
+  bool rotational_ = true;
+  // Rear-plane chief-ray crossing per mm of film x and y (paraxial, each section's exit pupil).
+  double kappa_x_ = 0, kappa_y_ = 0;
   double z_rear_mm_;
   int directions_;
   std::vector<Vec2> dirs_;  // unit vectors of the polygon directions
   std::vector<Interval> intervals_;
   std::vector<int> radius_lut_;  // first interval for film radii k / lut_scale_
   double lut_scale_ = 0;
+  // The bounds: one set for rotationally symmetric lenses; one per wedge of the first quadrant
+  // for anamorphic ones (film points elsewhere are mirrored into it).
+  struct Sector {
+    std::vector<Interval> intervals;
+    std::vector<int> lut;
+    double lut_scale = 0;
+  };
+  std::vector<Sector> sectors_;
   double build_seconds_ = 0;
   long traces_ = 0;
 };

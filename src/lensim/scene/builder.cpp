@@ -725,7 +725,11 @@ class Builder {
         const Param* lf = ps.find({"lensfile"}, {ParamType::String});
         if (!lf) throw Error(d.loc, "realistic camera: missing \"string lensfile\"");
         r.lens_file_as_written = lf->strings[0];
-        r.lens_file = resolve(lf->strings[0], lf->loc, "lens file");
+        // Catalogue names (lentil:KEY, lenses:NAME; see optics/lens_formats.h) are not paths.
+        const std::string& lname = lf->strings[0];
+        r.lens_file = lname.rfind("lentil:", 0) == 0 || lname.rfind("lenses:", 0) == 0
+                          ? lname
+                          : resolve(lname, lf->loc, "lens file");
         r.aperture_diameter_mm = ps.getFloat({"aperturediameter"}, 1.0);
         r.focus_distance_m = ps.getFloat({"focusdistance"}, 10.0);
         // pbrt-v3's default is true; pbrt-v4 has no such parameter (always irradiance).

@@ -1,0 +1,28 @@
+// First-order data of lenses that are not rotationally symmetric (anamorphic lenses with
+// cylindrical or biconic surfaces): the x-z and y-z sections are traced paraxially apart.
+#pragma once
+
+#include <optional>
+
+#include "lensim/optics/lens_system.h"
+#include "lensim/optics/paraxial.h"
+
+namespace lensim::optics {
+
+/// True when every surface is rotationally symmetric.
+bool isRotationallySymmetric(const LensPrescription& p);
+
+/// The x-z section of a lens as a rotationally symmetric prescription: every surface takes its
+/// x-section radius (and conic), so that the usual paraxial code gives the x data.
+LensPrescription xSection(const LensPrescription& p);
+
+/// x and y first-order data of an anamorphic lens; squeeze = EFL_y / EFL_x (> 1: the lens
+/// squeezes the image horizontally, as a 2x anamorphic's EFL_x is half its EFL_y).
+struct AnamorphicData {
+  std::optional<ParaxialData> x;  ///< nullopt when the x section is afocal
+  std::optional<ParaxialData> y;  ///< nullopt when the y section is afocal
+  double squeeze = 1;             ///< EFL_y / EFL_x (0 when a section is afocal)
+};
+AnamorphicData anamorphicData(const LensSystem& lens);
+
+}  // namespace lensim::optics

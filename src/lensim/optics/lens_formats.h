@@ -1,0 +1,51 @@
+// Lens file formats besides pbrt's `.dat` tables: Zemax `.zmx` (sequential), lentil's JSON
+// database, ISET3d's JSON lens files and lensim's own JSON lens format; writers for `.dat` and
+// lensim JSON; and the catalogue of named lenses shipped in `lenses/`.
+//
+// Every reader fills one LensPrescription (prescription.h) with `file:line` on every surface and
+// throws lensim::Error (`file:line:col: error: ...`) for what it cannot model.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "lensim/optics/prescription.h"
+
+namespace lensim::optics {
+
+/// Decodes a text file's bytes to UTF-8: UTF-16 LE/BE with a byte-order mark, UTF-8 (with or
+/// without a BOM) or ASCII. Throws a located error for malformed UTF-16.
+std::string decodeTextFile(std::string_view bytes, const std::string& path);
+
+/// Parses a Zemax `.zmx` file (sequential mode). Surfaces: STANDARD, EVENASPH, ODDASPH (with
+/// CONI, PARM); UNIT MM/CM/IN/M; GLAS (catalogue name with the file's n_d/V_d, ___BLANK model
+/// glass); DIAM (semi-diameter), STOP, DISZ (INFINITY for the object); WAVM/WAVL + PWAV;
+/// ENPD / FNUM / FLOA set the stop's size. Anything else that changes the optics (coordinate
+/// breaks, other surface types, mirrors, tilts, non-sequential mode) is refused at its line.
+LensPrescription parseZmx(std::string_view bytes, const std::string& path);
+
+/// Parses a JSON lens file: lensim's own format (docs/lens-format.md, docs/lens.schema.json),
+/// ISET3d's (`surfaces` with `radius`, `thickness`, `ior`/`n`, `semi_aperture`) or one design of
+/// lentil's database (`lentil_key` selects it; empty: the file must hold a single design).
+LensPrescription parseLensJson(std::string_view text, const std::string& path,
+                               const std::string& lentil_key = "");
+
+/// Writes a prescription as lensim JSON (always possible).
+std::string writeLensJson(const LensPrescription& p);
+/// Writes a prescription as a pbrt `.dat` table. Throws lensim::Error naming the surface and
+/// what cannot be written (aspheres, cylinders, a stop with curvature...).
+std::string writeLensDat(const LensPrescription& p);
+
+/// Resolves a lens name: `lentil:KEY` (lentil's database, e.g. lentil:0003), `lenses:NAME`
+/// (a file in lensim's lenses/ catalogue, any format), else a path. Returns the file path and
+/// the lentil key ("" for none).
+struct LensRef {
+  std::string path;
+  std::string lentil_key;
+};
+LensRef resolveLensName(const std::string& name);
+
+/// Where the `lenses/` catalogue is (LENSIM_LENSES_DIR, else the source tree's lenses/).
+std::string lensCatalogueDir();
+
+}  // namespace lensim::optics

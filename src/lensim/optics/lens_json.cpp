@@ -1,0 +1,460 @@
+// JSON lens files: lensim's own format, ISET3d's and lentil's database; the .dat and JSON
+// writers; the lens catalogue.
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "lensim/optics/glass.h"
+#include "lensim/optics/lens_formats.h"
+
+namespace lensim::optics {
+
+namespace {
+
+using nlohmann::json;
+
+// nlohmann::json keeps no positions, so the line of every element of an array of objects is
+// found by a small scan of the text: the offsets of the '{' that open the elements of the array
+// that is the value of `key` (at any depth; the n-th such array is chosen by `occurrence`).
+std::vector<size_t> arrayElementOffsets(std::string_view text, std::string_view key,
+                                        int occurrence = 0) {
+  std::vector<size_t> out;
+  int depth = 0;
+  int found = -1;
+  int array_depth = -1;
+  std::string last_string;
+  bool last_was_key = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"') {
+      size_t j = i + 1;
+      std::string s;
+      while (j < text.size() && text[j] != '"') {
+        if (text[j] == '\\' && j + 1 < text.size()) ++j;
+        s += text[j++];
+      }
+      i = j;
+      last_string = s;
+      // A key if the next non-space character is ':'.
+      size_t k = j + 1;
+      while (k < text.size() && std::isspace(static_cast<unsigned char>(text[k]))) ++k;
+      last_was_key = k < text.size() && text[k] == ':';
+      continue;
+    }
+    if (c == '[') {
+      ++depth;
+      if (array_depth < 0 && last_was_key && last_string == key) {
+        if (++found == occurrence) array_depth = depth;
+      }
+      last_was_key = false;
+    } else if (c == ']') {
+      if (depth == array_depth) return out;
+      --depth;
+    } else if (c == '{') {
+      if (array_depth >= 0 && depth == array_depth) out.push_back(i);
+      ++depth;
+    } else if (c == '}') {
+      --depth;
+    } else if (c == ',') {
+      last_was_key = false;
+    }
+  }
+  return out;
+}
+
+FileLoc locAt(std::string_view text, size_t offset, const std::string& path) {
+  int line = 1, col = 1;
+  for (size_t i = 0; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line, col = 1;
+    } else {
+      ++col;
+    }
+  }
+  return FileLoc{path, line, col};
+}
+
+double getNumber(const json& j, const char* key, const FileLoc& loc, const char* what) {
+  auto it = j.find(key);
+  if (it == j.end() || !it->is_number())
+    throw Error(loc, fmt::format("{}: expected a number for \"{}\"{}", what, key,
+                                 it == j.end() ? " (missing)" : ""));
+  const double v = it->get<double>();
+  if (!std::isfinite(v)) throw Error(loc, fmt::format("{}: \"{}\" must be finite", what, key));
+  return v;
+}
+
+std::optional<double> optNumber(const json& j, const char* key, const FileLoc& loc,
+                                const char* what) {
+  auto it = j.find(key);
+  if (it == j.end() || it->is_null()) return std::nullopt;
+  return getNumber(j, key, loc, what);
+}
+
+void checkSurface(const LensSurface& s, int index) {
+  if (s.thickness_mm < 0)
+    throw Error(s.loc, fmt::format("surface {}: thickness {} mm is negative", index,
+                                   s.thickness_mm));
+  if (!(s.aperture_diameter_mm > 0))
+    throw Error(s.loc, fmt::format("surface {}: the clear aperture must be > 0 (found semi-"
+                                   "aperture {} mm)",
+                                   index, s.aperture_diameter_mm / 2));
+  if (s.ior < 1)
+    throw Error(s.loc, fmt::format("surface {}: index of refraction {} is not physical", index,
+                                   s.ior));
+  if (s.semiAperture_mm() >= sagDomainRadius(s.radius_mm, s.shape))
+    throw Error(s.loc, fmt::format("surface {}: semi-aperture {} mm exceeds the surface's "
+                                   "extent",
+                                   index, s.semiAperture_mm()));
+}
+
+LensPrescription parseLensim(const json& j, std::string_view text, const std::string& path) {
+  LensPrescription p;
+  p.path = path;
+  p.format = "lensim-json";
+  p.name = j.value("name", std::filesystem::path(path).stem().string());
+  if (j.contains("units") && j["units"] != "mm")
+    throw Error(FileLoc{path, 1, 1}, "\"units\" must be \"mm\"");
+  if (auto w = j.find("wavelengths_nm"); w != j.end() && w->is_array())
+    for (const auto& v : *w) p.wavelengths_nm.push_back(v.get<double>());
+  if (auto w = j.find("primary_wavelength_nm"); w != j.end() && w->is_number())
+    p.primary_wavelength_nm = w->get<double>();
+  if (auto w = j.find("object_distance_mm"); w != j.end() && w->is_number())
+    p.object_distance_mm = w->get<double>();
+  const auto offs = arrayElementOffsets(text, "surfaces");
+  const json& surfs = j.at("surfaces");
+  for (size_t i = 0; i < surfs.size(); ++i) {
+    const json& e = surfs[i];
+    LensSurface s;
+    s.loc = i < offs.size() ? locAt(text, offs[i], path) : FileLoc{path, 1, 1};
+    if (!e.is_object()) throw Error(s.loc, fmt::format("surface {}: expected an object", i));
+    const char* what = "surface";
+    s.radius_mm = getNumber(e, "radius_mm", s.loc, what);
+    s.thickness_mm = getNumber(e, "thickness_mm", s.loc, what);
+    s.aperture_diameter_mm = 2 * getNumber(e, "semi_aperture_mm", s.loc, what);
+    s.ior = optNumber(e, "ior", s.loc, what).value_or(1.0);
+    s.stop_flag = e.value("stop", false);
+    s.shape.conic = optNumber(e, "conic", s.loc, what).value_or(0.0);
+    s.shape.radius_x_mm = optNumber(e, "radius_x_mm", s.loc, what);
+    s.shape.conic_x = optNumber(e, "conic_x", s.loc, what).value_or(0.0);
+    if (auto a = e.find("aspheric"); a != e.end()) {
+      if (!a->is_object())
+        throw Error(s.loc, "\"aspheric\" must map powers (\"4\", \"6\", ...) to coefficients");
+      for (const auto& [k, v] : a->items()) {
+        int pw = 0;
+        try {
+          pw = std::stoi(k);
+        } catch (...) {
+          pw = 0;
+        }
+        if (pw < 1 || pw > 40 || !v.is_number())
+          throw Error(s.loc, fmt::format("aspheric term \"{}\": expected a power 1..40 mapped "
+                                         "to a number",
+                                         k));
+        if (s.shape.poly.size() <= size_t(pw)) s.shape.poly.resize(size_t(pw) + 1, 0.0);
+        s.shape.poly[size_t(pw)] = v.get<double>();
+      }
+    }
+    if (auto g = e.find("glass"); g != e.end() && g->is_object()) {
+      s.glass.name = g->value("name", "");
+      s.glass.n_d = optNumber(*g, "n_d", s.loc, "glass");
+      s.glass.v_d = optNumber(*g, "v_d", s.loc, "glass");
+      s.glass.loc = s.loc;
+      if (!e.contains("ior") && s.glass.n_d) s.ior = *s.glass.n_d;
+    }
+    checkSurface(s, int(i));
+    p.surfaces.push_back(s);
+  }
+  return p;
+}
+
+// ISET3d / isetlens: {"name", "description", "type", "surfaces": [{radius, thickness, ior,
+// semi_aperture}]} in millimetres; radius 0 is the stop (ior 0 there means air), as in .dat.
+LensPrescription parseIset(const json& j, std::string_view text, const std::string& path) {
+  LensPrescription p;
+  p.path = path;
+  p.format = "iset-json";
+  p.name = j.value("name", std::filesystem::path(path).stem().string());
+  const auto offs = arrayElementOffsets(text, "surfaces");
+  const json& surfs = j.at("surfaces");
+  bool stop_seen = false;
+  for (size_t i = 0; i < surfs.size(); ++i) {
+    const json& e = surfs[i];
+    LensSurface s;
+    s.loc = i < offs.size() ? locAt(text, offs[i], path) : FileLoc{path, 1, 1};
+    if (!e.is_object()) throw Error(s.loc, fmt::format("surface {}: expected an object", i));
+    s.radius_mm = getNumber(e, "radius", s.loc, "surface");
+    s.thickness_mm = getNumber(e, "thickness", s.loc, "surface");
+    const double n = getNumber(e, "ior", s.loc, "surface");
+    s.ior = n == 0 ? 1.0 : n;
+    s.aperture_diameter_mm = 2 * getNumber(e, "semi_aperture", s.loc, "surface");
+    if (auto k = optNumber(e, "conic_constant", s.loc, "surface")) s.shape.conic = *k;
+    if (s.radius_mm == 0) {
+      if (stop_seen)
+        throw Error(s.loc, "second aperture stop (radius 0)");
+      stop_seen = true;
+    }
+    checkSurface(s, int(i));
+    p.surfaces.push_back(s);
+  }
+  return p;
+}
+
+// lentil (zpelgrims/lentil, polynomial-optics/database/lenses.json): one design per key.
+LensPrescription parseLentil(const json& db, std::string_view text, const std::string& path,
+                             const std::string& key) {
+  auto it = db.find(key);
+  if (it == db.end()) {
+    std::string keys;
+    for (const auto& [k, v] : db.items()) keys += (keys.empty() ? "" : ", ") + k;
+    throw Error(FileLoc{path, 1, 1},
+                fmt::format("lentil database has no lens '{}'; it has {}", key, keys));
+  }
+  const json& lens = *it;
+  LensPrescription p;
+  p.path = path;
+  p.format = "lentil";
+  p.name = fmt::format("lentil {} {} {} {}", key, lens.value("company", ""),
+                       lens.value("product-name", ""),
+                       lens.contains("year") && lens["year"].is_number()
+                           ? std::to_string(lens["year"].get<int>())
+                           : std::string());
+  const char* elements_key =
+      lens.contains("optical-elements-adjusted") ? "optical-elements-adjusted"
+                                                 : "optical-elements-patent";
+  // Locations: the element arrays of this design, found after the design's key in the text.
+  size_t design_pos = text.find("\"" + key + "\"");
+  std::vector<size_t> offs;
+  if (design_pos != std::string_view::npos) {
+    offs = arrayElementOffsets(text.substr(design_pos), elements_key);
+    for (auto& o : offs) o += design_pos;
+  }
+  const json& els = lens.at(elements_key);
+  const FileLoc design_loc =
+      design_pos != std::string_view::npos ? locAt(text, design_pos, path) : FileLoc{path, 1, 1};
+  if (!els.is_array() || els.empty())
+    throw Error(design_loc, fmt::format("lentil lens {}: no optical elements", key));
+  bool stop_seen = false;
+  for (size_t i = 0; i < els.size(); ++i) {
+    const json& e = els[i];
+    LensSurface s;
+    s.loc = i < offs.size() ? locAt(text, offs[i], path) : design_loc;
+    const std::string material = e.value("material", "");
+    const std::string geometry = e.value("lens-geometry", "spherical");
+    const double R = getNumber(e, "radius", s.loc, "element");
+    s.thickness_mm = getNumber(e, "thickness", s.loc, "element");
+    s.aperture_diameter_mm = 2 * getNumber(e, "housing-radius", s.loc, "element");
+    const auto ior = optNumber(e, "ior", s.loc, "element");
+    const auto abbe = optNumber(e, "abbe", s.loc, "element");
+    const bool iris = material == "iris" || material == "IRIS";
+    s.stop_flag = iris;
+    if (iris) {
+      if (stop_seen) throw Error(s.loc, "second iris (aperture stop)");
+      stop_seen = true;
+      s.radius_mm = 0;  // lentil writes the iris as a huge radius
+    } else if (geometry == "spherical" || geometry == "aspherical") {
+      s.radius_mm = R;
+    } else if (geometry == "cyl-y") {
+      // A cylinder with its axis along y: curved in the x-z section (Hanika & Dachsbacher's
+      // lens-system convention, which lentil follows), flat in y.
+      s.radius_mm = 0;
+      s.shape.radius_x_mm = R;
+    } else if (geometry == "cyl-x") {
+      s.radius_mm = R;
+      s.shape.radius_x_mm = 0.0;
+    } else {
+      throw Error(s.loc, fmt::format("element {}: lens-geometry '{}' is not supported (expected "
+                                     "spherical, aspherical, cyl-x or cyl-y)",
+                                     i, geometry));
+    }
+    if (geometry == "aspherical") {
+      auto a = e.find("aspherical-equation");
+      if (a == e.end() || !a->is_array())
+        throw Error(s.loc, fmt::format("element {}: aspherical without aspherical-equation", i));
+      // lentil's even asphere: coefficients of r^4, r^6, r^8, r^10 (conic 0).
+      s.shape.poly.assign(11, 0.0);
+      int power = 4;
+      for (const auto& c : *a) {
+        if (power > 10 || !c.is_number())
+          throw Error(s.loc, fmt::format("element {}: expected up to 4 aspheric coefficients", i));
+        s.shape.poly[size_t(power)] = c.get<double>();
+        power += 2;
+      }
+    }
+    const bool air = material == "air" || iris || !ior || *ior == 0 || *ior == 1;
+    if (air) {
+      s.ior = 1;
+    } else {
+      s.ior = *ior;
+      s.glass.name = material == "abbe" ? std::string() : material;
+      s.glass.n_d = *ior;
+      if (abbe && *abbe > 0) s.glass.v_d = *abbe;
+      s.glass.loc = s.loc;
+    }
+    // lentil's database has a few housings wider than their sphere (0015): clamp, with a warning.
+    const double domain = sagDomainRadius(s.radius_mm, s.shape);
+    if (s.semiAperture_mm() >= domain) {
+      p.diagnostics.push_back(
+          {Severity::Warning, s.loc,
+           fmt::format("element {}: housing radius {} mm is wider than the surface (radius {} "
+                       "mm); clamped to {:.6g} mm",
+                       i, s.semiAperture_mm(), domain, 0.999 * domain)});
+      s.aperture_diameter_mm = 2 * 0.999 * domain;
+    }
+    checkSurface(s, int(i));
+    p.surfaces.push_back(s);
+  }
+  if (lens.contains("focal-length-mm-patent") && lens["focal-length-mm-patent"].is_number())
+    p.nominal_focal_length_mm = lens["focal-length-mm-patent"].get<double>();
+  return p;
+}
+
+}  // namespace
+
+LensPrescription parseLensJson(std::string_view text, const std::string& path,
+                               const std::string& lentil_key) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw Error(locAt(text, e.byte > 0 ? e.byte - 1 : 0, path),
+                fmt::format("malformed JSON: {}", e.what()));
+  }
+  if (!j.is_object()) throw Error(FileLoc{path, 1, 1}, "expected a JSON object");
+  try {
+    if (!lentil_key.empty()) return parseLentil(j, text, path, lentil_key);
+    if (j.value("format", "") == "lensim-lens") return parseLensim(j, text, path);
+    if (j.contains("surfaces") && j["surfaces"].is_array()) return parseIset(j, text, path);
+    // A lentil database: a single design is read directly; otherwise a key is needed.
+    bool lentil = !j.empty();
+    for (const auto& [k, v] : j.items())
+      lentil = lentil && v.is_object() && (v.contains("optical-elements-patent"));
+    if (lentil) {
+      if (j.size() == 1) return parseLentil(j, text, path, j.begin().key());
+      throw Error(FileLoc{path, 1, 1},
+                  fmt::format("a lentil database with {} lenses: pick one with lentil:KEY "
+                              "(e.g. lentil:{})",
+                              j.size(), j.begin().key()));
+    }
+  } catch (const json::exception& e) {
+    throw Error(FileLoc{path, 1, 1}, fmt::format("unexpected JSON structure: {}", e.what()));
+  }
+  throw Error(FileLoc{path, 1, 1},
+              "unknown JSON lens format: expected lensim's (\"format\": \"lensim-lens\"), "
+              "ISET3d's (\"surfaces\" with radius/thickness/ior/semi_aperture) or lentil's "
+              "database");
+}
+
+std::string writeLensJson(const LensPrescription& p) {
+  json j;
+  j["format"] = "lensim-lens";
+  j["version"] = 1;
+  j["name"] = p.name;
+  j["units"] = "mm";
+  if (!p.wavelengths_nm.empty()) j["wavelengths_nm"] = p.wavelengths_nm;
+  if (p.primary_wavelength_nm) j["primary_wavelength_nm"] = *p.primary_wavelength_nm;
+  if (p.object_distance_mm) j["object_distance_mm"] = *p.object_distance_mm;
+  j["source"] = fmt::format("{} ({})", p.path, p.format);
+  json surfs = json::array();
+  for (const LensSurface& s : p.surfaces) {
+    json e;
+    e["radius_mm"] = s.radius_mm;
+    e["thickness_mm"] = s.thickness_mm;
+    e["semi_aperture_mm"] = s.semiAperture_mm();
+    e["ior"] = s.ior;
+    if (s.isStop()) e["stop"] = true;
+    if (s.shape.conic != 0) e["conic"] = s.shape.conic;
+    if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
+    if (s.shape.conic_x != 0) e["conic_x"] = s.shape.conic_x;
+    if (s.shape.hasPolynomial()) {
+      json a = json::object();
+      for (size_t k = 1; k < s.shape.poly.size(); ++k)
+        if (s.shape.poly[k] != 0) a[std::to_string(k)] = s.shape.poly[k];
+      e["aspheric"] = a;
+    }
+    if (!s.glass.empty() || s.glass.n_d) {
+      json g;
+      if (!s.glass.name.empty()) g["name"] = s.glass.name;
+      if (s.glass.n_d) g["n_d"] = *s.glass.n_d;
+      if (s.glass.v_d) g["v_d"] = *s.glass.v_d;
+      e["glass"] = g;
+    }
+    surfs.push_back(e);
+  }
+  j["surfaces"] = surfs;
+  return j.dump(2) + "\n";
+}
+
+std::string writeLensDat(const LensPrescription& p) {
+  std::string out = fmt::format("# {}\n# converted by lensim from {} ({})\n", p.name, p.path,
+                                p.format);
+  out += "# radius thickness index aperture (mm; planes that are not the stop are written as "
+         "radius 1e9)\n";
+  int stops = 0;
+  for (size_t i = 0; i < p.surfaces.size(); ++i) {
+    const LensSurface& s = p.surfaces[i];
+    if (!s.shape.isSpherical())
+      throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: it is {} (the .dat "
+                                     "format has spheres only); write .json instead",
+                                     i,
+                                     s.shape.radius_x_mm ? "cylindrical/toroidal"
+                                                         : "aspheric (conic or polynomial)"));
+    double radius = s.radius_mm;
+    if (s.isStop()) {
+      if (s.radius_mm != 0)
+        throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: the stop is curved",
+                                       i));
+      if (s.ior != 1 && !(i > 0 && p.surfaces[i - 1].ior == s.ior))
+        throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: the stop changes "
+                                       "the medium",
+                                       i));
+      ++stops;
+    } else if (radius == 0) {
+      radius = 1e9;
+    }
+    out += fmt::format("{:.10g}\t{:.10g}\t{:.10g}\t{:.10g}", radius, s.thickness_mm,
+                       s.isStop() && s.ior == 1 ? 0.0 : s.ior, s.aperture_diameter_mm);
+    // Columns 5 and 6 keep the glass: a catalogue glass by name, a model glass by its V_d.
+    if (s.ior != 1 && !s.isStop()) {
+      const CatalogGlass* g =
+          s.glass.name.empty() ? nullptr : GlassCatalog::builtin().find(s.glass.name);
+      if (g)
+        out += fmt::format("\t{:.6g}\t{}", g->listed_v_d, g->qualifiedName());
+      else if (s.glass.v_d)
+        out += fmt::format("\t{:.10g}", *s.glass.v_d);
+    }
+    out += "\n";
+  }
+  (void)stops;
+  return out;
+}
+
+std::string lensCatalogueDir() {
+  if (const char* env = std::getenv("LENSIM_LENSES_DIR")) return env;
+#ifdef LENSIM_LENSES_DIR_DEFAULT
+  return LENSIM_LENSES_DIR_DEFAULT;
+#else
+  return "lenses";
+#endif
+}
+
+LensRef resolveLensName(const std::string& name) {
+  if (name.rfind("lentil:", 0) == 0) {
+    return {lensCatalogueDir() + "/lentil/lenses.json", name.substr(7)};
+  }
+  if (name.rfind("lenses:", 0) == 0) {
+    const std::string rest = name.substr(7);
+    const std::string dir = lensCatalogueDir();
+    for (const char* ext : {"", ".dat", ".zmx", ".json"}) {
+      const std::string candidate = dir + "/" + rest + ext;
+      if (std::filesystem::is_regular_file(candidate)) return {candidate, ""};
+    }
+    throw Error(FileLoc{name, 0, 0},
+                fmt::format("no lens '{}' in the catalogue {} (see lenses/README.md)", rest, dir));
+  }
+  return {name, ""};
+}
+
+}  // namespace lensim::optics

@@ -1,0 +1,322 @@
+#include "lensim/optics/surface_shape.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace lensim::optics {
+
+bool SurfaceShape::hasPolynomial() const {
+  for (size_t p = 1; p < poly.size(); ++p)
+    if (poly[p] != 0) return true;
+  return false;
+}
+
+void SurfaceShape::scaleLengths(double s) {
+  for (size_t p = 1; p < poly.size(); ++p) poly[p] *= std::pow(s, 1.0 - double(p));
+  if (radius_x_mm) *radius_x_mm *= s;
+}
+
+namespace {
+
+struct Coeffs {
+  double cx, cy, ax, ay;  // curvatures and (1 + k) c^2 of the x and y sections
+};
+
+Coeffs coeffsOf(double radius_mm, const SurfaceShape& shape) {
+  Coeffs k;
+  k.cy = radius_mm != 0 ? 1 / radius_mm : 0.0;
+  if (shape.radius_x_mm) {
+    k.cx = *shape.radius_x_mm != 0 ? 1 / *shape.radius_x_mm : 0.0;
+    k.ax = (1 + shape.conic_x) * k.cx * k.cx;
+  } else {
+    k.cx = k.cy;
+    k.ax = (1 + shape.conic) * k.cx * k.cx;
+  }
+  k.ay = (1 + shape.conic) * k.cy * k.cy;
+  return k;
+}
+
+}  // namespace
+
+std::optional<SagGradient> surfaceSag(double radius_mm, const SurfaceShape& shape, double x,
+                                      double y) {
+  const Coeffs k = coeffsOf(radius_mm, shape);
+  const double arg = 1 - k.ax * x * x - k.ay * y * y;
+  if (arg < 0) return std::nullopt;
+  const double S = std::sqrt(arg);
+  const double N = k.cx * x * x + k.cy * y * y;
+  const double den = 1 + S;
+  SagGradient g;
+  g.z = N / den;
+  // d/dx [N / (1 + S)] = (2 cx x (1 + S) - N dS/dx) / (1 + S)^2 with dS/dx = -ax x / S.
+  if (S > 0) {
+    g.dzdx = (2 * k.cx * x * den + N * k.ax * x / S) / (den * den);
+    g.dzdy = (2 * k.cy * y * den + N * k.ay * y / S) / (den * den);
+  } else {  // the rim of the conic's domain: the surface is vertical there
+    const double inf = std::numeric_limits<double>::infinity();
+    g.dzdx = x != 0 ? std::copysign(inf, x * (k.cx != 0 ? k.cx : 1)) : 0;
+    g.dzdy = y != 0 ? std::copysign(inf, y * (k.cy != 0 ? k.cy : 1)) : 0;
+  }
+  if (shape.hasPolynomial()) {
+    const double r = std::sqrt(x * x + y * y);
+    // sum p a_p r^(p-2): the radial slope divided by r (the p = 1 cone term is singular at 0).
+    double z = 0, slope_over_r = 0, rp = 1;  // rp = r^p
+    for (size_t p = 1; p < shape.poly.size(); ++p) {
+      const double rpm2 = rp / std::max(r, 1e-300);  // r^(p-2) before updating rp
+      rp *= r;
+      const double a = shape.poly[p];
+      if (a == 0) continue;
+      z += a * rp;
+      if (p == 1) {
+        if (r > 0) slope_over_r += a / r;
+      } else {
+        slope_over_r += double(p) * a * (p == 2 ? 1.0 : rpm2);
+      }
+    }
+    g.z += z;
+    g.dzdx += slope_over_r * x;
+    g.dzdy += slope_over_r * y;
+  }
+  return g;
+}
+
+double vertexCurvatureY(double radius_mm, const SurfaceShape& shape) {
+  return (radius_mm != 0 ? 1 / radius_mm : 0.0) + 2 * shape.r2Coefficient();
+}
+
+double vertexCurvatureX(double radius_mm, const SurfaceShape& shape) {
+  if (!shape.radius_x_mm) return vertexCurvatureY(radius_mm, shape);
+  return (*shape.radius_x_mm != 0 ? 1 / *shape.radius_x_mm : 0.0) + 2 * shape.r2Coefficient();
+}
+
+double sagDomainRadius(double radius_mm, const SurfaceShape& shape) {
+  const Coeffs k = coeffsOf(radius_mm, shape);
+  const double a = std::max(k.ax, k.ay);
+  return a > 0 ? 1 / std::sqrt(a) : std::numeric_limits<double>::infinity();
+}
+
+// ---------------------------------------------------------------------------------------------
+
+ShapeIntersector::ShapeIntersector(double radius_mm, const SurfaceShape& shape,
+                                   double semi_aperture_mm)
+    : radius_(radius_mm), shape_(shape) {
+  {
+    const Coeffs k = coeffsOf(radius_mm, shape);
+    cx_ = k.cx, cy_ = k.cy, ax_ = k.ax, ay_ = k.ay;
+    for (size_t p = 1; p < shape.poly.size(); ++p)
+      if (shape.poly[p] != 0) terms_.push_back({int(p), shape.poly[p]});
+  }
+  const double domain = sagDomainRadius(radius_mm, shape);
+  const double semi = std::max(semi_aperture_mm, 1e-6);
+  bound_r_ = std::min(1.25 * semi, domain * (1 - 1e-9));
+  // Slab of the surface: sag sampled on a polar grid over a quadrant (every shape here is
+  // symmetric in x -> -x and y -> -y), padded for the extremes between samples.
+  const int n_ang = shape.isRotational() ? 1 : 9;
+  double lo = 0, hi = 0;
+  for (int a = 0; a < n_ang; ++a) {
+    const double phi = n_ang == 1 ? 0.0 : (std::numbers::pi / 2) * a / (n_ang - 1);
+    for (int k = 0; k <= 128; ++k) {
+      const double r = bound_r_ * k / 128;
+      const SagGradient g = sagContinued(r * std::cos(phi), r * std::sin(phi));
+      lo = std::min(lo, g.z), hi = std::max(hi, g.z);
+    }
+  }
+  const double pad = 0.02 * (hi - lo) + 1e-7;
+  z_lo_ = lo - pad, z_hi_ = hi + pad;
+  // Quadric when (1 + k) c is the same for every curved section.
+  {
+    const Coeffs k = coeffsOf(radius_mm, shape);
+    const double ex = k.cx != 0 ? k.ax / k.cx : 0.0, ey = k.cy != 0 ? k.ay / k.cy : 0.0;
+    if (k.cx == 0 || k.cy == 0 || std::abs(ex - ey) <= 1e-12 * std::max(std::abs(ex), 1e-300)) {
+      base_quadric_ = true;
+      quadric_ = !shape.hasPolynomial();
+      qcx_ = k.cx, qcy_ = k.cy, qe_ = k.cx != 0 ? ex : ey;
+    }
+  }
+}
+
+std::optional<double> ShapeIntersector::quadricRoot(const Vec3& o, const Vec3& d,
+                                                    double t_min) const {
+  // A t^2 + 2 B t + C = 0; stable roots; the nearest on the vertex sheet.
+  const double A = qcx_ * d.x * d.x + qcy_ * d.y * d.y + qe_ * d.z * d.z;
+  const double B = qcx_ * o.x * d.x + qcy_ * o.y * d.y + qe_ * o.z * d.z - d.z;
+  const double C = qcx_ * o.x * o.x + qcy_ * o.y * o.y + qe_ * o.z * o.z - 2 * o.z;
+  double roots[2];
+  int nr = 0;
+  if (A == 0) {
+    if (B != 0) roots[nr++] = -C / (2 * B);
+  } else {
+    const double disc = B * B - A * C;
+    if (disc >= 0) {
+      const double q = -(B + std::copysign(std::sqrt(disc), B));
+      roots[nr++] = q / A;
+      if (q != 0) roots[nr++] = C / q;
+    }
+  }
+  if (nr == 2 && roots[1] < roots[0]) std::swap(roots[0], roots[1]);
+  for (int i = 0; i < nr; ++i) {
+    const double t = roots[i];
+    if (!(t >= t_min)) continue;
+    if (1 - qe_ * (o.z + t * d.z) <= 0) continue;  // the other sheet
+    return t;
+  }
+  return std::nullopt;
+}
+
+SagGradient ShapeIntersector::sagContinued(double x, double y) const {
+  const double r2 = x * x + y * y;
+  if (r2 > bound_r_ * bound_r_) {
+    // The flat annulus beyond the bound, at the rim's sag in this direction.
+    const double s = bound_r_ / std::sqrt(r2);
+    auto g = surfaceSag(radius_, shape_, x * s, y * s);
+    return {g ? g->z : 0.0, 0.0, 0.0};
+  }
+  // surfaceSag's formula with the coefficients cached (the hot path of the Newton solve).
+  const double arg = std::max(0.0, 1 - ax_ * x * x - ay_ * y * y);
+  const double S = std::sqrt(arg), N = cx_ * x * x + cy_ * y * y, den = 1 + S;
+  SagGradient g;
+  g.z = N / den;
+  if (S > 0) {
+    const double inv = 1 / (den * den), nS = N / S;
+    g.dzdx = (2 * cx_ * x * den + nS * ax_ * x) * inv;
+    g.dzdy = (2 * cy_ * y * den + nS * ay_ * y) * inv;
+  } else {
+    return *surfaceSag(radius_, shape_, x, y);  // the domain's rim (not inside bound_r_)
+  }
+  if (!terms_.empty()) {
+    const double r = std::sqrt(r2);
+    double z = 0, slope_over_r = 0;
+    double rk = 1;  // r^k; the terms come in increasing powers
+    int k = 0;
+    for (const auto& [p, a] : terms_) {
+      if (p == 1) {
+        z += a * r;
+        if (r > 0) slope_over_r += a / r;
+      } else {
+        while (k < p - 2) rk *= r, ++k;
+        const double rpm2 = rk;
+        z += a * rpm2 * r2;
+        slope_over_r += p * a * rpm2;
+      }
+    }
+    g.z += z;
+    g.dzdx += slope_over_r * x;
+    g.dzdy += slope_over_r * y;
+  }
+  return g;
+}
+
+std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, const Vec3& d,
+                                                                 double t_min) const {
+  // The part of the ray inside the slab.
+  double ta, tb;
+  if (std::abs(d.z) > 1e-12) {
+    const double t0 = (z_lo_ - o.z) / d.z, t1 = (z_hi_ - o.z) / d.z;
+    ta = std::min(t0, t1), tb = std::max(t0, t1);
+  } else {
+    if (o.z < z_lo_ || o.z > z_hi_) return std::nullopt;
+    ta = t_min;
+    tb = t_min + 4 * bound_r_ + std::sqrt(o.x * o.x + o.y * o.y);
+  }
+  ta = std::max(ta, t_min);
+  if (!(ta <= tb)) return std::nullopt;
+  if (quadric_) {
+    if (auto t = quadricRoot(o, d, t_min)) {
+      const Vec3 p = o + d * *t;
+      // Normal from the quadric's gradient (2 cx x, 2 cy y, 2 e z - 2), facing -z.
+      return Hit{*t, normalize(Vec3{qcx_ * p.x, qcy_ * p.y, qe_ * p.z - 1})};
+    }
+    // No vertex-sheet hit: the general search below finds the continuation beyond bound_r.
+  }
+  auto g = [&](double t, SagGradient* sg) {
+    const double x = o.x + t * d.x, y = o.y + t * d.y;
+    const SagGradient s = sagContinued(x, y);
+    if (sg) *sg = s;
+    return o.z + t * d.z - s.z;
+  };
+  // Aspheres on a quadric base: Newton's method from the base quadric's hit, accepted when it
+  // converges inside the slab and g keeps its sign from the slab's entry to just before the root
+  // (checked at 4 points; so the root is the first crossing); else the bracketing search below.
+  if (base_quadric_ && !quadric_) {
+    if (auto tq = quadricRoot(o, d, t_min); tq && *tq >= ta && *tq <= tb) {
+      double t = *tq;
+      bool converged = false;
+      for (int it = 0; it < 12; ++it) {
+        SagGradient s;
+        const double gt = g(t, &s);
+        const double dg = d.z - s.dzdx * d.x - s.dzdy * d.y;
+        if (dg == 0 || !std::isfinite(dg)) break;
+        const double tn = t - gt / dg;
+        if (!(tn >= ta && tn <= tb)) break;
+        const double step = std::abs(tn - t);
+        t = tn;
+        if (step <= 1e-13 * (1 + std::abs(t))) {
+          converged = true;
+          break;
+        }
+      }
+      if (converged) {
+        const double g0 = g(ta, nullptr);
+        bool first = g0 != 0;
+        for (int k = 1; k <= 4 && first; ++k) {
+          const double gk = g(ta + (t - ta) * k / 5.0, nullptr);
+          first = gk != 0 && (gk < 0) == (g0 < 0);
+        }
+        if (first) {
+          SagGradient s;
+          g(t, &s);
+          const Vec3 n{s.dzdx, s.dzdy, -1.0};
+          if (std::isfinite(n.x) && std::isfinite(n.y)) return Hit{t, normalize(n)};
+        }
+      }
+    }
+  }
+  // First sign change along the ray: the nearest crossing.
+  constexpr int kSamples = 16;
+  double a = ta, ga = g(ta, nullptr);
+  double b = ta, gb = ga;
+  bool found = ga == 0;
+  for (int k = 1; k <= kSamples && !found; ++k) {
+    b = ta + (tb - ta) * k / kSamples;
+    gb = g(b, nullptr);
+    if (gb == 0 || (gb < 0) != (ga < 0)) {
+      found = true;
+      break;
+    }
+    a = b, ga = gb;
+  }
+  if (!found) return std::nullopt;
+  double t;
+  if (ga == 0) {
+    t = a;
+  } else if (gb == 0) {
+    t = b;
+  } else {
+    // Newton's method kept inside the bracket [a, b] (bisection when a step leaves it).
+    t = a - ga * (b - a) / (gb - ga);  // start from the secant
+    for (int it = 0; it < 60; ++it) {
+      SagGradient s;
+      const double gt = g(t, &s);
+      if (gt == 0) break;
+      if ((gt < 0) == (ga < 0))
+        a = t, ga = gt;
+      else
+        b = t, gb = gt;
+      const double dg = d.z - s.dzdx * d.x - s.dzdy * d.y;
+      double tn = dg != 0 ? t - gt / dg : 0.5 * (a + b);
+      if (!(tn > a && tn < b)) tn = 0.5 * (a + b);
+      const double step = std::abs(tn - t);
+      t = tn;
+      if (step <= 1e-14 * (1 + std::abs(t)) || b - a <= 1e-14 * (1 + std::abs(t))) break;
+    }
+  }
+  SagGradient s;
+  g(t, &s);
+  Vec3 n{s.dzdx, s.dzdy, -1.0};
+  if (!std::isfinite(n.x) || !std::isfinite(n.y)) return std::nullopt;
+  return Hit{t, normalize(n)};
+}
+
+}  // namespace lensim::optics

@@ -1,0 +1,521 @@
+// Zemax `.zmx` reader (sequential mode).
+//
+// A .zmx file is a list of keyword lines: system data first (UNIT, ENPD, WAVM, ...), then one
+// block per surface starting with `SURF n` (0 = object, last = image). Written from the file
+// format as Zemax writes it (see the samples in ../shared/lenses/zmx and their sources); no
+// library reads it, so this is hand-written.
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <map>
+
+#include "lensim/optics/glass.h"
+#include "lensim/optics/lens_formats.h"
+#include "lensim/optics/lens_system.h"
+#include "lensim/optics/paraxial.h"
+
+namespace lensim::optics {
+
+namespace {
+
+void appendUtf8(std::string& out, std::uint32_t cp) {
+  if (cp < 0x80) {
+    out += char(cp);
+  } else if (cp < 0x800) {
+    out += char(0xC0 | (cp >> 6));
+    out += char(0x80 | (cp & 0x3F));
+  } else if (cp < 0x10000) {
+    out += char(0xE0 | (cp >> 12));
+    out += char(0x80 | ((cp >> 6) & 0x3F));
+    out += char(0x80 | (cp & 0x3F));
+  } else {
+    out += char(0xF0 | (cp >> 18));
+    out += char(0x80 | ((cp >> 12) & 0x3F));
+    out += char(0x80 | ((cp >> 6) & 0x3F));
+    out += char(0x80 | (cp & 0x3F));
+  }
+}
+
+}  // namespace
+
+std::string decodeTextFile(std::string_view bytes, const std::string& path) {
+  auto u8 = [&](size_t i) { return static_cast<unsigned char>(bytes[i]); };
+  const bool le = bytes.size() >= 2 && u8(0) == 0xFF && u8(1) == 0xFE;
+  const bool be = bytes.size() >= 2 && u8(0) == 0xFE && u8(1) == 0xFF;
+  if (!le && !be) {
+    if (bytes.size() >= 3 && u8(0) == 0xEF && u8(1) == 0xBB && u8(2) == 0xBF)
+      return std::string(bytes.substr(3));
+    return std::string(bytes);
+  }
+  std::string out;
+  out.reserve(bytes.size() / 2);
+  int line = 1;
+  auto unit = [&](size_t i) -> std::uint32_t {
+    return le ? (std::uint32_t(u8(i)) | (std::uint32_t(u8(i + 1)) << 8))
+              : ((std::uint32_t(u8(i)) << 8) | std::uint32_t(u8(i + 1)));
+  };
+  const char* enc = le ? "UTF-16 LE" : "UTF-16 BE";
+  const bool odd = bytes.size() % 2 != 0;
+  for (size_t i = 2; i + 1 < bytes.size(); i += 2) {
+    std::uint32_t cu = unit(i);
+    if (cu >= 0xD800 && cu <= 0xDBFF) {
+      if (i + 3 >= bytes.size() || unit(i + 2) < 0xDC00 || unit(i + 2) > 0xDFFF)
+        throw Error(FileLoc{path, line, 0},
+                    fmt::format("malformed {} text: unpaired high surrogate 0x{:04X}", enc, cu));
+      cu = 0x10000 + ((cu - 0xD800) << 10) + (unit(i + 2) - 0xDC00);
+      i += 2;
+    } else if (cu >= 0xDC00 && cu <= 0xDFFF) {
+      throw Error(FileLoc{path, line, 0},
+                  fmt::format("malformed {} text: unpaired low surrogate 0x{:04X}", enc, cu));
+    } else if (cu == 0) {
+      throw Error(FileLoc{path, line, 0},
+                  fmt::format("malformed {} text: a NUL character (is the file really {}?)", enc,
+                              enc));
+    }
+    if (cu == '\n') ++line;
+    appendUtf8(out, cu);
+  }
+  if (odd)
+    throw Error(FileLoc{path, line, 0},
+                fmt::format("malformed {} file: odd number of bytes ({}); the file is truncated "
+                            "in the middle of a character or is not UTF-16",
+                            enc, bytes.size()));
+  return out;
+}
+
+namespace {
+
+struct Tok {
+  std::string_view text;
+  int col;
+};
+
+std::vector<Tok> tokens(std::string_view line) {
+  std::vector<Tok> t;
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+    if (i >= line.size()) break;
+    const size_t s = i;
+    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+    t.push_back({line.substr(s, i - s), int(s) + 1});
+  }
+  return t;
+}
+
+struct ZSurface {
+  int number = 0;
+  FileLoc loc;  // the SURF line
+  std::string type = "STANDARD";
+  FileLoc type_loc;
+  double curv = 0;
+  std::optional<double> disz;  // nullopt: INFINITY
+  FileLoc disz_loc;
+  bool has_disz = false;
+  std::optional<double> diam;
+  FileLoc diam_loc;
+  bool stop = false;
+  double conic = 0;
+  std::map<int, double> parm;
+  std::string glass;
+  std::optional<double> n_d, v_d;
+  FileLoc glass_loc;
+  std::optional<double> clap_max;
+};
+
+class ZmxParser {
+ public:
+  ZmxParser(const std::string& path) : path_(path) {}
+
+  LensPrescription parse(std::string_view bytes);
+
+ private:
+  double number(const Tok& t, int line, const char* what) const {
+    double v = 0;
+    const char* first = t.text.data();
+    const char* last = first + t.text.size();
+    if (first != last && *first == '+') ++first;
+    auto [ptr, ec] = std::from_chars(first, last, v);
+    if (ec != std::errc() || ptr != last || !std::isfinite(v))
+      throw Error(FileLoc{path_, line, t.col},
+                  fmt::format("expected a number for the {}, found '{}'", what, t.text));
+    return v;
+  }
+  void need(const std::vector<Tok>& t, size_t n, int line, const char* what) const {
+    if (t.size() < n)
+      throw Error(FileLoc{path_, line, t.empty() ? 0 : t[0].col},
+                  fmt::format("{} needs {} value{}, found {}", t[0].text, n - 1, n > 2 ? "s" : "",
+                              t.size() - 1));
+    (void)what;
+  }
+
+  std::string path_;
+};
+
+LensPrescription ZmxParser::parse(std::string_view bytes) {
+  const std::string text = decodeTextFile(bytes, path_);
+  LensPrescription p;
+  p.path = path_;
+  p.format = "zmx";
+  p.name = std::filesystem::path(path_).stem().string();
+
+  double unit_mm = 1;
+  std::optional<double> enpd, fnum;
+  bool floa = false;
+  FileLoc aperture_loc;
+  std::map<int, double> wavm;  // index -> micrometres
+  std::vector<double> wavl;
+  std::optional<int> pwav;
+  std::optional<int> n_waves;
+  std::vector<ZSurface> surfs;
+  ZSurface* cur = nullptr;
+  bool sequential_seen = false;
+
+  int line_no = 0;
+  size_t pos = 0;
+  int last_line = 1;
+  while (pos <= text.size()) {
+    size_t end = text.find_first_of("\r\n", pos);
+    if (end == std::string::npos) end = text.size();
+    std::string_view line(text.data() + pos, end - pos);
+    ++line_no;
+    pos = (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n') ? end + 2
+                                                                                 : end + 1;
+    if (end == text.size() && line.empty()) break;
+    last_line = line_no;
+    const std::vector<Tok> t = tokens(line);
+    if (t.empty()) continue;
+    const std::string_view key = t[0].text;
+    const FileLoc loc{path_, line_no, t[0].col};
+    auto num = [&](size_t i, const char* what) {
+      need(t, i + 1, line_no, what);
+      return number(t[i], line_no, what);
+    };
+    auto surfErr = [&](const std::string& msg) {
+      return Error(loc, fmt::format("surface {}: {}", cur ? cur->number : -1, msg));
+    };
+
+    if (key == "SURF") {
+      const int n = int(num(1, "surface number"));
+      if (n != int(surfs.size()))
+        throw Error(loc, fmt::format("surfaces out of order: SURF {} where SURF {} was expected",
+                                     n, surfs.size()));
+      surfs.push_back({});
+      cur = &surfs.back();
+      cur->number = n;
+      cur->loc = loc;
+      continue;
+    }
+    if (!cur) {
+      // System data.
+      if (key == "MODE") {
+        need(t, 2, line_no, "mode");
+        if (t[1].text != "SEQ")
+          throw Error(FileLoc{path_, line_no, t[1].col},
+                      fmt::format("MODE {} is not supported: lensim reads sequential (MODE SEQ) "
+                                  "files only",
+                                  t[1].text));
+        sequential_seen = true;
+      } else if (key == "UNIT") {
+        need(t, 2, line_no, "unit");
+        const std::string_view u = t[1].text;
+        if (u == "MM")
+          unit_mm = 1;
+        else if (u == "CM")
+          unit_mm = 10;
+        else if (u == "IN")
+          unit_mm = 25.4;
+        else if (u == "M" || u == "METER" || u == "METERS")
+          unit_mm = 1000;
+        else
+          throw Error(FileLoc{path_, line_no, t[1].col},
+                      fmt::format("unknown lens unit '{}'; expected MM, CM, IN or M", u));
+      } else if (key == "NAME") {
+        const size_t s = line.find("NAME") + 4;
+        std::string name(line.substr(std::min(s, line.size())));
+        while (!name.empty() && (name.front() == ' ' || name.front() == '\t')) name.erase(0, 1);
+        while (!name.empty() && (name.back() == ' ' || name.back() == '\t')) name.pop_back();
+        if (!name.empty()) p.name = name;
+      } else if (key == "ENPD") {
+        enpd = num(1, "entrance pupil diameter");
+        aperture_loc = loc;
+        if (!(*enpd > 0))
+          throw Error(FileLoc{path_, line_no, t[1].col},
+                      fmt::format("entrance pupil diameter {} must be > 0", *enpd));
+      } else if (key == "FNUM") {
+        fnum = num(1, "f-number");
+        aperture_loc = loc;
+        if (!(*fnum > 0))
+          throw Error(FileLoc{path_, line_no, t[1].col},
+                      fmt::format("f-number {} must be > 0", *fnum));
+      } else if (key == "FLOA") {
+        floa = true;
+        aperture_loc = loc;
+      } else if (key == "OBNA" || key == "OBSC" || key == "NUMA") {
+        throw Error(loc, fmt::format("system aperture {} (object-space numerical aperture or "
+                                     "cone angle) is not supported; use ENPD, FNUM or FLOA",
+                                     key));
+      } else if (key == "WAVM") {
+        const int i = int(num(1, "wavelength number"));
+        wavm[i] = num(2, "wavelength (micrometres)");
+      } else if (key == "WAVL") {
+        for (size_t i = 1; i < t.size(); ++i) wavl.push_back(number(t[i], line_no, "wavelength"));
+      } else if (key == "PWAV") {
+        pwav = int(num(1, "primary wavelength number"));
+      } else if (key == "FTYP") {
+        if (t.size() >= 5) n_waves = int(number(t[4], line_no, "number of wavelengths"));
+      }
+      continue;
+    }
+
+    // Surface data.
+    if (key == "TYPE") {
+      need(t, 2, line_no, "type");
+      cur->type = std::string(t[1].text);
+      cur->type_loc = loc;
+      if (cur->type != "STANDARD" && cur->type != "EVENASPH" && cur->type != "ODDASPH")
+        throw surfErr(fmt::format("TYPE {} is not supported (lensim models STANDARD, EVENASPH "
+                                  "and ODDASPH surfaces)",
+                                  cur->type));
+    } else if (key == "CURV") {
+      cur->curv = num(1, "curvature");
+    } else if (key == "DISZ") {
+      need(t, 2, line_no, "thickness");
+      cur->has_disz = true;
+      cur->disz_loc = FileLoc{path_, line_no, t[1].col};
+      if (t[1].text == "INFINITY")
+        cur->disz.reset();
+      else
+        cur->disz = number(t[1], line_no, "thickness");
+    } else if (key == "DIAM") {
+      cur->diam = num(1, "semi-diameter");
+      cur->diam_loc = FileLoc{path_, line_no, t[1].col};
+    } else if (key == "STOP") {
+      cur->stop = true;
+    } else if (key == "CONI") {
+      cur->conic = num(1, "conic constant");
+    } else if (key == "PARM") {
+      const int i = int(num(1, "parameter number"));
+      cur->parm[i] = num(2, "parameter value");
+    } else if (key == "GLAS") {
+      need(t, 2, line_no, "glass");
+      cur->glass = std::string(t[1].text);
+      cur->glass_loc = FileLoc{path_, line_no, t[1].col};
+      if (cur->glass == "MIRROR")
+        throw Error(cur->glass_loc,
+                    fmt::format("surface {}: GLAS MIRROR: mirror (catadioptric) lenses are not "
+                                "supported yet; lensim traces refracting surfaces only",
+                                cur->number));
+      if (t.size() >= 6) {
+        cur->n_d = number(t[4], line_no, "glass index n_d");
+        cur->v_d = number(t[5], line_no, "glass Abbe number V_d");
+      }
+    } else if (key == "CLAP") {
+      const double rmin = num(2, "aperture minimum radius");
+      cur->clap_max = num(3, "aperture maximum radius");
+      if (rmin != 0)
+        throw surfErr(fmt::format("annular aperture (CLAP minimum radius {}) is not supported",
+                                  rmin));
+    } else if (key == "OBSC" || key == "SQAP" || key == "ELAP" || key == "SQOB" ||
+               key == "ELOB" || key == "UDAP" || key == "UDOB") {
+      throw surfErr(fmt::format("{} (a surface aperture or obscuration other than circular) is "
+                                "not supported",
+                                key));
+    } else if (key == "SCBD" || key == "DECX" || key == "DECY" || key == "TILT") {
+      // Surface decentres and tilts: refused unless all zero.
+      for (size_t i = 2; i < t.size(); ++i)
+        if (number(t[i], line_no, "decentre/tilt") != 0)
+          throw surfErr(fmt::format("{}: tilted or decentred surfaces are not supported", key));
+    }
+  }
+
+  if (!sequential_seen && surfs.empty())
+    throw Error(FileLoc{path_, last_line, 0},
+                "not a Zemax lens file: no MODE SEQ line and no SURF blocks");
+  if (surfs.size() < 3)
+    throw Error(FileLoc{path_, last_line, 0},
+                fmt::format("truncated or empty lens: {} SURF block{} (object, at least one lens "
+                            "surface and the image are needed)",
+                            surfs.size(), surfs.size() == 1 ? "" : "s"));
+
+  // Wavelengths (micrometres in the file).
+  {
+    std::vector<double> um;
+    if (!wavm.empty()) {
+      const int count = n_waves ? *n_waves : int(wavm.size());
+      for (int i = 1; i <= count; ++i)
+        if (auto it = wavm.find(i); it != wavm.end()) um.push_back(it->second);
+    } else {
+      um = wavl;
+    }
+    for (double w : um) p.wavelengths_nm.push_back(w * 1000);
+    if (pwav && *pwav >= 1 && *pwav <= int(p.wavelengths_nm.size()))
+      p.primary_wavelength_nm = p.wavelengths_nm[size_t(*pwav - 1)];
+  }
+
+  // Object surface.
+  const ZSurface& obj = surfs.front();
+  if (obj.disz) p.object_distance_mm = *obj.disz * unit_mm;
+
+  // Lens surfaces: 1 .. N-2; the last is the image.
+  int stop_surface = -1;
+  for (size_t k = 1; k + 1 < surfs.size(); ++k)
+    if (surfs[k].stop) stop_surface = int(k);
+  if (stop_surface < 0) {
+    stop_surface = 1;  // Zemax's default: the first surface
+    p.diagnostics.push_back({Severity::Note, surfs[1].loc,
+                             "no STOP line: surface 1 is the aperture stop (Zemax's default)"});
+  }
+  double ior_before = 1;
+  std::optional<int> inserted_stop;
+  for (size_t k = 1; k + 1 < surfs.size(); ++k) {
+    const ZSurface& z = surfs[k];
+    if (!z.has_disz)
+      throw Error(z.loc, fmt::format("surface {}: no DISZ (thickness) line", z.number));
+    if (!z.disz)
+      throw Error(z.disz_loc,
+                  fmt::format("surface {}: thickness INFINITY is allowed for the object only",
+                              z.number));
+    if (*z.disz < 0)
+      throw Error(z.disz_loc, fmt::format("surface {}: thickness {} is negative; lensim models "
+                                          "lenses whose surfaces follow in order along +z",
+                                          z.number, *z.disz));
+    if (!z.diam)
+      throw Error(z.loc, fmt::format("surface {}: no DIAM (semi-diameter) line; lensim needs "
+                                     "every surface's clear aperture",
+                                     z.number));
+    double semi = (z.clap_max ? *z.clap_max : *z.diam) * unit_mm;
+    if (!(semi > 0))
+      throw Error(z.diam_loc,
+                  fmt::format("surface {}: semi-diameter {} must be > 0", z.number, *z.diam));
+
+    LensSurface s;
+    s.loc = z.loc;
+    s.radius_mm = z.curv != 0 ? unit_mm / z.curv : 0.0;
+    s.thickness_mm = *z.disz * unit_mm;
+    s.aperture_diameter_mm = 2 * semi;
+    s.stop_flag = false;
+    s.shape.conic = z.conic;
+    if (z.type == "EVENASPH" || z.type == "ODDASPH") {
+      for (const auto& [i, v] : z.parm) {
+        if (i < 1 || i > 8 || v == 0) continue;
+        const size_t power = z.type == "EVENASPH" ? size_t(2 * i) : size_t(i);
+        if (s.shape.poly.size() <= power) s.shape.poly.resize(power + 1, 0.0);
+        s.shape.poly[power] = v;
+      }
+      s.shape.scaleLengths(unit_mm);
+    }
+    // The medium after the surface.
+    if (z.glass.empty()) {
+      s.ior = 1;
+    } else {
+      s.glass.name = z.glass == "___BLANK" ? std::string() : z.glass;
+      s.glass.loc = z.glass_loc;
+      s.glass.n_d = z.n_d;
+      s.glass.v_d = z.v_d;
+      // The constant index (used where dispersion is not) is the catalogue's n_d for a
+      // catalogue glass, else the n_d written on the GLAS line; resolveGlass (glass.h) gives the
+      // lens system the glass's n(lambda) and warns about a name it does not know.
+      const CatalogGlass* known =
+          z.glass == "___BLANK" ? nullptr : GlassCatalog::builtin().find(z.glass);
+      if (known) {
+        s.ior = known->listed_n_d;
+      } else if (z.n_d && *z.n_d >= 1) {
+        s.ior = *z.n_d;
+      } else {
+        resolveGlass(s.glass, 1.0, nullptr);  // throws: unknown glass, with did-you-mean hints
+      }
+    }
+    const double domain = sagDomainRadius(s.radius_mm, s.shape);
+    if (semi >= domain)
+      throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} mm exceeds the surface's "
+                                          "extent ({} mm)",
+                                          z.number, semi, domain));
+
+    if (int(k) == stop_surface) {
+      const bool plane = s.radius_mm == 0 && s.shape.isSpherical();
+      if (plane) {
+        s.stop_flag = true;
+      } else {
+        // Stop on a curved surface: a plane stop at its vertex, on the side the surface does not
+        // reach within its aperture (paraxially the same stop).
+        LensSurface st;
+        st.loc = z.loc;
+        st.stop_flag = true;
+        st.aperture_diameter_mm = 2 * semi;
+        auto sg = surfaceSag(s.radius_mm, s.shape, 0.0, semi * (1 - 1e-9));
+        const bool before = !sg || sg->z >= 0;
+        p.diagnostics.push_back(
+            {Severity::Note, z.loc,
+             fmt::format("surface {} is the stop and curved: lensim puts a plane stop at its "
+                         "vertex, {} it",
+                         z.number, before ? "just before" : "just after")});
+        if (before) {
+          st.ior = ior_before;
+          st.thickness_mm = 0;
+          inserted_stop = int(p.surfaces.size());
+          p.surfaces.push_back(st);
+          p.surfaces.push_back(s);
+        } else {
+          st.ior = s.ior;
+          st.glass = s.glass;
+          st.thickness_mm = s.thickness_mm;
+          s.thickness_mm = 0;
+          p.surfaces.push_back(s);
+          inserted_stop = int(p.surfaces.size());
+          p.surfaces.push_back(st);
+        }
+        ior_before = s.ior;
+        continue;
+      }
+    }
+    ior_before = s.ior;
+    p.surfaces.push_back(s);
+  }
+
+  // The system aperture sets the stop's size (paraxially: the entrance pupil is the image of the
+  // stop, so its diameter scales with the stop's).
+  const auto stop_index = p.stopIndex();
+  if (stop_index && (enpd || fnum) && !floa) {
+    LensSystem sys(p);
+    const auto& in = sys.interfaces();
+    const int st = *stop_index;
+    double y_stop = 1;
+    if (st > 0) {
+      const RayMatrix m = systemMatrix(sys, 0, st - 1);
+      y_stop = m.a + (in[size_t(st)].z_mm - in[size_t(st - 1)].z_mm) / in[size_t(st)].ior_before * m.c;
+    }
+    const double semi_now = p.surfaces[size_t(st)].semiAperture_mm();
+    const double epd_now = 2 * semi_now / std::abs(y_stop);
+    double epd_target;
+    if (enpd) {
+      epd_target = *enpd * unit_mm;
+      p.aperture_spec = fmt::format("ENPD {} mm", epd_target);
+    } else {
+      const ParaxialData para = computeParaxial(sys);
+      epd_target = std::abs(para.effective_focal_length_mm) / *fnum;
+      p.aperture_spec = fmt::format("FNUM {}", *fnum);
+    }
+    const double semi_new = semi_now * epd_target / epd_now;
+    p.surfaces[size_t(st)].aperture_diameter_mm = 2 * semi_new;
+    if (std::abs(semi_new / semi_now - 1) > 1e-6)
+      p.diagnostics.push_back(
+          {Severity::Note, aperture_loc,
+           fmt::format("{}: the stop's semi-diameter is {:.6g} mm (DIAM gives {:.6g} mm)",
+                       p.aperture_spec, semi_new, semi_now)});
+  } else if (floa) {
+    p.aperture_spec = "FLOA (stop semi-diameter from DIAM)";
+  }
+  (void)inserted_stop;
+  return p;
+}
+
+}  // namespace
+
+LensPrescription parseZmx(std::string_view bytes, const std::string& path) {
+  return ZmxParser(path).parse(bytes);
+}
+
+}  // namespace lensim::optics
