@@ -29,4 +29,10 @@ void registerAutofocusCommand(CLI::App& app, Action& action);
 /// `lensim compare IMAGE REFERENCE [--second IMAGE2] ...`: agreement within noise.
 void registerCompareCommand(CLI::App& app, Action& action);
 
+/// `lensim merge OUT PART...`: merge the parts of a distributed render exactly.
+void registerMergeCommand(CLI::App& app, Action& action);
+
+/// `lensim dispatch SCENE --engine slurm|kubernetes --jobs N`: cluster job files.
+void registerDispatchCommand(CLI::App& app, Action& action);
+
 }  // namespace lensim::cmd
