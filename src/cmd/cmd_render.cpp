@@ -182,6 +182,13 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       std::signal(SIGINT, previous);
       io::ImageWriteOptions wo;
       wo.tiff_format = io::TiffSampleFormat::Float32;
+      if (part_mode && res.stats.partial && !checkpoint.empty()) {
+        // An interrupted part is not written: a part file that exists is complete (merge jobs
+        // wait for them); the finished tiles are in the checkpoint.
+        std::fprintf(stderr, "lensim: interrupted; the finished tiles are in %s (continue with "
+                     "--resume %s)\n", checkpoint.c_str(), checkpoint.c_str());
+        return 130;
+      }
       if (part_mode) {
         render::Part p;
         p.metadata = res.image.metadata;
