@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "lensim/scene/builder.h"
 
@@ -95,6 +96,7 @@ Vec3 Film::toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) con
 Int128 Film::toFixed(double v) {
   constexpr double kMax = 0x1p100;  // 2^52 in real units
   const double f = std::rint(v * kFixedScale);
+  if (std::abs(f) < 0x1p62) return Int128(int64_t(f));  // the common case: one instruction
   if (!(f == f)) return 0;
   return Int128(std::clamp(f, -kMax, kMax));
 }
