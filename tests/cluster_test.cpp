@@ -188,6 +188,38 @@ TEST(Merge, TilesTimesSliceTimesThreadsEqualOneRun) {
     }
 }
 
+// Every sampler gives the same pixels split or whole (each value depends only on the pixel, the
+// sample index, the dimension and the seed).
+TEST(Merge, EverySamplerSplitsExactly) {
+  for (const char* sampler : {"stratified", "independent"}) {
+    scene::Scene s = scene::loadScene(kTiny);
+    s.sampler.type = sampler;
+    RenderOptions base;
+    base.keep_sums = true;
+    base.threads = 2;
+    base.spp = 9;  // stratified: 3 x 3
+    const render::RenderResult ref = render::render(s, base);
+    std::vector<Part> parts;
+    for (int t = 0; t < 2; ++t)
+      for (const auto& range : {std::make_pair(0, 4), std::make_pair(4, 9)}) {
+        RenderOptions o = base;
+        o.tile = std::make_pair(t, 2);
+        o.spp_range = range;
+        const render::RenderResult r = render::render(s, o);
+        Part p;
+        p.path = fmt::format("{} tile {} spp {}:{}", sampler, t, range.first, range.second);
+        p.metadata = render::renderIdentity(s, o, render::planRender(s, o), "test");
+        p.x_res = s.film.x_resolution, p.y_res = s.film.y_resolution;
+        p.bounds = r.bounds;
+        p.sums = r.sums;
+        parts.push_back(std::move(p));
+      }
+    const Part merged = render::mergeParts(parts);
+    EXPECT_TRUE(merged.sums == ref.sums) << sampler;
+    EXPECT_TRUE(sameBits(render::sumsImage(merged.bounds, merged.sums), ref.image)) << sampler;
+  }
+}
+
 // The same through the files and the CLI, and every way merge refuses parts.
 TEST(Merge, CliMergesPartsAndRefusesMismatches) {
   const fs::path d = tempDir("merge");
