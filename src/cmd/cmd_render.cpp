@@ -88,14 +88,16 @@ void registerRenderCommand(CLI::App& app, Action& action) {
   r->add_option("--checkpoint", o->checkpoint,
                 "Write the finished tiles to this EXR file every --checkpoint-every, and at the "
                 "end or on interruption (atomically)");
-  r->add_option("--checkpoint-every", o->checkpoint_every,
+  auto* every = r->add_option("--checkpoint-every", o->checkpoint_every,
                 "Checkpoint interval, e.g. 60s, 500ms, 5m (default 60s)");
   r->add_option("--resume", o->resume,
                 "Continue the render saved in this checkpoint (it must be of the same scene, "
                 "seed, samples, tile and sample range); checkpoints go on to it unless "
                 "--checkpoint names another file");
-  r->callback([o, seed, &action]() {
+  r->callback([o, seed, every, &action]() {
     o->has_seed = seed->count() > 0;
+    if (every->count() > 0 && o->checkpoint.empty() && o->resume.empty())
+      throw CLI::ValidationError("--checkpoint-every", "needs --checkpoint FILE (or --resume FILE)");
     action = [o]() -> int {
       const bool quiet = o->quiet || lensim::quiet();
       scene::Scene s = scene::loadScene(o->scene);
