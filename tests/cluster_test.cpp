@@ -309,6 +309,48 @@ TEST(Merge, CliMergesPartsAndRefusesMismatches) {
   fs::remove_all(d);
 }
 
+// Tiles of a crop window, and merges of merges (`merge --part`): still the single run.
+TEST(Merge, CropWindowsAndMergesOfMerges) {
+  const fs::path d = tempDir("crop");
+  const std::string L = q(kBinary) + " --quiet render " + q(kTiny) +
+                        " --spp 4 --cropwindow 0.1 0.85 0.2 0.9 ";
+  ASSERT_EQ(sh(L + "-o " + q(d / "full.exr")).status, 0);
+  std::string slice0, slice1;
+  for (int t = 0; t < 3; ++t) {
+    const fs::path a = d / fmt::format("a{}.exr", t), b = d / fmt::format("b{}.exr", t);
+    ASSERT_EQ(sh(L + fmt::format("--tile {}/3 --spp-range 0:1 -o ", t) + q(a)).status, 0);
+    ASSERT_EQ(sh(L + fmt::format("--tile {}/3 --spp-range 1:4 -o ", t) + q(b)).status, 0);
+    slice0 += " " + q(a), slice1 += " " + q(b);
+  }
+  // The first slice of every tile merged into one part, then merged with the rest.
+  auto r = sh(q(kBinary) + " --quiet merge --part " + q(d / "s0.exr") + slice0);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("missing samples 1:4"), std::string::npos) << r.out;
+  r = sh(q(kBinary) + " --quiet merge --part --partial-samples " + q(d / "s0.exr") + slice0);
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(io::readImage((d / "s0.exr").string()).metadata.at("lensim:spp_range"), "0:1");
+  // Partial samples must still be the same in every pixel.
+  r = sh(q(kBinary) + " --quiet merge --partial-samples " + q(d / "x.exr") + " " +
+         q(d / "a0.exr") + " " + q(d / "a1.exr") + " " + q(d / "b2.exr"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("every pixel needs the same samples"), std::string::npos) << r.out;
+  r = sh(q(kBinary) + " --quiet merge " + q(d / "m.exr") + " " + q(d / "s0.exr") + slice1);
+  ASSERT_EQ(r.status, 0) << r.out;
+  const io::Image m = rgb((d / "m.exr").string());
+  EXPECT_EQ(m.width, 36);  // ceil(48 * 0.85) - ceil(48 * 0.1)
+  EXPECT_TRUE(sameBits(m, rgb((d / "full.exr").string())));
+  // A part of the whole image does not fit a cropped render.
+  ASSERT_EQ(sh(q(kBinary) + " --quiet render " + q(kTiny) + " --spp 4 --part -o " +
+               q(d / "whole.exr"))
+                .status,
+            0);
+  r = sh(q(kBinary) + " --quiet merge " + q(d / "x.exr") + " " + q(d / "whole.exr") + slice0 +
+         slice1);
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("different pixel bounds"), std::string::npos) << r.out;
+  fs::remove_all(d);
+}
+
 namespace {
 
 pid_t spawn(const std::vector<std::string>& args) {

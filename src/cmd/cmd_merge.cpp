@@ -19,7 +19,7 @@ void registerMergeCommand(CLI::App& app, Action& action) {
   struct Options {
     std::string out;
     std::vector<std::string> parts;
-    bool keep_sums = false;
+    bool keep_sums = false, partial_samples = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* m = app.add_subcommand(
@@ -35,6 +35,10 @@ void registerMergeCommand(CLI::App& app, Action& action) {
   m->add_flag("--part", o->keep_sums,
               "Write the output as a part (exact sums) so it can be merged again, e.g. with "
               "more sample slices");
+  m->add_flag("--partial-samples", o->partial_samples,
+              "Accept parts that hold only some of the samples per pixel, the same contiguous "
+              "range in every pixel (progressive sample splitting: a preview, or with --part a "
+              "part to merge with the other slices later)");
   m->callback([o, &action]() {
     action = [o]() -> int {
       std::vector<render::Part> parts;
@@ -43,7 +47,7 @@ void registerMergeCommand(CLI::App& app, Action& action) {
         throw Error(FileLoc{o->out}, "--part writes an EXR part: use an .exr output");
       io::imageFormatFromPath(o->out);  // fail before reading the parts
       for (const std::string& p : o->parts) parts.push_back(render::readPart(p));
-      render::Part merged = render::mergeParts(parts);
+      render::Part merged = render::mergeParts(parts, o->partial_samples);
       merged.metadata["lensim:merged_parts"] = std::to_string(parts.size());
       if (o->keep_sums) {
         render::writePart(o->out, merged);

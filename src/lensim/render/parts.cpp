@@ -287,7 +287,7 @@ std::string meta(const Part& p, const std::string& key) {
 
 }  // namespace
 
-Part mergeParts(const std::vector<Part>& parts) {
+Part mergeParts(const std::vector<Part>& parts, bool allow_partial_samples) {
   if (parts.empty()) throw Error("merge: no parts given");
   const Part& first = parts[0];
   // Same render.
@@ -355,6 +355,8 @@ Part mergeParts(const std::vector<Part>& parts) {
     }
     return cover;
   };
+  Range common;  // the samples every pixel has
+  PixelBounds common_cell;
   // Missing tiles first, then the samples of each cell.
   for (size_t j = 0; j + 1 < ys.size(); ++j)
     for (size_t i = 0; i + 1 < xs.size(); ++i) {
@@ -372,7 +374,8 @@ Part mergeParts(const std::vector<Part>& parts) {
         return ranges[a].begin < ranges[b].begin ||
                (ranges[a].begin == ranges[b].begin && ranges[a].end < ranges[b].end);
       });
-      int at = 0;
+      int at = allow_partial_samples ? ranges[cover[0]].begin : 0;
+      const int lo = at;
       for (size_t k = 0; k < cover.size(); ++k) {
         const Range& r = ranges[cover[k]];
         if (r.begin < at)
@@ -386,16 +389,25 @@ Part mergeParts(const std::vector<Part>& parts) {
                                   at, r.begin, pixelsText(cell)));
         at = r.end;
       }
-      if (at < total)
+      if (at < total && !allow_partial_samples)
         throw Error(fmt::format("merge: missing samples {}:{} of pixels {} (no part has them)", at,
                                 total, pixelsText(cell)));
+      // With partial samples, every pixel must still have the same ones.
+      if (common.end == 0) {
+        common = {lo, at}, common_cell = cell;
+      } else if (common.begin != lo || common.end != at) {
+        throw Error(fmt::format("merge: the parts give pixels {} samples {}:{} but pixels {} "
+                                "samples {}:{}; every pixel needs the same samples",
+                                pixelsText(common_cell), common.begin, common.end,
+                                pixelsText(cell), lo, at));
+      }
     }
   // The exact sum.
   Part out;
   out.metadata = first.metadata;
-  out.metadata["lensim:spp_range"] = fmt::format("0:{}", total);
+  out.metadata["lensim:spp_range"] = fmt::format("{}:{}", common.begin, common.end);
   out.metadata["lensim:tile"] = "0/1";
-  out.metadata["lensim:spp"] = std::to_string(total);
+  out.metadata["lensim:spp"] = std::to_string(common.end - common.begin);
   out.metadata.erase("lensim:partial");
   out.x_res = first.x_res, out.y_res = first.y_res;
   out.bounds = full;

@@ -82,6 +82,9 @@ io::Image sumsImage(const PixelBounds& bounds, const std::vector<PixelSum>& sums
 /// together they must cover every pixel of the render's pixel bounds with every sample index
 /// in [0, spp) exactly once. Throws lensim::Error with a message naming the parts otherwise.
 /// The result's metadata is the render's identity; its spp range is the whole range.
-Part mergeParts(const std::vector<Part>& parts);
+/// With `allow_partial_samples` (progressive sample splitting), the parts may hold fewer than
+/// all samples as long as every pixel has the same contiguous range of them (the result is a
+/// part of that range, which can be merged with the other slices later).
+Part mergeParts(const std::vector<Part>& parts, bool allow_partial_samples = false);
 
 }  // namespace lensim::render
