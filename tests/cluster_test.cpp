@@ -3,9 +3,9 @@
 // SIGKILL at random points and resumed from its checkpoint equals the uninterrupted render; the
 // job files of `lensim dispatch` run (their commands in a local shell loop over the indices) and
 // the Kubernetes manifest validates against the Kubernetes schema.
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -45,8 +45,8 @@ const std::string kBinary = LENSIM_BINARY;
 const std::string kTiny = kSource + "/tests/data/cluster/tiny.pbrt";
 
 fs::path tempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("lensim_cluster_" + name + "_" +
-                                                  std::to_string(::getpid()));
+  const fs::path d =
+      fs::temp_directory_path() / ("lensim_cluster_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
@@ -155,10 +155,8 @@ TEST(Merge, TilesTimesSliceTimesThreadsEqualOneRun) {
     std::vector<std::pair<int, int>> slices;
   };
   const Split splits[] = {
-      {1, {{0, 16}}},
-      {1, {{0, 5}, {5, 16}}},
-      {4, {{0, 16}}},
-      {5, {{0, 1}, {1, 7}, {7, 16}}},
+      {1, {{0, 16}}},         {1, {{0, 5}, {5, 16}}},
+      {4, {{0, 16}}},         {5, {{0, 1}, {1, 7}, {7, 16}}},
       {6, {{0, 8}, {8, 16}}},
   };
   for (const Split& split : splits)
@@ -227,9 +225,9 @@ TEST(Merge, CliMergesPartsAndRefusesMismatches) {
   ASSERT_EQ(sh(L + "-o " + q(d / "full.exr")).status, 0);
   for (int t = 0; t < 3; ++t)
     for (const char* r : {"0:1", "1:4"}) {
-      const auto res = sh(L + fmt::format("--tile {}/3 --spp-range {} --threads {} -o ", t, r,
-                                          1 + t % 2) +
-                          q(d / fmt::format("t{}-{}.exr", t, r[0])));
+      const auto res =
+          sh(L + fmt::format("--tile {}/3 --spp-range {} --threads {} -o ", t, r, 1 + t % 2) +
+             q(d / fmt::format("t{}-{}.exr", t, r[0])));
       ASSERT_EQ(res.status, 0) << res.out;
     }
   auto merge = [&](const std::string& parts) {
@@ -271,8 +269,8 @@ TEST(Merge, CliMergesPartsAndRefusesMismatches) {
     fs::remove(other);
     ASSERT_EQ(r.status, 0) << r.out;
   }
-  const std::string five = q(d / "t0-0.exr") + " " + q(d / "t0-1.exr") + " " +
-                           q(d / "t1-0.exr") + " " + q(d / "t1-1.exr") + " " + q(d / "t2-0.exr");
+  const std::string five = q(d / "t0-0.exr") + " " + q(d / "t0-1.exr") + " " + q(d / "t1-0.exr") +
+                           " " + q(d / "t1-1.exr") + " " + q(d / "t2-0.exr");
   struct Case {
     std::string parts, message;
   };
@@ -312,8 +310,8 @@ TEST(Merge, CliMergesPartsAndRefusesMismatches) {
 // Tiles of a crop window, and merges of merges (`merge --part`): still the single run.
 TEST(Merge, CropWindowsAndMergesOfMerges) {
   const fs::path d = tempDir("crop");
-  const std::string L = q(kBinary) + " --quiet render " + q(kTiny) +
-                        " --spp 4 --cropwindow 0.1 0.85 0.2 0.9 ";
+  const std::string L =
+      q(kBinary) + " --quiet render " + q(kTiny) + " --spp 4 --cropwindow 0.1 0.85 0.2 0.9 ";
   ASSERT_EQ(sh(L + "-o " + q(d / "full.exr")).status, 0);
   std::string slice0, slice1;
   for (int t = 0; t < 3; ++t) {
@@ -330,8 +328,8 @@ TEST(Merge, CropWindowsAndMergesOfMerges) {
   ASSERT_EQ(r.status, 0) << r.out;
   EXPECT_EQ(io::readImage((d / "s0.exr").string()).metadata.at("lensim:spp_range"), "0:1");
   // Partial samples must still be the same in every pixel.
-  r = sh(q(kBinary) + " --quiet merge --partial-samples " + q(d / "x.exr") + " " +
-         q(d / "a0.exr") + " " + q(d / "a1.exr") + " " + q(d / "b2.exr"));
+  r = sh(q(kBinary) + " --quiet merge --partial-samples " + q(d / "x.exr") + " " + q(d / "a0.exr") +
+         " " + q(d / "a1.exr") + " " + q(d / "b2.exr"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.out.find("every pixel needs the same samples"), std::string::npos) << r.out;
   r = sh(q(kBinary) + " --quiet merge " + q(d / "m.exr") + " " + q(d / "s0.exr") + slice1);
@@ -340,10 +338,10 @@ TEST(Merge, CropWindowsAndMergesOfMerges) {
   EXPECT_EQ(m.width, 36);  // ceil(48 * 0.85) - ceil(48 * 0.1)
   EXPECT_TRUE(sameBits(m, rgb((d / "full.exr").string())));
   // A part of the whole image does not fit a cropped render.
-  ASSERT_EQ(sh(q(kBinary) + " --quiet render " + q(kTiny) + " --spp 4 --part -o " +
-               q(d / "whole.exr"))
-                .status,
-            0);
+  ASSERT_EQ(
+      sh(q(kBinary) + " --quiet render " + q(kTiny) + " --spp 4 --part -o " + q(d / "whole.exr"))
+          .status,
+      0);
   r = sh(q(kBinary) + " --quiet merge " + q(d / "x.exr") + " " + q(d / "whole.exr") + slice0 +
          slice1);
   EXPECT_EQ(r.status, 1);
@@ -396,8 +394,8 @@ TEST(Checkpoint, ResumeAfterSigkillEqualsUninterruptedRender) {
     const std::string ck = (d / "ck.exr").string(), out = (d / "out.exr").string();
     fs::remove(ck), fs::remove(out);
     // 1 thread so that tiles finish one after another; checkpoints every 20 ms.
-    const pid_t pid = spawn(args({"--threads", "1", "-o", out, "--checkpoint", ck,
-                                  "--checkpoint-every", "20ms"}));
+    const pid_t pid = spawn(
+        args({"--threads", "1", "-o", out, "--checkpoint", ck, "--checkpoint-every", "20ms"}));
     ASSERT_GT(pid, 0);
     std::uniform_real_distribution<double> when(0.02, std::max(0.1, 1.5 * full_s));
     std::this_thread::sleep_for(std::chrono::duration<double>(when(rng)));
@@ -465,17 +463,16 @@ TEST(Dispatch, KubernetesCommandsRunLocallyAndMergeExactly) {
     ASSERT_EQ(cmds.size(), 2u);
     ASSERT_EQ(cmds[0].size(), 3u);
     for (int i = 0; i < 4; ++i) {
-      const auto r = sh("JOB_COMPLETION_INDEX=" + std::to_string(i) + " /bin/sh -c " +
-                        q(cmds[0][2]));
+      const auto r =
+          sh("JOB_COMPLETION_INDEX=" + std::to_string(i) + " /bin/sh -c " + q(cmds[0][2]));
       ASSERT_EQ(r.status, 0) << split << " index " << i << ": " << r.out;
     }
     const auto m = sh("/bin/sh -c " + q(cmds[1][2]));
     ASSERT_EQ(m.status, 0) << m.out;
-    ASSERT_EQ(sh(q(kBinary) + " --quiet render " + q(kTiny) + " --spp 8 -o " + q(d / "ref.exr"))
-                  .status,
-              0);
-    EXPECT_TRUE(sameBits(rgb((d / "merged.exr").string()), rgb((d / "ref.exr").string())))
-        << split;
+    ASSERT_EQ(
+        sh(q(kBinary) + " --quiet render " + q(kTiny) + " --spp 8 -o " + q(d / "ref.exr")).status,
+        0);
+    EXPECT_TRUE(sameBits(rgb((d / "merged.exr").string()), rgb((d / "ref.exr").string()))) << split;
     // The checkpoints are removed once a part is done.
     EXPECT_FALSE(fs::exists(d / "lensim-jobs" / "parts" / "part-0.ckpt.exr"));
     fs::remove_all(d);
@@ -497,15 +494,14 @@ TEST(Dispatch, SlurmScriptsRunLocallyAndMergeExactly) {
   EXPECT_NE(text.find("#SBATCH --cpus-per-task=1"), std::string::npos);
   EXPECT_TRUE(fs::exists(jobs / "submit.sh"));
   for (int i = 0; i < 3; ++i) {
-    const auto r = sh("SLURM_ARRAY_TASK_ID=" + std::to_string(i) + " bash " +
-                      q(jobs / "render.sbatch"));
+    const auto r =
+        sh("SLURM_ARRAY_TASK_ID=" + std::to_string(i) + " bash " + q(jobs / "render.sbatch"));
     ASSERT_EQ(r.status, 0) << r.out;
   }
   const auto m = sh("bash " + q(jobs / "merge.sbatch"));
   ASSERT_EQ(m.status, 0) << m.out;
   ASSERT_EQ(
-      sh(q(kBinary) + " --quiet render " + q(kTiny) + " --spp 8 -o " + q(d / "ref.exr")).status,
-      0);
+      sh(q(kBinary) + " --quiet render " + q(kTiny) + " --spp 8 -o " + q(d / "ref.exr")).status, 0);
   EXPECT_TRUE(sameBits(rgb((d / "merged.exr").string()), rgb((d / "ref.exr").string())));
   // Errors before anything is written.
   const auto bad = sh("cd " + q(d) + " && " + q(kBinary) + " dispatch " + q(kTiny) +
@@ -519,8 +515,7 @@ TEST(Dispatch, SlurmScriptsRunLocallyAndMergeExactly) {
 // by scripts/install-deps into tests/k8s); a broken manifest must fail the same check.
 TEST(Dispatch, KubernetesManifestValidatesAgainstTheSchema) {
   const fs::path tool = fs::path(kSource) / "tests" / "k8s";
-  if (!fs::exists(tool / "node_modules" / "kubernetes-models") ||
-      sh("command -v node").status != 0)
+  if (!fs::exists(tool / "node_modules" / "kubernetes-models") || sh("command -v node").status != 0)
     GTEST_SKIP() << "kubernetes-models is not installed in tests/k8s (scripts/install-deps "
                     "installs it with npm)";
   const fs::path d = tempDir("schema");
@@ -534,9 +529,9 @@ TEST(Dispatch, KubernetesManifestValidatesAgainstTheSchema) {
   std::ifstream in(yaml);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   // Broken manifests fail: a count that is not an integer, a completion mode Kubernetes lacks.
-  for (const auto& [from, to] : {std::pair<std::string, std::string>{"completions: 16",
-                                                                      "completions: many"},
-                                 {"completionMode: Indexed", "completionMode: Indexes"}}) {
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"completions: 16", "completions: many"},
+        {"completionMode: Indexed", "completionMode: Indexes"}}) {
     std::string broken = text;
     broken.replace(broken.find(from), from.size(), to);
     std::ofstream(d / "bad.yaml") << broken;

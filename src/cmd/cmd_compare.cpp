@@ -1,7 +1,7 @@
 // `lensim compare IMAGE REFERENCE`: is a render the reference within noise? Block means, their
 // standard errors, a Bonferroni-corrected per-block z-test (lensim/render/image_compare.h).
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <cstring>

@@ -96,9 +96,10 @@ std::string mergeScript(const Options& o, bool wait) {
   s += "set -eu\n";
   s += fmt::format("cd {}\n", shq(o.workdir));
   s += "set --\n";
-  s += fmt::format("i=0; while [ $i -lt {} ]; do set -- \"$@\" {}/parts/part-$i.exr; "
-                   "i=$((i+1)); done\n",
-                   o.jobs, shq(o.outdir));
+  s += fmt::format(
+      "i=0; while [ $i -lt {} ]; do set -- \"$@\" {}/parts/part-$i.exr; "
+      "i=$((i+1)); done\n",
+      o.jobs, shq(o.outdir));
   if (wait) {
     s += "# Parts are written atomically: a part file that exists is complete.\n";
     s += "for f in \"$@\"; do while [ ! -f \"$f\" ]; do sleep 5; done; done\n";
@@ -158,8 +159,7 @@ void registerDispatchCommand(CLI::App& app, Action& action) {
   d->add_option("--pvc", o->pvc,
                 "Kubernetes: PersistentVolumeClaim with the scene, mounted at --workdir "
                 "(default lensim-data)");
-  d->add_option("--parallelism", o->parallelism,
-                "Kubernetes: parts running at once (default all)");
+  d->add_option("--parallelism", o->parallelism, "Kubernetes: parts running at once (default all)");
   d->add_option("--cpu", o->cpu_request, "Kubernetes: CPU request per part (e.g. 8)");
   d->callback([o, seed, &action]() {
     o->has_seed = seed->count() > 0;
@@ -205,10 +205,11 @@ void registerDispatchCommand(CLI::App& app, Action& action) {
                          o->scene, o->jobs, o->split);
         r += fmt::format("#SBATCH --job-name=lensim-{}\n", name);
         r += fmt::format("#SBATCH --array=0-{}\n", o->jobs - 1);
-        r += fmt::format("#SBATCH --output={}/logs/part-%a.log\n",
-                         fs::absolute(o->outdir).string());
+        r +=
+            fmt::format("#SBATCH --output={}/logs/part-%a.log\n", fs::absolute(o->outdir).string());
         r += "#SBATCH --open-mode=append\n#SBATCH --requeue\n";
-        if (o->cpus_per_task > 0) r += fmt::format("#SBATCH --cpus-per-task={}\n", o->cpus_per_task);
+        if (o->cpus_per_task > 0)
+          r += fmt::format("#SBATCH --cpus-per-task={}\n", o->cpus_per_task);
         if (!o->partition.empty()) r += fmt::format("#SBATCH --partition={}\n", o->partition);
         if (!o->time_limit.empty()) r += fmt::format("#SBATCH --time={}\n", o->time_limit);
         r += renderScript(*o, part_args, "SLURM_ARRAY_TASK_ID", threads);
@@ -234,9 +235,8 @@ void registerDispatchCommand(CLI::App& app, Action& action) {
                    (dir / "submit.sh").string()};
       } else {
         const std::string threads = o->threads > 0 ? std::to_string(o->threads) : "0";
-        const nlohmann::json render_cmd = {"/bin/sh", "-c",
-                                           renderScript(*o, part_args, "JOB_COMPLETION_INDEX",
-                                                        threads)};
+        const nlohmann::json render_cmd = {
+            "/bin/sh", "-c", renderScript(*o, part_args, "JOB_COMPLETION_INDEX", threads)};
         const nlohmann::json merge_cmd = {"/bin/sh", "-c", mergeScript(*o, true)};
         auto container = [&](const std::string& cname, const nlohmann::json& cmd) {
           std::string c;
@@ -244,12 +244,14 @@ void registerDispatchCommand(CLI::App& app, Action& action) {
           c += fmt::format("          image: {}\n", yamlString(o->image));
           c += fmt::format("          command: {}\n", cmd.dump());
           if (!o->cpu_request.empty())
-            c += fmt::format("          resources:\n            requests:\n              cpu: "
-                             "{}\n",
-                             yamlString(o->cpu_request));
-          c += fmt::format("          volumeMounts:\n            - name: data\n              "
-                           "mountPath: {}\n",
-                           yamlString(o->workdir));
+            c += fmt::format(
+                "          resources:\n            requests:\n              cpu: "
+                "{}\n",
+                yamlString(o->cpu_request));
+          c += fmt::format(
+              "          volumeMounts:\n            - name: data\n              "
+              "mountPath: {}\n",
+              yamlString(o->workdir));
           return c;
         };
         const std::string volumes = fmt::format(
@@ -259,7 +261,8 @@ void registerDispatchCommand(CLI::App& app, Action& action) {
         std::string y;
         y += fmt::format("# lensim dispatch: render {} as {} parts ({}) and merge them.\n",
                          o->scene, o->jobs, o->split);
-        y += "# kubectl apply -f job.yaml; the merge Job waits for every part file on the volume.\n";
+        y +=
+            "# kubectl apply -f job.yaml; the merge Job waits for every part file on the volume.\n";
         y += "apiVersion: batch/v1\nkind: Job\nmetadata:\n";
         y += fmt::format("  name: lensim-{}\n", name);
         y += "  labels:\n    app.kubernetes.io/name: lensim\n";

@@ -89,7 +89,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
                 "Write the finished tiles to this EXR file every --checkpoint-every, and at the "
                 "end or on interruption (atomically)");
   auto* every = r->add_option("--checkpoint-every", o->checkpoint_every,
-                "Checkpoint interval, e.g. 60s, 500ms, 5m (default 60s)");
+                              "Checkpoint interval, e.g. 60s, 500ms, 5m (default 60s)");
   r->add_option("--resume", o->resume,
                 "Continue the render saved in this checkpoint (it must be of the same scene, "
                 "seed, samples, tile and sample range); checkpoints go on to it unless "
@@ -97,7 +97,8 @@ void registerRenderCommand(CLI::App& app, Action& action) {
   r->callback([o, seed, every, &action]() {
     o->has_seed = seed->count() > 0;
     if (every->count() > 0 && o->checkpoint.empty() && o->resume.empty())
-      throw CLI::ValidationError("--checkpoint-every", "needs --checkpoint FILE (or --resume FILE)");
+      throw CLI::ValidationError("--checkpoint-every",
+                                 "needs --checkpoint FILE (or --resume FILE)");
     action = [o]() -> int {
       const bool quiet = o->quiet || lensim::quiet();
       scene::Scene s = scene::loadScene(o->scene);
@@ -150,7 +151,8 @@ void registerRenderCommand(CLI::App& app, Action& action) {
                                     key, theirs, value));
         }
         if (!(ck.bounds == plan.bounds) || ck.tile_done.empty())
-          throw Error(FileLoc{o->resume}, "cannot resume: not a checkpoint of this render's pixels");
+          throw Error(FileLoc{o->resume},
+                      "cannot resume: not a checkpoint of this render's pixels");
         resume_state.bounds = ck.bounds;
         resume_state.tile_done = std::move(ck.tile_done);
         resume_state.sums = std::move(ck.sums);
@@ -187,8 +189,10 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       if (part_mode && res.stats.partial && !checkpoint.empty()) {
         // An interrupted part is not written: a part file that exists is complete (merge jobs
         // wait for them); the finished tiles are in the checkpoint.
-        std::fprintf(stderr, "lensim: interrupted; the finished tiles are in %s (continue with "
-                     "--resume %s)\n", checkpoint.c_str(), checkpoint.c_str());
+        std::fprintf(stderr,
+                     "lensim: interrupted; the finished tiles are in %s (continue with "
+                     "--resume %s)\n",
+                     checkpoint.c_str(), checkpoint.c_str());
         return 130;
       }
       if (part_mode) {
@@ -203,8 +207,8 @@ void registerRenderCommand(CLI::App& app, Action& action) {
         for (const std::string& out : outs) io::writeImage(out, res.image, wo);
       }
       if (res.stats.tiles_resumed > 0 && !quiet)
-        logInfo(fmt::format("resumed {} finished tiles from {}", res.stats.tiles_resumed,
-                            o->resume));
+        logInfo(
+            fmt::format("resumed {} finished tiles from {}", res.stats.tiles_resumed, o->resume));
       if (!quiet || o->stats) std::fputs(render::formatStats(res.stats).c_str(), stderr);
       for (const std::string& out : outs) {
         if (!quiet || o->stats)

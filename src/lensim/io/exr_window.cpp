@@ -22,9 +22,8 @@ namespace {
 // that (x0, y0) lands on the first value.
 template <typename T>
 char* sliceBase(const T* data, int x0, int y0, int width) {
-  return (char*)(data) -
-         (static_cast<ptrdiff_t>(x0) + static_cast<ptrdiff_t>(y0) * width) *
-             static_cast<ptrdiff_t>(sizeof(T));
+  return (char*)(data) - (static_cast<ptrdiff_t>(x0) + static_cast<ptrdiff_t>(y0) * width) *
+                             static_cast<ptrdiff_t>(sizeof(T));
 }
 
 }  // namespace
@@ -34,9 +33,11 @@ void writeExrWindow(const std::string& path, const ExrWindowFile& f) {
   if (f.width <= 0 || f.height <= 0 || f.display_width <= 0 || f.display_height <= 0)
     throw Error(FileLoc{path}, "cannot write an empty image");
   for (const auto& [name, v] : f.float_channels)
-    if (v.size() != n) throw Error(FileLoc{path}, fmt::format("channel {} has the wrong size", name));
+    if (v.size() != n)
+      throw Error(FileLoc{path}, fmt::format("channel {} has the wrong size", name));
   for (const auto& [name, v] : f.uint_channels)
-    if (v.size() != n) throw Error(FileLoc{path}, fmt::format("channel {} has the wrong size", name));
+    if (v.size() != n)
+      throw Error(FileLoc{path}, fmt::format("channel {} has the wrong size", name));
   writeAtomically(path, [&](const std::string& tmp) {
     try {
       const Imath::Box2i display(Imath::V2i(0, 0),

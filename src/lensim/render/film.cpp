@@ -110,8 +110,7 @@ std::array<float, 3> Film::pixelValue(const PixelSum& p) {
 void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
                      double w) {
   const Vec3 rgb = toRgb(L, lambda);
-  PixelSum& p =
-      pixels_[size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0)];
+  PixelSum& p = pixels_[size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0)];
   p.rgb[0] += toFixed(w * rgb.x);
   p.rgb[1] += toFixed(w * rgb.y);
   p.rgb[2] += toFixed(w * rgb.z);

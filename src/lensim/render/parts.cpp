@@ -126,8 +126,8 @@ std::map<std::string, std::string> renderIdentity(const scene::Scene& s, const R
                                                   const std::string& version) {
   // Every scene file read, in a fixed order.
   std::set<std::string> files{s.path};
-  for (const auto* loc : {&s.camera.loc, &s.film.loc, &s.sampler.loc, &s.filter.loc,
-                          &s.integrator.loc})
+  for (const auto* loc :
+       {&s.camera.loc, &s.film.loc, &s.sampler.loc, &s.filter.loc, &s.integrator.loc})
     if (loc->valid()) files.insert(loc->file);
   for (const auto& x : s.shapes)
     if (x.loc.valid()) files.insert(x.loc.file);
@@ -303,13 +303,12 @@ Part mergeParts(const std::vector<Part>& parts, bool allow_partial_samples) {
   for (const Part& p : parts) {
     for (const auto& [key, what] : identity)
       if (meta(p, key) != meta(first, key))
-        partError(p.path, fmt::format("cannot merge parts of different {}: {} has {} \"{}\", {} "
-                                      "has \"{}\"",
-                                      what, first.path, key, meta(first, key), p.path,
-                                      meta(p, key)));
-    if (p.metadata.count("lensim:partial") || (!p.tile_done.empty() &&
-                                               std::count(p.tile_done.begin(),
-                                                          p.tile_done.end(), 0) > 0))
+        partError(p.path,
+                  fmt::format("cannot merge parts of different {}: {} has {} \"{}\", {} "
+                              "has \"{}\"",
+                              what, first.path, key, meta(first, key), p.path, meta(p, key)));
+    if (p.metadata.count("lensim:partial") ||
+        (!p.tile_done.empty() && std::count(p.tile_done.begin(), p.tile_done.end(), 0) > 0))
       partError(p.path,
                 "part is unfinished (an interrupted render or a checkpoint); finish it with "
                 "lensim render --resume");
@@ -362,9 +361,10 @@ Part mergeParts(const std::vector<Part>& parts, bool allow_partial_samples) {
     for (size_t i = 0; i + 1 < xs.size(); ++i) {
       const PixelBounds cell{xs[i], xs[i + 1], ys[j], ys[j + 1]};
       if (covering(cell).empty())
-        throw Error(fmt::format("merge: missing tile: no part covers pixels {} of the render "
-                                "({} parts given)",
-                                pixelsText(cell), parts.size()));
+        throw Error(
+            fmt::format("merge: missing tile: no part covers pixels {} of the render "
+                        "({} parts given)",
+                        pixelsText(cell), parts.size()));
     }
   for (size_t j = 0; j + 1 < ys.size(); ++j)
     for (size_t i = 0; i + 1 < xs.size(); ++i) {
@@ -379,11 +379,11 @@ Part mergeParts(const std::vector<Part>& parts, bool allow_partial_samples) {
       for (size_t k = 0; k < cover.size(); ++k) {
         const Range& r = ranges[cover[k]];
         if (r.begin < at)
-          throw Error(fmt::format("merge: overlapping parts: {} (samples {}:{}) and {} (samples "
-                                  "{}:{}) both cover pixels {}",
-                                  parts[cover[k - 1]].path, ranges[cover[k - 1]].begin,
-                                  ranges[cover[k - 1]].end, parts[cover[k]].path, r.begin, r.end,
-                                  pixelsText(cell)));
+          throw Error(fmt::format(
+              "merge: overlapping parts: {} (samples {}:{}) and {} (samples "
+              "{}:{}) both cover pixels {}",
+              parts[cover[k - 1]].path, ranges[cover[k - 1]].begin, ranges[cover[k - 1]].end,
+              parts[cover[k]].path, r.begin, r.end, pixelsText(cell)));
         if (r.begin > at)
           throw Error(fmt::format("merge: missing samples {}:{} of pixels {} (no part has them)",
                                   at, r.begin, pixelsText(cell)));
@@ -396,10 +396,10 @@ Part mergeParts(const std::vector<Part>& parts, bool allow_partial_samples) {
       if (common.end == 0) {
         common = {lo, at}, common_cell = cell;
       } else if (common.begin != lo || common.end != at) {
-        throw Error(fmt::format("merge: the parts give pixels {} samples {}:{} but pixels {} "
-                                "samples {}:{}; every pixel needs the same samples",
-                                pixelsText(common_cell), common.begin, common.end,
-                                pixelsText(cell), lo, at));
+        throw Error(fmt::format(
+            "merge: the parts give pixels {} samples {}:{} but pixels {} "
+            "samples {}:{}; every pixel needs the same samples",
+            pixelsText(common_cell), common.begin, common.end, pixelsText(cell), lo, at));
       }
     }
   // The exact sum.

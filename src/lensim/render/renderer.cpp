@@ -132,9 +132,10 @@ RenderPlan planRender(const scene::Scene& scene, const RenderOptions& opt) {
   if (opt.spp_range) {
     plan.spp_begin = opt.spp_range->first, plan.spp_end = opt.spp_range->second;
     if (plan.spp_begin < 0 || plan.spp_end > plan.spp || plan.spp_begin >= plan.spp_end)
-      throw Error(fmt::format("--spp-range {}:{} is not a non-empty range of the {} samples per "
-                              "pixel (expected 0 <= A < B <= {})",
-                              plan.spp_begin, plan.spp_end, plan.spp, plan.spp));
+      throw Error(
+          fmt::format("--spp-range {}:{} is not a non-empty range of the {} samples per "
+                      "pixel (expected 0 <= A < B <= {})",
+                      plan.spp_begin, plan.spp_end, plan.spp, plan.spp));
   }
   return plan;
 }
@@ -201,10 +202,11 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     const RenderCheckpoint& r = *opt.resume;
     if (!(r.bounds == bounds) || r.tile_done.size() != size_t(n_tiles) ||
         r.sums.size() != film.sums().size())
-      throw Error(fmt::format("cannot resume: the checkpoint covers pixels [{}, {}) x [{}, {}), "
-                              "this render [{}, {}) x [{}, {})",
-                              r.bounds.x0, r.bounds.x1, r.bounds.y0, r.bounds.y1, bounds.x0,
-                              bounds.x1, bounds.y0, bounds.y1));
+      throw Error(
+          fmt::format("cannot resume: the checkpoint covers pixels [{}, {}) x [{}, {}), "
+                      "this render [{}, {}) x [{}, {})",
+                      r.bounds.x0, r.bounds.x1, r.bounds.y0, r.bounds.y1, bounds.x0, bounds.x1,
+                      bounds.y0, bounds.y1));
     const int w = bounds.width();
     for (int t = 0; t < n_tiles; ++t) {
       if (!r.tile_done[size_t(t)]) continue;
@@ -213,15 +215,14 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
       const int tx = t % tiles_x, ty = t / tiles_x;
       for (int y = ty * kTile; y < std::min(bounds.height(), (ty + 1) * kTile); ++y)
         for (int x = tx * kTile; x < std::min(w, (tx + 1) * kTile); ++x)
-          film.sums()[size_t(y) * size_t(w) + size_t(x)] = r.sums[size_t(y) * size_t(w) + size_t(x)];
+          film.sums()[size_t(y) * size_t(w) + size_t(x)] =
+              r.sums[size_t(y) * size_t(w) + size_t(x)];
     }
     st.tiles_resumed = tiles_done.load();
   }
   // A failing checkpoint stops the render.
   std::atomic<bool> abort_render{false};
-  auto stopRequested = [&] {
-    return (opt.cancel && opt.cancel->load()) || abort_render.load();
-  };
+  auto stopRequested = [&] { return (opt.cancel && opt.cancel->load()) || abort_render.load(); };
   std::atomic<uint64_t> camera_samples{0}, camera_rays{0}, no_ray{0}, outside{0}, nonfinite{0},
       rays{0};
   std::atomic<bool> cancelled{false};
@@ -402,8 +403,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   md["lensim:resolution"] = fmt::format("{} {}", x_res, y_res);
   md["lensim:colorspace"] = "linear sRGB (Rec. 709 primaries, D65)";
   if (opt.spp_range) md["lensim:spp_range"] = fmt::format("{}:{}", spp_begin, spp_end);
-  if (opt.tile)
-    md["lensim:tile"] = fmt::format("{}/{}", opt.tile->first, opt.tile->second);
+  if (opt.tile) md["lensim:tile"] = fmt::format("{}/{}", opt.tile->first, opt.tile->second);
   if (st.partial) md["lensim:partial"] = "true";
   if (opt.keep_sums) result.sums = film.sums();
   return result;

@@ -27,9 +27,9 @@ namespace lensim::render {
 /// and the exact film sums (only the finished tiles' pixels are kept; the others are zero).
 struct RenderCheckpoint {
   static constexpr int kTileSize = 16;
-  PixelBounds bounds;                ///< the pixels rendered (the part's tile of the image)
-  std::vector<uint8_t> tile_done;    ///< 1 for a finished tile
-  std::vector<PixelSum> sums;        ///< bounds-sized, row by row
+  PixelBounds bounds;              ///< the pixels rendered (the part's tile of the image)
+  std::vector<uint8_t> tile_done;  ///< 1 for a finished tile
+  std::vector<PixelSum> sums;      ///< bounds-sized, row by row
   bool complete() const;
   int tilesDone() const;
 };
@@ -87,8 +87,8 @@ struct RenderStats {
 
 struct RenderResult {
   io::Image image;  ///< R, G, B over the rendered pixel bounds; metadata describes the render
-  PixelBounds bounds;       ///< the pixels rendered
-  PixelBounds full_bounds;  ///< the pixel bounds of the whole render (bounds, unless a tile)
+  PixelBounds bounds;          ///< the pixels rendered
+  PixelBounds full_bounds;     ///< the pixel bounds of the whole render (bounds, unless a tile)
   std::vector<PixelSum> sums;  ///< the exact film sums over bounds (RenderOptions::keep_sums)
   RenderStats stats;
 };
