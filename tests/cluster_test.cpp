@@ -11,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -375,36 +376,53 @@ int waitFor(pid_t pid) {
 // Killed with SIGKILL at random points (during a checkpoint write too) and resumed: the image is
 // the uninterrupted render's, bit for bit. 20 times.
 TEST(Checkpoint, ResumeAfterSigkillEqualsUninterruptedRender) {
+  using Clock = std::chrono::steady_clock;
+  auto seconds = [](Clock::time_point a) {
+    return std::chrono::duration<double>(Clock::now() - a).count();
+  };
   const fs::path d = tempDir("resume");
-  const std::string ref = (d / "ref.exr").string();
+  const std::string ref = (d / "ref.exr").string(), ck = (d / "ck.exr").string(),
+                    out = (d / "out.exr").string();
   const std::vector<std::string> common = {kBinary, "--quiet", "render", kTiny, "--spp", "32"};
   auto args = [&](std::vector<std::string> extra) {
     std::vector<std::string> a = common;
     a.insert(a.end(), extra.begin(), extra.end());
     return a;
   };
-  auto t0 = std::chrono::steady_clock::now();
+  // 1 thread so that the 6 tiles finish one after another; a checkpoint every 10 ms.
+  const std::vector<std::string> killed =
+      args({"--threads", "1", "-o", out, "--checkpoint", ck, "--checkpoint-every", "10ms"});
   ASSERT_EQ(waitFor(spawn(args({"--threads", "2", "-o", ref}))), 0);
-  const double full_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const io::Image want = rgb(ref);
+  // Calibration: when the first checkpoint appears (set-up done) and when the render ends, so
+  // that the kills land while it renders.
+  const auto t0 = Clock::now();
+  const pid_t cal = spawn(killed);
+  double t_first = -1;
+  while (waitpid(cal, nullptr, WNOHANG) == 0) {
+    if (t_first < 0 && fs::exists(ck)) t_first = seconds(t0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  const double t_end = seconds(t0);
+  if (t_first < 0) t_first = 0.5 * t_end;
+  ASSERT_TRUE(render::readPart(ck).metadata.count("lensim:partial") == 0);
+  fs::copy_file(ck, d / "complete.exr");
   std::mt19937 rng(2024);
-  int partial_resumes = 0, fresh = 0;
+  std::uniform_real_distribution<double> when(t_first, std::max(t_first, 0.95 * t_end) + 1e-3);
+  int in_progress = 0, fresh = 0, finished = 0;
   for (int run = 0; run < 20; ++run) {
-    const std::string ck = (d / "ck.exr").string(), out = (d / "out.exr").string();
     fs::remove(ck), fs::remove(out);
-    // 1 thread so that tiles finish one after another; checkpoints every 20 ms.
-    const pid_t pid = spawn(
-        args({"--threads", "1", "-o", out, "--checkpoint", ck, "--checkpoint-every", "20ms"}));
+    const pid_t pid = spawn(killed);
     ASSERT_GT(pid, 0);
-    std::uniform_real_distribution<double> when(0.02, std::max(0.1, 1.5 * full_s));
     std::this_thread::sleep_for(std::chrono::duration<double>(when(rng)));
     kill(pid, SIGKILL);
     waitFor(pid);
     int st;
     if (fs::exists(ck)) {
       const Part p = render::readPart(ck);  // never half-written
-      partial_resumes += p.metadata.count("lensim:partial") > 0;
+      const int done = int(std::count(p.tile_done.begin(), p.tile_done.end(), 1));
+      in_progress += done > 0 && done < int(p.tile_done.size());
+      finished += done == int(p.tile_done.size());
       st = waitFor(spawn(args({"--threads", "2", "-o", out, "--resume", ck})));
     } else {
       ++fresh;  // killed before the first checkpoint: start again, as the job scripts do
@@ -413,11 +431,15 @@ TEST(Checkpoint, ResumeAfterSigkillEqualsUninterruptedRender) {
     ASSERT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0) << "run " << run;
     ASSERT_TRUE(sameBits(rgb(out), want)) << "run " << run;
   }
-  // The kills must have hit renders in progress, not only finished ones.
-  EXPECT_GE(partial_resumes, 5) << fresh << " runs were killed before their first checkpoint";
+  std::printf(
+      "20 kills (render %.3f..%.3f s): %d resumed with some tiles done, %d with none or "
+      "before the first checkpoint, %d after all tiles were done\n",
+      t_first, t_end, in_progress, 20 - in_progress - finished, finished);
+  // The kills must have hit renders in progress, not only unstarted or finished ones.
+  EXPECT_GE(in_progress, 5);
   // A checkpoint of another render is refused.
   const auto other = sh(q(kBinary) + " --quiet render " + q(kTiny) + " --spp 32 --seed 9 -o " +
-                        q(d / "x.exr") + " --resume " + q(d / "ck.exr"));
+                        q(d / "x.exr") + " --resume " + q(d / "complete.exr"));
   EXPECT_EQ(other.status, 1);
   EXPECT_NE(other.out.find("cannot resume: the checkpoint is of another render (lensim:seed"),
             std::string::npos)
