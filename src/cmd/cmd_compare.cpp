@@ -1,7 +1,10 @@
 // `lensim compare IMAGE REFERENCE`: is a render the reference within noise? Block means, their
 // standard errors, a Bonferroni-corrected per-block z-test (lensim/render/image_compare.h).
+#include <fmt/format.h>
 #include <CLI/CLI.hpp>
+
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -12,11 +15,47 @@
 
 namespace lensim::cmd {
 
+namespace {
+
+/// Bit-for-bit equality of the R, G, B channels; prints the verdict, returns the exit status.
+int compareExact(const io::Image& a, const io::Image& b) {
+  if (a.width != b.width || a.height != b.height) {
+    std::printf("differ: sizes %dx%d and %dx%d\n", a.width, a.height, b.width, b.height);
+    return 1;
+  }
+  long long differing = 0;
+  std::string first;
+  for (const char* name : {"R", "G", "B"}) {
+    const auto ca = a.channelIndex(name), cb = b.channelIndex(name);
+    if (!ca || !cb) {
+      std::printf("differ: channel %s missing\n", name);
+      return 1;
+    }
+    for (int y = 0; y < a.height; ++y)
+      for (int x = 0; x < a.width; ++x) {
+        const float va = a.at(x, y, *ca), vb = b.at(x, y, *cb);
+        if (std::memcmp(&va, &vb, sizeof va) != 0) {
+          if (differing++ == 0)
+            first = fmt::format("first at ({}, {}) {}: {:.9g} vs {:.9g}", x, y, name, va, vb);
+        }
+      }
+  }
+  if (differing) {
+    std::printf("differ: %lld of %lld values; %s\n", differing, 3LL * a.width * a.height,
+                first.c_str());
+    return 1;
+  }
+  std::printf("identical: %dx%d pixels, R G B bit for bit\n", a.width, a.height);
+  return 0;
+}
+
+}  // namespace
+
 void registerCompareCommand(CLI::App& app, Action& action) {
   struct Options {
     std::string image, reference, second, reference_low;
     render::CompareOptions c;
-    bool json = false;
+    bool json = false, exact = false;
     int list = 10;
   };
   auto o = std::make_shared<Options>();
@@ -44,10 +83,14 @@ void registerCompareCommand(CLI::App& app, Action& action) {
   cmd->add_option("--list", o->list, "Blocks beyond the bound to list (default 10)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--json", o->json, "Print one JSON object");
+  cmd->add_flag("--exact", o->exact,
+                "Check that the R, G, B values are equal bit for bit (e.g. a merged distributed "
+                "render and a single render); exit status 1 when they are not");
   cmd->callback([o, &action]() {
     action = [o]() -> int {
       const io::Image image = io::readImage(o->image);
       const io::Image reference = io::readImage(o->reference);
+      if (o->exact) return compareExact(image, reference);
       std::optional<io::Image> second, low;
       render::CompareOptions c = o->c;
       if (!o->second.empty()) c.second = &second.emplace(io::readImage(o->second));

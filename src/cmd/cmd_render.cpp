@@ -6,6 +6,7 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,8 +14,10 @@
 #include "commands.h"
 #include "lensim/io/image.h"
 #include "lensim/render/autofocus_scene.h"
+#include "lensim/render/parts.h"
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
+#include "lensim/util/error.h"
 #include "lensim/util/log.h"
 
 namespace lensim::cmd {
@@ -43,6 +46,9 @@ void registerRenderCommand(CLI::App& app, Action& action) {
     bool autofocus = false;
     bool pbrt_v2_quirks = false;
     std::string zones;
+    // Distributed renders and checkpoints (docs/cluster.md).
+    std::string tile, spp_range, checkpoint, checkpoint_every = "60s", resume;
+    bool part = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* r = app.add_subcommand("render", "Render a pbrt scene (v4, or the v1–v3 syntax)");
@@ -71,8 +77,28 @@ void registerRenderCommand(CLI::App& app, Action& action) {
               "epsilon of 1e-3 x the camera-ray parameter (loses shadows and light hits under a "
               "scaled camera transform) and its realistic camera's zero-weight samples next to "
               "vignetting edges. For comparing with such references; physically wrong");
-  r->callback([o, seed, &action]() {
+  r->add_option("--tile", o->tile,
+                "Render only tile I of N (0 <= I < N, row by row) and write it as an EXR part for "
+                "lensim merge");
+  r->add_option("--spp-range", o->spp_range,
+                "Take only the sample indices A..B-1 of every pixel and write an EXR part for "
+                "lensim merge");
+  r->add_flag("--part", o->part,
+              "Write the output as an EXR part (exact sums and render identity) even when whole");
+  r->add_option("--checkpoint", o->checkpoint,
+                "Write the finished tiles to this EXR file every --checkpoint-every, and at the "
+                "end or on interruption (atomically)");
+  auto* every = r->add_option("--checkpoint-every", o->checkpoint_every,
+                              "Checkpoint interval, e.g. 60s, 500ms, 5m (default 60s)");
+  r->add_option("--resume", o->resume,
+                "Continue the render saved in this checkpoint (it must be of the same scene, "
+                "seed, samples, tile and sample range); checkpoints go on to it unless "
+                "--checkpoint names another file");
+  r->callback([o, seed, every, &action]() {
     o->has_seed = seed->count() > 0;
+    if (every->count() > 0 && o->checkpoint.empty() && o->resume.empty())
+      throw CLI::ValidationError("--checkpoint-every",
+                                 "needs --checkpoint FILE (or --resume FILE)");
     action = [o]() -> int {
       const bool quiet = o->quiet || lensim::quiet();
       scene::Scene s = scene::loadScene(o->scene);
@@ -99,16 +125,90 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       ro.progress = !quiet;
       ro.pbrt_v2_quirks = o->pbrt_v2_quirks;
       ro.cancel = &g_interrupted;
+      // Distributed renders: parts with exact sums, checkpoints, resuming.
+      if (!o->tile.empty()) ro.tile = render::parseTile(o->tile);
+      if (!o->spp_range.empty()) ro.spp_range = render::parseSppRange(o->spp_range);
+      const bool part_mode = ro.tile || ro.spp_range || o->part;
+      ro.keep_sums = part_mode;
+      const std::string checkpoint = o->checkpoint.empty() ? o->resume : o->checkpoint;
+      std::map<std::string, std::string> identity;
+      render::RenderPlan plan;
+      if (part_mode || !checkpoint.empty()) {
+        plan = render::planRender(s, ro);
+        identity = render::renderIdentity(s, ro, plan, LENSIM_VERSION);
+      }
+      render::RenderCheckpoint resume_state;
+      if (!o->resume.empty()) {
+        render::Part ck = render::readPart(o->resume);
+        for (const auto& [key, value] : identity) {
+          if (key == "lensim:scene") continue;
+          auto it = ck.metadata.find(key);
+          const std::string theirs = it == ck.metadata.end() ? "(none)" : it->second;
+          if (theirs != value)
+            throw Error(FileLoc{o->resume},
+                        fmt::format("cannot resume: the checkpoint is of another render ({} "
+                                    "\"{}\", this render \"{}\")",
+                                    key, theirs, value));
+        }
+        if (!(ck.bounds == plan.bounds) || ck.tile_done.empty())
+          throw Error(FileLoc{o->resume},
+                      "cannot resume: not a checkpoint of this render's pixels");
+        resume_state.bounds = ck.bounds;
+        resume_state.tile_done = std::move(ck.tile_done);
+        resume_state.sums = std::move(ck.sums);
+        ro.resume = &resume_state;
+      }
+      if (!checkpoint.empty()) {
+        if (io::imageFormatFromPath(checkpoint) != io::ImageFormat::Exr)
+          throw Error(FileLoc{checkpoint}, "a checkpoint must be an .exr file");
+        ro.checkpoint_every_s = render::parseDuration(o->checkpoint_every);
+        ro.on_checkpoint = [checkpoint, identity, &s](const render::RenderCheckpoint& c) {
+          render::Part p;
+          p.metadata = identity;
+          if (!c.complete()) p.metadata["lensim:partial"] = "true";
+          p.x_res = s.film.x_resolution, p.y_res = s.film.y_resolution;
+          p.bounds = c.bounds;
+          p.sums = c.sums;
+          p.tile_done = c.tile_done;
+          render::writePart(checkpoint, p);
+        };
+      }
       // The film's filename is relative to the directory lensim runs in, as in pbrt.
       std::vector<std::string> outs = o->outfiles;
       if (outs.empty()) outs.push_back(s.film.filename);
-      for (const std::string& out : outs) io::imageFormatFromPath(out);  // fail early
+      for (const std::string& out : outs)  // fail early
+        if (io::imageFormatFromPath(out) != io::ImageFormat::Exr && part_mode)
+          throw Error(FileLoc{out},
+                      "--tile, --spp-range and --part write EXR parts (exact sums for lensim "
+                      "merge): use an .exr output");
       auto previous = std::signal(SIGINT, onSigint);
       render::RenderResult res = render::render(s, ro);
       std::signal(SIGINT, previous);
       io::ImageWriteOptions wo;
       wo.tiff_format = io::TiffSampleFormat::Float32;
-      for (const std::string& out : outs) io::writeImage(out, res.image, wo);
+      if (part_mode && res.stats.partial && !checkpoint.empty()) {
+        // An interrupted part is not written: a part file that exists is complete (merge jobs
+        // wait for them); the finished tiles are in the checkpoint.
+        std::fprintf(stderr,
+                     "lensim: interrupted; the finished tiles are in %s (continue with "
+                     "--resume %s)\n",
+                     checkpoint.c_str(), checkpoint.c_str());
+        return 130;
+      }
+      if (part_mode) {
+        render::Part p;
+        p.metadata = res.image.metadata;
+        for (const auto& [key, value] : identity) p.metadata[key] = value;
+        p.x_res = s.film.x_resolution, p.y_res = s.film.y_resolution;
+        p.bounds = res.bounds;
+        p.sums = std::move(res.sums);
+        for (const std::string& out : outs) render::writePart(out, p);
+      } else {
+        for (const std::string& out : outs) io::writeImage(out, res.image, wo);
+      }
+      if (res.stats.tiles_resumed > 0 && !quiet)
+        logInfo(
+            fmt::format("resumed {} finished tiles from {}", res.stats.tiles_resumed, o->resume));
       if (!quiet || o->stats) std::fputs(render::formatStats(res.stats).c_str(), stderr);
       for (const std::string& out : outs) {
         if (!quiet || o->stats)

@@ -31,5 +31,10 @@ void registerCompareCommand(CLI::App& app, Action& action);
 
 /// `lensim serve [--port N] [--scene S] [--lenses DIR]`: the lens explorer web page.
 void registerServeCommand(CLI::App& app, Action& action);
+/// `lensim merge OUT PART...`: merge the parts of a distributed render exactly.
+void registerMergeCommand(CLI::App& app, Action& action);
+
+/// `lensim dispatch SCENE --engine slurm|kubernetes --jobs N`: cluster job files.
+void registerDispatchCommand(CLI::App& app, Action& action);
 
 }  // namespace lensim::cmd

@@ -23,6 +23,8 @@ int main(int argc, char** argv) {
   lensim::cmd::registerAutofocusCommand(app, action);
   lensim::cmd::registerCompareCommand(app, action);
   lensim::cmd::registerServeCommand(app, action);
+  lensim::cmd::registerMergeCommand(app, action);
+  lensim::cmd::registerDispatchCommand(app, action);
 
   try {
     app.parse(argc, argv);

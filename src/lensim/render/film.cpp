@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "lensim/scene/builder.h"
 
@@ -92,23 +93,36 @@ Vec3 Film::toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) con
   return rgb;
 }
 
+Int128 Film::toFixed(double v) {
+  constexpr double kMax = 0x1p100;  // 2^52 in real units
+  const double f = std::rint(v * kFixedScale);
+  if (std::abs(f) < 0x1p62) return Int128(int64_t(f));  // the common case: one instruction
+  if (!(f == f)) return 0;
+  return Int128(std::clamp(f, -kMax, kMax));
+}
+
+std::array<float, 3> Film::pixelValue(const PixelSum& p) {
+  if (p.weight == 0) return {0.0f, 0.0f, 0.0f};
+  const double w = double(p.weight);
+  return {float(double(p.rgb[0]) / w), float(double(p.rgb[1]) / w), float(double(p.rgb[2]) / w)};
+}
+
 void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
                      double w) {
   const Vec3 rgb = toRgb(L, lambda);
-  Pixel& p = pixels_[size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0)];
-  p.rgb[0] += w * rgb.x;
-  p.rgb[1] += w * rgb.y;
-  p.rgb[2] += w * rgb.z;
-  p.weight += w;
+  PixelSum& p = pixels_[size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0)];
+  p.rgb[0] += toFixed(w * rgb.x);
+  p.rgb[1] += toFixed(w * rgb.y);
+  p.rgb[2] += toFixed(w * rgb.z);
+  p.weight += toFixed(w);
 }
 
 io::Image Film::image() const {
   io::Image im(bounds_.width(), bounds_.height(), {"R", "G", "B"});
   for (int y = 0; y < bounds_.height(); ++y)
     for (int x = 0; x < bounds_.width(); ++x) {
-      const Pixel& p = pixels_[size_t(y) * size_t(bounds_.width()) + size_t(x)];
-      for (int c = 0; c < 3; ++c)
-        im.at(x, y, c) = p.weight != 0 ? float(p.rgb[c] / p.weight) : 0.0f;
+      const auto v = pixelValue(pixels_[size_t(y) * size_t(bounds_.width()) + size_t(x)]);
+      for (int c = 0; c < 3; ++c) im.at(x, y, c) = v[c];
     }
   return im;
 }

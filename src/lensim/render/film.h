@@ -25,6 +25,26 @@ struct PixelBounds {
   bool operator==(const PixelBounds&) const = default;
 };
 
+/// A 128-bit signed integer (GCC/Clang extension).
+__extension__ typedef __int128 Int128;
+
+/// A pixel's accumulated samples, exactly: the filter-weighted RGB sums and the weight sum as
+/// fixed-point integers (Film::kFixedScale units). Integer sums do not depend on the order in
+/// which samples are added, so a pixel rendered in any number of sample slices, tiles, threads
+/// or resumed runs sums to the very same bits, and dividing only at the end gives the same
+/// float pixel (the exact merge that distributed renders need; floating-point sums would differ
+/// in the last bits with the summation order).
+struct PixelSum {
+  Int128 rgb[3] = {0, 0, 0};
+  Int128 weight = 0;
+  PixelSum& operator+=(const PixelSum& o) {
+    for (int c = 0; c < 3; ++c) rgb[c] += o.rgb[c];
+    weight += o.weight;
+    return *this;
+  }
+  bool operator==(const PixelSum&) const = default;
+};
+
 /// Chromaticity (x, y) of CIE daylight of correlated colour temperature T (the CIE daylight
 /// locus, 4000-25000 K); below 4000 K, of a blackbody at T.
 Vec2 daylightChromaticity(double temperature_k);
@@ -47,13 +67,21 @@ class Film {
   /// The image so far: channels R, G, B, bounds-sized.
   io::Image image() const;
 
+  /// Fixed-point units per unit of weighted RGB or filter weight: 2^48, so a sample's
+  /// contribution keeps ~15 significant digits down to 1e-6 and the sum of 2^26 samples of up
+  /// to 4.5e15 (the clamp) cannot overflow.
+  static constexpr double kFixedScale = 0x1p48;
+  /// A value in fixed-point units, rounded to nearest, clamped to +-2^52 (NaN counts as 0).
+  static Int128 toFixed(double v);
+  /// The pixel value of accumulated sums: sum / weight (0 where the weight is 0), as floats.
+  static std::array<float, 3> pixelValue(const PixelSum& p);
+  /// The accumulators, row by row over bounds() (for parts, checkpoints and resuming).
+  const std::vector<PixelSum>& sums() const { return pixels_; }
+  std::vector<PixelSum>& sums() { return pixels_; }
+
  private:
-  struct Pixel {
-    double rgb[3] = {0, 0, 0};
-    double weight = 0;
-  };
   PixelBounds bounds_;
-  std::vector<Pixel> pixels_;
+  std::vector<PixelSum> pixels_;
   double imaging_ratio_ = 1, max_component_ = 1e300;
   bool white_balance_ = false;
   std::array<double, 9> xyz_balance_{};  ///< von Kries (Bradford) adaptation, row-major

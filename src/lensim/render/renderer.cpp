@@ -10,12 +10,15 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
+#include <exception>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "lensim/camera/camera.h"
 #include "lensim/render/filter.h"
 #include "lensim/render/integrator.h"
+#include "lensim/render/parts.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
@@ -55,6 +58,40 @@ std::unique_ptr<Filter> makeFilter(const scene::Filter& f) {
   return std::make_unique<GaussianFilter>(r, f.sigma);
 }
 
+/// The finished tiles' sums of `film` (the others zero).
+RenderCheckpoint snapshot(const Film& film, const std::vector<std::atomic<uint8_t>>& done,
+                          int tiles_x) {
+  constexpr int kTile = RenderCheckpoint::kTileSize;
+  RenderCheckpoint c;
+  c.bounds = film.bounds();
+  c.tile_done.resize(done.size());
+  c.sums.assign(film.sums().size(), PixelSum{});
+  const int w = c.bounds.width(), h = c.bounds.height();
+  for (size_t t = 0; t < done.size(); ++t) {
+    c.tile_done[t] = done[t].load(std::memory_order_acquire);
+    if (!c.tile_done[t]) continue;
+    const int tx = int(t) % tiles_x, ty = int(t) / tiles_x;
+    for (int y = ty * kTile; y < std::min(h, (ty + 1) * kTile); ++y)
+      for (int x = tx * kTile; x < std::min(w, (tx + 1) * kTile); ++x)
+        c.sums[size_t(y) * size_t(w) + size_t(x)] = film.sums()[size_t(y) * size_t(w) + size_t(x)];
+  }
+  return c;
+}
+
+}  // namespace
+
+bool RenderCheckpoint::complete() const {
+  return !tile_done.empty() && tilesDone() == int(tile_done.size());
+}
+
+int RenderCheckpoint::tilesDone() const {
+  int n = 0;
+  for (uint8_t d : tile_done) n += d != 0;
+  return n;
+}
+
+namespace {
+
 std::string fmtDuration(double s) {
   if (s < 60) return fmt::format("{:.1f}s", s);
   const int m = int(s / 60);
@@ -64,11 +101,7 @@ std::string fmtDuration(double s) {
 
 }  // namespace
 
-RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
-  const auto t_setup = Clock::now();
-  camera::CameraOptions camera_options;
-  camera_options.pbrt_v2_quirks = opt.pbrt_v2_quirks;
-  std::unique_ptr<camera::Camera> cam = camera::makeCamera(scene, camera_options);
+RenderPlan planRender(const scene::Scene& scene, const RenderOptions& opt) {
   const int x_res = scene.film.x_resolution, y_res = scene.film.y_resolution;
   PixelBounds bounds{0, x_res, 0, y_res};
   if (opt.pixelbounds) {
@@ -87,6 +120,35 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   if (bounds.width() <= 0 || bounds.height() <= 0)
     throw Error(scene.film.loc, fmt::format("empty pixel bounds [{}, {}) x [{}, {})", bounds.x0,
                                             bounds.x1, bounds.y0, bounds.y1));
+  const PixelBounds full_bounds = bounds;
+  if (opt.tile) bounds = tileBounds(full_bounds, opt.tile->first, opt.tile->second);
+  RenderPlan plan;
+  plan.full_bounds = full_bounds;
+  plan.bounds = bounds;
+  plan.seed = opt.seed.value_or(scene.sampler.seed);
+  plan.spp = makeSampler(scene, opt.spp.value_or(scene.sampler.pixel_samples), plan.seed)
+                 ->samplesPerPixel();
+  plan.spp_begin = 0, plan.spp_end = plan.spp;
+  if (opt.spp_range) {
+    plan.spp_begin = opt.spp_range->first, plan.spp_end = opt.spp_range->second;
+    if (plan.spp_begin < 0 || plan.spp_end > plan.spp || plan.spp_begin >= plan.spp_end)
+      throw Error(
+          fmt::format("--spp-range {}:{} is not a non-empty range of the {} samples per "
+                      "pixel (expected 0 <= A < B <= {})",
+                      plan.spp_begin, plan.spp_end, plan.spp, plan.spp));
+  }
+  return plan;
+}
+
+RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
+  const auto t_setup = Clock::now();
+  camera::CameraOptions camera_options;
+  camera_options.pbrt_v2_quirks = opt.pbrt_v2_quirks;
+  std::unique_ptr<camera::Camera> cam = camera::makeCamera(scene, camera_options);
+  const int x_res = scene.film.x_resolution, y_res = scene.film.y_resolution;
+  const RenderPlan plan = planRender(scene, opt);
+  const PixelBounds full_bounds = plan.full_bounds;
+  const PixelBounds bounds = plan.bounds;
 
   Accel accel(scene);
   Textures textures(scene);
@@ -114,22 +176,53 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const int seed = opt.seed.value_or(scene.sampler.seed);
   std::unique_ptr<Sampler> proto = makeSampler(scene, spp_req, seed);
   const int spp = proto->samplesPerPixel();
+  const int spp_begin = plan.spp_begin, spp_end = plan.spp_end;
   std::unique_ptr<Filter> filter = makeFilter(scene.filter);
   Film film(scene, bounds);
 
   RenderResult result;
   result.bounds = bounds;
+  result.full_bounds = full_bounds;
   RenderStats& st = result.stats;
   st.spp = spp;
+  st.spp_begin = spp_begin, st.spp_end = spp_end;
   st.camera = cam->describe();
   st.camera_startup_s = cam->startupSeconds();
   st.setup_s = std::chrono::duration<double>(Clock::now() - t_setup).count();
 
-  constexpr int kTile = 16;
+  constexpr int kTile = RenderCheckpoint::kTileSize;
   const int tiles_x = (bounds.width() + kTile - 1) / kTile;
   const int tiles_y = (bounds.height() + kTile - 1) / kTile;
   const int n_tiles = tiles_x * tiles_y;
   std::atomic<int> tiles_done{0};
+  // Finished tiles (for checkpoints), and those taken from the state resumed.
+  std::vector<std::atomic<uint8_t>> done(static_cast<size_t>(n_tiles));
+  for (auto& d : done) d.store(0);
+  if (opt.resume) {
+    const RenderCheckpoint& r = *opt.resume;
+    if (!(r.bounds == bounds) || r.tile_done.size() != size_t(n_tiles) ||
+        r.sums.size() != film.sums().size())
+      throw Error(
+          fmt::format("cannot resume: the checkpoint covers pixels [{}, {}) x [{}, {}), "
+                      "this render [{}, {}) x [{}, {})",
+                      r.bounds.x0, r.bounds.x1, r.bounds.y0, r.bounds.y1, bounds.x0, bounds.x1,
+                      bounds.y0, bounds.y1));
+    const int w = bounds.width();
+    for (int t = 0; t < n_tiles; ++t) {
+      if (!r.tile_done[size_t(t)]) continue;
+      done[size_t(t)].store(1);
+      ++tiles_done;
+      const int tx = t % tiles_x, ty = t / tiles_x;
+      for (int y = ty * kTile; y < std::min(bounds.height(), (ty + 1) * kTile); ++y)
+        for (int x = tx * kTile; x < std::min(w, (tx + 1) * kTile); ++x)
+          film.sums()[size_t(y) * size_t(w) + size_t(x)] =
+              r.sums[size_t(y) * size_t(w) + size_t(x)];
+    }
+    st.tiles_resumed = tiles_done.load();
+  }
+  // A failing checkpoint stops the render.
+  std::atomic<bool> abort_render{false};
+  auto stopRequested = [&] { return (opt.cancel && opt.cancel->load()) || abort_render.load(); };
   std::atomic<uint64_t> camera_samples{0}, camera_rays{0}, no_ray{0}, outside{0}, nonfinite{0},
       rays{0};
   std::atomic<bool> cancelled{false};
@@ -172,6 +265,29 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     });
   }
 
+  // Checkpoint writer.
+  std::thread checkpointer;
+  std::exception_ptr checkpoint_error;
+  if (opt.on_checkpoint) {
+    checkpointer = std::thread([&] {
+      std::unique_lock lock(pm);
+      while (!finished) {
+        pcv.wait_for(lock, std::chrono::duration<double>(std::max(opt.checkpoint_every_s, 1e-3)));
+        if (finished) break;
+        lock.unlock();
+        try {
+          opt.on_checkpoint(snapshot(film, done, tiles_x));
+        } catch (...) {
+          checkpoint_error = std::current_exception();
+          abort_render = true;
+          lock.lock();
+          break;
+        }
+        lock.lock();
+      }
+    });
+  }
+
   auto stopProgress = [&] {
     {
       std::lock_guard lock(pm);
@@ -179,22 +295,36 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     }
     pcv.notify_all();
     if (progress.joinable()) progress.join();
+    if (checkpointer.joinable()) checkpointer.join();
   };
-  // Passes over sample indices [pass_begin, pass_end) of every pixel: one pass over all of them,
-  // or, with RenderOptions::on_pass, 1, 1, 2, 4, ... samples (the total doubling), the image
-  // handed out after each. Each pixel's samples are the same and added in the same order.
-  int pass_begin = 0, pass_end = 0, passes = 0;
-  for (; pass_begin < spp && !cancelled.load(); pass_begin = pass_end, ++passes) {
-  pass_end = !opt.on_pass ? spp : pass_begin == 0 ? 1 : std::min(spp, 2 * pass_begin);
+  // Passes over sample indices [pass_begin, pass_end) of every pixel (within the render's
+  // [spp_begin, spp_end)): one pass over all of them, or, with RenderOptions::on_pass, 1, 1, 2,
+  // 4, ... samples (the total doubling), the image handed out after each. Each pixel's samples
+  // are the same and added in the same order. A tile is "done" (for checkpoints) when its last
+  // pass is, so progressive passes clear the flags between passes.
+  if (opt.on_pass && (opt.resume || opt.on_checkpoint))
+    throw Error("progressive passes (on_pass) do not combine with checkpoints or resume");
+  int pass_begin = spp_begin, pass_end = spp_begin, passes = 0;
+  for (; pass_begin < spp_end && !cancelled.load(); pass_begin = pass_end, ++passes) {
+  pass_end = !opt.on_pass ? spp_end
+             : pass_begin == spp_begin
+                 ? spp_begin + 1
+                 : std::min(spp_end, spp_begin + 2 * (pass_begin - spp_begin));
+  if (opt.on_pass && passes > 0) {
+    for (auto& d : done) d.store(0, std::memory_order_relaxed);
+    tiles_done = 0;
+  }
   try {
     tbb::parallel_for(
         tbb::blocked_range<int>(0, n_tiles, 1), [&](const tbb::blocked_range<int>& r) {
           std::unique_ptr<Sampler> sampler = proto->clone();
           for (int tile = r.begin(); tile != r.end(); ++tile) {
-            if (opt.cancel && opt.cancel->load()) {
+            if (stopRequested()) {
               cancelled = true;
               return;
             }
+            if (done[size_t(tile)].load()) continue;  // resumed
+            bool tile_cancelled = false;
             RayCounts counts;
             uint64_t n_samples = 0, n_rays = 0, n_none = 0, n_outside = 0, n_bad = 0;
             const int tx = tile % tiles_x, ty = tile / tiles_x;
@@ -213,8 +343,9 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             for (int y = y0; y < y1; ++y)
               for (int x = x0; x < x1; ++x)
                 for (int i0 = pass_begin; i0 < pass_end; i0 += kB) {
-                  if ((i0 & 63) == 0 && opt.cancel && opt.cancel->load()) {
+                  if (((i0 - pass_begin) & 63) == 0 && stopRequested()) {
                     cancelled = true;
+                    tile_cancelled = true;
                     break;
                   }
                   const int m = std::min(kB, pass_end - i0);
@@ -274,7 +405,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             outside += n_outside;
             nonfinite += n_bad;
             rays += counts.intersect + counts.shadow;
-            ++tiles_done;
+            if (!tile_cancelled) {
+              done[size_t(tile)].store(1, std::memory_order_release);
+              ++tiles_done;
+            }
           }
         });
   } catch (...) {
@@ -282,10 +416,12 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     throw;
   }
   if (opt.on_pass && !cancelled.load() && (opt.cancel == nullptr || !opt.cancel->load()) &&
-      !opt.on_pass(film.image(), pass_end))
+      !opt.on_pass(film.image(), pass_end - spp_begin))
     cancelled = true;
   }
   stopProgress();
+  if (checkpoint_error) std::rethrow_exception(checkpoint_error);
+  if (opt.on_checkpoint) opt.on_checkpoint(snapshot(film, done, tiles_x));
 
   st.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
   st.camera_samples = camera_samples;
@@ -294,7 +430,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   st.outside_samples = outside;
   st.nonfinite_samples = nonfinite;
   st.rays = rays;
-  st.partial = cancelled.load() || tiles_done.load() < n_tiles * passes || pass_begin < spp;
+  st.partial = cancelled.load() || tiles_done.load() < n_tiles || pass_begin < spp_end;
   result.image = film.image();
   auto& md = result.image.metadata;
   md["lensim:spp"] = std::to_string(spp);
@@ -302,7 +438,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   md["lensim:pixelbounds"] = fmt::format("{} {} {} {}", bounds.x0, bounds.x1, bounds.y0, bounds.y1);
   md["lensim:resolution"] = fmt::format("{} {}", x_res, y_res);
   md["lensim:colorspace"] = "linear sRGB (Rec. 709 primaries, D65)";
+  if (opt.spp_range) md["lensim:spp_range"] = fmt::format("{}:{}", spp_begin, spp_end);
+  if (opt.tile) md["lensim:tile"] = fmt::format("{}/{}", opt.tile->first, opt.tile->second);
   if (st.partial) md["lensim:partial"] = "true";
+  if (opt.keep_sums) result.sums = film.sums();
   return result;
 }
 

@@ -10,6 +10,8 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "lensim/io/image.h"
 #include "lensim/render/film.h"
@@ -19,6 +21,18 @@ struct Scene;
 }
 
 namespace lensim::render {
+
+/// The state of a render at a point in time, for checkpoints and resuming: which of the
+/// renderer's tiles (kTileSize pixels square, row by row over the rendered bounds) are finished,
+/// and the exact film sums (only the finished tiles' pixels are kept; the others are zero).
+struct RenderCheckpoint {
+  static constexpr int kTileSize = 16;
+  PixelBounds bounds;              ///< the pixels rendered (the part's tile of the image)
+  std::vector<uint8_t> tile_done;  ///< 1 for a finished tile
+  std::vector<PixelSum> sums;      ///< bounds-sized, row by row
+  bool complete() const;
+  int tilesDone() const;
+};
 
 /// Overrides of the scene's settings (pbrt's command-line flags).
 struct RenderOptions {
@@ -43,6 +57,21 @@ struct RenderOptions {
   /// weighting every wavelength by its own film point (realistic.cpp, "Dispersive lenses"); for
   /// comparing the two (bench/dispersion).
   bool dispersion_hero_only = false;
+  // Distributed renders (render/parts.h, docs/cluster.md).
+  /// Render only tile `first` of `second` tiles of the pixel bounds (render/parts.h tileBounds).
+  std::optional<std::pair<int, int>> tile;
+  /// Take only the sample indices [first, second) of every pixel (of the sampler's spp).
+  std::optional<std::pair<int, int>> spp_range;
+  /// Keep the exact film sums in RenderResult::sums (for writing a part).
+  bool keep_sums = false;
+  /// Called from a background thread every checkpoint_every_s seconds, and once at the end,
+  /// with the finished tiles so far (e.g. to write a checkpoint file). Exceptions it throws stop
+  /// the render and are rethrown by render().
+  std::function<void(const RenderCheckpoint&)> on_checkpoint;
+  double checkpoint_every_s = 60;
+  /// Continue from this state: its finished tiles are taken as they are and not rendered again.
+  /// Its bounds must be the bounds this render covers.
+  const RenderCheckpoint* resume = nullptr;
 };
 
 /// What happened during a render.
@@ -58,16 +87,33 @@ struct RenderStats {
   uint64_t nonfinite_samples = 0;  ///< NaN/inf radiance samples, discarded
   uint64_t rays = 0;               ///< all rays traced (intersection and shadow)
   int spp = 0;
+  int spp_begin = 0, spp_end = 0;  ///< the sample indices taken, [spp_begin, spp_end)
   int threads = 0;
+  int tiles_resumed = 0;  ///< tiles taken from RenderOptions::resume
   bool partial = false;  ///< cancelled before every tile was done
   std::string camera;    ///< the camera's description
 };
 
 struct RenderResult {
   io::Image image;  ///< R, G, B over the rendered pixel bounds; metadata describes the render
-  PixelBounds bounds;
+  PixelBounds bounds;          ///< the pixels rendered
+  PixelBounds full_bounds;     ///< the pixel bounds of the whole render (bounds, unless a tile)
+  std::vector<PixelSum> sums;  ///< the exact film sums over bounds (RenderOptions::keep_sums)
   RenderStats stats;
 };
+
+/// What a render with these options covers, before it starts.
+struct RenderPlan {
+  PixelBounds full_bounds;  ///< the pixel bounds of the whole render (crop window, pixel bounds)
+  PixelBounds bounds;       ///< the pixels this render takes (full_bounds, or a tile of it)
+  int spp = 0;              ///< the sampler's samples per pixel (after its rounding)
+  int spp_begin = 0, spp_end = 0;  ///< the sample indices taken
+  int seed = 0;
+};
+
+/// The plan of render(scene, options). Throws lensim::Error for empty bounds, a bad tile or a
+/// bad sample range.
+RenderPlan planRender(const scene::Scene& scene, const RenderOptions& options);
 
 /// Renders the scene. Throws lensim::Error for scenes that cannot be rendered (camera errors,
 /// unreadable textures).
