@@ -307,6 +307,62 @@ class Builder {
   }
   void finish(ParamSet& ps) { ps.reportUnused(scene_.diagnostics); }
 
+  // A singular current transform is accepted (pbrt-v4 keeps a NaN inverse:
+  // src/pbrt/util/transform.h) and is an error only where it is applied to something rendered.
+  void requireInvertible(const FileLoc& loc, std::string_view what, int which = 0) {
+    if (gs_.ctm[which].isSingular())
+      throw Error(loc, fmt::format("{}: the current transformation matrix is singular (not "
+                                   "invertible), so it cannot place what is rendered",
+                                   what));
+  }
+
+  // ---- light scale ---------------------------------------------------------------------------
+  // pbrt-v4 reads a light's "scale" as a float; pbrt-v3 as a spectrum (`"rgb scale"`, `"color
+  // scale"`, `"spectrum scale"`: pbrt-v3's CreatePointLight & co. call
+  // paramSet.FindOneSpectrum("scale", Spectrum(1.0)) and multiply the emission by it in RGB).
+  const Param* findLightScale(ParamSet& ps) {
+    return ps.find({"scale"}, {ParamType::Float, ParamType::Rgb, ParamType::Spectrum});
+  }
+  void applyLightScale(const Param* p, Light& l) {
+    if (!p) return;
+    if (p->type == ParamType::Float) {
+      if (p->numbers.size() != 1)
+        throw Error(p->loc, fmt::format("\"{}\": expected 1 value, got {}", p->name,
+                                        p->numbers.size()));
+      l.scale = p->numbers[0];
+      return;
+    }
+    SpectrumValue sv = spectrumOf(*p);
+    if (sv.kind == SpectrumValue::Kind::Rgb) {
+      const Vec3 c = sv.rgb;
+      if (c.x == c.y && c.y == c.z) {
+        l.scale = c.x;  // grey: a plain factor
+        return;
+      }
+      if (l.emission.kind == SpectrumValue::Kind::Rgb && l.filename.empty()) {
+        // pbrt-v3 multiplies RGB emission by the RGB scale channel by channel; so does this.
+        l.emission.rgb = {l.emission.rgb.x * c.x, l.emission.rgb.y * c.y,
+                          l.emission.rgb.z * c.z};
+        return;
+      }
+      l.scale = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+      warn(p->loc, fmt::format("\"{}\": a coloured scale of a light whose emission is an image "
+                               "or a spectrum is applied as its luminance {:.4g}",
+                               p->name, l.scale));
+      return;
+    }
+    double mean = 1;
+    if (sv.kind == SpectrumValue::Kind::Sampled && !sv.samples.empty()) {
+      mean = 0;
+      for (const auto& [lambda, v] : sv.samples) mean += v;
+      mean /= static_cast<double>(sv.samples.size());
+    }
+    l.scale = mean;
+    warn(p->loc, fmt::format("\"{}\": a spectrum-valued light scale is applied as its mean value "
+                             "{:.4g}",
+                             p->name, mean));
+  }
+
   // ---- files ---------------------------------------------------------------------------------
   // pbrt resolves file names relative to the top-level scene file's directory; lensim also
   // accepts them relative to the file that names them.
@@ -499,6 +555,7 @@ class Builder {
       current_object_ = -1;
       popState(false);
     } else if (n == "ObjectInstance") {
+      requireInvertible(d.loc, "ObjectInstance");
       if (g.ctm[0] != g.ctm[1])
         warnOnce("motion", d.loc,
                  "animated transforms are not rendered; the start transform is used");
@@ -529,6 +586,16 @@ class Builder {
       warnOnce("VolumeIntegrator", d.loc,
                fmt::format("VolumeIntegrator \"{}\" is ignored: participating media are not "
                            "rendered",
+                           d.strings[0]));
+    } else if (n == "Renderer") {
+      // pbrt-v2 only (pbrt-v3 and v4 have no such directive); its renderers' parameters
+      // do not apply to lensim's path tracer.
+      pbrt_v2_ = true;
+      ParamSet ps(d.params, d.loc, "Renderer");
+      ps.markAllUsed();
+      warnOnce("Renderer", d.loc,
+               fmt::format("Renderer \"{}\" (pbrt-v2) is ignored: lensim renders with its "
+                           "Integrator",
                            d.strings[0]));
     } else if (n == "Accelerator") {
       ParamSet ps(d.params, d.loc, "Accelerator");
@@ -657,6 +724,7 @@ class Builder {
     c.defaulted = false;
     c.type_as_written = type;
     c.loc = d.loc;
+    requireInvertible(d.loc, fmt::format("Camera \"{}\"", type));
     c.camera_from_world = gs_.ctm[0];
     c.camera_from_world_end = gs_.ctm[1];
     named_cs_["camera"] = {inverse(gs_.ctm[0]), inverse(gs_.ctm[1])};
@@ -1023,6 +1091,11 @@ class Builder {
                fmt::format("texture \"{}\" is not rendered by lensim; it renders as a constant 0.5",
                            cls));
     }
+    if ((t.mapping != "uv" || (t.type == "checkerboard" && t.dimension == 3)) &&
+        t.texture_from_world.isSingular())
+      throw Error(d.loc, fmt::format("texture \"{}\": its {} mapping uses the current "
+                                     "transformation matrix, which is singular (not invertible)",
+                                     name, t.mapping != "uv" ? t.mapping : "3-D"));
     finish(ps);
     auto& map = f ? float_textures_ : spectrum_textures_;
     if (map.count(name))
@@ -1251,7 +1324,7 @@ class Builder {
     l.type_as_written = type;
     l.loc = d.loc;
     l.transform = gs_.ctm[0];
-    l.scale = ps.getFloat({"scale"}, 1);
+    const Param* scale_param = findLightScale(ps);
     l.power = ps.findFloat({"power", "illuminance"});
     ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
     auto emission = [&](ParamSet::Names names) {
@@ -1296,6 +1369,8 @@ class Builder {
                fmt::format("light \"{}\" is not rendered by lensim; it is left out", type));
       return;
     }
+    applyLightScale(scale_param, l);
+    requireInvertible(d.loc, fmt::format("LightSource \"{}\"", type));
     finish(ps);
     scene_.lights.push_back(std::move(l));
   }
@@ -1318,13 +1393,14 @@ class Builder {
     } else {
       const Param* p = ps.find({"L"}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody});
       if (p) l.emission = spectrumOf(*p);
-      l.scale = ps.getFloat({"scale"}, 1);
+      const Param* scale_param = findLightScale(ps);
       l.two_sided = ps.getBool({"twosided"}, false);
       l.power = ps.findFloat({"power"});
       ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
       if (const Param* fn = ps.find({"filename"}, {ParamType::String})) {
         l.filename = resolve(fn->strings[0], fn->loc, "image file");
       }
+      applyLightScale(scale_param, l);
     }
     finish(ps);
     scene_.lights.push_back(std::move(l));
@@ -1342,6 +1418,7 @@ class Builder {
     s.transform = gs_.ctm[0];
     s.reverse_orientation = gs_.reverse_orientation;
     s.alpha = floatInput(ps, {"alpha"});
+    requireInvertible(d.loc, fmt::format("Shape \"{}\"", type));
     if (gs_.ctm[0] != gs_.ctm[1])
       warnOnce("motion", d.loc,
                "animated transforms are not rendered; the start transform is used");
