@@ -966,6 +966,19 @@ class Builder {
     if (type == "path" || type == "volpath") {
       it.regularize = ps.getBool({"regularize"}, false);
       it.light_sampler = ps.getString({"lightsampler", "lightsamplestrategy"}, "bvh");
+      // pbrt-v4's samplers (LightSampler::Create, src/pbrt/lightsamplers.cpp): an unknown name
+      // is reported and "bvh" used. pbrt-v3's "spatial" (its default, a light distribution
+      // that depends on position) is nearest to "bvh".
+      if (it.light_sampler == "spatial") it.light_sampler = "bvh";
+      if (it.light_sampler != "bvh" && it.light_sampler != "power" &&
+          it.light_sampler != "uniform" && it.light_sampler != "exhaustive") {
+        const Param* p = ps.peek({"lightsampler", "lightsamplestrategy"});
+        warn(p ? p->loc : d.loc,
+             fmt::format("unknown light sampler \"{}\" (expected bvh, power, uniform or "
+                         "exhaustive); \"bvh\" is used",
+                         it.light_sampler));
+        it.light_sampler = "bvh";
+      }
       ps.getFloat({"rrthreshold"}, 1);  // pbrt-v3
       if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
       if (type == "volpath")
