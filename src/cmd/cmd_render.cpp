@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -75,7 +76,10 @@ void registerRenderCommand(CLI::App& app, Action& action) {
     o->has_seed = seed->count() > 0;
     action = [o]() -> int {
       const bool quiet = o->quiet || lensim::quiet();
+      const auto t_load = std::chrono::steady_clock::now();
       scene::Scene s = scene::loadScene(o->scene);
+      const double load_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
       logDiagnostics(s.diagnostics);
       if (o->autofocus) {
         render::SceneAutofocusOptions af;
@@ -99,6 +103,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       ro.progress = !quiet;
       ro.pbrt_v2_quirks = o->pbrt_v2_quirks;
       ro.cancel = &g_interrupted;
+      ro.scene_load_s = load_s;
       // The film's filename is relative to the directory lensim runs in, as in pbrt.
       std::vector<std::string> outs = o->outfiles;
       if (outs.empty()) outs.push_back(s.film.filename);

@@ -33,12 +33,16 @@ struct RenderOptions {
   /// (SceneContext::pbrt_v2_epsilon) and its realistic camera's zero-weight samples
   /// (camera::CameraOptions::pbrt_v2_quirks). Off by default: both are physically wrong.
   bool pbrt_v2_quirks = false;
+  /// Seconds the caller spent reading, parsing and building the scene (PLY files, subdivision)
+  /// before render(); reported in RenderStats::load_s and the total set-up time.
+  double scene_load_s = 0;
 };
 
 /// What happened during a render.
 struct RenderStats {
   double wall_s = 0;               ///< rendering time (excluding scene and camera set-up)
   double setup_s = 0;              ///< building the acceleration structure, lights, textures
+  double load_s = 0;  ///< reading, parsing and building the scene before (RenderOptions)
   double camera_startup_s = 0;     ///< the camera's startupSeconds()
   uint64_t camera_samples = 0;     ///< camera samples taken
   uint64_t camera_rays = 0;        ///< camera samples that produced a ray
