@@ -16,6 +16,7 @@
 #include "lensim/io/image.h"
 #include "lensim/render/layered.h"
 #include "lensim/render/sampling.h"
+#include "lensim/render/v3materials.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 
@@ -149,6 +150,7 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
     return std::pair{tx.evalSpectrum(eta_in, ctx, lambda, SpectrumType::Unbounded),
                      tx.evalSpectrum(k_in, ctx, lambda, SpectrumType::Unbounded)};
   };
+  if (isV3Material(m.type)) return makeV3BxDF(m, tx, ctx, lambda, regularize);
   if (m.type == "measured") {
     return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
   }

@@ -1,7 +1,6 @@
 // Materials: the BSDF at a surface point from the scene's material description (pbrt-v4
-// materials; the builder has already mapped pbrt-v1–v3 names: matte -> diffuse, plastic /
-// substrate / uber -> coateddiffuse, metal -> conductor, mirror -> conductor with a reflectance,
-// glass -> dielectric).
+// materials, matte mapped to diffuse by the builder; pbrt-v3's plastic, substrate, uber,
+// translucent, glass, metal and mirror as pbrt-v3 defines them, in v3materials.h).
 #pragma once
 
 #include <memory>

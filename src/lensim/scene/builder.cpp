@@ -1157,64 +1157,56 @@ class Builder {
       m.reflectance = spectrumInput(ps, {"reflectance", "Kd"}, 0.5);
       m.has_reflectance = true;
       if (type == "matte") m.sigma = floatInput(ps, {"sigma"}, 0);  // Oren–Nayar, degrees
-    } else if (type == "coateddiffuse" || type == "plastic" || type == "uber" ||
-               type == "substrate") {
+    } else if (type == "coateddiffuse") {
       m.type = "coateddiffuse";
-      m.reflectance =
-          spectrumInput(ps, {"reflectance", "Kd"}, type == "coateddiffuse" ? 0.5 : 0.25);
+      m.reflectance = spectrumInput(ps, {"reflectance", "Kd"}, 0.5);
       m.has_reflectance = true;
-      roughness(type == "coateddiffuse" ? 0 : 0.1);
-      if (type == "coateddiffuse") {
-        m.thickness = floatInput(ps, {"thickness"}, 0.01);
-        m.albedo = spectrumInput(ps, {"albedo"}, 0);
-        m.g = floatInput(ps, {"g"}, 0);
-        m.max_depth = ps.getInt({"maxdepth"}, 10);
-        m.n_samples = ps.getInt({"nsamples"}, 1);
-        dielectricEta({"eta"});
-      } else {
-        // pbrt-v1–v3 names: Ks (specular colour) and the uber extras have no coateddiffuse
-        // equivalent; the coat is a clear dielectric of index 1.5.
-        m.eta.value = 1.5;
-        bool extra = spectrumInput(ps, {"Ks"}).has_value();
-        if (type == "uber") {
-          extra = spectrumInput(ps, {"Kr"}).has_value() || extra;
-          extra = spectrumInput(ps, {"Kt"}).has_value() || extra;
-          extra = spectrumInput(ps, {"opacity"}).has_value() || extra;
-          dielectricEta({"eta", "index"});
-        }
-        if (extra)
-          warnOnce("material " + type + " Ks", loc,
-                   fmt::format("material \"{}\": \"Ks\" (and Kr, Kt, opacity) are not rendered; it "
-                               "renders as \"coateddiffuse\" with a clear coat",
-                               type));
+      roughness(0);
+      m.thickness = floatInput(ps, {"thickness"}, 0.01);
+      m.albedo = spectrumInput(ps, {"albedo"}, 0);
+      m.g = floatInput(ps, {"g"}, 0);
+      m.max_depth = ps.getInt({"maxdepth"}, 10);
+      m.n_samples = ps.getInt({"nsamples"}, 1);
+      dielectricEta({"eta"});
+    } else if (type == "plastic" || type == "uber" || type == "substrate" ||
+               type == "translucent") {
+      // pbrt-v3's materials, rendered as pbrt-v3 defines them (render/v3materials.h), with
+      // pbrt-v3's defaults (src/materials/{plastic,uber,substrate,translucent}.cpp).
+      m.type = type;
+      const bool half = type == "substrate";
+      m.reflectance = spectrumInput(ps, {"Kd", "reflectance"}, half ? 0.5 : 0.25);
+      m.has_reflectance = true;
+      m.specular = spectrumInput(ps, {"Ks"}, half ? 0.5 : 0.25);
+      roughness(0.1);
+      if (type == "uber") {
+        m.kr = spectrumInput(ps, {"Kr"}, 0);
+        m.kt = spectrumInput(ps, {"Kt"}, 0);
+        m.opacity = spectrumInput(ps, {"opacity"}, 1);
+        dielectricEta({"eta", "index"});
+      } else if (type == "translucent") {
+        m.v3_reflect = spectrumInput(ps, {"reflect"}, 0.5);
+        m.transmittance = spectrumInput(ps, {"transmit"}, 0.5);
       }
     } else if (type == "conductor" || type == "metal") {
-      m.type = "conductor";
+      // pbrt-v3's metal keeps its name: its roughness is remapped as pbrt-v3 does.
+      m.type = type;
       conductorDefaults();
-      if (auto r = spectrumInput(ps, {"reflectance"})) {
-        m.reflectance = *r;
-        m.has_reflectance = true;
-      }
+      if (type == "conductor")
+        if (auto r = spectrumInput(ps, {"reflectance"})) {
+          m.reflectance = *r;
+          m.has_reflectance = true;
+        }
       roughness(type == "metal" ? 0.01 : 0);
     } else if (type == "mirror") {
-      m.type = "conductor";
-      m.reflectance = spectrumInput(ps, {"Kr", "reflectance"}, 0.9);
-      m.has_reflectance = true;
+      m.type = "mirror";  // pbrt-v3: a specular reflection of Kr at every angle
+      m.kr = spectrumInput(ps, {"Kr"}, 0.9);
     } else if (type == "dielectric" || type == "glass" || type == "thindielectric") {
-      m.type = type == "thindielectric" ? "thindielectric" : "dielectric";
+      m.type = type;
       dielectricEta({"eta", "index"});
       if (type != "thindielectric") roughness(0);
       if (type == "glass") {
-        bool tinted = false;
-        for (auto n : {"Kr", "Kt"}) {
-          Input k = spectrumInput(ps, {n}, 1);
-          tinted = tinted || k.texture >= 0 || k.spectrum.kind != SpectrumValue::Kind::Rgb ||
-                   k.spectrum.rgb != Vec3{1, 1, 1};
-        }
-        if (tinted)
-          warnOnce("glass tint", loc,
-                   "glass \"Kr\"/\"Kt\" tints are not rendered; the glass "
-                   "renders clear");
+        m.kr = spectrumInput(ps, {"Kr"}, 1);
+        m.kt = spectrumInput(ps, {"Kt"}, 1);
       }
     } else if (type == "coatedconductor") {
       m.type = type;
@@ -1239,36 +1231,11 @@ class Builder {
       m.g = floatInput(ps, {"g"}, 0);
       m.max_depth = ps.getInt({"maxdepth"}, 10);
       m.n_samples = ps.getInt({"nsamples"}, 1);
-    } else if (type == "diffusetransmission" || type == "translucent") {
+    } else if (type == "diffusetransmission") {
       m.type = "diffusetransmission";
-      if (type == "diffusetransmission") {
-        m.reflectance = spectrumInput(ps, {"reflectance"}, 0.25);
-        m.transmittance = spectrumInput(ps, {"transmittance"}, 0.25);
-        m.scale = ps.getFloat({"scale"}, 1);
-      } else {
-        // pbrt-v2/v3 translucent: diffuse part Kd split by "reflect" and "transmit"; the glossy
-        // part (Ks, roughness) has no diffusetransmission equivalent.
-        Input kd = spectrumInput(ps, {"Kd"}, 0.25);
-        Input refl = spectrumInput(ps, {"reflect"}, 0.5),
-              trans = spectrumInput(ps, {"transmit"}, 0.5);
-        auto product = [&](const Input& a, const Input& b) {
-          Input out = a;
-          if (a.texture < 0 && b.texture < 0 && a.spectrum.kind == SpectrumValue::Kind::Rgb &&
-              b.spectrum.kind == SpectrumValue::Kind::Rgb)
-            out.spectrum.rgb = {a.spectrum.rgb.x * b.spectrum.rgb.x,
-                                a.spectrum.rgb.y * b.spectrum.rgb.y,
-                                a.spectrum.rgb.z * b.spectrum.rgb.z};
-          return out;
-        };
-        m.reflectance = product(kd, refl);
-        m.transmittance = product(kd, trans);
-        spectrumInput(ps, {"Ks"});
-        floatInput(ps, {"roughness"});
-        ps.getBool({"remaproughness"}, true);
-        warnOnce("material translucent", loc,
-                 "material \"translucent\" (pbrt-v1–v3) renders as \"diffusetransmission\" "
-                 "(Kd x reflect, Kd x transmit); its glossy Ks part is not rendered");
-      }
+      m.reflectance = spectrumInput(ps, {"reflectance"}, 0.25);
+      m.transmittance = spectrumInput(ps, {"transmittance"}, 0.25);
+      m.scale = ps.getFloat({"scale"}, 1);
       m.has_reflectance = true;
     } else if (type == "mix") {
       m.type = "mix";

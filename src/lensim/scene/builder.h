@@ -89,7 +89,8 @@ struct Texture {
 
 /// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
 /// coateddiffuse, coatedconductor, conductor, dielectric, thindielectric, diffusetransmission,
-/// mix, interface.
+/// mix, interface; or a pbrt-v3 one rendered as pbrt-v3 does: plastic, substrate, uber,
+/// translucent, glass, metal, mirror.
 struct Material {
   std::string name;  ///< set for MakeNamedMaterial
   std::string type;
@@ -119,6 +120,10 @@ struct Material {
   std::optional<Input> displacement;
   std::string normal_map;     ///< resolved path
   std::string measured_file;  ///< measured (pbrt-v2): resolved `filename` of the .brdf data
+  // pbrt-v3 materials rendered as pbrt-v3 defines them (type plastic, substrate, uber,
+  // translucent, glass, metal, mirror; render/v3materials.h): Ks, Kr, Kt, opacity and
+  // translucent's "reflect" (its "transmit" is `transmittance`; Kd is `reflectance`).
+  Input specular, kr, kt, opacity, v3_reflect;
   /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
   bool fallback = false;
 };
