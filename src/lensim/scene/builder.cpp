@@ -1096,6 +1096,40 @@ class Builder {
     } else if (cls == "constant") {
       t.type = cls;
       t.tex1 = in({"value"}, 1);
+    } else if (cls == "fbm" || cls == "wrinkled" || cls == "windy" || cls == "marble") {
+      // pbrt-v4 (src/pbrt/textures.cpp): fbm, wrinkled and windy are float textures, marble a
+      // spectrum texture; 3-D mapping by the inverse of the declaration's transform.
+      t.type = cls;
+      if ((cls == "marble") == f)
+        throw Error(d.loc, fmt::format("texture \"{}\": \"{}\" is a {} texture in pbrt", name,
+                                       cls, f ? "spectrum" : "float"));
+      if (cls != "windy") {
+        t.octaves = ps.getInt({"octaves"}, 8);
+        t.omega = ps.getFloat({"roughness"}, 0.5);
+        if (t.octaves < 0 || t.octaves > 64)
+          throw Error(d.loc, fmt::format("texture \"{}\": octaves {} (expected 0 to 64)", name,
+                                         t.octaves));
+      }
+      if (cls == "marble") {
+        t.scale = ps.getFloat({"scale"}, 1);
+        t.variation = ps.getFloat({"variation"}, 0.2);
+      }
+      if (t.texture_from_world.isSingular())
+        throw Error(d.loc, fmt::format("texture \"{}\": its 3-D mapping uses the current "
+                                       "transformation matrix, which is singular (not invertible)",
+                                       name));
+    } else if (cls == "dots") {
+      t.type = cls;
+      mapping();
+      t.tex1 = in({"inside"}, 1);
+      t.tex2 = in({"outside"}, 0);
+    } else if (cls == "bilerp") {
+      t.type = cls;
+      mapping();
+      t.v00 = in({"v00"}, 0);
+      t.v01 = in({"v01"}, 1);
+      t.v10 = in({"v10"}, 0);
+      t.v11 = in({"v11"}, 1);
     } else {
       ps.markAllUsed();
       t.type = "constant";

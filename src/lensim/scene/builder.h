@@ -57,7 +57,8 @@ struct Input {
 enum class TextureKind { Float, Spectrum };
 
 /// A texture description. `type` is the pbrt-v4 class lensim renders: imagemap, scale (product
-/// of tex1 and tex2), mix, directionmix, checkerboard or constant (tex1).
+/// of tex1 and tex2), mix, directionmix, checkerboard, constant (tex1), or the procedural fbm,
+/// wrinkled, windy, marble, dots, bilerp (render/procedural.h).
 struct Texture {
   std::string name;
   TextureKind kind = TextureKind::Spectrum;
@@ -85,6 +86,11 @@ struct Texture {
   Input amount;                 ///< mix
   Vec3 direction{0, 1, 0};      ///< directionmix: world-space unit direction
   int dimension = 2;            ///< checkerboard
+  // fbm, wrinkled, marble (octaves, roughness = omega, marble variation; marble also uses
+  // `scale`); dots (tex1 inside, tex2 outside); bilerp (v00, v01, v10, v11).
+  int octaves = 8;
+  double omega = 0.5, variation = 0.2;
+  Input v00, v01, v10, v11;
 };
 
 /// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
