@@ -428,7 +428,7 @@ TEST(Builder, UnsupportedTypesWarnOnceWithAFallback) {
       "Film \"gbuffer\"\nIntegrator \"bdpt\" \"integer maxdepth\" 7\nWorldBegin\n"
       "Material \"hair\" \"float eumelanin\" 1\nMaterial \"hair\"\nShape \"curve\" \"point3 P\" [0 "
       "0 0 1 1 1 2 2 2 3 3 3]\n"
-      "Texture \"w\" \"float\" \"wrinkled\"\nLightSource \"sky\"\n",
+      "Texture \"w\" \"float\" \"ptex\"\nLightSource \"sky\"\n",
       "w.pbrt");
   EXPECT_EQ(testutil::errorsOf(s), "");
   EXPECT_EQ(warningCount(s), 8u);
