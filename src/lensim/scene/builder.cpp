@@ -1155,11 +1155,7 @@ class Builder {
     Material m;
     m.type_as_written = type;
     m.loc = loc;
-    m.displacement = floatInput(ps, {"displacement", "bumpmap"});
-    if (m.displacement)
-      warnOnce("material displacement", loc,
-               "material \"displacement\" (bump mapping) is not rendered; the shading normal is "
-               "the surface's");
+    m.displacement = floatInput(ps, {"displacement", "bumpmap"});  // bump mapping
     if (const Param* nm = ps.find({"normalmap"}, {ParamType::String}))
       if (!nm->strings[0].empty()) m.normal_map = resolve(nm->strings[0], nm->loc, "normal map");
     auto roughness = [&](double def) {
