@@ -245,6 +245,8 @@ TEST(NamedSpectrum, MetalsArePbrtV4sTables) {
       {"metal-Cu-eta", 799.897949, 0.254188}, {"metal-Cu-k", 387.450562, 2.21},
       {"metal-Al-eta", 551.040771, 0.963},    {"metal-Al-k", 551.040771, 6.7},
       {"metal-Al-eta", 826.561157, 2.74},     {"metal-Al-k", 751.41925, 8.62},
+      {"metal-MgO-eta", 589.258972, 1.73737}, {"metal-MgO-k", 589.258972, 0.0},
+      {"metal-TiO2-eta", 499.919006, 3.03},   {"metal-TiO2-k", 334.990997, 0.788},
   };
   for (const Node& n : nodes)
     EXPECT_NEAR(namedSpectrum(n.name)->eval(n.lambda), n.value, 1e-9) << n.name << " " << n.lambda;

@@ -527,7 +527,8 @@ SpectrumPtr interleaved(std::span<const double> d) {
 
 std::vector<std::string> namedSpectrumNames() {
   return {"stdillum-D65", "metal-Cu-eta", "metal-Cu-k",   "metal-Au-eta", "metal-Au-k",
-          "metal-Ag-eta", "metal-Ag-k",   "metal-Al-eta", "metal-Al-k"};
+          "metal-Ag-eta", "metal-Ag-k",   "metal-Al-eta", "metal-Al-k",
+          "metal-MgO-eta", "metal-MgO-k", "metal-TiO2-eta", "metal-TiO2-k"};
 }
 
 SpectrumPtr namedSpectrum(std::string_view name) {
@@ -540,6 +541,10 @@ SpectrumPtr namedSpectrum(std::string_view name) {
   if (name == "metal-Ag-k") return interleaved(data::kAgK);
   if (name == "metal-Al-eta") return interleaved(data::kAlEta);
   if (name == "metal-Al-k") return interleaved(data::kAlK);
+  if (name == "metal-MgO-eta") return interleaved(data::kMgOEta);
+  if (name == "metal-MgO-k") return interleaved(data::kMgOK);
+  if (name == "metal-TiO2-eta") return interleaved(data::kTiO2Eta);
+  if (name == "metal-TiO2-k") return interleaved(data::kTiO2K);
   return nullptr;
 }
 

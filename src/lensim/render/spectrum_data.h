@@ -19,5 +19,7 @@ extern const double kD65_5nm[95];
 /// Interleaved (wavelength nm, value) pairs of tabulated metal optical constants: pbrt-v4's
 /// named-spectrum tables (298.76-885.60 nm; sources in spectrum_data.cpp).
 extern const std::span<const double> kAuEta, kAuK, kAgEta, kAgK, kAlEta, kAlK, kCuEta, kCuK;
+/// pbrt-v4's metal-MgO-* and metal-TiO2-* tables.
+extern const std::span<const double> kMgOEta, kMgOK, kTiO2Eta, kTiO2K;
 
 }  // namespace lensim::render::data
