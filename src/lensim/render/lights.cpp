@@ -840,7 +840,10 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
     }
   }
   std::vector<const Light*> all;
-  for (const auto& l : lights_) all.push_back(l.get());
+  for (size_t i = 0; i < lights_.size(); ++i) {
+    lights_[i]->index = int(i);
+    all.push_back(lights_[i].get());
+  }
   sampler_name_ = scene.integrator.light_sampler;
   sampler_ = LightSampler::create(sampler_name_, all);
 }

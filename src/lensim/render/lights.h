@@ -40,6 +40,9 @@ struct LightLiSample {
 class Light {
  public:
   virtual ~Light() = default;
+  /// Position in the list given to the light sampler (set by LightSet; -1 outside one), so that
+  /// samplers find a light's data without a hash lookup.
+  int index = -1;
   /// Point and directional lights (no surface to hit).
   virtual bool isDelta() const { return false; }
   virtual bool isInfinite() const { return false; }

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <unordered_map>
 
 #include "lensim/render/lights.h"
 #include "lensim/util/error.h"
@@ -70,39 +69,67 @@ DirectionCone boundSubtendedDirections(const Bounds3& b, const Vec3& p) {
   return {normalize(c - p), cos_max, false};
 }
 
-double LightBounds::importance(const Vec3& p, const Vec3& n) const {
+namespace {
+
+// LightBounds with what importance() needs precomputed (centroid, the distance clamp, the
+// bounding sphere's squared radius, sin theta_o): the light BVH evaluates it at every node it
+// descends.
+struct ImportanceBounds {
+  Vec3 pc, w;
+  double d2_min = 0, r2 = 0, phi = 0, cos_o = 1, sin_o = 0, cos_e = 1;
+  bool two_sided = false;
+
+  ImportanceBounds() = default;
+  explicit ImportanceBounds(const LightBounds& b)
+      : pc(b.centroid()),
+        w(b.w),
+        d2_min(length(diagonal(b.bounds)) / 2),  // pbrt-v4's clamp, as written there
+        r2(dot(b.bounds.max - b.centroid(), b.bounds.max - b.centroid())),
+        phi(b.phi),
+        cos_o(b.cos_theta_o),
+        sin_o(safeSqrt(1 - b.cos_theta_o * b.cos_theta_o)),
+        cos_e(b.cos_theta_e),
+        two_sided(b.two_sided) {}
+
   // As pbrt-v4's LightBounds::Importance (src/pbrt/lights.cpp): phi cos(theta') / d^2, where
   // theta' is the smallest angle between the emission cone and the direction to p, widened by
-  // the angle the box subtends, and cos(theta'_i) for the receiver's normal likewise.
-  const Vec3 pc = centroid();
-  double d2 = dot(p - pc, p - pc);
-  d2 = std::max(d2, length(diagonal(bounds)) / 2);  // pbrt-v4's clamp, as written there
-  auto cosSubClamped = [](double sin_a, double cos_a, double sin_b, double cos_b) {
-    return cos_a > cos_b ? 1.0 : cos_a * cos_b + sin_a * sin_b;
-  };
-  auto sinSubClamped = [](double sin_a, double cos_a, double sin_b, double cos_b) {
-    return cos_a > cos_b ? 0.0 : sin_a * cos_b - cos_a * sin_b;
-  };
-  Vec3 wi = p - pc;
-  const double wl = length(wi);
-  wi = wl > 0 ? wi / wl : Vec3{0, 0, 1};
-  double cos_w = dot(w, wi);
-  if (two_sided) cos_w = std::abs(cos_w);
-  const double sin_w = safeSqrt(1 - cos_w * cos_w);
-  const double cos_b = boundSubtendedDirections(bounds, p).cos_theta;
-  const double sin_b = safeSqrt(1 - cos_b * cos_b);
-  const double sin_o = safeSqrt(1 - cos_theta_o * cos_theta_o);
-  const double cos_x = cosSubClamped(sin_w, cos_w, sin_o, cos_theta_o);
-  const double sin_x = sinSubClamped(sin_w, cos_w, sin_o, cos_theta_o);
-  const double cos_p = cosSubClamped(sin_x, cos_x, sin_b, cos_b);
-  if (cos_p <= cos_theta_e) return 0;
-  double imp = phi * cos_p / d2;
-  if (n.x != 0 || n.y != 0 || n.z != 0) {
-    const double cos_i = std::abs(dot(wi, n));
-    const double sin_i = safeSqrt(1 - cos_i * cos_i);
-    imp *= cosSubClamped(sin_i, cos_i, sin_b, cos_b);
+  // the angle the box's bounding sphere subtends, and cos(theta'_i) for the receiver's normal
+  // likewise.
+  double operator()(const Vec3& p, const Vec3& n) const {
+    const Vec3 v = p - pc;
+    const double dist2 = dot(v, v);
+    const double d2 = std::max(dist2, d2_min);
+    auto cosSubClamped = [](double sin_a, double cos_a, double sin_b, double cos_b) {
+      return cos_a > cos_b ? 1.0 : cos_a * cos_b + sin_a * sin_b;
+    };
+    auto sinSubClamped = [](double sin_a, double cos_a, double sin_b, double cos_b) {
+      return cos_a > cos_b ? 0.0 : sin_a * cos_b - cos_a * sin_b;
+    };
+    const Vec3 wi = dist2 > 0 ? v / std::sqrt(dist2) : Vec3{0, 0, 1};
+    double cos_w = dot(w, wi);
+    if (two_sided) cos_w = std::abs(cos_w);
+    const double sin_w = safeSqrt(1 - cos_w * cos_w);
+    // The cone of directions from p to the bounding sphere (boundSubtendedDirections).
+    const double cos_b = dist2 < r2 ? -1.0 : safeSqrt(1 - r2 / dist2);
+    const double sin_b = safeSqrt(1 - cos_b * cos_b);
+    const double cos_x = cosSubClamped(sin_w, cos_w, sin_o, cos_o);
+    const double sin_x = sinSubClamped(sin_w, cos_w, sin_o, cos_o);
+    const double cos_p = cosSubClamped(sin_x, cos_x, sin_b, cos_b);
+    if (cos_p <= cos_e) return 0;
+    double imp = phi * cos_p / d2;
+    if (n.x != 0 || n.y != 0 || n.z != 0) {
+      const double cos_i = std::abs(dot(wi, n));
+      const double sin_i = safeSqrt(1 - cos_i * cos_i);
+      imp *= cosSubClamped(sin_i, cos_i, sin_b, cos_b);
+    }
+    return std::max(imp, 0.0);
   }
-  return std::max(imp, 0.0);
+};
+
+}  // namespace
+
+double LightBounds::importance(const Vec3& p, const Vec3& n) const {
+  return ImportanceBounds(*this)(p, n);
 }
 
 LightBounds unionBounds(const LightBounds& a, const LightBounds& b) {
@@ -151,7 +178,6 @@ class PowerLightSampler final : public LightSampler {
       if (!std::isfinite(w) || w < 0) w = 0;
       p[i] = w;
       total += w;
-      index_[lights[i]] = i;
     }
     // pbrt-v4: all zero → uniform (PowerLightSampler's constructor).
     if (total == 0) std::fill(p.begin(), p.end(), 1.0), total = double(p.size());
@@ -172,14 +198,13 @@ class PowerLightSampler final : public LightSampler {
     return SampledLight{lights_[i], pmf_[i]};
   }
   double pmf(const LightSampleContext&, const Light* light) const override {
-    auto it = index_.find(light);
-    return it == index_.end() ? 0 : pmf_[it->second];
+    const size_t i = size_t(light->index);
+    return i < lights_.size() && lights_[i] == light ? pmf_[i] : 0;
   }
 
  private:
   std::vector<const Light*> lights_;
   std::vector<double> pmf_, cdf_;
-  std::unordered_map<const Light*, size_t> index_;
 };
 
 // ---- BVH (pbrt-v4's BVHLightSampler) ---------------------------------------------------------
@@ -196,9 +221,12 @@ class BVHLightSampler final : public LightSampler {
         bvh_lights.push_back({l, *lb});
       }
     }
+    leaf_of_.assign(lights.size(), -1);
+    is_infinite_.assign(lights.size(), false);
+    lights_ = lights;
+    for (const Light* l : infinite_) is_infinite_[size_t(l->index)] = true;
     if (!bvh_lights.empty()) build(bvh_lights, 0, bvh_lights.size(), -1);
     p_infinite_ = double(infinite_.size()) / double(infinite_.size() + (nodes_.empty() ? 0 : 1));
-    for (size_t i = 0; i < infinite_.size(); ++i) infinite_index_[infinite_[i]] = i;
   }
 
   std::optional<SampledLight> sample(const LightSampleContext& ctx, double u) const override {
@@ -214,11 +242,11 @@ class BVHLightSampler final : public LightSampler {
     for (;;) {
       const Node& nd = nodes_[size_t(node)];
       if (nd.leaf) {
-        if (nd.lb.importance(ctx.p, ctx.n) > 0) return SampledLight{nd.light, pmf};
+        if (nd.ib(ctx.p, ctx.n) > 0) return SampledLight{nd.light, pmf};
         return std::nullopt;
       }
-      const double c0 = nodes_[size_t(node + 1)].lb.importance(ctx.p, ctx.n);
-      const double c1 = nodes_[size_t(nd.second)].lb.importance(ctx.p, ctx.n);
+      const double c0 = nodes_[size_t(node + 1)].ib(ctx.p, ctx.n);
+      const double c1 = nodes_[size_t(nd.second)].ib(ctx.p, ctx.n);
       if (c0 == 0 && c1 == 0) return std::nullopt;
       const double p0 = c0 / (c0 + c1);
       if (u < p0) {
@@ -234,16 +262,17 @@ class BVHLightSampler final : public LightSampler {
   }
 
   double pmf(const LightSampleContext& ctx, const Light* light) const override {
-    if (infinite_index_.count(light)) return p_infinite_ / double(infinite_.size());
-    auto it = leaf_of_.find(light);
-    if (it == leaf_of_.end()) return 0;  // not in the tree: no power
-    int node = it->second;
-    if (nodes_[size_t(node)].lb.importance(ctx.p, ctx.n) == 0) return 0;
+    const size_t li = size_t(light->index);
+    if (li >= lights_.size() || lights_[li] != light) return 0;
+    if (is_infinite_[li]) return p_infinite_ / double(infinite_.size());
+    int node = leaf_of_[li];
+    if (node < 0) return 0;  // not in the tree: no power
+    if (nodes_[size_t(node)].ib(ctx.p, ctx.n) == 0) return 0;
     double pmf = 1;
     while (node != 0) {
       const int parent = nodes_[size_t(node)].parent;
-      const double c0 = nodes_[size_t(parent + 1)].lb.importance(ctx.p, ctx.n);
-      const double c1 = nodes_[size_t(nodes_[size_t(parent)].second)].lb.importance(ctx.p, ctx.n);
+      const double c0 = nodes_[size_t(parent + 1)].ib(ctx.p, ctx.n);
+      const double c1 = nodes_[size_t(nodes_[size_t(parent)].second)].ib(ctx.p, ctx.n);
       const double c = node == parent + 1 ? c0 : c1;
       if (c == 0) return 0;
       pmf *= c / (c0 + c1);
@@ -255,6 +284,7 @@ class BVHLightSampler final : public LightSampler {
  private:
   struct Node {
     LightBounds lb;
+    ImportanceBounds ib;           // lb, prepared for importance()
     const Light* light = nullptr;  // leaf
     int second = -1;               // interior: index of the second child (the first is next)
     int parent = -1;
@@ -284,11 +314,12 @@ class BVHLightSampler final : public LightSampler {
       const int index = int(nodes_.size());
       Node n;
       n.lb = ls[start].second;
+      n.ib = ImportanceBounds(n.lb);
       n.light = ls[start].first;
       n.leaf = true;
       n.parent = parent;
       nodes_.push_back(n);
-      leaf_of_[n.light] = index;
+      leaf_of_[size_t(n.light->index)] = index;
       return {index, n.lb};
     }
     Bounds3 bounds, centroids;
@@ -335,13 +366,14 @@ class BVHLightSampler final : public LightSampler {
     auto c1 = build(ls, mid, end, index);
     nodes_[size_t(index)].second = c1.first;
     nodes_[size_t(index)].lb = unionBounds(c0.second, c1.second);
+    nodes_[size_t(index)].ib = ImportanceBounds(nodes_[size_t(index)].lb);
     return {index, nodes_[size_t(index)].lb};
   }
 
-  std::vector<const Light*> infinite_;
-  std::unordered_map<const Light*, size_t> infinite_index_;
+  std::vector<const Light*> lights_, infinite_;
+  std::vector<bool> is_infinite_;  ///< per light index
   std::vector<Node> nodes_;
-  std::unordered_map<const Light*, int> leaf_of_;
+  std::vector<int> leaf_of_;       ///< per light index: its leaf node, or -1
   double p_infinite_ = 0;
 };
 

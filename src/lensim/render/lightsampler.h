@@ -78,7 +78,8 @@ class LightSampler {
   /// The probability that sample(ctx, .) chooses `light`.
   virtual double pmf(const LightSampleContext& ctx, const Light* light) const = 0;
 
-  /// "bvh", "power", "uniform" or "exhaustive"; throws lensim::Error for another name.
+  /// "bvh", "power", "uniform" or "exhaustive"; throws lensim::Error for another name. Each
+  /// light's `index` must be its position in `lights`.
   static std::unique_ptr<LightSampler> create(const std::string& name,
                                               const std::vector<const Light*>& lights);
   /// The names create() accepts.
