@@ -18,11 +18,11 @@ namespace {
 
 TEST(Bump, LinearDisplacementTiltsTheNormal) {
   for (double a : {0.25, 1.0, std::sqrt(3.0)}) {
-    const std::string text = "WorldBegin\nTexture \"d\" \"float\" \"bilerp\" \"float v00\" 0 "
-                             "\"float v10\" " +
-                             std::to_string(a) + " \"float v01\" 0 \"float v11\" " +
-                             std::to_string(a) +
-                             "\nMaterial \"diffuse\" \"texture displacement\" \"d\"\n";
+    const std::string text =
+        "WorldBegin\nTexture \"d\" \"float\" \"bilerp\" \"float v00\" 0 "
+        "\"float v10\" " +
+        std::to_string(a) + " \"float v01\" 0 \"float v11\" " + std::to_string(a) +
+        "\nMaterial \"diffuse\" \"texture displacement\" \"d\"\n";
     scene::Scene s = testutil::buildText(text);
     ASSERT_EQ(testutil::errorsOf(s), "");
     EXPECT_TRUE(s.diagnostics.empty()) << s.diagnostics[0].message;
@@ -63,8 +63,8 @@ Shape "trianglemesh" "point3 P" [-1 -1 -3  1 -1 -3  0 1 -3] "integer indices" [0
     EXPECT_NEAR(std::abs(dot(normalize(cross(h->dpdu, h->dpdv)), h->ng)), 1, 1e-9);
     EXPECT_NEAR(length(h->dndu - h->dpdu / 2.0), 0, 1e-9 * length(h->dpdu));
     const TextureEvalContext ctx{h->p, h->uv, h->ns};
-    const Vec3 n = mats.bumpedNormal(s.shapes[0].material, ctx, h->ns, h->dpdu, h->dpdv, h->dndu,
-                                     h->dndv);
+    const Vec3 n =
+        mats.bumpedNormal(s.shapes[0].material, ctx, h->ns, h->dpdu, h->dpdv, h->dndu, h->dndv);
     EXPECT_NEAR(length(n - h->ns), 0, 1e-6);
   }
   // The triangle: p = P0 + (1, 0, 0) u + (0, 0.5, 0) v reproduces its three vertices and (u, v).
@@ -87,7 +87,8 @@ WorldBegin
 LightSource "point" "point3 from" [0 0 1000] "rgb I" [1000000 1000000 1000000]
 Texture "d" "float" "bilerp" "float v00" 0 "float v10" 1.7320508 "float v01" 0 "float v11" 1.7320508
 )";
-    text += bump ? "Material \"diffuse\" \"texture displacement\" \"d\"\n" : "Material \"diffuse\"\n";
+    text +=
+        bump ? "Material \"diffuse\" \"texture displacement\" \"d\"\n" : "Material \"diffuse\"\n";
     text += R"(Shape "trianglemesh" "point3 P" [-1 -1 0  1 -1 0  1 1 0  -1 1 0]
       "integer indices" [0 1 2  0 2 3] "point2 uv" [-1 -1  1 -1  1 1  -1 1]
 )";

@@ -65,8 +65,8 @@ RunningStats albedoByWalk(const BxDF& b, const Vec3& wo, int n, uint64_t seed) {
   Rng rng(seed, 5);
   RunningStats s;
   for (int i = 0; i < n; ++i) {
-    const auto bs = b.sample_f(wo, rng.uniform(), {rng.uniform(), rng.uniform()},
-                               TransportMode::Radiance);
+    const auto bs =
+        b.sample_f(wo, rng.uniform(), {rng.uniform(), rng.uniform()}, TransportMode::Radiance);
     s.add(bs && bs->pdf > 0 ? bs->f[0] * std::abs(bs->wi.z) / bs->pdf : 0.0);
   }
   return s;
@@ -124,9 +124,9 @@ TEST(CoatedReciprocity, FIsSymmetricInItsDirections) {
   // independent estimates (wi moved by 1e-9) averaged, compared by a z-test.
   LayerParams p;
   p.max_depth = 50;
-  const auto diffuse = std::make_shared<CoatedBxDF>(
-      DielectricBxDF(1.5, TrowbridgeReitz(0.2, 0.2)),
-      std::make_shared<DiffuseBxDF>(SampledSpectrum(0.7)), p);
+  const auto diffuse =
+      std::make_shared<CoatedBxDF>(DielectricBxDF(1.5, TrowbridgeReitz(0.2, 0.2)),
+                                   std::make_shared<DiffuseBxDF>(SampledSpectrum(0.7)), p);
   SampledSpectrum eta(0.2), k(3.0);
   const auto conductor = std::make_shared<CoatedBxDF>(
       DielectricBxDF(1.5, TrowbridgeReitz(0.15, 0.15)),

@@ -166,9 +166,8 @@ TEST_P(EachSampler, EveryLightThatContributesCanBeChosen) {
       }
       if (!contributes) continue;
       ++contributing;
-      EXPECT_GT(f.lights.pmf(ctx, &light), 0)
-          << GetParam() << " light " << i << " at (" << ctx.p.x << ", " << ctx.p.y << ", "
-          << ctx.p.z << ")";
+      EXPECT_GT(f.lights.pmf(ctx, &light), 0) << GetParam() << " light " << i << " at (" << ctx.p.x
+                                              << ", " << ctx.p.y << ", " << ctx.p.z << ")";
     }
   }
   EXPECT_GT(contributing, 10000);

@@ -43,9 +43,10 @@ TEST(Procedural, PerlinNoiseClosedFormsAndReferenceValues) {
 TEST(Procedural, SumsOfOctaves) {
   const Vec3 p{1.25, -2.7, 3.1};
   EXPECT_NEAR(fbm(p, 0.5, 1), perlinNoise(1.25, -2.7, 3.1), 1e-15);
-  EXPECT_NEAR(fbm(p, 0.5, 2),
-              perlinNoise(1.25, -2.7, 3.1) + 0.5 * perlinNoise(1.99 * 1.25, 1.99 * -2.7, 1.99 * 3.1),
-              1e-15);
+  EXPECT_NEAR(
+      fbm(p, 0.5, 2),
+      perlinNoise(1.25, -2.7, 3.1) + 0.5 * perlinNoise(1.99 * 1.25, 1.99 * -2.7, 1.99 * 3.1),
+      1e-15);
   EXPECT_NEAR(fbm(p, 0.5, 8), 0.6586376364247302, 1e-12);
   EXPECT_NEAR(turbulence(p, 0.5, 8), 0.7291159109371244, 1e-12);
   EXPECT_NEAR(windy(p), 0.34165020611861624, 1e-12);
@@ -74,8 +75,8 @@ TEST(Procedural, PolkaDotsMatchReference) {
 TEST(Procedural, MarbleStaysOnItsColourSpline) {
   Rng rng(3, 3);
   for (int i = 0; i < 2000; ++i) {
-    const Vec3 c = marbleRgb({rng.uniform() * 10, rng.uniform() * 10, rng.uniform() * 10}, 8, 0.5,
-                             0.2);
+    const Vec3 c =
+        marbleRgb({rng.uniform() * 10, rng.uniform() * 10, rng.uniform() * 10}, 8, 0.5, 0.2);
     // Convex combinations of the control points, times 1.5.
     for (double v : {c.x, c.y, c.z}) {
       EXPECT_GE(v, 1.5 * 0.2 - 1e-12);
@@ -112,9 +113,10 @@ Texture "bad" "float" "marble"
   TextureEvalContext ctx;
   ctx.p = {1.25, -2.7, 3.1};
   ctx.uv = {0.25, 0.75};
-  EXPECT_NEAR(tx.evalFloat(input(0), ctx),
-              perlinNoise(1.25, -2.7, 3.1) + 0.25 * perlinNoise(1.99 * 1.25, 1.99 * -2.7, 1.99 * 3.1),
-              1e-12);
+  EXPECT_NEAR(
+      tx.evalFloat(input(0), ctx),
+      perlinNoise(1.25, -2.7, 3.1) + 0.25 * perlinNoise(1.99 * 1.25, 1.99 * -2.7, 1.99 * 3.1),
+      1e-12);
   EXPECT_NEAR(tx.evalFloat(input(1), ctx), 0.7291159109371244, 1e-12);
   EXPECT_NEAR(tx.evalFloat(input(2), ctx), 0.34165020611861624, 1e-12);
   // Bilerp at (s, t) = (0.25, 0.75): 0.1875 v00 + 0.5625 v01 + 0.0625 v10 + 0.1875 v11.

@@ -100,7 +100,8 @@ TEST(Parity, DuplicatedParameterTheLastOneWins) {
 }
 
 TEST(Parity, DuplicateWithAnotherTypeWarnsAndUsesTheLastOne) {
-  Scene s = testutil::buildText("WorldBegin\nShape \"sphere\" \"integer radius\" 1 \"float radius\" 2\n");
+  Scene s =
+      testutil::buildText("WorldBegin\nShape \"sphere\" \"integer radius\" 1 \"float radius\" 2\n");
   EXPECT_EQ(countSeverity(s, Severity::Error), 0u) << allDiagnostics(s);
   ASSERT_EQ(countSeverity(s, Severity::Warning), 1u) << allDiagnostics(s);
   EXPECT_NE(allDiagnostics(s).find("test.pbrt:2:16: warning: \"radius\": given again"),

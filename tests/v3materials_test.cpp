@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "chi2.h"
-#include "render_test_util.h"
 #include "lensim/render/sampling.h"
 #include "lensim/render/v3materials.h"
+#include "render_test_util.h"
 #include "stats.h"
 
 namespace lensim::render {
@@ -62,12 +62,13 @@ std::vector<Case> cases() {
       {"plastic-glossy", V3BSDF({lambert(0.5), microfacet(0.5, false, 0.05, 1.5, 1.0)})},
       {"substrate", V3BSDF({fresnelBlend(0.5, 0.5, a01, a01)})},
       {"substrate-aniso", V3BSDF({fresnelBlend(0.3, 0.2, 0.05, 0.4)})},
-      {"translucent", V3BSDF({lambert(0.125), lambert(0.125, true),
-                              microfacet(0.125, false, a01, 1.0, 1.5),
-                              microfacet(0.125, true, a01, 1.0, 1.5)})},
-      {"rough-glass", V3BSDF({microfacet(1.0, false, 0.3, 1.0, 1.5),
-                              microfacet(1.0, true, 0.3, 1.0, 1.5)})},
-      {"rough-metal", [] {
+      {"translucent",
+       V3BSDF({lambert(0.125), lambert(0.125, true), microfacet(0.125, false, a01, 1.0, 1.5),
+               microfacet(0.125, true, a01, 1.0, 1.5)})},
+      {"rough-glass",
+       V3BSDF({microfacet(1.0, false, 0.3, 1.0, 1.5), microfacet(1.0, true, 0.3, 1.0, 1.5)})},
+      {"rough-metal",
+       [] {
          V3Lobe l;
          l.kind = V3Lobe::Kind::MicrofacetReflection;
          l.R = SampledSpectrum(1.0);
@@ -174,8 +175,8 @@ TEST(V3Materials, RoughGlassEqualsPbrtV4sRoughDielectric) {
       const Vec3 wi = sampleUniformSphere({rng.uniform(), rng.uniform()});
       for (auto mode : {TransportMode::Radiance, TransportMode::Importance}) {
         const double f3 = v3.f(wo, wi, mode)[0], f4 = v4.f(wo, wi, mode)[0];
-        EXPECT_NEAR(f3, f4, 1e-9 + 1e-7 * std::abs(f4)) << "alpha " << a << " wo.z " << wo.z
-                                                        << " wi.z " << wi.z;
+        EXPECT_NEAR(f3, f4, 1e-9 + 1e-7 * std::abs(f4))
+            << "alpha " << a << " wo.z " << wo.z << " wi.z " << wi.z;
         compared += f4 > 0;
       }
     }
@@ -224,18 +225,20 @@ LightSource "infinite" "rgb L" [1 1 1]
     const char* material;
     double expect;
   };
-  const F cases[] = {{R"(Material "glass")", 1.0},
-                     {R"(Material "glass" "float uroughness" 0.05 "float vroughness" 0.05 "bool remaproughness" false)", 1.0},
-                     {R"(Material "plastic" "color Kd" [1 1 1] "color Ks" [0 0 0])", 1.0},
-                     {R"(Material "mirror" "color Kr" [0.6 0.6 0.6])", 0.6},
-                     {R"(Material "uber" "color Kd" [0 0 0] "color Ks" [0 0 0] "color opacity" [0.3 0.3 0.3])", 0.49}};
+  const F cases[] = {
+      {R"(Material "glass")", 1.0},
+      {R"(Material "glass" "float uroughness" 0.05 "float vroughness" 0.05 "bool remaproughness" false)",
+       1.0},
+      {R"(Material "plastic" "color Kd" [1 1 1] "color Ks" [0 0 0])", 1.0},
+      {R"(Material "mirror" "color Kr" [0.6 0.6 0.6])", 0.6},
+      {R"(Material "uber" "color Kd" [0 0 0] "color Ks" [0 0 0] "color opacity" [0.3 0.3 0.3])",
+       0.49}};
   for (const F& f : cases) {
     render::RenderOptions o;
     o.seed = 3;
-    const io::Image im = testutil::renderText(header + f.material +
-                                                  "\nShape \"sphere\" \"float radius\" 1\n",
-                                              o)
-                             .image;
+    const io::Image im =
+        testutil::renderText(header + f.material + "\nShape \"sphere\" \"float radius\" 1\n", o)
+            .image;
     RunningStats centre;
     for (int y = 5; y < 11; ++y)
       for (int x = 5; x < 11; ++x) centre.add(testutil::luminanceAt(im, x, y));

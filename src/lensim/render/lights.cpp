@@ -859,8 +859,7 @@ const Light* LightSet::areaLight(int shape, int prim) const {
   return i < lights_.size() ? lights_[i].get() : nullptr;
 }
 
-std::optional<LightSet::Choice> LightSet::sample(const LightSampleContext& ctx,
-                                                  double u) const {
+std::optional<LightSet::Choice> LightSet::sample(const LightSampleContext& ctx, double u) const {
   auto s = sampler_->sample(ctx, u);
   if (!s || s->pmf <= 0) return std::nullopt;
   return Choice{s->light, s->pmf};

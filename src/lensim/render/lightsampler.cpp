@@ -13,7 +13,6 @@ namespace lensim::render {
 
 namespace {
 
-
 constexpr double kOneMinusEpsilon = 1 - 1e-16;
 
 double safeSqrt(double x) {
@@ -135,8 +134,7 @@ double LightBounds::importance(const Vec3& p, const Vec3& n) const {
 LightBounds unionBounds(const LightBounds& a, const LightBounds& b) {
   if (a.phi == 0) return b;
   if (b.phi == 0) return a;
-  const DirectionCone cone =
-      unionCones({a.w, a.cos_theta_o, false}, {b.w, b.cos_theta_o, false});
+  const DirectionCone cone = unionCones({a.w, a.cos_theta_o, false}, {b.w, b.cos_theta_o, false});
   LightBounds u;
   u.bounds = a.bounds;
   u.bounds.extend(b.bounds);
@@ -298,10 +296,10 @@ class BVHLightSampler final : public LightSampler {
     const double theta_o = safeAcos(b.cos_theta_o), theta_e = safeAcos(b.cos_theta_e);
     const double theta_w = std::min(theta_o + theta_e, kPi);
     const double sin_o = safeSqrt(1 - b.cos_theta_o * b.cos_theta_o);
-    const double m_omega = 2 * kPi * (1 - b.cos_theta_o) +
-                           kPi / 2 *
-                               (2 * theta_w * sin_o - std::cos(theta_o - 2 * theta_w) -
-                                2 * theta_o * sin_o + b.cos_theta_o);
+    const double m_omega =
+        2 * kPi * (1 - b.cos_theta_o) + kPi / 2 *
+                                            (2 * theta_w * sin_o - std::cos(theta_o - 2 * theta_w) -
+                                             2 * theta_o * sin_o + b.cos_theta_o);
     const Vec3 d = diagonal(bounds);
     const double kr = d[dim] > 0 ? maxComponent(d) / d[dim] : 1;
     return b.phi * m_omega * kr * surfaceArea(b.bounds);
@@ -353,9 +351,9 @@ class BVHLightSampler final : public LightSampler {
     }
     size_t mid = (start + end) / 2;
     if (best_dim >= 0) {
-      auto it = std::partition(ls.begin() + long(start), ls.begin() + long(end), [&](const auto& l) {
-        return bucketOf(l.second.centroid(), best_dim) <= best_bucket;
-      });
+      auto it = std::partition(
+          ls.begin() + long(start), ls.begin() + long(end),
+          [&](const auto& l) { return bucketOf(l.second.centroid(), best_dim) <= best_bucket; });
       mid = size_t(it - ls.begin());
       if (mid == start || mid == end) mid = (start + end) / 2;
     }
@@ -373,7 +371,7 @@ class BVHLightSampler final : public LightSampler {
   std::vector<const Light*> lights_, infinite_;
   std::vector<bool> is_infinite_;  ///< per light index
   std::vector<Node> nodes_;
-  std::vector<int> leaf_of_;       ///< per light index: its leaf node, or -1
+  std::vector<int> leaf_of_;  ///< per light index: its leaf node, or -1
   double p_infinite_ = 0;
 };
 
@@ -389,8 +387,7 @@ class ExhaustiveLightSampler final : public LightSampler {
         infinite_.push_back(l);
       }
     }
-    p_infinite_ =
-        double(infinite_.size()) / double(infinite_.size() + (bounded_.empty() ? 0 : 1));
+    p_infinite_ = double(infinite_.size()) / double(infinite_.size() + (bounded_.empty() ? 0 : 1));
   }
   std::optional<SampledLight> sample(const LightSampleContext& ctx, double u) const override {
     if (u < p_infinite_) {
@@ -401,7 +398,8 @@ class ExhaustiveLightSampler final : public LightSampler {
     u = std::min((u - p_infinite_) / (1 - p_infinite_), kOneMinusEpsilon);
     std::vector<double> imp(bounded_.size());
     double total = 0;
-    for (size_t i = 0; i < bounded_.size(); ++i) total += imp[i] = bounds_[i].importance(ctx.p, ctx.n);
+    for (size_t i = 0; i < bounded_.size(); ++i)
+      total += imp[i] = bounds_[i].importance(ctx.p, ctx.n);
     if (total <= 0) return std::nullopt;
     double c = 0;
     for (size_t i = 0; i < bounded_.size(); ++i) {
@@ -444,9 +442,10 @@ std::unique_ptr<LightSampler> LightSampler::create(const std::string& name,
   if (name == "power") return std::make_unique<PowerLightSampler>(lights);
   if (name == "uniform") return std::make_unique<UniformLightSampler>(lights);
   if (name == "exhaustive") return std::make_unique<ExhaustiveLightSampler>(lights);
-  throw Error(fmt::format("unknown light sampler \"{}\" (expected bvh, power, uniform or "
-                          "exhaustive)",
-                          name));
+  throw Error(
+      fmt::format("unknown light sampler \"{}\" (expected bvh, power, uniform or "
+                  "exhaustive)",
+                  name));
 }
 
 }  // namespace lensim::render

@@ -526,9 +526,9 @@ SpectrumPtr interleaved(std::span<const double> d) {
 }  // namespace
 
 std::vector<std::string> namedSpectrumNames() {
-  return {"stdillum-D65", "metal-Cu-eta", "metal-Cu-k",   "metal-Au-eta", "metal-Au-k",
-          "metal-Ag-eta", "metal-Ag-k",   "metal-Al-eta", "metal-Al-k",
-          "metal-MgO-eta", "metal-MgO-k", "metal-TiO2-eta", "metal-TiO2-k"};
+  return {"stdillum-D65", "metal-Cu-eta",   "metal-Cu-k",   "metal-Au-eta", "metal-Au-k",
+          "metal-Ag-eta", "metal-Ag-k",     "metal-Al-eta", "metal-Al-k",   "metal-MgO-eta",
+          "metal-MgO-k",  "metal-TiO2-eta", "metal-TiO2-k"};
 }
 
 SpectrumPtr namedSpectrum(std::string_view name) {

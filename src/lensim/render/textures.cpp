@@ -325,8 +325,9 @@ double Textures::evalFloat(const scene::Input& in, const TextureEvalContext& ctx
     return insidePolkaDot(impl_->mapping(t, ctx)) ? evalFloat(t.tex1, ctx) : evalFloat(t.tex2, ctx);
   if (t.type == "bilerp") {
     const Vec2 st = impl_->mapping(t, ctx);
-    return (1 - st.x) * (1 - st.y) * evalFloat(t.v00, ctx) + st.x * (1 - st.y) * evalFloat(t.v10, ctx) +
-           (1 - st.x) * st.y * evalFloat(t.v01, ctx) + st.x * st.y * evalFloat(t.v11, ctx);
+    return (1 - st.x) * (1 - st.y) * evalFloat(t.v00, ctx) +
+           st.x * (1 - st.y) * evalFloat(t.v10, ctx) + (1 - st.x) * st.y * evalFloat(t.v01, ctx) +
+           st.x * st.y * evalFloat(t.v11, ctx);
   }
   return 0.5;
 }

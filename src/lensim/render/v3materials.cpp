@@ -111,11 +111,9 @@ SampledSpectrum lobeF(const V3Lobe& l, const Vec3& wo, const Vec3& wi, Transport
       if (wh.x == 0 && wh.y == 0 && wh.z == 0) return {};
       wh = normalize(wh);
       const TrowbridgeReitz d(l.alpha_x, l.alpha_y);
-      const double denom =
-          4 * std::abs(dot(wi, wh)) * std::max(absCosTheta(wi), absCosTheta(wo));
+      const double denom = 4 * std::abs(dot(wi, wh)) * std::max(absCosTheta(wi), absCosTheta(wo));
       if (denom == 0) return diffuse;
-      const SampledSpectrum schlick =
-          rs + (SampledSpectrum(1.0) - rs) * pow5(1 - dot(wi, wh));
+      const SampledSpectrum schlick = rs + (SampledSpectrum(1.0) - rs) * pow5(1 - dot(wi, wh));
       return diffuse + schlick * (d.D(wh) / denom);
     }
     default:
@@ -151,7 +149,8 @@ double lobePdf(const V3Lobe& l, const Vec3& wo, const Vec3& wi) {
       if (!sameHemisphere(wo, wi)) return 0;
       const Vec3 wh = normalize(wo + wi);
       const double c = dot(wo, wh);
-      const double spec = c > 0 ? pdfWh(TrowbridgeReitz(l.alpha_x, l.alpha_y), wo, wh) / (4 * c) : 0;
+      const double spec =
+          c > 0 ? pdfWh(TrowbridgeReitz(l.alpha_x, l.alpha_y), wo, wh) / (4 * c) : 0;
       return 0.5 * (absCosTheta(wi) * kInvPi + spec);
     }
     default:
@@ -225,9 +224,8 @@ std::optional<BSDFSample> lobeSample(const V3Lobe& l, const Vec3& wo, double uc,
       if (!refractV3(wo, Vec3(0, 0, entering ? 1 : -1), ei / et, s.wi)) return std::nullopt;
       // SpecularTransmission evaluates its Fresnel at the transmitted direction, FresnelSpecular
       // at wo; both are the interface's transmittance 1 - F.
-      const double Ft = l.kind == K::FresnelSpecular
-                            ? F
-                            : frDielectricV3(cosTheta(s.wi), l.eta_i, l.eta_t);
+      const double Ft =
+          l.kind == K::FresnelSpecular ? F : frDielectricV3(cosTheta(s.wi), l.eta_i, l.eta_t);
       SampledSpectrum ft = l.T * (1 - Ft);
       if (mode == TransportMode::Radiance) ft *= (ei * ei) / (et * et);
       s.pdf = l.kind == K::FresnelSpecular ? 1 - F : 1;

@@ -47,7 +47,7 @@ struct V3Lobe {
   SampledSpectrum R{0.0}, T{0.0};  ///< reflection / transmission scale (FresnelBlend: Rd, Rs)
   double alpha_x = 0, alpha_y = 0;
   Fresnel fresnel = Fresnel::NoOp;
-  double eta_i = 1, eta_t = 1.5;         ///< dielectric Fresnel and refraction indices
+  double eta_i = 1, eta_t = 1.5;               ///< dielectric Fresnel and refraction indices
   SampledSpectrum cond_eta{1.0}, cond_k{0.0};  ///< conductor Fresnel
 
   BxDFFlags flags() const;

@@ -327,8 +327,8 @@ class Builder {
     if (!p) return;
     if (p->type == ParamType::Float) {
       if (p->numbers.size() != 1)
-        throw Error(p->loc, fmt::format("\"{}\": expected 1 value, got {}", p->name,
-                                        p->numbers.size()));
+        throw Error(p->loc,
+                    fmt::format("\"{}\": expected 1 value, got {}", p->name, p->numbers.size()));
       l.scale = p->numbers[0];
       return;
     }
@@ -341,8 +341,7 @@ class Builder {
       }
       if (l.emission.kind == SpectrumValue::Kind::Rgb && l.filename.empty()) {
         // pbrt-v3 multiplies RGB emission by the RGB scale channel by channel; so does this.
-        l.emission.rgb = {l.emission.rgb.x * c.x, l.emission.rgb.y * c.y,
-                          l.emission.rgb.z * c.z};
+        l.emission.rgb = {l.emission.rgb.x * c.x, l.emission.rgb.y * c.y, l.emission.rgb.z * c.z};
         return;
       }
       l.scale = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
@@ -1101,14 +1100,14 @@ class Builder {
       // spectrum texture; 3-D mapping by the inverse of the declaration's transform.
       t.type = cls;
       if ((cls == "marble") == f)
-        throw Error(d.loc, fmt::format("texture \"{}\": \"{}\" is a {} texture in pbrt", name,
-                                       cls, f ? "spectrum" : "float"));
+        throw Error(d.loc, fmt::format("texture \"{}\": \"{}\" is a {} texture in pbrt", name, cls,
+                                       f ? "spectrum" : "float"));
       if (cls != "windy") {
         t.octaves = ps.getInt({"octaves"}, 8);
         t.omega = ps.getFloat({"roughness"}, 0.5);
         if (t.octaves < 0 || t.octaves > 64)
-          throw Error(d.loc, fmt::format("texture \"{}\": octaves {} (expected 0 to 64)", name,
-                                         t.octaves));
+          throw Error(
+              d.loc, fmt::format("texture \"{}\": octaves {} (expected 0 to 64)", name, t.octaves));
       }
       if (cls == "marble") {
         t.scale = ps.getFloat({"scale"}, 1);

@@ -165,10 +165,10 @@ void ParamSet::markAllUsed() {
 
 void ParamSet::reportUnused(std::vector<Diagnostic>& out) const {
   for (const auto& [earlier, later] : shadowed_)
-    out.push_back({Severity::Warning, earlier->loc,
-                   fmt::format("\"{}\": given again as \"{} {}\" at {}; the later one is used",
-                               earlier->name, later->type_as_written, later->name,
-                               later->loc.str())});
+    out.push_back(
+        {Severity::Warning, earlier->loc,
+         fmt::format("\"{}\": given again as \"{} {}\" at {}; the later one is used", earlier->name,
+                     later->type_as_written, later->name, later->loc.str())});
   for (const Entry& e : entries_)
     if (!e.used && !e.is_default) {
       // Suggest the nearest name a getter asked for (a misspelling is at most 2 edits away).

@@ -211,7 +211,8 @@ std::optional<std::string> readSceneText(const std::string& path) {
 class TokenStream {
  public:
   void push(std::string text, const std::string& file) {
-    if (sources_.size() >= 64) throw Error(FileLoc{file, 1, 1}, "Include nested too deeply (a cycle?)");
+    if (sources_.size() >= 64)
+      throw Error(FileLoc{file, 1, 1}, "Include nested too deeply (a cycle?)");
     auto src = std::make_unique<Source>();
     src->text = std::move(text);
     src->tok = std::make_unique<Tokenizer>(src->text, file);
