@@ -57,6 +57,9 @@ TEST(ImageCompare, AgreeingImagesPassAndAShiftedBlockIsFound) {
   EXPECT_EQ(s.failing[0].bx, 5);
   EXPECT_EQ(s.failing[0].by, 2);
   EXPECT_NEAR(s.failing[0].z, 8.4, 3.0);
+  EXPECT_TRUE(render::verdict(r).pass);
+  EXPECT_FALSE(render::verdict(s).pass);
+  EXPECT_TRUE(render::verdict(s, {0.005, 0.05}).pass);  // 1 of 200 allowed
   // Without a second render there is no noise estimate, hence no z-test.
   o.second = nullptr;
   EXPECT_FALSE(render::compareImages(shifted, ref, o).has_noise);
@@ -78,16 +81,38 @@ TEST(ImageCompare, CommandLine) {
   io::writeImage(ref, noisy(1024, 1));
   io::writeImage(a, noisy(16, 3, 0.2));
   io::writeImage(b, noisy(16, 4));
+  // One shifted block: the family-wise z-test fails it, exit status 1.
   const auto r = test::runLensim("compare " + a + " " + ref + " --second " + b +
                                  " --spp 16 --reference-spp 1024 --json");
-  ASSERT_EQ(r.status, 0) << r.out;
+  ASSERT_EQ(r.status, 1) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["blocks"], 200);
   EXPECT_EQ(j["z_failures"], 1);
   EXPECT_EQ(j["failing_blocks"][0]["bx"], 5);
+  EXPECT_EQ(j["verdict"], "fail");
+  // Allowing 1% of the blocks (2 of 200) to fail passes it.
+  const auto tolerant = test::runLensim("compare " + a + " " + ref + " --second " + b +
+                                        " --spp 16 --reference-spp 1024 --max-fail-share 0.01");
+  EXPECT_EQ(tolerant.status, 0) << tolerant.out;
+  EXPECT_NE(tolerant.out.find("verdict: PASS (1 of 200 blocks beyond the z bound"),
+            std::string::npos)
+      << tolerant.out;
+  // An unshifted render of the same scene passes.
+  const std::string a2 = (dir / "a2.exr").string();
+  io::writeImage(a2, noisy(16, 3));
+  const auto pass = test::runLensim("compare " + a2 + " " + ref + " --second " + b +
+                                    " --spp 16 --reference-spp 1024");
+  EXPECT_EQ(pass.status, 0) << pass.out;
+  EXPECT_NE(pass.out.find("verdict: PASS (0 of 200"), std::string::npos) << pass.out;
+  // Without a second render: no z-test, the verdict is by --tolerance on the means.
   const auto text = test::runLensim("compare " + a + " " + ref);
-  EXPECT_EQ(text.status, 0);
   EXPECT_NE(text.out.find("no z-test"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("verdict: "), std::string::npos) << text.out;
+  const auto strict = test::runLensim("compare " + a + " " + ref + " --tolerance 0");
+  EXPECT_EQ(strict.status, 1) << strict.out;
+  EXPECT_NE(strict.out.find("verdict: FAIL (no noise estimate"), std::string::npos) << strict.out;
+  const auto loose = test::runLensim("compare " + a + " " + ref + " --tolerance 0.5");
+  EXPECT_EQ(loose.status, 0) << loose.out;
   const auto missing = test::runLensim("compare " + a + " " + (dir / "none.exr").string());
   EXPECT_EQ(missing.status, 1);
   EXPECT_NE(missing.out.find("none.exr"), std::string::npos) << missing.out;

@@ -38,10 +38,9 @@ TEST(PbrtReference, BoxPerspectiveBlockMeansMatchPbrtV4) {
   // each pixel's samples depend only on the pixel). The reference's own noise (1024 spp) adds
   // 2*kSpp/1024 of our variance.
   const int B = 20;
-  // Blocks that see the gold sphere (centre (-0.45, 0.3, 1.2), radius 0.3 in box-world.pbrt):
-  // lensim's gold optical constants come from different published tables than pbrt-v4's (see
-  // src/lensim/render/README.md), which changes the sphere's colour by several percent, so those
-  // blocks get a wider systematic allowance. The sphere is projected through the scene's camera.
+  // Blocks that see the gold sphere (centre (-0.45, 0.3, 1.2), radius 0.3 in box-world.pbrt),
+  // reported apart: lensim's metal-Au-* are pbrt-v4's own tables (spectrum_data.cpp), so they get
+  // the same bound as the rest. The sphere is projected through the scene's camera.
   const lensim::Vec3 c = s.camera.camera_from_world.applyPoint({-0.45, 0.3, 1.2});
   const double t = std::tan(s.camera.fov_deg * M_PI / 360);
   const double cx = (c.x / c.z / t + 1) / 2 * a.width, cy = (1 - c.y / c.z / t) / 2 * a.height;
@@ -51,7 +50,7 @@ TEST(PbrtReference, BoxPerspectiveBlockMeansMatchPbrtV4) {
     const double qy = std::clamp(cy, double(by * B), double((by + 1) * B));
     return std::hypot(qx - cx, qy - cy) < cr;
   };
-  double worst_z_other = 0, sum_rel_other = 0, worst_usage = 0;
+  double worst_z_other = 0, sum_rel_other = 0, worst_usage = 0, worst_usage_gold = 0;
   int n_other = 0;
   double worst_z = 0, sum_abs_rel = 0, max_abs_rel = 0;
   int n = 0, outliers = 0;
@@ -73,12 +72,13 @@ TEST(PbrtReference, BoxPerspectiveBlockMeansMatchPbrtV4) {
         const double sigma = std::sqrt(var_mean + var_ref);
         const double m = (ma + mb) / 2;
         const double z = std::abs(m - mr) / std::max(sigma, 1e-9);
-        // Bound: 5 sigma of the noise plus 2% for the deliberate differences (metal tables,
-        // sampler), far below any real error (a missing bounce changes blocks by >10%).
+        // Bound: 5 sigma of the noise plus 2% for the deliberate differences (sampler, light
+        // sampling), far below any real error (a missing bounce changes blocks by >10%).
         const bool gold = seesGold(bx, by);
-        const double bound = 5 * sigma + (gold ? 0.10 : 0.02) * mr + 1e-4;
+        const double bound = 5 * sigma + 0.02 * mr + 1e-4;
         const bool ok = std::abs(m - mr) <= bound;
         worst_usage = std::max(worst_usage, std::abs(m - mr) / bound);
+        if (gold) worst_usage_gold = std::max(worst_usage_gold, std::abs(m - mr) / bound);
         if (!ok) {
           ++outliers;
           std::printf("block (%d,%d) channel %d: lensim %.5f pbrt %.5f sigma %.5f z %.1f\n", bx, by,
@@ -108,7 +108,8 @@ TEST(PbrtReference, BoxPerspectiveBlockMeansMatchPbrtV4) {
       n, sum_abs_rel / n, max_abs_rel, worst_z, lum_l / lum_r, outliers);
   std::printf("  without the %d gold-sphere blocks x channels: mean |rel diff| %.4f, max z %.2f\n",
               n - n_other, sum_rel_other / n_other, worst_z_other);
-  std::printf("  largest |difference| / bound: %.2f\n", worst_usage);
+  std::printf("  largest |difference| / bound: %.2f (gold-sphere blocks: %.2f)\n", worst_usage,
+              worst_usage_gold);
   RecordProperty("mean_abs_rel_diff", std::to_string(sum_abs_rel / n));
   EXPECT_EQ(outliers, 0);
   EXPECT_NEAR(lum_l / lum_r, 1.0, 0.01);

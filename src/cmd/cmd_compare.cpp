@@ -55,6 +55,7 @@ void registerCompareCommand(CLI::App& app, Action& action) {
   struct Options {
     std::string image, reference, second, reference_low;
     render::CompareOptions c;
+    render::VerdictOptions v;
     bool json = false, exact = false;
     int list = 10;
   };
@@ -82,10 +83,21 @@ void registerCompareCommand(CLI::App& app, Action& action) {
       ->check(CLI::Range(1e-12, 0.5));
   cmd->add_option("--list", o->list, "Blocks beyond the bound to list (default 10)")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--max-fail-share", o->v.max_fail_share,
+                  "With --second: share of blocks allowed beyond the z bound and still pass "
+                  "(default 0)")
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--tolerance", o->v.tolerance,
+                  "Without --second: largest |mean ratio - 1| and mean |block difference| "
+                  "(relative) that pass (default 0.05)")
+      ->check(CLI::Range(0.0, 1e9));
   cmd->add_flag("--json", o->json, "Print one JSON object");
   cmd->add_flag("--exact", o->exact,
                 "Check that the R, G, B values are equal bit for bit (e.g. a merged distributed "
                 "render and a single render); exit status 1 when they are not");
+  cmd->footer(
+      "Exit status: 0 if the render passes (a line \"verdict: PASS ...\"), 1 if it fails "
+      "(\"verdict: FAIL ...\") or on an error (a message and no verdict).");
   cmd->callback([o, &action]() {
     action = [o]() -> int {
       const io::Image image = io::readImage(o->image);
@@ -97,10 +109,12 @@ void registerCompareCommand(CLI::App& app, Action& action) {
       if (!o->reference_low.empty())
         c.reference_low = &low.emplace(io::readImage(o->reference_low));
       const render::CompareResult r = render::compareImages(image, reference, c);
+      const render::Verdict v = render::verdict(r, o->v);
       if (!o->json) {
         const std::string text = render::formatCompare(r, o->list);
         std::fwrite(text.data(), 1, text.size(), stdout);
-        return 0;
+        std::printf("verdict: %s (%s)\n", v.pass ? "PASS" : "FAIL", v.reason.c_str());
+        return v.pass ? 0 : 1;
       }
       nlohmann::json j;
       j["blocks"] = r.blocks;
@@ -121,8 +135,10 @@ void registerCompareCommand(CLI::App& app, Action& action) {
                        {"z", b.z}});
         j["failing_blocks"] = f;
       }
+      j["verdict"] = v.pass ? "pass" : "fail";
+      j["verdict_reason"] = v.reason;
       std::printf("%s\n", j.dump(2).c_str());
-      return 0;
+      return v.pass ? 0 : 1;
     };
   });
 }

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -101,7 +102,10 @@ void registerRenderCommand(CLI::App& app, Action& action) {
                                  "needs --checkpoint FILE (or --resume FILE)");
     action = [o]() -> int {
       const bool quiet = o->quiet || lensim::quiet();
+      const auto t_load = std::chrono::steady_clock::now();
       scene::Scene s = scene::loadScene(o->scene);
+      const double load_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
       logDiagnostics(s.diagnostics);
       if (o->autofocus) {
         render::SceneAutofocusOptions af;
@@ -173,6 +177,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
           render::writePart(checkpoint, p);
         };
       }
+      ro.scene_load_s = load_s;
       // The film's filename is relative to the directory lensim runs in, as in pbrt.
       std::vector<std::string> outs = o->outfiles;
       if (outs.empty()) outs.push_back(s.film.filename);

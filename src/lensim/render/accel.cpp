@@ -350,6 +350,7 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   h.shape = r.shape;
   h.prim = static_cast<int>(rh.hit.primID);
   Vec3 p, ng, ns, dpdu;
+  Vec3 dpdv{0, 0, 0}, dndu{0, 0, 0}, dndv{0, 0, 0};
   Vec2 uv;
   if (r.indices.empty()) {
     // Quadric: refine t in double precision from the object-space ray.
@@ -363,6 +364,9 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
     if (r.flip) ng = -ng;
     ns = ng;
     dpdu = r.space_from_object.applyVector(g.dpdu);
+    dpdv = r.space_from_object.applyVector(g.dpdv);
+    dndu = r.space_from_object.applyNormal(g.dndu);
+    dndv = r.space_from_object.applyNormal(g.dndv);
     uv = g.uv;
   } else if (r.vertices_per_face == 3) {
     const int* f = &r.indices[3 * static_cast<size_t>(h.prim)];
@@ -376,7 +380,18 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
     uv = uv0 * b0 + uv1 * b1 + uv2 * b2;
     const Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
     const double det = duv02.x * duv12.y - duv02.y * duv12.x;
-    if (std::abs(det) > 1e-12) dpdu = ((p0 - p2) * duv12.y - (p1 - p2) * duv02.y) / det;
+    if (std::abs(det) > 1e-12) {
+      dpdu = ((p0 - p2) * duv12.y - (p1 - p2) * duv02.y) / det;
+      // pbrt-v4 Triangle::InteractionFromIntersection: dp/dv, and dn/du, dn/dv from the
+      // vertex normals.
+      dpdv = ((p1 - p2) * duv02.x - (p0 - p2) * duv12.x) / det;
+      if (!r.n.empty()) {
+        const Vec3 dn1 = r.n[size_t(f[0])] - r.n[size_t(f[2])];
+        const Vec3 dn2 = r.n[size_t(f[1])] - r.n[size_t(f[2])];
+        dndu = (dn1 * duv12.y - dn2 * duv02.y) / det;
+        dndv = (dn2 * duv02.x - dn1 * duv12.x) / det;
+      }
+    }
     if (!r.n.empty()) {
       Vec3 sn = r.n[size_t(f[0])] * b0 + r.n[size_t(f[1])] * b1 + r.n[size_t(f[2])] * b2;
       ns = length(sn) > 0 ? normalize(sn) : ng;
@@ -394,7 +409,7 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
     // that surface).
     p = o + d * h.t;
     dpdu = (p10 - p00) * (1 - v) + (p11 - p01) * v;
-    const Vec3 dpdv = (p01 - p00) * (1 - u) + (p11 - p10) * u;
+    dpdv = (p01 - p00) * (1 - u) + (p11 - p10) * u;
     Vec3 n = cross(dpdu, dpdv);
     ng = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
     // The surface Embree intersects is one of the patch's two triangles: its normal (oriented as
@@ -422,12 +437,19 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
     ng = normalize(world_from_space->applyNormal(ng));
     ns = normalize(world_from_space->applyNormal(ns));
     dpdu = world_from_space->applyVector(dpdu);
+    dpdv = world_from_space->applyVector(dpdv);
+    dndu = world_from_space->applyNormal(dndu);
+    dndv = world_from_space->applyNormal(dndv);
   }
   if (length(dpdu) == 0 || !std::isfinite(dpdu.x)) dpdu = perpendicular(ns);
+  if (length(dpdv) == 0 || !std::isfinite(dpdv.x)) dpdv = cross(ns, dpdu);
   h.p = p;
   h.ng = ng;
   h.ns = ns;
   h.dpdu = dpdu;
+  h.dpdv = dpdv;
+  h.dndu = dndu;
+  h.dndv = dndv;
   h.uv = uv;
   return h;
 }

@@ -26,6 +26,8 @@ struct SurfaceHit {
   Vec3 ng;            ///< unit geometric normal, pbrt's orientation (ReverseOrientation applied)
   Vec3 ns;            ///< unit shading normal, on the same side as ng
   Vec3 dpdu;          ///< world dp/du
+  Vec3 dpdv;          ///< world dp/dv (bump mapping)
+  Vec3 dndu, dndv;    ///< world dn/du, dn/dv of the (shading) normal (bump mapping)
   Vec2 uv;            ///< surface (u, v)
   int shape = -1;     ///< index into Scene::shapes
   int prim = 0;       ///< face index within a mesh (0 for quadrics)

@@ -140,4 +140,22 @@ std::string formatCompare(const CompareResult& r, int max_listed) {
   return s;
 }
 
+Verdict verdict(const CompareResult& r, const VerdictOptions& o) {
+  Verdict v;
+  if (r.has_noise) {
+    const int allowed = int(std::floor(o.max_fail_share * r.blocks + 1e-9));
+    v.pass = r.z_failures <= allowed;
+    v.reason = fmt::format("{} of {} blocks beyond the z bound {:.2f} (allowed {})", r.z_failures,
+                           r.blocks, r.z_bound, allowed);
+  } else {
+    const double dm = std::abs(r.mean_ratio - 1);
+    v.pass = dm <= o.tolerance && r.mad_rel <= o.tolerance;
+    v.reason = fmt::format(
+        "no noise estimate: |mean ratio - 1| {:.4f} and mean |block difference| {:.4f} against "
+        "the tolerance {:g}",
+        dm, r.mad_rel, o.tolerance);
+  }
+  return v;
+}
+
 }  // namespace lensim::render

@@ -60,4 +60,22 @@ CompareResult compareImages(const io::Image& test, const io::Image& reference,
 /// The result as readable lines (as `lensim compare` prints it).
 std::string formatCompare(const CompareResult& r, int max_listed = 10);
 
+/// What a comparison must show to pass (`lensim compare` exits 0 on pass, 1 on fail).
+struct VerdictOptions {
+  /// With a noise estimate: the share of blocks allowed beyond the z bound. 0 (the default) is
+  /// the family-wise test itself: a render equal to the reference in expectation fails with
+  /// probability at most the family-wise error rate.
+  double max_fail_share = 0;
+  /// Without a noise estimate (no second render): pass iff |mean ratio - 1| and the mean
+  /// |block difference| (relative to the image mean) are both at most this.
+  double tolerance = 0.05;
+};
+
+struct Verdict {
+  bool pass = false;
+  std::string reason;  ///< one line: what was tested and the figures
+};
+
+Verdict verdict(const CompareResult& r, const VerdictOptions& options = {});
+
 }  // namespace lensim::render

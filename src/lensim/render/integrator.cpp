@@ -102,6 +102,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
   double eta_scale = 1;
   double prev_pdf = 0;  // BSDF pdf of the last sampled direction (solid angle)
   Vec3 prev_p;
+  Vec3 prev_ns;  // shading normal there (the light sampler's context)
   int depth = 0, interfaces = 0;
   bool any_non_specular = false;
   Ray ray{o, d, INFINITY};
@@ -114,7 +115,8 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
         if (depth == 0 || specular_bounce) {
           L += beta * Le;
         } else {
-          const double pl = sc.lights->pmf(light) * light->pdfLi(prev_p, ray.d, nullptr);
+          const double pl =
+              sc.lights->pmf({prev_p, prev_ns}, light) * light->pdfLi(prev_p, ray.d, nullptr);
           L += beta * Le * powerHeuristic(1, prev_pdf, 1, pl);
         }
       }
@@ -129,7 +131,8 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
         if (depth == 0 || specular_bounce) {
           L += beta * Le;
         } else {
-          const double pl = sc.lights->pmf(area) * area->pdfLi(prev_p, ray.d, &h);
+          const double pl =
+              sc.lights->pmf({prev_p, prev_ns}, area) * area->pdfLi(prev_p, ray.d, &h);
           L += beta * Le * powerHeuristic(1, prev_pdf, 1, pl);
         }
       }
@@ -145,12 +148,14 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
     if (depth++ == sc.max_depth) break;
     auto bxdf = sc.materials->bxdf(material, tctx, lambda, sc.regularize && any_non_specular);
     Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
+    if (sc.materials->hasBump(material))
+      ns = sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
     const BSDF bsdf(ns, h.dpdu, bxdf);
     // Next-event estimation.
     const double u_light = sampler.get1D();
     const Vec2 u_light2 = sampler.get2D();
     if (isNonSpecular(bsdf.flags())) {
-      if (auto choice = sc.lights->sample(u_light)) {
+      if (auto choice = sc.lights->sample({h.p, ns}, u_light)) {
         if (auto ls = choice->light->sampleLi(h.p, u_light2, lambda)) {
           if (ls->pdf > 0 && !ls->L.isBlack()) {
             const SampledSpectrum f = bsdf.f(wo, ls->wi) * std::abs(dot(ls->wi, ns));
@@ -178,6 +183,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
     any_non_specular = any_non_specular || !specular_bounce;
     if (bs->isTransmission()) eta_scale *= bs->eta * bs->eta;
     prev_p = h.p;
+    prev_ns = ns;
     ray = Ray{offsetOrigin(h.p + bs->wi * skip, h.ng, bs->wi), bs->wi, INFINITY};
     if (beta.isBlack()) break;
     const SampledSpectrum rr_beta = beta * eta_scale;

@@ -82,6 +82,8 @@ CoatedBxDF::CoatedBxDF(DielectricBxDF top, std::shared_ptr<const BxDF> bottom,
 // the two differ by the refraction Jacobian, which leaves the MIS weights not summing to one and
 // biased f() by several percent for rough coatings (see layered_test).
 double CoatedBxDF::exitStrategyPdf(const Vec3& wi, const Vec3& w, TransportMode mode) const {
+  // pbrt-v4 (LayeredBxDF::f, src/pbrt/bxdfs.h): exitInterface.PDF(-w, wi, mode, Transmission).
+  if (params_.pbrt_v4_exit_weight) return top_.pdf(-w, wi, mode, ReflTrans::Transmission);
   return top_.pdf(wi, -w, adjoint(mode), ReflTrans::Transmission);
 }
 

@@ -59,6 +59,18 @@ std::optional<LightLiSample> towardPoint(const Vec3& p, const Vec3& pl, double& 
   return s;
 }
 
+/// Light bounds of a point emitting in every direction (pbrt-v4: cos theta_o = cos pi,
+/// cos theta_e = cos pi/2).
+LightBounds pointBounds(const Vec3& p, double phi) {
+  LightBounds b;
+  b.bounds.extend(p);
+  b.phi = phi;
+  b.w = {0, 0, 1};
+  b.cos_theta_o = -1;
+  b.cos_theta_e = 0;
+  return b;
+}
+
 double smoothStep(double a, double b, double x) {
   if (a == b) return x < a ? 0 : 1;
   const double t = std::clamp((x - a) / (b - a), 0.0, 1.0);
@@ -77,6 +89,8 @@ class PointLight final : public Light {
     return s;
   }
   double power() const override { return 4 * M_PI * scale_ * luminanceOf(*I_); }
+  // pbrt-v4's PointLight::Bounds: the point, emitting in all directions.
+  std::optional<LightBounds> bounds() const override { return pointBounds(p_, power()); }
 
  private:
   Vec3 p_;
@@ -106,6 +120,16 @@ class SpotLight final : public Light {
   }
   double power() const override {
     return scale_ * luminanceOf(*I_) * 2 * M_PI * ((1 - cos_start_) + (cos_start_ - cos_end_) / 2);
+  }
+  // pbrt-v4's SpotLight::Bounds: the cone of the full-intensity region widened by the falloff,
+  // with phi = 4 pi I scale as pbrt-v4 takes it.
+  std::optional<LightBounds> bounds() const override {
+    LightBounds b = pointBounds(p_, 4 * M_PI * scale_ * luminanceOf(*I_));
+    b.w = axis_;
+    b.cos_theta_o = cos_start_;
+    b.cos_theta_e = std::cos(std::acos(std::clamp(cos_end_, -1.0, 1.0)) -
+                             std::acos(std::clamp(cos_start_, -1.0, 1.0)));
+    return b;
   }
 
  private:
@@ -161,6 +185,7 @@ class GoniometricLight final : public Light {
     return s;
   }
   double power() const override { return 4 * M_PI * scale_ * luminanceOf(*I_) * mean_; }
+  std::optional<LightBounds> bounds() const override { return pointBounds(p_, power()); }
   /// The image factor for world direction w leaving the light.
   double factor(const Vec3& w) const {
     if (values_.empty()) return 1;
@@ -253,6 +278,8 @@ class ProjectionLight final : public Light {
         (bounds_[1] - bounds_[0]) * (bounds_[3] - bounds_[2]) * tan_half_ * tan_half_;
     return scale_ * mean_lum_ * area;
   }
+  // Conservatively all directions (pbrt-v4 bounds the frustum; this only costs noise).
+  std::optional<LightBounds> bounds() const override { return pointBounds(p_, power()); }
 
  private:
   Transform light_from_world_;
@@ -549,6 +576,20 @@ class FaceLight final : public AreaLightBase {
   double pdfLi(const Vec3& p, const Vec3& wi, const SurfaceHit* hit) const override {
     return hit ? solidAnglePdf(p, wi, *hit) : 0;
   }
+  // pbrt-v4's DiffuseAreaLight::Bounds with a triangle's normal bounds: the face's box, its
+  // normal (a cone holding both triangles of a non-planar patch), emission to 90 degrees.
+  std::optional<LightBounds> bounds() const override {
+    LightBounds b;
+    for (const auto& t : tris_)
+      for (const Vec3& v : t) b.bounds.extend(v);
+    b.phi = power();
+    b.w = n_;
+    b.cos_theta_o = 1;
+    for (const Vec3& n : normals_) b.cos_theta_o = std::min(b.cos_theta_o, dot(n, n_));
+    b.cos_theta_e = 0;
+    b.two_sided = two_sided_;
+    return b;
+  }
 
  private:
   std::vector<std::array<Vec3, 3>> tris_;
@@ -612,6 +653,26 @@ class QuadricLight final : public AreaLightBase {
     if (shape_->flipNormals()) nl = -nl;
     return finish(p, pl, nl, g->uv, 1 / area_, lambda);
   }
+  void setWorldBounds(const Bounds3& b) { world_bounds_ = b; }
+  // pbrt-v4's DiffuseAreaLight::Bounds with the shape's normal bounds: a disk's normal, every
+  // direction for curved quadrics.
+  std::optional<LightBounds> bounds() const override {
+    LightBounds b;
+    b.bounds = world_bounds_;
+    b.phi = power();
+    b.cos_theta_o = -1;
+    b.cos_theta_e = 0;
+    b.two_sided = two_sided_;
+    if (shape_->type == scene::ShapeType::Disk) {
+      if (auto g = sampleQuadricArea(*shape_, {0.5, 0.5})) {
+        Vec3 nl = normalize(shape_->transform.applyNormal(g->n));
+        if (shape_->flipNormals()) nl = -nl;
+        b.w = nl;
+        b.cos_theta_o = 1;
+      }
+    }
+    return b;
+  }
   double pdfLi(const Vec3& p, const Vec3& wi, const SurfaceHit* hit) const override {
     if (full_sphere_) {
       const Vec3 dc = center_ - p;
@@ -629,6 +690,7 @@ class QuadricLight final : public AreaLightBase {
   double s_, area_ = 0, radius_ = 0;
   bool full_sphere_ = false;
   Vec3 center_;
+  Bounds3 world_bounds_;
 };
 
 }  // namespace
@@ -773,37 +835,17 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
         scale *= *l.power / (k_e * sides * area * M_PI);
       auto light = std::make_unique<QuadricLight>(s, spec, scale, l.two_sided);
       light->setImage(image);
+      light->setWorldBounds(s.transform.applyBounds(scene::objectBounds(scene, s)));
       lights_.push_back(std::move(light));
     }
   }
-  // Light choice as pbrt-v4's BVH light sampler splits it: each light without a position
-  // (infinite, distant) gets 1 / (their count + 1), the lights in the scene share the rest in
-  // proportion to their power. (Power alone would hand a sky, whose power grows with the scene's
-  // size, nearly every sample.)
-  pmf_.assign(lights_.size(), 0.0);
-  std::vector<size_t> bounded, unbounded;
+  std::vector<const Light*> all;
   for (size_t i = 0; i < lights_.size(); ++i) {
-    const bool far = lights_[i]->isInfinite() || dynamic_cast<DistantLight*>(lights_[i].get());
-    (far ? unbounded : bounded).push_back(i);
+    lights_[i]->index = int(i);
+    all.push_back(lights_[i].get());
   }
-  const double p_unbounded =
-      unbounded.empty()
-          ? 0
-          : double(unbounded.size()) / double(unbounded.size() + (bounded.empty() ? 0 : 1));
-  for (size_t i : unbounded) pmf_[i] = p_unbounded / double(unbounded.size());
-  double total = 0;
-  for (size_t i : bounded) {
-    double p = std::max(0.0, lights_[i]->power());
-    if (!std::isfinite(p)) p = 0;
-    pmf_[i] = p;
-    total += p;
-  }
-  for (size_t i : bounded)
-    pmf_[i] = (1 - p_unbounded) * (total > 0 ? pmf_[i] / total : 1.0 / double(bounded.size()));
-  cdf_.resize(lights_.size());
-  double c = 0;
-  for (size_t i = 0; i < lights_.size(); ++i) cdf_[i] = (c += pmf_[i]);
-  for (size_t i = 0; i < lights_.size(); ++i) index_of_[lights_[i].get()] = i;
+  sampler_name_ = scene.integrator.light_sampler;
+  sampler_ = LightSampler::create(sampler_name_, all);
 }
 
 LightSet::~LightSet() = default;
@@ -817,17 +859,14 @@ const Light* LightSet::areaLight(int shape, int prim) const {
   return i < lights_.size() ? lights_[i].get() : nullptr;
 }
 
-std::optional<LightSet::Choice> LightSet::sample(double u) const {
-  if (lights_.empty()) return std::nullopt;
-  size_t i = size_t(std::upper_bound(cdf_.begin(), cdf_.end(), u * cdf_.back()) - cdf_.begin());
-  i = std::min(i, lights_.size() - 1);
-  while (pmf_[i] == 0 && i > 0) --i;
-  return Choice{lights_[i].get(), pmf_[i]};
+std::optional<LightSet::Choice> LightSet::sample(const LightSampleContext& ctx, double u) const {
+  auto s = sampler_->sample(ctx, u);
+  if (!s || s->pmf <= 0) return std::nullopt;
+  return Choice{s->light, s->pmf};
 }
 
-double LightSet::pmf(const Light* light) const {
-  auto it = index_of_.find(light);
-  return it == index_of_.end() ? 0 : pmf_[it->second];
+double LightSet::pmf(const LightSampleContext& ctx, const Light* light) const {
+  return sampler_->pmf(ctx, light);
 }
 
 }  // namespace lensim::render

@@ -11,10 +11,12 @@
 
 #include <memory>
 #include <optional>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
 #include "lensim/render/accel.h"
+#include "lensim/render/lightsampler.h"
 #include "lensim/render/sampling.h"
 #include "lensim/render/spectrum.h"
 
@@ -38,6 +40,9 @@ struct LightLiSample {
 class Light {
  public:
   virtual ~Light() = default;
+  /// Position in the list given to the light sampler (set by LightSet; -1 outside one), so that
+  /// samplers find a light's data without a hash lookup.
+  int index = -1;
   /// Point and directional lights (no surface to hit).
   virtual bool isDelta() const { return false; }
   virtual bool isInfinite() const { return false; }
@@ -63,10 +68,13 @@ class Light {
   }
   /// Emitted power (luminance-weighted), for choosing lights in proportion to it.
   virtual double power() const = 0;
+  /// Where the light is and where it emits, for the BVH light sampler (pbrt-v4's
+  /// Light::Bounds()); nullopt for lights without a position (infinite, distant).
+  virtual std::optional<LightBounds> bounds() const { return std::nullopt; }
 };
 
-/// All lights of a scene and the light choice: lights without a position (infinite, distant)
-/// 1 / (their count + 1) each, the others the rest in proportion to their power.
+/// All lights of a scene and the light choice for next-event estimation: the scene's
+/// integrator "lightsampler" (bvh, the default; power; uniform; exhaustive), see lightsampler.h.
 class LightSet {
  public:
   LightSet(const scene::Scene& scene, const Accel& accel, const Textures& textures);
@@ -77,22 +85,24 @@ class LightSet {
   const std::vector<const Light*>& infinite() const { return infinite_; }
   /// The area light of a shape's face, or nullptr.
   const Light* areaLight(int shape, int prim) const;
-  /// Chooses a light (see the class comment); nullopt without lights.
+  /// Chooses a light for the shading point ctx (see the class comment); nullopt if none can
+  /// contribute there.
   struct Choice {
     const Light* light;
     double pmf;
   };
-  std::optional<Choice> sample(double u) const;
-  /// Probability that sample() chooses `light`.
-  double pmf(const Light* light) const;
+  std::optional<Choice> sample(const LightSampleContext& ctx, double u) const;
+  /// Probability that sample(ctx, .) chooses `light`.
+  double pmf(const LightSampleContext& ctx, const Light* light) const;
+  /// The light sampler's name.
+  const std::string& samplerName() const { return sampler_name_; }
 
  private:
   std::vector<std::unique_ptr<Light>> lights_;
   std::vector<const Light*> infinite_;
   std::vector<int> shape_first_light_;  ///< per shape: index of its first light, or -1
-  std::vector<double> cdf_;
-  std::vector<double> pmf_;
-  std::unordered_map<const Light*, size_t> index_of_;
+  std::unique_ptr<LightSampler> sampler_;
+  std::string sampler_name_;
 };
 
 }  // namespace lensim::render

@@ -16,6 +16,7 @@
 #include "lensim/io/image.h"
 #include "lensim/render/layered.h"
 #include "lensim/render/sampling.h"
+#include "lensim/render/v3materials.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 
@@ -110,6 +111,34 @@ Vec3 Materials::shadingNormal(int material, const TextureEvalContext& ctx, const
   return length(n) > 0 ? normalize(n) : ns;
 }
 
+bool Materials::hasBump(int material) const {
+  if (material < 0) return false;
+  const scene::Material& m = scene_->materials[size_t(material)];
+  return m.displacement.has_value() && !normal_maps_[size_t(material)];
+}
+
+Vec3 Materials::bumpedNormal(int material, const TextureEvalContext& ctx, const Vec3& ns,
+                             const Vec3& dpdu, const Vec3& dpdv, const Vec3& dndu,
+                             const Vec3& dndv) const {
+  const scene::Material& m = scene_->materials[size_t(material)];
+  const scene::Input& disp = *m.displacement;
+  const double du = 0.0005, dv = 0.0005;
+  TextureEvalContext shifted = ctx;
+  shifted.p = ctx.p + dpdu * du;
+  shifted.uv = ctx.uv + Vec2(du, 0);
+  const double u_displace = textures_->evalFloat(disp, shifted);
+  shifted.p = ctx.p + dpdv * dv;
+  shifted.uv = ctx.uv + Vec2(0, dv);
+  const double v_displace = textures_->evalFloat(disp, shifted);
+  const double displace = textures_->evalFloat(disp, ctx);
+  const Vec3 bu = dpdu + ns * ((u_displace - displace) / du) + dndu * displace;
+  const Vec3 bv = dpdv + ns * ((v_displace - displace) / dv) + dndv * displace;
+  Vec3 n = cross(bu, bv);
+  if (!(length(n) > 0) || !std::isfinite(n.x)) return ns;
+  n = normalize(n);
+  return dot(n, ns) < 0 ? -n : n;
+}
+
 bool Materials::isInterface(int material) const {
   return material >= 0 && scene_->materials[size_t(material)].type == "interface";
 }
@@ -149,6 +178,7 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
     return std::pair{tx.evalSpectrum(eta_in, ctx, lambda, SpectrumType::Unbounded),
                      tx.evalSpectrum(k_in, ctx, lambda, SpectrumType::Unbounded)};
   };
+  if (isV3Material(m.type)) return makeV3BxDF(m, tx, ctx, lambda, regularize);
   if (m.type == "measured") {
     return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
   }

@@ -1,7 +1,6 @@
 // Materials: the BSDF at a surface point from the scene's material description (pbrt-v4
-// materials; the builder has already mapped pbrt-v1–v3 names: matte -> diffuse, plastic /
-// substrate / uber -> coateddiffuse, metal -> conductor, mirror -> conductor with a reflectance,
-// glass -> dielectric).
+// materials, matte mapped to diffuse by the builder; pbrt-v3's plastic, substrate, uber,
+// translucent, glass, metal and mirror as pbrt-v3 defines them, in v3materials.h).
 #pragma once
 
 #include <memory>
@@ -28,6 +27,14 @@ class Materials {
   /// the frame of dp/du and the shading normal, read linearly); ns itself without a map.
   Vec3 shadingNormal(int material, const TextureEvalContext& ctx, const Vec3& ns,
                      const Vec3& dpdu) const;
+  /// Whether the material has a bump map ("displacement" without a normal map, which wins).
+  bool hasBump(int material) const;
+  /// The shading normal after pbrt-v4's BumpMap (src/pbrt/materials.h): the displacement d is
+  /// evaluated at the point and at points moved by du = dv = 0.0005 along dp/du and dp/dv (pbrt's
+  /// step without ray differentials); dp/du' = dp/du + (d(u + du) - d) / du n + d dn/du, likewise
+  /// for v, and the normal is their cross product on the side of ns.
+  Vec3 bumpedNormal(int material, const TextureEvalContext& ctx, const Vec3& ns, const Vec3& dpdu,
+                    const Vec3& dpdv, const Vec3& dndu, const Vec3& dndv) const;
   /// Whether the material only marks a boundary (pbrt's "interface" / ""): rays pass through.
   bool isInterface(int material) const;
   /// The BxDF of `material` at ctx. May terminate secondary wavelengths (dispersive eta). With

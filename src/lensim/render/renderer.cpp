@@ -189,6 +189,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   st.camera = cam->describe();
   st.camera_startup_s = cam->startupSeconds();
   st.setup_s = std::chrono::duration<double>(Clock::now() - t_setup).count();
+  st.load_s = opt.scene_load_s;
 
   constexpr int kTile = RenderCheckpoint::kTileSize;
   const int tiles_x = (bounds.width() + kTile - 1) / kTile;
@@ -434,6 +435,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   result.image = film.image();
   auto& md = result.image.metadata;
   md["lensim:spp"] = std::to_string(spp);
+  md["lensim:setup_seconds"] = fmt::format("{:.3f}", st.load_s + st.setup_s);
   md["lensim:camera"] = st.camera;
   md["lensim:pixelbounds"] = fmt::format("{} {} {} {}", bounds.x0, bounds.x1, bounds.y0, bounds.y1);
   md["lensim:resolution"] = fmt::format("{} {}", x_res, y_res);
@@ -450,8 +452,12 @@ std::string formatStats(const RenderStats& s) {
   std::string out;
   out += fmt::format("render time          {:.3f} s ({} threads, {} spp){}\n", s.wall_s, s.threads,
                      s.spp, s.partial ? " -- interrupted, image partial" : "");
-  out += fmt::format("setup time           {:.3f} s (camera startup {:.3f} s)\n", s.setup_s,
-                     s.camera_startup_s);
+  // The whole set-up: reading and building the scene (parsing, PLY files, subdivision) and the
+  // render's own (BVH, lights, textures, camera).
+  out += fmt::format(
+      "setup time           {:.3f} s (scene load {:.3f} s; BVH, lights, textures {:.3f} s, "
+      "of which camera startup {:.3f} s)\n",
+      s.load_s + s.setup_s, s.load_s, s.setup_s, s.camera_startup_s);
   out += fmt::format("camera               {}\n", s.camera);
   out += fmt::format("camera samples       {} ({:.3g} samples/s)\n", s.camera_samples,
                      double(s.camera_samples) / w);

@@ -72,18 +72,22 @@ struct RenderOptions {
   /// Continue from this state: its finished tiles are taken as they are and not rendered again.
   /// Its bounds must be the bounds this render covers.
   const RenderCheckpoint* resume = nullptr;
+  /// Seconds the caller spent reading, parsing and building the scene (PLY files, subdivision)
+  /// before render(); reported in RenderStats::load_s and the total set-up time.
+  double scene_load_s = 0;
 };
 
 /// What happened during a render.
 struct RenderStats {
-  double wall_s = 0;               ///< rendering time (excluding scene and camera set-up)
-  double setup_s = 0;              ///< building the acceleration structure, lights, textures
-  double camera_startup_s = 0;     ///< the camera's startupSeconds()
-  uint64_t camera_samples = 0;     ///< camera samples taken
-  uint64_t camera_rays = 0;        ///< camera samples that produced a ray
-  uint64_t no_ray_samples = 0;     ///< camera samples without a ray (blocked by the lens)
-  uint64_t outside_samples = 0;    ///< of those, samples where no light reaches the film (outside
-                                   ///< the image circle: camera::Camera::reachesFilm)
+  double wall_s = 0;             ///< rendering time (excluding scene and camera set-up)
+  double setup_s = 0;            ///< building the acceleration structure, lights, textures
+  double load_s = 0;             ///< reading, parsing and building the scene before (RenderOptions)
+  double camera_startup_s = 0;   ///< the camera's startupSeconds()
+  uint64_t camera_samples = 0;   ///< camera samples taken
+  uint64_t camera_rays = 0;      ///< camera samples that produced a ray
+  uint64_t no_ray_samples = 0;   ///< camera samples without a ray (blocked by the lens)
+  uint64_t outside_samples = 0;  ///< of those, samples where no light reaches the film (outside
+                                 ///< the image circle: camera::Camera::reachesFilm)
   uint64_t nonfinite_samples = 0;  ///< NaN/inf radiance samples, discarded
   uint64_t rays = 0;               ///< all rays traced (intersection and shadow)
   int spp = 0;

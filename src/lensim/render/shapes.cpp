@@ -121,6 +121,12 @@ LocalGeometry quadricGeometry(const scene::Shape& s, Vec3 p) {
       g.uv = {phi / phimax, (theta - theta_min) / (theta_max - theta_min)};
       g.dpdu = {-phimax * p.y, phimax * p.x, 0};
       g.n = normalize(p);
+      // pbrt-v4 Sphere: dp/dv = (theta_max - theta_min) (z cos phi, z sin phi, -r sin theta);
+      // n = p / r, so dn/du = dp/du / r and dn/dv = dp/dv / r.
+      g.dpdv = Vec3{p.z * std::cos(phi), p.z * std::sin(phi), -s.radius * std::sin(theta)} *
+               (theta_max - theta_min);
+      g.dndu = g.dpdu / s.radius;
+      g.dndv = g.dpdv / s.radius;
       break;
     }
     case ShapeType::Cylinder: {
@@ -131,6 +137,8 @@ LocalGeometry quadricGeometry(const scene::Shape& s, Vec3 p) {
       g.uv = {phiOf(p.x, p.y) / phimax, (p.z - zmin) / (zmax - zmin)};
       g.dpdu = {-phimax * p.y, phimax * p.x, 0};
       g.n = normalize(Vec3{p.x, p.y, 0});
+      g.dpdv = {0, 0, zmax - zmin};
+      g.dndu = g.dpdu / s.radius;
       break;
     }
     case ShapeType::Disk: {
@@ -140,11 +148,16 @@ LocalGeometry quadricGeometry(const scene::Shape& s, Vec3 p) {
       g.dpdu = {-phimax * p.y, phimax * p.x, 0};
       if (r == 0) g.dpdu = {1, 0, 0};
       g.n = {0, 0, 1};
+      g.dpdv = r > 0 ? Vec3{p.x, p.y, 0} * ((s.inner_radius - s.radius) / r) : Vec3{0, 1, 0};
       break;
     }
     case ShapeType::Cone: {
       g.uv = {phiOf(p.x, p.y) / phimax, p.z / s.height};
       g.dpdu = {-phimax * p.y, phimax * p.x, 0};
+      {
+        const double one_v = 1 - p.z / s.height;
+        g.dpdv = one_v > 1e-12 ? Vec3{-p.x / one_v, -p.y / one_v, s.height} : Vec3{0, 0, s.height};
+      }
       // Outward normal of x^2 + y^2 = k (z - h)^2: gradient (x, y, -k (z - h)).
       const double k = (s.radius / s.height) * (s.radius / s.height);
       Vec3 n{p.x, p.y, -k * (p.z - s.height)};

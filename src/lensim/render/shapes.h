@@ -30,6 +30,9 @@ struct LocalGeometry {
   Vec3 n;     ///< unit normal, pbrt-v4's orientation before ReverseOrientation
   Vec3 dpdu;  ///< partial derivative of p with respect to u (scene units)
   Vec2 uv;    ///< surface parameters in [0,1]^2
+  /// dp/dv and the normal's derivatives dn/du, dn/dv (pbrt-v4's; for bump mapping). The cone's
+  /// dn/du, dn/dv are left zero.
+  Vec3 dpdv{0, 0, 0}, dndu{0, 0, 0}, dndv{0, 0, 0};
 };
 
 /// Nearest t in (tmin, tmax) at which the object-space ray hits the quadric, if any.

@@ -519,39 +519,6 @@ double RGBIlluminantSpectrum::maxValue() const {
 
 namespace {
 
-// Copper: the Hagemann, Gudat & Kunz (1974) table up to 670 nm (spectrum_data.cpp), and beyond it,
-// where the table jumps to 1240 nm and copper behaves as a free-electron metal, the
-// Lorentz-Drude model of A. D. Rakic, A. B. Djurisic, J. M. Elazar and M. L. Majewski, "Optical
-// properties of metallic films for vertical-cavity optoelectronic devices", Applied Optics
-// 37(22), 5271-5283 (1998), Table 1 (Cu): plasma energy 10.83 eV, f0 = 0.575,
-// Gamma0 = 0.030 eV, and four oscillators (f, Gamma eV, omega eV); eta + i k = sqrt(epsilon).
-std::complex<double> copperPermittivity(double lambda_nm) {
-  const double w = 1239.84193 / lambda_nm;  // photon energy, eV
-  const double wp = 10.83;
-  const double f0 = 0.575, g0 = 0.030;
-  const double osc[4][3] = {
-      {0.061, 0.378, 0.291}, {0.104, 1.056, 2.957}, {0.723, 3.213, 5.300}, {0.638, 4.305, 11.18}};
-  using C = std::complex<double>;
-  C eps = 1.0 - f0 * wp * wp / (w * C(w, g0));
-  for (const auto& o : osc) eps += o[0] * wp * wp / C(o[2] * o[2] - w * w, -w * o[1]);
-  return eps;
-}
-
-SpectrumPtr copperSpectrum(bool want_k) {
-  const std::span<const double> table = want_k ? data::kCuKTo670 : data::kCuEtaTo670;
-  std::vector<double> l, v;
-  for (size_t i = 0; i < table.size(); i += 2) {
-    l.push_back(table[i]);
-    v.push_back(table[i + 1]);
-  }
-  for (double lambda = 690; lambda <= 900; lambda += 10) {
-    const std::complex<double> n = std::sqrt(copperPermittivity(lambda));
-    l.push_back(lambda);
-    v.push_back(want_k ? std::abs(n.imag()) : n.real());
-  }
-  return std::make_shared<PiecewiseLinearSpectrum>(std::move(l), std::move(v));
-}
-
 SpectrumPtr interleaved(std::span<const double> d) {
   return PiecewiseLinearSpectrum::fromInterleaved(std::vector<double>(d.begin(), d.end()), false);
 }
@@ -559,20 +526,25 @@ SpectrumPtr interleaved(std::span<const double> d) {
 }  // namespace
 
 std::vector<std::string> namedSpectrumNames() {
-  return {"stdillum-D65", "metal-Cu-eta", "metal-Cu-k",   "metal-Au-eta", "metal-Au-k",
-          "metal-Ag-eta", "metal-Ag-k",   "metal-Al-eta", "metal-Al-k"};
+  return {"stdillum-D65", "metal-Cu-eta",   "metal-Cu-k",   "metal-Au-eta", "metal-Au-k",
+          "metal-Ag-eta", "metal-Ag-k",     "metal-Al-eta", "metal-Al-k",   "metal-MgO-eta",
+          "metal-MgO-k",  "metal-TiO2-eta", "metal-TiO2-k"};
 }
 
 SpectrumPtr namedSpectrum(std::string_view name) {
   if (name == "stdillum-D65") return RGBColorSpace::sRGB().illuminant();
-  if (name == "metal-Cu-eta") return copperSpectrum(false);
-  if (name == "metal-Cu-k") return copperSpectrum(true);
+  if (name == "metal-Cu-eta") return interleaved(data::kCuEta);
+  if (name == "metal-Cu-k") return interleaved(data::kCuK);
   if (name == "metal-Au-eta") return interleaved(data::kAuEta);
   if (name == "metal-Au-k") return interleaved(data::kAuK);
   if (name == "metal-Ag-eta") return interleaved(data::kAgEta);
   if (name == "metal-Ag-k") return interleaved(data::kAgK);
   if (name == "metal-Al-eta") return interleaved(data::kAlEta);
   if (name == "metal-Al-k") return interleaved(data::kAlK);
+  if (name == "metal-MgO-eta") return interleaved(data::kMgOEta);
+  if (name == "metal-MgO-k") return interleaved(data::kMgOK);
+  if (name == "metal-TiO2-eta") return interleaved(data::kTiO2Eta);
+  if (name == "metal-TiO2-k") return interleaved(data::kTiO2K);
   return nullptr;
 }
 

@@ -16,9 +16,10 @@ inline constexpr double kCieStep_nm = 5.0;
 /// 100 at 560 nm).
 extern const double kD65_5nm[95];
 
-/// Interleaved (wavelength nm, value) pairs of tabulated metal optical constants.
-extern const std::span<const double> kAuEta, kAuK, kAgEta, kAgK, kAlEta, kAlK;
-/// Copper up to 670 nm only (the source table's visible part; see spectrum.cpp for the rest).
-extern const std::span<const double> kCuEtaTo670, kCuKTo670;
+/// Interleaved (wavelength nm, value) pairs of tabulated metal optical constants: pbrt-v4's
+/// named-spectrum tables (298.76-885.60 nm; sources in spectrum_data.cpp).
+extern const std::span<const double> kAuEta, kAuK, kAgEta, kAgK, kAlEta, kAlK, kCuEta, kCuK;
+/// pbrt-v4's metal-MgO-* and metal-TiO2-* tables.
+extern const std::span<const double> kMgOEta, kMgOK, kTiO2Eta, kTiO2K;
 
 }  // namespace lensim::render::data

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <fstream>
@@ -18,6 +19,7 @@
 
 #include "lensim/io/image.h"
 #include "lensim/optics/glass.h"
+#include "lensim/render/procedural.h"
 #include "lensim/render/sampling.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
@@ -335,6 +337,20 @@ double Textures::evalFloat(const scene::Input& in, const TextureEvalContext& ctx
     const Vec3 v = impl_->lookup(t, *impl_->images[size_t(in.texture)], impl_->mapping(t, ctx));
     return (v.x + v.y + v.z) / 3;
   }
+  if (t.type == "fbm" || t.type == "wrinkled" || t.type == "windy") {
+    const Vec3 p = t.texture_from_world.applyPoint(ctx.p);
+    if (t.type == "fbm") return fbm(p, t.omega, t.octaves);
+    if (t.type == "wrinkled") return turbulence(p, t.omega, t.octaves);
+    return windy(p);
+  }
+  if (t.type == "dots")
+    return insidePolkaDot(impl_->mapping(t, ctx)) ? evalFloat(t.tex1, ctx) : evalFloat(t.tex2, ctx);
+  if (t.type == "bilerp") {
+    const Vec2 st = impl_->mapping(t, ctx);
+    return (1 - st.x) * (1 - st.y) * evalFloat(t.v00, ctx) +
+           st.x * (1 - st.y) * evalFloat(t.v10, ctx) + (1 - st.x) * st.y * evalFloat(t.v01, ctx) +
+           st.x * st.y * evalFloat(t.v11, ctx);
+  }
   return 0.5;
 }
 
@@ -376,6 +392,26 @@ SampledSpectrum Textures::evalSpectrum(const scene::Input& in, const TextureEval
     SampledSpectrum s;
     for (int i = 0; i < kSpectrumSamples; ++i) s[i] = scale * poly.eval(lambda.lambda(i));
     if (type == SpectrumType::Illuminant) s *= RGBColorSpace::sRGB().illuminant()->sample(lambda);
+    return s;
+  }
+  if (t.type == "dots")
+    return insidePolkaDot(impl_->mapping(t, ctx)) ? evalSpectrum(t.tex1, ctx, lambda, type)
+                                                  : evalSpectrum(t.tex2, ctx, lambda, type);
+  if (t.type == "bilerp") {
+    const Vec2 st = impl_->mapping(t, ctx);
+    return evalSpectrum(t.v00, ctx, lambda, type) * ((1 - st.x) * (1 - st.y)) +
+           evalSpectrum(t.v10, ctx, lambda, type) * (st.x * (1 - st.y)) +
+           evalSpectrum(t.v01, ctx, lambda, type) * ((1 - st.x) * st.y) +
+           evalSpectrum(t.v11, ctx, lambda, type) * (st.x * st.y);
+  }
+  if (t.type == "marble") {
+    // pbrt-v4's MarbleTexture: an RGB albedo whatever the spectrum type.
+    const Vec3 p = t.texture_from_world.applyPoint(ctx.p) * t.scale;
+    Vec3 rgb = marbleRgb(p, t.octaves, t.omega, t.variation);
+    rgb = {std::clamp(rgb.x, 0.0, 1.0), std::clamp(rgb.y, 0.0, 1.0), std::clamp(rgb.z, 0.0, 1.0)};
+    const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(rgb);
+    SampledSpectrum s;
+    for (int i = 0; i < kSpectrumSamples; ++i) s[i] = poly.eval(lambda.lambda(i));
     return s;
   }
   return SampledSpectrum(0.5);

@@ -307,6 +307,61 @@ class Builder {
   }
   void finish(ParamSet& ps) { ps.reportUnused(scene_.diagnostics); }
 
+  // A singular current transform is accepted (pbrt-v4 keeps a NaN inverse:
+  // src/pbrt/util/transform.h) and is an error only where it is applied to something rendered.
+  void requireInvertible(const FileLoc& loc, std::string_view what, int which = 0) {
+    if (gs_.ctm[which].isSingular())
+      throw Error(loc, fmt::format("{}: the current transformation matrix is singular (not "
+                                   "invertible), so it cannot place what is rendered",
+                                   what));
+  }
+
+  // ---- light scale ---------------------------------------------------------------------------
+  // pbrt-v4 reads a light's "scale" as a float; pbrt-v3 as a spectrum (`"rgb scale"`, `"color
+  // scale"`, `"spectrum scale"`: pbrt-v3's CreatePointLight & co. call
+  // paramSet.FindOneSpectrum("scale", Spectrum(1.0)) and multiply the emission by it in RGB).
+  const Param* findLightScale(ParamSet& ps) {
+    return ps.find({"scale"}, {ParamType::Float, ParamType::Rgb, ParamType::Spectrum});
+  }
+  void applyLightScale(const Param* p, Light& l) {
+    if (!p) return;
+    if (p->type == ParamType::Float) {
+      if (p->numbers.size() != 1)
+        throw Error(p->loc,
+                    fmt::format("\"{}\": expected 1 value, got {}", p->name, p->numbers.size()));
+      l.scale = p->numbers[0];
+      return;
+    }
+    SpectrumValue sv = spectrumOf(*p);
+    if (sv.kind == SpectrumValue::Kind::Rgb) {
+      const Vec3 c = sv.rgb;
+      if (c.x == c.y && c.y == c.z) {
+        l.scale = c.x;  // grey: a plain factor
+        return;
+      }
+      if (l.emission.kind == SpectrumValue::Kind::Rgb && l.filename.empty()) {
+        // pbrt-v3 multiplies RGB emission by the RGB scale channel by channel; so does this.
+        l.emission.rgb = {l.emission.rgb.x * c.x, l.emission.rgb.y * c.y, l.emission.rgb.z * c.z};
+        return;
+      }
+      l.scale = 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+      warn(p->loc, fmt::format("\"{}\": a coloured scale of a light whose emission is an image "
+                               "or a spectrum is applied as its luminance {:.4g}",
+                               p->name, l.scale));
+      return;
+    }
+    double mean = 1;
+    if (sv.kind == SpectrumValue::Kind::Sampled && !sv.samples.empty()) {
+      mean = 0;
+      for (const auto& [lambda, v] : sv.samples) mean += v;
+      mean /= static_cast<double>(sv.samples.size());
+    }
+    l.scale = mean;
+    warn(p->loc, fmt::format("\"{}\": a spectrum-valued light scale is applied as its mean value "
+                             "{:.4g}",
+                             p->name, mean));
+  }
+
   // ---- files ---------------------------------------------------------------------------------
   // pbrt resolves file names relative to the top-level scene file's directory; lensim also
   // accepts them relative to the file that names them.
@@ -499,6 +554,7 @@ class Builder {
       current_object_ = -1;
       popState(false);
     } else if (n == "ObjectInstance") {
+      requireInvertible(d.loc, "ObjectInstance");
       if (g.ctm[0] != g.ctm[1])
         warnOnce("motion", d.loc,
                  "animated transforms are not rendered; the start transform is used");
@@ -529,6 +585,16 @@ class Builder {
       warnOnce("VolumeIntegrator", d.loc,
                fmt::format("VolumeIntegrator \"{}\" is ignored: participating media are not "
                            "rendered",
+                           d.strings[0]));
+    } else if (n == "Renderer") {
+      // pbrt-v2 only (pbrt-v3 and v4 have no such directive); its renderers' parameters
+      // do not apply to lensim's path tracer.
+      pbrt_v2_ = true;
+      ParamSet ps(d.params, d.loc, "Renderer");
+      ps.markAllUsed();
+      warnOnce("Renderer", d.loc,
+               fmt::format("Renderer \"{}\" (pbrt-v2) is ignored: lensim renders with its "
+                           "Integrator",
                            d.strings[0]));
     } else if (n == "Accelerator") {
       ParamSet ps(d.params, d.loc, "Accelerator");
@@ -657,6 +723,7 @@ class Builder {
     c.defaulted = false;
     c.type_as_written = type;
     c.loc = d.loc;
+    requireInvertible(d.loc, fmt::format("Camera \"{}\"", type));
     c.camera_from_world = gs_.ctm[0];
     c.camera_from_world_end = gs_.ctm[1];
     named_cs_["camera"] = {inverse(gs_.ctm[0]), inverse(gs_.ctm[1])};
@@ -903,6 +970,19 @@ class Builder {
     if (type == "path" || type == "volpath") {
       it.regularize = ps.getBool({"regularize"}, false);
       it.light_sampler = ps.getString({"lightsampler", "lightsamplestrategy"}, "bvh");
+      // pbrt-v4's samplers (LightSampler::Create, src/pbrt/lightsamplers.cpp): an unknown name
+      // is reported and "bvh" used. pbrt-v3's "spatial" (its default, a light distribution
+      // that depends on position) is nearest to "bvh".
+      if (it.light_sampler == "spatial") it.light_sampler = "bvh";
+      if (it.light_sampler != "bvh" && it.light_sampler != "power" &&
+          it.light_sampler != "uniform" && it.light_sampler != "exhaustive") {
+        const Param* p = ps.peek({"lightsampler", "lightsamplestrategy"});
+        warn(p ? p->loc : d.loc,
+             fmt::format("unknown light sampler \"{}\" (expected bvh, power, uniform or "
+                         "exhaustive); \"bvh\" is used",
+                         it.light_sampler));
+        it.light_sampler = "bvh";
+      }
       ps.getFloat({"rrthreshold"}, 1);  // pbrt-v3
       if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
       if (type == "volpath")
@@ -1020,6 +1100,40 @@ class Builder {
     } else if (cls == "constant") {
       t.type = cls;
       t.tex1 = in({"value"}, 1);
+    } else if (cls == "fbm" || cls == "wrinkled" || cls == "windy" || cls == "marble") {
+      // pbrt-v4 (src/pbrt/textures.cpp): fbm, wrinkled and windy are float textures, marble a
+      // spectrum texture; 3-D mapping by the inverse of the declaration's transform.
+      t.type = cls;
+      if ((cls == "marble") == f)
+        throw Error(d.loc, fmt::format("texture \"{}\": \"{}\" is a {} texture in pbrt", name, cls,
+                                       f ? "spectrum" : "float"));
+      if (cls != "windy") {
+        t.octaves = ps.getInt({"octaves"}, 8);
+        t.omega = ps.getFloat({"roughness"}, 0.5);
+        if (t.octaves < 0 || t.octaves > 64)
+          throw Error(
+              d.loc, fmt::format("texture \"{}\": octaves {} (expected 0 to 64)", name, t.octaves));
+      }
+      if (cls == "marble") {
+        t.scale = ps.getFloat({"scale"}, 1);
+        t.variation = ps.getFloat({"variation"}, 0.2);
+      }
+      if (t.texture_from_world.isSingular())
+        throw Error(d.loc, fmt::format("texture \"{}\": its 3-D mapping uses the current "
+                                       "transformation matrix, which is singular (not invertible)",
+                                       name));
+    } else if (cls == "dots") {
+      t.type = cls;
+      mapping();
+      t.tex1 = in({"inside"}, 1);
+      t.tex2 = in({"outside"}, 0);
+    } else if (cls == "bilerp") {
+      t.type = cls;
+      mapping();
+      t.v00 = in({"v00"}, 0);
+      t.v01 = in({"v01"}, 1);
+      t.v10 = in({"v10"}, 0);
+      t.v11 = in({"v11"}, 1);
     } else {
       ps.markAllUsed();
       t.type = "constant";
@@ -1028,6 +1142,11 @@ class Builder {
                fmt::format("texture \"{}\" is not rendered by lensim; it renders as a constant 0.5",
                            cls));
     }
+    if ((t.mapping != "uv" || (t.type == "checkerboard" && t.dimension == 3)) &&
+        t.texture_from_world.isSingular())
+      throw Error(d.loc, fmt::format("texture \"{}\": its {} mapping uses the current "
+                                     "transformation matrix, which is singular (not invertible)",
+                                     name, t.mapping != "uv" ? t.mapping : "3-D"));
     finish(ps);
     auto& map = f ? float_textures_ : spectrum_textures_;
     if (map.count(name))
@@ -1040,11 +1159,7 @@ class Builder {
     Material m;
     m.type_as_written = type;
     m.loc = loc;
-    m.displacement = floatInput(ps, {"displacement", "bumpmap"});
-    if (m.displacement)
-      warnOnce("material displacement", loc,
-               "material \"displacement\" (bump mapping) is not rendered; the shading normal is "
-               "the surface's");
+    m.displacement = floatInput(ps, {"displacement", "bumpmap"});  // bump mapping
     if (const Param* nm = ps.find({"normalmap"}, {ParamType::String}))
       if (!nm->strings[0].empty()) m.normal_map = resolve(nm->strings[0], nm->loc, "normal map");
     auto roughness = [&](double def) {
@@ -1076,64 +1191,56 @@ class Builder {
       m.reflectance = spectrumInput(ps, {"reflectance", "Kd"}, 0.5);
       m.has_reflectance = true;
       if (type == "matte") m.sigma = floatInput(ps, {"sigma"}, 0);  // Oren–Nayar, degrees
-    } else if (type == "coateddiffuse" || type == "plastic" || type == "uber" ||
-               type == "substrate") {
+    } else if (type == "coateddiffuse") {
       m.type = "coateddiffuse";
-      m.reflectance =
-          spectrumInput(ps, {"reflectance", "Kd"}, type == "coateddiffuse" ? 0.5 : 0.25);
+      m.reflectance = spectrumInput(ps, {"reflectance", "Kd"}, 0.5);
       m.has_reflectance = true;
-      roughness(type == "coateddiffuse" ? 0 : 0.1);
-      if (type == "coateddiffuse") {
-        m.thickness = floatInput(ps, {"thickness"}, 0.01);
-        m.albedo = spectrumInput(ps, {"albedo"}, 0);
-        m.g = floatInput(ps, {"g"}, 0);
-        m.max_depth = ps.getInt({"maxdepth"}, 10);
-        m.n_samples = ps.getInt({"nsamples"}, 1);
-        dielectricEta({"eta"});
-      } else {
-        // pbrt-v1–v3 names: Ks (specular colour) and the uber extras have no coateddiffuse
-        // equivalent; the coat is a clear dielectric of index 1.5.
-        m.eta.value = 1.5;
-        bool extra = spectrumInput(ps, {"Ks"}).has_value();
-        if (type == "uber") {
-          extra = spectrumInput(ps, {"Kr"}).has_value() || extra;
-          extra = spectrumInput(ps, {"Kt"}).has_value() || extra;
-          extra = spectrumInput(ps, {"opacity"}).has_value() || extra;
-          dielectricEta({"eta", "index"});
-        }
-        if (extra)
-          warnOnce("material " + type + " Ks", loc,
-                   fmt::format("material \"{}\": \"Ks\" (and Kr, Kt, opacity) are not rendered; it "
-                               "renders as \"coateddiffuse\" with a clear coat",
-                               type));
+      roughness(0);
+      m.thickness = floatInput(ps, {"thickness"}, 0.01);
+      m.albedo = spectrumInput(ps, {"albedo"}, 0);
+      m.g = floatInput(ps, {"g"}, 0);
+      m.max_depth = ps.getInt({"maxdepth"}, 10);
+      m.n_samples = ps.getInt({"nsamples"}, 1);
+      dielectricEta({"eta"});
+    } else if (type == "plastic" || type == "uber" || type == "substrate" ||
+               type == "translucent") {
+      // pbrt-v3's materials, rendered as pbrt-v3 defines them (render/v3materials.h), with
+      // pbrt-v3's defaults (src/materials/{plastic,uber,substrate,translucent}.cpp).
+      m.type = type;
+      const bool half = type == "substrate";
+      m.reflectance = spectrumInput(ps, {"Kd", "reflectance"}, half ? 0.5 : 0.25);
+      m.has_reflectance = true;
+      m.specular = spectrumInput(ps, {"Ks"}, half ? 0.5 : 0.25);
+      roughness(0.1);
+      if (type == "uber") {
+        m.kr = spectrumInput(ps, {"Kr"}, 0);
+        m.kt = spectrumInput(ps, {"Kt"}, 0);
+        m.opacity = spectrumInput(ps, {"opacity"}, 1);
+        dielectricEta({"eta", "index"});
+      } else if (type == "translucent") {
+        m.v3_reflect = spectrumInput(ps, {"reflect"}, 0.5);
+        m.transmittance = spectrumInput(ps, {"transmit"}, 0.5);
       }
     } else if (type == "conductor" || type == "metal") {
-      m.type = "conductor";
+      // pbrt-v3's metal keeps its name: its roughness is remapped as pbrt-v3 does.
+      m.type = type;
       conductorDefaults();
-      if (auto r = spectrumInput(ps, {"reflectance"})) {
-        m.reflectance = *r;
-        m.has_reflectance = true;
-      }
+      if (type == "conductor")
+        if (auto r = spectrumInput(ps, {"reflectance"})) {
+          m.reflectance = *r;
+          m.has_reflectance = true;
+        }
       roughness(type == "metal" ? 0.01 : 0);
     } else if (type == "mirror") {
-      m.type = "conductor";
-      m.reflectance = spectrumInput(ps, {"Kr", "reflectance"}, 0.9);
-      m.has_reflectance = true;
+      m.type = "mirror";  // pbrt-v3: a specular reflection of Kr at every angle
+      m.kr = spectrumInput(ps, {"Kr"}, 0.9);
     } else if (type == "dielectric" || type == "glass" || type == "thindielectric") {
-      m.type = type == "thindielectric" ? "thindielectric" : "dielectric";
+      m.type = type;
       dielectricEta({"eta", "index"});
       if (type != "thindielectric") roughness(0);
       if (type == "glass") {
-        bool tinted = false;
-        for (auto n : {"Kr", "Kt"}) {
-          Input k = spectrumInput(ps, {n}, 1);
-          tinted = tinted || k.texture >= 0 || k.spectrum.kind != SpectrumValue::Kind::Rgb ||
-                   k.spectrum.rgb != Vec3{1, 1, 1};
-        }
-        if (tinted)
-          warnOnce("glass tint", loc,
-                   "glass \"Kr\"/\"Kt\" tints are not rendered; the glass "
-                   "renders clear");
+        m.kr = spectrumInput(ps, {"Kr"}, 1);
+        m.kt = spectrumInput(ps, {"Kt"}, 1);
       }
     } else if (type == "coatedconductor") {
       m.type = type;
@@ -1158,36 +1265,11 @@ class Builder {
       m.g = floatInput(ps, {"g"}, 0);
       m.max_depth = ps.getInt({"maxdepth"}, 10);
       m.n_samples = ps.getInt({"nsamples"}, 1);
-    } else if (type == "diffusetransmission" || type == "translucent") {
+    } else if (type == "diffusetransmission") {
       m.type = "diffusetransmission";
-      if (type == "diffusetransmission") {
-        m.reflectance = spectrumInput(ps, {"reflectance"}, 0.25);
-        m.transmittance = spectrumInput(ps, {"transmittance"}, 0.25);
-        m.scale = ps.getFloat({"scale"}, 1);
-      } else {
-        // pbrt-v2/v3 translucent: diffuse part Kd split by "reflect" and "transmit"; the glossy
-        // part (Ks, roughness) has no diffusetransmission equivalent.
-        Input kd = spectrumInput(ps, {"Kd"}, 0.25);
-        Input refl = spectrumInput(ps, {"reflect"}, 0.5),
-              trans = spectrumInput(ps, {"transmit"}, 0.5);
-        auto product = [&](const Input& a, const Input& b) {
-          Input out = a;
-          if (a.texture < 0 && b.texture < 0 && a.spectrum.kind == SpectrumValue::Kind::Rgb &&
-              b.spectrum.kind == SpectrumValue::Kind::Rgb)
-            out.spectrum.rgb = {a.spectrum.rgb.x * b.spectrum.rgb.x,
-                                a.spectrum.rgb.y * b.spectrum.rgb.y,
-                                a.spectrum.rgb.z * b.spectrum.rgb.z};
-          return out;
-        };
-        m.reflectance = product(kd, refl);
-        m.transmittance = product(kd, trans);
-        spectrumInput(ps, {"Ks"});
-        floatInput(ps, {"roughness"});
-        ps.getBool({"remaproughness"}, true);
-        warnOnce("material translucent", loc,
-                 "material \"translucent\" (pbrt-v1–v3) renders as \"diffusetransmission\" "
-                 "(Kd x reflect, Kd x transmit); its glossy Ks part is not rendered");
-      }
+      m.reflectance = spectrumInput(ps, {"reflectance"}, 0.25);
+      m.transmittance = spectrumInput(ps, {"transmittance"}, 0.25);
+      m.scale = ps.getFloat({"scale"}, 1);
       m.has_reflectance = true;
     } else if (type == "mix") {
       m.type = "mix";
@@ -1256,7 +1338,7 @@ class Builder {
     l.type_as_written = type;
     l.loc = d.loc;
     l.transform = gs_.ctm[0];
-    l.scale = ps.getFloat({"scale"}, 1);
+    const Param* scale_param = findLightScale(ps);
     l.power = ps.findFloat({"power", "illuminance"});
     ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
     auto emission = [&](ParamSet::Names names) {
@@ -1301,6 +1383,8 @@ class Builder {
                fmt::format("light \"{}\" is not rendered by lensim; it is left out", type));
       return;
     }
+    applyLightScale(scale_param, l);
+    requireInvertible(d.loc, fmt::format("LightSource \"{}\"", type));
     finish(ps);
     scene_.lights.push_back(std::move(l));
   }
@@ -1323,13 +1407,14 @@ class Builder {
     } else {
       const Param* p = ps.find({"L"}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody});
       if (p) l.emission = spectrumOf(*p);
-      l.scale = ps.getFloat({"scale"}, 1);
+      const Param* scale_param = findLightScale(ps);
       l.two_sided = ps.getBool({"twosided"}, false);
       l.power = ps.findFloat({"power"});
       ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
       if (const Param* fn = ps.find({"filename"}, {ParamType::String})) {
         l.filename = resolve(fn->strings[0], fn->loc, "image file");
       }
+      applyLightScale(scale_param, l);
     }
     finish(ps);
     scene_.lights.push_back(std::move(l));
@@ -1347,6 +1432,7 @@ class Builder {
     s.transform = gs_.ctm[0];
     s.reverse_orientation = gs_.reverse_orientation;
     s.alpha = floatInput(ps, {"alpha"});
+    requireInvertible(d.loc, fmt::format("Shape \"{}\"", type));
     if (gs_.ctm[0] != gs_.ctm[1])
       warnOnce("motion", d.loc,
                "animated transforms are not rendered; the start transform is used");

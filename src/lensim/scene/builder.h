@@ -57,7 +57,8 @@ struct Input {
 enum class TextureKind { Float, Spectrum };
 
 /// A texture description. `type` is the pbrt-v4 class lensim renders: imagemap, scale (product
-/// of tex1 and tex2), mix, directionmix, checkerboard or constant (tex1).
+/// of tex1 and tex2), mix, directionmix, checkerboard, constant (tex1), or the procedural fbm,
+/// wrinkled, windy, marble, dots, bilerp (render/procedural.h).
 struct Texture {
   std::string name;
   TextureKind kind = TextureKind::Spectrum;
@@ -85,11 +86,17 @@ struct Texture {
   Input amount;                 ///< mix
   Vec3 direction{0, 1, 0};      ///< directionmix: world-space unit direction
   int dimension = 2;            ///< checkerboard
+  // fbm, wrinkled, marble (octaves, roughness = omega, marble variation; marble also uses
+  // `scale`); dots (tex1 inside, tex2 outside); bilerp (v00, v01, v10, v11).
+  int octaves = 8;
+  double omega = 0.5, variation = 0.2;
+  Input v00, v01, v10, v11;
 };
 
 /// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
 /// coateddiffuse, coatedconductor, conductor, dielectric, thindielectric, diffusetransmission,
-/// mix, interface.
+/// mix, interface; or a pbrt-v3 one rendered as pbrt-v3 does: plastic, substrate, uber,
+/// translucent, glass, metal, mirror.
 struct Material {
   std::string name;  ///< set for MakeNamedMaterial
   std::string type;
@@ -119,6 +126,10 @@ struct Material {
   std::optional<Input> displacement;
   std::string normal_map;     ///< resolved path
   std::string measured_file;  ///< measured (pbrt-v2): resolved `filename` of the .brdf data
+  // pbrt-v3 materials rendered as pbrt-v3 defines them (type plastic, substrate, uber,
+  // translucent, glass, metal, mirror; render/v3materials.h): Ks, Kr, Kt, opacity and
+  // translucent's "reflect" (its "transmit" is `transmittance`; Kd is `reflectance`).
+  Input specular, kr, kt, opacity, v3_reflect;
   /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
   bool fallback = false;
 };

@@ -297,6 +297,7 @@ std::string formatPbrtV4(const SceneDesc& desc) {
       indent = std::max(0, indent - 1);
     std::string line = fmt::format("{:{}}", "", indent * 2);
     if (name == "VolumeIntegrator") line += "# (pbrt-v1–v3, no pbrt-v4 equivalent) ";
+    if (name == "Renderer") line += "# (pbrt-v2, no pbrt-v4 equivalent) ";
     if (name == "Camera" && d.strings[0] == "realistic")
       for (const Param& p : d.params)
         if (p.name == "specfile")

@@ -13,11 +13,18 @@ size_t valueCount(const Param& p) {
 ParamSet::ParamSet(const ParamList& params, FileLoc directive_loc, std::string directive)
     : loc_(std::move(directive_loc)), directive_(std::move(directive)) {
   for (const Param& p : params) {
-    for (const Entry& e : entries_)
-      if (e.param->name == p.name)
-        throw Error(p.loc, fmt::format("\"{}\": parameter given twice (first at {})", p.name,
-                                       e.param->loc.str()));
-    entries_.push_back({&p, false, false});
+    // A parameter given twice: the last one written is used and the earlier one is ignored,
+    // as pbrt-v4 does (its ParameterDictionary reverses the list so lookups find the last one
+    // first, and ReportUnused lets a shadowed duplicate of the same type and name pass:
+    // src/pbrt/paramdict.cpp) and as pbrt-v3's ParamSet::Add* (which erase the earlier one).
+    bool replaced = false;
+    for (Entry& e : entries_)
+      if (e.param->name == p.name) {
+        if (e.param->type != p.type) shadowed_.push_back({e.param, &p});
+        e.param = &p;
+        replaced = true;
+      }
+    if (!replaced) entries_.push_back({&p, false, false});
   }
 }
 
@@ -157,6 +164,11 @@ void ParamSet::markAllUsed() {
 }
 
 void ParamSet::reportUnused(std::vector<Diagnostic>& out) const {
+  for (const auto& [earlier, later] : shadowed_)
+    out.push_back(
+        {Severity::Warning, earlier->loc,
+         fmt::format("\"{}\": given again as \"{} {}\" at {}; the later one is used", earlier->name,
+                     later->type_as_written, later->name, later->loc.str())});
   for (const Entry& e : entries_)
     if (!e.used && !e.is_default) {
       // Suggest the nearest name a getter asked for (a misspelling is at most 2 edits away).

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "lensim/scene/parser.h"
@@ -64,6 +65,8 @@ class ParamSet {
   };
   std::vector<Entry> entries_;
   std::vector<std::string> queried_;  // every name a getter asked for
+  // Parameters given twice with different types: (earlier, later); the later one is used.
+  std::vector<std::pair<const Param*, const Param*>> shadowed_;
   FileLoc loc_;
   std::string directive_;
 };

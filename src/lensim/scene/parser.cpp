@@ -12,6 +12,8 @@
 #include <set>
 #include <sstream>
 
+#include <zlib.h>
+
 #include "lensim/scene/params.h"
 #include "lensim/scene/tokenizer.h"
 
@@ -117,6 +119,8 @@ const std::map<std::string, DirectiveSpec, std::less<>>& directiveSpecs() {
       {"ObjectBegin", {Args::OneString, 0, B::World}},
       {"ObjectEnd", {Args::None, 0, B::World}},
       {"ObjectInstance", {Args::OneString, 0, B::World}},
+      // pbrt-v2's `Renderer "sampler"|"metropolis"|...`: the builder ignores it with a warning.
+      {"Renderer", {Args::TypeAndParams, 0, B::Options, true}},
       {"Include", {Args::OneString}},
       {"Import", {Args::OneString}},
   };
@@ -169,31 +173,109 @@ std::string suggestion(std::string_view word) {
   return best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best);
 }
 
+// The text of a scene file; `.gz` files are decompressed, as pbrt-v4 does for any file name
+// ending in ".gz" (Tokenizer::CreateFromFile in pbrt-v4's src/pbrt/parser.cpp).
+std::optional<std::string> readSceneText(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return std::nullopt;
+  if (path.size() > 3 && path.compare(path.size() - 3, 3, ".gz") == 0) {
+    gzFile f = gzopen(path.c_str(), "rb");
+    if (!f) return std::nullopt;
+    std::string data;
+    char buf[1 << 16];
+    for (;;) {
+      int n = gzread(f, buf, sizeof buf);
+      if (n < 0) {
+        int err = 0;
+        std::string msg = gzerror(f, &err);
+        gzclose(f);
+        throw Error(FileLoc{path, 0, 0}, fmt::format("cannot decompress: {}", msg));
+      }
+      if (n == 0) break;
+      data.append(buf, static_cast<size_t>(n));
+    }
+    gzclose(f);
+    return data;
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// One token stream over the top-level file and the files it includes. As in pbrt-v4's parse()
+// (src/pbrt/parser.cpp: `nextToken` pops the file stack at the end of an included file and goes
+// on with the including file), an Include pushes its file and the stream continues seamlessly
+// where it ends, so a directive's parameter list may run on across the end of an included file.
+class TokenStream {
+ public:
+  void push(std::string text, const std::string& file) {
+    if (sources_.size() >= 64)
+      throw Error(FileLoc{file, 1, 1}, "Include nested too deeply (a cycle?)");
+    auto src = std::make_unique<Source>();
+    src->text = std::move(text);
+    src->tok = std::make_unique<Tokenizer>(src->text, file);
+    sources_.push_back(std::move(src));
+  }
+  /// The next token; at the end of an included file, the next token of the including file.
+  Token next() {
+    for (;;) {
+      if (sources_.empty()) return end_;
+      Token t = sources_.back()->tok->next();
+      if (t.kind != Token::Kind::End) return t;
+      end_ = t;
+      // Keep the tokenizer (tokens point at its file name) but free the text.
+      finished_.push_back(std::move(sources_.back()->tok));
+      sources_.pop_back();
+    }
+  }
+  FileLoc loc(const Token& t) const {
+    return FileLoc{t.file ? *t.file : std::string(), t.line, t.column};
+  }
+
+ private:
+  struct Source {
+    std::string text;
+    std::unique_ptr<Tokenizer> tok;
+  };
+  std::vector<std::unique_ptr<Source>> sources_;
+  std::vector<std::unique_ptr<Tokenizer>> finished_;
+  Token end_;
+};
+
 class Parser {
  public:
   explicit Parser(SceneDesc& desc) : desc_(desc) {}
 
   void parseFile(const std::string& path, const FileLoc* included_from) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in || fs::is_directory(path)) {
+    if (!pushFile(path, included_from)) return;
+    run();
+  }
+
+  void parseText(std::string_view text, const std::string& file) {
+    stream_.push(std::string(text), file);
+    run();
+  }
+
+  // Pushes a file onto the token stream; false (after recording an error) if it cannot be read.
+  bool pushFile(const std::string& path, const FileLoc* included_from) {
+    std::optional<std::string> text = readSceneText(path);
+    if (!text) {
       std::string msg = included_from ? fmt::format("cannot open included file \"{}\"", path)
                                       : fmt::format("cannot open scene file \"{}\"", path);
       if (!included_from) throw Error(msg);
       desc_.diagnostics.push_back({Severity::Error, *included_from, msg});
-      return;
+      return false;
     }
-    std::stringstream ss;
-    ss << in.rdbuf();
-    std::string text = ss.str();
     desc_.files.push_back(path);
-    parseText(text, path);
+    stream_.push(std::move(*text), path);
+    return true;
   }
 
-  void parseText(std::string_view text, const std::string& file) {
-    if (++depth_ > 64) throw Error(FileLoc{file, 1, 1}, "Include nested too deeply (a cycle?)");
-    Tokenizer tok(text, file);
+  void run() {
+    TokenStream& tok = stream_;
     pending_.reset();
-    std::optional<Token> saved_pending;
     for (;;) {
       Token t = next(tok);
       if (t.kind == Token::Kind::End) break;
@@ -220,7 +302,7 @@ class Parser {
       checkStructure(spec, d);
       if (d.name == "Include" || d.name == "Import") {
         fs::path p(d.strings[0]);
-        if (p.is_relative()) p = fs::path(file).parent_path() / p;
+        if (p.is_relative()) p = fs::path(d.loc.file).parent_path() / p;
         std::string resolved = p.lexically_normal().string();
         std::error_code ec;
         if (!fs::is_regular_file(resolved, ec)) {
@@ -229,16 +311,13 @@ class Parser {
                                                    d.strings[0], resolved)});
           continue;
         }
-        // The nested file has its own tokenizer; keep our lookahead across it.
-        saved_pending = pending_;
-        pending_.reset();
-        parseFile(resolved, &d.loc);
-        pending_ = saved_pending;
+        // No token is pending here (the file name was the last one read): the included file's
+        // tokens come next, then the rest of this file's.
+        pushFile(resolved, &d.loc);
         continue;
       }
       desc_.directives.push_back(std::move(d));
     }
-    --depth_;
   }
 
   void finish() {
@@ -258,7 +337,7 @@ class Parser {
     FileLoc loc;
   };
 
-  Token next(Tokenizer& tok) {
+  Token next(TokenStream& tok) {
     if (pending_) {
       Token t = std::move(*pending_);
       pending_.reset();
@@ -266,12 +345,12 @@ class Parser {
     }
     return tok.next();
   }
-  const Token& peek(Tokenizer& tok) {
+  const Token& peek(TokenStream& tok) {
     if (!pending_) pending_ = tok.next();
     return *pending_;
   }
 
-  void parseArgs(Tokenizer& tok, const DirectiveSpec& spec, Directive& d) {
+  void parseArgs(TokenStream& tok, const DirectiveSpec& spec, Directive& d) {
     auto expectString = [&](const char* what) {
       Token s = next(tok);
       if (s.kind != Token::Kind::String)
@@ -374,7 +453,7 @@ class Parser {
     }
   }
 
-  ParamList parseParams(Tokenizer& tok) {
+  ParamList parseParams(TokenStream& tok) {
     ParamList list;
     while (peek(tok).kind == Token::Kind::String) {
       Token decl = next(tok);
@@ -422,7 +501,7 @@ class Parser {
     return list;
   }
 
-  void convertValues(Param& p, const std::vector<Token>& values, Tokenizer& tok) {
+  void convertValues(Param& p, const std::vector<Token>& values, TokenStream& tok) {
     const std::string decl = fmt::format("\"{} {}\"", p.type_as_written, p.name);
     auto wrongKind = [&](const Token& v, const char* expected) {
       throw Error(tok.loc(v),
@@ -564,11 +643,11 @@ class Parser {
   }
 
   SceneDesc& desc_;
+  TokenStream stream_;
   std::optional<Token> pending_;
   std::vector<Block> stack_;
   bool in_world_ = false;
   bool world_ended_ = false;
-  int depth_ = 0;
   std::set<std::string> objects_;
   std::vector<std::pair<std::string, FileLoc>> instance_uses_;
 };

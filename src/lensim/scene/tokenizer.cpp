@@ -31,6 +31,7 @@ Token Tokenizer::next() {
     Token t;
     t.line = line_;
     t.column = column_;
+    t.file = &file_;
     if (c == '[' || c == ']') {
       get();
       t.kind = c == '[' ? Token::Kind::LBracket : Token::Kind::RBracket;
@@ -84,6 +85,7 @@ Token Tokenizer::next() {
   Token end;
   end.line = line_;
   end.column = column_;
+  end.file = &file_;
   return end;
 }
 

@@ -16,6 +16,8 @@ struct Token {
   std::string text;
   int line = 0;
   int column = 0;
+  /// The file the token came from (owned by its Tokenizer); null for a default-made token.
+  const std::string* file = nullptr;
 };
 
 /// Reads tokens from text that stays alive as long as the tokenizer.
@@ -26,7 +28,7 @@ class Tokenizer {
   /// The next token; Kind::End at the end. Throws lensim::Error for an unterminated string.
   Token next();
   const std::string& file() const { return file_; }
-  FileLoc loc(const Token& t) const { return FileLoc{file_, t.line, t.column}; }
+  FileLoc loc(const Token& t) const { return FileLoc{t.file ? *t.file : file_, t.line, t.column}; }
 
  private:
   char get();

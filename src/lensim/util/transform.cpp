@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <utility>
@@ -71,8 +72,18 @@ Transform::Transform() : m_(identityMatrix()), inv_(identityMatrix()) {}
 
 Transform::Transform(const Matrix& m) : m_(m) {
   auto inv = invert(m);
-  if (!inv) throw Error("singular transformation matrix");
-  inv_ = *inv;
+  if (inv) {
+    inv_ = *inv;
+  } else {
+    for (auto& row : inv_) row.fill(std::numeric_limits<double>::quiet_NaN());
+  }
+}
+
+bool Transform::isSingular() const {
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (std::isnan(inv_[i][j]) || std::isnan(m_[i][j])) return true;
+  return false;
 }
 
 Transform Transform::operator*(const Transform& o) const {

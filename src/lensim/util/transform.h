@@ -26,7 +26,9 @@ class Transform {
 
   /// Identity.
   Transform();
-  /// From a matrix; computes the inverse (throws lensim::Error if singular).
+  /// From a matrix; computes the inverse. A singular matrix gets a NaN inverse (isSingular()),
+  /// as in pbrt-v4 (src/pbrt/util/transform.h, Transform(const SquareMatrix<4>&)): scene files
+  /// may hold singular transforms that nothing rendered uses.
   explicit Transform(const Matrix& m);
   Transform(const Matrix& m, const Matrix& inverse) : m_(m), inv_(inverse) {}
 
@@ -37,6 +39,8 @@ class Transform {
   Transform operator*(const Transform& o) const;
   bool operator==(const Transform& o) const { return m_ == o.m_; }
   bool isIdentity() const;
+  /// True if the matrix (or its inverse) is singular: the inverse (or matrix) holds NaNs.
+  bool isSingular() const;
   /// True if the transform changes a right-handed frame into a left-handed one.
   bool swapsHandedness() const;
 
