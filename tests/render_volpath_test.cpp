@@ -1,0 +1,311 @@
+// The volpath integrator against closed forms: Beer-Lambert transmittance of a slab at each of a
+// path's wavelengths (spectral sigma_a), white furnaces inside lossless and emitting media,
+// single scattering from a thin layer, and path vs volpath within noise on a scene without
+// media. Bounds come from the estimates' own standard errors.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <numbers>
+#include <string>
+
+#include "lensim/render/accel.h"
+#include "lensim/render/image_compare.h"
+#include "lensim/render/lights.h"
+#include "lensim/render/materials.h"
+#include "lensim/render/media.h"
+#include "lensim/render/textures.h"
+#include "lensim/render/volpath.h"
+#include "render_test_util.h"
+
+using namespace lensim;
+using lensim::io::Image;
+using lensim::render::RenderOptions;
+using lensim::testutil::buildText;
+using lensim::testutil::renderText;
+
+namespace {
+
+/// A scene built for calling the integrator directly.
+struct Direct {
+  scene::Scene scene;
+  std::unique_ptr<render::Accel> accel;
+  std::unique_ptr<render::Textures> textures;
+  std::unique_ptr<render::Materials> materials;
+  std::unique_ptr<render::LightSet> lights;
+  std::unique_ptr<render::Media> media;
+  render::SceneContext sc;
+
+  explicit Direct(const std::string& text) : scene(buildText(text, "volpath-test.pbrt")) {
+    if (scene.hasErrors()) throw Error(formatDiagnostics(scene.diagnostics));
+    accel = std::make_unique<render::Accel>(scene);
+    textures = std::make_unique<render::Textures>(scene);
+    materials = std::make_unique<render::Materials>(scene, *textures);
+    lights = std::make_unique<render::LightSet>(scene, *accel, *textures);
+    media = std::make_unique<render::Media>(scene);
+    sc.scene = &scene;
+    sc.accel = accel.get();
+    sc.textures = textures.get();
+    sc.materials = materials.get();
+    sc.lights = lights.get();
+    sc.media = media.get();
+    sc.max_depth = scene.integrator.max_depth;
+  }
+};
+
+/// Mean and standard error of the mean of the values of a region of channel c.
+struct Stats {
+  double mean = 0, sem = 0;
+};
+Stats regionStats(const Image& im, int c, int x0, int x1, int y0, int y1) {
+  double s = 0, s2 = 0;
+  int n = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const double v = im.at(x, y, c);
+      s += v, s2 += v * v, ++n;
+    }
+  Stats r;
+  r.mean = s / n;
+  r.sem = std::sqrt(std::max(0.0, s2 / n - r.mean * r.mean) / (n - 1));
+  return r;
+}
+
+}  // namespace
+
+// A slab 1 m thick (z in [0.5, 1.5], bounded by interface quads) of a purely absorbing medium
+// whose sigma_a varies with wavelength, in front of an emitter; a ray along +z. Transmittance at
+// each wavelength is exp(-sigma_a(lambda) 1 m). The hero-wavelength estimator is unbiased for
+// every wavelength once averaged over which wavelength is the hero, so each wavelength set is
+// traced with each of its members as hero.
+TEST(Volpath, BeerLambertSlabAtEachWavelength) {
+  Direct d(R"(
+Integrator "volpath" "integer maxdepth" 5
+WorldBegin
+MakeNamedMedium "ink" "string type" "homogeneous" "float scale" 1
+  "spectrum sigma_a" [360 0.3 450 0.5 550 1.2 650 2.0 830 2.6] "rgb sigma_s" [0 0 0]
+AttributeBegin
+  MediumInterface "ink" ""
+  Material "interface"
+  # z = 0.5 facing -z and z = 1.5 facing +z: inside is the slab.
+  Shape "trianglemesh" "point3 P" [-1 -1 0.5  -1 1 0.5  1 1 0.5  1 -1 0.5]
+    "integer indices" [0 1 2 0 2 3]
+  Shape "trianglemesh" "point3 P" [-1 -1 1.5  1 -1 1.5  1 1 1.5  -1 1 1.5]
+    "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [1 1 1]
+  Shape "trianglemesh" "point3 P" [-10 -10 2  -10 10 2  10 10 2  10 -10 2]
+    "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+)");
+  auto sigma_a = [](double l) {  // the spectrum above, linear between its points
+    const double x[] = {360, 450, 550, 650, 830}, y[] = {0.3, 0.5, 1.2, 2.0, 2.6};
+    for (int i = 0; i < 4; ++i)
+      if (l <= x[i + 1]) return y[i] + (y[i + 1] - y[i]) * (l - x[i]) / (x[i + 1] - x[i]);
+    return y[4];
+  };
+  const double u0 = 0.13;  // wavelengths 421.1, 538.6, 656.1, 773.6 nm
+  const render::SampledWavelengths base = render::SampledWavelengths::sampleUniform(u0);
+  constexpr int kPaths = 40000;
+  render::IndependentSampler sampler(kPaths, 7);
+  render::RayCounts counts;
+  double sum[4] = {}, sum2[4] = {}, emitted[4] = {};
+  for (int k = 0; k < 4; ++k) {
+    // The same set with member k as hero.
+    render::SampledWavelengths lambda =
+        render::SampledWavelengths::sampleUniform(std::fmod(u0 + k / 4.0, 1.0));
+    int slot[4];
+    for (int c = 0; c < 4; ++c)
+      for (int j = 0; j < 4; ++j)
+        if (std::abs(lambda.lambda(c) - base.lambda(j)) < 1e-6) slot[c] = j;
+    // The emitter seen past the slab (x = 5): its radiance at these wavelengths.
+    sampler.startPixelSample({0, 0}, 0);
+    render::SampledWavelengths l2 = lambda;
+    const render::SampledSpectrum Le =
+        render::volpathLi(d.sc, {5, 0, 0}, {0, 0, 1}, -1, l2, sampler, counts);
+    for (int c = 0; c < 4; ++c) emitted[slot[c]] = Le[c];
+    for (int i = 0; i < kPaths; ++i) {
+      sampler.startPixelSample({k, 0}, i);
+      render::SampledWavelengths l = lambda;
+      const render::SampledSpectrum L =
+          render::volpathLi(d.sc, {0, 0, 0}, {0, 0, 1}, -1, l, sampler, counts);
+      for (int c = 0; c < 4; ++c) sum[slot[c]] += L[c], sum2[slot[c]] += L[c] * L[c];
+    }
+  }
+  const double n = 4.0 * kPaths;
+  for (int j = 0; j < 4; ++j) {
+    ASSERT_GT(emitted[j], 0);
+    const double mean = sum[j] / n / emitted[j];
+    const double sem =
+        std::sqrt(std::max(0.0, sum2[j] / n - std::pow(sum[j] / n, 2)) / (n - 1)) / emitted[j];
+    const double expected = std::exp(-sigma_a(base.lambda(j)));
+    std::printf("%.1f nm: T %.5f +- %.5f, exp(-sigma_a d) %.5f\n", base.lambda(j), mean, sem,
+                expected);
+    EXPECT_NEAR(mean, expected, 4 * sem + 1e-6) << "at " << base.lambda(j) << " nm";
+    EXPECT_LT(sem, 0.02 * expected) << "at " << base.lambda(j) << " nm";
+  }
+}
+
+// A camera inside a sphere of a scattering medium, lit from all sides by a uniform infinite
+// light of radiance 1 through the sphere's interface. Inside a lossless (albedo 1) medium the
+// radiance is 1 everywhere, whatever the (chromatic) scattering coefficient and asymmetry; in a
+// medium that absorbs and emits Le = 1 it is 1 too (emission sigma_a Le balances absorption).
+TEST(Volpath, FurnaceInsideAlbedoOneAndEmittingMedia) {
+  const std::string header = R"(
+LookAt 0 0 0  0 0 1  0 1 0
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16 "string filename" "f.exr"
+Sampler "independent" "integer pixelsamples" 64
+PixelFilter "box"
+Integrator "volpath" "integer maxdepth" 1000
+)";
+  const std::string world = R"(
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+AttributeBegin
+  MediumInterface "m" ""
+  Material "interface"
+  Shape "sphere" "float radius" 2
+AttributeEnd
+)";
+  const char* media[] = {
+      // Lossless, chromatic sigma_s (optical radius 1 to 4), forward scattering.
+      R"(MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_a" [0 0 0]
+           "rgb sigma_s" [0.5 1 2] "float g" 0.6)",
+      // Absorbing and emitting, backward scattering.
+      R"(MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_a" [0.8 0.4 1.5]
+           "rgb sigma_s" [0.3 0.6 0.2] "float g" -0.4 "rgb Le" [1 1 1])",
+      // The same without emission: darker (so the medium, and the camera's, are in effect).
+      R"(MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_a" [0.8 0.4 1.5]
+           "rgb sigma_s" [0.3 0.6 0.2] "float g" -0.4)",
+  };
+  for (const char* m : media) {
+    const bool dark = std::string(m).find("Le") == std::string::npos &&
+                      std::string(m).find("[0 0 0]") == std::string::npos;
+    SCOPED_TRACE(m);
+    // The camera is inside the medium: the outside of the MediumInterface current at Camera.
+    const std::string text =
+        header + m + "\nMediumInterface \"\" \"m\"\nCamera \"perspective\" \"float fov\" 90\n" +
+        world;
+    const Image im = renderText(text).image;
+    for (int c = 0; c < 3; ++c) {
+      const Stats s = regionStats(im, c, 0, 16, 0, 16);
+      std::printf("furnace channel %d: %.4f +- %.4f\n", c, s.mean, s.sem);
+      if (dark)
+        EXPECT_LT(s.mean, 0.8) << "channel " << c;
+      else
+        EXPECT_NEAR(s.mean, 1.0, 4 * s.sem + 0.005) << "channel " << c;
+    }
+  }
+}
+
+// Single scattering (maxdepth 1) from a slab z in [0, d] of an isotropic... Henyey-Greenstein
+// medium lit by a distant light along -z with irradiance E, seen by an orthographic camera from
+// above at angle theta to the normal. A point at distance s along the view ray inside the slab
+// is reached by the light through depth s mu (mu = cos theta), so
+//   L = sigma_s p(Theta) E int_0^{d/mu} exp(-sigma_t s (1 + mu)) ds
+//     = sigma_s p(Theta) E (1 - exp(-sigma_t d (1 + mu) / mu)) / (sigma_t (1 + mu)),
+// with Theta the angle between the light's and the scattered light's directions of travel.
+TEST(Volpath, SingleScatteringFromAThinLayer) {
+  const double theta = 40 * std::numbers::pi / 180, mu = std::cos(theta);
+  const double sigma_a = 0.3, sigma_s = 0.9, thickness = 0.25, g = 0.3, E = 2.0;
+  const double sigma_t = sigma_a + sigma_s;
+  const double cos_Theta = -mu;  // light travels -z, scattered light (-sin, 0, cos)
+  const double p =
+      (1 - g * g) / (4 * std::numbers::pi * std::pow(1 + g * g - 2 * g * cos_Theta, 1.5));
+  const double expected =
+      sigma_s * p * E * (1 - std::exp(-sigma_t * thickness * (1 + mu) / mu)) / (sigma_t * (1 + mu));
+  const double cx = 5 * std::sin(theta), cz = 5 * mu;
+  const std::string text = fmt::format(R"(
+LookAt {} 0 {}  0 0 0  0 1 0
+Camera "orthographic" "float screenwindow" [-0.5 0.5 -0.5 0.5]
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16 "string filename" "s.exr"
+Sampler "independent" "integer pixelsamples" 256
+PixelFilter "box"
+Integrator "volpath" "integer maxdepth" 1
+WorldBegin
+LightSource "distant" "point3 from" [0 0 1] "point3 to" [0 0 0] "rgb L" [{} {} {}]
+MakeNamedMedium "layer" "string type" "homogeneous" "rgb sigma_a" [{} {} {}]
+  "rgb sigma_s" [{} {} {}] "float g" {}
+AttributeBegin
+  MediumInterface "layer" ""
+  Material "interface"
+  Shape "trianglemesh" "point3 P" [-50 -50 {}  50 -50 {}  50 50 {}  -50 50 {}]
+    "integer indices" [0 1 2 0 2 3]
+  Shape "trianglemesh" "point3 P" [-50 -50 0  -50 50 0  50 50 0  50 -50 0]
+    "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+)",
+                                       cx, cz, E, E, E, sigma_a, sigma_a, sigma_a, sigma_s, sigma_s,
+                                       sigma_s, g, thickness, thickness, thickness, thickness);
+  const Image im = renderText(text).image;
+  for (int c = 0; c < 3; ++c) {
+    const Stats s = regionStats(im, c, 0, 16, 0, 16);
+    std::printf("single scattering channel %d: %.5f +- %.5f, closed form %.5f\n", c, s.mean, s.sem,
+                expected);
+    EXPECT_NEAR(s.mean, expected, 4 * s.sem + 1e-3 * expected) << "channel " << c;
+    EXPECT_LT(s.sem, 0.01 * expected);
+  }
+}
+
+// A diffuse box with an area light and no media: volpath and path render the same image
+// within noise (per-block z-test of lensim compare).
+TEST(Volpath, AgreesWithPathWithoutMedia) {
+  auto scene = [](const char* integrator) {
+    return fmt::format(R"(
+LookAt 0 1 -3.2  0 1 0  0 1 0
+Camera "perspective" "float fov" 45
+Film "rgb" "integer xresolution" 40 "integer yresolution" 40 "string filename" "b.exr"
+Sampler "independent" "integer pixelsamples" 16
+Integrator "{}" "integer maxdepth" 5
+WorldBegin
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [6 6 6]
+  Shape "trianglemesh" "point3 P" [-0.3 1.99 -0.3  0.3 1.99 -0.3  0.3 1.99 0.3  -0.3 1.99 0.3]
+    "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+Material "diffuse" "rgb reflectance" [0.7 0.7 0.7]
+Shape "trianglemesh" "point3 P" [-1 0 -1  1 0 -1  1 0 1  -1 0 1  -1 2 -1  1 2 -1  1 2 1  -1 2 1]
+  "integer indices" [0 2 1 0 3 2  4 5 6 4 6 7  3 7 6 3 6 2]
+Material "diffuse" "rgb reflectance" [0.7 0.1 0.1]
+Shape "trianglemesh" "point3 P" [-1 0 -1  -1 0 1  -1 2 1  -1 2 -1] "integer indices" [0 2 1 0 3 2]
+Material "diffuse" "rgb reflectance" [0.1 0.7 0.1]
+Shape "trianglemesh" "point3 P" [1 0 -1  1 0 1  1 2 1  1 2 -1] "integer indices" [0 1 2 0 2 3]
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.8]
+AttributeBegin
+  Translate 0.3 0.35 0.2
+  Shape "sphere" "float radius" 0.35
+AttributeEnd
+)",
+                       integrator);
+  };
+  RenderOptions o;
+  o.spp = 32;
+  o.seed = 1;
+  const Image a = renderText(scene("volpath"), o).image;
+  o.seed = 2;
+  const Image b = renderText(scene("volpath"), o).image;
+  o.seed = 3;
+  o.spp = 128;
+  const Image ref = renderText(scene("path"), o).image;
+  render::CompareOptions co;
+  co.second = &b;
+  co.spp = 32;
+  co.reference_spp = 128;
+  const render::CompareResult r = render::compareImages(a, ref, co);
+  std::printf("%s", render::formatCompare(r).c_str());
+  EXPECT_EQ(r.z_failures, 0) << render::formatCompare(r);
+  EXPECT_NEAR(r.mean_ratio, 1.0, 0.02) << render::formatCompare(r);
+  // The test can fail: a red wall made white is found.
+  const std::string wrong = [&] {
+    std::string s = scene("volpath");
+    s.replace(s.find("0.7 0.1 0.1"), 11, "0.7 0.7 0.7");
+    return s;
+  }();
+  o.seed = 1;
+  o.spp = 32;
+  const Image w = renderText(wrong, o).image;
+  EXPECT_GT(render::compareImages(w, ref, co).z_failures, 0);
+}
