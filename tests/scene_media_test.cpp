@@ -159,4 +159,9 @@ Shape "sphere"
 TEST(SceneMedia, VolpathIsItsOwnIntegrator) {
   EXPECT_EQ(buildText("Integrator \"volpath\"\nWorldBegin\n").integrator.type, "volpath");
   EXPECT_EQ(buildText("Integrator \"path\"\nWorldBegin\n").integrator.type, "path");
+  // pbrt-v4's default; pbrt-v1–v3 files keep theirs (pbrt-v2's directlighting: path, depth 1).
+  EXPECT_EQ(buildText("WorldBegin\n").integrator.type, "volpath");
+  const scene::Scene legacy = buildText("WorldBegin\nWorldEnd\n");
+  EXPECT_EQ(legacy.integrator.type, "path");
+  EXPECT_EQ(legacy.integrator.max_depth, 1);
 }
