@@ -73,13 +73,56 @@ Stats regionStats(const Image& im, int c, int x0, int x1, int y0, int y1) {
   return r;
 }
 
+/// Transmittance along the ray (o, dir) at each wavelength of one set, estimated by volpath as
+/// radiance over that of the emitter seen along (o_clear, dir). The hero-wavelength estimator is
+/// unbiased for every wavelength once averaged over which wavelength is the hero, so the set is
+/// traced with each of its members as hero.
+struct Transmittance {
+  double lambda[4], mean[4], sem[4];
+};
+Transmittance transmittance(const Direct& d, const Vec3& o, const Vec3& dir, const Vec3& o_clear) {
+  const double u0 = 0.13;  // wavelengths 421.1, 538.6, 656.1, 773.6 nm
+  const render::SampledWavelengths base = render::SampledWavelengths::sampleUniform(u0);
+  constexpr int kPaths = 40000;
+  render::IndependentSampler sampler(kPaths, 7);
+  render::RayCounts counts;
+  double sum[4] = {}, sum2[4] = {}, emitted[4] = {};
+  for (int k = 0; k < 4; ++k) {
+    const render::SampledWavelengths lambda =
+        render::SampledWavelengths::sampleUniform(std::fmod(u0 + k / 4.0, 1.0));
+    int slot[4] = {};
+    for (int c = 0; c < 4; ++c)
+      for (int j = 0; j < 4; ++j)
+        if (std::abs(lambda.lambda(c) - base.lambda(j)) < 1e-6) slot[c] = j;
+    sampler.startPixelSample({0, 0}, 0);
+    render::SampledWavelengths l2 = lambda;
+    const render::SampledSpectrum Le =
+        render::volpathLi(d.sc, o_clear, dir, -1, l2, sampler, counts);
+    for (int c = 0; c < 4; ++c) emitted[slot[c]] = Le[c];
+    for (int i = 0; i < kPaths; ++i) {
+      sampler.startPixelSample({k, 0}, i);
+      render::SampledWavelengths l = lambda;
+      const render::SampledSpectrum L = render::volpathLi(d.sc, o, dir, -1, l, sampler, counts);
+      for (int c = 0; c < 4; ++c) sum[slot[c]] += L[c], sum2[slot[c]] += L[c] * L[c];
+    }
+  }
+  Transmittance T;
+  const double n = 4.0 * kPaths;
+  for (int j = 0; j < 4; ++j) {
+    EXPECT_GT(emitted[j], 0);
+    T.lambda[j] = base.lambda(j);
+    T.mean[j] = sum[j] / n / emitted[j];
+    T.sem[j] =
+        std::sqrt(std::max(0.0, sum2[j] / n - std::pow(sum[j] / n, 2)) / (n - 1)) / emitted[j];
+  }
+  return T;
+}
+
 }  // namespace
 
 // A slab 1 m thick (z in [0.5, 1.5], bounded by interface quads) of a purely absorbing medium
 // whose sigma_a varies with wavelength, in front of an emitter; a ray along +z. Transmittance at
-// each wavelength is exp(-sigma_a(lambda) 1 m). The hero-wavelength estimator is unbiased for
-// every wavelength once averaged over which wavelength is the hero, so each wavelength set is
-// traced with each of its members as hero.
+// each wavelength is exp(-sigma_a(lambda) 1 m).
 TEST(Volpath, BeerLambertSlabAtEachWavelength) {
   Direct d(R"(
 Integrator "volpath" "integer maxdepth" 5
@@ -107,45 +150,13 @@ AttributeEnd
       if (l <= x[i + 1]) return y[i] + (y[i + 1] - y[i]) * (l - x[i]) / (x[i + 1] - x[i]);
     return y[4];
   };
-  const double u0 = 0.13;  // wavelengths 421.1, 538.6, 656.1, 773.6 nm
-  const render::SampledWavelengths base = render::SampledWavelengths::sampleUniform(u0);
-  constexpr int kPaths = 40000;
-  render::IndependentSampler sampler(kPaths, 7);
-  render::RayCounts counts;
-  double sum[4] = {}, sum2[4] = {}, emitted[4] = {};
-  for (int k = 0; k < 4; ++k) {
-    // The same set with member k as hero.
-    render::SampledWavelengths lambda =
-        render::SampledWavelengths::sampleUniform(std::fmod(u0 + k / 4.0, 1.0));
-    int slot[4];
-    for (int c = 0; c < 4; ++c)
-      for (int j = 0; j < 4; ++j)
-        if (std::abs(lambda.lambda(c) - base.lambda(j)) < 1e-6) slot[c] = j;
-    // The emitter seen past the slab (x = 5): its radiance at these wavelengths.
-    sampler.startPixelSample({0, 0}, 0);
-    render::SampledWavelengths l2 = lambda;
-    const render::SampledSpectrum Le =
-        render::volpathLi(d.sc, {5, 0, 0}, {0, 0, 1}, -1, l2, sampler, counts);
-    for (int c = 0; c < 4; ++c) emitted[slot[c]] = Le[c];
-    for (int i = 0; i < kPaths; ++i) {
-      sampler.startPixelSample({k, 0}, i);
-      render::SampledWavelengths l = lambda;
-      const render::SampledSpectrum L =
-          render::volpathLi(d.sc, {0, 0, 0}, {0, 0, 1}, -1, l, sampler, counts);
-      for (int c = 0; c < 4; ++c) sum[slot[c]] += L[c], sum2[slot[c]] += L[c] * L[c];
-    }
-  }
-  const double n = 4.0 * kPaths;
+  const Transmittance T = transmittance(d, {0, 0, 0}, {0, 0, 1}, {5, 0, 0});
   for (int j = 0; j < 4; ++j) {
-    ASSERT_GT(emitted[j], 0);
-    const double mean = sum[j] / n / emitted[j];
-    const double sem =
-        std::sqrt(std::max(0.0, sum2[j] / n - std::pow(sum[j] / n, 2)) / (n - 1)) / emitted[j];
-    const double expected = std::exp(-sigma_a(base.lambda(j)));
-    std::printf("%.1f nm: T %.5f +- %.5f, exp(-sigma_a d) %.5f\n", base.lambda(j), mean, sem,
+    const double expected = std::exp(-sigma_a(T.lambda[j]));
+    std::printf("%.1f nm: T %.5f +- %.5f, exp(-sigma_a d) %.5f\n", T.lambda[j], T.mean[j], T.sem[j],
                 expected);
-    EXPECT_NEAR(mean, expected, 4 * sem + 1e-6) << "at " << base.lambda(j) << " nm";
-    EXPECT_LT(sem, 0.02 * expected) << "at " << base.lambda(j) << " nm";
+    EXPECT_NEAR(T.mean[j], expected, 4 * T.sem[j] + 1e-6) << "at " << T.lambda[j] << " nm";
+    EXPECT_LT(T.sem[j], 0.02 * expected) << "at " << T.lambda[j] << " nm";
   }
 }
 
@@ -308,4 +319,75 @@ AttributeEnd
   o.spp = 32;
   const Image w = renderText(wrong, o).image;
   EXPECT_GT(render::compareImages(w, ref, co).z_failures, 0);
+}
+
+// A uniformgrid of 2 x 1 x 1 voxels (densities a, b) mapped by the CTM at MakeNamedMedium onto
+// x in [-1, 1], |y|, |z| <= 0.5, inside an interface sphere, absorbing with a spectral sigma_a,
+// in front of an emitter. Along the x axis pbrt-v4's lookup (trilinear between voxel centres,
+// zero beyond) gives a density whose integral over the grid's unit x is 0.4375 (a + b), so the
+// optical depth is sigma_a(lambda) * 2 m * 0.4375 (a + b). Delta tracking meets null collisions
+// here (the majorant is the largest density of each cell).
+TEST(Volpath, BeerLambertThroughAUniformGrid) {
+  const double a = 0.6, b = 1.4;
+  Direct d(fmt::format(R"(
+Integrator "volpath" "integer maxdepth" 5
+WorldBegin
+AttributeBegin
+  Translate -1 -0.5 -0.5
+  Scale 2 1 1
+  MakeNamedMedium "grid" "string type" "uniformgrid" "integer nx" 2 "float density" [{} {}]
+    "spectrum sigma_a" [360 0.3 830 1.3] "rgb sigma_s" [0 0 0]
+AttributeEnd
+AttributeBegin
+  MediumInterface "grid" ""
+  Material "interface"
+  Shape "sphere" "float radius" 3
+AttributeEnd
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [1 1 1]
+  Shape "trianglemesh" "point3 P" [4 -10 -10  4 -10 10  4 10 10  4 10 -10]
+    "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+)",
+                       a, b));
+  const Transmittance T = transmittance(d, {-3.5, 0, 0}, {1, 0, 0}, {-3.5, 5, 0});
+  for (int j = 0; j < 4; ++j) {
+    const double sigma = 0.3 + (T.lambda[j] - 360) / 470;
+    const double expected = std::exp(-sigma * 2 * 0.4375 * (a + b));
+    std::printf("uniformgrid %.1f nm: T %.5f +- %.5f, closed form %.5f\n", T.lambda[j], T.mean[j],
+                T.sem[j], expected);
+    EXPECT_NEAR(T.mean[j], expected, 4 * T.sem[j] + 1e-6) << "at " << T.lambda[j] << " nm";
+  }
+}
+
+// A camera inside an rgbgrid of 2 x 2 x 2 voxels of different chromatic scattering and no
+// absorption, lit by a uniform sky through an interface sphere: a lossless medium, so the
+// radiance is 1 everywhere (null collisions against cell majorants, spectral MIS).
+TEST(Volpath, FurnaceInsideAnRgbGrid) {
+  const std::string text = R"(
+LookAt 0 0 0  0 0 1  0 1 0
+MakeNamedMedium "g" "string type" "rgbgrid" "integer nx" 2 "integer ny" 2 "integer nz" 2
+  "point3 p0" [-2 -2 -2] "point3 p1" [2 2 2] "float g" 0.5
+  "rgb sigma_a" [0 0 0  0 0 0  0 0 0  0 0 0  0 0 0  0 0 0  0 0 0  0 0 0]
+  "rgb sigma_s" [0.5 1 2  2 1 0.5  1 1 1  3 0.2 0.2  0.1 0.1 0.1  0.2 3 0.2  1 2 3  0 0 0]
+MediumInterface "" "g"
+Camera "perspective" "float fov" 90
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16 "string filename" "f.exr"
+Sampler "independent" "integer pixelsamples" 64
+PixelFilter "box"
+Integrator "volpath" "integer maxdepth" 1000
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+AttributeBegin
+  MediumInterface "g" ""
+  Material "interface"
+  Shape "sphere" "float radius" 1.9
+AttributeEnd
+)";
+  const Image im = renderText(text).image;
+  for (int c = 0; c < 3; ++c) {
+    const Stats s = regionStats(im, c, 0, 16, 0, 16);
+    std::printf("rgbgrid furnace channel %d: %.4f +- %.4f\n", c, s.mean, s.sem);
+    EXPECT_NEAR(s.mean, 1.0, 4 * s.sem + 0.005) << "channel " << c;
+  }
 }

@@ -141,6 +141,44 @@ TEST(SceneMedia, BadParametersAreLocatedErrors) {
             "test.pbrt:1:1: error: MakeNamedMedium \"m\": missing \"string type\"\n");
 }
 
+TEST(SceneMedia, GridMedia) {
+  const scene::Scene s = buildText(R"(
+AttributeBegin
+  Translate 1 2 3
+  MakeNamedMedium "smoke" "string type" "uniformgrid" "integer nx" 2 "integer ny" 1
+    "integer nz" 1 "float density" [0.5 2] "point3 p0" [-1 -1 -1] "float scale" 3
+MakeNamedMedium "tint" "string type" "rgbgrid" "rgb sigma_s" [1 0 0] "rgb Le" [0 1 0]
+  "float Lescale" 2
+AttributeEnd
+WorldBegin
+)");
+  ASSERT_EQ(errorsOf(s), "");
+  ASSERT_EQ(s.media.size(), 2u);
+  EXPECT_EQ(s.media[0].type, "uniformgrid");
+  EXPECT_EQ(s.media[0].nx, 2);
+  EXPECT_EQ(s.media[0].density.size(), 2u);
+  EXPECT_EQ(s.media[0].p0.x, -1);
+  EXPECT_EQ(s.media[0].p1.z, 1);
+  EXPECT_EQ(s.media[0].medium_from_world.applyPoint({1, 2, 3}), (Vec3{0, 0, 0}));
+  EXPECT_EQ(s.media[1].type, "rgbgrid");
+  EXPECT_TRUE(s.media[1].sigma_a_grid.empty());
+  EXPECT_EQ(s.media[1].sigma_s_grid.size(), 1u);
+  EXPECT_EQ(s.media[1].Le_grid.at(0).y, 1);
+  EXPECT_EQ(s.media[1].Le_scale, 2);
+
+  EXPECT_EQ(errorsOf(buildText(R"(MakeNamedMedium "m" "string type" "uniformgrid" "integer nx" 2
+  "float density" [1 2 3]
+)")),
+            "test.pbrt:2:3: error: medium \"m\": \"density\" has 3 values; expected nx*ny*nz = "
+            "2\n");
+  EXPECT_EQ(errorsOf(buildText(R"(MakeNamedMedium "m" "string type" "uniformgrid"
+)")),
+            "test.pbrt:1:1: error: medium \"m\": missing \"float density\"\n");
+  EXPECT_EQ(errorsOf(buildText(R"(MakeNamedMedium "m" "string type" "rgbgrid" "rgb sigma_a" [1 -1 0]
+)")),
+            "test.pbrt:1:45: error: medium \"m\": \"sigma_a\" has a negative value -1\n");
+}
+
 TEST(SceneMedia, UnrenderedTypesAreWarnedAndLeftOut) {
   const scene::Scene s = buildText(R"(
 MakeNamedMedium "cloud" "string type" "nanovdb" "string filename" "x.nvdb"

@@ -259,6 +259,13 @@ struct Medium {
   double g = 0;        ///< Henyey-Greenstein asymmetry in (-1, 1)
   SpectrumValue Le = SpectrumValue::gray(0);  ///< emitted radiance (times sigma_a)
   double Le_scale = 1;                        ///< `Lescale`
+  // uniformgrid and rgbgrid: nx * ny * nz voxel values (x fastest) over the medium-space box
+  // [p0, p1], interpolated trilinearly between voxel centres (zero beyond the outer ones).
+  int nx = 1, ny = 1, nz = 1;
+  Vec3 p0{0, 0, 0}, p1{1, 1, 1};
+  std::vector<double> density;        ///< uniformgrid: scales sigma_a and sigma_s
+  std::vector<double> Le_scale_grid;  ///< uniformgrid: per-voxel `Lescale`, or empty
+  std::vector<Vec3> sigma_a_grid, sigma_s_grid, Le_grid;  ///< rgbgrid (empty: 1, 1, 0)
 };
 
 /// The film (image) description.
