@@ -158,6 +158,29 @@ AttributeEnd
     EXPECT_NEAR(T.mean[j], expected, 4 * T.sem[j] + 1e-6) << "at " << T.lambda[j] << " nm";
     EXPECT_LT(T.sem[j], 0.02 * expected) << "at " << T.lambda[j] << " nm";
   }
+  // Behind a dispersive lens or interface only the hero wavelength is carried: its estimate
+  // alone must be unbiased (no averaging with the dropped wavelengths' pdfs).
+  render::IndependentSampler sampler(20000, 11);
+  render::RayCounts counts;
+  for (int j = 0; j < 4; ++j) {
+    render::SampledWavelengths lambda =
+        render::SampledWavelengths::sampleUniform(std::fmod(0.13 + j / 4.0, 1.0));
+    lambda.terminateSecondary();
+    sampler.startPixelSample({9, 9}, 0);
+    render::SampledWavelengths l2 = lambda;
+    const double Le = render::volpathLi(d.sc, {5, 0, 0}, {0, 0, 1}, -1, l2, sampler, counts)[0];
+    double sum = 0, sum2 = 0;
+    for (int i = 0; i < 20000; ++i) {
+      sampler.startPixelSample({j, 9}, i);
+      render::SampledWavelengths l = lambda;
+      const double v =
+          render::volpathLi(d.sc, {0, 0, 0}, {0, 0, 1}, -1, l, sampler, counts)[0] / Le;
+      sum += v, sum2 += v * v;
+    }
+    const double mean = sum / 20000, sem = std::sqrt((sum2 / 20000 - mean * mean) / 19999);
+    const double expected = std::exp(-sigma_a(lambda.lambda(0)));
+    EXPECT_NEAR(mean, expected, 4 * sem + 1e-6) << "hero only, " << lambda.lambda(0) << " nm";
+  }
 }
 
 // A camera inside a sphere of a scattering medium, lit from all sides by a uniform infinite

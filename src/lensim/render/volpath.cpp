@@ -16,6 +16,13 @@ namespace lensim::render {
 
 namespace {
 
+/// The average of rescaled path pdfs r over the wavelengths that are still carried: the one-sample
+/// MIS over wavelengths. Once a dispersive interface (or lens) has kept only the hero wavelength,
+/// its estimate is the hero's alone (r[0]); averaging in the others' pdfs would bias it.
+double wavelengthMean(const SampledSpectrum& r, const SampledWavelengths& lambda) {
+  return lambda.secondaryTerminated() ? r[0] : r.average();
+}
+
 /// exp(-dt sigma) per wavelength, 1 where sigma is 0 (also for an infinite dt).
 SampledSpectrum transmittance(double dt, const SampledSpectrum& sigma) {
   SampledSpectrum T;
@@ -143,7 +150,7 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
                          r_l *= Tm * smaj / pdf;
                          r_u *= Tm * sigma_n / pdf;
                          // Russian roulette on low transmittance.
-                         const SampledSpectrum Tr = T_ray / (r_l + r_u).average();
+                         const SampledSpectrum Tr = T_ray / wavelengthMean(r_l + r_u, lambda);
                          if (Tr.maxValue() < 0.05) {
                            const double q = 0.75;
                            if (rng.uniform() < q)
@@ -166,8 +173,8 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
   }
   r_l *= r_p * p_l;
   r_u *= r_p * scatter_pdf;
-  if (choice->light->isDelta()) return beta * f_hat * T_ray * ls->L / r_l.average();
-  return beta * f_hat * T_ray * ls->L / (r_l + r_u).average();
+  if (choice->light->isDelta()) return beta * f_hat * T_ray * ls->L / wavelengthMean(r_l, lambda);
+  return beta * f_hat * T_ray * ls->L / wavelengthMean(r_l + r_u, lambda);
 }
 
 }  // namespace
@@ -213,7 +220,8 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
                          const double pdf = smaj[0] * Tm[0];
                          const SampledSpectrum betap = beta * Tm / pdf;
                          const SampledSpectrum r_e = r_u * smaj * Tm / pdf;
-                         if (!r_e.isBlack()) L += betap * mp.sigma_a * mp.Le / r_e.average();
+                         if (!r_e.isBlack())
+                           L += betap * mp.sigma_a * mp.Le / wavelengthMean(r_e, lambda);
                        }
                        // Absorption, real scattering or a null collision, by the hero's
                        // probabilities.
@@ -277,11 +285,11 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
         const SampledSpectrum Le = light->Le(ray.d, lambda);
         if (Le.isBlack()) continue;
         if (depth == 0 || specular_bounce) {
-          L += beta * Le / r_u.average();
+          L += beta * Le / wavelengthMean(r_u, lambda);
         } else {
           const double p_l = sc.lights->pmf(light) * light->pdfLi(prev_p, ray.d, nullptr);
           const SampledSpectrum rl = r_l * p_l;
-          L += beta * Le / (r_u + rl).average();
+          L += beta * Le / wavelengthMean(r_u + rl, lambda);
         }
       }
       break;
@@ -292,11 +300,11 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
       const SampledSpectrum Le = area->L(h, wo, lambda);
       if (!Le.isBlack()) {
         if (depth == 0 || specular_bounce) {
-          L += beta * Le / r_u.average();
+          L += beta * Le / wavelengthMean(r_u, lambda);
         } else {
           const double p_l = sc.lights->pmf(area) * area->pdfLi(prev_p, ray.d, &h);
           const SampledSpectrum rl = r_l * p_l;
-          L += beta * Le / (r_u + rl).average();
+          L += beta * Le / wavelengthMean(r_u + rl, lambda);
         }
       }
     }
@@ -341,7 +349,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
     medium = mediumAfter(sc, h, bs->wi, medium);
     ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
     if (beta.isBlack()) break;
-    const SampledSpectrum rr_beta = beta * eta_scale / r_u.average();
+    const SampledSpectrum rr_beta = beta * eta_scale / wavelengthMean(r_u, lambda);
     const double u_rr = sampler.get1D();
     if (rr_beta.maxValue() < 1 && depth > 1) {
       const double q = std::max(0.0, 1 - rr_beta.maxValue());
