@@ -203,3 +203,21 @@ TEST(SceneMedia, VolpathIsItsOwnIntegrator) {
   EXPECT_EQ(legacy.integrator.type, "path");
   EXPECT_EQ(legacy.integrator.max_depth, 1);
 }
+
+TEST(SceneMedia, PathIgnoresMediaWithAWarningAndOtherIntegratorsKeepThem) {
+  const scene::Scene s = buildText(R"(Integrator "path"
+MakeNamedMedium "fog" "string type" "homogeneous"
+WorldBegin
+MediumInterface "fog" ""
+Shape "sphere"
+)");
+  ASSERT_EQ(errorsOf(s), "");
+  bool warned = false;
+  for (const Diagnostic& d : s.diagnostics)
+    warned = warned || (d.loc.str() == "test.pbrt:1:1" &&
+                        d.message.find("participating media but integrator \"path\" ignores "
+                                       "them") != std::string::npos);
+  EXPECT_TRUE(warned);
+  // bdpt is not rendered; its stand-in renders media (pbrt-v4 files).
+  EXPECT_EQ(buildText("Integrator \"bdpt\"\nWorldBegin\n").integrator.type, "volpath");
+}

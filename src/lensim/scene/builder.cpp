@@ -917,10 +917,12 @@ class Builder {
                "integrator \"directlighting\" (pbrt-v1–v3) renders as \"path\" with maxdepth 1");
     } else {
       ps.markAllUsed();
+      // pbrt-v4's other integrators (bdpt, mlt, sppm, ...) handle media: volpath keeps them.
+      if (!scene_.legacy_syntax) it.type = "volpath";
       warnOnce("integrator " + type, d.loc,
-               fmt::format("integrator \"{}\" is not rendered by lensim; it renders as \"path\" "
+               fmt::format("integrator \"{}\" is not rendered by lensim; it renders as \"{}\" "
                            "with maxdepth {}",
-                           type, it.max_depth));
+                           type, it.type, it.max_depth));
     }
     finish(ps);
   }
