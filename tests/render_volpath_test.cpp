@@ -387,6 +387,52 @@ AttributeEnd
 // A camera inside an rgbgrid of 2 x 2 x 2 voxels of different chromatic scattering and no
 // absorption, lit by a uniform sky through an interface sphere: a lossless medium, so the
 // radiance is 1 everywhere (null collisions against cell majorants, spectral MIS).
+// The furnace enclosed in a uniform area emitter instead of a sky: a black sphere emitting L = 1
+// inward (ReverseOrientation: its normal, hence its outside medium, faces the centre) around a
+// camera in a lossless chromatic medium. The radiance is 1 everywhere; this exercises the MIS
+// of area-light hits found by phase sampling against light sampling from medium points.
+TEST(Volpath, FurnaceInsideAUniformAreaEmitter) {
+  const char* media[] = {
+      R"(MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_a" [0 0 0]
+  "rgb sigma_s" [0.3 0.6 1.2] "float g" 0.3)",
+      R"(MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_a" [0.5 0.2 0.9]
+  "rgb sigma_s" [0.3 0.6 1.2] "float g" 0.3 "rgb Le" [1 1 1])",
+      // Without its emission the absorbing medium darkens the view: the medium is in effect.
+      R"(MakeNamedMedium "m" "string type" "homogeneous" "rgb sigma_a" [0.5 0.2 0.9]
+  "rgb sigma_s" [0.3 0.6 1.2] "float g" 0.3)",
+  };
+  for (int k = 0; k < 3; ++k) {
+    SCOPED_TRACE(media[k]);
+    const std::string text = std::string(R"(
+LookAt 0 0 0  0 0 1  0 1 0
+)") + media[k] + R"(
+MediumInterface "" "m"
+Camera "perspective" "float fov" 90
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16 "string filename" "a.exr"
+Sampler "independent" "integer pixelsamples" 64
+PixelFilter "box"
+Integrator "volpath" "integer maxdepth" 1000
+WorldBegin
+AttributeBegin
+  ReverseOrientation
+  MediumInterface "" "m"
+  AreaLightSource "diffuse" "rgb L" [1 1 1]
+  Material "diffuse" "rgb reflectance" [0 0 0]
+  Shape "sphere" "float radius" 2
+AttributeEnd
+)";
+    const Image im = renderText(text).image;
+    for (int c = 0; c < 3; ++c) {
+      const Stats s = regionStats(im, c, 0, 16, 0, 16);
+      std::printf("area-emitter furnace %d channel %d: %.4f +- %.4f\n", k, c, s.mean, s.sem);
+      if (k == 2)
+        EXPECT_LT(s.mean, 0.8) << "channel " << c;
+      else
+        EXPECT_NEAR(s.mean, 1.0, 4 * s.sem + 0.005) << "channel " << c;
+    }
+  }
+}
+
 TEST(Volpath, FurnaceInsideAnRgbGrid) {
   const std::string text = R"(
 LookAt 0 0 0  0 0 1  0 1 0
