@@ -166,6 +166,15 @@ WorldBegin
   EXPECT_EQ(s.media[1].Le_grid.at(0).y, 1);
   EXPECT_EQ(s.media[1].Le_scale, 2);
 
+  // pbrt-v3's name for the density grid.
+  const scene::Scene v3 = buildText(R"(MakeNamedMedium "smoke" "string type" "heterogeneous"
+  "float density" [0.5] "rgb sigma_a" [1 1 1] "rgb sigma_s" [2 2 2]
+WorldBegin
+)");
+  ASSERT_EQ(errorsOf(v3), "");
+  EXPECT_EQ(v3.media.at(0).type, "uniformgrid");
+  EXPECT_EQ(v3.media.at(0).type_as_written, "heterogeneous");
+
   EXPECT_EQ(errorsOf(buildText(R"(MakeNamedMedium "m" "string type" "uniformgrid" "integer nx" 2
   "float density" [1 2 3]
 )")),

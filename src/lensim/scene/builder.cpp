@@ -1553,7 +1553,7 @@ class Builder {
     m.loc = d.loc;
     m.type_as_written = *type;
     m.medium_from_world = inverse(gs_.ctm[0]);
-    if (*type == "uniformgrid" || *type == "rgbgrid") {
+    if (*type == "uniformgrid" || *type == "rgbgrid" || *type == "heterogeneous") {
       gridMedium(m, ps, d.loc);
       finish(ps);
       if (named_media_.count(name)) warn(d.loc, fmt::format("named medium \"{}\" redefined", name));
@@ -1615,7 +1615,8 @@ class Builder {
   // pbrt-v4's "uniformgrid" (GridMedium: a density grid scaling sigma_a and sigma_s, optional
   // per-voxel Lescale) and "rgbgrid" (RGBGridMedium: RGB sigma_a, sigma_s and Le grids).
   void gridMedium(Medium& m, ParamSet& ps, const FileLoc& loc) {
-    m.type = m.type_as_written;
+    // pbrt-v3's "heterogeneous" (GridDensityMedium) is pbrt-v4's uniformgrid.
+    m.type = m.type_as_written == "heterogeneous" ? "uniformgrid" : m.type_as_written;
     m.nx = ps.getInt({"nx"}, 1);
     m.ny = ps.getInt({"ny"}, 1);
     m.nz = ps.getInt({"nz"}, 1);
