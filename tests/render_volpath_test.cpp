@@ -554,3 +554,33 @@ Shape "sphere" "float radius" 0.35
                 lens, r.mean_ratio, r.z_failures, r2.mean_ratio, r2.z_failures);
   }
 }
+
+// Shadow rays of volpath pass through "interface" surfaces (medium boundaries without a
+// surface), as pbrt-v4's volpath does, also in a scene without media: a diffuse plane under a
+// point light reads the same with an interface quad between them as without it.
+TEST(Volpath, ShadowRaysPassInterfaceSurfaces) {
+  auto scene = [](bool interface) {
+    return std::string(R"(
+LookAt 0 3 0  0 0 0  0 0 1
+Camera "perspective" "float fov" 30
+Film "rgb" "integer xresolution" 16 "integer yresolution" 16 "string filename" "i.exr"
+Sampler "independent" "integer pixelsamples" 16
+PixelFilter "box"
+Integrator "volpath" "integer maxdepth" 1
+WorldBegin
+LightSource "point" "point3 from" [0.5 2 0] "rgb I" [4 4 4]
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indices" [0 1 2 0 2 3]
+)") + (interface ? R"(Material "interface"
+Shape "trianglemesh" "point3 P" [-5 1 -5  5 1 -5  5 1 5  -5 1 5] "integer indices" [0 1 2 0 2 3]
+)"
+                 : "");
+  };
+  const Image a = renderText(scene(false)).image;
+  const Image b = renderText(scene(true)).image;
+  for (int c = 0; c < 3; ++c) {
+    const Stats sa = regionStats(a, c, 0, 16, 0, 16), sb = regionStats(b, c, 0, 16, 0, 16);
+    ASSERT_GT(sa.mean, 0.01);
+    EXPECT_NEAR(sb.mean, sa.mean, 4 * std::hypot(sa.sem, sb.sem) + 1e-4) << "channel " << c;
+  }
+}

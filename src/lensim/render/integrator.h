@@ -40,6 +40,7 @@ struct SceneContext {
   Transform camera_from_world;  ///< for pbrt_v2_epsilon
   const Media* media = nullptr;  ///< participating media (volpath); nullptr or empty: none
   int camera_medium = -1;        ///< the medium camera rays start in (Scene::media index)
+  bool has_interfaces = false;   ///< some material is "interface" (volpath's shadow rays pass)
 };
 
 /// Per-thread ray counts.

@@ -108,6 +108,8 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   Media media(scene);
   if (volpath) sc.media = &media;
   sc.camera_medium = scene.camera.medium;
+  for (const scene::Material& m : scene.materials)
+    sc.has_interfaces = sc.has_interfaces || m.type == "interface";
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
 
   if (scene.film.sensor != "cie1931")

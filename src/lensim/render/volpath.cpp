@@ -118,8 +118,8 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
   if (f_hat.isBlack()) return {};
 
   SampledSpectrum T_ray(1.0), r_l(1.0), r_u(1.0);
-  if (!sc.media || sc.media->empty()) {
-    // No media in the scene: a plain shadow ray, as the path integrator traces it.
+  if ((!sc.media || sc.media->empty()) && !sc.has_interfaces) {
+    // No media and no interface surfaces: a plain shadow ray, as the path integrator traces it.
     if (occludedScene(sc, v.p, v.ng, ls->p_light, ls->infinite, ls->wi, counts)) return {};
   } else {
     int medium = v.bsdf ? mediumAfter(sc, *v.hit, ls->wi, v.medium) : v.medium;
@@ -136,7 +136,7 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
       }
       auto hit = intersectScene(sc, r, counts);
       if (hit && !isInterfaceHit(sc, *hit, -r.d)) return {};
-      if (const Medium* m = sc.media->get(medium)) {
+      if (const Medium* m = sc.media ? sc.media->get(medium) : nullptr) {
         const double len = length(r.d);
         const double t_end = (hit ? hit->t : r.tmax) * len;
         const Vec3 d = r.d / len;
