@@ -18,6 +18,8 @@ struct Scene;
 
 namespace lensim::render {
 
+class Media;
+
 /// Everything the integrator reads; all of it is immutable during a render.
 struct SceneContext {
   const scene::Scene* scene = nullptr;
@@ -36,6 +38,9 @@ struct SceneContext {
   /// scaled camera transform this skips shadows and distant light hits.
   bool pbrt_v2_epsilon = false;
   Transform camera_from_world;  ///< for pbrt_v2_epsilon
+  const Media* media = nullptr;  ///< participating media (volpath); nullptr or empty: none
+  int camera_medium = -1;        ///< the medium camera rays start in (Scene::media index)
+  bool has_interfaces = false;   ///< some material is "interface" (volpath's shadow rays pass)
 };
 
 /// Per-thread ray counts.

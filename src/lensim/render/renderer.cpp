@@ -19,6 +19,8 @@
 #include "lensim/render/filter.h"
 #include "lensim/render/integrator.h"
 #include "lensim/render/parts.h"
+#include "lensim/render/media.h"
+#include "lensim/render/volpath.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
@@ -164,6 +166,12 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   sc.regularize = scene.integrator.regularize;
   sc.pbrt_v2_epsilon = opt.pbrt_v2_quirks;
   sc.camera_from_world = scene.camera.camera_from_world;
+  const bool volpath = scene.integrator.type == "volpath";
+  Media media(scene);
+  if (volpath) sc.media = &media;
+  sc.camera_medium = scene.camera.medium;
+  for (const scene::Material& m : scene.materials)
+    sc.has_interfaces = sc.has_interfaces || m.type == "interface";
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
 
   if (scene.film.sensor != "cie1931")
@@ -382,7 +390,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     } else {
                       ++n_rays;
                       sampler->startPixelSample({x, y}, i0 + k, path_dimension);
-                      L = pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts);
+                      L = volpath
+                              ? volpathLi(sc, ray->origin, ray->direction, sc.camera_medium, lambda,
+                                          *sampler, counts)
+                              : pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts);
                       if (ray->per_wavelength && !lambda.secondaryTerminated()) {
                         for (int c = 0; c < kSpectrumSamples; ++c)
                           L[c] *= ray->wavelength_weight[size_t(c)];

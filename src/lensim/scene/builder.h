@@ -166,6 +166,9 @@ struct Shape {
   // Quadrics (scene units, degrees).
   double radius = 1, inner_radius = 0, height = 0, zmin = -1, zmax = 1, phimax_deg = 360;
   int mesh = -1;  ///< index into Scene::meshes for meshes
+  /// MediumInterface at the shape: indices into Scene::media, -1 for vacuum. A shape whose
+  /// inside and outside are the same is no medium boundary (rays keep their medium, as pbrt-v4).
+  int inside_medium = -1, outside_medium = -1;
 
   /// pbrt's rule: normals are flipped if ReverseOrientation xor the transform swaps handedness.
   bool flipNormals() const { return reverse_orientation != transform.swapsHandedness(); }
@@ -250,6 +253,30 @@ struct Camera {
   std::optional<LegacyRealistic> legacy_realistic;
   std::optional<Realistic> realistic;
   bool defaulted = true;  ///< no Camera directive
+  int medium = -1;        ///< the outside medium of the MediumInterface current at Camera, or -1
+};
+
+/// A participating medium (MakeNamedMedium). `type` is the pbrt-v4 medium lensim renders:
+/// homogeneous. Coefficients are per scene unit (metre), multiplied by `scale` when rendered.
+struct Medium {
+  std::string name;
+  std::string type;  ///< "homogeneous"
+  std::string type_as_written;
+  FileLoc loc;
+  Transform medium_from_world;  ///< inverse of the CTM at MakeNamedMedium
+  SpectrumValue sigma_a = SpectrumValue::gray(1), sigma_s = SpectrumValue::gray(1);
+  std::string preset;  ///< pbrt-v4 `preset` (measured medium) that gave sigma_a/sigma_s
+  double scale = 1;    ///< multiplies sigma_a and sigma_s
+  double g = 0;        ///< Henyey-Greenstein asymmetry in (-1, 1)
+  SpectrumValue Le = SpectrumValue::gray(0);  ///< emitted radiance (times sigma_a)
+  double Le_scale = 1;                        ///< `Lescale`
+  // uniformgrid and rgbgrid: nx * ny * nz voxel values (x fastest) over the medium-space box
+  // [p0, p1], interpolated trilinearly between voxel centres (zero beyond the outer ones).
+  int nx = 1, ny = 1, nz = 1;
+  Vec3 p0{0, 0, 0}, p1{1, 1, 1};
+  std::vector<double> density;        ///< uniformgrid: scales sigma_a and sigma_s
+  std::vector<double> Le_scale_grid;  ///< uniformgrid: per-voxel `Lescale`, or empty
+  std::vector<Vec3> sigma_a_grid, sigma_s_grid, Le_grid;  ///< rgbgrid (empty: 1, 1, 0)
 };
 
 /// The film (image) description.
@@ -295,7 +322,8 @@ struct Filter {
   bool defaulted = true;
 };
 
-/// The light transport algorithm.
+/// The light transport algorithm: `type` "path" or "volpath" (media). The builder makes
+/// volpath the default of pbrt-v4 files, as pbrt-v4 does; v1–v3 files default to path.
 struct Integrator {
   std::string type = "path";
   std::string type_as_written;
@@ -322,6 +350,7 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<Texture> textures;
   std::vector<Light> lights;
+  std::vector<Medium> media;                   ///< MakeNamedMedium, in order
   std::map<std::string, std::string> options;  ///< `Option` values, as text
   std::string color_space = "srgb";
   double transform_start_time = 0, transform_end_time = 1;  ///< TransformTimes

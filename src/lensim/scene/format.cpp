@@ -200,6 +200,31 @@ std::string summary(const Scene& scene) {
                        l.filename.empty() ? "" : fmt::format(", map \"{}\"", l.filename)));
     }
   }
+  if (!scene.media.empty()) {
+    line(fmt::format("media: {}", scene.media.size()));
+    for (const Medium& m : scene.media) {
+      if (m.type.empty()) {
+        line(fmt::format("  \"{}\": {} (not rendered)", m.name, m.type_as_written));
+        continue;
+      }
+      if (m.type != "homogeneous") {
+        line(fmt::format("  \"{}\": {}, {} × {} × {} voxels{}, g {}", m.name,
+                         renamed(m.type_as_written, m.type), m.nx, m.ny, m.nz,
+                         m.scale != 1 ? fmt::format(", scale {}", m.scale) : "", m.g));
+        continue;
+      }
+      line(fmt::format("  \"{}\": {}, sigma_a {}, sigma_s {}{}{}, g {}{}", m.name, m.type,
+                       m.sigma_a.str(), m.sigma_s.str(),
+                       m.preset.empty() ? "" : fmt::format(" (preset \"{}\")", m.preset),
+                       m.scale != 1 ? fmt::format(", scale {}", m.scale) : "", m.g,
+                       m.Le.rgb == Vec3{0, 0, 0} && m.Le.kind == SpectrumValue::Kind::Rgb
+                           ? ""
+                           : fmt::format(", Le {} x {}", m.Le.str(), m.Le_scale)));
+    }
+    if (scene.camera.medium >= 0)
+      line(fmt::format("  camera inside \"{}\"",
+                       scene.media[static_cast<size_t>(scene.camera.medium)].name));
+  }
   size_t warnings = 0;
   for (const Diagnostic& d : scene.diagnostics) warnings += d.severity == Severity::Warning;
   line(fmt::format("warnings: {}", warnings));
