@@ -15,21 +15,10 @@
 #include "lensim/render/autofocus_scene.h"
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
+#include "lensim/util/interrupt.h"
 #include "lensim/util/log.h"
 
 namespace lensim::cmd {
-
-namespace {
-
-std::atomic<bool> g_interrupted{false};
-
-extern "C" void onSigint(int) {
-  // The first Ctrl-C asks the renderer to stop and write what it has; a second one kills.
-  g_interrupted.store(true);
-  std::signal(SIGINT, SIG_DFL);
-}
-
-}  // namespace
 
 void registerRenderCommand(CLI::App& app, Action& action) {
   struct Options {
@@ -98,14 +87,15 @@ void registerRenderCommand(CLI::App& app, Action& action) {
                                             o->pixelbounds[3]};
       ro.progress = !quiet;
       ro.pbrt_v2_quirks = o->pbrt_v2_quirks;
-      ro.cancel = &g_interrupted;
+      // The first SIGINT or SIGTERM stops the render, which writes what it has and exits 130 or
+      // 143; a second one ends lensim at once (util/interrupt.h).
+      CancellableScope cancellable;
+      ro.cancel = &interruptFlag();
       // The film's filename is relative to the directory lensim runs in, as in pbrt.
       std::vector<std::string> outs = o->outfiles;
       if (outs.empty()) outs.push_back(s.film.filename);
       for (const std::string& out : outs) io::imageFormatFromPath(out);  // fail early
-      auto previous = std::signal(SIGINT, onSigint);
       render::RenderResult res = render::render(s, ro);
-      std::signal(SIGINT, previous);
       io::ImageWriteOptions wo;
       wo.tiff_format = io::TiffSampleFormat::Float32;
       for (const std::string& out : outs) io::writeImage(out, res.image, wo);
@@ -118,6 +108,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
           std::fprintf(stderr, "lensim: interrupted; the partial image was written to %s\n",
                        out.c_str());
       }
+      if (interrupted()) return interruptExitStatus();
       if (res.stats.partial) return 130;
       return 0;
     };

@@ -8,6 +8,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "lensim/util/file.h"
+#include "lensim/util/text.h"
+
 namespace lensim::optics {
 
 const char* layoutName(LensFileLayout layout) {
@@ -157,6 +160,8 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
       p.layout = LensFileLayout::Iset;
       continue;
     }
+    if (p.surfaces.size() >= kMaxLensSurfaces)
+      throw Error(loc, fmt::format("too many surfaces: at most {} rows are read", kMaxLensSurfaces));
     if (cols.size() != 4)
       throw Error(loc, fmt::format("expected 4 numbers (radius, thickness, index of refraction, "
                                    "aperture diameter), found {}",
@@ -213,17 +218,15 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
 
   p.name = firstComment ? *firstComment : stemOf(path);
   if (p.name.rfind("Name:", 0) == 0) p.name = trim(p.name.substr(5));
+  // The name goes into SVG, JSON and messages: printable, valid UTF-8, not too long.
+  p.name = shortToken(p.name, 200);
   checkCrossings(p);
   return p;
 }
 
 LensPrescription readLensFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(FileLoc{path, 0, 0}, "cannot open lens file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw Error(FileLoc{path, 0, 0}, "cannot read lens file");
-  return parseLensPrescription(ss.str(), path);
+  // Only regular files of a sane size: a FIFO would block, /dev/zero never ends.
+  return parseLensPrescription(readRegularFile(path, "lens file", kMaxLensFileBytes), path);
 }
 
 }  // namespace lensim::optics

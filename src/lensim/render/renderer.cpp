@@ -270,7 +270,23 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   st.nonfinite_samples = nonfinite;
   st.rays = rays;
   st.partial = cancelled.load() || tiles_done.load() < n_tiles;
+  st.invalid_rays = accel.invalidRays();
   result.image = film.image();
+  // No pixel is ever NaN or inf (an overflowing light, a degenerate film setting): such values
+  // are written as 0, counted and reported.
+  for (float& v : result.image.pixels)
+    if (!std::isfinite(v)) {
+      v = 0;
+      ++st.nonfinite_pixels;
+    }
+  if (st.invalid_rays > 0)
+    logWarning(fmt::format("{} rays with a non-finite or huge origin or direction were dropped "
+                           "(check the scene's numbers)",
+                           st.invalid_rays));
+  if (st.nonfinite_pixels > 0)
+    logWarning(fmt::format("{} pixel values were NaN or infinite and are written as 0 (check the "
+                           "scene's light and film values)",
+                           st.nonfinite_pixels));
   auto& md = result.image.metadata;
   md["lensim:spp"] = std::to_string(spp);
   md["lensim:camera"] = st.camera;
@@ -300,6 +316,10 @@ std::string formatStats(const RenderStats& s) {
       inside ? 100.0 * double(s.no_ray_samples - s.outside_samples) / double(inside) : 0.0, inside);
   out += fmt::format("rays traced          {} ({:.3g} rays/s)\n", s.rays, double(s.rays) / w);
   out += fmt::format("NaN/inf samples      {} (discarded)\n", s.nonfinite_samples);
+  if (s.invalid_rays > 0)
+    out += fmt::format("invalid rays         {} (non-finite or huge; dropped)\n", s.invalid_rays);
+  if (s.nonfinite_pixels > 0)
+    out += fmt::format("NaN/inf pixels       {} (written as 0)\n", s.nonfinite_pixels);
   return out;
 }
 

@@ -14,6 +14,8 @@
 
 #include "lensim/scene/params.h"
 #include "lensim/scene/tokenizer.h"
+#include "lensim/util/file.h"
+#include "lensim/util/limits.h"
 
 namespace lensim::scene {
 
@@ -52,6 +54,9 @@ std::string_view paramTypeName(ParamType t) {
 namespace {
 
 namespace fs = std::filesystem;
+
+// The largest scene file read (pbrt scenes with inline meshes reach gigabytes).
+constexpr uint64_t kMaxSceneFileBytes = uint64_t{16} << 30;
 
 // How a directive's positional arguments are written.
 enum class Args {
@@ -174,6 +179,12 @@ class Parser {
   explicit Parser(SceneDesc& desc) : desc_(desc) {}
 
   void parseFile(const std::string& path, const FileLoc* included_from) {
+    // Only regular files (a FIFO or /dev/zero would block or never end), of a size the memory
+    // budget allows (parsing needs a few times the text).
+    if (!included_from) {
+      const uint64_t bytes = requireRegularFile(path, "scene file", kMaxSceneFileBytes);
+      checkMemory(4.0 * static_cast<double>(bytes), FileLoc{path}, "parsing this scene file");
+    }
     std::ifstream in(path, std::ios::binary);
     if (!in || fs::is_directory(path)) {
       std::string msg = included_from ? fmt::format("cannot open included file \"{}\"", path)
@@ -293,6 +304,7 @@ class Parser {
           Token n = next(tok);
           std::optional<double> v;
           if (n.kind == Token::Kind::Word) v = parseNumber(n.text);
+          if (v) requireFinite(*v, tok.loc(n), "a number");
           if (!v) {
             if (bracket && (n.kind == Token::Kind::End || n.kind == Token::Kind::Word))
               throw Error(tok.loc(open), "unterminated array");
@@ -357,6 +369,7 @@ class Parser {
             p.type = ParamType::Bool;
             p.bools.push_back(v.text == "true");
           } else if (auto x = v.kind == Token::Kind::Word ? parseNumber(v.text) : std::nullopt) {
+            requireFinite(*x, tok.loc(v), "a number");
             p.type = *x == std::floor(*x) ? ParamType::Integer : ParamType::Float;
             p.numbers.push_back(*x);
           } else {
@@ -435,6 +448,8 @@ class Parser {
         std::optional<double> x;
         if (v.kind == Token::Kind::Word) x = parseNumber(v.text);
         if (!x) wrongKind(v, "a number");
+        // Every number in a scene is finite and fits a 32-bit float (util/limits.h).
+        requireFinite(*x, tok.loc(v), "a number");
         p.numbers.push_back(*x);
       }
     };
