@@ -17,11 +17,13 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "lensim/util/error.h"
 #include "lensim/util/file.h"
+#include "lensim/util/limits.h"
 
 namespace lensim::io {
 
@@ -30,6 +32,9 @@ namespace fs = std::filesystem;
 Image::Image(int width_px, int height_px, std::vector<std::string> channel_names)
     : width(width_px), height(height_px), channels(std::move(channel_names)) {
   if (width < 0 || height < 0) throw Error(fmt::format("bad image size {}x{}", width, height));
+  // Sizes come from file headers: check the buffer against the memory budget before allocating.
+  checkMemory(4.0 * width * height * static_cast<double>(channels.size()), FileLoc{},
+              fmt::format("a {}x{} image with {} channels", width, height, channels.size()));
   pixels.assign(static_cast<size_t>(width) * height * channels.size(), 0.0f);
 }
 
@@ -130,7 +135,11 @@ void writeExr(const std::string& path, const Image& image) {
 Image readExr(const std::string& path) {
   Imf::InputFile file(path.c_str());
   const Imath::Box2i dw = file.header().dataWindow();
-  const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+  // In 64 bits: a data window from INT_MIN to INT_MAX must not wrap around.
+  const int64_t w64 = int64_t{dw.max.x} - dw.min.x + 1, h64 = int64_t{dw.max.y} - dw.min.y + 1;
+  if (w64 <= 0 || h64 <= 0 || w64 > 1000000 || h64 > 1000000)
+    fail(path, fmt::format("bad EXR data window {}x{}", w64, h64));
+  const int w = static_cast<int>(w64), h = static_cast<int>(h64);
   // RGBA first in that order, then the other channels in the file's (alphabetical) order.
   std::vector<std::string> names;
   for (const char* n : {"R", "G", "B", "A"})
@@ -248,6 +257,7 @@ Image readTiff(const std::string& path) {
     fail(path,
          fmt::format("unsupported TIFF sample format ({} bits, format {})", bps, sample_format));
   if (w == 0 || h == 0 || spp == 0) fail(path, "empty TIFF image");
+  if (w > 1000000 || h > 1000000) fail(path, fmt::format("bad TIFF image size {}x{}", w, h));
   Image image(static_cast<int>(w), static_cast<int>(h), colorChannelNames(spp, extra_count > 0));
   std::vector<unsigned char> row(TIFFScanlineSize(t));
   if (row.size() < static_cast<size_t>(w) * spp * (bps / 8)) fail(path, "bad TIFF scanline size");
@@ -315,8 +325,15 @@ Image readPng(const std::string& path) {
   png.format &= ~(PNG_FORMAT_FLAG_COLORMAP | PNG_FORMAT_FLAG_AFIRST | PNG_FORMAT_FLAG_BGR);
   const int spp = PNG_IMAGE_SAMPLE_CHANNELS(png.format);
   const bool alpha = png.format & PNG_FORMAT_FLAG_ALPHA;
-  Image image(static_cast<int>(png.width), static_cast<int>(png.height),
-              colorChannelNames(spp, alpha));
+  std::optional<Image> checked;
+  try {
+    checked.emplace(static_cast<int>(png.width), static_cast<int>(png.height),
+                    colorChannelNames(spp, alpha));
+  } catch (...) {
+    png_image_free(&png);  // the memory budget refused the size the header claims
+    throw;
+  }
+  Image& image = *checked;
   std::vector<png_byte> bytes(PNG_IMAGE_SIZE(png));
   if (!png_image_finish_read(&png, nullptr, bytes.data(), 0, nullptr)) {
     std::string msg = png.message;
@@ -361,7 +378,8 @@ Image readImage(const std::string& path) {
       case ImageFormat::Png:
         return readPng(path);
     }
-  } catch (const Error&) {
+  } catch (const Error& e) {
+    if (!e.loc().valid()) fail(path, e.message());  // e.g. the memory budget: name the file
     throw;
   } catch (const std::exception& e) {
     fail(path, fmt::format("cannot read image: {}", e.what()));
@@ -377,9 +395,18 @@ void writeImage(const std::string& path, const Image& image, const ImageWriteOpt
   if (image.width <= 0 || image.height <= 0) fail(path, "cannot write an empty image");
   writeAtomically(path, [&](const std::string& tmp) {
     switch (format) {
-      case ImageFormat::Exr:
+      case ImageFormat::Exr: {
         writeExr(tmp, image);
+        // OpenEXR finishes the file (line offsets) in a destructor that swallows errors: read it
+        // back, so that a full disk is an error and not a truncated image.
+        bool complete = false;
+        try {
+          complete = Imf::InputFile(tmp.c_str()).isComplete();
+        } catch (const std::exception&) {
+        }
+        if (!complete) fail(path, "writing failed: the written EXR file is incomplete (disk full?)");
         break;
+      }
       case ImageFormat::Tiff:
         writeTiff(tmp, image, options.tiff_format);
         break;

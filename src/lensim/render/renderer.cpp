@@ -18,6 +18,7 @@
 #include "lensim/render/integrator.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
+#include "lensim/util/limits.h"
 #include "lensim/util/log.h"
 
 namespace lensim::render {
@@ -111,6 +112,8 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     scene.film.loc.str(), scene.film.sensor));
 
   const int spp_req = opt.spp.value_or(scene.sampler.pixel_samples);
+  if (spp_req <= 0 || spp_req > kMaxSamplesPerPixel)
+    throw Error(fmt::format("{} samples per pixel: expected 1 to {}", spp_req, kMaxSamplesPerPixel));
   const int seed = opt.seed.value_or(scene.sampler.seed);
   std::unique_ptr<Sampler> proto = makeSampler(scene, spp_req, seed);
   const int spp = proto->samplesPerPixel();

@@ -304,7 +304,7 @@ class Parser {
           Token n = next(tok);
           std::optional<double> v;
           if (n.kind == Token::Kind::Word) v = parseNumber(n.text);
-          if (v) requireFinite(*v, tok.loc(n), "a number");
+          if (v) requireFinite(*v, tok.loc(n), "");
           if (!v) {
             if (bracket && (n.kind == Token::Kind::End || n.kind == Token::Kind::Word))
               throw Error(tok.loc(open), "unterminated array");
@@ -369,7 +369,7 @@ class Parser {
             p.type = ParamType::Bool;
             p.bools.push_back(v.text == "true");
           } else if (auto x = v.kind == Token::Kind::Word ? parseNumber(v.text) : std::nullopt) {
-            requireFinite(*x, tok.loc(v), "a number");
+            requireFinite(*x, tok.loc(v), "");
             p.type = *x == std::floor(*x) ? ParamType::Integer : ParamType::Float;
             p.numbers.push_back(*x);
           } else {
@@ -447,9 +447,9 @@ class Parser {
       for (const Token& v : values) {
         std::optional<double> x;
         if (v.kind == Token::Kind::Word) x = parseNumber(v.text);
-        if (!x) wrongKind(v, "a number");
+        if (!x) wrongKind(v, "");
         // Every number in a scene is finite and fits a 32-bit float (util/limits.h).
-        requireFinite(*x, tok.loc(v), "a number");
+        requireFinite(*x, tok.loc(v), "");
         p.numbers.push_back(*x);
       }
     };

@@ -87,10 +87,12 @@ std::optional<uint64_t> checkedAdd(uint64_t a, uint64_t b) {
 
 void requireFinite(double value, const FileLoc& loc, std::string_view what, double max_abs) {
   if (!std::isfinite(value))
-    throw Error(loc, fmt::format("{} must be a finite number, found {}", what, value));
+    throw Error(loc, fmt::format("expected a finite number{}{}, found {}", what.empty() ? "" : " for ",
+                                 what, value));
   if (std::abs(value) > max_abs)
-    throw Error(loc, fmt::format("{} {:g} is out of range; expected a magnitude <= {:g}", what,
-                                 value, max_abs));
+    throw Error(loc, fmt::format("{}{:g} is out of range; expected a magnitude <= {:g}",
+                                 what.empty() ? "number " : fmt::format("{} ", what), value,
+                                 max_abs));
 }
 
 void requireInRange(double value, double lo, double hi, const FileLoc& loc,

@@ -40,8 +40,12 @@ std::optional<uint64_t> checkedAdd(uint64_t a, uint64_t b);
 /// the renderer, so anything beyond FLT_MAX would turn into infinity.
 inline constexpr double kMaxSceneNumber = 3.4028234663852886e38;
 
+/// The most samples per pixel a render takes (2^24): beyond it sample indices and counts overflow
+/// 32-bit integers in the samplers, and such a render would take years anyway.
+inline constexpr int64_t kMaxSamplesPerPixel = int64_t{1} << 24;
+
 /// Throws Error at `loc` unless `value` is finite (and |value| <= max_abs):
-/// "<what> must be a finite number, found inf".
+/// "expected a finite number for <what>, found inf" (what may be empty).
 void requireFinite(double value, const FileLoc& loc, std::string_view what,
                    double max_abs = kMaxSceneNumber);
 
