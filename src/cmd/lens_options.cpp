@@ -53,7 +53,14 @@ optics::FocusedLens setUpLens(const LensArgs& args) {
     setup.focus_distance_m = parseDistance_m(args.focus_distance, "--focus-distance");
   if (!(args.film_diagonal_mm > 0))
     throw Error(fmt::format("--film-diagonal {} mm must be > 0", args.film_diagonal_mm));
-  return optics::focusLens(optics::readLensFile(args.lens_path), setup);
+  optics::LensPrescription prescription = optics::readLensFile(args.lens_path);
+  try {
+    return optics::focusLens(std::move(prescription), setup);
+  } catch (const Error& e) {
+    // Focus and tracing errors have no row of their own: name the lens file (issue 16).
+    if (e.loc().valid()) throw;
+    throw Error(FileLoc{args.lens_path}, e.message());
+  }
 }
 
 Vec2 parsePair(const std::string& text, const std::string& option) {

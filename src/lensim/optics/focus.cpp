@@ -209,25 +209,7 @@ std::vector<Diagnostic> FocusedLens::allDiagnostics() const {
   return all;
 }
 
-namespace {
-FocusedLens focusLensImpl(LensPrescription prescription, const LensSetup& setup);
-}  // namespace
-
 FocusedLens focusLens(LensPrescription prescription, const LensSetup& setup) {
-  // An error about a lens read from a file names that file (focus and tracing errors have no
-  // row of their own).
-  const std::string path = prescription.path;
-  try {
-    return focusLensImpl(std::move(prescription), setup);
-  } catch (const Error& e) {
-    if (e.loc().valid() || path.empty()) throw;
-    throw Error(FileLoc{path}, e.message());
-  }
-}
-
-namespace {
-
-FocusedLens focusLensImpl(LensPrescription prescription, const LensSetup& setup) {
   if (setup.focus_distance_m && setup.film_distance_mm)
     throw Error("give a focus distance or a film distance, not both");
   LensSystemOptions opts;
@@ -250,7 +232,5 @@ FocusedLens focusLensImpl(LensPrescription prescription, const LensSetup& setup)
       focusDistanceForFilm(lens, fl.paraxial, lens.filmDistance_mm(), setup.focus_method);
   return fl;
 }
-
-}  // namespace
 
 }  // namespace lensim::optics

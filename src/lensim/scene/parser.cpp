@@ -447,7 +447,7 @@ class Parser {
       for (const Token& v : values) {
         std::optional<double> x;
         if (v.kind == Token::Kind::Word) x = parseNumber(v.text);
-        if (!x) wrongKind(v, "");
+        if (!x) wrongKind(v, "a number");
         // Every number in a scene is finite and fits a 32-bit float (util/limits.h).
         requireFinite(*x, tok.loc(v), "");
         p.numbers.push_back(*x);
