@@ -456,3 +456,13 @@ TEST(ReliabilityUtil, ReadRegularFileCapsTheSize) {
   EXPECT_THROW(lensim::readRegularFile(dir / "missing", "test file"), lensim::Error);
   EXPECT_THROW(lensim::readRegularFile("/dev/zero", "test file"), lensim::Error);
 }
+
+TEST(ReliabilityUtil, NonFinitePixelsAreReadAsZero) {
+  TempDir dir;
+  lensim::io::Image im(2, 1, {"R", "G", "B"});
+  im.pixels = {NAN, 1, INFINITY, -INFINITY, 0.5f, 2};
+  lensim::io::writeImage(dir / "nan.exr", im);
+  const lensim::io::Image back = lensim::io::readImage(dir / "nan.exr");
+  ASSERT_EQ(back.pixels.size(), 6u);
+  EXPECT_EQ(back.pixels, (std::vector<float>{0, 1, 0, 0, 0.5f, 2}));
+}

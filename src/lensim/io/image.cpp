@@ -24,6 +24,7 @@
 #include "lensim/util/error.h"
 #include "lensim/util/file.h"
 #include "lensim/util/limits.h"
+#include "lensim/util/log.h"
 
 namespace lensim::io {
 
@@ -365,7 +366,25 @@ Image readPng(const std::string& path) {
 
 }  // namespace
 
+namespace {
+Image readImageAsIs(const std::string& path);
+}  // namespace
+
 Image readImage(const std::string& path) {
+  Image image = readImageAsIs(path);
+  // Every number read from a file is finite: NaN and infinite pixels (EXR, float TIFF) become 0,
+  // with a warning, so that textures, environment maps and their sampling tables stay finite.
+  size_t bad = 0;
+  for (float& v : image.pixels)
+    if (!std::isfinite(v)) v = 0, ++bad;
+  if (bad)
+    logWarning(fmt::format("{}: {} NaN or infinite pixel values read as 0", path, bad));
+  return image;
+}
+
+namespace {
+
+Image readImageAsIs(const std::string& path) {
   const ImageFormat format = imageFormatFromPath(path);
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) fail(path, "no such image file");
@@ -386,6 +405,8 @@ Image readImage(const std::string& path) {
   }
   fail(path, "unknown image format");
 }
+
+}  // namespace
 
 void writeImage(const std::string& path, const Image& image, const ImageWriteOptions& options) {
   const ImageFormat format = imageFormatFromPath(path);
