@@ -466,3 +466,16 @@ TEST(ReliabilityUtil, NonFinitePixelsAreReadAsZero) {
   ASSERT_EQ(back.pixels.size(), 6u);
   EXPECT_EQ(back.pixels, (std::vector<float>{0, 1, 0, 0, 0.5f, 2}));
 }
+
+TEST(Reliability, AnExrHeaderCannotClaimMoreThanTheFileHolds) {
+  // Found by scripts/fuzz (image): a 347-byte EXR with a string attribute claiming 1.9 GB made
+  // OpenEXR allocate that much before reading it.
+  try {
+    lensim::io::readImage(kData + "exr_huge_attribute.exr");
+    FAIL() << "expected an error";
+  } catch (const lensim::Error& e) {
+    EXPECT_EQ(e.loc().file, kData + "exr_huge_attribute.exr");
+    EXPECT_TRUE(contains(e.message(), "attribute \"lensim:camera\" claims 1953391934 bytes"))
+        << e.what();
+  }
+}
