@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -151,20 +152,49 @@ void checkExrHeader(const std::string& path) {
     pos = end + 1;
     return out;
   };
+  auto int32At = [&](size_t at) {
+    if (at + 4 > n) fail(path, "bad EXR header: truncated");
+    int32_t v = 0;
+    std::memcpy(&v, data.data() + at, 4);  // little-endian, as the format says
+    return v;
+  };
+  // OpenEXR reads each attribute by its type, not by the size the file gives: fixed types take
+  // their own size, a channel list runs to its empty name; strings, vectors, previews and unknown
+  // types allocate what they claim. Follow it the same way.
+  static const std::map<std::string, size_t> fixed = {
+      {"box2i", 16}, {"box2f", 16}, {"compression", 1}, {"lineOrder", 1}, {"float", 4},
+      {"double", 8}, {"int", 4}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12}, {"v3f", 12},
+      {"v3d", 24}, {"m33f", 36}, {"m44f", 64}, {"m33d", 72}, {"m44d", 128},
+      {"chromaticities", 32}, {"envmap", 1}, {"keycode", 28}, {"timecode", 8}, {"rational", 8},
+      {"tiledesc", 9}, {"deepImageState", 1}};
   for (int header = 0; header < 1000; ++header) {
     for (;;) {
       const std::string name = cstring("attribute name");
       if (name.empty()) break;
-      cstring("attribute type");
-      if (pos + 4 > n) fail(path, "bad EXR header: truncated");
-      int32_t size = 0;
-      std::memcpy(&size, data.data() + pos, 4);  // little-endian, as the format says
+      const std::string type = cstring("attribute type");
+      const int32_t size = int32At(pos);
       pos += 4;
       if (size < 0 || static_cast<size_t>(size) > n - pos)
         fail(path, fmt::format("bad EXR header: attribute \"{}\" claims {} bytes, but the file "
                                "has only {} after it",
                                shortToken(name), size, n - pos));
-      pos += static_cast<size_t>(size);
+      if (auto it = fixed.find(type); it != fixed.end()) {
+        pos += it->second;
+      } else if (type == "chlist") {
+        for (;;) {
+          if (cstring("channel name").empty()) break;
+          pos += 16;  // pixel type, pLinear, reserved, x and y sampling
+        }
+      } else if (type == "preview") {
+        const int64_t w = static_cast<uint32_t>(int32At(pos)), h = static_cast<uint32_t>(int32At(pos + 4));
+        if (w * h * 4 > static_cast<int64_t>(n - pos))
+          fail(path, fmt::format("bad EXR header: a {}x{} preview image in a {}-byte file", w, h,
+                                 n));
+        pos += 8 + static_cast<size_t>(w * h * 4);
+      } else {
+        pos += static_cast<size_t>(size);  // string, stringvector, floatvector, unknown types
+      }
+      if (pos > n) fail(path, "bad EXR header: truncated");
     }
     // Multi-part files: headers follow one another until an empty one.
     if (!multipart || pos >= n || data[pos] == '\0') return;
