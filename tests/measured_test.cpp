@@ -86,7 +86,7 @@ TEST(MeasuredReader, MalformedFilesNameTheLineTheValueAndWhatWasExpected) {
       {"empty", "# nothing\n", ":1: error:", "expected the count of wavelengths"},
       {"count-word", "three\n400 500 600\n", ":1:1: error:", "'three' is not a number"},
       {"count-fraction", "2.5\n400 500\n", ":1:1:", "whole number"},
-      {"count-zero", "0\n", ":1:1:", "whole number >= 1"},
+      {"count-zero", "0\n", ":1:1:", "whole number from 1 to 1000"},
       {"short-wavelengths", "3\n400 500\n", ":2:", "ends after 2 of the 3 wavelengths"},
       {"decreasing", "3\n400 500 450\n0 0 0 0 1 1 1\n", ":2:9:", "450 nm after 500 nm"},
       {"bad-wavelength", "2\n400 5OO\n", ":2:5:", "'5OO' is not a number; expected wavelength 2"},

@@ -19,21 +19,10 @@
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
+#include "lensim/util/interrupt.h"
 #include "lensim/util/log.h"
 
 namespace lensim::cmd {
-
-namespace {
-
-std::atomic<bool> g_interrupted{false};
-
-extern "C" void onSigint(int) {
-  // The first Ctrl-C asks the renderer to stop and write what it has; a second one kills.
-  g_interrupted.store(true);
-  std::signal(SIGINT, SIG_DFL);
-}
-
-}  // namespace
 
 void registerRenderCommand(CLI::App& app, Action& action) {
   struct Options {
@@ -128,7 +117,11 @@ void registerRenderCommand(CLI::App& app, Action& action) {
                                             o->pixelbounds[3]};
       ro.progress = !quiet;
       ro.pbrt_v2_quirks = o->pbrt_v2_quirks;
-      ro.cancel = &g_interrupted;
+      // The first SIGINT or SIGTERM stops the render, which writes what it has (a part with a
+      // checkpoint: the checkpoint) and exits 130 or 143; a second one ends lensim at once
+      // (util/interrupt.h).
+      CancellableScope cancellable;
+      ro.cancel = &interruptFlag();
       // Distributed renders: parts with exact sums, checkpoints, resuming.
       if (!o->tile.empty()) ro.tile = render::parseTile(o->tile);
       if (!o->spp_range.empty()) ro.spp_range = render::parseSppRange(o->spp_range);
@@ -186,9 +179,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
           throw Error(FileLoc{out},
                       "--tile, --spp-range and --part write EXR parts (exact sums for lensim "
                       "merge): use an .exr output");
-      auto previous = std::signal(SIGINT, onSigint);
       render::RenderResult res = render::render(s, ro);
-      std::signal(SIGINT, previous);
       io::ImageWriteOptions wo;
       wo.tiff_format = io::TiffSampleFormat::Float32;
       if (part_mode && res.stats.partial && !checkpoint.empty()) {
@@ -198,7 +189,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
                      "lensim: interrupted; the finished tiles are in %s (continue with "
                      "--resume %s)\n",
                      checkpoint.c_str(), checkpoint.c_str());
-        return 130;
+        return interrupted() ? interruptExitStatus() : 130;
       }
       if (part_mode) {
         render::Part p;
@@ -223,6 +214,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
           std::fprintf(stderr, "lensim: interrupted; the partial image was written to %s\n",
                        out.c_str());
       }
+      if (interrupted()) return interruptExitStatus();
       if (res.stats.partial) return 130;
       return 0;
     };

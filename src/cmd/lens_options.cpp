@@ -67,7 +67,15 @@ optics::FocusedLens setUpLens(const LensArgs& args) {
   if (args.glass_match)
     for (const Diagnostic& d : optics::matchCatalogGlasses(prescription)) logDiagnostic(d);
   // Focus at the primary wavelength, then the indices (and paraxial data) at --wavelength.
-  optics::FocusedLens fl = optics::focusLens(std::move(prescription), setup);
+  optics::FocusedLens fl = [&] {
+    try {
+      return optics::focusLens(std::move(prescription), setup);
+    } catch (const Error& e) {
+      // Focus and tracing errors have no row of their own: name the lens file (issue 16).
+      if (e.loc().valid()) throw;
+      throw Error(FileLoc{args.lens_path}, e.message());
+    }
+  }();
   if (args.wavelength_nm) {
     const double l = *args.wavelength_nm;
     optics::checkWavelength(l, "--wavelength");

@@ -7,6 +7,9 @@
 
 #include "commands.h"
 #include "lensim/util/error.h"
+#include "lensim/util/interrupt.h"
+#include "lensim/util/limits.h"
+#include "lensim/util/text.h"
 #include "lensim/util/log.h"
 
 int main(int argc, char** argv) {
@@ -15,6 +18,13 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   bool quiet = false;
   app.add_flag("-q,--quiet", quiet, "Print no progress or information (warnings still appear)");
+  std::string memory_limit;
+  app.add_option("--memory-limit", memory_limit,
+                 "Refuse inputs whose estimated memory exceeds SIZE (e.g. 4G, 512M; default: half "
+                 "the physical memory)");
+  // Options of the main command (--memory-limit, -q) may also follow the subcommand.
+  app.fallthrough();
+  lensim::installInterruptHandlers();
 
   lensim::cmd::Action action;
   lensim::cmd::registerLensCommands(app, action);
@@ -34,14 +44,26 @@ int main(int argc, char** argv) {
     return status == 0 ? 0 : 1;
   }
   lensim::setQuiet(quiet);
+  if (!memory_limit.empty()) {
+    auto bytes = lensim::parseMemorySize(memory_limit);
+    if (!bytes) {
+      std::fprintf(stderr, "lensim: error: --memory-limit: expected a size such as 4G or 512M, "
+                   "found '%s'\n", lensim::shortToken(memory_limit).c_str());
+      return 1;
+    }
+    lensim::setMemoryBudgetBytes(*bytes);
+  }
 
   try {
     return action ? action() : 1;
   } catch (const lensim::Error& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 1;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "lensim: error: out of memory (see --memory-limit)\n");
+    return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "lensim: error: %s\n", e.what());
+    std::fprintf(stderr, "lensim: error: %s\n", lensim::sanitizeMessage(e.what()).c_str());
     return 1;
   }
 }

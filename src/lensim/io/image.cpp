@@ -16,12 +16,17 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "lensim/util/error.h"
 #include "lensim/util/file.h"
+#include "lensim/util/limits.h"
+#include "lensim/util/log.h"
+#include "lensim/util/text.h"
 
 namespace lensim::io {
 
@@ -30,6 +35,9 @@ namespace fs = std::filesystem;
 Image::Image(int width_px, int height_px, std::vector<std::string> channel_names)
     : width(width_px), height(height_px), channels(std::move(channel_names)) {
   if (width < 0 || height < 0) throw Error(fmt::format("bad image size {}x{}", width, height));
+  // Sizes come from file headers: check the buffer against the memory budget before allocating.
+  checkMemory(4.0 * width * height * static_cast<double>(channels.size()), FileLoc{},
+              fmt::format("a {}x{} image with {} channels", width, height, channels.size()));
   pixels.assign(static_cast<size_t>(width) * height * channels.size(), 0.0f);
 }
 
@@ -127,10 +135,81 @@ void writeExr(const std::string& path, const Image& image) {
   file.writePixels(image.height);
 }
 
+// OpenEXR allocates each header attribute at the size the file claims before reading it, so a
+// 347-byte file claiming a 1.9 GB string attribute costs 1.9 GB (found by fuzzing). Walk the
+// header(s) first and refuse attribute sizes that do not fit in the file.
+void checkExrHeader(const std::string& path) {
+  std::string data = readRegularFile(path, "EXR file", uint64_t{16} << 30);
+  const size_t n = data.size();
+  if (n < 8) fail(path, "not an OpenEXR file (too short)");
+  const bool multipart = (static_cast<unsigned char>(data[5]) & 0x10) != 0;
+  size_t pos = 8;
+  auto cstring = [&](const char* what) {
+    const size_t end = data.find('\0', pos);
+    if (end == std::string::npos || end - pos > 255)
+      fail(path, fmt::format("bad EXR header: unterminated {}", what));
+    std::string out = data.substr(pos, end - pos);
+    pos = end + 1;
+    return out;
+  };
+  auto int32At = [&](size_t at) {
+    if (at + 4 > n) fail(path, "bad EXR header: truncated");
+    int32_t v = 0;
+    std::memcpy(&v, data.data() + at, 4);  // little-endian, as the format says
+    return v;
+  };
+  // OpenEXR reads each attribute by its type, not by the size the file gives: fixed types take
+  // their own size, a channel list runs to its empty name; strings, vectors, previews and unknown
+  // types allocate what they claim. Follow it the same way.
+  static const std::map<std::string, size_t> fixed = {
+      {"box2i", 16}, {"box2f", 16}, {"compression", 1}, {"lineOrder", 1}, {"float", 4},
+      {"double", 8}, {"int", 4}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12}, {"v3f", 12},
+      {"v3d", 24}, {"m33f", 36}, {"m44f", 64}, {"m33d", 72}, {"m44d", 128},
+      {"chromaticities", 32}, {"envmap", 1}, {"keycode", 28}, {"timecode", 8}, {"rational", 8},
+      {"tiledesc", 9}, {"deepImageState", 1}};
+  for (int header = 0; header < 1000; ++header) {
+    for (;;) {
+      const std::string name = cstring("attribute name");
+      if (name.empty()) break;
+      const std::string type = cstring("attribute type");
+      const int32_t size = int32At(pos);
+      pos += 4;
+      if (size < 0 || static_cast<size_t>(size) > n - pos)
+        fail(path, fmt::format("bad EXR header: attribute \"{}\" claims {} bytes, but the file "
+                               "has only {} after it",
+                               shortToken(name), size, n - pos));
+      if (auto it = fixed.find(type); it != fixed.end()) {
+        pos += it->second;
+      } else if (type == "chlist") {
+        for (;;) {
+          if (cstring("channel name").empty()) break;
+          pos += 16;  // pixel type, pLinear, reserved, x and y sampling
+        }
+      } else if (type == "preview") {
+        const int64_t w = static_cast<uint32_t>(int32At(pos)), h = static_cast<uint32_t>(int32At(pos + 4));
+        if (w * h * 4 > static_cast<int64_t>(n - pos))
+          fail(path, fmt::format("bad EXR header: a {}x{} preview image in a {}-byte file", w, h,
+                                 n));
+        pos += 8 + static_cast<size_t>(w * h * 4);
+      } else {
+        pos += static_cast<size_t>(size);  // string, stringvector, floatvector, unknown types
+      }
+      if (pos > n) fail(path, "bad EXR header: truncated");
+    }
+    // Multi-part files: headers follow one another until an empty one.
+    if (!multipart || pos >= n || data[pos] == '\0') return;
+  }
+}
+
 Image readExr(const std::string& path) {
+  checkExrHeader(path);
   Imf::InputFile file(path.c_str());
   const Imath::Box2i dw = file.header().dataWindow();
-  const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+  // In 64 bits: a data window from INT_MIN to INT_MAX must not wrap around.
+  const int64_t w64 = int64_t{dw.max.x} - dw.min.x + 1, h64 = int64_t{dw.max.y} - dw.min.y + 1;
+  if (w64 <= 0 || h64 <= 0 || w64 > 1000000 || h64 > 1000000)
+    fail(path, fmt::format("bad EXR data window {}x{}", w64, h64));
+  const int w = static_cast<int>(w64), h = static_cast<int>(h64);
   // RGBA first in that order, then the other channels in the file's (alphabetical) order.
   std::vector<std::string> names;
   for (const char* n : {"R", "G", "B", "A"})
@@ -248,6 +327,7 @@ Image readTiff(const std::string& path) {
     fail(path,
          fmt::format("unsupported TIFF sample format ({} bits, format {})", bps, sample_format));
   if (w == 0 || h == 0 || spp == 0) fail(path, "empty TIFF image");
+  if (w > 1000000 || h > 1000000) fail(path, fmt::format("bad TIFF image size {}x{}", w, h));
   Image image(static_cast<int>(w), static_cast<int>(h), colorChannelNames(spp, extra_count > 0));
   std::vector<unsigned char> row(TIFFScanlineSize(t));
   if (row.size() < static_cast<size_t>(w) * spp * (bps / 8)) fail(path, "bad TIFF scanline size");
@@ -315,8 +395,15 @@ Image readPng(const std::string& path) {
   png.format &= ~(PNG_FORMAT_FLAG_COLORMAP | PNG_FORMAT_FLAG_AFIRST | PNG_FORMAT_FLAG_BGR);
   const int spp = PNG_IMAGE_SAMPLE_CHANNELS(png.format);
   const bool alpha = png.format & PNG_FORMAT_FLAG_ALPHA;
-  Image image(static_cast<int>(png.width), static_cast<int>(png.height),
-              colorChannelNames(spp, alpha));
+  std::optional<Image> checked;
+  try {
+    checked.emplace(static_cast<int>(png.width), static_cast<int>(png.height),
+                    colorChannelNames(spp, alpha));
+  } catch (...) {
+    png_image_free(&png);  // the memory budget refused the size the header claims
+    throw;
+  }
+  Image& image = *checked;
   std::vector<png_byte> bytes(PNG_IMAGE_SIZE(png));
   if (!png_image_finish_read(&png, nullptr, bytes.data(), 0, nullptr)) {
     std::string msg = png.message;
@@ -348,7 +435,25 @@ Image readPng(const std::string& path) {
 
 }  // namespace
 
+namespace {
+Image readImageAsIs(const std::string& path);
+}  // namespace
+
 Image readImage(const std::string& path) {
+  Image image = readImageAsIs(path);
+  // Every number read from a file is finite: NaN and infinite pixels (EXR, float TIFF) become 0,
+  // with a warning, so that textures, environment maps and their sampling tables stay finite.
+  size_t bad = 0;
+  for (float& v : image.pixels)
+    if (!std::isfinite(v)) v = 0, ++bad;
+  if (bad)
+    logWarning(fmt::format("{}: {} NaN or infinite pixel values read as 0", path, bad));
+  return image;
+}
+
+namespace {
+
+Image readImageAsIs(const std::string& path) {
   const ImageFormat format = imageFormatFromPath(path);
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) fail(path, "no such image file");
@@ -361,13 +466,16 @@ Image readImage(const std::string& path) {
       case ImageFormat::Png:
         return readPng(path);
     }
-  } catch (const Error&) {
+  } catch (const Error& e) {
+    if (!e.loc().valid()) fail(path, e.message());  // e.g. the memory budget: name the file
     throw;
   } catch (const std::exception& e) {
     fail(path, fmt::format("cannot read image: {}", e.what()));
   }
   fail(path, "unknown image format");
 }
+
+}  // namespace
 
 void writeImage(const std::string& path, const Image& image, const ImageWriteOptions& options) {
   const ImageFormat format = imageFormatFromPath(path);
@@ -377,9 +485,18 @@ void writeImage(const std::string& path, const Image& image, const ImageWriteOpt
   if (image.width <= 0 || image.height <= 0) fail(path, "cannot write an empty image");
   writeAtomically(path, [&](const std::string& tmp) {
     switch (format) {
-      case ImageFormat::Exr:
+      case ImageFormat::Exr: {
         writeExr(tmp, image);
+        // OpenEXR finishes the file (line offsets) in a destructor that swallows errors: read it
+        // back, so that a full disk is an error and not a truncated image.
+        bool complete = false;
+        try {
+          complete = Imf::InputFile(tmp.c_str()).isComplete();
+        } catch (const std::exception&) {
+        }
+        if (!complete) fail(path, "writing failed: the written EXR file is incomplete (disk full?)");
         break;
+      }
       case ImageFormat::Tiff:
         writeTiff(tmp, image, options.tiff_format);
         break;

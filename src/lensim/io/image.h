@@ -61,8 +61,9 @@ enum class ImageFormat { Exr, Tiff, Png };
 /// The format for a path's extension (case-insensitive); throws lensim::Error for others.
 ImageFormat imageFormatFromPath(const std::string& path);
 
-/// Reads an EXR, TIFF or PNG file (by extension) into linear floats.
-/// Throws lensim::Error naming the file if it is missing, unreadable or unsupported.
+/// Reads an EXR, TIFF or PNG file (by extension) into linear floats. NaN and infinite values are
+/// read as 0 (with a warning). Throws lensim::Error naming the file if it is missing, unreadable,
+/// unsupported or larger than the memory budget allows.
 Image readImage(const std::string& path);
 
 /// Writes `image` to `path` in the format its extension names, atomically (temporary file in the

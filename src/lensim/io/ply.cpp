@@ -3,13 +3,17 @@
 #include <fmt/format.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <bit>
+#include <cmath>
 #include <charconv>
 #include <cstdint>
 #include <cstring>
 #include <sstream>
 
 #include "lensim/util/error.h"
+#include "lensim/util/file.h"
+#include "lensim/util/limits.h"
 
 namespace lensim::io {
 
@@ -146,7 +150,26 @@ class BodyReader {
   const std::string& name_;
 };
 
+// A list's length as the file gives it: a whole number in [0, max], or an error.
+size_t listLength(double v, const std::string& name) {
+  if (!(v >= 0 && v <= 1e6) || v != std::floor(v))
+    throw Error(fmt::format("{}: bad PLY list length {}", name, v));
+  return static_cast<size_t>(v);
+}
+
+// The fewest bytes one element can take in the body (lists as empty lists).
+size_t minElementBytes(const Element& e, Format format) {
+  size_t n = 0;
+  for (const Property& p : e.props)
+    n += format == Format::Ascii ? 2 : scalarSize(p.is_list ? p.count_type : p.type);
+  return n;
+}
+
 std::string readGzFile(const std::string& path) {
+  // Only regular files (a FIFO blocks, /dev/zero never ends); the decompressed size is held to
+  // the memory budget.
+  requireRegularFile(path, "PLY file", uint64_t{64} << 30);
+  const double budget = static_cast<double>(memoryBudgetBytes()) / 2;
   gzFile f = gzopen(path.c_str(), "rb");  // reads uncompressed files unchanged
   if (!f) throw Error(fmt::format("cannot open PLY file \"{}\"", path));
   std::string data;
@@ -161,6 +184,10 @@ std::string readGzFile(const std::string& path) {
     }
     if (n == 0) break;
     data.append(buf, static_cast<size_t>(n));
+    if (static_cast<double>(data.size()) > budget) {
+      gzclose(f);
+      checkMemory(static_cast<double>(data.size()) * 2, FileLoc{path}, "decompressing this PLY file");
+    }
   }
   gzclose(f);
   return data;
@@ -234,6 +261,17 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
   }
   if (!have_format) throw Error(fmt::format("{}: PLY header has no format line", name));
 
+  // A small file must not claim a billion elements: each takes a few bytes at least.
+  {
+    const size_t body_bytes = data.size() - pos;
+    for (const Element& e : elements) {
+      const size_t per = std::max<size_t>(1, minElementBytes(e, format));
+      if (e.count > body_bytes / per)
+        throw Error(fmt::format("{}: PLY element \"{}\" claims {} entries, but the file has only "
+                                "{} bytes of data (at least {} bytes an entry)",
+                                name, e.name, e.count, body_bytes, per));
+    }
+  }
   PlyMesh mesh;
   BodyReader body(data, pos, format, name);
   for (const Element& e : elements) {
@@ -268,13 +306,18 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
         for (size_t i = 0; i < e.props.size(); ++i) {
           const Property& p = e.props[i];
           if (p.is_list) {
-            size_t n = static_cast<size_t>(body.read(p.count_type));
+            size_t n = listLength(body.read(p.count_type), name);
             for (size_t j = 0; j < n; ++j) body.read(p.type);
             vals[i] = 0;
           } else {
             vals[i] = body.read(p.type);
           }
         }
+        for (int k : {ix, iy, iz})
+          if (!(std::abs(vals[static_cast<size_t>(k)]) <= kMaxSceneNumber))
+            throw Error(fmt::format("{}: vertex {} has a coordinate that is not a finite number "
+                                    "({})",
+                                    name, v, vals[static_cast<size_t>(k)]));
         mesh.positions.push_back(Vec3f(Vec3{vals[ix], vals[iy], vals[iz]}));
         if (normals) mesh.normals.push_back(Vec3f(Vec3{vals[inx], vals[iny], vals[inz]}));
         if (uvs) mesh.uvs.push_back({float(vals[iu]), float(vals[iv])});
@@ -283,9 +326,13 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
       for (size_t f = 0; f < e.count; ++f) {
         for (const Property& p : e.props) {
           if (p.is_list) {
-            size_t n = static_cast<size_t>(body.read(p.count_type));
+            size_t n = listLength(body.read(p.count_type), name);
             std::vector<int> idx(n);
-            for (size_t j = 0; j < n; ++j) idx[j] = static_cast<int>(body.read(p.type));
+            for (size_t j = 0; j < n; ++j) {
+              const double x = body.read(p.type);
+              // Out of range or fractional values become -1, which the range check refuses.
+              idx[j] = x >= 0 && x < 2147483647.0 && x == std::floor(x) ? static_cast<int>(x) : -1;
+            }
             if (p.name != "vertex_indices" && p.name != "vertex_index") continue;
             for (int i : idx)
               if (i < 0 || static_cast<size_t>(i) >= mesh.positions.size())
@@ -301,7 +348,8 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
             }
           } else {
             double v = body.read(p.type);
-            if (p.name == "face_indices") mesh.face_indices.push_back(static_cast<int>(v));
+            if (p.name == "face_indices")
+              mesh.face_indices.push_back(std::abs(v) < 2147483647.0 ? static_cast<int>(v) : -1);
           }
         }
       }
@@ -309,7 +357,7 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
       for (size_t k = 0; k < e.count; ++k)
         for (const Property& p : e.props) {
           if (p.is_list) {
-            size_t n = static_cast<size_t>(body.read(p.count_type));
+            size_t n = listLength(body.read(p.count_type), name);
             for (size_t j = 0; j < n; ++j) body.read(p.type);
           } else {
             body.read(p.type);

@@ -12,6 +12,8 @@
 #include <sstream>
 
 #include "lensim/optics/glass.h"
+#include "lensim/util/file.h"
+#include "lensim/util/text.h"
 
 namespace lensim::optics {
 
@@ -162,6 +164,8 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
       p.layout = LensFileLayout::Iset;
       continue;
     }
+    if (p.surfaces.size() >= kMaxLensSurfaces)
+      throw Error(loc, fmt::format("too many surfaces: at most {} rows are read", kMaxLensSurfaces));
     if (cols.size() < 4 || cols.size() > 6)
       throw Error(loc, fmt::format("expected 4 numbers (radius, thickness, index of refraction, "
                                    "aperture diameter), optionally followed by the Abbe number "
@@ -239,6 +243,8 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
 
   p.name = firstComment ? *firstComment : stemOf(path);
   if (p.name.rfind("Name:", 0) == 0) p.name = trim(p.name.substr(5));
+  // The name goes into SVG, JSON and messages: printable, valid UTF-8, not too long.
+  p.name = shortToken(p.name, 200);
   checkCrossings(p);
   return p;
 }
@@ -250,15 +256,11 @@ LensPrescription readLensFile(const std::string& spec) {
   const std::string& path = ref.path;
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(FileLoc{path, 0, 0}, "cannot open lens file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw Error(FileLoc{path, 0, 0}, "cannot read lens file");
-  if (!ref.lentil_key.empty() || ext == ".json")
-    return parseLensJson(ss.str(), path, ref.lentil_key);
-  if (ext == ".zmx") return parseZmx(ss.str(), path);
-  return parseLensPrescription(ss.str(), path);
+  // Only regular files of a sane size: a FIFO would block, /dev/zero never ends.
+  const std::string text = readRegularFile(path, "lens file", kMaxLensFileBytes);
+  if (!ref.lentil_key.empty() || ext == ".json") return parseLensJson(text, path, ref.lentil_key);
+  if (ext == ".zmx") return parseZmx(text, path);
+  return parseLensPrescription(text, path);
 }
 
 }  // namespace lensim::optics

@@ -15,6 +15,8 @@
 // spaces or tabs separate columns; CR, LF and CRLF line endings are all accepted.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -98,6 +100,11 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
 /// `lenses:NAME`; see lens_formats.h). Throws lensim::Error when it cannot be read or is
 /// malformed.
 LensPrescription readLensFile(const std::string& path);
+
+/// The largest lens file read (a real prescription has at most a few hundred rows).
+inline constexpr uint64_t kMaxLensFileBytes = uint64_t{16} << 20;
+/// The most surfaces a prescription may have.
+inline constexpr size_t kMaxLensSurfaces = 10000;
 
 /// Sag of a spherical surface at height h: axial distance from the vertex plane (mm), signed
 /// toward +z. Zero for a plane (radius 0). Requires |h| <= |radius|.

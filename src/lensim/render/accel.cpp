@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <atomic>
 #include <mutex>
 
 #include "lensim/scene/builder.h"
@@ -45,6 +46,7 @@ struct Accel::Impl {
   std::vector<int> shape_world_mesh;
   std::mutex error_mutex;
   std::string error;
+  mutable std::atomic<uint64_t> invalid_rays{0};  ///< rays dropped before Embree (rayIsValid)
 
   ~Impl() {
     for (RTCScene s : object_scenes)
@@ -287,6 +289,8 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
 
 Accel::~Accel() = default;
 
+uint64_t Accel::invalidRays() const { return impl_->invalid_rays.load(); }
+
 const WorldMesh* Accel::worldMesh(int shape) const {
   if (shape < 0 || static_cast<size_t>(shape) >= impl_->shape_world_mesh.size()) return nullptr;
   const int i = impl_->shape_world_mesh[static_cast<size_t>(shape)];
@@ -294,6 +298,18 @@ const WorldMesh* Accel::worldMesh(int shape) const {
 }
 
 namespace {
+
+// What Embree accepts (its ray.valid(), asserted in Debian's build): origin and direction
+// components finite and within +-1.844e18 (FLT_LARGE), a non-zero direction, tmax >= 0. A scene
+// with NaN or huge numbers can make other rays; they are counted and dropped (no hit).
+constexpr double kEmbreeLarge = 1.844e18;
+bool rayIsValid(const Ray& ray) {
+  const double c[6] = {ray.o.x, ray.o.y, ray.o.z, ray.d.x, ray.d.y, ray.d.z};
+  for (double v : c)
+    if (!(std::abs(v) <= kEmbreeLarge)) return false;
+  if (ray.d.x == 0 && ray.d.y == 0 && ray.d.z == 0) return false;
+  return ray.tmax >= 0;  // false for NaN
+}
 
 void setRay(RTCRay& r, const Ray& ray) {
   r.org_x = float(ray.o.x), r.org_y = float(ray.o.y), r.org_z = float(ray.o.z);
@@ -320,6 +336,10 @@ Vec3 perpendicular(const Vec3& n) {
 
 std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   const Impl& m = *impl_;
+  if (!rayIsValid(ray)) {
+    m.invalid_rays.fetch_add(1, std::memory_order_relaxed);
+    return std::nullopt;
+  }
   RTCRayHit rh;
   setRay(rh.ray, ray);
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -455,6 +475,10 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
 }
 
 bool Accel::occluded(const Ray& ray) const {
+  if (!rayIsValid(ray)) {
+    impl_->invalid_rays.fetch_add(1, std::memory_order_relaxed);
+    return true;  // no light arrives along a ray that cannot be traced
+  }
   RTCRay r;
   setRay(r, ray);
   RTCIntersectContext ctx;

@@ -60,6 +60,8 @@ class Accel {
   Bounds3 bounds() const { return bounds_; }
   /// The world-space mesh of a world (non-instanced) emissive mesh shape; nullptr for others.
   const WorldMesh* worldMesh(int shape) const;
+  /// Rays with non-finite or huge origin or direction that were dropped instead of traced.
+  uint64_t invalidRays() const;
 
   struct Impl;
 

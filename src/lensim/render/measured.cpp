@@ -14,6 +14,8 @@
 #include "lensim/render/microfacet.h"
 #include "lensim/render/sampling.h"
 #include "lensim/util/error.h"
+#include "lensim/util/file.h"
+#include "lensim/util/limits.h"
 
 namespace lensim::render {
 
@@ -78,11 +80,17 @@ IrregularBRDFData parseIrregularBRDF(std::string_view text, const std::string& p
                 "isotropic BRDF: count, wavelengths, then samples)");
   IrregularBRDFData d;
   const double count = number(tokens[0], "the count of wavelengths");
-  if (count < 1 || count != std::floor(count) || count > 100000)
+  if (count < 1 || count != std::floor(count) || count > kMaxBRDFWavelengths)
     throw Error(loc(tokens[0]), fmt::format("the count of wavelengths is {}; expected a whole "
-                                            "number >= 1",
-                                            tokens[0].text));
+                                            "number from 1 to {}",
+                                            tokens[0].text, kMaxBRDFWavelengths));
   const std::size_t nw = std::size_t(count);
+  // The interpolation table holds every node for every wavelength (MeasuredBRDF::Options).
+  {
+    const MeasuredBRDF::Options o;
+    checkMemory(4.0 * o.n_theta * o.n_theta * o.n_phi * static_cast<double>(nw), loc(tokens[0]),
+                fmt::format("the BRDF table for {} wavelengths", nw));
+  }
   if (tokens.size() < 1 + nw)
     throw Error(loc(tokens.back()),
                 fmt::format("the file ends after {} of the {} wavelengths", tokens.size() - 1, nw));
@@ -132,6 +140,10 @@ IrregularBRDFData parseIrregularBRDF(std::string_view text, const std::string& p
       const Token& t = tokens[first + s * per + 4 + w];
       const double v = number(
           t, fmt::format("the BRDF value of sample {} at {} nm", s + 1, d.wavelengths_nm[w]));
+      if (v > kMaxBRDFValue)
+        throw Error(loc(t), fmt::format("the BRDF value of sample {} is {}; expected at most {:g} "
+                                        "(1/sr)",
+                                        s + 1, t.text, kMaxBRDFValue));
       d.values.push_back(std::max(0.0, v));
     }
   }
@@ -139,12 +151,8 @@ IrregularBRDFData parseIrregularBRDF(std::string_view text, const std::string& p
 }
 
 IrregularBRDFData readIrregularBRDF(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(FileLoc{path}, "cannot open the measured BRDF file");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw Error(FileLoc{path}, "cannot read the measured BRDF file");
-  return parseIrregularBRDF(ss.str(), path);
+  // Only regular files (no FIFO or device), at most 1 GiB.
+  return parseIrregularBRDF(readRegularFile(path, "measured BRDF file"), path);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -44,6 +44,12 @@ struct IrregularBRDFData {
   }
 };
 
+/// The most wavelengths a .brdf file may list.
+inline constexpr double kMaxBRDFWavelengths = 1000;
+/// The largest BRDF value accepted (1/sr; a mirror-like peak is far below it; float tables
+/// overflow near 3.4e38).
+inline constexpr double kMaxBRDFValue = 1e12;
+
 /// Parses the text of a `.brdf` file; `path` is used in messages only. Throws lensim::Error
 /// (`path:line:col: error: ...`) naming the offending value and what was expected.
 IrregularBRDFData parseIrregularBRDF(std::string_view text, const std::string& path);

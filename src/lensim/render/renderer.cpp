@@ -23,6 +23,7 @@
 #include "lensim/render/volpath.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
+#include "lensim/util/limits.h"
 #include "lensim/util/log.h"
 
 namespace lensim::render {
@@ -181,6 +182,8 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     scene.film.loc.str(), scene.film.sensor));
 
   const int spp_req = opt.spp.value_or(scene.sampler.pixel_samples);
+  if (spp_req <= 0 || spp_req > kMaxSamplesPerPixel)
+    throw Error(fmt::format("{} samples per pixel: expected 1 to {}", spp_req, kMaxSamplesPerPixel));
   const int seed = opt.seed.value_or(scene.sampler.seed);
   std::unique_ptr<Sampler> proto = makeSampler(scene, spp_req, seed);
   const int spp = proto->samplesPerPixel();
@@ -443,7 +446,23 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   st.nonfinite_samples = nonfinite;
   st.rays = rays;
   st.partial = cancelled.load() || tiles_done.load() < n_tiles || pass_begin < spp_end;
+  st.invalid_rays = accel.invalidRays();
   result.image = film.image();
+  // No pixel is ever NaN or inf (an overflowing light, a degenerate film setting): such values
+  // are written as 0, counted and reported.
+  for (float& v : result.image.pixels)
+    if (!std::isfinite(v)) {
+      v = 0;
+      ++st.nonfinite_pixels;
+    }
+  if (st.invalid_rays > 0)
+    logWarning(fmt::format("{} rays with a non-finite or huge origin or direction were dropped "
+                           "(check the scene's numbers)",
+                           st.invalid_rays));
+  if (st.nonfinite_pixels > 0)
+    logWarning(fmt::format("{} pixel values were NaN or infinite and are written as 0 (check the "
+                           "scene's light and film values)",
+                           st.nonfinite_pixels));
   auto& md = result.image.metadata;
   md["lensim:spp"] = std::to_string(spp);
   md["lensim:setup_seconds"] = fmt::format("{:.3f}", st.load_s + st.setup_s);
@@ -481,6 +500,10 @@ std::string formatStats(const RenderStats& s) {
       inside ? 100.0 * double(s.no_ray_samples - s.outside_samples) / double(inside) : 0.0, inside);
   out += fmt::format("rays traced          {} ({:.3g} rays/s)\n", s.rays, double(s.rays) / w);
   out += fmt::format("NaN/inf samples      {} (discarded)\n", s.nonfinite_samples);
+  if (s.invalid_rays > 0)
+    out += fmt::format("invalid rays         {} (non-finite or huge; dropped)\n", s.invalid_rays);
+  if (s.nonfinite_pixels > 0)
+    out += fmt::format("NaN/inf pixels       {} (written as 0)\n", s.nonfinite_pixels);
   return out;
 }
 

@@ -90,6 +90,8 @@ struct RenderStats {
                                  ///< the image circle: camera::Camera::reachesFilm)
   uint64_t nonfinite_samples = 0;  ///< NaN/inf radiance samples, discarded
   uint64_t rays = 0;               ///< all rays traced (intersection and shadow)
+  uint64_t invalid_rays = 0;       ///< rays with non-finite or huge numbers, dropped (Accel)
+  uint64_t nonfinite_pixels = 0;   ///< NaN/inf pixel values of the image, written as 0
   int spp = 0;
   int spp_begin = 0, spp_end = 0;  ///< the sample indices taken, [spp_begin, spp_end)
   int threads = 0;

@@ -23,6 +23,7 @@
 #include "lensim/render/sampling.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
+#include "lensim/util/file.h"
 #include "lensim/util/log.h"
 
 namespace lensim::render {
@@ -239,8 +240,8 @@ SpectrumPtr makeSpectrum(const scene::SpectrumValue& v, SpectrumType type) {
       return fallbackNamedSpectrum(v.name);
     }
     case K::File: {
-      std::ifstream in(v.name);
-      if (!in) throw Error(fmt::format("{}: cannot read the spectrum file", v.name));
+      // Only a regular file of at most 64 MiB (no FIFO or device).
+      std::istringstream in(readRegularFile(v.name, "spectrum file", uint64_t{64} << 20));
       std::string line, text;
       while (std::getline(in, line)) text += line.substr(0, line.find('#')) + "\n";
       std::istringstream ss(text);

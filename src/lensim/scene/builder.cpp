@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -11,6 +12,7 @@
 #include "lensim/io/ply.h"
 #include "lensim/scene/media_presets.h"
 #include "lensim/scene/params.h"
+#include "lensim/util/limits.h"
 
 namespace lensim::scene {
 
@@ -408,6 +410,10 @@ class Builder {
         s.kind = SpectrumValue::Kind::Blackbody;
         s.temperature_k = p.numbers[0];
         if (p.numbers.size() > 1) s.blackbody_scale = p.numbers[1];
+        if (!(s.temperature_k > 0 && s.temperature_k <= 1e6))
+          throw Error(p.loc, fmt::format("\"{}\": blackbody temperature {} K is out of range; "
+                                         "expected (0, 1e6] K",
+                                         p.name, s.temperature_k));
         break;
       case ParamType::Spectrum:
         if (!p.strings.empty()) {
@@ -431,8 +437,13 @@ class Builder {
           }
         } else {
           s.kind = SpectrumValue::Kind::Sampled;
-          for (size_t i = 0; i + 1 < p.numbers.size(); i += 2)
+          for (size_t i = 0; i + 1 < p.numbers.size(); i += 2) {
+            if (!s.samples.empty() && !(p.numbers[i] > s.samples.back().first))
+              throw Error(p.loc, fmt::format("\"{}\": spectrum wavelength {} nm after {} nm; "
+                                             "expected increasing wavelengths",
+                                             p.name, p.numbers[i], s.samples.back().first));
             s.samples.push_back({p.numbers[i], p.numbers[i + 1]});
+          }
         }
         break;
       default:
@@ -544,6 +555,7 @@ class Builder {
     } else if (n == "WorldEnd") {
       // pbrt v1–v3: end of the scene; nothing to do.
     } else if (n == "AttributeBegin") {
+      checkStackMemory(d);
       stack_.push_back(gs_);
     } else if (n == "AttributeEnd") {
       popState(false);
@@ -553,6 +565,7 @@ class Builder {
         warnOnce("TransformBegin", d.loc,
                  "TransformBegin/TransformEnd are deprecated in pbrt-v4 and act as "
                  "AttributeBegin/AttributeEnd");
+      checkStackMemory(d);
       stack_.push_back(gs_);
     } else if (n == "TransformEnd") {
       popState(scene_.legacy_syntax);
@@ -693,11 +706,11 @@ class Builder {
                                                 "wavefront"};
     const Param& p = d.params[0];
     if (!known.count(p.name)) throw Error(p.loc, fmt::format("\"{}\": unknown option", p.name));
-    std::string v;
-    for (double x : p.numbers) v += fmt::format("{}{}", v.empty() ? "" : " ", x);
-    for (const std::string& s : p.strings) v += (v.empty() ? "" : " ") + s;
-    for (bool b : p.bools) v += (v.empty() ? "" : " ") + std::string(b ? "true" : "false");
-    scene_.options[p.name] = v;
+    std::vector<std::string> words;
+    for (double x : p.numbers) words.push_back(fmt::format("{}", x));
+    for (const std::string& s : p.strings) words.push_back(s);
+    for (bool b : p.bools) words.push_back(b ? "true" : "false");
+    scene_.options[p.name] = fmt::format("{}", fmt::join(words, " "));
   }
 
   void attribute(const Directive& d) {
@@ -860,6 +873,12 @@ class Builder {
                            type));
     f.x_resolution = ps.getInt({"xresolution"}, f.x_resolution);
     f.y_resolution = ps.getInt({"yresolution"}, f.y_resolution);
+    if (f.x_resolution <= 0 || f.y_resolution <= 0)
+      throw Error(d.loc, fmt::format("film resolution {}x{} must be positive", f.x_resolution,
+                                     f.y_resolution));
+    // The film's buffers (accumulated XYZ and weights, then the RGB image): about 64 bytes a pixel.
+    checkMemory(64.0 * f.x_resolution * f.y_resolution, d.loc,
+                fmt::format("a {}x{} film", f.x_resolution, f.y_resolution));
     f.filename = ps.getString({"filename"}, f.filename);
     if (const Param* p = ps.find({"cropwindow"}, {ParamType::Float})) {
       ps.expectCount(*p, 4);
@@ -874,6 +893,15 @@ class Builder {
     f.diagonal_mm = ps.getFloat({"diagonal"}, 35);
     f.iso = ps.getFloat({"iso"}, 100);
     f.white_balance_k = ps.getFloat({"whitebalance"}, 0);
+    // Ranges that keep the film's arithmetic finite (a NaN or 1e-300 here made every pixel NaN).
+    if (!(f.iso > 0 && f.iso <= 1e7))
+      throw Error(d.loc, fmt::format("film \"iso\" {} is out of range; expected (0, 1e7]", f.iso));
+    if (f.white_balance_k != 0 && !(f.white_balance_k >= 1000 && f.white_balance_k <= 100000))
+      throw Error(d.loc, fmt::format("film \"whitebalance\" {} K is out of range; expected 0 (none) "
+                                     "or a colour temperature in [1000, 100000] K",
+                                     f.white_balance_k));
+    if (!(f.diagonal_mm > 0))
+      throw Error(d.loc, fmt::format("film \"diagonal\" {} mm must be > 0", f.diagonal_mm));
     f.sensor = ps.getString({"sensor"}, "cie1931");
     f.max_component_value = ps.getFloat({"maxcomponentvalue", "maxsampleluminance"}, 1e300);
     f.save_fp16 = ps.getBool({"savefp16"}, true);
@@ -899,7 +927,13 @@ class Builder {
     if (type == "stratified") {
       int x = ps.getInt({"xsamples"}, 4), y = ps.getInt({"ysamples"}, 4);
       s.jitter = ps.getBool({"jitter"}, true);
-      s.pixel_samples = x * y;
+      // The product in 64 bits: 65536 x 65536 must not wrap around.
+      const int64_t xy = int64_t{x} * int64_t{y};
+      if (x <= 0 || y <= 0 || xy > kMaxSamplesPerPixel)
+        throw Error(d.loc, fmt::format("stratified sampler: {} x {} samples per pixel; expected "
+                                       "positive counts with a product of at most {}",
+                                       x, y, kMaxSamplesPerPixel));
+      s.pixel_samples = static_cast<int>(xy);
       s.type = type;
     } else if (v4.count(type)) {
       s.type = type;
@@ -928,6 +962,9 @@ class Builder {
           fmt::format("sampler \"{}\" is not rendered by lensim; it renders as \"zsobol\"", type));
     }
     if (s.pixel_samples <= 0) throw Error(d.loc, "pixelsamples must be positive");
+    if (s.pixel_samples > kMaxSamplesPerPixel)
+      throw Error(d.loc, fmt::format("pixelsamples {} is too large; at most {} are taken",
+                                     s.pixel_samples, kMaxSamplesPerPixel));
     finish(ps);
   }
 
@@ -1067,6 +1104,22 @@ class Builder {
           t.encoding = fmt::format("gamma {}", g->numbers[0]);
         else
           t.encoding = g->bools[0] ? "sRGB" : "linear";
+      }
+      // "sRGB", "linear" or "gamma G" with a positive G, checked here at the parameter.
+      if (!t.encoding.empty() && t.encoding != "sRGB" && t.encoding != "linear") {
+        double gamma = 0;
+        const std::string_view e = t.encoding;
+        const bool ok = e.rfind("gamma ", 0) == 0 &&
+                        std::from_chars(e.data() + 6, e.data() + e.size(), gamma).ptr ==
+                            e.data() + e.size() &&
+                        gamma > 0 && gamma <= 100;
+        if (!ok) {
+          const Param* ep = ps.find({"encoding", "gamma"}, {ParamType::String, ParamType::Float});
+          throw Error(ep ? ep->loc : d.loc,
+                      fmt::format("image texture encoding \"{}\"; expected \"sRGB\", \"linear\" "
+                                  "or \"gamma G\" with G in (0, 100]",
+                                  t.encoding));
+        }
       }
     } else if (cls == "scale") {
       t.type = cls;
@@ -1334,6 +1387,23 @@ class Builder {
     return default_material_;
   }
 
+  // Each AttributeBegin copies the graphics state, attribute lists included: thousands of nested
+  // blocks after a large "Attribute" would multiply it (20,000 x 100k floats: 16 GB).
+  void checkStackMemory(const Directive& d) {
+    double bytes = sizeof(GraphicsState);
+    for (const ParamList* list :
+         {&gs_.shape_attrs, &gs_.light_attrs, &gs_.material_attrs, &gs_.texture_attrs})
+      for (const Param& p : *list) {
+        bytes += sizeof(Param) + 8.0 * static_cast<double>(p.numbers.size()) + p.bools.size();
+        for (const std::string& str : p.strings) bytes += sizeof(std::string) + str.size();
+      }
+    // The entries below hold copies of about this size too (estimate).
+    if (bytes > 4096)
+      checkMemory(bytes * static_cast<double>(stack_.size() + 1), d.loc,
+                  fmt::format("{} nested AttributeBegin blocks (each copies the attributes)",
+                              stack_.size() + 1));
+  }
+
   // ---- lights --------------------------------------------------------------------------------
   void light(const Directive& d) {
     const std::string& type = d.strings[0];
@@ -1358,6 +1428,9 @@ class Builder {
         l.to = ps.findPoint3({"to"}).value_or(Vec3{0, 0, 1});
         l.cone_angle_deg = ps.getFloat({"coneangle"}, 30);
         l.cone_delta_deg = ps.getFloat({"conedeltaangle"}, 5);
+        if (l.from == l.to)
+          throw Error(d.loc, "spot light: \"from\" and \"to\" are the same point; they give "
+                             "the light's direction");
       }
     } else if (type == "projection") {
       l.fov_deg = ps.getFloat({"fov"}, 90);
@@ -1376,6 +1449,9 @@ class Builder {
       emission({"L"});
       l.from = ps.findPoint3({"from"}).value_or(Vec3{0, 0, 0});
       l.to = ps.findPoint3({"to"}).value_or(Vec3{0, 0, 1});
+      if (l.from == l.to)
+        throw Error(d.loc, "distant light: \"from\" and \"to\" are the same point; they give "
+                           "the light's direction");
     } else if (type == "infinite") {
       emission({"L"});
       if (const Param* p = ps.find({"filename", "mapname"}, {ParamType::String}))
@@ -1543,6 +1619,12 @@ class Builder {
     if (type == "loopsubdiv") {
       int levels = ps.getInt({"levels", "nlevels"}, 3);
       if (levels < 0 || levels > 8) throw Error(loc, fmt::format("loopsubdiv: {} levels", levels));
+      // Every level makes four triangles of one; with the topology tables about 400 bytes a
+      // triangle at the last level.
+      const double triangles = static_cast<double>(idx.size() / 3) * std::pow(4.0, levels);
+      checkMemory(400.0 * triangles, loc,
+                  fmt::format("loopsubdiv: {} levels of {} triangles ({:.3g} triangles)", levels,
+                              idx.size() / 3, triangles));
       loopSubdivide(pos, idx, levels);
     }
     for (const Vec3& p : pos) m.positions.push_back(Vec3f(p));

@@ -37,6 +37,10 @@ void ParamSet::addDefaults(const ParamList& params) {
 }
 
 size_t editDistance(std::string_view a, std::string_view b) {
+  // The distance is at least the difference in length; callers only look for near misses, so a
+  // long word (a 10 MB token) is answered by that bound instead of a quadratic table.
+  const size_t diff = a.size() > b.size() ? a.size() - b.size() : b.size() - a.size();
+  if (diff > 16) return diff;
   std::vector<size_t> row(b.size() + 1);
   for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
   for (size_t i = 1; i <= a.size(); ++i) {

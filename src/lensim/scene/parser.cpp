@@ -16,6 +16,8 @@
 
 #include "lensim/scene/params.h"
 #include "lensim/scene/tokenizer.h"
+#include "lensim/util/file.h"
+#include "lensim/util/limits.h"
 
 namespace lensim::scene {
 
@@ -54,6 +56,9 @@ std::string_view paramTypeName(ParamType t) {
 namespace {
 
 namespace fs = std::filesystem;
+
+// The largest scene file read (pbrt scenes with inline meshes reach gigabytes).
+constexpr uint64_t kMaxSceneFileBytes = uint64_t{16} << 30;
 
 // How a directive's positional arguments are written.
 enum class Args {
@@ -193,6 +198,21 @@ std::optional<std::string> readSceneText(const std::string& path) {
       }
       if (n == 0) break;
       data.append(buf, static_cast<size_t>(n));
+      // A small .gz can expand without bound: the decompressed text counts against the budget.
+      if ((data.size() & ((size_t{1} << 26) - 1)) < sizeof buf || data.size() > kMaxSceneFileBytes) {
+        if (data.size() > kMaxSceneFileBytes) {
+          gzclose(f);
+          throw Error(FileLoc{path, 0, 0},
+                      fmt::format("decompressed scene text exceeds {} bytes", kMaxSceneFileBytes));
+        }
+        try {
+          checkMemory(4.0 * static_cast<double>(data.size()), FileLoc{path, 0, 0},
+                      "parsing this decompressed scene file");
+        } catch (...) {
+          gzclose(f);
+          throw;
+        }
+      }
     }
     gzclose(f);
     return data;
@@ -260,6 +280,12 @@ class Parser {
 
   // Pushes a file onto the token stream; false (after recording an error) if it cannot be read.
   bool pushFile(const std::string& path, const FileLoc* included_from) {
+    // Only regular files (a FIFO or /dev/zero would block or never end), of a size the memory
+    // budget allows (parsing needs a few times the text).
+    if (!included_from) {
+      const uint64_t bytes = requireRegularFile(path, "scene file", kMaxSceneFileBytes);
+      checkMemory(4.0 * static_cast<double>(bytes), FileLoc{path}, "parsing this scene file");
+    }
     std::optional<std::string> text = readSceneText(path);
     if (!text) {
       std::string msg = included_from ? fmt::format("cannot open included file \"{}\"", path)
@@ -372,6 +398,7 @@ class Parser {
           Token n = next(tok);
           std::optional<double> v;
           if (n.kind == Token::Kind::Word) v = parseNumber(n.text);
+          if (v) requireFinite(*v, tok.loc(n), "");
           if (!v) {
             if (bracket && (n.kind == Token::Kind::End || n.kind == Token::Kind::Word))
               throw Error(tok.loc(open), "unterminated array");
@@ -436,6 +463,7 @@ class Parser {
             p.type = ParamType::Bool;
             p.bools.push_back(v.text == "true");
           } else if (auto x = v.kind == Token::Kind::Word ? parseNumber(v.text) : std::nullopt) {
+            requireFinite(*x, tok.loc(v), "");
             p.type = *x == std::floor(*x) ? ParamType::Integer : ParamType::Float;
             p.numbers.push_back(*x);
           } else {
@@ -514,6 +542,8 @@ class Parser {
         std::optional<double> x;
         if (v.kind == Token::Kind::Word) x = parseNumber(v.text);
         if (!x) wrongKind(v, "a number");
+        // Every number in a scene is finite and fits a 32-bit float (util/limits.h).
+        requireFinite(*x, tok.loc(v), "");
         p.numbers.push_back(*x);
       }
     };

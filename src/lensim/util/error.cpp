@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "lensim/util/text.h"
+
 namespace lensim {
 
 std::string FileLoc::str() const {
@@ -24,8 +26,11 @@ static const char* severityName(Severity s) {
 }
 
 std::string Diagnostic::str() const {
-  if (loc.valid()) return fmt::format("{}: {}: {}", loc.str(), severityName(severity), message);
-  return fmt::format("{}: {}", severityName(severity), message);
+  // Messages quote bytes from users' files: escape what is unprintable, shorten long tokens.
+  const std::string safe = sanitizeMessage(message);
+  if (loc.valid())
+    return fmt::format("{}: {}: {}", sanitizeMessage(loc.str()), severityName(severity), safe);
+  return fmt::format("{}: {}", severityName(severity), safe);
 }
 
 static std::string formatError(const FileLoc& loc, const std::string& message) {
@@ -33,12 +38,12 @@ static std::string formatError(const FileLoc& loc, const std::string& message) {
 }
 
 Error::Error(std::string message)
-    : std::runtime_error(formatError({}, message)), message_(std::move(message)) {}
+    : std::runtime_error(formatError({}, message)), message_(sanitizeMessage(message)) {}
 
 Error::Error(FileLoc loc, std::string message)
     : std::runtime_error(formatError(loc, message)),
       loc_(std::move(loc)),
-      message_(std::move(message)) {}
+      message_(sanitizeMessage(message)) {}
 
 std::string formatDiagnostics(const std::vector<Diagnostic>& diagnostics) {
   std::string out;

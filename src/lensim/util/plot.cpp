@@ -69,8 +69,11 @@ void Chart::render(svg::Document& doc, double x, double y, double w, double h) c
     }
   if (!std::isfinite(xmin)) xmin = 0, xmax = 1, ymin = 0, ymax = 1;
   if (include_zero_y) ymin = std::min(ymin, 0.0), ymax = std::max(ymax, 0.0);
-  auto [x0, x1] = x_range ? *x_range : padRange(xmin, xmax, !x_log);
-  auto [y0, y1] = y_range ? *y_range : padRange(ymin, ymax, true);
+  // Plain references, not structured bindings: clang 14 (the fuzz and sanitizer builds) cannot
+  // capture those in the lambdas below.
+  std::pair<double, double> xr = x_range ? *x_range : padRange(xmin, xmax, !x_log);
+  std::pair<double, double> yr = y_range ? *y_range : padRange(ymin, ymax, true);
+  double &x0 = xr.first, &x1 = xr.second, &y0 = yr.first, &y1 = yr.second;
   if (x_log) {
     x0 = std::max(x0, 1e-300);
     if (!(x1 > x0)) x1 = x0 * 10;

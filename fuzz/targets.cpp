@@ -1,0 +1,156 @@
+#include "targets.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <mutex>
+#include <string>
+
+#include "lensim/io/image.h"
+#include "lensim/io/ply.h"
+#include "lensim/optics/focus.h"
+#include "lensim/optics/prescription.h"
+#include "lensim/render/measured.h"
+#include "lensim/render/renderer.h"
+#include "lensim/scene/builder.h"
+#include "lensim/scene/parser.h"
+#include "lensim/scene/tokenizer.h"
+#include "lensim/util/error.h"
+#include "lensim/util/limits.h"
+#include "lensim/util/log.h"
+
+namespace lensim::fuzz {
+
+namespace {
+
+std::string_view text(const uint8_t* data, size_t size) {
+  return {reinterpret_cast<const char*>(data), size};
+}
+
+// Runs `f`; lensim::Error is the expected answer to bad input.
+template <class F>
+int guarded(F&& f) {
+  try {
+    f();
+  } catch (const Error&) {
+  }
+  return 0;
+}
+
+// A per-process scratch directory for the targets that read files by path.
+const std::string& scratchDir() {
+  static const std::string dir = [] {
+    std::string d = "/tmp/lensim-fuzz-" + std::to_string(::getpid());
+    ::mkdir(d.c_str(), 0700);
+    return d;
+  }();
+  return dir;
+}
+
+std::string writeScratch(const std::string& name, const uint8_t* data, size_t size) {
+  const std::string path = scratchDir() + "/" + name;
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  return path;
+}
+
+}  // namespace
+
+void initFuzzing() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    setMemoryBudgetBytes(uint64_t{256} << 20);
+    setQuiet(true);
+  });
+}
+
+int fuzzLens(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] {
+    optics::LensPrescription p = optics::parseLensPrescription(text(data, size), "fuzz.dat");
+    optics::LensSetup setup;
+    optics::FocusedLens fl = optics::focusLens(std::move(p), setup);
+    (void)fl;
+  });
+}
+
+int fuzzSceneTokens(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] {
+    scene::Tokenizer tok(text(data, size), "fuzz.pbrt");
+    while (tok.next().kind != scene::Token::Kind::End) {
+    }
+  });
+}
+
+int fuzzSceneParse(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] { (void)scene::parseString(text(data, size), "fuzz.pbrt"); });
+}
+
+int fuzzSceneBuild(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] {
+    scene::SceneDesc desc = scene::parseString(text(data, size), scratchDir() + "/fuzz.pbrt");
+    (void)scene::build(desc);
+  });
+}
+
+int fuzzSceneRender(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] {
+    scene::SceneDesc desc = scene::parseString(text(data, size), scratchDir() + "/fuzz.pbrt");
+    scene::Scene s = scene::build(desc);
+    // Small and quick whatever the file asks for.
+    s.film.x_resolution = 4;
+    s.film.y_resolution = 4;
+    render::RenderOptions ro;
+    ro.spp = 1;
+    ro.threads = 1;
+    ro.progress = false;
+    (void)render::render(s, ro);
+  });
+}
+
+int fuzzPly(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] { (void)io::parsePly(std::string(text(data, size)), "fuzz.ply"); });
+}
+
+int fuzzImage(const uint8_t* data, size_t size) {
+  initFuzzing();
+  // The format by the file's magic number, as a user's file would be named.
+  const char* ext = ".png";
+  if (size >= 4 && data[0] == 0x76 && data[1] == 0x2f) ext = ".exr";
+  if (size >= 2 && ((data[0] == 'I' && data[1] == 'I') || (data[0] == 'M' && data[1] == 'M')))
+    ext = ".tif";
+  const std::string path = writeScratch(std::string("fuzz") + ext, data, size);
+  return guarded([&] { (void)io::readImage(path); });
+}
+
+int fuzzBrdf(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] {
+    render::IrregularBRDFData d = render::parseIrregularBRDF(text(data, size), "fuzz.brdf");
+    render::MeasuredBRDF::Options o;
+    o.n_theta = 6;  // a small table: the fuzzer looks for bad data, not for speed
+    o.n_phi = 5;
+    render::MeasuredBRDF brdf(std::move(d), o);
+    (void)brdf;
+  });
+}
+
+const Target* targets(size_t& count) {
+  static const Target all[] = {
+      {"lens", fuzzLens},          {"scene_tokens", fuzzSceneTokens},
+      {"scene_parse", fuzzSceneParse}, {"scene_build", fuzzSceneBuild},
+      {"scene_render", fuzzSceneRender}, {"ply", fuzzPly},
+      {"image", fuzzImage},        {"brdf", fuzzBrdf},
+  };
+  count = sizeof all / sizeof all[0];
+  return all;
+}
+
+}  // namespace lensim::fuzz
