@@ -174,6 +174,17 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       // The film's filename is relative to the directory lensim runs in, as in pbrt.
       std::vector<std::string> outs = o->outfiles;
       if (outs.empty()) outs.push_back(s.film.filename);
+      // pbrt-v4's spectral film writes EXR only (SpectralFilm::Create); its bucket sums are not
+      // the exact fixed-point sums that parts, checkpoints and lensim merge need.
+      if (s.film.type == "spectral" && (part_mode || !checkpoint.empty()))
+        throw Error(s.film.loc,
+                    "Film \"spectral\" cannot be rendered as parts or checkpointed (--tile, "
+                    "--spp-range, --part, --checkpoint, --resume): its spectral channels are not "
+                    "kept as exact sums for lensim merge; render it whole, or use Film \"rgb\"");
+      for (const std::string& out : outs)
+        if (s.film.type == "spectral" && io::imageFormatFromPath(out) != io::ImageFormat::Exr)
+          throw Error(FileLoc{out}, "Film \"spectral\" writes EXR only (as pbrt-v4): use an "
+                                    ".exr output");
       for (const std::string& out : outs)  // fail early
         if (io::imageFormatFromPath(out) != io::ImageFormat::Exr && part_mode)
           throw Error(FileLoc{out},

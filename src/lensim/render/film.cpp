@@ -8,7 +8,10 @@
 #include <cmath>
 #include <cstdint>
 
+#include <fmt/format.h>
+
 #include "lensim/scene/builder.h"
+#include "lensim/scene/film_sensor.h"
 
 namespace lensim::render {
 
@@ -73,14 +76,24 @@ Mat3 bradford(Vec2 src, const Vec3& dst) {
 Film::Film(const scene::Scene& scene, PixelBounds bounds)
     : bounds_(bounds), pixels_(size_t(std::max(0LL, bounds.area()))) {
   const double exposure = scene.camera.shutter_close - scene.camera.shutter_open;
-  imaging_ratio_ = (exposure > 0 ? exposure : 1) * scene.film.iso / 100 * scene.film.scale;
+  // pbrt-v4's imaging ratio (film.cpp, PixelSensor::Create), times pbrt-v3's film "scale". A
+  // camera with no shutter interval (shutteropen == shutterclose) records as if open 1 s.
+  imaging_ratio_ =
+      scene::sensorImagingRatio(exposure > 0 ? exposure : 1, scene.film.iso) * scene.film.scale;
   max_component_ = scene.film.max_component_value;
   if (scene.film.white_balance_k > 0) {
     // pbrt-v4's cie1931 sensor with "whitebalance": adapt the scene white (daylight of that
     // temperature) to the output colour space's white.
     white_balance_ = true;
-    xyz_balance_ = bradford(daylightChromaticity(scene.film.white_balance_k),
+    // pbrt-v4's Spectra::D takes T x 1.4388 / 1.4380 as the CCT, so 6500 means D65.
+    xyz_balance_ = bradford(daylightChromaticity(scene::whiteBalanceCct(scene.film.white_balance_k)),
                             RGBColorSpace::sRGB().toXyz({1, 1, 1}));
+  }
+  if (scene.film.type == "spectral") {
+    n_buckets_ = scene.film.spectral_buckets;
+    lambda_min_ = scene.film.lambda_min_nm;
+    lambda_max_ = scene.film.lambda_max_nm;
+    bucket_sums_.assign(pixels_.size() * size_t(n_buckets_), 0.0);
   }
 }
 
@@ -115,15 +128,64 @@ void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavele
   p.rgb[1] += toFixed(w * rgb.y);
   p.rgb[2] += toFixed(w * rgb.z);
   p.weight += toFixed(w);
+  if (n_buckets_ > 0) addSpectral(x, y, L, lambda, w);
+}
+
+// pbrt-v4's SpectralFilm::AddSample (src/pbrt/film.h) adds each wavelength's radiance times
+// CIE_Y_integral to its bucket and averages per bucket, which relies on its uniform wavelength
+// sampling over [lambdamin, lambdamax]. lensim samples wavelengths by visible importance over
+// [360, 830] nm, so a bucket gets the unbiased estimate of its mean radiance: for each of the
+// sample's wavelengths in it, L / (pdf x N x bucket width), averaged with the pixel's filter
+// weight. lensim's emission spectra are normalised to unit luminance Y = (1/CIE_Y_integral)
+// integral(L ybar), pbrt-v4's to integral(L ybar) = 1, so lensim's radiance is already
+// pbrt-v4's radiance times CIE_Y_integral: the two films record the same values. As in pbrt-v4
+// the buckets hold radiance (no sensor, imaging ratio or white balance), clamped to
+// "maxcomponentvalue" as a whole spectrum.
+void Film::addSpectral(int x, int y, SampledSpectrum L, const SampledWavelengths& lambda,
+                       double w) {
+  double lm = 0;
+  for (int i = 0; i < kSpectrumSamples; ++i) lm = std::max(lm, L[i]);
+  if (lm > max_component_) L = L * (max_component_ / lm);
+  const double width = (lambda_max_ - lambda_min_) / n_buckets_;
+  double* sums = bucket_sums_.data() +
+                 (size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0)) *
+                     size_t(n_buckets_);
+  for (int i = 0; i < kSpectrumSamples; ++i) {
+    const double l = lambda.lambda(i), pdf = lambda.pdf(i);
+    if (!(pdf > 0) || l < lambda_min_ || l >= lambda_max_) continue;
+    const int b = std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) /
+                                                (lambda_max_ - lambda_min_)));
+    sums[b] += w * L[i] / (pdf * kSpectrumSamples * width);
+  }
+}
+
+std::string Film::bucketChannel(int b) const {
+  std::string l =
+      fmt::format("{:.3f}nm", lambda_min_ + (b + 0.5) / n_buckets_ * (lambda_max_ - lambda_min_));
+  std::replace(l.begin(), l.end(), '.', ',');
+  return "S0." + l;
 }
 
 io::Image Film::image() const {
-  io::Image im(bounds_.width(), bounds_.height(), {"R", "G", "B"});
+  std::vector<std::string> channels = {"R", "G", "B"};
+  for (int b = 0; b < n_buckets_; ++b) channels.push_back(bucketChannel(b));
+  io::Image im(bounds_.width(), bounds_.height(), std::move(channels));
   for (int y = 0; y < bounds_.height(); ++y)
     for (int x = 0; x < bounds_.width(); ++x) {
-      const auto v = pixelValue(pixels_[size_t(y) * size_t(bounds_.width()) + size_t(x)]);
+      const size_t i = size_t(y) * size_t(bounds_.width()) + size_t(x);
+      const auto v = pixelValue(pixels_[i]);
       for (int c = 0; c < 3; ++c) im.at(x, y, c) = v[c];
+      if (n_buckets_ > 0 && pixels_[i].weight != 0) {
+        const double w = double(pixels_[i].weight) / kFixedScale;
+        for (int b = 0; b < n_buckets_; ++b)
+          im.at(x, y, 3 + b) = float(bucket_sums_[i * size_t(n_buckets_) + size_t(b)] / w);
+      }
     }
+  if (n_buckets_ > 0) {
+    im.metadata["lensim:spectral"] =
+        fmt::format("{} buckets over [{}, {}] nm: radiance (as pbrt-v4's spectral film)",
+                    n_buckets_, lambda_min_, lambda_max_);
+  }
   return im;
 }
 

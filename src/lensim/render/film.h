@@ -64,8 +64,17 @@ class Film {
                  double w);
   /// The RGB of a sample as the film would record it (before the filter weight).
   Vec3 toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const;
-  /// The image so far: channels R, G, B, bounds-sized.
+  /// The image so far: channels R, G, B, bounds-sized; for the spectral film (pbrt-v4's
+  /// SpectralFilm) then one channel per wavelength bucket, named as pbrt-v4 names them after
+  /// the OpenEXR spectral layout of Fichet et al. (JCGT 2021): "S0." and the bucket's centre
+  /// wavelength as "%.3fnm" with the decimal point written as a comma ("S0.374,688nm").
   io::Image image() const;
+
+  /// Whether this film records spectral buckets (Film "spectral"); such films are not
+  /// written as parts (their bucket sums are floating point, not the exact fixed-point sums).
+  bool spectral() const { return n_buckets_ > 0; }
+  /// The channel name of spectral bucket b (see image()).
+  std::string bucketChannel(int b) const;
 
   /// Fixed-point units per unit of weighted RGB or filter weight: 2^48, so a sample's
   /// contribution keeps ~15 significant digits down to 1e-6 and the sum of 2^26 samples of up
@@ -85,6 +94,12 @@ class Film {
   double imaging_ratio_ = 1, max_component_ = 1e300;
   bool white_balance_ = false;
   std::array<double, 9> xyz_balance_{};  ///< von Kries (Bradford) adaptation, row-major
+  // Spectral buckets (Film "spectral"): per pixel, n_buckets_ sums of filter-weighted bucket
+  // radiance estimates; a bucket's value is its sum over the pixel's weight sum.
+  int n_buckets_ = 0;
+  double lambda_min_ = 360, lambda_max_ = 830;
+  std::vector<double> bucket_sums_;
+  void addSpectral(int x, int y, SampledSpectrum L, const SampledWavelengths& lambda, double w);
 };
 
 }  // namespace lensim::render

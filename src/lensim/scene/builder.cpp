@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "lensim/io/ply.h"
+#include "lensim/scene/film_sensor.h"
 #include "lensim/scene/media_presets.h"
 #include "lensim/scene/params.h"
 #include "lensim/util/limits.h"
@@ -859,6 +860,54 @@ class Builder {
     scene_.camera = std::move(c);
   }
 
+  // pbrt-v4's "sensor" (src/pbrt/film.cpp, PixelSensor::Create): a name pbrt-v4 does not know
+  // is an error there ("unknown sensor type") and here; a camera pbrt-v4 knows but whose
+  // measured curves lensim does not bundle is warned and recorded through the CIE 1931 observer.
+  void checkSensor(ParamSet& ps, const Film& f) {
+    const Param* p = ps.find({"sensor"}, {ParamType::String});
+    if (!p) return;
+    const auto list = [](const std::vector<std::string>& v) {
+      std::string out;
+      for (const std::string& n : v) out += (out.empty() ? "" : ", ") + n;
+      return out;
+    };
+    switch (sensorSupport(f.sensor)) {
+      case SensorSupport::Applied: return;
+      case SensorSupport::NotBundled:
+        warn(p->loc, fmt::format("\"sensor\": the measured response curves of pbrt-v4's camera "
+                                 "sensor \"{}\" are not bundled with lensim; the film records "
+                                 "CIE 1931 XYZ instead (sensors lensim applies: {})",
+                                 f.sensor, list(bundledSensorNames())));
+        return;
+      case SensorSupport::Unknown:
+        throw Error(p->loc, fmt::format("\"sensor\": unknown sensor \"{}\"; expected {} or one "
+                                        "of pbrt-v4's camera sensors ({})",
+                                        f.sensor, list(bundledSensorNames()),
+                                        list(pbrtCameraSensorNames())));
+    }
+  }
+
+  // pbrt-v4's SpectralFilm::Create (src/pbrt/film.cpp): "nbuckets" (16), "lambdamin" and
+  // "lambdamax" (360 and 830 nm, pbrt-v4's Lambda_min/Lambda_max, outside which it refuses to
+  // render), an EXR file only.
+  void spectralFilm(ParamSet& ps, Film& f) {
+    f.type = "spectral";
+    const Param* nb = ps.find({"nbuckets"}, {ParamType::Integer});
+    f.spectral_buckets = ps.getInt({"nbuckets"}, 16);
+    if (f.spectral_buckets < 1 || f.spectral_buckets > 4096)
+      throw Error(nb ? nb->loc : f.loc,
+                  fmt::format("\"nbuckets\": {} buckets; expected 1 to 4096", f.spectral_buckets));
+    const Param* lo = ps.find({"lambdamin"}, {ParamType::Float});
+    const Param* hi = ps.find({"lambdamax"}, {ParamType::Float});
+    f.lambda_min_nm = ps.getFloat({"lambdamin"}, 360);
+    f.lambda_max_nm = ps.getFloat({"lambdamax"}, 830);
+    if (f.lambda_min_nm < 360 || f.lambda_max_nm > 830 || !(f.lambda_min_nm < f.lambda_max_nm))
+      throw Error(lo ? lo->loc : hi ? hi->loc : f.loc,
+                  fmt::format("\"lambdamin\"/\"lambdamax\": [{}, {}] nm; expected an interval "
+                              "within [360, 830] nm (the wavelengths lensim and pbrt-v4 render)",
+                              f.lambda_min_nm, f.lambda_max_nm));
+  }
+
   void film(const Directive& d) {
     const std::string& type = d.strings[0];
     ParamSet ps(d.params, d.loc, fmt::format("Film \"{}\"", type));
@@ -867,7 +916,9 @@ class Builder {
     f.type_as_written = type;
     f.loc = d.loc;
     f.type = "rgb";
-    if (type != "rgb" && type != "image")
+    if (type == "spectral") {
+      spectralFilm(ps, f);
+    } else if (type != "rgb" && type != "image")
       warnOnce("film " + type, d.loc,
                fmt::format("film \"{}\" is not rendered by lensim; it renders as an \"rgb\" film",
                            type));
@@ -903,10 +954,11 @@ class Builder {
     if (!(f.diagonal_mm > 0))
       throw Error(d.loc, fmt::format("film \"diagonal\" {} mm must be > 0", f.diagonal_mm));
     f.sensor = ps.getString({"sensor"}, "cie1931");
+    checkSensor(ps, f);
     f.max_component_value = ps.getFloat({"maxcomponentvalue", "maxsampleluminance"}, 1e300);
     f.save_fp16 = ps.getBool({"savefp16"}, true);
     ps.getBool({"display"}, false);  // pbrt-v2 image film: open a window
-    if (type == "spectral" || type == "gbuffer") ps.markAllUsed();
+    if (type == "gbuffer") ps.markAllUsed();
     if (f.x_resolution <= 0 || f.y_resolution <= 0)
       throw Error(d.loc, "film resolution must be positive");
     finish(ps);

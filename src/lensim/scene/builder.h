@@ -296,6 +296,10 @@ struct Film {
   double max_component_value = 1e300;
   bool save_fp16 = true;
   bool defaulted = true;
+  /// pbrt-v4 "spectral" film (type "spectral"): radiance in `spectral_buckets` equal buckets
+  /// over [lambda_min_nm, lambda_max_nm] beside the RGB.
+  int spectral_buckets = 16;
+  double lambda_min_nm = 360, lambda_max_nm = 830;
 };
 
 /// The sampler description; `type` is the pbrt-v4 sampler lensim uses.
