@@ -181,3 +181,25 @@ TEST(Curve, BadCurvesAreErrors) {
 
 }  // namespace
 }  // namespace lensim::scene
+
+namespace lensim::scene {
+namespace {
+
+TEST(Curve, TestSceneLoadsAndRendersWithoutDiagnostics) {
+  const Scene s =
+      build(parseFile(std::string(LENSIM_SOURCE_DIR) + "/tests/data/shapes/curves.pbrt"));
+  for (const Diagnostic& d : s.diagnostics) ADD_FAILURE() << d.str();
+  ASSERT_EQ(s.curves.size(), 3u);
+  EXPECT_EQ(s.curves[0].kind, CurveKind::Flat);
+  EXPECT_EQ(s.curves[1].kind, CurveKind::Cylinder);
+  EXPECT_EQ(s.curves[1].segments(), 2u);
+  EXPECT_EQ(s.curves[2].kind, CurveKind::Ribbon);
+  EXPECT_EQ(s.curves[2].normal.size(), 4u);
+  const render::RenderResult r = render::render(s, {});
+  const double mean = testutil::regionMean(r.image, 1, 0, 32, 0, 24);
+  EXPECT_TRUE(std::isfinite(mean));
+  EXPECT_GT(mean, 0.05);
+}
+
+}  // namespace
+}  // namespace lensim::scene
