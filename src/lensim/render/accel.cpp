@@ -9,6 +9,7 @@
 #include <atomic>
 #include <mutex>
 
+#include "lensim/render/accel_curves.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 
@@ -28,6 +29,9 @@ struct ShapeRecord {
   std::vector<Vec2> uv;
   std::vector<int> indices;
   Bounds3 bounds;  ///< in the space
+  // Curves (render/accel_curves.*): the Bézier segments in the space.
+  const scene::Curve* curve = nullptr;
+  CurveInSpace curve_space;
 };
 
 }  // namespace
@@ -189,6 +193,13 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
       }
       for (const auto& t : mesh.uvs) r.uv.push_back({t[0], t[1]});
       r.indices = mesh.indices;
+    } else if (s.type == scene::ShapeType::Curve) {
+      if (s.curve < 0) continue;
+      const scene::Curve& c = scene.curves[static_cast<size_t>(s.curve)];
+      if (c.cp.empty()) continue;
+      r.curve = &c;
+      r.curve_space = curveInSpace(c, s.transform);
+      r.bounds = r.curve_space.bounds;
     } else {
       r.bounds = s.transform.applyBounds(quadricObjectBounds(s));
     }
@@ -205,7 +216,9 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
       target = os;
     }
     RTCGeometry g;
-    if (!r.indices.empty()) {
+    if (r.curve) {
+      g = newCurveGeometry(m.device, *r.curve, r.curve_space);
+    } else if (!r.indices.empty()) {
       const bool quads = r.vertices_per_face == 4;
       g = rtcNewGeometry(m.device, quads ? RTC_GEOMETRY_TYPE_QUAD : RTC_GEOMETRY_TYPE_TRIANGLE);
       auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
@@ -372,7 +385,17 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   Vec3 p, ng, ns, dpdu;
   Vec3 dpdv{0, 0, 0}, dndu{0, 0, 0}, dndv{0, 0, 0};
   Vec2 uv;
-  if (r.indices.empty()) {
+  if (r.curve) {
+    const CurveHitGeometry g =
+        curveHitGeometry(*r.curve, r.curve_space, static_cast<size_t>(h.prim), rh.hit.u,
+                         rh.hit.v, Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, o + d * h.t, d);
+    p = g.p;
+    ng = r.flip ? -g.n : g.n;
+    ns = ng;
+    dpdu = g.dpdu;
+    dpdv = g.dpdv;
+    uv = g.uv;
+  } else if (r.indices.empty()) {
     // Quadric: refine t in double precision from the object-space ray.
     const Vec3 oo = r.object_from_space.applyPoint(o), od = r.object_from_space.applyVector(d);
     const double t0 = std::max(0.0, h.t * (1 - 1e-4) - 1e-7);

@@ -1,4 +1,5 @@
 #include "lensim/scene/builder.h"
+#include "lensim/scene/shapes_tessellated.h"
 
 #include <fmt/format.h>
 
@@ -33,6 +34,8 @@ std::string_view shapeTypeName(ShapeType t) {
       return "trianglemesh";
     case ShapeType::BilinearMesh:
       return "bilinearmesh";
+    case ShapeType::Curve:
+      return "curve";
   }
   return "?";
 }
@@ -94,6 +97,16 @@ Bounds3 objectBounds(const Scene& scene, const Shape& s) {
       if (s.mesh >= 0)
         for (const Vec3f& p : scene.meshes[static_cast<size_t>(s.mesh)].positions)
           b.extend(Vec3(p));
+      break;
+    case ShapeType::Curve:
+      if (s.curve >= 0) {
+        const Curve& c = scene.curves[static_cast<size_t>(s.curve)];
+        for (size_t i = 0; i < c.cp.size(); ++i) {
+          const double r = 0.5 * c.width[i];
+          b.extend(c.cp[i] - Vec3{r, r, r});
+          b.extend(c.cp[i] + Vec3{r, r, r});
+        }
+      }
       break;
   }
   return b;
@@ -1605,6 +1618,13 @@ class Builder {
     } else if (type == "plymesh") {
       s.type = ShapeType::TriangleMesh;
       s.mesh = plyMesh(ps, d.loc);
+    } else if (type == "curve") {
+      s.type = ShapeType::Curve;
+      s.curve = curveShape(ps, d.loc);
+    } else if (type == "hyperboloid" || type == "paraboloid" || type == "heightfield" ||
+               type == "nurbs") {
+      s.type = ShapeType::TriangleMesh;
+      s.mesh = tessellatedShape(type, ps, d.loc);
     } else {
       ps.markAllUsed();
       warnOnce("shape " + type, d.loc,
@@ -1616,14 +1636,18 @@ class Builder {
       throw Error(p ? p->loc : d.loc,
                   fmt::format("phimax {} outside (0, 360] degrees", s.phimax_deg));
     }
-    if (s.radius <= 0 && s.type != ShapeType::TriangleMesh && s.type != ShapeType::BilinearMesh) {
+    if (s.radius <= 0 && s.type != ShapeType::TriangleMesh && s.type != ShapeType::BilinearMesh &&
+        s.type != ShapeType::Curve) {
       const Param* p = ps.peek({"radius"});
       throw Error(p ? p->loc : d.loc, fmt::format("radius {} must be positive", s.radius));
     }
     finish(ps);
     s.material = currentMaterial();
     if (gs_.area_light >= 0) {
-      if (current_object_ >= 0) {
+      if (s.type == ShapeType::Curve) {
+        warnOnce("curve area light", d.loc,
+                 "area lights on curves are not supported; the curve does not emit");
+      } else if (current_object_ >= 0) {
         warnOnce("instanced area light", d.loc,
                  "area lights in object definitions are not supported (as in pbrt-v4); the shape "
                  "does not emit");
@@ -1708,6 +1732,172 @@ class Builder {
     }
     scene_.meshes.push_back(std::move(m));
     return static_cast<int>(scene_.meshes.size()) - 1;
+  }
+
+  // pbrt-v4 Curve::Create (src/pbrt/shapes.cpp): "P", "basis" bezier|bspline, "degree" 2|3
+  // (3), "type" flat|ribbon|cylinder (flat), "N" for ribbons (nSegments + 1), "width" (1),
+  // "width0"/"width1" (width), "splitdepth" (pbrt's refinement; read and ignored).
+  int curveShape(ParamSet& ps, const FileLoc& loc) {
+    const std::string basis = ps.getString({"basis"}, "bezier");
+    if (basis != "bezier" && basis != "bspline") {
+      const Param* p = ps.peek({"basis"});
+      throw Error(p ? p->loc : loc, fmt::format("curve basis \"{}\": expected \"bezier\" or "
+                                                "\"bspline\"",
+                                                basis));
+    }
+    const int degree = ps.getInt({"degree"}, 3);
+    if (degree != 2 && degree != 3) {
+      const Param* p = ps.peek({"degree"});
+      throw Error(p ? p->loc : loc, fmt::format("curve degree {}: expected 2 or 3", degree));
+    }
+    const std::vector<Vec3> P = ps.getVec3s({"P"}, {ParamType::Point3});
+    const bool bspline = basis == "bspline";
+    const int segments = curveSegmentCount(bspline, degree, P.size());
+    if (segments <= 0) {
+      const Param* p = ps.peek({"P"});
+      throw Error(p ? p->loc : loc,
+                  bspline ? fmt::format("curve: {} control points; a degree {} b-spline needs at "
+                                        "least {}",
+                                        P.size(), degree, degree + 1)
+                          : fmt::format("curve: {} control points; a degree {} Bézier curve "
+                                        "needs {} + n * {}",
+                                        P.size(), degree, degree + 1, degree));
+    }
+    const std::string type = ps.getString({"type"}, "flat");
+    CurveKind kind = CurveKind::Flat;
+    if (type == "ribbon")
+      kind = CurveKind::Ribbon;
+    else if (type == "cylinder")
+      kind = CurveKind::Cylinder;
+    else if (type != "flat") {
+      // pbrt-v4 reports an unknown type and uses "cylinder".
+      const Param* p = ps.peek({"type"});
+      warnOnce(fmt::format("curve type {}", type), p ? p->loc : loc,
+               fmt::format("unknown curve type \"{}\"; using \"cylinder\" (as pbrt-v4)", type));
+      kind = CurveKind::Cylinder;
+    }
+    std::vector<Vec3> N = ps.getVec3s({"N"}, {ParamType::Normal3});
+    if (!N.empty() && kind != CurveKind::Ribbon) {
+      warnOnce("curve normals", loc, "curve normals \"N\" are only used with \"ribbon\" curves");
+      N.clear();
+    } else if (kind == CurveKind::Ribbon && N.size() != size_t(segments) + 1) {
+      throw Error(loc, fmt::format("ribbon curve: {} normals \"N\" given; {} needed (one per "
+                                   "segment end, {} segments)",
+                                   N.size(), segments + 1, segments));
+    }
+    const double width = ps.getFloat({"width"}, 1);
+    const double w0 = ps.getFloat({"width0"}, width), w1 = ps.getFloat({"width1"}, width);
+    if (w0 < 0 || w1 < 0) throw Error(loc, fmt::format("curve widths {} and {} must be >= 0", w0, w1));
+    ps.getInt({"splitdepth"}, 3);  // pbrt's subdivision depth: Embree needs none
+    scene_.curves.push_back(makeCurve(kind, bspline, degree, P, w0, w1, N));
+    return static_cast<int>(scene_.curves.size()) - 1;
+  }
+
+  // pbrt's hyperboloid, paraboloid, heightfield and nurbs as meshes (scene/shapes_tessellated).
+  int tessellatedShape(const std::string& type, ParamSet& ps, const FileLoc& loc) {
+    auto phimaxOf = [&] {
+      const double phimax = ps.getFloat({"phimax"}, 360);
+      if (phimax <= 0 || phimax > 360) {
+        const Param* p = ps.peek({"phimax"});
+        throw Error(p ? p->loc : loc, fmt::format("phimax {} outside (0, 360] degrees", phimax));
+      }
+      return phimax;
+    };
+    Mesh m;
+    if (type == "hyperboloid") {
+      // pbrt-v3 CreateHyperboloidShape (src/shapes/hyperboloid.cpp): p1 (0,0,0), p2 (1,1,1).
+      const Vec3 p1 = ps.findPoint3({"p1"}).value_or(Vec3{0, 0, 0});
+      const Vec3 p2 = ps.findPoint3({"p2"}).value_or(Vec3{1, 1, 1});
+      const double phimax = phimaxOf();
+      if (p1 == p2) throw Error(loc, "hyperboloid: p1 and p2 are the same point");
+      m = tessellateHyperboloid(p1, p2, phimax);
+    } else if (type == "paraboloid") {
+      // pbrt-v3 CreateParaboloidShape (src/shapes/paraboloid.cpp): radius 1, zmin 0, zmax 1;
+      // the constructor orders zmin/zmax and keeps z >= 0.
+      const double radius = ps.getFloat({"radius"}, 1);
+      double zmin = ps.getFloat({"zmin"}, 0), zmax = ps.getFloat({"zmax"}, 1);
+      const double phimax = phimaxOf();
+      if (zmin > zmax) std::swap(zmin, zmax);
+      zmin = std::max(zmin, 0.0);
+      if (radius <= 0) {
+        const Param* p = ps.peek({"radius"});
+        throw Error(p ? p->loc : loc, fmt::format("radius {} must be positive", radius));
+      }
+      if (zmax <= zmin)
+        throw Error(loc, fmt::format("paraboloid: empty z range [{}, {}] (z >= 0)", zmin, zmax));
+      m = tessellateParaboloid(radius, zmin, zmax, phimax);
+    } else if (type == "heightfield") {
+      // pbrt-v3 CreateHeightfield (src/shapes/heightfield.cpp): nu, nv, nu*nv floats Pz.
+      const int nu = ps.getInt({"nu"}, -1), nv = ps.getInt({"nv"}, -1);
+      const Param* pz = ps.find({"Pz"}, {ParamType::Float});
+      if (nu < 2 || nv < 2)
+        throw Error(loc, fmt::format("heightfield: \"integer nu\" {} and \"integer nv\" {} "
+                                     "must both be given and >= 2",
+                                     nu, nv));
+      if (!pz) throw Error(loc, "heightfield: missing \"float Pz\"");
+      if (pz->numbers.size() != size_t(nu) * size_t(nv))
+        ps.fail(*pz, fmt::format("expected nu*nv = {} heights, got {}", nu * nv,
+                                 pz->numbers.size()));
+      m = heightfieldMesh(nu, nv, pz->numbers);
+    } else {
+      m = nurbsMeshOf(ps, loc);
+    }
+    scene_.meshes.push_back(std::move(m));
+    return static_cast<int>(scene_.meshes.size()) - 1;
+  }
+
+  // pbrt-v3 CreateNURBS (src/shapes/nurbs.cpp): nu, nv, uorder, vorder, uknots (nu+uorder),
+  // vknots (nv+vorder), u0/u1 default uknots[uorder-1]/uknots[nu] (v likewise), and either
+  // "point3 P" or homogeneous "float Pw" (x w, y w, z w, w); diced 30 x 30.
+  Mesh nurbsMeshOf(ParamSet& ps, const FileLoc& loc) {
+    NurbsPatch n;
+    n.nu = ps.getInt({"nu"}, -1);
+    n.nv = ps.getInt({"nv"}, -1);
+    n.uorder = ps.getInt({"uorder"}, -1);
+    n.vorder = ps.getInt({"vorder"}, -1);
+    if (n.nu < 1 || n.nv < 1 || n.uorder < 1 || n.vorder < 1)
+      throw Error(loc, "nurbs: \"integer nu\", \"nv\", \"uorder\" and \"vorder\" must be given "
+                       "and positive");
+    if (n.uorder > n.nu || n.vorder > n.nv)
+      throw Error(loc, fmt::format("nurbs: order ({}, {}) exceeds the control points ({}, {})",
+                                   n.uorder, n.vorder, n.nu, n.nv));
+    auto knots = [&](std::string_view name, size_t count) {
+      const Param* k = ps.find({name}, {ParamType::Float});
+      if (!k) throw Error(loc, fmt::format("nurbs: missing \"float {}\"", name));
+      if (k->numbers.size() != count)
+        ps.fail(*k, fmt::format("expected {} knots, got {}", count, k->numbers.size()));
+      for (size_t i = 1; i < count; ++i)
+        if (k->numbers[i] < k->numbers[i - 1]) ps.fail(*k, "knots must be non-decreasing");
+      return k->numbers;
+    };
+    n.uknots = knots("uknots", size_t(n.nu + n.uorder));
+    n.vknots = knots("vknots", size_t(n.nv + n.vorder));
+    n.u0 = ps.getFloat({"u0"}, n.uknots[size_t(n.uorder - 1)]);
+    n.u1 = ps.getFloat({"u1"}, n.uknots[size_t(n.nu)]);
+    n.v0 = ps.getFloat({"v0"}, n.vknots[size_t(n.vorder - 1)]);
+    n.v1 = ps.getFloat({"v1"}, n.vknots[size_t(n.nv)]);
+    const size_t count = size_t(n.nu) * size_t(n.nv);
+    if (const Param* P = ps.find({"P"}, {ParamType::Point3})) {
+      if (P->numbers.size() != 3 * count)
+        ps.fail(*P, fmt::format("expected nu*nv = {} points, got {}", count,
+                                P->numbers.size() / 3));
+      for (size_t i = 0; i < count; ++i)
+        n.P.push_back({P->numbers[3 * i], P->numbers[3 * i + 1], P->numbers[3 * i + 2]});
+      n.w.assign(count, 1.0);
+    } else if (const Param* Pw = ps.find({"Pw"}, {ParamType::Float})) {
+      if (Pw->numbers.size() != 4 * count)
+        ps.fail(*Pw, fmt::format("expected 4 nu*nv = {} values, got {}", 4 * count,
+                                 Pw->numbers.size()));
+      for (size_t i = 0; i < count; ++i) {
+        const double w = Pw->numbers[4 * i + 3];
+        if (!(w > 0)) ps.fail(*Pw, fmt::format("weight {} of point {} must be positive", w, i));
+        n.P.push_back(Vec3{Pw->numbers[4 * i], Pw->numbers[4 * i + 1], Pw->numbers[4 * i + 2]} / w);
+        n.w.push_back(w);
+      }
+    } else {
+      throw Error(loc, "nurbs: missing \"point3 P\" or \"float Pw\"");
+    }
+    return nurbsMesh(n);
   }
 
   int plyMesh(ParamSet& ps, const FileLoc& loc) {

@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "lensim/scene/curves.h"
 #include "lensim/scene/parser.h"
 #include "lensim/util/error.h"
 #include "lensim/util/transform.h"
@@ -135,7 +136,7 @@ struct Material {
 };
 
 /// Kinds of shape lensim builds; meshes live in Scene::meshes.
-enum class ShapeType { Sphere, Disk, Cylinder, Cone, TriangleMesh, BilinearMesh };
+enum class ShapeType { Sphere, Disk, Cylinder, Cone, TriangleMesh, BilinearMesh, Curve };
 std::string_view shapeTypeName(ShapeType t);
 
 /// A triangle (3 indices per face) or bilinear-patch (4) mesh in object space.
@@ -166,6 +167,7 @@ struct Shape {
   // Quadrics (scene units, degrees).
   double radius = 1, inner_radius = 0, height = 0, zmin = -1, zmax = 1, phimax_deg = 360;
   int mesh = -1;  ///< index into Scene::meshes for meshes
+  int curve = -1;  ///< index into Scene::curves for curves
   /// MediumInterface at the shape: indices into Scene::media, -1 for vacuum. A shape whose
   /// inside and outside are the same is no medium boundary (rays keep their medium, as pbrt-v4).
   int inside_medium = -1, outside_medium = -1;
@@ -349,6 +351,7 @@ struct Scene {
   Integrator integrator;
   std::vector<Shape> shapes;  ///< world shapes and shapes of object definitions
   std::vector<Mesh> meshes;
+  std::vector<Curve> curves;  ///< cubic Bézier segments of `curve` shapes
   std::vector<ObjectDef> objects;
   std::vector<Instance> instances;
   std::vector<Material> materials;
