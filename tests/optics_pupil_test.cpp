@@ -225,8 +225,9 @@ TEST(ExitPupilSampler, AnamorphicBoundsContainEveryPassingRay) {
   }
 }
 
-// The budgets for lenses that are not spherical: at most 5% of the camera's samples inside
-// the image circle wasted, and a start-up cheap enough for 0.1 s. Start-up time is not asserted
+// The budgets for lenses that are not spherical, for the bound at one wavelength (the
+// camera widens a dispersive aspheric/anamorphic lens's bound by 5%, see realistic.cpp): at most
+// 5% of the samples inside the image circle wasted, and a bounded build cost. Start-up time is not asserted
 // (bench/lens-table measures it); its machine-independent proxy, the number of rays traced to
 // build the bound, is. Each aspheric trace costs a few microseconds (Newton solves), so the
 // asphere's limit is set well under what the former dense bracketing traced (201228 for
