@@ -46,6 +46,11 @@ struct ExitPupilOptions {
   bool rotational = true;
   int sectors = 4;   ///< anamorphic: wedges of the first quadrant with bounds of their own
   int azimuths = 2;  ///< anamorphic: film azimuths per wedge (its edges included)
+  /// The same lens at other wavelengths (a dispersive lens at the ends of the spectrum): a
+  /// rear-plane point counts as passing if it passes through any of them too, so that the bound
+  /// holds the region of every wavelength without a wide blanket margin. Traced only where the
+  /// lens itself blocks the ray.
+  std::vector<const LensSystem*> also_cover;
 };
 
 /// A point to aim a camera ray at, and the area of the region it was drawn from (pdf = 1/area).
@@ -80,6 +85,8 @@ class ExitPupilSampler {
   long tracesAtBuild() const { return traces_; }
   /// Intervals of film radius after adaptive refinement.
   int intervals() const { return static_cast<int>(intervals_.size()); }
+  /// false for the 2-D bounds of a lens that is not rotationally symmetric.
+  bool rotationallySymmetric() const { return rotational_; }
 
  private:
   // A star-shaped polygon in the frame of a film point on the +x axis: vertices
@@ -105,8 +112,8 @@ class ExitPupilSampler {
   };
   static int intervalIn(const std::vector<Interval>& intervals,
                         const std::vector<int>& radius_lut, double lut_scale, double r);
-  void buildIntervals(const std::vector<Polygon>& nodes,
-                      const std::vector<std::vector<double>>& scales);
+  std::vector<Interval> buildIntervals(const std::vector<Polygon>& nodes,
+                                       const std::vector<std::vector<double>>& scales) const;
   // The interval, t and rotation for a film point; nullptr where it sees nothing.
   const Interval* locate(Vec2 film_mm, double& t, double& cos_a, double& sin_a) const;
 
