@@ -104,8 +104,7 @@ class PreviewRenderer {
   };
   Cached cached(const std::string& path);
   std::shared_ptr<const camera::Camera> camera(const scene::Scene& prepared,
-                                               const PreviewRequest& request,
-                                               uint64_t generation);
+                                               const PreviewRequest& request, uint64_t generation);
 
   /// LENSIM_PREVIEW_NO_CACHE set: every preview builds its world and camera (the behaviour
   /// before the caches, for bench/serve-latency's comparison).
