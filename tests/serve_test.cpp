@@ -667,7 +667,7 @@ TEST(PreviewRenderer, CancellationIsObservedBeforeAndDuringTheRender) {
   }));
   EXPECT_EQ(frames, 1);
   // 4096 spp of 32x21 pixels would take minutes; stopping took (printed, not asserted):
-  std::printf("cancelled preview ran %.1f ms in all\n",
-              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                  .count());
+  std::printf(
+      "cancelled preview ran %.1f ms in all\n",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
 }
