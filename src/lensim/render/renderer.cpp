@@ -143,20 +143,40 @@ RenderPlan planRender(const scene::Scene& scene, const RenderOptions& opt) {
   return plan;
 }
 
+struct RenderWorld {
+  explicit RenderWorld(const scene::Scene& scene)
+      : accel(scene),
+        textures(scene),
+        materials(scene, textures),
+        lights(scene, accel, textures),
+        media(scene) {}
+  Accel accel;
+  Textures textures;
+  Materials materials;
+  LightSet lights;
+  Media media;
+};
+
+std::shared_ptr<const RenderWorld> prepareWorld(const scene::Scene& scene) {
+  return std::make_shared<const RenderWorld>(scene);
+}
+
 RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const auto t_setup = Clock::now();
   camera::CameraOptions camera_options;
   camera_options.pbrt_v2_quirks = opt.pbrt_v2_quirks;
-  std::unique_ptr<camera::Camera> cam = camera::makeCamera(scene, camera_options);
+  std::shared_ptr<const camera::Camera> cam = opt.camera;
+  if (!cam) cam = camera::makeCamera(scene, camera_options);
   const int x_res = scene.film.x_resolution, y_res = scene.film.y_resolution;
   const RenderPlan plan = planRender(scene, opt);
   const PixelBounds full_bounds = plan.full_bounds;
   const PixelBounds bounds = plan.bounds;
 
-  Accel accel(scene);
-  Textures textures(scene);
-  Materials materials(scene, textures);
-  LightSet lights(scene, accel, textures);
+  const std::shared_ptr<const RenderWorld> world = opt.world ? opt.world : prepareWorld(scene);
+  const Accel& accel = world->accel;
+  const Textures& textures = world->textures;
+  const Materials& materials = world->materials;
+  const LightSet& lights = world->lights;
   SceneContext sc;
   sc.scene = &scene;
   sc.accel = &accel;
@@ -168,7 +188,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   sc.pbrt_v2_epsilon = opt.pbrt_v2_quirks;
   sc.camera_from_world = scene.camera.camera_from_world;
   const bool volpath = scene.integrator.type == "volpath";
-  Media media(scene);
+  const Media& media = world->media;
   if (volpath) sc.media = &media;
   sc.camera_medium = scene.camera.medium;
   for (const scene::Material& m : scene.materials)

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -18,6 +19,9 @@
 
 namespace lensim::scene {
 struct Scene;
+}
+namespace lensim::camera {
+class Camera;
 }
 
 namespace lensim::render {
@@ -33,6 +37,14 @@ struct RenderCheckpoint {
   bool complete() const;
   int tilesDone() const;
 };
+
+/// What a render builds from the scene's world before its first sample: the acceleration
+/// structure, textures, materials, lights and media (none of them depends on the camera or the
+/// film). prepareWorld builds it once so that renders of the same world with other cameras or
+/// films (the explorer's previews) skip the build: RenderOptions::world. It keeps references into
+/// the scene it was built from, which must outlive it.
+struct RenderWorld;
+std::shared_ptr<const RenderWorld> prepareWorld(const scene::Scene& scene);
 
 /// Overrides of the scene's settings (pbrt's command-line flags).
 struct RenderOptions {
@@ -75,6 +87,13 @@ struct RenderOptions {
   /// Seconds the caller spent reading, parsing and building the scene (PLY files, subdivision)
   /// before render(); reported in RenderStats::load_s and the total set-up time.
   double scene_load_s = 0;
+  /// Render with this camera instead of making one from the scene (the explorer keeps its
+  /// realistic cameras: their start-up traces the exit-pupil bounds). It must be the camera
+  /// camera::makeCamera(scene) makes; the image is then the same bit for bit.
+  std::shared_ptr<const camera::Camera> camera;
+  /// Render with this world (prepareWorld of a scene with this scene's shapes, materials,
+  /// textures, lights and media; its camera and film may differ) instead of building it.
+  std::shared_ptr<const RenderWorld> world;
 };
 
 /// What happened during a render.

@@ -9,8 +9,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
+#include "lensim/camera/camera.h"
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
@@ -100,19 +102,64 @@ std::string encodePngSrgb(const io::Image& image, double gain) {
   return out;
 }
 
-std::shared_ptr<const scene::Scene> PreviewRenderer::scene(const std::string& path) {
+PreviewRenderer::PreviewRenderer()
+    : cache_world_and_cameras_(std::getenv("LENSIM_PREVIEW_NO_CACHE") == nullptr) {}
+
+PreviewRenderer::Cached PreviewRenderer::cached(const std::string& path) {
   std::error_code ec;
   const auto mtime = std::filesystem::last_write_time(path, ec);
   {
     std::lock_guard lock(mutex_);
     auto it = scenes_.find(path);
-    if (it != scenes_.end() && it->second.mtime == mtime) return it->second.scene;
+    if (it != scenes_.end() && it->second.mtime == mtime) return it->second;
   }
   // Loaded outside the lock: a slow scene does not hold up other requests.
-  auto s = std::make_shared<const scene::Scene>(scene::loadScene(path));
+  Cached c;
+  c.mtime = mtime;
+  c.scene = std::make_shared<const scene::Scene>(scene::loadScene(path));
+  if (cache_world_and_cameras_) c.world = render::prepareWorld(*c.scene);
   std::lock_guard lock(mutex_);
-  scenes_[path] = {mtime, s};
-  return s;
+  c.generation = ++generation_;
+  ++stats_.scene_loads;
+  scenes_[path] = c;
+  return c;
+}
+
+std::shared_ptr<const scene::Scene> PreviewRenderer::scene(const std::string& path) {
+  return cached(path).scene;
+}
+
+std::shared_ptr<const camera::Camera> PreviewRenderer::camera(const scene::Scene& prepared,
+                                                              const PreviewRequest& rq,
+                                                              uint64_t generation) {
+  std::error_code ec;
+  const auto lens_mtime = std::filesystem::last_write_time(rq.lens_path, ec);
+  // Everything previewScene(rq) takes to make the camera, the scene by its load generation.
+  const std::string key =
+      fmt::format("{}\n{}\n{}\n{}\n{:a}\n{:a}\n{}\n{}", generation, rq.scene_path, rq.lens_path,
+                  lens_mtime.time_since_epoch().count(), rq.aperture_diameter_mm,
+                  rq.focus_distance_m, prepared.film.x_resolution, prepared.film.y_resolution);
+  {
+    std::lock_guard lock(mutex_);
+    for (size_t i = 0; i < cameras_.size(); ++i)
+      if (cameras_[i].first == key) {
+        std::rotate(cameras_.begin(), cameras_.begin() + std::ptrdiff_t(i),
+                    cameras_.begin() + std::ptrdiff_t(i) + 1);
+        ++stats_.camera_hits;
+        return cameras_.front().second;
+      }
+  }
+  std::shared_ptr<const camera::Camera> cam = camera::makeCamera(prepared);
+  std::lock_guard lock(mutex_);
+  ++stats_.camera_builds;
+  cameras_.insert(cameras_.begin(), {key, cam});
+  if (cameras_.size() > kCameraCacheSize) cameras_.pop_back();
+  return cam;
+}
+
+PreviewRenderer::CacheStats PreviewRenderer::cacheStats() const {
+  std::lock_guard lock(mutex_);
+  return stats_;
 }
 
 scene::Scene PreviewRenderer::previewScene(const PreviewRequest& rq) {
@@ -161,6 +208,22 @@ bool PreviewRenderer::run(const scene::Scene& s, const PreviewRequest& rq,
   ro.spp = rq.max_spp;
   ro.seed = rq.seed;
   ro.cancel = &cancel;
+  // The world and the camera from the caches: the first frame does not wait for the
+  // acceleration structure or the exit-pupil bounds of a scene and lens seen before, and a
+  // cancellation is not held up by them either.
+  if (cancel.load()) return false;
+  const Cached c = cached(rq.scene_path);
+  // `s` was made from the scene as loaded then; should the file have changed since (a new
+  // load), its world is built afresh rather than taken from a scene that may differ.
+  const scene::Scene& b = *c.scene;
+  if (b.shapes.size() == s.shapes.size() && b.meshes.size() == s.meshes.size() &&
+      b.objects.size() == s.objects.size() && b.instances.size() == s.instances.size() &&
+      b.materials.size() == s.materials.size() && b.textures.size() == s.textures.size() &&
+      b.lights.size() == s.lights.size() && b.media.size() == s.media.size())
+    ro.world = c.world;
+  if (cancel.load()) return false;
+  if (cache_world_and_cameras_) ro.camera = camera(s, rq, c.generation);
+  if (cancel.load()) return false;
   int pass = 0;
   auto t_pass = Clock::now();
   bool stopped_by_caller = false;
@@ -172,6 +235,7 @@ bool PreviewRenderer::run(const scene::Scene& s, const PreviewRequest& rq,
     f.width = image.width;
     f.height = image.height;
     f.render_ms = std::chrono::duration<double, std::milli>(Clock::now() - t_pass).count();
+    if (cancel.load()) return false;  // no PNG for a cancelled preview
     if (rq.auto_exposure && f.pass == 0) gain = autoExposureGain(image);
     f.exposure_stops = std::log2(gain);
     f.png = encodePngSrgb(image, gain);

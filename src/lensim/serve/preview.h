@@ -20,6 +20,12 @@
 namespace lensim::scene {
 struct Scene;
 }
+namespace lensim::camera {
+class Camera;
+}
+namespace lensim::render {
+struct RenderWorld;
+}
 
 namespace lensim::serve {
 
@@ -52,9 +58,16 @@ struct PreviewFrame {
   std::string png;
 };
 
-/// Scenes are parsed and built once and kept (keyed by path and modification time).
+/// Scenes are parsed and built once and kept (keyed by path and modification time), with what
+/// the renderer builds from their world (acceleration structure, lights, textures, materials,
+/// media: render::prepareWorld); the realistic cameras of the last kCameraCacheSize previews are
+/// kept too (their start-up traces the exit-pupil bounds), keyed by everything that makes them
+/// (scene, lens file and its modification time, stop, focus, preview width). A preview of a
+/// scene and lens seen before starts rendering at once; its image is the same bit for bit as an
+/// uncached render's.
 class PreviewRenderer {
  public:
+  PreviewRenderer();
   /// The scene (loads it on first use). Throws lensim::Error for a scene that cannot be loaded,
   /// or one whose camera cannot be replaced by a pbrt-v4 realistic camera (pbrt-v1/v2 realistic
   /// cameras work in millimetre camera space).
@@ -68,17 +81,40 @@ class PreviewRenderer {
   /// calling thread and the render's workers are given nice 10: call it from a thread of its own),
   /// calling `on_frame` after each, until max_spp, until `cancel` is set or `on_frame` returns
   /// false. Returns true if it ran to the end. Throws lensim::Error.
+  /// The cancellation is seen within one pixel's samples while rendering, and before and after
+  /// each set-up step and PNG encoding.
   bool run(const scene::Scene& prepared, const PreviewRequest& request,
            const std::atomic<bool>& cancel,
            const std::function<bool(const PreviewFrame&)>& on_frame);
 
+  static constexpr size_t kCameraCacheSize = 8;
+  struct CacheStats {
+    int scene_loads = 0;    ///< scenes parsed and built (with their world)
+    int camera_builds = 0;  ///< cameras made (cache misses)
+    int camera_hits = 0;
+  };
+  CacheStats cacheStats() const;
+
  private:
-  std::mutex mutex_;
   struct Cached {
     std::filesystem::file_time_type mtime;
     std::shared_ptr<const scene::Scene> scene;
+    std::shared_ptr<const render::RenderWorld> world;
+    uint64_t generation = 0;  ///< a new one each load: camera keys name it
   };
+  Cached cached(const std::string& path);
+  std::shared_ptr<const camera::Camera> camera(const scene::Scene& prepared,
+                                               const PreviewRequest& request, uint64_t generation);
+
+  /// LENSIM_PREVIEW_NO_CACHE set: every preview builds its world and camera (the behaviour
+  /// before the caches, for bench/serve-latency's comparison).
+  bool cache_world_and_cameras_ = true;
+  mutable std::mutex mutex_;
   std::map<std::string, Cached> scenes_;
+  uint64_t generation_ = 0;
+  // Most recently used first.
+  std::vector<std::pair<std::string, std::shared_ptr<const camera::Camera>>> cameras_;
+  CacheStats stats_;
 };
 
 /// The running preview of each view (a page has two): starting one cancels the view's previous
