@@ -195,12 +195,8 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     sc.has_interfaces = sc.has_interfaces || m.type == "interface";
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
 
-  if (scene.film.sensor != "cie1931")
-    logWarning(
-        fmt::format("{}: film \"sensor\" \"{}\" is not simulated; the film records CIE "
-                    "1931 XYZ",
-                    scene.film.loc.str(), scene.film.sensor));
-
+  // A camera sensor lensim does not bundle is warned once, at its parameter, by the builder
+  // (scene/film_sensor.cpp).
   const int spp_req = opt.spp.value_or(scene.sampler.pixel_samples);
   if (spp_req <= 0 || spp_req > kMaxSamplesPerPixel)
     throw Error(fmt::format("{} samples per pixel: expected 1 to {}", spp_req, kMaxSamplesPerPixel));
