@@ -1,5 +1,8 @@
 #include "lensim/serve/preview.h"
 
+#include <optional>
+#include <thread>
+
 #include <fmt/format.h>
 #include <png.h>
 #include <sys/resource.h>
@@ -265,13 +268,24 @@ double PreviewViews::Ticket::msSinceCancel() const {
          (double(Clock::period::num) / Clock::period::den) * 1e9;
 }
 
-PreviewViews::Ticket PreviewViews::start(const std::string& view) {
-  std::lock_guard lock(mutex_);
-  auto it = views_.find(view);
-  if (it != views_.end()) cancelTicket(it->second);
+PreviewViews::Ticket PreviewViews::start(const std::string& view, int wait_ms) {
+  std::optional<Ticket> old;
   Ticket t{std::make_shared<std::atomic<bool>>(false), std::make_shared<std::atomic<int64_t>>(0),
-           next_++};
-  views_[view] = t;
+           0};
+  {
+    std::lock_guard lock(mutex_);
+    auto it = views_.find(view);
+    if (it != views_.end()) {
+      cancelTicket(it->second);
+      old = it->second;
+    }
+    t.generation = next_++;
+    views_[view] = t;
+  }
+  // Let the old render see its flag and return before this request competes for the CPU.
+  if (old)
+    for (int i = 0; i < wait_ms && !old->stopped->load(); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
   return t;
 }
 
@@ -291,6 +305,7 @@ void PreviewViews::cancelAll() {
 }
 
 void PreviewViews::finish(const std::string& view, const Ticket& t) {
+  t.stopped->store(true);  // also for a preview that never started its render
   std::lock_guard lock(mutex_);
   auto it = views_.find(view);
   if (it != views_.end() && it->second.generation == t.generation) views_.erase(it);

@@ -125,11 +125,15 @@ class PreviewViews {
     std::shared_ptr<std::atomic<bool>> cancel;
     std::shared_ptr<std::atomic<int64_t>> cancelled_at_ns;  ///< steady clock, when cancelled
     uint64_t generation = 0;
+    /// Set by the preview's render thread when it has returned (finished, cancelled or failed).
+    std::shared_ptr<std::atomic<bool>> stopped = std::make_shared<std::atomic<bool>>(false);
     /// Milliseconds since the cancellation (NaN if not cancelled).
     double msSinceCancel() const;
   };
-  /// Cancels the view's running preview (if any) and registers a new one.
-  Ticket start(const std::string& view);
+  /// Cancels the view's running preview (if any) and registers a new one. It then waits (at most
+  /// `wait_ms`) for the old render to return: the old render runs niced, and while this request
+  /// sleeps instead of setting up its own preview the old threads get the CPU at once and stop.
+  Ticket start(const std::string& view, int wait_ms = 100);
   /// Cancels the view's running preview; false if there was none.
   bool cancel(const std::string& view);
   /// Cancels every running preview (the server is stopping).

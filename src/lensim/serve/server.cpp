@@ -295,6 +295,7 @@ struct Server::Impl {
             } catch (const std::exception& e) {
               push("error", {{"error", e.what()}});
             }
+            ticket.stopped->store(true);
             {
               std::lock_guard lock(q->m);
               q->end = true;
