@@ -11,6 +11,7 @@
 #include "lensim/io/image.h"
 #include "lensim/io/ply.h"
 #include "lensim/optics/focus.h"
+#include "lensim/optics/lens_formats.h"
 #include "lensim/optics/prescription.h"
 #include "lensim/render/measured.h"
 #include "lensim/render/renderer.h"
@@ -70,6 +71,28 @@ int fuzzLens(const uint8_t* data, size_t size) {
   initFuzzing();
   return guarded([&] {
     optics::LensPrescription p = optics::parseLensPrescription(text(data, size), "fuzz.dat");
+    optics::LensSetup setup;
+    optics::FocusedLens fl = optics::focusLens(std::move(p), setup);
+    (void)fl;
+  });
+}
+
+// The Zemax reader (any bytes: BOMs, UTF-16 and the sequential keywords), then focusing.
+int fuzzZmx(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] {
+    optics::LensPrescription p = optics::parseZmx(text(data, size), "fuzz.zmx");
+    optics::LensSetup setup;
+    optics::FocusedLens fl = optics::focusLens(std::move(p), setup);
+    (void)fl;
+  });
+}
+
+// The JSON lens reader (lensim's own format, ISET3d's, one lentil design), then focusing.
+int fuzzLensJson(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] {
+    optics::LensPrescription p = optics::parseLensJson(text(data, size), "fuzz.json");
     optics::LensSetup setup;
     optics::FocusedLens fl = optics::focusLens(std::move(p), setup);
     (void)fl;
@@ -148,6 +171,7 @@ const Target* targets(size_t& count) {
       {"scene_parse", fuzzSceneParse}, {"scene_build", fuzzSceneBuild},
       {"scene_render", fuzzSceneRender}, {"ply", fuzzPly},
       {"image", fuzzImage},        {"brdf", fuzzBrdf},
+      {"zmx", fuzzZmx},            {"lens_json", fuzzLensJson},
   };
   count = sizeof all / sizeof all[0];
   return all;
