@@ -14,6 +14,7 @@
 #include "lensim/optics/plots.h"
 #include "lensim/optics/psf.h"
 #include "lensim/optics/wavefront.h"
+#include "optics_test_lenses.h"
 #include "test_paths.h"
 
 using namespace lensim;
@@ -394,40 +395,14 @@ TEST(ThroughFocus, OneWaveOfDefocusGivesTheDefocusOtf) {
   }
 }
 
-namespace {
-
-// A plano-convex singlet, flat face to the scene, n = 1.5, back surface of vertex radius -20 mm
-// with conic k: k = -n^2 (a hyperboloid of eccentricity n) images an axial point at infinity
-// perfectly (Descartes); the sphere (k = 0) of the same curvature has spherical aberration.
-LensPrescription conicSinglet(double conic) {
-  LensPrescription p;
-  p.path = "conic-singlet";
-  p.format = "lensim-json";
-  LensSurface a;
-  a.radius_mm = 0;
-  a.stop_flag = false;
-  a.thickness_mm = 5;
-  a.ior = 1.5;
-  a.aperture_diameter_mm = 12;
-  LensSurface b;
-  b.radius_mm = -20;
-  b.stop_flag = false;
-  b.thickness_mm = 40;
-  b.ior = 1;
-  b.aperture_diameter_mm = 12;
-  b.shape.conic = conic;
-  p.surfaces = {a, b};
-  return p;
-}
-
-}  // namespace
-
 TEST(Mtf, PerfectConicLensIsDiffractionLimitedOnAxis) {
+  // The conic k = -n^2 images an axial point at infinity perfectly; the sphere does not.
   MtfOptions o;
   o.fields = {0};
   o.geometric = false;
   // f = 40 mm, 12 mm aperture: about f/3.3, where the sphere is far from the limit.
-  const FocusedLens conic = focusLens(conicSinglet(-1.5 * 1.5), LensSetup{});
+  const FocusedLens conic =
+      focusLens(lensim::test::planoConvexConic(-1.5 * 1.5, 1.5, 12), LensSetup{});
   const MtfData d = computeMtf(monochromatic(conic), 1, o);
   ASSERT_EQ(d.fields.size(), 1u);
   for (size_t k = 0; k < d.frequency.size(); ++k) {
@@ -438,7 +413,7 @@ TEST(Mtf, PerfectConicLensIsDiffractionLimitedOnAxis) {
   }
   EXPECT_GT(d.fields[0].strehl, 0.99);
 
-  const FocusedLens sphere = focusLens(conicSinglet(0), LensSetup{});
+  const FocusedLens sphere = focusLens(lensim::test::planoConvexConic(0, 1.5, 12), LensSetup{});
   const MtfData s = computeMtf(monochromatic(sphere), 1, o);
   ASSERT_EQ(s.fields.size(), 1u);
   EXPECT_LT(s.fields[0].strehl, 0.5);

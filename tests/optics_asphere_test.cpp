@@ -8,6 +8,7 @@
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/surface_shape.h"
+#include "optics_test_lenses.h"
 
 using namespace lensim;
 using namespace lensim::optics;
@@ -16,30 +17,9 @@ namespace {
 
 constexpr double kN = 1.5;
 
-// Plano-convex lens, flat side to the scene: a plane at z = 0, then 5 mm of glass (n = 1.5) and
-// a convex back surface of vertex radius -20 mm (centre toward the scene) with conic k.
-// Collimated light enters the flat face undeviated; a conic of eccentricity e = n (k = -n^2)
-// refracting from glass into air focuses it to one point (Descartes), at f = |R| / (n - 1)
-// = 40 mm behind the back vertex; the sphere (k = 0) has spherical aberration.
+// The plano-convex test lens (n = 1.5, 24 mm clear aperture): f = 40 mm behind the back vertex.
 LensPrescription planoConvex(double conic) {
-  LensPrescription p;
-  p.path = "plano-convex";
-  p.format = "lensim-json";
-  LensSurface a;
-  a.radius_mm = 0;
-  a.stop_flag = false;
-  a.thickness_mm = 5;
-  a.ior = kN;
-  a.aperture_diameter_mm = 24;
-  LensSurface b;
-  b.radius_mm = -20;
-  b.stop_flag = false;
-  b.thickness_mm = 40;
-  b.ior = 1;
-  b.aperture_diameter_mm = 24;
-  b.shape.conic = conic;
-  p.surfaces = {a, b};
-  return p;
+  return lensim::test::planoConvexConic(conic, kN, 24);
 }
 
 // RMS distance from the axis where collimated rays at heights up to h_max cross z_focus.

@@ -121,55 +121,37 @@ std::vector<ColorSpotField> computeSpotsAtWavelengths(const FocusedLens& fl,
       const double z_obj = fp.lens->filmZ_mm() - fl.focus_distance_m * 1000;
       object = c.origin + c.direction * ((z_obj - c.origin.z) / c.direction.z);
     }
+    // Where the bundle from the object through a grid over the entrance pupil meets the film.
+    auto bundleHits = [&](const LensSystem& lens) {
+      std::vector<Vec2> pts;
+      for (int iy = 0; iy < grid; ++iy)
+        for (int ix = 0; ix < grid; ++ix) {
+          const double u = (2.0 * (ix + 0.5) / grid - 1), v = (2.0 * (iy + 0.5) / grid - 1);
+          if (u * u + v * v > 1) continue;
+          const Vec3 aim = pupil_centre + Vec3{u * r_aim, v * r_aim, 0};
+          Ray ray;
+          if (object) {
+            ray = {*object, normalize(aim - *object)};
+          } else {
+            const Vec3 d = -c.direction;
+            ray = {aim - d * ((aim.z + 10 * r_aim + 10) / d.z), d};
+          }
+          const TraceResult r = lens.tracer().traceFromScene(ray);
+          if (!r.ok() || !(r.ray.direction.z > 0)) continue;
+          const double t = (lens.filmZ_mm() - r.ray.origin.z) / r.ray.direction.z;
+          const Vec3 q = r.ray.origin + r.ray.direction * t;
+          pts.push_back({q.x, q.y});
+        }
+      return pts;
+    };
     std::vector<std::vector<Vec2>> hits(at.size());
-    for (size_t w = 0; w < at.size(); ++w) {
-      const LensSystem& lens = *at[w].lens;
-      for (int iy = 0; iy < grid; ++iy)
-        for (int ix = 0; ix < grid; ++ix) {
-          const double u = (2.0 * (ix + 0.5) / grid - 1), v = (2.0 * (iy + 0.5) / grid - 1);
-          if (u * u + v * v > 1) continue;
-          const Vec3 aim = pupil_centre + Vec3{u * r_aim, v * r_aim, 0};
-          Ray ray;
-          if (object) {
-            ray = {*object, normalize(aim - *object)};
-          } else {
-            const Vec3 d = -c.direction;
-            ray = {aim - d * ((aim.z + 10 * r_aim + 10) / d.z), d};
-          }
-          const TraceResult r = lens.tracer().traceFromScene(ray);
-          if (!r.ok() || !(r.ray.direction.z > 0)) continue;
-          const double t = (lens.filmZ_mm() - r.ray.origin.z) / r.ray.direction.z;
-          const Vec3 q = r.ray.origin + r.ray.direction * t;
-          hits[w].push_back({q.x, q.y});
-        }
-    }
+    for (size_t w = 0; w < at.size(); ++w) hits[w] = bundleHits(*at[w].lens);
     // The reference: the primary wavelength's centroid (its own bundle, traced the same way).
+    const std::vector<Vec2> primary_hits = bundleHits(*fp.lens);
+    if (primary_hits.empty()) continue;
     Vec2 ref{0, 0};
-    {
-      int n = 0;
-      const LensSystem& lens = *fp.lens;
-      for (int iy = 0; iy < grid; ++iy)
-        for (int ix = 0; ix < grid; ++ix) {
-          const double u = (2.0 * (ix + 0.5) / grid - 1), v = (2.0 * (iy + 0.5) / grid - 1);
-          if (u * u + v * v > 1) continue;
-          const Vec3 aim = pupil_centre + Vec3{u * r_aim, v * r_aim, 0};
-          Ray ray;
-          if (object) {
-            ray = {*object, normalize(aim - *object)};
-          } else {
-            const Vec3 d = -c.direction;
-            ray = {aim - d * ((aim.z + 10 * r_aim + 10) / d.z), d};
-          }
-          const TraceResult r = lens.tracer().traceFromScene(ray);
-          if (!r.ok() || !(r.ray.direction.z > 0)) continue;
-          const double t = (lens.filmZ_mm() - r.ray.origin.z) / r.ray.direction.z;
-          const Vec3 q = r.ray.origin + r.ray.direction * t;
-          ref = ref + Vec2{q.x, q.y};
-          ++n;
-        }
-      if (n == 0) continue;
-      ref = ref * (1.0 / n);
-    }
+    for (const Vec2& q : primary_hits) ref = ref + q;
+    ref = ref * (1.0 / primary_hits.size());
     for (size_t w = 0; w < at.size(); ++w) {
       Vec2 mean{0, 0};
       for (const Vec2& q : hits[w]) mean = mean + q;
