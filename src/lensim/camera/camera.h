@@ -67,6 +67,36 @@ struct CameraRay {
   std::array<double, kCameraWavelengths> wavelength_weight{};
 };
 
+/// A connection from a scene point to the camera (pbrt-v4's Camera::SampleWi), for light
+/// tracing and bidirectional methods.
+///
+/// Measurement convention (shared by every camera, the realistic one included): the light
+/// tracer's contribution of radiance L, arriving at the scene point `ref` from the camera's side
+/// along -wi, to the film is
+///     importance[i] * L[i] * |cos(n_ref, wi)| / pdf      (times the BSDF at ref, for a surface)
+/// splatted at `film_raster` (Film::addSplat), and the final image is the pixels' filtered
+/// estimates plus the splats divided by the samples per pixel (pbrt-v4's convention). A camera's
+/// importance is thus on the same scale as generateRay's weight: a light tracer and a path tracer
+/// estimate the same image.
+struct CameraWiSample {
+  Vec3 wi;              ///< unit direction from ref toward p_lens (world)
+  double distance = 0;  ///< |p_lens - ref| (scene units)
+  Vec3 p_lens;          ///< world point where the connection enters the camera (pinhole: the eye;
+                        ///< thin lens: the lens point; realistic: a point on the front element)
+  Vec3 n_lens;          ///< the camera's forward axis at p_lens (world, unit)
+  double pdf = 0;       ///< solid-angle density of wi at ref
+  Vec2 film_raster;     ///< where the connection meets the film (full-image raster)
+  /// Importance per path wavelength (all equal for a lens that does not disperse).
+  std::array<double, kCameraWavelengths> importance{};
+};
+
+/// Density of a camera ray as generateRay samples it: pdf_pos per unit area of the surface the
+/// ray starts on (pinhole: 1, a delta; thin lens: the lens disc; realistic: the front element),
+/// pdf_dir per unit solid angle of its direction (both in world scene units).
+struct CameraRayPdf {
+  double pdf_pos = 0, pdf_dir = 0;
+};
+
 /// The interface every camera implements.
 class Camera {
  public:
@@ -88,6 +118,28 @@ class Camera {
   virtual double startupSeconds() const { return 0; }
   /// One line for logs: the type and its main settings.
   virtual std::string describe() const = 0;
+
+  // Camera importance (light tracing, bdpt). Cameras that support it override all four.
+  /// Whether sampleWi, importance and pdf are implemented.
+  virtual bool supportsImportance() const { return false; }
+  /// A connection from the scene point ref (time: shutter time of the path) through the camera
+  /// to its film, u in [0,1)^2 choosing the lens point; nullopt if none reaches the film (the
+  /// point is behind the camera, the lens blocks the path, it lands outside the image).
+  virtual std::optional<CameraWiSample> sampleWi(
+      const Vec3& /*ref*/, Vec2 /*u*/, const std::array<double, kCameraWavelengths>& /*lambda_nm*/,
+      double /*time*/) const {
+    return std::nullopt;
+  }
+  /// Importance of the world ray (o, d) leaving the camera as generateRay makes them (hero
+  /// wavelength lambda_nm), and its raster point; 0 if no film point sends that ray.
+  virtual double importance(const Vec3& /*o*/, const Vec3& /*d*/, double /*lambda_nm*/,
+                            Vec2* /*film_raster*/) const {
+    return 0;
+  }
+  /// Densities with which generateRay produces the world ray (o, d).
+  virtual CameraRayPdf rayPdf(const Vec3& /*o*/, const Vec3& /*d*/, double /*lambda_nm*/) const {
+    return {};
+  }
 };
 
 /// Choices the scene file does not make.
