@@ -66,17 +66,73 @@ RgbImage loadRgb(const scene::Texture& t) {
 }  // namespace
 
 struct Textures::Impl {
+  // A texture's class, wrap mode, mapping and filter, decided once from its strings when the
+  // textures are prepared (not per lookup).
+  enum class Kind : uint8_t {
+    Constant,
+    Scale,
+    Mix,
+    DirectionMix,
+    Checkerboard,
+    ImageMap,
+    Fbm,
+    Wrinkled,
+    Windy,
+    Dots,
+    Bilerp,
+    Marble,
+    Other
+  };
+  enum class Wrap : uint8_t { Repeat, Black, Clamp };
+  enum class Mapping : uint8_t { UV, Spherical, Cylindrical, Planar };
+  struct Decided {
+    Kind kind = Kind::Other;
+    Wrap wrap = Wrap::Repeat;
+    Mapping mapping = Mapping::UV;
+    bool point_filter = false;
+  };
+  static Decided decide(const scene::Texture& t) {
+    Decided d;
+    static const std::pair<const char*, Kind> kinds[] = {{"constant", Kind::Constant},
+                                                         {"scale", Kind::Scale},
+                                                         {"mix", Kind::Mix},
+                                                         {"directionmix", Kind::DirectionMix},
+                                                         {"checkerboard", Kind::Checkerboard},
+                                                         {"imagemap", Kind::ImageMap},
+                                                         {"fbm", Kind::Fbm},
+                                                         {"wrinkled", Kind::Wrinkled},
+                                                         {"windy", Kind::Windy},
+                                                         {"dots", Kind::Dots},
+                                                         {"bilerp", Kind::Bilerp},
+                                                         {"marble", Kind::Marble}};
+    for (const auto& [name, kind] : kinds)
+      if (t.type == name) d.kind = kind;
+    d.wrap = t.wrap == "black" ? Wrap::Black : t.wrap == "clamp" ? Wrap::Clamp : Wrap::Repeat;
+    d.mapping = t.mapping == "spherical"     ? Mapping::Spherical
+                : t.mapping == "cylindrical" ? Mapping::Cylindrical
+                : t.mapping == "planar"      ? Mapping::Planar
+                                             : Mapping::UV;
+    d.point_filter = t.filter == "point";
+    return d;
+  }
+
   const scene::Scene* scene = nullptr;
   uint64_t serial = 0;
   std::vector<std::shared_ptr<RgbImage>> images;  ///< per texture (null for non-image)
+  std::vector<Decided> decided;                   ///< per texture
+  /// The decisions for t, an element of scene->textures.
+  const Decided& of(const scene::Texture& t) const {
+    return decided[size_t(&t - scene->textures.data())];
+  }
   mutable std::mutex mutex;
   mutable std::map<std::pair<const scene::SpectrumValue*, int>, SpectrumPtr> constants;
 
   Vec2 mapping(const scene::Texture& t, const TextureEvalContext& ctx) const {
-    if (t.mapping == "spherical" || t.mapping == "cylindrical" || t.mapping == "planar") {
+    const Mapping m = of(t).mapping;
+    if (m != Mapping::UV) {
       const Vec3 p = t.texture_from_world.applyPoint(ctx.p);
-      if (t.mapping == "planar") return {t.udelta + dot(t.v1, p), t.vdelta + dot(t.v2, p)};
-      if (t.mapping == "cylindrical") return {(M_PI + std::atan2(p.y, p.x)) / (2 * M_PI), p.z};
+      if (m == Mapping::Planar) return {t.udelta + dot(t.v1, p), t.vdelta + dot(t.v2, p)};
+      if (m == Mapping::Cylindrical) return {(M_PI + std::atan2(p.y, p.x)) / (2 * M_PI), p.z};
       const double len = length(p);
       const Vec3 v = len > 0 ? p / len : Vec3{0, 0, 1};
       double phi = std::atan2(v.y, v.x);
@@ -94,10 +150,11 @@ struct Textures::Impl {
     const double x = st.x * im.width - 0.5, y = row_t * im.height - 0.5;
     const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
     const double fx = x - x0, fy = y - y0;
+    const Decided& d = of(t);
     auto texel = [&](int xi, int yi) -> Vec3 {
-      if (t.wrap == "black") {
+      if (d.wrap == Wrap::Black) {
         if (xi < 0 || yi < 0 || xi >= im.width || yi >= im.height) return {0, 0, 0};
-      } else if (t.wrap == "clamp") {
+      } else if (d.wrap == Wrap::Clamp) {
         xi = std::clamp(xi, 0, im.width - 1);
         yi = std::clamp(yi, 0, im.height - 1);
       } else {
@@ -108,7 +165,7 @@ struct Textures::Impl {
       return {c[0], c[1], c[2]};
     };
     Vec3 v;
-    if (t.filter == "point")
+    if (d.point_filter)
       v = texel(int(std::floor(st.x * im.width)), int(std::floor(row_t * im.height)));
     else
       v = (texel(x0, y0) * (1 - fx) + texel(x0 + 1, y0) * fx) * (1 - fy) +
@@ -264,6 +321,8 @@ Textures::Textures(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) 
   impl_->scene = &scene;
   impl_->serial = next_serial++;
   impl_->images.resize(scene.textures.size());
+  impl_->decided.reserve(scene.textures.size());
+  for (const scene::Texture& t : scene.textures) impl_->decided.push_back(Impl::decide(t));
   std::map<std::string, std::shared_ptr<RgbImage>> by_key;
   for (size_t i = 0; i < scene.textures.size(); ++i) {
     const scene::Texture& t = scene.textures[i];
@@ -322,31 +381,33 @@ SpectrumPtr Textures::constant(const scene::SpectrumValue& v, SpectrumType type)
 double Textures::evalFloat(const scene::Input& in, const TextureEvalContext& ctx) const {
   if (in.texture < 0) return in.value;
   const scene::Texture& t = impl_->scene->textures[size_t(in.texture)];
-  if (t.type == "constant") return evalFloat(t.tex1, ctx);
-  if (t.type == "scale") return evalFloat(t.tex1, ctx) * evalFloat(t.tex2, ctx);
-  if (t.type == "mix") {
+  using Kind = Impl::Kind;
+  const Kind kind = impl_->decided[size_t(in.texture)].kind;
+  if (kind == Kind::Constant) return evalFloat(t.tex1, ctx);
+  if (kind == Kind::Scale) return evalFloat(t.tex1, ctx) * evalFloat(t.tex2, ctx);
+  if (kind == Kind::Mix) {
     const double a = evalFloat(t.amount, ctx);
     return (1 - a) * evalFloat(t.tex1, ctx) + a * evalFloat(t.tex2, ctx);
   }
-  if (t.type == "directionmix") {
+  if (kind == Kind::DirectionMix) {
     const double a = std::abs(dot(ctx.n, t.direction));
     return a * evalFloat(t.tex1, ctx) + (1 - a) * evalFloat(t.tex2, ctx);
   }
-  if (t.type == "checkerboard")
+  if (kind == Kind::Checkerboard)
     return impl_->checker(t, ctx) ? evalFloat(t.tex1, ctx) : evalFloat(t.tex2, ctx);
-  if (t.type == "imagemap") {
+  if (kind == Kind::ImageMap) {
     const Vec3 v = impl_->lookup(t, *impl_->images[size_t(in.texture)], impl_->mapping(t, ctx));
     return (v.x + v.y + v.z) / 3;
   }
-  if (t.type == "fbm" || t.type == "wrinkled" || t.type == "windy") {
+  if (kind == Kind::Fbm || kind == Kind::Wrinkled || kind == Kind::Windy) {
     const Vec3 p = t.texture_from_world.applyPoint(ctx.p);
-    if (t.type == "fbm") return fbm(p, t.omega, t.octaves);
-    if (t.type == "wrinkled") return turbulence(p, t.omega, t.octaves);
+    if (kind == Kind::Fbm) return fbm(p, t.omega, t.octaves);
+    if (kind == Kind::Wrinkled) return turbulence(p, t.omega, t.octaves);
     return windy(p);
   }
-  if (t.type == "dots")
+  if (kind == Kind::Dots)
     return insidePolkaDot(impl_->mapping(t, ctx)) ? evalFloat(t.tex1, ctx) : evalFloat(t.tex2, ctx);
-  if (t.type == "bilerp") {
+  if (kind == Kind::Bilerp) {
     const Vec2 st = impl_->mapping(t, ctx);
     return (1 - st.x) * (1 - st.y) * evalFloat(t.v00, ctx) +
            st.x * (1 - st.y) * evalFloat(t.v10, ctx) + (1 - st.x) * st.y * evalFloat(t.v01, ctx) +
@@ -359,26 +420,28 @@ SampledSpectrum Textures::evalSpectrum(const scene::Input& in, const TextureEval
                                        const SampledWavelengths& lambda, SpectrumType type) const {
   if (in.texture < 0) return constant(in.spectrum, type)->sample(lambda);
   const scene::Texture& t = impl_->scene->textures[size_t(in.texture)];
-  if (t.type == "constant") return evalSpectrum(t.tex1, ctx, lambda, type);
-  if (t.type == "scale") {
+  using Kind = Impl::Kind;
+  const Kind kind = impl_->decided[size_t(in.texture)].kind;
+  if (kind == Kind::Constant) return evalSpectrum(t.tex1, ctx, lambda, type);
+  if (kind == Kind::Scale) {
     const SampledSpectrum a = evalSpectrum(t.tex1, ctx, lambda, type);
     if (t.scale_is_float) return a * evalFloat(t.tex2, ctx);
     return a * evalSpectrum(t.tex2, ctx, lambda, type);
   }
-  if (t.type == "mix") {
+  if (kind == Kind::Mix) {
     const double a = evalFloat(t.amount, ctx);
     return evalSpectrum(t.tex1, ctx, lambda, type) * (1 - a) +
            evalSpectrum(t.tex2, ctx, lambda, type) * a;
   }
-  if (t.type == "directionmix") {
+  if (kind == Kind::DirectionMix) {
     const double a = std::abs(dot(ctx.n, t.direction));
     return evalSpectrum(t.tex1, ctx, lambda, type) * a +
            evalSpectrum(t.tex2, ctx, lambda, type) * (1 - a);
   }
-  if (t.type == "checkerboard")
+  if (kind == Kind::Checkerboard)
     return impl_->checker(t, ctx) ? evalSpectrum(t.tex1, ctx, lambda, type)
                                   : evalSpectrum(t.tex2, ctx, lambda, type);
-  if (t.type == "imagemap") {
+  if (kind == Kind::ImageMap) {
     Vec3 rgb = impl_->lookup(t, *impl_->images[size_t(in.texture)], impl_->mapping(t, ctx));
     rgb = {std::max(0.0, rgb.x), std::max(0.0, rgb.y), std::max(0.0, rgb.z)};
     double scale = 1;
@@ -395,17 +458,17 @@ SampledSpectrum Textures::evalSpectrum(const scene::Input& in, const TextureEval
     if (type == SpectrumType::Illuminant) s *= RGBColorSpace::sRGB().illuminant()->sample(lambda);
     return s;
   }
-  if (t.type == "dots")
+  if (kind == Kind::Dots)
     return insidePolkaDot(impl_->mapping(t, ctx)) ? evalSpectrum(t.tex1, ctx, lambda, type)
                                                   : evalSpectrum(t.tex2, ctx, lambda, type);
-  if (t.type == "bilerp") {
+  if (kind == Kind::Bilerp) {
     const Vec2 st = impl_->mapping(t, ctx);
     return evalSpectrum(t.v00, ctx, lambda, type) * ((1 - st.x) * (1 - st.y)) +
            evalSpectrum(t.v10, ctx, lambda, type) * (st.x * (1 - st.y)) +
            evalSpectrum(t.v01, ctx, lambda, type) * ((1 - st.x) * st.y) +
            evalSpectrum(t.v11, ctx, lambda, type) * (st.x * st.y);
   }
-  if (t.type == "marble") {
+  if (kind == Kind::Marble) {
     // pbrt-v4's MarbleTexture: an RGB albedo whatever the spectrum type.
     const Vec3 p = t.texture_from_world.applyPoint(ctx.p) * t.scale;
     Vec3 rgb = marbleRgb(p, t.octaves, t.omega, t.variation);
