@@ -174,4 +174,19 @@ int Builder::currentMaterial() {
   return default_material_;
 }
 
+void Builder::resolveNamedMaterials() {
+  std::set<std::pair<std::string, std::string>> reported;  // each bad name once per place
+  for (const PendingMaterial& pm : pending_materials_) {
+    auto it = named_materials_.find(pm.name);
+    if (it != named_materials_.end()) {
+      scene_.shapes[static_cast<size_t>(pm.shape)].material = it->second;
+    } else if (reported.insert({pm.loc.str(), pm.name}).second) {
+      scene_.diagnostics.push_back(
+          {Severity::Error, pm.loc,
+           fmt::format("NamedMaterial: unknown material \"{}\" (no MakeNamedMaterial defines it)",
+                       pm.name)});
+    }
+  }
+}
+
 }  // namespace lensim::scene::detail
