@@ -94,6 +94,19 @@ const std::vector<Gap> kKnownGaps = {
     {"pbrt-v4-scenes/kroken-camera-1.pbrt", "warning", "film \"gbuffer\" is not rendered"},
     {"pbrt-v4-scenes/lte-orb-simple-ball.pbrt", "warning", "film \"gbuffer\" is not rendered"},
     {"pbrt-v4-scenes/watercolor-camera-1.pbrt", "warning", "film \"gbuffer\" is not rendered"},
+    {"pbrt-v3-scenes/hair-curly-hair.pbrt", "warning", "material \"hair\" is not rendered"},
+    {"pbrt-v3-scenes/hair-sphere-hairblock.pbrt", "warning", "material \"hair\" is not rendered"},
+    // pbrt-v3's fourier material (tabulated .bsdf): rendered as grey diffuse.
+    {"pbrt-v3-scenes/bathroom.pbrt", "warning", "material \"fourier\" is not rendered"},
+    // pbrt-v3's directlighting also follows specular reflection and transmission up to its
+    // maxdepth (5); lensim renders it as path with maxdepth 1 (as pbrt-v4's --upgrade does).
+    {"pbrt-v3-scenes/figures-f10-1ac.pbrt", "warning", "integrator \"directlighting\""},
+    {"pbrt-v3-scenes/figures-f7-19a.pbrt", "warning", "integrator \"directlighting\""},
+    {"pbrt-v3-scenes/figures-f7-34a.pbrt", "warning", "integrator \"directlighting\""},
+    // pbrt-v3 keeps named materials in the graphics state (scoped by AttributeBegin/End), so
+    // the second 'MakeNamedMaterial ""' in another block is no redefinition there; lensim's
+    // named materials are global (as pbrt-v4's) and it warns.
+    {"pbrt-v3-scenes/dambreak0.pbrt", "warning", "named material \"\" redefined"},
     // Motion blur: animated transforms use the start transform.
     {"pbrt-v4-scenes/killeroo-moving.pbrt", "warning", "animated transforms are not rendered"},
 };
@@ -102,6 +115,10 @@ const std::vector<Gap> kKnownGaps = {
 const std::vector<Gap> kNotGaps = {
     // pbrt-v4 uses the last of two Camera directives (silently); lensim says so.
     {"pbrt-v4-scenes/sanmiguel-realistic-courtyard.pbrt", "warning", "second Camera"},
+    // The acceleration structure is an implementation choice; the image does not depend on it.
+    {"pbrt-v3-scenes/simple.pbrt", "warning", "Accelerator \"bvh\" is ignored"},
+    // pbrt-v3's "random" sampler is pbrt-v4's "independent" (pbrt-v4's --upgrade does the same).
+    {"pbrt-v3-scenes/simple.pbrt", "warning", "sampler \"random\" (pbrt-v1–v3) renders as"},
     // pbrt-v4's parser gives the same warning (TransformBegin read as AttributeBegin).
     {"pbrt-v4-scenes/villa-daylight.pbrt", "warning", "TransformBegin/TransformEnd are deprecated"},
     {"pbrt-v4-scenes/villa-lights-on.pbrt", "warning", "TransformBegin/TransformEnd are deprecated"},
@@ -128,7 +145,7 @@ std::string corpusName(const fs::path& p) { return p.lexically_relative(kRoot).g
 
 TEST(PublicScenes, CorpusIsThere) {
   // One stand-in per public scene file gathered; see SOURCES.md for the list.
-  EXPECT_GE(standIns().size(), 40u);
+  EXPECT_GE(standIns().size(), 52u);
 }
 
 TEST(PublicScenes, EveryKnownGapNamesAStandIn) {
