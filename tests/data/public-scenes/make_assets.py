@@ -44,16 +44,6 @@ def png(rel, channels=3):
     open(out(rel), "wb").write(data)
 
 
-def tga(rel):
-    # Uncompressed true-colour TGA, bottom-up, BGR.
-    header = struct.pack("<BBBHHBHHHHBB", 0, 0, 2, 0, 0, 0, 0, 0, W, H, 24, 0)
-    body = b""
-    for y in reversed(range(H)):
-        for x in range(W):
-            r, g, b = RGB[y * W + x]
-            body += bytes([int(b * 255), int(g * 255), int(r * 255)])
-    open(out(rel), "wb").write(header + body)
-
 
 def pfm(rel):
     body = b""
@@ -111,17 +101,14 @@ def ply(rel, compress=False):
     open(out(rel), "wb").write(data)
 
 
-def spd(rel):
-    open(out(rel), "w").write("# wavelength (nm) value\n400 1.0\n550 1.2\n700 0.9\n")
 
-
+# What the stand-ins name (the .spd spectra and the .bsdf file are kept as text/binary files
+# beside these and are not generated).
 for coll in ("pbrt-v4-scenes", "pbrt-v3-scenes"):
     png(f"{coll}/textures/rgb.png", 3)
     png(f"{coll}/textures/rgba.png", 4)
     png(f"{coll}/textures/gray.png", 1)
-    tga(f"{coll}/textures/rgb.tga")
-    pfm(f"{coll}/textures/rgb.pfm")
     exr(f"{coll}/textures/sky.exr")
     ply(f"{coll}/geometry/quad.ply")
-    ply(f"{coll}/geometry/quad.ply.gz", compress=True)
-    spd(f"{coll}/spds/light.spd")
+ply("pbrt-v4-scenes/geometry/quad.ply.gz", compress=True)
+pfm("pbrt-v3-scenes/textures/rgb.pfm")
