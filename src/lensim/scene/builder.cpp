@@ -1411,6 +1411,13 @@ class Builder {
         m.mix[size_t(i)] = it->second;
       }
       m.amount = floatInput(ps, {"amount"}, 0.5);
+    } else if (type == "subsurface") {
+      // Rendered by a volumetric random walk inside the shape (render/subsurface.h).
+      m.type = "subsurface";
+      subsurfaceCoefficients(m, ps, loc);
+      dielectricEta({"eta"});
+      if (!ps.peek({"eta"})) m.eta.value = 1.33;  // pbrt-v4's default for subsurface
+      roughness(0);
     } else if (type == "interface" || type == "" || type == "none") {
       m.type = "interface";
     } else if (type == "measured") {
@@ -1975,6 +1982,14 @@ class Builder {
       named_media_[name] = static_cast<int>(scene_.media.size()) - 1;
       return;
     }
+    if (*type == "cloud" || *type == "nanovdb") {
+      proceduralMedium(m, ps, d.loc);
+      finish(ps);
+      if (named_media_.count(name)) warn(d.loc, fmt::format("named medium \"{}\" redefined", name));
+      scene_.media.push_back(std::move(m));
+      named_media_[name] = static_cast<int>(scene_.media.size()) - 1;
+      return;
+    }
     if (*type != "homogeneous") {
       ps.markAllUsed();
       warnOnce("medium " + *type, d.loc,
@@ -2114,6 +2129,106 @@ class Builder {
                                      m.name));
       m.Le_scale = ps.getFloat({"Lescale"}, 1);
     }
+  }
+
+  // pbrt-v4's SubsurfaceMaterial::Create (materials.cpp): the scattering coefficients from one of
+  // `name` (measured, reduced sigma_s, g forced to 0), sigma_a with sigma_s, reflectance with
+  // mfp, or the default (whole milk, Jensen et al. 2001), all times `scale`.
+  void subsurfaceCoefficients(Material& m, ParamSet& ps, const FileLoc& loc) {
+    m.ss_g = ps.getFloat({"g"}, 0);
+    if (!(m.ss_g > -1 && m.ss_g < 1))
+      throw Error(ps.peek({"g"})->loc, fmt::format("subsurface: g {} outside (-1, 1)", m.ss_g));
+    auto constant = [&](const char* pname, SpectrumValue& out) {
+      const Param* p = ps.find({pname}, {ParamType::Rgb, ParamType::Spectrum,
+                                         ParamType::Blackbody, ParamType::Texture});
+      if (!p) return false;
+      if (p->type == ParamType::Texture)
+        ps.fail(*p, "textured subsurface coefficients are not rendered (the random walk needs "
+                    "one homogeneous medium per material); give an rgb or spectrum value");
+      out = spectrumOf(*p);
+      return true;
+    };
+    if (const Param* p = ps.find({"name"}, {ParamType::String})) {
+      m.ss_name = p->strings[0];
+      if (!mediumPreset(m.ss_name, m.ss_sigma_a, m.ss_sigma_s)) {
+        std::string best;
+        size_t best_d = 4;
+        for (const std::string& k : mediumPresetNames())
+          if (size_t dist = editDistance(m.ss_name, k); dist < best_d) best_d = dist, best = k;
+        ps.fail(*p, fmt::format("unknown measured medium \"{}\"{}", m.ss_name,
+                                best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best)));
+      }
+      if (m.ss_g != 0)
+        warn(ps.peek({"g"})->loc, "subsurface: \"g\" is ignored with a named measured medium "
+                                  "(its sigma_s is the reduced scattering coefficient), as in "
+                                  "pbrt-v4");
+      m.ss_g = 0;
+    } else {
+      const bool a = constant("sigma_a", m.ss_sigma_a), s = constant("sigma_s", m.ss_sigma_s);
+      if (a != s)
+        throw Error(loc, a ? "subsurface: \"sigma_a\" given without \"sigma_s\""
+                           : "subsurface: \"sigma_s\" given without \"sigma_a\"");
+      if (!a) {
+        if (constant("reflectance", m.ss_reflectance)) {
+          m.ss_from_reflectance = true;
+          m.ss_mfp = SpectrumValue::gray(1);
+          constant("mfp", m.ss_mfp);
+        } else {
+          m.ss_sigma_a.rgb = {.0011, .0024, .014};
+          m.ss_sigma_s.rgb = {2.55, 3.21, 3.77};
+        }
+      }
+    }
+    m.scale = ps.getFloat({"scale"}, 1);
+    if (!(m.scale >= 0))
+      throw Error(ps.peek({"scale"})->loc,
+                  fmt::format("subsurface: scale {} must not be negative", m.scale));
+  }
+
+  // pbrt-v4's "cloud" (CloudMedium) and "nanovdb" (NanoVDBMedium): constant sigma_a, sigma_s
+  // (default 1) times `scale` times a density from noise or from the file (media.cpp, Create).
+  void proceduralMedium(Medium& m, ParamSet& ps, const FileLoc& loc) {
+    m.type = m.type_as_written;
+    auto spectrum = [&](const char* pname, SpectrumValue& out) {
+      if (const Param* p =
+              ps.find({pname}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody}))
+        out = spectrumOf(*p);
+    };
+    spectrum("sigma_a", m.sigma_a);
+    spectrum("sigma_s", m.sigma_s);
+    m.scale = ps.getFloat({"scale"}, 1);
+    m.g = ps.getFloat({"g"}, 0);
+    auto check = [&](const char* pname, double v, bool ok, const char* expected) {
+      if (ok) return;
+      const Param* p = ps.peek({pname});
+      throw Error(p ? p->loc : loc,
+                  fmt::format("medium \"{}\": {} {} {}", m.name, pname, v, expected));
+    };
+    check("g", m.g, m.g > -1 && m.g < 1, "outside (-1, 1)");
+    check("scale", m.scale, m.scale >= 0, "must not be negative");
+    if (m.type == "cloud") {
+      m.cloud_density = ps.getFloat({"density"}, 1);
+      m.wispiness = ps.getFloat({"wispiness"}, 1);
+      m.frequency = ps.getFloat({"frequency"}, 5);
+      check("density", m.cloud_density, m.cloud_density >= 0, "must not be negative");
+      if (auto p = ps.findPoint3({"p0"})) m.p0 = *p;
+      if (auto p = ps.findPoint3({"p1"})) m.p1 = *p;
+      if (!(m.p0.x < m.p1.x && m.p0.y < m.p1.y && m.p0.z < m.p1.z))
+        throw Error(ps.peek({"p1"}) ? ps.peek({"p1"})->loc : loc,
+                    fmt::format("medium \"{}\": empty bounds p0 ({}, {}, {}) to p1 ({}, {}, {})",
+                                m.name, m.p0.x, m.p0.y, m.p0.z, m.p1.x, m.p1.y, m.p1.z));
+      return;
+    }
+    const Param* f = ps.find({"filename"}, {ParamType::String});
+    if (!f || f->strings[0].empty())
+      throw Error(loc, fmt::format("medium \"{}\": nanovdb needs \"string filename\" (a .nvdb "
+                                   "file)",
+                                   m.name));
+    m.filename = resolve(f->strings[0], f->loc, "NanoVDB file");
+    m.Le_scale = ps.getFloat({"Lescale", "LeScale"}, 1);
+    m.temperature_offset =
+        ps.getFloat({"temperatureoffset"}, ps.getFloat({"temperaturecutoff"}, 0));
+    m.temperature_scale = ps.getFloat({"temperaturescale"}, 1);
   }
 
   int mediumIndex(const std::string& name, const FileLoc& loc) {
