@@ -52,27 +52,29 @@ CloudMedium::CloudMedium(const scene::Medium& m)
 
 double CloudMedium::density(const Vec3& p) const {
   // pbrt-v4 media.h, CloudMedium::Density (facts: the constants and the order of operations).
+  // pbrt's DNoise (the noise's analytic gradient) is taken here by central differences.
+  auto gradient = [](const Vec3& q) {
+    const double h = 1e-4;
+    return Vec3{perlinNoise(q.x + h, q.y, q.z) - perlinNoise(q.x - h, q.y, q.z),
+                perlinNoise(q.x, q.y + h, q.z) - perlinNoise(q.x, q.y - h, q.z),
+                perlinNoise(q.x, q.y, q.z + h) - perlinNoise(q.x, q.y, q.z - h)} /
+           (2 * h);
+  };
   Vec3 pp = p * frequency_;
   if (wispiness_ > 0) {
-    double vscale = 0.05 * wispiness_, vlac = 10;
+    double vomega = 0.05 * wispiness_, vlambda = 10;
     for (int i = 0; i < 2; ++i) {
-      const double delta = 0.01;
-      const Vec3 q = pp * vlac;
-      const double base = perlinNoise(q.x, q.y, q.z);
-      const Vec3 grad{perlinNoise(q.x + delta, q.y, q.z) - base,
-                      perlinNoise(q.x, q.y + delta, q.z) - base,
-                      perlinNoise(q.x, q.y, q.z + delta) - base};
-      pp = pp + grad * (vscale / delta);
-      vscale *= 0.5;
-      vlac *= 2.01;
+      pp = pp + gradient(pp * vlambda) * vomega;
+      vomega *= 0.5;
+      vlambda *= 1.99;
     }
   }
-  double d = 0, amplitude = 0.5, lacunarity = 1;
+  double d = 0, omega = 0.5, lambda = 1;
   for (int i = 0; i < 5; ++i) {
-    const Vec3 q = pp * lacunarity;
-    d += amplitude * perlinNoise(q.x, q.y, q.z);
-    amplitude *= 0.5;
-    lacunarity *= 2.01;
+    const Vec3 q = pp * lambda;
+    d += omega * perlinNoise(q.x, q.y, q.z);
+    omega *= 0.5;
+    lambda *= 1.99;
   }
   d = std::clamp((1 - p.y) * 4.5 * density_ * d, 0.0, 1.0);
   d += 2 * std::max(0.0, 0.5 - p.y);

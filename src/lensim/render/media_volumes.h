@@ -20,9 +20,10 @@ class CloudMedium final : public Medium {
   MediumProperties at(const Vec3& p, const SampledWavelengths& lambda) const override;
   void majorants(const Vec3& o, const Vec3& d, double tmax, const SampledWavelengths& lambda,
                  const SegmentFn& fn) const override;
-  /// pbrt-v4's CloudMedium::Density at the medium-space point p: five octaves of Perlin noise at
-  /// frequency * p, the lookup point first pushed along the noise gradient (two octaves scaled by
-  /// wispiness), times (1 - y) 4.5 density, clamped to [0, 1], plus 2 max(0, 0.5 - y), clamped.
+  /// pbrt-v4's CloudMedium::Density at the medium-space point p: five octaves (lacunarity 1.99)
+  /// of Perlin noise at frequency * p, the lookup point first pushed along the noise gradient
+  /// (two octaves, 0.05 wispiness and half that), times (1 - y) 4.5 density, clamped to [0, 1],
+  /// plus 2 max(0, 0.5 - y), clamped to [0, 1].
   double density(const Vec3& p) const;
 
  private:
