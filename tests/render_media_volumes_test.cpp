@@ -179,8 +179,9 @@ AttributeEnd
 // (pbrt-v4: the blackbody normalised to 1 at its peak), from Planck's law here.
 TEST(NanoVDBMedium, HotOpaqueGridGlowsAsABlackbody) {
   const fs::path dir = testDir("hot");
-  writeNvdb(dir / "fire.nvdb", 20, 0.1, nanovdb::Vec3d(-1, -1, -1),
-            [](int, int, int) { return 1.0; }, 1000);
+  writeNvdb(
+      dir / "fire.nvdb", 20, 0.1, nanovdb::Vec3d(-1, -1, -1), [](int, int, int) { return 1.0; },
+      1000);
   const Direct d(R"(
 Integrator "volpath" "integer maxdepth" 5
 WorldBegin
@@ -232,7 +233,7 @@ AttributeBegin
     "point3 p0" [-1 -0.5 -1] "point3 p1" [1 1 1] "rgb sigma_s" [2 1 0.5]
 AttributeEnd
 )",
-                                                          (dir / "scene.pbrt").string()));
+                                                         (dir / "scene.pbrt").string()));
   ASSERT_FALSE(s.hasErrors()) << formatDiagnostics(s.diagnostics);
   const render::Media media(s);
   for (int mi = 0; mi < 2; ++mi) {
@@ -247,24 +248,25 @@ AttributeEnd
       const render::SampledWavelengths lambda = render::SampledWavelengths::sampleUniform(U(rng));
       double covered_end = 0;
       std::vector<std::pair<double, double>> segments;
-      m->majorants(o, dvec, 10, lambda, [&](double t0, double t1, const render::SampledSpectrum& smaj) {
-        EXPECT_LE(t0, t1);
-        EXPECT_GE(t0, covered_end - 1e-9);  // in order, not overlapping
-        covered_end = t1;
-        segments.push_back({t0, t1});
-        for (int k = 0; k < 40; ++k) {
-          const double t = t0 + (t1 - t0) * U(rng);
-          const render::MediumProperties mp = m->at(o + dvec * t, lambda);
-          for (int c = 0; c < 4; ++c) {
-            const double st = mp.sigma_a[c] + mp.sigma_s[c];
-            ++samples;
-            nonzero += st > 0;
-            worst = std::max(worst, st - smaj[c]);
-            EXPECT_LE(st, smaj[c] * (1 + 1e-6) + 1e-9) << "medium " << mi << " at t " << t;
-          }
-        }
-        return true;
-      });
+      m->majorants(
+          o, dvec, 10, lambda, [&](double t0, double t1, const render::SampledSpectrum& smaj) {
+            EXPECT_LE(t0, t1);
+            EXPECT_GE(t0, covered_end - 1e-9);  // in order, not overlapping
+            covered_end = t1;
+            segments.push_back({t0, t1});
+            for (int k = 0; k < 40; ++k) {
+              const double t = t0 + (t1 - t0) * U(rng);
+              const render::MediumProperties mp = m->at(o + dvec * t, lambda);
+              for (int c = 0; c < 4; ++c) {
+                const double st = mp.sigma_a[c] + mp.sigma_s[c];
+                ++samples;
+                nonzero += st > 0;
+                worst = std::max(worst, st - smaj[c]);
+                EXPECT_LE(st, smaj[c] * (1 + 1e-6) + 1e-9) << "medium " << mi << " at t " << t;
+              }
+            }
+            return true;
+          });
       // Outside the segments the medium is empty.
       for (int k = 0; k < 40; ++k) {
         const double t = 10 * U(rng);
@@ -301,11 +303,11 @@ TEST(NanoVDBMedium, BadFilesAreLocatedErrors) {
   for (auto [file, message] :
        {std::pair{"junk.nvdb", "cannot read NanoVDB file"}, {"missing.nvdb", "not found"}}) {
     const std::string text = fmt::format(
-        "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" \"{}\"\n",
+        "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" "
+        "\"{}\"\n",
         file);
     try {
-      const scene::Scene s =
-          scene::build(scene::parseString(text, (dir / "scene.pbrt").string()));
+      const scene::Scene s = scene::build(scene::parseString(text, (dir / "scene.pbrt").string()));
       if (s.hasErrors()) throw Error(formatDiagnostics(s.diagnostics));
       const render::Media media(s);
       ADD_FAILURE() << "no error for " << file;
@@ -349,8 +351,7 @@ AttributeEnd
     const double sigma = 0.3 + (L.lambda[j] - 360) / 470;
     const double expected = std::exp(-sigma * scale * 2);
     const double T = L.mean[j] / L0.mean[j], sem = L.sem[j] / L0.mean[j];
-    std::printf("cloud %.1f nm: T %.5f +- %.5f, closed form %.5f\n", L.lambda[j], T, sem,
-                expected);
+    std::printf("cloud %.1f nm: T %.5f +- %.5f, closed form %.5f\n", L.lambda[j], T, sem, expected);
     EXPECT_NEAR(T, expected, 4 * sem + 1e-6) << "at " << L.lambda[j] << " nm";
   }
   fs::remove_all(dir);

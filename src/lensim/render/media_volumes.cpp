@@ -11,6 +11,7 @@
 #include <nanovdb/NanoVDB.h>
 #include <nanovdb/util/IO.h>
 #include <nanovdb/util/SampleFromVoxels.h>
+#include <tbb/parallel_for.h>
 
 #include "lensim/render/procedural.h"
 #include "lensim/render/textures.h"
@@ -29,8 +30,7 @@ Vec3 unitDirection(const Transform& medium_from_world, const Vec3& p0, const Vec
 }
 Vec3 unitPoint(const Transform& medium_from_world, const Vec3& p0, const Vec3& p1, const Vec3& p) {
   const Vec3 q = medium_from_world.applyPoint(p);
-  return {(q.x - p0.x) / (p1.x - p0.x), (q.y - p0.y) / (p1.y - p0.y),
-          (q.z - p0.z) / (p1.z - p0.z)};
+  return {(q.x - p0.x) / (p1.x - p0.x), (q.y - p0.y) / (p1.y - p0.y), (q.z - p0.z) / (p1.z - p0.z)};
 }
 
 }  // namespace
@@ -120,7 +120,8 @@ NanoVDBMedium::NanoVDBMedium(const scene::Medium& m)
   g_ = m.g;
   auto read = [&](const char* name) {
     try {
-      if (!nanovdb::io::hasGrid(m.filename, name)) return nanovdb::GridHandle<nanovdb::HostBuffer>();
+      if (!nanovdb::io::hasGrid(m.filename, name))
+        return nanovdb::GridHandle<nanovdb::HostBuffer>();
       return nanovdb::io::readGrid<nanovdb::HostBuffer>(m.filename, name);
     } catch (const std::exception& e) {
       throw Error(m.loc, fmt::format("medium \"{}\": cannot read NanoVDB file \"{}\": {}", m.name,
@@ -162,13 +163,15 @@ NanoVDBMedium::NanoVDBMedium(const scene::Medium& m)
   const nanovdb::FloatGrid& grid = *grids_->density;
   const auto ibox = grid.indexBBox();
   const float background = grid.tree().background();
-  auto acc = grid.getAccessor();
-  for (int z = 0; z < kRes; ++z)
+  // One slice of cells per task (large grids: pbrt-v4 runs this in parallel too).
+  tbb::parallel_for(0, kRes, [&](int z) {
+    auto acc = grid.getAccessor();
     for (int y = 0; y < kRes; ++y)
       for (int x = 0; x < kRes; ++x) {
         int lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
         for (int corner = 0; corner < 8; ++corner) {
-          const double u[3] = {double(x + (corner & 1)) / kRes, double(y + ((corner >> 1) & 1)) / kRes,
+          const double u[3] = {double(x + (corner & 1)) / kRes,
+                               double(y + ((corner >> 1) & 1)) / kRes,
                                double(z + ((corner >> 2) & 1)) / kRes};
           const nanovdb::Vec3d w(p0_.x + u[0] * (p1_.x - p0_.x), p0_.y + u[1] * (p1_.y - p0_.y),
                                  p0_.z + u[2] * (p1_.z - p0_.z));
@@ -191,6 +194,7 @@ NanoVDBMedium::NanoVDBMedium(const scene::Medium& m)
               v = std::max(v, double(acc.getValue(nanovdb::Coord(i, j, k))));
         majorant_[(size_t(z) * kRes + y) * kRes + x] = v;
       }
+  });
 }
 
 NanoVDBMedium::~NanoVDBMedium() = default;

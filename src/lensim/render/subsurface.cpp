@@ -71,8 +71,9 @@ double diffuseReflectanceOfAlbedo(double a) {
     std::array<double, Quadrature::n> next;
     for (int i = 0; i < q.n; ++i) {
       double integral = 0;
-      for (int j = 0; j < q.n; ++j) integral += q.w[size_t(j)] * q.x[size_t(j)] * H[size_t(j)] /
-                                                (q.x[size_t(i)] + q.x[size_t(j)]);
+      for (int j = 0; j < q.n; ++j)
+        integral +=
+            q.w[size_t(j)] * q.x[size_t(j)] * H[size_t(j)] / (q.x[size_t(i)] + q.x[size_t(j)]);
       next[size_t(i)] = 1 / (s + 0.5 * a * integral);
       change = std::max(change, std::abs(next[size_t(i)] - H[size_t(i)]));
     }
