@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "lensim/render/image_compare.h"
-#include "lensim/render/subsurface.h"
+#include "lensim/render/media/subsurface.h"
 #include "render_test_util.h"
 
 using namespace lensim;

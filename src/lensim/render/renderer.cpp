@@ -16,11 +16,11 @@
 #include <vector>
 
 #include "lensim/camera/camera.h"
-#include "lensim/render/filter.h"
-#include "lensim/render/integrator.h"
+#include "lensim/render/integrators/integrator.h"
+#include "lensim/render/integrators/volpath.h"
+#include "lensim/render/media/media.h"
 #include "lensim/render/parts.h"
-#include "lensim/render/media.h"
-#include "lensim/render/volpath.h"
+#include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/limits.h"
@@ -188,7 +188,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   sc.pbrt_v2_epsilon = opt.pbrt_v2_quirks;
   sc.camera_from_world = scene.camera.camera_from_world;
   const Media& media = world->media;
-  // Subsurface materials need volpath's tracking (render/subsurface.h): the path integrator
+  // Subsurface materials need volpath's tracking (render/media/subsurface.h): the path integrator
   // renders them with it too, without the scene's media (which it ignores, with a warning).
   const bool volpath = scene.integrator.type == "volpath" || media.hasSubsurface();
   if (volpath) sc.media = &media;
