@@ -61,7 +61,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // Each wedge's bound is built on its own (its own azimuths and trace count), so that the
   // wedges of an anamorphic lens are built side by side (TBB); a rotational lens has one.
   std::atomic<long> traces_total{0};
-  auto buildSector = [&](int sec) -> Sector {
+  auto buildSector = [&](int sec) -> std::vector<Sector> {
   long traces = 0;
   std::vector<double> az, az_main, az_check;
   // The margin of a rear-plane point: the ray from the film point toward it, traced without
@@ -109,10 +109,14 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   };
   // The lens's margin; where it blocks, the least over the other wavelengths' lenses too (the
   // bound holds the union of their regions). <= 1 exactly where some lens lets the ray through.
+  // The lenses whose regions count (the first traced first): the lens and also_cover while
+  // building the lens's own bound; a band's lenses, or one of them, while re-solving a band's.
+  std::vector<const LensSystem*> cur{&lens};
+  cur.insert(cur.end(), opts.also_cover.begin(), opts.also_cover.end());
   auto marginCover = [&](Vec2 film, Vec2 a) {
-    double m = margin1(lens, film, a);
+    double m = margin1(*cur[0], film, a);
     if (m <= 1) return m;
-    for (const LensSystem* other : opts.also_cover) m = std::min(m, margin1(*other, film, a));
+    for (size_t i = 1; i < cur.size(); ++i) m = std::min(m, margin1(*cur[i], film, a));
     return m;
   };
   // The checks of a polygon (below) use the azimuths half-way between the polygon's own, so
@@ -349,6 +353,8 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     for (const Vec2& q : pts)
       poly.radius.push_back(std::hypot(q.x - poly.centre.x, q.y - poly.centre.y));
     const std::vector<double> f = coverFactors(poly, checkPoints(h, 0.5 * dphi, &poly));
+    poly.raw = poly.radius;
+    poly.node_f = f;
     for (int j = 0; j < nd; ++j) poly.radius[j] *= f[j];
     return poly;
   };
@@ -422,31 +428,112 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     stack.pop_back();
     left = right;
   }
-  Sector out;
-  out.intervals = buildIntervals(done, scales);
-  // A table from film radius to the first interval that can hold it, so that a lookup is a
-  // table read and a step or two instead of a binary search.
-  if (!out.intervals.empty() && film_radius_mm_ > 0) {
-    constexpr int kLut = 512;
-    std::vector<int> lut(kLut + 1);
-    for (int k = 0; k <= kLut; ++k)
-      lut[size_t(k)] = intervalIn(out.intervals, {}, 0, film_radius_mm_ * k / kLut);
-    out.lut_scale = kLut / film_radius_mm_;
-    out.lut = std::move(lut);
+  auto makeSector = [&](const std::vector<Polygon>& nodes) {
+    Sector out;
+    out.intervals = buildIntervals(nodes, scales);
+    // A table from film radius to the first interval that can hold it, so that a lookup is a
+    // table read and a step or two instead of a binary search.
+    if (!out.intervals.empty() && film_radius_mm_ > 0) {
+      constexpr int kLut = 512;
+      std::vector<int> lut(kLut + 1);
+      for (int k = 0; k <= kLut; ++k)
+        lut[size_t(k)] = intervalIn(out.intervals, {}, 0, film_radius_mm_ * k / kLut);
+      out.lut_scale = kLut / film_radius_mm_;
+      out.lut = std::move(lut);
+    }
+    return out;
+  };
+  std::vector<Sector> sets;
+  sets.push_back(makeSector(done));
+  // Wavelength bands: the same nodes, each vertex distance the farthest of the band's lenses'
+  // boundaries along the vertex's direction from the node's centre (each lens's region is
+  // star-shaped about it, so that this is the union's), each from the lens's own distance (two
+  // or three traces), times the node's own check factors; the intervals keep their widening.
+  // Where the centre lies outside one of the band's regions, or where the lens's region is
+  // empty next to one that is not (the edge of the image circle moves with the wavelength),
+  // the union's polygon is traced from scratch.
+  // Each lens's distances once per node (neighbouring bands share their edge's lens), each
+  // started from the last lens's (the bands' lenses come in order of wavelength).
+  std::vector<const LensSystem*> band_lens;
+  for (const std::vector<const LensSystem*>& band : opts.bands)
+    for (const LensSystem* L : band)
+      if (std::find(band_lens.begin(), band_lens.end(), L) == band_lens.end())
+        band_lens.push_back(L);
+  std::vector<std::vector<Polygon>> band_nodes(opts.bands.size(), done);
+  std::vector<std::vector<double>> dist(band_lens.size());
+  std::vector<char> inside(band_lens.size());
+  for (size_t k = 0; k < done.size() && !opts.bands.empty(); ++k) {
+    const Polygon& base = done[k];
+    const double h = base.r;
+    if (!base.empty) {
+      const std::vector<double>* prev = &base.raw;
+      for (size_t i = 0; i < band_lens.size(); ++i) {
+        cur = {band_lens[i]};
+        inside[i] = passes(h, base.centre);
+        dist[i].assign(size_t(nd), 0.0);
+        if (!inside[i]) continue;
+        for (int j = 0; j < nd; ++j)
+          dist[i][size_t(j)] =
+              boundary(h, base.centre, dirs_[size_t(j)], (*prev)[size_t(j)]);
+        prev = &dist[i];
+      }
+    }
+    for (size_t b = 0; b < opts.bands.size(); ++b) {
+      const std::vector<const LensSystem*>& band = opts.bands[b];
+      Polygon& node = band_nodes[b][k];
+      if (band.empty()) continue;
+      bool all_in = !base.empty;
+      for (const LensSystem* L : band)
+        all_in = all_in && inside[size_t(std::find(band_lens.begin(), band_lens.end(), L) -
+                                         band_lens.begin())];
+      if (all_in) {
+        for (int j = 0; j < nd; ++j) {
+          double d = 0;
+          for (const LensSystem* L : band)
+            d = std::max(d, dist[size_t(std::find(band_lens.begin(), band_lens.end(), L) -
+                                        band_lens.begin())][size_t(j)]);
+          node.radius[size_t(j)] = d * base.node_f[size_t(j)];
+        }
+        continue;
+      }
+      const Polygon* hint = !base.empty ? &base
+                            : k > 0 && !done[k - 1].empty ? &done[k - 1]
+                            : k + 1 < done.size() && !done[k + 1].empty ? &done[k + 1]
+                                                                          : nullptr;
+      if (!hint) continue;
+      cur = band;
+      Polygon np;
+      np.r = h;
+      const std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &np.centre, hint);
+      if (!pts.empty()) {
+        np.empty = false;
+        for (int j = 0; j < nd; ++j) {
+          const Vec2 q = pts[size_t(j)];
+          const double f = base.empty ? 1.0 : base.node_f[size_t(j)];
+          np.radius.push_back(std::hypot(q.x - np.centre.x, q.y - np.centre.y) * f);
+        }
+      }
+      node = np;
+    }
   }
+  for (const std::vector<Polygon>& nodes : band_nodes) sets.push_back(makeSector(nodes));
   traces_total += traces;
-  return out;
+  return sets;
   };  // buildSector
-  sectors_.resize(size_t(n_sectors));
+  std::vector<std::vector<Sector>> by_sector(static_cast<size_t>(n_sectors));
   if (n_sectors == 1) {
-    sectors_[0] = buildSector(0);
+    by_sector[0] = buildSector(0);
   } else {
-    tbb::parallel_for(0, n_sectors, [&](int sec) { sectors_[size_t(sec)] = buildSector(sec); });
+    tbb::parallel_for(0, n_sectors,
+                      [&](int sec) { by_sector[size_t(sec)] = buildSector(sec); });
   }
+  sets_.assign(by_sector[0].size(), {});
+  for (auto& secs : by_sector)
+    for (size_t set = 0; set < secs.size(); ++set) sets_[set].push_back(std::move(secs[set]));
   traces_ = traces_total;
-  intervals_ = sectors_.front().intervals;
-  radius_lut_ = sectors_.front().lut;
-  lut_scale_ = sectors_.front().lut_scale;
+  intervals_ = sets_[0].front().intervals;
+  radius_lut_ = sets_[0].front().lut;
+  lut_scale_ = sets_[0].front().lut_scale;
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -528,18 +615,20 @@ std::vector<ExitPupilSampler::Interval> ExitPupilSampler::buildIntervals(
 }
 
 const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double& t, double& cos_a,
-                                                           double& sin_a) const {
+                                                           double& sin_a, int set) const {
   // Film coordinates are millimetres: no overflow for hypot to guard against.
   const double r = std::sqrt(film_mm.x * film_mm.x + film_mm.y * film_mm.y);
-  if (r > film_radius_mm_ * (1 + 1e-9) || sectors_.empty()) return nullptr;
-  const Sector* sec = &sectors_.front();
+  if (set < 0 || set >= static_cast<int>(sets_.size())) return nullptr;
+  const std::vector<Sector>& sectors = sets_[size_t(set)];
+  if (r > film_radius_mm_ * (1 + 1e-9) || sectors.empty()) return nullptr;
+  const Sector* sec = &sectors.front();
   if (!rotational_) {
     // Anamorphic: the film point mirrored into the first quadrant picks its wedge; the caller
     // mirrors the rear point back.
     film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
     const double phi = std::atan2(film_mm.y, film_mm.x);
-    const int n = static_cast<int>(sectors_.size());
-    sec = &sectors_[size_t(std::clamp(int(phi / (std::numbers::pi / 2) * n), 0, n - 1))];
+    const int n = static_cast<int>(sectors.size());
+    sec = &sectors[size_t(std::clamp(int(phi / (std::numbers::pi / 2) * n), 0, n - 1))];
   }
   if (sec->intervals.empty()) return nullptr;
   const Interval& iv = sec->intervals[size_t(intervalIn(sec->intervals, sec->lut, sec->lut_scale, r))];
@@ -551,14 +640,14 @@ const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double&
   return &iv;
 }
 
-std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u) const {
+std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u, int band) const {
   std::optional<PupilSample> out;
-  sampleBatch(&film_mm, &u, 1, &out);
+  sampleBatch(&film_mm, &u, 1, &out, band);
   return out;
 }
 
 void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
-                                   std::optional<PupilSample>* out) const {
+                                   std::optional<PupilSample>* out, int band) const {
   const int nd = directions_;
   const Interval* iv[kBatch];
   double t[kBatch], ca[kBatch], sa[kBatch], w0[kBatch], w1[kBatch], w2[kBatch], target[kBatch],
@@ -571,7 +660,7 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
   };
   for (int i = 0; i < std::min(n, kBatch); ++i) {
     out[i].reset();
-    const Interval* v = locate(film_mm[i], t[m], ca[m], sa[m]);
+    const Interval* v = locate(film_mm[i], t[m], ca[m], sa[m], band + 1);
     if (!v) continue;
     iv[m] = v;
     const double tt = t[m];
@@ -612,13 +701,13 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
   }
 }
 
-bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm) const {
+bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm, int band) const {
   if (!rotational_) {
     rear_mm = {film_mm.x < 0 ? -rear_mm.x : rear_mm.x, film_mm.y < 0 ? -rear_mm.y : rear_mm.y};
     film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
   }
   double t, ca, sa;
-  const Interval* iv = locate(film_mm, t, ca, sa);
+  const Interval* iv = locate(film_mm, t, ca, sa, band + 1);
   if (!iv) return false;
   const Vec2 centre = iv->c0 * (1 - t) + iv->c1 * t;
   // Into the +x frame, relative to the centre.
@@ -639,9 +728,9 @@ bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm) const {
   return cross2(b - a, q - a) >= 0;
 }
 
-double ExitPupilSampler::area_mm2(Vec2 film_mm) const {
+double ExitPupilSampler::area_mm2(Vec2 film_mm, int band) const {
   double t, ca, sa;
-  const Interval* iv = locate(film_mm, t, ca, sa);
+  const Interval* iv = locate(film_mm, t, ca, sa, band + 1);
   if (!iv) return 0.0;
   const int nd = directions_;
   const double total = (1 - t) * (1 - t) * iv->P[3 * nd] + t * (1 - t) * iv->P[3 * nd + 1] +
