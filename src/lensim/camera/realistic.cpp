@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 
 #include "lensim/render/filter.h"
 #include "lensim/scene/builder.h"
@@ -14,8 +15,20 @@
 
 namespace lensim::camera {
 
+namespace {
+
+// Processor time of the whole process (every thread), seconds.
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+}  // namespace
+
 RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::move(settings)) {
   const auto t0 = std::chrono::steady_clock::now();
+  const double cpu0 = processCpuSeconds();
   if (!(settings_.film_diagonal_mm > 0))
     throw Error(fmt::format("film diagonal {} mm must be > 0", settings_.film_diagonal_mm));
   optics::LensPrescription prescription = optics::readLensFile(settings_.lens_path);
@@ -95,6 +108,7 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   if (settings_.simple_weighting && !(centre_area_mm2_ > 0))
     throw Error("simpleweighting: no light reaches the centre of the film to normalise by");
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  startup_cpu_seconds_ = processCpuSeconds() - cpu0;
 }
 
 int RealisticCamera::bandAt(double lambda_nm) const {

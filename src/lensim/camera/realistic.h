@@ -85,6 +85,7 @@ class RealisticCamera final : public Camera {
   void generateRays(const CameraSample* samples, int n,
                     std::optional<CameraRay>* rays) const override;
   double startupSeconds() const override { return startup_seconds_; }
+  double startupCpuSeconds() const override { return startup_cpu_seconds_; }
   bool reachesFilm(Vec2 film_raster) const override;
   std::string describe() const override;
 
@@ -126,7 +127,7 @@ class RealisticCamera final : public Camera {
   double stop_radius_mm_ = 0;
   double centre_area_mm2_ = 0;  // sampled region at the film centre (simple weighting)  // the set
                                 // stop radius: the aperture shape's unit
-  double startup_seconds_ = 0;
+  double startup_seconds_ = 0, startup_cpu_seconds_ = 0;
   /// Dispersion (see realistic.cpp, "Dispersive lenses"): whether the lens disperses, and an id
   /// that keys each thread's re-indexed copy of the tracer to this camera.
   bool dispersive_ = false;

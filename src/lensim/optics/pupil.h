@@ -14,6 +14,14 @@
 // for anamorphic lenses see ExitPupilOptions::rotational).
 // Sampling is uniform in the polygon, so a camera's estimator weight uses its area.
 //
+// A boundary point is found on the ray's margin (its largest ratio of hit radius to clear
+// semi-aperture over the surfaces, with sin of the refracted angle where total internal
+// reflection can occur): it varies continuously, is <= 1 exactly where the ray gets through, and
+// its secant steps find a boundary in two or three traces (bisection took ~9); a region's sliver
+// near the edge of the image circle is found by pattern searches on it (a 96x96 grid before).
+// A dispersive lens gets bounds per wavelength band (ExitPupilOptions::bands) sharing the
+// lens's own structure.
+//
 // Measured (tests/optics_pupil_test.cpp and a 2-million-ray check): no passing ray outside the
 // bounds for the double Gauss, wide-angle and telephoto; for the fisheye one in two million,
 // at a sharp corner of the region near the edge of its image circle, where a polygon vertex
