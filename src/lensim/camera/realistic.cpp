@@ -353,9 +353,20 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
   }
   if (pupil_->bands() == 0) {
     pupil_->sampleBatch(film, u, n, ps);
-  } else {  // each sample its hero wavelength's band
-    for (int i = 0; i < n; ++i)
-      ps[i] = pupil_->sample(film[i], u[i], bandAt(samples[i].lambda_nm[0]));
+  } else {  // each sample its hero wavelength's band: the samples of a band together
+    int band[kB];
+    bool done[kB] = {};
+    for (int i = 0; i < n; ++i) band[i] = bandAt(samples[i].lambda_nm[0]);
+    for (int i = 0; i < n; ++i) {
+      if (done[i]) continue;
+      Vec2 f[kB], v[kB];
+      int idx[kB], m = 0;
+      for (int j = i; j < n; ++j)
+        if (!done[j] && band[j] == band[i]) f[m] = film[j], v[m] = u[j], idx[m++] = j, done[j] = true;
+      std::optional<optics::PupilSample> got[kB];
+      pupil_->sampleBatch(f, v, m, got, band[i]);
+      for (int k = 0; k < m; ++k) ps[idx[k]] = got[k];
+    }
   }
   int m = 0;
   for (int i = 0; i < n; ++i) {
