@@ -8,7 +8,7 @@
 #include <cmath>
 #include <ctime>
 
-#include "lensim/render/filter.h"
+#include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
