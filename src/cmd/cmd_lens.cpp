@@ -50,6 +50,9 @@ json surfacesJson(const LensSystem& lens) {
                    {"aperture_diameter_mm", 2 * s.semi_aperture_mm},
                    {"z_mm", s.z_mm},
                    {"is_stop", s.is_stop}});
+    if (s.is_mirror) arr.back()["mirror"] = true;
+    if (s.obscuration_radius_mm > 0)
+      arr.back()["obscuration_radius_mm"] = s.obscuration_radius_mm;
     if (!s.shape.isSpherical()) {
       json& e = arr.back();
       e["conic"] = s.shape.conic;
@@ -266,7 +269,10 @@ int runInfo(const LensArgs& args, bool as_json) {
                : fmt::format("{:.6g} m from the film", fl.focus_distance_m);
   line("focus", fmt::format("{} ({} method); closest {:.4f} m", focus_text,
                             focusMethodName(args.focus_method), closest));
-  line("film distance", fmt::format("{:.4f} mm behind the rear vertex", lens.filmDistance_mm()));
+  line("film distance",
+       fmt::format("{:.4f} mm {} the rear vertex", lens.filmDistance_mm(),
+                   lens.imageSpaceReversed() ? "in front of (image space reversed by the mirrors)"
+                                             : "behind"));
   line("wavelength",
        fmt::format("{:.2f} nm{} (focus solved at the primary wavelength, {:.2f} nm){}",
                    lens.wavelength_nm(),
@@ -289,11 +295,28 @@ int runInfo(const LensArgs& args, bool as_json) {
     const Interface& s = lens.interfaces()[i];
     const double t =
         i + 1 < lens.surfaceCount() ? pr.surfaces[i].thickness_mm : lens.filmDistance_mm();
-    std::cout << fmt::format("  {:>3} {:>5} {:>12} {:>11.4f} {:>8.4f} {:>10.4f} {:>11.4f}\n", i,
-                             pr.surfaces[i].loc.line,
-                             s.is_stop ? std::string("stop") : fmt::format("{:.4f}", s.radius_mm),
-                             t, s.ior_after, 2 * s.semi_aperture_mm, s.z_mm);
+    // A plane stop shows as "stop"; a curved stop (a mirror) keeps its radius, marked below.
+    std::cout << fmt::format("  {:>3} {:>5} {:>12} {:>11.4f} {:>8.4f} {:>10.4f} {:>11.4f}{}{}{}\n",
+                             i, pr.surfaces[i].loc.line,
+                             s.is_stop && s.radius_mm == 0 ? std::string("stop")
+                                                           : fmt::format("{:.4f}", s.radius_mm),
+                             t, s.ior_after, 2 * s.semi_aperture_mm, s.z_mm,
+                             s.is_mirror ? "  mirror" : "",
+                             s.is_stop && s.radius_mm != 0 ? "  stop" : "",
+                             s.obscuration_radius_mm > 0
+                                 ? fmt::format("  obscured r < {:.4f}", s.obscuration_radius_mm)
+                                 : std::string());
   }
+  if (lens.mirrorCount() > 0)
+    std::cout << fmt::format(
+        "  {} mirror{}: thicknesses are signed z distances (negative after an odd number of "
+        "mirrors){}\n",
+        lens.mirrorCount(), lens.mirrorCount() == 1 ? "" : "s",
+        lens.imageSpaceReversed()
+            ? fmt::format("; the image lies toward -z, at z = {:.4f} mm (image-side z above are "
+                          "unfolded about the rear vertex plane)",
+                          lens.realFilmZ_mm())
+            : "");
   // Per element: the glass, n_d, V_d and the index at the analysis wavelength.
   std::cout << fmt::format("\n  {:>8} {:>5}  {:<28} {:>9} {:>8} {:>10}\n", "element", "line",
                            "glass", "n_d", "V_d", fmt::format("n({:.0f})", lens.wavelength_nm()));

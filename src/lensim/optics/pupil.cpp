@@ -64,10 +64,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   auto passes1 = [&](Vec2 film, Vec2 a) {
     if (disc2 > 0 && a.x * a.x + a.y * a.y > disc2) return false;
     ++traces;
-    if (lens.traceFromFilmPoint(film, a).ok()) return true;
+    // The outer boundary: a central obscuration's shadow lies inside the bound (its samples are
+    // blocked when traced), so that the bound stays star-shaped about the chief ray.
+    if (lens.traceFromFilmPoint(film, a, kOuterBoundary).ok()) return true;
     for (const LensSystem* other : opts.also_cover) {
       ++traces;
-      if (other->traceFromFilmPoint(film, a).ok()) return true;
+      if (other->traceFromFilmPoint(film, a, kOuterBoundary).ok()) return true;
     }
     return false;
   };
