@@ -36,6 +36,21 @@ json vec3Json(const Vec3& v) {
   return json::array({v.x, v.y, v.z});
 }
 
+// Lens length and total track: front to rear vertex and front vertex to film; for a folded
+// (mirror) lens, the axial extent of its surfaces and of its surfaces and film.
+double lensLength(const LensSystem& lens) {
+  if (lens.mirrorCount() == 0) return lens.rearVertexZ_mm();
+  double lo = 0, hi = 0;
+  for (const Interface& s : lens.interfaces()) lo = std::min(lo, s.z_mm), hi = std::max(hi, s.z_mm);
+  return hi - lo;
+}
+double totalTrack(const LensSystem& lens) {
+  if (lens.mirrorCount() == 0) return lens.filmZ_mm();
+  double lo = lens.realFilmZ_mm(), hi = lo;
+  for (const Interface& s : lens.interfaces()) lo = std::min(lo, s.z_mm), hi = std::max(hi, s.z_mm);
+  return hi - lo;
+}
+
 json surfacesJson(const LensSystem& lens) {
   json arr = json::array();
   const auto& rows = lens.prescription().surfaces;
@@ -164,8 +179,9 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["exit_pupil_z_mm"] = p.exit_pupil_z_mm;
     j["f_number"] = p.f_number;
     j["working_f_number"] = working_f;
-    j["lens_length_mm"] = lens.rearVertexZ_mm();
-    j["total_track_mm"] = lens.filmZ_mm();
+    j["lens_length_mm"] = lensLength(lens);
+    j["total_track_mm"] = totalTrack(lens);
+    if (lens.mirrorCount() > 0) j["mirrors"] = lens.mirrorCount();
     j["film_distance_mm"] = lens.filmDistance_mm();
     j["focus_distance_m"] = at_inf ? json(nullptr) : json(fl.focus_distance_m);
     j["focus_at_infinity"] = at_inf && !beyond_infinity_mm;
@@ -279,7 +295,10 @@ int runInfo(const LensArgs& args, bool as_json) {
                    lens.wavelength_nm() == primaryWavelength_nm(pr) ? " (primary)" : "",
                    primaryWavelength_nm(pr), lens.dispersive() ? "" : "; no element disperses"));
   line("lens length / total track",
-       fmt::format("{:.4f} mm / {:.4f} mm", lens.rearVertexZ_mm(), lens.filmZ_mm()));
+       fmt::format("{:.4f} mm / {:.4f} mm{}", lensLength(lens), totalTrack(lens),
+                   lens.mirrorCount() > 0 ? " (folded: the axial extent of the surfaces / of "
+                                            "the surfaces and the film)"
+                                          : ""));
   if (fov.real_deg)
     line("field of view", fmt::format("{:.3f} deg on a {:.2f} mm diagonal (paraxial {:.3f} deg)",
                                       *fov.real_deg, args.film_diagonal_mm, fov.paraxial_deg));
