@@ -4,6 +4,10 @@
 // optical axis; the vertex of the front (scene-side) surface is at z = 0; +z points toward the
 // film. Surface i has its vertex at z_i = sum of the thicknesses before it; a sphere of signed
 // radius R has its centre at z_i + R. The film is the plane z = rearVertexZ() + filmDistance().
+// Mirrors (catadioptric lenses): thicknesses are signed z distances as in Zemax, so after a mirror
+// the surfaces follow toward -z; after an odd number of mirrors image space runs toward -z and is
+// unfolded about the rear vertex plane (z -> 2 rearVertexZ - z) by the tracers, so that the film
+// still lies at +z for everything downstream (realFilmZ_mm() is where it physically is).
 #pragma once
 
 #include <cstdint>
