@@ -119,8 +119,8 @@ TEST(Mirror, ParabolaFocusesAnAxialBeamToAPoint) {
       // The same through the unfolded film plane the rest of lensim uses.
       const double tu = (lens.filmZ_mm() - r.ray.origin.z) / r.ray.direction.z;
       EXPECT_NEAR(r.ray.origin.x + tu * r.ray.direction.x, q.x, 1e-9);
-      const TraceResultT<float> rf = lens.tracerFloat().traceFromScene(
-          {Vec3f(in.origin), Vec3f(in.direction)});
+      const TraceResultT<float> rf =
+          lens.tracerFloat().traceFromScene({Vec3f(in.origin), Vec3f(in.direction)});
       ASSERT_TRUE(rf.ok());
       const double tf = (lens.filmZ_mm() - rf.ray.origin.z) / rf.ray.direction.z;
       const double xf = rf.ray.origin.x + tf * rf.ray.direction.x,
@@ -243,8 +243,8 @@ TEST(Mirror, ObscurationsBlockAndTheTracersAgree) {
     lens.tracerFloat().traceFromFilmBatch(rays, nb, out);
     for (int j = 0; j < nb; ++j) {
       const TraceResultT<float> one = lens.tracerFloat().traceFromFilm(rays[j]);
-      const TraceResult dbl = lens.tracer().traceFromFilm(
-          {Vec3(rays[j].origin), normalize(Vec3(rays[j].direction))});
+      const TraceResult dbl =
+          lens.tracer().traceFromFilm({Vec3(rays[j].origin), normalize(Vec3(rays[j].direction))});
       EXPECT_EQ(out[j].reason, one.reason);
       EXPECT_EQ(out[j].blocked_surface, one.blocked_surface);
       EXPECT_EQ(out[j].ray.origin.x, one.ray.origin.x);
@@ -303,8 +303,8 @@ TEST(Mirror, ExitPupilBoundCutsOutTheObscuredMiddle) {
     const double p1 = double(passing) / kN, p2 = double(pass2) / kN;
     const double a_disc = 3.141592653589793 * disc * disc, a_bound = sampler.area_mm2(film);
     const double a1 = a_disc * p1, a2 = a_bound * p2;
-    const double se = std::hypot(a_disc * std::sqrt(p1 * (1 - p1) / kN),
-                                 a_bound * std::sqrt(p2 * (1 - p2) / kN));
+    const double se =
+        std::hypot(a_disc * std::sqrt(p1 * (1 - p1) / kN), a_bound * std::sqrt(p2 * (1 - p2) / kN));
     EXPECT_NEAR(a2, a1, 4.5 * se) << "film height " << h;
     EXPECT_GT(passing, 1000) << h;
   }
@@ -322,8 +322,8 @@ TEST(Mirror, ReadersLocateErrorsAndRoundTrip) {
       "MODE SEQ\nUNIT MM X W X CM MR CPMM\nENPD 20\nSURF 0\n  CURV 0\n  DISZ INFINITY\n"
       "SURF 1\n  STOP\n  CURV -0.005\n  DISZ {}\n  GLAS MIRROR 0 0 1.5 40\n  CONI -1\n"
       "  DIAM 12\n{}SURF 2\n  CURV 0\n  DISZ 0\n  DIAM 1\n";
-  const LensPrescription ok = parseZmx(fmt::format(fmt::runtime(head), "-100", "  OBSC 0 3 0\n"),
-                                       "m.zmx");
+  const LensPrescription ok =
+      parseZmx(fmt::format(fmt::runtime(head), "-100", "  OBSC 0 3 0\n"), "m.zmx");
   ASSERT_EQ(ok.surfaces.size(), 1u);
   EXPECT_TRUE(ok.surfaces[0].mirror);
   EXPECT_TRUE(ok.surfaces[0].isStop());
@@ -349,8 +349,7 @@ TEST(Mirror, ReadersLocateErrorsAndRoundTrip) {
   const std::string big = errorOf(fmt::format(fmt::runtime(head), "-100", "  OBSC 0 30 0\n"));
   EXPECT_NE(big.find("m.zmx:14:10: error: surface 1: obscuration radius 30"), std::string::npos)
       << big;
-  const std::string dec =
-      errorOf(fmt::format(fmt::runtime(head), "-100", "  OBDC 0.0 190.6\n"));
+  const std::string dec = errorOf(fmt::format(fmt::runtime(head), "-100", "  OBDC 0.0 190.6\n"));
   EXPECT_NE(dec.find("m.zmx:14:12: error: surface 1: OBDC"), std::string::npos) << dec;
   // CLAP rmin rmax: an annular clear aperture is a central obscuration.
   const LensPrescription clap =
@@ -361,9 +360,7 @@ TEST(Mirror, ReadersLocateErrorsAndRoundTrip) {
   // JSON: round trip of the Mangin reflex lens; the .dat writer names the first mirror.
   const LensPrescription us = readLensFile(sharedLens("zmx/US05331467-1.zmx"));
   const auto tmp = std::filesystem::temp_directory_path() / "lensim_mirror_roundtrip.json";
-  {
-    std::ofstream(tmp) << writeLensJson(us);
-  }
+  { std::ofstream(tmp) << writeLensJson(us); }
   const LensPrescription back = readLensFile(tmp.string());
   std::filesystem::remove(tmp);
   ASSERT_EQ(back.surfaces.size(), us.surfaces.size());
@@ -402,9 +399,7 @@ TEST(Mirror, ReadersLocateErrorsAndRoundTrip) {
   {"radius_mm": -200, "thickness_mm": -10, "semi_aperture_mm": 20, "mirror": true, "ior": 1.6},
   {"radius_mm": 0, "thickness_mm": -50, "semi_aperture_mm": 20}]})";
   const auto bj = std::filesystem::temp_directory_path() / "lensim_mirror_bad.json";
-  {
-    std::ofstream(bj) << bad_json;
-  }
+  { std::ofstream(bj) << bad_json; }
   try {
     readLensFile(bj.string());
     FAIL();
@@ -416,9 +411,7 @@ TEST(Mirror, ReadersLocateErrorsAndRoundTrip) {
   std::string sign_json = bad_json;
   sign_json.replace(sign_json.find(", \"ior\": 1.6"), 12, "");
   sign_json.replace(sign_json.find("\"thickness_mm\": -10"), 19, "\"thickness_mm\": 10");
-  {
-    std::ofstream(bj) << sign_json;
-  }
+  { std::ofstream(bj) << sign_json; }
   try {
     readLensFile(bj.string());
     FAIL();

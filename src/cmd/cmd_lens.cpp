@@ -66,8 +66,7 @@ json surfacesJson(const LensSystem& lens) {
                    {"z_mm", s.z_mm},
                    {"is_stop", s.is_stop}});
     if (s.is_mirror) arr.back()["mirror"] = true;
-    if (s.obscuration_radius_mm > 0)
-      arr.back()["obscuration_radius_mm"] = s.obscuration_radius_mm;
+    if (s.obscuration_radius_mm > 0) arr.back()["obscuration_radius_mm"] = s.obscuration_radius_mm;
     if (!s.shape.isSpherical()) {
       json& e = arr.back();
       e["conic"] = s.shape.conic;
@@ -315,16 +314,14 @@ int runInfo(const LensArgs& args, bool as_json) {
     const double t =
         i + 1 < lens.surfaceCount() ? pr.surfaces[i].thickness_mm : lens.filmDistance_mm();
     // A plane stop shows as "stop"; a curved stop (a mirror) keeps its radius, marked below.
-    std::cout << fmt::format("  {:>3} {:>5} {:>12} {:>11.4f} {:>8.4f} {:>10.4f} {:>11.4f}{}{}{}\n",
-                             i, pr.surfaces[i].loc.line,
-                             s.is_stop && s.radius_mm == 0 ? std::string("stop")
-                                                           : fmt::format("{:.4f}", s.radius_mm),
-                             t, s.ior_after, 2 * s.semi_aperture_mm, s.z_mm,
-                             s.is_mirror ? "  mirror" : "",
-                             s.is_stop && s.radius_mm != 0 ? "  stop" : "",
-                             s.obscuration_radius_mm > 0
-                                 ? fmt::format("  obscured r < {:.4f}", s.obscuration_radius_mm)
-                                 : std::string());
+    std::cout << fmt::format(
+        "  {:>3} {:>5} {:>12} {:>11.4f} {:>8.4f} {:>10.4f} {:>11.4f}{}{}{}\n", i,
+        pr.surfaces[i].loc.line,
+        s.is_stop && s.radius_mm == 0 ? std::string("stop") : fmt::format("{:.4f}", s.radius_mm), t,
+        s.ior_after, 2 * s.semi_aperture_mm, s.z_mm, s.is_mirror ? "  mirror" : "",
+        s.is_stop && s.radius_mm != 0 ? "  stop" : "",
+        s.obscuration_radius_mm > 0 ? fmt::format("  obscured r < {:.4f}", s.obscuration_radius_mm)
+                                    : std::string());
   }
   if (lens.mirrorCount() > 0)
     std::cout << fmt::format(

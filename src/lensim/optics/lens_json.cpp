@@ -97,12 +97,12 @@ std::optional<double> optNumber(const json& j, const char* key, const FileLoc& l
 // negative after an odd number of them).
 void checkSurface(const LensSurface& s, int index, int mirrors = 0) {
   if (s.thickness_mm * (mirrors % 2 ? -1 : 1) < 0)
-    throw Error(s.loc, fmt::format("surface {}: thickness {} mm is {} after {} mirror{} (the "
-                                   "next surface must lie the way the light travels: +z, -z "
-                                   "after an odd number of mirrors)",
-                                   index, s.thickness_mm, s.thickness_mm < 0 ? "negative"
-                                                                             : "positive",
-                                   mirrors, mirrors == 1 ? "" : "s"));
+    throw Error(s.loc,
+                fmt::format("surface {}: thickness {} mm is {} after {} mirror{} (the "
+                            "next surface must lie the way the light travels: +z, -z "
+                            "after an odd number of mirrors)",
+                            index, s.thickness_mm, s.thickness_mm < 0 ? "negative" : "positive",
+                            mirrors, mirrors == 1 ? "" : "s"));
   if (!(s.obscuration_radius_mm >= 0) ||
       (s.obscuration_radius_mm > 0 && !(s.obscuration_radius_mm < s.semiAperture_mm())))
     throw Error(s.loc, fmt::format("surface {}: obscuration radius {} mm must be >= 0 and "

@@ -80,8 +80,8 @@ template <typename T>
 }  // namespace
 
 template <typename T>
-BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& opts,
-                                    Vec3T<T>& o, Vec3T<T>& d, Vec3T<T>& hit) const {
+BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
+                                    Vec3T<T>& d, Vec3T<T>& hit) const {
   if (shape_index_[i] >= 0) return traceShaped(i, from_film, opts, o, d, hit);
   // A ray may start on the previous surface; accept roots a hair behind the origin so that
   // surfaces touching at the rim do not lose rays to rounding.
@@ -284,13 +284,12 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
       }
       if (stop) sx[j] = px[j], sy[j] = py[j];
       if (fate[j] != zero) {
-        results[j] = {
-            RayT<T>{{px[j], py[j], pz[j]}, {dx[j], dy[j], dz[j]}},
-            i,
-            fate[j] == T(2)   ? BlockReason::Aperture
-            : fate[j] == T(3) ? BlockReason::TotalInternalReflection
-                              : BlockReason::Obscured,
-            {sx[j], sy[j]}};
+        results[j] = {RayT<T>{{px[j], py[j], pz[j]}, {dx[j], dy[j], dz[j]}},
+                      i,
+                      fate[j] == T(2)   ? BlockReason::Aperture
+                      : fate[j] == T(3) ? BlockReason::TotalInternalReflection
+                                        : BlockReason::Obscured,
+                      {sx[j], sy[j]}};
         alive[j] = false;
       }
     }
@@ -308,8 +307,8 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
 }
 
 template <typename T>
-BlockReason LensTracer<T>::traceShaped(int i, bool from_film, const TraceOptions& opts,
-                                       Vec3T<T>& o, Vec3T<T>& d, Vec3T<T>& hit) const {
+BlockReason LensTracer<T>::traceShaped(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
+                                       Vec3T<T>& d, Vec3T<T>& hit) const {
   const ShapeIntersector& shape = shapes_[size_t(shape_index_[i])];
   const double t_min = std::is_same_v<T, float> ? -1e-4 : -1e-9;
   const Vec3 rel{double(o.x), double(o.y), double(o.z) - double(z_[i])};
@@ -391,12 +390,12 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
     // Thicknesses are signed z distances (Zemax's convention): after an odd number of mirrors
     // the next surface lies toward -z.
     if (i + 1 < surfaces.size() && s.thickness_mm * dir < 0)
-      throw Error(s.loc, fmt::format("surface {}: thickness {} mm points against the direction "
-                                     "the light travels after {} mirror{} (expected a {} "
-                                     "thickness)",
-                                     i, s.thickness_mm, mirror_count_,
-                                     mirror_count_ == 1 ? "" : "s",
-                                     dir > 0 ? "positive" : "negative"));
+      throw Error(s.loc,
+                  fmt::format("surface {}: thickness {} mm points against the direction "
+                              "the light travels after {} mirror{} (expected a {} "
+                              "thickness)",
+                              i, s.thickness_mm, mirror_count_, mirror_count_ == 1 ? "" : "s",
+                              dir > 0 ? "positive" : "negative"));
     interfaces_.push_back(in);
     if (in.is_stop) {
       stop_index_ = static_cast<int>(i);
@@ -432,8 +431,8 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
   }
   // The film distance is measured along the direction image space runs (negative in the file
   // after an odd number of mirrors).
-  film_distance_mm_ = opts.film_distance_mm ? *opts.film_distance_mm
-                                            : prescription_.fileFilmDistance_mm() * dir;
+  film_distance_mm_ =
+      opts.film_distance_mm ? *opts.film_distance_mm : prescription_.fileFilmDistance_mm() * dir;
   if (opts.film_distance_mm && !(*opts.film_distance_mm > 0))
     throw Error(fmt::format("film distance {} mm must be > 0", *opts.film_distance_mm));
   resolveMedia();

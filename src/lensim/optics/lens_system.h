@@ -131,8 +131,8 @@ class LensTracer {
 
   // Traces surface i with its ShapeIntersector (in double precision): hit point and refracted
   // direction, or why it stopped.
-  BlockReason traceShaped(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
-                          Vec3T<T>& d, Vec3T<T>& hit) const;
+  BlockReason traceShaped(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o, Vec3T<T>& d,
+                          Vec3T<T>& hit) const;
   // One surface for one ray (any kind: sphere, plane, shaped, mirror, obscured): hit point and
   // new direction, or why it stopped. Used by the batch tracer for the lanes of such surfaces.
   BlockReason traceOne(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o, Vec3T<T>& d,
@@ -146,8 +146,8 @@ class LensTracer {
 
   std::vector<T> radius_, inv_radius_, z_, semi2_, inner2_, eta_before_, eta_after_;
   std::vector<std::uint8_t> is_stop_, is_mirror_, per_lane_;
-  bool reversed_ = false;  // odd number of mirrors: image space unfolded
-  T z_unfold_ = 0;         // 2 z_rear
+  bool reversed_ = false;                   // odd number of mirrors: image space unfolded
+  T z_unfold_ = 0;                          // 2 z_rear
   std::vector<int> shape_index_;            // -1: spherical (the quadratic); else into shapes_
   std::vector<ShapeIntersector> shapes_;
 };

@@ -345,8 +345,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                       fmt::format("surface {}: OBDC: decentred apertures (off-axis mirrors) are "
                                   "not supported",
                                   cur->number));
-    } else if (key == "SQAP" || key == "ELAP" || key == "SQOB" ||
-               key == "ELOB" || key == "UDAP" || key == "UDOB") {
+    } else if (key == "SQAP" || key == "ELAP" || key == "SQOB" || key == "ELOB" || key == "UDAP" ||
+               key == "UDOB") {
       throw surfErr(fmt::format("{} (a surface aperture or obscuration other than circular) is "
                                 "not supported",
                                 key));
@@ -535,7 +535,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     double y_stop = 1;
     if (st > 0) {
       const RayMatrix m = systemMatrix(sys, 0, st - 1);
-      y_stop = m.a + (in[size_t(st)].z_mm - in[size_t(st - 1)].z_mm) / in[size_t(st)].nBefore() * m.c;
+      y_stop =
+          m.a + (in[size_t(st)].z_mm - in[size_t(st - 1)].z_mm) / in[size_t(st)].nBefore() * m.c;
     }
     const double semi_now = p.surfaces[size_t(st)].semiAperture_mm();
     const double epd_now = 2 * semi_now / std::abs(y_stop);
