@@ -36,6 +36,21 @@ json vec3Json(const Vec3& v) {
   return json::array({v.x, v.y, v.z});
 }
 
+// Lens length and total track: front to rear vertex and front vertex to film; for a folded
+// (mirror) lens, the axial extent of its surfaces and of its surfaces and film.
+double lensLength(const LensSystem& lens) {
+  if (lens.mirrorCount() == 0) return lens.rearVertexZ_mm();
+  double lo = 0, hi = 0;
+  for (const Interface& s : lens.interfaces()) lo = std::min(lo, s.z_mm), hi = std::max(hi, s.z_mm);
+  return hi - lo;
+}
+double totalTrack(const LensSystem& lens) {
+  if (lens.mirrorCount() == 0) return lens.filmZ_mm();
+  double lo = lens.realFilmZ_mm(), hi = lo;
+  for (const Interface& s : lens.interfaces()) lo = std::min(lo, s.z_mm), hi = std::max(hi, s.z_mm);
+  return hi - lo;
+}
+
 json surfacesJson(const LensSystem& lens) {
   json arr = json::array();
   const auto& rows = lens.prescription().surfaces;
@@ -50,6 +65,8 @@ json surfacesJson(const LensSystem& lens) {
                    {"aperture_diameter_mm", 2 * s.semi_aperture_mm},
                    {"z_mm", s.z_mm},
                    {"is_stop", s.is_stop}});
+    if (s.is_mirror) arr.back()["mirror"] = true;
+    if (s.obscuration_radius_mm > 0) arr.back()["obscuration_radius_mm"] = s.obscuration_radius_mm;
     if (!s.shape.isSpherical()) {
       json& e = arr.back();
       e["conic"] = s.shape.conic;
@@ -161,8 +178,9 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["exit_pupil_z_mm"] = p.exit_pupil_z_mm;
     j["f_number"] = p.f_number;
     j["working_f_number"] = working_f;
-    j["lens_length_mm"] = lens.rearVertexZ_mm();
-    j["total_track_mm"] = lens.filmZ_mm();
+    j["lens_length_mm"] = lensLength(lens);
+    j["total_track_mm"] = totalTrack(lens);
+    if (lens.mirrorCount() > 0) j["mirrors"] = lens.mirrorCount();
     j["film_distance_mm"] = lens.filmDistance_mm();
     j["focus_distance_m"] = at_inf ? json(nullptr) : json(fl.focus_distance_m);
     j["focus_at_infinity"] = at_inf && !beyond_infinity_mm;
@@ -266,14 +284,20 @@ int runInfo(const LensArgs& args, bool as_json) {
                : fmt::format("{:.6g} m from the film", fl.focus_distance_m);
   line("focus", fmt::format("{} ({} method); closest {:.4f} m", focus_text,
                             focusMethodName(args.focus_method), closest));
-  line("film distance", fmt::format("{:.4f} mm behind the rear vertex", lens.filmDistance_mm()));
+  line("film distance",
+       fmt::format("{:.4f} mm {} the rear vertex", lens.filmDistance_mm(),
+                   lens.imageSpaceReversed() ? "in front of (image space reversed by the mirrors)"
+                                             : "behind"));
   line("wavelength",
        fmt::format("{:.2f} nm{} (focus solved at the primary wavelength, {:.2f} nm){}",
                    lens.wavelength_nm(),
                    lens.wavelength_nm() == primaryWavelength_nm(pr) ? " (primary)" : "",
                    primaryWavelength_nm(pr), lens.dispersive() ? "" : "; no element disperses"));
   line("lens length / total track",
-       fmt::format("{:.4f} mm / {:.4f} mm", lens.rearVertexZ_mm(), lens.filmZ_mm()));
+       fmt::format("{:.4f} mm / {:.4f} mm{}", lensLength(lens), totalTrack(lens),
+                   lens.mirrorCount() > 0 ? " (folded: the axial extent of the surfaces / of "
+                                            "the surfaces and the film)"
+                                          : ""));
   if (fov.real_deg)
     line("field of view", fmt::format("{:.3f} deg on a {:.2f} mm diagonal (paraxial {:.3f} deg)",
                                       *fov.real_deg, args.film_diagonal_mm, fov.paraxial_deg));
@@ -289,11 +313,26 @@ int runInfo(const LensArgs& args, bool as_json) {
     const Interface& s = lens.interfaces()[i];
     const double t =
         i + 1 < lens.surfaceCount() ? pr.surfaces[i].thickness_mm : lens.filmDistance_mm();
-    std::cout << fmt::format("  {:>3} {:>5} {:>12} {:>11.4f} {:>8.4f} {:>10.4f} {:>11.4f}\n", i,
-                             pr.surfaces[i].loc.line,
-                             s.is_stop ? std::string("stop") : fmt::format("{:.4f}", s.radius_mm),
-                             t, s.ior_after, 2 * s.semi_aperture_mm, s.z_mm);
+    // A plane stop shows as "stop"; a curved stop (a mirror) keeps its radius, marked below.
+    std::cout << fmt::format(
+        "  {:>3} {:>5} {:>12} {:>11.4f} {:>8.4f} {:>10.4f} {:>11.4f}{}{}{}\n", i,
+        pr.surfaces[i].loc.line,
+        s.is_stop && s.radius_mm == 0 ? std::string("stop") : fmt::format("{:.4f}", s.radius_mm), t,
+        s.ior_after, 2 * s.semi_aperture_mm, s.z_mm, s.is_mirror ? "  mirror" : "",
+        s.is_stop && s.radius_mm != 0 ? "  stop" : "",
+        s.obscuration_radius_mm > 0 ? fmt::format("  obscured r < {:.4f}", s.obscuration_radius_mm)
+                                    : std::string());
   }
+  if (lens.mirrorCount() > 0)
+    std::cout << fmt::format(
+        "  {} mirror{}: thicknesses are signed z distances (negative after an odd number of "
+        "mirrors){}\n",
+        lens.mirrorCount(), lens.mirrorCount() == 1 ? "" : "s",
+        lens.imageSpaceReversed()
+            ? fmt::format("; the image lies toward -z, at z = {:.4f} mm (image-side z above are "
+                          "unfolded about the rear vertex plane)",
+                          lens.realFilmZ_mm())
+            : "");
   // Per element: the glass, n_d, V_d and the index at the analysis wavelength.
   std::cout << fmt::format("\n  {:>8} {:>5}  {:<28} {:>9} {:>8} {:>10}\n", "element", "line",
                            "glass", "n_d", "V_d", fmt::format("n({:.0f})", lens.wavelength_nm()));

@@ -132,7 +132,7 @@ std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p
   const double h = film_height_mm;
   const Vec3 film{h, 0, lens.filmZ_mm()};
   const double z_rear = lens.rearVertexZ_mm();
-  auto passes = [&](Vec2 a) { return lens.traceFromFilmPoint({h, 0}, a).ok(); };
+  auto passes = [&](Vec2 a) { return lens.traceFromFilmPoint({h, 0}, a, kOuterBoundary).ok(); };
   // Where the line from the film point through `q` crosses the rear-vertex plane.
   auto toRear = [&](const Vec3& q) {
     const double t = (z_rear - film.z) / (q.z - film.z);

@@ -98,16 +98,27 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
       in_element[i] = in_element[i + 1] = true;
     }
   }
-  for (int i = 0; i < n; ++i)
-    if (!in_element[i] && !s[i].is_stop)
-      d.bare_surfaces.push_back(profile(s[i], -s[i].semi_aperture_mm, s[i].semi_aperture_mm));
-  if (lens.stopIndex()) {
+  for (int i = 0; i < n; ++i) {
+    const double semi = s[i].semi_aperture_mm, inner = s[i].obscuration_radius_mm;
+    if (s[i].is_mirror) {
+      if (inner > 0) {
+        d.mirrors.push_back(profile(s[i], -semi, -inner));
+        d.mirrors.push_back(profile(s[i], inner, semi));
+      } else {
+        d.mirrors.push_back(profile(s[i], -semi, semi));
+      }
+      continue;
+    }
+    if (inner > 0) d.obscurations.push_back(profile(s[i], -inner, inner));
+    if (!in_element[i] && !s[i].is_stop) d.bare_surfaces.push_back(profile(s[i], -semi, semi));
+  }
+  if (lens.stopIndex() && !s[*lens.stopIndex()].is_mirror) {  // a mirror stop is its own rim
     const Interface& st = s[*lens.stopIndex()];
     d.stop_z_mm = st.z_mm;
     d.stop_opening_mm = st.semi_aperture_mm;
     d.stop_outer_mm = std::max(*lens.maxStopDiameter_mm() / 2 * 1.25, st.semi_aperture_mm + 1.5);
   }
-  d.film_z_mm = lens.filmZ_mm();
+  d.film_z_mm = lens.realFilmZ_mm();  // where it is (image space folded back by the mirrors)
   d.film_half_height_mm = opts.film_diagonal_mm / 2;
   d.rear_vertex_z_mm = lens.rearVertexZ_mm();
 
@@ -198,15 +209,20 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
             const Ray& out = ray.result.ray;
             if (ray.result.ok() && out.direction.z > 0) {
               const double t = (lens.filmZ_mm() - out.origin.z) / out.direction.z;
-              if (t > 0) ray.points.push_back(out.origin + out.direction * t);
+              Vec3 q = out.origin + out.direction * t;
+              // The tracer unfolds image space after an odd number of mirrors; fold it back.
+              if (lens.imageSpaceReversed()) q.z = 2 * lens.rearVertexZ_mm() - q.z;
+              if (t > 0) ray.points.push_back(q);
             }
           });
     }
   }
 
   // Extent.
-  d.z_min = z_front;
-  d.z_max = lens.filmZ_mm() + 0.03 * length;
+  double z_lo = std::min(0.0, d.film_z_mm), z_hi = d.film_z_mm;
+  for (const Interface& si : s) z_lo = std::min(z_lo, si.z_mm), z_hi = std::max(z_hi, si.z_mm);
+  d.z_min = std::min(z_front, z_lo - 0.03 * length);
+  d.z_max = z_hi + 0.03 * length;
   d.x_max = std::max({semi_max, d.film_half_height_mm, d.stop_outer_mm.value_or(0)});
   for (const DiagramRay& r : d.rays)
     for (const Vec3& q : r.points) d.x_max = std::max(d.x_max, std::abs(q.x));
@@ -261,6 +277,17 @@ void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double 
     std::vector<std::pair<double, double>> pts;
     for (const Vec2& q : prof) pts.push_back(P(q.x, q.y));
     doc.polyline(pts, {{"class", "surface"}, {"stroke", "#2b5d84"}, {"stroke-width", "1.2"}});
+  }
+  // Mirrors: thick dark curves; central obscurations: dark bars on their surface.
+  for (const auto& prof : d.mirrors) {
+    std::vector<std::pair<double, double>> pts;
+    for (const Vec2& q : prof) pts.push_back(P(q.x, q.y));
+    doc.polyline(pts, {{"class", "mirror"}, {"stroke", "#444444"}, {"stroke-width", "3"}});
+  }
+  for (const auto& prof : d.obscurations) {
+    std::vector<std::pair<double, double>> pts;
+    for (const Vec2& q : prof) pts.push_back(P(q.x, q.y));
+    doc.polyline(pts, {{"class", "obscuration"}, {"stroke", "#111111"}, {"stroke-width", "4"}});
   }
   // Stop blades.
   if (d.stop_z_mm) {

@@ -48,6 +48,10 @@ struct LensDiagram {
   std::vector<DiagramElement> elements;
   std::vector<std::vector<Vec2>>
       bare_surfaces;  ///< refracting surfaces not part of a glass element
+  /// Mirror profiles (split at a central hole), drawn as thick reflecting curves.
+  std::vector<std::vector<Vec2>> mirrors;
+  /// Central obscurations of refracting or plane surfaces (a secondary mirror's shadow).
+  std::vector<std::vector<Vec2>> obscurations;
   std::optional<double> stop_z_mm, stop_opening_mm, stop_outer_mm;  ///< semi heights
   double film_z_mm = 0, film_half_height_mm = 0, rear_vertex_z_mm = 0;
   std::vector<double> field_values;  ///< film heights (mm) or field angles (deg) of the bundles

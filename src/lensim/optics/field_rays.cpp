@@ -125,7 +125,11 @@ std::optional<Vec2> FieldBundle::hitPlane(const LensSystem& lens, const Ray& ray
 }
 
 std::optional<std::pair<Vec2, double>> FieldBundle::pupilCircle(const LensSystem& lens) const {
-  auto passes = [&](Vec2 o) { return lens.tracer().traceFromScene(sceneRay(o)).ok(); };
+  // The outer boundary of the beam: central obscurations (a catadioptric lens) would hide the
+  // centre the search starts from; the rays traced through the region meet them.
+  auto passes = [&](Vec2 o) {
+    return lens.tracer().traceFromScene(sceneRay(o), kOuterBoundary).ok();
+  };
   const double reach = 4 * pupil_radius_mm + 1e-3;
   // A passing point: the chief ray, else a search over a grid.
   std::optional<Vec2> c;
@@ -178,7 +182,11 @@ std::optional<FieldBundle::PupilRegion> FieldBundle::pupilRegion(const LensSyste
                                                                  int directions) const {
   auto circle = pupilCircle(lens);
   if (!circle) return std::nullopt;
-  auto passes = [&](Vec2 o) { return lens.tracer().traceFromScene(sceneRay(o)).ok(); };
+  // The outer boundary of the beam: central obscurations (a catadioptric lens) would hide the
+  // centre the search starts from; the rays traced through the region meet them.
+  auto passes = [&](Vec2 o) {
+    return lens.tracer().traceFromScene(sceneRay(o), kOuterBoundary).ok();
+  };
   PupilRegion region;
   region.centre = circle->first;
   if (!passes(region.centre)) {

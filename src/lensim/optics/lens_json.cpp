@@ -93,10 +93,21 @@ std::optional<double> optNumber(const json& j, const char* key, const FileLoc& l
   return getNumber(j, key, loc, what);
 }
 
-void checkSurface(const LensSurface& s, int index) {
-  if (s.thickness_mm < 0)
-    throw Error(s.loc, fmt::format("surface {}: thickness {} mm is negative", index,
-                                   s.thickness_mm));
+// `mirrors`: the mirrors up to and including this surface (thicknesses are signed z distances:
+// negative after an odd number of them).
+void checkSurface(const LensSurface& s, int index, int mirrors = 0) {
+  if (s.thickness_mm * (mirrors % 2 ? -1 : 1) < 0)
+    throw Error(s.loc,
+                fmt::format("surface {}: thickness {} mm is {} after {} mirror{} (the "
+                            "next surface must lie the way the light travels: +z, -z "
+                            "after an odd number of mirrors)",
+                            index, s.thickness_mm, s.thickness_mm < 0 ? "negative" : "positive",
+                            mirrors, mirrors == 1 ? "" : "s"));
+  if (!(s.obscuration_radius_mm >= 0) ||
+      (s.obscuration_radius_mm > 0 && !(s.obscuration_radius_mm < s.semiAperture_mm())))
+    throw Error(s.loc, fmt::format("surface {}: obscuration radius {} mm must be >= 0 and "
+                                   "smaller than the semi-aperture {} mm",
+                                   index, s.obscuration_radius_mm, s.semiAperture_mm()));
   if (!(s.aperture_diameter_mm > 0))
     throw Error(s.loc, fmt::format("surface {}: the clear aperture must be > 0 (found semi-"
                                    "aperture {} mm)",
@@ -125,6 +136,7 @@ LensPrescription parseLensim(const json& j, std::string_view text, const std::st
     p.object_distance_mm = w->get<double>();
   const auto offs = arrayElementOffsets(text, "surfaces");
   const json& surfs = j.at("surfaces");
+  int mirrors = 0;
   for (size_t i = 0; i < surfs.size(); ++i) {
     const json& e = surfs[i];
     LensSurface s;
@@ -164,7 +176,25 @@ LensPrescription parseLensim(const json& j, std::string_view text, const std::st
       s.glass.loc = s.loc;
       if (!e.contains("ior") && s.glass.n_d) s.ior = *s.glass.n_d;
     }
-    checkSurface(s, int(i));
+    s.obscuration_radius_mm = optNumber(e, "obscuration_radius_mm", s.loc, what).value_or(0.0);
+    if (auto m = e.find("mirror"); m != e.end()) {
+      if (!m->is_boolean())
+        throw Error(s.loc, fmt::format("surface {}: \"mirror\" must be true or false", i));
+      s.mirror = m->get<bool>();
+    }
+    if (s.mirror) {
+      // The light goes back through the medium it came from; an "ior" or "glass" on a mirror
+      // must name that medium.
+      const double before = p.surfaces.empty() ? 1.0 : p.surfaces.back().ior;
+      if (e.contains("ior") && s.ior != before)
+        throw Error(s.loc, fmt::format("surface {} is a mirror: its \"ior\" {} must be the "
+                                       "index before it ({}) or be left out",
+                                       i, s.ior, before));
+      s.ior = before;
+      s.glass = p.surfaces.empty() ? GlassSpec{} : p.surfaces.back().glass;
+      ++mirrors;
+    }
+    checkSurface(s, int(i), mirrors);
     p.surfaces.push_back(s);
   }
   return p;
@@ -365,6 +395,8 @@ std::string writeLensJson(const LensPrescription& p) {
     e["semi_aperture_mm"] = s.semiAperture_mm();
     e["ior"] = s.ior;
     if (s.isStop()) e["stop"] = true;
+    if (s.mirror) e["mirror"] = true;
+    if (s.obscuration_radius_mm > 0) e["obscuration_radius_mm"] = s.obscuration_radius_mm;
     if (s.shape.conic != 0) e["conic"] = s.shape.conic;
     if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
     if (s.shape.conic_x != 0) e["conic_x"] = s.shape.conic_x;
@@ -395,6 +427,16 @@ std::string writeLensDat(const LensPrescription& p) {
   int stops = 0;
   for (size_t i = 0; i < p.surfaces.size(); ++i) {
     const LensSurface& s = p.surfaces[i];
+    if (s.mirror)
+      throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: it is a mirror (the "
+                                     ".dat format has refracting surfaces only); write .json "
+                                     "instead",
+                                     i));
+    if (s.obscuration_radius_mm > 0)
+      throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: it has a central "
+                                     "obscuration (radius {} mm) that .dat cannot hold; write "
+                                     ".json instead",
+                                     i, s.obscuration_radius_mm));
     if (!s.shape.isSpherical())
       throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: it is {} (the .dat "
                                      "format has spheres only); write .json instead",

@@ -18,6 +18,8 @@ const char* blockReasonName(BlockReason r) {
       return "miss";
     case BlockReason::TotalInternalReflection:
       return "tir";
+    case BlockReason::Obscured:
+      return "obscured";
   }
   return "none";
 }
@@ -32,16 +34,21 @@ LensTracer<T>::LensTracer(const std::vector<Interface>& interfaces) {
     inv_radius_.push_back(s.radius_mm != 0 ? T(1 / s.radius_mm) : T(0));
     z_.push_back(T(s.z_mm));
     semi2_.push_back(T(s.semi_aperture_mm * s.semi_aperture_mm));
+    inner2_.push_back(T(s.obscuration_radius_mm * s.obscuration_radius_mm));
     eta_before_.push_back(T(s.ior_before));
     eta_after_.push_back(T(s.ior_after));
     is_stop_.push_back(s.is_stop ? 1 : 0);
+    is_mirror_.push_back(s.is_mirror ? 1 : 0);
+    if (s.is_mirror) reversed_ = !reversed_;
     if (s.shape.isSpherical()) {
       shape_index_.push_back(-1);
     } else {
       shape_index_.push_back(static_cast<int>(shapes_.size()));
       shapes_.emplace_back(s.radius_mm, s.shape, s.semi_aperture_mm);
     }
+    per_lane_.push_back(shape_index_.back() >= 0 || s.is_mirror || s.obscuration_radius_mm > 0);
   }
+  if (!interfaces.empty()) z_unfold_ = T(2 * interfaces.back().z_mm);
 }
 
 template <typename T>
@@ -73,74 +80,85 @@ template <typename T>
 }  // namespace
 
 template <typename T>
+BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
+                                    Vec3T<T>& d, Vec3T<T>& hit) const {
+  if (shape_index_[i] >= 0) return traceShaped(i, from_film, opts, o, d, hit);
+  // A ray may start on the previous surface; accept roots a hair behind the origin so that
+  // surfaces touching at the rim do not lose rays to rounding.
+  const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
+  const T R = radius_[i];
+  const Vec3T<T> rel{o.x, o.y, o.z - z_[i]};  // origin relative to the vertex
+  T t;
+  Vec3T<T> normal;
+  if (R == T(0)) {
+    // Plane at the vertex (the aperture stop).
+    if (d.z == T(0)) return BlockReason::Miss;
+    t = -rel.z / d.z;
+    if (!(t >= t_min)) return BlockReason::Miss;
+    normal = {T(0), T(0), T(-1)};
+  } else {
+    // Sphere through the vertex with centre at (0, 0, R) relative to it:
+    //   |rel + t d|^2 - 2 R (rel.z + t d.z) = 0,  i.e.  t^2 + 2 b t + c = 0 (|d| = 1) with
+    //   b = rel.d - R d.z,  c = |rel|^2 - 2 R rel.z.
+    // Stable roots: q = -(b + sign(b) sqrt(b^2 - c)); t = q and t = c / q.
+    const T b = dot(rel, d) - R * d.z;
+    const T c = dot(rel, rel) - T(2) * R * rel.z;
+    const T disc = b * b - c;
+    if (disc < T(0)) return BlockReason::Miss;
+    const T q = -(b + std::copysign(std::sqrt(disc), b));
+    const T t0 = q;
+    const T t1 = q != T(0) ? c / q : T(0);
+    // Keep the root on the vertex-side hemisphere: (z - R) / R < 0 relative to the vertex.
+    // (The same cap whichever way the ray travels: after a mirror it meets it from behind.)
+    auto onCap = [&](T tt) {
+      const T pz = rel.z + tt * d.z;
+      return tt >= t_min && (pz - R) * R < T(0);
+    };
+    const bool ok0 = onCap(t0), ok1 = onCap(t1);
+    if (!ok0 && !ok1) return BlockReason::Miss;
+    t = ok0 && ok1 ? std::min(t0, t1) : (ok0 ? t0 : t1);
+    const Vec3T<T> p = rel + d * t;
+    const T inv_r = inv_radius_[i];
+    normal = Vec3T<T>{p.x * inv_r, p.y * inv_r, (p.z - R) * inv_r};  // unit; toward -z on the cap
+  }
+  hit = o + d * t;
+  if (opts.clip_apertures) {
+    const T r2 = hit.x * hit.x + hit.y * hit.y;
+    if (r2 > semi2_[i]) return BlockReason::Aperture;
+    if (opts.obscurations && r2 < inner2_[i]) return BlockReason::Obscured;
+  }
+  if (is_mirror_[i]) {
+    d = d - normal * (T(2) * dot(d, normal));
+    return BlockReason::None;
+  }
+  const T eta_i = from_film ? eta_after_[i] : eta_before_[i];
+  const T eta_t = from_film ? eta_before_[i] : eta_after_[i];
+  if (!refract(d, normal, eta_i, eta_t)) return BlockReason::TotalInternalReflection;
+  return BlockReason::None;
+}
+
+template <typename T>
 template <bool kFromFilm>
 TraceResultT<T> LensTracer<T>::trace(const RayT<T>& in, const TraceOptions& opts,
                                      std::vector<Vec3T<T>>* path) const {
   TraceResultT<T> res;
   Vec3T<T> o = in.origin;
   Vec3T<T> d = in.direction;
+  if (kFromFilm && reversed_) unfold(o, d);  // the film side to real coordinates
   if (path) path->push_back(o);
   const int n = size();
-  // A ray may start on the previous surface; accept roots a hair behind the origin so that
-  // surfaces touching at the rim do not lose rays to rounding.
-  const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
   for (int k = 0; k < n; ++k) {
     const int i = kFromFilm ? n - 1 - k : k;
-    if (shape_index_[i] >= 0) {
-      Vec3T<T> p;
-      const BlockReason why = traceShaped(i, kFromFilm, opts.clip_apertures, o, d, p);
-      if (why == BlockReason::Miss) return {RayT<T>{o, d}, i, why, res.stop_point};
-      if (path) path->push_back(p);
-      if (is_stop_[i]) res.stop_point = {p.x, p.y};
-      if (why != BlockReason::None) return {RayT<T>{p, d}, i, why, res.stop_point};
-      o = p;
-      continue;
-    }
-    const T R = radius_[i];
-    const Vec3T<T> rel{o.x, o.y, o.z - z_[i]};  // origin relative to the vertex
-    T t;
-    Vec3T<T> normal;
-    if (R == T(0)) {
-      // Plane at the vertex (the aperture stop).
-      if (d.z == T(0)) return {RayT<T>{o, d}, i, BlockReason::Miss};
-      t = -rel.z / d.z;
-      if (!(t >= t_min)) return {RayT<T>{o, d}, i, BlockReason::Miss};
-      normal = {T(0), T(0), T(-1)};
-    } else {
-      // Sphere through the vertex with centre at (0, 0, R) relative to it:
-      //   |rel + t d|^2 - 2 R (rel.z + t d.z) = 0,  i.e.  t^2 + 2 b t + c = 0 (|d| = 1) with
-      //   b = rel.d - R d.z,  c = |rel|^2 - 2 R rel.z.
-      // Stable roots: q = -(b + sign(b) sqrt(b^2 - c)); t = q and t = c / q.
-      const T b = dot(rel, d) - R * d.z;
-      const T c = dot(rel, rel) - T(2) * R * rel.z;
-      const T disc = b * b - c;
-      if (disc < T(0)) return {RayT<T>{o, d}, i, BlockReason::Miss};
-      const T q = -(b + std::copysign(std::sqrt(disc), b));
-      const T t0 = q;
-      const T t1 = q != T(0) ? c / q : T(0);
-      // Keep the root on the vertex-side hemisphere: (z - R) / R < 0 relative to the vertex.
-      auto onCap = [&](T tt) {
-        const T pz = rel.z + tt * d.z;
-        return tt >= t_min && (pz - R) * R < T(0);
-      };
-      const bool ok0 = onCap(t0), ok1 = onCap(t1);
-      if (!ok0 && !ok1) return {RayT<T>{o, d}, i, BlockReason::Miss};
-      t = ok0 && ok1 ? std::min(t0, t1) : (ok0 ? t0 : t1);
-      const Vec3T<T> p = rel + d * t;
-      const T inv_r = inv_radius_[i];
-      normal = Vec3T<T>{p.x * inv_r, p.y * inv_r, (p.z - R) * inv_r};  // unit; toward -z on the cap
-    }
-    const Vec3T<T> p = o + d * t;
+    Vec3T<T> p{};
+    const Vec3T<T> d_in = d;
+    const BlockReason why = traceOne(i, kFromFilm, opts, o, d, p);
+    if (why == BlockReason::Miss) return {RayT<T>{o, d_in}, i, why, res.stop_point};
     if (path) path->push_back(p);
     if (is_stop_[i]) res.stop_point = {p.x, p.y};
-    if (opts.clip_apertures && p.x * p.x + p.y * p.y > semi2_[i])
-      return {RayT<T>{p, d}, i, BlockReason::Aperture, res.stop_point};
-    const T eta_i = kFromFilm ? eta_after_[i] : eta_before_[i];
-    const T eta_t = kFromFilm ? eta_before_[i] : eta_after_[i];
-    if (!refract(d, normal, eta_i, eta_t))
-      return {RayT<T>{p, d}, i, BlockReason::TotalInternalReflection, res.stop_point};
+    if (why != BlockReason::None) return {RayT<T>{p, d_in}, i, why, res.stop_point};
     o = p;
   }
+  if (!kFromFilm && reversed_) unfold(o, d);  // image space unfolded, the film at +z
   res.ray = {o, d};
   return res;
 }
@@ -154,7 +172,7 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
   // can be), then a short loop that records the lanes blocked at that surface.
   T ox[kBatch], oy[kBatch], oz[kBatch], dx[kBatch], dy[kBatch], dz[kBatch];
   T px[kBatch], py[kBatch], pz[kBatch], ex[kBatch], ey[kBatch], ez[kBatch];
-  T fate[kBatch];  // 0 through, 1 miss, 2 aperture, 3 total internal reflection
+  T fate[kBatch];  // 0 through, 1 miss, 2 aperture, 3 total internal reflection, 4 obscured
   T sx[kBatch] = {}, sy[kBatch] = {};
   bool alive[kBatch];
   n = std::min(n, kBatch);
@@ -164,6 +182,7 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
     const RayT<T>& r = rays[j < n ? j : 0];
     ox[j] = r.origin.x, oy[j] = r.origin.y, oz[j] = r.origin.z;
     dx[j] = r.direction.x, dy[j] = r.direction.y, dz[j] = r.direction.z;
+    if (reversed_) oz[j] = z_unfold_ - oz[j], dz[j] = -dz[j];
     alive[j] = j < n;
   }
   const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
@@ -201,20 +220,20 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
     };
-    if (shape_index_[i] >= 0) {
-      // A non-spherical surface: lane by lane with the bracketed Newton solve (spherical
-      // lenses never come here).
+    if (per_lane_[i]) {
+      // A non-spherical surface (the bracketed Newton solve), a mirror or an obscured surface:
+      // lane by lane (spherical refracting lenses never come here).
       for (int j = 0; j < nv; ++j) {
         Vec3T<T> o{ox[j], oy[j], oz[j]}, d{dx[j], dy[j], dz[j]}, p{};
-        const BlockReason why = traceShaped(i, true, true, o, d, p);
+        const BlockReason why = traceOne(i, true, TraceOptions{}, o, d, p);
         px[j] = p.x, py[j] = p.y, pz[j] = p.z;
         ex[j] = d.x, ey[j] = d.y, ez[j] = d.z;
-        fate[j] = why == BlockReason::None       ? zero
-                  : why == BlockReason::Miss     ? one
-                  : why == BlockReason::Aperture ? T(2)
-                                                 : T(3);
-        if (why == BlockReason::Aperture || why == BlockReason::TotalInternalReflection)
-          ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
+        fate[j] = why == BlockReason::None                      ? zero
+                  : why == BlockReason::Miss                    ? one
+                  : why == BlockReason::Aperture                ? T(2)
+                  : why == BlockReason::TotalInternalReflection ? T(3)
+                                                                : T(4);
+        if (why != BlockReason::None) ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
       }
     } else if (R == zero && refracts == zero) {
       planeLanes(std::false_type{});
@@ -265,11 +284,12 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
       }
       if (stop) sx[j] = px[j], sy[j] = py[j];
       if (fate[j] != zero) {
-        results[j] = {
-            RayT<T>{{px[j], py[j], pz[j]}, {dx[j], dy[j], dz[j]}},
-            i,
-            fate[j] == T(2) ? BlockReason::Aperture : BlockReason::TotalInternalReflection,
-            {sx[j], sy[j]}};
+        results[j] = {RayT<T>{{px[j], py[j], pz[j]}, {dx[j], dy[j], dz[j]}},
+                      i,
+                      fate[j] == T(2)   ? BlockReason::Aperture
+                      : fate[j] == T(3) ? BlockReason::TotalInternalReflection
+                                        : BlockReason::Obscured,
+                      {sx[j], sy[j]}};
         alive[j] = false;
       }
     }
@@ -287,7 +307,7 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
 }
 
 template <typename T>
-BlockReason LensTracer<T>::traceShaped(int i, bool from_film, bool clip, Vec3T<T>& o,
+BlockReason LensTracer<T>::traceShaped(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
                                        Vec3T<T>& d, Vec3T<T>& hit) const {
   const ShapeIntersector& shape = shapes_[size_t(shape_index_[i])];
   const double t_min = std::is_same_v<T, float> ? -1e-4 : -1e-9;
@@ -298,7 +318,16 @@ BlockReason LensTracer<T>::traceShaped(int i, bool from_film, bool clip, Vec3T<T
   if (!h) return BlockReason::Miss;
   const Vec3 p = rel + dir * h->t;
   hit = {T(p.x), T(p.y), T(p.z + double(z_[i]))};
-  if (clip && p.x * p.x + p.y * p.y > double(semi2_[i])) return BlockReason::Aperture;
+  if (opts.clip_apertures) {
+    const double r2 = p.x * p.x + p.y * p.y;
+    if (r2 > double(semi2_[i])) return BlockReason::Aperture;
+    if (opts.obscurations && r2 < double(inner2_[i])) return BlockReason::Obscured;
+  }
+  if (is_mirror_[i]) {
+    dir = dir - h->normal * (2 * dot(dir, h->normal));
+    d = {T(dir.x), T(dir.y), T(dir.z)};
+    return BlockReason::None;
+  }
   const double eta_i = from_film ? double(eta_after_[i]) : double(eta_before_[i]);
   const double eta_t = from_film ? double(eta_before_[i]) : double(eta_after_[i]);
   if (!refract(dir, h->normal, eta_i, eta_t)) return BlockReason::TotalInternalReflection;
@@ -330,6 +359,7 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
   if (surfaces.empty()) throw Error(FileLoc{prescription_.path}, "lens has no surfaces");
   double z = 0;
   double ior_before = 1.0;
+  int dir = 1;  // direction of travel along z: -1 after an odd number of mirrors
   for (size_t i = 0; i < surfaces.size(); ++i) {
     const LensSurface& s = surfaces[i];
     Interface in;
@@ -340,6 +370,32 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
     in.ior_after = s.ior;
     in.is_stop = s.isStop();
     in.shape = s.shape;
+    in.is_mirror = s.mirror;
+    in.obscuration_radius_mm = s.obscuration_radius_mm;
+    if (!(s.obscuration_radius_mm >= 0) || s.obscuration_radius_mm >= s.semiAperture_mm())
+      throw Error(s.loc, fmt::format("surface {}: obscuration radius {} mm must be >= 0 and "
+                                     "smaller than the semi-aperture {} mm",
+                                     i, s.obscuration_radius_mm, s.semiAperture_mm()));
+    in.dir_before = dir;
+    if (s.mirror) {
+      // The medium after a mirror is the one before it (readers repeat it).
+      if (s.ior != ior_before)
+        throw Error(s.loc, fmt::format("surface {} is a mirror: the medium after it must be the "
+                                       "one before it (index {}), not index {}",
+                                       i, ior_before, s.ior));
+      dir = -dir;
+      ++mirror_count_;
+    }
+    in.dir_after = dir;
+    // Thicknesses are signed z distances (Zemax's convention): after an odd number of mirrors
+    // the next surface lies toward -z.
+    if (i + 1 < surfaces.size() && s.thickness_mm * dir < 0)
+      throw Error(s.loc,
+                  fmt::format("surface {}: thickness {} mm points against the direction "
+                              "the light travels after {} mirror{} (expected a {} "
+                              "thickness)",
+                              i, s.thickness_mm, mirror_count_, mirror_count_ == 1 ? "" : "s",
+                              dir > 0 ? "positive" : "negative"));
     interfaces_.push_back(in);
     if (in.is_stop) {
       stop_index_ = static_cast<int>(i);
@@ -365,10 +421,18 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
                        d, *max_stop_diameter_mm_)});
     } else {
       interfaces_[*stop_index_].semi_aperture_mm = d / 2;
+      if (d / 2 <= interfaces_[*stop_index_].obscuration_radius_mm)
+        diagnostics_.push_back(
+            {Severity::Warning, surfaces[*stop_index_].loc,
+             fmt::format("aperture diameter {} mm lies inside the stop's central obscuration "
+                         "(radius {} mm): no light passes the lens",
+                         d, interfaces_[*stop_index_].obscuration_radius_mm)});
     }
   }
+  // The film distance is measured along the direction image space runs (negative in the file
+  // after an odd number of mirrors).
   film_distance_mm_ =
-      opts.film_distance_mm ? *opts.film_distance_mm : prescription_.fileFilmDistance_mm();
+      opts.film_distance_mm ? *opts.film_distance_mm : prescription_.fileFilmDistance_mm() * dir;
   if (opts.film_distance_mm && !(*opts.film_distance_mm > 0))
     throw Error(fmt::format("film distance {} mm must be > 0", *opts.film_distance_mm));
   resolveMedia();

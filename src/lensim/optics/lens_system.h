@@ -4,6 +4,10 @@
 // optical axis; the vertex of the front (scene-side) surface is at z = 0; +z points toward the
 // film. Surface i has its vertex at z_i = sum of the thicknesses before it; a sphere of signed
 // radius R has its centre at z_i + R. The film is the plane z = rearVertexZ() + filmDistance().
+// Mirrors (catadioptric lenses): thicknesses are signed z distances as in Zemax, so after a mirror
+// the surfaces follow toward -z; after an odd number of mirrors image space runs toward -z and is
+// unfolded about the rear vertex plane (z -> 2 rearVertexZ - z) by the tracers, so that the film
+// still lies at +z for everything downstream (realFilmZ_mm() is where it physically is).
 #pragma once
 
 #include <cstdint>
@@ -30,9 +34,10 @@ enum class BlockReason : std::uint8_t {
   Aperture,  ///< hit the surface (or stop plane) outside its clear aperture
   Miss,      ///< the line misses the sphere (or the plane) entirely
   TotalInternalReflection,
+  Obscured,  ///< hit the surface inside its central obscuration
 };
 
-/// "aperture", "miss", "tir" or "none".
+/// "aperture", "miss", "tir", "obscured" or "none".
 const char* blockReasonName(BlockReason r);
 
 /// The outcome of an exact trace: the ray leaving the last surface, or where and why it stopped.
@@ -57,6 +62,17 @@ struct Interface {
   double ior_before = 1;        ///< index on the scene side
   double ior_after = 1;         ///< index on the film side
   bool is_stop = false;
+  /// A mirror: reflects instead of refracting (ior_after == ior_before).
+  bool is_mirror = false;
+  /// Rays meeting the surface closer than this to the axis are blocked (0: no obscuration).
+  double obscuration_radius_mm = 0;
+  /// The direction of travel along z in the medium before and after the surface: +1 toward the
+  /// film, -1 after an odd number of mirrors. Paraxial optics uses the signed indices
+  /// n * direction (the n -> -n convention for mirrors), the exact tracer the magnitudes.
+  int dir_before = 1, dir_after = 1;
+  /// Signed indices for paraxial optics.
+  double nBefore() const { return dir_before * ior_before; }
+  double nAfter() const { return dir_after * ior_after; }
   /// Non-spherical shape (conic, asphere, cylinder); spherical by default. Non-spherical
   /// interfaces are traced by ShapeIntersector, spherical ones by the quadratic as before.
   SurfaceShape shape;
@@ -68,7 +84,12 @@ struct Interface {
 /// What a trace records and checks.
 struct TraceOptions {
   bool clip_apertures = true;  ///< false: ignore clear apertures (used to find chief rays)
+  /// false: ignore central obscurations (searches for the outer boundary of a beam or pupil,
+  /// which an obscured centre would otherwise hide); only with clip_apertures.
+  bool obscurations = true;
 };
+/// Options for searches of the outer boundary of a beam or pupil (clear apertures only).
+inline constexpr TraceOptions kOuterBoundary{true, false};
 
 /// A contiguous copy of the interfaces in precision T, with the exact tracer.
 ///
@@ -93,7 +114,8 @@ class LensTracer {
   static constexpr int kBatch = 16;
   /// Traces n <= kBatch rays from the film as traceFromFilm does each (same operations, same
   /// results), surface by surface across the rays: independent rays overlap in the processor,
-  /// which hides the latency of each trace's chain of square roots and divisions.
+  /// which hides the latency of each trace's chain of square roots and divisions. Mirrors,
+  /// obscured and non-spherical surfaces are traced lane by lane.
   void traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<T>* results) const;
 
   int size() const { return static_cast<int>(radius_.size()); }
@@ -109,11 +131,23 @@ class LensTracer {
 
   // Traces surface i with its ShapeIntersector (in double precision): hit point and refracted
   // direction, or why it stopped.
-  BlockReason traceShaped(int i, bool from_film, bool clip, Vec3T<T>& o, Vec3T<T>& d,
+  BlockReason traceShaped(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o, Vec3T<T>& d,
                           Vec3T<T>& hit) const;
+  // One surface for one ray (any kind: sphere, plane, shaped, mirror, obscured): hit point and
+  // new direction, or why it stopped. Used by the batch tracer for the lanes of such surfaces.
+  BlockReason traceOne(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o, Vec3T<T>& d,
+                       Vec3T<T>& hit) const;
+  // Image space after an odd number of mirrors runs toward -z; the tracers unfold it (mirror z
+  // about the rear vertex plane) so that the film lies at +z as for any lens.
+  void unfold(Vec3T<T>& o, Vec3T<T>& d) const {
+    o.z = z_unfold_ - o.z;
+    d.z = -d.z;
+  }
 
-  std::vector<T> radius_, inv_radius_, z_, semi2_, eta_before_, eta_after_;
-  std::vector<std::uint8_t> is_stop_;
+  std::vector<T> radius_, inv_radius_, z_, semi2_, inner2_, eta_before_, eta_after_;
+  std::vector<std::uint8_t> is_stop_, is_mirror_, per_lane_;
+  bool reversed_ = false;                   // odd number of mirrors: image space unfolded
+  T z_unfold_ = 0;                          // 2 z_rear
   std::vector<int> shape_index_;            // -1: spherical (the quadratic); else into shapes_
   std::vector<ShapeIntersector> shapes_;
 };
@@ -149,7 +183,17 @@ class LensSystem {
   double frontVertexZ_mm() const { return 0.0; }
   double rearVertexZ_mm() const { return interfaces_.back().z_mm; }
   double filmDistance_mm() const { return film_distance_mm_; }
+  /// The film plane. After an odd number of mirrors the image lies toward -z from the rear
+  /// vertex; every image-side z (film, back focal point, exit pupil) is then given in image space
+  /// unfolded about the rear vertex plane (z_real = 2 rearVertexZ - z), where the film lies at
+  /// +z as for any lens; realFilmZ_mm() is where it physically is.
   double filmZ_mm() const { return rearVertexZ_mm() + film_distance_mm_; }
+  double realFilmZ_mm() const {
+    return imageSpaceReversed() ? rearVertexZ_mm() - film_distance_mm_ : filmZ_mm();
+  }
+  /// Mirrors in the lens, and whether image space is reversed (an odd number of them).
+  int mirrorCount() const { return mirror_count_; }
+  bool imageSpaceReversed() const { return mirror_count_ % 2 == 1; }
   /// Moves the film; the distance is measured from the rear vertex and must be > 0.
   void setFilmDistance_mm(double d);
   /// Index of the medium in front of the lens (air) and behind it (at the film).
@@ -192,6 +236,7 @@ class LensSystem {
   LensPrescription prescription_;
   std::vector<Interface> interfaces_;
   std::optional<int> stop_index_;
+  int mirror_count_ = 0;
   std::optional<double> max_stop_diameter_mm_;
   double film_distance_mm_ = 0;
   std::vector<Diagnostic> diagnostics_;

@@ -16,8 +16,10 @@ namespace {
 // still be the aperture stop (5% in f-number).
 constexpr double kStopTolerance = 1.05;
 
+// With mirrors the indices are signed (n -> -n after a reflection, Interface::nBefore/nAfter):
+// a mirror's power is -2 n c, and t / n stays positive for the negative thicknesses after it.
 RayMatrix refraction(const Interface& s) {
-  double power = (s.ior_after - s.ior_before) * s.paraxialCurvature();
+  double power = (s.nAfter() - s.nBefore()) * s.paraxialCurvature();
   return {1, 0, -power, 1};
 }
 
@@ -31,7 +33,7 @@ RayMatrix systemMatrix(const LensSystem& lens, int first, int last) {
   const auto& s = lens.interfaces();
   RayMatrix m;
   for (int i = first; i <= last; ++i) {
-    if (i > first) m = transfer(s[i].z_mm - s[i - 1].z_mm, s[i].ior_before) * m;
+    if (i > first) m = transfer(s[i].z_mm - s[i - 1].z_mm, s[i].nBefore()) * m;
     m = refraction(s[i]) * m;
   }
   return m;
@@ -40,6 +42,8 @@ RayMatrix systemMatrix(const LensSystem& lens, int first, int last) {
 ParaxialData computeParaxial(const LensSystem& lens) {
   const auto& s = lens.interfaces();
   const int n = lens.surfaceCount();
+  // Image space unfolded after an odd number of mirrors (lens_system.h): its index counts as
+  // positive, so that image-side z (focal point, exit pupil) lie at +z from the rear vertex.
   const double n_obj = lens.objectIor(), n_img = lens.imageIor();
   ParaxialData p;
 
@@ -64,7 +68,7 @@ ParaxialData computeParaxial(const LensSystem& lens) {
   double y = 1, w = 0;
   double best_ratio = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i) {
-    if (i > 0) y += (s[i].z_mm - s[i - 1].z_mm) * w / s[i].ior_before;
+    if (i > 0) y += (s[i].z_mm - s[i - 1].z_mm) * w / s[i].nBefore();
     if (std::abs(y) > 1e-300) {
       double ratio = s[i].semi_aperture_mm / std::abs(y);
       if (ratio < best_ratio) {
@@ -102,7 +106,7 @@ ParaxialData computeParaxial(const LensSystem& lens) {
   // the stop centre when B(M_f T(-z)) = 0, i.e. z = n B/A; the pupil's magnification is A.
   RayMatrix front;
   if (st > 0)
-    front = transfer(s[st].z_mm - s[st - 1].z_mm, s[st].ior_before) * systemMatrix(lens, 0, st - 1);
+    front = transfer(s[st].z_mm - s[st - 1].z_mm, s[st].nBefore()) * systemMatrix(lens, 0, st - 1);
   p.entrance_pupil_z_mm = n_obj * front.b / front.a;
   p.entrance_pupil_diameter_mm = p.aperture_stop_diameter_mm / std::abs(front.a);
 
@@ -112,7 +116,7 @@ ParaxialData computeParaxial(const LensSystem& lens) {
   RayMatrix rear;
   if (st + 1 < n)
     rear = systemMatrix(lens, st + 1, n - 1) *
-           transfer(s[st + 1].z_mm - s[st].z_mm, s[st + 1].ior_before);
+           transfer(s[st + 1].z_mm - s[st].z_mm, s[st + 1].nBefore());
   p.exit_pupil_z_mm = lens.rearVertexZ_mm() - n_img * rear.b / rear.d;
   p.exit_pupil_diameter_mm = p.aperture_stop_diameter_mm / std::abs(rear.d);
 

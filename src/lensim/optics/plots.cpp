@@ -121,7 +121,8 @@ VignettingData computeVignetting(const FocusedLens& fl, double film_diagonal_mm,
   const int angles = std::max(16, 2 * grid);
   auto measure = [&](double h, double& area, double& weighted) {
     area = weighted = 0;
-    auto passes = [&](Vec2 a) { return lens.traceFromFilmPoint({h, 0}, a).ok(); };
+    // The outer boundary (central obscurations not subtracted: see lens_system.h).
+    auto passes = [&](Vec2 a) { return lens.traceFromFilmPoint({h, 0}, a, kOuterBoundary).ok(); };
     const std::optional<Vec2> start = passingRearAim(lens, p, h);
     if (!start) return;
     const Vec2 c = *start;

@@ -58,6 +58,15 @@ struct LensSurface {
   /// Readers that mark the aperture stop explicitly (Zemax STOP, JSON) set this, so that a plane
   /// surface need not be the stop; unset (.dat): the radius-0 row is the stop.
   std::optional<bool> stop_flag;
+  /// A mirror (Zemax `GLAS MIRROR`, JSON `"mirror": true`): the surface reflects, and the ray
+  /// travels back along the axis. The medium after it is the one before (ior and glass repeat
+  /// it), and the thickness after it is negative after an odd number of mirrors (Zemax's sign
+  /// convention: thicknesses are signed z distances).
+  bool mirror = false;
+  /// Central obscuration: rays meeting the surface closer than this to the axis are blocked (a
+  /// catadioptric lens's secondary mirror or the hole in its primary; Zemax `OBSC 0 r`, the
+  /// inner radius of `CLAP rmin r`). 0: none.
+  double obscuration_radius_mm = 0;
 
   bool isStop() const { return stop_flag ? *stop_flag : radius_mm == 0; }
   double semiAperture_mm() const { return aperture_diameter_mm / 2; }

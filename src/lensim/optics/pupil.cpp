@@ -42,6 +42,8 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   const double rr = 1.5 * lens.interfaces().back().semi_aperture_mm;
 
   const double disc2 = opts.rear_disc_radius_mm * opts.rear_disc_radius_mm;
+  bool obscured = false;
+  for (const Interface& s : lens.interfaces()) obscured = obscured || s.obscuration_radius_mm > 0;
   // Anamorphic: the paraxial chief ray from film height h crosses the rear plane at kappa h
   // (aimed at the exit pupil's centre).
   if (!rotational_) {
@@ -431,6 +433,72 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   auto makeSector = [&](const std::vector<Polygon>& nodes) {
     Sector out;
     out.intervals = buildIntervals(nodes, scales);
+    // Central obscurations: a hole in each interval's polygon (rotationally symmetric lenses).
+    if (obscured && rotational_) {
+      auto passesAll = [&](double h, Vec2 a) {  // with obscurations, at any wavelength covered
+        ++traces;
+        if (lens.traceFromFilmPoint({h, 0}, a).ok()) return true;
+        for (const LensSystem* other : opts.also_cover) {
+          ++traces;
+          if (other->traceFromFilmPoint({h, 0}, a).ok()) return true;
+        }
+        return false;
+      };
+      // The largest scale k of the polygon (centre c, vertex distances R) whose vertices all lie
+      // in the blocked middle: along each direction, the first passing point from the centre.
+      auto holeScale = [&](double h, Vec2 c, const std::vector<double>& R) {
+        if (passesAll(h, c)) return 0.0;
+        double k = 1;
+        for (int j = 0; j < nd; ++j) {
+          constexpr int kSteps = 16;
+          double lo = 0, hi = 1;
+          for (int s = 1; s <= kSteps; ++s) {
+            const double f = double(s) / kSteps;
+            if (passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * f))) {
+              hi = f;
+              break;
+            }
+            lo = f;
+          }
+          for (int it = 0; it < 6 && hi < 1; ++it) {
+            const double mid = 0.5 * (lo + hi);
+            (passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * mid)) ? hi : lo) = mid;
+          }
+          k = std::min(k, lo);
+        }
+        return k;
+      };
+      for (Interval& iv : out.intervals) {
+        if (iv.empty) continue;
+        auto at = [&](double t, Vec2& c, std::vector<double>& R) {
+          c = iv.c0 * (1 - t) + iv.c1 * t;
+          R.resize(size_t(nd));
+          for (int j = 0; j < nd; ++j) R[size_t(j)] = iv.A[size_t(j)] * (1 - t) + iv.B[size_t(j)] * t;
+          return iv.r0 + t * (iv.r1 - iv.r0);
+        };
+        Vec2 c;
+        std::vector<double> R;
+        double k = 1;
+        for (double t : {0.0, 0.5, 1.0}) {
+          const double h = at(t, c, R);
+          k = std::min(k, holeScale(h, c, R));
+          if (k <= 0) break;
+        }
+        k *= 1 - 3 * opts.margin;  // the safety margin, inward
+        // Check the hole between the ends: every vertex of the scaled polygon blocked.
+        for (int tries = 0; tries < 4 && k > 0.05; ++tries) {
+          bool ok = true;
+          for (double t : {0.25, 0.75}) {
+            const double h = at(t, c, R);
+            for (int j = 0; j < nd && ok; ++j)
+              ok = !passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * k));
+          }
+          if (ok) break;
+          k *= 0.8;
+        }
+        iv.hole = k > 0.05 ? k : 0.0;
+      }
+    }
     // A table from film radius to the first interval that can hold it, so that a lookup is a
     // table read and a step or two instead of a binary search.
     if (!out.intervals.empty() && film_radius_mm_ > 0) {
@@ -685,9 +753,11 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
     const int j1 = (j + 1) % nd;
     const double c_lo = cum(k, j), tri = cum(k, j + 1) - c_lo;
     const double ux = tri > 0 ? std::clamp((target[k] - c_lo) / tri, 0.0, 1.0) : 0.0;
-    const double s = std::sqrt(ux);
-    const double tt = t[k];
     const Interval& v = *iv[k];
+    // Uniform in the polygon minus the hole scaled by v.hole: the fraction of the way out along
+    // the fan, s, has s^2 uniform in [hole^2, 1].
+    const double s = std::sqrt(v.hole * v.hole + ux * (1 - v.hole * v.hole));
+    const double tt = t[k];
     const Vec2 a = dirs_[j] * (v.A[j] * (1 - tt) + v.B[j] * tt);
     const Vec2 b = dirs_[j1] * (v.A[j1] * (1 - tt) + v.B[j1] * tt);
     const Vec2 centre = v.c0 * (1 - tt) + v.c1 * tt;
@@ -697,7 +767,8 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
     const Vec2 f = film_mm[lane[k]];
     Vec2 rear = toFilmAzimuth(local, std::hypot(f.x, f.y), ca[k], sa[k]);
     if (!rotational_) rear = {f.x < 0 ? -rear.x : rear.x, f.y < 0 ? -rear.y : rear.y};
-    out[lane[k]] = PupilSample{{rear.x, rear.y, z_rear_mm_}, 0.5 * total[k] * dirs_[1].y};
+    out[lane[k]] = PupilSample{{rear.x, rear.y, z_rear_mm_},
+                               0.5 * total[k] * dirs_[1].y * (1 - v.hole * v.hole)};
   }
 }
 
@@ -724,7 +795,9 @@ bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm, int band) const {
   const int j = std::min(static_cast<int>(ang / dphi), nd - 1), j1 = (j + 1) % nd;
   const Vec2 a = dirs_[j] * (iv->A[j] * (1 - t) + iv->B[j] * t);
   const Vec2 b = dirs_[j1] * (iv->A[j1] * (1 - t) + iv->B[j1] * t);
-  // Inside the fan triangle (0, a, b): on the origin's side of the edge a-b.
+  // Inside the fan triangle (0, a, b): on the origin's side of the edge a-b; and not inside the
+  // hole (the triangle scaled by `hole`).
+  if (iv->hole > 0 && cross2(b - a, q - a * iv->hole) > 0) return false;
   return cross2(b - a, q - a) >= 0;
 }
 
@@ -735,7 +808,7 @@ double ExitPupilSampler::area_mm2(Vec2 film_mm, int band) const {
   const int nd = directions_;
   const double total = (1 - t) * (1 - t) * iv->P[3 * nd] + t * (1 - t) * iv->P[3 * nd + 1] +
                        t * t * iv->P[3 * nd + 2];
-  return 0.5 * total * dirs_[1].y;
+  return 0.5 * total * dirs_[1].y * (1 - iv->hole * iv->hole);
 }
 
 }  // namespace lensim::optics

@@ -26,6 +26,9 @@
 // bounds for the double Gauss, wide-angle and telephoto; for the fisheye one in two million,
 // at a sharp corner of the region near the edge of its image circle, where a polygon vertex
 // cannot follow the corner exactly. 2-3% of the samples yield no ray.
+// Lenses with central obscurations (catadioptric lenses): the polygon is the outer boundary of
+// the region (obscurations ignored), and a hole, the polygon scaled about its centre to lie
+// inside the obscured middle, is cut out of it (checked with real rays across each interval).
 #pragma once
 
 #include <optional>
@@ -127,6 +130,10 @@ class ExitPupilSampler {
     Vec2 c0, c1;
     std::vector<double> A, B;  // per vertex
     std::vector<double> P;     // prefix sums P0, P1, P2 interleaved: 3 (n + 1) values
+    // A lens with central obscurations: the polygon scaled by `hole` about its centre lies in
+    // the obscured (blocked) middle of the region all across the interval; samples are drawn
+    // from the polygon minus that hole. 0: no hole.
+    double hole = 0;
   };
   static int intervalIn(const std::vector<Interval>& intervals,
                         const std::vector<int>& radius_lut, double lut_scale, double r);

@@ -123,6 +123,9 @@ struct ZSurface {
   std::optional<double> n_d, v_d;
   FileLoc glass_loc;
   std::optional<double> clap_max;
+  double inner_radius = 0;  // central obscuration (OBSC 0 r, or CLAP's minimum radius)
+  FileLoc inner_loc;
+  bool mirror = false;
 };
 
 class ZmxParser {
@@ -303,23 +306,47 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       need(t, 2, line_no, "glass");
       cur->glass = std::string(t[1].text);
       cur->glass_loc = FileLoc{path_, line_no, t[1].col};
-      if (cur->glass == "MIRROR")
-        throw Error(cur->glass_loc,
-                    fmt::format("surface {}: GLAS MIRROR: mirror (catadioptric) lenses are not "
-                                "supported yet; lensim traces refracting surfaces only",
-                                cur->number));
-      if (t.size() >= 6) {
+      if (cur->glass == "MIRROR") {
+        // A reflecting surface; the medium after it is the one before it.
+        cur->mirror = true;
+        cur->glass.clear();
+      } else if (t.size() >= 6) {
         cur->n_d = number(t[4], line_no, "glass index n_d");
         cur->v_d = number(t[5], line_no, "glass Abbe number V_d");
       }
-    } else if (key == "CLAP") {
-      const double rmin = num(2, "aperture minimum radius");
-      cur->clap_max = num(3, "aperture maximum radius");
-      if (rmin != 0)
-        throw surfErr(fmt::format("annular aperture (CLAP minimum radius {}) is not supported",
-                                  rmin));
-    } else if (key == "OBSC" || key == "SQAP" || key == "ELAP" || key == "SQOB" ||
-               key == "ELOB" || key == "UDAP" || key == "UDOB") {
+    } else if (key == "CLAP" || key == "OBSC") {
+      // Circular aperture `CLAP rmin rmax` (clear between the radii) and circular obscuration
+      // `OBSC rmin rmax` (blocked between them), as Zemax writes them (the samples: `CLAP 0
+      // 25.4 0`, `OBSC 0 25 0`). An annular clear aperture and a central obscuration (rmin 0)
+      // both block the centre; an obscuring ring (OBSC rmin > 0) is not modelled.
+      const double rmin = num(1, "aperture minimum radius");
+      const double rmax = num(2, "aperture maximum radius");
+      const FileLoc vloc{path_, line_no, t[1].col};
+      if (!(rmin >= 0) || !(rmax > rmin))
+        throw Error(vloc, fmt::format("surface {}: {} radii {} .. {}: expected 0 <= minimum < "
+                                      "maximum",
+                                      cur->number, key, rmin, rmax));
+      if (key == "CLAP") {
+        cur->clap_max = rmax;
+        if (rmin > 0) cur->inner_radius = rmin, cur->inner_loc = vloc;
+      } else {
+        if (rmin != 0)
+          throw Error(vloc, fmt::format("surface {}: OBSC {} {}: an obscuring ring (minimum "
+                                        "radius > 0) is not supported; a central obscuration "
+                                        "(OBSC 0 r) is",
+                                        cur->number, rmin, rmax));
+        cur->inner_radius = rmax, cur->inner_loc = FileLoc{path_, line_no, t[2].col};
+      }
+    } else if (key == "OBDC") {
+      // Aperture / obscuration decentre: refused unless zero.
+      for (size_t i = 1; i < t.size(); ++i)
+        if (number(t[i], line_no, "aperture decentre") != 0)
+          throw Error(FileLoc{path_, line_no, t[i].col},
+                      fmt::format("surface {}: OBDC: decentred apertures (off-axis mirrors) are "
+                                  "not supported",
+                                  cur->number));
+    } else if (key == "SQAP" || key == "ELAP" || key == "SQOB" || key == "ELOB" || key == "UDAP" ||
+               key == "UDOB") {
       throw surfErr(fmt::format("{} (a surface aperture or obscuration other than circular) is "
                                 "not supported",
                                 key));
@@ -369,6 +396,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                              "no STOP line: surface 1 is the aperture stop (Zemax's default)"});
   }
   double ior_before = 1;
+  GlassSpec glass_before;
+  int mirrors = 0;
   std::optional<int> inserted_stop;
   for (size_t k = 1; k + 1 < surfs.size(); ++k) {
     const ZSurface& z = surfs[k];
@@ -378,10 +407,16 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       throw Error(z.disz_loc,
                   fmt::format("surface {}: thickness INFINITY is allowed for the object only",
                               z.number));
-    if (*z.disz < 0)
-      throw Error(z.disz_loc, fmt::format("surface {}: thickness {} is negative; lensim models "
-                                          "lenses whose surfaces follow in order along +z",
-                                          z.number, *z.disz));
+    // Thicknesses are signed (Zemax): negative after an odd number of mirrors, where the light
+    // travels toward -z; any other sign would need a ray to go backward.
+    mirrors += z.mirror ? 1 : 0;
+    if (*z.disz * (mirrors % 2 ? -1 : 1) < 0)
+      throw Error(z.disz_loc,
+                  fmt::format("surface {}: thickness {} is {} after {} mirror{}; lensim models "
+                              "lenses whose surfaces follow in the direction the light travels "
+                              "(+z, and -z after an odd number of mirrors)",
+                              z.number, *z.disz, *z.disz < 0 ? "negative" : "positive", mirrors,
+                              mirrors == 1 ? "" : "s"));
     if (!z.diam)
       throw Error(z.loc, fmt::format("surface {}: no DIAM (semi-diameter) line; lensim needs "
                                      "every surface's clear aperture",
@@ -407,8 +442,19 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       }
       s.shape.scaleLengths(unit_mm);
     }
+    s.mirror = z.mirror;
+    if (z.inner_radius > 0) {
+      s.obscuration_radius_mm = z.inner_radius * unit_mm;
+      if (!(s.obscuration_radius_mm < semi))
+        throw Error(z.inner_loc, fmt::format("surface {}: obscuration radius {} is not inside the "
+                                             "semi-diameter {}",
+                                             z.number, z.inner_radius, semi / unit_mm));
+    }
     // The medium after the surface.
-    if (z.glass.empty()) {
+    if (z.mirror) {
+      s.ior = ior_before;  // a mirror: the light goes back through the medium it came from
+      s.glass = glass_before;
+    } else if (z.glass.empty()) {
       s.ior = 1;
     } else {
       s.glass.name = z.glass == "___BLANK" ? std::string() : z.glass;
@@ -436,7 +482,9 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
 
     if (int(k) == stop_surface) {
       const bool plane = s.radius_mm == 0 && s.shape.isSpherical();
-      if (plane) {
+      // A mirror is its own stop: a plane at its vertex could not be reached in sequence on
+      // either side of a concave mirror (the light turns back before it).
+      if (plane || s.mirror) {
         s.stop_flag = true;
       } else {
         // Stop on a curved surface: a plane stop at its vertex, on the side the surface does not
@@ -468,10 +516,12 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
           p.surfaces.push_back(st);
         }
         ior_before = s.ior;
+        glass_before = s.glass;
         continue;
       }
     }
     ior_before = s.ior;
+    glass_before = s.glass;
     p.surfaces.push_back(s);
   }
 
@@ -485,7 +535,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     double y_stop = 1;
     if (st > 0) {
       const RayMatrix m = systemMatrix(sys, 0, st - 1);
-      y_stop = m.a + (in[size_t(st)].z_mm - in[size_t(st - 1)].z_mm) / in[size_t(st)].ior_before * m.c;
+      y_stop =
+          m.a + (in[size_t(st)].z_mm - in[size_t(st - 1)].z_mm) / in[size_t(st)].nBefore() * m.c;
     }
     const double semi_now = p.surfaces[size_t(st)].semiAperture_mm();
     const double epd_now = 2 * semi_now / std::abs(y_stop);
@@ -499,8 +550,19 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       p.aperture_spec = fmt::format("FNUM {}", *fnum);
     }
     const double semi_new = semi_now * epd_target / epd_now;
-    p.surfaces[size_t(st)].aperture_diameter_mm = 2 * semi_new;
-    if (std::abs(semi_new / semi_now - 1) > 1e-6)
+    const LensSurface& stop_row = p.surfaces[size_t(st)];
+    const double extent = sagDomainRadius(stop_row.radius_mm, stop_row.shape);
+    if (semi_new >= extent) {
+      // A curved stop (a mirror) cannot open beyond its surface: keep DIAM's size.
+      p.diagnostics.push_back(
+          {Severity::Warning, aperture_loc,
+           fmt::format("{}: the stop would need a semi-diameter of {:.6g} mm, beyond its "
+                       "surface's extent ({:.6g} mm); it keeps DIAM's {:.6g} mm",
+                       p.aperture_spec, semi_new, extent, semi_now)});
+    } else {
+      p.surfaces[size_t(st)].aperture_diameter_mm = 2 * semi_new;
+    }
+    if (semi_new < extent && std::abs(semi_new / semi_now - 1) > 1e-6)
       p.diagnostics.push_back(
           {Severity::Note, aperture_loc,
            fmt::format("{}: the stop's semi-diameter is {:.6g} mm (DIAM gives {:.6g} mm)",
