@@ -6,7 +6,7 @@ FROM debian:12 AS build
 RUN apt-get update \
  && apt-get install -y --no-install-recommends \
       build-essential cmake ninja-build pkg-config \
-      libembree-dev libtbb-dev libopenexr-dev libtiff-dev libpng-dev zlib1g-dev \
+      libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev libpng-dev zlib1g-dev \
       libfmt-dev libcli11-dev nlohmann-json3-dev libnanovdb-dev \
  && rm -rf /var/lib/apt/lists/*
 WORKDIR /src
@@ -14,16 +14,18 @@ COPY CMakeLists.txt ./
 COPY src ./src
 RUN cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release \
       -DLENSIM_BUILD_TESTS=OFF -DLENSIM_BUILD_BENCH=OFF \
- && cmake --build build --target lensim
+ && cmake --build build --target lensim lensim_oiio
 
 FROM debian:12-slim
 # The shared libraries lensim links (the runtime halves of the -dev packages above).
 RUN apt-get update \
  && apt-get install -y --no-install-recommends \
-      libembree3-3 libtbb12 libopenexr-3-1-30 libimath-3-1-29 libtiff6 libpng16-16 zlib1g \
+      libembree3-3 libtbb12 libopenexr-3-1-30 libimath-3-1-29 libopenimageio2.4 libpng16-16 zlib1g \
       libfmt9 \
  && rm -rf /var/lib/apt/lists/*
 COPY --from=build /src/build/lensim /usr/local/bin/lensim
+# Image I/O through OpenImageIO, loaded on demand from ../lib/lensim (src/lensim/io/oiio_module.h).
+COPY --from=build /src/build/liblensim_oiio.so /usr/local/lib/lensim/liblensim_oiio.so
 COPY lenses /usr/local/share/lensim/lenses
 RUN lensim --version
 WORKDIR /data

@@ -144,11 +144,17 @@ int fuzzPly(const uint8_t* data, size_t size) {
 
 int fuzzImage(const uint8_t* data, size_t size) {
   initFuzzing();
-  // The format by the file's magic number, as a user's file would be named.
+  // The format by the file's magic number, as a user's file would be named; TGA has none (its
+  // third byte is the image type, 1-3 or 9-11).
   const char* ext = ".png";
   if (size >= 4 && data[0] == 0x76 && data[1] == 0x2f) ext = ".exr";
   if (size >= 2 && ((data[0] == 'I' && data[1] == 'I') || (data[0] == 'M' && data[1] == 'M')))
     ext = ".tif";
+  if (size >= 2 && data[0] == 'P' && (data[1] == 'F' || data[1] == 'f')) ext = ".pfm";
+  if (size >= 2 && data[0] == '#' && data[1] == '?') ext = ".hdr";
+  if (size >= 2 && data[0] == 0xff && data[1] == 0xd8) ext = ".jpg";
+  if (size >= 18 && data[1] <= 1 && ((data[2] >= 1 && data[2] <= 3) || (data[2] >= 9 && data[2] <= 11)))
+    ext = ".tga";
   const std::string path = writeScratch(std::string("fuzz") + ext, data, size);
   return guarded([&] { (void)io::readImage(path); });
 }

@@ -221,3 +221,54 @@ TEST(Image, Reads16BitAndGreyPng) {
   EXPECT_FLOAT_EQ(img.at(2, 0, 0), 1.0f);
   fs::remove_all(dir);
 }
+
+// The other formats lensim writes (through OpenImageIO): TGA keeps alpha, HDR is RGBE (8-bit
+// mantissas: relative error below 2^-8 of the pixel's largest channel), JPEG is lossy.
+TEST(Image, TgaHdrAndJpegRoundTrips) {
+  const fs::path dir = scratchDir("more");
+  Image rgba = randomImage(21, 13, {"R", "G", "B", "A"}, 0.0f, 1.0f, 11);
+  const std::string tga = (dir / "a.tga").string();
+  lensim::io::writeImage(tga, rgba);
+  const Image t = lensim::io::readImage(tga);
+  ASSERT_EQ(t.channels, rgba.channels);
+  for (size_t i = 0; i < t.pixels.size(); ++i) {
+    const bool alpha = i % 4 == 3;
+    const float want = alpha ? rgba.pixels[i] : lensim::io::linearToSrgb(rgba.pixels[i]);
+    const float got = alpha ? t.pixels[i] : lensim::io::linearToSrgb(t.pixels[i]);
+    EXPECT_NEAR(got, want, 0.5 / 255.0 + 1e-5) << i;
+  }
+
+  Image hdr = randomImage(17, 9, {"R", "G", "B"}, 0.0f, 50.0f, 12);
+  const std::string h = (dir / "a.hdr").string();
+  lensim::io::writeImage(h, hdr);
+  const Image hb = lensim::io::readImage(h);
+  ASSERT_EQ(hb.channels, hdr.channels);
+  for (int y = 0; y < hdr.height; ++y)
+    for (int x = 0; x < hdr.width; ++x) {
+      const float m = std::max({hdr.at(x, y, 0), hdr.at(x, y, 1), hdr.at(x, y, 2)});
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(hb.at(x, y, c), hdr.at(x, y, c), m / 128.0);
+    }
+
+  Image smooth(32, 16, {"R", "G", "B"});
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 32; ++x) {
+      smooth.at(x, y, 0) = 0.2f + 0.5f * x / 32.0f;
+      smooth.at(x, y, 1) = 0.4f;
+      smooth.at(x, y, 2) = 0.1f + 0.3f * y / 16.0f;
+    }
+  const std::string j = (dir / "a.jpg").string();
+  lensim::io::writeImage(j, smooth);
+  const Image jb = lensim::io::readImage(j);
+  ASSERT_EQ(jb.width, 32);
+  double worst = 0, sum = 0;
+  for (size_t i = 0; i < jb.pixels.size(); ++i) {
+    const double e = std::abs(double(lensim::io::linearToSrgb(jb.pixels[i])) -
+                              lensim::io::linearToSrgb(smooth.pixels[i]));
+    worst = std::max(worst, e);
+    sum += e;
+  }
+  // Quality 95 on smooth gradients (chroma subsampled: the worst code off by a few).
+  EXPECT_LT(sum / jb.pixels.size(), 1.0 / 255.0);
+  EXPECT_LT(worst, 8.0 / 255.0);
+  fs::remove_all(dir);
+}

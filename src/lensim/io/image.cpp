@@ -6,19 +6,23 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
-#include <png.h>
-#include <tiffio.h>
+#include <dlfcn.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <bit>
+#include <cerrno>
 #include <cmath>
-#include <cstdarg>
 #include <cstdint>
-#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -27,6 +31,7 @@
 #include "lensim/util/limits.h"
 #include "lensim/util/log.h"
 #include "lensim/util/text.h"
+#include "lensim/io/oiio_module.h"
 
 namespace lensim::io {
 
@@ -58,16 +63,30 @@ float srgbToLinear(float v) {
   return std::pow((v + 0.055f) / 1.055f, 2.4f);
 }
 
-ImageFormat imageFormatFromPath(const std::string& path) {
+namespace {
+
+std::string lowerExtension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+}  // namespace
+
+ImageFormat imageFormatFromPath(const std::string& path) {
+  const std::string ext = lowerExtension(path);
   if (ext == ".exr") return ImageFormat::Exr;
   if (ext == ".tif" || ext == ".tiff") return ImageFormat::Tiff;
   if (ext == ".png") return ImageFormat::Png;
-  throw Error(
-      FileLoc{path},
-      fmt::format("unsupported image extension \"{}\" (use .exr, .tif, .tiff or .png)", ext));
+  if (ext == ".pfm") return ImageFormat::Pfm;
+  if (ext == ".hdr") return ImageFormat::Hdr;
+  if (ext == ".jpg" || ext == ".jpeg") return ImageFormat::Jpeg;
+  if (ext == ".tga") return ImageFormat::Tga;
+  throw Error(FileLoc{path},
+              fmt::format("unsupported image extension \"{}\" for writing (use .exr, .tif, .tiff, "
+                          ".png, .pfm, .hdr, .jpg, .jpeg or .tga)",
+                          ext));
 }
 
 namespace {
@@ -117,7 +136,13 @@ std::vector<std::string> colorChannelNames(int samples, bool alpha_last) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// OpenEXR
+// OpenEXR. EXR files are written with OpenEXR itself, not OpenImageIO: lensim's EXR header is
+// exactly the image's channels as 32-bit FLOAT (spectral films have dozens), ZIP compression and
+// the image's string attributes under their own names ("lensim:spp_range", ...), which the part
+// merger, checkpoints and `lensim compare` read back. OpenImageIO's EXR writer renames attributes
+// it knows under other names (an attribute "DateTime" is written as EXR's capDate, "Copyright" as
+// owner, ...; checked with OIIO 2.4), so the metadata would not come back as written; and the
+// channel layout and the incomplete-file check below are what lensim's EXR readers rely on.
 
 void writeExr(const std::string& path, const Image& image) {
   Imf::Header header(image.width, image.height);
@@ -201,246 +226,343 @@ void checkExrHeader(const std::string& path) {
   }
 }
 
-Image readExr(const std::string& path) {
-  checkExrHeader(path);
+// The string attributes of an EXR file's first part, under their own names. Read with OpenEXR:
+// OpenImageIO renames standard attributes and reports some non-string ones as strings (e.g.
+// "compression"), so its spec cannot tell which strings the file holds.
+std::map<std::string, std::string> exrStringAttributes(const std::string& path) {
+  std::map<std::string, std::string> out;
   Imf::InputFile file(path.c_str());
-  const Imath::Box2i dw = file.header().dataWindow();
-  // In 64 bits: a data window from INT_MIN to INT_MAX must not wrap around.
-  const int64_t w64 = int64_t{dw.max.x} - dw.min.x + 1, h64 = int64_t{dw.max.y} - dw.min.y + 1;
-  if (w64 <= 0 || h64 <= 0 || w64 > 1000000 || h64 > 1000000)
-    fail(path, fmt::format("bad EXR data window {}x{}", w64, h64));
-  const int w = static_cast<int>(w64), h = static_cast<int>(h64);
-  // RGBA first in that order, then the other channels in the file's (alphabetical) order.
-  std::vector<std::string> names;
-  for (const char* n : {"R", "G", "B", "A"})
-    if (file.header().channels().findChannel(n)) names.push_back(n);
-  for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
-    if (std::find(names.begin(), names.end(), it.name()) == names.end()) names.push_back(it.name());
-  Image image(w, h, names);
-  const size_t nc = names.size();
-  Imf::FrameBuffer fb;
-  // Slices are addressed with absolute data-window coordinates.
-  char* base = (char*)(image.pixels.data()) -
-               (static_cast<ptrdiff_t>(dw.min.x) + static_cast<ptrdiff_t>(dw.min.y) * w) *
-                   static_cast<ptrdiff_t>(sizeof(float) * nc);
-  for (size_t c = 0; c < nc; ++c)
-    fb.insert(names[c], Imf::Slice(Imf::FLOAT, base + c * sizeof(float), sizeof(float) * nc,
-                                   sizeof(float) * nc * w));
-  file.setFrameBuffer(fb);
-  file.readPixels(dw.min.y, dw.max.y);
   for (auto it = file.header().begin(); it != file.header().end(); ++it)
     if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&it.attribute()))
-      image.metadata[it.name()] = s->value();
-  return image;
+      out[it.name()] = s->value();
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------------
-// libtiff. Messages go to a per-file string instead of libtiff's default stderr printing.
+// The OpenImageIO module, loaded on first use (see oiio_module.h). Looked for in
+// $LENSIM_OIIO_MODULE, beside the executable, in ../lib/lensim from it, and where this build put it.
 
-int tiffMessage(TIFF*, void* user, const char* module, const char* format, va_list args) {
-  char buf[512];
-  std::vsnprintf(buf, sizeof buf, format, args);
-  auto* out = static_cast<std::string*>(user);
-  if (out->empty()) *out = module && *module ? fmt::format("{}: {}", module, buf) : buf;
-  return 1;
-}
-int tiffIgnore(TIFF*, void*, const char*, const char*, va_list) {
-  return 1;
+const oiio::Api& oiioApi() {
+  static const oiio::Api* api = nullptr;
+  static std::string failure;
+  static std::once_flag once;
+  std::call_once(once, [] {
+    std::vector<std::string> candidates;
+    if (const char* env = std::getenv("LENSIM_OIIO_MODULE"); env && *env) candidates.push_back(env);
+    std::error_code ec;
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) {
+      candidates.push_back((exe.parent_path() / "liblensim_oiio.so").string());
+      candidates.push_back((exe.parent_path() / ".." / "lib" / "lensim" / "liblensim_oiio.so").string());
+    }
+#ifdef LENSIM_OIIO_MODULE_PATH
+    candidates.push_back(LENSIM_OIIO_MODULE_PATH);
+#endif
+    std::string tried;
+    for (const std::string& c : candidates) {
+      if (!fs::exists(c, ec)) {
+        tried += fmt::format("{}{}", tried.empty() ? "" : ", ", c);
+        continue;
+      }
+      void* handle = ::dlopen(c.c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (!handle) {
+        failure = fmt::format("cannot load the OpenImageIO module {}: {}", c, ::dlerror());
+        return;
+      }
+      auto entry = reinterpret_cast<const oiio::Api* (*)()>(::dlsym(handle, "lensim_oiio_api"));
+      const oiio::Api* a = entry ? entry() : nullptr;
+      if (!a || a->version != oiio::kApiVersion) {
+        failure = fmt::format("the OpenImageIO module {} does not match this lensim", c);
+        return;
+      }
+      api = a;
+      return;
+    }
+    failure = fmt::format("the OpenImageIO module liblensim_oiio.so was not found (looked for {})",
+                          tried);
+  });
+  if (!api) throw Error(failure);
+  return *api;
 }
 
-struct TiffCloser {
-  void operator()(TIFF* t) const { TIFFClose(t); }
+// ---------------------------------------------------------------------------------------------
+// Reading through OpenImageIO
+
+// The transfer curve integer pixel values are decoded with.
+struct Decoding {
+  enum Kind { Linear, Srgb, Gamma } kind = Srgb;
+  float gamma = 1;
+  float operator()(float encoded) const {
+    switch (kind) {
+      case Linear:
+        return encoded;
+      case Srgb:
+        return srgbToLinear(encoded);
+      case Gamma:
+        return std::pow(encoded, gamma);
+    }
+    return encoded;
+  }
 };
 
-std::unique_ptr<TIFF, TiffCloser> openTiff(const std::string& path, const char* mode,
-                                           std::string* errors) {
-  TIFFOpenOptions* opts = TIFFOpenOptionsAlloc();
-  TIFFOpenOptionsSetErrorHandlerExtR(opts, tiffMessage, errors);
-  TIFFOpenOptionsSetWarningHandlerExtR(opts, tiffIgnore, nullptr);
-  TIFF* t = TIFFOpenExt(path.c_str(), mode, opts);
-  TIFFOpenOptionsFree(opts);
-  if (!t) fail(path, errors->empty() ? "cannot open TIFF file" : *errors);
-  return std::unique_ptr<TIFF, TiffCloser>(t);
+// The decoding for integer data: the caller's encoding if given (pbrt-v4 textures' "encoding",
+// src/pbrt/textures.cpp, ColorEncoding::Get), else the file's convention (see image.h).
+Decoding integerDecoding(const std::string& encoding, const oiio::Spec& spec,
+                         const std::string& path) {
+  Decoding d;
+  if (encoding == "sRGB") return d;
+  if (encoding == "linear") return {Decoding::Linear};
+  if (encoding.rfind("gamma ", 0) == 0) {
+    d.kind = Decoding::Gamma;
+    char* end = nullptr;
+    d.gamma = std::strtof(encoding.c_str() + 6, &end);
+    if (end != encoding.c_str() + 6 && *end == '\0' && d.gamma > 0 && std::isfinite(d.gamma))
+      return d;
+  }
+  if (!encoding.empty())
+    fail(path, fmt::format("bad image encoding \"{}\"; expected \"sRGB\", \"linear\" or "
+                           "\"gamma <positive number>\"",
+                           encoding));
+  // A file that says it is linear (a PNG with a gAMA of 1.0; OpenImageIO reports "Linear").
+  std::string cs = spec.color_space;
+  std::transform(cs.begin(), cs.end(), cs.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (cs == "linear") return {Decoding::Linear};
+  // 8-bit data is display-encoded (pbrt-v4 reads PNG and the stb_image formats as sRGB, and so
+  // does every paint program); pbrt-v4 decodes 16-bit PNGs with the same encoding (ReadPNG).
+  // Other 16-bit files (TIFF, PNM) are read linearly, as lensim writes 16-bit TIFFs.
+  if (spec.bytes_per_channel == 1 || spec.format == "png") return d;
+  return {Decoding::Linear};
 }
 
-void writeTiff(const std::string& path, const Image& image, TiffSampleFormat format) {
-  const ColorLayout layout = colorLayout(image, path);
-  const int spp = static_cast<int>(layout.source.size());
-  const bool is_float = format == TiffSampleFormat::Float32;
-  std::string errors;
-  auto tif = openTiff(path, "w", &errors);
-  TIFF* t = tif.get();
-  TIFFSetField(t, TIFFTAG_IMAGEWIDTH, static_cast<uint32_t>(image.width));
-  TIFFSetField(t, TIFFTAG_IMAGELENGTH, static_cast<uint32_t>(image.height));
-  TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, static_cast<uint16_t>(spp));
-  TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, static_cast<uint16_t>(is_float ? 32 : 16));
-  TIFFSetField(t, TIFFTAG_SAMPLEFORMAT,
-               static_cast<uint16_t>(is_float ? SAMPLEFORMAT_IEEEFP : SAMPLEFORMAT_UINT));
-  TIFFSetField(t, TIFFTAG_PLANARCONFIG, static_cast<uint16_t>(PLANARCONFIG_CONTIG));
-  TIFFSetField(t, TIFFTAG_PHOTOMETRIC,
-               static_cast<uint16_t>(spp >= 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK));
-  TIFFSetField(t, TIFFTAG_COMPRESSION, static_cast<uint16_t>(COMPRESSION_ADOBE_DEFLATE));
-  TIFFSetField(t, TIFFTAG_ORIENTATION, static_cast<uint16_t>(ORIENTATION_TOPLEFT));
-  TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, TIFFDefaultStripSize(t, 0));
-  if (layout.has_alpha) {
-    uint16_t extra = EXTRASAMPLE_UNASSALPHA;
-    TIFFSetField(t, TIFFTAG_EXTRASAMPLES, static_cast<uint16_t>(1), &extra);
-  }
-  std::vector<float> row_f(static_cast<size_t>(image.width) * spp);
-  std::vector<uint16_t> row_u(row_f.size());
-  for (int y = 0; y < image.height; ++y) {
-    for (int x = 0; x < image.width; ++x)
-      for (int c = 0; c < spp; ++c) {
-        const float v = image.at(x, y, layout.source[c]);
-        row_f[x * spp + c] = v;
-        row_u[x * spp + c] = static_cast<uint16_t>(
-            std::lround(std::clamp(std::isnan(v) ? 0.0f : v, 0.0f, 1.0f) * 65535.0f));
-      }
-    void* row = is_float ? static_cast<void*>(row_f.data()) : static_cast<void*>(row_u.data());
-    if (TIFFWriteScanline(t, row, static_cast<uint32_t>(y), 0) < 0)
-      fail(path, errors.empty() ? "cannot write TIFF scanline" : errors);
-  }
-  if (!TIFFFlush(t)) fail(path, errors.empty() ? "cannot write TIFF file" : errors);
+// EXR channels: R, G, B, A first in that order, then the others in the file's (alphabetical)
+// order, as lensim has always returned them.
+std::vector<std::string> exrChannelOrder(const std::vector<std::string>& names) {
+  std::vector<std::string> out;
+  for (const char* n : {"R", "G", "B", "A"})
+    if (std::find(names.begin(), names.end(), n) != names.end()) out.push_back(n);
+  std::vector<std::string> rest;
+  for (const std::string& n : names)
+    if (std::find(out.begin(), out.end(), n) == out.end()) rest.push_back(n);
+  std::sort(rest.begin(), rest.end());
+  out.insert(out.end(), rest.begin(), rest.end());
+  return out;
 }
 
-Image readTiff(const std::string& path) {
-  std::string errors;
-  auto tif = openTiff(path, "r", &errors);
-  TIFF* t = tif.get();
-  uint32_t w = 0, h = 0;
-  uint16_t spp = 1, bps = 8, sample_format = SAMPLEFORMAT_UINT, planar = PLANARCONFIG_CONTIG;
-  uint16_t extra_count = 0;
-  uint16_t* extra_types = nullptr;
-  TIFFGetField(t, TIFFTAG_IMAGEWIDTH, &w);
-  TIFFGetField(t, TIFFTAG_IMAGELENGTH, &h);
-  TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLESPERPIXEL, &spp);
-  TIFFGetFieldDefaulted(t, TIFFTAG_BITSPERSAMPLE, &bps);
-  TIFFGetFieldDefaulted(t, TIFFTAG_SAMPLEFORMAT, &sample_format);
-  TIFFGetFieldDefaulted(t, TIFFTAG_PLANARCONFIG, &planar);
-  TIFFGetFieldDefaulted(t, TIFFTAG_EXTRASAMPLES, &extra_count, &extra_types);
-  if (TIFFIsTiled(t)) fail(path, "tiled TIFF files are not supported");
-  if (planar != PLANARCONFIG_CONTIG) fail(path, "planar (separate) TIFF files are not supported");
-  const bool u8 = bps == 8 && sample_format == SAMPLEFORMAT_UINT;
-  const bool u16 = bps == 16 && sample_format == SAMPLEFORMAT_UINT;
-  const bool f32 = bps == 32 && sample_format == SAMPLEFORMAT_IEEEFP;
-  if (!u8 && !u16 && !f32)
-    fail(path,
-         fmt::format("unsupported TIFF sample format ({} bits, format {})", bps, sample_format));
-  if (w == 0 || h == 0 || spp == 0) fail(path, "empty TIFF image");
-  if (w > 1000000 || h > 1000000) fail(path, fmt::format("bad TIFF image size {}x{}", w, h));
-  Image image(static_cast<int>(w), static_cast<int>(h), colorChannelNames(spp, extra_count > 0));
-  std::vector<unsigned char> row(TIFFScanlineSize(t));
-  if (row.size() < static_cast<size_t>(w) * spp * (bps / 8)) fail(path, "bad TIFF scanline size");
-  for (uint32_t y = 0; y < h; ++y) {
-    if (TIFFReadScanline(t, row.data(), y, 0) < 0)
-      fail(path, errors.empty() ? "cannot read TIFF scanline" : errors);
-    for (uint32_t i = 0; i < w * spp; ++i) {
-      float v;
-      const bool alpha = extra_count > 0 && i % spp == spp - 1u;
-      if (u8) {
-        v = row[i] / 255.0f;
-        if (!alpha) v = srgbToLinear(v);  // 8-bit TIFFs are display-encoded (sRGB)
-      } else if (u16) {
-        uint16_t s;
-        std::memcpy(&s, row.data() + 2 * i, 2);
-        v = s / 65535.0f;
-      } else {
-        std::memcpy(&v, row.data() + 4 * i, 4);
-      }
-      image.pixels[static_cast<size_t>(y) * w * spp + i] = v;
+Image readWithOiio(const std::string& path, const ImageReadOptions& options) {
+  const bool exr = lowerExtension(path) == ".exr";
+  if (exr) checkExrHeader(path);
+  const oiio::Api& api = oiioApi();
+  oiio::Spec spec;
+  std::string error;
+  void* reader = api.open(path, &spec, &error);
+  if (!reader) fail(path, fmt::format("cannot read image: {}", error));
+  struct Closer {
+    const oiio::Api& api;
+    void* reader;
+    ~Closer() { api.close(reader); }
+  } closer{api, reader};
+  if (spec.deep) fail(path, "deep images are not supported");
+  const int64_t w64 = spec.width, h64 = spec.height, nc = spec.nchannels;
+  if (w64 <= 0 || h64 <= 0 || nc <= 0 || w64 > 1000000 || h64 > 1000000 || nc > 4096)
+    fail(path, fmt::format("bad image size {}x{} with {} channels", w64, h64, nc));
+  const int w = static_cast<int>(w64), h = static_cast<int>(h64);
+  const bool any_uint32 =
+      std::find(spec.channel_is_uint32.begin(), spec.channel_is_uint32.end(), true) !=
+      spec.channel_is_uint32.end();
+
+  // Names and order in the Image; `from[i]`: the file channel of Image channel i.
+  std::vector<std::string> names;
+  std::vector<int> from(nc);
+  if (exr) {
+    names = exrChannelOrder(spec.channel_names);
+    for (int i = 0; i < nc; ++i)
+      from[i] = static_cast<int>(
+          std::find(spec.channel_names.begin(), spec.channel_names.end(), names[i]) -
+          spec.channel_names.begin());
+  } else {
+    names = colorChannelNames(static_cast<int>(nc),
+                              spec.alpha_channel == nc - 1 && nc != 3);
+    for (int i = 0; i < nc; ++i) from[i] = i;
+  }
+  bool identity = true;
+  for (int i = 0; i < nc; ++i) identity = identity && from[i] == i;
+
+  // The memory budget is checked here, before any pixel is read (the size is the header's).
+  Image image(w, h, names);
+  const size_t count = image.pixels.size();
+  auto readAll = [&](oiio::PixelType type, void* data) {
+    if (!api.read(reader, type, data, &error))
+      fail(path, fmt::format("cannot read image: {}", error));
+  };
+  auto permute = [&](auto convert) {
+    for (size_t p = 0; p < count; p += nc)
+      for (int i = 0; i < nc; ++i) image.pixels[p + i] = convert(p + from[i], from[i]);
+  };
+  auto checkSecondBuffer = [&] {
+    checkMemory(8.0 * static_cast<double>(count), FileLoc{path},
+                fmt::format("reading a {}x{} image with {} channels", w, h, nc));
+  };
+  if (spec.is_float && !any_uint32) {
+    // Linear floats as stored (EXR half/float, PFM, HDR, float TIFF).
+    if (identity) {
+      readAll(oiio::PixelType::Float, image.pixels.data());
+    } else {
+      checkSecondBuffer();
+      std::vector<float> buf(count);
+      readAll(oiio::PixelType::Float, buf.data());
+      permute([&](size_t k, int) { return buf[k]; });
+    }
+  } else if (any_uint32) {
+    // EXR UINT channels (ids, sample counts) keep their values; OpenImageIO's conversion to
+    // float would scale them to [0, 1].
+    checkSecondBuffer();
+    std::vector<float> f(count);
+    readAll(oiio::PixelType::Float, f.data());
+    std::vector<uint32_t> u(count);
+    readAll(oiio::PixelType::UInt32, u.data());
+    permute([&](size_t k, int c) {
+      return spec.channel_is_uint32[c] ? static_cast<float>(u[k]) : f[k];
+    });
+  } else {
+    // Integer data through a table of its 256 or 65536 codes, decoded with the transfer curve
+    // (never alpha).
+    const Decoding decode = integerDecoding(options.encoding, spec, path);
+    const bool wide = spec.bytes_per_channel > 1;
+    const int codes = wide ? 65536 : 256;
+    std::vector<float> colour(codes), linear(codes);
+    for (int k = 0; k < codes; ++k) {
+      linear[k] = k / float(codes - 1);
+      colour[k] = decode(linear[k]);
+    }
+    const int alpha = spec.alpha_channel;
+    if (wide) {
+      std::vector<uint16_t> buf(count);
+      readAll(oiio::PixelType::UInt16, buf.data());
+      permute([&](size_t k, int c) { return c == alpha ? linear[buf[k]] : colour[buf[k]]; });
+    } else {
+      std::vector<uint8_t> buf(count);
+      readAll(oiio::PixelType::UInt8, buf.data());
+      permute([&](size_t k, int c) { return c == alpha ? linear[buf[k]] : colour[buf[k]]; });
     }
   }
+  if (exr) image.metadata = exrStringAttributes(path);
   return image;
 }
 
 // ---------------------------------------------------------------------------------------------
-// libpng (simplified API of libpng 1.6)
+// PFM output. OpenImageIO 2.4 (Debian 12) reads PFM but has no PFM writer, so these few lines
+// write it: "PF" (RGB) or "Pf" (grey), the size, a scale whose sign gives the byte order
+// (negative: little-endian), then the rows bottom to top (as pbrt-v4's WritePFM,
+// src/pbrt/util/image.cpp).
 
-void writePng(const std::string& path, const Image& image) {
-  const ColorLayout layout = colorLayout(image, path);
+void writePfm(const std::string& path, const std::string& report_as, const Image& image,
+              const std::vector<int>& source) {
+  const int nc = static_cast<int>(source.size());
+  std::string out = fmt::format("{}\n{} {}\n{}\n", nc == 3 ? "PF" : "Pf", image.width,
+                                image.height,
+                                std::endian::native == std::endian::little ? "-1" : "1");
+  const size_t header = out.size();
+  out.resize(header + static_cast<size_t>(image.width) * image.height * nc * sizeof(float));
+  char* p = out.data() + header;
+  for (int y = image.height - 1; y >= 0; --y)
+    for (int x = 0; x < image.width; ++x)
+      for (int c : source) {
+        const float v = image.at(x, y, c);
+        std::memcpy(p, &v, sizeof v);
+        p += sizeof v;
+      }
+  std::ofstream f(path, std::ios::binary);
+  f.write(out.data(), static_cast<std::streamsize>(out.size()));
+  f.close();
+  if (!f) fail(report_as, fmt::format("cannot write image: {}", std::strerror(errno)));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing through OpenImageIO (all formats but EXR and PFM)
+
+void writeWithOiio(const std::string& path, const std::string& report_as, const Image& image,
+                   ImageFormat format, const ImageWriteOptions& options) {
+  ColorLayout layout = colorLayout(image, report_as);
+  // Formats without alpha (pbrt-v4 writes RGB only too); HDR stores exactly three channels.
+  const bool alpha_ok =
+      format == ImageFormat::Png || format == ImageFormat::Tiff || format == ImageFormat::Tga;
+  if (layout.has_alpha && !alpha_ok) {
+    layout.source.pop_back();
+    layout.has_alpha = false;
+  }
+  if (format == ImageFormat::Pfm) {
+    writePfm(path, report_as, image, layout.source);
+    return;
+  }
+  if (format == ImageFormat::Hdr && layout.source.size() == 1)
+    layout.source = {layout.source[0], layout.source[0], layout.source[0]};
   const int spp = static_cast<int>(layout.source.size());
-  png_image png{};
-  png.version = PNG_IMAGE_VERSION;
-  png.width = static_cast<png_uint_32>(image.width);
-  png.height = static_cast<png_uint_32>(image.height);
-  png.format =
-      (spp >= 3 ? PNG_FORMAT_FLAG_COLOR : 0) | (layout.has_alpha ? PNG_FORMAT_FLAG_ALPHA : 0);
-  std::vector<png_byte> bytes(static_cast<size_t>(image.width) * image.height * spp);
+  const int colour_channels = spp - (layout.has_alpha ? 1 : 0);
+
+  const bool eight_bit =
+      format == ImageFormat::Png || format == ImageFormat::Jpeg || format == ImageFormat::Tga;
+  const bool sixteen =
+      format == ImageFormat::Tiff && options.tiff_format == TiffSampleFormat::UInt16;
+  oiio::WriteSpec spec;
+  spec.width = image.width;
+  spec.height = image.height;
+  spec.type = eight_bit ? oiio::PixelType::UInt8
+              : sixteen ? oiio::PixelType::UInt16
+                        : oiio::PixelType::Float;
+  spec.channel_names =
+      colour_channels == 1 ? std::vector<std::string>{"Y"} : std::vector<std::string>{"R", "G", "B"};
+  if (layout.has_alpha) {
+    spec.channel_names.push_back("A");
+    spec.alpha_channel = spp - 1;
+  }
+  if (eight_bit) spec.color_space = "sRGB";
+  if (format == ImageFormat::Tiff) spec.compression = "zip";
+  if (format == ImageFormat::Jpeg) spec.compression = "jpeg:95";
+
+  // Interleaved pixels in the output type: 8-bit sRGB-encoded, 16-bit linear, or floats.
+  const size_t n = static_cast<size_t>(image.width) * image.height * spp;
+  std::vector<float> f(eight_bit || sixteen ? 0 : n);
+  std::vector<uint8_t> u8(eight_bit ? n : 0);
+  std::vector<uint16_t> u16(sixteen ? n : 0);
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x)
       for (int c = 0; c < spp; ++c) {
-        float v = image.at(x, y, layout.source[c]);
-        v = std::clamp(std::isnan(v) ? 0.0f : v, 0.0f, 1.0f);
-        const bool alpha = layout.has_alpha && c == spp - 1;
-        if (!alpha) v = linearToSrgb(v);
-        bytes[(static_cast<size_t>(y) * image.width + x) * spp + c] =
-            static_cast<png_byte>(std::lround(v * 255.0f));
+        const size_t i = (static_cast<size_t>(y) * image.width + x) * spp + c;
+        const float v = image.at(x, y, layout.source[c]);
+        const float clamped = std::clamp(std::isnan(v) ? 0.0f : v, 0.0f, 1.0f);
+        if (eight_bit) {
+          const bool alpha = layout.has_alpha && c == spp - 1;
+          u8[i] = static_cast<uint8_t>(
+              std::lround((alpha ? clamped : linearToSrgb(clamped)) * 255.0f));
+        } else if (sixteen) {
+          u16[i] = static_cast<uint16_t>(std::lround(clamped * 65535.0f));
+        } else {
+          f[i] = v;
+        }
       }
-  if (!png_image_write_to_file(&png, path.c_str(), 0, bytes.data(), 0, nullptr)) {
-    std::string msg = png.message;
-    png_image_free(&png);
-    fail(path, "cannot write PNG: " + msg);
-  }
+  const void* data = eight_bit ? static_cast<const void*>(u8.data())
+                     : sixteen ? static_cast<const void*>(u16.data())
+                               : static_cast<const void*>(f.data());
+  std::string error;
+  if (!oiioApi().write(path, spec, data, &error))
+    fail(report_as, fmt::format("cannot write image: {}", error));
 }
 
-Image readPng(const std::string& path) {
-  png_image png{};
-  png.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&png, path.c_str())) {
-    std::string msg = png.message;
-    png_image_free(&png);
-    fail(path, "cannot read PNG: " + msg);
-  }
-  const bool wide = png.format & PNG_FORMAT_FLAG_LINEAR;  // 16-bit file
-  png.format &= ~(PNG_FORMAT_FLAG_COLORMAP | PNG_FORMAT_FLAG_AFIRST | PNG_FORMAT_FLAG_BGR);
-  const int spp = PNG_IMAGE_SAMPLE_CHANNELS(png.format);
-  const bool alpha = png.format & PNG_FORMAT_FLAG_ALPHA;
-  std::optional<Image> checked;
+}  // namespace
+
+Image readImage(const std::string& path, const ImageReadOptions& options) {
+  Image image;
   try {
-    checked.emplace(static_cast<int>(png.width), static_cast<int>(png.height),
-                    colorChannelNames(spp, alpha));
-  } catch (...) {
-    png_image_free(&png);  // the memory budget refused the size the header claims
+    // Only regular files (a FIFO would hang the reader, /dev/zero never end); the size limit is
+    // the EXR reader's, whose header check reads the whole file.
+    requireRegularFile(path, "image file", uint64_t{16} << 30);
+    image = readWithOiio(path, options);
+  } catch (const Error& e) {
+    if (!e.loc().valid()) fail(path, e.message());  // e.g. the memory budget: name the file
     throw;
+  } catch (const std::exception& e) {
+    fail(path, fmt::format("cannot read image: {}", e.what()));
   }
-  Image& image = *checked;
-  std::vector<png_byte> bytes(PNG_IMAGE_SIZE(png));
-  if (!png_image_finish_read(&png, nullptr, bytes.data(), 0, nullptr)) {
-    std::string msg = png.message;
-    png_image_free(&png);
-    fail(path, "cannot read PNG: " + msg);
-  }
-  const size_t n = image.pixels.size();
-  for (size_t i = 0; i < n; ++i) {
-    const bool is_alpha = alpha && static_cast<int>(i % spp) == spp - 1;
-    if (wide) {
-      // 16-bit: libpng returns linear values (alpha premultiplied; undo that).
-      uint16_t s;
-      std::memcpy(&s, bytes.data() + 2 * i, 2);
-      image.pixels[i] = s / 65535.0f;
-    } else {
-      const float v = bytes[i] / 255.0f;
-      image.pixels[i] = is_alpha ? v : srgbToLinear(v);
-    }
-  }
-  if (wide && alpha) {
-    for (size_t p = 0; p < n; p += spp) {
-      const float a = image.pixels[p + spp - 1];
-      for (int c = 0; c < spp - 1; ++c)
-        image.pixels[p + c] = a > 0 ? image.pixels[p + c] / a : 0.0f;
-    }
-  }
-  return image;
-}
-
-}  // namespace
-
-namespace {
-Image readImageAsIs(const std::string& path);
-}  // namespace
-
-Image readImage(const std::string& path) {
-  Image image = readImageAsIs(path);
   // Every number read from a file is finite: NaN and infinite pixels (EXR, float TIFF) become 0,
   // with a warning, so that textures, environment maps and their sampling tables stay finite.
   size_t bad = 0;
@@ -451,59 +573,27 @@ Image readImage(const std::string& path) {
   return image;
 }
 
-namespace {
-
-Image readImageAsIs(const std::string& path) {
-  const ImageFormat format = imageFormatFromPath(path);
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) fail(path, "no such image file");
-  try {
-    switch (format) {
-      case ImageFormat::Exr:
-        return readExr(path);
-      case ImageFormat::Tiff:
-        return readTiff(path);
-      case ImageFormat::Png:
-        return readPng(path);
-    }
-  } catch (const Error& e) {
-    if (!e.loc().valid()) fail(path, e.message());  // e.g. the memory budget: name the file
-    throw;
-  } catch (const std::exception& e) {
-    fail(path, fmt::format("cannot read image: {}", e.what()));
-  }
-  fail(path, "unknown image format");
-}
-
-}  // namespace
-
 void writeImage(const std::string& path, const Image& image, const ImageWriteOptions& options) {
   const ImageFormat format = imageFormatFromPath(path);
   if (image.pixels.size() !=
       static_cast<size_t>(image.width) * image.height * image.channels.size())
     fail(path, "image pixel buffer does not match its size and channels");
   if (image.width <= 0 || image.height <= 0) fail(path, "cannot write an empty image");
+  if (format != ImageFormat::Exr) colorLayout(image, path);  // fail before creating a file
   writeAtomically(path, [&](const std::string& tmp) {
-    switch (format) {
-      case ImageFormat::Exr: {
-        writeExr(tmp, image);
-        // OpenEXR finishes the file (line offsets) in a destructor that swallows errors: read it
-        // back, so that a full disk is an error and not a truncated image.
-        bool complete = false;
-        try {
-          complete = Imf::InputFile(tmp.c_str()).isComplete();
-        } catch (const std::exception&) {
-        }
-        if (!complete) fail(path, "writing failed: the written EXR file is incomplete (disk full?)");
-        break;
-      }
-      case ImageFormat::Tiff:
-        writeTiff(tmp, image, options.tiff_format);
-        break;
-      case ImageFormat::Png:
-        writePng(tmp, image);
-        break;
+    if (format != ImageFormat::Exr) {
+      writeWithOiio(tmp, path, image, format, options);
+      return;
     }
+    writeExr(tmp, image);
+    // OpenEXR finishes the file (line offsets) in a destructor that swallows errors: read it
+    // back, so that a full disk is an error and not a truncated image.
+    bool complete = false;
+    try {
+      complete = Imf::InputFile(tmp.c_str()).isComplete();
+    } catch (const std::exception&) {
+    }
+    if (!complete) fail(path, "writing failed: the written EXR file is incomplete (disk full?)");
   });
 }
 

@@ -1,11 +1,22 @@
-// Images in memory and on disk (EXR, TIFF, PNG), chosen by file extension.
+// Images in memory and on disk. Reading goes through OpenImageIO for every format it knows
+// (EXR, PNG, TIFF, TGA, PFM, HDR, JPEG, BMP, GIF, PNM, ...); writing goes through OpenImageIO
+// for PNG, TIFF, PFM, HDR, JPEG and TGA, and through OpenEXR for EXR (see writeExr in image.cpp).
 //
-// Pixel values in memory are always linear floats. Encodings on disk:
+// Pixel values in memory are always linear floats. Conversions (pbrt-v4's conventions,
+// src/pbrt/util/image.cpp, Image::Read and its readers):
+//   float data (EXR half/float, PFM, HDR, float TIFF): linear as stored; PFM rows are stored
+//     bottom to top and scaled by |scale| (the scale's sign gives the byte order), HDR is RGBE.
+//   8-bit data (PNG, TGA, JPEG, 8-bit TIFF, ...): sRGB-encoded unless ImageReadOptions::encoding
+//     says otherwise ("linear", "gamma g"), or the file itself says it is linear (a PNG gAMA of 1).
+//   16-bit data: PNG like 8-bit (pbrt-v4 applies the encoding to 16-bit PNGs); 16-bit TIFF and
+//     the rest linear (lensim writes 16-bit TIFFs linear), unless the encoding says otherwise.
+//   Alpha is never decoded and never premultiplied.
+// On disk when writing:
 //   .exr          32-bit float per channel, any channel names, string metadata in the header.
-//   .tif/.tiff    write: 16-bit unsigned (linear, clamped to [0,1]) or 32-bit IEEE float;
-//                 read: 8-bit (sRGB-encoded, decoded to linear), 16-bit (linear) or 32-bit float.
-//   .png          write: 8-bit, sRGB transfer curve, clamped to [0,1];
-//                 read: 8-bit (sRGB, decoded to linear) or 16-bit (linearised by libpng).
+//   .tif/.tiff    16-bit unsigned (linear, clamped to [0,1]) or 32-bit IEEE float.
+//   .png/.tga     8-bit, sRGB transfer curve, clamped to [0,1], with alpha if the image has A.
+//   .jpg/.jpeg    8-bit sRGB (quality 95), no alpha.
+//   .pfm          32-bit float, R,G,B or Y, no alpha.   .hdr  RGBE (Radiance), R,G,B, no alpha.
 // Writes go to a temporary file in the destination directory that is renamed over the target,
 // so a crash never leaves a half-written image under the final name.
 #pragma once
@@ -55,19 +66,28 @@ struct ImageWriteOptions {
   TiffSampleFormat tiff_format = TiffSampleFormat::Float32;
 };
 
-/// Image file formats lensim reads and writes.
-enum class ImageFormat { Exr, Tiff, Png };
+/// Image file formats lensim writes.
+enum class ImageFormat { Exr, Tiff, Png, Pfm, Hdr, Jpeg, Tga };
 
-/// The format for a path's extension (case-insensitive); throws lensim::Error for others.
+/// The format to write for a path's extension (case-insensitive); throws lensim::Error for others.
 ImageFormat imageFormatFromPath(const std::string& path);
 
-/// Reads an EXR, TIFF or PNG file (by extension) into linear floats. NaN and infinite values are
-/// read as 0 (with a warning). Throws lensim::Error naming the file if it is missing, unreadable,
-/// unsupported or larger than the memory budget allows.
-Image readImage(const std::string& path);
+/// Options for readImage.
+struct ImageReadOptions {
+  /// How 8- and 16-bit pixel values become linear: "sRGB", "linear" or "gamma g" (value^g), as
+  /// pbrt-v4's "encoding" parameter; empty: the file's own convention (see the top of this file).
+  /// Float data is always linear and ignores it.
+  std::string encoding;
+};
+
+/// Reads an image file into linear floats (see the top of this file). NaN and infinite values are
+/// read as 0 (with a warning). Throws lensim::Error naming the file (with OpenImageIO's reason)
+/// if it is missing, not a regular file, unreadable, corrupt, of an unknown format, or larger
+/// than the memory budget allows (checked from the header, before the pixels are read).
+Image readImage(const std::string& path, const ImageReadOptions& options = {});
 
 /// Writes `image` to `path` in the format its extension names, atomically (temporary file in the
-/// same directory, then rename). PNG and TIFF need channels R,G,B (optionally A) or Y.
+/// same directory, then rename). Formats other than EXR need channels R,G,B (optionally A) or Y.
 /// Throws lensim::Error naming the file on failure and leaves no file behind.
 void writeImage(const std::string& path, const Image& image, const ImageWriteOptions& options = {});
 

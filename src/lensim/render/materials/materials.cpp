@@ -38,21 +38,19 @@ Materials::Materials(const scene::Scene& scene, const Textures& textures)
     if (it == loaded.end()) {
       io::Image im;
       try {
-        im = io::readImage(m.normal_map);
+        im = io::readImage(m.normal_map, {.encoding = "linear"});  // as pbrt-v4 reads them
       } catch (const Error& e) {
         throw Error(m.loc, fmt::format("normal map: {}", e.what()));
       }
       auto nm = std::make_shared<NormalMap>();
       nm->width = im.width;
       nm->height = im.height;
-      const bool eight_bit = io::imageFormatFromPath(m.normal_map) == io::ImageFormat::Png;
       const int nc = im.channelCount();
       for (int y = 0; y < im.height; ++y)
         for (int x = 0; x < im.width; ++x) {
           double c[3];
           for (int k = 0; k < 3; ++k) {
-            float v = im.at(x, y, std::min(k, nc - 1));
-            if (eight_bit) v = io::linearToSrgb(v);  // pbrt reads normal maps linearly
+            const float v = im.at(x, y, std::min(k, nc - 1));
             c[k] = 2.0 * v - 1.0;
           }
           Vec3 n{c[0], c[1], c[2]};

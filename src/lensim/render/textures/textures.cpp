@@ -36,29 +36,28 @@ struct RgbImage {
 };
 
 RgbImage loadRgb(const scene::Texture& t) {
-  io::Image im = io::readImage(t.filename);
+  // 8- and 16-bit files are decoded with the texture's "encoding" (sRGB by default), float files
+  // are linear (io/image.h).
+  io::Image im = io::readImage(t.filename, {.encoding = t.encoding});
   RgbImage out;
   out.width = im.width;
   out.height = im.height;
   out.rgb.resize(size_t(im.width) * size_t(im.height) * 3);
   const int nc = im.channelCount();
+  // R, G, B by name; a grey image (Y, or Y and A) gives Y to all three; else the first channels.
+  const auto y = im.channelIndex("Y");
   auto ch = [&](const char* name, int fallback) {
-    auto c = im.channelIndex(name);
-    return c ? *c : std::min(fallback, nc - 1);
+    if (auto c = im.channelIndex(name)) return *c;
+    if (y) return *y;
+    return std::min(fallback, nc - 1);
   };
   const int cr = ch("R", 0), cg = ch("G", 1), cb = ch("B", 2);
-  // 8-bit files were decoded with the sRGB curve; a file pbrt would read as linear or with a
-  // plain gamma is re-encoded first.
-  const bool eight_bit = io::imageFormatFromPath(t.filename) == io::ImageFormat::Png;
-  for (int y = 0; y < im.height; ++y)
+  for (int yy = 0; yy < im.height; ++yy)
     for (int x = 0; x < im.width; ++x) {
-      float v[3] = {im.at(x, y, cr), im.at(x, y, cg), im.at(x, y, cb)};
-      for (float& c : v) {
-        if (eight_bit && t.encoding == "linear") c = io::linearToSrgb(c);
-        if (eight_bit && t.encoding.rfind("gamma", 0) == 0)
-          c = std::pow(io::linearToSrgb(c), std::stof(t.encoding.substr(6)));
-      }
-      for (int c = 0; c < 3; ++c) out.rgb[(size_t(y) * im.width + x) * 3 + c] = v[c];
+      float* o = &out.rgb[(size_t(yy) * im.width + x) * 3];
+      o[0] = im.at(x, yy, cr);
+      o[1] = im.at(x, yy, cg);
+      o[2] = im.at(x, yy, cb);
     }
   return out;
 }

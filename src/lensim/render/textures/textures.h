@@ -3,8 +3,9 @@
 // evaluate to spectra; RGB values become spectra through the sigmoid-polynomial upsampling).
 //
 // Texture classes: constant, scale, mix, directionmix (|n . dir| of tex1), checkerboard (2-D and
-// 3-D), imagemap (EXR/PNG/TIFF; bilinear lookup, wrap repeat/clamp/black/octahedralsphere as
-// repeat, scale, invert; 8-bit files are sRGB-decoded unless "encoding" says otherwise), the
+// 3-D), imagemap (any format io::readImage reads; bilinear lookup, wrap
+// repeat/clamp/black/octahedralsphere as repeat, scale, invert; 8-bit files are sRGB-decoded
+// unless "encoding" says otherwise), the
 // procedural fbm, wrinkled, windy, marble, dots and bilerp (procedural.h). Mappings:
 // uv, spherical, cylindrical, planar with uscale/vscale/udelta/vdelta.
 #pragma once

@@ -1,0 +1,105 @@
+// The OpenImageIO module (liblensim_oiio.so): see oiio_module.h. Loaded with dlopen by image.cpp.
+#include "lensim/io/oiio_module.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <memory>
+
+namespace lensim::io::oiio {
+namespace {
+
+using OIIO::ImageInput;
+using OIIO::ImageOutput;
+using OIIO::ImageSpec;
+using OIIO::TypeDesc;
+
+std::string trimmed(std::string t) {
+  while (!t.empty() && (t.back() == '\n' || t.back() == ' ')) t.pop_back();
+  return t.empty() ? "unknown error" : t;
+}
+
+TypeDesc typeOf(PixelType t) {
+  switch (t) {
+    case PixelType::UInt8:
+      return TypeDesc::UINT8;
+    case PixelType::UInt16:
+      return TypeDesc::UINT16;
+    case PixelType::UInt32:
+      return TypeDesc::UINT32;
+    case PixelType::Float:
+      return TypeDesc::FLOAT;
+  }
+  return TypeDesc::FLOAT;
+}
+
+void* openImage(const std::string& path, Spec* out, std::string* error) {
+  ImageSpec config;
+  // Alpha as stored: OpenImageIO would premultiply PNG, TGA and TIFF colours by it otherwise.
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  std::unique_ptr<ImageInput> in = ImageInput::open(path, &config);
+  if (!in) {
+    *error = trimmed(OIIO::geterror());
+    return nullptr;
+  }
+  const ImageSpec& s = in->spec();
+  out->width = s.width;
+  out->height = s.height;
+  out->nchannels = s.nchannels;
+  out->alpha_channel = s.alpha_channel;
+  out->deep = s.deep;
+  out->is_float = s.format.is_floating_point();
+  out->bytes_per_channel = static_cast<int>(s.format.size());
+  out->bits_per_sample = s.get_int_attribute("oiio:BitsPerSample", out->bytes_per_channel * 8);
+  out->format = in->format_name();
+  out->color_space = s.get_string_attribute("oiio:ColorSpace");
+  out->channel_names.assign(s.channelnames.begin(), s.channelnames.end());
+  out->channel_is_uint32.assign(s.nchannels, false);
+  for (int c = 0; c < s.nchannels; ++c) {
+    const TypeDesc t = c < static_cast<int>(s.channelformats.size()) ? s.channelformats[c] : s.format;
+    out->channel_is_uint32[c] = t.basetype == TypeDesc::UINT32 || t.basetype == TypeDesc::INT32;
+  }
+  return in.release();
+}
+
+bool readImage(void* reader, PixelType type, void* data, std::string* error) {
+  auto* in = static_cast<ImageInput*>(reader);
+  if (in->read_image(0, 0, 0, in->spec().nchannels, typeOf(type), data)) return true;
+  *error = trimmed(in->geterror());
+  return false;
+}
+
+void closeImage(void* reader) {
+  auto* in = static_cast<ImageInput*>(reader);
+  in->close();
+  (void)in->geterror();  // OpenImageIO complains at exit about errors nobody collected
+  delete in;
+}
+
+bool writeImage(const std::string& path, const WriteSpec& w, const void* data,
+                std::string* error) {
+  const TypeDesc type = typeOf(w.type);
+  ImageSpec spec(w.width, w.height, static_cast<int>(w.channel_names.size()), type);
+  spec.channelnames = w.channel_names;
+  spec.alpha_channel = w.alpha_channel;
+  if (w.alpha_channel >= 0) spec.attribute("oiio:UnassociatedAlpha", 1);  // never un-premultiply
+  if (!w.color_space.empty()) spec.attribute("oiio:ColorSpace", w.color_space);
+  if (!w.compression.empty()) spec.attribute("compression", w.compression);
+  std::unique_ptr<ImageOutput> out = ImageOutput::create(path);
+  if (!out) {
+    *error = trimmed(OIIO::geterror());
+    return false;
+  }
+  bool ok = out->open(path, spec) && out->write_image(type, data);
+  ok = out->close() && ok;
+  if (!ok) *error = trimmed(out->geterror());
+  return ok;
+}
+
+const Api kApi = {kApiVersion, openImage, readImage, closeImage, writeImage};
+
+}  // namespace
+}  // namespace lensim::io::oiio
+
+extern "C" __attribute__((visibility("default"))) const lensim::io::oiio::Api* lensim_oiio_api() {
+  return &lensim::io::oiio::kApi;
+}
