@@ -4,6 +4,7 @@
 // hero wavelength).
 #include "lensim/render/materials.h"
 #include "lensim/render/measured.h"
+#include "lensim/render/measured_rgl.h"
 
 #include <fmt/format.h>
 
@@ -180,6 +181,9 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
   };
   if (isV3Material(m.type)) return makeV3BxDF(m, tx, ctx, lambda, regularize);
   if (m.type == "measured") {
+    if (m.measured_rgl)
+      return std::make_shared<RGLMeasuredBxDF>(RGLMeasuredBRDF::loadCached(m.measured_file),
+                                               lambda);
     return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
   }
   if (m.type == "diffuse") {
