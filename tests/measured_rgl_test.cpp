@@ -583,6 +583,20 @@ TEST(RGLMeasuredErrors, MalformedFilesGiveLocatedErrors) {
   EXPECT_NE(e.find("overflows 64 bits"), std::string::npos) << e;
 }
 
+TEST(RGLMeasuredErrors, AFileThatIsNeitherFormatIsRefusedAtTheParameter) {
+  const auto dir = std::filesystem::temp_directory_path() / "lensim_measured_rgl_test";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "m.txt") << "not a measured BRDF\n";
+  std::ofstream(dir / "t.pbrt") << "WorldBegin\nMaterial \"measured\" \"string filename\" "
+                                   "\"m.txt\"\nShape \"sphere\"\n";
+  const auto r = lensim::test::runLensim("check " + (dir / "t.pbrt").string());
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("t.pbrt:2:"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("expected an RGL measured BSDF (a .bsdf tensor file) or a pbrt-v2"),
+            std::string::npos)
+      << r.out;
+}
+
 TEST(RGLMeasuredErrors, TablesBeyondTheMemoryBudgetAreRefused) {
   const uint64_t saved = memoryBudgetBytes();
   setMemoryBudgetBytes(uint64_t{1} << 18);  // the lambertian file's tables take ~0.9 MiB
