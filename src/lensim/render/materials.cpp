@@ -41,7 +41,7 @@ Materials::Materials(const scene::Scene& scene, const Textures& textures)
       try {
         im = io::readImage(m.normal_map);
       } catch (const Error& e) {
-        throw Error(m.loc, fmt::format("normal map: {}", e.what()));
+        throw Error(m.loc, fmt::format("normal map: {}", nestedMessage(e)));
       }
       auto nm = std::make_shared<NormalMap>();
       nm->width = im.width;
