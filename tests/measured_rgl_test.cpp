@@ -24,9 +24,9 @@
 
 #include "chi2.h"
 #include "cli_run.h"
-#include "lensim/render/measured_rgl.h"
-#include "lensim/render/piecewise_linear_2d.h"
-#include "lensim/render/sampling.h"
+#include "lensim/render/materials/measured_rgl.h"
+#include "lensim/sampling/piecewise_linear_2d.h"
+#include "lensim/sampling/sampling.h"
 #include "lensim/util/error.h"
 #include "lensim/util/limits.h"
 

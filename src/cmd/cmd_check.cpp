@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "lensim/camera/realistic.h"
-#include "lensim/render/measured_rgl.h"
+#include "lensim/render/materials/measured_rgl.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/format.h"
 #include "lensim/scene/parser.h"

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "lensim/camera/projective.h"
-#include "lensim/render/sampling.h"
+#include "lensim/sampling/sampling.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 

@@ -6,7 +6,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "lensim/render/filter.h"
+#include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"

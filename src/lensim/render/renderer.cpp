@@ -16,11 +16,11 @@
 #include <vector>
 
 #include "lensim/camera/camera.h"
-#include "lensim/render/filter.h"
-#include "lensim/render/integrator.h"
+#include "lensim/render/integrators/integrator.h"
+#include "lensim/render/integrators/volpath.h"
+#include "lensim/render/media/media.h"
 #include "lensim/render/parts.h"
-#include "lensim/render/media.h"
-#include "lensim/render/volpath.h"
+#include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/limits.h"
