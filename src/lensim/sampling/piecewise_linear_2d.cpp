@@ -130,8 +130,8 @@ PiecewiseLinear2D::Corners PiecewiseLinear2D::corners(std::span<const double> pa
   return c;
 }
 
-double PiecewiseLinear2D::blend(const std::vector<float>& table, std::size_t stride,
-                                std::size_t i, const Corners& c) {
+double PiecewiseLinear2D::blend(const std::vector<float>& table, std::size_t stride, std::size_t i,
+                                const Corners& c) {
   double v = 0;
   for (int k = 0; k < c.n; ++k) v += c.weight[k] * table[c.slice[k] * stride + i];
   return v;
@@ -162,9 +162,8 @@ PiecewiseLinear2D::Sample PiecewiseLinear2D::sample(Vec2 u, std::span<const doub
 
   // The row: marginal CDF, then the position t inside the row strip.
   auto marginal = [&](std::size_t k) { return blend(marginal_cdf_, std::size_t(ny_), k, c); };
-  const std::size_t row = findInterval(std::size_t(ny_), [&](std::size_t k) {
-    return marginal(k) < u.y;
-  });
+  const std::size_t row =
+      findInterval(std::size_t(ny_), [&](std::size_t k) { return marginal(k) < u.y; });
   double y = u.y - marginal(row);
   const std::size_t r = row * std::size_t(nx_);
   const double r0 = blend(conditional_cdf_, per, r + nx_ - 1, c);
@@ -177,9 +176,8 @@ PiecewiseLinear2D::Sample PiecewiseLinear2D::sample(Vec2 u, std::span<const doub
     return (1 - t) * blend(conditional_cdf_, per, r + k, c) +
            t * blend(conditional_cdf_, per, r + nx_ + k, c);
   };
-  const std::size_t col = findInterval(std::size_t(nx_), [&](std::size_t k) {
-    return conditional(k) < x;
-  });
+  const std::size_t col =
+      findInterval(std::size_t(nx_), [&](std::size_t k) { return conditional(k) < x; });
   x -= conditional(col);
   const std::size_t i = r + col;
   const double v00 = blend(data_, per, i, c), v10 = blend(data_, per, i + 1, c),
@@ -211,8 +209,8 @@ PiecewiseLinear2D::Sample PiecewiseLinear2D::invert(Vec2 p, std::span<const doub
   const double row_total = (1 - t) * r0 + t * r1;
   x = row_total > 0 ? x / row_total : 0;
   // Row: the marginal CDF up to the row plus the strip's part.
-  const double y = t * (r0 + 0.5 * t * (r1 - r0)) +
-                   blend(marginal_cdf_, std::size_t(ny_), std::size_t(row), c);
+  const double y =
+      t * (r0 + 0.5 * t * (r1 - r0)) + blend(marginal_cdf_, std::size_t(ny_), std::size_t(row), c);
   return {{x, y}, pdf * (nx_ - 1) * (ny_ - 1)};
 }
 

@@ -8,8 +8,8 @@
 
 #include <fmt/format.h>
 
-#include "lensim/sampling/sampling.h"
 #include "lensim/render/materials/tensor_file.h"
+#include "lensim/sampling/sampling.h"
 #include "lensim/util/error.h"
 #include "lensim/util/file.h"
 #include "lensim/util/limits.h"
@@ -19,10 +19,18 @@ namespace lensim::render {
 namespace {
 
 // Unit-square coordinates of the parameterisation (pbrt-v4 MeasuredBxDF::theta2u etc.).
-inline double theta2u(double theta) { return std::sqrt(std::max(0.0, theta) * (2 / kPi)); }
-inline double phi2u(double phi) { return (phi + kPi) / (2 * kPi); }
-inline double u2theta(double u) { return u * u * (kPi / 2); }
-inline double u2phi(double u) { return (2 * u - 1) * kPi; }
+inline double theta2u(double theta) {
+  return std::sqrt(std::max(0.0, theta) * (2 / kPi));
+}
+inline double phi2u(double phi) {
+  return (phi + kPi) / (2 * kPi);
+}
+inline double u2theta(double u) {
+  return u * u * (kPi / 2);
+}
+inline double u2phi(double u) {
+  return (2 * u - 1) * kPi;
+}
 
 // Elevation of a unit vector, accurate near the pole (2 asin(|w - z| / 2)).
 inline double elevation(const Vec3& w) {
@@ -53,13 +61,13 @@ class Fields {
       tf_.fail(f.header_offset, fmt::format("field \"{}\" has type {}; expected {}", f.name,
                                             tensorTypeName(f.dtype), tensorTypeName(dtype)));
     if (f.shape.size() != ndim)
-      tf_.fail(f.header_offset, fmt::format("field \"{}\" has {} dimensions; expected {}",
-                                            f.name, f.shape.size(), ndim));
+      tf_.fail(f.header_offset, fmt::format("field \"{}\" has {} dimensions; expected {}", f.name,
+                                            f.shape.size(), ndim));
     for (std::size_t d = 0; d < ndim; ++d)
-      if (f.shape[d] < min_extent || f.shape[d] > (uint64_t{1} << 31))
+      if (f.shape[d] < min_extent || f.shape[d] > (uint64_t{1} << 30))
         tf_.fail(f.header_offset,
                  fmt::format("field \"{}\" has {} entries along dimension {}; expected {} to "
-                             "2^31",
+                             "2^30",
                              f.name, f.shape[d], d + 1, min_extent));
   }
   void expectExtent(const TensorField& f, std::size_t d, uint64_t n, std::string_view why) const {
@@ -75,10 +83,10 @@ class Fields {
     for (uint64_t i = 0; i < f.count; ++i) {
       const double x = tf_.float32At(f, i);
       if (!(x >= lo && x <= hi))
-        tf_.fail(tf_.byteOffset(f, i),
-                 fmt::format("value {} of field \"{}\" is {}; expected {}", i, f.name,
-                             std::isnan(x) ? std::string("nan") : fmt::format("{:g}", x),
-                             expected));
+        tf_.fail(
+            tf_.byteOffset(f, i),
+            fmt::format("value {} of field \"{}\" is {}; expected {}", i, f.name,
+                        std::isnan(x) ? std::string("nan") : fmt::format("{:g}", x), expected));
       v[i] = float(x);
     }
     return v;
@@ -145,8 +153,7 @@ RGLMeasuredBRDF RGLMeasuredBRDF::parse(std::string bytes, const std::string& pat
   const std::size_t ld = lum_f.shape.size();
   for (const TensorField* f : {&vndf_f, &lum_f})
     for (std::size_t d = 2; d < 4; ++d)
-      if (f->shape[d] < 2)
-        fields.expectExtent(*f, d, 2, "at least 2 nodes of the unit square");
+      if (f->shape[d] < 2) fields.expectExtent(*f, d, 2, "at least 2 nodes of the unit square");
   fields.expectExtent(*spec_f, 3, lum_f.shape[ld - 2], "as many as the luminance table");
   fields.expectExtent(*spec_f, 4, lum_f.shape[ld - 1], "as many as the luminance table");
   if (const TensorField* j = tf.find("jacobian")) {
@@ -213,14 +220,14 @@ RGLMeasuredBRDF RGLMeasuredBRDF::parse(std::string bytes, const std::string& pat
   {
     const std::vector<float> v = fields.floats(vndf_f, 0, kMaxRGLValue, nonneg);
     fields.positiveSlices(vndf_f, v, int(vndf_f.shape[3]), int(vndf_f.shape[2]));
-    b.vndf_ = PiecewiseLinear2D(v, int(vndf_f.shape[3]), int(vndf_f.shape[2]), {phi, theta},
-                                M::Density);
+    b.vndf_ =
+        PiecewiseLinear2D(v, int(vndf_f.shape[3]), int(vndf_f.shape[2]), {phi, theta}, M::Density);
   }
   {
     const std::vector<float> v = fields.floats(lum_f, 0, kMaxRGLValue, nonneg);
     fields.positiveSlices(lum_f, v, int(lum_f.shape[3]), int(lum_f.shape[2]));
-    b.luminance_ = PiecewiseLinear2D(v, int(lum_f.shape[3]), int(lum_f.shape[2]), {phi, theta},
-                                     M::Density);
+    b.luminance_ =
+        PiecewiseLinear2D(v, int(lum_f.shape[3]), int(lum_f.shape[2]), {phi, theta}, M::Density);
   }
   if (b.rgb_) {
     b.wavelengths_ = {0, 1, 2};  // the channel index is the third parameter (as in Mitsuba)
@@ -361,8 +368,8 @@ SampledSpectrum RGLMeasuredBxDF::f(const Vec3& wo, const Vec3& wi, TransportMode
   return wo.z < 0 ? brdf_->f(-wo, -wi, lambda_) : brdf_->f(wo, wi, lambda_);
 }
 
-std::optional<BSDFSample> RGLMeasuredBxDF::sample_f(const Vec3& wo, double, Vec2 u,
-                                                    TransportMode, ReflTrans allowed) const {
+std::optional<BSDFSample> RGLMeasuredBxDF::sample_f(const Vec3& wo, double, Vec2 u, TransportMode,
+                                                    ReflTrans allowed) const {
   if (!allows(allowed, ReflTrans::Reflection) || wo.z == 0) return std::nullopt;
   const bool flip = wo.z < 0;
   std::optional<BSDFSample> bs = brdf_->sample(flip ? -wo : wo, u, lambda_);

@@ -34,8 +34,8 @@
 #include <vector>
 
 #include "lensim/render/materials/bsdf.h"
-#include "lensim/sampling/piecewise_linear_2d.h"
 #include "lensim/render/spectra/spectrum.h"
+#include "lensim/sampling/piecewise_linear_2d.h"
 #include "lensim/util/vec.h"
 
 namespace lensim::render {
@@ -64,8 +64,7 @@ class RGLMeasuredBRDF {
   /// f(wo, wi) in sr^-1 for wo.z > 0 and wi.z > 0 (zero otherwise).
   SampledSpectrum f(const Vec3& wo, const Vec3& wi, const SampledWavelengths& lambda) const;
   /// Samples wi for wo.z > 0; nullopt when the sampled direction is below the surface.
-  std::optional<BSDFSample> sample(const Vec3& wo, Vec2 u,
-                                   const SampledWavelengths& lambda) const;
+  std::optional<BSDFSample> sample(const Vec3& wo, Vec2 u, const SampledWavelengths& lambda) const;
   /// Density of sample() producing wi (sr^-1).
   double pdf(const Vec3& wo, const Vec3& wi) const;
 

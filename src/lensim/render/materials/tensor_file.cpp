@@ -51,18 +51,30 @@ std::size_t tensorTypeSize(TensorField::DType t) {
 std::string_view tensorTypeName(TensorField::DType t) {
   using D = TensorField::DType;
   switch (t) {
-    case D::UInt8: return "uint8";
-    case D::Int8: return "int8";
-    case D::UInt16: return "uint16";
-    case D::Int16: return "int16";
-    case D::UInt32: return "uint32";
-    case D::Int32: return "int32";
-    case D::UInt64: return "uint64";
-    case D::Int64: return "int64";
-    case D::Float16: return "float16";
-    case D::Float32: return "float32";
-    case D::Float64: return "float64";
-    case D::Invalid: break;
+    case D::UInt8:
+      return "uint8";
+    case D::Int8:
+      return "int8";
+    case D::UInt16:
+      return "uint16";
+    case D::Int16:
+      return "int16";
+    case D::UInt32:
+      return "uint32";
+    case D::Int32:
+      return "int32";
+    case D::UInt64:
+      return "uint64";
+    case D::Int64:
+      return "int64";
+    case D::Float16:
+      return "float16";
+    case D::Float32:
+      return "float32";
+    case D::Float64:
+      return "float64";
+    case D::Invalid:
+      break;
   }
   return "invalid";
 }
@@ -90,8 +102,9 @@ TensorFile::TensorFile(std::string bytes, std::string path)
                            size, what, n));
   };
   if (size < sizeof kMagic || std::memcmp(bytes_.data(), kMagic, sizeof kMagic) != 0)
-    fail(0, "not a tensor file: expected the header \"tensor_file\" (an RGL measured BSDF, "
-            ".bsdf)");
+    fail(0,
+         "not a tensor file: expected the header \"tensor_file\" (an RGL measured BSDF, "
+         ".bsdf)");
   need(12, 2, "the version");
   const int major = static_cast<unsigned char>(bytes_[12]);
   const int minor = static_cast<unsigned char>(bytes_[13]);
@@ -130,8 +143,7 @@ TensorFile::TensorFile(std::string bytes, std::string path)
     for (uint64_t d = 0; d < ndim; ++d) {
       const uint64_t extent = readLE(bytes_, at, 8);
       const auto c = checkedMul(f.count, extent);
-      if (!c)
-        fail(at, fmt::format("the shape of field \"{}\" overflows 64 bits", f.name));
+      if (!c) fail(at, fmt::format("the shape of field \"{}\" overflows 64 bits", f.name));
       f.count = *c;
       f.shape.push_back(extent);
       at += 8;
@@ -164,7 +176,8 @@ const TensorField* TensorFile::find(std::string_view name) const {
 const TensorField& TensorFile::require(std::string_view name, std::string_view what) const {
   if (const TensorField* f = find(name)) return *f;
   std::string names;
-  for (const TensorField& f : fields_) names += fmt::format("{}\"{}\"", names.empty() ? "" : ", ", f.name);
+  for (const TensorField& f : fields_)
+    names += fmt::format("{}\"{}\"", names.empty() ? "" : ", ", f.name);
   fail(14, fmt::format("no field \"{}\" ({}); the file has {}", name, what,
                        names.empty() ? std::string("no fields") : names));
 }
