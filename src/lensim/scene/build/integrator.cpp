@@ -31,6 +31,8 @@ void Builder::integrator(const Directive& d) {
     ps.getFloat({"rrthreshold"}, 1);  // pbrt-v3
     if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
     if (type == "volpath") it.type = "volpath";
+  } else if (type == "lighttracer") {
+    it.type = "lighttracer";  // pbrt-v4's LightPathIntegrator (render/integrators/lighttracer.h)
   } else if (type == "directlighting") {
     // As pbrt-v4's --upgrade: direct lighting is a path tracer of depth 1.
     ps.markAllUsed();

@@ -1,0 +1,330 @@
+// The realistic camera's importance (camera.h, CameraWiSample): light arriving from the scene,
+// traced backward through the lens to the film.
+//
+// The measure. generateRay draws a film point uniformly in its pixel (by the filter) and a point
+// q of the sampled region (area A(x)) of the rear-vertex plane, and weighs the ray by
+// w = T cos^4(theta) A / z^2 (realistic.h). A ray's measure on the film side is
+// dA_film cos(theta) d omega_film = dA_film dA_rear cos^4(theta) / z^2, and the lens conserves
+// it (etendue, air on both sides): dA_film cos(theta) d omega_film = dA_front cos(n) d omega_front
+// at the front element. So a pixel's estimate E[w L] is the integral of T L over the rays through
+// the pixel in that measure divided by the pixel's area: the importance per unit front-element
+// area and projected solid angle is T / A_film for every ray that reaches the film, A_film the
+// area of the whole image (the light tracer's normalisation, camera.h), times z^2 / A0 with
+// "simpleweighting" (whose weight has A0 where the irradiance has z^2). No Jacobian of the lens
+// map is needed: the conserved measure carries it.
+//
+// sampleWi draws a point of the front surface (uniform in its projection on the vertex plane,
+// within the clear semi-aperture: density |n_z| / (pi R^2) per unit surface area, n the surface
+// normal), traces the line from the scene point through it into the lens (exact tracer) to the
+// film, and rejects it if the lens stops it, the line meets the front surface first elsewhere
+// (that entry point has its own chance to be drawn), it lands off the film (beyond the filter's
+// margin, film_bounds.h) or outside the region camera rays are drawn from (exit-pupil bounds;
+// v1/v2 scenes: the rear disc). Its solid-angle density at the scene point is
+// p_area r^2 / |cos(n, wi)|. pbrt-v4 has no realistic-camera importance (its RealisticCamera::We
+// is unimplemented and its bdpt refuses the camera, pbrt-v4 issue #279).
+//
+// Dispersive lenses: the connection is traced at the path's hero wavelength and is valid for it
+// alone (each wavelength would meet the film at its own point): CameraWiSample::hero_only, the
+// light tracer then keeps only the hero wavelength (pbrt-v4's TerminateSecondary), which is
+// unbiased. pbrt-v2's neighbour quirk (RealisticSettings::zero_if_neighbour_blocked) is not
+// reproduced by importance.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "lensim/camera/realistic.h"
+#include "lensim/optics/surface_shape.h"
+#include "lensim/sampling/sampling.h"
+
+namespace lensim::camera {
+
+namespace {
+
+/// The front surface at (x, y): its sag (lens space z of the point) and unit normal facing the
+/// scene (-z); nullopt outside the sag's domain.
+struct FrontPoint {
+  Vec3 p;
+  Vec3 n;
+};
+std::optional<FrontPoint> frontPoint(const optics::Interface& f, double x, double y) {
+  double z = 0, gx = 0, gy = 0;
+  if (f.radius_mm != 0 || !f.shape.isSpherical()) {
+    const auto sg = optics::surfaceSag(f.radius_mm, f.shape, x, y);
+    if (!sg) return std::nullopt;
+    z = sg->z, gx = sg->dzdx, gy = sg->dzdy;
+  }
+  return FrontPoint{{x, y, f.z_mm + z}, normalize(Vec3{gx, gy, -1})};
+}
+
+}  // namespace
+
+Vec3 RealisticCamera::lensFromWorldPoint(const Vec3& p) const {
+  const Vec3 c = camera_from_world_.applyPoint(p);
+  const double u = settings_.camera_units_per_mm;
+  const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens_.lens->filmZ_mm();
+  return {c.x / u, c.y / u, z0 - c.z / u};
+}
+Vec3 RealisticCamera::lensFromWorldVector(const Vec3& v) const {
+  const Vec3 c = camera_from_world_.applyVector(v);
+  return {c.x, c.y, -c.z};
+}
+Vec3 RealisticCamera::worldFromLensPoint(const Vec3& p) const {
+  const double u = settings_.camera_units_per_mm;
+  const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens_.lens->filmZ_mm();
+  return settings_.world_from_camera.applyPoint({p.x * u, p.y * u, (z0 - p.z) * u});
+}
+Vec3 RealisticCamera::worldFromLensVector(const Vec3& v) const {
+  return settings_.world_from_camera.applyVector({v.x, v.y, -v.z});
+}
+
+std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3& o_lens,
+                                                                     const Vec3& d_lens,
+                                                                     double lambda_nm,
+                                                                     const Vec3* front_hit,
+                                                                     Vec3* front_out) const {
+  const optics::LensSystem& lens = *lens_.lens;
+  if (!(d_lens.z > 0)) return std::nullopt;
+  // Start the trace just before the front surface's slab: nothing of the lens lies before it,
+  // and float keeps its precision there.
+  Vec3 o = o_lens;
+  const double z_start = front_zmin_mm_ - 1;
+  if (o.z < z_start) o = o + d_lens * ((z_start - o.z) / d_lens.z);
+  const optics::LensTracer<float>& tracer =
+      dispersive_ && lambda_nm > 0 ? tracerAt(lambda_nm) : lens.tracerFloat();
+  thread_local std::vector<Vec3f> path;
+  path.clear();
+  const optics::TraceResultT<float> r = tracer.traceFromScene(
+      optics::RayT<float>{Vec3f(o), Vec3f(d_lens)}, {},
+      front_hit || front_out ? &path : nullptr);
+  if (!r.ok()) return std::nullopt;
+  if (front_out) {
+    if (path.size() < 2) return std::nullopt;
+    *front_out = Vec3{path[1]};
+  }
+  if (front_hit) {
+    if (path.size() < 2) return std::nullopt;
+    const Vec3 h{path[1]};
+    if (length(h - *front_hit) > 1e-3 * (1 + length(*front_hit))) return std::nullopt;
+  }
+  const Vec3 ro{r.ray.origin}, rd{r.ray.direction};
+  if (!(rd.z > 0)) return std::nullopt;
+  const double z_film = lens.filmZ_mm(), z_rear = lens.rearVertexZ_mm();
+  const Vec3 x = ro + rd * ((z_film - ro.z) / rd.z), q = ro + rd * ((z_rear - ro.z) / rd.z);
+  FilmHit hit;
+  hit.film_mm = {x.x, x.y};
+  hit.raster = rasterPoint(hit.film_mm);
+  const Vec2 fr = settings_.filter_radius;
+  if (!(hit.raster.x >= 0.5 - fr.x && hit.raster.x < settings_.x_resolution + fr.x - 0.5 &&
+        hit.raster.y >= 0.5 - fr.y && hit.raster.y < settings_.y_resolution + fr.y - 0.5))
+    return std::nullopt;
+  // Only rays camera rays can take count: through the sampled rear-plane region.
+  if (settings_.rear_disc_only) {
+    const double rr = lens.interfaces().back().semi_aperture_mm;
+    if (q.x * q.x + q.y * q.y > rr * rr) return std::nullopt;
+  }
+  if (!(pupil_->area_mm2(hit.film_mm) > 0) || !pupil_->contains(hit.film_mm, {q.x, q.y}))
+    return std::nullopt;
+  double transmission = 1;
+  if (!settings_.aperture.isRound() && stop_radius_mm_ > 0) {
+    transmission = settings_.aperture.transmission(
+        Vec2{r.stop_point.x / stop_radius_mm_, r.stop_point.y / stop_radius_mm_});
+    if (!(transmission > 0)) return std::nullopt;
+  }
+  const double z = lens.filmDistance_mm();
+  const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
+  const double film_area_mm2 = 4 * half_width_mm_ * half_height_mm_;
+  const double units = settings_.camera_units_per_mm;
+  hit.cos_theta = rd.z / length(rd);
+  hit.importance = transmission * z * z / (norm * film_area_mm2 * units * units);
+  return hit;
+}
+
+std::optional<CameraWiSample> RealisticCamera::sampleWi(
+    const Vec3& ref, Vec2 u, const std::array<double, kCameraWavelengths>& lambda_nm,
+    double) const {
+  const optics::Interface& front = lens_.lens->interfaces().front();
+  const Vec3 r_l = lensFromWorldPoint(ref);
+  if (!(r_l.z < front_zmin_mm_)) return std::nullopt;  // not in front of the lens
+  const double R = front.semi_aperture_mm;
+  const FrontDisc disc = frontDisc(r_l);
+  if (!(disc.radius > 0)) return std::nullopt;
+  const Vec2 xy = disc.centre + render::sampleUniformDiskConcentric(u) * disc.radius;
+  if (xy.x * xy.x + xy.y * xy.y > R * R) return std::nullopt;
+  const std::optional<FrontPoint> fp = frontPoint(front, xy.x, xy.y);
+  if (!fp) return std::nullopt;
+  const Vec3 d_l = normalize(fp->p - r_l);
+  const double hero = lambda_nm[0];
+  const std::optional<FilmHit> hit = traceToFilm(r_l, d_l, hero, &fp->p);
+  if (!hit) return std::nullopt;
+  CameraWiSample s;
+  s.p_lens = worldFromLensPoint(fp->p);
+  const Vec3 to_lens = s.p_lens - ref;
+  s.distance = length(to_lens);
+  if (!(s.distance > 0)) return std::nullopt;
+  s.wi = to_lens / s.distance;
+  s.n_lens = normalize(worldFromLensVector(fp->n));
+  const double cos_n = std::abs(dot(s.n_lens, s.wi));
+  if (!(cos_n > 0)) return std::nullopt;
+  const double units = settings_.camera_units_per_mm;
+  const double pdf_area =
+      std::abs(fp->n.z) / (M_PI * disc.radius * disc.radius * units * units);  // per world area
+  s.pdf = pdf_area * s.distance * s.distance / cos_n;
+  s.film_raster = hit->raster;
+  if (dispersive_ && hero > 0) {
+    s.hero_only = true;
+    s.importance = {hit->importance, 0, 0, 0};
+  } else {
+    s.importance.fill(hit->importance);
+  }
+  return s;
+}
+
+// The front bounds, from the camera rays themselves: 65536 rays (a 128 x 128 grid of film points
+// over the film's sample bounds, 4 exit-pupil points each) are traced out of the lens;
+// each leaves the front element at a point p in direction w, which light from the scene arriving
+// along -w enters at p. Binned by the angle theta of -w to the axis (0.25 degree bins) and turned
+// to azimuth 0, the points of a bin are bounded by a disc, widened by twice the points' mean
+// spacing (the sampled points cover the region only that finely) and 1% of the front radius (3%
+// for a dispersive lens, whose other wavelengths leave elsewhere). Built on the first sampleWi
+// (a light tracer's), never for camera rays.
+void RealisticCamera::buildFrontBounds() const {
+  const optics::LensSystem& lens = *lens_.lens;
+  const double R = lens.interfaces().front().semi_aperture_mm;
+  constexpr int kBins = 360, kFilm = 128, kPupil = 2;
+  FrontBoundTable t;
+  t.step_rad = 0.25 * M_PI / 180;
+  std::vector<std::vector<Vec2>> pts(kBins);
+  const Vec2 fr = settings_.filter_radius;
+  const double x0 = 0.5 - fr.x, x1 = settings_.x_resolution + fr.x - 0.5;
+  const double y0 = 0.5 - fr.y, y1 = settings_.y_resolution + fr.y - 0.5;
+  for (int i = 0; i < kFilm; ++i)
+    for (int j = 0; j < kFilm; ++j) {
+      CameraSample cs;
+      cs.film_raster = {x0 + (i + 0.5) / kFilm * (x1 - x0), y0 + (j + 0.5) / kFilm * (y1 - y0)};
+      const Vec2 film = filmPoint(cs.film_raster);
+      for (int a = 0; a < kPupil * kPupil; ++a) {
+          // The R2 low-discrepancy sequence (Roberts 2018) over all the rays: every film point
+          // gets other pupil points.
+          const double n = double((i * kFilm + j) * kPupil * kPupil + a);
+          const Vec2 u{std::fmod(0.5 + n * 0.7548776662466927, 1.0),
+                       std::fmod(0.5 + n * 0.5698402909980532, 1.0)};
+          const std::optional<FilmRay> f = filmRay(cs, film, pupil_->sample(film, u));
+          if (!f) continue;
+          const optics::TraceResultT<float> r = lens.tracerFloat().traceFromFilm(f->ray);
+          if (!r.ok()) continue;
+          const Vec3 p{r.ray.origin}, w = -normalize(Vec3{r.ray.direction});
+          if (!(w.z > 0)) continue;
+          const int k = int(std::acos(std::min(1.0, w.z)) / t.step_rad);
+          if (k >= kBins) continue;
+          const double phi = std::atan2(w.y, w.x), c = std::cos(phi), sn = std::sin(phi);
+          pts[size_t(k)].push_back({p.x * c + p.y * sn, -p.x * sn + p.y * c});
+        }
+    }
+  t.centre.assign(kBins, 0.0);
+  t.radius.assign(kBins, -1.0);
+  for (int k = 0; k < kBins; ++k) {
+    const std::vector<Vec2>& v = pts[size_t(k)];
+    if (v.empty()) continue;
+    double a = v[0].x, b = v[0].x;
+    for (const Vec2& q : v) a = std::min(a, q.x), b = std::max(b, q.x);
+    const double c = 0.5 * (a + b);
+    double r = 0;
+    for (const Vec2& q : v) r = std::max(r, std::hypot(q.x - c, q.y));
+    const double spacing = std::sqrt(M_PI * r * r / double(v.size()));
+    t.centre[size_t(k)] = c;
+    t.radius[size_t(k)] = r + 2 * spacing + (dispersive_ ? 0.03 : 0.01) * R;
+  }
+  front_bounds_ = std::move(t);
+}
+
+RealisticCamera::FrontDisc RealisticCamera::frontDisc(const Vec3& r) const {
+  const optics::LensSystem& lens = *lens_.lens;
+  const optics::Interface& front = lens.interfaces().front();
+  const double R = front.semi_aperture_mm;
+  const FrontDisc whole{{0, 0}, R};
+  bool rotational = true;
+  for (const optics::Interface& in : lens.interfaces())
+    rotational = rotational && in.shape.isRotational();
+  if (!rotational) return whole;
+  std::call_once(*front_once_, [this] { buildFrontBounds(); });
+  const FrontBoundTable& t = front_bounds_;
+  const Vec3 to_front = Vec3{0, 0, front.z_mm} - r;
+  const double dist = length(to_front);
+  const double reach = R + (front_zmax_mm_ - front_zmin_mm_);
+  if (!(dist > 2 * reach)) return whole;
+  // The directions from r to the front element: within spread of the central one.
+  const double theta_c = std::acos(std::clamp(to_front.z / dist, -1.0, 1.0));
+  const double spread = std::asin(reach / dist);
+  const int n = int(t.radius.size());
+  const int k0 = int(std::floor((theta_c - spread) / t.step_rad)) - 1;
+  const int k1 = int(std::ceil((theta_c + spread) / t.step_rad)) + 1;
+  if (k1 >= n) return whole;  // near 90 degrees: no table
+  const int kc = std::clamp(int(std::lround(theta_c / t.step_rad)), 0, n - 1);
+  double rho = -1, c_spread = 0, c_max = 0;
+  const double c0 = t.centre[size_t(kc)];
+  for (int k = std::max(0, k0); k <= k1; ++k) {
+    if (t.radius[size_t(k)] < 0) continue;
+    rho = std::max(rho, t.radius[size_t(k)]);
+    c_spread = std::max(c_spread, std::abs(t.centre[size_t(k)] - c0));
+    c_max = std::max(c_max, std::abs(t.centre[size_t(k)]));
+  }
+  if (rho < 0) return {};  // no light from r's directions reaches the film
+  // The azimuths of the directions from r: within asin(reach / lateral) of the central one.
+  const double lateral = std::hypot(r.x, r.y);
+  const double dphi = lateral > reach ? std::asin(reach / lateral) : M_PI;
+  const double radius = rho + c_spread + c_max * std::min(2.0, dphi);
+  if (radius >= R) return whole;
+  const double phi = std::atan2(-r.y, -r.x);
+  return {{c0 * std::cos(phi), c0 * std::sin(phi)}, radius};
+}
+
+double RealisticCamera::pdfWiPos(const Vec3& ref, const Vec3& p_lens) const {
+  const optics::Interface& front = lens_.lens->interfaces().front();
+  const Vec3 r_l = lensFromWorldPoint(ref), p = lensFromWorldPoint(p_lens);
+  if (!(r_l.z < front_zmin_mm_)) return 0;
+  const FrontDisc disc = frontDisc(r_l);
+  const double R = front.semi_aperture_mm;
+  const Vec2 xy{p.x, p.y};
+  if (!(disc.radius > 0) || xy.x * xy.x + xy.y * xy.y > R * R ||
+      std::hypot(xy.x - disc.centre.x, xy.y - disc.centre.y) > disc.radius)
+    return 0;
+  const std::optional<FrontPoint> fp = frontPoint(front, xy.x, xy.y);
+  if (!fp) return 0;
+  const double units = settings_.camera_units_per_mm;
+  return std::abs(fp->n.z) / (M_PI * disc.radius * disc.radius * units * units);
+}
+
+double RealisticCamera::importance(const Vec3& o, const Vec3& d, double lambda_nm,
+                                   Vec2* film_raster) const {
+  // The ray leaves the lens at o toward d: the line back into the lens runs along -d.
+  const std::optional<FilmHit> hit =
+      traceToFilm(lensFromWorldPoint(o), normalize(lensFromWorldVector(-d)), lambda_nm);
+  if (!hit) return 0;
+  if (film_raster) *film_raster = hit->raster;
+  return hit->importance;
+}
+
+CameraRayPdf RealisticCamera::rayPdf(const Vec3& o, const Vec3& d, double lambda_nm) const {
+  // pdf_pos: sampleWi's density of the front-surface point (so that bdpt's strategies agree on
+  // the camera vertex); pdf_dir: generateRay's joint density of the ray over it. generateRay's
+  // density per unit film area and film-side solid angle is (1/A_film) (1/A(x)) z^2 / cos^3
+  // (film point uniform over the image, as pbrt-v4's PDF_We takes it; rear-plane point uniform
+  // over the region A(x)); per unit front area and solid angle it is that times
+  // cos(n) / cos(theta) (etendue).
+  const optics::Interface& front = lens_.lens->interfaces().front();
+  const Vec3 o_l = lensFromWorldPoint(o), back = normalize(lensFromWorldVector(-d));
+  const std::optional<FrontPoint> fp = frontPoint(front, o_l.x, o_l.y);
+  const std::optional<FilmHit> hit = traceToFilm(o_l, back, lambda_nm);
+  if (!fp || !hit) return {};
+  const double area = pupil_->area_mm2(hit->film_mm);
+  if (!(area > 0)) return {};
+  const double units = settings_.camera_units_per_mm, R = front.semi_aperture_mm;
+  const double z = lens_.lens->filmDistance_mm(), c = hit->cos_theta;
+  const double film_area_mm2 = 4 * half_width_mm_ * half_height_mm_;
+  const double p_film = z * z / (film_area_mm2 * area * c * c * c);  // per mm^2 sr, film side
+  const double p_front = p_film * std::abs(dot(fp->n, back)) / c / (units * units);
+  const double pdf_pos = std::abs(fp->n.z) / (M_PI * R * R * units * units);
+  return {pdf_pos, p_front / pdf_pos};
+}
+
+}  // namespace lensim::camera
