@@ -3,7 +3,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <mutex>
 #include <string>
@@ -14,6 +16,7 @@
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/prescription.h"
 #include "lensim/render/materials/measured.h"
+#include "lensim/render/materials/measured_rgl.h"
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/parser.h"
@@ -171,6 +174,30 @@ int fuzzBrdf(const uint8_t* data, size_t size) {
   });
 }
 
+int fuzzBsdf(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] {
+    const render::RGLMeasuredBRDF b =
+        render::RGLMeasuredBRDF::parse(std::string(text(data, size)), "fuzz.bsdf");
+    // A file that loads is evaluated and sampled a few times: tables that pass the checks must
+    // give finite, non-negative values.
+    const render::SampledWavelengths lambda = render::SampledWavelengths::sampleUniform(0.37);
+    const Vec3 dirs[3] = {{0, 0, 1}, {0.6, 0.0, 0.8}, {-0.28, 0.6, 0.7483314773547883}};
+    for (const Vec3& wo : dirs)
+      for (int k = 0; k < 4; ++k) {
+        const auto s = b.sample(wo, {0.13 + 0.25 * k, 0.71 - 0.17 * k}, lambda);
+        if (s && !(s->pdf > 0 && std::isfinite(s->pdf))) std::abort();
+        for (const Vec3& wi : dirs) {
+          const double p = b.pdf(wo, wi);
+          const render::SampledSpectrum f = b.f(wo, wi, lambda);
+          if (!(p >= 0 && std::isfinite(p))) std::abort();
+          for (int i = 0; i < render::kSpectrumSamples; ++i)
+            if (!(f[i] >= 0 && std::isfinite(f[i]))) std::abort();
+        }
+      }
+  });
+}
+
 const Target* targets(size_t& count) {
   static const Target all[] = {
       {"lens", fuzzLens},          {"scene_tokens", fuzzSceneTokens},
@@ -178,6 +205,7 @@ const Target* targets(size_t& count) {
       {"scene_render", fuzzSceneRender}, {"ply", fuzzPly},
       {"image", fuzzImage},        {"brdf", fuzzBrdf},
       {"zmx", fuzzZmx},            {"lens_json", fuzzLensJson},
+      {"bsdf", fuzzBsdf},
   };
   count = sizeof all / sizeof all[0];
   return all;

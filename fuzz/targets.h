@@ -33,6 +33,8 @@ int fuzzSceneRender(const uint8_t* data, size_t size);    ///< builder + a 4x4 r
 int fuzzPly(const uint8_t* data, size_t size);            ///< PLY meshes
 int fuzzImage(const uint8_t* data, size_t size);          ///< EXR, TIFF and PNG headers and data
 int fuzzBrdf(const uint8_t* data, size_t size);           ///< pbrt-v2 irregular .brdf
+int fuzzBsdf(const uint8_t* data, size_t size);           ///< RGL measured BSDF (.bsdf), then
+                                                          ///< evaluation and sampling
 
 /// Every target, in a fixed order.
 const Target* targets(size_t& count);

@@ -66,22 +66,9 @@ struct Gap {
 };
 
 // Known gaps: features lensim does not do yet (other branches are implementing several of
-// them: hair, measured .bsdf, OpenImageIO images, bdpt, media). Remove an entry when its
+// them: hair, OpenImageIO images, bdpt, media). Remove an entry when its
 // feature lands; the test fails while a listed gap no longer occurs.
 const std::vector<Gap> kKnownGaps = {
-    // pbrt-v4's measured material reads RGL .bsdf files; lensim reads only pbrt-v2 .brdf (an
-    // error at the file name), so the named material is then undefined too.
-    {"pbrt-v4-scenes/contemporary-bathroom.pbrt", "error", "only pbrt-v2's irregular isotropic"},
-    {"pbrt-v4-scenes/lte-orb-blue-agat-spec.pbrt", "error", "only pbrt-v2's irregular isotropic"},
-    {"pbrt-v4-scenes/lte-orb-blue-agat-spec.pbrt", "error", "unknown material \"OuterMat\""},
-    {"pbrt-v4-scenes/lte-orb-simple-ball.pbrt", "error", "only pbrt-v2's irregular isotropic"},
-    {"pbrt-v4-scenes/lte-orb-simple-ball.pbrt", "error", "unknown material \"Material\""},
-    {"pbrt-v4-scenes/pavilion-measured.pbrt", "error", "only pbrt-v2's irregular isotropic"},
-    {"pbrt-v4-scenes/pavilion-measured.pbrt", "error", "unknown material \"leather_white\""},
-    {"pbrt-v4-scenes/sportscar-area-lights.pbrt", "error", "only pbrt-v2's irregular isotropic"},
-    {"pbrt-v4-scenes/sportscar-area-lights.pbrt", "error", "unknown material \"Material.001\""},
-    {"pbrt-v4-scenes/sportscar-sky.pbrt", "error", "only pbrt-v2's irregular isotropic"},
-    {"pbrt-v4-scenes/sportscar-sky.pbrt", "error", "unknown material \"Material.001\""},
     // Subsurface with a textured coefficient (head: an image "reflectance"): lensim's random
     // walk needs one homogeneous medium per material and refuses it; pbrt-v4 renders it.
     {"pbrt-v4-scenes/head.pbrt", "error", "textured subsurface coefficients are not rendered"},

@@ -157,6 +157,55 @@ TEST(RenderCommand, ErrorsExitWithStatusOne) {
       << bad.out;
 }
 
+TEST(RenderCommand, BadCropWindowSaysWhichValueAndWhatIsExpected) {
+  lensim::testutil::TempDir dir("lensim-render-crop");
+  const std::string scene = dir.write("s.pbrt", kScene);
+  Result r = run("render " + scene + " --quiet -o " + dir.file("o.exr") +
+                 " --cropwindow 0 1 nan 1");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("error: --cropwindow: y0 is nan; expected a finite fraction of the image, "
+                       "in [0, 1] (--cropwindow x0 x1 y0 y1)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("s.pbrt"), std::string::npos) << r.out;  // not the scene's fault
+  r = run("render " + scene + " --quiet -o " + dir.file("o.exr") + " --cropwindow 0.2 0.2 0 1");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find("error: --cropwindow gives empty pixel bounds"), std::string::npos)
+      << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("o.exr")));
+}
+
+TEST(RenderCommand, ErrorsAboutReferencedFilesSayErrorOnce) {
+  // An unreadable image behind a texture, a light or a normal map: the scene line that names it
+  // and the image's own message, with "error:" once (it was printed twice).
+  lensim::testutil::TempDir dir("lensim-render-nested");
+  dir.write("bad.png", "not an image\n");
+  dir.write("bad.exr", "not an image\n");
+  const char* const cases[] = {
+      "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"bad.png\"\n"
+      "Material \"diffuse\" \"texture reflectance\" \"t\"\n",
+      "LightSource \"infinite\" \"string filename\" \"bad.exr\"\n",
+      "LightSource \"projection\" \"string filename\" \"bad.exr\"\n",
+      "LightSource \"goniometric\" \"string filename\" \"bad.exr\"\n",
+      "AreaLightSource \"diffuse\" \"string filename\" \"bad.exr\"\n",
+      "Material \"diffuse\" \"string normalmap\" \"bad.png\"\n",
+  };
+  for (const char* body : cases) {
+    SCOPED_TRACE(body);
+    const std::string scene =
+        dir.write("s.pbrt", std::string("WorldBegin\n") + body + "Shape \"sphere\"\n");
+    Result r = run("render " + scene + " --quiet -o " + dir.file("o.exr"));
+    EXPECT_EQ(r.status, 1) << r.out;
+    EXPECT_NE(r.out.find("s.pbrt:2:1: error: "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("bad."), std::string::npos) << r.out;
+    size_t count = 0;
+    for (size_t at = r.out.find("error:"); at != std::string::npos;
+         at = r.out.find("error:", at + 1))
+      ++count;
+    EXPECT_EQ(count, 1u) << r.out;
+  }
+}
+
 TEST(RenderCommand, RealisticCameraErrorIsReportedCleanly) {
   // A focus distance the lens cannot reach: a located error at the Camera directive naming the
   // closest possible distance, exit status 1, and no image.

@@ -6,6 +6,7 @@
 
 #include "commands.h"
 #include "lensim/camera/realistic.h"
+#include "lensim/render/materials/measured_rgl.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/format.h"
 #include "lensim/scene/parser.h"
@@ -32,6 +33,11 @@ void registerCheckCommand(CLI::App& app, Action& action) {
       // summary, or go to stderr with --format so that stdout stays a scene file.
       if (s.hasErrors() || opts->format) logDiagnostics(s.diagnostics);
       if (s.hasErrors()) return 1;
+      // RGL measured BSDF files are read as the renderer will (cheap: no table is fitted), so
+      // that check reports a truncated or corrupt one.
+      for (const scene::Material& m : s.materials)
+        if (m.type == "measured" && m.measured_rgl)
+          (void)render::RGLMeasuredBRDF::loadCached(m.measured_file);
       std::string text = opts->format ? scene::formatPbrtV4(desc) : scene::summary(s);
       // A realistic camera is set up as the renderer will (lens file, focus, pupil bounds), so
       // that check reports a bad lens or an unreachable focus too.

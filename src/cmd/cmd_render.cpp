@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -110,8 +111,16 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       if (o->spp > 0) ro.spp = o->spp;
       if (o->has_seed) ro.seed = o->seed;
       ro.threads = o->threads;
-      if (o->crop.size() == 4)
+      if (o->crop.size() == 4) {
+        // pbrt-v4 orders and clamps each pair to [0, 1]; a value that is not a number cannot be.
+        static const char* const kCropNames[4] = {"x0", "x1", "y0", "y1"};
+        for (int i = 0; i < 4; ++i)
+          if (!std::isfinite(o->crop[size_t(i)]))
+            throw Error(fmt::format("--cropwindow: {} is {}; expected a finite fraction of the "
+                                    "image, in [0, 1] (--cropwindow x0 x1 y0 y1)",
+                                    kCropNames[i], o->crop[size_t(i)]));
         ro.crop = std::array<double, 4>{o->crop[0], o->crop[1], o->crop[2], o->crop[3]};
+      }
       if (o->pixelbounds.size() == 4)
         ro.pixelbounds = std::array<int, 4>{o->pixelbounds[0], o->pixelbounds[1], o->pixelbounds[2],
                                             o->pixelbounds[3]};

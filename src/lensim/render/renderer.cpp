@@ -121,9 +121,17 @@ RenderPlan planRender(const scene::Scene& scene, const RenderOptions& opt) {
   }
   bounds.x0 = std::clamp(bounds.x0, 0, x_res), bounds.x1 = std::clamp(bounds.x1, 0, x_res);
   bounds.y0 = std::clamp(bounds.y0, 0, y_res), bounds.y1 = std::clamp(bounds.y1, 0, y_res);
-  if (bounds.width() <= 0 || bounds.height() <= 0)
-    throw Error(scene.film.loc, fmt::format("empty pixel bounds [{}, {}) x [{}, {})", bounds.x0,
-                                            bounds.x1, bounds.y0, bounds.y1));
+  if (bounds.width() <= 0 || bounds.height() <= 0) {
+    const std::string empty = fmt::format("empty pixel bounds [{}, {}) x [{}, {})", bounds.x0,
+                                          bounds.x1, bounds.y0, bounds.y1);
+    // Bounds from the command line are not the scene file's fault.
+    if (opt.pixelbounds || opt.crop)
+      throw Error(fmt::format("{} gives {} on the {}x{} film; expected a window of at least one "
+                              "pixel",
+                              opt.pixelbounds ? "--pixelbounds" : "--cropwindow", empty, x_res,
+                              y_res));
+    throw Error(scene.film.loc, empty);
+  }
   const PixelBounds full_bounds = bounds;
   if (opt.tile) bounds = tileBounds(full_bounds, opt.tile->first, opt.tile->second);
   RenderPlan plan;

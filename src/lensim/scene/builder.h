@@ -126,7 +126,8 @@ struct Material {
   Input amount;
   std::optional<Input> displacement;
   std::string normal_map;     ///< resolved path
-  std::string measured_file;  ///< measured (pbrt-v2): resolved `filename` of the .brdf data
+  std::string measured_file;  ///< measured: resolved `filename` (.brdf or RGL .bsdf data)
+  bool measured_rgl = false;  ///< measured: an RGL .bsdf tensor file (else pbrt-v2 .brdf text)
   // pbrt-v3 materials rendered as pbrt-v3 defines them (type plastic, substrate, uber,
   // translucent, glass, metal, mirror; render/v3materials.h): Ks, Kr, Kt, opacity and
   // translucent's "reflect" (its "transmit" is `transmittance`; Kd is `reflectance`).

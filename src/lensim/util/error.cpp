@@ -54,4 +54,9 @@ std::string formatDiagnostics(const std::vector<Diagnostic>& diagnostics) {
   return out;
 }
 
+std::string nestedMessage(const Error& e) {
+  if (!e.loc().valid()) return e.message();
+  return fmt::format("{}: {}", e.loc().str(), e.message());
+}
+
 }  // namespace lensim

@@ -50,6 +50,11 @@ class Error : public std::runtime_error {
   std::string message_;
 };
 
+/// The message of `e` after its location ("bad.png: cannot read PNG: ..."), without the
+/// "error:" of its printed form: for wrapping it in an Error about what referenced the file, so
+/// that the wrapped error says "error:" once.
+std::string nestedMessage(const Error& e);
+
 /// Formats a list of diagnostics, one per line.
 std::string formatDiagnostics(const std::vector<Diagnostic>& diagnostics);
 

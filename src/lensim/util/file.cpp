@@ -77,6 +77,23 @@ uint64_t requireRegularFile(const std::string& path, std::string_view what, uint
   return size;
 }
 
+bool fileStartsWith(const std::string& path, std::string_view magic) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return false;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return false;
+  std::string head(magic.size(), '\0');
+  std::size_t got = 0;
+  while (got < head.size()) {
+    const ssize_t n = ::read(fd, head.data() + got, head.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+  return got == head.size() && head == magic;
+}
+
 std::string readRegularFile(const std::string& path, std::string_view what, uint64_t max_bytes) {
   requireRegularFile(path, what, max_bytes);
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);

@@ -37,6 +37,10 @@ uint64_t requireRegularFile(const std::string& path, std::string_view what,
 std::string readRegularFile(const std::string& path, std::string_view what,
                             uint64_t max_bytes = kDefaultMaxFileBytes);
 
+/// True when `path` is a readable regular file whose first bytes are `magic` (never blocks on a
+/// FIFO or device; false for anything that cannot be read).
+bool fileStartsWith(const std::string& path, std::string_view magic);
+
 /// Writes `content` to `path` atomically (see writeAtomically).
 void writeFileAtomically(const std::string& path, std::string_view content);
 

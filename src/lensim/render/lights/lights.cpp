@@ -836,14 +836,14 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
       try {
         lights_.push_back(std::make_unique<ProjectionLight>(l, l.scale));
       } catch (const Error& e) {
-        throw Error(l.loc, e.what());
+        throw Error(l.loc, nestedMessage(e));
       }
     } else if (l.type == "goniometric") {
       std::unique_ptr<GoniometricLight> g;
       try {
         g = std::make_unique<GoniometricLight>(l, spec, scale);
       } catch (const Error& e) {
-        throw Error(l.loc, e.what());
+        throw Error(l.loc, nestedMessage(e));
       }
       if (l.power && *l.power > 0 && g->meanFactor() > 0)
         g = std::make_unique<GoniometricLight>(l, spec,
@@ -858,7 +858,7 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
         try {
           lights_.push_back(std::make_unique<ImageInfiniteLight>(l, l.scale, radius));
         } catch (const Error& e) {
-          throw Error(l.loc, e.what());
+          throw Error(l.loc, nestedMessage(e));
         }
       } else {
         // pbrt-v4 "illuminance": the irradiance E at an upward-facing point, pi L for a
@@ -883,7 +883,7 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
       try {
         image = std::make_shared<EmissionImage>(l.filename);
       } catch (const Error& e) {
-        throw Error(l.loc, e.what());
+        throw Error(l.loc, nestedMessage(e));
       }
     }
     // pbrt-v4: an image light's texels are RGB illuminants (D65 of unit luminance for white).

@@ -4,6 +4,7 @@
 // hero wavelength).
 #include "lensim/render/materials/materials.h"
 #include "lensim/render/materials/measured.h"
+#include "lensim/render/materials/measured_rgl.h"
 
 #include <fmt/format.h>
 
@@ -40,7 +41,7 @@ Materials::Materials(const scene::Scene& scene, const Textures& textures)
       try {
         im = io::readImage(m.normal_map, {.encoding = "linear"});  // as pbrt-v4 reads them
       } catch (const Error& e) {
-        throw Error(m.loc, fmt::format("normal map: {}", e.what()));
+        throw Error(m.loc, fmt::format("normal map: {}", nestedMessage(e)));
       }
       auto nm = std::make_shared<NormalMap>();
       nm->width = im.width;
@@ -178,6 +179,9 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
   };
   if (isV3Material(m.type)) return makeV3BxDF(m, tx, ctx, lambda, regularize);
   if (m.type == "measured") {
+    if (m.measured_rgl)
+      return std::make_shared<RGLMeasuredBxDF>(RGLMeasuredBRDF::loadCached(m.measured_file),
+                                               lambda);
     return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
   }
   if (m.type == "diffuse") {

@@ -332,7 +332,7 @@ Textures::Textures(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) 
       try {
         it = by_key.emplace(key, std::make_shared<RgbImage>(loadRgb(t))).first;
       } catch (const Error& e) {
-        throw Error(t.loc, fmt::format("texture \"{}\": {}", t.name, e.what()));
+        throw Error(t.loc, fmt::format("texture \"{}\": {}", t.name, nestedMessage(e)));
       }
     }
     impl_->images[i] = it->second;

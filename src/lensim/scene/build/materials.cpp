@@ -1,4 +1,5 @@
 // Builder: materials (Material, MakeNamedMaterial) and the default material.
+#include "lensim/util/file.h"
 #include "lensim/scene/build/builder_internal.h"
 
 namespace lensim::scene::detail {
@@ -143,16 +144,20 @@ Material Builder::material(const std::string& type, ParamSet& ps, const FileLoc&
   } else if (type == "interface" || type == "" || type == "none") {
     m.type = "interface";
   } else if (type == "measured") {
-    // pbrt-v2: measured BRDF data; the irregular isotropic `.brdf` format is rendered.
+    // pbrt-v4: an RGL measured BSDF (`.bsdf` tensor file, render/materials/measured_rgl.h);
+    // pbrt-v2: the irregular isotropic `.brdf` text format (render/materials/measured.h).
+    // Chosen by content (the tensor-file header), else by extension.
     const Param* f = ps.find({"filename"}, {ParamType::String});
     if (!f) throw Error(loc, "measured: missing \"string filename\"");
     const std::string& name = f->strings[0];
-    if (name.size() < 5 || name.substr(name.size() - 5) != ".brdf")
-      ps.fail(*f,
-              "only pbrt-v2's irregular isotropic .brdf files are rendered (expected a "
-              "file name ending in .brdf)");
     m.type = "measured";
     m.measured_file = resolve(name, f->loc, "measured BRDF file");
+    m.measured_rgl = name.ends_with(".bsdf") ||
+                     fileStartsWith(m.measured_file, std::string_view("tensor_file\0", 12));
+    if (!m.measured_rgl && !name.ends_with(".brdf"))
+      ps.fail(*f,
+              "expected an RGL measured BSDF (a .bsdf tensor file) or a pbrt-v2 irregular "
+              "isotropic .brdf file");
   } else {
     ps.markAllUsed();
     m.type = "diffuse";
