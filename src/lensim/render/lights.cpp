@@ -89,6 +89,22 @@ class PointLight final : public Light {
     return s;
   }
   double power() const override { return 4 * M_PI * scale_ * luminanceOf(*I_); }
+  const char* typeName() const override { return "point"; }
+  bool supportsLe() const override { return true; }
+  // pbrt-v4's PointLight::SampleLe (src/pbrt/lights.cpp): a uniform direction.
+  std::optional<LightLeSample> sampleLe(Vec2, Vec2 u2,
+                                        const SampledWavelengths& lambda) const override {
+    LightLeSample s;
+    s.o = p_;
+    s.d = sampleUniformSphere(u2);
+    s.L = I_->sample(lambda) * scale_;
+    s.pdf_pos = 1;
+    s.pdf_dir = uniformSpherePdf();
+    return s;
+  }
+  std::pair<double, double> pdfLe(const Vec3&, const Vec3&, const Vec3&) const override {
+    return {0, uniformSpherePdf()};
+  }
   // pbrt-v4's PointLight::Bounds: the point, emitting in all directions.
   std::optional<LightBounds> bounds() const override { return pointBounds(p_, power()); }
 
@@ -121,6 +137,28 @@ class SpotLight final : public Light {
   double power() const override {
     return scale_ * luminanceOf(*I_) * 2 * M_PI * ((1 - cos_start_) + (cos_start_ - cos_end_) / 2);
   }
+  const char* typeName() const override { return "spot"; }
+  bool supportsLe() const override { return true; }
+  // A uniform direction in the cone of the falloff's end (pbrt-v4's SpotLight::SampleLe samples
+  // the two parts of the cone by their power; uniform is simpler and exact).
+  std::optional<LightLeSample> sampleLe(Vec2, Vec2 u2,
+                                        const SampledWavelengths& lambda) const override {
+    const Vec3 wl = sampleUniformCone(u2, cos_end_);
+    const Vec3 a = std::abs(axis_.x) > 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+    const Vec3 x = normalize(cross(a, axis_)), y = cross(axis_, x);
+    LightLeSample s;
+    s.o = p_;
+    s.d = normalize(x * wl.x + y * wl.y + axis_ * wl.z);
+    const double f = smoothStep(cos_end_, cos_start_, dot(s.d, axis_));
+    if (f <= 0) return std::nullopt;
+    s.L = I_->sample(lambda) * (scale_ * f);
+    s.pdf_pos = 1;
+    s.pdf_dir = uniformConePdf(cos_end_);
+    return s;
+  }
+  std::pair<double, double> pdfLe(const Vec3&, const Vec3&, const Vec3& d) const override {
+    return {0, dot(d, axis_) >= cos_end_ ? uniformConePdf(cos_end_) : 0.0};
+  }
   // pbrt-v4's SpotLight::Bounds: the cone of the full-intensity region widened by the falloff,
   // with phi = 4 pi I scale as pbrt-v4 takes it.
   std::optional<LightBounds> bounds() const override {
@@ -143,6 +181,7 @@ class SpotLight final : public Light {
 /// use pbrt-v4's equal-area octahedral mapping, others pbrt-v2's latitude-longitude one.
 class GoniometricLight final : public Light {
  public:
+  const char* typeName() const override { return "goniometric"; }
   GoniometricLight(const scene::Light& desc, SpectrumPtr I, double scale)
       : world_from_light_(desc.transform),
         light_from_world_(inverse(desc.transform)),
@@ -220,6 +259,7 @@ class GoniometricLight final : public Light {
 /// RGB becomes an illuminant spectrum (RGB (1,1,1) is D65 of unit luminance) times "scale".
 class ProjectionLight final : public Light {
  public:
+  const char* typeName() const override { return "projection"; }
   ProjectionLight(const scene::Light& desc, double scale)
       : light_from_world_(inverse(desc.transform)),
         p_(desc.transform.applyPoint({0, 0, 0})),
@@ -293,9 +333,11 @@ class ProjectionLight final : public Light {
 
 class DistantLight final : public Light {
  public:
+  const char* typeName() const override { return "distant"; }
   DistantLight(Vec3 w, SpectrumPtr L, double scale, double scene_radius)
       : w_(w), L_(std::move(L)), scale_(scale), radius_(scene_radius) {}
   bool isDelta() const override { return true; }
+  bool isDeltaDirection() const override { return true; }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
                                         const SampledWavelengths& lambda) const override {
     LightLiSample s;
@@ -316,6 +358,7 @@ class DistantLight final : public Light {
 
 class UniformInfiniteLight final : public Light {
  public:
+  const char* typeName() const override { return "infinite (uniform)"; }
   UniformInfiniteLight(SpectrumPtr L, double scale, double scene_radius)
       : L_(std::move(L)), scale_(scale), radius_(scene_radius) {}
   bool isInfinite() const override { return true; }
@@ -348,6 +391,7 @@ class UniformInfiniteLight final : public Light {
 
 class ImageInfiniteLight final : public Light {
  public:
+  const char* typeName() const override { return "infinite (image)"; }
   ImageInfiniteLight(const scene::Light& desc, double scale, double scene_radius)
       : world_from_light_(desc.transform),
         light_from_world_(inverse(desc.transform)),
@@ -503,6 +547,47 @@ class AreaLightBase : public Light {
     return scale_ * lum * area() * M_PI * (two_sided_ ? 2 : 1);
   }
   virtual double area() const = 0;
+  bool supportsLe() const override { return true; }
+  // pbrt-v4's DiffuseAreaLight::SampleLe: a point by area, a cosine-weighted direction about
+  // the emitting side's normal (a two-sided light picks a side with probability 1/2).
+  std::optional<LightLeSample> sampleLe(Vec2 u1, Vec2 u2,
+                                        const SampledWavelengths& lambda) const override {
+    Vec3 pl, nl;
+    Vec2 uv;
+    if (!samplePoint(u1, pl, nl, uv)) return std::nullopt;
+    double side = 1;
+    if (two_sided_) {
+      side = u2.x < 0.5 ? 1 : -1;
+      u2.x = u2.x < 0.5 ? 2 * u2.x : 2 * u2.x - 1;
+      u2.x = std::min(u2.x, 1.0 - 1e-12);
+    }
+    const Vec3 wl = sampleCosineHemisphere(u2);
+    if (wl.z <= 0) return std::nullopt;
+    const Vec3 n = nl * side;
+    const Vec3 a = std::abs(n.x) > 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+    const Vec3 x = normalize(cross(a, n)), y = cross(n, x);
+    LightLeSample s;
+    s.o = pl;
+    s.d = normalize(x * wl.x + y * wl.y + n * wl.z);
+    s.n = nl;
+    s.uv = uv;
+    s.on_surface = true;
+    SurfaceHit h;
+    h.ng = nl;
+    h.uv = uv;
+    s.L = L(h, s.d, lambda);
+    if (s.L.isBlack()) return std::nullopt;
+    s.pdf_pos = 1 / area();
+    s.pdf_dir = cosineHemispherePdf(wl.z) * (two_sided_ ? 0.5 : 1.0);
+    return s;
+  }
+  std::pair<double, double> pdfLe(const Vec3&, const Vec3& n, const Vec3& d) const override {
+    const double c = dot(n, d);
+    if (!two_sided_ && c <= 0) return {1 / area(), 0};
+    return {1 / area(), cosineHemispherePdf(std::abs(c)) * (two_sided_ ? 0.5 : 1.0)};
+  }
+  /// A point drawn uniformly by area (world), its normal (the emitting side) and surface (u, v).
+  virtual bool samplePoint(Vec2 u, Vec3& p, Vec3& n, Vec2& uv) const = 0;
 
  protected:
   /// Converts an area sample (point pl, normal nl, surface (u, v), area pdf) into a solid-angle
@@ -517,6 +602,7 @@ class AreaLightBase : public Light {
     const double cos_l = std::abs(dot(nl, s.wi));
     if (cos_l == 0) return std::nullopt;
     s.pdf = pdf_area * r2 / cos_l;
+    s.n_light = nl;
     SurfaceHit h;
     h.ng = nl;
     h.uv = uv;
@@ -555,6 +641,25 @@ class FaceLight final : public AreaLightBase {
     }
   }
   double area() const override { return area_; }
+  const char* typeName() const override { return "area"; }
+  bool samplePoint(Vec2 u, Vec3& p, Vec3& n, Vec2& uv) const override {
+    if (area_ == 0) return false;
+    size_t k = 0;
+    if (tris_.size() > 1) {
+      const double x = u.x * area_;
+      k = x < cum_[0] ? 0 : 1;
+      u.x = k == 0 ? x / cum_[0] : (x - cum_[0]) / (area_ - cum_[0]);
+      u.x = std::clamp(u.x, 0.0, 1.0 - 1e-12);
+    }
+    const auto& t = tris_[k];
+    const double su = std::sqrt(u.x);
+    const double b0 = 1 - su, b1 = u.y * su;
+    p = t[0] * b0 + t[1] * b1 + t[2] * (1 - b0 - b1);
+    const auto& tuv = uvs_[k];
+    uv = tuv[0] * b0 + tuv[1] * b1 + tuv[2] * (1 - b0 - b1);
+    n = normals_[k];
+    return true;
+  }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2 u,
                                         const SampledWavelengths& lambda) const override {
     if (area_ == 0) return std::nullopt;
@@ -614,6 +719,16 @@ class QuadricLight final : public AreaLightBase {
     radius_ = shape.radius * s_;
   }
   double area() const override { return area_; }
+  const char* typeName() const override { return "area"; }
+  bool samplePoint(Vec2 u, Vec3& p, Vec3& n, Vec2& uv) const override {
+    auto g = sampleQuadricArea(*shape_, u);
+    if (!g) return false;
+    p = shape_->transform.applyPoint(g->p);
+    n = normalize(shape_->transform.applyNormal(g->n));
+    if (shape_->flipNormals()) n = -n;
+    uv = g->uv;
+    return true;
+  }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2 u,
                                         const SampledWavelengths& lambda) const override {
     if (full_sphere_) {
@@ -639,6 +754,7 @@ class QuadricLight final : public AreaLightBase {
         SurfaceHit h;
         h.ng = normalize(pl - center_);
         if (shape_->flipNormals()) h.ng = -h.ng;
+        s.n_light = h.ng;
         if (image_) h.uv = quadricGeometry(*shape_, inverse(shape_->transform).applyPoint(pl)).uv;
         s.L = L(h, -wi, lambda);
         if (s.L.isBlack()) return std::nullopt;

@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "lensim/render/accel.h"
@@ -35,6 +36,19 @@ struct LightLiSample {
   double pdf = 0;     ///< per steradian, or 1 for delta lights
   Vec3 p_light;       ///< point on the light (far away for distant/infinite lights)
   bool infinite = false;
+  Vec3 n_light{0, 0, 0};  ///< the surface normal at p_light (area lights); zero otherwise
+};
+
+/// A ray leaving a light (light tracing, bidirectional methods): pbrt-v4's LightLeSample.
+struct LightLeSample {
+  Vec3 o, d;          ///< origin on the light, unit direction
+  SampledSpectrum L;  ///< radiance leaving along d (intensity for point lights)
+  double pdf_pos = 0; ///< per unit area of the light's surface (1 for a point light: a delta)
+  double pdf_dir = 0; ///< per steradian of d
+  bool on_surface = false;  ///< an area light: n is its surface normal at o (the side of d
+                            ///< for two-sided lights is not implied)
+  Vec3 n;
+  Vec2 uv;  ///< surface (u, v) at o (area lights; for image emission)
 };
 
 class Light {
@@ -46,6 +60,9 @@ class Light {
   /// Point and directional lights (no surface to hit).
   virtual bool isDelta() const { return false; }
   virtual bool isInfinite() const { return false; }
+  /// Light arriving from one direction (distant lights): no point on it can be connected to
+  /// (pbrt-v4's LightType::DeltaDirection).
+  virtual bool isDeltaDirection() const { return false; }
   /// A sample of incident light at world point p.
   virtual std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2 u,
                                                 const SampledWavelengths& lambda) const = 0;
@@ -66,6 +83,23 @@ class Light {
     (void)dir, (void)lambda;
     return {};
   }
+  /// A ray leaving the light, u1 choosing the point and u2 the direction; nullopt if it emits
+  /// none there. Lights without emission sampling (supportsLe() false) give nullopt always.
+  virtual std::optional<LightLeSample> sampleLe(Vec2 u1, Vec2 u2,
+                                                const SampledWavelengths& lambda) const {
+    (void)u1, (void)u2, (void)lambda;
+    return std::nullopt;
+  }
+  /// Densities of sampleLe giving the ray from the light point o (normal n; unused for point
+  /// lights) in direction d: {pdf_pos, pdf_dir}.
+  virtual std::pair<double, double> pdfLe(const Vec3& o, const Vec3& n, const Vec3& d) const {
+    (void)o, (void)n, (void)d;
+    return {0, 0};
+  }
+  /// Whether sampleLe is implemented (point, spot and diffuse area lights).
+  virtual bool supportsLe() const { return false; }
+  /// The light's type, for messages.
+  virtual const char* typeName() const = 0;
   /// Emitted power (luminance-weighted), for choosing lights in proportion to it.
   virtual double power() const = 0;
   /// Where the light is and where it emits, for the BVH light sampler (pbrt-v4's

@@ -1095,6 +1095,8 @@ class Builder {
       ps.getFloat({"rrthreshold"}, 1);  // pbrt-v3
       if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
       if (type == "volpath") it.type = "volpath";
+    } else if (type == "bdpt") {
+      integratorBdpt(ps, it);
     } else if (type == "directlighting") {
       // As pbrt-v4's --upgrade: direct lighting is a path tracer of depth 1.
       ps.markAllUsed();
@@ -1111,6 +1113,30 @@ class Builder {
                            type, it.type, it.max_depth));
     }
     finish(ps);
+  }
+
+  // pbrt-v4's BDPTIntegrator::Create (src/pbrt/cpu/integrators.cpp): maxdepth, regularize,
+  // lightsampler (default "power"), visualizestrategies, visualizeweights.
+  void integratorBdpt(ParamSet& ps, Integrator& it) {
+    it.type = "bdpt";
+    it.regularize = ps.getBool({"regularize"}, false);
+    it.light_sampler = ps.getString({"lightsampler"}, "power");
+    if (it.light_sampler != "power" && it.light_sampler != "uniform") {
+      const Param* p = ps.peek({"lightsampler"});
+      warn(p ? p->loc : it.loc,
+           fmt::format("bdpt chooses lights by \"power\" or \"uniform\" (light subpaths need a "
+                       "choice that does not depend on a point), not \"{}\"; \"power\" is used",
+                       it.light_sampler));
+      it.light_sampler = "power";
+    }
+    for (const char* name : {"visualizestrategies", "visualizeweights"})
+      if (ps.getBool({name}, false)) {
+        const Param* p = ps.peek({name});
+        warn(p ? p->loc : it.loc,
+             fmt::format("bdpt \"{}\" (pbrt-v4's per-strategy debug images) is not supported; "
+                         "the image is rendered as usual",
+                         name));
+      }
   }
 
   // ---- textures and materials ----------------------------------------------------------------
@@ -2149,6 +2175,13 @@ class Builder {
     bool used = scene_.camera.medium >= 0;
     for (const Shape& sh : scene_.shapes)
       used = used || sh.inside_medium >= 0 || sh.outside_medium >= 0;
+    if (used && scene_.integrator.type == "bdpt") {
+      // lensim's bdpt does not trace media (pbrt-v4's does): volpath renders them.
+      warn(scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc,
+           "the scene has participating media, which lensim's \"bdpt\" does not handle; it "
+           "renders as \"volpath\"");
+      scene_.integrator.type = "volpath";
+    }
     if (used && scene_.integrator.type == "path")
       warn(scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc,
            fmt::format("the scene has participating media but integrator \"{}\" ignores them; "

@@ -1,0 +1,313 @@
+// The bdpt integrator: MIS weights of all the strategies of one path sum to one and, on a
+// diffuse scene, equal the balance heuristic computed here from closed-form densities (cosine
+// lobes, cosine emission, uniform light area); scene-builder parameters.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "lensim/camera/camera.h"
+#include "lensim/render/accel.h"
+#include "lensim/render/bdpt.h"
+#include "lensim/render/lights.h"
+#include "lensim/render/materials.h"
+#include "lensim/render/sampler.h"
+#include "lensim/render/textures.h"
+#include "scene_test_util.h"
+
+using namespace lensim;
+using render::bdpt::Vertex;
+using render::bdpt::VertexType;
+using testutil::buildText;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+/// A camera for calling the vertex functions directly: rays from the eye with directions
+/// uniform over the hemisphere about +z (so its direction density is 1 / 2 pi).
+class HemisphereCamera final : public camera::Camera {
+ public:
+  std::optional<camera::CameraRay> generateRay(const camera::CameraSample&) const override {
+    return std::nullopt;
+  }
+  std::string describe() const override { return "test hemisphere camera"; }
+  bool supportsImportance() const override { return true; }
+  camera::CameraRayPdf rayPdf(const Vec3&, const Vec3& d, double) const override {
+    return {1, d.z > 0 ? 1 / (2 * kPi) : 0.0};
+  }
+};
+
+/// A scene built for calling the bdpt functions directly.
+struct Direct {
+  scene::Scene scene;
+  std::unique_ptr<render::Accel> accel;
+  std::unique_ptr<render::Textures> textures;
+  std::unique_ptr<render::Materials> materials;
+  std::unique_ptr<render::LightSet> lights;
+  std::unique_ptr<render::LightSampler> light_sampler;
+  render::SceneContext sc;
+  HemisphereCamera camera;
+  render::bdpt::Context ctx;
+
+  explicit Direct(const std::string& text) : scene(buildText(text, "bdpt-test.pbrt")) {
+    if (scene.hasErrors()) throw Error(formatDiagnostics(scene.diagnostics));
+    accel = std::make_unique<render::Accel>(scene);
+    textures = std::make_unique<render::Textures>(scene);
+    materials = std::make_unique<render::Materials>(scene, *textures);
+    lights = std::make_unique<render::LightSet>(scene, *accel, *textures);
+    sc.scene = &scene;
+    sc.accel = accel.get();
+    sc.textures = textures.get();
+    sc.materials = materials.get();
+    sc.lights = lights.get();
+    sc.max_depth = scene.integrator.max_depth;
+    std::vector<const render::Light*> all;
+    for (size_t i = 0; i < lights->size(); ++i) all.push_back(&lights->light(i));
+    light_sampler = render::LightSampler::create("power", all);
+    ctx.sc = &sc;
+    ctx.camera = &camera;
+    ctx.light_sampler = light_sampler.get();
+    ctx.max_depth = sc.max_depth;
+  }
+};
+
+/// A closed box [-1, 1] x [0, 2] x [-1, 1] of diffuse walls (reflectance 0.5), a small
+/// two-sided light near the ceiling; `extra` adds shapes.
+std::string boxScene(const std::string& extra) {
+  return R"(Integrator "bdpt" "integer maxdepth" 7
+Camera "perspective"
+WorldBegin
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-1 0 -1  1 0 -1  1 0 1  -1 0 1] "integer indices" [0 1 2 0 2 3]
+Shape "trianglemesh" "point3 P" [-1 2 -1  1 2 -1  1 2 1  -1 2 1] "integer indices" [0 1 2 0 2 3]
+Shape "trianglemesh" "point3 P" [-1 0 -1  -1 2 -1  -1 2 1  -1 0 1] "integer indices" [0 1 2 0 2 3]
+Shape "trianglemesh" "point3 P" [1 0 -1  1 2 -1  1 2 1  1 0 1] "integer indices" [0 1 2 0 2 3]
+Shape "trianglemesh" "point3 P" [-1 0 1  1 0 1  1 2 1  -1 2 1] "integer indices" [0 1 2 0 2 3]
+Shape "trianglemesh" "point3 P" [-1 0 -1  1 0 -1  1 2 -1  -1 2 -1] "integer indices" [0 1 2 0 2 3]
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [4 4 4] "bool twosided" true
+Shape "trianglemesh" "point3 P" [-0.3 1.9 -0.3  0.3 1.9 -0.3  0.3 1.9 0.3  -0.3 1.9 0.3]
+  "integer indices" [0 1 2 0 2 3]
+AttributeEnd
+)" + extra;
+}
+
+/// Camera subpaths from the eye (0, 1, -0.9) looking along +z that end on the light, cut there:
+/// complete paths the s = 0 strategy found. Up to `count` of them, each of at least 3 vertices.
+std::vector<std::vector<Vertex>> pathsEndingOnLight(Direct& d, int count) {
+  std::vector<std::vector<Vertex>> out;
+  render::IndependentSampler sampler(1, 7);
+  std::vector<Vertex> buf(size_t(d.ctx.max_depth) + 3);
+  render::RayCounts counts;
+  for (int i = 0; i < 200000 && int(out.size()) < count; ++i) {
+    sampler.startPixelSample({i, 0}, 0);
+    Vec3 dir = render::sampleUniformHemisphere(sampler.get2D());
+    camera::CameraRay ray;
+    ray.origin = {0, 1, -0.9};
+    ray.direction = dir;
+    render::SampledWavelengths lambda = render::SampledWavelengths::sampleVisible(0.3);
+    const int n = render::bdpt::cameraSubpath(d.ctx, ray, lambda, sampler, counts, buf.data());
+    for (int k = 1; k < n; ++k) {
+      // Short segments (into corners) are left out: the walk's densities are those of its
+      // sampled directions, the weights' of the vertices' positions, which lie along rays from
+      // origins offset off the surfaces (~4e-5); over a segment of length l they differ by
+      // ~4e-5 / l relative per vertex, ~1e-3 over a path's product.
+      if (length(buf[size_t(k)].p - buf[size_t(k - 1)].p) < 0.25) break;
+      if (k >= 2 && buf[size_t(k)].type == VertexType::Surface && buf[size_t(k)].light) {
+        out.emplace_back(buf.begin(), buf.begin() + k + 1);
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+/// The light and camera subpaths with which strategy (s, n - s) makes the complete camera path
+/// `cam` (cam[0] the eye, cam.back() on the light), with the densities each subpath's walk
+/// would have given, and the vertex the strategy samples at its end (s = 1: the light point;
+/// t = 1: the eye).
+struct Split {
+  std::vector<Vertex> light, camera;
+  Vertex sampled;
+};
+Split split(const Direct& d, const std::vector<Vertex>& cam, int s, bool recompute) {
+  const int n = int(cam.size());
+  std::vector<Vertex> path = cam;
+  if (recompute) {
+    // Every vertex's densities from the positions (bdpt::pdf), instead of the walk's, which are
+    // those of its sampled directions from ray origins offset off the surfaces.
+    Vertex y0 = cam[size_t(n - 1)];
+    y0.type = VertexType::Light;
+    for (int k = 1; k < n; ++k) {
+      Vertex& v = path[size_t(k)];
+      v.pdf_fwd =
+          render::bdpt::pdf(d.ctx, cam[size_t(k - 1)], k >= 2 ? &cam[size_t(k - 2)] : nullptr, v,
+                            550);
+      if (k == n - 1)
+        v.pdf_rev = render::bdpt::pdfLightOrigin(d.ctx, y0, cam[size_t(n - 2)]);
+      else if (k == n - 2)
+        v.pdf_rev = render::bdpt::pdfLight(d.ctx, y0, v);
+      else
+        v.pdf_rev = render::bdpt::pdf(d.ctx, cam[size_t(k + 1)], &cam[size_t(k + 2)], v, 550);
+    }
+  }
+  Split r;
+  r.camera.assign(path.begin(), path.begin() + (n - s));
+  for (int j = 0; j < s; ++j) {
+    Vertex v = path[size_t(n - 1 - j)];
+    std::swap(v.pdf_fwd, v.pdf_rev);
+    r.light.push_back(v);
+  }
+  // The light end: a light vertex, its origin density and the emission density of y1.
+  Vertex y0 = path[size_t(n - 1)];
+  y0.type = VertexType::Light;
+  y0.pdf_fwd = render::bdpt::pdfLightOrigin(d.ctx, y0, path[size_t(n - 2)]);
+  y0.pdf_rev = path[size_t(n - 1)].pdf_fwd;
+  if (s >= 1) r.light[0] = y0;
+  if (s >= 2) r.light[1].pdf_fwd = render::bdpt::pdfLight(d.ctx, y0, path[size_t(n - 2)]);
+  r.sampled = s == 1 ? y0 : path[0];
+  return r;
+}
+
+/// Whether strategy s of the path can make it: both connection vertices are connectible.
+bool strategyExists(const std::vector<Vertex>& cam, int s) {
+  const int n = int(cam.size());
+  if (s == 0) return true;
+  const Vertex& ys = cam[size_t(n - s)];  // light-side end of the connection
+  if (ys.type == VertexType::Surface && !render::isNonSpecular(ys.bsdf.flags()) && s >= 2)
+    return false;
+  const Vertex& yt = cam[size_t(n - s - 1)];
+  return yt.type != VertexType::Surface || render::isNonSpecular(yt.bsdf.flags());
+}
+
+double weightSum(Direct& d, const std::vector<Vertex>& cam, std::vector<double>* weights,
+                 bool recompute = false) {
+  const int n = int(cam.size());
+  double sum = 0;
+  for (int s = 0; s < n; ++s) {
+    const int t = n - s;
+    if (s == 1 && t == 1) continue;
+    if (!strategyExists(cam, s)) {
+      if (weights) weights->push_back(0);
+      continue;
+    }
+    Split sp = split(d, cam, s, recompute);
+    const double w = render::bdpt::misWeight(d.ctx, sp.light.data(), sp.camera.data(), sp.sampled,
+                                             s, t, 550);
+    if (weights) weights->push_back(w);
+    sum += w;
+  }
+  return sum;
+}
+
+}  // namespace
+
+TEST(Bdpt, MisWeightsOfAPathSumToOne) {
+  // Diffuse walls, a rough conductor and a smooth glass sphere (specular vertices that some
+  // strategies cannot connect through).
+  Direct d(boxScene(R"(Material "conductor" "float roughness" 0.2
+Shape "trianglemesh" "point3 P" [-0.99 0.1 0.2  -0.99 1.2 0.2  -0.99 1.2 0.9  -0.99 0.1 0.9]
+  "integer indices" [0 1 2 0 2 3]
+Material "dielectric" "float eta" 1.5
+AttributeBegin
+Translate 0.3 0.5 0.3
+Shape "sphere" "float radius" 0.35
+AttributeEnd
+)"));
+  const auto paths = pathsEndingOnLight(d, 60);
+  ASSERT_GE(paths.size(), 40u);
+  int longest = 0, with_specular = 0;
+  for (double exponent : {1.0, 2.0}) {
+    d.ctx.mis_exponent = exponent;
+    for (const auto& cam : paths) {
+      longest = std::max(longest, int(cam.size()));
+      bool specular = false;
+      for (const Vertex& v : cam) specular = specular || v.delta;
+      with_specular += specular;
+      // For the fixed path (densities from its vertices' positions) the weights sum to one
+      // to rounding; with the walks' own densities, to the ray offsets' effect.
+      EXPECT_NEAR(weightSum(d, cam, nullptr, true), 1.0, 1e-9)
+          << cam.size() << " vertices, heuristic exponent " << exponent;
+      EXPECT_NEAR(weightSum(d, cam, nullptr, false), 1.0, 5e-3)
+          << cam.size() << " vertices, heuristic exponent " << exponent;
+    }
+  }
+  EXPECT_GE(longest, 5);
+  EXPECT_GT(with_specular, 0);
+}
+
+TEST(Bdpt, MisWeightsAreTheBalanceHeuristicOfClosedFormDensities) {
+  Direct d(boxScene(""));
+  const auto paths = pathsEndingOnLight(d, 30);
+  ASSERT_GE(paths.size(), 20u);
+  // The light: two-sided, area 0.36 (to float rounding of the mesh: 1e-7), two triangles of
+  // equal power.
+  const double light_area = 0.36;
+  // The tolerance: ray-origin offsets (see pathsEndingOnLight).
+  for (const auto& cam : paths) {
+    const int n = int(cam.size());
+    // y_j = cam[n - 1 - j]: y_0 on the light, y_{n-1} the eye.
+    auto y = [&](int j) -> const Vertex& { return cam[size_t(n - 1 - j)]; };
+    auto cosAt = [](const Vertex& v, const Vec3& w) { return std::abs(dot(v.ng, w)); };
+    auto toArea = [&](const Vertex& from, const Vertex& to, double pdf_dir) {
+      const Vec3 w = to.p - from.p;
+      const double d2 = dot(w, w);
+      return pdf_dir * cosAt(to, w / std::sqrt(d2)) / d2;
+    };
+    // Densities of y_j sampled from the light side (pl) and from the camera side (pc).
+    std::vector<double> pl(size_t(n), 0), pc(size_t(n), 0);
+    pl[0] = 1 / light_area;
+    pl[1] = toArea(y(0), y(1), cosAt(y(0), normalize(y(1).p - y(0).p)) / kPi * 0.5);
+    for (int j = 2; j < n - 1; ++j)
+      pl[size_t(j)] = toArea(y(j - 1), y(j), cosAt(y(j - 1), normalize(y(j).p - y(j - 1).p)) / kPi);
+    pc[size_t(n - 2)] = toArea(y(n - 1), y(n - 2), 1 / (2 * kPi));
+    for (int j = n - 3; j >= 0; --j)
+      pc[size_t(j)] = toArea(y(j + 1), y(j), cosAt(y(j + 1), normalize(y(j).p - y(j + 1).p)) / kPi);
+    std::vector<double> p;
+    for (int s = 0; s < n; ++s) {
+      if (s == 1 && n == 2) continue;
+      double ps = 1;
+      for (int j = 0; j < s; ++j) ps *= pl[size_t(j)];
+      for (int j = s; j < n - 1; ++j) ps *= pc[size_t(j)];
+      p.push_back(ps);
+    }
+    for (double exponent : {1.0, 2.0})
+      for (bool recompute : {true, false}) {
+        d.ctx.mis_exponent = exponent;
+        std::vector<double> w;
+        weightSum(d, cam, &w, recompute);
+        ASSERT_EQ(w.size(), p.size());
+        double sum = 0;
+        for (double ps : p) sum += std::pow(ps, exponent);
+        for (size_t s = 0; s < p.size(); ++s)
+          EXPECT_NEAR(w[s], std::pow(p[s], exponent) / sum, 1e-12 + (recompute ? 1e-6 : 5e-3) * w[s])
+              << "strategy s = " << s << " of a path of " << n << " vertices"
+              << (recompute ? "" : " (the walks' densities)");
+      }
+  }
+}
+
+TEST(Bdpt, BuilderParameters) {
+  scene::Scene s = buildText(
+      "Integrator \"bdpt\" \"integer maxdepth\" 9 \"bool regularize\" true \"bool "
+      "visualizeweights\" true \"string lightsampler\" \"bvh\"\nWorldBegin\n",
+      "b.pbrt");
+  EXPECT_EQ(s.integrator.type, "bdpt");
+  EXPECT_EQ(s.integrator.max_depth, 9);
+  EXPECT_TRUE(s.integrator.regularize);
+  EXPECT_EQ(s.integrator.light_sampler, "power");
+  int warnings = 0;
+  for (const auto& dg : s.diagnostics) warnings += dg.severity == Severity::Warning;
+  EXPECT_EQ(warnings, 2);  // bvh light sampler, visualizeweights
+  // With media, volpath renders the scene (warned).
+  scene::Scene m = buildText(
+      "Integrator \"bdpt\"\nWorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+      "MediumInterface \"fog\" \"\"\nShape \"sphere\"\n",
+      "m.pbrt");
+  EXPECT_EQ(m.integrator.type, "volpath");
+}
