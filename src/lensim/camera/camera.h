@@ -88,6 +88,10 @@ struct CameraWiSample {
   Vec2 film_raster;     ///< where the connection meets the film (full-image raster)
   /// Importance per path wavelength (all equal for a lens that does not disperse).
   std::array<double, kCameraWavelengths> importance{};
+  /// The connection was traced through a dispersive lens at the hero wavelength only (the
+  /// others would meet the film elsewhere): the path must terminate its secondary wavelengths
+  /// (SampledWavelengths::terminateSecondary) before using it; importance[0] is the hero's.
+  bool hero_only = false;
 };
 
 /// Density of a camera ray as generateRay samples it: pdf_pos per unit area of the surface the

@@ -1,8 +1,19 @@
 // The perspective (pinhole or thin-lens) camera, as pbrt-v4's PerspectiveCamera: camera space
 // looks down +z with +y up; the screen window at z = 1 is scaled by tan(fov / 2).
+//
+// Importance (camera.h, CameraWiSample): pbrt-v4's PerspectiveCamera::We, PDF_We and SampleWi
+// (src/pbrt/cameras.cpp): a ray leaving the lens at angle theta to the axis carries
+// W = 1 / (A lens_area cos^4 theta), A the area of the whole image on the plane z = 1 and
+// lens_area pi r^2 (1 for a pinhole), so that the importance integrated over the film is 1 per
+// image: one light path per pixel and sample, splatted and divided by the samples per pixel,
+// estimates the same image as camera rays of weight 1. pbrt-v4 defines no importance for the
+// orthographic camera; lensim derives it the same way (ProjectiveCamera::orthoImportance below).
+// Both take the camera transform to be rigid (lens and film areas in scene units): a scaling
+// camera transform would scale them.
 #include <fmt/format.h>
 #include <cmath>
 
+#include "lensim/camera/film_bounds.h"
 #include "lensim/camera/projective.h"
 #include "lensim/render/sampling.h"
 #include "lensim/scene/builder.h"
@@ -34,6 +45,7 @@ class ProjectiveCamera : public Camera {
   ProjectiveCamera(const scene::Scene& scene, bool orthographic)
       : scene_(&scene),
         world_from_camera_(inverse(scene.camera.camera_from_world)),
+        inverse_(scene.camera.camera_from_world),
         window_(screenWindow(scene)),
         ortho_(orthographic),
         lens_radius_(scene.camera.lens_radius),
@@ -48,6 +60,66 @@ class ProjectiveCamera : public Camera {
     if (lens_radius_ < 0) throw Error(c.loc, "camera: lensradius must not be negative");
     if (lens_radius_ > 0 && focal_distance_ <= 0)
       throw Error(c.loc, "camera: focaldistance must be positive with a lens radius");
+    film_ = FilmSampleBounds(scene);
+    forward_ = normalize(world_from_camera_.applyVector({0, 0, 1}));
+    const double sx = window_[1] - window_[0], sy = window_[3] - window_[2];
+    image_area_ = ortho_ ? std::abs(sx * sy)
+                         : std::abs(sx * sy) * tan_half_fov_ * tan_half_fov_;  // at z = 1
+    lens_area_ = lens_radius_ > 0 ? M_PI * lens_radius_ * lens_radius_ : 1.0;
+  }
+
+  bool supportsImportance() const override { return true; }
+
+  std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2 u,
+                                         const std::array<double, kCameraWavelengths>&,
+                                         double) const override {
+    const Transform& cw = world_from_camera_;
+    const Vec3 ref_c = inverse_.applyPoint(ref);
+    if (ortho_) return orthoSampleWi(ref_c, u);
+    // pbrt-v4's PerspectiveCamera::SampleWi: a uniform point on the lens disc (the eye for a
+    // pinhole), its solid-angle density at ref and the importance of the ray toward ref.
+    const Vec2 l = lens_radius_ > 0 ? render::sampleUniformDiskConcentric(u) * lens_radius_
+                                    : Vec2{0, 0};
+    CameraWiSample s;
+    s.p_lens = cw.applyPoint({l.x, l.y, 0});
+    const Vec3 d = s.p_lens - ref;
+    s.distance = length(d);
+    if (!(s.distance > 0)) return std::nullopt;
+    s.wi = d / s.distance;
+    s.n_lens = forward_;
+    const double cos_lens = std::abs(dot(s.n_lens, s.wi));
+    if (cos_lens == 0) return std::nullopt;
+    s.pdf = s.distance * s.distance / (cos_lens * lens_area_);
+    const double w = We({l.x, l.y, 0}, inverse_.applyVector(-s.wi), &s.film_raster);
+    if (w == 0) return std::nullopt;
+    s.importance.fill(w);
+    return s;
+  }
+
+  double importance(const Vec3& o, const Vec3& d, double, Vec2* film_raster) const override {
+    const Vec3 o_c = inverse_.applyPoint(o), d_c = inverse_.applyVector(d);
+    Vec2 raster;
+    const double w = ortho_ ? orthoWe(o_c, d_c, &raster) : We(o_c, d_c, &raster);
+    if (film_raster) *film_raster = raster;
+    return w;
+  }
+
+  CameraRayPdf rayPdf(const Vec3& o, const Vec3& d, double) const override {
+    const Vec3 o_c = inverse_.applyPoint(o), d_c = normalize(inverse_.applyVector(d));
+    Vec2 raster;
+    if (ortho_) {
+      if (orthoWe(o_c, d_c, &raster) == 0 && lens_radius_ > 0) return {};
+      // Origins uniform over the image (the film point; the lens offset moves it), directions
+      // by the lens point: fd^2 / (pi r^2 cos^3); a pinhole's direction is a delta (pdf 1).
+      const double c = d_c.z;
+      if (lens_radius_ == 0) return {1 / image_area_, 1};
+      return {1 / image_area_,
+              focal_distance_ * focal_distance_ / (lens_area_ * c * c * c)};
+    }
+    if (We(o_c, d_c, &raster) == 0) return {};
+    // pbrt-v4's PerspectiveCamera::PDF_We.
+    const double c = d_c.z;
+    return {lens_radius_ > 0 ? 1 / lens_area_ : 1.0, 1 / (image_area_ * c * c * c)};
   }
 
   std::optional<CameraRay> generateRay(const CameraSample& s) const override {
@@ -74,6 +146,82 @@ class ProjectiveCamera : public Camera {
     return r;
   }
 
+  /// Importance of the camera-space ray (o on the lens, d toward the scene) and its raster
+  /// point (pbrt-v4's PerspectiveCamera::We); 0 outside the film's sample bounds.
+  double We(const Vec3& o, Vec3 d, Vec2* raster) const {
+    d = normalize(d);
+    const double c = d.z;
+    if (!(c > 0)) return 0;
+    // The film point: through the point the ray crosses the plane of focus, back through the
+    // lens centre (a pinhole: the direction itself).
+    Vec3 q = d / c;
+    if (lens_radius_ > 0) {
+      if (o.x * o.x + o.y * o.y > lens_radius_ * lens_radius_ * (1 + 1e-9)) return 0;
+      q = (o + d * (focal_distance_ / c)) / focal_distance_;
+    }
+    *raster = screenToRaster({q.x / tan_half_fov_, q.y / tan_half_fov_});
+    if (!film_.inside(*raster)) return 0;
+    return 1 / (image_area_ * lens_area_ * c * c * c * c);
+  }
+
+  /// The orthographic camera's importance, derived as pbrt-v4 derives the perspective one: a
+  /// film point x (uniform over the image, area A in camera units) and a lens point l (uniform on
+  /// the disc) give the ray from o = x + l toward the point of focus x + (0, 0, fd), direction
+  /// d = (-l, fd) / |(-l, fd)|; the density of (o, d) per unit area and solid angle is
+  /// (1/A) (1/(pi r^2)) fd^2 / cos^3, so W = fd^2 / (A pi r^2 cos^4). A pinhole's rays all run
+  /// along +z: its importance is 1/A per unit area, a delta in direction (returned for d = +z
+  /// by sampleWi only; 0 here).
+  double orthoWe(const Vec3& o, Vec3 d, Vec2* raster) const {
+    d = normalize(d);
+    const double c = d.z;
+    if (!(c > 0) || lens_radius_ == 0) return 0;
+    const Vec2 l{-d.x / c * focal_distance_, -d.y / c * focal_distance_};
+    if (l.x * l.x + l.y * l.y > lens_radius_ * lens_radius_) return 0;
+    *raster = screenToRaster({o.x - l.x, o.y - l.y});
+    if (!film_.inside(*raster)) return 0;
+    return focal_distance_ * focal_distance_ / (image_area_ * lens_area_ * c * c * c * c);
+  }
+
+  std::optional<CameraWiSample> orthoSampleWi(const Vec3& ref_c, Vec2 u) const {
+    if (!(ref_c.z > 0)) return std::nullopt;
+    const Transform& cw = world_from_camera_;
+    CameraWiSample s;
+    s.n_lens = forward_;
+    if (lens_radius_ == 0) {
+      // The one ray through ref: along -z to the film plane. Importance 1/A per unit area and
+      // pdf 1 (a delta direction), so that W L |cos| / pdf is the projected-area measure.
+      const Vec3 o{ref_c.x, ref_c.y, 0};
+      s.film_raster = screenToRaster({o.x, o.y});
+      if (!film_.inside(s.film_raster)) return std::nullopt;
+      s.p_lens = cw.applyPoint(o);
+      s.wi = -forward_;
+      s.distance = length(s.p_lens - cw.applyPoint(ref_c));
+      s.pdf = 1;
+      s.importance.fill(1 / image_area_);
+      return s;
+    }
+    // The lens point fixes the direction; the ray through ref in that direction meets z = 0 at o.
+    const Vec2 l = render::sampleUniformDiskConcentric(u) * lens_radius_;
+    const Vec3 d = normalize(Vec3{-l.x, -l.y, focal_distance_});
+    const Vec3 o = ref_c - d * (ref_c.z / d.z);
+    const double w = orthoWe(o, d, &s.film_raster);
+    if (w == 0) return std::nullopt;
+    s.p_lens = cw.applyPoint(o);
+    const Vec3 to_lens = s.p_lens - cw.applyPoint(ref_c);
+    s.distance = length(to_lens);
+    s.wi = to_lens / s.distance;
+    // Solid angle of directions per lens area: cos^3 / fd^2.
+    s.pdf = focal_distance_ * focal_distance_ / (d.z * d.z * d.z * lens_area_);
+    s.importance.fill(w);
+    return s;
+  }
+
+  Vec2 screenToRaster(Vec2 screen) const {
+    const double fx = (screen.x - window_[0]) / (window_[1] - window_[0]);
+    const double fy = (window_[3] - screen.y) / (window_[3] - window_[2]);
+    return {fx * scene_->film.x_resolution, fy * scene_->film.y_resolution};
+  }
+
   std::string describe() const override {
     if (ortho_) return fmt::format("orthographic, lens radius {}", lens_radius_);
     return fmt::format("perspective, fov {:.4g} deg, lens radius {}, focal distance {}",
@@ -82,10 +230,13 @@ class ProjectiveCamera : public Camera {
 
  private:
   const scene::Scene* scene_;
-  Transform world_from_camera_;
+  Transform world_from_camera_, inverse_;
   std::array<double, 4> window_;
   bool ortho_;
   double lens_radius_, focal_distance_, tan_half_fov_, shutter_open_, shutter_close_;
+  FilmSampleBounds film_;
+  Vec3 forward_;
+  double image_area_ = 1, lens_area_ = 1;
 };
 
 }  // namespace

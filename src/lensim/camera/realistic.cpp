@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "lensim/optics/surface_shape.h"
 #include "lensim/render/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
@@ -91,6 +92,22 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   pupil_.emplace(*lens_.lens, lens_.paraxial, std::hypot(half_width_mm_, half_height_mm_),
                  pupil_options);
   centre_area_mm2_ = pupil_->area_mm2({0, 0});
+  camera_from_world_ = inverse(settings_.world_from_camera);
+  {
+    // The front surface's axial extent (lens space), for light arriving from the scene.
+    const optics::Interface& f = lens_.lens->interfaces().front();
+    const double r = f.semi_aperture_mm;
+    front_zmin_mm_ = front_zmax_mm_ = f.z_mm;
+    if (f.radius_mm != 0 || !f.shape.isSpherical())
+      for (int i = 0; i <= 64; ++i)
+        for (int k = 0; k < 16; ++k) {
+          const double h = r * i / 64, a = 2 * M_PI * k / 16;
+          if (auto sg = optics::surfaceSag(f.radius_mm, f.shape, h * std::cos(a), h * std::sin(a))) {
+            front_zmin_mm_ = std::min(front_zmin_mm_, f.z_mm + sg->z);
+            front_zmax_mm_ = std::max(front_zmax_mm_, f.z_mm + sg->z);
+          }
+        }
+  }
   if (settings_.simple_weighting && !(centre_area_mm2_ > 0))
     throw Error("simpleweighting: no light reaches the centre of the film to normalise by");
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -376,6 +393,7 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
   s.y_resolution = scene.film.y_resolution;
   s.world_from_camera = inverse(c.camera_from_world);
   s.zero_if_neighbour_blocked = options.pbrt_v2_quirks;
+  s.filter_radius = {scene.filter.x_radius, scene.filter.y_radius};
   try {
     if (c.legacy_realistic) {
       // pbrt-v1/v2 (CS348B): camera space in millimetres, film distance given, no exposure time.

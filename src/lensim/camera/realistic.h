@@ -71,6 +71,9 @@ struct RealisticSettings {
   /// Give every element of the lens the catalogue glass nearest to its index (and V_d), as
   /// `lens info --glass-match` does (the scene's "bool glassmatch"), so an old lens disperses.
   bool glass_match = false;
+  /// The pixel filter's radius (pixels): film points this far beyond the image's edge still
+  /// reach its edge pixels (camera importance accepts them; film_bounds.h).
+  Vec2 filter_radius{0.5, 0.5};
 };
 
 class RealisticCamera final : public Camera {
@@ -87,6 +90,15 @@ class RealisticCamera final : public Camera {
   double startupSeconds() const override { return startup_seconds_; }
   bool reachesFilm(Vec2 film_raster) const override;
   std::string describe() const override;
+
+  // Camera importance (realistic_importance.cpp).
+  bool supportsImportance() const override { return true; }
+  std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2 u,
+                                         const std::array<double, kCameraWavelengths>& lambda_nm,
+                                         double time) const override;
+  double importance(const Vec3& o, const Vec3& d, double lambda_nm,
+                    Vec2* film_raster) const override;
+  CameraRayPdf rayPdf(const Vec3& o, const Vec3& d, double lambda_nm) const override;
 
   /// The lens as set up (film position, stop, paraxial data).
   const optics::FocusedLens& lens() const { return lens_; }
@@ -135,6 +147,29 @@ class RealisticCamera final : public Camera {
   std::optional<CameraRay> dispersiveRay(const CameraSample& sample, const FilmRay& f) const;
   /// Raster position of a film point (lens space, mm): the inverse of filmPoint.
   Vec2 rasterPoint(Vec2 film_mm) const;
+
+  // Importance (realistic_importance.cpp).
+  /// Where the line through o_lens with direction d_lens (lens space, mm; toward +z), coming
+  /// from the scene, meets the film, traced at lambda_nm (0: the primary wavelength): the film
+  /// point's raster position and the importance per unit world area and projected solid angle
+  /// at the front element; nullopt if the lens stops it, it misses the film or no camera ray
+  /// could have taken that way. With front_hit: also nullopt unless the line enters the lens
+  /// there (its first meeting with the front surface).
+  struct FilmHit {
+    Vec2 raster;
+    double importance = 0;
+    Vec2 film_mm;
+    double cos_theta = 1;  ///< of the film-side ray to the axis
+  };
+  std::optional<FilmHit> traceToFilm(const Vec3& o_lens, const Vec3& d_lens, double lambda_nm,
+                                     const Vec3* front_hit = nullptr) const;
+  /// World <-> lens space (mm).
+  Vec3 lensFromWorldPoint(const Vec3& p) const;
+  Vec3 lensFromWorldVector(const Vec3& v) const;
+  Vec3 worldFromLensPoint(const Vec3& p) const;
+  Vec3 worldFromLensVector(const Vec3& v) const;
+  Transform camera_from_world_;
+  double front_zmin_mm_ = 0, front_zmax_mm_ = 0;  ///< the front surface's axial extent
 };
 
 }  // namespace lensim::camera

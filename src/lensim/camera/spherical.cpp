@@ -3,6 +3,13 @@
 // camera's +y axis: the direction is (sin theta cos phi, cos theta, sin theta sin phi) in camera
 // space. With "equalarea" (pbrt-v4's default; square images) the raster position in [0,1]^2 goes
 // through the equal-area octahedral mapping, then y and z are swapped, as in pbrt-v4.
+//
+// Importance (camera.h): pbrt-v4 defines none for this camera; lensim derives it as pbrt-v4 does
+// for a pinhole. Film points are uniform over the image, so the density of a direction is
+// 1 / (4 pi) per steradian for the equal-area mapping and 1 / (2 pi^2 sin theta) for the
+// equirectangular one (d omega = sin theta d theta d phi = 2 pi^2 sin theta du dv); a point camera
+// has no facing, so the importance of a ray is that density, with the camera's "normal" at the
+// eye taken along the connection (cos 1) and a position density of 1 (a delta, as a pinhole's).
 #include <fmt/format.h>
 #include <cmath>
 
@@ -21,7 +28,68 @@ class SphericalCamera final : public Camera {
   explicit SphericalCamera(const scene::Scene& scene)
       : scene_(&scene),
         world_from_camera_(inverse(scene.camera.camera_from_world)),
-        equal_area_(scene.camera.spherical_mapping == "equalarea") {}
+        inverse_(scene.camera.camera_from_world),
+        equal_area_(scene.camera.spherical_mapping == "equalarea") {
+    eye_ = world_from_camera_.applyPoint({0, 0, 0});
+  }
+
+  bool supportsImportance() const override { return true; }
+
+  std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2,
+                                         const std::array<double, kCameraWavelengths>&,
+                                         double) const override {
+    CameraWiSample s;
+    s.p_lens = eye_;
+    const Vec3 d = eye_ - ref;
+    s.distance = length(d);
+    if (!(s.distance > 0)) return std::nullopt;
+    s.wi = d / s.distance;
+    s.n_lens = -s.wi;
+    s.pdf = s.distance * s.distance;
+    const double w = directionDensity(inverse_.applyVector(-s.wi), &s.film_raster);
+    if (w == 0) return std::nullopt;
+    s.importance.fill(w);
+    return s;
+  }
+  double importance(const Vec3&, const Vec3& d, double, Vec2* film_raster) const override {
+    Vec2 raster;
+    const double w = directionDensity(inverse_.applyVector(d), &raster);
+    if (film_raster) *film_raster = raster;
+    return w;
+  }
+  CameraRayPdf rayPdf(const Vec3&, const Vec3& d, double) const override {
+    Vec2 raster;
+    return {1, directionDensity(inverse_.applyVector(d), &raster)};
+  }
+
+  /// The solid-angle density of camera-space direction d and its raster point (0 outside the
+  /// film's sample bounds).
+  double directionDensity(Vec3 d, Vec2* raster) const {
+    const double len = length(d);
+    if (!(len > 0)) return 0;
+    d = d / len;
+    const double xr = scene_->film.x_resolution, yr = scene_->film.y_resolution;
+    double density;
+    if (equal_area_) {
+      const Vec2 uv = render::equalAreaSphereToSquare({d.x, d.z, d.y});
+      *raster = {uv.x * xr, uv.y * yr};
+      density = 1 / (4 * M_PI);
+    } else {
+      const double theta = std::acos(std::clamp(d.y, -1.0, 1.0));
+      double phi = std::atan2(d.z, d.x);
+      if (phi < 0) phi += 2 * M_PI;
+      *raster = {phi / (2 * M_PI) * xr, theta / M_PI * yr};
+      const double sin_theta = std::sin(theta);
+      if (!(sin_theta > 0)) return 0;
+      density = 1 / (2 * M_PI * M_PI * sin_theta);
+    }
+    // Film points beyond the image edge (the filter's margin) map back inside (the mapping
+    // wraps or clamps), so a path tracer's edge pixels with a filter wider than a pixel see
+    // directions from across the seam that a splat, landing on the one raster point of its
+    // direction, does not reach: light-traced edge pixels differ there (not with "box").
+    if (raster->x < 0 || raster->x > xr || raster->y < 0 || raster->y > yr) return 0;
+    return density;
+  }
 
   std::optional<CameraRay> generateRay(const CameraSample& s) const override {
     const double u = s.film_raster.x / scene_->film.x_resolution;
@@ -48,8 +116,9 @@ class SphericalCamera final : public Camera {
 
  private:
   const scene::Scene* scene_;
-  Transform world_from_camera_;
+  Transform world_from_camera_, inverse_;
   bool equal_area_;
+  Vec3 eye_;
 };
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include "lensim/render/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/film_sensor.h"
 
@@ -159,6 +160,46 @@ void Film::addSpectral(int x, int y, SampledSpectrum L, const SampledWavelengths
   }
 }
 
+void Film::enableSplats(const Filter& filter) {
+  splat_filter_ = &filter;
+  splats_.assign(pixels_.size(), {0, 0, 0});
+  if (n_buckets_ > 0) bucket_splats_.assign(pixels_.size() * size_t(n_buckets_), 0.0);
+  splat_locks_ = std::make_unique<std::mutex[]>(kSplatLocks);
+}
+
+void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda) {
+  if (!splat_filter_) return;
+  const Vec3 rgb = toRgb(L, lambda);
+  const Vec2 r = splat_filter_->radius();
+  const double norm = 1 / splat_filter_->integral();
+  // Pixels whose centre (x + 0.5, y + 0.5) lies within the filter radius of p.
+  const int x0 = std::max(bounds_.x0, int(std::ceil(p.x - 0.5 - r.x)));
+  const int x1 = std::min(bounds_.x1 - 1, int(std::floor(p.x - 0.5 + r.x)));
+  const int y0 = std::max(bounds_.y0, int(std::ceil(p.y - 0.5 - r.y)));
+  const int y1 = std::min(bounds_.y1 - 1, int(std::floor(p.y - 0.5 + r.y)));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const double w = splat_filter_->eval({p.x - (x + 0.5), p.y - (y + 0.5)}) * norm;
+      if (w == 0) continue;
+      const size_t i = size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0);
+      const Int128 v[3] = {toFixed(w * rgb.x), toFixed(w * rgb.y), toFixed(w * rgb.z)};
+      std::lock_guard lock(splat_locks_[i % kSplatLocks]);
+      for (int c = 0; c < 3; ++c) splats_[i][size_t(c)] += v[c];
+      if (n_buckets_ > 0) {
+        // As addSpectral, the bucket estimate of the splat's radiance.
+        const double width = (lambda_max_ - lambda_min_) / n_buckets_;
+        for (int k = 0; k < kSpectrumSamples; ++k) {
+          const double l = lambda.lambda(k), pdf = lambda.pdf(k);
+          if (!(pdf > 0) || l < lambda_min_ || l >= lambda_max_) continue;
+          const int b = std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) /
+                                                      (lambda_max_ - lambda_min_)));
+          bucket_splats_[i * size_t(n_buckets_) + size_t(b)] +=
+              w * std::min(L[k], max_component_) / (pdf * kSpectrumSamples * width);
+        }
+      }
+    }
+}
+
 std::string Film::bucketChannel(int b) const {
   std::string l =
       fmt::format("{:.3f}nm", lambda_min_ + (b + 0.5) / n_buckets_ * (lambda_max_ - lambda_min_));
@@ -179,6 +220,13 @@ io::Image Film::image() const {
         const double w = double(pixels_[i].weight) / kFixedScale;
         for (int b = 0; b < n_buckets_; ++b)
           im.at(x, y, 3 + b) = float(bucket_sums_[i * size_t(n_buckets_) + size_t(b)] / w);
+      }
+      if (!splats_.empty()) {
+        for (int c = 0; c < 3; ++c)
+          im.at(x, y, c) += float(double(splats_[i][size_t(c)]) / kFixedScale * splat_scale_);
+        for (int b = 0; b < n_buckets_; ++b)
+          im.at(x, y, 3 + b) +=
+              float(bucket_splats_[i * size_t(n_buckets_) + size_t(b)] * splat_scale_);
       }
     }
   if (n_buckets_ > 0) {

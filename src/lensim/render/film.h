@@ -4,6 +4,8 @@
 #pragma once
 
 #include <array>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -15,6 +17,8 @@ struct Scene;
 }
 
 namespace lensim::render {
+
+class Filter;
 
 /// A half-open rectangle of pixels [x0, x1) x [y0, y1) in the full image's raster.
 struct PixelBounds {
@@ -88,6 +92,30 @@ class Film {
   const std::vector<PixelSum>& sums() const { return pixels_; }
   std::vector<PixelSum>& sums() { return pixels_; }
 
+  // Splats: contributions of light paths that reach the film at any point (light tracing,
+  // bidirectional methods; camera.h, CameraWiSample, has the measurement convention). A pixel of
+  // the image is its filtered estimate (the samples above) plus splat_scale times its splat sum.
+  // Splat sums are fixed-point integers like the pixels' sums, so they too do not depend on the
+  // order in which threads add them: a splatting render's RGB is deterministic whatever the number
+  // of threads (a spectral film's bucket splats are floating point: their last bits may vary).
+  // They are not written to parts or checkpoints (the renderer refuses those for a
+  // splatting integrator: a light path started in one tile splats anywhere in the image).
+  /// Makes the film accept splats (allocates the splat sums), reconstructed with `filter`
+  /// (which must outlive the film).
+  void enableSplats(const Filter& filter);
+  bool splatsEnabled() const { return splat_filter_ != nullptr; }
+  /// Adds the splat L (carried by lambda) at the continuous raster position p (full image): to
+  /// each pixel of bounds() whose filter support holds p, with weight f(p - centre) / (integral
+  /// of f), so that a splat adds its whole value to the image and the splatted image is filtered
+  /// as the sampled one is (pbrt-v4's RGBFilm::AddSplat, src/pbrt/film.cpp, weighs by the raw
+  /// filter value, which matches only filters of unit integral). Thread-safe.
+  void addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda);
+  /// The factor image() applies to the splat sums: 1 / (light paths per pixel of the full
+  /// image), pbrt-v4's 1 / spp for a render of the whole image.
+  void setSplatScale(double scale) { splat_scale_ = scale; }
+  /// The splat sums (R, G, B in fixed point), row by row over bounds(); empty without splats.
+  const std::vector<std::array<Int128, 3>>& splatSums() const { return splats_; }
+
  private:
   PixelBounds bounds_;
   std::vector<PixelSum> pixels_;
@@ -100,6 +128,13 @@ class Film {
   double lambda_min_ = 360, lambda_max_ = 830;
   std::vector<double> bucket_sums_;
   void addSpectral(int x, int y, SampledSpectrum L, const SampledWavelengths& lambda, double w);
+  // Splats (see enableSplats).
+  const Filter* splat_filter_ = nullptr;
+  double splat_scale_ = 1;
+  std::vector<std::array<Int128, 3>> splats_;
+  std::vector<double> bucket_splats_;  ///< spectral films: per pixel, n_buckets_ splat sums
+  static constexpr size_t kSplatLocks = 1024;  ///< lock stripes (by pixel index)
+  std::unique_ptr<std::mutex[]> splat_locks_;
 };
 
 }  // namespace lensim::render

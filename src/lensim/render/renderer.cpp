@@ -18,6 +18,7 @@
 #include "lensim/camera/camera.h"
 #include "lensim/render/filter.h"
 #include "lensim/render/integrator.h"
+#include "lensim/render/lighttracer.h"
 #include "lensim/render/parts.h"
 #include "lensim/render/media.h"
 #include "lensim/render/volpath.h"
@@ -206,6 +207,33 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const int spp_begin = plan.spp_begin, spp_end = plan.spp_end;
   std::unique_ptr<Filter> filter = makeFilter(scene.filter);
   Film film(scene, bounds);
+  // A splatting integrator (lighttracer): each pixel sample starts a light path that splats
+  // anywhere in the image, so a tile's pixels are not its own: no tiles of a distributed
+  // render, no exact part sums, no checkpoints (render/film.h, splats).
+  std::optional<LightTracer> light_tracer;
+  if (scene.integrator.type == "lighttracer") {
+    const char* refused = opt.tile          ? "--tile"
+                          : opt.keep_sums   ? "parts (exact sums)"
+                          : opt.on_checkpoint ? "checkpoints"
+                          : opt.resume      ? "resuming"
+                                            : nullptr;
+    if (refused)
+      throw Error(scene.integrator.loc,
+                  fmt::format("integrator \"lighttracer\" does not support {}: its light paths "
+                              "splat anywhere in the image (split a render by --spp-range and "
+                              "average the images instead)",
+                              refused));
+    if (!scene.media.empty())
+      logWarning("integrator \"lighttracer\" ignores participating media (use \"volpath\")");
+    light_tracer.emplace(sc, *cam);
+    film.enableSplats(*filter);
+  }
+  // The splats' scale for `n` samples per pixel taken: one light path per sample of every
+  // pixel rendered, the image normalised per pixel of the full image (camera.h).
+  auto setSplatScale = [&](int n) {
+    film.setSplatScale(double(x_res) * double(y_res) /
+                       (double(std::max(n, 1)) * double(bounds.area())));
+  };
 
   RenderResult result;
   result.bounds = bounds;
@@ -368,7 +396,24 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             double u_lambda[kB];
             SampledWavelengths lambdas[kB];
             std::optional<camera::CameraRay> cam_rays[kB];
-            for (int y = y0; y < y1; ++y)
+            if (light_tracer) {
+              for (int y = y0; y < y1 && !tile_cancelled; ++y)
+                for (int x = x0; x < x1; ++x) {
+                  if (stopRequested()) {
+                    cancelled = true;
+                    tile_cancelled = true;
+                    break;
+                  }
+                  for (int i = pass_begin; i < pass_end; ++i) {
+                    sampler->startPixelSample({x, y}, i);
+                    // Dimension order: wavelength, then the light path.
+                    SampledWavelengths lambda = SampledWavelengths::sampleVisible(sampler->get1D());
+                    n_bad += uint64_t(light_tracer->trace(lambda, *sampler, film, counts));
+                    ++n_samples;
+                  }
+                }
+            }
+            for (int y = y0; y < (light_tracer ? y0 : y1); ++y)
               for (int x = x0; x < x1; ++x)
                 for (int i0 = pass_begin; i0 < pass_end; i0 += kB) {
                   if (((i0 - pass_begin) & 63) == 0 && stopRequested()) {
@@ -446,6 +491,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     stopProgress();  // a joinable thread must not outlive the render
     throw;
   }
+  setSplatScale(pass_end - spp_begin);
   if (opt.on_pass && !cancelled.load() && (opt.cancel == nullptr || !opt.cancel->load()) &&
       !opt.on_pass(film.image(), pass_end - spp_begin))
     cancelled = true;

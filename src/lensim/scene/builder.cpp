@@ -1095,6 +1095,8 @@ class Builder {
       ps.getFloat({"rrthreshold"}, 1);  // pbrt-v3
       if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
       if (type == "volpath") it.type = "volpath";
+    } else if (type == "lighttracer") {
+      it.type = "lighttracer";  // pbrt-v4's LightPathIntegrator (render/lighttracer.h)
     } else if (type == "bdpt") {
       integratorBdpt(ps, it);
     } else if (type == "directlighting") {

@@ -1,0 +1,149 @@
+// The light tracer; see lighttracer.h. The estimator follows pbrt-v4's
+// LightPathIntegrator::EvaluatePixelSample (src/pbrt/cpu/integrators.cpp): the light's point is
+// connected to the camera with weight Le |cos| W / (pmf pdf_pos pdf_camera), and every surface
+// vertex with beta f |cos| W / pdf_camera, beta starting at Le |cos| / (pmf pdf_pos pdf_dir) and
+// multiplied by f |cos| / pdf at each BSDF sample (importance transport); no Russian roulette;
+// a path ends after maxdepth surface vertices, which gives it the path tracer's path lengths.
+// Where pbrt-v4 divides the light's point by its solid-angle density from the lens, lensim
+// uses the area density it sampled the point with (the two agree for area-sampled lights).
+#include "lensim/render/lighttracer.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "lensim/camera/camera.h"
+#include "lensim/render/film.h"
+#include "lensim/scene/builder.h"
+#include "lensim/util/error.h"
+#include "lensim/util/log.h"
+
+namespace lensim::render {
+
+LightTracer::LightTracer(const SceneContext& sc, const camera::Camera& camera)
+    : sc_(&sc),
+      camera_(&camera),
+      shutter_open_(sc.scene->camera.shutter_open),
+      shutter_close_(sc.scene->camera.shutter_close) {
+  if (!camera.supportsImportance())
+    throw Error(sc.scene->camera.loc,
+                fmt::format("integrator \"lighttracer\": the camera ({}) has no importance "
+                            "function, so light paths cannot reach its film; render it with "
+                            "\"path\"",
+                            camera.describe()));
+  std::map<std::string, int> left_out;
+  double total = 0;
+  for (size_t i = 0; i < sc.lights->size(); ++i) {
+    const Light& l = sc.lights->light(i);
+    if (!l.supportsLe()) {
+      ++left_out[l.typeName()];
+      continue;
+    }
+    lights_.push_back(&l);
+    total += std::max(0.0, l.power());
+    cdf_.push_back(total);
+  }
+  if (total <= 0)  // no power known: uniform
+    for (size_t i = 0; i < cdf_.size(); ++i) cdf_[i] = double(i + 1);
+  for (const auto& [type, n] : left_out)
+    logWarning(fmt::format("integrator \"lighttracer\": {} {} light{} cannot start light paths "
+                           "(no emission sampling) and {} left out of the image",
+                           n, type, n > 1 ? "s" : "", n > 1 ? "are" : "is"));
+}
+
+int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
+                       RayCounts& counts) const {
+  const double u_light = sampler.get1D();
+  const double u_time = sampler.get1D();
+  const Vec2 u1 = sampler.get2D(), u2 = sampler.get2D();
+  if (lights_.empty()) return 0;
+  const double time = shutter_open_ + u_time * (shutter_close_ - shutter_open_);
+  // The light, by power.
+  const double x = u_light * cdf_.back();
+  const size_t k = size_t(std::min<std::ptrdiff_t>(
+      std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin(), std::ptrdiff_t(cdf_.size()) - 1));
+  const double pmf = (cdf_[k] - (k > 0 ? cdf_[k - 1] : 0.0)) / cdf_.back();
+  if (!(pmf > 0)) return 0;
+  const Light& light = *lights_[k];
+  std::array<double, camera::kCameraWavelengths> lambda_nm{};
+  auto wavelengths = [&] {
+    for (int i = 0; i < kSpectrumSamples; ++i) lambda_nm[size_t(i)] = lambda.lambda(i);
+    return lambda_nm;
+  };
+  int dropped = 0;
+  // Splats beta W / pdf at the connection's film point.
+  auto splat = [&](const camera::CameraWiSample& cs, SampledSpectrum L) {
+    if (cs.hero_only) lambda.terminateSecondary();
+    for (int i = 0; i < kSpectrumSamples; ++i) L[i] *= cs.importance[size_t(i)] / cs.pdf;
+    for (int i = 0; i < kSpectrumSamples; ++i)
+      if (!std::isfinite(L[i])) {
+        ++dropped;
+        return;
+      }
+    film.addSplat(cs.film_raster, L, lambda);
+  };
+
+  const Vec2 u_cam0 = sampler.get2D();
+  const std::optional<LightLeSample> les = light.sampleLe(u1, u2, lambda);
+  if (!les || !(les->pdf_pos > 0) || !(les->pdf_dir > 0) || les->L.isBlack()) return 0;
+  // The light's own point seen by the camera (area lights; a point light is a delta the film
+  // cannot see).
+  if (les->on_surface) {
+    if (auto cs = camera_->sampleWi(les->o, u_cam0, wavelengths(), time); cs && cs->pdf > 0) {
+      SurfaceHit h;
+      h.ng = les->n;
+      h.uv = les->uv;
+      const SampledSpectrum Le = light.L(h, cs->wi, lambda);
+      if (!Le.isBlack() &&
+          !occludedScene(*sc_, les->o, les->n, cs->p_lens, false, cs->wi, counts))
+        splat(*cs, Le * (std::abs(dot(les->n, cs->wi)) / (pmf * les->pdf_pos)));
+    }
+  }
+  const double cos0 = les->on_surface ? std::abs(dot(les->n, les->d)) : 1.0;
+  SampledSpectrum beta = les->L * (cos0 / (pmf * les->pdf_pos * les->pdf_dir));
+  Ray ray{les->on_surface ? offsetOrigin(les->o, les->n, les->d) : les->o, les->d, INFINITY};
+  int depth = 0, interfaces = 0;
+  for (;;) {
+    const auto hit = intersectScene(*sc_, ray, counts);
+    if (!hit) break;
+    const SurfaceHit& h = *hit;
+    const Vec3 wo = -ray.d;
+    const TextureEvalContext tctx{h.p, h.uv, h.ns};
+    const int material =
+        sc_->materials->resolve(sc_->scene->shapes[size_t(h.shape)].material, tctx, wo);
+    if (sc_->materials->isInterface(material)) {
+      if (++interfaces > 100) break;
+      ray.o = offsetOrigin(h.p, h.ng, ray.d);
+      continue;
+    }
+    if (depth++ == sc_->max_depth) break;
+    auto bxdf = sc_->materials->bxdf(material, tctx, lambda, false);
+    Vec3 ns = sc_->materials->shadingNormal(material, tctx, h.ns, h.dpdu);
+    if (sc_->materials->hasBump(material))
+      ns = sc_->materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+    const BSDF bsdf(ns, h.dpdu, bxdf);
+    // Connect to the camera.
+    const Vec2 u_cam = sampler.get2D();
+    if (isNonSpecular(bsdf.flags())) {
+      if (auto cs = camera_->sampleWi(h.p, u_cam, wavelengths(), time); cs && cs->pdf > 0) {
+        const SampledSpectrum f =
+            bsdf.f(wo, cs->wi, TransportMode::Importance) * std::abs(dot(cs->wi, ns));
+        if (!f.isBlack() && !occludedScene(*sc_, h.p, h.ng, cs->p_lens, false, cs->wi, counts))
+          splat(*cs, beta * f);
+      }
+    }
+    // Continue the path.
+    const double uc = sampler.get1D();
+    const Vec2 u = sampler.get2D();
+    auto bs = bsdf.sample_f(wo, uc, u, TransportMode::Importance);
+    if (!bs) break;
+    beta *= bs->f * (std::abs(dot(bs->wi, ns)) / bs->pdf);
+    if (beta.isBlack()) break;
+    ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
+  }
+  return dropped;
+}
+
+}  // namespace lensim::render
