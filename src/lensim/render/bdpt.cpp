@@ -173,6 +173,8 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     const Vec2 u = sampler.get2D();
     auto cs = ctx.camera->sampleWi(qs.p, u, lambda_nm, time);
     if (!cs || cs->pdf <= 0) return L;
+    // Through a dispersive lens only the hero wavelength reaches this film point.
+    if (cs->hero_only) lambda.terminateSecondary();
     sampled = Vertex{};
     sampled.type = VertexType::Camera;
     sampled.p = cs->p_lens;

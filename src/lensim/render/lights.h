@@ -51,18 +51,6 @@ struct LightLeSample {
   Vec2 uv;  ///< surface (u, v) at o (area lights; for image emission)
 };
 
-/// A ray leaving a light (light tracing, bidirectional methods): pbrt-v4's LightLeSample.
-struct LightLeSample {
-  Vec3 o, d;          ///< origin on the light, unit direction
-  SampledSpectrum L;  ///< radiance leaving along d (intensity for point lights)
-  double pdf_pos = 0; ///< per unit area of the light's surface (1 for a point light: a delta)
-  double pdf_dir = 0; ///< per steradian of d
-  bool on_surface = false;  ///< an area light: n is its surface normal at o (the side of d
-                            ///< for two-sided lights is not implied)
-  Vec3 n;
-  Vec2 uv;  ///< surface (u, v) at o (area lights; for image emission)
-};
-
 class Light {
  public:
   virtual ~Light() = default;
@@ -108,7 +96,7 @@ class Light {
     (void)o, (void)n, (void)d;
     return {0, 0};
   }
-  /// Whether sampleLe is implemented (point, spot and diffuse area lights).
+  /// Whether sampleLe is implemented (every light type lensim has).
   virtual bool supportsLe() const { return false; }
   /// The light's type, for messages.
   virtual const char* typeName() const = 0;
