@@ -101,7 +101,7 @@ AttributeEnd
 }
 
 /// Camera subpaths from the eye (0, 1, -0.9) looking along +z that end on the light, cut there:
-/// complete paths the s = 0 strategy found. Up to `count` of them, each of at least 3 vertices.
+/// complete paths the s = 0 strategy found (the light seen directly included). Up to `count`.
 std::vector<std::vector<Vertex>> pathsEndingOnLight(Direct& d, int count) {
   std::vector<std::vector<Vertex>> out;
   render::IndependentSampler sampler(1, 7);
@@ -121,7 +121,7 @@ std::vector<std::vector<Vertex>> pathsEndingOnLight(Direct& d, int count) {
       // origins offset off the surfaces (~4e-5); over a segment of length l they differ by
       // ~4e-5 / l relative per vertex, ~1e-3 over a path's product.
       if (length(buf[size_t(k)].p - buf[size_t(k - 1)].p) < 0.25) break;
-      if (k >= 2 && buf[size_t(k)].type == VertexType::Surface && buf[size_t(k)].light) {
+      if (buf[size_t(k)].type == VertexType::Surface && buf[size_t(k)].light) {
         out.emplace_back(buf.begin(), buf.begin() + k + 1);
         break;
       }
@@ -173,7 +173,7 @@ Split split(const Direct& d, const std::vector<Vertex>& cam, int s, bool recompu
   y0.pdf_rev = path[size_t(n - 1)].pdf_fwd;
   if (s >= 1) r.light[0] = y0;
   if (s >= 2) r.light[1].pdf_fwd = render::bdpt::pdfLight(d.ctx, y0, path[size_t(n - 2)]);
-  r.sampled = s == 1 ? y0 : path[0];
+  r.sampled = s == 1 && n > 2 ? y0 : path[0];
   return r;
 }
 
@@ -194,7 +194,6 @@ double weightSum(Direct& d, const std::vector<Vertex>& cam, std::vector<double>*
   double sum = 0;
   for (int s = 0; s < n; ++s) {
     const int t = n - s;
-    if (s == 1 && t == 1) continue;
     if (!strategyExists(cam, s)) {
       if (weights) weights->push_back(0);
       continue;
@@ -252,8 +251,10 @@ TEST(Bdpt, MisWeightsAreTheBalanceHeuristicOfClosedFormDensities) {
   // equal power.
   const double light_area = 0.36;
   // The tolerance: ray-origin offsets (see pathsEndingOnLight).
+  int direct = 0;  // paths of the light seen directly: strategies (0, 2) and (1, 1)
   for (const auto& cam : paths) {
     const int n = int(cam.size());
+    direct += n == 2;
     // y_j = cam[n - 1 - j]: y_0 on the light, y_{n-1} the eye.
     auto y = [&](int j) -> const Vertex& { return cam[size_t(n - 1 - j)]; };
     auto cosAt = [](const Vertex& v, const Vec3& w) { return std::abs(dot(v.ng, w)); };
@@ -273,7 +274,6 @@ TEST(Bdpt, MisWeightsAreTheBalanceHeuristicOfClosedFormDensities) {
       pc[size_t(j)] = toArea(y(j + 1), y(j), cosAt(y(j + 1), normalize(y(j).p - y(j + 1).p)) / kPi);
     std::vector<double> p;
     for (int s = 0; s < n; ++s) {
-      if (s == 1 && n == 2) continue;
       double ps = 1;
       for (int j = 0; j < s; ++j) ps *= pl[size_t(j)];
       for (int j = s; j < n - 1; ++j) ps *= pc[size_t(j)];
@@ -293,6 +293,7 @@ TEST(Bdpt, MisWeightsAreTheBalanceHeuristicOfClosedFormDensities) {
               << (recompute ? "" : " (the walks' densities)");
       }
   }
+  EXPECT_GT(direct, 0);
 }
 
 TEST(Bdpt, BuilderParameters) {

@@ -180,8 +180,14 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     sampled.p = cs->p_lens;
     for (int c = 0; c < kSpectrumSamples; ++c)
       sampled.beta[c] = cs->importance[size_t(c)] / cs->pdf;
-    L = qs.beta * bsdfF(qs, sampled, TransportMode::Importance) * sampled.beta;
-    if (qs.onSurface()) L *= std::abs(dot(cs->wi, qs.ns));
+    if (qs.type == VertexType::Light) {
+      // s = 1: the area light's own point seen through the camera.
+      L = emitted(ctx, qs, sampled, lambda) *
+          (std::abs(dot(cs->wi, qs.ng)) / std::max(qs.pdf_fwd, 1e-300)) * sampled.beta;
+    } else {
+      L = qs.beta * bsdfF(qs, sampled, TransportMode::Importance) * sampled.beta;
+      if (qs.onSurface()) L *= std::abs(dot(cs->wi, qs.ns));
+    }
     if (L.isBlack() || segmentOccluded(ctx, qs, sampled, counts)) return SampledSpectrum(0.0);
     *raster = cs->film_raster;
   } else if (s == 1) {
@@ -226,6 +232,10 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
 }
 
 }  // namespace
+
+bool isAreaLightEnd(const Vertex& v) {
+  return isLight(v) && !isInfiniteLight(v) && v.onSurface();
+}
 
 bool isConnectible(const Vertex& v) {
   switch (v.type) {
@@ -305,11 +315,17 @@ double pdfLightOrigin(const Context& ctx, const Vertex& v, const Vertex& next) {
 
 double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex& sampled, int s,
                  int t, double lambda_nm) {
-  if (s + t == 2) return 1;
+  // A light seen directly: by the camera ray (s = 0, t = 2) or, for an area light, by the light
+  // point connected to the camera (s = 1, t = 1, which pbrt-v4 leaves out); the two are weighted
+  // against each other. Other lights have the one strategy.
+  if (s + t == 2) {
+    const Vertex& end = s == 0 ? camera[1] : light[0];
+    if (!isAreaLightEnd(end)) return 1;
+  }
   // The end vertices take the sampled one's place, and the connection vertices' reverse
   // densities and delta flags those of this strategy, for the duration of the call.
   Vertex saved_end;
-  Vertex* end = s == 1 ? &light[0] : t == 1 ? &camera[0] : nullptr;
+  Vertex* end = t == 1 ? &camera[0] : s == 1 ? &light[0] : nullptr;
   if (end) {
     saved_end = *end;
     *end = sampled;
@@ -397,7 +413,11 @@ int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sample
   v.type = VertexType::Light;
   v.light = light;
   v.p = le->o;
-  if (le->on_surface) v.ng = v.ns = le->n;
+  if (le->on_surface) {
+    v.ng = v.ns = le->n;
+    v.hit.ng = le->n;
+    v.hit.uv = le->uv;
+  }
   v.beta = le->L;
   v.pdf_fwd = le->pdf_pos * choice->pmf;
   const bool on_surface = v.onSurface();
@@ -479,7 +499,8 @@ SampledSpectrum BdptIntegrator::Li(const camera::CameraRay* ray, double time,
   for (int t = 1; t <= n_camera; ++t)
     for (int s = 0; s <= n_light; ++s) {
       const int depth = t + s - 2;
-      if ((s == 1 && t == 1) || depth < 0 || depth > ctx_.max_depth) continue;
+      if (depth < 0 || depth > ctx_.max_depth) continue;
+      if (s == 1 && t == 1 && !isAreaLightEnd(light_path[0])) continue;
       if (!ray && s == 0) continue;
       Vec2 raster;
       const SampledSpectrum Lpath =

@@ -75,6 +75,9 @@ struct Context {
   int max_depth = 5;
 };
 
+/// A light vertex on an area light (not an infinite one): its point can be connected to the
+/// camera (s = 1, t = 1).
+bool isAreaLightEnd(const Vertex& v);
 bool isConnectible(const Vertex& v);
 bool isLight(const Vertex& v);
 bool isDeltaLight(const Vertex& v);
@@ -89,8 +92,8 @@ double pdf(const Context& ctx, const Vertex& v, const Vertex* prev, const Vertex
 double pdfLight(const Context& ctx, const Vertex& v, const Vertex& next);
 /// Density of choosing the light vertex v (light choice and position) as a light subpath's start.
 double pdfLightOrigin(const Context& ctx, const Vertex& v, const Vertex& next);
-/// The MIS weight of strategy (s, t) (pbrt-v4's MISWeight); `sampled` replaces light[0] (s = 1)
-/// or camera[0] (t = 1). light and camera are modified during the call and restored.
+/// The MIS weight of strategy (s, t) (pbrt-v4's MISWeight); `sampled` replaces camera[0]
+/// (t = 1) or else light[0] (s = 1). light and camera are modified during the call and restored.
 double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex& sampled, int s,
                  int t, double lambda_nm);
 
