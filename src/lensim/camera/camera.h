@@ -123,7 +123,7 @@ class Camera {
   /// One line for logs: the type and its main settings.
   virtual std::string describe() const = 0;
 
-  // Camera importance (light tracing, bdpt). Cameras that support it override all four.
+  // Camera importance (light tracing, bdpt). Cameras that support it override all five.
   /// Whether sampleWi, importance and pdf are implemented.
   virtual bool supportsImportance() const { return false; }
   /// A connection from the scene point ref (time: shutter time of the path) through the camera
@@ -140,6 +140,12 @@ class Camera {
                             Vec2* /*film_raster*/) const {
     return 0;
   }
+  /// Density per unit world area (of the lens disc, the front element: the surface p_lens lies
+  /// on) with which sampleWi(ref, ...) picks the point p_lens; 1 for a camera whose connections
+  /// all pass one point (pinhole, spherical: a delta), 0 where sampleWi cannot pick it. The
+  /// realistic camera's depends on ref (it aims at the part of the front element light from ref
+  /// can pass); the projective cameras' does not. For bidirectional MIS.
+  virtual double pdfWiPos(const Vec3& /*ref*/, const Vec3& /*p_lens*/) const { return 0; }
   /// Densities with which generateRay produces the world ray (o, d).
   virtual CameraRayPdf rayPdf(const Vec3& /*o*/, const Vec3& /*d*/, double /*lambda_nm*/) const {
     return {};

@@ -96,6 +96,18 @@ class ProjectiveCamera : public Camera {
     return s;
   }
 
+  double pdfWiPos(const Vec3& ref, const Vec3& p_lens) const override {
+    if (lens_radius_ == 0) return 1;
+    const Vec3 p = inverse_.applyPoint(p_lens);
+    if (p.x * p.x + p.y * p.y > lens_radius_ * lens_radius_ * (1 + 1e-9)) return 0;
+    if (!ortho_) return 1 / lens_area_;
+    // The orthographic thin lens: p_lens = ref - d ref.z / d.z, d set by the lens point l, so
+    // p_lens.xy = ref.xy + l ref.z / fd: the density of l, 1 / (pi r^2), times (fd / ref.z)^2.
+    const double rz = inverse_.applyPoint(ref).z;
+    if (!(rz > 0)) return 0;
+    return focal_distance_ * focal_distance_ / (rz * rz * lens_area_);
+  }
+
   double importance(const Vec3& o, const Vec3& d, double, Vec2* film_raster) const override {
     const Vec3 o_c = inverse_.applyPoint(o), d_c = inverse_.applyVector(d);
     Vec2 raster;

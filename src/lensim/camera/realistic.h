@@ -26,6 +26,8 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -99,6 +101,7 @@ class RealisticCamera final : public Camera {
   double importance(const Vec3& o, const Vec3& d, double lambda_nm,
                     Vec2* film_raster) const override;
   CameraRayPdf rayPdf(const Vec3& o, const Vec3& d, double lambda_nm) const override;
+  double pdfWiPos(const Vec3& ref, const Vec3& p_lens) const override;
 
   /// The lens as set up (film position, stop, paraxial data).
   const optics::FocusedLens& lens() const { return lens_; }
@@ -162,7 +165,25 @@ class RealisticCamera final : public Camera {
     double cos_theta = 1;  ///< of the film-side ray to the axis
   };
   std::optional<FilmHit> traceToFilm(const Vec3& o_lens, const Vec3& d_lens, double lambda_nm,
-                                     const Vec3* front_hit = nullptr) const;
+                                     const Vec3* front_hit = nullptr,
+                                     Vec3* front_out = nullptr) const;
+  /// Where sampleWi draws front-surface points for a scene point (lens space): a disc in the
+  /// front vertex plane's projection (centre, radius, mm) that holds every point where light
+  /// from it enters the lens and reaches the film; radius 0: none does.
+  struct FrontDisc {
+    Vec2 centre;
+    double radius = 0;
+  };
+  FrontDisc frontDisc(const Vec3& ref_lens) const;
+  /// Per field angle theta (parallel light from the scene at azimuth 0): the disc holding the
+  /// front points of the rays that reach the film (centre on the x axis; radius < 0: none).
+  struct FrontBoundTable {
+    double step_rad = 0;
+    std::vector<double> centre, radius;
+  };
+  void buildFrontBounds() const;
+  mutable std::unique_ptr<std::once_flag> front_once_ = std::make_unique<std::once_flag>();
+  mutable FrontBoundTable front_bounds_;
   /// World <-> lens space (mm).
   Vec3 lensFromWorldPoint(const Vec3& p) const;
   Vec3 lensFromWorldVector(const Vec3& v) const;

@@ -28,6 +28,7 @@
 // light tracer then keeps only the hero wavelength (pbrt-v4's TerminateSecondary), which is
 // unbiased. pbrt-v2's neighbour quirk (RealisticSettings::zero_if_neighbour_blocked) is not
 // reproduced by importance.
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -79,7 +80,8 @@ Vec3 RealisticCamera::worldFromLensVector(const Vec3& v) const {
 std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3& o_lens,
                                                                      const Vec3& d_lens,
                                                                      double lambda_nm,
-                                                                     const Vec3* front_hit) const {
+                                                                     const Vec3* front_hit,
+                                                                     Vec3* front_out) const {
   const optics::LensSystem& lens = *lens_.lens;
   if (!(d_lens.z > 0)) return std::nullopt;
   // Start the trace just before the front surface's slab: nothing of the lens lies before it,
@@ -92,8 +94,13 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
   thread_local std::vector<Vec3f> path;
   path.clear();
   const optics::TraceResultT<float> r = tracer.traceFromScene(
-      optics::RayT<float>{Vec3f(o), Vec3f(d_lens)}, {}, front_hit ? &path : nullptr);
+      optics::RayT<float>{Vec3f(o), Vec3f(d_lens)}, {},
+      front_hit || front_out ? &path : nullptr);
   if (!r.ok()) return std::nullopt;
+  if (front_out) {
+    if (path.size() < 2) return std::nullopt;
+    *front_out = Vec3{path[1]};
+  }
   if (front_hit) {
     if (path.size() < 2) return std::nullopt;
     const Vec3 h{path[1]};
@@ -139,7 +146,10 @@ std::optional<CameraWiSample> RealisticCamera::sampleWi(
   const Vec3 r_l = lensFromWorldPoint(ref);
   if (!(r_l.z < front_zmin_mm_)) return std::nullopt;  // not in front of the lens
   const double R = front.semi_aperture_mm;
-  const Vec2 xy = render::sampleUniformDiskConcentric(u) * R;
+  const FrontDisc disc = frontDisc(r_l);
+  if (!(disc.radius > 0)) return std::nullopt;
+  const Vec2 xy = disc.centre + render::sampleUniformDiskConcentric(u) * disc.radius;
+  if (xy.x * xy.x + xy.y * xy.y > R * R) return std::nullopt;
   const std::optional<FrontPoint> fp = frontPoint(front, xy.x, xy.y);
   if (!fp) return std::nullopt;
   const Vec3 d_l = normalize(fp->p - r_l);
@@ -156,7 +166,8 @@ std::optional<CameraWiSample> RealisticCamera::sampleWi(
   const double cos_n = std::abs(dot(s.n_lens, s.wi));
   if (!(cos_n > 0)) return std::nullopt;
   const double units = settings_.camera_units_per_mm;
-  const double pdf_area = std::abs(fp->n.z) / (M_PI * R * R * units * units);  // per world area
+  const double pdf_area =
+      std::abs(fp->n.z) / (M_PI * disc.radius * disc.radius * units * units);  // per world area
   s.pdf = pdf_area * s.distance * s.distance / cos_n;
   s.film_raster = hit->raster;
   if (dispersive_ && hero > 0) {
@@ -166,6 +177,121 @@ std::optional<CameraWiSample> RealisticCamera::sampleWi(
     s.importance.fill(hit->importance);
   }
   return s;
+}
+
+// The front bounds, from the camera rays themselves: 65536 rays (a 128 x 128 grid of film points
+// over the film's sample bounds, 4 exit-pupil points each) are traced out of the lens;
+// each leaves the front element at a point p in direction w, which light from the scene arriving
+// along -w enters at p. Binned by the angle theta of -w to the axis (0.25 degree bins) and turned
+// to azimuth 0, the points of a bin are bounded by a disc, widened by twice the points' mean
+// spacing (the sampled points cover the region only that finely) and 1% of the front radius (3%
+// for a dispersive lens, whose other wavelengths leave elsewhere). Built on the first sampleWi
+// (a light tracer's), never for camera rays.
+void RealisticCamera::buildFrontBounds() const {
+  const optics::LensSystem& lens = *lens_.lens;
+  const double R = lens.interfaces().front().semi_aperture_mm;
+  constexpr int kBins = 360, kFilm = 128, kPupil = 2;
+  FrontBoundTable t;
+  t.step_rad = 0.25 * M_PI / 180;
+  std::vector<std::vector<Vec2>> pts(kBins);
+  const Vec2 fr = settings_.filter_radius;
+  const double x0 = 0.5 - fr.x, x1 = settings_.x_resolution + fr.x - 0.5;
+  const double y0 = 0.5 - fr.y, y1 = settings_.y_resolution + fr.y - 0.5;
+  for (int i = 0; i < kFilm; ++i)
+    for (int j = 0; j < kFilm; ++j) {
+      CameraSample cs;
+      cs.film_raster = {x0 + (i + 0.5) / kFilm * (x1 - x0), y0 + (j + 0.5) / kFilm * (y1 - y0)};
+      const Vec2 film = filmPoint(cs.film_raster);
+      for (int a = 0; a < kPupil * kPupil; ++a) {
+          // The R2 low-discrepancy sequence (Roberts 2018) over all the rays: every film point
+          // gets other pupil points.
+          const double n = double((i * kFilm + j) * kPupil * kPupil + a);
+          const Vec2 u{std::fmod(0.5 + n * 0.7548776662466927, 1.0),
+                       std::fmod(0.5 + n * 0.5698402909980532, 1.0)};
+          const std::optional<FilmRay> f = filmRay(cs, film, pupil_->sample(film, u));
+          if (!f) continue;
+          const optics::TraceResultT<float> r = lens.tracerFloat().traceFromFilm(f->ray);
+          if (!r.ok()) continue;
+          const Vec3 p{r.ray.origin}, w = -normalize(Vec3{r.ray.direction});
+          if (!(w.z > 0)) continue;
+          const int k = int(std::acos(std::min(1.0, w.z)) / t.step_rad);
+          if (k >= kBins) continue;
+          const double phi = std::atan2(w.y, w.x), c = std::cos(phi), sn = std::sin(phi);
+          pts[size_t(k)].push_back({p.x * c + p.y * sn, -p.x * sn + p.y * c});
+        }
+    }
+  t.centre.assign(kBins, 0.0);
+  t.radius.assign(kBins, -1.0);
+  for (int k = 0; k < kBins; ++k) {
+    const std::vector<Vec2>& v = pts[size_t(k)];
+    if (v.empty()) continue;
+    double a = v[0].x, b = v[0].x;
+    for (const Vec2& q : v) a = std::min(a, q.x), b = std::max(b, q.x);
+    const double c = 0.5 * (a + b);
+    double r = 0;
+    for (const Vec2& q : v) r = std::max(r, std::hypot(q.x - c, q.y));
+    const double spacing = std::sqrt(M_PI * r * r / double(v.size()));
+    t.centre[size_t(k)] = c;
+    t.radius[size_t(k)] = r + 2 * spacing + (dispersive_ ? 0.03 : 0.01) * R;
+  }
+  front_bounds_ = std::move(t);
+}
+
+RealisticCamera::FrontDisc RealisticCamera::frontDisc(const Vec3& r) const {
+  const optics::LensSystem& lens = *lens_.lens;
+  const optics::Interface& front = lens.interfaces().front();
+  const double R = front.semi_aperture_mm;
+  const FrontDisc whole{{0, 0}, R};
+  bool rotational = true;
+  for (const optics::Interface& in : lens.interfaces())
+    rotational = rotational && in.shape.isRotational();
+  if (!rotational) return whole;
+  std::call_once(*front_once_, [this] { buildFrontBounds(); });
+  const FrontBoundTable& t = front_bounds_;
+  const Vec3 to_front = Vec3{0, 0, front.z_mm} - r;
+  const double dist = length(to_front);
+  const double reach = R + (front_zmax_mm_ - front_zmin_mm_);
+  if (!(dist > 2 * reach)) return whole;
+  // The directions from r to the front element: within spread of the central one.
+  const double theta_c = std::acos(std::clamp(to_front.z / dist, -1.0, 1.0));
+  const double spread = std::asin(reach / dist);
+  const int n = int(t.radius.size());
+  const int k0 = int(std::floor((theta_c - spread) / t.step_rad)) - 1;
+  const int k1 = int(std::ceil((theta_c + spread) / t.step_rad)) + 1;
+  if (k1 >= n) return whole;  // near 90 degrees: no table
+  const int kc = std::clamp(int(std::lround(theta_c / t.step_rad)), 0, n - 1);
+  double rho = -1, c_spread = 0, c_max = 0;
+  const double c0 = t.centre[size_t(kc)];
+  for (int k = std::max(0, k0); k <= k1; ++k) {
+    if (t.radius[size_t(k)] < 0) continue;
+    rho = std::max(rho, t.radius[size_t(k)]);
+    c_spread = std::max(c_spread, std::abs(t.centre[size_t(k)] - c0));
+    c_max = std::max(c_max, std::abs(t.centre[size_t(k)]));
+  }
+  if (rho < 0) return {};  // no light from r's directions reaches the film
+  // The azimuths of the directions from r: within asin(reach / lateral) of the central one.
+  const double lateral = std::hypot(r.x, r.y);
+  const double dphi = lateral > reach ? std::asin(reach / lateral) : M_PI;
+  const double radius = rho + c_spread + c_max * std::min(2.0, dphi);
+  if (radius >= R) return whole;
+  const double phi = std::atan2(-r.y, -r.x);
+  return {{c0 * std::cos(phi), c0 * std::sin(phi)}, radius};
+}
+
+double RealisticCamera::pdfWiPos(const Vec3& ref, const Vec3& p_lens) const {
+  const optics::Interface& front = lens_.lens->interfaces().front();
+  const Vec3 r_l = lensFromWorldPoint(ref), p = lensFromWorldPoint(p_lens);
+  if (!(r_l.z < front_zmin_mm_)) return 0;
+  const FrontDisc disc = frontDisc(r_l);
+  const double R = front.semi_aperture_mm;
+  const Vec2 xy{p.x, p.y};
+  if (!(disc.radius > 0) || xy.x * xy.x + xy.y * xy.y > R * R ||
+      std::hypot(xy.x - disc.centre.x, xy.y - disc.centre.y) > disc.radius)
+    return 0;
+  const std::optional<FrontPoint> fp = frontPoint(front, xy.x, xy.y);
+  if (!fp) return 0;
+  const double units = settings_.camera_units_per_mm;
+  return std::abs(fp->n.z) / (M_PI * disc.radius * disc.radius * units * units);
 }
 
 double RealisticCamera::importance(const Vec3& o, const Vec3& d, double lambda_nm,

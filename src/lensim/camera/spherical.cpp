@@ -57,6 +57,7 @@ class SphericalCamera final : public Camera {
     if (film_raster) *film_raster = raster;
     return w;
   }
+  double pdfWiPos(const Vec3&, const Vec3&) const override { return 1; }
   CameraRayPdf rayPdf(const Vec3&, const Vec3& d, double) const override {
     Vec2 raster;
     return {1, directionDensity(inverse_.applyVector(d), &raster)};
