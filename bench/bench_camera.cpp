@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "lensim/camera/realistic.h"
-#include "lensim/render/filter.h"
+#include "lensim/sampling/filter.h"
 
 using namespace lensim;
 using namespace lensim::camera;

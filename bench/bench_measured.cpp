@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "lensim/render/bsdf.h"
-#include "lensim/render/measured.h"
-#include "lensim/render/sampling.h"
+#include "lensim/render/materials/bsdf.h"
+#include "lensim/render/materials/measured.h"
+#include "lensim/sampling/sampling.h"
 
 using namespace lensim;
 using namespace lensim::render;

@@ -13,7 +13,7 @@
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/prescription.h"
-#include "lensim/render/measured.h"
+#include "lensim/render/materials/measured.h"
 #include "lensim/render/renderer.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/parser.h"

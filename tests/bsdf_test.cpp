@@ -10,8 +10,8 @@
 #include <fmt/format.h>
 
 #include "chi2.h"
-#include "lensim/render/bsdf.h"
-#include "lensim/render/sampling.h"
+#include "lensim/render/materials/bsdf.h"
+#include "lensim/sampling/sampling.h"
 #include "stats.h"
 
 using namespace lensim;

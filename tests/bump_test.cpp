@@ -8,9 +8,9 @@
 #include <cmath>
 #include <string>
 
-#include "lensim/render/accel.h"
-#include "lensim/render/materials.h"
-#include "lensim/render/textures.h"
+#include "lensim/render/materials/materials.h"
+#include "lensim/render/shapes/accel.h"
+#include "lensim/render/textures/textures.h"
 #include "render_test_util.h"
 
 namespace lensim::render {

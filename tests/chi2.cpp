@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "lensim/render/sampling.h"
+#include "lensim/sampling/sampling.h"
 
 namespace lensim::test {
 

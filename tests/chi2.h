@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "lensim/render/bsdf.h"
+#include "lensim/render/materials/bsdf.h"
 
 namespace lensim::test {
 

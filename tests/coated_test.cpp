@@ -15,8 +15,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "lensim/render/layered.h"
-#include "lensim/render/sampling.h"
+#include "lensim/render/materials/layered.h"
+#include "lensim/sampling/sampling.h"
 #include "stats.h"
 
 namespace lensim::render {

@@ -7,7 +7,7 @@
 #include <numbers>
 #include <string>
 
-#include "lensim/render/accel.h"
+#include "lensim/render/shapes/accel.h"
 #include "lensim/scene/curves.h"
 #include "render_test_util.h"
 

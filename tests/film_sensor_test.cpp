@@ -9,7 +9,7 @@
 #include <cstdio>
 #include <string>
 
-#include "lensim/render/film.h"
+#include "lensim/render/film/film.h"
 #include "lensim/scene/film_sensor.h"
 #include "render_test_util.h"
 

@@ -4,7 +4,7 @@
 #include <memory>
 #include <vector>
 
-#include "lensim/render/filter.h"
+#include "lensim/sampling/filter.h"
 #include "stats.h"
 
 using namespace lensim;

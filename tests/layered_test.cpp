@@ -14,8 +14,8 @@
 
 #include <fmt/format.h>
 
-#include "lensim/render/layered.h"
-#include "lensim/render/sampling.h"
+#include "lensim/render/materials/layered.h"
+#include "lensim/sampling/sampling.h"
 #include "stats.h"
 
 using namespace lensim;

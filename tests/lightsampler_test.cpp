@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "chi2.h"
-#include "lensim/render/accel.h"
-#include "lensim/render/lights.h"
-#include "lensim/render/lightsampler.h"
-#include "lensim/render/sampling.h"
-#include "lensim/render/textures.h"
+#include "lensim/render/lights/lights.h"
+#include "lensim/render/lights/lightsampler.h"
+#include "lensim/render/shapes/accel.h"
+#include "lensim/render/textures/textures.h"
+#include "lensim/sampling/sampling.h"
 #include "render_test_util.h"
 #include "stats.h"
 

@@ -14,9 +14,9 @@
 #include <fmt/format.h>
 
 #include "chi2.h"
-#include "lensim/render/measured.h"
-#include "lensim/render/microfacet.h"
-#include "lensim/render/sampling.h"
+#include "lensim/render/materials/measured.h"
+#include "lensim/render/materials/microfacet.h"
+#include "lensim/sampling/sampling.h"
 #include "lensim/util/error.h"
 #include "stats.h"
 

@@ -1,4 +1,4 @@
-// pbrt's procedural textures (render/procedural.h) against closed forms and against values
+// pbrt's procedural textures (render/textures/procedural.h) against closed forms and against values
 // computed with an independent Python transcription of pbrt-v4's src/pbrt/util/noise.cpp and
 // textures.cpp (InsidePolkaDot, FBm, Turbulence, WindyTexture) done for this test.
 #include <gtest/gtest.h>
@@ -6,9 +6,9 @@
 #include <cmath>
 #include <string>
 
-#include "lensim/render/procedural.h"
-#include "lensim/render/sampling.h"
-#include "lensim/render/textures.h"
+#include "lensim/render/textures/procedural.h"
+#include "lensim/render/textures/textures.h"
+#include "lensim/sampling/sampling.h"
 #include "lensim/scene/builder.h"
 #include "render_test_util.h"
 #include "stats.h"

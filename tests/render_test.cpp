@@ -7,13 +7,13 @@
 #include <cstdio>
 #include <string>
 
-#include "lensim/render/accel.h"
-#include "lensim/render/film.h"
-#include "lensim/render/lights.h"
-#include "lensim/render/materials.h"
+#include "lensim/render/film/film.h"
+#include "lensim/render/lights/lights.h"
+#include "lensim/render/materials/materials.h"
 #include "lensim/render/renderer.h"
-#include "lensim/render/sampling.h"
-#include "lensim/render/textures.h"
+#include "lensim/render/shapes/accel.h"
+#include "lensim/render/textures/textures.h"
+#include "lensim/sampling/sampling.h"
 #include "render_test_util.h"
 
 using lensim::io::Image;

@@ -11,13 +11,13 @@
 #include <numbers>
 #include <string>
 
-#include "lensim/render/accel.h"
 #include "lensim/render/image_compare.h"
-#include "lensim/render/lights.h"
-#include "lensim/render/materials.h"
-#include "lensim/render/media.h"
-#include "lensim/render/textures.h"
-#include "lensim/render/volpath.h"
+#include "lensim/render/integrators/volpath.h"
+#include "lensim/render/lights/lights.h"
+#include "lensim/render/materials/materials.h"
+#include "lensim/render/media/media.h"
+#include "lensim/render/shapes/accel.h"
+#include "lensim/render/textures/textures.h"
 #include "render_test_util.h"
 #include "test_paths.h"
 

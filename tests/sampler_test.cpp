@@ -5,7 +5,7 @@
 #include <set>
 #include <vector>
 
-#include "lensim/render/sampler.h"
+#include "lensim/sampling/sampler.h"
 #include "stats.h"
 
 using namespace lensim;

@@ -4,7 +4,7 @@
 #include <functional>
 #include <set>
 
-#include "lensim/render/sampling.h"
+#include "lensim/sampling/sampling.h"
 #include "stats.h"
 
 using namespace lensim;

@@ -6,7 +6,7 @@
 #include <random>
 #include <string>
 
-#include "lensim/render/spectrum.h"
+#include "lensim/render/spectra/spectrum.h"
 #include "lensim/util/error.h"
 
 using namespace lensim;

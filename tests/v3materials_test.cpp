@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "chi2.h"
-#include "lensim/render/sampling.h"
-#include "lensim/render/v3materials.h"
+#include "lensim/render/materials/v3materials.h"
+#include "lensim/sampling/sampling.h"
 #include "render_test_util.h"
 #include "stats.h"
 

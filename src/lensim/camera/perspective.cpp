@@ -15,7 +15,7 @@
 
 #include "lensim/camera/film_bounds.h"
 #include "lensim/camera/projective.h"
-#include "lensim/render/sampling.h"
+#include "lensim/sampling/sampling.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 

@@ -7,7 +7,7 @@
 #include <cmath>
 
 #include "lensim/optics/surface_shape.h"
-#include "lensim/render/filter.h"
+#include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"

@@ -34,7 +34,7 @@
 
 #include "lensim/camera/realistic.h"
 #include "lensim/optics/surface_shape.h"
-#include "lensim/render/sampling.h"
+#include "lensim/sampling/sampling.h"
 
 namespace lensim::camera {
 

@@ -16,7 +16,7 @@
 #include <algorithm>
 
 #include "lensim/camera/projective.h"
-#include "lensim/render/equal_area.h"
+#include "lensim/sampling/equal_area.h"
 #include "lensim/scene/builder.h"
 
 namespace lensim::camera {

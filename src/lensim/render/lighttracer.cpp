@@ -15,7 +15,7 @@
 #include <map>
 
 #include "lensim/camera/camera.h"
-#include "lensim/render/film.h"
+#include "lensim/render/film/film.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"

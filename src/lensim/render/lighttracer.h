@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "lensim/render/integrator.h"
+#include "lensim/render/integrators/integrator.h"
 
 namespace lensim::camera {
 class Camera;

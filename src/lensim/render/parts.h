@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "lensim/io/image.h"
-#include "lensim/render/film.h"
+#include "lensim/render/film/film.h"
 #include "lensim/render/renderer.h"
 
 namespace lensim::scene {

@@ -16,13 +16,13 @@
 #include <vector>
 
 #include "lensim/camera/camera.h"
-#include "lensim/render/bdpt.h"
-#include "lensim/render/filter.h"
-#include "lensim/render/integrator.h"
+#include "lensim/render/integrators/bdpt.h"
+#include "lensim/render/integrators/integrator.h"
+#include "lensim/render/integrators/volpath.h"
 #include "lensim/render/lighttracer.h"
+#include "lensim/render/media/media.h"
 #include "lensim/render/parts.h"
-#include "lensim/render/media.h"
-#include "lensim/render/volpath.h"
+#include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/limits.h"

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "lensim/io/image.h"
-#include "lensim/render/film.h"
+#include "lensim/render/film/film.h"
 
 namespace lensim::scene {
 struct Scene;

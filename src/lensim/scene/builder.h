@@ -59,7 +59,7 @@ enum class TextureKind { Float, Spectrum };
 
 /// A texture description. `type` is the pbrt-v4 class lensim renders: imagemap, scale (product
 /// of tex1 and tex2), mix, directionmix, checkerboard, constant (tex1), or the procedural fbm,
-/// wrinkled, windy, marble, dots, bilerp (render/procedural.h).
+/// wrinkled, windy, marble, dots, bilerp (render/textures/procedural.h).
 struct Texture {
   std::string name;
   TextureKind kind = TextureKind::Spectrum;

@@ -1,0 +1,240 @@
+// Film accumulation. pbrt-v4's RGBFilm: the sensor RGB of a sample (for the cie1931 sensor,
+// XYZ times the imaging ratio = exposure time x ISO / 100) is scaled down to maxcomponentvalue,
+// converted to the output colour space and added with its filter weight; a pixel is the
+// weighted average.
+#include "lensim/render/film/film.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include <fmt/format.h>
+
+#include "lensim/sampling/filter.h"
+#include "lensim/scene/builder.h"
+#include "lensim/scene/film_sensor.h"
+
+namespace lensim::render {
+
+PixelBounds cropWindowBounds(int x_res, int y_res, const std::array<double, 4>& c) {
+  PixelBounds b;
+  b.x0 = int(std::ceil(x_res * std::clamp(std::min(c[0], c[1]), 0.0, 1.0)));
+  b.x1 = int(std::ceil(x_res * std::clamp(std::max(c[0], c[1]), 0.0, 1.0)));
+  b.y0 = int(std::ceil(y_res * std::clamp(std::min(c[2], c[3]), 0.0, 1.0)));
+  b.y1 = int(std::ceil(y_res * std::clamp(std::max(c[2], c[3]), 0.0, 1.0)));
+  return b;
+}
+
+Vec2 daylightChromaticity(double t) {
+  if (t < 4000) {
+    const Vec3 xyz = spectrumToXyz(BlackbodySpectrum(t));
+    const double sum = xyz.x + xyz.y + xyz.z;
+    return {xyz.x / sum, xyz.y / sum};
+  }
+  // CIE 15:2004, eq. 3.3-3.4 (daylight locus).
+  const double t2 = t * t, t3 = t2 * t;
+  const double x = t <= 7000 ? -4.6070e9 / t3 + 2.9678e6 / t2 + 0.09911e3 / t + 0.244063
+                             : -2.0064e9 / t3 + 1.9018e6 / t2 + 0.24748e3 / t + 0.237040;
+  return {x, -3.0 * x * x + 2.870 * x - 0.275};
+}
+
+namespace {
+
+using Mat3 = std::array<double, 9>;
+Mat3 mul(const Mat3& a, const Mat3& b) {
+  Mat3 r{};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k) r[3 * i + j] += a[3 * i + k] * b[3 * k + j];
+  return r;
+}
+Vec3 mulVec(const Mat3& m, const Vec3& v) {
+  return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
+          m[6] * v.x + m[7] * v.y + m[8] * v.z};
+}
+Mat3 invert(const Mat3& m) {
+  const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
+                     m[2] * (m[3] * m[7] - m[4] * m[6]);
+  return {(m[4] * m[8] - m[5] * m[7]) / det, (m[2] * m[7] - m[1] * m[8]) / det,
+          (m[1] * m[5] - m[2] * m[4]) / det, (m[5] * m[6] - m[3] * m[8]) / det,
+          (m[0] * m[8] - m[2] * m[6]) / det, (m[2] * m[3] - m[0] * m[5]) / det,
+          (m[3] * m[7] - m[4] * m[6]) / det, (m[1] * m[6] - m[0] * m[7]) / det,
+          (m[0] * m[4] - m[1] * m[3]) / det};
+}
+
+/// Bradford von Kries adaptation from white xy `src` to white XYZ `dst` (Lam 1985; the matrix
+/// as published by Lindbloom).
+Mat3 bradford(Vec2 src, const Vec3& dst) {
+  const Mat3 mb{0.8951, 0.2664, -0.1614, -0.7502, 1.7135, 0.0367, 0.0389, -0.0685, 1.0296};
+  const Vec3 src_xyz{src.x / src.y, 1.0, (1 - src.x - src.y) / src.y};
+  const Vec3 ls = mulVec(mb, src_xyz), ld = mulVec(mb, dst / dst.y);
+  const Mat3 d{ld.x / ls.x, 0, 0, 0, ld.y / ls.y, 0, 0, 0, ld.z / ls.z};
+  return mul(invert(mb), mul(d, mb));
+}
+
+}  // namespace
+
+Film::Film(const scene::Scene& scene, PixelBounds bounds)
+    : bounds_(bounds), pixels_(size_t(std::max(0LL, bounds.area()))) {
+  const double exposure = scene.camera.shutter_close - scene.camera.shutter_open;
+  // pbrt-v4's imaging ratio (film.cpp, PixelSensor::Create), times pbrt-v3's film "scale". A
+  // camera with no shutter interval (shutteropen == shutterclose) records as if open 1 s.
+  imaging_ratio_ =
+      scene::sensorImagingRatio(exposure > 0 ? exposure : 1, scene.film.iso) * scene.film.scale;
+  max_component_ = scene.film.max_component_value;
+  if (scene.film.white_balance_k > 0) {
+    // pbrt-v4's cie1931 sensor with "whitebalance": adapt the scene white (daylight of that
+    // temperature) to the output colour space's white.
+    white_balance_ = true;
+    // pbrt-v4's Spectra::D takes T x 1.4388 / 1.4380 as the CCT, so 6500 means D65.
+    xyz_balance_ = bradford(daylightChromaticity(scene::whiteBalanceCct(scene.film.white_balance_k)),
+                            RGBColorSpace::sRGB().toXyz({1, 1, 1}));
+  }
+  if (scene.film.type == "spectral") {
+    n_buckets_ = scene.film.spectral_buckets;
+    lambda_min_ = scene.film.lambda_min_nm;
+    lambda_max_ = scene.film.lambda_max_nm;
+    bucket_sums_.assign(pixels_.size() * size_t(n_buckets_), 0.0);
+  }
+}
+
+Vec3 Film::toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const {
+  Vec3 xyz = sampledToXyz(L, lambda) * imaging_ratio_;
+  if (white_balance_) xyz = mulVec(xyz_balance_, xyz);
+  Vec3 rgb = RGBColorSpace::sRGB().toRgb(xyz);
+  const double m = std::max({rgb.x, rgb.y, rgb.z});
+  if (m > max_component_) rgb = rgb * (max_component_ / m);
+  return rgb;
+}
+
+Int128 Film::toFixed(double v) {
+  constexpr double kMax = 0x1p100;  // 2^52 in real units
+  const double f = std::rint(v * kFixedScale);
+  if (std::abs(f) < 0x1p62) return Int128(int64_t(f));  // the common case: one instruction
+  if (!(f == f)) return 0;
+  return Int128(std::clamp(f, -kMax, kMax));
+}
+
+std::array<float, 3> Film::pixelValue(const PixelSum& p) {
+  if (p.weight == 0) return {0.0f, 0.0f, 0.0f};
+  const double w = double(p.weight);
+  return {float(double(p.rgb[0]) / w), float(double(p.rgb[1]) / w), float(double(p.rgb[2]) / w)};
+}
+
+void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
+                     double w) {
+  const Vec3 rgb = toRgb(L, lambda);
+  PixelSum& p = pixels_[size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0)];
+  p.rgb[0] += toFixed(w * rgb.x);
+  p.rgb[1] += toFixed(w * rgb.y);
+  p.rgb[2] += toFixed(w * rgb.z);
+  p.weight += toFixed(w);
+  if (n_buckets_ > 0) addSpectral(x, y, L, lambda, w);
+}
+
+// pbrt-v4's SpectralFilm::AddSample (src/pbrt/film.h) adds each wavelength's radiance times
+// CIE_Y_integral to its bucket and averages per bucket, which relies on its uniform wavelength
+// sampling over [lambdamin, lambdamax]. lensim samples wavelengths by visible importance over
+// [360, 830] nm, so a bucket gets the unbiased estimate of its mean radiance: for each of the
+// sample's wavelengths in it, L / (pdf x N x bucket width), averaged with the pixel's filter
+// weight. lensim's emission spectra are normalised to unit luminance Y = (1/CIE_Y_integral)
+// integral(L ybar), pbrt-v4's to integral(L ybar) = 1, so lensim's radiance is already
+// pbrt-v4's radiance times CIE_Y_integral: the two films record the same values. As in pbrt-v4
+// the buckets hold radiance (no sensor, imaging ratio or white balance), clamped to
+// "maxcomponentvalue" as a whole spectrum.
+void Film::addSpectral(int x, int y, SampledSpectrum L, const SampledWavelengths& lambda,
+                       double w) {
+  double lm = 0;
+  for (int i = 0; i < kSpectrumSamples; ++i) lm = std::max(lm, L[i]);
+  if (lm > max_component_) L = L * (max_component_ / lm);
+  const double width = (lambda_max_ - lambda_min_) / n_buckets_;
+  double* sums = bucket_sums_.data() +
+                 (size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0)) *
+                     size_t(n_buckets_);
+  for (int i = 0; i < kSpectrumSamples; ++i) {
+    const double l = lambda.lambda(i), pdf = lambda.pdf(i);
+    if (!(pdf > 0) || l < lambda_min_ || l >= lambda_max_) continue;
+    const int b = std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) /
+                                                (lambda_max_ - lambda_min_)));
+    sums[b] += w * L[i] / (pdf * kSpectrumSamples * width);
+  }
+}
+
+void Film::enableSplats(const Filter& filter) {
+  splat_filter_ = &filter;
+  splats_.assign(pixels_.size(), {0, 0, 0});
+  if (n_buckets_ > 0) bucket_splats_.assign(pixels_.size() * size_t(n_buckets_), 0.0);
+  splat_locks_ = std::make_unique<std::mutex[]>(kSplatLocks);
+}
+
+void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda) {
+  if (!splat_filter_) return;
+  const Vec3 rgb = toRgb(L, lambda);
+  const Vec2 r = splat_filter_->radius();
+  const double norm = 1 / splat_filter_->integral();
+  // Pixels whose centre (x + 0.5, y + 0.5) lies within the filter radius of p.
+  const int x0 = std::max(bounds_.x0, int(std::ceil(p.x - 0.5 - r.x)));
+  const int x1 = std::min(bounds_.x1 - 1, int(std::floor(p.x - 0.5 + r.x)));
+  const int y0 = std::max(bounds_.y0, int(std::ceil(p.y - 0.5 - r.y)));
+  const int y1 = std::min(bounds_.y1 - 1, int(std::floor(p.y - 0.5 + r.y)));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const double w = splat_filter_->eval({p.x - (x + 0.5), p.y - (y + 0.5)}) * norm;
+      if (w == 0) continue;
+      const size_t i = size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0);
+      const Int128 v[3] = {toFixed(w * rgb.x), toFixed(w * rgb.y), toFixed(w * rgb.z)};
+      std::lock_guard lock(splat_locks_[i % kSplatLocks]);
+      for (int c = 0; c < 3; ++c) splats_[i][size_t(c)] += v[c];
+      if (n_buckets_ > 0) {
+        // As addSpectral, the bucket estimate of the splat's radiance.
+        const double width = (lambda_max_ - lambda_min_) / n_buckets_;
+        for (int k = 0; k < kSpectrumSamples; ++k) {
+          const double l = lambda.lambda(k), pdf = lambda.pdf(k);
+          if (!(pdf > 0) || l < lambda_min_ || l >= lambda_max_) continue;
+          const int b = std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) /
+                                                      (lambda_max_ - lambda_min_)));
+          bucket_splats_[i * size_t(n_buckets_) + size_t(b)] +=
+              w * std::min(L[k], max_component_) / (pdf * kSpectrumSamples * width);
+        }
+      }
+    }
+}
+
+std::string Film::bucketChannel(int b) const {
+  std::string l =
+      fmt::format("{:.3f}nm", lambda_min_ + (b + 0.5) / n_buckets_ * (lambda_max_ - lambda_min_));
+  std::replace(l.begin(), l.end(), '.', ',');
+  return "S0." + l;
+}
+
+io::Image Film::image() const {
+  std::vector<std::string> channels = {"R", "G", "B"};
+  for (int b = 0; b < n_buckets_; ++b) channels.push_back(bucketChannel(b));
+  io::Image im(bounds_.width(), bounds_.height(), std::move(channels));
+  for (int y = 0; y < bounds_.height(); ++y)
+    for (int x = 0; x < bounds_.width(); ++x) {
+      const size_t i = size_t(y) * size_t(bounds_.width()) + size_t(x);
+      const auto v = pixelValue(pixels_[i]);
+      for (int c = 0; c < 3; ++c) im.at(x, y, c) = v[c];
+      if (n_buckets_ > 0 && pixels_[i].weight != 0) {
+        const double w = double(pixels_[i].weight) / kFixedScale;
+        for (int b = 0; b < n_buckets_; ++b)
+          im.at(x, y, 3 + b) = float(bucket_sums_[i * size_t(n_buckets_) + size_t(b)] / w);
+      }
+      if (!splats_.empty()) {
+        for (int c = 0; c < 3; ++c)
+          im.at(x, y, c) += float(double(splats_[i][size_t(c)]) / kFixedScale * splat_scale_);
+        for (int b = 0; b < n_buckets_; ++b)
+          im.at(x, y, 3 + b) +=
+              float(bucket_splats_[i * size_t(n_buckets_) + size_t(b)] * splat_scale_);
+      }
+    }
+  if (n_buckets_ > 0) {
+    im.metadata["lensim:spectral"] =
+        fmt::format("{} buckets over [{}, {}] nm: radiance (as pbrt-v4's spectral film)",
+                    n_buckets_, lambda_min_, lambda_max_);
+  }
+  return im;
+}
+
+}  // namespace lensim::render

@@ -1,0 +1,140 @@
+// The film: accumulates filtered spectral samples as RGB in the output colour space (linear
+// sRGB) through the CIE 1931 matching functions (pbrt-v4's "rgb" film with the "cie1931"
+// sensor), over the pixel bounds being rendered.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "lensim/io/image.h"
+#include "lensim/render/spectra/spectrum.h"
+
+namespace lensim::scene {
+struct Scene;
+}
+
+namespace lensim::render {
+
+class Filter;
+
+/// A half-open rectangle of pixels [x0, x1) x [y0, y1) in the full image's raster.
+struct PixelBounds {
+  int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  int width() const { return x1 - x0; }
+  int height() const { return y1 - y0; }
+  long long area() const { return (long long)width() * height(); }
+  bool operator==(const PixelBounds&) const = default;
+};
+
+/// A 128-bit signed integer (GCC/Clang extension).
+__extension__ typedef __int128 Int128;
+
+/// A pixel's accumulated samples, exactly: the filter-weighted RGB sums and the weight sum as
+/// fixed-point integers (Film::kFixedScale units). Integer sums do not depend on the order in
+/// which samples are added, so a pixel rendered in any number of sample slices, tiles, threads
+/// or resumed runs sums to the very same bits, and dividing only at the end gives the same
+/// float pixel (the exact merge that distributed renders need; floating-point sums would differ
+/// in the last bits with the summation order).
+struct PixelSum {
+  Int128 rgb[3] = {0, 0, 0};
+  Int128 weight = 0;
+  PixelSum& operator+=(const PixelSum& o) {
+    for (int c = 0; c < 3; ++c) rgb[c] += o.rgb[c];
+    weight += o.weight;
+    return *this;
+  }
+  bool operator==(const PixelSum&) const = default;
+};
+
+/// Chromaticity (x, y) of CIE daylight of correlated colour temperature T (the CIE daylight
+/// locus, 4000-25000 K); below 4000 K, of a blackbody at T.
+Vec2 daylightChromaticity(double temperature_k);
+
+/// The pixel bounds of a crop window (fractions of the full image, pbrt's rounding: ceil).
+PixelBounds cropWindowBounds(int x_res, int y_res, const std::array<double, 4>& crop);
+
+class Film {
+ public:
+  /// A film over `bounds` for the scene's film settings (exposure from the camera's shutter and
+  /// the film's ISO, pbrt-v3 "scale", maxcomponentvalue, whitebalance).
+  Film(const scene::Scene& scene, PixelBounds bounds);
+  const PixelBounds& bounds() const { return bounds_; }
+  /// Adds radiance L (carried by `lambda`) to pixel (x, y) (full-image raster) with filter
+  /// weight w. Not thread-safe for the same pixel; different pixels may be added concurrently.
+  void addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
+                 double w);
+  /// The RGB of a sample as the film would record it (before the filter weight).
+  Vec3 toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const;
+  /// The image so far: channels R, G, B, bounds-sized; for the spectral film (pbrt-v4's
+  /// SpectralFilm) then one channel per wavelength bucket, named as pbrt-v4 names them after
+  /// the OpenEXR spectral layout of Fichet et al. (JCGT 2021): "S0." and the bucket's centre
+  /// wavelength as "%.3fnm" with the decimal point written as a comma ("S0.374,688nm").
+  io::Image image() const;
+
+  /// Whether this film records spectral buckets (Film "spectral"); such films are not
+  /// written as parts (their bucket sums are floating point, not the exact fixed-point sums).
+  bool spectral() const { return n_buckets_ > 0; }
+  /// The channel name of spectral bucket b (see image()).
+  std::string bucketChannel(int b) const;
+
+  /// Fixed-point units per unit of weighted RGB or filter weight: 2^48, so a sample's
+  /// contribution keeps ~15 significant digits down to 1e-6 and the sum of 2^26 samples of up
+  /// to 4.5e15 (the clamp) cannot overflow.
+  static constexpr double kFixedScale = 0x1p48;
+  /// A value in fixed-point units, rounded to nearest, clamped to +-2^52 (NaN counts as 0).
+  static Int128 toFixed(double v);
+  /// The pixel value of accumulated sums: sum / weight (0 where the weight is 0), as floats.
+  static std::array<float, 3> pixelValue(const PixelSum& p);
+  /// The accumulators, row by row over bounds() (for parts, checkpoints and resuming).
+  const std::vector<PixelSum>& sums() const { return pixels_; }
+  std::vector<PixelSum>& sums() { return pixels_; }
+
+  // Splats: contributions of light paths that reach the film at any point (light tracing,
+  // bidirectional methods; camera.h, CameraWiSample, has the measurement convention). A pixel of
+  // the image is its filtered estimate (the samples above) plus splat_scale times its splat sum.
+  // Splat sums are fixed-point integers like the pixels' sums, so they too do not depend on the
+  // order in which threads add them: a splatting render's RGB is deterministic whatever the number
+  // of threads (a spectral film's bucket splats are floating point: their last bits may vary).
+  // They are not written to parts or checkpoints (the renderer refuses those for a
+  // splatting integrator: a light path started in one tile splats anywhere in the image).
+  /// Makes the film accept splats (allocates the splat sums), reconstructed with `filter`
+  /// (which must outlive the film).
+  void enableSplats(const Filter& filter);
+  bool splatsEnabled() const { return splat_filter_ != nullptr; }
+  /// Adds the splat L (carried by lambda) at the continuous raster position p (full image): to
+  /// each pixel of bounds() whose filter support holds p, with weight f(p - centre) / (integral
+  /// of f), so that a splat adds its whole value to the image and the splatted image is filtered
+  /// as the sampled one is (pbrt-v4's RGBFilm::AddSplat, src/pbrt/film.cpp, weighs by the raw
+  /// filter value, which matches only filters of unit integral). Thread-safe.
+  void addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda);
+  /// The factor image() applies to the splat sums: 1 / (light paths per pixel of the full
+  /// image), pbrt-v4's 1 / spp for a render of the whole image.
+  void setSplatScale(double scale) { splat_scale_ = scale; }
+  /// The splat sums (R, G, B in fixed point), row by row over bounds(); empty without splats.
+  const std::vector<std::array<Int128, 3>>& splatSums() const { return splats_; }
+
+ private:
+  PixelBounds bounds_;
+  std::vector<PixelSum> pixels_;
+  double imaging_ratio_ = 1, max_component_ = 1e300;
+  bool white_balance_ = false;
+  std::array<double, 9> xyz_balance_{};  ///< von Kries (Bradford) adaptation, row-major
+  // Spectral buckets (Film "spectral"): per pixel, n_buckets_ sums of filter-weighted bucket
+  // radiance estimates; a bucket's value is its sum over the pixel's weight sum.
+  int n_buckets_ = 0;
+  double lambda_min_ = 360, lambda_max_ = 830;
+  std::vector<double> bucket_sums_;
+  void addSpectral(int x, int y, SampledSpectrum L, const SampledWavelengths& lambda, double w);
+  // Splats (see enableSplats).
+  const Filter* splat_filter_ = nullptr;
+  double splat_scale_ = 1;
+  std::vector<std::array<Int128, 3>> splats_;
+  std::vector<double> bucket_splats_;  ///< spectral films: per pixel, n_buckets_ splat sums
+  static constexpr size_t kSplatLocks = 1024;  ///< lock stripes (by pixel index)
+  std::unique_ptr<std::mutex[]> splat_locks_;
+};
+
+}  // namespace lensim::render

@@ -1,0 +1,368 @@
+// The volpath integrator. See volpath.h. Notation as pbrt-v4 (4th ed., sec. 14.2): beta is the
+// path throughput divided by the hero wavelength's path pdf; r_u[i] (r_l[i]) is the pdf of the
+// path sampled unidirectionally (ending with a light sample) at wavelength i divided by the hero's
+// unidirectional pdf. A contribution beta * f / average(r_u + r_l) is then the one-sample MIS
+// estimate over wavelengths and strategies (balance heuristic).
+#include "lensim/render/integrators/volpath.h"
+
+#include <cmath>
+#include <cstring>
+
+#include "lensim/render/materials/layered.h"
+#include "lensim/render/media/media.h"
+#include "lensim/scene/builder.h"
+
+namespace lensim::render {
+
+namespace {
+
+/// The average of rescaled path pdfs r over the wavelengths that are still carried: the one-sample
+/// MIS over wavelengths. Once a dispersive interface (or lens) has kept only the hero wavelength,
+/// its estimate is the hero's alone (r[0]); averaging in the others' pdfs would bias it.
+double wavelengthMean(const SampledSpectrum& r, const SampledWavelengths& lambda) {
+  return lambda.secondaryTerminated() ? r[0] : r.average();
+}
+
+/// exp(-dt sigma) per wavelength, 1 where sigma is 0 (also for an infinite dt).
+SampledSpectrum transmittance(double dt, const SampledSpectrum& sigma) {
+  SampledSpectrum T;
+  for (int i = 0; i < kSpectrumSamples; ++i) T[i] = sigma[i] == 0 ? 1.0 : std::exp(-dt * sigma[i]);
+  return T;
+}
+
+/// pbrt-v4's SampleT_maj: delta tracking along the ray o + t d (d unit), t in [0, tmax), in
+/// `medium` by the hero wavelength's majorant. At each tentative collision calls
+/// callback(p, properties, sigma_maj, T_maj) with T_maj the majorant transmittance since the
+/// previous collision; stops when it returns false (and then returns 1). Otherwise returns the
+/// majorant transmittance from the last collision to tmax.
+template <class Callback>
+SampledSpectrum sampleTmaj(const Medium& medium, const Vec3& o, const Vec3& d, double tmax,
+                           double u, Rng& rng, const SampledWavelengths& lambda,
+                           Callback&& callback) {
+  SampledSpectrum T_maj(1.0);
+  bool stopped = false;
+  medium.majorants(o, d, tmax, lambda, [&](double t0, double t1, const SampledSpectrum& smaj) {
+    if (smaj[0] == 0) {
+      T_maj *= transmittance(t1 - t0, smaj);
+      return true;
+    }
+    double t_min = t0;
+    for (;;) {
+      const double t = t_min - std::log1p(-u) / smaj[0];
+      u = rng.uniform();
+      if (t >= t1) {
+        T_maj *= transmittance(t1 - t_min, smaj);
+        return true;
+      }
+      T_maj *= transmittance(t - t_min, smaj);
+      const Vec3 p = o + d * t;
+      if (!callback(p, medium.at(p, lambda), smaj, T_maj)) {
+        stopped = true;
+        return false;
+      }
+      T_maj = SampledSpectrum(1.0);
+      t_min = t;
+    }
+  });
+  return stopped ? SampledSpectrum(1.0) : T_maj;
+}
+
+/// The medium a ray enters when it leaves the surface hit `h` in direction w (pbrt-v4: shapes
+/// whose inside and outside media are the same are no boundary).
+int mediumAfter(const SceneContext& sc, const SurfaceHit& h, const Vec3& w, int current) {
+  const scene::Shape& s = sc.scene->shapes[size_t(h.shape)];
+  if (s.inside_medium == s.outside_medium) return current;
+  return dot(w, h.ng) > 0 ? s.outside_medium : s.inside_medium;
+}
+
+bool isInterfaceHit(const SceneContext& sc, const SurfaceHit& h, const Vec3& wo) {
+  const TextureEvalContext tctx{h.p, h.uv, h.ns};
+  const int material = sc.materials->resolve(sc.scene->shapes[size_t(h.shape)].material, tctx, wo);
+  return sc.materials->isInterface(material);
+}
+
+/// A scattering vertex for next-event estimation: a surface (bsdf set) or a medium point.
+struct Vertex {
+  Vec3 p;
+  Vec3 ng;  ///< surface: geometric normal (ray offsets); medium: zero
+  Vec3 ns;  ///< surface: shading normal
+  Vec3 wo;
+  int medium = -1;  ///< medium point: its medium; surface: unused (by direction)
+  const SurfaceHit* hit = nullptr;
+  const BSDF* bsdf = nullptr;
+  const HenyeyGreenstein* phase = nullptr;
+};
+
+/// pbrt-v4's SampleLd: a light sample, its transmittance by ratio tracking through media and
+/// interface surfaces, MIS-weighted against BSDF/phase sampling. r_p: the path's r_u.
+SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledWavelengths& lambda,
+                         Sampler& sampler, Rng& rng, const SampledSpectrum& beta,
+                         const SampledSpectrum& r_p, RayCounts& counts) {
+  const double u_light = sampler.get1D();
+  const Vec2 u_light2 = sampler.get2D();
+  auto choice = sc.lights->sample({v.p, v.ns}, u_light);
+  if (!choice) return {};
+  auto ls = choice->light->sampleLi(v.p, u_light2, lambda);
+  if (!ls || ls->pdf <= 0 || ls->L.isBlack()) return {};
+  const double p_l = choice->pmf * ls->pdf;
+  SampledSpectrum f_hat;
+  double scatter_pdf;
+  if (v.bsdf) {
+    f_hat = v.bsdf->f(v.wo, ls->wi) * std::abs(dot(ls->wi, v.ns));
+    scatter_pdf = v.bsdf->pdf(v.wo, ls->wi);
+  } else {
+    const double ph = v.phase->p(v.wo, ls->wi);
+    f_hat = SampledSpectrum(ph);
+    scatter_pdf = ph;
+  }
+  if (f_hat.isBlack()) return {};
+
+  SampledSpectrum T_ray(1.0), r_l(1.0), r_u(1.0);
+  if ((!sc.media || sc.media->empty()) && !sc.has_interfaces) {
+    // No media and no interface surfaces: a plain shadow ray, as the path integrator traces it.
+    if (occludedScene(sc, v.p, v.ng, ls->p_light, ls->infinite, ls->wi, counts)) return {};
+  } else {
+    int medium = v.bsdf ? mediumAfter(sc, *v.hit, ls->wi, v.medium) : v.medium;
+    Vec3 origin = v.bsdf ? offsetOrigin(v.p, v.ng, ls->wi) : v.p;
+    for (int guard = 0; guard < 256; ++guard) {
+      Ray r;
+      r.o = origin;
+      if (ls->infinite) {
+        r.d = ls->wi;
+        r.tmax = INFINITY;
+      } else {
+        r.d = ls->p_light - origin;
+        r.tmax = 1 - 1e-4;
+      }
+      auto hit = intersectScene(sc, r, counts);
+      if (hit && !isInterfaceHit(sc, *hit, -r.d)) return {};
+      if (const Medium* m = sc.media ? sc.media->get(medium) : nullptr) {
+        const double len = length(r.d);
+        const double t_end = (hit ? hit->t : r.tmax) * len;
+        const Vec3 d = r.d / len;
+        const SampledSpectrum T_maj =
+            sampleTmaj(*m, r.o, d, t_end, rng.uniform(), rng, lambda,
+                       [&](const Vec3&, const MediumProperties& mp, const SampledSpectrum& smaj,
+                           const SampledSpectrum& Tm) {
+                         const SampledSpectrum sigma_n = clampZero(smaj - mp.sigma_a - mp.sigma_s);
+                         const double pdf = Tm[0] * smaj[0];
+                         T_ray *= Tm * sigma_n / pdf;
+                         r_l *= Tm * smaj / pdf;
+                         r_u *= Tm * sigma_n / pdf;
+                         // Russian roulette on low transmittance.
+                         const SampledSpectrum Tr = T_ray / wavelengthMean(r_l + r_u, lambda);
+                         if (Tr.maxValue() < 0.05) {
+                           const double q = 0.75;
+                           if (rng.uniform() < q)
+                             T_ray = SampledSpectrum(0.0);
+                           else
+                             T_ray /= 1 - q;
+                         }
+                         return !T_ray.isBlack();
+                       });
+        T_ray *= T_maj / T_maj[0];
+        r_l *= T_maj / T_maj[0];
+        r_u *= T_maj / T_maj[0];
+      }
+      if (T_ray.isBlack()) return {};
+      if (!hit) break;
+      medium = mediumAfter(sc, *hit, r.d, medium);
+      origin = offsetOrigin(hit->p, hit->ng, r.d);
+      if (!ls->infinite && dot(ls->p_light - origin, r.d) <= 0) break;
+    }
+  }
+  r_l *= r_p * p_l;
+  r_u *= r_p * scatter_pdf;
+  if (choice->light->isDelta()) return beta * f_hat * T_ray * ls->L / wavelengthMean(r_l, lambda);
+  return beta * f_hat * T_ray * ls->L / wavelengthMean(r_l + r_u, lambda);
+}
+
+}  // namespace
+
+SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, int medium,
+                          SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts) {
+  SampledSpectrum L(0.0), beta(1.0), r_u(1.0), r_l(1.0);
+  bool specular_bounce = false, any_non_specular = false;
+  double eta_scale = 1;
+  Vec3 prev_p;
+  Vec3 prev_n{0, 0, 0};  ///< the previous vertex's shading normal (zero in a medium), for the light sampler
+  int depth = 0, interfaces = 0;
+  const bool has_media = sc.media && !sc.media->empty();
+  // Random numbers for the tracking steps (their count varies): a stream per path.
+  Rng rng;
+  if (has_media) {
+    const double a = sampler.get1D(), b = sampler.get1D();
+    uint64_t ua, ub;
+    std::memcpy(&ua, &a, sizeof ua);
+    std::memcpy(&ub, &b, sizeof ub);
+    rng.setSequence(hashValues({ua, ub}), mixBits(ub ^ 0x9e3779b97f4a7c15ULL));
+  }
+  if (!has_media) medium = -1;
+  Ray ray{o, d, INFINITY};
+  for (;;) {
+    auto hit = intersectScene(sc, ray, counts);
+    if (const Medium* m = has_media ? sc.media->get(medium) : nullptr) {
+      bool scattered = false, terminated = false;
+      const double len = length(ray.d);
+      const Vec3 dir = ray.d / len;
+      const double t_end = hit ? hit->t * len : INFINITY;
+      const double u = sampler.get1D();
+      double u_mode = sampler.get1D();  // the first collision's; then the stream's
+      const SampledSpectrum T_maj =
+          sampleTmaj(*m, ray.o, dir, t_end, u, rng, lambda,
+                     [&](const Vec3& p, const MediumProperties& mp, const SampledSpectrum& smaj,
+                         const SampledSpectrum& Tm) {
+                       if (beta.isBlack()) {
+                         terminated = true;
+                         return false;
+                       }
+                       // Emission at the collision.
+                       if (depth < sc.max_depth && !mp.Le.isBlack()) {
+                         const double pdf = smaj[0] * Tm[0];
+                         const SampledSpectrum betap = beta * Tm / pdf;
+                         const SampledSpectrum r_e = r_u * smaj * Tm / pdf;
+                         if (!r_e.isBlack())
+                           L += betap * mp.sigma_a * mp.Le / wavelengthMean(r_e, lambda);
+                       }
+                       // Absorption, real scattering or a null collision, by the hero's
+                       // probabilities.
+                       const double p_absorb = mp.sigma_a[0] / smaj[0];
+                       const double p_scatter = mp.sigma_s[0] / smaj[0];
+                       const double um = u_mode;
+                       u_mode = rng.uniform();
+                       if (um < p_absorb) {
+                         terminated = true;
+                         return false;
+                       }
+                       if (um < p_absorb + p_scatter) {
+                         if (depth++ >= sc.max_depth) {
+                           terminated = true;
+                           return false;
+                         }
+                         const double pdf = Tm[0] * mp.sigma_s[0];
+                         beta *= Tm * mp.sigma_s / pdf;
+                         r_u *= Tm * mp.sigma_s / pdf;
+                         if (!beta.isBlack() && !r_u.isBlack()) {
+                           const HenyeyGreenstein phase(m->g());
+                           Vertex v;
+                           v.p = p;
+                           v.wo = -dir;
+                           v.medium = medium;
+                           v.phase = &phase;
+                           L += sampleLd(sc, v, lambda, sampler, rng, beta, r_u, counts);
+                           auto ps = phase.sample(-dir, sampler.get2D());
+                           if (!ps || ps->pdf <= 0) {
+                             terminated = true;
+                           } else {
+                             beta *= ps->p / ps->pdf;
+                             r_l = r_u / ps->pdf;
+                             prev_p = p;
+                             prev_n = Vec3{0, 0, 0};
+                             scattered = true;
+                             ray = Ray{p, ps->wi, INFINITY};
+                             specular_bounce = false;
+                             any_non_specular = true;
+                           }
+                         }
+                         return false;
+                       }
+                       // Null collision (none for homogeneous media, whose majorant is sigma_t).
+                       const SampledSpectrum sigma_n = clampZero(smaj - mp.sigma_a - mp.sigma_s);
+                       const double pdf = Tm[0] * sigma_n[0];
+                       beta *= Tm * sigma_n / pdf;
+                       if (pdf == 0) beta = SampledSpectrum(0.0);
+                       r_u *= Tm * sigma_n / pdf;
+                       r_l *= Tm * smaj / pdf;
+                       return !beta.isBlack() && !r_u.isBlack();
+                     });
+      if (terminated || beta.isBlack() || r_u.isBlack()) return L;
+      if (scattered) continue;
+      beta *= T_maj / T_maj[0];
+      r_u *= T_maj / T_maj[0];
+      r_l *= T_maj / T_maj[0];
+    }
+
+    if (!hit) {
+      for (const Light* light : sc.lights->infinite()) {
+        const SampledSpectrum Le = light->Le(ray.d, lambda);
+        if (Le.isBlack()) continue;
+        if (depth == 0 || specular_bounce) {
+          L += beta * Le / wavelengthMean(r_u, lambda);
+        } else {
+          const double p_l = sc.lights->pmf({prev_p, prev_n}, light) * light->pdfLi(prev_p, ray.d, nullptr);
+          const SampledSpectrum rl = r_l * p_l;
+          L += beta * Le / wavelengthMean(r_u + rl, lambda);
+        }
+      }
+      break;
+    }
+    const SurfaceHit& h = *hit;
+    const Vec3 wo = -ray.d;
+    if (const Light* area = sc.lights->areaLight(h.shape, h.prim)) {
+      const SampledSpectrum Le = area->L(h, wo, lambda);
+      if (!Le.isBlack()) {
+        if (depth == 0 || specular_bounce) {
+          L += beta * Le / wavelengthMean(r_u, lambda);
+        } else {
+          const double p_l = sc.lights->pmf({prev_p, prev_n}, area) * area->pdfLi(prev_p, ray.d, &h);
+          const SampledSpectrum rl = r_l * p_l;
+          L += beta * Le / wavelengthMean(r_u + rl, lambda);
+        }
+      }
+    }
+    const TextureEvalContext tctx{h.p, h.uv, h.ns};
+    const int material =
+        sc.materials->resolve(sc.scene->shapes[size_t(h.shape)].material, tctx, wo);
+    if (sc.materials->isInterface(material)) {
+      // A medium boundary without a surface: the ray goes on, into the other medium.
+      if (++interfaces > 100) break;
+      medium = mediumAfter(sc, h, ray.d, medium);
+      ray.o = offsetOrigin(h.p, h.ng, ray.d);
+      continue;
+    }
+    if (depth++ >= sc.max_depth) break;
+    auto bxdf = sc.materials->bxdf(material, tctx, lambda, sc.regularize && any_non_specular);
+    Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
+    if (sc.materials->hasBump(material))
+      ns = sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+    const BSDF bsdf(ns, h.dpdu, bxdf);
+    if (isNonSpecular(bsdf.flags())) {
+      Vertex v;
+      v.p = h.p;
+      v.ng = h.ng;
+      v.ns = ns;
+      v.wo = wo;
+      v.medium = medium;
+      v.hit = &h;
+      v.bsdf = &bsdf;
+      L += sampleLd(sc, v, lambda, sampler, rng, beta, r_u, counts);
+    } else {
+      sampler.get1D();  // keep the dimensions of the light sample in step with non-specular
+      sampler.get2D();
+    }
+    prev_p = h.p;
+    prev_n = ns;
+    const double uc = sampler.get1D();
+    const Vec2 u = sampler.get2D();
+    auto bs = bsdf.sample_f(wo, uc, u);
+    if (!bs) break;
+    beta *= bs->f * (std::abs(dot(bs->wi, ns)) / bs->pdf);
+    r_l = r_u / (bs->pdf_is_proportional ? bsdf.pdf(wo, bs->wi) : bs->pdf);
+    specular_bounce = bs->isSpecular();
+    any_non_specular = any_non_specular || !specular_bounce;
+    if (bs->isTransmission()) eta_scale *= bs->eta * bs->eta;
+    medium = mediumAfter(sc, h, bs->wi, medium);
+    ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
+    if (beta.isBlack()) break;
+    const SampledSpectrum rr_beta = beta * eta_scale / wavelengthMean(r_u, lambda);
+    const double u_rr = sampler.get1D();
+    if (rr_beta.maxValue() < 1 && depth > 1) {
+      const double q = std::max(0.0, 1 - rr_beta.maxValue());
+      if (u_rr < q) break;
+      beta /= 1 - q;
+    }
+  }
+  return L;
+}
+
+}  // namespace lensim::render

@@ -1,0 +1,513 @@
+// Embree 3 scene construction and ray queries. See accel.h.
+#include "lensim/render/shapes/accel.h"
+
+#include <embree3/rtcore.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstring>
+#include <mutex>
+
+#include "lensim/render/shapes/accel_curves.h"
+#include "lensim/scene/builder.h"
+#include "lensim/util/error.h"
+
+namespace lensim::render {
+
+namespace {
+
+/// Shape data in its "space": world for world shapes, instance space for shapes of objects.
+struct ShapeRecord {
+  int shape = -1;
+  const scene::Shape* desc = nullptr;
+  Transform space_from_object, object_from_space;
+  bool flip = false;
+  // Meshes, transformed to the space.
+  int vertices_per_face = 3;
+  std::vector<Vec3> p, n;
+  std::vector<Vec2> uv;
+  std::vector<int> indices;
+  Bounds3 bounds;  ///< in the space
+  // Curves (render/accel_curves.*): the Bézier segments in the space.
+  const scene::Curve* curve = nullptr;
+  CurveInSpace curve_space;
+};
+
+}  // namespace
+
+struct Accel::Impl {
+  const scene::Scene* scene = nullptr;
+  RTCDevice device = nullptr;
+  RTCScene top = nullptr;
+  std::vector<RTCScene> object_scenes;  ///< per object definition
+  std::vector<ShapeRecord> records;
+  std::vector<int> top_geom;                  ///< top-level geomID -> record (or -1: instance)
+  std::vector<std::vector<int>> object_geom;  ///< per object: geomID -> record
+  std::vector<int> top_geom_instance;         ///< top-level geomID -> instance index
+  std::vector<int> shape_record;              ///< shape -> record, -1 if none
+  std::vector<WorldMesh> world_meshes;
+  std::vector<int> shape_world_mesh;
+  std::mutex error_mutex;
+  std::string error;
+  mutable std::atomic<uint64_t> invalid_rays{0};  ///< rays dropped before Embree (rayIsValid)
+
+  ~Impl() {
+    for (RTCScene s : object_scenes)
+      if (s) rtcReleaseScene(s);
+    if (top) rtcReleaseScene(top);
+    if (device) rtcReleaseDevice(device);
+  }
+
+  void check(const char* what) {
+    std::lock_guard lock(error_mutex);
+    if (!error.empty()) throw Error(fmt::format("Embree error while {}: {}", what, error));
+    const RTCError e = rtcGetDeviceError(device);
+    if (e != RTC_ERROR_NONE)
+      throw Error(fmt::format("Embree error {} while {}", static_cast<int>(e), what));
+  }
+};
+
+namespace {
+
+void errorCallback(void* user, RTCError code, const char* str) {
+  auto* impl = static_cast<Accel::Impl*>(user);
+  std::lock_guard lock(impl->error_mutex);
+  if (!impl->error.empty()) impl->error += "; ";
+  impl->error += fmt::format("code {}: {}", static_cast<int>(code), str ? str : "");
+}
+
+void quadricBounds(const RTCBoundsFunctionArguments* args) {
+  const auto* r = static_cast<const ShapeRecord*>(args->geometryUserPtr);
+  RTCBounds* b = args->bounds_o;
+  b->lower_x = float(r->bounds.min.x), b->lower_y = float(r->bounds.min.y);
+  b->lower_z = float(r->bounds.min.z);
+  b->upper_x = float(r->bounds.max.x), b->upper_y = float(r->bounds.max.y);
+  b->upper_z = float(r->bounds.max.z);
+  // Pad for float rounding.
+  const float pad =
+      1e-6f * (1 + std::max({std::abs(b->lower_x), std::abs(b->upper_x), std::abs(b->lower_y),
+                             std::abs(b->upper_y), std::abs(b->lower_z), std::abs(b->upper_z)}));
+  b->lower_x -= pad, b->lower_y -= pad, b->lower_z -= pad;
+  b->upper_x += pad, b->upper_y += pad, b->upper_z += pad;
+}
+
+std::optional<double> quadricHit(const ShapeRecord* r, const float* org, const float* dir,
+                                 double tnear, double tfar) {
+  const Vec3 o = r->object_from_space.applyPoint({org[0], org[1], org[2]});
+  const Vec3 d = r->object_from_space.applyVector({dir[0], dir[1], dir[2]});
+  return intersectQuadric(*r->desc, o, d, tnear, tfar);
+}
+
+void quadricIntersect(const RTCIntersectFunctionNArguments* args) {
+  if (args->N != 1 || !args->valid[0]) return;
+  const auto* r = static_cast<const ShapeRecord*>(args->geometryUserPtr);
+  RTCRayHit* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);
+  const float org[3] = {rh->ray.org_x, rh->ray.org_y, rh->ray.org_z};
+  const float dir[3] = {rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z};
+  auto t = quadricHit(r, org, dir, rh->ray.tnear, rh->ray.tfar);
+  if (!t) return;
+  rh->ray.tfar = float(*t);
+  rh->hit.u = rh->hit.v = 0;
+  rh->hit.Ng_x = 0, rh->hit.Ng_y = 0, rh->hit.Ng_z = 1;
+  rh->hit.primID = args->primID;
+  rh->hit.geomID = args->geomID;
+  rh->hit.instID[0] = args->context->instID[0];
+}
+
+void quadricOccluded(const RTCOccludedFunctionNArguments* args) {
+  if (args->N != 1 || !args->valid[0]) return;
+  const auto* r = static_cast<const ShapeRecord*>(args->geometryUserPtr);
+  RTCRay* ray = reinterpret_cast<RTCRay*>(args->ray);
+  const float org[3] = {ray->org_x, ray->org_y, ray->org_z};
+  const float dir[3] = {ray->dir_x, ray->dir_y, ray->dir_z};
+  if (quadricHit(r, org, dir, ray->tnear, ray->tfar)) ray->tfar = -INFINITY;
+}
+
+Bounds3 quadricObjectBounds(const scene::Shape& s) {
+  Bounds3 b;
+  using scene::ShapeType;
+  const double r = s.radius;
+  switch (s.type) {
+    case ShapeType::Sphere:
+      b.extend({-r, -r, s.zmin});
+      b.extend({r, r, s.zmax});
+      break;
+    case ShapeType::Cylinder:
+      b.extend({-r, -r, s.zmin});
+      b.extend({r, r, s.zmax});
+      break;
+    case ShapeType::Disk:
+      b.extend({-r, -r, s.height});
+      b.extend({r, r, s.height});
+      break;
+    case ShapeType::Cone:
+      b.extend({-r, -r, 0});
+      b.extend({r, r, s.height});
+      break;
+    default:
+      break;
+  }
+  return b;
+}
+
+}  // namespace
+
+Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.scene = &scene;
+  m.device = rtcNewDevice(nullptr);
+  if (!m.device)
+    throw Error(fmt::format("cannot create the Embree device (error {})",
+                            static_cast<int>(rtcGetDeviceError(nullptr))));
+  rtcSetDeviceErrorFunction(m.device, errorCallback, &m);
+  m.top = rtcNewScene(m.device);
+  rtcSetSceneBuildQuality(m.top, RTC_BUILD_QUALITY_HIGH);
+  m.object_scenes.resize(scene.objects.size(), nullptr);
+  m.object_geom.resize(scene.objects.size());
+  m.shape_record.assign(scene.shapes.size(), -1);
+  m.shape_world_mesh.assign(scene.shapes.size(), -1);
+  // Records first (their addresses must not move once Embree holds them).
+  m.records.reserve(scene.shapes.size());
+  for (size_t i = 0; i < scene.shapes.size(); ++i) {
+    const scene::Shape& s = scene.shapes[i];
+    ShapeRecord r;
+    r.shape = static_cast<int>(i);
+    r.desc = &s;
+    r.space_from_object = s.transform;
+    r.object_from_space = inverse(s.transform);
+    r.flip = s.flipNormals();
+    if (s.type == scene::ShapeType::TriangleMesh || s.type == scene::ShapeType::BilinearMesh) {
+      if (s.mesh < 0) continue;
+      const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(s.mesh)];
+      if (mesh.indices.empty()) continue;
+      r.vertices_per_face = mesh.vertices_per_face;
+      r.p.reserve(mesh.positions.size());
+      for (const Vec3f& q : mesh.positions) {
+        r.p.push_back(s.transform.applyPoint(Vec3(q)));
+        r.bounds.extend(r.p.back());
+      }
+      for (const Vec3f& q : mesh.normals) {
+        Vec3 nn = s.transform.applyNormal(Vec3(q));
+        r.n.push_back(length(nn) > 0 ? normalize(nn) : nn);
+      }
+      for (const auto& t : mesh.uvs) r.uv.push_back({t[0], t[1]});
+      r.indices = mesh.indices;
+    } else if (s.type == scene::ShapeType::Curve) {
+      if (s.curve < 0) continue;
+      const scene::Curve& c = scene.curves[static_cast<size_t>(s.curve)];
+      if (c.cp.empty()) continue;
+      r.curve = &c;
+      r.curve_space = curveInSpace(c, s.transform);
+      r.bounds = r.curve_space.bounds;
+    } else {
+      r.bounds = s.transform.applyBounds(quadricObjectBounds(s));
+    }
+    m.shape_record[i] = static_cast<int>(m.records.size());
+    m.records.push_back(std::move(r));
+  }
+  for (size_t ri = 0; ri < m.records.size(); ++ri) {
+    ShapeRecord& r = m.records[ri];
+    const scene::Shape& s = *r.desc;
+    RTCScene target = m.top;
+    if (s.object >= 0) {
+      RTCScene& os = m.object_scenes[static_cast<size_t>(s.object)];
+      if (!os) os = rtcNewScene(m.device);
+      target = os;
+    }
+    RTCGeometry g;
+    if (r.curve) {
+      g = newCurveGeometry(m.device, *r.curve, r.curve_space);
+    } else if (!r.indices.empty()) {
+      const bool quads = r.vertices_per_face == 4;
+      g = rtcNewGeometry(m.device, quads ? RTC_GEOMETRY_TYPE_QUAD : RTC_GEOMETRY_TYPE_TRIANGLE);
+      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+          g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), r.p.size()));
+      for (size_t k = 0; k < r.p.size(); ++k) {
+        v[3 * k] = float(r.p[k].x), v[3 * k + 1] = float(r.p[k].y), v[3 * k + 2] = float(r.p[k].z);
+      }
+      const size_t faces = r.indices.size() / static_cast<size_t>(r.vertices_per_face);
+      auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+          g, RTC_BUFFER_TYPE_INDEX, 0, quads ? RTC_FORMAT_UINT4 : RTC_FORMAT_UINT3,
+          (quads ? 4 : 3) * sizeof(unsigned), faces));
+      for (size_t f = 0; f < faces; ++f) {
+        if (quads) {
+          // pbrt's patch (p00, p10, p01, p11) as Embree's cyclic quad (p00, p10, p11, p01).
+          idx[4 * f] = unsigned(r.indices[4 * f]);
+          idx[4 * f + 1] = unsigned(r.indices[4 * f + 1]);
+          idx[4 * f + 2] = unsigned(r.indices[4 * f + 3]);
+          idx[4 * f + 3] = unsigned(r.indices[4 * f + 2]);
+        } else {
+          for (int c = 0; c < 3; ++c) idx[3 * f + c] = unsigned(r.indices[3 * f + c]);
+        }
+      }
+      if (s.object < 0 && s.area_light >= 0) {  // kept only for emitters (light sampling)
+        WorldMesh wm;
+        wm.vertices_per_face = r.vertices_per_face;
+        wm.p = r.p;
+        wm.n = r.n;
+        wm.uv = r.uv;
+        wm.flip = r.flip;
+        wm.indices = r.indices;
+        m.shape_world_mesh[static_cast<size_t>(r.shape)] = static_cast<int>(m.world_meshes.size());
+        m.world_meshes.push_back(std::move(wm));
+      }
+    } else {
+      g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_USER);
+      rtcSetGeometryUserPrimitiveCount(g, 1);
+      rtcSetGeometryUserData(g, &r);
+      rtcSetGeometryBoundsFunction(g, quadricBounds, nullptr);
+      rtcSetGeometryIntersectFunction(g, quadricIntersect);
+      rtcSetGeometryOccludedFunction(g, quadricOccluded);
+    }
+    rtcCommitGeometry(g);
+    const unsigned id = rtcAttachGeometry(target, g);
+    rtcReleaseGeometry(g);
+    auto& map = s.object >= 0 ? m.object_geom[static_cast<size_t>(s.object)] : m.top_geom;
+    if (map.size() <= id) map.resize(id + 1, -1);
+    map[id] = static_cast<int>(ri);
+    if (s.object < 0) {
+      if (m.top_geom_instance.size() <= id) m.top_geom_instance.resize(id + 1, -1);
+    }
+  }
+  for (RTCScene os : m.object_scenes)
+    if (os) rtcCommitScene(os);
+  m.check("building object definitions");
+  for (size_t i = 0; i < scene.instances.size(); ++i) {
+    const scene::Instance& inst = scene.instances[i];
+    RTCScene os = m.object_scenes[static_cast<size_t>(inst.object)];
+    if (!os) continue;  // an empty object
+    RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, os);
+    float xfm[12];  // column-major 3x4
+    for (int c = 0; c < 4; ++c)
+      for (int rr = 0; rr < 3; ++rr) xfm[3 * c + rr] = float(inst.transform(rr, c));
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+    rtcCommitGeometry(g);
+    const unsigned id = rtcAttachGeometry(m.top, g);
+    rtcReleaseGeometry(g);
+    if (m.top_geom.size() <= id) m.top_geom.resize(id + 1, -1);
+    if (m.top_geom_instance.size() <= id) m.top_geom_instance.resize(id + 1, -1);
+    m.top_geom_instance[id] = static_cast<int>(i);
+  }
+  rtcCommitScene(m.top);
+  m.check("building the scene");
+  RTCBounds b;
+  rtcGetSceneBounds(m.top, &b);
+  if (b.lower_x <= b.upper_x) {
+    bounds_.extend({b.lower_x, b.lower_y, b.lower_z});
+    bounds_.extend({b.upper_x, b.upper_y, b.upper_z});
+  }
+}
+
+Accel::~Accel() = default;
+
+uint64_t Accel::invalidRays() const { return impl_->invalid_rays.load(); }
+
+const WorldMesh* Accel::worldMesh(int shape) const {
+  if (shape < 0 || static_cast<size_t>(shape) >= impl_->shape_world_mesh.size()) return nullptr;
+  const int i = impl_->shape_world_mesh[static_cast<size_t>(shape)];
+  return i < 0 ? nullptr : &impl_->world_meshes[static_cast<size_t>(i)];
+}
+
+namespace {
+
+// What Embree accepts (its ray.valid(), asserted in Debian's build): origin and direction
+// components finite and within +-1.844e18 (FLT_LARGE), a non-zero direction, tmax >= 0. A scene
+// with NaN or huge numbers can make other rays; they are counted and dropped (no hit).
+constexpr double kEmbreeLarge = 1.844e18;
+bool rayIsValid(const Ray& ray) {
+  const double c[6] = {ray.o.x, ray.o.y, ray.o.z, ray.d.x, ray.d.y, ray.d.z};
+  for (double v : c)
+    if (!(std::abs(v) <= kEmbreeLarge)) return false;
+  if (ray.d.x == 0 && ray.d.y == 0 && ray.d.z == 0) return false;
+  return ray.tmax >= 0;  // false for NaN
+}
+
+void setRay(RTCRay& r, const Ray& ray) {
+  r.org_x = float(ray.o.x), r.org_y = float(ray.o.y), r.org_z = float(ray.o.z);
+  r.dir_x = float(ray.d.x), r.dir_y = float(ray.d.y), r.dir_z = float(ray.d.z);
+  r.tnear = 0;
+  r.tfar = std::isfinite(ray.tmax) ? float(ray.tmax) : INFINITY;
+  r.time = 0;
+  r.mask = 0xFFFFFFFFu;
+  r.id = 0;
+  r.flags = 0;
+}
+
+Vec3 faceForward(const Vec3& v, const Vec3& ref) {
+  return dot(v, ref) < 0 ? -v : v;
+}
+
+/// Any unit vector perpendicular to n.
+Vec3 perpendicular(const Vec3& n) {
+  const Vec3 a = std::abs(n.x) > 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+  return normalize(cross(n, a));
+}
+
+}  // namespace
+
+std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
+  const Impl& m = *impl_;
+  if (!rayIsValid(ray)) {
+    m.invalid_rays.fetch_add(1, std::memory_order_relaxed);
+    return std::nullopt;
+  }
+  RTCRayHit rh;
+  setRay(rh.ray, ray);
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcIntersect1(m.top, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+
+  SurfaceHit h;
+  h.t = rh.ray.tfar;
+  int record;
+  const Transform* world_from_space = nullptr;
+  Vec3 o = ray.o, d = ray.d;
+  if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
+    h.instance = m.top_geom_instance[rh.hit.instID[0]];
+    const scene::Instance& inst = m.scene->instances[static_cast<size_t>(h.instance)];
+    world_from_space = &inst.transform;
+    const Transform space_from_world = inverse(inst.transform);
+    o = space_from_world.applyPoint(o);
+    d = space_from_world.applyVector(d);
+    record = m.object_geom[static_cast<size_t>(inst.object)][rh.hit.geomID];
+  } else {
+    record = m.top_geom[rh.hit.geomID];
+  }
+  const ShapeRecord& r = m.records[static_cast<size_t>(record)];
+  h.shape = r.shape;
+  h.prim = static_cast<int>(rh.hit.primID);
+  Vec3 p, ng, ns, dpdu;
+  Vec3 dpdv{0, 0, 0}, dndu{0, 0, 0}, dndv{0, 0, 0};
+  Vec2 uv;
+  if (r.curve) {
+    const CurveHitGeometry g =
+        curveHitGeometry(*r.curve, r.curve_space, static_cast<size_t>(h.prim), rh.hit.u,
+                         rh.hit.v, Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, o + d * h.t, d);
+    p = g.p;
+    ng = r.flip ? -g.n : g.n;
+    ns = ng;
+    dpdu = g.dpdu;
+    dpdv = g.dpdv;
+    uv = g.uv;
+  } else if (r.indices.empty()) {
+    // Quadric: refine t in double precision from the object-space ray.
+    const Vec3 oo = r.object_from_space.applyPoint(o), od = r.object_from_space.applyVector(d);
+    const double t0 = std::max(0.0, h.t * (1 - 1e-4) - 1e-7);
+    auto t = intersectQuadric(*r.desc, oo, od, t0, h.t * (1 + 1e-4) + 1e-7);
+    if (t) h.t = *t;
+    const LocalGeometry g = quadricGeometry(*r.desc, oo + od * h.t);
+    p = r.space_from_object.applyPoint(g.p);
+    ng = normalize(r.space_from_object.applyNormal(g.n));
+    if (r.flip) ng = -ng;
+    ns = ng;
+    dpdu = r.space_from_object.applyVector(g.dpdu);
+    dpdv = r.space_from_object.applyVector(g.dpdv);
+    dndu = r.space_from_object.applyNormal(g.dndu);
+    dndv = r.space_from_object.applyNormal(g.dndv);
+    uv = g.uv;
+  } else if (r.vertices_per_face == 3) {
+    const int* f = &r.indices[3 * static_cast<size_t>(h.prim)];
+    const Vec3 &p0 = r.p[size_t(f[0])], &p1 = r.p[size_t(f[1])], &p2 = r.p[size_t(f[2])];
+    const double b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
+    p = p0 * b0 + p1 * b1 + p2 * b2;
+    Vec3 n = cross(p0 - p2, p1 - p2);
+    ng = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
+    Vec2 uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
+    if (!r.uv.empty()) uv0 = r.uv[size_t(f[0])], uv1 = r.uv[size_t(f[1])], uv2 = r.uv[size_t(f[2])];
+    uv = uv0 * b0 + uv1 * b1 + uv2 * b2;
+    const Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
+    const double det = duv02.x * duv12.y - duv02.y * duv12.x;
+    if (std::abs(det) > 1e-12) {
+      dpdu = ((p0 - p2) * duv12.y - (p1 - p2) * duv02.y) / det;
+      // pbrt-v4 Triangle::InteractionFromIntersection: dp/dv, and dn/du, dn/dv from the
+      // vertex normals.
+      dpdv = ((p1 - p2) * duv02.x - (p0 - p2) * duv12.x) / det;
+      if (!r.n.empty()) {
+        const Vec3 dn1 = r.n[size_t(f[0])] - r.n[size_t(f[2])];
+        const Vec3 dn2 = r.n[size_t(f[1])] - r.n[size_t(f[2])];
+        dndu = (dn1 * duv12.y - dn2 * duv02.y) / det;
+        dndv = (dn2 * duv02.x - dn1 * duv12.x) / det;
+      }
+    }
+    if (!r.n.empty()) {
+      Vec3 sn = r.n[size_t(f[0])] * b0 + r.n[size_t(f[1])] * b1 + r.n[size_t(f[2])] * b2;
+      ns = length(sn) > 0 ? normalize(sn) : ng;
+      ng = faceForward(ng, ns);
+    } else {
+      if (r.flip) ng = -ng;
+      ns = ng;
+    }
+  } else {
+    const int* f = &r.indices[4 * static_cast<size_t>(h.prim)];
+    const Vec3 &p00 = r.p[size_t(f[0])], &p10 = r.p[size_t(f[1])], &p01 = r.p[size_t(f[2])],
+               &p11 = r.p[size_t(f[3])];
+    const double u = rh.hit.u, v = rh.hit.v;
+    // The point on the triangle Embree hit (a warped patch's bilinear point at (u, v) is off
+    // that surface).
+    p = o + d * h.t;
+    dpdu = (p10 - p00) * (1 - v) + (p11 - p01) * v;
+    dpdv = (p01 - p00) * (1 - u) + (p11 - p10) * u;
+    Vec3 n = cross(dpdu, dpdv);
+    ng = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
+    // The surface Embree intersects is one of the patch's two triangles: its normal (oriented as
+    // the patch's) is the geometric normal, so light pdfs use the surface actually hit.
+    const Vec3 tn{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    if (length(tn) > 0) ng = dot(tn, ng) < 0 ? -normalize(tn) : normalize(tn);
+    uv = {u, v};
+    if (!r.uv.empty()) {
+      const Vec2 &a = r.uv[size_t(f[0])], &b = r.uv[size_t(f[1])], &c = r.uv[size_t(f[2])],
+                 &e = r.uv[size_t(f[3])];
+      uv = (a * (1 - u) + b * u) * (1 - v) + (c * (1 - u) + e * u) * v;
+    }
+    if (!r.n.empty()) {
+      const Vec3 sn = (r.n[size_t(f[0])] * (1 - u) + r.n[size_t(f[1])] * u) * (1 - v) +
+                      (r.n[size_t(f[2])] * (1 - u) + r.n[size_t(f[3])] * u) * v;
+      ns = length(sn) > 0 ? normalize(sn) : ng;
+      ng = faceForward(ng, ns);
+    } else {
+      if (r.flip) ng = -ng;
+      ns = ng;
+    }
+  }
+  if (world_from_space) {
+    p = world_from_space->applyPoint(p);
+    ng = normalize(world_from_space->applyNormal(ng));
+    ns = normalize(world_from_space->applyNormal(ns));
+    dpdu = world_from_space->applyVector(dpdu);
+    dpdv = world_from_space->applyVector(dpdv);
+    dndu = world_from_space->applyNormal(dndu);
+    dndv = world_from_space->applyNormal(dndv);
+  }
+  if (length(dpdu) == 0 || !std::isfinite(dpdu.x)) dpdu = perpendicular(ns);
+  if (length(dpdv) == 0 || !std::isfinite(dpdv.x)) dpdv = cross(ns, dpdu);
+  h.p = p;
+  h.ng = ng;
+  h.ns = ns;
+  h.dpdu = dpdu;
+  h.dpdv = dpdv;
+  h.dndu = dndu;
+  h.dndv = dndv;
+  h.uv = uv;
+  return h;
+}
+
+bool Accel::occluded(const Ray& ray) const {
+  if (!rayIsValid(ray)) {
+    impl_->invalid_rays.fetch_add(1, std::memory_order_relaxed);
+    return true;  // no light arrives along a ray that cannot be traced
+  }
+  RTCRay r;
+  setRay(r, ray);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcOccluded1(impl_->top, &ctx, &r);
+  return r.tfar < 0;
+}
+
+}  // namespace lensim::render

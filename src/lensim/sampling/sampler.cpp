@@ -1,0 +1,175 @@
+#include "lensim/sampling/sampler.h"
+
+#include <algorithm>
+#include <bit>
+
+#include <fmt/format.h>
+
+#include "lensim/util/error.h"
+
+namespace lensim::render {
+
+namespace {
+double toUnit(uint32_t v) {
+  return std::min(v * 0x1p-32, kOneMinusEpsilon);
+}
+uint64_t pixelKey(Point2i p) {
+  return (static_cast<uint64_t>(static_cast<uint32_t>(p.x)) << 32) | static_cast<uint32_t>(p.y);
+}
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+IndependentSampler::IndependentSampler(int samples_per_pixel, int seed)
+    : spp_(samples_per_pixel), seed_(seed) {
+  if (spp_ <= 0) throw Error(fmt::format("pixelsamples must be positive (got {})", spp_));
+}
+
+void IndependentSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
+  // Each sample index gets its own stretch of the stream (2^16 values per sample, 2 per value).
+  rng_ = Rng(hashValues({pixelKey(pixel), static_cast<uint64_t>(seed_), 1}), 0);
+  rng_.advance((static_cast<uint64_t>(sample_index) << 17) + 2 * static_cast<uint64_t>(dimension));
+  dim_ = dimension;
+}
+
+std::unique_ptr<Sampler> IndependentSampler::clone() const {
+  return std::make_unique<IndependentSampler>(*this);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+StratifiedSampler::StratifiedSampler(int x_samples, int y_samples, bool jitter, int seed)
+    : xs_(x_samples), ys_(y_samples), seed_(seed), jitter_(jitter) {
+  if (xs_ <= 0 || ys_ <= 0)
+    throw Error(fmt::format("xsamples and ysamples must be positive (got {}, {})", xs_, ys_));
+}
+
+void StratifiedSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
+  pixel_ = pixel;
+  index_ = sample_index;
+  dim_ = dimension;
+}
+
+// Jitter for dimension `dim`: a PCG32 stream per pixel, positioned by sample index and
+// dimension, so a value never depends on which dimensions were drawn before it.
+Rng StratifiedSampler::jitterRng(int dim) const {
+  Rng rng(hashValues({pixelKey(pixel_), static_cast<uint64_t>(seed_), 2}), 0);
+  rng.advance((static_cast<uint64_t>(index_) << 17) + 2 * static_cast<uint64_t>(dim));
+  return rng;
+}
+
+double StratifiedSampler::get1D() {
+  const uint64_t h =
+      hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim_), static_cast<uint64_t>(seed_)});
+  const int n = samplesPerPixel();
+  const int stratum = permutationElement(static_cast<uint32_t>(index_ % n), n, h);
+  Rng rng = jitterRng(dim_);
+  ++dim_;
+  const double delta = jitter_ ? rng.uniform() : 0.5;
+  return std::min((stratum + delta) / n, kOneMinusEpsilon);
+}
+
+Vec2 StratifiedSampler::get2D() {
+  const uint64_t h =
+      hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim_), static_cast<uint64_t>(seed_)});
+  const int n = samplesPerPixel();
+  const int stratum = permutationElement(static_cast<uint32_t>(index_ % n), n, h);
+  Rng rng = jitterRng(dim_);
+  dim_ += 2;
+  const int x = stratum % xs_, y = stratum / xs_;
+  const double dx = jitter_ ? rng.uniform() : 0.5;
+  const double dy = jitter_ ? rng.uniform() : 0.5;
+  return {std::min((x + dx) / xs_, kOneMinusEpsilon), std::min((y + dy) / ys_, kOneMinusEpsilon)};
+}
+
+std::unique_ptr<Sampler> StratifiedSampler::clone() const {
+  return std::make_unique<StratifiedSampler>(*this);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+uint32_t sobolDimension0(uint32_t index) {
+  // Bit reversal: the generator matrix of the first Sobol dimension is the identity.
+  uint32_t v = index;
+  v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
+  v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+  v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
+  v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
+  return (v >> 16) | (v << 16);
+}
+
+namespace {
+uint32_t reverseBits(uint32_t x) {
+  x = (x << 16) | (x >> 16);
+  x = ((x & 0x00ff00ffU) << 8) | ((x & 0xff00ff00U) >> 8);
+  x = ((x & 0x0f0f0f0fU) << 4) | ((x & 0xf0f0f0f0U) >> 4);
+  x = ((x & 0x33333333U) << 2) | ((x & 0xccccccccU) >> 2);
+  x = ((x & 0x55555555U) << 1) | ((x & 0xaaaaaaaaU) >> 1);
+  return x;
+}
+}  // namespace
+
+uint32_t sobolDimension1(uint32_t index) {
+  // Second Sobol dimension (primitive polynomial x + 1, m_1 = 1): direction numbers
+  // v_0 = 2^31, v_k = v_{k-1} xor (v_{k-1} >> 1); the value is the xor of v_k over set bits k.
+  uint32_t result = 0, v = 1u << 31;
+  for (; index != 0; index >>= 1, v ^= v >> 1)
+    if (index & 1u) result ^= v;
+  return result;
+}
+
+uint32_t owenScramble(uint32_t v, uint64_t seed) {
+  // Nested uniform scrambling by a hash on the bit-reversed value (Laine & Karras 2011, "Stratified
+  // sampling for stochastic transparency", with the constants of Burley 2020, "Practical
+  // Hash-based Owen Scrambling", JCGT 9(4)): after reversal, multiplication and addition only
+  // carry toward higher bits, so the flip of each original bit depends only on the bits above
+  // it and every elementary interval is permuted as a whole (Owen 1995). A few operations per
+  // value instead of one hash per bit.
+  const uint32_t s = static_cast<uint32_t>(mixBits(seed));
+  uint32_t x = reverseBits(v);
+  x ^= x * 0x3d20adeaU;
+  x += s;
+  x *= (s >> 16) | 1U;
+  x ^= x * 0x05526c56U;
+  x ^= x * 0x53a22864U;
+  return reverseBits(x);
+}
+
+PaddedSobolSampler::PaddedSobolSampler(int samples_per_pixel, int seed) : seed_(seed) {
+  if (samples_per_pixel <= 0)
+    throw Error(fmt::format("pixelsamples must be positive (got {})", samples_per_pixel));
+  spp_ = static_cast<int>(std::bit_ceil(static_cast<uint32_t>(samples_per_pixel)));
+}
+
+void PaddedSobolSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
+  pixel_ = pixel;
+  index_ = sample_index;
+  dim_ = dimension;
+}
+
+uint64_t PaddedSobolSampler::dimensionHash(int dim) const {
+  return hashValues(
+      {pixelKey(pixel_), static_cast<uint64_t>(dim), static_cast<uint64_t>(seed_), 3});
+}
+
+double PaddedSobolSampler::get1D() {
+  const uint64_t h = dimensionHash(dim_++);
+  const uint32_t i =
+      static_cast<uint32_t>(permutationElement(static_cast<uint32_t>(index_ % spp_), spp_, h));
+  return toUnit(owenScramble(sobolDimension0(i), mixBits(h + 1)));
+}
+
+Vec2 PaddedSobolSampler::get2D() {
+  const uint64_t h = dimensionHash(dim_);
+  dim_ += 2;
+  const uint32_t i =
+      static_cast<uint32_t>(permutationElement(static_cast<uint32_t>(index_ % spp_), spp_, h));
+  return {toUnit(owenScramble(sobolDimension0(i), mixBits(h + 1))),
+          toUnit(owenScramble(sobolDimension1(i), mixBits(h + 2)))};
+}
+
+std::unique_ptr<Sampler> PaddedSobolSampler::clone() const {
+  return std::make_unique<PaddedSobolSampler>(*this);
+}
+
+}  // namespace lensim::render

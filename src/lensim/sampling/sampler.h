@@ -1,0 +1,116 @@
+// Sample generators for pixel estimates (pbrt-v4 semantics: "independent", "stratified",
+// and a scrambled low-discrepancy "sobol"-family sampler).
+//
+// Every value depends only on (seed, pixel, sample index, dimension), never on the order of
+// calls across pixels, so a render is identical whatever the number or scheduling of threads.
+// Use one Sampler per thread (clone()); call startPixelSample before drawing a pixel sample's
+// dimensions in a fixed order.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "lensim/sampling/sampling.h"
+#include "lensim/util/vec.h"
+
+namespace lensim::render {
+
+/// Integer pixel coordinates (raster space, x right, y down).
+using Point2i = Vec2T<int>;
+
+/// Source of sample values in [0,1) for one pixel sample at a time.
+class Sampler {
+ public:
+  virtual ~Sampler() = default;
+  /// Samples per pixel this sampler produces (after any rounding it needs).
+  virtual int samplesPerPixel() const = 0;
+  /// Begins sample `sample_index` of `pixel`; the next value drawn is `dimension`.
+  virtual void startPixelSample(Point2i pixel, int sample_index, int dimension = 0) = 0;
+  /// The next 1-D value, in [0,1).
+  virtual double get1D() = 0;
+  /// The next 2-D value, in [0,1)^2.
+  virtual Vec2 get2D() = 0;
+  /// The 2-D value for the film position within the pixel (the first dimensions).
+  virtual Vec2 getPixel2D() { return get2D(); }
+  /// The dimension the next value comes from (as startPixelSample counts them): drawing up to
+  /// here and restarting the sample at this dimension give the same values from then on.
+  virtual int dimension() const = 0;
+  /// An independent copy with the same parameters, for another thread.
+  virtual std::unique_ptr<Sampler> clone() const = 0;
+};
+
+/// Uniform random values (PCG32) seeded by hash(seed, pixel, sample index).
+class IndependentSampler final : public Sampler {
+ public:
+  explicit IndependentSampler(int samples_per_pixel, int seed = 0);
+  int samplesPerPixel() const override { return spp_; }
+  void startPixelSample(Point2i pixel, int sample_index, int dimension = 0) override;
+  double get1D() override {
+    ++dim_;
+    return rng_.uniform();
+  }
+  Vec2 get2D() override {
+    dim_ += 2;
+    const double a = rng_.uniform();
+    return {a, rng_.uniform()};
+  }
+  int dimension() const override { return dim_; }
+  std::unique_ptr<Sampler> clone() const override;
+
+ private:
+  int spp_, seed_;
+  int dim_ = 0;
+  Rng rng_;
+};
+
+/// Jittered stratification: per dimension, x_samples * y_samples strata (2-D) or that many
+/// intervals (1-D) per pixel, each pixel sample taking a stratum through a per-pixel,
+/// per-dimension random permutation; jitter inside the stratum unless jitter is false.
+class StratifiedSampler final : public Sampler {
+ public:
+  StratifiedSampler(int x_samples, int y_samples, bool jitter = true, int seed = 0);
+  int samplesPerPixel() const override { return xs_ * ys_; }
+  void startPixelSample(Point2i pixel, int sample_index, int dimension = 0) override;
+  double get1D() override;
+  Vec2 get2D() override;
+  int dimension() const override { return dim_; }
+  std::unique_ptr<Sampler> clone() const override;
+
+ private:
+  Rng jitterRng(int dim) const;
+  int xs_, ys_, seed_;
+  bool jitter_;
+  Point2i pixel_{};
+  int index_ = 0, dim_ = 0;
+};
+
+/// Padded Sobol sampler: each dimension pair is the first two Sobol dimensions (a (0,2)-sequence
+/// in base 2), Owen-scrambled with a hash of (seed, pixel, dimension), and the sample index is
+/// shuffled per pixel and dimension so pairs are decorrelated. The samples per pixel are rounded
+/// up to a power of two, as the (0,2)-sequence's stratification needs.
+class PaddedSobolSampler final : public Sampler {
+ public:
+  explicit PaddedSobolSampler(int samples_per_pixel, int seed = 0);
+  int samplesPerPixel() const override { return spp_; }
+  void startPixelSample(Point2i pixel, int sample_index, int dimension = 0) override;
+  double get1D() override;
+  Vec2 get2D() override;
+  int dimension() const override { return dim_; }
+  std::unique_ptr<Sampler> clone() const override;
+
+ private:
+  uint64_t dimensionHash(int dim) const;
+  int spp_, seed_;
+  Point2i pixel_{};
+  int index_ = 0, dim_ = 0;
+};
+
+/// The unscrambled first (van der Corput) and second Sobol dimensions as 32-bit fractions.
+uint32_t sobolDimension0(uint32_t index);
+uint32_t sobolDimension1(uint32_t index);
+/// Owen (nested uniform) scrambling of a 32-bit fraction: the flip of each bit depends only on
+/// the seed and the bits above it (hash-based, Laine-Karras / Burley 2020).
+uint32_t owenScramble(uint32_t v, uint64_t seed);
+
+}  // namespace lensim::render

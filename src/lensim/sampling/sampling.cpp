@@ -1,0 +1,202 @@
+#include "lensim/sampling/sampling.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "lensim/util/error.h"
+
+namespace lensim::render {
+
+Vec3 sampleUniformHemisphere(Vec2 u) {
+  const double z = u.x;
+  const double r = std::sqrt(std::max(0.0, 1 - z * z));
+  const double phi = 2 * kPi * u.y;
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+Vec3 sampleUniformSphere(Vec2 u) {
+  const double z = 1 - 2 * u.x;
+  const double r = std::sqrt(std::max(0.0, 1 - z * z));
+  const double phi = 2 * kPi * u.y;
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+// Shirley & Chiu 1997, "A Low Distortion Map Between Disk and Square".
+Vec2 sampleUniformDiskConcentric(Vec2 u) {
+  const double a = 2 * u.x - 1, b = 2 * u.y - 1;
+  if (a == 0 && b == 0) return {0, 0};
+  double r, theta;
+  if (std::abs(a) > std::abs(b)) {
+    r = a;
+    theta = (kPi / 4) * (b / a);
+  } else {
+    r = b;
+    theta = kPi / 2 - (kPi / 4) * (a / b);
+  }
+  return {r * std::cos(theta), r * std::sin(theta)};
+}
+
+Vec3 sampleCosineHemisphere(Vec2 u) {
+  const Vec2 d = sampleUniformDiskConcentric(u);
+  const double z = std::sqrt(std::max(0.0, 1 - d.x * d.x - d.y * d.y));
+  return {d.x, d.y, z};
+}
+
+Vec3 sampleUniformCone(Vec2 u, double cos_theta_max) {
+  const double cos_theta = (1 - u.x) + u.x * cos_theta_max;
+  const double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
+  const double phi = 2 * kPi * u.y;
+  return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+}
+
+double sampleTent(double u, double r) {
+  // Pick a side with probability 1/2, then invert the linear density on [0, r].
+  if (u < 0.5) {
+    const double v = u * 2;  // in [0,1)
+    return -r + r * std::sqrt(v);
+  }
+  const double v = (u - 0.5) * 2;
+  return r - r * std::sqrt(1 - v);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+PiecewiseConstant1D::PiecewiseConstant1D(std::span<const double> f, double min, double max)
+    : func_(f.begin(), f.end()), min_(min), max_(max) {
+  if (func_.empty()) throw Error("piecewise-constant distribution needs at least one value");
+  for (double& v : func_) v = std::abs(v);
+  const size_t n = func_.size();
+  cdf_.assign(n + 1, 0.0);
+  for (size_t i = 1; i <= n; ++i) cdf_[i] = cdf_[i - 1] + func_[i - 1] * (max_ - min_) / n;
+  integral_ = cdf_[n];
+  if (integral_ == 0) {
+    for (size_t i = 1; i <= n; ++i) cdf_[i] = double(i) / n;
+  } else {
+    for (size_t i = 1; i <= n; ++i) cdf_[i] /= integral_;
+  }
+}
+
+PiecewiseConstant1D::Sample PiecewiseConstant1D::sample(double u) const {
+  // Last cdf entry <= u (cells with zero probability are skipped by upper_bound).
+  const int n = size();
+  int o = static_cast<int>(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()) - 1;
+  o = std::clamp(o, 0, n - 1);
+  double du = u - cdf_[o];
+  const double width = cdf_[o + 1] - cdf_[o];
+  if (width > 0) du /= width;
+  du = std::clamp(du, 0.0, kOneMinusEpsilon);
+  const double pdf = integral_ > 0 ? func_[o] / integral_ : 1.0 / (max_ - min_);
+  const double x = min_ + (o + du) / n * (max_ - min_);
+  return {std::min(x, max_), pdf, o};
+}
+
+double PiecewiseConstant1D::pdf(double x) const {
+  if (x < min_ || x > max_) return 0.0;
+  const int n = size();
+  const int o = std::clamp(static_cast<int>((x - min_) / (max_ - min_) * n), 0, n - 1);
+  return integral_ > 0 ? func_[o] / integral_ : 1.0 / (max_ - min_);
+}
+
+PiecewiseConstant2D::PiecewiseConstant2D(std::span<const double> f, int nu, int nv, Vec2 min,
+                                         Vec2 max)
+    : min_(min), max_(max) {
+  if (nu <= 0 || nv <= 0 || f.size() != static_cast<size_t>(nu) * nv)
+    throw Error("piecewise-constant 2-D distribution: value count does not match nu * nv");
+  std::vector<double> marginal;
+  for (int v = 0; v < nv; ++v) {
+    conditional_.emplace_back(f.subspan(static_cast<size_t>(v) * nu, nu), min.x, max.x);
+    marginal.push_back(conditional_.back().integral());
+  }
+  marginal_ = PiecewiseConstant1D(marginal, min.y, max.y);
+}
+
+PiecewiseConstant2D::Sample PiecewiseConstant2D::sample(Vec2 u) const {
+  const auto sv = marginal_.sample(u.y);
+  const auto su = conditional_[sv.offset].sample(u.x);
+  return {{su.x, sv.x}, su.pdf * sv.pdf};
+}
+
+double PiecewiseConstant2D::pdf(Vec2 p) const {
+  if (p.x < min_.x || p.x > max_.x || p.y < min_.y || p.y > max_.y) return 0.0;
+  const int nv = static_cast<int>(conditional_.size());
+  const int v = std::clamp(static_cast<int>((p.y - min_.y) / (max_.y - min_.y) * nv), 0, nv - 1);
+  return conditional_[v].pdf(p.x) * marginal_.pdf(p.y);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+uint64_t mixBits(uint64_t v) {
+  v ^= v >> 33;
+  v *= 0xff51afd7ed558ccdULL;
+  v ^= v >> 33;
+  v *= 0xc4ceb9fe1a85ec53ULL;
+  v ^= v >> 33;
+  return v;
+}
+
+uint64_t hashValues(std::initializer_list<uint64_t> values) {
+  uint64_t h = 0x9e3779b97f4a7c15ULL;
+  for (uint64_t v : values) h = mixBits(h ^ mixBits(v + 0x632be59bd9b4e019ULL));
+  return h;
+}
+
+void Rng::setSequence(uint64_t sequence_index, uint64_t seed) {
+  state_ = 0;
+  inc_ = (sequence_index << 1u) | 1u;
+  uniformU32();
+  state_ += seed;
+  uniformU32();
+}
+
+void Rng::advance(uint64_t delta) {
+  // Compose the LCG step x -> a x + c with itself delta times by repeated squaring.
+  uint64_t cur_mult = 6364136223846793005ULL, cur_plus = inc_;
+  uint64_t acc_mult = 1, acc_plus = 0;
+  while (delta > 0) {
+    if (delta & 1) {
+      acc_mult *= cur_mult;
+      acc_plus = acc_plus * cur_mult + cur_plus;
+    }
+    cur_plus = (cur_mult + 1) * cur_plus;
+    cur_mult *= cur_mult;
+    delta >>= 1;
+  }
+  state_ = acc_mult * state_ + acc_plus;
+}
+
+uint32_t Rng::uniformU32() {
+  const uint64_t old = state_;
+  state_ = old * 6364136223846793005ULL + inc_;
+  const uint32_t xorshifted = static_cast<uint32_t>(((old >> 18u) ^ old) >> 27u);
+  const uint32_t rot = static_cast<uint32_t>(old >> 59u);
+  return (xorshifted >> rot) | (xorshifted << ((~rot + 1u) & 31));
+}
+
+double Rng::uniform() {
+  // 53 random bits from two outputs.
+  const uint64_t hi = uniformU32(), lo = uniformU32();
+  return static_cast<double>(((hi << 32) | lo) >> 11) * 0x1.0p-53;
+}
+
+int permutationElement(uint32_t i, uint32_t n, uint64_t seed) {
+  // Cycle-walking: apply a bijective hash on the smallest power-of-two domain containing n
+  // until the value lands in [0, n).
+  uint32_t w = n - 1;
+  w |= w >> 1, w |= w >> 2, w |= w >> 4, w |= w >> 8, w |= w >> 16;
+  uint32_t x = i;
+  do {
+    // A bijection on [0, w]: xor with a key, odd multiply, xorshift (all invertible mod 2^k).
+    for (int round = 0; round < 3; ++round) {
+      const uint64_t key = mixBits(seed + round);
+      x ^= static_cast<uint32_t>(key) & w;
+      x = (x * (static_cast<uint32_t>(key >> 32) | 1u)) & w;
+      x ^= (x >> 3) & w;
+      x = (x * 0x2c1b3c6dU + static_cast<uint32_t>(key >> 17)) & w;
+      x ^= (x >> 7);
+      x &= w;
+    }
+  } while (x >= n);
+  return static_cast<int>(x);
+}
+
+}  // namespace lensim::render

@@ -1,0 +1,158 @@
+// Internal to scene/builder.cpp and scene/build/*.cpp: the Builder that turns parsed
+// directives into a Scene. Its member functions are defined by family in scene/build/.
+#pragma once
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "lensim/io/ply.h"
+#include "lensim/scene/builder.h"
+#include "lensim/scene/film_sensor.h"
+#include "lensim/scene/media_presets.h"
+#include "lensim/scene/params.h"
+#include "lensim/scene/shapes_tessellated.h"
+#include "lensim/util/limits.h"
+
+namespace lensim::scene::detail {
+
+namespace fs = std::filesystem;
+
+// Graphics state pushed by AttributeBegin.
+struct GraphicsState {
+  Transform ctm[2];
+  bool active[2] = {true, true};
+  bool reverse_orientation = false;
+  int material = -1;
+  int area_light = -1;
+  ParamList shape_attrs, light_attrs, material_attrs, texture_attrs, medium_attrs;
+  // MediumInterface: medium names ("" is vacuum) and where they were given.
+  std::string inside_medium, outside_medium;
+  FileLoc medium_loc;
+};
+
+class Builder {
+ public:
+  explicit Builder(const SceneDesc& desc);
+
+  bool pbrt_v2_ = false;  // the file uses syntax only pbrt-v1/v2 have
+
+  Scene run();
+
+ private:
+  void warn(const FileLoc& loc, std::string msg);
+  void warnOnce(const std::string& key, const FileLoc& loc, std::string msg);
+  void finish(ParamSet& ps) { ps.reportUnused(scene_.diagnostics); }
+
+  void requireInvertible(const FileLoc& loc, std::string_view what, int which = 0);
+
+  const Param* findLightScale(ParamSet& ps);
+  void applyLightScale(const Param* p, Light& l);
+
+  std::string resolve(const std::string& name, const FileLoc& loc, std::string_view what);
+
+  SpectrumValue spectrumOf(const Param& p);
+
+  int textureIndex(const std::string& name, TextureKind kind, const FileLoc& loc);
+
+  std::optional<Input> spectrumInput(ParamSet& ps, ParamSet::Names names);
+  Input spectrumInput(ParamSet& ps, ParamSet::Names names, double def);
+
+  std::optional<Input> floatInput(ParamSet& ps, ParamSet::Names names);
+  Input floatInput(ParamSet& ps, ParamSet::Names names, double def);
+
+  void directive(const Directive& d);
+
+  void popState(bool transform_only);
+
+  void objectBegin(const Directive& d);
+
+  void option(const Directive& d);
+
+  void attribute(const Directive& d);
+
+  void camera(const Directive& d);
+
+  void checkSensor(ParamSet& ps, const Film& f);
+
+  void spectralFilm(ParamSet& ps, Film& f);
+
+  void film(const Directive& d);
+
+  void sampler(const Directive& d);
+
+  void filter(const Directive& d);
+
+  void integrator(const Directive& d);
+  void integratorBdpt(ParamSet& ps, Integrator& it);
+
+  void texture(const Directive& d);
+
+  Material material(const std::string& type, ParamSet& ps, const FileLoc& loc);
+
+  int currentMaterial();
+
+  void checkStackMemory(const Directive& d);
+
+  void light(const Directive& d);
+
+  void areaLight(const Directive& d);
+
+  void shape(const Directive& d);
+
+  int inlineMesh(const std::string& type, ParamSet& ps, const FileLoc& loc);
+
+  int curveShape(ParamSet& ps, const FileLoc& loc);
+
+  int tessellatedShape(const std::string& type, ParamSet& ps, const FileLoc& loc);
+
+  Mesh nurbsMeshOf(ParamSet& ps, const FileLoc& loc);
+
+  int plyMesh(ParamSet& ps, const FileLoc& loc);
+
+  const SceneDesc& desc_;
+  Scene scene_;
+  fs::path top_dir_;
+  GraphicsState gs_;
+  std::vector<GraphicsState> stack_;
+  std::map<std::string, std::pair<Transform, Transform>> named_cs_;
+  std::map<std::string, int> float_textures_, spectrum_textures_, named_materials_, object_index_;
+  std::set<std::string> warned_;
+  int current_object_ = -1;
+  int default_material_ = -1;
+  struct PendingInstance {
+    std::string name;
+    FileLoc loc;
+    Transform transform;
+  };
+  std::vector<PendingInstance> pending_instances_;
+  // Media named by MediumInterface, resolved after all MakeNamedMedium (as pbrt-v4 does).
+  struct PendingMedia {
+    int shape;  ///< index into Scene::shapes, or -1 for the camera
+    std::string inside, outside;
+    FileLoc loc;
+  };
+  std::vector<PendingMedia> pending_media_;
+  std::map<std::string, int> named_media_;
+
+  void makeNamedMedium(const Directive& d);
+
+  void gridMedium(Medium& m, ParamSet& ps, const FileLoc& loc);
+
+  int mediumIndex(const std::string& name, const FileLoc& loc);
+
+  void resolveMedia();
+};
+
+}  // namespace lensim::scene::detail

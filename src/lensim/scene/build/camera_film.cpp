@@ -1,0 +1,331 @@
+// Builder: Camera, Film, Sampler and PixelFilter directives.
+#include "lensim/scene/build/builder_internal.h"
+
+namespace lensim::scene::detail {
+
+// ---- camera and options --------------------------------------------------------------------
+void Builder::camera(const Directive& d) {
+  const std::string& type = d.strings[0];
+  if (!scene_.camera.defaulted)
+    warn(d.loc, fmt::format("second Camera (the first is at {}); the last one is used",
+                            scene_.camera.loc.str()));
+  ParamSet ps(d.params, d.loc, fmt::format("Camera \"{}\"", type));
+  Camera c;
+  c.defaulted = false;
+  c.type_as_written = type;
+  c.loc = d.loc;
+  requireInvertible(d.loc, fmt::format("Camera \"{}\"", type));
+  c.camera_from_world = gs_.ctm[0];
+  c.camera_from_world_end = gs_.ctm[1];
+  named_cs_["camera"] = {inverse(gs_.ctm[0]), inverse(gs_.ctm[1])};
+  pending_media_.push_back({-1, "", gs_.outside_medium, gs_.medium_loc});
+  c.shutter_open = ps.getFloat({"shutteropen"}, 0);
+  c.shutter_close = ps.getFloat({"shutterclose"}, 1);
+  c.hither = ps.getFloat({"hither"}, 1e-3);
+  c.yon = ps.getFloat({"yon"}, 1e30);
+  if (c.shutter_close < c.shutter_open)
+    warn(d.loc, "shutterclose is before shutteropen; they are swapped");
+  if (c.shutter_close < c.shutter_open) std::swap(c.shutter_open, c.shutter_close);
+  auto screen = [&]() {
+    c.frame_aspect_ratio = ps.findFloat({"frameaspectratio"});
+    if (const Param* p = ps.find({"screenwindow"}, {ParamType::Float})) {
+      ps.expectCount(*p, 4);
+      c.screen_window =
+          std::array<double, 4>{p->numbers[0], p->numbers[1], p->numbers[2], p->numbers[3]};
+    }
+    c.lens_radius = ps.getFloat({"lensradius"}, 0);
+    c.focal_distance = ps.getFloat({"focaldistance"}, 1e6);
+  };
+  if (type == "perspective") {
+    c.type = "perspective";
+    screen();
+    c.fov_deg = ps.getFloat({"fov"}, 90);
+    if (auto half = ps.findFloat({"halffov"})) c.fov_deg = 2 * *half;  // pbrt-v1/v2
+  } else if (type == "orthographic") {
+    c.type = "orthographic";
+    screen();
+  } else if (type == "spherical") {
+    c.type = "spherical";
+    ps.find({"screenwindow"}, {ParamType::Float});
+    ps.getFloat({"lensradius"}, 0);
+    ps.getFloat({"focaldistance"}, 1e6);
+    ps.findFloat({"frameaspectratio"});
+    c.spherical_mapping = ps.getString({"mapping"}, "equalarea");
+    if (c.spherical_mapping != "equirectangular" && c.spherical_mapping != "equalarea")
+      throw Error(ps.peek({"mapping"})->loc,
+                  fmt::format("spherical camera: unknown mapping \"{}\" (expected "
+                              "\"equalarea\" or \"equirectangular\")",
+                              c.spherical_mapping));
+  } else if (type == "realistic") {
+    c.type = "realistic";
+    if (ps.peek({"specfile"})) {
+      // pbrt-v1/v2 (CS348B): camera-space millimetres.
+      pbrt_v2_ = true;
+      LegacyRealistic r;
+      const Param* spec = ps.find({"specfile"}, {ParamType::String});
+      r.lens_file_as_written = spec->strings[0];
+      r.lens_file = resolve(spec->strings[0], spec->loc, "lens file");
+      const Param* fd = ps.find({"filmdistance"}, {ParamType::Float});
+      if (!fd) throw Error(d.loc, "realistic camera: missing \"float filmdistance\" (mm)");
+      ps.expectCount(*fd, 1);
+      r.film_distance_mm = fd->numbers[0];
+      const Param* ad = ps.find({"aperture_diameter"}, {ParamType::Float});
+      if (!ad) throw Error(d.loc, "realistic camera: missing \"float aperture_diameter\" (mm)");
+      ps.expectCount(*ad, 1);
+      r.aperture_diameter_mm = ad->numbers[0];
+      r.film_diagonal_mm = ps.getFloat({"filmdiag"}, 35);
+      if (const Param* af = ps.find({"af_zones"}, {ParamType::String}))
+        r.af_zones_file = resolve(af->strings[0], af->loc, "autofocus zone file");
+      if (r.film_distance_mm <= 0) ps.fail(*fd, "film distance must be positive (mm)");
+      if (r.aperture_diameter_mm <= 0) ps.fail(*ad, "aperture diameter must be positive (mm)");
+      c.legacy_realistic = r;
+    } else {
+      Realistic r;
+      const Param* lf = ps.find({"lensfile"}, {ParamType::String});
+      if (!lf) throw Error(d.loc, "realistic camera: missing \"string lensfile\"");
+      r.lens_file_as_written = lf->strings[0];
+      // Catalogue names (lentil:KEY, lenses:NAME; see optics/lens_formats.h) are not paths.
+      const std::string& lname = lf->strings[0];
+      r.lens_file = lname.rfind("lentil:", 0) == 0 || lname.rfind("lenses:", 0) == 0
+                        ? lname
+                        : resolve(lname, lf->loc, "lens file");
+      r.aperture_diameter_mm = ps.getFloat({"aperturediameter"}, 1.0);
+      r.focus_distance_m = ps.getFloat({"focusdistance"}, 10.0);
+      // pbrt-v3's default is true; pbrt-v4 has no such parameter (always irradiance).
+      r.simple_weighting = ps.getBool({"simpleweighting"}, scene_.legacy_syntax);
+      r.glass_match = ps.getBool({"glassmatch"}, false);
+      if (const Param* fd = ps.find({"filmdistance"}, {ParamType::Float})) {
+        ps.expectCount(*fd, 1);
+        if (!(fd->numbers[0] > 0)) ps.fail(*fd, "film distance must be positive (mm)");
+        if (ps.peek({"focusdistance"}))
+          ps.fail(*fd, "give filmdistance or focusdistance, not both");
+        r.film_distance_mm = fd->numbers[0];
+      }
+      if (const Param* fm = ps.find({"focusmethod"}, {ParamType::String})) {
+        if (fm->strings[0] != "thick" && fm->strings[0] != "exact")
+          ps.fail(*fm, fmt::format("\"{}\": expected \"thick\" or \"exact\"", fm->strings[0]));
+        r.focus_method = fm->strings[0];
+      }
+      if (const Param* b = ps.find({"blades"}, {ParamType::Integer})) {
+        ps.expectCount(*b, 1);
+        if (b->numbers[0] != 0 && b->numbers[0] < 3)
+          ps.fail(*b, "a polygonal stop needs at least 3 blades (0: round)");
+        r.blades = static_cast<int>(b->numbers[0]);
+      }
+      r.blade_rotation_deg = ps.getFloat({"bladerotation"}, 0);
+      if (const Param* ap = ps.find({"aperture"}, {ParamType::String})) {
+        const std::string& a = ap->strings[0];
+        static const std::set<std::string> builtin = {"gaussian", "square", "pentagon", "star"};
+        r.aperture = builtin.count(a) ? a : resolve(a, ap->loc, "aperture image");
+      }
+      c.realistic = r;
+    }
+  } else {
+    ps.markAllUsed();
+    warnOnce("camera " + type, d.loc,
+             fmt::format("camera \"{}\" is not rendered by lensim; it renders as a perspective "
+                         "camera with a 90 degree field of view",
+                         type));
+  }
+  finish(ps);
+  scene_.camera = std::move(c);
+}
+
+// pbrt-v4's "sensor" (src/pbrt/film.cpp, PixelSensor::Create): a name pbrt-v4 does not know
+// is an error there ("unknown sensor type") and here; a camera pbrt-v4 knows but whose
+// measured curves lensim does not bundle is warned and recorded through the CIE 1931 observer.
+void Builder::checkSensor(ParamSet& ps, const Film& f) {
+  const Param* p = ps.find({"sensor"}, {ParamType::String});
+  if (!p) return;
+  const auto list = [](const std::vector<std::string>& v) {
+    std::string out;
+    for (const std::string& n : v) out += (out.empty() ? "" : ", ") + n;
+    return out;
+  };
+  switch (sensorSupport(f.sensor)) {
+    case SensorSupport::Applied:
+      return;
+    case SensorSupport::NotBundled:
+      warn(p->loc, fmt::format("\"sensor\": the measured response curves of pbrt-v4's camera "
+                               "sensor \"{}\" are not bundled with lensim; the film records "
+                               "CIE 1931 XYZ instead (sensors lensim applies: {})",
+                               f.sensor, list(bundledSensorNames())));
+      return;
+    case SensorSupport::Unknown:
+      throw Error(p->loc,
+                  fmt::format("\"sensor\": unknown sensor \"{}\"; expected {} or one "
+                              "of pbrt-v4's camera sensors ({})",
+                              f.sensor, list(bundledSensorNames()), list(pbrtCameraSensorNames())));
+  }
+}
+
+// pbrt-v4's SpectralFilm::Create (src/pbrt/film.cpp): "nbuckets" (16), "lambdamin" and
+// "lambdamax" (360 and 830 nm, pbrt-v4's Lambda_min/Lambda_max, outside which it refuses to
+// render), an EXR file only.
+void Builder::spectralFilm(ParamSet& ps, Film& f) {
+  f.type = "spectral";
+  const Param* nb = ps.find({"nbuckets"}, {ParamType::Integer});
+  f.spectral_buckets = ps.getInt({"nbuckets"}, 16);
+  if (f.spectral_buckets < 1 || f.spectral_buckets > 4096)
+    throw Error(nb ? nb->loc : f.loc,
+                fmt::format("\"nbuckets\": {} buckets; expected 1 to 4096", f.spectral_buckets));
+  const Param* lo = ps.find({"lambdamin"}, {ParamType::Float});
+  const Param* hi = ps.find({"lambdamax"}, {ParamType::Float});
+  f.lambda_min_nm = ps.getFloat({"lambdamin"}, 360);
+  f.lambda_max_nm = ps.getFloat({"lambdamax"}, 830);
+  if (f.lambda_min_nm < 360 || f.lambda_max_nm > 830 || !(f.lambda_min_nm < f.lambda_max_nm))
+    throw Error(lo   ? lo->loc
+                : hi ? hi->loc
+                     : f.loc,
+                fmt::format("\"lambdamin\"/\"lambdamax\": [{}, {}] nm; expected an interval "
+                            "within [360, 830] nm (the wavelengths lensim and pbrt-v4 render)",
+                            f.lambda_min_nm, f.lambda_max_nm));
+}
+
+void Builder::film(const Directive& d) {
+  const std::string& type = d.strings[0];
+  ParamSet ps(d.params, d.loc, fmt::format("Film \"{}\"", type));
+  Film& f = scene_.film;
+  f.defaulted = false;
+  f.type_as_written = type;
+  f.loc = d.loc;
+  f.type = "rgb";
+  if (type == "spectral") {
+    spectralFilm(ps, f);
+  } else if (type != "rgb" && type != "image")
+    warnOnce(
+        "film " + type, d.loc,
+        fmt::format("film \"{}\" is not rendered by lensim; it renders as an \"rgb\" film", type));
+  f.x_resolution = ps.getInt({"xresolution"}, f.x_resolution);
+  f.y_resolution = ps.getInt({"yresolution"}, f.y_resolution);
+  if (f.x_resolution <= 0 || f.y_resolution <= 0)
+    throw Error(d.loc, fmt::format("film resolution {}x{} must be positive", f.x_resolution,
+                                   f.y_resolution));
+  // The film's buffers (accumulated XYZ and weights, then the RGB image): about 64 bytes a pixel.
+  checkMemory(64.0 * f.x_resolution * f.y_resolution, d.loc,
+              fmt::format("a {}x{} film", f.x_resolution, f.y_resolution));
+  f.filename = ps.getString({"filename"}, f.filename);
+  if (const Param* p = ps.find({"cropwindow"}, {ParamType::Float})) {
+    ps.expectCount(*p, 4);
+    f.crop_window = {p->numbers[0], p->numbers[1], p->numbers[2], p->numbers[3]};
+  }
+  if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) {
+    ps.expectCount(*p, 4);
+    f.pixel_bounds = std::array<int, 4>{int(p->numbers[0]), int(p->numbers[1]), int(p->numbers[2]),
+                                        int(p->numbers[3])};
+  }
+  f.scale = ps.getFloat({"scale"}, 1);  // pbrt-v3 image film
+  f.diagonal_mm = ps.getFloat({"diagonal"}, 35);
+  f.iso = ps.getFloat({"iso"}, 100);
+  f.white_balance_k = ps.getFloat({"whitebalance"}, 0);
+  // Ranges that keep the film's arithmetic finite (a NaN or 1e-300 here made every pixel NaN).
+  if (!(f.iso > 0 && f.iso <= 1e7))
+    throw Error(d.loc, fmt::format("film \"iso\" {} is out of range; expected (0, 1e7]", f.iso));
+  if (f.white_balance_k != 0 && !(f.white_balance_k >= 1000 && f.white_balance_k <= 100000))
+    throw Error(d.loc, fmt::format("film \"whitebalance\" {} K is out of range; expected 0 (none) "
+                                   "or a colour temperature in [1000, 100000] K",
+                                   f.white_balance_k));
+  if (!(f.diagonal_mm > 0))
+    throw Error(d.loc, fmt::format("film \"diagonal\" {} mm must be > 0", f.diagonal_mm));
+  f.sensor = ps.getString({"sensor"}, "cie1931");
+  checkSensor(ps, f);
+  f.max_component_value = ps.getFloat({"maxcomponentvalue", "maxsampleluminance"}, 1e300);
+  f.save_fp16 = ps.getBool({"savefp16"}, true);
+  ps.getBool({"display"}, false);  // pbrt-v2 image film: open a window
+  if (type == "gbuffer") ps.markAllUsed();
+  if (f.x_resolution <= 0 || f.y_resolution <= 0)
+    throw Error(d.loc, "film resolution must be positive");
+  finish(ps);
+}
+
+void Builder::sampler(const Directive& d) {
+  const std::string& type = d.strings[0];
+  ParamSet ps(d.params, d.loc, fmt::format("Sampler \"{}\"", type));
+  Sampler& s = scene_.sampler;
+  s.defaulted = false;
+  s.type_as_written = type;
+  s.loc = d.loc;
+  static const std::set<std::string> v4 = {"independent", "stratified", "halton", "sobol",
+                                           "paddedsobol", "zsobol",     "pmj02bn"};
+  s.seed = ps.getInt({"seed"}, 0);
+  s.randomization = ps.getString({"randomization"}, "");
+  ps.getBool({"samplepixelcenter"}, false);  // pbrt-v3 halton
+  if (type == "stratified") {
+    int x = ps.getInt({"xsamples"}, 4), y = ps.getInt({"ysamples"}, 4);
+    s.jitter = ps.getBool({"jitter"}, true);
+    // The product in 64 bits: 65536 x 65536 must not wrap around.
+    const int64_t xy = int64_t{x} * int64_t{y};
+    if (x <= 0 || y <= 0 || xy > kMaxSamplesPerPixel)
+      throw Error(d.loc, fmt::format("stratified sampler: {} x {} samples per pixel; expected "
+                                     "positive counts with a product of at most {}",
+                                     x, y, kMaxSamplesPerPixel));
+    s.pixel_samples = static_cast<int>(xy);
+    s.type = type;
+  } else if (v4.count(type)) {
+    s.type = type;
+    s.pixel_samples = ps.getInt({"pixelsamples"}, 16);
+  } else if (type == "lowdiscrepancy" || type == "02sequence" || type == "bestcandidate" ||
+             type == "maxmindist" || type == "random" || type == "adaptive") {
+    // The pbrt-v4 equivalents its --upgrade uses.
+    s.type = type == "random"                                  ? "independent"
+             : type == "maxmindist" || type == "bestcandidate" ? "pmj02bn"
+                                                               : "paddedsobol";
+    s.pixel_samples = ps.getInt({"pixelsamples"}, 4);
+    if (type == "adaptive") {
+      s.pixel_samples = ps.getInt({"maxsamples"}, 32);
+      ps.markAllUsed();
+    }
+    ps.getInt({"dimensions"}, 4);
+    warnOnce("sampler " + type, d.loc,
+             fmt::format("sampler \"{}\" (pbrt-v1–v3) renders as \"{}\" with {} samples per "
+                         "pixel",
+                         type, s.type, s.pixel_samples));
+  } else {
+    ps.markAllUsed();
+    s.type = "zsobol";
+    warnOnce(
+        "sampler " + type, d.loc,
+        fmt::format("sampler \"{}\" is not rendered by lensim; it renders as \"zsobol\"", type));
+  }
+  if (s.pixel_samples <= 0) throw Error(d.loc, "pixelsamples must be positive");
+  if (s.pixel_samples > kMaxSamplesPerPixel)
+    throw Error(d.loc, fmt::format("pixelsamples {} is too large; at most {} are taken",
+                                   s.pixel_samples, kMaxSamplesPerPixel));
+  finish(ps);
+}
+
+void Builder::filter(const Directive& d) {
+  const std::string& type = d.strings[0];
+  ParamSet ps(d.params, d.loc, fmt::format("PixelFilter \"{}\"", type));
+  Filter& f = scene_.filter;
+  f.defaulted = false;
+  f.type_as_written = type;
+  f.loc = d.loc;
+  double def = type == "box"        ? 0.5
+               : type == "gaussian" ? 1.5
+               : type == "mitchell" ? 2
+               : type == "triangle" ? 2
+                                    : 4;
+  f.type = type == "sinc" ? "lanczos" : type;
+  f.x_radius = ps.getFloat({"xradius", "xwidth"}, def);
+  f.y_radius = ps.getFloat({"yradius", "ywidth"}, def);
+  if (type == "gaussian") {
+    f.sigma = ps.getFloat({"sigma"}, 0.5);
+    if (auto alpha = ps.findFloat({"alpha"}))  // pbrt-v2: exp(-alpha x^2) = exp(-x^2/(2 sigma^2))
+      f.sigma = 1 / std::sqrt(2 * *alpha);
+  } else if (type == "mitchell") {
+    f.b = ps.getFloat({"B"}, 1.0 / 3);
+    f.c = ps.getFloat({"C"}, 1.0 / 3);
+  } else if (type == "sinc" || type == "lanczos") {
+    f.tau = ps.getFloat({"tau"}, 3);
+  } else if (type != "box" && type != "triangle") {
+    ps.markAllUsed();
+    f.type = "gaussian";
+    warnOnce(
+        "filter " + type, d.loc,
+        fmt::format("filter \"{}\" is not rendered by lensim; it renders as \"gaussian\"", type));
+  }
+  finish(ps);
+}
+
+}  // namespace lensim::scene::detail

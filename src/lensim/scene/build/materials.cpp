@@ -1,0 +1,177 @@
+// Builder: materials (Material, MakeNamedMaterial) and the default material.
+#include "lensim/scene/build/builder_internal.h"
+
+namespace lensim::scene::detail {
+
+Material Builder::material(const std::string& type, ParamSet& ps, const FileLoc& loc) {
+  Material m;
+  m.type_as_written = type;
+  m.loc = loc;
+  m.displacement = floatInput(ps, {"displacement", "bumpmap"});  // bump mapping
+  if (const Param* nm = ps.find({"normalmap"}, {ParamType::String}))
+    if (!nm->strings[0].empty()) m.normal_map = resolve(nm->strings[0], nm->loc, "normal map");
+  auto roughness = [&](double def) {
+    Input r = floatInput(ps, {"roughness"}, def);
+    m.uroughness = floatInput(ps, {"uroughness"}).value_or(r);
+    m.vroughness = floatInput(ps, {"vroughness"}).value_or(r);
+    m.remap_roughness = ps.getBool({"remaproughness"}, true);
+  };
+  auto conductorDefaults = [&]() {
+    m.eta = spectrumInput(ps, {"eta"}).value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-eta")});
+    m.k = spectrumInput(ps, {"k"}).value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-k")});
+  };
+  auto dielectricEta = [&](ParamSet::Names names) {
+    const Param* p = ps.find(names, {ParamType::Float, ParamType::Spectrum, ParamType::Texture});
+    m.eta.value = 1.5;
+    if (!p) return;
+    if (p->type == ParamType::Float) {
+      ps.expectCount(*p, 1);
+      m.eta.value = p->numbers[0];
+    } else if (p->type == ParamType::Texture) {
+      m.eta.texture = textureIndex(p->strings[0], TextureKind::Float, p->loc);
+    } else {
+      m.eta.spectrum = spectrumOf(*p);
+    }
+  };
+  if (type == "diffuse" || type == "matte") {
+    m.type = "diffuse";
+    m.reflectance = spectrumInput(ps, {"reflectance", "Kd"}, 0.5);
+    m.has_reflectance = true;
+    if (type == "matte") m.sigma = floatInput(ps, {"sigma"}, 0);  // Oren–Nayar, degrees
+  } else if (type == "coateddiffuse") {
+    m.type = "coateddiffuse";
+    m.reflectance = spectrumInput(ps, {"reflectance", "Kd"}, 0.5);
+    m.has_reflectance = true;
+    roughness(0);
+    m.thickness = floatInput(ps, {"thickness"}, 0.01);
+    m.albedo = spectrumInput(ps, {"albedo"}, 0);
+    m.g = floatInput(ps, {"g"}, 0);
+    m.max_depth = ps.getInt({"maxdepth"}, 10);
+    m.n_samples = ps.getInt({"nsamples"}, 1);
+    dielectricEta({"eta"});
+  } else if (type == "plastic" || type == "uber" || type == "substrate" || type == "translucent") {
+    // pbrt-v3's materials, rendered as pbrt-v3 defines them (render/v3materials.h), with
+    // pbrt-v3's defaults (src/materials/{plastic,uber,substrate,translucent}.cpp).
+    m.type = type;
+    const bool half = type == "substrate";
+    m.reflectance = spectrumInput(ps, {"Kd", "reflectance"}, half ? 0.5 : 0.25);
+    m.has_reflectance = true;
+    m.specular = spectrumInput(ps, {"Ks"}, half ? 0.5 : 0.25);
+    roughness(0.1);
+    if (type == "uber") {
+      m.kr = spectrumInput(ps, {"Kr"}, 0);
+      m.kt = spectrumInput(ps, {"Kt"}, 0);
+      m.opacity = spectrumInput(ps, {"opacity"}, 1);
+      dielectricEta({"eta", "index"});
+    } else if (type == "translucent") {
+      m.v3_reflect = spectrumInput(ps, {"reflect"}, 0.5);
+      m.transmittance = spectrumInput(ps, {"transmit"}, 0.5);
+    }
+  } else if (type == "conductor" || type == "metal") {
+    // pbrt-v3's metal keeps its name: its roughness is remapped as pbrt-v3 does.
+    m.type = type;
+    conductorDefaults();
+    if (type == "conductor")
+      if (auto r = spectrumInput(ps, {"reflectance"})) {
+        m.reflectance = *r;
+        m.has_reflectance = true;
+      }
+    roughness(type == "metal" ? 0.01 : 0);
+  } else if (type == "mirror") {
+    m.type = "mirror";  // pbrt-v3: a specular reflection of Kr at every angle
+    m.kr = spectrumInput(ps, {"Kr"}, 0.9);
+  } else if (type == "dielectric" || type == "glass" || type == "thindielectric") {
+    m.type = type;
+    dielectricEta({"eta", "index"});
+    if (type != "thindielectric") roughness(0);
+    if (type == "glass") {
+      m.kr = spectrumInput(ps, {"Kr"}, 1);
+      m.kt = spectrumInput(ps, {"Kt"}, 1);
+    }
+  } else if (type == "coatedconductor") {
+    m.type = type;
+    Input r = floatInput(ps, {"interface.roughness"}, 0);
+    m.uroughness = floatInput(ps, {"interface.uroughness"}).value_or(r);
+    m.vroughness = floatInput(ps, {"interface.vroughness"}).value_or(r);
+    Input cr = floatInput(ps, {"conductor.roughness"}, 0);
+    m.conductor_uroughness = floatInput(ps, {"conductor.uroughness"}).value_or(cr);
+    m.conductor_vroughness = floatInput(ps, {"conductor.vroughness"}).value_or(cr);
+    m.remap_roughness = ps.getBool({"remaproughness"}, true);
+    dielectricEta({"interface.eta"});
+    m.conductor_eta = spectrumInput(ps, {"conductor.eta"})
+                          .value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-eta")});
+    m.conductor_k = spectrumInput(ps, {"conductor.k"})
+                        .value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-k")});
+    if (auto rr = spectrumInput(ps, {"reflectance"})) {
+      m.conductor_reflectance = *rr;
+      m.conductor_has_reflectance = true;
+    }
+    m.thickness = floatInput(ps, {"thickness"}, 0.01);
+    m.albedo = spectrumInput(ps, {"albedo"}, 0);
+    m.g = floatInput(ps, {"g"}, 0);
+    m.max_depth = ps.getInt({"maxdepth"}, 10);
+    m.n_samples = ps.getInt({"nsamples"}, 1);
+  } else if (type == "diffusetransmission") {
+    m.type = "diffusetransmission";
+    m.reflectance = spectrumInput(ps, {"reflectance"}, 0.25);
+    m.transmittance = spectrumInput(ps, {"transmittance"}, 0.25);
+    m.scale = ps.getFloat({"scale"}, 1);
+    m.has_reflectance = true;
+  } else if (type == "mix") {
+    m.type = "mix";
+    std::vector<std::string> names;
+    if (const Param* p = ps.find({"materials"}, {ParamType::String}))
+      names = p->strings;
+    else
+      names = {ps.getString({"namedmaterial1"}, ""), ps.getString({"namedmaterial2"}, "")};
+    if (names.size() != 2)
+      throw Error(loc, fmt::format("mix: expected 2 materials, got {}", names.size()));
+    for (int i = 0; i < 2; ++i) {
+      auto it = named_materials_.find(names[size_t(i)]);
+      if (it == named_materials_.end())
+        throw Error(loc, fmt::format("mix: unknown material \"{}\"", names[size_t(i)]));
+      m.mix[size_t(i)] = it->second;
+    }
+    m.amount = floatInput(ps, {"amount"}, 0.5);
+  } else if (type == "interface" || type == "" || type == "none") {
+    m.type = "interface";
+  } else if (type == "measured") {
+    // pbrt-v2: measured BRDF data; the irregular isotropic `.brdf` format is rendered.
+    const Param* f = ps.find({"filename"}, {ParamType::String});
+    if (!f) throw Error(loc, "measured: missing \"string filename\"");
+    const std::string& name = f->strings[0];
+    if (name.size() < 5 || name.substr(name.size() - 5) != ".brdf")
+      ps.fail(*f,
+              "only pbrt-v2's irregular isotropic .brdf files are rendered (expected a "
+              "file name ending in .brdf)");
+    m.type = "measured";
+    m.measured_file = resolve(name, f->loc, "measured BRDF file");
+  } else {
+    ps.markAllUsed();
+    m.type = "diffuse";
+    m.reflectance.spectrum = SpectrumValue::gray(0.5);
+    m.has_reflectance = true;
+    m.fallback = true;
+    warnOnce("material " + type, loc,
+             fmt::format("material \"{}\" is not rendered by lensim; it renders as diffuse grey "
+                         "(reflectance 0.5)",
+                         type));
+  }
+  return m;
+}
+
+int Builder::currentMaterial() {
+  if (gs_.material >= 0) return gs_.material;
+  if (default_material_ < 0) {
+    Material m;
+    m.type = "diffuse";
+    m.type_as_written = "(default)";
+    m.reflectance.spectrum = SpectrumValue::gray(0.5);
+    m.has_reflectance = true;
+    scene_.materials.push_back(m);
+    default_material_ = static_cast<int>(scene_.materials.size()) - 1;
+  }
+  return default_material_;
+}
+
+}  // namespace lensim::scene::detail
