@@ -7,7 +7,7 @@ RUN apt-get update \
  && apt-get install -y --no-install-recommends \
       build-essential cmake ninja-build pkg-config \
       libembree-dev libtbb-dev libopenexr-dev libtiff-dev libpng-dev zlib1g-dev \
-      libfmt-dev libcli11-dev nlohmann-json3-dev \
+      libfmt-dev libcli11-dev nlohmann-json3-dev libnanovdb-dev \
  && rm -rf /var/lib/apt/lists/*
 WORKDIR /src
 COPY CMakeLists.txt ./

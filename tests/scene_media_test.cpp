@@ -190,17 +190,118 @@ WorldBegin
 
 TEST(SceneMedia, UnrenderedTypesAreWarnedAndLeftOut) {
   const scene::Scene s = buildText(R"(
-MakeNamedMedium "cloud" "string type" "nanovdb" "string filename" "x.nvdb"
+MakeNamedMedium "haze" "string type" "spectralfog" "float density" 2
 WorldBegin
-MediumInterface "cloud" ""
+MediumInterface "haze" ""
 Shape "sphere"
 )");
   ASSERT_EQ(errorsOf(s), "");
   EXPECT_EQ(s.shapes.at(0).inside_medium, -1);
   bool warned = false;
   for (const Diagnostic& d : s.diagnostics)
-    warned = warned || d.message.find("\"nanovdb\" is not rendered") != std::string::npos;
+    warned = warned || d.message.find("\"spectralfog\" is not rendered") != std::string::npos;
   EXPECT_TRUE(warned);
+}
+
+TEST(SceneMedia, CloudAndNanoVDBParameters) {
+  const testutil::TempDir dir("lensim-scene-vdb");
+  dir.write("smoke.nvdb", "x");  // only its existence matters to the builder
+  const scene::Scene s = scene::build(scene::parseFile(dir.write("s.pbrt", R"(
+MakeNamedMedium "c" "string type" "cloud" "float density" 2 "float wispiness" 0.5
+  "float frequency" 7 "point3 p0" [-1 0 -1] "point3 p1" [1 1 1] "rgb sigma_s" [3 2 1]
+  "float scale" 4 "float g" 0.7
+MakeNamedMedium "v" "string type" "nanovdb" "string filename" "smoke.nvdb"
+  "float LeScale" 5 "float temperaturecutoff" 300 "float temperaturescale" 2
+WorldBegin
+)")));
+  ASSERT_EQ(errorsOf(s), "");
+  ASSERT_EQ(s.media.size(), 2u);
+  const scene::Medium& c = s.media[0];
+  EXPECT_EQ(c.type, "cloud");
+  EXPECT_EQ(c.cloud_density, 2);
+  EXPECT_EQ(c.wispiness, 0.5);
+  EXPECT_EQ(c.frequency, 7);
+  EXPECT_EQ(c.p0.x, -1);
+  EXPECT_EQ(c.sigma_s.rgb.x, 3);
+  EXPECT_EQ(c.sigma_a.rgb.x, 1);  // pbrt-v4's default
+  EXPECT_EQ(c.scale, 4);
+  EXPECT_EQ(c.g, 0.7);
+  const scene::Medium& v = s.media[1];
+  EXPECT_EQ(v.type, "nanovdb");
+  EXPECT_EQ(v.filename, dir.file("smoke.nvdb"));
+  EXPECT_EQ(v.Le_scale, 5);
+  EXPECT_EQ(v.temperature_offset, 300);
+  EXPECT_EQ(v.temperature_scale, 2);
+  // Defaults as pbrt-v4's CloudMedium::Create.
+  const scene::Medium& d =
+      buildText("MakeNamedMedium \"c\" \"string type\" \"cloud\"\nWorldBegin\n").media.at(0);
+  EXPECT_EQ(d.cloud_density, 1);
+  EXPECT_EQ(d.wispiness, 1);
+  EXPECT_EQ(d.frequency, 5);
+  EXPECT_EQ(d.p1.y, 1);
+  // Located errors.
+  EXPECT_EQ(errorsOf(buildText(R"(MakeNamedMedium "v" "string type" "nanovdb"
+)")),
+            "test.pbrt:1:1: error: medium \"v\": nanovdb needs \"string filename\" (a .nvdb "
+            "file)\n");
+  EXPECT_NE(errorsOf(buildText(R"(MakeNamedMedium "v" "string type" "nanovdb" "string filename" "no.nvdb"
+)")).find("NanoVDB file \"no.nvdb\" not found"),
+            std::string::npos);
+  EXPECT_EQ(errorsOf(buildText(R"(MakeNamedMedium "c" "string type" "cloud" "float density" -1
+)")),
+            "test.pbrt:1:43: error: medium \"c\": density -1 must not be negative\n");
+}
+
+TEST(SceneMedia, SubsurfaceMaterialParameters) {
+  const scene::Scene s = buildText(R"(
+WorldBegin
+Material "subsurface" "string name" "Skin1" "float scale" 10 "float g" 0.4
+Shape "sphere"
+Material "subsurface" "rgb sigma_a" [0.1 0.2 0.3] "rgb sigma_s" [1 2 3] "float eta" 1.5
+  "float g" 0.3 "float roughness" 0.2
+Shape "sphere"
+Material "subsurface" "rgb reflectance" [0.8 0.5 0.2] "rgb mfp" [1 2 3]
+Shape "sphere"
+Material "subsurface"
+Shape "sphere"
+)");
+  ASSERT_EQ(errorsOf(s), "");
+  ASSERT_EQ(s.materials.size(), 4u);
+  const scene::Material& a = s.materials[0];
+  EXPECT_EQ(a.type, "subsurface");
+  EXPECT_EQ(a.ss_name, "Skin1");
+  scene::SpectrumValue sa, ss;
+  ASSERT_TRUE(scene::mediumPreset("Skin1", sa, ss));
+  EXPECT_EQ(a.ss_sigma_a.rgb, sa.rgb);
+  EXPECT_EQ(a.ss_sigma_s.rgb, ss.rgb);
+  EXPECT_EQ(a.ss_g, 0);  // forced to 0 with a named medium, with a warning
+  EXPECT_EQ(a.scale, 10);
+  EXPECT_EQ(a.eta.value, 1.33);  // pbrt-v4's default
+  bool warned = false;
+  for (const Diagnostic& d : s.diagnostics)
+    warned = warned || d.message.find("\"g\" is ignored") != std::string::npos;
+  EXPECT_TRUE(warned);
+  const scene::Material& b = s.materials[1];
+  EXPECT_EQ(b.ss_sigma_s.rgb.z, 3);
+  EXPECT_EQ(b.ss_g, 0.3);
+  EXPECT_EQ(b.eta.value, 1.5);
+  EXPECT_EQ(b.uroughness.value, 0.2);
+  const scene::Material& c = s.materials[2];
+  EXPECT_TRUE(c.ss_from_reflectance);
+  EXPECT_EQ(c.ss_reflectance.rgb.x, 0.8);
+  EXPECT_EQ(c.ss_mfp.rgb.z, 3);
+  const scene::Material& d = s.materials[3];  // whole milk, as pbrt-v4's default
+  EXPECT_EQ(d.ss_sigma_s.rgb.x, 2.55);
+  EXPECT_FALSE(d.fallback);
+  EXPECT_EQ(errorsOf(buildText(R"(WorldBegin
+Material "subsurface" "string name" "Skim milk"
+)")),
+            "test.pbrt:2:23: error: \"name\": unknown measured medium \"Skim milk\"; did you "
+            "mean \"Skimmilk\"?\n");
+  EXPECT_EQ(errorsOf(buildText(R"(WorldBegin
+Material "subsurface" "rgb sigma_a" [1 1 1]
+)")),
+            "test.pbrt:2:1: error: subsurface: \"sigma_a\" given without \"sigma_s\"\n");
 }
 
 TEST(SceneMedia, VolpathIsItsOwnIntegrator) {

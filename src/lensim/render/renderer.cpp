@@ -18,8 +18,8 @@
 #include "lensim/camera/camera.h"
 #include "lensim/render/integrators/bdpt.h"
 #include "lensim/render/integrators/integrator.h"
+#include "lensim/render/integrators/lighttracer.h"
 #include "lensim/render/integrators/volpath.h"
-#include "lensim/render/lighttracer.h"
 #include "lensim/render/media/media.h"
 #include "lensim/render/parts.h"
 #include "lensim/sampling/filter.h"
@@ -189,9 +189,12 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   sc.regularize = scene.integrator.regularize;
   sc.pbrt_v2_epsilon = opt.pbrt_v2_quirks;
   sc.camera_from_world = scene.camera.camera_from_world;
-  const bool volpath = scene.integrator.type == "volpath";
   const Media& media = world->media;
+  // Subsurface materials need volpath's tracking (render/media/subsurface.h): the path integrator
+  // renders them with it too, without the scene's media (which it ignores, with a warning).
+  const bool volpath = scene.integrator.type == "volpath" || media.hasSubsurface();
   if (volpath) sc.media = &media;
+  sc.scene_media = scene.integrator.type == "volpath";
   sc.camera_medium = scene.camera.medium;
   for (const scene::Material& m : scene.materials)
     sc.has_interfaces = sc.has_interfaces || m.type == "interface";
@@ -507,7 +510,8 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                       ++n_rays;
                       sampler->startPixelSample({x, y}, i0 + k, path_dimension);
                       L = volpath
-                              ? volpathLi(sc, ray->origin, ray->direction, sc.camera_medium, lambda,
+                              ? volpathLi(sc, ray->origin, ray->direction,
+                                          sc.scene_media ? sc.camera_medium : -1, lambda,
                                           *sampler, counts)
                               : pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts);
                       if (ray->per_wavelength && !lambda.secondaryTerminated()) {

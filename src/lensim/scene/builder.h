@@ -131,6 +131,13 @@ struct Material {
   // translucent, glass, metal, mirror; render/v3materials.h): Ks, Kr, Kt, opacity and
   // translucent's "reflect" (its "transmit" is `transmittance`; Kd is `reflectance`).
   Input specular, kr, kt, opacity, v3_reflect;
+  // subsurface (pbrt-v4's SubsurfaceMaterial; the boundary is a dielectric of `eta` and
+  // roughness): sigma_a and sigma_s (1/scene unit, times `scale`), from `name` (a measured
+  // medium, g 0) or given; or `reflectance` with the mean free path `mfp`. Constants only.
+  scene::SpectrumValue ss_sigma_a, ss_sigma_s, ss_reflectance, ss_mfp;
+  bool ss_from_reflectance = false;
+  std::string ss_name;
+  double ss_g = 0;
   /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
   bool fallback = false;
 };
@@ -279,6 +286,13 @@ struct Medium {
   std::vector<double> density;        ///< uniformgrid: scales sigma_a and sigma_s
   std::vector<double> Le_scale_grid;  ///< uniformgrid: per-voxel `Lescale`, or empty
   std::vector<Vec3> sigma_a_grid, sigma_s_grid, Le_grid;  ///< rgbgrid (empty: 1, 1, 0)
+  // cloud (pbrt-v4's CloudMedium): procedural density over [p0, p1] from these parameters.
+  double cloud_density = 1, wispiness = 1, frequency = 5;
+  // nanovdb (pbrt-v4's NanoVDBMedium): the resolved .nvdb file with a "density" grid and an
+  // optional "temperature" grid emitting blackbody light (Le_scale times the normalised
+  // blackbody at (T - temperature_offset) * temperature_scale kelvin, none at or below 100 K).
+  std::string filename;
+  double temperature_offset = 0, temperature_scale = 1;
 };
 
 /// The film (image) description.

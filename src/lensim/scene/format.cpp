@@ -207,6 +207,12 @@ std::string summary(const Scene& scene) {
         line(fmt::format("  \"{}\": {} (not rendered)", m.name, m.type_as_written));
         continue;
       }
+      if (m.type == "cloud" || m.type == "nanovdb") {
+        line(fmt::format("  \"{}\": {}{}{}, g {}", m.name, m.type,
+                         m.type == "nanovdb" ? fmt::format(", \"{}\"", m.filename) : "",
+                         m.scale != 1 ? fmt::format(", scale {}", m.scale) : "", m.g));
+        continue;
+      }
       if (m.type != "homogeneous") {
         line(fmt::format("  \"{}\": {}, {} × {} × {} voxels{}, g {}", m.name,
                          renamed(m.type_as_written, m.type), m.nx, m.ny, m.nz,

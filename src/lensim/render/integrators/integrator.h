@@ -41,6 +41,9 @@ struct SceneContext {
   const Media* media = nullptr;  ///< participating media (volpath); nullptr or empty: none
   int camera_medium = -1;        ///< the medium camera rays start in (Scene::media index)
   bool has_interfaces = false;   ///< some material is "interface" (volpath's shadow rays pass)
+  /// Scene media (MediumInterface, the camera's medium) are rendered; false when the path
+  /// integrator uses volpath's code for subsurface materials only.
+  bool scene_media = true;
 };
 
 /// Per-thread ray counts.

@@ -69,11 +69,23 @@ SampledSpectrum sampleTmaj(const Medium& medium, const Vec3& o, const Vec3& d, d
 
 /// The medium a ray enters when it leaves the surface hit `h` in direction w (pbrt-v4: shapes
 /// whose inside and outside media are the same are no boundary).
+/// A shape of subsurface material has that material's medium inside (render/media/subsurface.h).
+/// Without scene media (the path integrator) MediumInterface is ignored.
 int mediumAfter(const SceneContext& sc, const SurfaceHit& h, const Vec3& w, int current) {
   const scene::Shape& s = sc.scene->shapes[size_t(h.shape)];
-  if (s.inside_medium == s.outside_medium) return current;
-  return dot(w, h.ng) > 0 ? s.outside_medium : s.inside_medium;
+  int inside = sc.scene_media ? s.inside_medium : -1;
+  const int outside = sc.scene_media ? s.outside_medium : -1;
+  if (sc.media) {
+    const int ss = sc.media->subsurface(s.material);
+    if (ss >= 0) inside = ss;
+  }
+  if (inside == outside) return current;
+  return dot(w, h.ng) > 0 ? outside : inside;
 }
+
+/// The most scattering events and boundary hits of one random walk inside a subsurface shape
+/// (they do not count toward maxdepth, as the pbrt-v4 BSSRDF's inner bounces do not).
+constexpr int kMaxWalkSteps = 100000;
 
 bool isInterfaceHit(const SceneContext& sc, const SurfaceHit& h, const Vec3& wo) {
   const TextureEvalContext tctx{h.p, h.uv, h.ns};
@@ -186,8 +198,8 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
   double eta_scale = 1;
   Vec3 prev_p;
   Vec3 prev_n{0, 0, 0};  ///< the previous vertex's shading normal (zero in a medium), for the light sampler
-  int depth = 0, interfaces = 0;
-  const bool has_media = sc.media && !sc.media->empty();
+  int depth = 0, interfaces = 0, walk_steps = 0;
+  const bool has_media = sc.media && (!sc.media->empty() || sc.media->hasSubsurface());
   // Random numbers for the tracking steps (their count varies): a stream per path.
   Rng rng;
   if (has_media) {
@@ -197,10 +209,13 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
     std::memcpy(&ub, &b, sizeof ub);
     rng.setSequence(hashValues({ua, ub}), mixBits(ub ^ 0x9e3779b97f4a7c15ULL));
   }
-  if (!has_media) medium = -1;
+  if (!has_media || !sc.scene_media) medium = -1;
   Ray ray{o, d, INFINITY};
   for (;;) {
     auto hit = intersectScene(sc, ray, counts);
+    // Inside a subsurface shape (a random walk): its boundary is no light's window (it is not
+    // an interface), so no light is sampled from inside and scattering is not counted as depth.
+    const bool in_walk = has_media && sc.media->isSubsurface(medium);
     if (const Medium* m = has_media ? sc.media->get(medium) : nullptr) {
       bool scattered = false, terminated = false;
       const double len = length(ray.d);
@@ -235,7 +250,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
                          return false;
                        }
                        if (um < p_absorb + p_scatter) {
-                         if (depth++ >= sc.max_depth) {
+                         if (in_walk ? ++walk_steps > kMaxWalkSteps : depth++ >= sc.max_depth) {
                            terminated = true;
                            return false;
                          }
@@ -249,7 +264,8 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
                            v.wo = -dir;
                            v.medium = medium;
                            v.phase = &phase;
-                           L += sampleLd(sc, v, lambda, sampler, rng, beta, r_u, counts);
+                           if (!in_walk)
+                             L += sampleLd(sc, v, lambda, sampler, rng, beta, r_u, counts);
                            auto ps = phase.sample(-dir, sampler.get2D());
                            if (!ps || ps->pdf <= 0) {
                              terminated = true;
@@ -260,7 +276,8 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
                              prev_n = Vec3{0, 0, 0};
                              scattered = true;
                              ray = Ray{p, ps->wi, INFINITY};
-                             specular_bounce = false;
+                             // Without a light sample, emission found next counts in full.
+                             specular_bounce = in_walk;
                              any_non_specular = true;
                            }
                          }
@@ -320,7 +337,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
       ray.o = offsetOrigin(h.p, h.ng, ray.d);
       continue;
     }
-    if (depth++ >= sc.max_depth) break;
+    if (in_walk ? ++walk_steps > kMaxWalkSteps : depth++ >= sc.max_depth) break;
     auto bxdf = sc.materials->bxdf(material, tctx, lambda, sc.regularize && any_non_specular);
     Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
     if (sc.materials->hasBump(material))

@@ -99,7 +99,7 @@ class Light {
   /// Whether sampleLe is implemented (every light type lensim has).
   virtual bool supportsLe() const { return false; }
   /// The light's type, for messages.
-  virtual const char* typeName() const = 0;
+  virtual const char* typeName() const { return "unnamed"; }
   /// Emitted power (luminance-weighted), for choosing lights in proportion to it.
   virtual double power() const = 0;
   /// Where the light is and where it emits, for the BVH light sampler (pbrt-v4's

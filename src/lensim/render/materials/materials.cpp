@@ -221,7 +221,7 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
     const auto [eta, k] = conductorIndex(m.has_reflectance, m.reflectance, m.eta, m.k);
     return std::make_shared<ConductorBxDF>(distribution(), eta, k);
   }
-  if (m.type == "dielectric") {
+  if (m.type == "dielectric" || m.type == "subsurface") {  // subsurface: its boundary
     double eta = dielectricEta();
     if (eta == 0) eta = 1;
     return std::make_shared<DielectricBxDF>(eta, distribution());

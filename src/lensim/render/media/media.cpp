@@ -4,6 +4,8 @@
 #include <array>
 #include <map>
 
+#include "lensim/render/media/media_volumes.h"
+#include "lensim/render/media/subsurface.h"
 #include "lensim/render/textures/textures.h"
 #include "lensim/scene/builder.h"
 
@@ -135,9 +137,18 @@ MediumProperties GridMedium::at(const Vec3& p, const SampledWavelengths& lambda)
 void GridMedium::majorants(const Vec3& o, const Vec3& d, double tmax,
                            const SampledWavelengths& lambda, const SegmentFn& fn) const {
   // The ray in grid space ([0,1]^3 over the bounds); t is unchanged (affine map).
-  const Vec3 og = toGrid(o);
   const Vec3 q = medium_from_world_.applyVector(d);
-  const double dg[3] = {q.x / (p1_.x - p0_.x), q.y / (p1_.y - p0_.y), q.z / (p1_.z - p0_.z)};
+  const Vec3 dg{q.x / (p1_.x - p0_.x), q.y / (p1_.y - p0_.y), q.z / (p1_.z - p0_.z)};
+  const SampledSpectrum sigma_t =
+      rgb_ ? SampledSpectrum(scale_)
+           : (sigma_a_->sample(lambda) + sigma_s_->sample(lambda)) * scale_;
+  walkMajorantGrid(toGrid(o), dg, tmax, kRes, majorant_, sigma_t, fn);
+}
+
+void walkMajorantGrid(const Vec3& og, const Vec3& dgv, double tmax, int res,
+                      const std::vector<double>& cells, const SampledSpectrum& sigma_t,
+                      const Medium::SegmentFn& fn) {
+  const double dg[3] = {dgv.x, dgv.y, dgv.z};
   const double ov[3] = {og.x, og.y, og.z};
   // Clip to the unit box.
   double t0 = 0, t1 = tmax;
@@ -152,26 +163,23 @@ void GridMedium::majorants(const Vec3& o, const Vec3& d, double tmax,
     t1 = std::min(t1, tb);
   }
   if (!(t0 < t1)) return;
-  const SampledSpectrum sigma_t =
-      rgb_ ? SampledSpectrum(scale_)
-           : (sigma_a_->sample(lambda) + sigma_s_->sample(lambda)) * scale_;
-  // 3-D DDA through the majorant cells (Amanatides & Woo 1987).
+  // 3-D DDA through the majorant cells (Amanatides & Woo 1987; pbrt-v4's DDAMajorantIterator).
   int voxel[3], step[3], limit[3];
   double next[3], delta[3];
   for (int a = 0; a < 3; ++a) {
     const double pa = ov[a] + dg[a] * t0;
-    voxel[a] = std::clamp(int(pa * kRes), 0, kRes - 1);
+    voxel[a] = std::clamp(int(pa * res), 0, res - 1);
     if (dg[a] == 0) {
       delta[a] = next[a] = INFINITY;
-      step[a] = 1, limit[a] = kRes;
+      step[a] = 1, limit[a] = res;
       continue;
     }
-    delta[a] = 1 / (std::abs(dg[a]) * kRes);
+    delta[a] = 1 / (std::abs(dg[a]) * res);
     if (dg[a] > 0) {
-      next[a] = t0 + (double(voxel[a] + 1) / kRes - pa) / dg[a];
-      step[a] = 1, limit[a] = kRes;
+      next[a] = t0 + (double(voxel[a] + 1) / res - pa) / dg[a];
+      step[a] = 1, limit[a] = res;
     } else {
-      next[a] = t0 + (double(voxel[a]) / kRes - pa) / dg[a];
+      next[a] = t0 + (double(voxel[a]) / res - pa) / dg[a];
       step[a] = -1, limit[a] = -1;
     }
   }
@@ -179,7 +187,7 @@ void GridMedium::majorants(const Vec3& o, const Vec3& d, double tmax,
   while (t < t1) {
     const int a = next[0] < next[1] ? (next[0] < next[2] ? 0 : 2) : (next[1] < next[2] ? 1 : 2);
     const double t_exit = std::min(t1, next[a]);
-    const double maj = majorant_[(size_t(voxel[2]) * kRes + voxel[1]) * kRes + voxel[0]];
+    const double maj = cells[(size_t(voxel[2]) * res + voxel[1]) * res + voxel[0]];
     if (!fn(t, t_exit, sigma_t * maj)) return;
     t = t_exit;
     voxel[a] += step[a];
@@ -194,10 +202,22 @@ Media::Media(const scene::Scene& scene) {
       media_.push_back(std::make_unique<HomogeneousMedium>(m));
     else if (m.type == "uniformgrid" || m.type == "rgbgrid")
       media_.push_back(std::make_unique<GridMedium>(m));
+    else if (m.type == "cloud")
+      media_.push_back(std::make_unique<CloudMedium>(m));
+    else if (m.type == "nanovdb")
+      media_.push_back(std::make_unique<NanoVDBMedium>(m));
     else
       media_.push_back(nullptr);
     any_ = any_ || media_.back() != nullptr;
   }
+  n_scene_ = int(media_.size());
+  subsurface_.assign(scene.materials.size(), -1);
+  for (size_t i = 0; i < scene.materials.size(); ++i)
+    if (scene.materials[i].type == "subsurface") {
+      subsurface_[i] = int(media_.size());
+      media_.push_back(std::make_unique<SubsurfaceMedium>(scene.materials[i]));
+      has_subsurface_ = true;
+    }
 }
 
 Media::~Media() = default;

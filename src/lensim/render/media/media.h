@@ -143,18 +143,36 @@ class GridMedium final : public Medium {
   std::vector<double> majorant_;
 };
 
-/// The media of a scene, indexed as Scene::media (nullptr for types not rendered).
+/// Walks the ray og + t dg in grid space (the unit cube [0,1]^3 over a medium's bounds; t in
+/// [0, tmax)) through a res^3 grid of majorant cells (x fastest) by a 3-D DDA, calling
+/// fn(t0, t1, sigma_t * cell) for each cell the ray crosses, in order.
+void walkMajorantGrid(const Vec3& og, const Vec3& dg, double tmax, int res,
+                      const std::vector<double>& cells, const SampledSpectrum& sigma_t,
+                      const Medium::SegmentFn& fn);
+
+/// The media of a scene, indexed as Scene::media (nullptr for types not rendered), followed by
+/// one homogeneous medium per subsurface material (its inside, for the random walk).
 class Media {
  public:
   explicit Media(const scene::Scene& scene);
   ~Media();
   /// The medium of index i (Scene::media), or nullptr for -1 (vacuum) and media left out.
   const Medium* get(int i) const { return i < 0 ? nullptr : media_[size_t(i)].get(); }
+  /// No scene medium is rendered (subsurface interiors aside).
   bool empty() const { return !any_; }
+  /// The medium inside shapes of subsurface material `material` (an index for get()), or -1.
+  int subsurface(int material) const {
+    return material < 0 || subsurface_.empty() ? -1 : subsurface_[size_t(material)];
+  }
+  /// Whether medium index i is a subsurface material's inside.
+  bool isSubsurface(int i) const { return i >= n_scene_; }
+  bool hasSubsurface() const { return has_subsurface_; }
 
  private:
   std::vector<std::unique_ptr<Medium>> media_;
-  bool any_ = false;
+  std::vector<int> subsurface_;  ///< per material: its medium index, or -1
+  int n_scene_ = 0;
+  bool any_ = false, has_subsurface_ = false;
 };
 
 }  // namespace lensim::render

@@ -149,6 +149,8 @@ class Builder {
   void makeNamedMedium(const Directive& d);
 
   void gridMedium(Medium& m, ParamSet& ps, const FileLoc& loc);
+  void proceduralMedium(Medium& m, ParamSet& ps, const FileLoc& loc);  ///< cloud, nanovdb
+  void subsurfaceCoefficients(Material& m, ParamSet& ps, const FileLoc& loc);
 
   int mediumIndex(const std::string& name, const FileLoc& loc);
 

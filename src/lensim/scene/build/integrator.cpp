@@ -32,7 +32,7 @@ void Builder::integrator(const Directive& d) {
     if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
     if (type == "volpath") it.type = "volpath";
   } else if (type == "lighttracer") {
-    it.type = "lighttracer";  // pbrt-v4's LightPathIntegrator (render/lighttracer.h)
+    it.type = "lighttracer";  // pbrt-v4's LightPathIntegrator (render/integrators/lighttracer.h)
   } else if (type == "bdpt") {
     integratorBdpt(ps, it);
   } else if (type == "directlighting") {

@@ -133,6 +133,13 @@ Material Builder::material(const std::string& type, ParamSet& ps, const FileLoc&
       m.mix[size_t(i)] = it->second;
     }
     m.amount = floatInput(ps, {"amount"}, 0.5);
+  } else if (type == "subsurface") {
+    // Rendered by a volumetric random walk inside the shape (render/media/subsurface.h).
+    m.type = "subsurface";
+    subsurfaceCoefficients(m, ps, loc);
+    dielectricEta({"eta"});
+    if (!ps.peek({"eta"})) m.eta.value = 1.33;  // pbrt-v4's default for subsurface
+    roughness(0);
   } else if (type == "interface" || type == "" || type == "none") {
     m.type = "interface";
   } else if (type == "measured") {
@@ -172,6 +179,62 @@ int Builder::currentMaterial() {
     default_material_ = static_cast<int>(scene_.materials.size()) - 1;
   }
   return default_material_;
+}
+
+// pbrt-v4's SubsurfaceMaterial::Create (materials.cpp): the scattering coefficients from one of
+// `name` (measured, reduced sigma_s, g forced to 0), sigma_a with sigma_s, reflectance with
+// mfp, or the default (whole milk, Jensen et al. 2001), all times `scale`.
+void Builder::subsurfaceCoefficients(Material& m, ParamSet& ps, const FileLoc& loc) {
+  m.ss_g = ps.getFloat({"g"}, 0);
+  if (!(m.ss_g > -1 && m.ss_g < 1))
+    throw Error(ps.peek({"g"})->loc, fmt::format("subsurface: g {} outside (-1, 1)", m.ss_g));
+  auto constant = [&](const char* pname, SpectrumValue& out) {
+    const Param* p = ps.find(
+        {pname}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody, ParamType::Texture});
+    if (!p) return false;
+    if (p->type == ParamType::Texture)
+      ps.fail(*p,
+              "textured subsurface coefficients are not rendered (the random walk needs "
+              "one homogeneous medium per material); give an rgb or spectrum value");
+    out = spectrumOf(*p);
+    return true;
+  };
+  if (const Param* p = ps.find({"name"}, {ParamType::String})) {
+    m.ss_name = p->strings[0];
+    if (!mediumPreset(m.ss_name, m.ss_sigma_a, m.ss_sigma_s)) {
+      std::string best;
+      size_t best_d = 4;
+      for (const std::string& k : mediumPresetNames())
+        if (size_t dist = editDistance(m.ss_name, k); dist < best_d) best_d = dist, best = k;
+      ps.fail(*p, fmt::format("unknown measured medium \"{}\"{}", m.ss_name,
+                              best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best)));
+    }
+    if (m.ss_g != 0)
+      warn(ps.peek({"g"})->loc,
+           "subsurface: \"g\" is ignored with a named measured medium "
+           "(its sigma_s is the reduced scattering coefficient), as in "
+           "pbrt-v4");
+    m.ss_g = 0;
+  } else {
+    const bool a = constant("sigma_a", m.ss_sigma_a), s = constant("sigma_s", m.ss_sigma_s);
+    if (a != s)
+      throw Error(loc, a ? "subsurface: \"sigma_a\" given without \"sigma_s\""
+                         : "subsurface: \"sigma_s\" given without \"sigma_a\"");
+    if (!a) {
+      if (constant("reflectance", m.ss_reflectance)) {
+        m.ss_from_reflectance = true;
+        m.ss_mfp = SpectrumValue::gray(1);
+        constant("mfp", m.ss_mfp);
+      } else {
+        m.ss_sigma_a.rgb = {.0011, .0024, .014};
+        m.ss_sigma_s.rgb = {2.55, 3.21, 3.77};
+      }
+    }
+  }
+  m.scale = ps.getFloat({"scale"}, 1);
+  if (!(m.scale >= 0))
+    throw Error(ps.peek({"scale"})->loc,
+                fmt::format("subsurface: scale {} must not be negative", m.scale));
 }
 
 }  // namespace lensim::scene::detail

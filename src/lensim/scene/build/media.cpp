@@ -24,6 +24,14 @@ void Builder::makeNamedMedium(const Directive& d) {
     named_media_[name] = static_cast<int>(scene_.media.size()) - 1;
     return;
   }
+  if (*type == "cloud" || *type == "nanovdb") {
+    proceduralMedium(m, ps, d.loc);
+    finish(ps);
+    if (named_media_.count(name)) warn(d.loc, fmt::format("named medium \"{}\" redefined", name));
+    scene_.media.push_back(std::move(m));
+    named_media_[name] = static_cast<int>(scene_.media.size()) - 1;
+    return;
+  }
   if (*type != "homogeneous") {
     ps.markAllUsed();
     warnOnce("medium " + *type, d.loc,
@@ -159,6 +167,51 @@ void Builder::gridMedium(Medium& m, ParamSet& ps, const FileLoc& loc) {
                                    m.name));
     m.Le_scale = ps.getFloat({"Lescale"}, 1);
   }
+}
+
+// pbrt-v4's "cloud" (CloudMedium) and "nanovdb" (NanoVDBMedium): constant sigma_a, sigma_s
+// (default 1) times `scale` times a density from noise or from the file (media.cpp, Create).
+void Builder::proceduralMedium(Medium& m, ParamSet& ps, const FileLoc& loc) {
+  m.type = m.type_as_written;
+  auto spectrum = [&](const char* pname, SpectrumValue& out) {
+    if (const Param* p =
+            ps.find({pname}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody}))
+      out = spectrumOf(*p);
+  };
+  spectrum("sigma_a", m.sigma_a);
+  spectrum("sigma_s", m.sigma_s);
+  m.scale = ps.getFloat({"scale"}, 1);
+  m.g = ps.getFloat({"g"}, 0);
+  auto check = [&](const char* pname, double v, bool ok, const char* expected) {
+    if (ok) return;
+    const Param* p = ps.peek({pname});
+    throw Error(p ? p->loc : loc,
+                fmt::format("medium \"{}\": {} {} {}", m.name, pname, v, expected));
+  };
+  check("g", m.g, m.g > -1 && m.g < 1, "outside (-1, 1)");
+  check("scale", m.scale, m.scale >= 0, "must not be negative");
+  if (m.type == "cloud") {
+    m.cloud_density = ps.getFloat({"density"}, 1);
+    m.wispiness = ps.getFloat({"wispiness"}, 1);
+    m.frequency = ps.getFloat({"frequency"}, 5);
+    check("density", m.cloud_density, m.cloud_density >= 0, "must not be negative");
+    if (auto p = ps.findPoint3({"p0"})) m.p0 = *p;
+    if (auto p = ps.findPoint3({"p1"})) m.p1 = *p;
+    if (!(m.p0.x < m.p1.x && m.p0.y < m.p1.y && m.p0.z < m.p1.z))
+      throw Error(ps.peek({"p1"}) ? ps.peek({"p1"})->loc : loc,
+                  fmt::format("medium \"{}\": empty bounds p0 ({}, {}, {}) to p1 ({}, {}, {})",
+                              m.name, m.p0.x, m.p0.y, m.p0.z, m.p1.x, m.p1.y, m.p1.z));
+    return;
+  }
+  const Param* f = ps.find({"filename"}, {ParamType::String});
+  if (!f || f->strings[0].empty())
+    throw Error(loc, fmt::format("medium \"{}\": nanovdb needs \"string filename\" (a .nvdb "
+                                 "file)",
+                                 m.name));
+  m.filename = resolve(f->strings[0], f->loc, "NanoVDB file");
+  m.Le_scale = ps.getFloat({"Lescale", "LeScale"}, 1);
+  m.temperature_offset = ps.getFloat({"temperatureoffset"}, ps.getFloat({"temperaturecutoff"}, 0));
+  m.temperature_scale = ps.getFloat({"temperaturescale"}, 1);
 }
 
 int Builder::mediumIndex(const std::string& name, const FileLoc& loc) {

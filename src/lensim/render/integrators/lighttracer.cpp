@@ -6,7 +6,7 @@
 // a path ends after maxdepth surface vertices, which gives it the path tracer's path lengths.
 // Where pbrt-v4 divides the light's point by its solid-angle density from the lens, lensim
 // uses the area density it sampled the point with (the two agree for area-sampled lights).
-#include "lensim/render/lighttracer.h"
+#include "lensim/render/integrators/lighttracer.h"
 
 #include <fmt/format.h>
 
