@@ -198,5 +198,44 @@ TEST(Parity, V2RendererIsIgnoredWithAWarning) {
   EXPECT_TRUE(s.legacy_syntax);
 }
 
+// pbrt-v4 records NamedMaterial as a name and looks named materials up only when it creates the
+// scene (BasicScene::CreateMaterials, then each shape's lookup, src/pbrt/scene.cpp), so a shape
+// may use a material that a later MakeNamedMaterial defines (contemporary-bathroom in
+// pbrt-v4-scenes does: its lights use materials that the Include after them defines).
+TEST(Parity, NamedMaterialMayPrecedeItsDefinition) {
+  testutil::TempDir dir("lensim-parity-named");
+  std::string main = dir.write("main.pbrt",
+                               "WorldBegin\n"
+                               "NamedMaterial \"gold\"\n"
+                               "Shape \"sphere\"\n"
+                               "MakeNamedMaterial \"gold\" \"string type\" \"conductor\"\n"
+                               "Material \"dielectric\"\n"
+                               "Shape \"disk\"\n"
+                               "NamedMaterial \"gold\"\n"
+                               "Shape \"cylinder\"\n");
+  Scene s = build(parseFile(main));
+  EXPECT_EQ(countSeverity(s, Severity::Error), 0u) << allDiagnostics(s);
+  ASSERT_EQ(s.shapes.size(), 3u);
+  EXPECT_EQ(s.materials.at(static_cast<size_t>(s.shapes[0].material)).type, "conductor");
+  EXPECT_EQ(s.shapes[0].material, s.shapes[2].material);
+  EXPECT_EQ(s.materials.at(static_cast<size_t>(s.shapes[1].material)).type, "dielectric");
+}
+
+// A name that no MakeNamedMaterial defines is an error where pbrt-v4 has one: at a shape that
+// uses it ("no named material defined"); lensim places it at the NamedMaterial, once.
+TEST(Parity, NamedMaterialNeverDefinedIsAnErrorAtTheNamedMaterial) {
+  testutil::TempDir dir("lensim-parity-named-bad");
+  std::string main = dir.write(
+      "main.pbrt", "WorldBegin\nNamedMaterial \"gold\"\nShape \"sphere\"\nShape \"disk\"\n");
+  Scene s = build(parseFile(main));
+  ASSERT_EQ(countSeverity(s, Severity::Error), 1u) << allDiagnostics(s);
+  for (const Diagnostic& d : s.diagnostics) {
+    if (d.severity != Severity::Error) continue;
+    EXPECT_EQ(d.loc.line, 2);
+    EXPECT_EQ(d.loc.column, 1);
+    EXPECT_NE(d.message.find("unknown material \"gold\""), std::string::npos) << d.message;
+  }
+}
+
 }  // namespace
 }  // namespace lensim::scene

@@ -183,6 +183,7 @@ Scene Builder::run() {
     }
     scene_.instances.push_back({it->second, transform, loc});
   }
+  resolveNamedMaterials();
   resolveMedia();
   // pbrt-v1/v2 looked image textures up with t = 0 at the image's first (top) row; pbrt-v3
   // and v4 flip it. Files with syntax only v1/v2 have (a `specfile` realistic camera, a
@@ -478,6 +479,7 @@ void Builder::directive(const Directive& d) {
     finish(ps);
     scene_.materials.push_back(std::move(m));
     g.material = static_cast<int>(scene_.materials.size()) - 1;
+    g.material_name.clear();
   } else if (n == "MakeNamedMaterial") {
     ParamSet ps(d.params, d.loc, fmt::format("MakeNamedMaterial \"{}\"", d.strings[0]));
     ps.addDefaults(g.material_attrs);
@@ -494,9 +496,9 @@ void Builder::directive(const Directive& d) {
     named_materials_[d.strings[0]] = static_cast<int>(scene_.materials.size()) - 1;
   } else if (n == "NamedMaterial") {
     auto it = named_materials_.find(d.strings[0]);
-    if (it == named_materials_.end())
-      throw Error(d.loc, fmt::format("NamedMaterial: unknown material \"{}\"", d.strings[0]));
-    g.material = it->second;
+    g.material = it == named_materials_.end() ? -1 : it->second;
+    g.material_name = it == named_materials_.end() ? d.strings[0] : std::string();
+    g.material_name_loc = d.loc;
   } else if (n == "Texture") {
     texture(d);
   } else if (n == "LightSource") {

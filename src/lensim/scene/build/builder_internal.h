@@ -35,6 +35,9 @@ struct GraphicsState {
   bool active[2] = {true, true};
   bool reverse_orientation = false;
   int material = -1;
+  // NamedMaterial of a name not (yet) defined: resolved when the scene is complete.
+  std::string material_name;
+  FileLoc material_name_loc;
   int area_light = -1;
   ParamList shape_attrs, light_attrs, material_attrs, texture_attrs, medium_attrs;
   // MediumInterface: medium names ("" is vacuum) and where they were given.
@@ -155,6 +158,16 @@ class Builder {
   int mediumIndex(const std::string& name, const FileLoc& loc);
 
   void resolveMedia();
+  // Shapes whose NamedMaterial named a material not defined before them: pbrt-v4 looks named
+  // materials up only when it creates the scene (BasicScene::CreateMaterials and the shape
+  // lookups after it, src/pbrt/scene.cpp), so a MakeNamedMaterial may follow its use.
+  struct PendingMaterial {
+    int shape;
+    std::string name;
+    FileLoc loc;
+  };
+  std::vector<PendingMaterial> pending_materials_;
+  void resolveNamedMaterials();
 };
 
 }  // namespace lensim::scene::detail

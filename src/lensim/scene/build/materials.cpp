@@ -181,6 +181,21 @@ int Builder::currentMaterial() {
   return default_material_;
 }
 
+void Builder::resolveNamedMaterials() {
+  std::set<std::pair<std::string, std::string>> reported;  // each bad name once per place
+  for (const PendingMaterial& pm : pending_materials_) {
+    auto it = named_materials_.find(pm.name);
+    if (it != named_materials_.end()) {
+      scene_.shapes[static_cast<size_t>(pm.shape)].material = it->second;
+    } else if (reported.insert({pm.loc.str(), pm.name}).second) {
+      scene_.diagnostics.push_back(
+          {Severity::Error, pm.loc,
+           fmt::format("NamedMaterial: unknown material \"{}\" (no MakeNamedMaterial defines it)",
+                       pm.name)});
+    }
+  }
+}
+
 // pbrt-v4's SubsurfaceMaterial::Create (materials.cpp): the scattering coefficients from one of
 // `name` (measured, reduced sigma_s, g forced to 0), sigma_a with sigma_s, reflectance with
 // mfp, or the default (whole milk, Jensen et al. 2001), all times `scale`.

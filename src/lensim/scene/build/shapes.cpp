@@ -182,6 +182,9 @@ void Builder::shape(const Directive& d) {
   }
   finish(ps);
   s.material = currentMaterial();
+  if (!gs_.material_name.empty())
+    pending_materials_.push_back(
+        {static_cast<int>(scene_.shapes.size()), gs_.material_name, gs_.material_name_loc});
   if (gs_.area_light >= 0) {
     if (s.type == ShapeType::Curve) {
       warnOnce("curve area light", d.loc,
