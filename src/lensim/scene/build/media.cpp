@@ -250,8 +250,8 @@ void Builder::resolveMedia() {
   if (used && scene_.integrator.type == "bdpt") {
     // lensim's bdpt does not trace media (pbrt-v4's does): volpath renders them.
     warn(scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc,
-         "the scene has participating media, which lensim's \"bdpt\" does not handle; it "
-         "renders as \"volpath\"");
+         "the scene has participating media but integrator \"bdpt\" does not trace them in "
+         "lensim (pbrt-v4's does); it renders as \"volpath\"");
     scene_.integrator.type = "volpath";
   }
   if (used && scene_.integrator.type == "path")
