@@ -238,9 +238,9 @@ TEST(ExitPupilSampler, AsphericAndAnamorphicLensesMeetTheBudgets) {
     long max_traces;
   };
   const Budget budgets[] = {
-      {std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/ACL3026U-Zemax(ZMX).zmx", 130000},
-      {"lentil:0014", 130000},
-      {"lentil:2003", 330000},
+      {std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/ACL3026U-Zemax(ZMX).zmx", 60000},
+      {"lentil:0014", 45000},
+      {"lentil:2003", 170000},
   };
   for (const Budget& b : budgets) {
     SCOPED_TRACE(b.lens);
@@ -264,5 +264,72 @@ TEST(ExitPupilSampler, AsphericAndAnamorphicLensesMeetTheBudgets) {
     EXPECT_LE(double(wasted) / samples, 0.05) << wasted << " of " << samples;
     std::printf("%s: %ld traces, %.3f s; %.2f%% of %d samples wasted\n", b.lens.c_str(),
                 sampler.tracesAtBuild(), sampler.buildSeconds(), 100.0 * wasted / samples, samples);
+  }
+}
+
+// A dispersive lens's bounds per wavelength band (as the realistic camera builds them: six bands
+// of equal steps in 1/lambda^2 over 360-830 nm, each holding its two ends' regions): every ray
+// that gets through at a wavelength starts toward a point of its band's bound (checked at
+// wavelengths spread over every band, not only its ends), and few of a band's samples are
+// blocked at the band's wavelengths. SF66 (V_d 21) and the asphere move their regions most.
+TEST(ExitPupilSampler, WavelengthBandBoundsHoldEveryWavelengthsRays) {
+  const std::string lenses[] = {
+      lensPath("landscape.sf66.dat"),
+      std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/ACL3026U-Zemax(ZMX).zmx", "lentil:0005"};
+  for (const std::string& file : lenses) {
+    SCOPED_TRACE(file);
+    FocusedLens fl = focusLens(readLensFile(file), {});
+    ASSERT_TRUE(fl.lens->dispersive());
+    constexpr int kBands = 6;
+    const double a = 1 / (360.0 * 360.0), b = 1 / (830.0 * 830.0);
+    std::vector<double> edges;
+    for (int k = 0; k <= kBands; ++k) edges.push_back(1 / std::sqrt(a + (b - a) * k / kBands));
+    std::vector<LensSystem> edge_lenses;
+    for (double l : edges) edge_lenses.push_back(fl.lens->atWavelength(l));
+    ExitPupilOptions o;
+    for (int k = 0; k < kBands; ++k) o.bands.push_back({&edge_lenses[k], &edge_lenses[k + 1]});
+    ExitPupilSampler sampler(*fl.lens, fl.paraxial, kFilmDiagonal / 2, o);
+    ASSERT_EQ(sampler.bands(), kBands);
+    // Four wavelengths inside each band (not its ends).
+    std::vector<LensSystem> at;
+    std::vector<int> band_of;
+    for (int k = 0; k < kBands; ++k)
+      for (double t : {0.2, 0.4, 0.6, 0.8}) {
+        at.push_back(fl.lens->atWavelength(edges[k] + t * (edges[k + 1] - edges[k])));
+        band_of.push_back(k);
+      }
+    std::mt19937_64 rng(29);
+    std::uniform_real_distribution<double> u(0, 1);
+    const double rr = 1.5 * fl.lens->interfaces().back().semi_aperture_mm;
+    int passing = 0, outside = 0;
+    for (int k = 0; k < 120000; ++k) {
+      const Vec2 film = uniformFilm(rng);
+      const Vec2 q{(2 * u(rng) - 1) * rr, (2 * u(rng) - 1) * rr};
+      const size_t w = size_t(k) % at.size();
+      if (!at[w].traceFromFilmPoint(film, q).ok()) continue;
+      ++passing;
+      outside += !sampler.contains(film, q, band_of[w]);
+    }
+    EXPECT_GT(passing, 1000);
+    // The condenser asphere's region has corners near the rear rim (|q| ~ 14 mm of 15) that the
+    // polygons do not follow exactly: a few in 10^4 of its passing rays fall outside, at the
+    // primary wavelength too (3 in 34346 with the lens's own bound, the same rays as before the
+    // wavelength bands and the secant boundary search). The others lose none.
+    const bool asphere = file.find("ACL3026U") != std::string::npos;
+    EXPECT_LE(outside, asphere ? passing / 1000 : 0)
+        << outside << " of " << passing << " passing rays outside the bounds";
+    int samples = 0, wasted = 0;
+    for (int k = 0; k < 40000; ++k) {
+      const Vec2 film = uniformFilm(rng);
+      const size_t w = size_t(k) % at.size();
+      auto s = sampler.sample(film, {u(rng), u(rng)}, band_of[w]);
+      if (!s) continue;
+      ++samples;
+      wasted += !at[w].traceFromFilmPoint(film, {s->rear_point_mm.x, s->rear_point_mm.y}).ok();
+    }
+    std::printf("%s: %ld traces, %.3f s; %d passing rays; %.2f%% of %d samples wasted\n",
+                file.c_str(), sampler.tracesAtBuild(), sampler.buildSeconds(), passing,
+                100.0 * wasted / samples, samples);
+    EXPECT_LE(double(wasted) / samples, 0.05);
   }
 }

@@ -120,6 +120,9 @@ class Camera {
   virtual bool reachesFilm(Vec2 /*film_raster*/) const { return true; }
   /// Seconds spent building the camera (lens set-up, pupil bounds), for render statistics.
   virtual double startupSeconds() const { return 0; }
+  /// Processor seconds of that (all threads): on a loaded machine the wall time above mostly
+  /// measures the wait for a core.
+  virtual double startupCpuSeconds() const { return 0; }
   /// One line for logs: the type and its main settings.
   virtual std::string describe() const = 0;
 

@@ -2,9 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/filter.h"
@@ -14,8 +16,20 @@
 
 namespace lensim::camera {
 
+namespace {
+
+// Processor time of the whole process (every thread), seconds.
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+}  // namespace
+
 RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::move(settings)) {
   const auto t0 = std::chrono::steady_clock::now();
+  const double cpu0 = processCpuSeconds();
   if (!(settings_.film_diagonal_mm > 0))
     throw Error(fmt::format("film diagonal {} mm must be > 0", settings_.film_diagonal_mm));
   optics::LensPrescription prescription = optics::readLensFile(settings_.lens_path);
@@ -66,31 +80,31 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
     pupil_options.rear_disc_radius_mm = lens_.lens->interfaces().back().semi_aperture_mm;
     pupil_options.radial_bins = 48;
   }
-  // The bounds are traced at the primary wavelength; other wavelengths move the region's edge a
-  // little (the lens's power changes by about 1/V_d between F and C), so rays of 360-830 nm must
-  // not be lost (checked through the film irradiance at 450 and 620 nm in
-  // tests/render_dispersion_test.cpp).
-  // A dispersive lens of spherical surfaces: instead of a blanket 5% margin (which wasted ~9%
-  // of the samples), the bound holds the regions at both ends of the spectrum too (the lens at
-  // 360 and 830 nm) with the usual 1% margin: 3-5% wasted, ~1.3x the traces. For aspheric and
-  // anamorphic lenses, whose traces are slower and whose regions change faster, that costs 2-2.4x
-  // the start-up (ACL3026U 0.65 -> 1.44 s, lentil:2004 10.6 -> 15.3 s on a loaded 2-core
-  // machine), so they keep the 5% margin (bench/lens-table).
-  std::vector<optics::LensSystem> spectrum_ends;
-  spectrum_ends.reserve(2);
-  bool spherical = true;
-  for (const optics::Interface& in : lens_.lens->interfaces())
-    spherical = spherical && in.shape.isSpherical();
-  if (dispersive_ && !spherical) pupil_options.margin = 0.05;
-  if (dispersive_ && spherical) {
-    spectrum_ends.push_back(lens_.lens->atWavelength(kIndexFrom_nm));
-    spectrum_ends.push_back(lens_.lens->atWavelength(kIndexTo_nm));
-    for (const optics::LensSystem& l : spectrum_ends) pupil_options.also_cover.push_back(&l);
-  }
   for (const optics::Interface& in : lens_.lens->interfaces())
     if (!in.shape.isRotational()) pupil_options.rotational = false;  // anamorphic: 2-D bound
-  pupil_.emplace(*lens_.lens, lens_.paraxial, std::hypot(half_width_mm_, half_height_mm_),
-                 pupil_options);
+  const double film_radius = std::hypot(half_width_mm_, half_height_mm_);
+  // Other wavelengths move the region's edge (the lens's power changes by about 1/V_d between F
+  // and C, and much more toward 360 nm), so rays of 360-830 nm must not be lost (checked
+  // through the film irradiance at 450 and 620 nm in tests/render_dispersion_test.cpp, and ray
+  // by ray in tests/optics_pupil_test.cpp). One bound holding the regions of both ends of the
+  // spectrum wasted up to 20% of a strongly dispersive lens's samples (landscape.sf66 20.7%,
+  // ACL3026U 10%, as did a 5% margin); a dispersive lens gets a bound per wavelength band
+  // instead, each holding the regions at its band's two ends (ExitPupilOptions::bands: they
+  // share the lens's own bound's structure and cost a few traces per polygon vertex and lens),
+  // and a sample uses its hero wavelength's band (4.6% and 5.0% wasted). Bands are equal steps
+  // of 1/lambda^2 (index changes about evenly across them).
+  std::vector<optics::LensSystem> band_lenses;
+  if (dispersive_) {
+    const double a = 1 / (kIndexFrom_nm * kIndexFrom_nm), b = 1 / (kIndexTo_nm * kIndexTo_nm);
+    for (int k = 0; k <= kWavelengthBands; ++k)
+      band_edges_nm_.push_back(1 / std::sqrt(a + (b - a) * k / kWavelengthBands));
+    band_lenses.reserve(size_t(kWavelengthBands + 1));
+    for (int k = 0; k <= kWavelengthBands; ++k)
+      band_lenses.push_back(lens_.lens->atWavelength(band_edges_nm_[size_t(k)]));
+    for (int k = 0; k < kWavelengthBands; ++k)
+      pupil_options.bands.push_back({&band_lenses[size_t(k)], &band_lenses[size_t(k) + 1]});
+  }
+  pupil_.emplace(*lens_.lens, lens_.paraxial, film_radius, pupil_options);
   centre_area_mm2_ = pupil_->area_mm2({0, 0});
   camera_from_world_ = inverse(settings_.world_from_camera);
   {
@@ -111,6 +125,14 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   if (settings_.simple_weighting && !(centre_area_mm2_ > 0))
     throw Error("simpleweighting: no light reaches the centre of the film to normalise by");
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  startup_cpu_seconds_ = processCpuSeconds() - cpu0;
+}
+
+int RealisticCamera::bandAt(double lambda_nm) const {
+  if (band_edges_nm_.size() < 2 || !(lambda_nm > 0)) return -1;
+  const auto it =
+      std::upper_bound(band_edges_nm_.begin() + 1, band_edges_nm_.end() - 1, lambda_nm);
+  return static_cast<int>(it - (band_edges_nm_.begin() + 1));
 }
 
 Vec2 RealisticCamera::filmPoint(Vec2 raster) const {
@@ -304,8 +326,10 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
       const double rr = lens.interfaces().back().semi_aperture_mm;
       if (q.x * q.x + q.y * q.y > rr * rr) continue;
     }
-    const double area = pupil_->area_mm2(xf);
-    if (area > 0 && pupil_->contains(xf, {q.x, q.y}))
+    // Wavelength j's own strategy: its band's bound.
+    const int band = bandAt(l);
+    const double area = pupil_->area_mm2(xf, band);
+    if (area > 0 && pupil_->contains(xf, {q.x, q.y}, band))
       p[size_t(j)] = filter.pdf(offset) / area * z * z / (c2 * c2);
   }
   double mean_p = 0;
@@ -319,7 +343,8 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
 
 std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample) const {
   const Vec2 film = filmPoint(sample.film_raster);
-  const std::optional<FilmRay> f = filmRay(sample, film, pupil_->sample(film, sample.lens));
+  const std::optional<FilmRay> f = filmRay(
+      sample, film, pupil_->sample(film, sample.lens, bandAt(sample.lambda_nm[0])));
   if (!f) return std::nullopt;
   if (dispersive_) return dispersiveRay(sample, *f);
   const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f->ray);
@@ -343,7 +368,23 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
     film[i] = filmPoint(samples[i].film_raster);
     u[i] = samples[i].lens;
   }
-  pupil_->sampleBatch(film, u, n, ps);
+  if (pupil_->bands() == 0) {
+    pupil_->sampleBatch(film, u, n, ps);
+  } else {  // each sample its hero wavelength's band: the samples of a band together
+    int band[kB];
+    bool done[kB] = {};
+    for (int i = 0; i < n; ++i) band[i] = bandAt(samples[i].lambda_nm[0]);
+    for (int i = 0; i < n; ++i) {
+      if (done[i]) continue;
+      Vec2 f[kB], v[kB];
+      int idx[kB], m = 0;
+      for (int j = i; j < n; ++j)
+        if (!done[j] && band[j] == band[i]) f[m] = film[j], v[m] = u[j], idx[m++] = j, done[j] = true;
+      std::optional<optics::PupilSample> got[kB];
+      pupil_->sampleBatch(f, v, m, got, band[i]);
+      for (int k = 0; k < m; ++k) ps[idx[k]] = got[k];
+    }
+  }
   int m = 0;
   for (int i = 0; i < n; ++i) {
     rays[i].reset();
@@ -364,7 +405,10 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
 }
 
 bool RealisticCamera::reachesFilm(Vec2 film_raster) const {
-  return pupil_->area_mm2(filmPoint(film_raster)) > 0;
+  const Vec2 film = filmPoint(film_raster);
+  for (int band = -1; band < pupil_->bands(); ++band)
+    if (pupil_->area_mm2(film, band) > 0) return true;
+  return false;
 }
 
 std::string RealisticCamera::describe() const {
@@ -380,9 +424,12 @@ std::string RealisticCamera::describe() const {
       dispersive_ ? fmt::format(", dispersive (focused at {:.2f} nm; hero wavelength only)",
                                 lens.wavelength_nm())
                   : std::string()) +
-         fmt::format("; exit-pupil bound: {} traces, {:.3f} s, {} radial intervals{}",
+         fmt::format("; exit-pupil bound: {} traces, {:.3f} s, {} radial intervals{}{}",
                      pupil_->tracesAtBuild(), pupil_->buildSeconds(), pupil_->intervals(),
-                     pupil_->rotationallySymmetric() ? "" : ", 2-D (anamorphic)");
+                     pupil_->rotationallySymmetric() ? "" : ", 2-D (anamorphic)",
+                     pupil_->bands() > 0
+                         ? fmt::format(", {} wavelength bands", pupil_->bands())
+                         : std::string());
 }
 
 std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,

@@ -90,6 +90,7 @@ class RealisticCamera final : public Camera {
   void generateRays(const CameraSample* samples, int n,
                     std::optional<CameraRay>* rays) const override;
   double startupSeconds() const override { return startup_seconds_; }
+  double startupCpuSeconds() const override { return startup_cpu_seconds_; }
   bool reachesFilm(Vec2 film_raster) const override;
   std::string describe() const override;
 
@@ -129,12 +130,19 @@ class RealisticCamera final : public Camera {
 
   RealisticSettings settings_;
   optics::FocusedLens lens_;
+  /// The exit-pupil bounds; for a dispersive lens one per wavelength band too (band k holds the
+  /// regions of [band_edges_nm_[k], band_edges_nm_[k + 1]]).
   std::optional<optics::ExitPupilSampler> pupil_;
+  static constexpr int kWavelengthBands = 6;
+  std::vector<double> band_edges_nm_;
+  /// The band of the wavelength; -1 (the lens's own bound) for a lens without bands or no
+  /// wavelength.
+  int bandAt(double lambda_nm) const;
   double half_width_mm_ = 0, half_height_mm_ = 0;
   double stop_radius_mm_ = 0;
   double centre_area_mm2_ = 0;  // sampled region at the film centre (simple weighting)  // the set
                                 // stop radius: the aperture shape's unit
-  double startup_seconds_ = 0;
+  double startup_seconds_ = 0, startup_cpu_seconds_ = 0;
   /// Dispersion (see realistic.cpp, "Dispersive lenses"): whether the lens disperses, and an id
   /// that keys each thread's re-indexed copy of the tracer to this camera.
   bool dispersive_ = false;

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <tbb/parallel_for.h>
@@ -14,6 +15,8 @@
 namespace lensim::optics {
 
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 Vec2 unit(double phi) {
   return {std::cos(phi), std::sin(phi)};
@@ -58,62 +61,150 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // Each wedge's bound is built on its own (its own azimuths and trace count), so that the
   // wedges of an anamorphic lens are built side by side (TBB); a rotational lens has one.
   std::atomic<long> traces_total{0};
-  auto buildSector = [&](int sec) -> Sector {
+  auto buildSector = [&](int sec) -> std::vector<Sector> {
   long traces = 0;
   std::vector<double> az, az_main, az_check;
-  auto passes1 = [&](Vec2 film, Vec2 a) {
-    if (disc2 > 0 && a.x * a.x + a.y * a.y > disc2) return false;
+  // The margin of a rear-plane point: the ray from the film point toward it, traced without
+  // clipping, and the largest ratio of a hit's distance from the axis to that surface's clear
+  // semi-aperture (and of the point's to the rear disc's radius); infinite where the ray misses
+  // a surface or is totally reflected. The ray gets through (the clipped trace) exactly where
+  // the margin is <= 1, and the margin varies continuously across the rear plane, so that a
+  // boundary is found by the secant method (a few traces) rather than by bisection (~9), and a
+  // sliver of region by minimising it rather than by a blind grid.
+  std::vector<Vec3> path;
+  auto margin1 = [&](const LensSystem& L, Vec2 film, Vec2 a) {
+    double m2 = disc2 > 0 ? (a.x * a.x + a.y * a.y) / disc2 : 0.0;
+    if (m2 > 1) return std::sqrt(m2);  // outside the rear disc: no trace needed
     ++traces;
-    if (lens.traceFromFilmPoint(film, a).ok()) return true;
-    for (const LensSystem* other : opts.also_cover) {
-      ++traces;
-      if (other->traceFromFilmPoint(film, a).ok()) return true;
+    path.clear();
+    const TraceResult r = L.traceFromFilmPoint(film, a, TraceOptions{.clip_apertures = false},
+                                               &path);
+    if (r.reason == BlockReason::Miss) return kInf;
+    const std::vector<Interface>& ifs = L.interfaces();
+    const int n = static_cast<int>(ifs.size());
+    // path[0] is the film point, path[k] the hit on surface n - k. Where the ray goes into a
+    // rarer medium, sin^2 of its refracted angle counts too (>= 1: total internal reflection),
+    // so that a boundary set by total internal reflection is no jump either.
+    for (size_t k = 1; k < path.size() && int(k) <= n; ++k) {
+      const Interface& in = ifs[size_t(n - int(k))];
+      const Vec3 q = path[k];
+      const double semi = in.semi_aperture_mm;
+      const double r2 = q.x * q.x + q.y * q.y;
+      m2 = std::max(m2, semi > 0 ? r2 / (semi * semi) : (r2 > 0 ? kInf : 0.0));
+      if (in.ior_after > in.ior_before) {
+        Vec3 normal{0, 0, -1};
+        if (!in.shape.isSpherical()) {
+          const std::optional<SagGradient> sg = surfaceSag(in.radius_mm, in.shape, q.x, q.y);
+          if (!sg) continue;
+          normal = normalize(Vec3{sg->dzdx, sg->dzdy, -1});
+        } else if (in.radius_mm != 0) {
+          normal = Vec3{q.x, q.y, q.z - in.z_mm - in.radius_mm} * (1 / in.radius_mm);
+        }
+        const double cos_i = dot(normalize(q - path[k - 1]), normal);
+        const double eta = in.ior_after / in.ior_before;
+        m2 = std::max(m2, eta * eta * std::max(0.0, 1 - cos_i * cos_i));
+      }
     }
-    return false;
+    return std::sqrt(m2);
+  };
+  // The lens's margin; where it blocks, the least over the other wavelengths' lenses too (the
+  // bound holds the union of their regions). <= 1 exactly where some lens lets the ray through.
+  // The lenses whose regions count (the first traced first): the lens and also_cover while
+  // building the lens's own bound; a band's lenses, or one of them, while re-solving a band's.
+  std::vector<const LensSystem*> cur{&lens};
+  cur.insert(cur.end(), opts.also_cover.begin(), opts.also_cover.end());
+  auto marginCover = [&](Vec2 film, Vec2 a) {
+    double m = margin1(*cur[0], film, a);
+    if (m <= 1) return m;
+    for (size_t i = 1; i < cur.size(); ++i) m = std::min(m, margin1(*cur[i], film, a));
+    return m;
   };
   // The checks of a polygon (below) use the azimuths half-way between the polygon's own, so
   // that the regions of film points between them are covered too.
   int last_az = 0;  // the azimuth that passed last: neighbouring points usually pass there too
-  auto passes = [&](double h, Vec2 a) {
-    if (rotational_) return passes1({h, 0}, a);
+  auto margin = [&](double h, Vec2 a) {
+    if (rotational_) return marginCover({h, 0}, a);
     const int n_az = static_cast<int>(az.size());
+    double best = kInf;
     for (int i = 0; i < n_az; ++i) {
       const int k = (last_az + i) % n_az;
       const double phi = az[size_t(k)];
       const double ca = std::cos(phi), sa = std::sin(phi);
-      if (passes1({h * ca, h * sa}, toFilmAzimuth(a, h, ca, sa))) {
+      const double m = marginCover({h * ca, h * sa}, toFilmAzimuth(a, h, ca, sa));
+      if (m <= 1) {
         last_az = k;
-        return true;
+        return m;
+      }
+      best = std::min(best, m);
+    }
+    return best;
+  };
+  auto passes = [&](double h, Vec2 a) { return margin(h, a) <= 1; };
+  // Distance from c (inside the region) to the region's boundary along u: the first blocked
+  // point, with a passing point within 1e-3 relative before it. From a guess (usually the
+  // neighbouring direction's distance, within a few percent), secant steps on the margin
+  // (started with the slope found at the last boundary) aim a hair past the root on the side
+  // not yet pinned, so that two or three traces usually close the bracket; bisection (or
+  // geometric steps while one side is open) where a secant step falls outside the bracket or
+  // fails to halve it.
+  double slope_hint = 0;  // d(margin)/ds at the last boundary
+  auto boundary = [&](double h, Vec2 c, Vec2 u, double guess) {
+    constexpr double tol = 1e-3;
+    double lo = 0, glo = kInf, hi = kInf, ghi = kInf;
+    double s0 = 0, g0 = kInf, s1 = 0, g1 = kInf;  // the two latest evaluations
+    auto eval = [&](double s) {
+      const double g = margin(h, c + u * s);
+      s0 = s1, g0 = g1, s1 = s, g1 = g;
+      if (g <= 1) {
+        if (s > lo) lo = s, glo = g;
+      } else if (s < hi) {
+        hi = s, ghi = g;
+      }
+    };
+    eval(std::max(guess, 1e-6 * rr));
+    double f = 1.0 / 16;
+    double last_width = kInf;
+    bool force_bisect = false;
+    for (int it = 0; it < 80; ++it) {
+      if (hi < kInf && hi - lo <= tol * hi) break;
+      if (hi == kInf && lo >= 4 * rr) return lo;  // beyond any real region: give up there
+      if (lo == 0 && hi <= 1e-9 * rr) return hi;  // the region has no extent along u
+      double x = std::numeric_limits<double>::quiet_NaN();
+      if (!force_bisect) {
+        if (std::isfinite(g0) && std::isfinite(g1) && g1 != g0 && s1 != s0)
+          x = s1 + (1 - g1) * (s1 - s0) / (g1 - g0);
+        else if (std::isfinite(g1) && slope_hint > 0)
+          x = s1 + (1 - g1) / slope_hint;
+        // Aim a hair toward the bracket's far end, so that the near one stays and the far one
+        // moves to within the tolerance.
+        if (std::isfinite(x)) x += (hi - x <= x - lo ? -0.4 : 0.4) * tol * std::abs(x);
+      }
+      force_bisect = false;
+      if (hi < kInf && lo > 0) {
+        if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+      } else if (hi < kInf) {  // nothing passing found along u yet
+        if (!(x > 0 && x < hi)) x = hi / (1 + f), f *= 2;
+      } else {  // nothing blocked yet
+        if (!(x > lo)) x = lo * (1 + f), f *= 2;
+        x = std::min(x, 2 * lo + 1e-6 * rr);
+      }
+      eval(x);
+      // A secant step that does not halve the bracket twice running gives way to bisection.
+      if (hi < kInf && lo > 0) {
+        const double w = hi - lo;
+        if (w > 0.5 * last_width) force_bisect = true;
+        last_width = w;
       }
     }
-    return false;
-  };
-  // Distance from c (inside the region) to the region's boundary along u: the first blocked
-  // point, bisected to 1e-3 relative; starts from a guess and grows or shrinks geometrically.
-  // The guess is usually the neighbouring direction's distance, within a few percent of the
-  // answer: the bracket starts 1/16 wide and doubles its step (from 1/16 to x2 after four
-  // steps), so that the bisection needs ~6 traces instead of ~9 from a factor-2 bracket.
-  auto boundary = [&](double h, Vec2 c, Vec2 u, double guess) {
-    double lo = 0, hi = std::max(guess, 1e-6 * rr);
-    double f = 1.0 / 16;
-    if (passes(h, c + u * hi)) {
-      lo = hi;
-      while (hi < 4 * rr && passes(h, c + u * (hi * (1 + f)))) lo = hi *= 1 + f, f *= 2;
-      hi *= 1 + f;
-    } else {
-      while (hi > 1e-9 * rr && !passes(h, c + u * (hi / (1 + f)))) hi /= 1 + f, f *= 2;
-      lo = hi / (1 + f);
-    }
-    while (hi - lo > 1e-3 * hi) {
-      const double mid = 0.5 * (lo + hi);
-      (passes(h, c + u * mid) ? lo : hi) = mid;
-    }
+    if (std::isfinite(glo) && std::isfinite(ghi) && hi > lo && ghi > glo)
+      slope_hint = (ghi - glo) / (hi - lo);
     return hi;
   };
   // Boundary points of the region at film radius h, seen from a point inside it, in `count`
   // directions starting at angle `offset`. Empty if the film point sees nothing.
-  // A point inside the region at film radius h: the chief ray or pupil grids, else (near the
-  // edge of the image circle, where the region is tiny) a fine grid around a neighbour's polygon.
+  // A point inside the region at film radius h: the neighbour's centre or the real chief ray,
+  // else (near the edge of the image circle, where the region is tiny) the least margin around
+  // a neighbour's polygon: the best point of a coarse grid, then a pattern search.
   auto findInside = [&](double h, const Polygon* hint) -> std::optional<Vec2> {
     // The neighbouring polygon's centre usually lies inside; the real chief ray's search costs
     // many traces.
@@ -122,15 +213,54 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     if (c && passes(h, *c)) return c;
     if (!hint || hint->empty) return std::nullopt;
     const double reach = 1.5 * *std::max_element(hint->radius.begin(), hint->radius.end());
-    // Coarse first; then fine enough to find slivers a hundredth of the neighbour's size.
-    for (int grid : {24, 96}) {
+    // The margin on a coarse grid; then pattern searches from its three least points (the
+    // region can be a thin crescent whose least margin lies off one search's path).
+    constexpr int kGrid = 9;
+    std::vector<std::pair<double, Vec2>> starts;
+    for (int iy = 0; iy < kGrid; ++iy)
+      for (int ix = 0; ix < kGrid; ++ix) {
+        const Vec2 a = hint->centre + Vec2{reach * (2.0 * (ix + 0.5) / kGrid - 1),
+                                           reach * (2.0 * (iy + 0.5) / kGrid - 1)};
+        const double g = margin(h, a);
+        if (g <= 1) return a;
+        starts.push_back({g, a});
+      }
+    std::partial_sort(starts.begin(), starts.begin() + 3, starts.end(),
+                      [](const auto& x, const auto& y) { return x.first < y.first; });
+    double g_least = kInf;
+    for (int st = 0; st < 3 && std::isfinite(starts[size_t(st)].first); ++st) {
+      auto [g_best, best] = starts[size_t(st)];
+      // The margin is the largest of a few smooth functions (one per limiting surface): its
+      // minimum often lies on a ridge where two of them are equal, so the search tries 16
+      // directions before halving its step.
+      constexpr int kDirs = 16;
+      double step = reach / kGrid;
+      for (int it = 0; it < 400 && step > 1e-4 * reach; ++it) {
+        bool moved = false;
+        for (int k = 0; k < kDirs; ++k) {
+          const Vec2 q = best + unit(2 * std::numbers::pi * k / kDirs) * step;
+          const double g = margin(h, q);
+          if (g <= 1) return q;
+          if (g < g_best) {
+            best = q, g_best = g, moved = true;
+            break;
+          }
+        }
+        if (!moved) step *= 0.5;
+      }
+      g_least = std::min(g_least, g_best);
+    }
+    // Against the rear disc's hard edge the crescent can be thinner still: where the margin
+    // came within 2% of passing, a fine grid as well (fine enough to find slivers a hundredth of
+    // the neighbour's size), as the bounds of the CS348B set-ups need (tests/optics_pupil_test).
+    if (disc2 == 0 || g_least > 1.02) return std::nullopt;
+    for (int grid : {24, 96})
       for (int iy = 0; iy < grid; ++iy)
         for (int ix = 0; ix < grid; ++ix) {
           const Vec2 a = hint->centre + Vec2{reach * (2.0 * (ix + 0.5) / grid - 1),
                                              reach * (2.0 * (iy + 0.5) / grid - 1)};
           if (passes(h, a)) return a;
         }
-    }
     return std::nullopt;
   };
   auto boundaryPoints = [&](double h, int count, double offset, Vec2* centre_out,
@@ -145,11 +275,19 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     // traces saved).
     const bool from_hint = !centre_out && hint && !hint->empty && c->x == hint->centre.x &&
                            c->y == hint->centre.y;
+    // Each boundary search starts from the last one's distance (the neighbour's polygon's
+    // size for the first).
+    double guess = 0.1 * rr;
+    if (hint && !hint->empty) {
+      guess = 0;
+      for (double v : hint->radius) guess += v / nd;
+    }
     for (int it = 0; it < (from_hint ? 0 : 2); ++it) {
       Vec2 lo_pt{1e300, 1e300}, hi_pt{-1e300, -1e300};
       for (int j = 0; j < 12; ++j) {
         const Vec2 u = unit(2 * std::numbers::pi * j / 12);
-        const Vec2 q = *c + u * boundary(h, *c, u, 0.1 * rr);
+        guess = boundary(h, *c, u, guess);
+        const Vec2 q = *c + u * guess;
         lo_pt = {std::min(lo_pt.x, q.x), std::min(lo_pt.y, q.y)};
         hi_pt = {std::max(hi_pt.x, q.x), std::max(hi_pt.y, q.y)};
       }
@@ -158,7 +296,6 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       c = mid;
     }
     if (centre_out) *centre_out = *c;
-    double guess = 0.1 * rr;
     for (int j = 0; j < count; ++j) {
       const Vec2 u = unit(offset + 2 * std::numbers::pi * j / count);
       guess = boundary(h, *c, u, guess);
@@ -216,6 +353,8 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     for (const Vec2& q : pts)
       poly.radius.push_back(std::hypot(q.x - poly.centre.x, q.y - poly.centre.y));
     const std::vector<double> f = coverFactors(poly, checkPoints(h, 0.5 * dphi, &poly));
+    poly.raw = poly.radius;
+    poly.node_f = f;
     for (int j = 0; j < nd; ++j) poly.radius[j] *= f[j];
     return poly;
   };
@@ -289,31 +428,112 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     stack.pop_back();
     left = right;
   }
-  Sector out;
-  out.intervals = buildIntervals(done, scales);
-  // A table from film radius to the first interval that can hold it, so that a lookup is a
-  // table read and a step or two instead of a binary search.
-  if (!out.intervals.empty() && film_radius_mm_ > 0) {
-    constexpr int kLut = 512;
-    std::vector<int> lut(kLut + 1);
-    for (int k = 0; k <= kLut; ++k)
-      lut[size_t(k)] = intervalIn(out.intervals, {}, 0, film_radius_mm_ * k / kLut);
-    out.lut_scale = kLut / film_radius_mm_;
-    out.lut = std::move(lut);
+  auto makeSector = [&](const std::vector<Polygon>& nodes) {
+    Sector out;
+    out.intervals = buildIntervals(nodes, scales);
+    // A table from film radius to the first interval that can hold it, so that a lookup is a
+    // table read and a step or two instead of a binary search.
+    if (!out.intervals.empty() && film_radius_mm_ > 0) {
+      constexpr int kLut = 512;
+      std::vector<int> lut(kLut + 1);
+      for (int k = 0; k <= kLut; ++k)
+        lut[size_t(k)] = intervalIn(out.intervals, {}, 0, film_radius_mm_ * k / kLut);
+      out.lut_scale = kLut / film_radius_mm_;
+      out.lut = std::move(lut);
+    }
+    return out;
+  };
+  std::vector<Sector> sets;
+  sets.push_back(makeSector(done));
+  // Wavelength bands: the same nodes, each vertex distance the farthest of the band's lenses'
+  // boundaries along the vertex's direction from the node's centre (each lens's region is
+  // star-shaped about it, so that this is the union's), each from the lens's own distance (two
+  // or three traces), times the node's own check factors; the intervals keep their widening.
+  // Where the centre lies outside one of the band's regions, or where the lens's region is
+  // empty next to one that is not (the edge of the image circle moves with the wavelength),
+  // the union's polygon is traced from scratch.
+  // Each lens's distances once per node (neighbouring bands share their edge's lens), each
+  // started from the last lens's (the bands' lenses come in order of wavelength).
+  std::vector<const LensSystem*> band_lens;
+  for (const std::vector<const LensSystem*>& band : opts.bands)
+    for (const LensSystem* L : band)
+      if (std::find(band_lens.begin(), band_lens.end(), L) == band_lens.end())
+        band_lens.push_back(L);
+  std::vector<std::vector<Polygon>> band_nodes(opts.bands.size(), done);
+  std::vector<std::vector<double>> dist(band_lens.size());
+  std::vector<char> inside(band_lens.size());
+  for (size_t k = 0; k < done.size() && !opts.bands.empty(); ++k) {
+    const Polygon& base = done[k];
+    const double h = base.r;
+    if (!base.empty) {
+      const std::vector<double>* prev = &base.raw;
+      for (size_t i = 0; i < band_lens.size(); ++i) {
+        cur = {band_lens[i]};
+        inside[i] = passes(h, base.centre);
+        dist[i].assign(size_t(nd), 0.0);
+        if (!inside[i]) continue;
+        for (int j = 0; j < nd; ++j)
+          dist[i][size_t(j)] =
+              boundary(h, base.centre, dirs_[size_t(j)], (*prev)[size_t(j)]);
+        prev = &dist[i];
+      }
+    }
+    for (size_t b = 0; b < opts.bands.size(); ++b) {
+      const std::vector<const LensSystem*>& band = opts.bands[b];
+      Polygon& node = band_nodes[b][k];
+      if (band.empty()) continue;
+      bool all_in = !base.empty;
+      for (const LensSystem* L : band)
+        all_in = all_in && inside[size_t(std::find(band_lens.begin(), band_lens.end(), L) -
+                                         band_lens.begin())];
+      if (all_in) {
+        for (int j = 0; j < nd; ++j) {
+          double d = 0;
+          for (const LensSystem* L : band)
+            d = std::max(d, dist[size_t(std::find(band_lens.begin(), band_lens.end(), L) -
+                                        band_lens.begin())][size_t(j)]);
+          node.radius[size_t(j)] = d * base.node_f[size_t(j)];
+        }
+        continue;
+      }
+      const Polygon* hint = !base.empty ? &base
+                            : k > 0 && !done[k - 1].empty ? &done[k - 1]
+                            : k + 1 < done.size() && !done[k + 1].empty ? &done[k + 1]
+                                                                          : nullptr;
+      if (!hint) continue;
+      cur = band;
+      Polygon np;
+      np.r = h;
+      const std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &np.centre, hint);
+      if (!pts.empty()) {
+        np.empty = false;
+        for (int j = 0; j < nd; ++j) {
+          const Vec2 q = pts[size_t(j)];
+          const double f = base.empty ? 1.0 : base.node_f[size_t(j)];
+          np.radius.push_back(std::hypot(q.x - np.centre.x, q.y - np.centre.y) * f);
+        }
+      }
+      node = np;
+    }
   }
+  for (const std::vector<Polygon>& nodes : band_nodes) sets.push_back(makeSector(nodes));
   traces_total += traces;
-  return out;
+  return sets;
   };  // buildSector
-  sectors_.resize(size_t(n_sectors));
+  std::vector<std::vector<Sector>> by_sector(static_cast<size_t>(n_sectors));
   if (n_sectors == 1) {
-    sectors_[0] = buildSector(0);
+    by_sector[0] = buildSector(0);
   } else {
-    tbb::parallel_for(0, n_sectors, [&](int sec) { sectors_[size_t(sec)] = buildSector(sec); });
+    tbb::parallel_for(0, n_sectors,
+                      [&](int sec) { by_sector[size_t(sec)] = buildSector(sec); });
   }
+  sets_.assign(by_sector[0].size(), {});
+  for (auto& secs : by_sector)
+    for (size_t set = 0; set < secs.size(); ++set) sets_[set].push_back(std::move(secs[set]));
   traces_ = traces_total;
-  intervals_ = sectors_.front().intervals;
-  radius_lut_ = sectors_.front().lut;
-  lut_scale_ = sectors_.front().lut_scale;
+  intervals_ = sets_[0].front().intervals;
+  radius_lut_ = sets_[0].front().lut;
+  lut_scale_ = sets_[0].front().lut_scale;
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -395,18 +615,20 @@ std::vector<ExitPupilSampler::Interval> ExitPupilSampler::buildIntervals(
 }
 
 const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double& t, double& cos_a,
-                                                           double& sin_a) const {
+                                                           double& sin_a, int set) const {
   // Film coordinates are millimetres: no overflow for hypot to guard against.
   const double r = std::sqrt(film_mm.x * film_mm.x + film_mm.y * film_mm.y);
-  if (r > film_radius_mm_ * (1 + 1e-9) || sectors_.empty()) return nullptr;
-  const Sector* sec = &sectors_.front();
+  if (set < 0 || set >= static_cast<int>(sets_.size())) return nullptr;
+  const std::vector<Sector>& sectors = sets_[size_t(set)];
+  if (r > film_radius_mm_ * (1 + 1e-9) || sectors.empty()) return nullptr;
+  const Sector* sec = &sectors.front();
   if (!rotational_) {
     // Anamorphic: the film point mirrored into the first quadrant picks its wedge; the caller
     // mirrors the rear point back.
     film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
     const double phi = std::atan2(film_mm.y, film_mm.x);
-    const int n = static_cast<int>(sectors_.size());
-    sec = &sectors_[size_t(std::clamp(int(phi / (std::numbers::pi / 2) * n), 0, n - 1))];
+    const int n = static_cast<int>(sectors.size());
+    sec = &sectors[size_t(std::clamp(int(phi / (std::numbers::pi / 2) * n), 0, n - 1))];
   }
   if (sec->intervals.empty()) return nullptr;
   const Interval& iv = sec->intervals[size_t(intervalIn(sec->intervals, sec->lut, sec->lut_scale, r))];
@@ -418,14 +640,14 @@ const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double&
   return &iv;
 }
 
-std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u) const {
+std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u, int band) const {
   std::optional<PupilSample> out;
-  sampleBatch(&film_mm, &u, 1, &out);
+  sampleBatch(&film_mm, &u, 1, &out, band);
   return out;
 }
 
 void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
-                                   std::optional<PupilSample>* out) const {
+                                   std::optional<PupilSample>* out, int band) const {
   const int nd = directions_;
   const Interval* iv[kBatch];
   double t[kBatch], ca[kBatch], sa[kBatch], w0[kBatch], w1[kBatch], w2[kBatch], target[kBatch],
@@ -438,7 +660,7 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
   };
   for (int i = 0; i < std::min(n, kBatch); ++i) {
     out[i].reset();
-    const Interval* v = locate(film_mm[i], t[m], ca[m], sa[m]);
+    const Interval* v = locate(film_mm[i], t[m], ca[m], sa[m], band + 1);
     if (!v) continue;
     iv[m] = v;
     const double tt = t[m];
@@ -479,13 +701,13 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
   }
 }
 
-bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm) const {
+bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm, int band) const {
   if (!rotational_) {
     rear_mm = {film_mm.x < 0 ? -rear_mm.x : rear_mm.x, film_mm.y < 0 ? -rear_mm.y : rear_mm.y};
     film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
   }
   double t, ca, sa;
-  const Interval* iv = locate(film_mm, t, ca, sa);
+  const Interval* iv = locate(film_mm, t, ca, sa, band + 1);
   if (!iv) return false;
   const Vec2 centre = iv->c0 * (1 - t) + iv->c1 * t;
   // Into the +x frame, relative to the centre.
@@ -506,9 +728,9 @@ bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm) const {
   return cross2(b - a, q - a) >= 0;
 }
 
-double ExitPupilSampler::area_mm2(Vec2 film_mm) const {
+double ExitPupilSampler::area_mm2(Vec2 film_mm, int band) const {
   double t, ca, sa;
-  const Interval* iv = locate(film_mm, t, ca, sa);
+  const Interval* iv = locate(film_mm, t, ca, sa, band + 1);
   if (!iv) return 0.0;
   const int nd = directions_;
   const double total = (1 - t) * (1 - t) * iv->P[3 * nd] + t * (1 - t) * iv->P[3 * nd + 1] +

@@ -14,6 +14,14 @@
 // for anamorphic lenses see ExitPupilOptions::rotational).
 // Sampling is uniform in the polygon, so a camera's estimator weight uses its area.
 //
+// A boundary point is found on the ray's margin (its largest ratio of hit radius to clear
+// semi-aperture over the surfaces, with sin of the refracted angle where total internal
+// reflection can occur): it varies continuously, is <= 1 exactly where the ray gets through, and
+// its secant steps find a boundary in two or three traces (bisection took ~9); a region's sliver
+// near the edge of the image circle is found by pattern searches on it (a 96x96 grid before).
+// A dispersive lens gets bounds per wavelength band (ExitPupilOptions::bands) sharing the
+// lens's own structure.
+//
 // Measured (tests/optics_pupil_test.cpp and a 2-million-ray check): no passing ray outside the
 // bounds for the double Gauss, wide-angle and telephoto; for the fisheye one in two million,
 // at a sharp corner of the region near the edge of its image circle, where a polygon vertex
@@ -51,6 +59,12 @@ struct ExitPupilOptions {
   /// holds the region of every wavelength without a wide blanket margin. Traced only where the
   /// lens itself blocks the ray.
   std::vector<const LensSystem*> also_cover;
+  /// Wavelength bands: for each, the lenses (the lens at other wavelengths) whose regions that
+  /// band's bound must hold. The bounds share the lens's own structure (its film radii, polygon
+  /// centres and the widening its checks found) and re-solve only each polygon's vertex
+  /// distances, as the farthest of the band's lenses' boundaries: a few traces per vertex
+  /// instead of a build of their own. sample(..., band) etc. use them.
+  std::vector<std::vector<const LensSystem*>> bands;
 };
 
 /// A point to aim a camera ray at, and the area of the region it was drawn from (pdf = 1/area).
@@ -67,19 +81,22 @@ class ExitPupilSampler {
 
   /// A uniformly distributed point of the bound for the film point, from u in [0,1)^2; nullopt
   /// where the film point sees nothing (outside the image circle).
-  std::optional<PupilSample> sample(Vec2 film_mm, Vec2 u) const;
+  /// band: an index into ExitPupilOptions::bands, or -1 for the lens's own bound.
+  std::optional<PupilSample> sample(Vec2 film_mm, Vec2 u, int band = -1) const;
   /// The most film points sampleBatch takes at once.
   static constexpr int kBatch = 16;
   /// sample() for n <= kBatch film points, the same results; the binary searches of the points
   /// run side by side, so that their chains of dependent loads overlap.
-  void sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
-                   std::optional<PupilSample>* out) const;
+  void sampleBatch(const Vec2* film_mm, const Vec2* u, int n, std::optional<PupilSample>* out,
+                   int band = -1) const;
 
   /// Whether the bound for the film point contains the rear-plane point.
-  bool contains(Vec2 film_mm, Vec2 rear_mm) const;
+  bool contains(Vec2 film_mm, Vec2 rear_mm, int band = -1) const;
 
   /// The area of the bound for the film point (0 where it sees nothing).
-  double area_mm2(Vec2 film_mm) const;
+  double area_mm2(Vec2 film_mm, int band = -1) const;
+  /// The number of wavelength bands (ExitPupilOptions::bands).
+  int bands() const { return static_cast<int>(sets_.size()) - 1; }
 
   double buildSeconds() const { return build_seconds_; }
   long tracesAtBuild() const { return traces_; }
@@ -96,6 +113,7 @@ class ExitPupilSampler {
     bool empty = true;
     Vec2 centre;
     std::vector<double> radius;
+    std::vector<double> raw, node_f;  // vertex distances before the node's check, its factors
   };
   // The unscaled polygon interpolated between two nodes at radius r (used while building).
   bool interpolateBetween(const Polygon& a, const Polygon& b, double r, Polygon& poly) const;
@@ -115,7 +133,7 @@ class ExitPupilSampler {
   std::vector<Interval> buildIntervals(const std::vector<Polygon>& nodes,
                                        const std::vector<std::vector<double>>& scales) const;
   // The interval, t and rotation for a film point; nullptr where it sees nothing.
-  const Interval* locate(Vec2 film_mm, double& t, double& cos_a, double& sin_a) const;
+  const Interval* locate(Vec2 film_mm, double& t, double& cos_a, double& sin_a, int set) const;
 
   // Where the rear-plane point `local` of the +x frame lies for a film point at distance r and
   // azimuth (ca, sa): rotated (symmetric lenses) or moved by the chief-ray model (anamorphic).
@@ -141,7 +159,8 @@ class ExitPupilSampler {
     std::vector<int> lut;
     double lut_scale = 0;
   };
-  std::vector<Sector> sectors_;
+  // sets_[0]: the lens's own bounds; sets_[1 + b]: wavelength band b's.
+  std::vector<std::vector<Sector>> sets_;
   double build_seconds_ = 0;
   long traces_ = 0;
 };

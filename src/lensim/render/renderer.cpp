@@ -273,6 +273,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   st.spp_begin = spp_begin, st.spp_end = spp_end;
   st.camera = cam->describe();
   st.camera_startup_s = cam->startupSeconds();
+  st.camera_startup_cpu_s = cam->startupCpuSeconds();
   st.setup_s = std::chrono::duration<double>(Clock::now() - t_setup).count();
   st.load_s = opt.scene_load_s;
 
@@ -604,8 +605,8 @@ std::string formatStats(const RenderStats& s) {
   // render's own (BVH, lights, textures, camera).
   out += fmt::format(
       "setup time           {:.3f} s (scene load {:.3f} s; BVH, lights, textures {:.3f} s, "
-      "of which camera startup {:.3f} s)\n",
-      s.load_s + s.setup_s, s.load_s, s.setup_s, s.camera_startup_s);
+      "of which camera startup {:.3f} s, {:.3f} s CPU)\n",
+      s.load_s + s.setup_s, s.load_s, s.setup_s, s.camera_startup_s, s.camera_startup_cpu_s);
   out += fmt::format("camera               {}\n", s.camera);
   out += fmt::format("camera samples       {} ({:.3g} samples/s)\n", s.camera_samples,
                      double(s.camera_samples) / w);

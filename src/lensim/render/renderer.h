@@ -102,6 +102,7 @@ struct RenderStats {
   double setup_s = 0;            ///< building the acceleration structure, lights, textures
   double load_s = 0;             ///< reading, parsing and building the scene before (RenderOptions)
   double camera_startup_s = 0;   ///< the camera's startupSeconds()
+  double camera_startup_cpu_s = 0;  ///< the camera's startupCpuSeconds()
   uint64_t camera_samples = 0;   ///< camera samples taken
   uint64_t camera_rays = 0;      ///< camera samples that produced a ray
   uint64_t no_ray_samples = 0;   ///< camera samples without a ray (blocked by the lens)
