@@ -328,6 +328,6 @@ Shape "sphere"
                         d.message.find("participating media but integrator \"path\" ignores "
                                        "them") != std::string::npos);
   EXPECT_TRUE(warned);
-  // bdpt is not rendered; its stand-in renders media (pbrt-v4 files).
-  EXPECT_EQ(buildText("Integrator \"bdpt\"\nWorldBegin\n").integrator.type, "volpath");
+  // mlt is not rendered; its stand-in renders media (pbrt-v4 files).
+  EXPECT_EQ(buildText("Integrator \"mlt\"\nWorldBegin\n").integrator.type, "volpath");
 }

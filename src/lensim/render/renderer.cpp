@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "lensim/camera/camera.h"
+#include "lensim/render/integrators/bdpt.h"
 #include "lensim/render/integrators/integrator.h"
 #include "lensim/render/integrators/lighttracer.h"
 #include "lensim/render/integrators/volpath.h"
@@ -239,6 +240,32 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     light_tracer.emplace(sc, *cam);
     film.enableSplats(*filter);
   }
+  // bdpt (render/bdpt.h): its t = 1 strategies splat as the light tracer's paths do, so it has
+  // the same limits; scenes it cannot render (a camera without importance, lights without
+  // emission sampling) render with path, warned.
+  std::optional<BdptIntegrator> bdpt;
+  if (scene.integrator.type == "bdpt") {
+    const char* refused = opt.tile            ? "--tile"
+                          : opt.keep_sums     ? "parts (exact sums)"
+                          : opt.on_checkpoint ? "checkpoints"
+                          : opt.resume        ? "resuming"
+                                              : nullptr;
+    if (refused)
+      throw Error(scene.integrator.loc,
+                  fmt::format("integrator \"bdpt\" does not support {}: its light subpaths "
+                              "splat anywhere in the image (split a render by --spp-range and "
+                              "average the images instead)",
+                              refused));
+    if (const std::string why = BdptIntegrator::unsupported(sc, *cam); !why.empty()) {
+      logWarning(fmt::format("{}: integrator \"bdpt\" renders as \"path\": {}",
+                             scene.integrator.loc.str(), why));
+    } else {
+      bdpt.emplace(sc, *cam);
+      film.enableSplats(*filter);
+    }
+  }
+  const double shutter_open = scene.camera.shutter_open;
+  const double shutter_length = scene.camera.shutter_close - scene.camera.shutter_open;
   // The splats' scale for `n` samples per pixel taken: one light path per sample of every
   // pixel rendered, the image normalised per pixel of the full image (camera.h).
   auto setSplatScale = [&](int n) {
@@ -408,6 +435,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             double u_lambda[kB];
             SampledWavelengths lambdas[kB];
             std::optional<camera::CameraRay> cam_rays[kB];
+            std::vector<BdptSplat> bdpt_splats;
             if (light_tracer) {
               for (int y = y0; y < y1 && !tile_cancelled; ++y)
                 for (int x = x0; x < x1; ++x) {
@@ -448,7 +476,9 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     for (int c = 0; c < kSpectrumSamples; ++c)
                       cs[k].lambda_nm[size_t(c)] = lambdas[k].lambda(c);
                     cs[k].pixel_centre = {x + 0.5, y + 0.5};
-                    cs[k].filter = opt.dispersion_hero_only ? nullptr : filter.get();
+                    // bdpt keeps a dispersive lens's hero wavelength only (as pbrt-v4 does):
+                    // its light subpaths share the camera path's wavelengths.
+                    cs[k].filter = opt.dispersion_hero_only || bdpt ? nullptr : filter.get();
                     cs[k].filter_weight = fs[k].weight;
                     path_dimension = sampler->dimension();
                   }
@@ -460,7 +490,29 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     // A dispersive lens refracted the ray at the hero wavelength only.
                     if (ray && ray->hero_only) lambda.terminateSecondary();
                     SampledSpectrum L(0.0);
-                    if (!ray) {
+                    if (bdpt) {
+                      // Also without a camera ray: the light subpath's splats do not need it.
+                      if (!ray) {
+                        ++n_none;
+                        n_outside += !cam->reachesFilm(cs[k].film_raster);
+                      } else {
+                        ++n_rays;
+                      }
+                      sampler->startPixelSample({x, y}, i0 + k, path_dimension);
+                      bdpt_splats.clear();
+                      const double time =
+                          ray ? ray->time : shutter_open + cs[k].time * shutter_length;
+                      L = bdpt->Li(ray ? &*ray : nullptr, time, lambda, *sampler, counts,
+                                   bdpt_splats);
+                      for (const BdptSplat& sp : bdpt_splats) {
+                        bool ok = true;
+                        for (int c = 0; c < kSpectrumSamples; ++c) ok = ok && std::isfinite(sp.L[c]);
+                        if (ok)
+                          film.addSplat(sp.raster, sp.L, lambda);
+                        else
+                          ++n_bad;
+                      }
+                    } else if (!ray) {
                       ++n_none;
                       n_outside += !cam->reachesFilm(cs[k].film_raster);
                     } else {

@@ -343,8 +343,8 @@ struct Filter {
   bool defaulted = true;
 };
 
-/// The light transport algorithm: `type` "path", "volpath" (media) or "lighttracer". The builder makes
-/// volpath the default of pbrt-v4 files, as pbrt-v4 does; v1–v3 files default to path.
+/// The light transport algorithm: `type` "path", "volpath" (media), "lighttracer" or "bdpt". The
+/// builder makes volpath the default of pbrt-v4 files, as pbrt-v4 does; v1–v3 files default to path.
 struct Integrator {
   std::string type = "path";
   std::string type_as_written;

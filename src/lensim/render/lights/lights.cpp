@@ -77,6 +77,44 @@ double smoothStep(double a, double b, double x) {
   return t * t * (3 - 2 * t);
 }
 
+// ---- emission sampling of the lights pbrt-v4 samples with their own SampleLe: goniometric,
+// projection (as point lights emitting in all directions), distant and infinite lights ----------
+
+/// A ray from the point light at p, its direction uniform over the sphere; L is the intensity
+/// toward d, taken from sampleLi at the point p + d (one unit away: radiance x r^2 = intensity).
+std::optional<LightLeSample> uniformPointSampleLe(const Light& light, const Vec3& p, Vec2 u2,
+                                                  const SampledWavelengths& lambda) {
+  LightLeSample s;
+  s.d = sampleUniformSphere(u2);
+  s.o = p;
+  auto li = light.sampleLi(p + s.d, {0.5, 0.5}, lambda);
+  if (!li || li->L.isBlack()) return std::nullopt;
+  s.L = li->L;
+  s.pdf_pos = 1;
+  s.pdf_dir = uniformSpherePdf();
+  return s;
+}
+
+/// A ray from an infinite or distant light (pbrt-v4's UniformInfiniteLight::SampleLe,
+/// DistantLight::SampleLe): the direction toward the light wi from sampleLi (which does not
+/// depend on the point for these lights), the origin on the disk of the scene's bounding sphere
+/// (centre c, radius r) perpendicular to wi, on the light's side.
+std::optional<LightLeSample> infiniteSampleLe(const Light& light, const Vec3& c, double r, Vec2 u1,
+                                              Vec2 u2, const SampledWavelengths& lambda) {
+  auto li = light.sampleLi(c, u1, lambda);
+  if (!li || !(li->pdf > 0) || li->L.isBlack()) return std::nullopt;
+  const Vec3 a = std::abs(li->wi.x) > 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+  const Vec3 x = normalize(cross(a, li->wi)), y = cross(li->wi, x);
+  const Vec2 pd = sampleUniformDiskConcentric(u2);
+  LightLeSample s;
+  s.L = li->L;
+  s.o = c + (li->wi + x * pd.x + y * pd.y) * r;
+  s.d = -li->wi;
+  s.pdf_pos = 1 / (M_PI * r * r);
+  s.pdf_dir = li->pdf;  // 1 for a distant light (a delta direction)
+  return s;
+}
+
 class PointLight final : public Light {
  public:
   PointLight(Vec3 p, SpectrumPtr I, double scale) : p_(p), I_(std::move(I)), scale_(scale) {}
@@ -225,6 +263,15 @@ class GoniometricLight final : public Light {
   }
   double power() const override { return 4 * M_PI * scale_ * luminanceOf(*I_) * mean_; }
   std::optional<LightBounds> bounds() const override { return pointBounds(p_, power()); }
+  // Directions uniform over the sphere (as pbrt-v4's GoniometricLight::SampleLe).
+  bool supportsLe() const override { return true; }
+  std::optional<LightLeSample> sampleLe(Vec2, Vec2 u2,
+                                        const SampledWavelengths& lambda) const override {
+    return uniformPointSampleLe(*this, p_, u2, lambda);
+  }
+  std::pair<double, double> pdfLe(const Vec3&, const Vec3&, const Vec3&) const override {
+    return {0, uniformSpherePdf()};
+  }
   /// The image factor for world direction w leaving the light.
   double factor(const Vec3& w) const {
     if (values_.empty()) return 1;
@@ -320,6 +367,16 @@ class ProjectionLight final : public Light {
   }
   // Conservatively all directions (pbrt-v4 bounds the frustum; this only costs noise).
   std::optional<LightBounds> bounds() const override { return pointBounds(p_, power()); }
+  // Directions uniform over the sphere (pbrt-v4 samples the projected image; this only costs
+  // noise: directions outside the frustum carry nothing).
+  bool supportsLe() const override { return true; }
+  std::optional<LightLeSample> sampleLe(Vec2, Vec2 u2,
+                                        const SampledWavelengths& lambda) const override {
+    return uniformPointSampleLe(*this, p_, u2, lambda);
+  }
+  std::pair<double, double> pdfLe(const Vec3&, const Vec3&, const Vec3&) const override {
+    return {0, uniformSpherePdf()};
+  }
 
  private:
   Transform light_from_world_;
@@ -334,9 +391,10 @@ class ProjectionLight final : public Light {
 class DistantLight final : public Light {
  public:
   const char* typeName() const override { return "distant"; }
-  DistantLight(Vec3 w, SpectrumPtr L, double scale, double scene_radius)
-      : w_(w), L_(std::move(L)), scale_(scale), radius_(scene_radius) {}
+  DistantLight(Vec3 w, SpectrumPtr L, double scale, double scene_radius, Vec3 scene_centre)
+      : w_(w), L_(std::move(L)), scale_(scale), radius_(scene_radius), centre_(scene_centre) {}
   bool isDelta() const override { return true; }
+  bool isDeltaDirection() const override { return true; }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2,
                                         const SampledWavelengths& lambda) const override {
     LightLiSample s;
@@ -348,18 +406,27 @@ class DistantLight final : public Light {
     return s;
   }
   double power() const override { return scale_ * luminanceOf(*L_) * M_PI * radius_ * radius_; }
+  bool supportsLe() const override { return true; }
+  std::optional<LightLeSample> sampleLe(Vec2 u1, Vec2 u2,
+                                        const SampledWavelengths& lambda) const override {
+    return infiniteSampleLe(*this, centre_, radius_, u1, u2, lambda);
+  }
+  std::pair<double, double> pdfLe(const Vec3&, const Vec3&, const Vec3&) const override {
+    return {1 / (M_PI * radius_ * radius_), 0};
+  }
 
  private:
   Vec3 w_;
   SpectrumPtr L_;
   double scale_, radius_;
+  Vec3 centre_;
 };
 
 class UniformInfiniteLight final : public Light {
  public:
   const char* typeName() const override { return "infinite (uniform)"; }
-  UniformInfiniteLight(SpectrumPtr L, double scale, double scene_radius)
-      : L_(std::move(L)), scale_(scale), radius_(scene_radius) {}
+  UniformInfiniteLight(SpectrumPtr L, double scale, double scene_radius, Vec3 scene_centre)
+      : L_(std::move(L)), scale_(scale), radius_(scene_radius), centre_(scene_centre) {}
   bool isInfinite() const override { return true; }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2 u,
                                         const SampledWavelengths& lambda) const override {
@@ -380,10 +447,19 @@ class UniformInfiniteLight final : public Light {
   double power() const override {
     return 4 * M_PI * M_PI * radius_ * radius_ * scale_ * luminanceOf(*L_);
   }
+  bool supportsLe() const override { return true; }
+  std::optional<LightLeSample> sampleLe(Vec2 u1, Vec2 u2,
+                                        const SampledWavelengths& lambda) const override {
+    return infiniteSampleLe(*this, centre_, radius_, u1, u2, lambda);
+  }
+  std::pair<double, double> pdfLe(const Vec3&, const Vec3&, const Vec3& d) const override {
+    return {1 / (M_PI * radius_ * radius_), pdfLi(centre_, -d, nullptr)};
+  }
 
  private:
   SpectrumPtr L_;
   double scale_, radius_;
+  Vec3 centre_;
 };
 
 // ---- environment maps ----------------------------------------------------------------------
@@ -391,11 +467,13 @@ class UniformInfiniteLight final : public Light {
 class ImageInfiniteLight final : public Light {
  public:
   const char* typeName() const override { return "infinite (image)"; }
-  ImageInfiniteLight(const scene::Light& desc, double scale, double scene_radius)
+  ImageInfiniteLight(const scene::Light& desc, double scale, double scene_radius,
+                     Vec3 scene_centre)
       : world_from_light_(desc.transform),
         light_from_world_(inverse(desc.transform)),
         scale_(scale),
-        radius_(scene_radius) {
+        radius_(scene_radius),
+        centre_(scene_centre) {
     io::Image im = io::readImage(desc.filename);
     w_ = im.width;
     h_ = im.height;
@@ -461,6 +539,14 @@ class ImageInfiniteLight final : public Light {
     return lookup(equal_area_ ? equalAreaSphereToSquare(wl) : latLong(wl), lambda);
   }
   double power() const override { return 4 * M_PI * M_PI * radius_ * radius_ * scale_ * avg_lum_; }
+  bool supportsLe() const override { return true; }
+  std::optional<LightLeSample> sampleLe(Vec2 u1, Vec2 u2,
+                                        const SampledWavelengths& lambda) const override {
+    return infiniteSampleLe(*this, centre_, radius_, u1, u2, lambda);
+  }
+  std::pair<double, double> pdfLe(const Vec3&, const Vec3&, const Vec3& d) const override {
+    return {1 / (M_PI * radius_ * radius_), pdfLi(centre_, -d, nullptr)};
+  }
 
  private:
   static Vec2 latLong(const Vec3& wl) {
@@ -482,6 +568,7 @@ class ImageInfiniteLight final : public Light {
   }
   Transform world_from_light_, light_from_world_;
   double scale_, radius_;
+  Vec3 centre_;
   int w_ = 0, h_ = 0;
   bool equal_area_ = true;
   std::vector<Vec3> rgb_;
@@ -601,6 +688,7 @@ class AreaLightBase : public Light {
     const double cos_l = std::abs(dot(nl, s.wi));
     if (cos_l == 0) return std::nullopt;
     s.pdf = pdf_area * r2 / cos_l;
+    s.n_light = nl;
     SurfaceHit h;
     h.ng = nl;
     h.uv = uv;
@@ -752,6 +840,7 @@ class QuadricLight final : public AreaLightBase {
         SurfaceHit h;
         h.ng = normalize(pl - center_);
         if (shape_->flipNormals()) h.ng = -h.ng;
+        s.n_light = h.ng;
         if (image_) h.uv = quadricGeometry(*shape_, inverse(shape_->transform).applyPoint(pl)).uv;
         s.L = L(h, -wi, lambda);
         if (s.L.isBlack()) return std::nullopt;
@@ -812,6 +901,7 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
   const Bounds3 b = accel.bounds();
   double radius = 1;
   if (!b.empty()) radius = std::max(1e-3, 0.5 * length(b.max - b.min));
+  const Vec3 centre = b.empty() ? Vec3{0, 0, 0} : (b.min + b.max) * 0.5;
   for (const scene::Light& l : scene.lights) {
     if (l.type == "diffuse") continue;  // attached to shapes below
     const bool rgb = l.emission.kind == scene::SpectrumValue::Kind::Rgb;
@@ -852,11 +942,11 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
     } else if (l.type == "distant") {
       if (l.power && *l.power > 0) scale *= *l.power;
       lights_.push_back(std::make_unique<DistantLight>(
-          normalize(l.transform.applyVector(l.from - l.to)), spec, scale, radius));
+          normalize(l.transform.applyVector(l.from - l.to)), spec, scale, radius, centre));
     } else if (l.type == "infinite") {
       if (!l.filename.empty()) {
         try {
-          lights_.push_back(std::make_unique<ImageInfiniteLight>(l, l.scale, radius));
+          lights_.push_back(std::make_unique<ImageInfiniteLight>(l, l.scale, radius, centre));
         } catch (const Error& e) {
           throw Error(l.loc, nestedMessage(e));
         }
@@ -864,7 +954,7 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
         // pbrt-v4 "illuminance": the irradiance E at an upward-facing point, pi L for a
         // uniform sky.
         if (l.power && *l.power > 0) scale *= *l.power / M_PI;
-        lights_.push_back(std::make_unique<UniformInfiniteLight>(spec, scale, radius));
+        lights_.push_back(std::make_unique<UniformInfiniteLight>(spec, scale, radius, centre));
       }
       infinite_.push_back(lights_.back().get());
     }

@@ -36,6 +36,7 @@ struct LightLiSample {
   double pdf = 0;     ///< per steradian, or 1 for delta lights
   Vec3 p_light;       ///< point on the light (far away for distant/infinite lights)
   bool infinite = false;
+  Vec3 n_light{0, 0, 0};  ///< the surface normal at p_light (area lights); zero otherwise
 };
 
 /// A ray leaving a light (light tracing, bidirectional methods): pbrt-v4's LightLeSample.
@@ -59,6 +60,9 @@ class Light {
   /// Point and directional lights (no surface to hit).
   virtual bool isDelta() const { return false; }
   virtual bool isInfinite() const { return false; }
+  /// Light arriving from one direction (distant lights): no point on it can be connected to
+  /// (pbrt-v4's LightType::DeltaDirection).
+  virtual bool isDeltaDirection() const { return false; }
   /// A sample of incident light at world point p.
   virtual std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2 u,
                                                 const SampledWavelengths& lambda) const = 0;
@@ -92,7 +96,7 @@ class Light {
     (void)o, (void)n, (void)d;
     return {0, 0};
   }
-  /// Whether sampleLe is implemented (point, spot and diffuse area lights).
+  /// Whether sampleLe is implemented (every light type lensim has).
   virtual bool supportsLe() const { return false; }
   /// The light's type, for messages.
   virtual const char* typeName() const { return "unnamed"; }

@@ -98,6 +98,7 @@ class Builder {
   void filter(const Directive& d);
 
   void integrator(const Directive& d);
+  void integratorBdpt(ParamSet& ps, Integrator& it);
 
   void texture(const Directive& d);
 

@@ -33,6 +33,8 @@ void Builder::integrator(const Directive& d) {
     if (type == "volpath") it.type = "volpath";
   } else if (type == "lighttracer") {
     it.type = "lighttracer";  // pbrt-v4's LightPathIntegrator (render/integrators/lighttracer.h)
+  } else if (type == "bdpt") {
+    integratorBdpt(ps, it);
   } else if (type == "directlighting") {
     // As pbrt-v4's --upgrade: direct lighting is a path tracer of depth 1.
     ps.markAllUsed();
@@ -49,6 +51,30 @@ void Builder::integrator(const Directive& d) {
                          type, it.type, it.max_depth));
   }
   finish(ps);
+}
+
+// pbrt-v4's BDPTIntegrator::Create (src/pbrt/cpu/integrators.cpp): maxdepth, regularize,
+// lightsampler (default "power"), visualizestrategies, visualizeweights.
+void Builder::integratorBdpt(ParamSet& ps, Integrator& it) {
+  it.type = "bdpt";
+  it.regularize = ps.getBool({"regularize"}, false);
+  it.light_sampler = ps.getString({"lightsampler"}, "power");
+  if (it.light_sampler != "power" && it.light_sampler != "uniform") {
+    const Param* p = ps.peek({"lightsampler"});
+    warn(p ? p->loc : it.loc,
+         fmt::format("bdpt chooses lights by \"power\" or \"uniform\" (light subpaths need a "
+                     "choice that does not depend on a point), not \"{}\"; \"power\" is used",
+                     it.light_sampler));
+    it.light_sampler = "power";
+  }
+  for (const char* name : {"visualizestrategies", "visualizeweights"})
+    if (ps.getBool({name}, false)) {
+      const Param* p = ps.peek({name});
+      warn(p ? p->loc : it.loc,
+           fmt::format("bdpt \"{}\" (pbrt-v4's per-strategy debug images) is not supported; "
+                       "the image is rendered as usual",
+                       name));
+    }
 }
 
 }  // namespace lensim::scene::detail

@@ -1,0 +1,517 @@
+// The bdpt integrator. Structure and MIS as pbrt-v4's src/pbrt/cpu/integrators.cpp
+// (BDPTIntegrator::Li, GenerateCameraSubpath, GenerateLightSubpath, RandomWalk, ConnectBDPT,
+// MISWeight, InfiniteLightDensity) and its Vertex (integrators.h): read there, written anew.
+#include "lensim/render/integrators/bdpt.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "lensim/camera/camera.h"
+#include "lensim/scene/builder.h"
+#include "lensim/util/error.h"
+
+namespace lensim::render {
+namespace bdpt {
+
+namespace {
+
+Vec3 unitOrZero(const Vec3& v, double& len2) {
+  len2 = dot(v, v);
+  return len2 > 0 ? v / std::sqrt(len2) : Vec3{0, 0, 0};
+}
+
+/// pbrt-v4's CorrectShadingNormal: light paths scattered with shading normals need the
+/// adjoint's factor |wo.ns||wi.ng| / (|wo.ng||wi.ns|) (Veach 1997, sec. 5.3).
+double correctShadingNormal(const Vertex& v, const Vec3& wo, const Vec3& wi, TransportMode mode) {
+  if (mode != TransportMode::Importance) return 1;
+  const double num = std::abs(dot(wo, v.ns) * dot(wi, v.ng));
+  const double den = std::abs(dot(wo, v.ng) * dot(wi, v.ns));
+  return den == 0 ? 0 : num / den;
+}
+
+/// Radiance emitted by the light vertex v toward `toward`.
+SampledSpectrum emitted(const Context& ctx, const Vertex& v, const Vertex& toward,
+                        const SampledWavelengths& lambda) {
+  if (!isLight(v)) return SampledSpectrum(0.0);
+  double d2;
+  const Vec3 w = unitOrZero(toward.p - v.p, d2);
+  if (d2 == 0) return SampledSpectrum(0.0);
+  if (isInfiniteLight(v)) {
+    SampledSpectrum Le(0.0);
+    for (const Light* l : ctx.infinite) Le += l->Le(-w, lambda);
+    return Le;
+  }
+  return v.light->L(v.hit, w, lambda);
+}
+
+SampledSpectrum bsdfF(const Vertex& v, const Vertex& next, TransportMode mode) {
+  double d2;
+  const Vec3 wi = unitOrZero(next.p - v.p, d2);
+  if (d2 == 0 || v.type != VertexType::Surface) return SampledSpectrum(0.0);
+  return v.bsdf.f(v.wo, wi, mode);
+}
+
+/// Density of the infinite lights sending light along the propagation direction w (pbrt-v4's
+/// InfiniteLightDensity): their choice probability times the density of the direction -w.
+double infiniteLightDensity(const Context& ctx, const Vec3& w) {
+  double pdf = 0;
+  for (const Light* l : ctx.infinite)
+    pdf += ctx.light_sampler->pmf({}, l) * l->pdfLi(Vec3{0, 0, 0}, -w, nullptr);
+  return pdf;
+}
+
+/// A surface vertex at a hit, with its BSDF; nullopt for an "interface" material (the walk
+/// passes through).
+bool makeSurfaceVertex(const Context& ctx, const SurfaceHit& h, const Vec3& ray_d,
+                       SampledWavelengths& lambda, bool regularize, Vertex& v) {
+  const SceneContext& sc = *ctx.sc;
+  const Vec3 wo = -normalize(ray_d);
+  const TextureEvalContext tctx{h.p, h.uv, h.ns};
+  const int material = sc.materials->resolve(sc.scene->shapes[size_t(h.shape)].material, tctx, wo);
+  if (sc.materials->isInterface(material)) return false;
+  auto bxdf = sc.materials->bxdf(material, tctx, lambda, regularize);
+  Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
+  if (sc.materials->hasBump(material))
+    ns = sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+  v = Vertex{};
+  v.type = VertexType::Surface;
+  v.p = h.p;
+  v.ng = h.ng;
+  v.ns = ns;
+  v.wo = wo;
+  v.bsdf = BSDF(ns, h.dpdu, bxdf);
+  v.hit = h;
+  v.light = sc.lights->areaLight(h.shape, h.prim);
+  return true;
+}
+
+/// pbrt-v4's RandomWalk: extends path[1..] from path[0] along ray; returns the number of
+/// vertices added.
+int randomWalk(const Context& ctx, Ray ray, SampledWavelengths& lambda, Sampler& sampler,
+               SampledSpectrum beta, double pdf_dir, int max_depth, TransportMode mode,
+               RayCounts& counts, Vertex* path) {
+  if (max_depth <= 0) return 0;
+  const SceneContext& sc = *ctx.sc;
+  int bounces = 0, interfaces = 0;
+  bool any_non_specular = false;
+  double pdf_fwd = pdf_dir;
+  for (;;) {
+    auto hit = intersectScene(sc, ray, counts);
+    Vertex& prev = path[bounces];
+    Vertex& v = path[bounces + 1];
+    if (!hit) {
+      // A camera ray that escapes ends on the infinite lights (pbrt-v4 adds the vertex
+      // whether or not there are any; its emission is then zero).
+      if (mode == TransportMode::Radiance) {
+        v = Vertex{};
+        v.type = VertexType::Light;
+        v.p = ray.o + normalize(ray.d);
+        v.beta = beta;
+        v.pdf_fwd = pdf_fwd;
+        ++bounces;
+      }
+      break;
+    }
+    if (!makeSurfaceVertex(ctx, *hit, ray.d, lambda, sc.regularize && any_non_specular, v)) {
+      if (++interfaces > 100) break;
+      ray.o = offsetOrigin(hit->p, hit->ng, ray.d);
+      continue;
+    }
+    v.beta = beta;
+    v.pdf_fwd = convertDensity(prev, pdf_fwd, v);
+    if (++bounces >= max_depth) break;
+    const double uc = sampler.get1D();
+    const Vec2 u = sampler.get2D();
+    auto bs = v.bsdf.sample_f(v.wo, uc, u, mode);
+    if (!bs) break;
+    pdf_fwd = bs->pdf_is_proportional ? v.bsdf.pdf(v.wo, bs->wi, mode) : bs->pdf;
+    any_non_specular = any_non_specular || !bs->isSpecular();
+    beta *= bs->f * (std::abs(dot(bs->wi, v.ns)) / bs->pdf);
+    beta *= correctShadingNormal(v, v.wo, bs->wi, mode);
+    const TransportMode reverse =
+        mode == TransportMode::Radiance ? TransportMode::Importance : TransportMode::Radiance;
+    double pdf_rev = v.bsdf.pdf(bs->wi, v.wo, reverse);
+    if (bs->isSpecular()) {
+      v.delta = true;
+      pdf_rev = pdf_fwd = 0;
+    }
+    prev.pdf_rev = convertDensity(v, pdf_rev, prev);
+    if (beta.isBlack()) break;
+    ray = Ray{offsetOrigin(v.p, v.ng, bs->wi), bs->wi, INFINITY};
+  }
+  return bounces;
+}
+
+bool segmentOccluded(const Context& ctx, const Vertex& a, const Vertex& b, RayCounts& counts) {
+  // Start from the vertex on a surface (offset along its normal); the far end stops short.
+  if (a.onSurface())
+    return occludedScene(*ctx.sc, a.p, a.ng, b.p, false, normalize(b.p - a.p), counts);
+  if (b.onSurface())
+    return occludedScene(*ctx.sc, b.p, b.ng, a.p, false, normalize(a.p - b.p), counts);
+  return occludedScene(*ctx.sc, a.p, Vec3{0, 0, 0}, b.p, false, normalize(b.p - a.p), counts);
+}
+
+/// pbrt-v4's ConnectBDPT: the contribution of strategy (s, t), weighted by MIS; raster is set
+/// for t = 1.
+SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s, int t,
+                        SampledWavelengths& lambda, double time, Sampler& sampler,
+                        RayCounts& counts, Vec2* raster) {
+  SampledSpectrum L(0.0);
+  // A camera subpath ending on an infinite light is only used by s = 0.
+  if (t > 1 && s != 0 && camera[t - 1].type == VertexType::Light) return L;
+  Vertex sampled;
+  if (s == 0) {
+    const Vertex& pt = camera[t - 1];
+    if (isLight(pt)) L = emitted(ctx, pt, camera[t - 2], lambda) * pt.beta;
+  } else if (t == 1) {
+    const Vertex& qs = light[s - 1];
+    if (!isConnectible(qs)) return L;
+    std::array<double, camera::kCameraWavelengths> lambda_nm{};
+    for (int c = 0; c < kSpectrumSamples; ++c) lambda_nm[size_t(c)] = lambda.lambda(c);
+    const Vec2 u = sampler.get2D();
+    auto cs = ctx.camera->sampleWi(qs.p, u, lambda_nm, time);
+    if (!cs || cs->pdf <= 0) return L;
+    // Through a dispersive lens only the hero wavelength reaches this film point.
+    if (cs->hero_only) lambda.terminateSecondary();
+    sampled = Vertex{};
+    sampled.type = VertexType::Camera;
+    sampled.p = cs->p_lens;
+    for (int c = 0; c < kSpectrumSamples; ++c)
+      sampled.beta[c] = cs->importance[size_t(c)] / cs->pdf;
+    if (qs.type == VertexType::Light) {
+      // s = 1: the area light's own point seen through the camera.
+      L = emitted(ctx, qs, sampled, lambda) *
+          (std::abs(dot(cs->wi, qs.ng)) / std::max(qs.pdf_fwd, 1e-300)) * sampled.beta;
+    } else {
+      L = qs.beta * bsdfF(qs, sampled, TransportMode::Importance) * sampled.beta;
+      if (qs.onSurface()) L *= std::abs(dot(cs->wi, qs.ns));
+    }
+    if (L.isBlack() || segmentOccluded(ctx, qs, sampled, counts)) return SampledSpectrum(0.0);
+    *raster = cs->film_raster;
+  } else if (s == 1) {
+    const Vertex& pt = camera[t - 1];
+    if (!isConnectible(pt)) return L;
+    const double ul = sampler.get1D();
+    const Vec2 u = sampler.get2D();
+    auto choice = ctx.light_sampler->sample({pt.p, pt.ns}, ul);
+    if (!choice || choice->pmf <= 0) return L;
+    auto ls = choice->light->sampleLi(pt.p, u, lambda);
+    if (!ls || ls->pdf <= 0 || ls->L.isBlack()) return L;
+    sampled = Vertex{};
+    sampled.type = VertexType::Light;
+    sampled.light = choice->light;
+    sampled.p = ls->p_light;
+    sampled.ng = ls->n_light;
+    sampled.ns = ls->n_light;
+    sampled.beta = ls->L / (choice->pmf * ls->pdf);
+    sampled.pdf_fwd = pdfLightOrigin(ctx, sampled, pt);
+    L = pt.beta * bsdfF(pt, sampled, TransportMode::Radiance) * sampled.beta;
+    if (pt.onSurface()) L *= std::abs(dot(ls->wi, pt.ns));
+    if (L.isBlack()) return L;
+    if (occludedScene(*ctx.sc, pt.p, pt.ng, ls->p_light, ls->infinite, ls->wi, counts))
+      return SampledSpectrum(0.0);
+  } else {
+    const Vertex &qs = light[s - 1], &pt = camera[t - 1];
+    if (!isConnectible(qs) || !isConnectible(pt)) return L;
+    L = qs.beta * bsdfF(qs, pt, TransportMode::Importance) * bsdfF(pt, qs, TransportMode::Radiance) *
+        pt.beta;
+    if (L.isBlack()) return L;
+    double d2;
+    const Vec3 w = unitOrZero(pt.p - qs.p, d2);
+    if (d2 == 0) return SampledSpectrum(0.0);
+    double g = 1 / d2;
+    if (qs.onSurface()) g *= std::abs(dot(qs.ns, w));
+    if (pt.onSurface()) g *= std::abs(dot(pt.ns, w));
+    L *= g;
+    if (L.isBlack() || segmentOccluded(ctx, qs, pt, counts)) return SampledSpectrum(0.0);
+  }
+  if (L.isBlack()) return L;
+  return L * misWeight(ctx, light, camera, sampled, s, t, lambda.lambda(0));
+}
+
+}  // namespace
+
+bool isAreaLightEnd(const Vertex& v) {
+  return isLight(v) && !isInfiniteLight(v) && v.onSurface();
+}
+
+bool isConnectible(const Vertex& v) {
+  switch (v.type) {
+    case VertexType::Light:
+      return !v.light || !v.light->isDeltaDirection();
+    case VertexType::Camera:
+      return true;
+    case VertexType::Surface:
+      return isNonSpecular(v.bsdf.flags());
+  }
+  return false;
+}
+
+bool isLight(const Vertex& v) {
+  return v.type == VertexType::Light || (v.type == VertexType::Surface && v.light);
+}
+
+bool isDeltaLight(const Vertex& v) {
+  return v.type == VertexType::Light && v.light && v.light->isDelta();
+}
+
+bool isInfiniteLight(const Vertex& v) {
+  return v.type == VertexType::Light &&
+         (!v.light || v.light->isInfinite() || v.light->isDeltaDirection());
+}
+
+double convertDensity(const Vertex& from, double pdf, const Vertex& next) {
+  if (isInfiniteLight(next)) return pdf;  // solid angle
+  double d2;
+  const Vec3 w = unitOrZero(next.p - from.p, d2);
+  if (d2 == 0) return 0;
+  if (next.onSurface()) pdf *= std::abs(dot(next.ng, w));
+  return pdf / d2;
+}
+
+double pdf(const Context& ctx, const Vertex& v, const Vertex* prev, const Vertex& next,
+           double lambda_nm) {
+  if (v.type == VertexType::Light) return pdfLight(ctx, v, next);
+  double d2;
+  const Vec3 wn = unitOrZero(next.p - v.p, d2);
+  if (d2 == 0) return 0;
+  double p = 0;
+  if (v.type == VertexType::Camera) {
+    p = ctx.camera->rayPdf(v.p, wn, lambda_nm).pdf_dir;
+  } else {
+    if (!prev) return 0;
+    double dp2;
+    const Vec3 wp = unitOrZero(prev->p - v.p, dp2);
+    if (dp2 == 0) return 0;
+    p = v.bsdf.pdf(wp, wn);
+  }
+  return convertDensity(v, p, next);
+}
+
+double pdfLight(const Context& ctx, const Vertex& v, const Vertex& next) {
+  double d2;
+  const Vec3 w = unitOrZero(next.p - v.p, d2);
+  if (d2 == 0) return 0;
+  double p;
+  if (isInfiniteLight(v)) {
+    // A density per unit area of the disk light subpaths of infinite lights start on.
+    p = 1 / (M_PI * ctx.scene_radius * ctx.scene_radius);
+  } else {
+    p = v.light->pdfLe(v.p, v.ng, w).second / d2;
+  }
+  if (next.onSurface()) p *= std::abs(dot(next.ng, w));
+  return p;
+}
+
+double pdfLightOrigin(const Context& ctx, const Vertex& v, const Vertex& next) {
+  double d2;
+  const Vec3 w = unitOrZero(next.p - v.p, d2);
+  if (d2 == 0) return 0;
+  if (isInfiniteLight(v)) return infiniteLightDensity(ctx, w);
+  return ctx.light_sampler->pmf({}, v.light) * v.light->pdfLe(v.p, v.ng, w).first;
+}
+
+double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex& sampled, int s,
+                 int t, double lambda_nm) {
+  // A light seen directly: by the camera ray (s = 0, t = 2) or, for an area light, by the light
+  // point connected to the camera (s = 1, t = 1, which pbrt-v4 leaves out); the two are weighted
+  // against each other. Other lights have the one strategy.
+  if (s + t == 2) {
+    const Vertex& end = s == 0 ? camera[1] : light[0];
+    if (!isAreaLightEnd(end)) return 1;
+  }
+  // The end vertices take the sampled one's place, and the connection vertices' reverse
+  // densities and delta flags those of this strategy, for the duration of the call.
+  Vertex saved_end;
+  Vertex* end = t == 1 ? &camera[0] : s == 1 ? &light[0] : nullptr;
+  if (end) {
+    saved_end = *end;
+    *end = sampled;
+  }
+  Vertex* qs = s > 0 ? &light[s - 1] : nullptr;
+  Vertex* pt = t > 0 ? &camera[t - 1] : nullptr;
+  Vertex* qs_minus = s > 1 ? &light[s - 2] : nullptr;
+  Vertex* pt_minus = t > 1 ? &camera[t - 2] : nullptr;
+  struct Saved {
+    double* at;
+    double value;
+  };
+  Saved saved[4];
+  int n_saved = 0;
+  const bool pt_delta = pt ? pt->delta : false, qs_delta = qs ? qs->delta : false;
+  double new_pt_rev = 0, new_pt_minus_rev = 0, new_qs_rev = 0, new_qs_minus_rev = 0;
+  if (pt)
+    new_pt_rev = s > 0 ? pdf(ctx, *qs, qs_minus, *pt, lambda_nm)
+                       : pdfLightOrigin(ctx, *pt, *pt_minus);
+  if (pt_minus)
+    new_pt_minus_rev =
+        s > 0 ? pdf(ctx, *pt, qs, *pt_minus, lambda_nm) : pdfLight(ctx, *pt, *pt_minus);
+  if (qs) new_qs_rev = pdf(ctx, *pt, pt_minus, *qs, lambda_nm);
+  if (qs_minus) new_qs_minus_rev = pdf(ctx, *qs, pt, *qs_minus, lambda_nm);
+  auto assign = [&](double& at, double value) {
+    saved[n_saved++] = {&at, at};
+    at = value;
+  };
+  if (pt) assign(pt->pdf_rev, new_pt_rev);
+  if (pt_minus) assign(pt_minus->pdf_rev, new_pt_minus_rev);
+  if (qs) assign(qs->pdf_rev, new_qs_rev);
+  if (qs_minus) assign(qs_minus->pdf_rev, new_qs_minus_rev);
+  if (pt) pt->delta = false;
+  if (qs) qs->delta = false;
+
+  auto remap0 = [](double f) { return f != 0 ? f : 1.0; };
+  const double e = ctx.mis_exponent;
+  auto power = [e](double r) { return e == 1 ? r : std::pow(r, e); };
+  double sum_ri = 0;
+  double ri = 1;
+  for (int i = t - 1; i > 0; --i) {
+    ri *= remap0(camera[i].pdf_rev) / remap0(camera[i].pdf_fwd);
+    if (!camera[i].delta && !camera[i - 1].delta) sum_ri += power(ri);
+  }
+  ri = 1;
+  for (int i = s - 1; i >= 0; --i) {
+    ri *= remap0(light[i].pdf_rev) / remap0(light[i].pdf_fwd);
+    const bool delta_light_vertex = i > 0 ? light[i - 1].delta : isDeltaLight(light[0]);
+    if (!light[i].delta && !delta_light_vertex) sum_ri += power(ri);
+  }
+
+  for (int k = n_saved - 1; k >= 0; --k) *saved[k].at = saved[k].value;
+  if (pt) pt->delta = pt_delta;
+  if (qs) qs->delta = qs_delta;
+  if (end) *end = saved_end;
+  return 1 / (1 + sum_ri);
+}
+
+int cameraSubpath(const Context& ctx, const camera::CameraRay& ray, SampledWavelengths& lambda,
+                  Sampler& sampler, RayCounts& counts, Vertex* path) {
+  const int max_vertices = ctx.max_depth + 2;
+  Vertex& v = path[0];
+  v = Vertex{};
+  v.type = VertexType::Camera;
+  v.p = ray.origin;
+  v.beta = SampledSpectrum(ray.weight);
+  const camera::CameraRayPdf rp = ctx.camera->rayPdf(ray.origin, ray.direction, lambda.lambda(0));
+  return randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY}, lambda, sampler, v.beta,
+                    rp.pdf_dir, max_vertices - 1, TransportMode::Radiance, counts, path) +
+         1;
+}
+
+int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sampler,
+                 RayCounts& counts, Vertex* path) {
+  const int max_vertices = ctx.max_depth + 1;
+  const double ul = sampler.get1D();
+  const Vec2 u1 = sampler.get2D(), u2 = sampler.get2D();
+  auto choice = ctx.light_sampler->sample({}, ul);
+  if (!choice || choice->pmf <= 0) return 0;
+  const Light* light = choice->light;
+  auto le = light->sampleLe(u1, u2, lambda);
+  if (!le || le->pdf_pos <= 0 || le->pdf_dir <= 0 || le->L.isBlack()) return 0;
+  Vertex& v = path[0];
+  v = Vertex{};
+  v.type = VertexType::Light;
+  v.light = light;
+  v.p = le->o;
+  if (le->on_surface) {
+    v.ng = v.ns = le->n;
+    v.hit.ng = le->n;
+    v.hit.uv = le->uv;
+  }
+  v.beta = le->L;
+  v.pdf_fwd = le->pdf_pos * choice->pmf;
+  const bool on_surface = v.onSurface();
+  const double cos_o = on_surface ? std::abs(dot(le->n, le->d)) : 1;
+  const SampledSpectrum beta = le->L * (cos_o / (choice->pmf * le->pdf_pos * le->pdf_dir));
+  // The light's own surface must not stop its ray.
+  const Vec3 o = on_surface ? offsetOrigin(le->o, le->n, le->d) : le->o;
+  const int n = randomWalk(ctx, Ray{o, le->d, INFINITY}, lambda, sampler, beta, le->pdf_dir,
+                           max_vertices - 1, TransportMode::Importance, counts, path);
+  // Infinite lights: the first surface vertex's density is the disk's positional density
+  // projected onto it, and the light vertex's the direction's (pbrt-v4).
+  if (isInfiniteLight(v)) {
+    if (n > 0) {
+      path[1].pdf_fwd = le->pdf_pos;
+      if (path[1].onSurface()) path[1].pdf_fwd *= std::abs(dot(le->d, path[1].ng));
+    }
+    v.pdf_fwd = infiniteLightDensity(ctx, le->d);
+  }
+  return n + 1;
+}
+
+}  // namespace bdpt
+
+BdptIntegrator::BdptIntegrator(const SceneContext& sc, const camera::Camera& camera,
+                               double mis_exponent) {
+  if (const std::string why = unsupported(sc, camera); !why.empty()) throw Error(why);
+  std::vector<const Light*> all;
+  for (size_t i = 0; i < sc.lights->size(); ++i) all.push_back(&sc.lights->light(i));
+  // pbrt-v4's bdpt chooses lights by power (its "lightsampler" default): a choice that does not
+  // depend on the point, as the light subpath and the MIS densities need.
+  const std::string& name = sc.scene->integrator.light_sampler;
+  light_sampler_ = LightSampler::create(name == "uniform" ? "uniform" : "power", all);
+  ctx_.sc = &sc;
+  ctx_.camera = &camera;
+  ctx_.light_sampler = light_sampler_.get();
+  ctx_.infinite = sc.lights->infinite();
+  for (size_t i = 0; i < sc.lights->size(); ++i)
+    if (sc.lights->light(i).isDeltaDirection()) ctx_.infinite.push_back(&sc.lights->light(i));
+  // The scene's bounding sphere as LightSet gives it to infinite and distant lights.
+  const Bounds3 b = sc.accel->bounds();
+  ctx_.scene_radius = b.empty() ? 1 : std::max(1e-3, 0.5 * length(b.max - b.min));
+  ctx_.mis_exponent = mis_exponent;
+  ctx_.max_depth = std::clamp(sc.max_depth, 0, 1000);
+}
+
+BdptIntegrator::~BdptIntegrator() = default;
+
+std::string BdptIntegrator::unsupported(const SceneContext& sc, const camera::Camera& camera) {
+  if (!camera.supportsImportance())
+    return fmt::format("the camera ({}) has no importance for light subpaths", camera.describe());
+  for (size_t i = 0; i < sc.lights->size(); ++i)
+    if (!sc.lights->light(i).supportsLe())
+      return fmt::format("{} lights do not sample emitted rays yet",
+                         sc.lights->light(i).typeName());
+  return "";
+}
+
+SampledSpectrum BdptIntegrator::Li(const camera::CameraRay* ray, double time,
+                                   SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts,
+                                   std::vector<BdptSplat>& splats) const {
+  using namespace bdpt;
+  // Per-thread vertex storage, reused across samples.
+  thread_local std::vector<Vertex> camera_buf, light_buf;
+  const size_t need = size_t(ctx_.max_depth) + 3;
+  if (camera_buf.size() < need) camera_buf.resize(need);
+  if (light_buf.size() < need) light_buf.resize(need);
+  Vertex* camera_path = camera_buf.data();
+  Vertex* light_path = light_buf.data();
+  int n_camera = 0;
+  if (ray) {
+    n_camera = cameraSubpath(ctx_, *ray, lambda, sampler, counts, camera_path);
+  } else {
+    // No camera ray: only the t = 1 strategies, whose camera vertex is sampled anew.
+    camera_path[0].type = VertexType::Camera;
+    n_camera = 1;
+  }
+  const int n_light = lightSubpath(ctx_, lambda, sampler, counts, light_path);
+  SampledSpectrum L(0.0);
+  for (int t = 1; t <= n_camera; ++t)
+    for (int s = 0; s <= n_light; ++s) {
+      const int depth = t + s - 2;
+      if (depth < 0 || depth > ctx_.max_depth) continue;
+      if (s == 1 && t == 1 && !isAreaLightEnd(light_path[0])) continue;
+      if (!ray && s == 0) continue;
+      Vec2 raster;
+      const SampledSpectrum Lpath =
+          connect(ctx_, light_path, camera_path, s, t, lambda, time, sampler, counts, &raster);
+      if (Lpath.isBlack()) continue;
+      if (t == 1)
+        splats.push_back({raster, Lpath});
+      else
+        L += Lpath;
+    }
+  return L;
+}
+
+}  // namespace lensim::render
