@@ -219,22 +219,25 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const int spp_begin = plan.spp_begin, spp_end = plan.spp_end;
   std::unique_ptr<Filter> filter = makeFilter(scene.filter);
   Film film(scene, bounds);
-  // A splatting integrator (lighttracer): each pixel sample starts a light path that splats
-  // anywhere in the image, so a tile's pixels are not its own: no tiles of a distributed
-  // render, no exact part sums, no checkpoints (render/film.h, splats).
-  std::optional<LightTracer> light_tracer;
-  if (scene.integrator.type == "lighttracer") {
-    const char* refused = opt.tile          ? "--tile"
-                          : opt.keep_sums   ? "parts (exact sums)"
+  // A splatting integrator (lighttracer, bdpt): each pixel sample starts a light path that
+  // splats anywhere in the image, so a tile's pixels are not its own: no tiles of a distributed
+  // render, no exact part sums, no checkpoints, no resuming (render/film.h, splats).
+  auto refuseSplatting = [&](const char* integrator, const char* what) {
+    const char* refused = opt.tile            ? "--tile"
+                          : opt.keep_sums     ? "parts (exact sums)"
                           : opt.on_checkpoint ? "checkpoints"
-                          : opt.resume      ? "resuming"
-                                            : nullptr;
+                          : opt.resume        ? "resuming"
+                                              : nullptr;
     if (refused)
       throw Error(scene.integrator.loc,
-                  fmt::format("integrator \"lighttracer\" does not support {}: its light paths "
-                              "splat anywhere in the image (split a render by --spp-range and "
-                              "average the images instead)",
-                              refused));
+                  fmt::format("integrator \"{}\" does not support {}: its {} splat anywhere in "
+                              "the image (split a render by --spp-range and average the images "
+                              "instead)",
+                              integrator, refused, what));
+  };
+  std::optional<LightTracer> light_tracer;
+  if (scene.integrator.type == "lighttracer") {
+    refuseSplatting("lighttracer", "light paths");
     if (!scene.media.empty())
       logWarning("integrator \"lighttracer\" ignores participating media (use \"volpath\")");
     light_tracer.emplace(sc, *cam);
@@ -245,17 +248,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   // emission sampling) render with path, warned.
   std::optional<BdptIntegrator> bdpt;
   if (scene.integrator.type == "bdpt") {
-    const char* refused = opt.tile            ? "--tile"
-                          : opt.keep_sums     ? "parts (exact sums)"
-                          : opt.on_checkpoint ? "checkpoints"
-                          : opt.resume        ? "resuming"
-                                              : nullptr;
-    if (refused)
-      throw Error(scene.integrator.loc,
-                  fmt::format("integrator \"bdpt\" does not support {}: its light subpaths "
-                              "splat anywhere in the image (split a render by --spp-range and "
-                              "average the images instead)",
-                              refused));
+    refuseSplatting("bdpt", "light subpaths");
     if (const std::string why = BdptIntegrator::unsupported(sc, *cam); !why.empty()) {
       logWarning(fmt::format("{}: integrator \"bdpt\" renders as \"path\": {}",
                              scene.integrator.loc.str(), why));
