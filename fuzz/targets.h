@@ -31,8 +31,10 @@ int fuzzSceneParse(const uint8_t* data, size_t size);     ///< tokenizer + parse
 int fuzzSceneBuild(const uint8_t* data, size_t size);     ///< parser + builder
 int fuzzSceneRender(const uint8_t* data, size_t size);    ///< builder + a 4x4 render, 1 spp
 int fuzzPly(const uint8_t* data, size_t size);            ///< PLY meshes
-int fuzzImage(const uint8_t* data, size_t size);          ///< EXR, TIFF and PNG headers and data
+int fuzzImage(const uint8_t* data, size_t size);          ///< image headers and data (every format)
 int fuzzBrdf(const uint8_t* data, size_t size);           ///< pbrt-v2 irregular .brdf
+int fuzzZmx(const uint8_t* data, size_t size);            ///< Zemax .zmx lens files, then focus
+int fuzzLensJson(const uint8_t* data, size_t size);       ///< lensim/lentil/ISET JSON lenses
 int fuzzBsdf(const uint8_t* data, size_t size);           ///< RGL measured BSDF (.bsdf), then
                                                           ///< evaluation and sampling
 

@@ -351,6 +351,16 @@ LensPrescription parseLensJson(std::string_view text, const std::string& path,
   } catch (const json::parse_error& e) {
     throw Error(locAt(text, e.byte > 0 ? e.byte - 1 : 0, path),
                 fmt::format("malformed JSON: {}", e.what()));
+  } catch (const json::exception& e) {
+    // Other parse failures (a number too large for a double: out_of_range.406) carry no byte
+    // position; their message quotes the token, located at its first occurrence.
+    const std::string what = e.what();
+    size_t at = std::string::npos;
+    if (const size_t q0 = what.find('\''); q0 != std::string::npos)
+      if (const size_t q1 = what.find('\'', q0 + 1); q1 != std::string::npos && q1 > q0 + 1)
+        at = text.find(what.substr(q0 + 1, q1 - q0 - 1));
+    throw Error(at != std::string::npos ? locAt(text, at, path) : FileLoc{path, 1, 1},
+                fmt::format("malformed JSON: {}", what));
   }
   if (!j.is_object()) throw Error(FileLoc{path, 1, 1}, "expected a JSON object");
   try {

@@ -196,12 +196,23 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       need(t, i + 1, line_no, what);
       return number(t[i], line_no, what);
     };
+    // A count or index (surface, wavelength, parameter number): an integer in [-1e6, 1e6], so
+    // that converting it to int is defined.
+    auto inum = [&](size_t i, const char* what) {
+      const double v = num(i, what);
+      if (v != std::floor(v) || std::abs(v) > 1e6)
+        throw Error(FileLoc{path_, line_no, t[i].col},
+                    fmt::format("expected an integer between -1000000 and 1000000 for the {}, "
+                                "found '{}'",
+                                what, t[i].text));
+      return int(v);
+    };
     auto surfErr = [&](const std::string& msg) {
       return Error(loc, fmt::format("surface {}: {}", cur ? cur->number : -1, msg));
     };
 
     if (key == "SURF") {
-      const int n = int(num(1, "surface number"));
+      const int n = inum(1, "surface number");
       if (n != int(surfs.size()))
         throw Error(loc, fmt::format("surfaces out of order: SURF {} where SURF {} was expected",
                                      n, surfs.size()));
@@ -261,12 +272,12 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                                      "cone angle) is not supported; use ENPD, FNUM or FLOA",
                                      key));
       } else if (key == "WAVM") {
-        const int i = int(num(1, "wavelength number"));
+        const int i = inum(1, "wavelength number");
         wavm[i] = num(2, "wavelength (micrometres)");
       } else if (key == "WAVL") {
         for (size_t i = 1; i < t.size(); ++i) wavl.push_back(number(t[i], line_no, "wavelength"));
       } else if (key == "PWAV") {
-        pwav = int(num(1, "primary wavelength number"));
+        pwav = inum(1, "primary wavelength number");
       } else if (key == "FTYP") {
         if (t.size() >= 5) n_waves = int(number(t[4], line_no, "number of wavelengths"));
       }
@@ -300,7 +311,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     } else if (key == "CONI") {
       cur->conic = num(1, "conic constant");
     } else if (key == "PARM") {
-      const int i = int(num(1, "parameter number"));
+      const int i = inum(1, "parameter number");
       cur->parm[i] = num(2, "parameter value");
     } else if (key == "GLAS") {
       need(t, 2, line_no, "glass");
