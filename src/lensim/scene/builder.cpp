@@ -262,13 +262,8 @@ SpectrumValue Builder::spectrumOf(const Param& p) {
           s.kind = SpectrumValue::Kind::Named;
           s.name = n;
         } else if (c == SpectrumName::Unknown) {
-          std::string best;
-          size_t best_d = 3;
-          for (const std::string& k : namedSpectra())
-            if (size_t dist = editDistance(n, k); dist < best_d) best_d = dist, best = k;
-          throw Error(p.loc,
-                      fmt::format("\"{}\": unknown named spectrum \"{}\"{}", p.name, n,
-                                  best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best)));
+          throw Error(p.loc, fmt::format("\"{}\": unknown named spectrum \"{}\"{}", p.name, n,
+                                         didYouMean(n, namedSpectra(), 3)));
         } else {
           s.kind = SpectrumValue::Kind::File;
           s.name = resolve(n, p.loc, "spectrum file");

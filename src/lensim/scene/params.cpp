@@ -176,15 +176,10 @@ void ParamSet::reportUnused(std::vector<Diagnostic>& out) const {
   for (const Entry& e : entries_)
     if (!e.used && !e.is_default) {
       // Suggest the nearest name a getter asked for (a misspelling is at most 2 edits away).
-      std::string best;
-      size_t best_d = std::min<size_t>(3, e.param->name.size() / 2 + 1);
-      for (const std::string& q : queried_) {
-        size_t d = editDistance(e.param->name, q);
-        if (d < best_d && q != e.param->name) best_d = d, best = q;
-      }
       out.push_back({Severity::Error, e.param->loc,
                      fmt::format("\"{}\": unused parameter{}", e.param->name,
-                                 best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best))});
+                                 didYouMean(e.param->name, queried_,
+                                            std::min<size_t>(3, e.param->name.size() / 2 + 1)))});
     }
 }
 

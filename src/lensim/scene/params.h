@@ -77,4 +77,29 @@ size_t valueCount(const Param& p);
 /// Levenshtein distance between two names (for "did you mean" hints).
 size_t editDistance(std::string_view a, std::string_view b);
 
+/// The "did you mean" hint for a misspelt name: "; did you mean \"NAME\"?" for the first of
+/// `names` (strings, or map entries whose key is the name) nearest to `word` and fewer than
+/// `max_edits_exclusive` edits away, or "" if none is.
+template <class Names>
+std::string didYouMean(std::string_view word, const Names& names, size_t max_edits_exclusive) {
+  std::string_view best;
+  size_t best_d = max_edits_exclusive;
+  for (const auto& entry : names) {
+    std::string_view name;
+    if constexpr (requires { entry.first; })
+      name = entry.first;
+    else
+      name = entry;
+    if (name == word) continue;
+    if (const size_t d = editDistance(word, name); d < best_d) best_d = d, best = name;
+  }
+  std::string hint;
+  if (!best.empty()) {
+    hint = "; did you mean \"";
+    hint += best;
+    hint += "\"?";
+  }
+  return hint;
+}
+
 }  // namespace lensim::scene

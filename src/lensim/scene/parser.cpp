@@ -169,13 +169,7 @@ std::optional<ParamType> parseType(std::string_view t, bool& legacy) {
 
 // "; did you mean \"Translate\"?" for a near miss of a directive name, or "".
 std::string suggestion(std::string_view word) {
-  std::string best;
-  size_t best_d = 3;  // at most two edits
-  for (const auto& [name, spec] : directiveSpecs()) {
-    size_t d = editDistance(word, name);
-    if (d < best_d) best_d = d, best = name;
-  }
-  return best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best);
+  return didYouMean(word, directiveSpecs(), 3);  // at most two edits
 }
 
 // The text of a scene file; `.gz` files are decompressed, as pbrt-v4 does for any file name

@@ -222,12 +222,8 @@ void Builder::subsurfaceCoefficients(Material& m, ParamSet& ps, const FileLoc& l
   if (const Param* p = ps.find({"name"}, {ParamType::String})) {
     m.ss_name = p->strings[0];
     if (!mediumPreset(m.ss_name, m.ss_sigma_a, m.ss_sigma_s)) {
-      std::string best;
-      size_t best_d = 4;
-      for (const std::string& k : mediumPresetNames())
-        if (size_t dist = editDistance(m.ss_name, k); dist < best_d) best_d = dist, best = k;
       ps.fail(*p, fmt::format("unknown measured medium \"{}\"{}", m.ss_name,
-                              best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best)));
+                              didYouMean(m.ss_name, mediumPresetNames(), 4)));
     }
     if (m.ss_g != 0)
       warn(ps.peek({"g"})->loc,

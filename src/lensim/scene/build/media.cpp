@@ -45,12 +45,8 @@ void Builder::makeNamedMedium(const Directive& d) {
   if (const Param* p = ps.find({"preset"}, {ParamType::String})) {
     m.preset = p->strings[0];
     if (!mediumPreset(m.preset, m.sigma_a, m.sigma_s)) {
-      std::string best;
-      size_t best_d = 4;
-      for (const std::string& k : mediumPresetNames())
-        if (size_t dist = editDistance(m.preset, k); dist < best_d) best_d = dist, best = k;
       ps.fail(*p, fmt::format("unknown medium preset \"{}\"{}", m.preset,
-                              best.empty() ? "" : fmt::format("; did you mean \"{}\"?", best)));
+                              didYouMean(m.preset, mediumPresetNames(), 4)));
     }
   } else {
     auto spectrum = [&](const char* pname, SpectrumValue& out) {
@@ -218,13 +214,9 @@ int Builder::mediumIndex(const std::string& name, const FileLoc& loc) {
   if (name.empty()) return -1;
   auto it = named_media_.find(name);
   if (it != named_media_.end()) return it->second;
-  std::string best;
-  size_t best_d = 3;
-  for (const auto& [k, v] : named_media_)
-    if (size_t dist = editDistance(name, k); dist < best_d) best_d = dist, best = k;
+  const std::string hint = didYouMean(name, named_media_, 3);
   throw Error(loc, fmt::format("MediumInterface: unknown medium \"{}\"{}", name,
-                               best.empty() ? " (no MakeNamedMedium defines it)"
-                                            : fmt::format("; did you mean \"{}\"?", best)));
+                               hint.empty() ? " (no MakeNamedMedium defines it)" : hint));
 }
 
 void Builder::resolveMedia() {
