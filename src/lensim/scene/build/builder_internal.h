@@ -153,6 +153,11 @@ class Builder {
 
   void gridMedium(Medium& m, ParamSet& ps, const FileLoc& loc);
   void proceduralMedium(Medium& m, ParamSet& ps, const FileLoc& loc);  ///< cloud, nanovdb
+  /// Reports the medium's unused parameters and registers it under its name (a redefinition
+  /// warned).
+  void addNamedMedium(Medium m, ParamSet& ps);
+  /// out = the spectrum-valued parameter `name` (rgb, spectrum or blackbody), if given.
+  void optionalSpectrum(ParamSet& ps, const char* name, SpectrumValue& out);
   void subsurfaceCoefficients(Material& m, ParamSet& ps, const FileLoc& loc);
 
   int mediumIndex(const std::string& name, const FileLoc& loc);

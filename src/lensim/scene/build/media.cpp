@@ -18,18 +18,12 @@ void Builder::makeNamedMedium(const Directive& d) {
   m.medium_from_world = inverse(gs_.ctm[0]);
   if (*type == "uniformgrid" || *type == "rgbgrid" || *type == "heterogeneous") {
     gridMedium(m, ps, d.loc);
-    finish(ps);
-    if (named_media_.count(name)) warn(d.loc, fmt::format("named medium \"{}\" redefined", name));
-    scene_.media.push_back(std::move(m));
-    named_media_[name] = static_cast<int>(scene_.media.size()) - 1;
+    addNamedMedium(std::move(m), ps);
     return;
   }
   if (*type == "cloud" || *type == "nanovdb") {
     proceduralMedium(m, ps, d.loc);
-    finish(ps);
-    if (named_media_.count(name)) warn(d.loc, fmt::format("named medium \"{}\" redefined", name));
-    scene_.media.push_back(std::move(m));
-    named_media_[name] = static_cast<int>(scene_.media.size()) - 1;
+    addNamedMedium(std::move(m), ps);
     return;
   }
   if (*type != "homogeneous") {
@@ -49,16 +43,10 @@ void Builder::makeNamedMedium(const Directive& d) {
                               didYouMean(m.preset, mediumPresetNames(), 4)));
     }
   } else {
-    auto spectrum = [&](const char* pname, SpectrumValue& out) {
-      if (const Param* p =
-              ps.find({pname}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody}))
-        out = spectrumOf(*p);
-    };
-    spectrum("sigma_a", m.sigma_a);
-    spectrum("sigma_s", m.sigma_s);
+    optionalSpectrum(ps, "sigma_a", m.sigma_a);
+    optionalSpectrum(ps, "sigma_s", m.sigma_s);
   }
-  if (const Param* p = ps.find({"Le"}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody}))
-    m.Le = spectrumOf(*p);
+  optionalSpectrum(ps, "Le", m.Le);
   m.Le_scale = ps.getFloat({"Lescale"}, 1);
   m.scale = ps.getFloat({"scale"}, 1);
   m.g = ps.getFloat({"g"}, 0);
@@ -71,10 +59,20 @@ void Builder::makeNamedMedium(const Directive& d) {
     throw Error(p ? p->loc : d.loc,
                 fmt::format("medium \"{}\": scale {} must not be negative", name, m.scale));
   }
+  addNamedMedium(std::move(m), ps);
+}
+
+void Builder::addNamedMedium(Medium m, ParamSet& ps) {
   finish(ps);
-  if (named_media_.count(name)) warn(d.loc, fmt::format("named medium \"{}\" redefined", name));
+  const std::string name = m.name;
+  if (named_media_.count(name)) warn(m.loc, fmt::format("named medium \"{}\" redefined", name));
   scene_.media.push_back(std::move(m));
   named_media_[name] = static_cast<int>(scene_.media.size()) - 1;
+}
+
+void Builder::optionalSpectrum(ParamSet& ps, const char* name, SpectrumValue& out) {
+  if (const Param* p = ps.find({name}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody}))
+    out = spectrumOf(*p);
 }
 
 // pbrt-v4's "uniformgrid" (GridMedium: a density grid scaling sigma_a and sigma_s, optional
@@ -125,14 +123,9 @@ void Builder::gridMedium(Medium& m, ParamSet& ps, const FileLoc& loc) {
       throw Error(
           ps.peek({"temperature"})->loc,
           fmt::format("medium \"{}\": \"temperature\" grids are not rendered by lensim", m.name));
-    auto spectrum = [&](const char* pname, SpectrumValue& out) {
-      if (const Param* p =
-              ps.find({pname}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody}))
-        out = spectrumOf(*p);
-    };
-    spectrum("sigma_a", m.sigma_a);
-    spectrum("sigma_s", m.sigma_s);
-    spectrum("Le", m.Le);
+    optionalSpectrum(ps, "sigma_a", m.sigma_a);
+    optionalSpectrum(ps, "sigma_s", m.sigma_s);
+    optionalSpectrum(ps, "Le", m.Le);
     if (const Param* p = ps.find({"Lescale"}, {ParamType::Float})) {
       if (p->numbers.size() == 1 && n != 1) {
         m.Le_scale = p->numbers[0];
@@ -169,13 +162,8 @@ void Builder::gridMedium(Medium& m, ParamSet& ps, const FileLoc& loc) {
 // (default 1) times `scale` times a density from noise or from the file (media.cpp, Create).
 void Builder::proceduralMedium(Medium& m, ParamSet& ps, const FileLoc& loc) {
   m.type = m.type_as_written;
-  auto spectrum = [&](const char* pname, SpectrumValue& out) {
-    if (const Param* p =
-            ps.find({pname}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody}))
-      out = spectrumOf(*p);
-  };
-  spectrum("sigma_a", m.sigma_a);
-  spectrum("sigma_s", m.sigma_s);
+  optionalSpectrum(ps, "sigma_a", m.sigma_a);
+  optionalSpectrum(ps, "sigma_s", m.sigma_s);
   m.scale = ps.getFloat({"scale"}, 1);
   m.g = ps.getFloat({"g"}, 0);
   auto check = [&](const char* pname, double v, bool ok, const char* expected) {
