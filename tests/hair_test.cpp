@@ -117,7 +117,7 @@ TEST(HairBxDF, WhiteFurnaceIntegratesToOne) {
           return hair.f(c.wo, wi, TransportMode::Radiance).average() * std::abs(wi.z);
         },
         800, 11);
-    EXPECT_NEAR(I, 1.0, 0.005) << c.str();
+    EXPECT_NEAR(I, 1.0, 0.01) << c.str();
     worst = std::max(worst, std::abs(I - 1));
   }
   RecordProperty("worst_furnace_error", fmt::format("{:.4f}", worst));

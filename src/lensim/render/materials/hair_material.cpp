@@ -71,7 +71,10 @@ std::shared_ptr<const BxDF> makeHairBxDF(const scene::Material& m, const Texture
       break;
   }
   // The offset across the fibre from the surface's v (pbrt-v4: h = -1 + 2 uv[1]; for curves v
-  // runs across the width as pbrt-v4's curve intersection computes it).
+  // runs across the width as pbrt-v4's curve intersection computes it). Kept as pbrt-v4 has it,
+  // although by the model's geometry (R leaves at phi_o - 2 gamma_o, h = sin gamma_o) this side
+  // convention mirrors the lobes about the fibre relative to a geometric cylinder; it shows only
+  // where a fibre spans several pixels.
   const double h = -1 + 2 * ctx.uv.y;
   return std::make_shared<HairBxDF>(h, eta, sigma_a, beta_m, beta_n, alpha);
 }
