@@ -208,6 +208,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   // pbrt-v1–v3's directlighting (render/integrators/directlighting.h).
   const bool direct_lighting = scene.integrator.type == "directlighting";
   const DirectLightingOptions direct_opt{scene.integrator.all_lights, scene.integrator.max_depth};
+  if (direct_lighting && opt.pbrt_v2_quirks)
+    logWarning(fmt::format("{}: --pbrt-v2-quirks: pbrt-v2's ray epsilon is reproduced by the path "
+                           "integrator only; \"directlighting\" uses lensim's ray offsets",
+                           scene.integrator.loc.str()));
   for (const scene::Material& m : scene.materials)
     sc.has_interfaces = sc.has_interfaces || m.kind == scene::MaterialKind::Interface;
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
