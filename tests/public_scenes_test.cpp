@@ -69,9 +69,6 @@ struct Gap {
 // them: OpenImageIO images, bdpt, media). Remove an entry when its
 // feature lands; the test fails while a listed gap no longer occurs.
 const std::vector<Gap> kKnownGaps = {
-    // Subsurface with a textured coefficient (head: an image "reflectance"): lensim's random
-    // walk needs one homogeneous medium per material and refuses it; pbrt-v4 renders it.
-    {"pbrt-v4-scenes/head.pbrt", "error", "textured subsurface coefficients are not rendered"},
     // pbrt-v4's named camera sensors: their measured curves are not bundled (CIE 1931 used).
     {"pbrt-v4-scenes/bunny-cloud.pbrt", "warning", "\"sensor\": the measured response curves"},
     {"pbrt-v4-scenes/clouds.pbrt", "warning", "\"sensor\": the measured response curves"},

@@ -170,8 +170,9 @@ struct Material {
   Input specular, kr, kt, opacity, v3_reflect;
   // subsurface (pbrt-v4's SubsurfaceMaterial; the boundary is a dielectric of `eta` and
   // roughness): sigma_a and sigma_s (1/scene unit, times `scale`), from `name` (a measured
-  // medium, g 0) or given; or `reflectance` with the mean free path `mfp`. Constants only.
-  scene::SpectrumValue ss_sigma_a, ss_sigma_s, ss_reflectance, ss_mfp;
+  // medium, g 0) or given; or `reflectance` with the mean free path `mfp`. Each a constant or
+  // a spectrum texture, evaluated where a path enters the shape (render/media/subsurface.h).
+  Input ss_sigma_a, ss_sigma_s, ss_reflectance, ss_mfp;
   bool ss_from_reflectance = false;
   std::string ss_name;
   double ss_g = 0;

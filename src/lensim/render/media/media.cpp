@@ -215,7 +215,9 @@ Media::Media(const scene::Scene& scene) {
   for (size_t i = 0; i < scene.materials.size(); ++i)
     if (scene.materials[i].kind == scene::MaterialKind::Subsurface) {
       subsurface_[i] = int(media_.size());
-      media_.push_back(std::make_unique<SubsurfaceMedium>(scene.materials[i]));
+      auto ss = std::make_unique<SubsurfaceMedium>(scene.materials[i]);
+      textured_.push_back(ss->textured() ? ss.get() : nullptr);
+      media_.push_back(std::move(ss));
       has_subsurface_ = true;
     }
 }

@@ -233,20 +233,16 @@ void Builder::subsurfaceCoefficients(Material& m, ParamSet& ps, const FileLoc& l
   m.ss_g = ps.getFloat({"g"}, 0);
   if (!(m.ss_g > -1 && m.ss_g < 1))
     throw Error(ps.peek({"g"})->loc, fmt::format("subsurface: g {} outside (-1, 1)", m.ss_g));
-  auto constant = [&](const char* pname, SpectrumValue& out) {
-    const Param* p = ps.find(
-        {pname}, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody, ParamType::Texture});
-    if (!p) return false;
-    if (p->type == ParamType::Texture)
-      ps.fail(*p,
-              "textured subsurface coefficients are not rendered (the random walk needs "
-              "one homogeneous medium per material); give an rgb or spectrum value");
-    out = spectrumOf(*p);
-    return true;
+  // Each coefficient a constant or a spectrum texture, as pbrt-v4's GetSpectrumTextureOrNull
+  // takes them (src/pbrt/paramdict.cpp: a float texture there is an error).
+  auto input = [&](const char* pname, Input& out) {
+    std::optional<Input> in = spectrumInput(ps, {pname});
+    if (in) out = *in;
+    return in.has_value();
   };
   if (const Param* p = ps.find({"name"}, {ParamType::String})) {
     m.ss_name = p->strings[0];
-    if (!mediumPreset(m.ss_name, m.ss_sigma_a, m.ss_sigma_s)) {
+    if (!mediumPreset(m.ss_name, m.ss_sigma_a.spectrum, m.ss_sigma_s.spectrum)) {
       ps.fail(*p, fmt::format("unknown measured medium \"{}\"{}", m.ss_name,
                               didYouMean(m.ss_name, mediumPresetNames(), 4)));
     }
@@ -257,18 +253,17 @@ void Builder::subsurfaceCoefficients(Material& m, ParamSet& ps, const FileLoc& l
            "pbrt-v4");
     m.ss_g = 0;
   } else {
-    const bool a = constant("sigma_a", m.ss_sigma_a), s = constant("sigma_s", m.ss_sigma_s);
+    const bool a = input("sigma_a", m.ss_sigma_a), s = input("sigma_s", m.ss_sigma_s);
     if (a != s)
       throw Error(loc, a ? "subsurface: \"sigma_a\" given without \"sigma_s\""
                          : "subsurface: \"sigma_s\" given without \"sigma_a\"");
     if (!a) {
-      if (constant("reflectance", m.ss_reflectance)) {
+      if (input("reflectance", m.ss_reflectance)) {
         m.ss_from_reflectance = true;
-        m.ss_mfp = SpectrumValue::gray(1);
-        constant("mfp", m.ss_mfp);
+        m.ss_mfp = spectrumInput(ps, {"mfp"}, 1);
       } else {
-        m.ss_sigma_a.rgb = {.0011, .0024, .014};
-        m.ss_sigma_s.rgb = {2.55, 3.21, 3.77};
+        m.ss_sigma_a.spectrum.rgb = {.0011, .0024, .014};
+        m.ss_sigma_s.spectrum.rgb = {2.55, 3.21, 3.77};
       }
     }
   }
