@@ -444,11 +444,13 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         }
         return false;
       };
-      // The largest scale k of the polygon (centre c, vertex distances R) whose vertices all lie
-      // in the blocked middle: along each direction, the first passing point from the centre.
-      auto holeScale = [&](double h, Vec2 c, const std::vector<double>& R) {
-        if (passesAll(h, c)) return 0.0;
-        double k = 1;
+      // Along each direction of the polygon (centre c, vertex distances R): the distance from
+      // the centre to the first passing point (the edge of the blocked middle), a 16th of the
+      // vertex distance at a time, then bisected to a 1024th. All zero where the centre itself
+      // passes (no blocked middle there).
+      auto holeDistances = [&](double h, Vec2 c, const std::vector<double>& R) {
+        std::vector<double> d(size_t(nd), 0.0);
+        if (passesAll(h, c)) return d;
         for (int j = 0; j < nd; ++j) {
           constexpr int kSteps = 16;
           double lo = 0, hi = 1;
@@ -464,9 +466,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
             const double mid = 0.5 * (lo + hi);
             (passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * mid)) ? hi : lo) = mid;
           }
-          k = std::min(k, lo);
+          d[size_t(j)] = lo * R[size_t(j)];
         }
-        return k;
+        return d;
       };
       for (Interval& iv : out.intervals) {
         if (iv.empty) continue;
@@ -478,25 +480,52 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         };
         Vec2 c;
         std::vector<double> R;
-        double k = 1;
-        for (double t : {0.0, 0.5, 1.0}) {
-          const double h = at(t, c, R);
-          k = std::min(k, holeScale(h, c, R));
-          if (k <= 0) break;
+        std::vector<double> d[3];
+        bool any = true;
+        for (int e = 0; e < 3 && any; ++e) {
+          d[e] = holeDistances(at(0.5 * e, c, R), c, R);
+          any = *std::max_element(d[e].begin(), d[e].end()) > 0;
         }
-        k *= 1 - 3 * opts.margin;  // the safety margin, inward
-        // Check the hole between the ends: every vertex of the scaled polygon blocked.
-        for (int tries = 0; tries < 4 && k > 0.05; ++tries) {
+        if (!any) continue;
+        // The hole's vertex distances at the ends: each no farther than the blocked middle's edge
+        // at its end and (so that the interpolated hole lies inside at the middle too) at the
+        // middle; pulled in by the safety margin.
+        const double pull = 1 - opts.margin;
+        std::vector<double> HA(static_cast<size_t>(nd)), HB(static_cast<size_t>(nd));
+        for (int j = 0; j < nd; ++j) {
+          HA[size_t(j)] = std::min(d[0][size_t(j)], d[1][size_t(j)]) * pull;
+          HB[size_t(j)] = std::min(d[2][size_t(j)], d[1][size_t(j)]) * pull;
+        }
+        // Check the hole between the ends: every vertex of the hole and the middle of every edge
+        // blocked; else shrink it.
+        double k = 1;
+        for (int tries = 0; tries < 4; ++tries) {
           bool ok = true;
           for (double t : {0.25, 0.75}) {
             const double h = at(t, c, R);
-            for (int j = 0; j < nd && ok; ++j)
-              ok = !passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * k));
+            for (int j = 0; j < nd && ok; ++j) {
+              const int j1 = (j + 1) % nd;
+              const Vec2 a = dirs_[size_t(j)] * (k * (HA[size_t(j)] * (1 - t) + HB[size_t(j)] * t));
+              const Vec2 b = dirs_[size_t(j1)] * (k * (HA[size_t(j1)] * (1 - t) + HB[size_t(j1)] * t));
+              ok = !passesAll(h, c + a) && !passesAll(h, c + (a + b) * 0.5);
+            }
           }
           if (ok) break;
-          k *= 0.8;
+          k = tries < 3 ? k * 0.8 : 0.0;
         }
-        iv.hole = k > 0.05 ? k : 0.0;
+        if (!(k > 0)) continue;
+        for (int j = 0; j < nd; ++j) HA[size_t(j)] *= k, HB[size_t(j)] *= k;
+        // The fan's prefix sums count the polygon minus the hole.
+        for (int j = 0; j < nd; ++j) {
+          const int j1 = (j + 1) % nd;
+          double* p = &iv.P[3 * size_t(j)];
+          p[3] = p[0] + iv.A[size_t(j)] * iv.A[size_t(j1)] - HA[size_t(j)] * HA[size_t(j1)];
+          p[4] = p[1] + iv.A[size_t(j)] * iv.B[size_t(j1)] + iv.B[size_t(j)] * iv.A[size_t(j1)] -
+                 HA[size_t(j)] * HB[size_t(j1)] - HB[size_t(j)] * HA[size_t(j1)];
+          p[5] = p[2] + iv.B[size_t(j)] * iv.B[size_t(j1)] - HB[size_t(j)] * HB[size_t(j1)];
+        }
+        iv.HA = std::move(HA);
+        iv.HB = std::move(HB);
       }
     }
     // A table from film radius to the first interval that can hold it, so that a lookup is a
@@ -754,21 +783,46 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
     const double c_lo = cum(k, j), tri = cum(k, j + 1) - c_lo;
     const double ux = tri > 0 ? std::clamp((target[k] - c_lo) / tri, 0.0, 1.0) : 0.0;
     const Interval& v = *iv[k];
-    // Uniform in the polygon minus the hole scaled by v.hole: the fraction of the way out along
-    // the fan, s, has s^2 uniform in [hole^2, 1].
-    const double s = std::sqrt(v.hole * v.hole + ux * (1 - v.hole * v.hole));
     const double tt = t[k];
     const Vec2 a = dirs_[j] * (v.A[j] * (1 - tt) + v.B[j] * tt);
     const Vec2 b = dirs_[j1] * (v.A[j1] * (1 - tt) + v.B[j1] * tt);
     const Vec2 centre = v.c0 * (1 - tt) + v.c1 * tt;
     const double uy = u[lane[k]].y;
-    const Vec2 local = centre + (a * (1 - uy) + b * uy) * s;
+    Vec2 local;
+    if (!v.hasHole()) {
+      // Uniform in the fan triangle (centre, a, b): the fraction of the way out, s, has s^2
+      // uniform.
+      local = centre + (a * (1 - uy) + b * uy) * std::sqrt(ux);
+    } else {
+      // Uniform in the fan triangle minus the hole's (centre, ha, hb): the quadrilateral
+      // (ha, a, b, hb), split along a diagonal that lies inside it into two triangles, one picked
+      // by area (reusing ux), then uniform in it.
+      const Vec2 ha = dirs_[j] * (v.HA[j] * (1 - tt) + v.HB[j] * tt);
+      const Vec2 hb = dirs_[j1] * (v.HA[j1] * (1 - tt) + v.HB[j1] * tt);
+      Vec2 p0 = ha, p1 = a, p2 = b, q0 = ha, q1 = b, q2 = hb;
+      double s1 = cross2(a - ha, b - ha), s2 = cross2(b - ha, hb - ha);
+      if (s1 < 0 || s2 < 0) {  // the other diagonal
+        p0 = a, p1 = b, p2 = hb, q0 = a, q1 = hb, q2 = ha;
+        s1 = cross2(b - a, hb - a), s2 = cross2(hb - a, ha - a);
+      }
+      s1 = std::max(s1, 0.0), s2 = std::max(s2, 0.0);
+      const double f1 = s1 + s2 > 0 ? s1 / (s1 + s2) : 1.0;
+      double w = ux;
+      if (w < f1) {
+        w = f1 > 0 ? w / f1 : 0.0;
+      } else {
+        w = (w - f1) / (1 - f1);
+        p0 = q0, p1 = q1, p2 = q2;
+      }
+      const double sw = std::sqrt(std::clamp(w, 0.0, 1.0));
+      local = centre + p0 * (1 - sw) + (p1 * (1 - uy) + p2 * uy) * sw;
+    }
     // From the +x film frame to the film point's azimuth.
     const Vec2 f = film_mm[lane[k]];
     Vec2 rear = toFilmAzimuth(local, std::hypot(f.x, f.y), ca[k], sa[k]);
     if (!rotational_) rear = {f.x < 0 ? -rear.x : rear.x, f.y < 0 ? -rear.y : rear.y};
     out[lane[k]] = PupilSample{{rear.x, rear.y, z_rear_mm_},
-                               0.5 * total[k] * dirs_[1].y * (1 - v.hole * v.hole)};
+                               0.5 * total[k] * dirs_[1].y};
   }
 }
 
@@ -796,8 +850,12 @@ bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm, int band) const {
   const Vec2 a = dirs_[j] * (iv->A[j] * (1 - t) + iv->B[j] * t);
   const Vec2 b = dirs_[j1] * (iv->A[j1] * (1 - t) + iv->B[j1] * t);
   // Inside the fan triangle (0, a, b): on the origin's side of the edge a-b; and not inside the
-  // hole (the triangle scaled by `hole`).
-  if (iv->hole > 0 && cross2(b - a, q - a * iv->hole) > 0) return false;
+  // hole's triangle (0, ha, hb).
+  if (iv->hasHole()) {
+    const Vec2 ha = dirs_[j] * (iv->HA[j] * (1 - t) + iv->HB[j] * t);
+    const Vec2 hb = dirs_[j1] * (iv->HA[j1] * (1 - t) + iv->HB[j1] * t);
+    if (cross2(hb - ha, q - ha) > 0) return false;
+  }
   return cross2(b - a, q - a) >= 0;
 }
 
@@ -808,7 +866,7 @@ double ExitPupilSampler::area_mm2(Vec2 film_mm, int band) const {
   const int nd = directions_;
   const double total = (1 - t) * (1 - t) * iv->P[3 * nd] + t * (1 - t) * iv->P[3 * nd + 1] +
                        t * t * iv->P[3 * nd + 2];
-  return 0.5 * total * dirs_[1].y * (1 - iv->hole * iv->hole);
+  return 0.5 * total * dirs_[1].y;
 }
 
 }  // namespace lensim::optics
