@@ -1,12 +1,14 @@
 #include "lensim/optics/pupil.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <numbers>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "lensim/optics/anamorphic.h"
@@ -60,10 +62,27 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // across it (edges included) and checked at the azimuths half-way between those.
   const int n_sectors = rotational_ ? 1 : std::max(1, opts.sectors);
   const int per = std::max(2, opts.azimuths);
-  // Each wedge's bound is built on its own (its own azimuths and trace count), so that the
-  // wedges of an anamorphic lens are built side by side (TBB); a rotational lens has one.
+  // Each wedge's bound is built on its own (its own azimuths); a rotational lens has one. The
+  // build runs in stages whose pieces are independent, so that they run side by side (TBB; the
+  // start-up budget is wall time on two cores): (0) the uniform nodes, each found from its
+  // neighbour's polygon, one wedge a task; (1) each uniform interval's checks and refinement,
+  // one interval a task; (2) the wavelength bands' vertex distances, a few nodes a task; (3) the
+  // sampling tables (and an obscuration's hole), one wedge a task. Each task starts from the
+  // same state (no search hints carried over from another task), so that the bounds do not
+  // depend on how the tasks are scheduled.
+  struct Work {
+    std::vector<Polygon> initial;                                // stage 0
+    std::vector<std::vector<Polygon>> refined;                   // stage 1, per interval
+    std::vector<std::vector<std::vector<double>>> refined_scales;
+    std::vector<Polygon> done;                                   // all nodes, by radius
+    std::vector<std::vector<double>> scales;                     // per interval
+    std::vector<std::vector<Polygon>> band_nodes;                // stage 2
+    std::vector<Sector> sets;                                    // stage 3
+  };
+  std::vector<Work> work(static_cast<size_t>(n_sectors));
   std::atomic<long> traces_total{0};
-  auto buildSector = [&](int sec) -> std::vector<Sector> {
+  auto buildSector = [&](int sec, int stage, int k0, int k1) {
+  Work& w = work[size_t(sec)];
   long traces = 0;
   std::vector<double> az, az_main, az_check;
   // The margin of a rear-plane point: the ray from the film point toward it, traced without
@@ -379,15 +398,18 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     az = az_main;
     last_az = 0;
   }
-  std::vector<Polygon> done;
-  std::vector<std::vector<double>> scales;
-  std::vector<Polygon> stack;  // right ends still to process, nearest last
-  std::vector<Polygon> initial;
-  for (int k = 0; k <= ni; ++k)
-    initial.push_back(makeNode(film_radius_mm * k / ni, k > 0 ? &initial.back() : nullptr));
-  for (int k = ni; k >= 1; --k) stack.push_back(initial[k]);
-  Polygon left = initial[0];
-  done.push_back(left);
+  if (stage == 0) {
+    for (int k = 0; k <= ni; ++k)
+      w.initial.push_back(makeNode(film_radius_mm * k / ni, k > 0 ? &w.initial.back() : nullptr));
+    traces_total += traces;
+    return;
+  }
+  if (stage == 1) {
+  // The uniform interval k0: its nodes after its left end, and each sub-interval's scales.
+  std::vector<Polygon>& done = w.refined[size_t(k0)];
+  std::vector<std::vector<double>>& scales = w.refined_scales[size_t(k0)];
+  std::vector<Polygon> stack{w.initial[size_t(k0) + 1]};  // right ends still to process, nearest last
+  Polygon left = w.initial[size_t(k0)];
   while (!stack.empty()) {
     Polygon right = stack.back();
     const double h = 0.5 * (left.r + right.r);
@@ -430,9 +452,13 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     stack.pop_back();
     left = right;
   }
+  traces_total += traces;
+  return;
+  }  // stage 1
+  const std::vector<Polygon>& done = w.done;
   auto makeSector = [&](const std::vector<Polygon>& nodes) {
     Sector out;
-    out.intervals = buildIntervals(nodes, scales);
+    out.intervals = buildIntervals(nodes, w.scales);
     // Central obscurations: a hole in each interval's polygon (rotationally symmetric lenses).
     if (obscured && rotational_) {
       auto passesAll = [&](double h, Vec2 a) {  // with obscurations, at any wavelength covered
@@ -540,8 +566,13 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     }
     return out;
   };
-  std::vector<Sector> sets;
-  sets.push_back(makeSector(done));
+  if (stage == 3) {
+    w.sets.push_back(makeSector(done));
+    for (const std::vector<Polygon>& nodes : w.band_nodes) w.sets.push_back(makeSector(nodes));
+    traces_total += traces;
+    return;
+  }
+  // Stage 2: the bands' nodes k0 .. k1 - 1.
   // Wavelength bands: the same nodes, each vertex distance the farthest of the band's lenses'
   // boundaries along the vertex's direction from the node's centre (each lens's region is
   // star-shaped about it, so that this is the union's), each from the lens's own distance (two
@@ -556,10 +587,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     for (const LensSystem* L : band)
       if (std::find(band_lens.begin(), band_lens.end(), L) == band_lens.end())
         band_lens.push_back(L);
-  std::vector<std::vector<Polygon>> band_nodes(opts.bands.size(), done);
   std::vector<std::vector<double>> dist(band_lens.size());
   std::vector<char> inside(band_lens.size());
-  for (size_t k = 0; k < done.size() && !opts.bands.empty(); ++k) {
+  for (size_t k = size_t(k0); k < size_t(k1) && !opts.bands.empty(); ++k) {
     const Polygon& base = done[k];
     const double h = base.r;
     if (!base.empty) {
@@ -577,7 +607,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     }
     for (size_t b = 0; b < opts.bands.size(); ++b) {
       const std::vector<const LensSystem*>& band = opts.bands[b];
-      Polygon& node = band_nodes[b][k];
+      Polygon& node = w.band_nodes[b][k];
       if (band.empty()) continue;
       bool all_in = !base.empty;
       for (const LensSystem* L : band)
@@ -613,20 +643,49 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       node = np;
     }
   }
-  for (const std::vector<Polygon>& nodes : band_nodes) sets.push_back(makeSector(nodes));
   traces_total += traces;
-  return sets;
   };  // buildSector
-  std::vector<std::vector<Sector>> by_sector(static_cast<size_t>(n_sectors));
-  if (n_sectors == 1) {
-    by_sector[0] = buildSector(0);
-  } else {
-    tbb::parallel_for(0, n_sectors,
-                      [&](int sec) { by_sector[size_t(sec)] = buildSector(sec); });
+  // The stages: each a list of (wedge, stage, k0, k1) tasks.
+  auto runStage = [&](const std::vector<std::array<int, 4>>& tasks) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t i = range.begin(); i != range.end(); ++i)
+                          buildSector(tasks[i][0], tasks[i][1], tasks[i][2], tasks[i][3]);
+                      });
+  };
+  std::vector<std::array<int, 4>> tasks;
+  for (int sec = 0; sec < n_sectors; ++sec) tasks.push_back({sec, 0, 0, 0});
+  runStage(tasks);
+  tasks.clear();
+  for (int sec = 0; sec < n_sectors; ++sec) {
+    work[size_t(sec)].refined.assign(size_t(ni), {});
+    work[size_t(sec)].refined_scales.assign(size_t(ni), {});
+    for (int k = 0; k < ni; ++k) tasks.push_back({sec, 1, k, k + 1});
   }
-  sets_.assign(by_sector[0].size(), {});
-  for (auto& secs : by_sector)
-    for (size_t set = 0; set < secs.size(); ++set) sets_[set].push_back(std::move(secs[set]));
+  runStage(tasks);
+  tasks.clear();
+  constexpr int kBandNodesPerTask = 4;
+  for (int sec = 0; sec < n_sectors; ++sec) {
+    Work& w = work[size_t(sec)];
+    w.done = {w.initial[0]};
+    for (int k = 0; k < ni; ++k) {
+      w.done.insert(w.done.end(), w.refined[size_t(k)].begin(), w.refined[size_t(k)].end());
+      w.scales.insert(w.scales.end(), w.refined_scales[size_t(k)].begin(),
+                      w.refined_scales[size_t(k)].end());
+    }
+    w.band_nodes.assign(opts.bands.size(), w.done);
+    const int n = static_cast<int>(w.done.size());
+    if (!opts.bands.empty())
+      for (int k = 0; k < n; k += kBandNodesPerTask)
+        tasks.push_back({sec, 2, k, std::min(n, k + kBandNodesPerTask)});
+  }
+  runStage(tasks);
+  tasks.clear();
+  for (int sec = 0; sec < n_sectors; ++sec) tasks.push_back({sec, 3, 0, 0});
+  runStage(tasks);
+  sets_.assign(work[0].sets.size(), {});
+  for (Work& w : work)
+    for (size_t set = 0; set < w.sets.size(); ++set) sets_[set].push_back(std::move(w.sets[set]));
   traces_ = traces_total;
   intervals_ = sets_[0].front().intervals;
   radius_lut_ = sets_[0].front().lut;
