@@ -60,8 +60,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // Anamorphic lenses are symmetric under x -> -x and y -> -y: bounds are built for film points
   // in the first quadrant, in `sectors` wedges, each covering the regions at `per` azimuths
   // across it (edges included) and checked at the azimuths half-way between those.
-  const int n_sectors = rotational_ ? 1 : std::max(1, opts.sectors);
-  const int per = std::max(2, opts.azimuths);
+  // Anamorphic: a bound along each wedge edge ("sector" below), blended across the wedges.
+  const int n_wedges = std::max(1, opts.sectors);
+  const int n_sectors = rotational_ ? 1 : n_wedges + 1;
+  const double wedge = (std::numbers::pi / 2) / n_wedges;
+  // Where across a wedge its blended polygon is checked against the true region.
+  const std::vector<double> kWedgeChecks = {0.5};
   // Each wedge's bound is built on its own (its own azimuths); a rotational lens has one. The
   // build runs in stages whose pieces are independent, so that they run side by side (TBB; the
   // start-up budget is wall time on two cores): (0) the uniform nodes, each found from its
@@ -354,7 +358,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // azimuths between them.
   auto checkPoints = [&](double h, double offset, const Polygon* hint) {
     std::vector<Vec2> pts = boundaryPoints(h, nd, offset, nullptr, hint);
-    if (!rotational_) {
+    if (!rotational_ && !az_check.empty()) {
       az = az_check;
       last_az = 0;
       std::vector<Vec2> more = boundaryPoints(h, nd, offset, nullptr, hint);
@@ -391,10 +395,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // the region changes fast (at the edge of the image circle), the interval is split.
   const double min_width = film_radius_mm / (ni * 16.0);
   if (!rotational_) {
-    const double w = (std::numbers::pi / 2) / n_sectors, a0 = sec * w;
-    az_main.clear(), az_check.clear();
-    for (int k = 0; k < per; ++k) az_main.push_back(a0 + w * k / (per - 1));
-    for (int k = 0; k + 1 < per; ++k) az_check.push_back(a0 + w * (k + 0.5) / (per - 1));
+    // The wedge edge's azimuth (a wedge's checks, stage 4, set their own).
+    az_main = {sec * wedge};
+    az_check.clear();
     az = az_main;
     last_az = 0;
   }
@@ -455,6 +458,46 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   traces_total += traces;
   return;
   }  // stage 1
+  if (stage == 4) {
+    // Anamorphic: wedge `sec`'s blended polygon checked against the true region at its middle
+    // azimuth, at both edges' nodes and interval middles; the factors that widen it to hold the
+    // boundary points found, with the safety margin.
+    std::vector<double> rs;
+    for (int l : {sec, sec + 1})
+      for (const Interval& iv : sets_[0][size_t(l)].intervals)
+        rs.insert(rs.end(), {iv.r0, 0.5 * (iv.r0 + iv.r1), iv.r1});
+    std::sort(rs.begin(), rs.end());
+    std::vector<double> kept;
+    for (double r : rs)
+      if (kept.empty() || r - kept.back() > 0.25 * min_width) kept.push_back(r);
+    // Filled on the side: blended() must give the unwidened polygon while checking.
+    WedgeCheck wc;
+    std::vector<double> R(static_cast<size_t>(nd));
+    for (double h : kept) {
+      Polygon poly;
+      poly.r = h;
+      std::vector<double> f(size_t(nd), 1.0);
+      for (double sw : kWedgeChecks) {
+        if (!blended(0, sec, h, sw, poly.centre, R.data())) continue;
+        az = {(sec + sw) * wedge};
+        last_az = 0;
+        poly.empty = false;
+        poly.radius = R;
+        for (double off : {0.25, 0.75}) {
+          const std::vector<double> g =
+              coverFactors(poly, boundaryPoints(h, nd, off * dphi, nullptr, &poly));
+          for (int j = 0; j < nd; ++j) f[size_t(j)] = std::max(f[size_t(j)], g[size_t(j)]);
+        }
+      }
+      for (double& v : f)
+        if (v > 1) v *= 1 + opts.margin;
+      wc.r.push_back(h);
+      wc.f.push_back(std::move(f));
+    }
+    wedges_[size_t(sec)] = std::move(wc);
+    traces_total += traces;
+    return;
+  }
   const std::vector<Polygon>& done = w.done;
   auto makeSector = [&](const std::vector<Polygon>& nodes) {
     Sector out;
@@ -686,6 +729,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   sets_.assign(work[0].sets.size(), {});
   for (Work& w : work)
     for (size_t set = 0; set < w.sets.size(); ++set) sets_[set].push_back(std::move(w.sets[set]));
+  if (!rotational_) {
+    wedges_.assign(size_t(n_wedges), {});
+    for (int wdg = 0; wdg < n_wedges; ++wdg) tasks.push_back({wdg, 4, 0, 0});
+    runStage(tasks);
+    tasks.clear();
+  }
   traces_ = traces_total;
   intervals_ = sets_[0].front().intervals;
   radius_lut_ = sets_[0].front().lut;
@@ -777,15 +826,8 @@ const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double&
   if (set < 0 || set >= static_cast<int>(sets_.size())) return nullptr;
   const std::vector<Sector>& sectors = sets_[size_t(set)];
   if (r > film_radius_mm_ * (1 + 1e-9) || sectors.empty()) return nullptr;
+  // Rotationally symmetric lenses only (anamorphic ones: blended()).
   const Sector* sec = &sectors.front();
-  if (!rotational_) {
-    // Anamorphic: the film point mirrored into the first quadrant picks its wedge; the caller
-    // mirrors the rear point back.
-    film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
-    const double phi = std::atan2(film_mm.y, film_mm.x);
-    const int n = static_cast<int>(sectors.size());
-    sec = &sectors[size_t(std::clamp(int(phi / (std::numbers::pi / 2) * n), 0, n - 1))];
-  }
   if (sec->intervals.empty()) return nullptr;
   const Interval& iv = sec->intervals[size_t(intervalIn(sec->intervals, sec->lut, sec->lut_scale, r))];
   if (iv.empty) return nullptr;
@@ -802,8 +844,91 @@ std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u, int ba
   return out;
 }
 
+void ExitPupilSampler::wedgeOf(Vec2 film_mm, int& wedge, double& s, double& r) const {
+  const double fx = std::abs(film_mm.x), fy = std::abs(film_mm.y);
+  r = std::sqrt(fx * fx + fy * fy);
+  const int n = static_cast<int>(wedges_.size());
+  const double q = std::atan2(fy, fx) / (std::numbers::pi / 2) * n;
+  wedge = std::clamp(static_cast<int>(q), 0, n - 1);
+  s = std::clamp(q - wedge, 0.0, 1.0);
+}
+
+bool ExitPupilSampler::blended(int set, int wedge, double r, double s, Vec2& c, double* R) const {
+  const int nd = directions_;
+  if (set < 0 || set >= static_cast<int>(sets_.size())) return false;
+  if (r > film_radius_mm_ * (1 + 1e-9)) return false;
+  const std::vector<Sector>& lines = sets_[size_t(set)];
+  auto lineAt = [&](const Sector& L, Vec2& cc, double* RR) {
+    if (L.intervals.empty()) return false;
+    const Interval& iv = L.intervals[size_t(intervalIn(L.intervals, L.lut, L.lut_scale, r))];
+    if (iv.empty) return false;
+    const double t = iv.r1 > iv.r0 ? std::clamp((r - iv.r0) / (iv.r1 - iv.r0), 0.0, 1.0) : 0.0;
+    cc = iv.c0 * (1 - t) + iv.c1 * t;
+    for (int j = 0; j < nd; ++j) RR[j] = iv.A[size_t(j)] * (1 - t) + iv.B[size_t(j)] * t;
+    return true;
+  };
+  thread_local std::vector<double> other;
+  other.resize(size_t(nd));
+  Vec2 cb;
+  const bool a = lineAt(lines[size_t(wedge)], c, R);
+  const bool b = lineAt(lines[size_t(wedge) + 1], cb, other.data());
+  if (!a && !b) return false;
+  if (a && b) {
+    c = c * (1 - s) + cb * s;
+    for (int j = 0; j < nd; ++j) R[j] = R[j] * (1 - s) + other[size_t(j)] * s;
+  } else if (b) {  // one edge's region is empty at r (beyond its image circle): the other's
+    c = cb;
+    std::copy(other.begin(), other.end(), R);
+  }
+  const WedgeCheck& wc = wedges_[size_t(wedge)];
+  if (!wc.r.empty()) {
+    // The checks at the film radii around r; beyond the last, the last's.
+    const size_t m = size_t(std::upper_bound(wc.r.begin(), wc.r.end(), r) - wc.r.begin());
+    const std::vector<double>& f0 = wc.f[m > 0 ? m - 1 : 0];
+    const std::vector<double>& f1 = wc.f[std::min(m, wc.r.size() - 1)];
+    for (int j = 0; j < nd; ++j) R[j] *= std::max(f0[size_t(j)], f1[size_t(j)]);
+  }
+  return true;
+}
+
+std::optional<PupilSample> ExitPupilSampler::sampleAnamorphic(Vec2 film_mm, Vec2 u,
+                                                              int set) const {
+  const int nd = directions_;
+  int wedge;
+  double s, r;
+  wedgeOf(film_mm, wedge, s, r);
+  thread_local std::vector<double> R, P;
+  R.resize(size_t(nd));
+  P.resize(size_t(nd) + 1);
+  Vec2 c;
+  if (!blended(set, wedge, r, s, c, R.data())) return std::nullopt;
+  P[0] = 0;
+  for (int j = 0; j < nd; ++j) P[size_t(j) + 1] = P[size_t(j)] + R[size_t(j)] * R[size_t((j + 1) % nd)];
+  const double total = P[size_t(nd)];
+  if (!(total > 0)) return std::nullopt;
+  // A fan triangle by area, then uniform in it (as sampleBatch).
+  const double target = u.x * total;
+  const int j = std::min(
+      static_cast<int>(std::upper_bound(P.begin() + 1, P.end(), target) - (P.begin() + 1)), nd - 1);
+  const int j1 = (j + 1) % nd;
+  const double tri = P[size_t(j) + 1] - P[size_t(j)];
+  const double ux = tri > 0 ? std::clamp((target - P[size_t(j)]) / tri, 0.0, 1.0) : 0.0;
+  const Vec2 local = c + (dirs_[size_t(j)] * (R[size_t(j)] * (1 - u.y)) +
+                          dirs_[size_t(j1)] * (R[size_t(j1)] * u.y)) *
+                             std::sqrt(ux);
+  const double fx = std::abs(film_mm.x), fy = std::abs(film_mm.y);
+  const double ca = r > 0 ? fx / r : 1.0, sa = r > 0 ? fy / r : 0.0;
+  Vec2 rear = toFilmAzimuth(local, r, ca, sa);
+  rear = {film_mm.x < 0 ? -rear.x : rear.x, film_mm.y < 0 ? -rear.y : rear.y};
+  return PupilSample{{rear.x, rear.y, z_rear_mm_}, 0.5 * total * dirs_[1].y};
+}
+
 void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
                                    std::optional<PupilSample>* out, int band) const {
+  if (!rotational_) {
+    for (int i = 0; i < std::min(n, kBatch); ++i) out[i] = sampleAnamorphic(film_mm[i], u[i], band + 1);
+    return;
+  }
   const int nd = directions_;
   const Interval* iv[kBatch];
   double t[kBatch], ca[kBatch], sa[kBatch], w0[kBatch], w1[kBatch], w2[kBatch], target[kBatch],
@@ -878,8 +1003,7 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
     }
     // From the +x film frame to the film point's azimuth.
     const Vec2 f = film_mm[lane[k]];
-    Vec2 rear = toFilmAzimuth(local, std::hypot(f.x, f.y), ca[k], sa[k]);
-    if (!rotational_) rear = {f.x < 0 ? -rear.x : rear.x, f.y < 0 ? -rear.y : rear.y};
+    const Vec2 rear = toFilmAzimuth(local, std::hypot(f.x, f.y), ca[k], sa[k]);
     out[lane[k]] = PupilSample{{rear.x, rear.y, z_rear_mm_},
                                0.5 * total[k] * dirs_[1].y};
   }
@@ -887,20 +1011,33 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
 
 bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm, int band) const {
   if (!rotational_) {
-    rear_mm = {film_mm.x < 0 ? -rear_mm.x : rear_mm.x, film_mm.y < 0 ? -rear_mm.y : rear_mm.y};
-    film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
+    // Into the first quadrant's frame, then relative to the blended polygon's centre.
+    const int nd = directions_;
+    int wedge;
+    double s, r;
+    wedgeOf(film_mm, wedge, s, r);
+    thread_local std::vector<double> R;
+    R.resize(size_t(nd));
+    Vec2 c;
+    if (!blended(band + 1, wedge, r, s, c, R.data())) return false;
+    const double fx = std::abs(film_mm.x), fy = std::abs(film_mm.y);
+    const double ca = r > 0 ? fx / r : 1.0, sa = r > 0 ? fy / r : 0.0;
+    const Vec2 rq{film_mm.x < 0 ? -rear_mm.x : rear_mm.x, film_mm.y < 0 ? -rear_mm.y : rear_mm.y};
+    const Vec2 q{rq.x - (kappa_x_ * ca - kappa_x_) * r - c.x, rq.y - kappa_y_ * sa * r - c.y};
+    const double dphi = 2 * std::numbers::pi / nd;
+    double ang = std::atan2(q.y, q.x);
+    if (ang < 0) ang += 2 * std::numbers::pi;
+    const int j = std::min(static_cast<int>(ang / dphi), nd - 1), j1 = (j + 1) % nd;
+    const Vec2 a = dirs_[size_t(j)] * R[size_t(j)], b = dirs_[size_t(j1)] * R[size_t(j1)];
+    return cross2(b - a, q - a) >= 0;
   }
   double t, ca, sa;
   const Interval* iv = locate(film_mm, t, ca, sa, band + 1);
   if (!iv) return false;
   const Vec2 centre = iv->c0 * (1 - t) + iv->c1 * t;
   // Into the +x frame, relative to the centre.
-  Vec2 q{ca * rear_mm.x + sa * rear_mm.y - centre.x, -sa * rear_mm.x + ca * rear_mm.y - centre.y};
-  if (!rotational_) {
-    const double r = std::hypot(film_mm.x, film_mm.y);
-    q = {rear_mm.x - (kappa_x_ * ca - kappa_x_) * r - centre.x,
-         rear_mm.y - kappa_y_ * sa * r - centre.y};
-  }
+  const Vec2 q{ca * rear_mm.x + sa * rear_mm.y - centre.x,
+               -sa * rear_mm.x + ca * rear_mm.y - centre.y};
   const int nd = directions_;
   const double dphi = 2 * std::numbers::pi / nd;
   double ang = std::atan2(q.y, q.x);
@@ -919,6 +1056,19 @@ bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm, int band) const {
 }
 
 double ExitPupilSampler::area_mm2(Vec2 film_mm, int band) const {
+  if (!rotational_) {
+    const int nd = directions_;
+    int wedge;
+    double s, r;
+    wedgeOf(film_mm, wedge, s, r);
+    thread_local std::vector<double> R;
+    R.resize(size_t(nd));
+    Vec2 c;
+    if (!blended(band + 1, wedge, r, s, c, R.data())) return 0.0;
+    double total = 0;
+    for (int j = 0; j < nd; ++j) total += R[size_t(j)] * R[size_t((j + 1) % nd)];
+    return 0.5 * total * dirs_[1].y;
+  }
   double t, ca, sa;
   const Interval* iv = locate(film_mm, t, ca, sa, band + 1);
   if (!iv) return 0.0;
