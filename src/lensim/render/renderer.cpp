@@ -495,7 +495,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                       // Also without a camera ray: the light subpath's splats do not need it.
                       if (!ray) {
                         ++n_none;
-                        n_outside += !cam->reachesFilm(cs[k].film_raster);
+                        n_outside += !cam->reachesFilm(cs[k]);
                       } else {
                         ++n_rays;
                       }
@@ -515,7 +515,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                       }
                     } else if (!ray) {
                       ++n_none;
-                      n_outside += !cam->reachesFilm(cs[k].film_raster);
+                      n_outside += !cam->reachesFilm(cs[k]);
                     } else {
                       ++n_rays;
                       sampler->startPixelSample({x, y}, i0 + k, path_dimension);
