@@ -77,6 +77,7 @@ json surfacesJson(const LensSystem& lens) {
         e["aspheric"] = a;
       }
       if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
+      if (s.shape.rotation_radius_mm) e["rotation_radius_mm"] = *s.shape.rotation_radius_mm;
     }
   }
   return arr;
@@ -349,9 +350,14 @@ int runInfo(const LensArgs& args, bool as_json) {
     if (sh.isSpherical()) continue;
     std::string d = fmt::format("  surface {}: ", i);
     if (sh.radius_x_mm) d += fmt::format("x-section radius {:.4f} mm, ", *sh.radius_x_mm);
+    if (sh.rotation_radius_mm)
+      d += *sh.rotation_radius_mm != 0
+               ? fmt::format("toroidal, radius of rotation {:.4f} mm, ", *sh.rotation_radius_mm)
+               : std::string("toroidal, radius of rotation infinite (cylinder), ");
     d += fmt::format("conic {:.6g}", sh.conic);
     for (size_t k = 1; k < sh.poly.size(); ++k)
-      if (sh.poly[k] != 0) d += fmt::format(", r^{} {:.6g}", k, sh.poly[k]);
+      if (sh.poly[k] != 0)
+        d += fmt::format(", {}^{} {:.6g}", sh.isToroidal() ? "y" : "r", k, sh.poly[k]);
     std::cout << d << "\n";
   }
   return 0;

@@ -11,6 +11,13 @@ bool isRotationallySymmetric(const LensPrescription& p) {
 LensPrescription xSection(const LensPrescription& p) {
   LensPrescription x = p;
   for (LensSurface& s : x.surfaces) {
+    if (s.shape.isToroidal()) {
+      // A toroid's x-z section is the circle of radius R (0: flat), with no conic or terms.
+      if (!s.stop_flag) s.stop_flag = s.isStop();
+      s.radius_mm = *s.shape.rotation_radius_mm;
+      s.shape = SurfaceShape{};
+      continue;
+    }
     if (!s.shape.radius_x_mm) continue;
     if (!s.stop_flag) s.stop_flag = s.isStop();  // a flat x section must not become the stop
     s.radius_mm = *s.shape.radius_x_mm;

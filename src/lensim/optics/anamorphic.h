@@ -1,5 +1,5 @@
 // First-order data of lenses that are not rotationally symmetric (anamorphic lenses with
-// cylindrical or biconic surfaces): the x-z and y-z sections are traced paraxially apart.
+// cylindrical, biconic or toroidal surfaces): the x-z and y-z sections are traced paraxially apart.
 #pragma once
 
 #include <optional>
@@ -13,7 +13,8 @@ namespace lensim::optics {
 bool isRotationallySymmetric(const LensPrescription& p);
 
 /// The x-z section of a lens as a rotationally symmetric prescription: every surface takes its
-/// x-section radius (and conic), so that the usual paraxial code gives the x data.
+/// x-section radius (and conic; a toroid its radius of rotation), so that the usual paraxial
+/// code gives the x data.
 LensPrescription xSection(const LensPrescription& p);
 
 /// x and y first-order data of an anamorphic lens; squeeze = EFL_y / EFL_x (> 1: the lens
