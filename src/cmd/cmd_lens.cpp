@@ -468,17 +468,22 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     FocusedLens fl = setUpLens(one);
     logDiagnostics(fl.allDiagnostics());
     if (args.wavelengths.empty()) {
-      diagrams.push_back(buildLensDiagram(fl, opts));
-      if (!isRotationallySymmetric(fl.lens->prescription())) {
-        // Anamorphic: the x-z section too (meridional rays of a biconic surface in the x-z plane
-        // are those of its x-section profile), with the same film plane.
-        LensPrescription x = xSection(fl.lens->prescription());
-        x.name += " (x-z section)";
+      if (isRotationallySymmetric(fl.lens->prescription())) {
+        diagrams.push_back(buildLensDiagram(fl, opts));
+        continue;
+      }
+      // Anamorphic: the y-z and x-z sections, each as the rotational lens whose meridional rays
+      // are the lens's rays in that plane (a biconic's or toroid's section profile), with the
+      // same film plane.
+      for (bool x_section : {false, true}) {
+        LensPrescription sec = x_section ? xSection(fl.lens->prescription())
+                                         : ySection(fl.lens->prescription());
+        sec.name += x_section ? " (x-z section)" : " (y-z section)";
         LensSetup setup;
         setup.film_distance_mm = fl.lens->filmDistance_mm();
         if (fl.lens->stopDiameter_mm()) setup.aperture_diameter_mm = fl.lens->stopDiameter_mm();
-        FocusedLens fx = focusLens(std::move(x), setup);
-        diagrams.push_back(buildLensDiagram(fx, opts));
+        FocusedLens fs = focusLens(std::move(sec), setup);
+        diagrams.push_back(buildLensDiagram(fs, opts));
       }
       continue;
     }

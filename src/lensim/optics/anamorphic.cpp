@@ -28,6 +28,20 @@ LensPrescription xSection(const LensPrescription& p) {
   return x;
 }
 
+LensPrescription ySection(const LensPrescription& p) {
+  LensPrescription y = p;
+  for (LensSurface& s : y.surfaces) {
+    if (s.shape.isRotational()) continue;
+    if (!s.stop_flag) s.stop_flag = s.isStop();
+    // On x = 0 a biconic's and a toroid's sag is the rotational one of the same radius, conic
+    // and terms (a toroid's terms are powers of y = r there).
+    s.shape.radius_x_mm.reset();
+    s.shape.conic_x = 0;
+    s.shape.rotation_radius_mm.reset();
+  }
+  return y;
+}
+
 AnamorphicData anamorphicData(const LensSystem& lens) {
   AnamorphicData a;
   auto tryParaxial = [](const LensSystem& l) -> std::optional<ParaxialData> {
