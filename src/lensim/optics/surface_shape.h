@@ -91,7 +91,9 @@ double sagDomainRadius(double radius_mm, const SurfaceShape& shape);
 /// it), to ~1e-12 mm. There is only one sheet (the sag function's), so no wrong-sheet hits.
 /// Conics and cylinders without polynomial terms are quadrics: their hits come from the
 /// quadratic, on the vertex sheet (hits beyond bound_r on the true quadric; the flat
-/// continuation only where the line misses the vertex sheet).
+/// continuation only where the line misses the vertex sheet). Toroids start Newton's method from
+/// the quadric with their vertex curvatures (1/R in x, the y curve's c and conic), as aspheres
+/// start from their base quadric, with the same first-crossing check and bracketed fallback.
 class ShapeIntersector {
  public:
   ShapeIntersector() = default;
