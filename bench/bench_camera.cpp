@@ -152,7 +152,7 @@ void BM_RealisticCameraLens(benchmark::State& state, std::string lens) {
 
 int main(int argc, char** argv) {
   for (const char* lens : {"dgauss.50mm.dat", "lentil:0001", "lentil:0014", "lentil:2004",
-                           "lentil:2003"})
+                           "lentil:2003", "toroidal-anamorphic.50mm.zmx"})
     benchmark::RegisterBenchmark((std::string("RealisticCameraLens/") + lens).c_str(),
                                  BM_RealisticCameraLens, std::string(lens));
   for (const Setup& s :

@@ -77,6 +77,7 @@ json surfacesJson(const LensSystem& lens) {
         e["aspheric"] = a;
       }
       if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
+      if (s.shape.rotation_radius_mm) e["rotation_radius_mm"] = *s.shape.rotation_radius_mm;
     }
   }
   return arr;
@@ -349,9 +350,14 @@ int runInfo(const LensArgs& args, bool as_json) {
     if (sh.isSpherical()) continue;
     std::string d = fmt::format("  surface {}: ", i);
     if (sh.radius_x_mm) d += fmt::format("x-section radius {:.4f} mm, ", *sh.radius_x_mm);
+    if (sh.rotation_radius_mm)
+      d += *sh.rotation_radius_mm != 0
+               ? fmt::format("toroidal, radius of rotation {:.4f} mm, ", *sh.rotation_radius_mm)
+               : std::string("toroidal, radius of rotation infinite (cylinder), ");
     d += fmt::format("conic {:.6g}", sh.conic);
     for (size_t k = 1; k < sh.poly.size(); ++k)
-      if (sh.poly[k] != 0) d += fmt::format(", r^{} {:.6g}", k, sh.poly[k]);
+      if (sh.poly[k] != 0)
+        d += fmt::format(", {}^{} {:.6g}", sh.isToroidal() ? "y" : "r", k, sh.poly[k]);
     std::cout << d << "\n";
   }
   return 0;
@@ -462,17 +468,22 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     FocusedLens fl = setUpLens(one);
     logDiagnostics(fl.allDiagnostics());
     if (args.wavelengths.empty()) {
-      diagrams.push_back(buildLensDiagram(fl, opts));
-      if (!isRotationallySymmetric(fl.lens->prescription())) {
-        // Anamorphic: the x-z section too (meridional rays of a biconic surface in the x-z plane
-        // are those of its x-section profile), with the same film plane.
-        LensPrescription x = xSection(fl.lens->prescription());
-        x.name += " (x-z section)";
+      if (isRotationallySymmetric(fl.lens->prescription())) {
+        diagrams.push_back(buildLensDiagram(fl, opts));
+        continue;
+      }
+      // Anamorphic: the y-z and x-z sections, each as the rotational lens whose meridional rays
+      // are the lens's rays in that plane (a biconic's or toroid's section profile), with the
+      // same film plane.
+      for (bool x_section : {false, true}) {
+        LensPrescription sec = x_section ? xSection(fl.lens->prescription())
+                                         : ySection(fl.lens->prescription());
+        sec.name += x_section ? " (x-z section)" : " (y-z section)";
         LensSetup setup;
         setup.film_distance_mm = fl.lens->filmDistance_mm();
         if (fl.lens->stopDiameter_mm()) setup.aperture_diameter_mm = fl.lens->stopDiameter_mm();
-        FocusedLens fx = focusLens(std::move(x), setup);
-        diagrams.push_back(buildLensDiagram(fx, opts));
+        FocusedLens fs = focusLens(std::move(sec), setup);
+        diagrams.push_back(buildLensDiagram(fs, opts));
       }
       continue;
     }

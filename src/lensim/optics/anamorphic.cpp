@@ -11,6 +11,13 @@ bool isRotationallySymmetric(const LensPrescription& p) {
 LensPrescription xSection(const LensPrescription& p) {
   LensPrescription x = p;
   for (LensSurface& s : x.surfaces) {
+    if (s.shape.isToroidal()) {
+      // A toroid's x-z section is the circle of radius R (0: flat), with no conic or terms.
+      if (!s.stop_flag) s.stop_flag = s.isStop();
+      s.radius_mm = *s.shape.rotation_radius_mm;
+      s.shape = SurfaceShape{};
+      continue;
+    }
     if (!s.shape.radius_x_mm) continue;
     if (!s.stop_flag) s.stop_flag = s.isStop();  // a flat x section must not become the stop
     s.radius_mm = *s.shape.radius_x_mm;
@@ -19,6 +26,20 @@ LensPrescription xSection(const LensPrescription& p) {
     s.shape.conic_x = 0;
   }
   return x;
+}
+
+LensPrescription ySection(const LensPrescription& p) {
+  LensPrescription y = p;
+  for (LensSurface& s : y.surfaces) {
+    if (s.shape.isRotational()) continue;
+    if (!s.stop_flag) s.stop_flag = s.isStop();
+    // On x = 0 a biconic's and a toroid's sag is the rotational one of the same radius, conic
+    // and terms (a toroid's terms are powers of y = r there).
+    s.shape.radius_x_mm.reset();
+    s.shape.conic_x = 0;
+    s.shape.rotation_radius_mm.reset();
+  }
+  return y;
 }
 
 AnamorphicData anamorphicData(const LensSystem& lens) {

@@ -303,6 +303,45 @@ const CatalogGlass& GlassCatalog::nearest(double n_d, double v_d) const {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Former glass names
+
+namespace {
+
+// Names lens files use that the vendors' current catalogues no longer list, with the catalogue
+// glass that replaces them. Only rows with a source.
+struct FormerName {
+  const char* name;       // as lens files write it
+  const char* successor;  // "vendor:name" in the built-in catalogue
+};
+constexpr FormerName kFormerNames[] = {
+    // Hikari E-LAFH3 (lanthanum dense flint, in US 5,331,467's telephoto): ray-optics substitutes
+    // Hikari J-LAFH3 for it when it reads that patent's Zemax file (mjhoptics/ray-optics,
+    // src/rayoptics/zemax/models/PhotoPrime/US05331467-1.smx: {"E-LAFH3":
+    // "HikariGlass('J-LAFH3')"}); with it, that lens's EFL is the patent's 1000 mm (ray-optics:
+    // 999.6388 mm).
+    {"E-LAFH3", "hikari:J-LAFH3"},
+};
+
+}  // namespace
+
+const CatalogGlass* findGlassOrSuccessor(std::string_view name, bool* successor_of) {
+  if (successor_of) *successor_of = false;
+  const GlassCatalog& cat = GlassCatalog::builtin();
+  if (const CatalogGlass* g = cat.find(name)) return g;
+  std::string_view bare = name;
+  if (const size_t colon = name.find(':'); colon != std::string_view::npos)
+    bare = name.substr(colon + 1);
+  for (const FormerName& f : kFormerNames) {
+    if (upper(bare) != upper(f.name)) continue;
+    if (const CatalogGlass* g = cat.find(f.successor)) {
+      if (successor_of) *successor_of = true;
+      return g;
+    }
+  }
+  return nullptr;
+}
+
+// ---------------------------------------------------------------------------------------------
 // Resolving a lens file's glass
 
 Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagnostic>* diags) {
@@ -318,6 +357,16 @@ Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagn
              fmt::format("glass '{}': the file gives n_d {}, the catalogue's {} has {:.6f}; the "
                          "catalogue's formula is used",
                          spec.name, *spec.n_d, g->qualifiedName(), n_d));
+      return g->glass;
+    }
+    bool successor = false;
+    if (const CatalogGlass* g = findGlassOrSuccessor(spec.name, &successor); g && successor) {
+      note(Severity::Warning,
+           fmt::format("glass '{}' is not in the catalogue; using {} (n_d {:.6f}, V_d {:.2f}), "
+                       "the glass that replaces it{}",
+                       spec.name, g->qualifiedName(), g->glass.n_d(), g->listed_v_d,
+                       spec.n_d ? fmt::format(" (the file's n_d {} is not used)", *spec.n_d)
+                                : std::string()));
       return g->glass;
     }
     if (spec.n_d && spec.v_d) {

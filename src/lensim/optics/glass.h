@@ -115,9 +115,16 @@ class GlassCatalog {
   std::vector<CatalogGlass> glasses_;
 };
 
+/// A catalogue glass by name (GlassCatalog::find on the built-in catalogue) or, when the name
+/// is not in it, through lensim's short table of former glass names whose successor is known
+/// (each row cites its source; e.g. E-LAFH3 -> hikari:J-LAFH3). `successor_of` is set to true
+/// when the table was used. nullptr when neither knows the name.
+const CatalogGlass* findGlassOrSuccessor(std::string_view name, bool* successor_of = nullptr);
+
 /// Resolves a lens file's GlassSpec into a medium:
 /// - a name found in the catalogue: that glass (a note when the file's n_d differs from the
-///   catalogue's by more than 1e-3);
+///   catalogue's by more than 1e-3); a former name with a known successor: the successor, with a
+///   warning;
 /// - a name not found, with n_d and V_d given: the model glass from them, with a warning;
 /// - a name not found alone: lensim::Error at spec.loc with did-you-mean hints;
 /// - no name, V_d given: the model glass from n_d (spec.n_d, else constant_ior) and V_d;

@@ -169,6 +169,19 @@ LensPrescription parseLensim(const json& j, std::string_view text, const std::st
         s.shape.poly[size_t(pw)] = v.get<double>();
       }
     }
+    s.shape.rotation_radius_mm = optNumber(e, "rotation_radius_mm", s.loc, what);
+    if (s.shape.isToroidal()) {
+      if (s.shape.radius_x_mm || s.shape.conic_x != 0)
+        throw Error(s.loc, fmt::format("surface {}: \"rotation_radius_mm\" (a toroid) and "
+                                       "\"radius_x_mm\"/\"conic_x\" (a biconic) exclude each "
+                                       "other",
+                                       i));
+      for (size_t pw = 1; pw < s.shape.poly.size(); pw += 2)
+        if (s.shape.poly[pw] != 0)
+          throw Error(s.loc, fmt::format("surface {}: aspheric term \"{}\": a toroid's y-curve "
+                                         "terms are even powers of y",
+                                         i, pw));
+    }
     if (auto g = e.find("glass"); g != e.end() && g->is_object()) {
       s.glass.name = g->value("name", "");
       s.glass.n_d = optNumber(*g, "n_d", s.loc, "glass");
@@ -410,6 +423,7 @@ std::string writeLensJson(const LensPrescription& p) {
     if (s.shape.conic != 0) e["conic"] = s.shape.conic;
     if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
     if (s.shape.conic_x != 0) e["conic_x"] = s.shape.conic_x;
+    if (s.shape.rotation_radius_mm) e["rotation_radius_mm"] = *s.shape.rotation_radius_mm;
     if (s.shape.hasPolynomial()) {
       json a = json::object();
       for (size_t k = 1; k < s.shape.poly.size(); ++k)
@@ -451,8 +465,9 @@ std::string writeLensDat(const LensPrescription& p) {
       throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: it is {} (the .dat "
                                      "format has spheres only); write .json instead",
                                      i,
-                                     s.shape.radius_x_mm ? "cylindrical/toroidal"
-                                                         : "aspheric (conic or polynomial)"));
+                                     s.shape.isToroidal()  ? "toroidal"
+                                     : s.shape.radius_x_mm ? "cylindrical/biconic"
+                                                           : "aspheric (conic or polynomial)"));
     double radius = s.radius_mm;
     if (s.isStop()) {
       if (s.radius_mm != 0)

@@ -13,9 +13,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Radial height of a ray parallel to the axis at entrance height h on each surface it reaches
 // (apertures ignored); the list ends where the ray misses a surface or is totally reflected.
+// The ray is in the y-z plane: for an anamorphic lens, the section whose EFL the f-number uses.
 std::vector<double> heightsAt(const LensSystem& lens, double h, Ray* out = nullptr) {
   std::vector<Vec3> path;
-  const Ray ray{{h, 0, -1.0}, {0, 0, 1}};
+  const Ray ray{{0, h, -1.0}, {0, 0, 1}};
   TraceResult r = lens.tracer().traceFromScene(ray, TraceOptions{false}, &path);
   std::vector<double> hs;
   // path[0] is the start; path[k + 1] is surface k. A ray stopped at surface k (miss, TIR) still

@@ -16,6 +16,7 @@ bool SurfaceShape::hasPolynomial() const {
 void SurfaceShape::scaleLengths(double s) {
   for (size_t p = 1; p < poly.size(); ++p) poly[p] *= std::pow(s, 1.0 - double(p));
   if (radius_x_mm) *radius_x_mm *= s;
+  if (rotation_radius_mm) *rotation_radius_mm *= s;
 }
 
 namespace {
@@ -38,10 +39,73 @@ Coeffs coeffsOf(double radius_mm, const SurfaceShape& shape) {
   return k;
 }
 
+// Toroids (see the header for the definition and its source). The y-z curve f(y) and its slope
+// f'(y); nullopt where the conic square root is undefined.
+struct Profile {
+  double f, df;
+};
+std::optional<Profile> toroidProfile(double c, double a, const std::vector<double>& poly,
+                                     double y) {
+  // a = (1 + k) c^2; f = c y^2 / (1 + S), f' = c y / S with S = sqrt(1 - a y^2).
+  const double arg = 1 - a * y * y;
+  if (arg < 0) return std::nullopt;
+  const double S = std::sqrt(arg);
+  Profile p;
+  p.f = c * y * y / (1 + S);
+  p.df = S > 0 ? c * y / S
+               : (y != 0 ? std::copysign(std::numeric_limits<double>::infinity(), c * y) : 0.0);
+  double yp = 1;  // y^(p-1)
+  for (size_t k = 1; k < poly.size(); ++k) {
+    const double a_p = poly[k];
+    if (a_p != 0) p.df += double(k) * a_p * yp;
+    yp *= y;
+    if (a_p != 0) p.f += a_p * yp;
+  }
+  return p;
+}
+
+// The toroid's sag at (x, y): z = f + x^2 / (rho + q), q = sgn(rho) sqrt(rho^2 - x^2),
+// rho = R - f(y); gradient dz/dx = x / q, dz/dy = rho f' / q (from q^2 = rho^2 - x^2).
+// rot = 0: the cylinder z = f(y). `clamp`: rho^2 - x^2 < 0 (just outside the domain, from the
+// sampled domain radius) is taken as 0 instead of failing.
+std::optional<SagGradient> toroidSag(double c, double a, const std::vector<double>& poly,
+                                     double rot, double x, double y, bool clamp) {
+  const auto pr = toroidProfile(c, a, poly, y);
+  if (!pr) return std::nullopt;
+  if (rot == 0) return SagGradient{pr->f, 0.0, pr->df};
+  const double rho = rot - pr->f;
+  double d = rho * rho - x * x;
+  if (d < 0) {
+    if (!clamp) return std::nullopt;
+    d = 0;
+  }
+  const double q = std::copysign(std::sqrt(d), rho);
+  SagGradient g;
+  if (rho + q == 0) return std::nullopt;  // rho = 0: the curve meets the axis of rotation
+  g.z = pr->f + x * x / (rho + q);
+  if (q != 0) {
+    g.dzdx = x / q;
+    g.dzdy = rho * pr->df / q;
+  } else {  // the rim of the domain: vertical
+    const double inf = std::numeric_limits<double>::infinity();
+    g.dzdx = x != 0 ? std::copysign(inf, x * rho) : 0.0;
+    g.dzdy = pr->df != 0 ? std::copysign(inf, rho * pr->df) : 0.0;
+  }
+  return g;
+}
+
+double toroidA(double radius_mm, const SurfaceShape& shape) {
+  const double c = radius_mm != 0 ? 1 / radius_mm : 0.0;
+  return (1 + shape.conic) * c * c;
+}
+
 }  // namespace
 
 std::optional<SagGradient> surfaceSag(double radius_mm, const SurfaceShape& shape, double x,
                                       double y) {
+  if (shape.isToroidal())
+    return toroidSag(radius_mm != 0 ? 1 / radius_mm : 0.0, toroidA(radius_mm, shape), shape.poly,
+                     *shape.rotation_radius_mm, x, y, false);
   const Coeffs k = coeffsOf(radius_mm, shape);
   const double arg = 1 - k.ax * x * x - k.ay * y * y;
   if (arg < 0) return std::nullopt;
@@ -87,11 +151,32 @@ double vertexCurvatureY(double radius_mm, const SurfaceShape& shape) {
 }
 
 double vertexCurvatureX(double radius_mm, const SurfaceShape& shape) {
+  if (shape.isToroidal())  // the x-z section is the circle of radius R
+    return *shape.rotation_radius_mm != 0 ? 1 / *shape.rotation_radius_mm : 0.0;
   if (!shape.radius_x_mm) return vertexCurvatureY(radius_mm, shape);
   return (*shape.radius_x_mm != 0 ? 1 / *shape.radius_x_mm : 0.0) + 2 * shape.r2Coefficient();
 }
 
 double sagDomainRadius(double radius_mm, const SurfaceShape& shape) {
+  if (shape.isToroidal()) {
+    // The y curve's domain, then the nearest point (|rho(y)|, y) where x reaches the axis of
+    // rotation's distance: min over y of hypot(rho(y), y). Beyond y = the best so far no point
+    // can be nearer, so sampling [0, min(domain_y, |R|)] finds it.
+    const double c = radius_mm != 0 ? 1 / radius_mm : 0.0, a = toroidA(radius_mm, shape);
+    double best = a > 0 ? 1 / std::sqrt(a) : std::numeric_limits<double>::infinity();
+    const double rot = *shape.rotation_radius_mm;
+    if (rot == 0) return best;
+    best = std::min(best, std::abs(rot));
+    const double span = best;
+    constexpr int kSamples = 4096;
+    for (int i = 1; i <= kSamples; ++i) {
+      const double y = span * i / kSamples;
+      const auto pr = toroidProfile(c, a, shape.poly, y);
+      if (!pr) break;
+      best = std::min(best, std::hypot(rot - pr->f, y));
+    }
+    return best * (1 - 1e-6);
+  }
   const Coeffs k = coeffsOf(radius_mm, shape);
   const double a = std::max(k.ax, k.ay);
   return a > 0 ? 1 / std::sqrt(a) : std::numeric_limits<double>::infinity();
@@ -101,8 +186,10 @@ double sagDomainRadius(double radius_mm, const SurfaceShape& shape) {
 
 ShapeIntersector::ShapeIntersector(double radius_mm, const SurfaceShape& shape,
                                    double semi_aperture_mm)
-    : radius_(radius_mm), shape_(shape) {
-  {
+    : radius_(radius_mm), shape_(shape), toroidal_(shape.isToroidal()) {
+  if (toroidal_) {  // the y curve's c and (1 + k) c^2; the terms are powers of y
+    cy_ = radius_mm != 0 ? 1 / radius_mm : 0.0, ay_ = toroidA(radius_mm, shape);
+  } else {
     const Coeffs k = coeffsOf(radius_mm, shape);
     cx_ = k.cx, cy_ = k.cy, ax_ = k.ax, ay_ = k.ay;
     for (size_t p = 1; p < shape.poly.size(); ++p)
@@ -125,6 +212,18 @@ ShapeIntersector::ShapeIntersector(double radius_mm, const SurfaceShape& shape,
   }
   const double pad = 0.02 * (hi - lo) + 1e-7;
   z_lo_ = lo - pad, z_hi_ = hi + pad;
+  if (toroidal_) {
+    // Not a quadric; the quadric with the toroid's vertex curvatures and the y curve's conic
+    // (exact for a sphere, R = radius and k = 0, and for a cylinder, R = 0) predicts the hit
+    // that Newton's method refines, as for the aspheres.
+    const double c = radius_mm != 0 ? 1 / radius_mm : 0.0;
+    const double rot = *shape.rotation_radius_mm;
+    base_quadric_ = true;
+    quadric_ = false;
+    qcx_ = rot != 0 ? 1 / rot : 0.0, qcy_ = c;
+    qe_ = c != 0 ? (1 + shape.conic) * c : qcx_;
+    return;
+  }
   // Quadric when (1 + k) c is the same for every curved section.
   {
     const Coeffs k = coeffsOf(radius_mm, shape);
@@ -171,7 +270,14 @@ SagGradient ShapeIntersector::sagContinued(double x, double y) const {
     // The flat annulus beyond the bound, at the rim's sag in this direction.
     const double s = bound_r_ / std::sqrt(r2);
     auto g = surfaceSag(radius_, shape_, x * s, y * s);
+    if (!g && toroidal_) g = toroidSag(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x * s,
+                                       y * s, true);
     return {g ? g->z : 0.0, 0.0, 0.0};
+  }
+  if (toroidal_) {
+    if (auto g = toroidSag(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x, y, true))
+      return *g;
+    return {0.0, std::numeric_limits<double>::infinity(), 0.0};  // not reached inside bound_r_
   }
   // surfaceSag's formula with the coefficients cached (the hot path of the Newton solve).
   const double arg = std::max(0.0, 1 - ax_ * x * x - ay_ * y * y);

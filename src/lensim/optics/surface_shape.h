@@ -12,6 +12,18 @@
 //                         + sum_p poly[p] r^p
 // with cx = 1 / radius_x_mm (0: flat in x, i.e. a cylinder curved in y) and kx = conic_x. A
 // cylinder curved in x only has radius_mm = 0 (flat in y) and radius_x_mm set.
+//   toroidal (Zemax TOROIDAL): the y-z curve
+//                f(y)   = c y^2 / (1 + sqrt(1 - (1 + k) c^2 y^2)) + sum_p poly[p] y^p
+//              rotated about the axis parallel to y that crosses the z axis at z = R (the radius
+//              of rotation, rotation_radius_mm; R = 0 means infinite: a cylinder flat in x).
+//              A point of the curve at height y is rho = R - f(y) from that axis, so
+//                z(x,y) = R - sgn(rho) sqrt(rho^2 - x^2) = f + x^2 / (rho + sgn(rho) sqrt(rho^2 - x^2))
+//              Its x-z section is the circle of radius R, its y-z section the curve f.
+// The toroidal definition is Zemax OpticStudio's ("Toroidal" in the OpticStudio User Guide,
+// Surface Types: a curve in the Y-Z plane with base radius, conic and the polynomial terms
+// alpha_1 y^2 .. alpha_7 y^14, rotated about an axis parallel to Y at the distance R from the
+// vertex; PARM 1 = R, 0 read as infinite; PARM 2..8 = alpha_1..alpha_7; its optional Zernike
+// sag terms are not modelled); LensForge's "Toric Y" surface documents the same surface.
 #pragma once
 
 #include <optional>
@@ -32,9 +44,14 @@ struct SurfaceShape {
   /// rotationally symmetric surfaces.
   std::optional<double> radius_x_mm;
   double conic_x = 0;  ///< conic constant of the x section (biconic only)
+  /// Toroidal: the radius of rotation R in mm (0: infinite, a cylinder curved in y only). When
+  /// set, `conic` and `poly` describe the y-z curve and poly[p] multiplies y^p (even p only),
+  /// not r^p. Unset for every other shape; never set together with radius_x_mm.
+  std::optional<double> rotation_radius_mm;
 
   bool hasPolynomial() const;
-  bool isRotational() const { return !radius_x_mm; }
+  bool isToroidal() const { return rotation_radius_mm.has_value(); }
+  bool isRotational() const { return !radius_x_mm && !rotation_radius_mm; }
   /// True when the surface is the plain sphere (or plane) of its base radius.
   bool isSpherical() const { return conic == 0 && !hasPolynomial() && isRotational(); }
   /// The even r^2 coefficient (adds 2 * poly[2] to the vertex curvature).
@@ -58,7 +75,9 @@ double vertexCurvatureY(double radius_mm, const SurfaceShape& shape);
 double vertexCurvatureX(double radius_mm, const SurfaceShape& shape);
 
 /// Largest radial distance from the axis where the sag is defined in every direction (infinity
-/// when the conic square root never fails).
+/// when the conic square root never fails). For a toroid: the nearest point (x, y) where the
+/// y curve's square root fails or |x| reaches the distance R - f(y) from the axis of rotation
+/// (found by sampling f; slightly conservative).
 double sagDomainRadius(double radius_mm, const SurfaceShape& shape);
 
 /// Exact ray intersection with a non-spherical surface (a bracketed Newton solve).
@@ -72,7 +91,9 @@ double sagDomainRadius(double radius_mm, const SurfaceShape& shape);
 /// it), to ~1e-12 mm. There is only one sheet (the sag function's), so no wrong-sheet hits.
 /// Conics and cylinders without polynomial terms are quadrics: their hits come from the
 /// quadratic, on the vertex sheet (hits beyond bound_r on the true quadric; the flat
-/// continuation only where the line misses the vertex sheet).
+/// continuation only where the line misses the vertex sheet). Toroids start Newton's method from
+/// the quadric with their vertex curvatures (1/R in x, the y curve's c and conic), as aspheres
+/// start from their base quadric, with the same first-crossing check and bracketed fallback.
 class ShapeIntersector {
  public:
   ShapeIntersector() = default;
@@ -101,6 +122,7 @@ class ShapeIntersector {
   bool base_quadric_ = false;
   double qcx_ = 0, qcy_ = 0, qe_ = 0;
   std::optional<double> quadricRoot(const Vec3& o, const Vec3& d, double t_min) const;
+  bool toroidal_ = false;
   double bound_r_ = 0;
   double z_lo_ = 0, z_hi_ = 0;  // slab of the (continued) surface relative to the vertex
 };

@@ -119,6 +119,8 @@ struct ZSurface {
   bool stop = false;
   double conic = 0;
   std::map<int, double> parm;
+  std::map<int, FileLoc> parm_loc;  // the value's place on each PARM line
+  std::optional<FileLoc> xdat_loc;  // the first non-zero XDAT (extra data) value
   std::string glass;
   std::optional<double> n_d, v_d;
   FileLoc glass_loc;
@@ -154,8 +156,51 @@ class ZmxParser {
     (void)what;
   }
 
+  // The place of PARM i's value, else the surface's TYPE line.
+  FileLoc parmLoc(const ZSurface& z, int i) const {
+    if (auto it = z.parm_loc.find(i); it != z.parm_loc.end()) return it->second;
+    return z.type_loc.valid() ? z.type_loc : z.loc;
+  }
+  void readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& shape) const;
+
   std::string path_;
 };
+
+// TYPE TOROIDAL, as OpticStudio defines it (OpticStudio User Guide, "Toroidal"; see
+// surface_shape.h): PARM 0 extrapolate (ignored: lensim continues every surface flat beyond its
+// aperture), PARM 1 the radius of rotation R in lens units (0: infinite, a cylinder), PARM 2..8
+// the y-curve terms alpha_1..alpha_7 on y^2, y^4, ..., y^14; PARM 13 the number of Zernike
+// sag terms (PARM 14 their normalisation radius), whose coefficients are extra data (XDAT): not
+// modelled, refused when present.
+void ZmxParser::readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& shape) const {
+  shape.rotation_radius_mm = 0.0;
+  for (const auto& [i, v] : z.parm) {
+    if (i == 0 || i == 14) continue;  // extrapolate; the Zernike normalisation radius
+    if (i == 1) {
+      shape.rotation_radius_mm = v;
+    } else if (i >= 2 && i <= 8) {
+      if (v == 0) continue;
+      const size_t power = size_t(2 * (i - 1));
+      if (shape.poly.size() <= power) shape.poly.resize(power + 1, 0.0);
+      shape.poly[power] = v;
+    } else if (v != 0) {
+      throw Error(parmLoc(z, i),
+                  i == 13
+                      ? fmt::format("surface {}: TOROIDAL PARM {} = {}: Zernike sag terms on a "
+                                    "toroidal surface are not supported",
+                                    z.number, i, v)
+                      : fmt::format("surface {}: TOROIDAL PARM {} = {}: a toroidal surface has "
+                                    "parameters 1 (radius of rotation) and 2-8 (y^2 .. y^14 "
+                                    "terms) only",
+                                    z.number, i, v));
+    }
+  }
+  if (z.xdat_loc)
+    throw Error(*z.xdat_loc, fmt::format("surface {}: TOROIDAL extra data (XDAT, Zernike sag "
+                                         "terms) is not supported",
+                                         z.number));
+  shape.scaleLengths(unit_mm);
+}
 
 LensPrescription ZmxParser::parse(std::string_view bytes) {
   const std::string text = decodeTextFile(bytes, path_);
@@ -289,9 +334,10 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       need(t, 2, line_no, "type");
       cur->type = std::string(t[1].text);
       cur->type_loc = loc;
-      if (cur->type != "STANDARD" && cur->type != "EVENASPH" && cur->type != "ODDASPH")
-        throw surfErr(fmt::format("TYPE {} is not supported (lensim models STANDARD, EVENASPH "
-                                  "and ODDASPH surfaces)",
+      if (cur->type != "STANDARD" && cur->type != "EVENASPH" && cur->type != "ODDASPH" &&
+          cur->type != "TOROIDAL")
+        throw surfErr(fmt::format("TYPE {} is not supported (lensim models STANDARD, EVENASPH, "
+                                  "ODDASPH and TOROIDAL surfaces)",
                                   cur->type));
     } else if (key == "CURV") {
       cur->curv = num(1, "curvature");
@@ -313,6 +359,11 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     } else if (key == "PARM") {
       const int i = inum(1, "parameter number");
       cur->parm[i] = num(2, "parameter value");
+      cur->parm_loc[i] = FileLoc{path_, line_no, t[2].col};
+    } else if (key == "XDAT" && cur->type == "TOROIDAL") {
+      // Extra data (`XDAT n value ...`): a toroid's Zernike sag terms; kept to refuse them.
+      const double v = num(2, "extra data value");
+      if (v != 0 && !cur->xdat_loc) cur->xdat_loc = FileLoc{path_, line_no, t[2].col};
     } else if (key == "GLAS") {
       need(t, 2, line_no, "glass");
       cur->glass = std::string(t[1].text);
@@ -408,6 +459,11 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   }
   double ior_before = 1;
   GlassSpec glass_before;
+  // Whether the n_d on the file's GLAS lines are the glasses' data: catalogue glasses checked,
+  // those whose n_d disagrees with the catalogue, and the unknown names that fall back on them.
+  int glas_checked = 0, glas_disagree = 0;
+  std::string glas_example;
+  std::vector<std::pair<std::string, FileLoc>> glas_fallbacks;
   int mirrors = 0;
   std::optional<int> inserted_stop;
   for (size_t k = 1; k + 1 < surfs.size(); ++k) {
@@ -452,6 +508,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
         s.shape.poly[power] = v;
       }
       s.shape.scaleLengths(unit_mm);
+    } else if (z.type == "TOROIDAL") {
+      readToroidal(z, unit_mm, s.shape);
     }
     s.mirror = z.mirror;
     if (z.inner_radius > 0) {
@@ -476,16 +534,36 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       // catalogue glass, else the n_d written on the GLAS line; resolveGlass (glass.h) gives the
       // lens system the glass's n(lambda) and warns about a name it does not know.
       const CatalogGlass* known =
-          z.glass == "___BLANK" ? nullptr : GlassCatalog::builtin().find(z.glass);
+          z.glass == "___BLANK" ? nullptr : findGlassOrSuccessor(z.glass);
       if (known) {
         s.ior = known->listed_n_d;
+        if (z.n_d && z.glass != "___BLANK") {
+          ++glas_checked;
+          if (std::abs(*z.n_d - known->listed_n_d) > 1e-3) {
+            if (glas_disagree++ == 0)
+              glas_example = fmt::format("{} n_d {} on its line, {} in the catalogue", z.glass,
+                                         *z.n_d, known->listed_n_d);
+          }
+        }
       } else if (z.n_d && *z.n_d >= 1) {
         s.ior = *z.n_d;
+        if (z.glass != "___BLANK") glas_fallbacks.push_back({z.glass, z.glass_loc});
       } else {
         resolveGlass(s.glass, 1.0, nullptr);  // throws: unknown glass, with did-you-mean hints
       }
     }
     const double domain = sagDomainRadius(s.radius_mm, s.shape);
+    if (s.shape.isToroidal() && semi >= domain) {
+      // Within the y curve's own extent, the radius of rotation is what is too small.
+      SurfaceShape y_curve = s.shape;
+      y_curve.rotation_radius_mm = 0.0;
+      if (semi < sagDomainRadius(s.radius_mm, y_curve))
+        throw Error(parmLoc(z, 1), fmt::format("surface {}: radius of rotation {}: the toroid "
+                                               "closes on its axis of rotation {:.6g} mm from "
+                                               "the vertex, inside the semi-diameter {}",
+                                               z.number, z.parm.count(1) ? z.parm.at(1) : 0.0,
+                                               domain / unit_mm, semi / unit_mm));
+    }
     if (semi >= domain)
       throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} mm exceeds the surface's "
                                           "extent ({} mm)",
@@ -535,6 +613,18 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     glass_before = s.glass;
     p.surfaces.push_back(s);
   }
+
+  // An unknown glass falls back on its GLAS line's n_d and V_d (resolveGlass warns). Some files
+  // carry placeholders there instead (US05331467-1.zmx: 1.5 and 40 on every line): say so when
+  // most of the catalogue glasses of the same file disagree with the catalogue.
+  if (!glas_fallbacks.empty() && glas_disagree > 0 && 2 * glas_disagree >= glas_checked)
+    for (const auto& [name, gloc] : glas_fallbacks)
+      p.diagnostics.push_back(
+          {Severity::Warning, gloc,
+           fmt::format("glass '{}': the n_d/V_d on this file's GLAS lines look like placeholders, "
+                       "not glass data ({} of {} catalogue glasses here disagree with the "
+                       "catalogue, e.g. {}); the model glass made from them is probably wrong",
+                       name, glas_disagree, glas_checked, glas_example)});
 
   // The system aperture sets the stop's size (paraxially: the entrance pupil is the image of the
   // stop, so its diameter scales with the stop's).
