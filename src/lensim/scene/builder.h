@@ -216,6 +216,8 @@ struct Light {
   std::vector<Vec3> portal;  ///< infinite: 4 points of a portal quad, or empty
   bool two_sided = false;
   int shape_count = 0;  ///< area lights: shapes that emit with it
+  /// Other lights: the outside medium of the MediumInterface current at LightSource, or -1.
+  int medium = -1;
 };
 
 /// pbrt-v1/v2 `realistic` camera (Stanford CS348B): camera space is millimetres.

@@ -57,6 +57,11 @@ class Light {
   /// Position in the list given to the light sampler (set by LightSet; -1 outside one), so that
   /// samplers find a light's data without a hash lookup.
   int index = -1;
+  /// The medium light paths start in (Scene::media index; -1 vacuum): area lights, that of
+  /// their shape `shape` on the side they leave by (lightMedium, bdpt.h); other lights, the
+  /// outside medium of the MediumInterface current at their LightSource (pbrt-v4).
+  int shape = -1;
+  int medium = -1;
   /// Point and directional lights (no surface to hit).
   virtual bool isDelta() const { return false; }
   virtual bool isInfinite() const { return false; }
