@@ -188,9 +188,10 @@ void runScene(const std::string& name, std::string (*text)(const std::string&), 
   const Render ref = renderOnce(bdpt, ref_spp, 12345, threads);
   const int spp_bdpt = std::max(1, int(std::lround(seconds / t_bdpt)));
   const int spp_path = std::max(1, int(std::lround(seconds / t_path)));
-  fmt::print("{}: reference bdpt {} spp ({:.0f} CPU s); equal time {:.1f} CPU s: {} {} spp, "
-             "bdpt {} spp; {} seeds\n",
-             name, ref_spp, ref.cpu_s, seconds, rival, spp_path, spp_bdpt, seeds);
+  fmt::print(
+      "{}: reference bdpt {} spp ({:.0f} CPU s); equal time {:.1f} CPU s: {} {} spp, "
+      "bdpt {} spp; {} seeds\n",
+      name, ref_spp, ref.cpu_s, seconds, rival, spp_path, spp_bdpt, seeds);
   double rmse[2] = {0, 0}, rel[2] = {0, 0}, cpu[2] = {0, 0};
   for (int k = 0; k < seeds; ++k)
     for (int i = 0; i < 2; ++i) {
@@ -205,8 +206,8 @@ void runScene(const std::string& name, std::string (*text)(const std::string&), 
              cpu[0]);
   fmt::print("  bdpt: RMSE {:.4g}, relative MSE {:.4g} ({:.1f} CPU s)\n", rmse[1], rel[1], cpu[1]);
   // MSE falls as 1 / time: the ratio of MSE x time is the ratio at exactly equal time.
-  fmt::print("  bdpt / {} at equal time: RMSE {:.3f}, MSE {:.3f} (MSE x CPU time {:.3f})\n",
-             rival, rmse[1] / rmse[0], rel[1] / rel[0], rel[1] * cpu[1] / (rel[0] * cpu[0]));
+  fmt::print("  bdpt / {} at equal time: RMSE {:.3f}, MSE {:.3f} (MSE x CPU time {:.3f})\n", rival,
+             rmse[1] / rmse[0], rel[1] / rel[0], rel[1] * cpu[1] / (rel[0] * cpu[0]));
 }
 
 }  // namespace

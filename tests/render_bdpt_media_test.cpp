@@ -111,8 +111,8 @@ render::CompareResult againstVolpath(const std::function<std::string(const char*
 }
 
 void expectAgree(const render::CompareResult& r, const char* what) {
-  std::printf("%s: %d blocks, %d beyond |z| %.2f, mean ratio %.4f\n", what, r.blocks,
-              r.z_failures, r.z_bound, r.mean_ratio);
+  std::printf("%s: %d blocks, %d beyond |z| %.2f, mean ratio %.4f\n", what, r.blocks, r.z_failures,
+              r.z_bound, r.mean_ratio);
   EXPECT_EQ(r.z_failures, 0) << what << "\n" << render::formatCompare(r);
   EXPECT_NEAR(r.mean_ratio, 1.0, 0.04) << what << "\n" << render::formatCompare(r);
 }
@@ -126,7 +126,8 @@ TEST(BdptMedia, AgreesWithVolpathThroughAPerspectiveCamera) {
   // The test can fail: bdpt in a fog that scatters 25% more is found.
   auto denser = [](const char* i) {
     std::string s = fogScene(kOutside, i, kGreyFog);
-    if (std::string(i) == "bdpt") s.replace(s.find("[0.6 0.6 0.6] \"float g\""), 13, "[0.75 0.75 0.75]");
+    if (std::string(i) == "bdpt")
+      s.replace(s.find("[0.6 0.6 0.6] \"float g\""), 13, "[0.75 0.75 0.75]");
     return s;
   };
   EXPECT_GT(againstVolpath(denser, "bdpt", 32).z_failures, 0);

@@ -293,8 +293,8 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
   } else {
     const Vertex &qs = light[s - 1], &pt = camera[t - 1];
     if (!isConnectible(qs) || !isConnectible(pt)) return L;
-    L = qs.beta * scatterF(qs, pt, TransportMode::Importance) * scatterF(pt, qs, TransportMode::Radiance) *
-        pt.beta;
+    L = qs.beta * scatterF(qs, pt, TransportMode::Importance) *
+        scatterF(pt, qs, TransportMode::Radiance) * pt.beta;
     if (L.isBlack()) return L;
     double d2;
     const Vec3 w = unitOrZero(pt.p - qs.p, d2);

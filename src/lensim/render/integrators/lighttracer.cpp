@@ -61,8 +61,9 @@ LightTracer::LightTracer(const SceneContext& sc, const camera::Camera& camera)
     for (size_t i = 0; i < sc.scene->media.size(); ++i)
       if (const Medium* m = sc.media->get(int(i))) emissive = emissive || m->isEmissive();
     if (emissive)
-      logWarning("integrator \"lighttracer\" does not trace the emission of media (no light "
-                 "path starts in a medium); \"volpath\" or \"bdpt\" render it");
+      logWarning(
+          "integrator \"lighttracer\" does not trace the emission of media (no light "
+          "path starts in a medium); \"volpath\" or \"bdpt\" render it");
   }
   for (const auto& [type, n] : left_out)
     logWarning(fmt::format("integrator \"lighttracer\": {} {} light{} cannot start light paths "
@@ -115,8 +116,8 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
   auto visible = [&](const Vec3& p, const Vec3& ng, const camera::CameraWiSample& cs,
                      SampledSpectrum& T) {
     if (!tracked) return !occludedScene(*sc_, p, ng, cs.p_lens, false, cs.wi, counts);
-    T = segmentTransmittance(*sc_, cs.p_lens, Vec3{0, 0, 0}, camera_medium, p, false, lambda,
-                             rng, counts);
+    T = segmentTransmittance(*sc_, cs.p_lens, Vec3{0, 0, 0}, camera_medium, p, false, lambda, rng,
+                             counts);
     return !T.isBlack();
   };
   // The light's own point seen by the camera (area lights; a point light is a delta the film

@@ -146,22 +146,22 @@ SampledSpectrum segmentTransmittance(const SceneContext& sc, const Vec3& from, c
         T *= transmittance(t_end, mp.sigma_a + mp.sigma_s);
       } else {
         // Ratio tracking by the hero's majorant: unbiased at every wavelength.
-        const SampledSpectrum T_maj = sampleTmaj(
-            *m, ray.o, d, t_end, rng.uniform(), rng, lambda,
-            [&](const Vec3&, const MediumProperties& mp, const SampledSpectrum& smaj,
-                const SampledSpectrum& Tm) {
-              const SampledSpectrum sigma_n = clampZero(smaj - mp.sigma_a - mp.sigma_s);
-              T *= Tm * sigma_n / (Tm[0] * smaj[0]);
-              // Russian roulette on low transmittance.
-              if (T.maxValue() < 0.05) {
-                const double q = 0.75;
-                if (rng.uniform() < q)
-                  T = SampledSpectrum(0.0);
-                else
-                  T /= 1 - q;
-              }
-              return !T.isBlack();
-            });
+        const SampledSpectrum T_maj =
+            sampleTmaj(*m, ray.o, d, t_end, rng.uniform(), rng, lambda,
+                       [&](const Vec3&, const MediumProperties& mp, const SampledSpectrum& smaj,
+                           const SampledSpectrum& Tm) {
+                         const SampledSpectrum sigma_n = clampZero(smaj - mp.sigma_a - mp.sigma_s);
+                         T *= Tm * sigma_n / (Tm[0] * smaj[0]);
+                         // Russian roulette on low transmittance.
+                         if (T.maxValue() < 0.05) {
+                           const double q = 0.75;
+                           if (rng.uniform() < q)
+                             T = SampledSpectrum(0.0);
+                           else
+                             T /= 1 - q;
+                         }
+                         return !T.isBlack();
+                       });
         if (!(T_maj[0] > 0)) return SampledSpectrum(0.0);
         T *= T_maj / T_maj[0];
       }

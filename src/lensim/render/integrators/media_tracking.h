@@ -118,7 +118,6 @@ MediumEvent trackMedium(const Medium& m, const Vec3& o, const Vec3& d, double t_
 /// geometric normal of the surface `from` lies on (the ray starts off it), or zero.
 SampledSpectrum segmentTransmittance(const SceneContext& sc, const Vec3& from, const Vec3& from_ng,
                                      int medium, const Vec3& to, bool to_infinite,
-                                     const SampledWavelengths& lambda, Rng& rng,
-                                     RayCounts& counts);
+                                     const SampledWavelengths& lambda, Rng& rng, RayCounts& counts);
 
 }  // namespace lensim::render

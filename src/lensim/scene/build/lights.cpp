@@ -116,8 +116,8 @@ void Builder::light(const Directive& d) {
   requireInvertible(d.loc, fmt::format("LightSource \"{}\"", type));
   finish(ps);
   if (!gs_.outside_medium.empty())
-    pending_media_.push_back({-1, "", gs_.outside_medium, gs_.medium_loc,
-                              static_cast<int>(scene_.lights.size())});
+    pending_media_.push_back(
+        {-1, "", gs_.outside_medium, gs_.medium_loc, static_cast<int>(scene_.lights.size())});
   scene_.lights.push_back(std::move(l));
 }
 
