@@ -1,6 +1,8 @@
 // Error at equal time, bdpt against path (issue 13), on two scenes where bidirectional light
 // transport should pay: a caustic (a glass sphere on a diffuse floor lit by a small light) and
-// bokeh (two small bright lights far behind the focus of the double Gauss at f/2.9).
+// bokeh (two small bright lights far behind the focus of the double Gauss at f/2.9); and, against
+// volpath, fog (a sphere of scattering fog holding a small light above a glass ball on a diffuse
+// floor: volumetric and floor caustics).
 //
 // For each scene: a long bdpt render is the reference (both integrators are unbiased: the
 // consistency tests in render_bdpt_test check that they agree within noise); then each integrator
@@ -9,7 +11,7 @@
 // render's CPU time per sample. The error of a render is its RMSE against the reference over the
 // pixels' R, G, B, and its relative MSE (MSE / mean^2); the mean over the seeds is printed, and
 // the ratios bdpt / path. Usage (bench/bdpt runs it):
-//   lensim_bench_bdpt [--scene caustic|bokeh|all] [--seconds T] [--reference-seconds R]
+//   lensim_bench_bdpt [--scene caustic|bokeh|fog|all] [--seconds T] [--reference-seconds R]
 //                     [--seeds K] [--threads N]
 #include <fmt/format.h>
 #include <sys/resource.h>
@@ -94,6 +96,41 @@ AttributeEnd
                      LENSIM_SOURCE_DIR, integrator);
 }
 
+std::string fogScene(const std::string& integrator) {
+  return fmt::format(R"(LookAt 0 1.2 -3.4  0 0.8 0  0 1 0
+Camera "perspective" "float fov" 40
+Film "rgb" "integer xresolution" 64 "integer yresolution" 48 "string filename" "fog.exr"
+Sampler "independent"
+PixelFilter "box" "float xradius" 0.5 "float yradius" 0.5
+Integrator "{}" "integer maxdepth" 8
+MakeNamedMedium "fog" "string type" "homogeneous" "rgb sigma_a" [0.05 0.05 0.05]
+  "rgb sigma_s" [0.4 0.4 0.4] "float g" 0.2
+WorldBegin
+AttributeBegin
+  MediumInterface "fog" ""
+  Material "interface"
+  Translate 0 1 0
+  Shape "sphere" "float radius" 2.5
+AttributeEnd
+MediumInterface "fog" "fog"
+AttributeBegin
+  Translate -0.6 2.2 0.4
+  AreaLightSource "diffuse" "rgb L" [300 300 300]
+  Shape "sphere" "float radius" 0.05
+AttributeEnd
+Material "diffuse" "rgb reflectance" [0.6 0.6 0.6]
+Shape "trianglemesh" "point3 P" [-1.5 0 -1.5  1.5 0 -1.5  1.5 0 1.5  -1.5 0 1.5]
+  "integer indices" [0 2 1 0 3 2]
+MediumInterface "" "fog"
+Material "dielectric" "float eta" 1.5
+AttributeBegin
+  Translate 0 0.6 0
+  Shape "sphere" "float radius" 0.45
+AttributeEnd
+)",
+                     integrator);
+}
+
 scene::Scene build(const std::string& text) {
   scene::Scene s = scene::build(scene::parseString(text, "bench-bdpt.pbrt"));
   if (s.hasErrors()) throw Error(formatDiagnostics(s.diagnostics));
@@ -136,9 +173,10 @@ Error2 errorOf(const io::Image& im, const io::Image& ref) {
   return {std::sqrt(mse), mse / (mean * mean)};
 }
 
+/// bdpt against `rival` (path, or volpath for media).
 void runScene(const std::string& name, std::string (*text)(const std::string&), double seconds,
-              double ref_seconds, int seeds, int threads) {
-  const scene::Scene bdpt = build(text("bdpt")), path = build(text("path"));
+              double ref_seconds, int seeds, int threads, const char* rival = "path") {
+  const scene::Scene bdpt = build(text("bdpt")), path = build(text(rival));
   // CPU seconds per sample per pixel, from pilots.
   auto perSpp = [&](const scene::Scene& s) {
     const int spp = 4;
@@ -150,9 +188,10 @@ void runScene(const std::string& name, std::string (*text)(const std::string&), 
   const Render ref = renderOnce(bdpt, ref_spp, 12345, threads);
   const int spp_bdpt = std::max(1, int(std::lround(seconds / t_bdpt)));
   const int spp_path = std::max(1, int(std::lround(seconds / t_path)));
-  fmt::print("{}: reference bdpt {} spp ({:.0f} CPU s); equal time {:.1f} CPU s: path {} spp, "
-             "bdpt {} spp; {} seeds\n",
-             name, ref_spp, ref.cpu_s, seconds, spp_path, spp_bdpt, seeds);
+  fmt::print(
+      "{}: reference bdpt {} spp ({:.0f} CPU s); equal time {:.1f} CPU s: {} {} spp, "
+      "bdpt {} spp; {} seeds\n",
+      name, ref_spp, ref.cpu_s, seconds, rival, spp_path, spp_bdpt, seeds);
   double rmse[2] = {0, 0}, rel[2] = {0, 0}, cpu[2] = {0, 0};
   for (int k = 0; k < seeds; ++k)
     for (int i = 0; i < 2; ++i) {
@@ -163,10 +202,11 @@ void runScene(const std::string& name, std::string (*text)(const std::string&), 
       rel[i] += e.rel_mse / seeds;
       cpu[i] += r.cpu_s / seeds;
     }
-  fmt::print("  path: RMSE {:.4g}, relative MSE {:.4g} ({:.1f} CPU s)\n", rmse[0], rel[0], cpu[0]);
+  fmt::print("  {}: RMSE {:.4g}, relative MSE {:.4g} ({:.1f} CPU s)\n", rival, rmse[0], rel[0],
+             cpu[0]);
   fmt::print("  bdpt: RMSE {:.4g}, relative MSE {:.4g} ({:.1f} CPU s)\n", rmse[1], rel[1], cpu[1]);
   // MSE falls as 1 / time: the ratio of MSE x time is the ratio at exactly equal time.
-  fmt::print("  bdpt / path at equal time: RMSE {:.3f}, MSE {:.3f} (MSE x CPU time {:.3f})\n",
+  fmt::print("  bdpt / {} at equal time: RMSE {:.3f}, MSE {:.3f} (MSE x CPU time {:.3f})\n", rival,
              rmse[1] / rmse[0], rel[1] / rel[0], rel[1] * cpu[1] / (rel[0] * cpu[0]));
 }
 
@@ -206,6 +246,9 @@ int main(int argc, char** argv) {
     if (which == "bokeh" || which == "all")
       runScene("bokeh (small lights behind the focus of the double Gauss)", bokehScene, seconds,
                ref_seconds, seeds, threads);
+    if (which == "fog" || which == "all")
+      runScene("fog (a small light above a glass ball in a sphere of fog)", fogScene, seconds,
+               ref_seconds, seeds, threads, "volpath");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lensim_bench_bdpt: %s\n", e.what());
     return 1;

@@ -311,12 +311,13 @@ TEST(Bdpt, BuilderParameters) {
   int warnings = 0;
   for (const auto& dg : s.diagnostics) warnings += dg.severity == Severity::Warning;
   EXPECT_EQ(warnings, 2);  // bvh light sampler, visualizeweights
-  // With media, volpath renders the scene (warned).
+  // With media, bdpt renders the scene (it traces them: render_bdpt_media_test), unwarned.
   scene::Scene m = buildText(
       "Integrator \"bdpt\"\nWorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
       "MediumInterface \"fog\" \"\"\nShape \"sphere\"\n",
       "m.pbrt");
-  EXPECT_EQ(m.integrator.type, "volpath");
+  EXPECT_EQ(m.integrator.type, "bdpt");
+  for (const auto& dg : m.diagnostics) EXPECT_NE(dg.severity, Severity::Warning) << dg.message;
 }
 
 namespace {

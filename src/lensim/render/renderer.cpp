@@ -201,9 +201,11 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const Media& media = world->media;
   // Subsurface materials need volpath's tracking (render/media/subsurface.h): the path integrator
   // renders them with it too, without the scene's media (which it ignores, with a warning).
-  const bool volpath = scene.integrator.type == "volpath" || media.hasSubsurface();
-  if (volpath) sc.media = &media;
-  sc.scene_media = scene.integrator.type == "volpath";
+  bool volpath = scene.integrator.type == "volpath" || media.hasSubsurface();
+  // lighttracer and bdpt track the scene's media too (render/integrators/media_tracking.h).
+  const bool splatting = scene.integrator.type == "lighttracer" || scene.integrator.type == "bdpt";
+  if (volpath || splatting) sc.media = &media;
+  sc.scene_media = scene.integrator.type == "volpath" || splatting;
   sc.camera_medium = scene.camera.medium;
   // pbrt-v1–v3's directlighting (render/integrators/directlighting.h).
   const bool direct_lighting = scene.integrator.type == "directlighting";
@@ -246,20 +248,20 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   std::optional<LightTracer> light_tracer;
   if (scene.integrator.type == "lighttracer") {
     refuseSplatting("lighttracer", "light paths");
-    if (!scene.media.empty())
-      logWarning("integrator \"lighttracer\" ignores participating media (use \"volpath\")");
     light_tracer.emplace(sc, *cam);
     film.enableSplats(*filter);
   }
   // bdpt (render/bdpt.h): its t = 1 strategies splat as the light tracer's paths do, so it has
   // the same limits; scenes it cannot render (a camera without importance, lights without
-  // emission sampling) render with path, warned.
+  // emission sampling) render with path (volpath where the scene has media), warned.
   std::optional<BdptIntegrator> bdpt;
   if (scene.integrator.type == "bdpt") {
     refuseSplatting("bdpt", "light subpaths");
     if (const std::string why = BdptIntegrator::unsupported(sc, *cam); !why.empty()) {
-      logWarning(fmt::format("{}: integrator \"bdpt\" renders as \"path\": {}",
-                             scene.integrator.loc.str(), why));
+      // With media, as volpath (which tracks them).
+      volpath = volpath || !media.empty();
+      logWarning(fmt::format("{}: integrator \"bdpt\" renders as \"{}\": {}",
+                             scene.integrator.loc.str(), volpath ? "volpath" : "path", why));
     } else {
       bdpt.emplace(sc, *cam);
       film.enableSplats(*filter);

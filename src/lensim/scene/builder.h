@@ -260,6 +260,8 @@ struct Light {
   bool two_sided = false;
   int shape_count = 0;  ///< area lights: shapes that emit with it
   int n_samples = 1;    ///< pbrt-v1–v3 "nsamples" (directlighting "all": samples per hit)
+  /// Other lights: the outside medium of the MediumInterface current at LightSource, or -1.
+  int medium = -1;
 };
 
 /// pbrt-v1/v2 `realistic` camera (Stanford CS348B): camera space is millimetres.

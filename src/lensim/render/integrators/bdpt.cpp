@@ -9,6 +9,8 @@
 #include <cmath>
 
 #include "lensim/camera/camera.h"
+#include "lensim/render/integrators/media_tracking.h"
+#include "lensim/render/materials/layered.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 
@@ -46,10 +48,14 @@ SampledSpectrum emitted(const Context& ctx, const Vertex& v, const Vertex& towar
   return v.light->L(v.hit, w, lambda);
 }
 
-SampledSpectrum bsdfF(const Vertex& v, const Vertex& next, TransportMode mode) {
+/// The scattering function at v toward next: the BSDF at a surface vertex, the phase function
+/// at a medium vertex (pbrt-v4's Vertex::f).
+SampledSpectrum scatterF(const Vertex& v, const Vertex& next, TransportMode mode) {
   double d2;
   const Vec3 wi = unitOrZero(next.p - v.p, d2);
-  if (d2 == 0 || v.type != VertexType::Surface) return SampledSpectrum(0.0);
+  if (d2 == 0) return SampledSpectrum(0.0);
+  if (v.type == VertexType::Medium) return SampledSpectrum(HenyeyGreenstein(v.g).p(v.wo, wi));
+  if (v.type != VertexType::Surface) return SampledSpectrum(0.0);
   return v.bsdf.f(v.wo, wi, mode);
 }
 
@@ -87,20 +93,55 @@ bool makeSurfaceVertex(const Context& ctx, const SurfaceHit& h, const Vec3& ray_
   return true;
 }
 
-/// pbrt-v4's RandomWalk: extends path[1..] from path[0] along ray; returns the number of
-/// vertices added.
-int randomWalk(const Context& ctx, Ray ray, SampledWavelengths& lambda, Sampler& sampler,
-               SampledSpectrum beta, double pdf_dir, int max_depth, TransportMode mode,
-               RayCounts& counts, Vertex* path) {
+/// pbrt-v4's RandomWalk: extends path[1..] from path[0] along ray, which starts in `medium`;
+/// returns the number of vertices added. L_medium: see cameraSubpath.
+int randomWalk(const Context& ctx, Ray ray, int medium, SampledWavelengths& lambda,
+               Sampler& sampler, Rng* rng, SampledSpectrum beta, double pdf_dir, int max_depth,
+               TransportMode mode, RayCounts& counts, Vertex* path, SampledSpectrum* L_medium) {
   if (max_depth <= 0) return 0;
   const SceneContext& sc = *ctx.sc;
   int bounces = 0, interfaces = 0;
   bool any_non_specular = false;
   double pdf_fwd = pdf_dir;
+  SampledSpectrum r(1.0);
   for (;;) {
     auto hit = intersectScene(sc, ray, counts);
     Vertex& prev = path[bounces];
     Vertex& v = path[bounces + 1];
+    if (const Medium* m = ctx.media && rng ? sc.media->get(medium) : nullptr) {
+      // Delta tracking to a real scattering event, absorption, or the hit (pbrt-v4's
+      // RandomWalk with SampleT_maj).
+      const double len = length(ray.d);
+      const Vec3 dir = ray.d / len;
+      // Emission at collisions counts for paths of at most maxdepth scattering events before
+      // it (as volpath's).
+      SampledSpectrum* L_e = L_medium && bounces < ctx.max_depth ? L_medium : nullptr;
+      const MediumEvent ev = trackMedium(*m, ray.o, dir, hit ? hit->t * len : INFINITY, lambda,
+                                         sampler, *rng, beta, r, L_e);
+      if (ev.kind == MediumEvent::Kind::Absorbed) break;
+      if (ev.kind == MediumEvent::Kind::Scattered) {
+        v = Vertex{};
+        v.type = VertexType::Medium;
+        v.p = ev.p;
+        v.wo = -dir;
+        v.medium = medium;
+        v.g = m->g();
+        v.beta = beta;
+        v.r = r;
+        v.pdf_fwd = convertDensity(prev, pdf_fwd, v);
+        if (++bounces >= max_depth) break;
+        const HenyeyGreenstein phase(v.g);
+        auto ps = phase.sample(v.wo, sampler.get2D());
+        if (!ps || ps->pdf <= 0) break;
+        beta *= ps->p / ps->pdf;
+        // The phase function is symmetric: the reverse density is the forward one.
+        pdf_fwd = ps->pdf;
+        prev.pdf_rev = convertDensity(v, ps->pdf, prev);
+        any_non_specular = true;
+        ray = Ray{v.p, ps->wi, INFINITY};
+        continue;
+      }
+    }
     if (!hit) {
       // A camera ray that escapes ends on the infinite lights (pbrt-v4 adds the vertex
       // whether or not there are any; its emission is then zero).
@@ -109,6 +150,8 @@ int randomWalk(const Context& ctx, Ray ray, SampledWavelengths& lambda, Sampler&
         v.type = VertexType::Light;
         v.p = ray.o + normalize(ray.d);
         v.beta = beta;
+        v.r = r;
+        v.medium = medium;
         v.pdf_fwd = pdf_fwd;
         ++bounces;
       }
@@ -116,10 +159,13 @@ int randomWalk(const Context& ctx, Ray ray, SampledWavelengths& lambda, Sampler&
     }
     if (!makeSurfaceVertex(ctx, *hit, ray.d, lambda, sc.regularize && any_non_specular, v)) {
       if (++interfaces > 100) break;
+      if (ctx.media) medium = mediumAfter(sc, *hit, ray.d, medium, false);
       ray.o = offsetOrigin(hit->p, hit->ng, ray.d);
       continue;
     }
     v.beta = beta;
+    v.r = r;
+    v.medium = medium;
     v.pdf_fwd = convertDensity(prev, pdf_fwd, v);
     if (++bounces >= max_depth) break;
     const double uc = sampler.get1D();
@@ -139,9 +185,27 @@ int randomWalk(const Context& ctx, Ray ray, SampledWavelengths& lambda, Sampler&
     }
     prev.pdf_rev = convertDensity(v, pdf_rev, prev);
     if (beta.isBlack()) break;
+    if (ctx.media) medium = mediumAfter(sc, *hit, bs->wi, medium, false);
     ray = Ray{offsetOrigin(v.p, v.ng, bs->wi), bs->wi, INFINITY};
   }
   return bounces;
+}
+
+/// The medium a connection from the camera-side vertex v toward direction w starts in.
+int mediumToward(const Context& ctx, const Vertex& v, const Vec3& w) {
+  if (v.type == VertexType::Surface) return mediumAfter(*ctx.sc, v.hit, w, v.medium, false);
+  return v.medium;
+}
+
+/// The transmittance of a connection from the camera-side vertex a to b (to the direction wi
+/// when b is on an infinite light), traced from a, whose medium is known.
+SampledSpectrum connectionT(const Context& ctx, const Vertex& a, const Vertex& b, bool infinite,
+                            const Vec3& wi, const SampledWavelengths& lambda, Rng& rng,
+                            RayCounts& counts) {
+  const Vec3 w = infinite ? wi : normalize(b.p - a.p);
+  const Vec3 ng = a.onSurface() ? a.ng : Vec3{0, 0, 0};
+  return segmentTransmittance(*ctx.sc, a.p, ng, mediumToward(ctx, a, w), infinite ? wi : b.p,
+                              infinite, lambda, rng, counts);
 }
 
 bool segmentOccluded(const Context& ctx, const Vertex& a, const Vertex& b, RayCounts& counts) {
@@ -156,15 +220,20 @@ bool segmentOccluded(const Context& ctx, const Vertex& a, const Vertex& b, RayCo
 /// pbrt-v4's ConnectBDPT: the contribution of strategy (s, t), weighted by MIS; raster is set
 /// for t = 1.
 SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s, int t,
-                        SampledWavelengths& lambda, double time, Sampler& sampler,
+                        SampledWavelengths& lambda, double time, Sampler& sampler, Rng& rng,
                         RayCounts& counts, Vec2* raster) {
   SampledSpectrum L(0.0);
   // A camera subpath ending on an infinite light is only used by s = 0.
   if (t > 1 && s != 0 && camera[t - 1].type == VertexType::Light) return L;
+  // Connections see media and pass interface surfaces where the scene has them; else a shadow
+  // ray (started from the surface end).
+  const bool tracked = ctx.media || ctx.sc->has_interfaces;
   Vertex sampled;
+  SampledSpectrum r(1.0);  // the strategy's density ratios over wavelengths (bdpt.h)
   if (s == 0) {
     const Vertex& pt = camera[t - 1];
     if (isLight(pt)) L = emitted(ctx, pt, camera[t - 2], lambda) * pt.beta;
+    r = pt.r;
   } else if (t == 1) {
     const Vertex& qs = light[s - 1];
     if (!isConnectible(qs)) return L;
@@ -178,6 +247,7 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     sampled = Vertex{};
     sampled.type = VertexType::Camera;
     sampled.p = cs->p_lens;
+    sampled.medium = ctx.camera_medium;
     for (int c = 0; c < kSpectrumSamples; ++c)
       sampled.beta[c] = cs->importance[size_t(c)] / cs->pdf;
     if (qs.type == VertexType::Light) {
@@ -185,11 +255,16 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
       L = emitted(ctx, qs, sampled, lambda) *
           (std::abs(dot(cs->wi, qs.ng)) / std::max(qs.pdf_fwd, 1e-300)) * sampled.beta;
     } else {
-      L = qs.beta * bsdfF(qs, sampled, TransportMode::Importance) * sampled.beta;
+      L = qs.beta * scatterF(qs, sampled, TransportMode::Importance) * sampled.beta;
       if (qs.onSurface()) L *= std::abs(dot(cs->wi, qs.ns));
     }
-    if (L.isBlack() || segmentOccluded(ctx, qs, sampled, counts)) return SampledSpectrum(0.0);
+    if (L.isBlack()) return SampledSpectrum(0.0);
+    if (tracked)
+      L *= connectionT(ctx, sampled, qs, false, {}, lambda, rng, counts);
+    else if (segmentOccluded(ctx, qs, sampled, counts))
+      return SampledSpectrum(0.0);
     *raster = cs->film_raster;
+    r = qs.r;
   } else if (s == 1) {
     const Vertex& pt = camera[t - 1];
     if (!isConnectible(pt)) return L;
@@ -207,16 +282,19 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     sampled.ns = ls->n_light;
     sampled.beta = ls->L / (choice->pmf * ls->pdf);
     sampled.pdf_fwd = pdfLightOrigin(ctx, sampled, pt);
-    L = pt.beta * bsdfF(pt, sampled, TransportMode::Radiance) * sampled.beta;
+    L = pt.beta * scatterF(pt, sampled, TransportMode::Radiance) * sampled.beta;
     if (pt.onSurface()) L *= std::abs(dot(ls->wi, pt.ns));
     if (L.isBlack()) return L;
-    if (occludedScene(*ctx.sc, pt.p, pt.ng, ls->p_light, ls->infinite, ls->wi, counts))
+    if (tracked)
+      L *= connectionT(ctx, pt, sampled, ls->infinite, ls->wi, lambda, rng, counts);
+    else if (occludedScene(*ctx.sc, pt.p, pt.ng, ls->p_light, ls->infinite, ls->wi, counts))
       return SampledSpectrum(0.0);
+    r = pt.r;
   } else {
     const Vertex &qs = light[s - 1], &pt = camera[t - 1];
     if (!isConnectible(qs) || !isConnectible(pt)) return L;
-    L = qs.beta * bsdfF(qs, pt, TransportMode::Importance) * bsdfF(pt, qs, TransportMode::Radiance) *
-        pt.beta;
+    L = qs.beta * scatterF(qs, pt, TransportMode::Importance) *
+        scatterF(pt, qs, TransportMode::Radiance) * pt.beta;
     if (L.isBlack()) return L;
     double d2;
     const Vec3 w = unitOrZero(pt.p - qs.p, d2);
@@ -225,10 +303,16 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     if (qs.onSurface()) g *= std::abs(dot(qs.ns, w));
     if (pt.onSurface()) g *= std::abs(dot(pt.ns, w));
     L *= g;
-    if (L.isBlack() || segmentOccluded(ctx, qs, pt, counts)) return SampledSpectrum(0.0);
+    if (L.isBlack()) return SampledSpectrum(0.0);
+    if (tracked)
+      L *= connectionT(ctx, pt, qs, false, {}, lambda, rng, counts);
+    else if (segmentOccluded(ctx, qs, pt, counts))
+      return SampledSpectrum(0.0);
+    r = qs.r * pt.r;
   }
   if (L.isBlack()) return L;
-  return L * misWeight(ctx, light, camera, sampled, s, t, lambda.lambda(0));
+  return L * (misWeight(ctx, light, camera, sampled, s, t, lambda.lambda(0)) /
+              wavelengthMean(r, lambda));
 }
 
 }  // namespace
@@ -245,6 +329,8 @@ bool isConnectible(const Vertex& v) {
       return true;
     case VertexType::Surface:
       return isNonSpecular(v.bsdf.flags());
+    case VertexType::Medium:
+      return true;
   }
   return false;
 }
@@ -280,6 +366,12 @@ double pdf(const Context& ctx, const Vertex& v, const Vertex* prev, const Vertex
   double p = 0;
   if (v.type == VertexType::Camera) {
     p = ctx.camera->rayPdf(v.p, wn, lambda_nm).pdf_dir;
+  } else if (v.type == VertexType::Medium) {
+    if (!prev) return 0;
+    double dp2;
+    const Vec3 wp = unitOrZero(prev->p - v.p, dp2);
+    if (dp2 == 0) return 0;
+    p = HenyeyGreenstein(v.g).p(wp, wn);
   } else {
     if (!prev) return 0;
     double dp2;
@@ -416,24 +508,28 @@ double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex
 }
 
 int cameraSubpath(const Context& ctx, const camera::CameraRay& ray, SampledWavelengths& lambda,
-                  Sampler& sampler, RayCounts& counts, Vertex* path) {
+                  Sampler& sampler, RayCounts& counts, Vertex* path, Rng* rng,
+                  SampledSpectrum* L_medium) {
   const int max_vertices = ctx.max_depth + 2;
   Vertex& v = path[0];
   v = Vertex{};
   v.type = VertexType::Camera;
   v.p = ray.origin;
   v.beta = SampledSpectrum(ray.weight);
+  v.medium = ctx.camera_medium;
   const camera::CameraRayPdf rp = ctx.camera->rayPdf(ray.origin, ray.direction, lambda.lambda(0));
-  const int n = randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY}, lambda, sampler, v.beta,
-                           rp.pdf_dir, max_vertices - 1, TransportMode::Radiance, counts, path) +
+  const int n = randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY}, v.medium, lambda, sampler,
+                           rng, v.beta, rp.pdf_dir, max_vertices - 1, TransportMode::Radiance, counts,
+                           path, L_medium) +
                 1;
-  if (n >= 2 && path[1].onSurface())
+  // The t = 1 strategy can pick this camera point from a surface or a medium vertex.
+  if (n >= 2 && (path[1].onSurface() || path[1].type == VertexType::Medium))
     path[0].wi_pos_ratio = cameraPositionRatio(ctx, rp.pdf_pos, path[0].p, path[1].p);
   return n;
 }
 
 int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sampler,
-                 RayCounts& counts, Vertex* path) {
+                 RayCounts& counts, Vertex* path, Rng* rng) {
   const int max_vertices = ctx.max_depth + 1;
   const double ul = sampler.get1D();
   const Vec2 u1 = sampler.get2D(), u2 = sampler.get2D();
@@ -453,14 +549,20 @@ int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sample
     v.hit.uv = le->uv;
   }
   v.beta = le->L;
+  v.medium = ctx.media ? lightMedium(*ctx.sc, *light) : -1;
   v.pdf_fwd = le->pdf_pos * choice->pmf;
   const bool on_surface = v.onSurface();
   const double cos_o = on_surface ? std::abs(dot(le->n, le->d)) : 1;
-  const SampledSpectrum beta = le->L * (cos_o / (choice->pmf * le->pdf_pos * le->pdf_dir));
+  SampledSpectrum beta = le->L * (cos_o / (choice->pmf * le->pdf_pos * le->pdf_dir));
+  if (isInfiniteLight(v) && v.medium >= 0) {
+    beta *= transmittanceFromInfinity(*ctx.sc, v.medium, lambda);
+    if (beta.isBlack()) return 1;
+  }
   // The light's own surface must not stop its ray.
   const Vec3 o = on_surface ? offsetOrigin(le->o, le->n, le->d) : le->o;
-  const int n = randomWalk(ctx, Ray{o, le->d, INFINITY}, lambda, sampler, beta, le->pdf_dir,
-                           max_vertices - 1, TransportMode::Importance, counts, path);
+  const int n =
+      randomWalk(ctx, Ray{o, le->d, INFINITY}, v.medium, lambda, sampler, rng, beta, le->pdf_dir,
+                 max_vertices - 1, TransportMode::Importance, counts, path, nullptr);
   // Infinite lights: the first surface vertex's density is the disk's positional density
   // projected onto it, and the light vertex's the direction's (pbrt-v4).
   if (isInfiniteLight(v)) {
@@ -497,6 +599,8 @@ BdptIntegrator::BdptIntegrator(const SceneContext& sc, const camera::Camera& cam
   ctx_.max_depth = std::clamp(sc.max_depth, 0, 1000);
   const scene::Camera& c = sc.scene->camera;
   ctx_.camera_delta_direction = c.type == "orthographic" && c.lens_radius == 0;
+  ctx_.media = sc.scene_media && sc.media && !sc.media->empty();
+  ctx_.camera_medium = ctx_.media ? sc.camera_medium : -1;
 }
 
 BdptIntegrator::~BdptIntegrator() = default;
@@ -523,15 +627,18 @@ SampledSpectrum BdptIntegrator::Li(const camera::CameraRay* ray, double time,
   Vertex* camera_path = camera_buf.data();
   Vertex* light_path = light_buf.data();
   int n_camera = 0;
+  // The stream for tracking steps in media (their count varies).
+  Rng rng;
+  if (ctx_.media) rng = pathRng(sampler);
+  SampledSpectrum L(0.0);
   if (ray) {
-    n_camera = cameraSubpath(ctx_, *ray, lambda, sampler, counts, camera_path);
+    n_camera = cameraSubpath(ctx_, *ray, lambda, sampler, counts, camera_path, &rng, &L);
   } else {
     // No camera ray: only the t = 1 strategies, whose camera vertex is sampled anew.
     camera_path[0].type = VertexType::Camera;
     n_camera = 1;
   }
-  const int n_light = lightSubpath(ctx_, lambda, sampler, counts, light_path);
-  SampledSpectrum L(0.0);
+  const int n_light = lightSubpath(ctx_, lambda, sampler, counts, light_path, &rng);
   for (int t = 1; t <= n_camera; ++t)
     for (int s = 0; s <= n_light; ++s) {
       const int depth = t + s - 2;
@@ -540,7 +647,7 @@ SampledSpectrum BdptIntegrator::Li(const camera::CameraRay* ray, double time,
       if (!ray && s == 0) continue;
       Vec2 raster;
       const SampledSpectrum Lpath =
-          connect(ctx_, light_path, camera_path, s, t, lambda, time, sampler, counts, &raster);
+          connect(ctx_, light_path, camera_path, s, t, lambda, time, sampler, rng, counts, &raster);
       if (Lpath.isBlack()) continue;
       if (t == 1)
         splats.push_back({raster, Lpath});

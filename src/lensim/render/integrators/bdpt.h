@@ -36,7 +36,19 @@
 // (sampleWi's hero_only) terminate the secondary wavelengths before they contribute, also for
 // samples without a camera ray. Unbiased; the colour noise is that of one wavelength per path.
 //
-// Not handled: participating media (the scene builder renders such scenes with volpath, warned).
+// Participating media (pbrt-v4's BDPT with media): the random walks track delta collisions by
+// the majorant (render/integrators/media_tracking.h) and leave medium vertices, whose scattering
+// function is the Henyey-Greenstein phase function; every connection (t = 1 to the camera, s = 1
+// to a light, and between subpaths) carries the transmittance between its ends, through
+// interface surfaces; camera subpaths start in the camera's medium, light subpaths in the
+// light's (lightMedium). The MIS densities of medium vertices are those of their phase function
+// (solid angle to area without the cosine), as pbrt-v4's, whose MIS also leaves out the
+// distance-sampling densities (a partition of unity all the same). Chromatic media: the
+// throughputs are divided by the hero wavelength's densities and each vertex keeps r, its
+// subpath's densities at the other wavelengths over the hero's (as volpath's r_u); a strategy's
+// contribution is divided by the mean of the two subpaths' r product, the one-sample MIS over
+// the hero choice that volpath uses, so the two estimate the same image. Emission from media
+// reaches the image by the s = 0 strategy alone (no light subpath starts in a medium), weight 1.
 #pragma once
 
 #include <memory>
@@ -62,7 +74,7 @@ struct BdptSplat {
 
 namespace bdpt {
 
-enum class VertexType { Camera, Light, Surface };
+enum class VertexType { Camera, Light, Surface, Medium };
 
 /// A subpath vertex (pbrt-v4's Vertex).
 struct Vertex {
@@ -82,6 +94,12 @@ struct Vertex {
   /// Camera vertex: the density with which the t = 1 strategy (Camera::sampleWi from the next
   /// vertex) picks this position, over generateRay's (rayPdf().pdf_pos); see cameraPositionRatio.
   double wi_pos_ratio = 1;
+  /// The medium around the vertex: medium vertices, camera vertices, light vertices; surface
+  /// vertices: the medium the walk reached them in (Scene::media index; -1 vacuum).
+  int medium = -1;
+  double g = 0;  ///< medium vertex: Henyey-Greenstein asymmetry
+  /// The subpath's densities with each wavelength as the hero over the hero's (chromatic media).
+  SampledSpectrum r = SampledSpectrum(1.0);
 
   bool onSurface() const { return ng.x != 0 || ng.y != 0 || ng.z != 0; }
 };
@@ -98,6 +116,8 @@ struct Context {
   /// The camera's rays run along one direction (the orthographic pinhole): the first vertex's
   /// density from the camera is pdf_pos |cos| per unit area, not through a solid angle.
   bool camera_delta_direction = false;
+  bool media = false;      ///< the scene's media are tracked (SceneContext::media)
+  int camera_medium = -1;  ///< the medium camera rays start in
 };
 
 /// A light vertex on an area light (not an infinite one): its point can be connected to the
@@ -130,10 +150,13 @@ double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex
                  int t, double lambda_nm);
 
 /// Subpaths (pbrt-v4's GenerateCameraSubpath / GenerateLightSubpath); return the vertex count.
+/// rng: the path's stream for tracking in media (needed when ctx.media); L_medium: emission of
+/// media the camera subpath passes is added there (the s = 0 strategy's, weight 1).
 int cameraSubpath(const Context& ctx, const camera::CameraRay& ray, SampledWavelengths& lambda,
-                  Sampler& sampler, RayCounts& counts, Vertex* path);
+                  Sampler& sampler, RayCounts& counts, Vertex* path, Rng* rng = nullptr,
+                  SampledSpectrum* L_medium = nullptr);
 int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sampler,
-                 RayCounts& counts, Vertex* path);
+                 RayCounts& counts, Vertex* path, Rng* rng = nullptr);
 
 }  // namespace bdpt
 

@@ -6,6 +6,12 @@
 // a path ends after maxdepth surface vertices, which gives it the path tracer's path lengths.
 // Where pbrt-v4 divides the light's point by its solid-angle density from the lens, lensim
 // uses the area density it sampled the point with (the two agree for area-sampled lights).
+// Media (as pbrt-v4's LightPathIntegrator): the path is tracked through them by delta tracking
+// (render/integrators/media_tracking.h) from the light's medium; real scattering events are
+// vertices connected to the camera with the phase function, each connection carries the
+// transmittance from the camera (in its medium) to the vertex, and chromatic media are weighted
+// by the one-sample MIS over the hero wavelength as volpath's. Media's own emission is not
+// traced (no light path starts in a medium; warned).
 #include "lensim/render/integrators/lighttracer.h"
 
 #include <fmt/format.h>
@@ -16,6 +22,8 @@
 
 #include "lensim/camera/camera.h"
 #include "lensim/render/film/film.h"
+#include "lensim/render/integrators/media_tracking.h"
+#include "lensim/render/materials/layered.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
@@ -47,6 +55,16 @@ LightTracer::LightTracer(const SceneContext& sc, const camera::Camera& camera)
   }
   if (total <= 0)  // no power known: uniform
     for (size_t i = 0; i < cdf_.size(); ++i) cdf_[i] = double(i + 1);
+  media_ = sc.scene_media && sc.media && !sc.media->empty();
+  if (media_) {
+    bool emissive = false;
+    for (size_t i = 0; i < sc.scene->media.size(); ++i)
+      if (const Medium* m = sc.media->get(int(i))) emissive = emissive || m->isEmissive();
+    if (emissive)
+      logWarning(
+          "integrator \"lighttracer\" does not trace the emission of media (no light "
+          "path starts in a medium); \"volpath\" or \"bdpt\" render it");
+  }
   for (const auto& [type, n] : left_out)
     logWarning(fmt::format("integrator \"lighttracer\": {} {} light{} cannot start light paths "
                            "(no emission sampling) and {} left out of the image",
@@ -88,6 +106,20 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
   const Vec2 u_cam0 = sampler.get2D();
   const std::optional<LightLeSample> les = light.sampleLe(u1, u2, lambda);
   if (!les || !(les->pdf_pos > 0) || !(les->pdf_dir > 0) || les->L.isBlack()) return 0;
+  // Media and interface surfaces: connections are traced from the camera, in its medium.
+  const bool tracked = media_ || sc_->has_interfaces;
+  Rng rng;
+  if (media_) rng = pathRng(sampler);
+  const int camera_medium = media_ ? sc_->camera_medium : -1;
+  // Whether the connection from the point p (on a surface of geometric normal ng, or zero) to
+  // the lens is open; T its transmittance.
+  auto visible = [&](const Vec3& p, const Vec3& ng, const camera::CameraWiSample& cs,
+                     SampledSpectrum& T) {
+    if (!tracked) return !occludedScene(*sc_, p, ng, cs.p_lens, false, cs.wi, counts);
+    T = segmentTransmittance(*sc_, cs.p_lens, Vec3{0, 0, 0}, camera_medium, p, false, lambda, rng,
+                             counts);
+    return !T.isBlack();
+  };
   // The light's own point seen by the camera (area lights; a point light is a delta the film
   // cannot see).
   if (les->on_surface) {
@@ -96,17 +128,46 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
       h.ng = les->n;
       h.uv = les->uv;
       const SampledSpectrum Le = light.L(h, cs->wi, lambda);
-      if (!Le.isBlack() &&
-          !occludedScene(*sc_, les->o, les->n, cs->p_lens, false, cs->wi, counts))
-        splat(*cs, Le * (std::abs(dot(les->n, cs->wi)) / (pmf * les->pdf_pos)));
+      SampledSpectrum T(1.0);
+      if (!Le.isBlack() && visible(les->o, les->n, *cs, T))
+        splat(*cs, T * Le * (std::abs(dot(les->n, cs->wi)) / (pmf * les->pdf_pos)));
     }
   }
   const double cos0 = les->on_surface ? std::abs(dot(les->n, les->d)) : 1.0;
   SampledSpectrum beta = les->L * (cos0 / (pmf * les->pdf_pos * les->pdf_dir));
+  SampledSpectrum r(1.0);  // chromatic media: media_tracking.h
+  int medium = media_ ? lightMedium(*sc_, light) : -1;
+  if (light.isInfinite() || light.isDeltaDirection())
+    beta *= transmittanceFromInfinity(*sc_, medium, lambda);
   Ray ray{les->on_surface ? offsetOrigin(les->o, les->n, les->d) : les->o, les->d, INFINITY};
   int depth = 0, interfaces = 0;
   for (;;) {
     const auto hit = intersectScene(*sc_, ray, counts);
+    if (const Medium* m = media_ ? sc_->media->get(medium) : nullptr) {
+      const double len = length(ray.d);
+      const Vec3 dir = ray.d / len;
+      const MediumEvent ev = trackMedium(*m, ray.o, dir, hit ? hit->t * len : INFINITY, lambda,
+                                         sampler, rng, beta, r, nullptr);
+      if (ev.kind == MediumEvent::Kind::Absorbed) break;
+      if (ev.kind == MediumEvent::Kind::Scattered) {
+        if (depth++ == sc_->max_depth) break;
+        const HenyeyGreenstein phase(m->g());
+        const Vec2 u_cam = sampler.get2D();
+        if (auto cs = camera_->sampleWi(ev.p, u_cam, wavelengths(), time); cs && cs->pdf > 0) {
+          SampledSpectrum T(1.0);
+          const double ph = phase.p(-dir, cs->wi);
+          if (ph > 0 && visible(ev.p, Vec3{0, 0, 0}, *cs, T)) {
+            if (cs->hero_only) lambda.terminateSecondary();
+            splat(*cs, T * beta * ph / wavelengthMean(r, lambda));
+          }
+        }
+        auto ps = phase.sample(-dir, sampler.get2D());
+        if (!ps || ps->pdf <= 0) break;
+        beta *= ps->p / ps->pdf;
+        ray = Ray{ev.p, ps->wi, INFINITY};
+        continue;
+      }
+    }
     if (!hit) break;
     const SurfaceHit& h = *hit;
     const Vec3 wo = -ray.d;
@@ -115,6 +176,7 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
         sc_->materials->resolve(sc_->scene->shapes[size_t(h.shape)].material, tctx, wo);
     if (sc_->materials->isInterface(material)) {
       if (++interfaces > 100) break;
+      if (media_) medium = mediumAfter(*sc_, h, ray.d, medium, false);
       ray.o = offsetOrigin(h.p, h.ng, ray.d);
       continue;
     }
@@ -130,8 +192,11 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
       if (auto cs = camera_->sampleWi(h.p, u_cam, wavelengths(), time); cs && cs->pdf > 0) {
         const SampledSpectrum f =
             bsdf.f(wo, cs->wi, TransportMode::Importance) * std::abs(dot(cs->wi, ns));
-        if (!f.isBlack() && !occludedScene(*sc_, h.p, h.ng, cs->p_lens, false, cs->wi, counts))
-          splat(*cs, beta * f);
+        SampledSpectrum T(1.0);
+        if (!f.isBlack() && visible(h.p, h.ng, *cs, T)) {
+          if (cs->hero_only) lambda.terminateSecondary();
+          splat(*cs, T * beta * f / wavelengthMean(r, lambda));
+        }
       }
     }
     // Continue the path.
@@ -141,6 +206,7 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
     if (!bs) break;
     beta *= bs->f * (std::abs(dot(bs->wi, ns)) / bs->pdf);
     if (beta.isBlack()) break;
+    if (media_) medium = mediumAfter(*sc_, h, bs->wi, medium, false);
     ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
   }
   return dropped;

@@ -37,6 +37,7 @@ class LightTracer {
   std::vector<const Light*> lights_;  ///< those with emission sampling
   std::vector<double> cdf_;           ///< by power (uniform if no power is known)
   double shutter_open_ = 0, shutter_close_ = 0;
+  bool media_ = false;  ///< the scene's media are tracked
 };
 
 }  // namespace lensim::render

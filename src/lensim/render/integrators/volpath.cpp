@@ -6,8 +6,8 @@
 #include "lensim/render/integrators/volpath.h"
 
 #include <cmath>
-#include <cstring>
 
+#include "lensim/render/integrators/media_tracking.h"
 #include "lensim/render/materials/layered.h"
 #include "lensim/render/media/media.h"
 #include "lensim/render/media/subsurface.h"
@@ -16,73 +16,6 @@
 namespace lensim::render {
 
 namespace {
-
-/// The average of rescaled path pdfs r over the wavelengths that are still carried: the one-sample
-/// MIS over wavelengths. Once a dispersive interface (or lens) has kept only the hero wavelength,
-/// its estimate is the hero's alone (r[0]); averaging in the others' pdfs would bias it.
-double wavelengthMean(const SampledSpectrum& r, const SampledWavelengths& lambda) {
-  return lambda.secondaryTerminated() ? r[0] : r.average();
-}
-
-/// exp(-dt sigma) per wavelength, 1 where sigma is 0 (also for an infinite dt).
-SampledSpectrum transmittance(double dt, const SampledSpectrum& sigma) {
-  SampledSpectrum T;
-  for (int i = 0; i < kSpectrumSamples; ++i) T[i] = sigma[i] == 0 ? 1.0 : std::exp(-dt * sigma[i]);
-  return T;
-}
-
-/// pbrt-v4's SampleT_maj: delta tracking along the ray o + t d (d unit), t in [0, tmax), in
-/// `medium` by the hero wavelength's majorant. At each tentative collision calls
-/// callback(p, properties, sigma_maj, T_maj) with T_maj the majorant transmittance since the
-/// previous collision; stops when it returns false (and then returns 1). Otherwise returns the
-/// majorant transmittance from the last collision to tmax.
-template <class Callback>
-SampledSpectrum sampleTmaj(const Medium& medium, const Vec3& o, const Vec3& d, double tmax,
-                           double u, Rng& rng, const SampledWavelengths& lambda,
-                           Callback&& callback) {
-  SampledSpectrum T_maj(1.0);
-  bool stopped = false;
-  medium.majorants(o, d, tmax, lambda, [&](double t0, double t1, const SampledSpectrum& smaj) {
-    if (smaj[0] == 0) {
-      T_maj *= transmittance(t1 - t0, smaj);
-      return true;
-    }
-    double t_min = t0;
-    for (;;) {
-      const double t = t_min - std::log1p(-u) / smaj[0];
-      u = rng.uniform();
-      if (t >= t1) {
-        T_maj *= transmittance(t1 - t_min, smaj);
-        return true;
-      }
-      T_maj *= transmittance(t - t_min, smaj);
-      const Vec3 p = o + d * t;
-      if (!callback(p, medium.at(p, lambda), smaj, T_maj)) {
-        stopped = true;
-        return false;
-      }
-      T_maj = SampledSpectrum(1.0);
-      t_min = t;
-    }
-  });
-  return stopped ? SampledSpectrum(1.0) : T_maj;
-}
-
-/// The medium a ray enters when it leaves the surface hit `h` in direction w (pbrt-v4: shapes
-/// whose inside and outside media are the same are no boundary).
-/// A shape of subsurface material has that material's medium inside (render/media/subsurface.h).
-/// Without scene media (the path integrator) MediumInterface is ignored.
-int mediumAfter(const SceneContext& sc, const SurfaceHit& h, const Vec3& w, int current) {
-  const scene::Shape& s = sc.scene->shapes[size_t(h.shape)];
-  int inside = sc.scene_media ? s.inside_medium : -1;
-  const int outside = sc.scene_media ? s.outside_medium : -1;
-  if (sc.media) {
-    const int ss = sc.media->subsurface(s.material);
-    if (ss >= 0) inside = ss;
-  }
-  if (inside == outside) return current;
-  return dot(w, h.ng) > 0 ? outside : inside;
-}
 
 /// The medium of index `medium` for tracking: `walk` where the index is that of the walk whose
 /// coefficients it holds (a textured subsurface material, evaluated where the walk entered).
@@ -107,12 +40,6 @@ void enterMedium(const SceneContext& sc, int next, int current, const TextureEva
 /// The most scattering events and boundary hits of one random walk inside a subsurface shape
 /// (they do not count toward maxdepth, as the pbrt-v4 BSSRDF's inner bounces do not).
 constexpr int kMaxWalkSteps = 100000;
-
-bool isInterfaceHit(const SceneContext& sc, const SurfaceHit& h, const Vec3& wo) {
-  const TextureEvalContext tctx{h.p, h.uv, h.ns};
-  const int material = sc.materials->resolve(sc.scene->shapes[size_t(h.shape)].material, tctx, wo);
-  return sc.materials->isInterface(material);
-}
 
 /// A scattering vertex for next-event estimation: a surface (bsdf set) or a medium point.
 struct Vertex {
@@ -231,13 +158,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
   const bool has_media = sc.media && (!sc.media->empty() || sc.media->hasSubsurface());
   // Random numbers for the tracking steps (their count varies): a stream per path.
   Rng rng;
-  if (has_media) {
-    const double a = sampler.get1D(), b = sampler.get1D();
-    uint64_t ua, ub;
-    std::memcpy(&ua, &a, sizeof ua);
-    std::memcpy(&ub, &b, sizeof ub);
-    rng.setSequence(hashValues({ua, ub}), mixBits(ub ^ 0x9e3779b97f4a7c15ULL));
-  }
+  if (has_media) rng = pathRng(sampler);
   if (!has_media || !sc.scene_media) medium = -1;
   Ray ray{o, d, INFINITY};
   for (;;) {

@@ -960,6 +960,7 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
       infinite_.push_back(lights_.back().get());
     }
     for (size_t i = first_light; i < lights_.size(); ++i) lights_[i]->n_samples = l.n_samples;
+    if (lights_.size() > first_light) lights_.back()->medium = l.medium;
   }
   // Area lights: one light per triangle / patch, one per quadric.
   shape_first_light_.assign(scene.shapes.size(), -1);
@@ -1045,6 +1046,12 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
     }
     for (size_t i = size_t(shape_first_light_[si]); i < lights_.size(); ++i)
       lights_[i]->n_samples = l.n_samples;
+  }
+  for (size_t si = 0; si < scene.shapes.size(); ++si) {
+    const int first = shape_first_light_[si];
+    if (first < 0) continue;
+    for (size_t i = size_t(first); i < lights_.size() && lights_[i]->shape < 0; ++i)
+      lights_[i]->shape = int(si);
   }
   std::vector<const Light*> all;
   for (size_t i = 0; i < lights_.size(); ++i) {

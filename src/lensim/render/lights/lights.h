@@ -60,6 +60,11 @@ class Light {
   /// pbrt-v1–v3 "nsamples": the light samples per hit of the directlighting integrator's "all"
   /// strategy (set by LightSet from the scene light).
   int n_samples = 1;
+  /// The medium light paths start in (Scene::media index; -1 vacuum): area lights, that of
+  /// their shape `shape` on the side they leave by (lightMedium, bdpt.h); other lights, the
+  /// outside medium of the MediumInterface current at their LightSource (pbrt-v4).
+  int shape = -1;
+  int medium = -1;
   /// Point and directional lights (no surface to hit).
   virtual bool isDelta() const { return false; }
   virtual bool isInfinite() const { return false; }

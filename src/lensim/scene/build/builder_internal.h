@@ -157,9 +157,10 @@ class Builder {
   std::vector<PendingInstance> pending_instances_;
   // Media named by MediumInterface, resolved after all MakeNamedMedium (as pbrt-v4 does).
   struct PendingMedia {
-    int shape;  ///< index into Scene::shapes, or -1 for the camera
+    int shape;  ///< index into Scene::shapes, or -1 for the camera or a light
     std::string inside, outside;
     FileLoc loc;
+    int light = -1;  ///< index into Scene::lights (shape -1)
   };
   std::vector<PendingMedia> pending_media_;
   std::map<std::string, int> named_media_;

@@ -129,6 +129,9 @@ void Builder::light(const Directive& d) {
   applyLightScale(scale_param, l);
   requireInvertible(d.loc, fmt::format("LightSource \"{}\"", type));
   finish(ps);
+  if (!gs_.outside_medium.empty())
+    pending_media_.push_back(
+        {-1, "", gs_.outside_medium, gs_.medium_loc, static_cast<int>(scene_.lights.size())});
   scene_.lights.push_back(std::move(l));
 }
 

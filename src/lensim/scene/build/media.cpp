@@ -212,7 +212,9 @@ void Builder::resolveMedia() {
   for (const PendingMedia& pm : pending_media_) {
     try {
       const int in = mediumIndex(pm.inside, pm.loc), out = mediumIndex(pm.outside, pm.loc);
-      if (pm.shape < 0) {
+      if (pm.light >= 0) {
+        scene_.lights[static_cast<size_t>(pm.light)].medium = out;
+      } else if (pm.shape < 0) {
         scene_.camera.medium = out;
       } else {
         Shape& s = scene_.shapes[static_cast<size_t>(pm.shape)];
@@ -227,13 +229,6 @@ void Builder::resolveMedia() {
   bool used = scene_.camera.medium >= 0;
   for (const Shape& sh : scene_.shapes)
     used = used || sh.inside_medium >= 0 || sh.outside_medium >= 0;
-  if (used && scene_.integrator.type == "bdpt") {
-    // lensim's bdpt does not trace media (pbrt-v4's does): volpath renders them.
-    warn(scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc,
-         "the scene has participating media but integrator \"bdpt\" does not trace them in "
-         "lensim (pbrt-v4's does); it renders as \"volpath\"");
-    scene_.integrator.type = "volpath";
-  }
   if (used && (scene_.integrator.type == "path" || scene_.integrator.type == "directlighting"))
     warn(
         scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc,
