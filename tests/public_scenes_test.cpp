@@ -99,8 +99,6 @@ const std::vector<Gap> kKnownGaps = {
     // the second 'MakeNamedMaterial ""' in another block is no redefinition there; lensim's
     // named materials are global (as pbrt-v4's) and it warns.
     {"pbrt-v3-scenes/dambreak0.pbrt", "warning", "named material \"\" redefined"},
-    // Motion blur: animated transforms use the start transform.
-    {"pbrt-v4-scenes/killeroo-moving.pbrt", "warning", "animated transforms are not rendered"},
 };
 
 // Not gaps: diagnostics about what the file does, where lensim does what pbrt-v4 does.

@@ -41,7 +41,7 @@ class HemisphereCamera final : public camera::Camera {
   }
   std::string describe() const override { return "test hemisphere camera"; }
   bool supportsImportance() const override { return true; }
-  camera::CameraRayPdf rayPdf(const Vec3&, const Vec3& d, double) const override {
+  camera::CameraRayPdf rayPdf(const Vec3&, const Vec3& d, double, double) const override {
     return {1, d.z > 0 ? 1 / (2 * kPi) : 0.0};
   }
 };

@@ -511,11 +511,11 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     } else {
                       ++n_rays;
                       sampler->startPixelSample({x, y}, i0 + k, path_dimension);
-                      L = volpath
-                              ? volpathLi(sc, ray->origin, ray->direction,
-                                          sc.scene_media ? sc.camera_medium : -1, lambda,
-                                          *sampler, counts)
-                              : pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts);
+                      L = volpath ? volpathLi(sc, ray->origin, ray->direction, ray->time,
+                                              sc.scene_media ? sc.camera_medium : -1, lambda,
+                                              *sampler, counts)
+                                  : pathLi(sc, ray->origin, ray->direction, ray->time, lambda,
+                                           *sampler, counts);
                       if (ray->per_wavelength && !lambda.secondaryTerminated()) {
                         for (int c = 0; c < kSpectrumSamples; ++c)
                           L[c] *= ray->wavelength_weight[size_t(c)];

@@ -139,18 +139,19 @@ int randomWalk(const Context& ctx, Ray ray, SampledWavelengths& lambda, Sampler&
     }
     prev.pdf_rev = convertDensity(v, pdf_rev, prev);
     if (beta.isBlack()) break;
-    ray = Ray{offsetOrigin(v.p, v.ng, bs->wi), bs->wi, INFINITY};
+    ray = Ray{offsetOrigin(v.p, v.ng, bs->wi), bs->wi, INFINITY, ray.time};
   }
   return bounces;
 }
 
-bool segmentOccluded(const Context& ctx, const Vertex& a, const Vertex& b, RayCounts& counts) {
+bool segmentOccluded(const Context& ctx, const Vertex& a, const Vertex& b, double time,
+                     RayCounts& counts) {
   // Start from the vertex on a surface (offset along its normal); the far end stops short.
   if (a.onSurface())
-    return occludedScene(*ctx.sc, a.p, a.ng, b.p, false, normalize(b.p - a.p), counts);
+    return occludedScene(*ctx.sc, a.p, a.ng, b.p, false, normalize(b.p - a.p), time, counts);
   if (b.onSurface())
-    return occludedScene(*ctx.sc, b.p, b.ng, a.p, false, normalize(a.p - b.p), counts);
-  return occludedScene(*ctx.sc, a.p, Vec3{0, 0, 0}, b.p, false, normalize(b.p - a.p), counts);
+    return occludedScene(*ctx.sc, b.p, b.ng, a.p, false, normalize(a.p - b.p), time, counts);
+  return occludedScene(*ctx.sc, a.p, Vec3{0, 0, 0}, b.p, false, normalize(b.p - a.p), time, counts);
 }
 
 /// pbrt-v4's ConnectBDPT: the contribution of strategy (s, t), weighted by MIS; raster is set
@@ -178,6 +179,7 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     sampled = Vertex{};
     sampled.type = VertexType::Camera;
     sampled.p = cs->p_lens;
+    sampled.time = time;
     for (int c = 0; c < kSpectrumSamples; ++c)
       sampled.beta[c] = cs->importance[size_t(c)] / cs->pdf;
     if (qs.type == VertexType::Light) {
@@ -188,7 +190,7 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
       L = qs.beta * bsdfF(qs, sampled, TransportMode::Importance) * sampled.beta;
       if (qs.onSurface()) L *= std::abs(dot(cs->wi, qs.ns));
     }
-    if (L.isBlack() || segmentOccluded(ctx, qs, sampled, counts)) return SampledSpectrum(0.0);
+    if (L.isBlack() || segmentOccluded(ctx, qs, sampled, time, counts)) return SampledSpectrum(0.0);
     *raster = cs->film_raster;
   } else if (s == 1) {
     const Vertex& pt = camera[t - 1];
@@ -210,7 +212,7 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     L = pt.beta * bsdfF(pt, sampled, TransportMode::Radiance) * sampled.beta;
     if (pt.onSurface()) L *= std::abs(dot(ls->wi, pt.ns));
     if (L.isBlack()) return L;
-    if (occludedScene(*ctx.sc, pt.p, pt.ng, ls->p_light, ls->infinite, ls->wi, counts))
+    if (occludedScene(*ctx.sc, pt.p, pt.ng, ls->p_light, ls->infinite, ls->wi, time, counts))
       return SampledSpectrum(0.0);
   } else {
     const Vertex &qs = light[s - 1], &pt = camera[t - 1];
@@ -225,7 +227,7 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     if (qs.onSurface()) g *= std::abs(dot(qs.ns, w));
     if (pt.onSurface()) g *= std::abs(dot(pt.ns, w));
     L *= g;
-    if (L.isBlack() || segmentOccluded(ctx, qs, pt, counts)) return SampledSpectrum(0.0);
+    if (L.isBlack() || segmentOccluded(ctx, qs, pt, time, counts)) return SampledSpectrum(0.0);
   }
   if (L.isBlack()) return L;
   return L * misWeight(ctx, light, camera, sampled, s, t, lambda.lambda(0));
@@ -279,7 +281,7 @@ double pdf(const Context& ctx, const Vertex& v, const Vertex* prev, const Vertex
   if (d2 == 0) return 0;
   double p = 0;
   if (v.type == VertexType::Camera) {
-    p = ctx.camera->rayPdf(v.p, wn, lambda_nm).pdf_dir;
+    p = ctx.camera->rayPdf(v.p, wn, lambda_nm, v.time).pdf_dir;
   } else {
     if (!prev) return 0;
     double dp2;
@@ -392,13 +394,15 @@ int cameraSubpath(const Context& ctx, const camera::CameraRay& ray, SampledWavel
   v.type = VertexType::Camera;
   v.p = ray.origin;
   v.beta = SampledSpectrum(ray.weight);
-  const camera::CameraRayPdf rp = ctx.camera->rayPdf(ray.origin, ray.direction, lambda.lambda(0));
-  return randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY}, lambda, sampler, v.beta,
-                    rp.pdf_dir, max_vertices - 1, TransportMode::Radiance, counts, path) +
+  v.time = ray.time;
+  const camera::CameraRayPdf rp =
+      ctx.camera->rayPdf(ray.origin, ray.direction, lambda.lambda(0), ray.time);
+  return randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY, ray.time}, lambda, sampler,
+                    v.beta, rp.pdf_dir, max_vertices - 1, TransportMode::Radiance, counts, path) +
          1;
 }
 
-int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sampler,
+int lightSubpath(const Context& ctx, double time, SampledWavelengths& lambda, Sampler& sampler,
                  RayCounts& counts, Vertex* path) {
   const int max_vertices = ctx.max_depth + 1;
   const double ul = sampler.get1D();
@@ -425,7 +429,7 @@ int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sample
   const SampledSpectrum beta = le->L * (cos_o / (choice->pmf * le->pdf_pos * le->pdf_dir));
   // The light's own surface must not stop its ray.
   const Vec3 o = on_surface ? offsetOrigin(le->o, le->n, le->d) : le->o;
-  const int n = randomWalk(ctx, Ray{o, le->d, INFINITY}, lambda, sampler, beta, le->pdf_dir,
+  const int n = randomWalk(ctx, Ray{o, le->d, INFINITY, time}, lambda, sampler, beta, le->pdf_dir,
                            max_vertices - 1, TransportMode::Importance, counts, path);
   // Infinite lights: the first surface vertex's density is the disk's positional density
   // projected onto it, and the light vertex's the direction's (pbrt-v4).
@@ -492,9 +496,11 @@ SampledSpectrum BdptIntegrator::Li(const camera::CameraRay* ray, double time,
   } else {
     // No camera ray: only the t = 1 strategies, whose camera vertex is sampled anew.
     camera_path[0].type = VertexType::Camera;
+    camera_path[0].time = time;
     n_camera = 1;
   }
-  const int n_light = lightSubpath(ctx_, lambda, sampler, counts, light_path);
+  // The light subpath at the camera sample's time (pbrt-v4's BDPTIntegrator::Li).
+  const int n_light = lightSubpath(ctx_, time, lambda, sampler, counts, light_path);
   SampledSpectrum L(0.0);
   for (int t = 1; t <= n_camera; ++t)
     for (int s = 0; s <= n_light; ++s) {

@@ -60,6 +60,7 @@ struct Vertex {
   SurfaceHit hit;  ///< surface: the hit (area light emission, normal, uv)
   bool delta = false;
   double pdf_fwd = 0, pdf_rev = 0;  ///< area densities (solid angle toward infinite lights)
+  double time = 0;                  ///< camera vertex: the shutter time that places a moving camera
 
   bool onSurface() const { return ng.x != 0 || ng.y != 0 || ng.z != 0; }
 };
@@ -100,7 +101,8 @@ double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex
 /// Subpaths (pbrt-v4's GenerateCameraSubpath / GenerateLightSubpath); return the vertex count.
 int cameraSubpath(const Context& ctx, const camera::CameraRay& ray, SampledWavelengths& lambda,
                   Sampler& sampler, RayCounts& counts, Vertex* path);
-int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sampler,
+/// The light subpath's rays are traced at shutter time `time` (the camera sample's).
+int lightSubpath(const Context& ctx, double time, SampledWavelengths& lambda, Sampler& sampler,
                  RayCounts& counts, Vertex* path);
 
 }  // namespace bdpt

@@ -97,13 +97,13 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
       h.uv = les->uv;
       const SampledSpectrum Le = light.L(h, cs->wi, lambda);
       if (!Le.isBlack() &&
-          !occludedScene(*sc_, les->o, les->n, cs->p_lens, false, cs->wi, counts))
+          !occludedScene(*sc_, les->o, les->n, cs->p_lens, false, cs->wi, time, counts))
         splat(*cs, Le * (std::abs(dot(les->n, cs->wi)) / (pmf * les->pdf_pos)));
     }
   }
   const double cos0 = les->on_surface ? std::abs(dot(les->n, les->d)) : 1.0;
   SampledSpectrum beta = les->L * (cos0 / (pmf * les->pdf_pos * les->pdf_dir));
-  Ray ray{les->on_surface ? offsetOrigin(les->o, les->n, les->d) : les->o, les->d, INFINITY};
+  Ray ray{les->on_surface ? offsetOrigin(les->o, les->n, les->d) : les->o, les->d, INFINITY, time};
   int depth = 0, interfaces = 0;
   for (;;) {
     const auto hit = intersectScene(*sc_, ray, counts);
@@ -130,7 +130,8 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
       if (auto cs = camera_->sampleWi(h.p, u_cam, wavelengths(), time); cs && cs->pdf > 0) {
         const SampledSpectrum f =
             bsdf.f(wo, cs->wi, TransportMode::Importance) * std::abs(dot(cs->wi, ns));
-        if (!f.isBlack() && !occludedScene(*sc_, h.p, h.ng, cs->p_lens, false, cs->wi, counts))
+        if (!f.isBlack() &&
+            !occludedScene(*sc_, h.p, h.ng, cs->p_lens, false, cs->wi, time, counts))
           splat(*cs, beta * f);
       }
     }
@@ -141,7 +142,7 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
     if (!bs) break;
     beta *= bs->f * (std::abs(dot(bs->wi, ns)) / bs->pdf);
     if (beta.isBlack()) break;
-    ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
+    ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY, time};
   }
   return dropped;
 }

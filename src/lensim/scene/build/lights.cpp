@@ -60,6 +60,7 @@ void Builder::light(const Directive& d) {
   l.type_as_written = type;
   l.loc = d.loc;
   l.transform = gs_.ctm[0];
+  warnIfAnimated(d.loc, "lights");
   const Param* scale_param = findLightScale(ps);
   l.power = ps.findFloat({"power", "illuminance"});
   ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
