@@ -153,6 +153,9 @@ struct SquareScene {
   double camera_travel = 0;        ///< the camera's motion along x
   double static_offset = 0;        ///< a plain Translate of the square (no motion)
   bool big = false;                ///< a square filling the frame (calibration)
+  /// 0: a plain shape; 1: an ObjectInstance of the square moves; 2: the square moves inside its
+  /// object definition, instanced still.
+  int instancing = 0;
   int spp = 256;
   std::string text() const {
     std::ostringstream f;
@@ -169,15 +172,25 @@ struct SquareScene {
       << "WorldBegin\n"
       << "LightSource \"distant\" \"point3 from\" [0 0 0] \"point3 to\" [0 0 1] "
          "\"spectrum L\" [300 2 800 2]\n"
-      << "AttributeBegin\n"
       << "Material \"diffuse\" \"spectrum reflectance\" [300 0.5 800 0.5]\n";
-    if (static_offset != 0) f << "Translate " << static_offset << " 0 0\n";
-    if (object_travel != 0)
-      f << "ActiveTransform EndTime\nTranslate " << object_travel << " 0 0\nActiveTransform All\n";
     const double x0 = big ? -20 : kX0, x1 = big ? 20 : kX1, y0 = big ? -5 : kY0, y1 = big ? 5 : kY1;
-    f << "Shape \"bilinearmesh\" \"point3 P\" [" << x0 << " " << y0 << " " << kDepth << " " << x1
-      << " " << y0 << " " << kDepth << " " << x0 << " " << y1 << " " << kDepth << " " << x1 << " "
-      << y1 << " " << kDepth << "]\nAttributeEnd\n";
+    std::ostringstream shape;
+    shape << "Shape \"bilinearmesh\" \"point3 P\" [" << x0 << " " << y0 << " " << kDepth << " "
+          << x1 << " " << y0 << " " << kDepth << " " << x0 << " " << y1 << " " << kDepth << " "
+          << x1 << " " << y1 << " " << kDepth << "]\n";
+    std::ostringstream motion;
+    if (static_offset != 0) motion << "Translate " << static_offset << " 0 0\n";
+    if (object_travel != 0)
+      motion << "ActiveTransform EndTime\nTranslate " << object_travel
+             << " 0 0\nActiveTransform All\n";
+    if (instancing == 0)
+      f << "AttributeBegin\n" << motion.str() << shape.str() << "AttributeEnd\n";
+    else if (instancing == 1)
+      f << "ObjectBegin \"square\"\n" << shape.str() << "ObjectEnd\nAttributeBegin\n"
+        << motion.str() << "ObjectInstance \"square\"\nAttributeEnd\n";
+    else
+      f << "ObjectBegin \"square\"\n" << motion.str() << shape.str()
+        << "ObjectEnd\nObjectInstance \"square\"\n";
     return f.str();
   }
 };
@@ -257,6 +270,19 @@ TEST(MotionBlur, MovingSquareIsTheBoxFilteredSmear) {
   EXPECT_LT(z, 4.5);
   // The test can tell: the square held at its start position is far off.
   EXPECT_GT(maxZ(im, c, s.spp, [](int x, int y) { return coverage(x, y, 0); }), 20);
+}
+
+// The same through object instancing: a moving ObjectInstance, and a moving shape inside an
+// object definition instanced still.
+TEST(MotionBlur, MovingInstancesAreSmearedAlike) {
+  const Calibration c = calibrate();
+  for (int instancing : {1, 2}) {
+    SquareScene s;
+    s.instancing = instancing;
+    const double z = maxZ(renderSquare(s, 3), c, s.spp,
+                          [](int x, int y) { return coverage(x, y, kTravel); });
+    EXPECT_LT(z, 4.5) << "instancing " << instancing;
+  }
 }
 
 // An instant shutter renders the scene as it stands at that time: exactly the static scene
@@ -425,6 +451,45 @@ TEST(MotionBlur, RealisticCameraSmearFollowsTheLensMagnification) {
               moving_camera.centroid);
   EXPECT_NEAR(cam_smear, expected_px, 0.06 * expected_px);
   EXPECT_NEAR(moving_camera.centroid, mid.centroid, 0.3);
+}
+
+}  // namespace
+}  // namespace lensim
+
+namespace lensim {
+namespace {
+
+// What pbrt-v4 does not animate: lights, media and texture transforms keep the start transform
+// with a warning; an area light on a moving shape is an error at the shape.
+TEST(MotionScene, UnanimatedThingsAreWarnedAndAnimatedAreaLightsRefused) {
+  const std::string head =
+      "Camera \"perspective\"\nWorldBegin\nAttributeBegin\nActiveTransform EndTime\n"
+      "Translate 1 0 0\nActiveTransform All\n";
+  const scene::Scene s = testutil::buildText(
+      head + "LightSource \"point\"\nTexture \"t\" \"float\" \"constant\"\nAttributeEnd\n");
+  EXPECT_FALSE(s.hasErrors());
+  std::string all;
+  for (const auto& d : s.diagnostics) all += d.message + "\n";
+  EXPECT_NE(all.find("animated lights are not supported"), std::string::npos) << all;
+  EXPECT_NE(all.find("animated texture transforms are not supported"), std::string::npos) << all;
+  const scene::Scene bad = testutil::buildText(
+      head + "AreaLightSource \"diffuse\"\nShape \"sphere\"\nAttributeEnd\n");
+  ASSERT_TRUE(bad.hasErrors());
+  bool found = false;
+  for (const auto& d : bad.diagnostics)
+    if (d.severity == Severity::Error) {
+      EXPECT_NE(d.message.find("animated area lights are not supported"), std::string::npos);
+      EXPECT_EQ(d.loc.line, 8);
+      found = true;
+    }
+  EXPECT_TRUE(found);
+  // A moving shape without a light is fine, and counted in the summary.
+  const scene::Scene ok = testutil::buildText(head + "Shape \"sphere\"\nAttributeEnd\n");
+  EXPECT_FALSE(ok.hasErrors());
+  ASSERT_EQ(ok.motions.size(), 1u);
+  EXPECT_EQ(ok.shapes[0].motion, 0);
+  EXPECT_NE(scene::summary(ok).find("motion blur: 1 shape and 0 instances move"),
+            std::string::npos);
 }
 
 }  // namespace
