@@ -551,25 +551,28 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   int record;
   // World from the record's space: an instance's transform (static, or animated and taken at
   // the ray's time), then an animated shape's own motion at that time.
-  std::optional<Transform> world_from_space;
+  const Transform* world_from_space = nullptr;
+  std::optional<Transform> moved;  // only for motion (no copies for static scenes)
   Vec3 o = ray.o, d = ray.d;
   if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
     h.instance = m.top_geom_instance[rh.hit.instID[0]];
     const scene::Instance& inst = m.scene->instances[static_cast<size_t>(h.instance)];
-    world_from_space = m.instance_transform[size_t(h.instance)];
+    world_from_space = &m.instance_transform[size_t(h.instance)];
     record = m.object_geom[static_cast<size_t>(inst.object)][rh.hit.geomID];
   } else if (m.top_geom_instance[rh.hit.geomID] >= 0) {  // an animated instance's wrapper
     h.instance = m.top_geom_instance[rh.hit.geomID];
     const scene::Instance& inst = m.scene->instances[static_cast<size_t>(h.instance)];
-    world_from_space = m.instance_motion[size_t(h.instance)]->interpolate(ray.time);
+    moved = m.instance_motion[size_t(h.instance)]->interpolate(ray.time);
+    world_from_space = &*moved;
     record = m.object_geom[static_cast<size_t>(inst.object)][ctx.inner_geom];
   } else {
     record = m.top_geom[rh.hit.geomID];
   }
   const ShapeRecord& r = m.records[static_cast<size_t>(record)];
   if (r.motion) {
-    const Transform moved = r.motion->interpolate(ray.time);
-    world_from_space = world_from_space ? *world_from_space * moved : moved;
+    const Transform shape_moved = r.motion->interpolate(ray.time);
+    moved = world_from_space ? *world_from_space * shape_moved : shape_moved;
+    world_from_space = &*moved;
   }
   if (world_from_space) {
     const Transform space_from_world = inverse(*world_from_space);
