@@ -79,8 +79,6 @@ const std::vector<Gap> kKnownGaps = {
     {"pbrt-v4-scenes/kroken-camera-1.pbrt", "warning", "film \"gbuffer\" is not rendered"},
     {"pbrt-v4-scenes/lte-orb-simple-ball.pbrt", "warning", "film \"gbuffer\" is not rendered"},
     {"pbrt-v4-scenes/watercolor-camera-1.pbrt", "warning", "film \"gbuffer\" is not rendered"},
-    // Motion blur: animated transforms use the start transform.
-    {"pbrt-v4-scenes/killeroo-moving.pbrt", "warning", "animated transforms are not rendered"},
 };
 
 // Not gaps: diagnostics about what the file does, where lensim does what pbrt-v4 does.

@@ -269,14 +269,15 @@ TEST(LightTracer, ImportanceRetracesCameraRays) {
       if (!ray) continue;
       ++n_rays;
       Vec2 raster;
-      const double w = cam->importance(ray->origin, ray->direction, 0, &raster);
+      const double w = cam->importance(ray->origin, ray->direction, 0, &raster, ray->time);
       if (w > 0) {
         ++n_found;
         worst = std::max(worst, std::hypot(raster.x - cs.film_raster.x, raster.y - cs.film_raster.y));
       }
       // sampleWi from points on the ray (3 m and 1 m out) can pick the ray's front point.
-      for (double t : {3.0, 1.0}) n_outside += cam->pdfWiPos(ray->origin + ray->direction * t,
-                                                              ray->origin) > 0 ? 0 : 1;
+      for (double t : {3.0, 1.0})
+        n_outside +=
+            cam->pdfWiPos(ray->origin + ray->direction * t, ray->origin, ray->time) > 0 ? 0 : 1;
     }
     std::printf("%s: %d of %d camera rays retraced, worst raster error %.2g px, %d of %d front "
                 "points outside sampleWi's region\n",

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "lensim/util/animated_transform.h"
 #include "lensim/util/vec.h"
 
 namespace lensim::scene {
@@ -139,9 +140,10 @@ class Camera {
     return std::nullopt;
   }
   /// Importance of the world ray (o, d) leaving the camera as generateRay makes them (hero
-  /// wavelength lambda_nm), and its raster point; 0 if no film point sends that ray.
+  /// wavelength lambda_nm) at shutter time `time`, and its raster point; 0 if no film point
+  /// sends that ray.
   virtual double importance(const Vec3& /*o*/, const Vec3& /*d*/, double /*lambda_nm*/,
-                            Vec2* /*film_raster*/) const {
+                            Vec2* /*film_raster*/, double /*time*/) const {
     return 0;
   }
   /// Density per unit world area (of the lens disc, the front element: the surface p_lens lies
@@ -149,9 +151,13 @@ class Camera {
   /// all pass one point (pinhole, spherical: a delta), 0 where sampleWi cannot pick it. The
   /// realistic camera's depends on ref (it aims at the part of the front element light from ref
   /// can pass); the projective cameras' does not. For bidirectional MIS.
-  virtual double pdfWiPos(const Vec3& /*ref*/, const Vec3& /*p_lens*/) const { return 0; }
-  /// Densities with which generateRay produces the world ray (o, d).
-  virtual CameraRayPdf rayPdf(const Vec3& /*o*/, const Vec3& /*d*/, double /*lambda_nm*/) const {
+  /// (`time`: the shutter time, which places a moving camera.)
+  virtual double pdfWiPos(const Vec3& /*ref*/, const Vec3& /*p_lens*/, double /*time*/) const {
+    return 0;
+  }
+  /// Densities with which generateRay produces the world ray (o, d) at shutter time `time`.
+  virtual CameraRayPdf rayPdf(const Vec3& /*o*/, const Vec3& /*d*/, double /*lambda_nm*/,
+                              double /*time*/) const {
     return {};
   }
 };
@@ -164,6 +170,12 @@ struct CameraOptions {
   /// assignment's realistic camera inherits it). Realistic camera only; off by default.
   bool pbrt_v2_quirks = false;
 };
+
+/// World from camera space over the shutter, as pbrt-v4's CameraTransform
+/// (src/pbrt/cameras.h; BasicSceneBuilder::Camera in scene.cpp): the inverses of the CTM at the
+/// Camera directive at its start and end times, decomposed and interpolated (an animated camera:
+/// ActiveTransform before Camera). Every camera places its rays with it at the ray's time.
+AnimatedTransform worldFromCamera(const scene::Scene& scene);
 
 /// Builds the camera the scene describes (its film gives the resolution and sensor size).
 /// Throws lensim::Error, located at the Camera directive, for settings that cannot work.

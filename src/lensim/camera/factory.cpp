@@ -8,6 +8,12 @@
 
 namespace lensim::camera {
 
+AnimatedTransform worldFromCamera(const scene::Scene& scene) {
+  const scene::Camera& c = scene.camera;
+  return AnimatedTransform(inverse(c.camera_from_world), c.transform_start_time,
+                           inverse(c.camera_from_world_end), c.transform_end_time);
+}
+
 std::unique_ptr<Camera> makeCamera(const scene::Scene& scene, const CameraOptions& options) {
   const scene::Camera& c = scene.camera;
   if (c.type == "realistic") return makeRealisticCamera(scene, options);

@@ -44,6 +44,7 @@ class ProjectiveCamera : public Camera {
  public:
   ProjectiveCamera(const scene::Scene& scene, bool orthographic)
       : scene_(&scene),
+        motion_(worldFromCamera(scene)),
         world_from_camera_(inverse(scene.camera.camera_from_world)),
         inverse_(scene.camera.camera_from_world),
         window_(screenWindow(scene)),
@@ -61,7 +62,6 @@ class ProjectiveCamera : public Camera {
     if (lens_radius_ > 0 && focal_distance_ <= 0)
       throw Error(c.loc, "camera: focaldistance must be positive with a lens radius");
     film_ = FilmSampleBounds(scene);
-    forward_ = normalize(world_from_camera_.applyVector({0, 0, 1}));
     const double sx = window_[1] - window_[0], sy = window_[3] - window_[2];
     image_area_ = ortho_ ? std::abs(sx * sy)
                          : std::abs(sx * sy) * tan_half_fov_ * tan_half_fov_;  // at z = 1
@@ -70,12 +70,34 @@ class ProjectiveCamera : public Camera {
 
   bool supportsImportance() const override { return true; }
 
+  /// World from camera at `time`, and its inverse (the static ones without motion).
+  struct Placement {
+    Transform moving;
+    const Transform* world_from_camera;
+    Transform camera_from_world_moving;
+    const Transform* camera_from_world;
+  };
+  void place(double time, Placement& p) const {
+    if (!motion_.isAnimated()) {
+      p.world_from_camera = &world_from_camera_;
+      p.camera_from_world = &inverse_;
+      return;
+    }
+    p.moving = motion_.interpolate(time);
+    p.camera_from_world_moving = inverse(p.moving);
+    p.world_from_camera = &p.moving;
+    p.camera_from_world = &p.camera_from_world_moving;
+  }
+
   std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2 u,
                                          const std::array<double, kCameraWavelengths>&,
-                                         double) const override {
-    const Transform& cw = world_from_camera_;
-    const Vec3 ref_c = inverse_.applyPoint(ref);
-    if (ortho_) return orthoSampleWi(ref_c, u);
+                                         double time) const override {
+    Placement pl;
+    place(time, pl);
+    const Transform& cw = *pl.world_from_camera;
+    const Transform& cfw = *pl.camera_from_world;
+    const Vec3 ref_c = cfw.applyPoint(ref);
+    if (ortho_) return orthoSampleWi(ref_c, u, cw);
     // pbrt-v4's PerspectiveCamera::SampleWi: a uniform point on the lens disc (the eye for a
     // pinhole), its solid-angle density at ref and the importance of the ray toward ref.
     const Vec2 l = lens_radius_ > 0 ? render::sampleUniformDiskConcentric(u) * lens_radius_
@@ -86,25 +108,28 @@ class ProjectiveCamera : public Camera {
     s.distance = length(d);
     if (!(s.distance > 0)) return std::nullopt;
     s.wi = d / s.distance;
-    s.n_lens = forward_;
+    s.n_lens = normalize(cw.applyVector({0, 0, 1}));
     const double cos_lens = std::abs(dot(s.n_lens, s.wi));
     if (cos_lens == 0) return std::nullopt;
     s.pdf = s.distance * s.distance / (cos_lens * lens_area_);
-    const double w = We({l.x, l.y, 0}, inverse_.applyVector(-s.wi), &s.film_raster);
+    const double w = We({l.x, l.y, 0}, cfw.applyVector(-s.wi), &s.film_raster);
     if (w == 0) return std::nullopt;
     s.importance.fill(w);
     return s;
   }
 
-  double pdfWiPos(const Vec3& ref, const Vec3& p_lens) const override {
+  double pdfWiPos(const Vec3& ref, const Vec3& p_lens, double time) const override {
     if (lens_radius_ == 0) return 1;
-    const Vec3 p = inverse_.applyPoint(p_lens);
+    Placement pl;
+    place(time, pl);
+    const Transform& cfw = *pl.camera_from_world;
+    const Vec3 p = cfw.applyPoint(p_lens);
     const double r2 = lens_radius_ * lens_radius_ * (1 + 1e-9);
     if (!ortho_) return p.x * p.x + p.y * p.y > r2 ? 0 : 1 / lens_area_;
     // The orthographic thin lens: p_lens = ref - d ref.z / d.z, d set by the lens point l, so
     // p_lens.xy = ref.xy + l ref.z / fd: the density of l, 1 / (pi r^2), times (fd / ref.z)^2,
     // where that l lies on the lens disc (the disc is about the film point, not the axis).
-    const Vec3 rc = inverse_.applyPoint(ref);
+    const Vec3 rc = cfw.applyPoint(ref);
     if (!(rc.z > 0)) return 0;
     const double lx = (p.x - rc.x) * focal_distance_ / rc.z;
     const double ly = (p.y - rc.y) * focal_distance_ / rc.z;
@@ -112,16 +137,23 @@ class ProjectiveCamera : public Camera {
     return focal_distance_ * focal_distance_ / (rc.z * rc.z * lens_area_);
   }
 
-  double importance(const Vec3& o, const Vec3& d, double, Vec2* film_raster) const override {
-    const Vec3 o_c = inverse_.applyPoint(o), d_c = inverse_.applyVector(d);
+  double importance(const Vec3& o, const Vec3& d, double, Vec2* film_raster,
+                    double time) const override {
+    Placement pl;
+    place(time, pl);
+    const Transform& cfw = *pl.camera_from_world;
+    const Vec3 o_c = cfw.applyPoint(o), d_c = cfw.applyVector(d);
     Vec2 raster;
     const double w = ortho_ ? orthoWe(o_c, d_c, &raster) : We(o_c, d_c, &raster);
     if (film_raster) *film_raster = raster;
     return w;
   }
 
-  CameraRayPdf rayPdf(const Vec3& o, const Vec3& d, double) const override {
-    const Vec3 o_c = inverse_.applyPoint(o), d_c = normalize(inverse_.applyVector(d));
+  CameraRayPdf rayPdf(const Vec3& o, const Vec3& d, double, double time) const override {
+    Placement pl;
+    place(time, pl);
+    const Transform& cfw = *pl.camera_from_world;
+    const Vec3 o_c = cfw.applyPoint(o), d_c = normalize(cfw.applyVector(d));
     Vec2 raster;
     if (ortho_) {
       if (orthoWe(o_c, d_c, &raster) == 0 && lens_radius_ > 0) return {};
@@ -156,9 +188,17 @@ class ProjectiveCamera : public Camera {
       d = normalize(focus - o);
     }
     CameraRay r;
-    r.origin = world_from_camera_.applyPoint(o);
-    r.direction = normalize(world_from_camera_.applyVector(d));
+    // pbrt-v4's CameraBase::SampleTime: a time uniform over the shutter; the ray is placed by
+    // the camera transform at that time (CameraTransform::RenderFromCamera(ray)).
     r.time = shutter_open_ + s.time * (shutter_close_ - shutter_open_);
+    const auto place = [&](const Transform& cw) {
+      r.origin = cw.applyPoint(o);
+      r.direction = normalize(cw.applyVector(d));
+    };
+    if (motion_.isAnimated())
+      place(motion_.interpolate(r.time));
+    else
+      place(world_from_camera_);
     return r;
   }
 
@@ -198,11 +238,11 @@ class ProjectiveCamera : public Camera {
     return focal_distance_ * focal_distance_ / (image_area_ * lens_area_ * c * c * c * c);
   }
 
-  std::optional<CameraWiSample> orthoSampleWi(const Vec3& ref_c, Vec2 u) const {
+  std::optional<CameraWiSample> orthoSampleWi(const Vec3& ref_c, Vec2 u,
+                                              const Transform& cw) const {
     if (!(ref_c.z > 0)) return std::nullopt;
-    const Transform& cw = world_from_camera_;
     CameraWiSample s;
-    s.n_lens = forward_;
+    s.n_lens = normalize(cw.applyVector({0, 0, 1}));
     if (lens_radius_ == 0) {
       // The one ray through ref: along -z to the film plane. Importance 1/A per unit area and
       // pdf 1 (a delta direction), so that W L |cos| / pdf is the projected-area measure.
@@ -210,7 +250,7 @@ class ProjectiveCamera : public Camera {
       s.film_raster = screenToRaster({o.x, o.y});
       if (!film_.inside(s.film_raster)) return std::nullopt;
       s.p_lens = cw.applyPoint(o);
-      s.wi = -forward_;
+      s.wi = -s.n_lens;
       s.distance = length(s.p_lens - cw.applyPoint(ref_c));
       s.pdf = 1;
       s.importance.fill(1 / image_area_);
@@ -246,12 +286,12 @@ class ProjectiveCamera : public Camera {
 
  private:
   const scene::Scene* scene_;
-  Transform world_from_camera_, inverse_;
+  AnimatedTransform motion_;               ///< world from camera over the shutter
+  Transform world_from_camera_, inverse_;  ///< at the start time
   std::array<double, 4> window_;
   bool ortho_;
   double lens_radius_, focal_distance_, tan_half_fov_, shutter_open_, shutter_close_;
   FilmSampleBounds film_;
-  Vec3 forward_;
   double image_area_ = 1, lens_area_ = 1;
 };
 

@@ -106,7 +106,7 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   }
   pupil_.emplace(*lens_.lens, lens_.paraxial, film_radius, pupil_options);
   centre_area_mm2_ = pupil_->area_mm2({0, 0});
-  camera_from_world_ = inverse(settings_.world_from_camera);
+  camera_from_world_ = inverse(settings_.world_from_camera.start());
   {
     // The front surface's axial extent (lens space), for light arriving from the scene.
     const optics::Interface& f = lens_.lens->interfaces().front();
@@ -170,7 +170,7 @@ std::optional<RealisticCamera::FilmRay> RealisticCamera::filmRay(
 }
 
 std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<float>& r,
-                                                 const FilmRay& f, double time) const {
+                                                 const FilmRay& f, double u_time) const {
   double transmission = 1;
   if (!settings_.aperture.isRound() && stop_radius_mm_ > 0) {
     transmission = settings_.aperture.transmission(
@@ -187,15 +187,23 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
   const Vec3 d_cam{double(r.ray.direction.x), double(r.ray.direction.y),
                    -double(r.ray.direction.z)};
   CameraRay ray;
-  ray.origin = settings_.world_from_camera.applyPoint(o_cam);
-  ray.direction = normalize(settings_.world_from_camera.applyVector(d_cam));
+  // pbrt-v4's CameraBase::SampleTime (a time uniform over the shutter) and the camera transform
+  // at that time (CameraTransform::RenderFromCamera); the lens itself is in camera space.
+  ray.time = settings_.shutter_open + u_time * (settings_.shutter_close - settings_.shutter_open);
+  const auto place = [&](const Transform& cw) {
+    ray.origin = cw.applyPoint(o_cam);
+    ray.direction = normalize(cw.applyVector(d_cam));
+  };
+  if (settings_.world_from_camera.isAnimated())
+    place(settings_.world_from_camera.interpolate(ray.time));
+  else
+    place(settings_.world_from_camera.start());
   // w = T cos^4(theta) A / z^2 (z: film to the rear-vertex plane, where the pupil is sampled);
   // the film multiplies by the exposure time (and ISO / 100), as pbrt-v4's imaging ratio does.
   const double z = lens.filmDistance_mm();
   const double c2 = f.cos_theta * f.cos_theta;
   const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
   ray.weight = transmission * c2 * c2 * f.area_mm2 / norm;
-  ray.time = time * settings_.exposure_time;
   return ray;
 }
 
@@ -439,7 +447,9 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
   RealisticSettings s;
   s.x_resolution = scene.film.x_resolution;
   s.y_resolution = scene.film.y_resolution;
-  s.world_from_camera = inverse(c.camera_from_world);
+  s.world_from_camera = worldFromCamera(scene);
+  s.shutter_open = c.shutter_open;
+  s.shutter_close = c.shutter_close;
   s.zero_if_neighbour_blocked = options.pbrt_v2_quirks;
   s.filter_radius = {scene.filter.x_radius, scene.filter.y_radius};
   try {

@@ -58,23 +58,34 @@ std::optional<FrontPoint> frontPoint(const optics::Interface& f, double x, doubl
 
 }  // namespace
 
-Vec3 RealisticCamera::lensFromWorldPoint(const Vec3& p) const {
-  const Vec3 c = camera_from_world_.applyPoint(p);
+const Transform& RealisticCamera::cameraFromWorld(double time, Transform& scratch) const {
+  if (!settings_.world_from_camera.isAnimated()) return camera_from_world_;
+  scratch = inverse(settings_.world_from_camera.interpolate(time));
+  return scratch;
+}
+
+Vec3 RealisticCamera::lensFromWorldPoint(const Vec3& p, double time) const {
+  Transform scratch;
+  const Vec3 c = cameraFromWorld(time, scratch).applyPoint(p);
   const double u = settings_.camera_units_per_mm;
   const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens_.lens->filmZ_mm();
   return {c.x / u, c.y / u, z0 - c.z / u};
 }
-Vec3 RealisticCamera::lensFromWorldVector(const Vec3& v) const {
-  const Vec3 c = camera_from_world_.applyVector(v);
+Vec3 RealisticCamera::lensFromWorldVector(const Vec3& v, double time) const {
+  Transform scratch;
+  const Vec3 c = cameraFromWorld(time, scratch).applyVector(v);
   return {c.x, c.y, -c.z};
 }
-Vec3 RealisticCamera::worldFromLensPoint(const Vec3& p) const {
+Vec3 RealisticCamera::worldFromLensPoint(const Vec3& p, double time) const {
+  Transform scratch;
   const double u = settings_.camera_units_per_mm;
   const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens_.lens->filmZ_mm();
-  return settings_.world_from_camera.applyPoint({p.x * u, p.y * u, (z0 - p.z) * u});
+  return settings_.world_from_camera.at(time, scratch)
+      .applyPoint({p.x * u, p.y * u, (z0 - p.z) * u});
 }
-Vec3 RealisticCamera::worldFromLensVector(const Vec3& v) const {
-  return settings_.world_from_camera.applyVector({v.x, v.y, -v.z});
+Vec3 RealisticCamera::worldFromLensVector(const Vec3& v, double time) const {
+  Transform scratch;
+  return settings_.world_from_camera.at(time, scratch).applyVector({v.x, v.y, -v.z});
 }
 
 std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3& o_lens,
@@ -141,9 +152,9 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
 
 std::optional<CameraWiSample> RealisticCamera::sampleWi(
     const Vec3& ref, Vec2 u, const std::array<double, kCameraWavelengths>& lambda_nm,
-    double) const {
+    double time) const {
   const optics::Interface& front = lens_.lens->interfaces().front();
-  const Vec3 r_l = lensFromWorldPoint(ref);
+  const Vec3 r_l = lensFromWorldPoint(ref, time);
   if (!(r_l.z < front_zmin_mm_)) return std::nullopt;  // not in front of the lens
   const double R = front.semi_aperture_mm;
   const FrontDisc disc = frontDisc(r_l);
@@ -157,12 +168,12 @@ std::optional<CameraWiSample> RealisticCamera::sampleWi(
   const std::optional<FilmHit> hit = traceToFilm(r_l, d_l, hero, &fp->p);
   if (!hit) return std::nullopt;
   CameraWiSample s;
-  s.p_lens = worldFromLensPoint(fp->p);
+  s.p_lens = worldFromLensPoint(fp->p, time);
   const Vec3 to_lens = s.p_lens - ref;
   s.distance = length(to_lens);
   if (!(s.distance > 0)) return std::nullopt;
   s.wi = to_lens / s.distance;
-  s.n_lens = normalize(worldFromLensVector(fp->n));
+  s.n_lens = normalize(worldFromLensVector(fp->n, time));
   const double cos_n = std::abs(dot(s.n_lens, s.wi));
   if (!(cos_n > 0)) return std::nullopt;
   const double units = settings_.camera_units_per_mm;
@@ -278,9 +289,9 @@ RealisticCamera::FrontDisc RealisticCamera::frontDisc(const Vec3& r) const {
   return {{c0 * std::cos(phi), c0 * std::sin(phi)}, radius};
 }
 
-double RealisticCamera::pdfWiPos(const Vec3& ref, const Vec3& p_lens) const {
+double RealisticCamera::pdfWiPos(const Vec3& ref, const Vec3& p_lens, double time) const {
   const optics::Interface& front = lens_.lens->interfaces().front();
-  const Vec3 r_l = lensFromWorldPoint(ref), p = lensFromWorldPoint(p_lens);
+  const Vec3 r_l = lensFromWorldPoint(ref, time), p = lensFromWorldPoint(p_lens, time);
   if (!(r_l.z < front_zmin_mm_)) return 0;
   const FrontDisc disc = frontDisc(r_l);
   const double R = front.semi_aperture_mm;
@@ -295,16 +306,17 @@ double RealisticCamera::pdfWiPos(const Vec3& ref, const Vec3& p_lens) const {
 }
 
 double RealisticCamera::importance(const Vec3& o, const Vec3& d, double lambda_nm,
-                                   Vec2* film_raster) const {
+                                   Vec2* film_raster, double time) const {
   // The ray leaves the lens at o toward d: the line back into the lens runs along -d.
   const std::optional<FilmHit> hit =
-      traceToFilm(lensFromWorldPoint(o), normalize(lensFromWorldVector(-d)), lambda_nm);
+      traceToFilm(lensFromWorldPoint(o, time), normalize(lensFromWorldVector(-d, time)), lambda_nm);
   if (!hit) return 0;
   if (film_raster) *film_raster = hit->raster;
   return hit->importance;
 }
 
-CameraRayPdf RealisticCamera::rayPdf(const Vec3& o, const Vec3& d, double lambda_nm) const {
+CameraRayPdf RealisticCamera::rayPdf(const Vec3& o, const Vec3& d, double lambda_nm,
+                                     double time) const {
   // pdf_pos: sampleWi's density of the front-surface point (so that bdpt's strategies agree on
   // the camera vertex); pdf_dir: generateRay's joint density of the ray over it. generateRay's
   // density per unit film area and film-side solid angle is (1/A_film) (1/A(x)) z^2 / cos^3
@@ -312,7 +324,7 @@ CameraRayPdf RealisticCamera::rayPdf(const Vec3& o, const Vec3& d, double lambda
   // over the region A(x)); per unit front area and solid angle it is that times
   // cos(n) / cos(theta) (etendue).
   const optics::Interface& front = lens_.lens->interfaces().front();
-  const Vec3 o_l = lensFromWorldPoint(o), back = normalize(lensFromWorldVector(-d));
+  const Vec3 o_l = lensFromWorldPoint(o, time), back = normalize(lensFromWorldVector(-d, time));
   const std::optional<FrontPoint> fp = frontPoint(front, o_l.x, o_l.y);
   const std::optional<FilmHit> hit = traceToFilm(o_l, back, lambda_nm);
   if (!fp || !hit) return {};

@@ -27,40 +27,45 @@ class SphericalCamera final : public Camera {
  public:
   explicit SphericalCamera(const scene::Scene& scene)
       : scene_(&scene),
-        world_from_camera_(inverse(scene.camera.camera_from_world)),
-        inverse_(scene.camera.camera_from_world),
-        equal_area_(scene.camera.spherical_mapping == "equalarea") {
-    eye_ = world_from_camera_.applyPoint({0, 0, 0});
-  }
+        motion_(worldFromCamera(scene)),
+        equal_area_(scene.camera.spherical_mapping == "equalarea") {}
 
   bool supportsImportance() const override { return true; }
 
   std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2,
                                          const std::array<double, kCameraWavelengths>&,
-                                         double) const override {
+                                         double time) const override {
+    Transform scratch;
+    const Transform& cw = motion_.at(time, scratch);
+    const Vec3 eye = cw.applyPoint({0, 0, 0});
     CameraWiSample s;
-    s.p_lens = eye_;
-    const Vec3 d = eye_ - ref;
+    s.p_lens = eye;
+    const Vec3 d = eye - ref;
     s.distance = length(d);
     if (!(s.distance > 0)) return std::nullopt;
     s.wi = d / s.distance;
     s.n_lens = -s.wi;
     s.pdf = s.distance * s.distance;
-    const double w = directionDensity(inverse_.applyVector(-s.wi), &s.film_raster);
+    const double w = directionDensity(inverse(cw).applyVector(-s.wi), &s.film_raster);
     if (w == 0) return std::nullopt;
     s.importance.fill(w);
     return s;
   }
-  double importance(const Vec3&, const Vec3& d, double, Vec2* film_raster) const override {
+  double importance(const Vec3&, const Vec3& d, double, Vec2* film_raster,
+                    double time) const override {
+    Transform scratch;
+    const Transform& cw = motion_.at(time, scratch);
     Vec2 raster;
-    const double w = directionDensity(inverse_.applyVector(d), &raster);
+    const double w = directionDensity(inverse(cw).applyVector(d), &raster);
     if (film_raster) *film_raster = raster;
     return w;
   }
-  double pdfWiPos(const Vec3&, const Vec3&) const override { return 1; }
-  CameraRayPdf rayPdf(const Vec3&, const Vec3& d, double) const override {
+  double pdfWiPos(const Vec3&, const Vec3&, double) const override { return 1; }
+  CameraRayPdf rayPdf(const Vec3&, const Vec3& d, double, double time) const override {
+    Transform scratch;
+    const Transform& cw = motion_.at(time, scratch);
     Vec2 raster;
-    return {1, directionDensity(inverse_.applyVector(d), &raster)};
+    return {1, directionDensity(inverse(cw).applyVector(d), &raster)};
   }
 
   /// The solid-angle density of camera-space direction d and its raster point (0 outside the
@@ -105,10 +110,12 @@ class SphericalCamera final : public Camera {
       d = {std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)};
     }
     CameraRay r;
-    r.origin = world_from_camera_.applyPoint({0, 0, 0});
-    r.direction = normalize(world_from_camera_.applyVector(d));
     const scene::Camera& c = scene_->camera;
     r.time = c.shutter_open + s.time * (c.shutter_close - c.shutter_open);
+    Transform scratch;
+    const Transform& cw = motion_.at(r.time, scratch);
+    r.origin = cw.applyPoint({0, 0, 0});
+    r.direction = normalize(cw.applyVector(d));
     return r;
   }
   std::string describe() const override {
@@ -117,9 +124,8 @@ class SphericalCamera final : public Camera {
 
  private:
   const scene::Scene* scene_;
-  Transform world_from_camera_, inverse_;
+  AnimatedTransform motion_;  ///< world from camera over the shutter
   bool equal_area_;
-  Vec3 eye_;
 };
 
 }  // namespace

@@ -523,12 +523,13 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                       sampler->startPixelSample({x, y}, i0 + k, path_dimension);
                       L = direct_lighting
                               ? directLightingLi(sc, direct_opt, ray->origin, ray->direction,
-                                                 lambda, *sampler, counts)
+                                                 ray->time, lambda, *sampler, counts)
                           : volpath
-                              ? volpathLi(sc, ray->origin, ray->direction,
+                              ? volpathLi(sc, ray->origin, ray->direction, ray->time,
                                           sc.scene_media ? sc.camera_medium : -1, lambda,
                                           *sampler, counts)
-                              : pathLi(sc, ray->origin, ray->direction, lambda, *sampler, counts);
+                              : pathLi(sc, ray->origin, ray->direction, ray->time, lambda,
+                                       *sampler, counts);
                       if (ray->per_wavelength && !lambda.secondaryTerminated()) {
                         for (int c = 0; c < kSpectrumSamples; ++c)
                           L[c] *= ray->wavelength_weight[size_t(c)];

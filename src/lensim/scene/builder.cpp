@@ -174,14 +174,14 @@ Scene Builder::run() {
           {Severity::Error, e.loc().valid() ? e.loc() : d.loc, e.message()});
     }
   }
-  for (const auto& [name, loc, transform] : pending_instances_) {
+  for (const auto& [name, loc, transform, motion] : pending_instances_) {
     auto it = object_index_.find(name);
     if (it == object_index_.end()) {
       scene_.diagnostics.push_back(
           {Severity::Error, loc, fmt::format("ObjectInstance of unknown object \"{}\"", name)});
       continue;
     }
-    scene_.instances.push_back({it->second, transform, loc});
+    scene_.instances.push_back({it->second, transform, loc, motion});
   }
   resolveNamedMaterials();
   resolveMedia();
@@ -209,6 +209,30 @@ void Builder::requireInvertible(const FileLoc& loc, std::string_view what, int w
     throw Error(loc, fmt::format("{}: the current transformation matrix is singular (not "
                                  "invertible), so it cannot place what is rendered",
                                  what));
+}
+
+// An animated CTM (ActiveTransform gave the start and end different transforms) as pbrt-v4's
+// RenderFromObject() (src/pbrt/scene.h): an AnimatedTransform from the start transform at the
+// TransformTimes start to the end transform at its end, stored in Scene::motions; -1 if static.
+int Builder::motionOfCtm(const FileLoc& loc, std::string_view what) {
+  if (gs_.ctm[0] == gs_.ctm[1]) return -1;
+  requireInvertible(loc, fmt::format("{} (its end-time transform)", what), 1);
+  AnimatedTransform m(gs_.ctm[0], scene_.transform_start_time, gs_.ctm[1],
+                      scene_.transform_end_time);
+  if (!m.isAnimated()) return -1;  // TransformTimes with end <= start: the start holds
+  scene_.motions.push_back(std::move(m));
+  return static_cast<int>(scene_.motions.size()) - 1;
+}
+
+// pbrt-v4 renders lights, media and textures with the start transform and warns that animated
+// ones are not supported (src/pbrt/scene.cpp: "Animated lights aren't supported", "Animated
+// transformation provided for medium", "Animated world to texture transforms").
+void Builder::warnIfAnimated(const FileLoc& loc, std::string_view what) {
+  if (gs_.ctm[0] == gs_.ctm[1]) return;
+  warnOnce(fmt::format("animated {}", what), loc,
+           fmt::format("animated {} are not supported (as in pbrt-v4); the start transform is "
+                       "used",
+                       what));
 }
 
 // ---- files ---------------------------------------------------------------------------------
@@ -410,10 +434,8 @@ void Builder::directive(const Directive& d) {
     popState(false);
   } else if (n == "ObjectInstance") {
     requireInvertible(d.loc, "ObjectInstance");
-    if (g.ctm[0] != g.ctm[1])
-      warnOnce("motion", d.loc,
-               "animated transforms are not rendered; the start transform is used");
-    pending_instances_.push_back({d.strings[0], d.loc, g.ctm[0]});
+    pending_instances_.push_back(
+        {d.strings[0], d.loc, g.ctm[0], motionOfCtm(d.loc, "ObjectInstance")});
   } else if (n == "Option") {
     option(d);
   } else if (n == "ColorSpace") {

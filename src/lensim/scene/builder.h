@@ -18,6 +18,7 @@
 
 #include "lensim/scene/curves.h"
 #include "lensim/scene/parser.h"
+#include "lensim/util/animated_transform.h"
 #include "lensim/util/error.h"
 #include "lensim/util/transform.h"
 #include "lensim/util/vec.h"
@@ -219,6 +220,9 @@ struct Shape {
   double radius = 1, inner_radius = 0, height = 0, zmin = -1, zmax = 1, phimax_deg = 360;
   int mesh = -1;  ///< index into Scene::meshes for meshes
   int curve = -1;  ///< index into Scene::curves for curves
+  /// Index into Scene::motions when the transform is animated (ActiveTransform; `transform` is
+  /// then the start transform), -1 for a static shape.
+  int motion = -1;
   /// MediumInterface at the shape: indices into Scene::media, -1 for vacuum. A shape whose
   /// inside and outside are the same is no medium boundary (rays keep their medium, as pbrt-v4).
   int inside_medium = -1, outside_medium = -1;
@@ -239,6 +243,7 @@ struct Instance {
   int object = -1;      ///< index into Scene::objects
   Transform transform;  ///< instance → world
   FileLoc loc;
+  int motion = -1;  ///< index into Scene::motions when animated (`transform`: the start)
 };
 
 /// A light description. `type` is the pbrt-v4 light type: point, spot, goniometric, projection,
@@ -298,7 +303,9 @@ struct Camera {
   std::string type = "perspective";
   std::string type_as_written;
   FileLoc loc;  ///< also the file relative to which lens files were resolved
-  Transform camera_from_world, camera_from_world_end;  ///< CTM at Camera (shutter open/close)
+  Transform camera_from_world, camera_from_world_end;  ///< CTM at Camera (start/end time)
+  /// TransformTimes at the Camera directive: when camera_from_world and _end apply.
+  double transform_start_time = 0, transform_end_time = 1;
   double shutter_open = 0, shutter_close = 1;
   double hither = 1e-3, yon = 1e30;  ///< camera-space units (mm for LegacyRealistic)
   double fov_deg = 90;
@@ -424,6 +431,8 @@ struct Scene {
   std::map<std::string, std::string> options;  ///< `Option` values, as text
   std::string color_space = "srgb";
   double transform_start_time = 0, transform_end_time = 1;  ///< TransformTimes
+  /// Animated transforms of shapes and instances (Shape::motion, Instance::motion).
+  std::vector<AnimatedTransform> motions;
   std::vector<Diagnostic> diagnostics;  ///< warnings, and errors if the scene is invalid
 
   bool hasErrors() const;

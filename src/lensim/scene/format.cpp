@@ -87,6 +87,17 @@ std::string summary(const Scene& scene) {
     line(fmt::format("camera: {} ({})", renamed(c.type_as_written, c.type), c.loc.str()));
   }
   if (!c.defaulted) line(fmt::format("  shutter {} to {}", c.shutter_open, c.shutter_close));
+  if (c.camera_from_world != c.camera_from_world_end)
+    line(fmt::format("  the camera moves (animated transform, times {} to {})",
+                     c.transform_start_time, c.transform_end_time));
+  if (!scene.motions.empty()) {
+    size_t moving_shapes = 0, moving_instances = 0;
+    for (const Shape& sh : scene.shapes) moving_shapes += sh.motion >= 0;
+    for (const Instance& i : scene.instances) moving_instances += i.motion >= 0;
+    line(fmt::format("motion blur: {} shape{} and {} instance{} move (animated transforms)",
+                     moving_shapes, moving_shapes == 1 ? "" : "s", moving_instances,
+                     moving_instances == 1 ? "" : "s"));
+  }
 
   const Film& f = scene.film;
   line(fmt::format("film: {}, {}×{}, output \"{}\"{}", renamed(f.type_as_written, f.type),

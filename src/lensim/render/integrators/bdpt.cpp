@@ -186,7 +186,7 @@ int randomWalk(const Context& ctx, Ray ray, int medium, SampledWavelengths& lamb
     prev.pdf_rev = convertDensity(v, pdf_rev, prev);
     if (beta.isBlack()) break;
     if (ctx.media) medium = mediumAfter(sc, *hit, bs->wi, medium, false);
-    ray = Ray{offsetOrigin(v.p, v.ng, bs->wi), bs->wi, INFINITY};
+    ray = Ray{offsetOrigin(v.p, v.ng, bs->wi), bs->wi, INFINITY, ray.time};
   }
   return bounces;
 }
@@ -200,21 +200,22 @@ int mediumToward(const Context& ctx, const Vertex& v, const Vec3& w) {
 /// The transmittance of a connection from the camera-side vertex a to b (to the direction wi
 /// when b is on an infinite light), traced from a, whose medium is known.
 SampledSpectrum connectionT(const Context& ctx, const Vertex& a, const Vertex& b, bool infinite,
-                            const Vec3& wi, const SampledWavelengths& lambda, Rng& rng,
-                            RayCounts& counts) {
+                            const Vec3& wi, double time, const SampledWavelengths& lambda,
+                            Rng& rng, RayCounts& counts) {
   const Vec3 w = infinite ? wi : normalize(b.p - a.p);
   const Vec3 ng = a.onSurface() ? a.ng : Vec3{0, 0, 0};
   return segmentTransmittance(*ctx.sc, a.p, ng, mediumToward(ctx, a, w), infinite ? wi : b.p,
-                              infinite, lambda, rng, counts);
+                              infinite, time, lambda, rng, counts);
 }
 
-bool segmentOccluded(const Context& ctx, const Vertex& a, const Vertex& b, RayCounts& counts) {
+bool segmentOccluded(const Context& ctx, const Vertex& a, const Vertex& b, double time,
+                     RayCounts& counts) {
   // Start from the vertex on a surface (offset along its normal); the far end stops short.
   if (a.onSurface())
-    return occludedScene(*ctx.sc, a.p, a.ng, b.p, false, normalize(b.p - a.p), counts);
+    return occludedScene(*ctx.sc, a.p, a.ng, b.p, false, normalize(b.p - a.p), time, counts);
   if (b.onSurface())
-    return occludedScene(*ctx.sc, b.p, b.ng, a.p, false, normalize(a.p - b.p), counts);
-  return occludedScene(*ctx.sc, a.p, Vec3{0, 0, 0}, b.p, false, normalize(b.p - a.p), counts);
+    return occludedScene(*ctx.sc, b.p, b.ng, a.p, false, normalize(a.p - b.p), time, counts);
+  return occludedScene(*ctx.sc, a.p, Vec3{0, 0, 0}, b.p, false, normalize(b.p - a.p), time, counts);
 }
 
 /// pbrt-v4's ConnectBDPT: the contribution of strategy (s, t), weighted by MIS; raster is set
@@ -248,6 +249,7 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     sampled.type = VertexType::Camera;
     sampled.p = cs->p_lens;
     sampled.medium = ctx.camera_medium;
+    sampled.time = time;
     for (int c = 0; c < kSpectrumSamples; ++c)
       sampled.beta[c] = cs->importance[size_t(c)] / cs->pdf;
     if (qs.type == VertexType::Light) {
@@ -260,8 +262,8 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     }
     if (L.isBlack()) return SampledSpectrum(0.0);
     if (tracked)
-      L *= connectionT(ctx, sampled, qs, false, {}, lambda, rng, counts);
-    else if (segmentOccluded(ctx, qs, sampled, counts))
+      L *= connectionT(ctx, sampled, qs, false, {}, time, lambda, rng, counts);
+    else if (segmentOccluded(ctx, qs, sampled, time, counts))
       return SampledSpectrum(0.0);
     *raster = cs->film_raster;
     r = qs.r;
@@ -286,8 +288,8 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     if (pt.onSurface()) L *= std::abs(dot(ls->wi, pt.ns));
     if (L.isBlack()) return L;
     if (tracked)
-      L *= connectionT(ctx, pt, sampled, ls->infinite, ls->wi, lambda, rng, counts);
-    else if (occludedScene(*ctx.sc, pt.p, pt.ng, ls->p_light, ls->infinite, ls->wi, counts))
+      L *= connectionT(ctx, pt, sampled, ls->infinite, ls->wi, time, lambda, rng, counts);
+    else if (occludedScene(*ctx.sc, pt.p, pt.ng, ls->p_light, ls->infinite, ls->wi, time, counts))
       return SampledSpectrum(0.0);
     r = pt.r;
   } else {
@@ -305,8 +307,8 @@ SampledSpectrum connect(const Context& ctx, Vertex* light, Vertex* camera, int s
     L *= g;
     if (L.isBlack()) return SampledSpectrum(0.0);
     if (tracked)
-      L *= connectionT(ctx, pt, qs, false, {}, lambda, rng, counts);
-    else if (segmentOccluded(ctx, qs, pt, counts))
+      L *= connectionT(ctx, pt, qs, false, {}, time, lambda, rng, counts);
+    else if (segmentOccluded(ctx, qs, pt, time, counts))
       return SampledSpectrum(0.0);
     r = qs.r * pt.r;
   }
@@ -365,7 +367,7 @@ double pdf(const Context& ctx, const Vertex& v, const Vertex* prev, const Vertex
   if (d2 == 0) return 0;
   double p = 0;
   if (v.type == VertexType::Camera) {
-    p = ctx.camera->rayPdf(v.p, wn, lambda_nm).pdf_dir;
+    p = ctx.camera->rayPdf(v.p, wn, lambda_nm, v.time).pdf_dir;
   } else if (v.type == VertexType::Medium) {
     if (!prev) return 0;
     double dp2;
@@ -405,9 +407,10 @@ double pdfLightOrigin(const Context& ctx, const Vertex& v, const Vertex& next) {
   return ctx.light_sampler->pmf({}, v.light) * v.light->pdfLe(v.p, v.ng, w).first;
 }
 
-double cameraPositionRatio(const Context& ctx, double pdf_pos, const Vec3& x0, const Vec3& x1) {
+double cameraPositionRatio(const Context& ctx, double pdf_pos, const Vec3& x0, const Vec3& x1,
+                           double time) {
   if (!(pdf_pos > 0)) return 1;
-  double r = ctx.camera->pdfWiPos(x1, x0) / pdf_pos;
+  double r = ctx.camera->pdfWiPos(x1, x0, time) / pdf_pos;
   if (ctx.camera_delta_direction) {
     const Vec3 d = x1 - x0;
     const double d2 = dot(d, d);
@@ -458,9 +461,9 @@ double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex
     double d2;
     const Vec3 w = unitOrZero(qs->p - pt->p, d2);
     if (d2 > 0) {
-      const camera::CameraRayPdf rp = ctx.camera->rayPdf(pt->p, w, lambda_nm);
+      const camera::CameraRayPdf rp = ctx.camera->rayPdf(pt->p, w, lambda_nm, pt->time);
       new_qs_rev = convertDensity(*pt, rp.pdf_dir, *qs);
-      pos_ratio = cameraPositionRatio(ctx, rp.pdf_pos, pt->p, qs->p);
+      pos_ratio = cameraPositionRatio(ctx, rp.pdf_pos, pt->p, qs->p, pt->time);
     }
     if (!(pos_ratio > 0)) {
       // sampleWi cannot pick this camera point for qs: the strategy has no density here.
@@ -517,18 +520,20 @@ int cameraSubpath(const Context& ctx, const camera::CameraRay& ray, SampledWavel
   v.p = ray.origin;
   v.beta = SampledSpectrum(ray.weight);
   v.medium = ctx.camera_medium;
-  const camera::CameraRayPdf rp = ctx.camera->rayPdf(ray.origin, ray.direction, lambda.lambda(0));
-  const int n = randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY}, v.medium, lambda, sampler,
-                           rng, v.beta, rp.pdf_dir, max_vertices - 1, TransportMode::Radiance, counts,
-                           path, L_medium) +
+  v.time = ray.time;
+  const camera::CameraRayPdf rp =
+      ctx.camera->rayPdf(ray.origin, ray.direction, lambda.lambda(0), ray.time);
+  const int n = randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY, ray.time}, v.medium,
+                           lambda, sampler, rng, v.beta, rp.pdf_dir, max_vertices - 1,
+                           TransportMode::Radiance, counts, path, L_medium) +
                 1;
   // The t = 1 strategy can pick this camera point from a surface or a medium vertex.
   if (n >= 2 && (path[1].onSurface() || path[1].type == VertexType::Medium))
-    path[0].wi_pos_ratio = cameraPositionRatio(ctx, rp.pdf_pos, path[0].p, path[1].p);
+    path[0].wi_pos_ratio = cameraPositionRatio(ctx, rp.pdf_pos, path[0].p, path[1].p, ray.time);
   return n;
 }
 
-int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sampler,
+int lightSubpath(const Context& ctx, double time, SampledWavelengths& lambda, Sampler& sampler,
                  RayCounts& counts, Vertex* path, Rng* rng) {
   const int max_vertices = ctx.max_depth + 1;
   const double ul = sampler.get1D();
@@ -561,7 +566,7 @@ int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sample
   // The light's own surface must not stop its ray.
   const Vec3 o = on_surface ? offsetOrigin(le->o, le->n, le->d) : le->o;
   const int n =
-      randomWalk(ctx, Ray{o, le->d, INFINITY}, v.medium, lambda, sampler, rng, beta, le->pdf_dir,
+      randomWalk(ctx, Ray{o, le->d, INFINITY, time}, v.medium, lambda, sampler, rng, beta, le->pdf_dir,
                  max_vertices - 1, TransportMode::Importance, counts, path, nullptr);
   // Infinite lights: the first surface vertex's density is the disk's positional density
   // projected onto it, and the light vertex's the direction's (pbrt-v4).
@@ -636,9 +641,11 @@ SampledSpectrum BdptIntegrator::Li(const camera::CameraRay* ray, double time,
   } else {
     // No camera ray: only the t = 1 strategies, whose camera vertex is sampled anew.
     camera_path[0].type = VertexType::Camera;
+    camera_path[0].time = time;
     n_camera = 1;
   }
-  const int n_light = lightSubpath(ctx_, lambda, sampler, counts, light_path, &rng);
+  // The light subpath at the camera sample's time (pbrt-v4's BDPTIntegrator::Li).
+  const int n_light = lightSubpath(ctx_, time, lambda, sampler, counts, light_path, &rng);
   for (int t = 1; t <= n_camera; ++t)
     for (int s = 0; s <= n_light; ++s) {
       const int depth = t + s - 2;

@@ -91,6 +91,7 @@ struct Vertex {
   SurfaceHit hit;  ///< surface: the hit (area light emission, normal, uv)
   bool delta = false;
   double pdf_fwd = 0, pdf_rev = 0;  ///< area densities (solid angle toward infinite lights)
+  double time = 0;                  ///< camera vertex: the shutter time that places a moving camera
   /// Camera vertex: the density with which the t = 1 strategy (Camera::sampleWi from the next
   /// vertex) picks this position, over generateRay's (rayPdf().pdf_pos); see cameraPositionRatio.
   double wi_pos_ratio = 1;
@@ -143,7 +144,8 @@ double pdfLightOrigin(const Context& ctx, const Vertex& v, const Vertex& next);
 /// direction (Context::camera_delta_direction), whose first vertex density is pdf_pos |cos|
 /// per unit area where pdf() gives pdf_dir |cos| / d^2 with a delta pdf_dir of 1. 1 where
 /// pdf_pos is 0 (no density to compare with).
-double cameraPositionRatio(const Context& ctx, double pdf_pos, const Vec3& x0, const Vec3& x1);
+double cameraPositionRatio(const Context& ctx, double pdf_pos, const Vec3& x0, const Vec3& x1,
+                           double time);
 /// The MIS weight of strategy (s, t) (pbrt-v4's MISWeight); `sampled` replaces camera[0]
 /// (t = 1) or else light[0] (s = 1). light and camera are modified during the call and restored.
 double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex& sampled, int s,
@@ -155,7 +157,8 @@ double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex
 int cameraSubpath(const Context& ctx, const camera::CameraRay& ray, SampledWavelengths& lambda,
                   Sampler& sampler, RayCounts& counts, Vertex* path, Rng* rng = nullptr,
                   SampledSpectrum* L_medium = nullptr);
-int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sampler,
+/// The light subpath's rays are traced at shutter time `time` (the camera sample's).
+int lightSubpath(const Context& ctx, double time, SampledWavelengths& lambda, Sampler& sampler,
                  RayCounts& counts, Vertex* path, Rng* rng = nullptr);
 
 }  // namespace bdpt

@@ -16,6 +16,7 @@ struct Ctx {
   SampledWavelengths& lambda;
   Sampler& sampler;
   RayCounts& counts;
+  double time;  ///< the path's shutter time
 };
 
 /// pbrt-v3's EstimateDirect (src/core/integrator.cpp) without media, over the non-specular part
@@ -30,7 +31,7 @@ SampledSpectrum estimateDirect(Ctx& c, const SurfaceHit& h, const Vec3& ns, cons
   if (auto ls = light.sampleLi(h.p, u_light, c.lambda); ls && ls->pdf > 0 && !ls->L.isBlack()) {
     const SampledSpectrum f = bsdf.f(wo, ls->wi) * std::abs(dot(ls->wi, ns));
     if (!f.isBlack() &&
-        !occludedScene(c.sc, h.p, h.ng, ls->p_light, ls->infinite, ls->wi, c.counts)) {
+        !occludedScene(c.sc, h.p, h.ng, ls->p_light, ls->infinite, ls->wi, c.time, c.counts)) {
       if (light.isDelta()) {
         Ld += f * ls->L / ls->pdf;
       } else {
@@ -45,7 +46,7 @@ SampledSpectrum estimateDirect(Ctx& c, const SurfaceHit& h, const Vec3& ns, cons
   const SampledSpectrum f = bs->f * std::abs(dot(bs->wi, ns));
   if (f.isBlack()) return Ld;
   const double pb = bs->pdf_is_proportional ? bsdf.pdf(wo, bs->wi) : bs->pdf;
-  const Ray ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
+  const Ray ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY, c.time};
   const auto hit = intersectScene(c.sc, ray, c.counts);
   SampledSpectrum Li(0.0);
   double pl = 0;
@@ -119,7 +120,7 @@ SampledSpectrum li(Ctx& c, Ray ray, int depth) {
       const double cos = std::abs(dot(bs->wi, ns));
       if (!(bs->pdf > 0) || cos == 0 || bs->f.isBlack()) continue;
       const SampledSpectrum w = bs->f * (cos / bs->pdf);
-      L += w * li(c, Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY}, depth + 1);
+      L += w * li(c, Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY, c.time}, depth + 1);
     }
   }
   return L;
@@ -128,10 +129,10 @@ SampledSpectrum li(Ctx& c, Ray ray, int depth) {
 }  // namespace
 
 SampledSpectrum directLightingLi(const SceneContext& sc, const DirectLightingOptions& opt,
-                                 const Vec3& o, const Vec3& d, SampledWavelengths& lambda,
-                                 Sampler& sampler, RayCounts& counts) {
-  Ctx c{sc, opt, lambda, sampler, counts};
-  return li(c, Ray{o, d, INFINITY}, 0);
+                                 const Vec3& o, const Vec3& d, double time,
+                                 SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts) {
+  Ctx c{sc, opt, lambda, sampler, counts, time};
+  return li(c, Ray{o, d, INFINITY, time}, 0);
 }
 
 }  // namespace lensim::render

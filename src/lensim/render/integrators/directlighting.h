@@ -30,9 +30,10 @@ struct DirectLightingOptions {
   int max_depth = 5;       ///< pbrt-v3's maxdepth: specular recursion while depth + 1 < it
 };
 
-/// Radiance along the camera ray (origin o, unit direction d) by pbrt-v3's directlighting.
+/// Radiance along the camera ray (origin o, unit direction d, shutter time `time`) by pbrt-v3's
+/// directlighting.
 SampledSpectrum directLightingLi(const SceneContext& sc, const DirectLightingOptions& opt,
-                                 const Vec3& o, const Vec3& d, SampledWavelengths& lambda,
-                                 Sampler& sampler, RayCounts& counts);
+                                 const Vec3& o, const Vec3& d, double time,
+                                 SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts);
 
 }  // namespace lensim::render

@@ -56,9 +56,9 @@ double pbrtV2Epsilon(const SceneContext& sc, const SurfaceHit& h, const Ray& ray
 /// pbrt-v2's VisibilityTester: from epsilon to (1 - 1e-3) of the distance; empty, hence
 /// unblocked, when epsilon is longer).
 bool shadowed(const SceneContext& sc, const SurfaceHit& h, const LightLiSample& ls, double skip,
-              RayCounts& counts) {
+              double time, RayCounts& counts) {
   if (skip > 0 && !ls.infinite && skip >= length(ls.p_light - h.p) * (1 - 1e-3)) return false;
-  return occludedScene(sc, h.p + ls.wi * skip, h.ng, ls.p_light, ls.infinite, ls.wi, counts);
+  return occludedScene(sc, h.p + ls.wi * skip, h.ng, ls.p_light, ls.infinite, ls.wi, time, counts);
 }
 
 }  // namespace
@@ -77,10 +77,11 @@ std::optional<SurfaceHit> intersectScene(const SceneContext& sc, Ray ray, RayCou
 }
 
 bool occludedScene(const SceneContext& sc, const Vec3& p, const Vec3& n, const Vec3& p_light,
-                   bool infinite, const Vec3& wi, RayCounts& counts) {
+                   bool infinite, const Vec3& wi, double time, RayCounts& counts) {
   const Vec3 o = offsetOrigin(p, n, wi);
   Ray r;
   r.o = o;
+  r.time = time;
   if (infinite) {
     r.d = wi;
     r.tmax = INFINITY;
@@ -95,7 +96,7 @@ bool occludedScene(const SceneContext& sc, const Vec3& p, const Vec3& n, const V
   return intersectScene(sc, r, counts).has_value();
 }
 
-SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
+SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, double time,
                        SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts) {
   SampledSpectrum L(0.0), beta(1.0);
   bool specular_bounce = false;
@@ -105,7 +106,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
   Vec3 prev_ns;  // shading normal there (the light sampler's context)
   int depth = 0, interfaces = 0;
   bool any_non_specular = false;
-  Ray ray{o, d, INFINITY};
+  Ray ray{o, d, INFINITY, time};
   for (;;) {
     auto hit = intersectScene(sc, ray, counts);
     if (!hit) {
@@ -159,7 +160,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
         if (auto ls = choice->light->sampleLi(h.p, u_light2, lambda)) {
           if (ls->pdf > 0 && !ls->L.isBlack()) {
             const SampledSpectrum f = bsdf.f(wo, ls->wi) * std::abs(dot(ls->wi, ns));
-            if (!f.isBlack() && !shadowed(sc, h, *ls, skip, counts)) {
+            if (!f.isBlack() && !shadowed(sc, h, *ls, skip, time, counts)) {
               const double pl = choice->pmf * ls->pdf;
               if (choice->light->isDelta()) {
                 L += beta * f * ls->L / pl;
@@ -184,7 +185,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
     if (bs->isTransmission()) eta_scale *= bs->eta * bs->eta;
     prev_p = h.p;
     prev_ns = ns;
-    ray = Ray{offsetOrigin(h.p + bs->wi * skip, h.ng, bs->wi), bs->wi, INFINITY};
+    ray = Ray{offsetOrigin(h.p + bs->wi * skip, h.ng, bs->wi), bs->wi, INFINITY, time};
     if (beta.isBlack()) break;
     const SampledSpectrum rr_beta = beta * eta_scale;
     const double u_rr = sampler.get1D();

@@ -53,14 +53,15 @@ struct RayCounts {
 
 /// The closest hit along the ray, skipping surfaces cut out by alpha textures.
 std::optional<SurfaceHit> intersectScene(const SceneContext& sc, Ray ray, RayCounts& counts);
-/// Whether the segment from p (offset along n) to p_light is blocked; infinite: toward
-/// direction wi without end.
+/// Whether the segment from p (offset along n) to p_light is blocked at shutter time `time`;
+/// infinite: toward direction wi without end.
 bool occludedScene(const SceneContext& sc, const Vec3& p, const Vec3& n, const Vec3& p_light,
-                   bool infinite, const Vec3& wi, RayCounts& counts);
+                   bool infinite, const Vec3& wi, double time, RayCounts& counts);
 
-/// Radiance along the camera ray (origin o, unit direction d) at the sampled wavelengths
-/// (which may be reduced to the hero wavelength by dispersive materials).
-SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d,
+/// Radiance along the camera ray (origin o, unit direction d, shutter time `time`: every ray of
+/// the path is traced at it, as pbrt-v4's rays inherit their parent's time) at the sampled
+/// wavelengths (which may be reduced to the hero wavelength by dispersive materials).
+SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, double time,
                        SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts);
 
 /// A ray origin moved off the surface at p (normal n) to the side of direction w, far enough

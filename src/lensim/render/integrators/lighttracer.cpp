@@ -115,9 +115,9 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
   // the lens is open; T its transmittance.
   auto visible = [&](const Vec3& p, const Vec3& ng, const camera::CameraWiSample& cs,
                      SampledSpectrum& T) {
-    if (!tracked) return !occludedScene(*sc_, p, ng, cs.p_lens, false, cs.wi, counts);
-    T = segmentTransmittance(*sc_, cs.p_lens, Vec3{0, 0, 0}, camera_medium, p, false, lambda, rng,
-                             counts);
+    if (!tracked) return !occludedScene(*sc_, p, ng, cs.p_lens, false, cs.wi, time, counts);
+    T = segmentTransmittance(*sc_, cs.p_lens, Vec3{0, 0, 0}, camera_medium, p, false, time, lambda,
+                             rng, counts);
     return !T.isBlack();
   };
   // The light's own point seen by the camera (area lights; a point light is a delta the film
@@ -139,7 +139,7 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
   int medium = media_ ? lightMedium(*sc_, light) : -1;
   if (light.isInfinite() || light.isDeltaDirection())
     beta *= transmittanceFromInfinity(*sc_, medium, lambda);
-  Ray ray{les->on_surface ? offsetOrigin(les->o, les->n, les->d) : les->o, les->d, INFINITY};
+  Ray ray{les->on_surface ? offsetOrigin(les->o, les->n, les->d) : les->o, les->d, INFINITY, time};
   int depth = 0, interfaces = 0;
   for (;;) {
     const auto hit = intersectScene(*sc_, ray, counts);
@@ -207,7 +207,7 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
     beta *= bs->f * (std::abs(dot(bs->wi, ns)) / bs->pdf);
     if (beta.isBlack()) break;
     if (media_) medium = mediumAfter(*sc_, h, bs->wi, medium, false);
-    ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
+    ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY, time};
   }
   return dropped;
 }

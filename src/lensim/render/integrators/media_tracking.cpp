@@ -111,13 +111,13 @@ MediumEvent trackMedium(const Medium& m, const Vec3& o, const Vec3& d, double t_
 }
 
 SampledSpectrum segmentTransmittance(const SceneContext& sc, const Vec3& from, const Vec3& from_ng,
-                                     int medium, const Vec3& to, bool to_infinite,
+                                     int medium, const Vec3& to, bool to_infinite, double time,
                                      const SampledWavelengths& lambda, Rng& rng,
                                      RayCounts& counts) {
   const Vec3 w0 = to_infinite ? to : normalize(to - from);
   const bool media = sc.scene_media && sc.media && !sc.media->empty();
   if (!media && !sc.has_interfaces)
-    return SampledSpectrum(occludedScene(sc, from, from_ng, to, to_infinite, w0, counts) ? 0.0
+    return SampledSpectrum(occludedScene(sc, from, from_ng, to, to_infinite, w0, time, counts) ? 0.0
                                                                                          : 1.0);
   const bool on_surface = from_ng.x != 0 || from_ng.y != 0 || from_ng.z != 0;
   Vec3 origin = on_surface ? offsetOrigin(from, from_ng, w0) : from;
@@ -126,6 +126,7 @@ SampledSpectrum segmentTransmittance(const SceneContext& sc, const Vec3& from, c
   for (int guard = 0; guard < 256; ++guard) {
     Ray ray;
     ray.o = origin;
+    ray.time = time;
     if (to_infinite) {
       ray.d = to;
       ray.tmax = INFINITY;

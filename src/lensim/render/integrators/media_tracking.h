@@ -114,10 +114,11 @@ MediumEvent trackMedium(const Medium& m, const Vec3& o, const Vec3& d, double t_
 /// The transmittance between `from` and `to` (to_infinite: the direction `to` without end),
 /// starting in medium `medium` (scene media index; -1 vacuum), through interface surfaces (their
 /// other side's medium): an unbiased estimate per wavelength (exact in homogeneous media, ratio
-/// tracking by the hero's majorant in others), 0 where an opaque surface blocks it. from_ng: the
+/// tracking by the hero's majorant in others), 0 where an opaque surface blocks it, at shutter
+/// time `time`. from_ng: the
 /// geometric normal of the surface `from` lies on (the ray starts off it), or zero.
 SampledSpectrum segmentTransmittance(const SceneContext& sc, const Vec3& from, const Vec3& from_ng,
-                                     int medium, const Vec3& to, bool to_infinite,
+                                     int medium, const Vec3& to, bool to_infinite, double time,
                                      const SampledWavelengths& lambda, Rng& rng, RayCounts& counts);
 
 }  // namespace lensim::render

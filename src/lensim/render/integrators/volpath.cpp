@@ -51,6 +51,7 @@ struct Vertex {
   const SurfaceHit* hit = nullptr;
   const BSDF* bsdf = nullptr;
   const HenyeyGreenstein* phase = nullptr;
+  double time = 0;  ///< the path's shutter time
 };
 
 /// pbrt-v4's SampleLd: a light sample, its transmittance by ratio tracking through media and
@@ -80,7 +81,7 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
   SampledSpectrum T_ray(1.0), r_l(1.0), r_u(1.0);
   if ((!sc.media || sc.media->empty()) && !sc.has_interfaces) {
     // No media and no interface surfaces: a plain shadow ray, as the path integrator traces it.
-    if (occludedScene(sc, v.p, v.ng, ls->p_light, ls->infinite, ls->wi, counts)) return {};
+    if (occludedScene(sc, v.p, v.ng, ls->p_light, ls->infinite, ls->wi, v.time, counts)) return {};
   } else {
     int medium = v.bsdf ? mediumAfter(sc, *v.hit, ls->wi, v.medium) : v.medium;
     // A shadow ray into a textured subsurface shape: its coefficients where it enters.
@@ -92,6 +93,7 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
     for (int guard = 0; guard < 256; ++guard) {
       Ray r;
       r.o = origin;
+      r.time = v.time;
       if (ls->infinite) {
         r.d = ls->wi;
         r.tmax = INFINITY;
@@ -144,8 +146,9 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
 
 }  // namespace
 
-SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, int medium,
-                          SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts) {
+SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, double time,
+                          int medium, SampledWavelengths& lambda, Sampler& sampler,
+                          RayCounts& counts) {
   SampledSpectrum L(0.0), beta(1.0), r_u(1.0), r_l(1.0);
   bool specular_bounce = false, any_non_specular = false;
   double eta_scale = 1;
@@ -160,7 +163,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
   Rng rng;
   if (has_media) rng = pathRng(sampler);
   if (!has_media || !sc.scene_media) medium = -1;
-  Ray ray{o, d, INFINITY};
+  Ray ray{o, d, INFINITY, time};
   for (;;) {
     auto hit = intersectScene(sc, ray, counts);
     // Inside a subsurface shape (a random walk): its boundary is no light's window (it is not
@@ -211,6 +214,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
                            const HenyeyGreenstein phase(m->g());
                            Vertex v;
                            v.p = p;
+                           v.time = time;
                            v.wo = -dir;
                            v.medium = medium;
                            v.phase = &phase;
@@ -225,7 +229,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
                              prev_p = p;
                              prev_n = Vec3{0, 0, 0};
                              scattered = true;
-                             ray = Ray{p, ps->wi, INFINITY};
+                             ray = Ray{p, ps->wi, INFINITY, time};
                              // Without a light sample, emission found next counts in full.
                              specular_bounce = in_walk;
                              any_non_specular = true;
@@ -296,6 +300,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
     if (isNonSpecular(bsdf.flags())) {
       Vertex v;
       v.p = h.p;
+      v.time = time;
       v.ng = h.ng;
       v.ns = ns;
       v.wo = wo;
@@ -321,7 +326,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
     const int next_medium = mediumAfter(sc, h, bs->wi, medium);
     if (has_media) enterMedium(sc, next_medium, medium, tctx, lambda, walk, walk_index);
     medium = next_medium;
-    ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
+    ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY, time};
     if (beta.isBlack()) break;
     const SampledSpectrum rr_beta = beta * eta_scale / wavelengthMean(r_u, lambda);
     const double u_rr = sampler.get1D();

@@ -13,9 +13,15 @@
 
 namespace lensim::render {
 
-/// Radiance along the camera ray (origin o, unit direction d), which starts in medium
-/// `medium` (index into Scene::media, -1 for vacuum; SceneContext::media resolves it).
-SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, int medium,
-                          SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts);
+/// Radiance along the camera ray (origin o, unit direction d, shutter time `time`), which starts
+/// in medium `medium` (index into Scene::media, -1 for vacuum; SceneContext::media resolves it).
+SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, double time,
+                          int medium, SampledWavelengths& lambda, Sampler& sampler,
+                          RayCounts& counts);
+/// The same at shutter time 0 (a scene without motion looks the same at every time).
+inline SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, int medium,
+                                 SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts) {
+  return volpathLi(sc, o, d, 0.0, medium, lambda, sampler, counts);
+}
 
 }  // namespace lensim::render

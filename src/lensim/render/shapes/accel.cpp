@@ -32,6 +32,30 @@ struct ShapeRecord {
   // Curves (render/accel_curves.*): the Bézier segments in the space.
   const scene::Curve* curve = nullptr;
   CurveInSpace curve_space;
+  /// An animated shape (motion blur): the shape's data are in its object space (the "space"
+  /// above is object space), in an Embree scene of its own that a MotionWrapper places.
+  const AnimatedTransform* motion = nullptr;
+};
+
+/// An Embree user geometry that places an inner Embree scene by an animated transform (pbrt-v4's
+/// AnimatedPrimitive, src/pbrt/cpu/primitive.h): the ray is carried into the inner scene by the
+/// transform interpolated at the ray's time (pbrt-v4's AnimatedTransform, decomposed and
+/// interpolated; not Embree's linear matrix motion) and intersected there. Its Embree bounds are
+/// the motion bounds over the shutter interval.
+struct MotionWrapper {
+  const AnimatedTransform* motion = nullptr;  ///< parent space from inner space
+  RTCScene inner = nullptr;
+  Bounds3 bounds;     ///< in the parent space, over the shutter
+  int instance = -1;  ///< an animated ObjectInstance (inner: the object's scene), else -1
+};
+
+/// The intersect context with the ray's time (seconds). Embree hands the context given to
+/// rtcIntersect1/rtcOccluded1 to user geometry callbacks unchanged, so they read the time here.
+/// `inner_geom`: the object-scene geometry an animated instance's wrapper last accepted.
+struct TimedContext {
+  RTCIntersectContext base;
+  double time = 0;
+  unsigned inner_geom = RTC_INVALID_GEOMETRY_ID;
 };
 
 }  // namespace
@@ -47,12 +71,20 @@ struct Accel::Impl {
   std::vector<int> top_geom_instance;         ///< top-level geomID -> instance index
   std::vector<int> shape_record;              ///< shape -> record, -1 if none
   std::vector<WorldMesh> world_meshes;
+  std::vector<std::unique_ptr<MotionWrapper>> wrappers;  ///< addresses held by Embree
+  std::vector<RTCScene> motion_scenes;                   ///< inner scenes of animated shapes
+  /// Per instance: world from instance as rendered (a motion steady over the shutter baked in),
+  /// and its motion when it moves while the shutter is open (else nullptr).
+  std::vector<Transform> instance_transform;
+  std::vector<const AnimatedTransform*> instance_motion;
   std::vector<int> shape_world_mesh;
   std::mutex error_mutex;
   std::string error;
   mutable std::atomic<uint64_t> invalid_rays{0};  ///< rays dropped before Embree (rayIsValid)
 
   ~Impl() {
+    for (RTCScene s : motion_scenes)
+      if (s) rtcReleaseScene(s);
     for (RTCScene s : object_scenes)
       if (s) rtcReleaseScene(s);
     if (top) rtcReleaseScene(top);
@@ -124,6 +156,79 @@ void quadricOccluded(const RTCOccludedFunctionNArguments* args) {
   if (quadricHit(r, org, dir, ray->tnear, ray->tfar)) ray->tfar = -INFINITY;
 }
 
+void motionBounds(const RTCBoundsFunctionArguments* args) {
+  const auto* w = static_cast<const MotionWrapper*>(args->geometryUserPtr);
+  RTCBounds* b = args->bounds_o;
+  const Bounds3& m = w->bounds;
+  const double pad =
+      1e-6 * (1 + std::max({std::abs(m.min.x), std::abs(m.max.x), std::abs(m.min.y),
+                            std::abs(m.max.y), std::abs(m.min.z), std::abs(m.max.z)}));
+  b->lower_x = float(m.min.x - pad), b->lower_y = float(m.min.y - pad);
+  b->lower_z = float(m.min.z - pad);
+  b->upper_x = float(m.max.x + pad), b->upper_y = float(m.max.y + pad);
+  b->upper_z = float(m.max.z + pad);
+}
+
+/// The ray (org, dir, tnear, tfar) carried into the wrapper's inner space at the context's time.
+void innerRay(const MotionWrapper& w, double time, const RTCRay& in, RTCRay& out) {
+  Transform scratch;
+  const Transform& m = w.motion->at(time, scratch);
+  const Transform::Matrix& mi = m.inverseMatrix();
+  const double o[3] = {in.org_x, in.org_y, in.org_z}, d[3] = {in.dir_x, in.dir_y, in.dir_z};
+  float oo[3], dd[3];
+  for (int r = 0; r < 3; ++r) {
+    oo[r] = float(mi[r][0] * o[0] + mi[r][1] * o[1] + mi[r][2] * o[2] + mi[r][3]);
+    dd[r] = float(mi[r][0] * d[0] + mi[r][1] * d[1] + mi[r][2] * d[2]);
+  }
+  out.org_x = oo[0], out.org_y = oo[1], out.org_z = oo[2];
+  out.dir_x = dd[0], out.dir_y = dd[1], out.dir_z = dd[2];
+  out.tnear = in.tnear;
+  out.tfar = in.tfar;
+  out.time = 0;
+  out.mask = in.mask;
+  out.id = in.id;
+  out.flags = 0;
+}
+
+void motionIntersect(const RTCIntersectFunctionNArguments* args) {
+  if (args->N != 1 || !args->valid[0]) return;
+  const auto* w = static_cast<const MotionWrapper*>(args->geometryUserPtr);
+  auto* ctx = reinterpret_cast<TimedContext*>(args->context);
+  RTCRayHit* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);
+  TimedContext inner;
+  rtcInitIntersectContext(&inner.base);
+  inner.time = ctx->time;
+  RTCRayHit ih;
+  innerRay(*w, ctx->time, rh->ray, ih.ray);
+  ih.hit.geomID = ih.hit.primID = ih.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(w->inner, &inner.base, &ih);
+  if (ih.hit.geomID == RTC_INVALID_GEOMETRY_ID || !(ih.ray.tfar < rh->ray.tfar)) return;
+  rh->ray.tfar = ih.ray.tfar;
+  // u, v and Ng stay in the inner space; Accel::intersect carries the hit out again.
+  rh->hit.u = ih.hit.u, rh->hit.v = ih.hit.v;
+  rh->hit.Ng_x = ih.hit.Ng_x, rh->hit.Ng_y = ih.hit.Ng_y, rh->hit.Ng_z = ih.hit.Ng_z;
+  rh->hit.primID = ih.hit.primID;
+  rh->hit.geomID = args->geomID;
+  rh->hit.instID[0] = args->context->instID[0];
+  // The last accepted hit is the nearest so far, so this names the final hit's geometry when
+  // the final hit is this wrapper's.
+  if (w->instance >= 0) ctx->inner_geom = ih.hit.geomID;
+}
+
+void motionOccluded(const RTCOccludedFunctionNArguments* args) {
+  if (args->N != 1 || !args->valid[0]) return;
+  const auto* w = static_cast<const MotionWrapper*>(args->geometryUserPtr);
+  const auto* ctx = reinterpret_cast<const TimedContext*>(args->context);
+  RTCRay* ray = reinterpret_cast<RTCRay*>(args->ray);
+  TimedContext inner;
+  rtcInitIntersectContext(&inner.base);
+  inner.time = ctx->time;
+  RTCRay ir;
+  innerRay(*w, ctx->time, *ray, ir);
+  rtcOccluded1(w->inner, &inner.base, &ir);
+  if (ir.tfar < 0) ray->tfar = -INFINITY;
+}
+
 Bounds3 quadricObjectBounds(const scene::Shape& s) {
   Bounds3 b;
   using scene::ShapeType;
@@ -151,6 +256,29 @@ Bounds3 quadricObjectBounds(const scene::Shape& s) {
   return b;
 }
 
+/// The transform of an animated shape or instance when it does not change while the shutter is
+/// open (an instant shutter, or motion wholly before or after it), else nullopt: such motion is
+/// rendered as the static transform it amounts to, exactly as a static scene.
+std::optional<Transform> steadyTransform(const scene::Scene& scene, const AnimatedTransform& m) {
+  const double open = scene.camera.shutter_open, close = scene.camera.shutter_close;
+  if (!m.isAnimated() || close <= m.startTime()) return m.start();
+  if (open >= m.endTime()) return m.end();
+  if (open == close) return m.interpolate(open);
+  return std::nullopt;
+}
+
+/// An Embree user geometry for the wrapper (which must outlive it).
+RTCGeometry newMotionGeometry(RTCDevice device, MotionWrapper* w) {
+  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+  rtcSetGeometryUserPrimitiveCount(g, 1);
+  rtcSetGeometryUserData(g, w);
+  rtcSetGeometryBoundsFunction(g, motionBounds, nullptr);
+  rtcSetGeometryIntersectFunction(g, motionIntersect);
+  rtcSetGeometryOccludedFunction(g, motionOccluded);
+  rtcCommitGeometry(g);
+  return g;
+}
+
 }  // namespace
 
 Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
@@ -174,9 +302,22 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
     ShapeRecord r;
     r.shape = static_cast<int>(i);
     r.desc = &s;
-    r.space_from_object = s.transform;
-    r.object_from_space = inverse(s.transform);
-    r.flip = s.flipNormals();
+    Transform xf = s.transform;  // space from object
+    if (s.motion >= 0) {
+      const AnimatedTransform& motion = scene.motions[static_cast<size_t>(s.motion)];
+      if (auto steady = steadyTransform(scene, motion)) {
+        xf = *steady;
+      } else {
+        r.motion = &motion;
+        xf = Transform();  // the wrapper places the object space
+      }
+    }
+    r.space_from_object = xf;
+    r.object_from_space = inverse(xf);
+    // pbrt-v4 builds an animated shape with an identity render-from-object transform
+    // (BasicSceneBuilder::Shape, src/pbrt/scene.cpp), so only ReverseOrientation flips it; its
+    // normals are then carried out by the interpolated transform.
+    r.flip = r.motion ? s.reverse_orientation : s.flipNormals();
     if (s.type == scene::ShapeType::TriangleMesh || s.type == scene::ShapeType::BilinearMesh) {
       if (s.mesh < 0) continue;
       const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(s.mesh)];
@@ -184,11 +325,11 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
       r.vertices_per_face = mesh.vertices_per_face;
       r.p.reserve(mesh.positions.size());
       for (const Vec3f& q : mesh.positions) {
-        r.p.push_back(s.transform.applyPoint(Vec3(q)));
+        r.p.push_back(xf.applyPoint(Vec3(q)));
         r.bounds.extend(r.p.back());
       }
       for (const Vec3f& q : mesh.normals) {
-        Vec3 nn = s.transform.applyNormal(Vec3(q));
+        Vec3 nn = xf.applyNormal(Vec3(q));
         r.n.push_back(length(nn) > 0 ? normalize(nn) : nn);
       }
       for (const auto& t : mesh.uvs) r.uv.push_back({t[0], t[1]});
@@ -198,10 +339,10 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
       const scene::Curve& c = scene.curves[static_cast<size_t>(s.curve)];
       if (c.cp.empty()) continue;
       r.curve = &c;
-      r.curve_space = curveInSpace(c, s.transform);
+      r.curve_space = curveInSpace(c, xf);
       r.bounds = r.curve_space.bounds;
     } else {
-      r.bounds = s.transform.applyBounds(quadricObjectBounds(s));
+      r.bounds = xf.applyBounds(quadricObjectBounds(s));
     }
     m.shape_record[i] = static_cast<int>(m.records.size());
     m.records.push_back(std::move(r));
@@ -214,6 +355,12 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
       RTCScene& os = m.object_scenes[static_cast<size_t>(s.object)];
       if (!os) os = rtcNewScene(m.device);
       target = os;
+    }
+    RTCScene parent = target;
+    if (r.motion) {
+      target = rtcNewScene(m.device);
+      rtcSetSceneBuildQuality(target, RTC_BUILD_QUALITY_HIGH);
+      m.motion_scenes.push_back(target);
     }
     RTCGeometry g;
     if (r.curve) {
@@ -261,8 +408,20 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
       rtcSetGeometryOccludedFunction(g, quadricOccluded);
     }
     rtcCommitGeometry(g);
-    const unsigned id = rtcAttachGeometry(target, g);
+    unsigned id = rtcAttachGeometry(target, g);
     rtcReleaseGeometry(g);
+    if (r.motion) {
+      rtcCommitScene(target);
+      auto w = std::make_unique<MotionWrapper>();
+      w->motion = r.motion;
+      w->inner = target;
+      w->bounds =
+          r.motion->motionBounds(r.bounds, scene.camera.shutter_open, scene.camera.shutter_close);
+      RTCGeometry wg = newMotionGeometry(m.device, w.get());
+      id = rtcAttachGeometry(parent, wg);
+      rtcReleaseGeometry(wg);
+      m.wrappers.push_back(std::move(w));
+    }
     auto& map = s.object >= 0 ? m.object_geom[static_cast<size_t>(s.object)] : m.top_geom;
     if (map.size() <= id) map.resize(id + 1, -1);
     map[id] = static_cast<int>(ri);
@@ -273,17 +432,40 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
   for (RTCScene os : m.object_scenes)
     if (os) rtcCommitScene(os);
   m.check("building object definitions");
+  m.instance_transform.resize(scene.instances.size());
+  m.instance_motion.assign(scene.instances.size(), nullptr);
   for (size_t i = 0; i < scene.instances.size(); ++i) {
     const scene::Instance& inst = scene.instances[i];
     RTCScene os = m.object_scenes[static_cast<size_t>(inst.object)];
     if (!os) continue;  // an empty object
-    RTCGeometry g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(g, os);
-    float xfm[12];  // column-major 3x4
-    for (int c = 0; c < 4; ++c)
-      for (int rr = 0; rr < 3; ++rr) xfm[3 * c + rr] = float(inst.transform(rr, c));
-    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
-    rtcCommitGeometry(g);
+    std::optional<Transform> steady = inst.transform;
+    if (inst.motion >= 0) steady = steadyTransform(scene, scene.motions[size_t(inst.motion)]);
+    m.instance_transform[i] = steady.value_or(Transform());
+    RTCGeometry g;
+    if (steady) {
+      g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcSetGeometryInstancedScene(g, os);
+      float xfm[12];  // column-major 3x4
+      for (int c = 0; c < 4; ++c)
+        for (int rr = 0; rr < 3; ++rr) xfm[3 * c + rr] = float((*steady)(rr, c));
+      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+      rtcCommitGeometry(g);
+    } else {
+      auto w = std::make_unique<MotionWrapper>();
+      w->motion = &scene.motions[size_t(inst.motion)];
+      w->inner = os;
+      w->instance = static_cast<int>(i);
+      m.instance_motion[i] = w->motion;
+      RTCBounds ob;
+      rtcGetSceneBounds(os, &ob);
+      Bounds3 object_bounds;
+      object_bounds.extend({ob.lower_x, ob.lower_y, ob.lower_z});
+      object_bounds.extend({ob.upper_x, ob.upper_y, ob.upper_z});
+      w->bounds = w->motion->motionBounds(object_bounds, scene.camera.shutter_open,
+                                          scene.camera.shutter_close);
+      g = newMotionGeometry(m.device, w.get());
+      m.wrappers.push_back(std::move(w));
+    }
     const unsigned id = rtcAttachGeometry(m.top, g);
     rtcReleaseGeometry(g);
     if (m.top_geom.size() <= id) m.top_geom.resize(id + 1, -1);
@@ -329,7 +511,7 @@ void setRay(RTCRay& r, const Ray& ray) {
   r.dir_x = float(ray.d.x), r.dir_y = float(ray.d.y), r.dir_z = float(ray.d.z);
   r.tnear = 0;
   r.tfar = std::isfinite(ray.tmax) ? float(ray.tmax) : INFINITY;
-  r.time = 0;
+  r.time = 0;  // Embree's own motion blur is not used; TimedContext carries the time
   r.mask = 0xFFFFFFFFu;
   r.id = 0;
   r.flags = 0;
@@ -358,28 +540,45 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcIntersect1(m.top, &ctx, &rh);
+  TimedContext ctx;
+  rtcInitIntersectContext(&ctx.base);
+  ctx.time = ray.time;
+  rtcIntersect1(m.top, &ctx.base, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
 
   SurfaceHit h;
   h.t = rh.ray.tfar;
   int record;
+  // World from the record's space: an instance's transform (static, or animated and taken at
+  // the ray's time), then an animated shape's own motion at that time.
   const Transform* world_from_space = nullptr;
+  std::optional<Transform> moved;  // only for motion (no copies for static scenes)
   Vec3 o = ray.o, d = ray.d;
   if (rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID) {
     h.instance = m.top_geom_instance[rh.hit.instID[0]];
     const scene::Instance& inst = m.scene->instances[static_cast<size_t>(h.instance)];
-    world_from_space = &inst.transform;
-    const Transform space_from_world = inverse(inst.transform);
-    o = space_from_world.applyPoint(o);
-    d = space_from_world.applyVector(d);
+    world_from_space = &m.instance_transform[size_t(h.instance)];
     record = m.object_geom[static_cast<size_t>(inst.object)][rh.hit.geomID];
+  } else if (m.top_geom_instance[rh.hit.geomID] >= 0) {  // an animated instance's wrapper
+    h.instance = m.top_geom_instance[rh.hit.geomID];
+    const scene::Instance& inst = m.scene->instances[static_cast<size_t>(h.instance)];
+    moved = m.instance_motion[size_t(h.instance)]->interpolate(ray.time);
+    world_from_space = &*moved;
+    record = m.object_geom[static_cast<size_t>(inst.object)][ctx.inner_geom];
   } else {
     record = m.top_geom[rh.hit.geomID];
   }
   const ShapeRecord& r = m.records[static_cast<size_t>(record)];
+  if (r.motion) {
+    const Transform shape_moved = r.motion->interpolate(ray.time);
+    moved = world_from_space ? *world_from_space * shape_moved : shape_moved;
+    world_from_space = &*moved;
+  }
+  if (world_from_space) {
+    const Transform space_from_world = inverse(*world_from_space);
+    o = space_from_world.applyPoint(o);
+    d = space_from_world.applyVector(d);
+  }
   h.shape = r.shape;
   h.prim = static_cast<int>(rh.hit.primID);
   Vec3 p, ng, ns, dpdu;
@@ -504,9 +703,10 @@ bool Accel::occluded(const Ray& ray) const {
   }
   RTCRay r;
   setRay(r, ray);
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  rtcOccluded1(impl_->top, &ctx, &r);
+  TimedContext ctx;
+  rtcInitIntersectContext(&ctx.base);
+  ctx.time = ray.time;
+  rtcOccluded1(impl_->top, &ctx.base, &r);
   return r.tfar < 0;
 }
 

@@ -22,6 +22,7 @@ struct Ray {
   Vec3 o;
   Vec3 d;
   double tmax = INFINITY;
+  double time = 0;  ///< shutter time (seconds, the camera's shutteropen..shutterclose)
 };
 
 /// Local geometry of a point on a shape, in the space it was computed in.

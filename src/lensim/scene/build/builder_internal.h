@@ -66,6 +66,10 @@ class Builder {
   void finish(ParamSet& ps) { ps.reportUnused(scene_.diagnostics); }
 
   void requireInvertible(const FileLoc& loc, std::string_view what, int which = 0);
+  /// Scene::motions index of the animated CTM (-1 if static); see builder.cpp.
+  int motionOfCtm(const FileLoc& loc, std::string_view what);
+  /// Warns once that animated `what` (lights, media, textures) use the start transform.
+  void warnIfAnimated(const FileLoc& loc, std::string_view what);
 
   const Param* findLightScale(ParamSet& ps);
   void applyLightScale(const Param* p, Light& l);
@@ -153,6 +157,7 @@ class Builder {
     std::string name;
     FileLoc loc;
     Transform transform;
+    int motion = -1;  ///< Scene::motions index when animated
   };
   std::vector<PendingInstance> pending_instances_;
   // Media named by MediumInterface, resolved after all MakeNamedMedium (as pbrt-v4 does).

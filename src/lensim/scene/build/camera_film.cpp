@@ -17,6 +17,10 @@ void Builder::camera(const Directive& d) {
   requireInvertible(d.loc, fmt::format("Camera \"{}\"", type));
   c.camera_from_world = gs_.ctm[0];
   c.camera_from_world_end = gs_.ctm[1];
+  c.transform_start_time = scene_.transform_start_time;
+  c.transform_end_time = scene_.transform_end_time;
+  if (c.camera_from_world_end != c.camera_from_world)
+    requireInvertible(d.loc, fmt::format("Camera \"{}\" (its end-time transform)", type), 1);
   named_cs_["camera"] = {inverse(gs_.ctm[0]), inverse(gs_.ctm[1])};
   pending_media_.push_back({-1, "", gs_.outside_medium, gs_.medium_loc});
   c.shutter_open = ps.getFloat({"shutteropen"}, 0);

@@ -74,6 +74,7 @@ void Builder::light(const Directive& d) {
   l.type_as_written = type;
   l.loc = d.loc;
   l.transform = gs_.ctm[0];
+  warnIfAnimated(d.loc, "lights");
   const Param* scale_param = findLightScale(ps);
   l.power = ps.findFloat({"power", "illuminance"});
   l.n_samples = lightSamples(ps);  // pbrt-v1–v3 sample count

@@ -16,6 +16,7 @@ void Builder::makeNamedMedium(const Directive& d) {
   m.loc = d.loc;
   m.type_as_written = *type;
   m.medium_from_world = inverse(gs_.ctm[0]);
+  warnIfAnimated(d.loc, "media");
   if (*type == "uniformgrid" || *type == "rgbgrid" || *type == "heterogeneous") {
     gridMedium(m, ps, d.loc);
     addNamedMedium(std::move(m), ps);

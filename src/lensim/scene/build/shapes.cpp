@@ -120,8 +120,7 @@ void Builder::shape(const Directive& d) {
   s.reverse_orientation = gs_.reverse_orientation;
   s.alpha = floatInput(ps, {"alpha"});
   requireInvertible(d.loc, fmt::format("Shape \"{}\"", type));
-  if (gs_.ctm[0] != gs_.ctm[1])
-    warnOnce("motion", d.loc, "animated transforms are not rendered; the start transform is used");
+  s.motion = motionOfCtm(d.loc, fmt::format("Shape \"{}\"", type));
   if (type == "sphere") {
     s.type = ShapeType::Sphere;
     s.radius = ps.getFloat({"radius"}, 1);
@@ -186,6 +185,12 @@ void Builder::shape(const Directive& d) {
     pending_materials_.push_back(
         {static_cast<int>(scene_.shapes.size()), gs_.material_name, gs_.material_name_loc});
   if (gs_.area_light >= 0) {
+    // pbrt-v4 (src/pbrt/scene.cpp, area lights in BasicScene::CreateAggregate): "Animated area
+    // lights are not supported." (an error there too).
+    if (s.motion >= 0)
+      throw Error(d.loc,
+                  "animated area lights are not supported (as in pbrt-v4): the shape's transform "
+                  "differs at the start and end times (ActiveTransform)");
     if (s.type == ShapeType::Curve) {
       warnOnce("curve area light", d.loc,
                "area lights on curves are not supported; the curve does not emit");

@@ -19,6 +19,7 @@ void Builder::texture(const Directive& d) {
                                    "\"float\" or \"spectrum\")",
                                    name, kind_s));
   t.texture_from_world = inverse(gs_.ctm[0]);
+  warnIfAnimated(d.loc, "texture transforms");
   ParamSet ps(d.params, d.loc, fmt::format("Texture \"{}\"", cls));
   ps.addDefaults(gs_.texture_attrs);
   const bool f = t.kind == TextureKind::Float;
