@@ -76,16 +76,6 @@ const std::vector<Gap> kKnownGaps = {
     {"pbrt-v4-scenes/bunny-fur.pbrt", "warning", "material \"hair\" is not rendered"},
     {"pbrt-v4-scenes/hair-actual-bsdf.pbrt", "warning", "material \"hair\" is not rendered"},
     {"pbrt-v4-scenes/hair-eumel-2-alpha0.pbrt", "warning", "material \"hair\" is not rendered"},
-    // pbrt-v4's named camera sensors: their measured curves are not bundled (CIE 1931 used).
-    {"pbrt-v4-scenes/bunny-cloud.pbrt", "warning", "\"sensor\": the measured response curves"},
-    {"pbrt-v4-scenes/clouds.pbrt", "warning", "\"sensor\": the measured response curves"},
-    {"pbrt-v4-scenes/crown.pbrt", "warning", "\"sensor\": the measured response curves"},
-    {"pbrt-v4-scenes/dambreak0.pbrt", "warning", "\"sensor\": the measured response curves"},
-    {"pbrt-v4-scenes/explosion.pbrt", "warning", "\"sensor\": the measured response curves"},
-    // Film "gbuffer": written as an rgb film, without the auxiliary layers.
-    {"pbrt-v4-scenes/kroken-camera-1.pbrt", "warning", "film \"gbuffer\" is not rendered"},
-    {"pbrt-v4-scenes/lte-orb-simple-ball.pbrt", "warning", "film \"gbuffer\" is not rendered"},
-    {"pbrt-v4-scenes/watercolor-camera-1.pbrt", "warning", "film \"gbuffer\" is not rendered"},
     {"pbrt-v3-scenes/hair-curly-hair.pbrt", "warning", "material \"hair\" is not rendered"},
     {"pbrt-v3-scenes/hair-sphere-hairblock.pbrt", "warning", "material \"hair\" is not rendered"},
     // pbrt-v3's fourier material (tabulated .bsdf): rendered as grey diffuse.
