@@ -185,6 +185,9 @@ Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indice
   EXPECT_EQ(im.channels[0], "R");
   EXPECT_EQ(im.channels[3], "S0.420,000nm");
   EXPECT_EQ(im.channels[10], "S0.700,000nm");
+  // The spectral layout's header attributes, as pbrt-v4 writes them.
+  EXPECT_EQ(im.metadata.at("spectralLayoutVersion"), "1.0");
+  EXPECT_EQ(im.metadata.at("emissiveUnits"), "W.m^-2.sr^-1");
   // Luminance of the (unnormalised) Planck spectrum, 1 nm steps over 360-830 nm.
   double yb = 0, ybar = 0;
   for (double l = 360; l <= 830; l += 1) {

@@ -264,6 +264,10 @@ io::Image Film::image() const {
       }
   }
   if (n_buckets_ > 0) {
+    // The OpenEXR spectral layout's attributes (Fichet et al., JCGT 2021), as pbrt-v4's
+    // SpectralFilm::GetImage writes them.
+    im.metadata["spectralLayoutVersion"] = "1.0";
+    im.metadata["emissiveUnits"] = "W.m^-2.sr^-1";
     im.metadata["lensim:spectral"] =
         fmt::format("{} buckets over [{}, {}] nm: radiance (as pbrt-v4's spectral film)",
                     n_buckets_, lambda_min_, lambda_max_);
