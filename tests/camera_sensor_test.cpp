@@ -26,12 +26,12 @@ using render::SampledWavelengths;
 // pbrt-v4's nikon_d810_g table (src/pbrt/util/spectrum.cpp), 380..720 nm every 10 nm, typed from
 // the published source at full precision (independent of data/sensors/camera_sensors.csv).
 constexpr double kNikonD810G[35] = {
-    0.0011608844999999451, 0.0007257054999999998, 0.0009183472,        0.00406119299999998,
-    0.054717585800000024,  0.09895888630000006,   0.13322969299999987, 0.16512565030000007,
-    0.21205885669999985,   0.35911410829999985,   0.45832181790000026, 0.47009864279999997,
-    0.5824303626999998,    0.8423741353129776,    0.9999999999999998,  0.8593352852000004,
-    0.8087476004000003,    0.7488264644999998,    0.7009741086000002,  0.5433874952999995,
-    0.4215144146999999,    0.30250479989999984,   0.1816440982999999,  0.10581981190000013,
+    0.0011608844999999451, 0.0007257054999999998, 0.0009183472,         0.00406119299999998,
+    0.054717585800000024,  0.09895888630000006,   0.13322969299999987,  0.16512565030000007,
+    0.21205885669999985,   0.35911410829999985,   0.45832181790000026,  0.47009864279999997,
+    0.5824303626999998,    0.8423741353129776,    0.9999999999999998,   0.8593352852000004,
+    0.8087476004000003,    0.7488264644999998,    0.7009741086000002,   0.5433874952999995,
+    0.4215144146999999,    0.30250479989999984,   0.1816440982999999,   0.10581981190000013,
     0.0611571649,          0.041325302600000044,  0.029100126000000004, 0.01866241960000003,
     0.014658702299999996,  0.010526794800000006,  0.004240209400000002, 0.0016354801999999972,
     0.0007563171999999998, 0.0005702804999999992, 0.0007327225999999986};
@@ -47,10 +47,13 @@ TEST(CameraSensor, CurvesAreThePublishedTables) {
     double lambda, value;
   };
   const Point points[] = {
-      {"canon_eos_100d", 0, 590, 0.5070160297000001},  {"canon_eos_5d_mkiv", 1, 520, 1.0},
-      {"nikon_d810", 0, 590, 0.6552644580000002},      {"sony_ilce_9", 2, 470, 0.7756312272999999},
+      {"canon_eos_100d", 0, 590, 0.5070160297000001},
+      {"canon_eos_5d_mkiv", 1, 520, 1.0},
+      {"nikon_d810", 0, 590, 0.6552644580000002},
+      {"sony_ilce_9", 2, 470, 0.7756312272999999},
       {"hasselblad_l1d_20c", 1, 670, 0.01472423499999999},
-      {"canon_eos_m", 2, 420, 0.4896949894999998},     {"sony_ilce_6400", 0, 720, 0.0003404241999999994},
+      {"canon_eos_m", 2, 420, 0.4896949894999998},
+      {"sony_ilce_6400", 0, 720, 0.0003404241999999994},
       {"canon_eos_5d", 2, 380, 0.000758327000000017},
   };
   for (const Point& p : points)
@@ -147,9 +150,10 @@ Vec3 filmRgbOf(const render::Film& film, const render::Spectrum& spec, int n = 4
 
 render::Film cameraFilm(const std::string& name, const std::string& extra) {
   static scene::Scene s;
-  s = testutil::buildText("Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4 "
-                          "\"string sensor\" \"" +
-                          name + "\" " + extra + "\nWorldBegin\n");
+  s = testutil::buildText(
+      "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4 "
+      "\"string sensor\" \"" +
+      name + "\" " + extra + "\nWorldBegin\n");
   EXPECT_FALSE(s.hasErrors()) << testutil::errorsOf(s);
   return render::Film(s, {0, 4, 0, 4});
 }
@@ -171,7 +175,10 @@ TEST(CameraSensor, WhiteUnderTheWhiteBalanceIlluminantIsNeutral) {
       const double dev = std::max(std::abs(rgb.x / rgb.y - 1), std::abs(rgb.z / rgb.y - 1));
       worst = std::max(worst, dev);
       worst_at[t] = std::max(worst_at[t], dev);
-      EXPECT_LT(dev, t > 6000 ? 0.02 : t > 4000 ? 0.025 : 0.04) << name << " " << t << ": " << rgb.x << " " << rgb.y << " " << rgb.z;
+      EXPECT_LT(dev, t > 6000   ? 0.02
+                     : t > 4000 ? 0.025
+                                : 0.04)
+          << name << " " << t << ": " << rgb.x << " " << rgb.y << " " << rgb.z;
     }
     const Vec3 d = filmRgbOf(cameraFilm(name, ""), *render::daylightIlluminant(6500));
     const Vec3 e = filmRgbOf(cameraFilm(name, "\"float whitebalance\" 6500"),
@@ -180,11 +187,13 @@ TEST(CameraSensor, WhiteUnderTheWhiteBalanceIlluminantIsNeutral) {
     EXPECT_NEAR(d.z, e.z, 1e-12);
   }
   for (const auto& [t, w] : worst_at)
-    std::printf("white under the %g K white-balance illuminant: worst |R/G - 1|, |B/G - 1| over "
-                "the 17 cameras = %.5f\n",
-                t, w);
+    std::printf(
+        "white under the %g K white-balance illuminant: worst |R/G - 1|, |B/G - 1| over "
+        "the 17 cameras = %.5f\n",
+        t, w);
   // Unbalanced, the same camera sees a 3200 K white as warm: balancing matters.
-  const Vec3 warm = filmRgbOf(cameraFilm("canon_eos_5d_mkiv", ""), *render::daylightIlluminant(3200));
+  const Vec3 warm =
+      filmRgbOf(cameraFilm("canon_eos_5d_mkiv", ""), *render::daylightIlluminant(3200));
   EXPECT_GT(warm.x / warm.z, 1.5);
 }
 
@@ -243,7 +252,8 @@ Shape "trianglemesh" "point3 P" [-5 0 -5  5 0 -5  5 0 5  -5 0 5] "integer indice
   static scene::Scene s;
   s = testutil::buildText(text);
   const Vec3 want = filmRgbOf(render::Film(s, {0, 4, 0, 4}), render::BlackbodySpectrum(3200));
-  const double r = testutil::regionMean(im, 0, 0, 4, 0, 4), g = testutil::regionMean(im, 1, 0, 4, 0, 4),
+  const double r = testutil::regionMean(im, 0, 0, 4, 0, 4),
+               g = testutil::regionMean(im, 1, 0, 4, 0, 4),
                b = testutil::regionMean(im, 2, 0, 4, 0, 4);
   std::printf("canon_eos_5d_mkiv, 3200 K white plane: RGB %.5f %.5f %.5f (1/pi = %.5f)\n", r, g, b,
               1 / M_PI);

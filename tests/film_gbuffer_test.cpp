@@ -19,6 +19,7 @@
 #include "lensim/render/film/film.h"
 #include "lensim/render/film/gbuffer.h"
 #include "render_test_util.h"
+#include "test_paths.h"
 
 namespace lensim {
 namespace {
@@ -69,7 +70,8 @@ TEST(FilmGBuffer, PlaneAtKnownDepth) {
   for (int y = 0; y < kRes; ++y)
     for (int x = 0; x < kRes; ++x) {
       EXPECT_NEAR(at(im, "P.Z", x, y), 2.0, 1e-5);
-      const double px = 2 * t * (2 * (x + 0.5) / kRes - 1), py = -2 * t * (2 * (y + 0.5) / kRes - 1);
+      const double px = 2 * t * (2 * (x + 0.5) / kRes - 1),
+                   py = -2 * t * (2 * (y + 0.5) / kRes - 1);
       // The box-filtered samples are uniform over the pixel: their mean position is the centre's
       // (linear on a plane at constant depth), up to the samples' scatter (16 per pixel).
       const double pixel = 4 * t / kRes;
@@ -98,9 +100,10 @@ TEST(FilmGBuffer, PlaneAtKnownDepth) {
   const double mr = testutil::regionMean(im, ar, 0, kRes, 0, kRes),
                mg = testutil::regionMean(im, ar + 1, 0, kRes, 0, kRes),
                mb = testutil::regionMean(im, ar + 2, 0, kRes, 0, kRes);
-  std::printf("plane at depth 2: P.Z %.6f, mean albedo %.4f %.4f %.4f (0.4 0.25 0.1), worst "
-              "|P.XY - pixel centre| %.3f pixel\n",
-              at(im, "P.Z", 4, 4), mr, mg, mb, worst_p);
+  std::printf(
+      "plane at depth 2: P.Z %.6f, mean albedo %.4f %.4f %.4f (0.4 0.25 0.1), worst "
+      "|P.XY - pixel centre| %.3f pixel\n",
+      at(im, "P.Z", 4, 4), mr, mg, mb, worst_p);
   EXPECT_NEAR(mr, 0.4, 0.015 * 0.4);
   EXPECT_NEAR(mg, 0.25, 0.015 * 0.25);
   EXPECT_NEAR(mb, 0.1, 0.05 * 0.1);
@@ -134,6 +137,47 @@ TEST(FilmGBuffer, TiltedPlaneDepthSlope) {
     EXPECT_NEAR(at(im, "N.X", x, 4), a / std::sqrt(1 + a * a), 1e-5);
     EXPECT_NEAR(at(im, "N.Z", x, 4), -1 / std::sqrt(1 + a * a), 1e-5);
   }
+}
+
+// Through the realistic camera the visible surface is the first scene hit of the ray that leaves
+// the lens: a fronto-parallel plane 3 m in front of the camera reads P.Z = 3 and N = (0, 0, -1)
+// wherever the lens images it, and its albedo in the image centre (as pbrt-v4, the albedo is
+// averaged over all the pixel's samples, so samples the lens blocks dilute it toward the corners).
+TEST(FilmGBuffer, RealisticCameraSeesThePlaneBeyondTheLens) {
+  const std::string text = fmt::format(R"(
+LookAt 0 0 0  0 0 1  0 1 0
+Camera "realistic" "string lensfile" "{}" "float aperturediameter" 5 "float focusdistance" 3
+Film "gbuffer" "integer xresolution" 8 "integer yresolution" 8 "float diagonal" 35
+  "string filename" "g.exr"
+PixelFilter "box"
+Sampler "independent" "integer pixelsamples" 16
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+LightSource "distant" "rgb L" [1 1 1] "point3 from" [0 0 0] "point3 to" [0 0 1]
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-10 -10 3  10 -10 3  10 10 3  -10 10 3]
+  "integer indices" [0 1 2 0 2 3]
+)",
+                                       lensim::test::lensPath("dgauss.50mm.dat"));
+  const io::Image im = testutil::renderText(text).image;
+  int covered = 0;
+  double albedo = 0, centre = 0;
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) {
+      if (at(im, "N.Z", x, y) == 0) continue;  // no ray left the lens here
+      ++covered;
+      EXPECT_NEAR(at(im, "P.Z", x, y), 3, 1e-5) << x << " " << y;
+      EXPECT_NEAR(at(im, "N.Z", x, y), -1, 1e-6) << x << " " << y;
+      albedo += at(im, "Albedo.G", x, y);
+      if (x >= 3 && x <= 4 && y >= 3 && y <= 4) centre += at(im, "Albedo.G", x, y) / 4;
+    }
+  std::printf(
+      "realistic camera: %d of 64 pixels see the plane, P.Z %.6f, albedo %.4f in the "
+      "centre, %.4f over the image\n",
+      covered, at(im, "P.Z", 4, 4), centre, albedo / std::max(covered, 1));
+  EXPECT_GE(covered, 60);
+  EXPECT_NEAR(centre, 0.5, 0.03);
+  EXPECT_LE(albedo / covered, 0.5 + 0.01);
 }
 
 // "coordinatesystem": "camera" (default) gives camera-space positions, "world" world ones; any
@@ -213,13 +257,31 @@ TEST(FilmGBuffer, ExrChannelsAsPbrtV4) {
   std::set<std::string> got;
   for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
     got.insert(it.name());
-  const std::set<std::string> want = {
-      "R",          "G",          "B",          "Albedo.R",           "Albedo.G",
-      "Albedo.B",   "P.X",        "P.Y",        "P.Z",                "dzdx",
-      "dzdy",       "N.X",        "N.Y",        "N.Z",                "Ns.X",
-      "Ns.Y",       "Ns.Z",       "u",          "v",                  "Variance.R",
-      "Variance.G", "Variance.B", "RelativeVariance.R", "RelativeVariance.G",
-      "RelativeVariance.B"};
+  const std::set<std::string> want = {"R",
+                                      "G",
+                                      "B",
+                                      "Albedo.R",
+                                      "Albedo.G",
+                                      "Albedo.B",
+                                      "P.X",
+                                      "P.Y",
+                                      "P.Z",
+                                      "dzdx",
+                                      "dzdy",
+                                      "N.X",
+                                      "N.Y",
+                                      "N.Z",
+                                      "Ns.X",
+                                      "Ns.Y",
+                                      "Ns.Z",
+                                      "u",
+                                      "v",
+                                      "Variance.R",
+                                      "Variance.G",
+                                      "Variance.B",
+                                      "RelativeVariance.R",
+                                      "RelativeVariance.G",
+                                      "RelativeVariance.B"};
   EXPECT_EQ(got, want);
   std::filesystem::remove(path);
 }

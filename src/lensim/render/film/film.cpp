@@ -10,11 +10,11 @@
 
 #include <fmt/format.h>
 
+#include "lensim/render/film/gbuffer.h"
+#include "lensim/render/film/pixel_sensor.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/film_sensor.h"
-#include "lensim/render/film/gbuffer.h"
-#include "lensim/render/film/pixel_sensor.h"
 
 namespace lensim::render {
 
@@ -50,8 +50,8 @@ Film::Film(const scene::Scene& scene, PixelBounds bounds)
   max_component_ = scene.film.max_component_value;
   // pbrt-v4's PixelSensor::Create: "cie1931" (XYZ; white balanced only with "whitebalance") or a
   // named camera (balanced for "whitebalance", 6500 K by default).
-  sensor_ = std::make_shared<PixelSensor>(scene.film.sensor, scene.film.white_balance_k,
-                                          imaging_ratio);
+  sensor_ =
+      std::make_shared<PixelSensor>(scene.film.sensor, scene.film.white_balance_k, imaging_ratio);
   if (scene.film.type == "spectral") {
     n_buckets_ = scene.film.spectral_buckets;
     lambda_min_ = scene.film.lambda_min_nm;
@@ -149,8 +149,8 @@ void Film::addSpectral(int x, int y, SampledSpectrum L, const SampledWavelengths
   for (int i = 0; i < kSpectrumSamples; ++i) {
     const double l = lambda.lambda(i), pdf = lambda.pdf(i);
     if (!(pdf > 0) || l < lambda_min_ || l >= lambda_max_) continue;
-    const int b = std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) /
-                                                (lambda_max_ - lambda_min_)));
+    const int b =
+        std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) / (lambda_max_ - lambda_min_)));
     sums[b] += w * L[i] / (pdf * kSpectrumSamples * width);
   }
 }
@@ -186,8 +186,8 @@ void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& 
         for (int k = 0; k < kSpectrumSamples; ++k) {
           const double l = lambda.lambda(k), pdf = lambda.pdf(k);
           if (!(pdf > 0) || l < lambda_min_ || l >= lambda_max_) continue;
-          const int b = std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) /
-                                                      (lambda_max_ - lambda_min_)));
+          const int b = std::min(n_buckets_ - 1,
+                                 int(n_buckets_ * (l - lambda_min_) / (lambda_max_ - lambda_min_)));
           bucket_splats_[i * size_t(n_buckets_) + size_t(b)] +=
               w * std::min(L[k], max_component_) / (pdf * kSpectrumSamples * width);
         }
@@ -203,11 +203,28 @@ std::string Film::bucketChannel(int b) const {
 }
 
 const std::vector<std::string>& Film::gbufferChannels() {
-  static const std::vector<std::string> c = {
-      "Albedo.R", "Albedo.G", "Albedo.B", "P.X",        "P.Y",        "P.Z",
-      "dzdx",     "dzdy",     "N.X",      "N.Y",        "N.Z",        "Ns.X",
-      "Ns.Y",     "Ns.Z",     "u",        "v",          "Variance.R", "Variance.G",
-      "Variance.B", "RelativeVariance.R", "RelativeVariance.G", "RelativeVariance.B"};
+  static const std::vector<std::string> c = {"Albedo.R",
+                                             "Albedo.G",
+                                             "Albedo.B",
+                                             "P.X",
+                                             "P.Y",
+                                             "P.Z",
+                                             "dzdx",
+                                             "dzdy",
+                                             "N.X",
+                                             "N.Y",
+                                             "N.Z",
+                                             "Ns.X",
+                                             "Ns.Y",
+                                             "Ns.Z",
+                                             "u",
+                                             "v",
+                                             "Variance.R",
+                                             "Variance.G",
+                                             "Variance.B",
+                                             "RelativeVariance.R",
+                                             "RelativeVariance.G",
+                                             "RelativeVariance.B"};
   return c;
 }
 
@@ -255,10 +272,27 @@ io::Image Film::image() const {
         const Vec3 n = unit(g.n), ns = unit(g.ns);
         const Vec3 var = g.count > 1 ? g.m2 / double(g.count - 1) : Vec3{};
         const auto rel = [&](double v, double m) { return g.count < 1 || m == 0 ? 0.0 : v / m; };
-        const double values[22] = {albedo.x, albedo.y, albedo.z, pos.x, pos.y, pos.z,
-                                   std::abs(g.dzdx / w), std::abs(g.dzdy / w), n.x, n.y, n.z,
-                                   ns.x, ns.y, ns.z, g.u / w, g.v / w, var.x, var.y, var.z,
-                                   rel(var.x, g.mean.x), rel(var.y, g.mean.y),
+        const double values[22] = {albedo.x,
+                                   albedo.y,
+                                   albedo.z,
+                                   pos.x,
+                                   pos.y,
+                                   pos.z,
+                                   std::abs(g.dzdx / w),
+                                   std::abs(g.dzdy / w),
+                                   n.x,
+                                   n.y,
+                                   n.z,
+                                   ns.x,
+                                   ns.y,
+                                   ns.z,
+                                   g.u / w,
+                                   g.v / w,
+                                   var.x,
+                                   var.y,
+                                   var.z,
+                                   rel(var.x, g.mean.x),
+                                   rel(var.y, g.mean.y),
                                    rel(var.z, g.mean.z)};
         for (int c = 0; c < 22; ++c) im.at(x, y, c0 + c) = float(values[c]);
       }

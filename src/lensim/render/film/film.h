@@ -70,8 +70,8 @@ class Film {
                  double w);
   /// As addSample, for a gbuffer film with the sample's first visible surface (null: the camera
   /// ray hit nothing, or the integrator gives none).
-  void addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
-                 double w, const VisibleSurface* vs);
+  void addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda, double w,
+                 const VisibleSurface* vs);
   /// The RGB of a sample as the film would record it (before the filter weight): the sensor's
   /// RGB (toSensorRgb) in the output colour space (outputRgb).
   Vec3 toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const;
@@ -166,7 +166,7 @@ class Film {
   const Filter* splat_filter_ = nullptr;
   double splat_scale_ = 1;
   std::vector<std::array<Int128, 3>> splats_;
-  std::vector<double> bucket_splats_;  ///< spectral films: per pixel, n_buckets_ splat sums
+  std::vector<double> bucket_splats_;          ///< spectral films: per pixel, n_buckets_ splat sums
   static constexpr size_t kSplatLocks = 1024;  ///< lock stripes (by pixel index)
   std::unique_ptr<std::mutex[]> splat_locks_;
 };

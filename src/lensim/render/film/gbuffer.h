@@ -14,10 +14,10 @@ namespace lensim::render {
 
 /// The first surface seen along a camera ray, in the gbuffer's output coordinates.
 struct VisibleSurface {
-  Vec3 p;       ///< position
-  Vec3 n, ns;   ///< geometric and shading normals (after bump or normal maps), facing the ray
-                ///< origin; not normalised (pbrt-v4 normalises the pixel's sums)
-  Vec2 uv;      ///< surface (u, v)
+  Vec3 p;      ///< position
+  Vec3 n, ns;  ///< geometric and shading normals (after bump or normal maps), facing the ray
+               ///< origin; not normalised (pbrt-v4 normalises the pixel's sums)
+  Vec2 uv;     ///< surface (u, v)
   double dzdx = 0, dzdy = 0;  ///< change of camera-space depth per pixel step in x and y
   Vec3 albedo;  ///< the BSDF's directional albedo at the ray's direction, as linear sRGB under
                 ///< the colour space's illuminant (pbrt-v4: bsdf.rho(wo) times the illuminant)
@@ -52,7 +52,7 @@ CameraRayDifferential differential(const camera::CameraRay& ray,
 std::optional<VisibleSurface> visibleSurface(const SceneContext& sc,
                                              const CameraRayDifferential& ray,
                                              SampledWavelengths lambda,
-                                             const Transform& output_from_world,
-                                             double diff_scale, RayCounts& counts);
+                                             const Transform& output_from_world, double diff_scale,
+                                             RayCounts& counts);
 
 }  // namespace lensim::render

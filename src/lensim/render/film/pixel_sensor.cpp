@@ -24,8 +24,8 @@ ZeroOutsideSpectrum::ZeroOutsideSpectrum(std::vector<double> lambda_nm, std::vec
 
 double ZeroOutsideSpectrum::eval(double l) const {
   if (lambda_nm_.empty() || l < lambda_nm_.front() || l > lambda_nm_.back()) return 0;
-  const size_t i = size_t(std::upper_bound(lambda_nm_.begin(), lambda_nm_.end(), l) -
-                          lambda_nm_.begin());
+  const size_t i =
+      size_t(std::upper_bound(lambda_nm_.begin(), lambda_nm_.end(), l) - lambda_nm_.begin());
   if (i >= lambda_nm_.size()) return values_.back();
   const double t = (l - lambda_nm_[i - 1]) / (lambda_nm_[i] - lambda_nm_[i - 1]);
   return values_[i - 1] + t * (values_[i] - values_[i - 1]);
@@ -84,7 +84,9 @@ const CameraTable& cameraTable() {
 
 }  // namespace
 
-const std::vector<std::string>& cameraSensorNames() { return cameraTable().names; }
+const std::vector<std::string>& cameraSensorNames() {
+  return cameraTable().names;
+}
 
 const ZeroOutsideSpectrum& cameraSensorCurve(const std::string& camera, int c) {
   return *cameraTable().curves.at(camera).at(size_t(c));
@@ -114,7 +116,8 @@ std::shared_ptr<const Spectrum> daylightIlluminant(double temperature_k) {
   const double m = 0.0241 + 0.2562 * x - 0.7341 * y;
   const double m1 = (-1.3515 - 1.7703 * x + 5.9114 * y) / m;
   const double m2 = (0.0300 - 31.4424 * x + 30.0717 * y) / m;
-  static const std::vector<std::vector<std::string>> basis = csvRows(embedded::kCieDaylightBasisCsv);
+  static const std::vector<std::vector<std::string>> basis =
+      csvRows(embedded::kCieDaylightBasisCsv);
   std::vector<double> l, v;
   for (const auto& row : basis) {
     l.push_back(std::stod(row.at(0)));
@@ -146,7 +149,8 @@ Mat3d mulMat3(const Mat3d& a, const Mat3d& b) {
   Mat3d r{};
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k) r[size_t(3 * i + j)] += a[size_t(3 * i + k)] * b[size_t(3 * k + j)];
+      for (int k = 0; k < 3; ++k)
+        r[size_t(3 * i + j)] += a[size_t(3 * i + k)] * b[size_t(3 * k + j)];
   return r;
 }
 

@@ -139,8 +139,8 @@ void Builder::checkSensor(ParamSet& ps, const Film& f) {
   if (!p || sensorSupport(f.sensor) == SensorSupport::Applied) return;
   std::string list;
   for (const std::string& n : bundledSensorNames()) list += (list.empty() ? "" : ", ") + n;
-  throw Error(p->loc, fmt::format("\"sensor\": unknown sensor \"{}\"; expected one of {}",
-                                  f.sensor, list));
+  throw Error(p->loc,
+              fmt::format("\"sensor\": unknown sensor \"{}\"; expected one of {}", f.sensor, list));
 }
 
 // pbrt-v4's SpectralFilm::Create (src/pbrt/film.cpp): "nbuckets" (16), "lambdamin" and
