@@ -20,12 +20,27 @@ extern const char* const kCieDaylightBasisCsv;
 namespace lensim::render {
 
 ZeroOutsideSpectrum::ZeroOutsideSpectrum(std::vector<double> lambda_nm, std::vector<double> values)
-    : lambda_nm_(std::move(lambda_nm)), values_(std::move(values)) {}
+    : lambda_nm_(std::move(lambda_nm)), values_(std::move(values)) {
+  // Evenly spaced samples (all of data/sensors/) are looked up by index, not by search.
+  if (lambda_nm_.size() >= 2) {
+    const double step = (lambda_nm_.back() - lambda_nm_.front()) / double(lambda_nm_.size() - 1);
+    bool even = step > 0;
+    for (size_t i = 0; i < lambda_nm_.size() && even; ++i)
+      even = std::abs(lambda_nm_[i] - (lambda_nm_.front() + step * double(i))) < 1e-9 * step;
+    if (even) inv_step_ = 1 / step;
+  }
+}
 
 double ZeroOutsideSpectrum::eval(double l) const {
   if (lambda_nm_.empty() || l < lambda_nm_.front() || l > lambda_nm_.back()) return 0;
-  const size_t i =
-      size_t(std::upper_bound(lambda_nm_.begin(), lambda_nm_.end(), l) - lambda_nm_.begin());
+  size_t i;  // the sample at or after l, at least 1
+  if (inv_step_ > 0) {
+    const double f = (l - lambda_nm_.front()) * inv_step_;
+    i = std::min(lambda_nm_.size() - 1, size_t(f) + 1);
+    const double t = f - double(i - 1);
+    return values_[i - 1] + t * (values_[i] - values_[i - 1]);
+  }
+  i = size_t(std::upper_bound(lambda_nm_.begin(), lambda_nm_.end(), l) - lambda_nm_.begin());
   if (i >= lambda_nm_.size()) return values_.back();
   const double t = (l - lambda_nm_[i - 1]) / (lambda_nm_[i] - lambda_nm_[i - 1]);
   return values_[i - 1] + t * (values_[i] - values_[i - 1]);

@@ -35,6 +35,7 @@ class ZeroOutsideSpectrum final : public Spectrum {
 
  private:
   std::vector<double> lambda_nm_, values_;
+  double inv_step_ = 0;  ///< 1 / spacing of evenly spaced samples, else 0
 };
 
 /// The camera sensors with measured curves (pbrt-v4's named sensors), in the data file's order.
