@@ -66,18 +66,12 @@ struct Gap {
 };
 
 // Known gaps: features lensim does not do yet (other branches are implementing several of
-// them: hair, OpenImageIO images, bdpt, media). Remove an entry when its
+// them: OpenImageIO images, bdpt, media). Remove an entry when its
 // feature lands; the test fails while a listed gap no longer occurs.
 const std::vector<Gap> kKnownGaps = {
     // Subsurface with a textured coefficient (head: an image "reflectance"): lensim's random
     // walk needs one homogeneous medium per material and refuses it; pbrt-v4 renders it.
     {"pbrt-v4-scenes/head.pbrt", "error", "textured subsurface coefficients are not rendered"},
-    // pbrt-v4's hair BSDF: rendered as grey diffuse.
-    {"pbrt-v4-scenes/bunny-fur.pbrt", "warning", "material \"hair\" is not rendered"},
-    {"pbrt-v4-scenes/hair-actual-bsdf.pbrt", "warning", "material \"hair\" is not rendered"},
-    {"pbrt-v4-scenes/hair-eumel-2-alpha0.pbrt", "warning", "material \"hair\" is not rendered"},
-    {"pbrt-v3-scenes/hair-curly-hair.pbrt", "warning", "material \"hair\" is not rendered"},
-    {"pbrt-v3-scenes/hair-sphere-hairblock.pbrt", "warning", "material \"hair\" is not rendered"},
     // pbrt-v3's fourier material (tabulated .bsdf): rendered as grey diffuse.
     {"pbrt-v3-scenes/bathroom.pbrt", "warning", "material \"fourier\" is not rendered"},
     // pbrt-v3's directlighting also follows specular reflection and transmission up to its

@@ -426,14 +426,14 @@ TEST(Builder, UnsupportedTypesWarnOnceWithAFallback) {
   Scene s = testutil::buildText(
       "Camera \"environment\"\nSampler \"bestcandidate\" \"integer pixelsamples\" 8\n"
       "Film \"photo\"\nIntegrator \"mlt\" \"integer maxdepth\" 7\nWorldBegin\n"
-      "Material \"hair\" \"float eumelanin\" 1\nMaterial \"hair\"\nShape \"curve\" \"point3 P\" [0 "
-      "0 0 1 1 1 2 2 2 3 3 3]\n"
+      "Material \"kdsubsurface\" \"float eta\" 1\nMaterial \"kdsubsurface\"\n"
+      "Shape \"curve\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\n"
       "Texture \"w\" \"float\" \"ptex\"\nLightSource \"sky\"\n",
       "w.pbrt");
   EXPECT_EQ(testutil::errorsOf(s), "");
   EXPECT_EQ(warningCount(s), 7u);  // the curve is built (issue 12), not warned
   EXPECT_TRUE(
-      hasWarning(s, "material \"hair\" is not rendered by lensim; it renders as diffuse grey"));
+      hasWarning(s, "material \"kdsubsurface\" is not rendered by lensim; it renders as diffuse"));
   EXPECT_EQ(s.diagnostics[0].loc.str(), "w.pbrt:1:1");
   EXPECT_EQ(s.sampler.pixel_samples, 8);
   EXPECT_EQ(s.integrator.max_depth, 7);

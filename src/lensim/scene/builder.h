@@ -96,7 +96,7 @@ struct Texture {
 
 /// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
 /// coateddiffuse, coatedconductor, conductor, dielectric, thindielectric, diffusetransmission,
-/// mix, interface; or a pbrt-v3 one rendered as pbrt-v3 does: plastic, substrate, uber,
+/// hair, mix, interface; or a pbrt-v3 one rendered as pbrt-v3 does: plastic, substrate, uber,
 /// translucent, glass, metal, mirror.
 struct Material {
   std::string name;  ///< set for MakeNamedMaterial
@@ -139,6 +139,12 @@ struct Material {
   bool ss_from_reflectance = false;
   std::string ss_name;
   double ss_g = 0;
+  // hair (pbrt-v4's HairMaterial, render/materials/hair.h): the absorption from one of sigma_a,
+  // `reflectance` above, or the melanin concentrations; `eta` (float), beta_m, beta_n and
+  // alpha (degrees).
+  enum class HairAbsorption { SigmaA, Reflectance, Melanin };
+  HairAbsorption hair_absorption = HairAbsorption::Melanin;
+  Input hair_sigma_a, hair_eumelanin, hair_pheomelanin, hair_beta_m, hair_beta_n, hair_alpha;
   /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
   bool fallback = false;
 };

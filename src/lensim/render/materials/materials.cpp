@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "lensim/io/image.h"
+#include "lensim/render/materials/hair_material.h"
 #include "lensim/render/materials/layered.h"
 #include "lensim/render/materials/v3materials.h"
 #include "lensim/sampling/sampling.h"
@@ -178,6 +179,7 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
                      tx.evalSpectrum(k_in, ctx, lambda, SpectrumType::Unbounded)};
   };
   if (isV3Material(m.type)) return makeV3BxDF(m, tx, ctx, lambda, regularize);
+  if (m.type == "hair") return makeHairBxDF(m, tx, ctx, lambda);
   if (m.type == "measured") {
     if (m.measured_rgl)
       return std::make_shared<RGLMeasuredBxDF>(RGLMeasuredBRDF::loadCached(m.measured_file),

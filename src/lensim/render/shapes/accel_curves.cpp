@@ -12,6 +12,11 @@ Vec3 bezierTangent(const Vec3* b, double u) {
   return (b[1] - b[0]) * (3 * s * s) + (b[2] - b[1]) * (6 * s * u) + (b[3] - b[2]) * (3 * u * u);
 }
 
+Vec3 bezierPoint(const Vec3* b, double u) {
+  const double s = 1 - u;
+  return b[0] * (s * s * s) + b[1] * (3 * s * s * u) + b[2] * (3 * s * u * u) + b[3] * (u * u * u);
+}
+
 /// Any unit vector perpendicular to t.
 Vec3 perpendicular(const Vec3& t) {
   const Vec3 a = std::abs(t.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
@@ -88,11 +93,22 @@ CurveHitGeometry curveHitGeometry(const scene::Curve& curve, const CurveInSpace&
     if (curve.kind == scene::CurveKind::Ribbon) vv = v;
   }
   n = length(n) > 0 ? normalize(n) : perpendicular(tn);
-  if (curve.kind == scene::CurveKind::Cylinder) {
-    // v across the tube as seen along the ray: the side of the axis the hit lies on.
-    const Vec3 side = cross(tn, d);
-    if (length(side) > 0 && width > 0)
-      vv = std::clamp(0.5 + dot(n, normalize(side)) * 0.5, 0.0, 1.0);
+  // v as pbrt-v4's Curve::RecursiveIntersect computes it for every curve type (shapes.cpp,
+  // "Compute v coordinate of curve intersection point"): in ray space, 0.5 plus or minus the
+  // hit's distance from the curve over the (projected) width, on the side given by the edge
+  // function (pc x dpc/dw).z, pc the curve point relative to the ray. In render space that side
+  // is the sign of r . (d x t), r the hit relative to the axis point; the hair BSDF's offset
+  // h = -1 + 2 v depends on it.
+  const Vec3 across = cross(d, tn);
+  if (length(across) > 0 && width > 0) {
+    const Vec3 e = normalize(across);
+    // The half-width seen along the ray: the radius, or for a ribbon its band's projection.
+    double half = 0.5 * width;
+    if (curve.kind == scene::CurveKind::Ribbon) half *= std::abs(dot(normalize(cross(n, tn)), e));
+    if (half > 0) {
+      const Vec3 r = p - bezierPoint(b, u);
+      vv = 0.5 + 0.5 * std::clamp(dot(r, e) / half, -1.0, 1.0);
+    }
   }
   g.n = n;
   g.dpdu = t;

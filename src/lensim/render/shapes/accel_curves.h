@@ -2,9 +2,9 @@
 // segments (scene/curves.h) in the accelerator's space as Embree FLAT_BEZIER (pbrt "flat"),
 // ROUND_BEZIER ("cylinder") and NORMAL_ORIENTED_BEZIER ("ribbon") curves, and the local geometry
 // of a hit as pbrt-v4 defines it (Curve::InteractionFromIntersection): u along the segment,
-// v across it in [0, 1], dp/du the curve's tangent, dp/dv across with the curve's width, and the
-// normal cross(dp/du, dp/dv) — facing the ray for flat curves, the ribbon's normal for ribbons,
-// the tube's surface normal for cylinders.
+// v across it in [0, 1] (its side taken from the ray, as pbrt-v4 does), dp/du the curve's tangent,
+// dp/dv across with the curve's width, and the normal cross(dp/du, dp/dv) — facing the ray for flat
+// curves, the ribbon's normal for ribbons, the tube's surface normal for cylinders.
 #pragma once
 
 #include <embree3/rtcore.h>

@@ -103,6 +103,7 @@ class Builder {
   void texture(const Directive& d);
 
   Material material(const std::string& type, ParamSet& ps, const FileLoc& loc);
+  void hairMaterial(Material& m, ParamSet& ps, const FileLoc& loc);  // build/hair.cpp
 
   int currentMaterial();
 

@@ -118,6 +118,8 @@ Material Builder::material(const std::string& type, ParamSet& ps, const FileLoc&
     m.transmittance = spectrumInput(ps, {"transmittance"}, 0.25);
     m.scale = ps.getFloat({"scale"}, 1);
     m.has_reflectance = true;
+  } else if (type == "hair") {
+    hairMaterial(m, ps, loc);
   } else if (type == "mix") {
     m.type = "mix";
     std::vector<std::string> names;
