@@ -15,6 +15,7 @@
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/prescription.h"
+#include "lensim/render/materials/fourier.h"
 #include "lensim/render/materials/measured.h"
 #include "lensim/render/materials/measured_rgl.h"
 #include "lensim/render/renderer.h"
@@ -198,6 +199,34 @@ int fuzzBsdf(const uint8_t* data, size_t size) {
   });
 }
 
+int fuzzFourier(const uint8_t* data, size_t size) {
+  initFuzzing();
+  return guarded([&] {
+    auto table = std::make_shared<const render::FourierBSDFTable>(
+        render::FourierBSDFTable::parse(text(data, size), "fuzz.bsdf"));
+    // A table that loads is evaluated and sampled in both modes: values must be finite and
+    // non-negative, pdfs finite and non-negative, samples with a positive pdf.
+    const render::SampledWavelengths lambda = render::SampledWavelengths::sampleUniform(0.37);
+    const render::FourierBxDF bx(table, lambda);
+    const Vec3 dirs[4] = {
+        {0, 0, 1}, {0.6, 0.0, 0.8}, {-0.28, 0.6, 0.7483314773547883}, {0.3, -0.4, -0.8660254}};
+    for (const render::TransportMode mode :
+         {render::TransportMode::Radiance, render::TransportMode::Importance})
+      for (const Vec3& wo : dirs)
+        for (int k = 0; k < 4; ++k) {
+          const auto s = bx.sample_f(wo, 0.5, {0.13 + 0.25 * k, 0.71 - 0.17 * k}, mode);
+          if (s && !(s->pdf > 0 && std::isfinite(s->pdf))) std::abort();
+          for (const Vec3& wi : dirs) {
+            const double p = bx.pdf(wo, wi, mode);
+            const render::SampledSpectrum f = bx.f(wo, wi, mode);
+            if (!(p >= 0 && std::isfinite(p))) std::abort();
+            for (int i = 0; i < render::kSpectrumSamples; ++i)
+              if (!(f[i] >= 0 && std::isfinite(f[i]))) std::abort();
+          }
+        }
+  });
+}
+
 const Target* targets(size_t& count) {
   static const Target all[] = {
       {"lens", fuzzLens},          {"scene_tokens", fuzzSceneTokens},
@@ -205,7 +234,7 @@ const Target* targets(size_t& count) {
       {"scene_render", fuzzSceneRender}, {"ply", fuzzPly},
       {"image", fuzzImage},        {"brdf", fuzzBrdf},
       {"zmx", fuzzZmx},            {"lens_json", fuzzLensJson},
-      {"bsdf", fuzzBsdf},
+      {"bsdf", fuzzBsdf},          {"fourier", fuzzFourier},
   };
   count = sizeof all / sizeof all[0];
   return all;

@@ -37,6 +37,8 @@ int fuzzZmx(const uint8_t* data, size_t size);            ///< Zemax .zmx lens f
 int fuzzLensJson(const uint8_t* data, size_t size);       ///< lensim/lentil/ISET JSON lenses
 int fuzzBsdf(const uint8_t* data, size_t size);           ///< RGL measured BSDF (.bsdf), then
                                                           ///< evaluation and sampling
+int fuzzFourier(const uint8_t* data, size_t size);        ///< pbrt-v3 tabulated BSDF (SCATFUN),
+                                                          ///< then evaluation and sampling
 
 /// Every target, in a fixed order.
 const Target* targets(size_t& count);

@@ -310,7 +310,9 @@ TEST(Mirror, ExitPupilBoundCutsOutTheObscuredMiddle) {
   }
   const double share = double(wasted) / samples;
   RecordProperty("wasted", fmt::format("{:.4f}", share));
-  EXPECT_LT(share, 0.16);  // without the hole: 0.256
+  // Without the hole: 0.256; with a scaled copy of the outer polygon as the hole: 0.116; with the
+  // hole's own vertex distances per direction: 0.037.
+  EXPECT_LT(share, 0.05);
 }
 
 // The readers: a positive thickness after one mirror (or negative after none) is refused at its

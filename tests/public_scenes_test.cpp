@@ -69,20 +69,6 @@ struct Gap {
 // them: OpenImageIO images, bdpt, media). Remove an entry when its
 // feature lands; the test fails while a listed gap no longer occurs.
 const std::vector<Gap> kKnownGaps = {
-    // Subsurface with a textured coefficient (head: an image "reflectance"): lensim's random
-    // walk needs one homogeneous medium per material and refuses it; pbrt-v4 renders it.
-    {"pbrt-v4-scenes/head.pbrt", "error", "textured subsurface coefficients are not rendered"},
-    // pbrt-v3's fourier material (tabulated .bsdf): rendered as grey diffuse.
-    {"pbrt-v3-scenes/bathroom.pbrt", "warning", "material \"fourier\" is not rendered"},
-    // pbrt-v3's directlighting also follows specular reflection and transmission up to its
-    // maxdepth (5); lensim renders it as path with maxdepth 1 (as pbrt-v4's --upgrade does).
-    {"pbrt-v3-scenes/figures-f10-1ac.pbrt", "warning", "integrator \"directlighting\""},
-    {"pbrt-v3-scenes/figures-f7-19a.pbrt", "warning", "integrator \"directlighting\""},
-    {"pbrt-v3-scenes/figures-f7-34a.pbrt", "warning", "integrator \"directlighting\""},
-    // pbrt-v3 keeps named materials in the graphics state (scoped by AttributeBegin/End), so
-    // the second 'MakeNamedMaterial ""' in another block is no redefinition there; lensim's
-    // named materials are global (as pbrt-v4's) and it warns.
-    {"pbrt-v3-scenes/dambreak0.pbrt", "warning", "named material \"\" redefined"},
     // Motion blur: animated transforms use the start transform.
     {"pbrt-v4-scenes/killeroo-moving.pbrt", "warning", "animated transforms are not rendered"},
 };

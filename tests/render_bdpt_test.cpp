@@ -44,6 +44,8 @@ class HemisphereCamera final : public camera::Camera {
   camera::CameraRayPdf rayPdf(const Vec3&, const Vec3& d, double) const override {
     return {1, d.z > 0 ? 1 / (2 * kPi) : 0.0};
   }
+  // A point eye: connections all pass it (a delta, as the pinhole's).
+  double pdfWiPos(const Vec3&, const Vec3&) const override { return 1; }
 };
 
 /// A scene built for calling the bdpt functions directly.

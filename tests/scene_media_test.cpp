@@ -272,8 +272,8 @@ Shape "sphere"
   EXPECT_EQ(a.ss_name, "Skin1");
   scene::SpectrumValue sa, ss;
   ASSERT_TRUE(scene::mediumPreset("Skin1", sa, ss));
-  EXPECT_EQ(a.ss_sigma_a.rgb, sa.rgb);
-  EXPECT_EQ(a.ss_sigma_s.rgb, ss.rgb);
+  EXPECT_EQ(a.ss_sigma_a.spectrum.rgb, sa.rgb);
+  EXPECT_EQ(a.ss_sigma_s.spectrum.rgb, ss.rgb);
   EXPECT_EQ(a.ss_g, 0);  // forced to 0 with a named medium, with a warning
   EXPECT_EQ(a.scale, 10);
   EXPECT_EQ(a.eta.value, 1.33);  // pbrt-v4's default
@@ -282,16 +282,16 @@ Shape "sphere"
     warned = warned || d.message.find("\"g\" is ignored") != std::string::npos;
   EXPECT_TRUE(warned);
   const scene::Material& b = s.materials[1];
-  EXPECT_EQ(b.ss_sigma_s.rgb.z, 3);
+  EXPECT_EQ(b.ss_sigma_s.spectrum.rgb.z, 3);
   EXPECT_EQ(b.ss_g, 0.3);
   EXPECT_EQ(b.eta.value, 1.5);
   EXPECT_EQ(b.uroughness.value, 0.2);
   const scene::Material& c = s.materials[2];
   EXPECT_TRUE(c.ss_from_reflectance);
-  EXPECT_EQ(c.ss_reflectance.rgb.x, 0.8);
-  EXPECT_EQ(c.ss_mfp.rgb.z, 3);
+  EXPECT_EQ(c.ss_reflectance.spectrum.rgb.x, 0.8);
+  EXPECT_EQ(c.ss_mfp.spectrum.rgb.z, 3);
   const scene::Material& d = s.materials[3];  // whole milk, as pbrt-v4's default
-  EXPECT_EQ(d.ss_sigma_s.rgb.x, 2.55);
+  EXPECT_EQ(d.ss_sigma_s.spectrum.rgb.x, 2.55);
   EXPECT_FALSE(d.fallback);
   EXPECT_EQ(errorsOf(buildText(R"(WorldBegin
 Material "subsurface" "string name" "Skim milk"

@@ -115,9 +115,10 @@ class Camera {
                             std::optional<CameraRay>* rays) const {
     for (int i = 0; i < n; ++i) rays[i] = generateRay(samples[i]);
   }
-  /// Whether light reaches the film at this raster position at all (false outside a lens's
-  /// image circle), for render statistics: samples there yield no ray by design.
-  virtual bool reachesFilm(Vec2 /*film_raster*/) const { return true; }
+  /// Whether light reaches the film at the sample's raster position at all, at the sample's
+  /// (hero) wavelength (false outside a lens's image circle at that wavelength), for render
+  /// statistics: samples there yield no ray by design, and nothing is traced for them.
+  virtual bool reachesFilm(const CameraSample& /*sample*/) const { return true; }
   /// Seconds spent building the camera (lens set-up, pupil bounds), for render statistics.
   virtual double startupSeconds() const { return 0; }
   /// Processor seconds of that (all threads): on a loaded machine the wall time above mostly

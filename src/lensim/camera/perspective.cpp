@@ -99,13 +99,17 @@ class ProjectiveCamera : public Camera {
   double pdfWiPos(const Vec3& ref, const Vec3& p_lens) const override {
     if (lens_radius_ == 0) return 1;
     const Vec3 p = inverse_.applyPoint(p_lens);
-    if (p.x * p.x + p.y * p.y > lens_radius_ * lens_radius_ * (1 + 1e-9)) return 0;
-    if (!ortho_) return 1 / lens_area_;
+    const double r2 = lens_radius_ * lens_radius_ * (1 + 1e-9);
+    if (!ortho_) return p.x * p.x + p.y * p.y > r2 ? 0 : 1 / lens_area_;
     // The orthographic thin lens: p_lens = ref - d ref.z / d.z, d set by the lens point l, so
-    // p_lens.xy = ref.xy + l ref.z / fd: the density of l, 1 / (pi r^2), times (fd / ref.z)^2.
-    const double rz = inverse_.applyPoint(ref).z;
-    if (!(rz > 0)) return 0;
-    return focal_distance_ * focal_distance_ / (rz * rz * lens_area_);
+    // p_lens.xy = ref.xy + l ref.z / fd: the density of l, 1 / (pi r^2), times (fd / ref.z)^2,
+    // where that l lies on the lens disc (the disc is about the film point, not the axis).
+    const Vec3 rc = inverse_.applyPoint(ref);
+    if (!(rc.z > 0)) return 0;
+    const double lx = (p.x - rc.x) * focal_distance_ / rc.z;
+    const double ly = (p.y - rc.y) * focal_distance_ / rc.z;
+    if (lx * lx + ly * ly > r2) return 0;
+    return focal_distance_ * focal_distance_ / (rc.z * rc.z * lens_area_);
   }
 
   double importance(const Vec3& o, const Vec3& d, double, Vec2* film_raster) const override {

@@ -404,11 +404,12 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
     if (out[k].ok()) rays[index[k]] = finish(out[k], lanes[k], samples[index[k]].time);
 }
 
-bool RealisticCamera::reachesFilm(Vec2 film_raster) const {
-  const Vec2 film = filmPoint(film_raster);
-  for (int band = -1; band < pupil_->bands(); ++band)
-    if (pupil_->area_mm2(film, band) > 0) return true;
-  return false;
+bool RealisticCamera::reachesFilm(const CameraSample& sample) const {
+  // The bound the sample is drawn from (generateRay): its hero wavelength's band. A dispersive
+  // lens's image circle shrinks with the wavelength; where the sample's band has no bound, no
+  // pupil point is drawn and nothing is traced (counting those as wasted put lentil:0007 at
+  // 5.7% instead of 4.2%).
+  return pupil_->area_mm2(filmPoint(sample.film_raster), bandAt(sample.lambda_nm[0])) > 0;
 }
 
 std::string RealisticCamera::describe() const {

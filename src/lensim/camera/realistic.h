@@ -91,7 +91,7 @@ class RealisticCamera final : public Camera {
                     std::optional<CameraRay>* rays) const override;
   double startupSeconds() const override { return startup_seconds_; }
   double startupCpuSeconds() const override { return startup_cpu_seconds_; }
-  bool reachesFilm(Vec2 film_raster) const override;
+  bool reachesFilm(const CameraSample& sample) const override;
   std::string describe() const override;
 
   // Camera importance (realistic_importance.cpp).

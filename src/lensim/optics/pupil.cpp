@@ -1,12 +1,14 @@
 #include "lensim/optics/pupil.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <numbers>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "lensim/optics/anamorphic.h"
@@ -58,14 +60,37 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // Anamorphic lenses are symmetric under x -> -x and y -> -y: bounds are built for film points
   // in the first quadrant, in `sectors` wedges, each covering the regions at `per` azimuths
   // across it (edges included) and checked at the azimuths half-way between those.
-  const int n_sectors = rotational_ ? 1 : std::max(1, opts.sectors);
-  const int per = std::max(2, opts.azimuths);
-  // Each wedge's bound is built on its own (its own azimuths and trace count), so that the
-  // wedges of an anamorphic lens are built side by side (TBB); a rotational lens has one.
+  // Anamorphic: a bound along each wedge edge ("sector" below), blended across the wedges.
+  const int n_wedges = std::max(1, opts.sectors);
+  const int n_sectors = rotational_ ? 1 : n_wedges + 1;
+  const double wedge = (std::numbers::pi / 2) / n_wedges;
+  // Where across a wedge its blended polygon is checked against the true region (checking at a
+  // quarter and three quarters as well found nothing more in lentil:2004 at twice the traces).
+  const std::vector<double> kWedgeChecks = {0.5};
+  // Each wedge's bound is built on its own (its own azimuths); a rotational lens has one. The
+  // build runs in stages whose pieces are independent, so that they run side by side (TBB; the
+  // start-up budget is wall time on two cores): (0) the uniform nodes, each found from its
+  // neighbour's polygon, one wedge a task; (1) each uniform interval's checks and refinement,
+  // one interval a task; (2) the wavelength bands' vertex distances, a few nodes a task; (3) the
+  // sampling tables (and an obscuration's hole), one wedge edge a task; (4) anamorphic: each
+  // wedge's checks of its blended polygon, one wedge a task. Each task starts from the
+  // same state (no search hints carried over from another task), so that the bounds do not
+  // depend on how the tasks are scheduled.
+  struct Work {
+    std::vector<Polygon> initial;                                // stage 0
+    std::vector<std::vector<Polygon>> refined;                   // stage 1, per interval
+    std::vector<std::vector<std::vector<double>>> refined_scales;
+    std::vector<Polygon> done;                                   // all nodes, by radius
+    std::vector<std::vector<double>> scales;                     // per interval
+    std::vector<std::vector<Polygon>> band_nodes;                // stage 2
+    std::vector<Sector> sets;                                    // stage 3
+  };
+  std::vector<Work> work(static_cast<size_t>(n_sectors));
   std::atomic<long> traces_total{0};
-  auto buildSector = [&](int sec) -> std::vector<Sector> {
+  auto buildSector = [&](int sec, int stage, int k0, int k1) {
+  Work& w = work[size_t(sec)];
   long traces = 0;
-  std::vector<double> az, az_main, az_check;
+  std::vector<double> az;  // anamorphic: the film azimuth whose regions count
   // The margin of a rear-plane point: the ray from the film point toward it, traced without
   // clipping, and the largest ratio of a hit's distance from the axis to that surface's clear
   // semi-aperture (and of the point's to the rear disc's radius); infinite where the ray misses
@@ -331,19 +356,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     return f;
   };
 
-  // Boundary points that check a polygon: its own azimuths, and for anamorphic bounds also the
-  // azimuths between them.
+  // Boundary points that check a polygon (at the film azimuth being built).
   auto checkPoints = [&](double h, double offset, const Polygon* hint) {
-    std::vector<Vec2> pts = boundaryPoints(h, nd, offset, nullptr, hint);
-    if (!rotational_) {
-      az = az_check;
-      last_az = 0;
-      std::vector<Vec2> more = boundaryPoints(h, nd, offset, nullptr, hint);
-      az = az_main;
-      last_az = 0;
-      pts.insert(pts.end(), more.begin(), more.end());
-    }
-    return pts;
+    return boundaryPoints(h, nd, offset, nullptr, hint);
   };
   // A node: the region's polygon at radius h, checked at the half-way directions.
   auto makeNode = [&](double h, const Polygon* hint) {
@@ -372,22 +387,22 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // the region changes fast (at the edge of the image circle), the interval is split.
   const double min_width = film_radius_mm / (ni * 16.0);
   if (!rotational_) {
-    const double w = (std::numbers::pi / 2) / n_sectors, a0 = sec * w;
-    az_main.clear(), az_check.clear();
-    for (int k = 0; k < per; ++k) az_main.push_back(a0 + w * k / (per - 1));
-    for (int k = 0; k + 1 < per; ++k) az_check.push_back(a0 + w * (k + 0.5) / (per - 1));
-    az = az_main;
+    // The wedge edge's azimuth (a wedge's checks, stage 4, set their own).
+    az = {sec * wedge};
     last_az = 0;
   }
-  std::vector<Polygon> done;
-  std::vector<std::vector<double>> scales;
-  std::vector<Polygon> stack;  // right ends still to process, nearest last
-  std::vector<Polygon> initial;
-  for (int k = 0; k <= ni; ++k)
-    initial.push_back(makeNode(film_radius_mm * k / ni, k > 0 ? &initial.back() : nullptr));
-  for (int k = ni; k >= 1; --k) stack.push_back(initial[k]);
-  Polygon left = initial[0];
-  done.push_back(left);
+  if (stage == 0) {
+    for (int k = 0; k <= ni; ++k)
+      w.initial.push_back(makeNode(film_radius_mm * k / ni, k > 0 ? &w.initial.back() : nullptr));
+    traces_total += traces;
+    return;
+  }
+  if (stage == 1) {
+  // The uniform interval k0: its nodes after its left end, and each sub-interval's scales.
+  std::vector<Polygon>& done = w.refined[size_t(k0)];
+  std::vector<std::vector<double>>& scales = w.refined_scales[size_t(k0)];
+  std::vector<Polygon> stack{w.initial[size_t(k0) + 1]};  // right ends still to process, nearest last
+  Polygon left = w.initial[size_t(k0)];
   while (!stack.empty()) {
     Polygon right = stack.back();
     const double h = 0.5 * (left.r + right.r);
@@ -430,9 +445,53 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     stack.pop_back();
     left = right;
   }
+  traces_total += traces;
+  return;
+  }  // stage 1
+  if (stage == 4) {
+    // Anamorphic: wedge `sec`'s blended polygon checked against the true region at its middle
+    // azimuth, at both edges' nodes and interval middles; the factors that widen it to hold the
+    // boundary points found, with the safety margin.
+    std::vector<double> rs;
+    for (int l : {sec, sec + 1})
+      for (const Interval& iv : sets_[0][size_t(l)].intervals)
+        rs.insert(rs.end(), {iv.r0, 0.5 * (iv.r0 + iv.r1), iv.r1});
+    std::sort(rs.begin(), rs.end());
+    std::vector<double> kept;
+    for (double r : rs)
+      if (kept.empty() || r - kept.back() > 0.25 * min_width) kept.push_back(r);
+    // Filled on the side: blended() must give the unwidened polygon while checking.
+    WedgeCheck wc;
+    std::vector<double> R(static_cast<size_t>(nd));
+    for (double h : kept) {
+      Polygon poly;
+      poly.r = h;
+      std::vector<double> f(size_t(nd), 1.0);
+      for (double sw : kWedgeChecks) {
+        if (!blended(0, sec, h, sw, poly.centre, R.data())) continue;
+        az = {(sec + sw) * wedge};
+        last_az = 0;
+        poly.empty = false;
+        poly.radius = R;
+        for (double off : {0.25, 0.75}) {
+          const std::vector<double> g =
+              coverFactors(poly, boundaryPoints(h, nd, off * dphi, nullptr, &poly));
+          for (int j = 0; j < nd; ++j) f[size_t(j)] = std::max(f[size_t(j)], g[size_t(j)]);
+        }
+      }
+      for (double& v : f)
+        if (v > 1) v *= 1 + opts.margin;
+      wc.r.push_back(h);
+      wc.f.push_back(std::move(f));
+    }
+    wedges_[size_t(sec)] = std::move(wc);
+    traces_total += traces;
+    return;
+  }
+  const std::vector<Polygon>& done = w.done;
   auto makeSector = [&](const std::vector<Polygon>& nodes) {
     Sector out;
-    out.intervals = buildIntervals(nodes, scales);
+    out.intervals = buildIntervals(nodes, w.scales);
     // Central obscurations: a hole in each interval's polygon (rotationally symmetric lenses).
     if (obscured && rotational_) {
       auto passesAll = [&](double h, Vec2 a) {  // with obscurations, at any wavelength covered
@@ -444,11 +503,13 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         }
         return false;
       };
-      // The largest scale k of the polygon (centre c, vertex distances R) whose vertices all lie
-      // in the blocked middle: along each direction, the first passing point from the centre.
-      auto holeScale = [&](double h, Vec2 c, const std::vector<double>& R) {
-        if (passesAll(h, c)) return 0.0;
-        double k = 1;
+      // Along each direction of the polygon (centre c, vertex distances R): the distance from
+      // the centre to the first passing point (the edge of the blocked middle), a 16th of the
+      // vertex distance at a time, then bisected to a 1024th. All zero where the centre itself
+      // passes (no blocked middle there).
+      auto holeDistances = [&](double h, Vec2 c, const std::vector<double>& R) {
+        std::vector<double> d(size_t(nd), 0.0);
+        if (passesAll(h, c)) return d;
         for (int j = 0; j < nd; ++j) {
           constexpr int kSteps = 16;
           double lo = 0, hi = 1;
@@ -464,9 +525,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
             const double mid = 0.5 * (lo + hi);
             (passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * mid)) ? hi : lo) = mid;
           }
-          k = std::min(k, lo);
+          d[size_t(j)] = lo * R[size_t(j)];
         }
-        return k;
+        return d;
       };
       for (Interval& iv : out.intervals) {
         if (iv.empty) continue;
@@ -478,25 +539,52 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         };
         Vec2 c;
         std::vector<double> R;
-        double k = 1;
-        for (double t : {0.0, 0.5, 1.0}) {
-          const double h = at(t, c, R);
-          k = std::min(k, holeScale(h, c, R));
-          if (k <= 0) break;
+        std::vector<double> d[3];
+        bool any = true;
+        for (int e = 0; e < 3 && any; ++e) {
+          d[e] = holeDistances(at(0.5 * e, c, R), c, R);
+          any = *std::max_element(d[e].begin(), d[e].end()) > 0;
         }
-        k *= 1 - 3 * opts.margin;  // the safety margin, inward
-        // Check the hole between the ends: every vertex of the scaled polygon blocked.
-        for (int tries = 0; tries < 4 && k > 0.05; ++tries) {
+        if (!any) continue;
+        // The hole's vertex distances at the ends: each no farther than the blocked middle's edge
+        // at its end and (so that the interpolated hole lies inside at the middle too) at the
+        // middle; pulled in by the safety margin.
+        const double pull = 1 - opts.margin;
+        std::vector<double> HA(static_cast<size_t>(nd)), HB(static_cast<size_t>(nd));
+        for (int j = 0; j < nd; ++j) {
+          HA[size_t(j)] = std::min(d[0][size_t(j)], d[1][size_t(j)]) * pull;
+          HB[size_t(j)] = std::min(d[2][size_t(j)], d[1][size_t(j)]) * pull;
+        }
+        // Check the hole between the ends: every vertex of the hole and the middle of every edge
+        // blocked; else shrink it.
+        double k = 1;
+        for (int tries = 0; tries < 4; ++tries) {
           bool ok = true;
           for (double t : {0.25, 0.75}) {
             const double h = at(t, c, R);
-            for (int j = 0; j < nd && ok; ++j)
-              ok = !passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * k));
+            for (int j = 0; j < nd && ok; ++j) {
+              const int j1 = (j + 1) % nd;
+              const Vec2 a = dirs_[size_t(j)] * (k * (HA[size_t(j)] * (1 - t) + HB[size_t(j)] * t));
+              const Vec2 b = dirs_[size_t(j1)] * (k * (HA[size_t(j1)] * (1 - t) + HB[size_t(j1)] * t));
+              ok = !passesAll(h, c + a) && !passesAll(h, c + (a + b) * 0.5);
+            }
           }
           if (ok) break;
-          k *= 0.8;
+          k = tries < 3 ? k * 0.8 : 0.0;
         }
-        iv.hole = k > 0.05 ? k : 0.0;
+        if (!(k > 0)) continue;
+        for (int j = 0; j < nd; ++j) HA[size_t(j)] *= k, HB[size_t(j)] *= k;
+        // The fan's prefix sums count the polygon minus the hole.
+        for (int j = 0; j < nd; ++j) {
+          const int j1 = (j + 1) % nd;
+          double* p = &iv.P[3 * size_t(j)];
+          p[3] = p[0] + iv.A[size_t(j)] * iv.A[size_t(j1)] - HA[size_t(j)] * HA[size_t(j1)];
+          p[4] = p[1] + iv.A[size_t(j)] * iv.B[size_t(j1)] + iv.B[size_t(j)] * iv.A[size_t(j1)] -
+                 HA[size_t(j)] * HB[size_t(j1)] - HB[size_t(j)] * HA[size_t(j1)];
+          p[5] = p[2] + iv.B[size_t(j)] * iv.B[size_t(j1)] - HB[size_t(j)] * HB[size_t(j1)];
+        }
+        iv.HA = std::move(HA);
+        iv.HB = std::move(HB);
       }
     }
     // A table from film radius to the first interval that can hold it, so that a lookup is a
@@ -511,8 +599,13 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     }
     return out;
   };
-  std::vector<Sector> sets;
-  sets.push_back(makeSector(done));
+  if (stage == 3) {
+    w.sets.push_back(makeSector(done));
+    for (const std::vector<Polygon>& nodes : w.band_nodes) w.sets.push_back(makeSector(nodes));
+    traces_total += traces;
+    return;
+  }
+  // Stage 2: the bands' nodes k0 .. k1 - 1.
   // Wavelength bands: the same nodes, each vertex distance the farthest of the band's lenses'
   // boundaries along the vertex's direction from the node's centre (each lens's region is
   // star-shaped about it, so that this is the union's), each from the lens's own distance (two
@@ -527,10 +620,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     for (const LensSystem* L : band)
       if (std::find(band_lens.begin(), band_lens.end(), L) == band_lens.end())
         band_lens.push_back(L);
-  std::vector<std::vector<Polygon>> band_nodes(opts.bands.size(), done);
   std::vector<std::vector<double>> dist(band_lens.size());
   std::vector<char> inside(band_lens.size());
-  for (size_t k = 0; k < done.size() && !opts.bands.empty(); ++k) {
+  for (size_t k = size_t(k0); k < size_t(k1) && !opts.bands.empty(); ++k) {
     const Polygon& base = done[k];
     const double h = base.r;
     if (!base.empty) {
@@ -548,7 +640,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     }
     for (size_t b = 0; b < opts.bands.size(); ++b) {
       const std::vector<const LensSystem*>& band = opts.bands[b];
-      Polygon& node = band_nodes[b][k];
+      Polygon& node = w.band_nodes[b][k];
       if (band.empty()) continue;
       bool all_in = !base.empty;
       for (const LensSystem* L : band)
@@ -584,20 +676,55 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       node = np;
     }
   }
-  for (const std::vector<Polygon>& nodes : band_nodes) sets.push_back(makeSector(nodes));
   traces_total += traces;
-  return sets;
   };  // buildSector
-  std::vector<std::vector<Sector>> by_sector(static_cast<size_t>(n_sectors));
-  if (n_sectors == 1) {
-    by_sector[0] = buildSector(0);
-  } else {
-    tbb::parallel_for(0, n_sectors,
-                      [&](int sec) { by_sector[size_t(sec)] = buildSector(sec); });
+  // The stages: each a list of (wedge, stage, k0, k1) tasks.
+  auto runStage = [&](const std::vector<std::array<int, 4>>& tasks) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t i = range.begin(); i != range.end(); ++i)
+                          buildSector(tasks[i][0], tasks[i][1], tasks[i][2], tasks[i][3]);
+                      });
+  };
+  std::vector<std::array<int, 4>> tasks;
+  for (int sec = 0; sec < n_sectors; ++sec) tasks.push_back({sec, 0, 0, 0});
+  runStage(tasks);
+  tasks.clear();
+  for (int sec = 0; sec < n_sectors; ++sec) {
+    work[size_t(sec)].refined.assign(size_t(ni), {});
+    work[size_t(sec)].refined_scales.assign(size_t(ni), {});
+    for (int k = 0; k < ni; ++k) tasks.push_back({sec, 1, k, k + 1});
   }
-  sets_.assign(by_sector[0].size(), {});
-  for (auto& secs : by_sector)
-    for (size_t set = 0; set < secs.size(); ++set) sets_[set].push_back(std::move(secs[set]));
+  runStage(tasks);
+  tasks.clear();
+  constexpr int kBandNodesPerTask = 4;
+  for (int sec = 0; sec < n_sectors; ++sec) {
+    Work& w = work[size_t(sec)];
+    w.done = {w.initial[0]};
+    for (int k = 0; k < ni; ++k) {
+      w.done.insert(w.done.end(), w.refined[size_t(k)].begin(), w.refined[size_t(k)].end());
+      w.scales.insert(w.scales.end(), w.refined_scales[size_t(k)].begin(),
+                      w.refined_scales[size_t(k)].end());
+    }
+    w.band_nodes.assign(opts.bands.size(), w.done);
+    const int n = static_cast<int>(w.done.size());
+    if (!opts.bands.empty())
+      for (int k = 0; k < n; k += kBandNodesPerTask)
+        tasks.push_back({sec, 2, k, std::min(n, k + kBandNodesPerTask)});
+  }
+  runStage(tasks);
+  tasks.clear();
+  for (int sec = 0; sec < n_sectors; ++sec) tasks.push_back({sec, 3, 0, 0});
+  runStage(tasks);
+  sets_.assign(work[0].sets.size(), {});
+  for (Work& w : work)
+    for (size_t set = 0; set < w.sets.size(); ++set) sets_[set].push_back(std::move(w.sets[set]));
+  if (!rotational_) {
+    wedges_.assign(size_t(n_wedges), {});
+    for (int wdg = 0; wdg < n_wedges; ++wdg) tasks.push_back({wdg, 4, 0, 0});
+    runStage(tasks);
+    tasks.clear();
+  }
   traces_ = traces_total;
   intervals_ = sets_[0].front().intervals;
   radius_lut_ = sets_[0].front().lut;
@@ -689,15 +816,8 @@ const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double&
   if (set < 0 || set >= static_cast<int>(sets_.size())) return nullptr;
   const std::vector<Sector>& sectors = sets_[size_t(set)];
   if (r > film_radius_mm_ * (1 + 1e-9) || sectors.empty()) return nullptr;
+  // Rotationally symmetric lenses only (anamorphic ones: blended()).
   const Sector* sec = &sectors.front();
-  if (!rotational_) {
-    // Anamorphic: the film point mirrored into the first quadrant picks its wedge; the caller
-    // mirrors the rear point back.
-    film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
-    const double phi = std::atan2(film_mm.y, film_mm.x);
-    const int n = static_cast<int>(sectors.size());
-    sec = &sectors[size_t(std::clamp(int(phi / (std::numbers::pi / 2) * n), 0, n - 1))];
-  }
   if (sec->intervals.empty()) return nullptr;
   const Interval& iv = sec->intervals[size_t(intervalIn(sec->intervals, sec->lut, sec->lut_scale, r))];
   if (iv.empty) return nullptr;
@@ -714,8 +834,91 @@ std::optional<PupilSample> ExitPupilSampler::sample(Vec2 film_mm, Vec2 u, int ba
   return out;
 }
 
+void ExitPupilSampler::wedgeOf(Vec2 film_mm, int& wedge, double& s, double& r) const {
+  const double fx = std::abs(film_mm.x), fy = std::abs(film_mm.y);
+  r = std::sqrt(fx * fx + fy * fy);
+  const int n = static_cast<int>(wedges_.size());
+  const double q = std::atan2(fy, fx) / (std::numbers::pi / 2) * n;
+  wedge = std::clamp(static_cast<int>(q), 0, n - 1);
+  s = std::clamp(q - wedge, 0.0, 1.0);
+}
+
+bool ExitPupilSampler::blended(int set, int wedge, double r, double s, Vec2& c, double* R) const {
+  const int nd = directions_;
+  if (set < 0 || set >= static_cast<int>(sets_.size())) return false;
+  if (r > film_radius_mm_ * (1 + 1e-9)) return false;
+  const std::vector<Sector>& lines = sets_[size_t(set)];
+  auto lineAt = [&](const Sector& L, Vec2& cc, double* RR) {
+    if (L.intervals.empty()) return false;
+    const Interval& iv = L.intervals[size_t(intervalIn(L.intervals, L.lut, L.lut_scale, r))];
+    if (iv.empty) return false;
+    const double t = iv.r1 > iv.r0 ? std::clamp((r - iv.r0) / (iv.r1 - iv.r0), 0.0, 1.0) : 0.0;
+    cc = iv.c0 * (1 - t) + iv.c1 * t;
+    for (int j = 0; j < nd; ++j) RR[j] = iv.A[size_t(j)] * (1 - t) + iv.B[size_t(j)] * t;
+    return true;
+  };
+  thread_local std::vector<double> other;
+  other.resize(size_t(nd));
+  Vec2 cb;
+  const bool a = lineAt(lines[size_t(wedge)], c, R);
+  const bool b = lineAt(lines[size_t(wedge) + 1], cb, other.data());
+  if (!a && !b) return false;
+  if (a && b) {
+    c = c * (1 - s) + cb * s;
+    for (int j = 0; j < nd; ++j) R[j] = R[j] * (1 - s) + other[size_t(j)] * s;
+  } else if (b) {  // one edge's region is empty at r (beyond its image circle): the other's
+    c = cb;
+    std::copy(other.begin(), other.end(), R);
+  }
+  const WedgeCheck& wc = wedges_[size_t(wedge)];
+  if (!wc.r.empty()) {
+    // The checks at the film radii around r; beyond the last, the last's.
+    const size_t m = size_t(std::upper_bound(wc.r.begin(), wc.r.end(), r) - wc.r.begin());
+    const std::vector<double>& f0 = wc.f[m > 0 ? m - 1 : 0];
+    const std::vector<double>& f1 = wc.f[std::min(m, wc.r.size() - 1)];
+    for (int j = 0; j < nd; ++j) R[j] *= std::max(f0[size_t(j)], f1[size_t(j)]);
+  }
+  return true;
+}
+
+std::optional<PupilSample> ExitPupilSampler::sampleAnamorphic(Vec2 film_mm, Vec2 u,
+                                                              int set) const {
+  const int nd = directions_;
+  int wedge;
+  double s, r;
+  wedgeOf(film_mm, wedge, s, r);
+  thread_local std::vector<double> R, P;
+  R.resize(size_t(nd));
+  P.resize(size_t(nd) + 1);
+  Vec2 c;
+  if (!blended(set, wedge, r, s, c, R.data())) return std::nullopt;
+  P[0] = 0;
+  for (int j = 0; j < nd; ++j) P[size_t(j) + 1] = P[size_t(j)] + R[size_t(j)] * R[size_t((j + 1) % nd)];
+  const double total = P[size_t(nd)];
+  if (!(total > 0)) return std::nullopt;
+  // A fan triangle by area, then uniform in it (as sampleBatch).
+  const double target = u.x * total;
+  const int j = std::min(
+      static_cast<int>(std::upper_bound(P.begin() + 1, P.end(), target) - (P.begin() + 1)), nd - 1);
+  const int j1 = (j + 1) % nd;
+  const double tri = P[size_t(j) + 1] - P[size_t(j)];
+  const double ux = tri > 0 ? std::clamp((target - P[size_t(j)]) / tri, 0.0, 1.0) : 0.0;
+  const Vec2 local = c + (dirs_[size_t(j)] * (R[size_t(j)] * (1 - u.y)) +
+                          dirs_[size_t(j1)] * (R[size_t(j1)] * u.y)) *
+                             std::sqrt(ux);
+  const double fx = std::abs(film_mm.x), fy = std::abs(film_mm.y);
+  const double ca = r > 0 ? fx / r : 1.0, sa = r > 0 ? fy / r : 0.0;
+  Vec2 rear = toFilmAzimuth(local, r, ca, sa);
+  rear = {film_mm.x < 0 ? -rear.x : rear.x, film_mm.y < 0 ? -rear.y : rear.y};
+  return PupilSample{{rear.x, rear.y, z_rear_mm_}, 0.5 * total * dirs_[1].y};
+}
+
 void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
                                    std::optional<PupilSample>* out, int band) const {
+  if (!rotational_) {
+    for (int i = 0; i < std::min(n, kBatch); ++i) out[i] = sampleAnamorphic(film_mm[i], u[i], band + 1);
+    return;
+  }
   const int nd = directions_;
   const Interval* iv[kBatch];
   double t[kBatch], ca[kBatch], sa[kBatch], w0[kBatch], w1[kBatch], w2[kBatch], target[kBatch],
@@ -754,40 +957,77 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
     const double c_lo = cum(k, j), tri = cum(k, j + 1) - c_lo;
     const double ux = tri > 0 ? std::clamp((target[k] - c_lo) / tri, 0.0, 1.0) : 0.0;
     const Interval& v = *iv[k];
-    // Uniform in the polygon minus the hole scaled by v.hole: the fraction of the way out along
-    // the fan, s, has s^2 uniform in [hole^2, 1].
-    const double s = std::sqrt(v.hole * v.hole + ux * (1 - v.hole * v.hole));
     const double tt = t[k];
     const Vec2 a = dirs_[j] * (v.A[j] * (1 - tt) + v.B[j] * tt);
     const Vec2 b = dirs_[j1] * (v.A[j1] * (1 - tt) + v.B[j1] * tt);
     const Vec2 centre = v.c0 * (1 - tt) + v.c1 * tt;
     const double uy = u[lane[k]].y;
-    const Vec2 local = centre + (a * (1 - uy) + b * uy) * s;
+    Vec2 local;
+    if (!v.hasHole()) {
+      // Uniform in the fan triangle (centre, a, b): the fraction of the way out, s, has s^2
+      // uniform.
+      local = centre + (a * (1 - uy) + b * uy) * std::sqrt(ux);
+    } else {
+      // Uniform in the fan triangle minus the hole's (centre, ha, hb): the quadrilateral
+      // (ha, a, b, hb), split along a diagonal that lies inside it into two triangles, one picked
+      // by area (reusing ux), then uniform in it.
+      const Vec2 ha = dirs_[j] * (v.HA[j] * (1 - tt) + v.HB[j] * tt);
+      const Vec2 hb = dirs_[j1] * (v.HA[j1] * (1 - tt) + v.HB[j1] * tt);
+      Vec2 p0 = ha, p1 = a, p2 = b, q0 = ha, q1 = b, q2 = hb;
+      double s1 = cross2(a - ha, b - ha), s2 = cross2(b - ha, hb - ha);
+      if (s1 < 0 || s2 < 0) {  // the other diagonal
+        p0 = a, p1 = b, p2 = hb, q0 = a, q1 = hb, q2 = ha;
+        s1 = cross2(b - a, hb - a), s2 = cross2(hb - a, ha - a);
+      }
+      s1 = std::max(s1, 0.0), s2 = std::max(s2, 0.0);
+      const double f1 = s1 + s2 > 0 ? s1 / (s1 + s2) : 1.0;
+      double w = ux;
+      if (w < f1) {
+        w = f1 > 0 ? w / f1 : 0.0;
+      } else {
+        w = (w - f1) / (1 - f1);
+        p0 = q0, p1 = q1, p2 = q2;
+      }
+      const double sw = std::sqrt(std::clamp(w, 0.0, 1.0));
+      local = centre + p0 * (1 - sw) + (p1 * (1 - uy) + p2 * uy) * sw;
+    }
     // From the +x film frame to the film point's azimuth.
     const Vec2 f = film_mm[lane[k]];
-    Vec2 rear = toFilmAzimuth(local, std::hypot(f.x, f.y), ca[k], sa[k]);
-    if (!rotational_) rear = {f.x < 0 ? -rear.x : rear.x, f.y < 0 ? -rear.y : rear.y};
+    const Vec2 rear = toFilmAzimuth(local, std::hypot(f.x, f.y), ca[k], sa[k]);
     out[lane[k]] = PupilSample{{rear.x, rear.y, z_rear_mm_},
-                               0.5 * total[k] * dirs_[1].y * (1 - v.hole * v.hole)};
+                               0.5 * total[k] * dirs_[1].y};
   }
 }
 
 bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm, int band) const {
   if (!rotational_) {
-    rear_mm = {film_mm.x < 0 ? -rear_mm.x : rear_mm.x, film_mm.y < 0 ? -rear_mm.y : rear_mm.y};
-    film_mm = {std::abs(film_mm.x), std::abs(film_mm.y)};
+    // Into the first quadrant's frame, then relative to the blended polygon's centre.
+    const int nd = directions_;
+    int wedge;
+    double s, r;
+    wedgeOf(film_mm, wedge, s, r);
+    thread_local std::vector<double> R;
+    R.resize(size_t(nd));
+    Vec2 c;
+    if (!blended(band + 1, wedge, r, s, c, R.data())) return false;
+    const double fx = std::abs(film_mm.x), fy = std::abs(film_mm.y);
+    const double ca = r > 0 ? fx / r : 1.0, sa = r > 0 ? fy / r : 0.0;
+    const Vec2 rq{film_mm.x < 0 ? -rear_mm.x : rear_mm.x, film_mm.y < 0 ? -rear_mm.y : rear_mm.y};
+    const Vec2 q{rq.x - (kappa_x_ * ca - kappa_x_) * r - c.x, rq.y - kappa_y_ * sa * r - c.y};
+    const double dphi = 2 * std::numbers::pi / nd;
+    double ang = std::atan2(q.y, q.x);
+    if (ang < 0) ang += 2 * std::numbers::pi;
+    const int j = std::min(static_cast<int>(ang / dphi), nd - 1), j1 = (j + 1) % nd;
+    const Vec2 a = dirs_[size_t(j)] * R[size_t(j)], b = dirs_[size_t(j1)] * R[size_t(j1)];
+    return cross2(b - a, q - a) >= 0;
   }
   double t, ca, sa;
   const Interval* iv = locate(film_mm, t, ca, sa, band + 1);
   if (!iv) return false;
   const Vec2 centre = iv->c0 * (1 - t) + iv->c1 * t;
   // Into the +x frame, relative to the centre.
-  Vec2 q{ca * rear_mm.x + sa * rear_mm.y - centre.x, -sa * rear_mm.x + ca * rear_mm.y - centre.y};
-  if (!rotational_) {
-    const double r = std::hypot(film_mm.x, film_mm.y);
-    q = {rear_mm.x - (kappa_x_ * ca - kappa_x_) * r - centre.x,
-         rear_mm.y - kappa_y_ * sa * r - centre.y};
-  }
+  const Vec2 q{ca * rear_mm.x + sa * rear_mm.y - centre.x,
+               -sa * rear_mm.x + ca * rear_mm.y - centre.y};
   const int nd = directions_;
   const double dphi = 2 * std::numbers::pi / nd;
   double ang = std::atan2(q.y, q.x);
@@ -796,19 +1036,36 @@ bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm, int band) const {
   const Vec2 a = dirs_[j] * (iv->A[j] * (1 - t) + iv->B[j] * t);
   const Vec2 b = dirs_[j1] * (iv->A[j1] * (1 - t) + iv->B[j1] * t);
   // Inside the fan triangle (0, a, b): on the origin's side of the edge a-b; and not inside the
-  // hole (the triangle scaled by `hole`).
-  if (iv->hole > 0 && cross2(b - a, q - a * iv->hole) > 0) return false;
+  // hole's triangle (0, ha, hb).
+  if (iv->hasHole()) {
+    const Vec2 ha = dirs_[j] * (iv->HA[j] * (1 - t) + iv->HB[j] * t);
+    const Vec2 hb = dirs_[j1] * (iv->HA[j1] * (1 - t) + iv->HB[j1] * t);
+    if (cross2(hb - ha, q - ha) > 0) return false;
+  }
   return cross2(b - a, q - a) >= 0;
 }
 
 double ExitPupilSampler::area_mm2(Vec2 film_mm, int band) const {
+  if (!rotational_) {
+    const int nd = directions_;
+    int wedge;
+    double s, r;
+    wedgeOf(film_mm, wedge, s, r);
+    thread_local std::vector<double> R;
+    R.resize(size_t(nd));
+    Vec2 c;
+    if (!blended(band + 1, wedge, r, s, c, R.data())) return 0.0;
+    double total = 0;
+    for (int j = 0; j < nd; ++j) total += R[size_t(j)] * R[size_t((j + 1) % nd)];
+    return 0.5 * total * dirs_[1].y;
+  }
   double t, ca, sa;
   const Interval* iv = locate(film_mm, t, ca, sa, band + 1);
   if (!iv) return 0.0;
   const int nd = directions_;
   const double total = (1 - t) * (1 - t) * iv->P[3 * nd] + t * (1 - t) * iv->P[3 * nd + 1] +
                        t * t * iv->P[3 * nd + 2];
-  return 0.5 * total * dirs_[1].y * (1 - iv->hole * iv->hole);
+  return 0.5 * total * dirs_[1].y;
 }
 
 }  // namespace lensim::optics

@@ -27,8 +27,12 @@
 // at a sharp corner of the region near the edge of its image circle, where a polygon vertex
 // cannot follow the corner exactly. 2-3% of the samples yield no ray.
 // Lenses with central obscurations (catadioptric lenses): the polygon is the outer boundary of
-// the region (obscurations ignored), and a hole, the polygon scaled about its centre to lie
-// inside the obscured middle, is cut out of it (checked with real rays across each interval).
+// the region (obscurations ignored), and a hole is cut out of it: a second star-shaped polygon
+// about the same centre, each vertex the first passing point along its direction (found with
+// real rays at both ends and the middle of each radial interval, interpolated like the outer
+// one, pulled in by the safety margin and checked with real rays in between). Off axis the
+// secondary's shadow moves off the outer region's centre; a scaled copy of the outer polygon
+// (the former hole) had to shrink to its nearest side and wasted 13% of the Cassegrain's samples.
 #pragma once
 
 #include <optional>
@@ -49,14 +53,17 @@ struct ExitPupilOptions {
   double rear_disc_radius_mm = 0;
   /// false for lenses that are not rotationally symmetric (anamorphic, symmetric under x -> -x
   /// and y -> -y): film points are mirrored into the first quadrant, which is cut into `sectors`
-  /// wedges; a wedge's bound at film radius h covers the regions of film points at `azimuths`
-  /// angles across it, each moved (not rotated) so that its paraxial chief-ray crossing (x and y
-  /// exit pupils apart) lies on the +x axis, and is checked at the angles between them; sampling
-  /// moves the bound back to the film point's azimuth without rotating it and mirrors it back (a
-  /// 2-D bound: an anamorphic lens's elliptical exit pupil keeps its orientation).
+  /// wedges. A bound of its own is built along each wedge edge (film azimuth k 90 / sectors
+  /// degrees, k = 0 .. sectors), for the region of each film point on it moved (not rotated) so
+  /// that its paraxial chief-ray crossing (x and y exit pupils apart) lies on the +x axis. A film
+  /// point inside a wedge uses the polygon blended linearly by azimuth between the two edges'
+  /// (centre and vertex distances), widened where checks of the true region at the wedge's middle
+  /// azimuth (at every node and interval middle of both edges) reach beyond it; sampling moves the
+  /// bound back to the film point's azimuth without rotating it and mirrors it back (a 2-D bound:
+  /// an anamorphic lens's elliptical exit pupil keeps its orientation). (Before: each wedge's
+  /// bound was the union of its edges' regions, which wasted 13.8% of lentil:2004's samples.)
   bool rotational = true;
-  int sectors = 4;   ///< anamorphic: wedges of the first quadrant with bounds of their own
-  int azimuths = 2;  ///< anamorphic: film azimuths per wedge (its edges included)
+  int sectors = 4;  ///< anamorphic: wedges of the first quadrant
   /// The same lens at other wavelengths (a dispersive lens at the ends of the spectrum): a
   /// rear-plane point counts as passing if it passes through any of them too, so that the bound
   /// holds the region of every wavelength without a wide blanket margin. Traced only where the
@@ -130,15 +137,31 @@ class ExitPupilSampler {
     Vec2 c0, c1;
     std::vector<double> A, B;  // per vertex
     std::vector<double> P;     // prefix sums P0, P1, P2 interleaved: 3 (n + 1) values
-    // A lens with central obscurations: the polygon scaled by `hole` about its centre lies in
-    // the obscured (blocked) middle of the region all across the interval; samples are drawn
-    // from the polygon minus that hole. 0: no hole.
-    double hole = 0;
+    // A lens with central obscurations: a hole, the star-shaped polygon about the same centre
+    // with vertex distances HA (1 - t) + HB t, lies in the obscured (blocked) middle of the
+    // region all across the interval; samples are drawn from the polygon minus the hole (each
+    // fan triangle minus the hole's, a quadrilateral). Empty: no hole.
+    std::vector<double> HA, HB;
+    bool hasHole() const { return !HA.empty(); }
   };
   static int intervalIn(const std::vector<Interval>& intervals,
                         const std::vector<int>& radius_lut, double lut_scale, double r);
   std::vector<Interval> buildIntervals(const std::vector<Polygon>& nodes,
                                        const std::vector<std::vector<double>>& scales) const;
+  // Anamorphic: the polygon of bound set `set` for film radius r in wedge `wedge`, blended at
+  // s in [0, 1] across it (centre c, vertex distances R[0 .. directions_)); false where it sees
+  // nothing.
+  bool blended(int set, int wedge, double r, double s, Vec2& c, double* R) const;
+  // Anamorphic: the wedge, blend weight and film radius of a film point (any quadrant).
+  void wedgeOf(Vec2 film_mm, int& wedge, double& s, double& r) const;
+  std::optional<PupilSample> sampleAnamorphic(Vec2 film_mm, Vec2 u, int set) const;
+  // Anamorphic: per wedge, the film radii of its checks and the widening factors per vertex
+  // they found (a film radius between two uses the larger of theirs).
+  struct WedgeCheck {
+    std::vector<double> r;
+    std::vector<std::vector<double>> f;
+  };
+  std::vector<WedgeCheck> wedges_;
   // The interval, t and rotation for a film point; nullptr where it sees nothing.
   const Interval* locate(Vec2 film_mm, double& t, double& cos_a, double& sin_a, int set) const;
 

@@ -17,6 +17,7 @@
 
 #include "lensim/camera/camera.h"
 #include "lensim/render/integrators/bdpt.h"
+#include "lensim/render/integrators/directlighting.h"
 #include "lensim/render/integrators/integrator.h"
 #include "lensim/render/integrators/lighttracer.h"
 #include "lensim/render/film/gbuffer.h"
@@ -205,8 +206,15 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   if (volpath) sc.media = &media;
   sc.scene_media = scene.integrator.type == "volpath";
   sc.camera_medium = scene.camera.medium;
+  // pbrt-v1–v3's directlighting (render/integrators/directlighting.h).
+  const bool direct_lighting = scene.integrator.type == "directlighting";
+  const DirectLightingOptions direct_opt{scene.integrator.all_lights, scene.integrator.max_depth};
+  if (direct_lighting && opt.pbrt_v2_quirks)
+    logWarning(fmt::format("{}: --pbrt-v2-quirks: pbrt-v2's ray epsilon is reproduced by the path "
+                           "integrator only; \"directlighting\" uses lensim's ray offsets",
+                           scene.integrator.loc.str()));
   for (const scene::Material& m : scene.materials)
-    sc.has_interfaces = sc.has_interfaces || m.type == "interface";
+    sc.has_interfaces = sc.has_interfaces || m.kind == scene::MaterialKind::Interface;
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
 
   // A camera sensor lensim does not bundle is warned once, at its parameter, by the builder
@@ -500,7 +508,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                       // Also without a camera ray: the light subpath's splats do not need it.
                       if (!ray) {
                         ++n_none;
-                        n_outside += !cam->reachesFilm(cs[k].film_raster);
+                        n_outside += !cam->reachesFilm(cs[k]);
                       } else {
                         ++n_rays;
                       }
@@ -520,11 +528,14 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                       }
                     } else if (!ray) {
                       ++n_none;
-                      n_outside += !cam->reachesFilm(cs[k].film_raster);
+                      n_outside += !cam->reachesFilm(cs[k]);
                     } else {
                       ++n_rays;
                       sampler->startPixelSample({x, y}, i0 + k, path_dimension);
-                      L = volpath
+                      L = direct_lighting
+                              ? directLightingLi(sc, direct_opt, ray->origin, ray->direction,
+                                                 lambda, *sampler, counts)
+                          : volpath
                               ? volpathLi(sc, ray->origin, ray->direction,
                                           sc.scene_media ? sc.camera_medium : -1, lambda,
                                           *sampler, counts)

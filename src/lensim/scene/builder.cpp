@@ -475,6 +475,7 @@ void Builder::directive(const Directive& d) {
     scene_.materials.push_back(std::move(m));
     g.material = static_cast<int>(scene_.materials.size()) - 1;
     g.material_name.clear();
+    g.scoped_material_name.clear();  // pbrt-v3's pbrtMaterial clears currentNamedMaterial
   } else if (n == "MakeNamedMaterial") {
     ParamSet ps(d.params, d.loc, fmt::format("MakeNamedMaterial \"{}\"", d.strings[0]));
     ps.addDefaults(g.material_attrs);
@@ -485,11 +486,13 @@ void Builder::directive(const Directive& d) {
     Material m = material(*type, ps, d.loc);
     m.name = d.strings[0];
     finish(ps);
+    if (scene_.legacy_syntax) return makeNamedMaterialScoped(d, std::move(m));
     if (named_materials_.count(m.name))
       warn(d.loc, fmt::format("named material \"{}\" redefined", m.name));
     scene_.materials.push_back(std::move(m));
     named_materials_[d.strings[0]] = static_cast<int>(scene_.materials.size()) - 1;
   } else if (n == "NamedMaterial") {
+    if (scene_.legacy_syntax) return namedMaterialScoped(d);
     auto it = named_materials_.find(d.strings[0]);
     g.material = it == named_materials_.end() ? -1 : it->second;
     g.material_name = it == named_materials_.end() ? d.strings[0] : std::string();

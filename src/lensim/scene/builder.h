@@ -8,9 +8,11 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -94,13 +96,46 @@ struct Texture {
   Input v00, v01, v10, v11;
 };
 
+/// The material lensim renders, decided once when the scene is built (Material::kind, from
+/// Material::type), so that shading switches on it instead of comparing type names per hit.
+enum class MaterialKind : uint8_t {
+  Diffuse,
+  CoatedDiffuse,
+  CoatedConductor,
+  Conductor,
+  Dielectric,
+  ThinDielectric,
+  DiffuseTransmission,
+  Mix,
+  Interface,
+  Subsurface,
+  Measured,
+  Hair,
+  // pbrt-v3 materials, rendered as pbrt-v3 defines them (render/materials/v3materials.h).
+  Plastic,
+  Substrate,
+  Uber,
+  Translucent,
+  Glass,
+  Metal,
+  Mirror,
+  Fourier,
+};
+/// The kind of a Material::type name; nullopt for a name lensim does not render.
+std::optional<MaterialKind> materialKindOf(std::string_view type);
+/// True for the pbrt-v3 kinds of render/materials/v3materials.h (plastic ... mirror).
+inline bool isV3Kind(MaterialKind k) {
+  return k >= MaterialKind::Plastic && k <= MaterialKind::Mirror;
+}
+
 /// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
 /// coateddiffuse, coatedconductor, conductor, dielectric, thindielectric, diffusetransmission,
 /// hair, mix, interface; or a pbrt-v3 one rendered as pbrt-v3 does: plastic, substrate, uber,
-/// translucent, glass, metal, mirror.
+/// translucent, glass, metal, mirror, fourier.
 struct Material {
   std::string name;  ///< set for MakeNamedMaterial
   std::string type;
+  MaterialKind kind = MaterialKind::Diffuse;  ///< `type`, decided by the builder
   std::string type_as_written;
   FileLoc loc;
   Input reflectance;  ///< spectrum: diffuse, coateddiffuse; conductor when given
@@ -126,7 +161,8 @@ struct Material {
   Input amount;
   std::optional<Input> displacement;
   std::string normal_map;     ///< resolved path
-  std::string measured_file;  ///< measured: resolved `filename` (.brdf or RGL .bsdf data)
+  std::string measured_file;  ///< measured: resolved `filename` (.brdf or RGL .bsdf data);
+                              ///< fourier: resolved `bsdffile` (pbrt-v3 tabulated BSDF)
   bool measured_rgl = false;  ///< measured: an RGL .bsdf tensor file (else pbrt-v2 .brdf text)
   // pbrt-v3 materials rendered as pbrt-v3 defines them (type plastic, substrate, uber,
   // translucent, glass, metal, mirror; render/v3materials.h): Ks, Kr, Kt, opacity and
@@ -134,8 +170,9 @@ struct Material {
   Input specular, kr, kt, opacity, v3_reflect;
   // subsurface (pbrt-v4's SubsurfaceMaterial; the boundary is a dielectric of `eta` and
   // roughness): sigma_a and sigma_s (1/scene unit, times `scale`), from `name` (a measured
-  // medium, g 0) or given; or `reflectance` with the mean free path `mfp`. Constants only.
-  scene::SpectrumValue ss_sigma_a, ss_sigma_s, ss_reflectance, ss_mfp;
+  // medium, g 0) or given; or `reflectance` with the mean free path `mfp`. Each a constant or
+  // a spectrum texture, evaluated where a path enters the shape (render/media/subsurface.h).
+  Input ss_sigma_a, ss_sigma_s, ss_reflectance, ss_mfp;
   bool ss_from_reflectance = false;
   std::string ss_name;
   double ss_g = 0;
@@ -222,6 +259,7 @@ struct Light {
   std::vector<Vec3> portal;  ///< infinite: 4 points of a portal quad, or empty
   bool two_sided = false;
   int shape_count = 0;  ///< area lights: shapes that emit with it
+  int n_samples = 1;    ///< pbrt-v1–v3 "nsamples" (directlighting "all": samples per hit)
 };
 
 /// pbrt-v1/v2 `realistic` camera (Stanford CS348B): camera space is millimetres.
@@ -352,8 +390,9 @@ struct Filter {
   bool defaulted = true;
 };
 
-/// The light transport algorithm: `type` "path", "volpath" (media), "lighttracer" or "bdpt". The
-/// builder makes volpath the default of pbrt-v4 files, as pbrt-v4 does; v1–v3 files default to path.
+/// The light transport algorithm: `type` "path", "volpath" (media), "lighttracer", "bdpt" or
+/// "directlighting" (pbrt-v1–v3). The builder makes volpath the default of pbrt-v4 files, as
+/// pbrt-v4 does; v1–v3 files default to path.
 struct Integrator {
   std::string type = "path";
   std::string type_as_written;
@@ -361,6 +400,7 @@ struct Integrator {
   int max_depth = 5;
   bool regularize = false;
   std::string light_sampler = "bvh";
+  bool all_lights = true;  ///< directlighting: strategy "all" (every light) or "one"
   bool defaulted = true;
 };
 

@@ -313,6 +313,17 @@ double pdfLightOrigin(const Context& ctx, const Vertex& v, const Vertex& next) {
   return ctx.light_sampler->pmf({}, v.light) * v.light->pdfLe(v.p, v.ng, w).first;
 }
 
+double cameraPositionRatio(const Context& ctx, double pdf_pos, const Vec3& x0, const Vec3& x1) {
+  if (!(pdf_pos > 0)) return 1;
+  double r = ctx.camera->pdfWiPos(x1, x0) / pdf_pos;
+  if (ctx.camera_delta_direction) {
+    const Vec3 d = x1 - x0;
+    const double d2 = dot(d, d);
+    r = d2 > 0 ? r / d2 : 0;
+  }
+  return r;
+}
+
 double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex& sampled, int s,
                  int t, double lambda_nm) {
   // A light seen directly: by the camera ray (s = 0, t = 2) or, for an area light, by the light
@@ -348,7 +359,25 @@ double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex
   if (pt_minus)
     new_pt_minus_rev =
         s > 0 ? pdf(ctx, *pt, qs, *pt_minus, lambda_nm) : pdfLight(ctx, *pt, *pt_minus);
-  if (qs) new_qs_rev = pdf(ctx, *pt, pt_minus, *qs, lambda_nm);
+  // The camera position's density ratio (t = 1 over generateRay's): the t >= 2 strategies
+  // found it with the camera subpath; t = 1 computes it here, from the ray to qs.
+  double pos_ratio = t >= 2 ? camera[0].wi_pos_ratio : 1;
+  if (t == 1 && qs) {
+    double d2;
+    const Vec3 w = unitOrZero(qs->p - pt->p, d2);
+    if (d2 > 0) {
+      const camera::CameraRayPdf rp = ctx.camera->rayPdf(pt->p, w, lambda_nm);
+      new_qs_rev = convertDensity(*pt, rp.pdf_dir, *qs);
+      pos_ratio = cameraPositionRatio(ctx, rp.pdf_pos, pt->p, qs->p);
+    }
+    if (!(pos_ratio > 0)) {
+      // sampleWi cannot pick this camera point for qs: the strategy has no density here.
+      if (end) *end = saved_end;
+      return 0;
+    }
+  } else if (qs) {
+    new_qs_rev = pdf(ctx, *pt, pt_minus, *qs, lambda_nm);
+  }
   if (qs_minus) new_qs_minus_rev = pdf(ctx, *qs, pt, *qs_minus, lambda_nm);
   auto assign = [&](double& at, double value) {
     saved[n_saved++] = {&at, at};
@@ -368,11 +397,13 @@ double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex
   double ri = 1;
   for (int i = t - 1; i > 0; --i) {
     ri *= remap0(camera[i].pdf_rev) / remap0(camera[i].pdf_fwd);
+    if (i == 1) ri *= pos_ratio;  // the t = 1 strategy picks the camera point by sampleWi
     if (!camera[i].delta && !camera[i - 1].delta) sum_ri += power(ri);
   }
   ri = 1;
   for (int i = s - 1; i >= 0; --i) {
     ri *= remap0(light[i].pdf_rev) / remap0(light[i].pdf_fwd);
+    if (t == 1 && i == s - 1) ri /= pos_ratio;  // strategies from here on use generateRay's
     const bool delta_light_vertex = i > 0 ? light[i - 1].delta : isDeltaLight(light[0]);
     if (!light[i].delta && !delta_light_vertex) sum_ri += power(ri);
   }
@@ -393,9 +424,12 @@ int cameraSubpath(const Context& ctx, const camera::CameraRay& ray, SampledWavel
   v.p = ray.origin;
   v.beta = SampledSpectrum(ray.weight);
   const camera::CameraRayPdf rp = ctx.camera->rayPdf(ray.origin, ray.direction, lambda.lambda(0));
-  return randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY}, lambda, sampler, v.beta,
-                    rp.pdf_dir, max_vertices - 1, TransportMode::Radiance, counts, path) +
-         1;
+  const int n = randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY}, lambda, sampler, v.beta,
+                           rp.pdf_dir, max_vertices - 1, TransportMode::Radiance, counts, path) +
+                1;
+  if (n >= 2 && path[1].onSurface())
+    path[0].wi_pos_ratio = cameraPositionRatio(ctx, rp.pdf_pos, path[0].p, path[1].p);
+  return n;
 }
 
 int lightSubpath(const Context& ctx, SampledWavelengths& lambda, Sampler& sampler,
@@ -461,6 +495,8 @@ BdptIntegrator::BdptIntegrator(const SceneContext& sc, const camera::Camera& cam
   ctx_.scene_radius = b.empty() ? 1 : std::max(1e-3, 0.5 * length(b.max - b.min));
   ctx_.mis_exponent = mis_exponent;
   ctx_.max_depth = std::clamp(sc.max_depth, 0, 1000);
+  const scene::Camera& c = sc.scene->camera;
+  ctx_.camera_delta_direction = c.type == "orthographic" && c.lens_radius == 0;
 }
 
 BdptIntegrator::~BdptIntegrator() = default;

@@ -13,9 +13,28 @@
 // the lens at a point on its front element that sampleWi finds, and the MIS densities of camera
 // vertices come from Camera::rayPdf.
 //
+// The camera vertex's position: strategies with t >= 2 pick it as generateRay does (density
+// rayPdf().pdf_pos per unit area of the lens / front element / film plane), t = 1 as sampleWi
+// does, given the next vertex (Camera::pdfWiPos). pbrt-v4 leaves both out of its MIS weights
+// (GenerateCameraSubpath computes pdfPos and drops it; MISWeight's camera loop stops at i = 1,
+// src/pbrt/cpu/integrators.cpp), which is exact for its perspective camera, whose SampleWi picks
+// the lens point uniformly as GenerateRay does. lensim's orthographic thin lens (sampleWi's
+// density depends on the depth of the point), its orthographic pinhole (a delta direction, the
+// position sampled over the film) and the realistic camera (sampleWi aims at the part of the
+// front element light from the point can pass) differ: the weights carry the ratio
+// pdfWiPos / pdf_pos (Vertex::wi_pos_ratio), so they are the balance (or power) heuristic of the
+// strategies' true densities for every camera.
+//
 // Light subpaths are traced for every camera sample, also when the camera sample yields no ray
 // (a realistic lens vignettes it): their t = 1 splats do not depend on the camera ray, and
 // dropping them would darken the image by the fraction of blocked samples.
+//
+// A dispersive lens: the renderer generates bdpt's camera rays at the hero wavelength only
+// (the path integrator's spectral MIS over the wavelengths' film points needs the pixel filter
+// per camera sample; a light subpath shares the camera path's wavelengths and splats anywhere),
+// so every strategy of the sample carries the hero alone, and t = 1 connections through the lens
+// (sampleWi's hero_only) terminate the secondary wavelengths before they contribute, also for
+// samples without a camera ray. Unbiased; the colour noise is that of one wavelength per path.
 //
 // Not handled: participating media (the scene builder renders such scenes with volpath, warned).
 #pragma once
@@ -60,6 +79,9 @@ struct Vertex {
   SurfaceHit hit;  ///< surface: the hit (area light emission, normal, uv)
   bool delta = false;
   double pdf_fwd = 0, pdf_rev = 0;  ///< area densities (solid angle toward infinite lights)
+  /// Camera vertex: the density with which the t = 1 strategy (Camera::sampleWi from the next
+  /// vertex) picks this position, over generateRay's (rayPdf().pdf_pos); see cameraPositionRatio.
+  double wi_pos_ratio = 1;
 
   bool onSurface() const { return ng.x != 0 || ng.y != 0 || ng.z != 0; }
 };
@@ -73,6 +95,9 @@ struct Context {
   double scene_radius = 1;
   double mis_exponent = 1;  ///< 1: balance heuristic (pbrt-v4); 2: power heuristic
   int max_depth = 5;
+  /// The camera's rays run along one direction (the orthographic pinhole): the first vertex's
+  /// density from the camera is pdf_pos |cos| per unit area, not through a solid angle.
+  bool camera_delta_direction = false;
 };
 
 /// A light vertex on an area light (not an infinite one): its point can be connected to the
@@ -92,6 +117,13 @@ double pdf(const Context& ctx, const Vertex& v, const Vertex* prev, const Vertex
 double pdfLight(const Context& ctx, const Vertex& v, const Vertex& next);
 /// Density of choosing the light vertex v (light choice and position) as a light subpath's start.
 double pdfLightOrigin(const Context& ctx, const Vertex& v, const Vertex& next);
+/// pdfWiPos(x1, x0) / pdf_pos for the camera vertex x0 of a path whose next vertex is x1: the
+/// t = 1 strategy's density of x0 over that of the strategies that start with generateRay's ray
+/// (pdf_pos: rayPdf's for the ray from x0 toward x1); over |x1 - x0|^2 more for a camera of one
+/// direction (Context::camera_delta_direction), whose first vertex density is pdf_pos |cos|
+/// per unit area where pdf() gives pdf_dir |cos| / d^2 with a delta pdf_dir of 1. 1 where
+/// pdf_pos is 0 (no density to compare with).
+double cameraPositionRatio(const Context& ctx, double pdf_pos, const Vec3& x0, const Vec3& x1);
 /// The MIS weight of strategy (s, t) (pbrt-v4's MISWeight); `sampled` replaces camera[0]
 /// (t = 1) or else light[0] (s = 1). light and camera are modified during the call and restored.
 double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex& sampled, int s,

@@ -10,6 +10,7 @@
 
 #include "lensim/render/materials/layered.h"
 #include "lensim/render/media/media.h"
+#include "lensim/render/media/subsurface.h"
 #include "lensim/scene/builder.h"
 
 namespace lensim::render {
@@ -83,6 +84,26 @@ int mediumAfter(const SceneContext& sc, const SurfaceHit& h, const Vec3& w, int 
   return dot(w, h.ng) > 0 ? outside : inside;
 }
 
+/// The medium of index `medium` for tracking: `walk` where the index is that of the walk whose
+/// coefficients it holds (a textured subsurface material, evaluated where the walk entered).
+const Medium* trackedMedium(const SceneContext& sc, int medium, int walk_index,
+                            const WalkMedium& walk) {
+  if (medium >= 0 && medium == walk_index) return &walk;
+  return sc.media ? sc.media->get(medium) : nullptr;
+}
+
+/// When a path leaves the surface hit `h` (texture context tctx) into medium `next` from
+/// `current`, and `next` is the inside of a subsurface material with textured coefficients:
+/// sets `walk` to them, evaluated at this entry point, and walk_index to next.
+void enterMedium(const SceneContext& sc, int next, int current, const TextureEvalContext& tctx,
+                 const SampledWavelengths& lambda, WalkMedium& walk, int& walk_index) {
+  if (next == current || !sc.media) return;
+  if (const SubsurfaceMedium* ss = sc.media->texturedSubsurface(next)) {
+    walk.set(ss->coefficientsAt(*sc.textures, tctx, lambda), ss->g());
+    walk_index = next;
+  }
+}
+
 /// The most scattering events and boundary hits of one random walk inside a subsurface shape
 /// (they do not count toward maxdepth, as the pbrt-v4 BSSRDF's inner bounces do not).
 constexpr int kMaxWalkSteps = 100000;
@@ -135,6 +156,11 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
     if (occludedScene(sc, v.p, v.ng, ls->p_light, ls->infinite, ls->wi, counts)) return {};
   } else {
     int medium = v.bsdf ? mediumAfter(sc, *v.hit, ls->wi, v.medium) : v.medium;
+    // A shadow ray into a textured subsurface shape: its coefficients where it enters.
+    WalkMedium walk;
+    int walk_index = -1;
+    if (v.bsdf)
+      enterMedium(sc, medium, v.medium, {v.hit->p, v.hit->uv, v.hit->ns}, lambda, walk, walk_index);
     Vec3 origin = v.bsdf ? offsetOrigin(v.p, v.ng, ls->wi) : v.p;
     for (int guard = 0; guard < 256; ++guard) {
       Ray r;
@@ -148,7 +174,7 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
       }
       auto hit = intersectScene(sc, r, counts);
       if (hit && !isInterfaceHit(sc, *hit, -r.d)) return {};
-      if (const Medium* m = sc.media ? sc.media->get(medium) : nullptr) {
+      if (const Medium* m = trackedMedium(sc, medium, walk_index, walk)) {
         const double len = length(r.d);
         const double t_end = (hit ? hit->t : r.tmax) * len;
         const Vec3 d = r.d / len;
@@ -199,6 +225,9 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
   Vec3 prev_p;
   Vec3 prev_n{0, 0, 0};  ///< the previous vertex's shading normal (zero in a medium), for the light sampler
   int depth = 0, interfaces = 0, walk_steps = 0;
+  // The walk in a textured subsurface material: its medium index and coefficients.
+  WalkMedium walk;
+  int walk_index = -1;
   const bool has_media = sc.media && (!sc.media->empty() || sc.media->hasSubsurface());
   // Random numbers for the tracking steps (their count varies): a stream per path.
   Rng rng;
@@ -216,7 +245,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
     // Inside a subsurface shape (a random walk): its boundary is no light's window (it is not
     // an interface), so no light is sampled from inside and scattering is not counted as depth.
     const bool in_walk = has_media && sc.media->isSubsurface(medium);
-    if (const Medium* m = has_media ? sc.media->get(medium) : nullptr) {
+    if (const Medium* m = has_media ? trackedMedium(sc, medium, walk_index, walk) : nullptr) {
       bool scattered = false, terminated = false;
       const double len = length(ray.d);
       const Vec3 dir = ray.d / len;
@@ -368,7 +397,9 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
     specular_bounce = bs->isSpecular();
     any_non_specular = any_non_specular || !specular_bounce;
     if (bs->isTransmission()) eta_scale *= bs->eta * bs->eta;
-    medium = mediumAfter(sc, h, bs->wi, medium);
+    const int next_medium = mediumAfter(sc, h, bs->wi, medium);
+    if (has_media) enterMedium(sc, next_medium, medium, tctx, lambda, walk, walk_index);
+    medium = next_medium;
     ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY};
     if (beta.isBlack()) break;
     const SampledSpectrum rr_beta = beta * eta_scale / wavelengthMean(r_u, lambda);

@@ -904,6 +904,7 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
   const Vec3 centre = b.empty() ? Vec3{0, 0, 0} : (b.min + b.max) * 0.5;
   for (const scene::Light& l : scene.lights) {
     if (l.type == "diffuse") continue;  // attached to shapes below
+    const size_t first_light = lights_.size();
     const bool rgb = l.emission.kind == scene::SpectrumValue::Kind::Rgb;
     SpectrumPtr spec =
         textures.constant(l.emission, rgb ? SpectrumType::Illuminant : SpectrumType::Unbounded);
@@ -958,6 +959,7 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
       }
       infinite_.push_back(lights_.back().get());
     }
+    for (size_t i = first_light; i < lights_.size(); ++i) lights_[i]->n_samples = l.n_samples;
   }
   // Area lights: one light per triangle / patch, one per quadric.
   shape_first_light_.assign(scene.shapes.size(), -1);
@@ -1041,6 +1043,8 @@ LightSet::LightSet(const scene::Scene& scene, const Accel& accel, const Textures
       light->setWorldBounds(s.transform.applyBounds(scene::objectBounds(scene, s)));
       lights_.push_back(std::move(light));
     }
+    for (size_t i = size_t(shape_first_light_[si]); i < lights_.size(); ++i)
+      lights_[i]->n_samples = l.n_samples;
   }
   std::vector<const Light*> all;
   for (size_t i = 0; i < lights_.size(); ++i) {

@@ -57,6 +57,9 @@ class Light {
   /// Position in the list given to the light sampler (set by LightSet; -1 outside one), so that
   /// samplers find a light's data without a hash lookup.
   int index = -1;
+  /// pbrt-v1–v3 "nsamples": the light samples per hit of the directlighting integrator's "all"
+  /// strategy (set by LightSet from the scene light).
+  int n_samples = 1;
   /// Point and directional lights (no surface to hit).
   virtual bool isDelta() const { return false; }
   virtual bool isInfinite() const { return false; }

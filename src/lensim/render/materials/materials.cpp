@@ -3,6 +3,7 @@
 // normal-incidence reflectance; a dielectric eta that varies with wavelength keeps only the
 // hero wavelength).
 #include "lensim/render/materials/materials.h"
+#include "lensim/render/materials/fourier.h"
 #include "lensim/render/materials/measured.h"
 #include "lensim/render/materials/measured_rgl.h"
 
@@ -32,9 +33,17 @@ struct Materials::NormalMap {
 Materials::Materials(const scene::Scene& scene, const Textures& textures)
     : scene_(&scene), textures_(&textures) {
   normal_maps_.resize(scene.materials.size());
+  fourier_tables_.resize(scene.materials.size());
   std::map<std::string, std::shared_ptr<NormalMap>> loaded;
   for (size_t i = 0; i < scene.materials.size(); ++i) {
     const scene::Material& m = scene.materials[i];
+    if (m.kind == scene::MaterialKind::Fourier) {
+      try {
+        fourier_tables_[i] = FourierBSDFTable::loadCached(m.measured_file);
+      } catch (const Error& e) {
+        throw Error(m.loc, fmt::format("fourier: {}", nestedMessage(e)));
+      }
+    }
     if (m.normal_map.empty()) continue;
     auto it = loaded.find(m.normal_map);
     if (it == loaded.end()) {
@@ -69,7 +78,7 @@ Materials::~Materials() = default;
 int Materials::resolve(int material, const TextureEvalContext& ctx, const Vec3& wo) const {
   for (int guard = 0; guard < 16 && material >= 0; ++guard) {
     const scene::Material& m = scene_->materials[size_t(material)];
-    if (m.type != "mix") return material;
+    if (m.kind != scene::MaterialKind::Mix) return material;
     const double a = textures_->evalFloat(m.amount, ctx);
     int next;
     if (a <= 0) {
@@ -140,7 +149,8 @@ Vec3 Materials::bumpedNormal(int material, const TextureEvalContext& ctx, const 
 }
 
 bool Materials::isInterface(int material) const {
-  return material >= 0 && scene_->materials[size_t(material)].type == "interface";
+  return material >= 0 &&
+         scene_->materials[size_t(material)].kind == scene::MaterialKind::Interface;
 }
 
 std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalContext& ctx,
@@ -178,77 +188,95 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
     return std::pair{tx.evalSpectrum(eta_in, ctx, lambda, SpectrumType::Unbounded),
                      tx.evalSpectrum(k_in, ctx, lambda, SpectrumType::Unbounded)};
   };
-  if (isV3Material(m.type)) return makeV3BxDF(m, tx, ctx, lambda, regularize);
-  if (m.type == "hair") return makeHairBxDF(m, tx, ctx, lambda);
-  if (m.type == "measured") {
-    if (m.measured_rgl)
-      return std::make_shared<RGLMeasuredBxDF>(RGLMeasuredBRDF::loadCached(m.measured_file),
-                                               lambda);
-    return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
-  }
-  if (m.type == "diffuse") {
-    const SampledSpectrum r =
-        clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo));
-    const double sigma = tx.evalFloat(m.sigma, ctx);
-    if (sigma > 0) return std::make_shared<OrenNayarBxDF>(r, sigma);
-    return std::make_shared<DiffuseBxDF>(r);
-  }
-  if (m.type == "diffusetransmission") {
-    const SampledSpectrum r =
-        clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo)) * m.scale;
-    const SampledSpectrum t =
-        clampZero(tx.evalSpectrum(m.transmittance, ctx, lambda, SpectrumType::Albedo)) * m.scale;
-    return std::make_shared<DiffuseTransmissionBxDF>(r, t);
-  }
-  if (m.type == "coatedconductor") {
-    auto [ceta, ck] = conductorIndex(m.conductor_has_reflectance, m.conductor_reflectance,
-                                     m.conductor_eta, m.conductor_k);
-    double eta = dielectricEta();
-    if (eta == 0) eta = 1;
-    // pbrt-v4: the conductor sits under a medium of index eta, so its index is relative to it.
-    ceta /= eta;
-    ck /= eta;
-    double cu = tx.evalFloat(m.conductor_uroughness, ctx),
-           cv = tx.evalFloat(m.conductor_vroughness, ctx);
-    if (m.remap_roughness) cu = roughnessToAlpha(cu), cv = roughnessToAlpha(cv);
-    LayerParams lp;
-    lp.thickness = tx.evalFloat(m.thickness, ctx);
-    lp.albedo = clampZero(tx.evalSpectrum(m.albedo, ctx, lambda, SpectrumType::Albedo));
-    lp.g = tx.evalFloat(m.g, ctx);
-    lp.max_depth = m.max_depth;
-    lp.n_samples = m.n_samples;
-    return std::make_shared<CoatedBxDF>(
-        DielectricBxDF(eta, distribution()),
-        std::make_shared<ConductorBxDF>(TrowbridgeReitz(reg(cu), reg(cv)), ceta, ck), lp);
-  }
-  if (m.type == "conductor") {
-    const auto [eta, k] = conductorIndex(m.has_reflectance, m.reflectance, m.eta, m.k);
-    return std::make_shared<ConductorBxDF>(distribution(), eta, k);
-  }
-  if (m.type == "dielectric" || m.type == "subsurface") {  // subsurface: its boundary
-    double eta = dielectricEta();
-    if (eta == 0) eta = 1;
-    return std::make_shared<DielectricBxDF>(eta, distribution());
-  }
-  if (m.type == "thindielectric") {
-    double eta = dielectricEta();
-    if (eta == 0) eta = 1;
-    return std::make_shared<ThinDielectricBxDF>(eta);
-  }
-  if (m.type == "coateddiffuse") {
-    const SampledSpectrum r =
-        clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo));
-    double eta = dielectricEta();
-    if (eta == 0) eta = 1;
-    LayerParams lp;
-    lp.thickness =
-        m.thickness.texture >= 0 || m.thickness.value != 0 ? tx.evalFloat(m.thickness, ctx) : 0.01;
-    lp.albedo = clampZero(tx.evalSpectrum(m.albedo, ctx, lambda, SpectrumType::Albedo));
-    lp.g = tx.evalFloat(m.g, ctx);
-    lp.max_depth = m.max_depth;
-    lp.n_samples = m.n_samples;
-    return std::make_shared<CoatedBxDF>(DielectricBxDF(eta, distribution()),
-                                        std::make_shared<DiffuseBxDF>(r), lp);
+  using K = scene::MaterialKind;
+  if (scene::isV3Kind(m.kind)) return makeV3BxDF(m, tx, ctx, lambda, regularize);
+  switch (m.kind) {
+    case K::Fourier:
+      return std::make_shared<FourierBxDF>(fourier_tables_[size_t(material)], lambda);
+    case K::Hair:
+      return makeHairBxDF(m, tx, ctx, lambda);
+    case K::Measured: {
+      if (m.measured_rgl)
+        return std::make_shared<RGLMeasuredBxDF>(RGLMeasuredBRDF::loadCached(m.measured_file),
+                                                 lambda);
+      return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
+    }
+    case K::Diffuse: {
+      const SampledSpectrum r =
+          clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo));
+      const double sigma = tx.evalFloat(m.sigma, ctx);
+      if (sigma > 0) return std::make_shared<OrenNayarBxDF>(r, sigma);
+      return std::make_shared<DiffuseBxDF>(r);
+    }
+    case K::DiffuseTransmission: {
+      const SampledSpectrum r =
+          clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo)) * m.scale;
+      const SampledSpectrum t =
+          clampZero(tx.evalSpectrum(m.transmittance, ctx, lambda, SpectrumType::Albedo)) * m.scale;
+      return std::make_shared<DiffuseTransmissionBxDF>(r, t);
+    }
+    case K::CoatedConductor: {
+      auto [ceta, ck] = conductorIndex(m.conductor_has_reflectance, m.conductor_reflectance,
+                                       m.conductor_eta, m.conductor_k);
+      double eta = dielectricEta();
+      if (eta == 0) eta = 1;
+      // pbrt-v4: the conductor sits under a medium of index eta, so its index is relative to it.
+      ceta /= eta;
+      ck /= eta;
+      double cu = tx.evalFloat(m.conductor_uroughness, ctx),
+             cv = tx.evalFloat(m.conductor_vroughness, ctx);
+      if (m.remap_roughness) cu = roughnessToAlpha(cu), cv = roughnessToAlpha(cv);
+      LayerParams lp;
+      lp.thickness = tx.evalFloat(m.thickness, ctx);
+      lp.albedo = clampZero(tx.evalSpectrum(m.albedo, ctx, lambda, SpectrumType::Albedo));
+      lp.g = tx.evalFloat(m.g, ctx);
+      lp.max_depth = m.max_depth;
+      lp.n_samples = m.n_samples;
+      return std::make_shared<CoatedBxDF>(
+          DielectricBxDF(eta, distribution()),
+          std::make_shared<ConductorBxDF>(TrowbridgeReitz(reg(cu), reg(cv)), ceta, ck), lp);
+    }
+    case K::Conductor: {
+      const auto [eta, k] = conductorIndex(m.has_reflectance, m.reflectance, m.eta, m.k);
+      return std::make_shared<ConductorBxDF>(distribution(), eta, k);
+    }
+    case K::Dielectric:
+    case K::Subsurface: {  // subsurface: its boundary
+      double eta = dielectricEta();
+      if (eta == 0) eta = 1;
+      return std::make_shared<DielectricBxDF>(eta, distribution());
+    }
+    case K::ThinDielectric: {
+      double eta = dielectricEta();
+      if (eta == 0) eta = 1;
+      return std::make_shared<ThinDielectricBxDF>(eta);
+    }
+    case K::CoatedDiffuse: {
+      const SampledSpectrum r =
+          clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo));
+      double eta = dielectricEta();
+      if (eta == 0) eta = 1;
+      LayerParams lp;
+      lp.thickness = m.thickness.texture >= 0 || m.thickness.value != 0
+                         ? tx.evalFloat(m.thickness, ctx)
+                         : 0.01;
+      lp.albedo = clampZero(tx.evalSpectrum(m.albedo, ctx, lambda, SpectrumType::Albedo));
+      lp.g = tx.evalFloat(m.g, ctx);
+      lp.max_depth = m.max_depth;
+      lp.n_samples = m.n_samples;
+      return std::make_shared<CoatedBxDF>(DielectricBxDF(eta, distribution()),
+                                          std::make_shared<DiffuseBxDF>(r), lp);
+    }
+    case K::Mix:        // resolved before (resolve())
+    case K::Interface:  // no BSDF: rays pass (isInterface())
+    case K::Plastic:
+    case K::Substrate:
+    case K::Uber:
+    case K::Translucent:
+    case K::Glass:
+    case K::Metal:
+    case K::Mirror:
+      break;
   }
   return std::make_shared<DiffuseBxDF>(SampledSpectrum(0.5));
 }

@@ -17,7 +17,8 @@ namespace lensim::render {
 
 class Materials {
  public:
-  /// Loads the normal maps; throws lensim::Error (at the material) for unreadable ones.
+  /// Loads the normal maps and the fourier materials' tables; throws lensim::Error (at the
+  /// material) for unreadable ones.
   Materials(const scene::Scene& scene, const Textures& textures);
   ~Materials();
   /// The material that shades the point: `mix` materials choose one of theirs with probability
@@ -48,6 +49,8 @@ class Materials {
   const Textures* textures_;
   struct NormalMap;
   std::vector<std::shared_ptr<NormalMap>> normal_maps_;  ///< per material, or null
+  /// pbrt-v3 "fourier" tables (render/materials/fourier.h), per material, or null.
+  std::vector<std::shared_ptr<const class FourierBSDFTable>> fourier_tables_;
 };
 
 }  // namespace lensim::render

@@ -360,11 +360,6 @@ double V3BSDF::pdf(const Vec3& wo, const Vec3& wi, TransportMode, ReflTrans allo
 
 // ---- materials ----------------------------------------------------------------------------
 
-bool isV3Material(const std::string& type) {
-  return type == "plastic" || type == "substrate" || type == "uber" || type == "translucent" ||
-         type == "glass" || type == "metal" || type == "mirror";
-}
-
 std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures& tx,
                                        const TextureEvalContext& ctx, SampledWavelengths& lambda,
                                        bool regularize) {
@@ -416,11 +411,12 @@ std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures&
     lobes.push_back(l);
   };
 
-  if (m.type == "plastic") {
+  using MK = scene::MaterialKind;
+  if (m.kind == MK::Plastic) {
     // plastic.cpp: Lambertian(Kd) + MicrofacetReflection(Ks, FresnelDielectric(1.5, 1)).
     lambert(albedo(m.reflectance), false);
     microfacet(albedo(m.specular), false, 1.5, 1.0);
-  } else if (m.type == "substrate") {
+  } else if (m.kind == MK::Substrate) {
     // substrate.cpp: FresnelBlend(Kd, Ks, TrowbridgeReitz(u, v)).
     const SampledSpectrum d = albedo(m.reflectance), s = albedo(m.specular);
     if (!d.isBlack() || !s.isBlack()) {
@@ -430,7 +426,7 @@ std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures&
       alphas(l);
       lobes.push_back(l);
     }
-  } else if (m.type == "uber") {
+  } else if (m.kind == MK::Uber) {
     // uber.cpp: (1 - opacity) passes straight through; the rest is op * (Kd Lambertian, Ks
     // microfacet and Kr specular reflection with FresnelDielectric(1, eta), Kt specular
     // transmission).
@@ -441,7 +437,7 @@ std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures&
     microfacet(op * albedo(m.specular), false, 1.0, eta);
     specular(op * albedo(m.kr), false, F::Dielectric, eta);
     specular(op * albedo(m.kt), true, F::Dielectric, eta);
-  } else if (m.type == "translucent") {
+  } else if (m.kind == MK::Translucent) {
     // translucent.cpp: reflect x (Kd Lambertian, Ks microfacet), transmit x (Kd Lambertian
     // transmission, Ks microfacet transmission), eta 1.5.
     const SampledSpectrum r = albedo(m.v3_reflect), t = albedo(m.transmittance);
@@ -452,7 +448,7 @@ std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures&
       microfacet(r * ks, false, 1.0, 1.5);
       microfacet(t * ks, true, 1.0, 1.5);
     }
-  } else if (m.type == "glass") {
+  } else if (m.kind == MK::Glass) {
     // glass.cpp: smooth: FresnelSpecular(Kr, Kt, 1, eta); rough: microfacet reflection and
     // transmission, scaled by Kr and Kt.
     const double eta = floatEta();
@@ -472,7 +468,7 @@ std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures&
       microfacet(R, false, 1.0, eta);
       microfacet(T, true, 1.0, eta);
     }
-  } else if (m.type == "metal") {
+  } else if (m.kind == MK::Metal) {
     // metal.cpp: MicrofacetReflection(1, FresnelConductor(1, eta, k)).
     V3Lobe l;
     l.kind = K::MicrofacetReflection;
@@ -482,7 +478,7 @@ std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures&
     l.cond_k = tx.evalSpectrum(m.k, ctx, lambda, SpectrumType::Unbounded);
     alphas(l);
     lobes.push_back(l);
-  } else if (m.type == "mirror") {
+  } else if (m.kind == MK::Mirror) {
     // mirror.cpp: SpecularReflection(Kr, FresnelNoOp).
     specular(albedo(m.kr), false, F::NoOp, 1.0);
   }

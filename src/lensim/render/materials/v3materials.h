@@ -70,9 +70,6 @@ class V3BSDF final : public BxDF {
   BxDFFlags flags_ = BxDFFlags::Unset;
 };
 
-/// True for the material types this file renders (the builder keeps pbrt-v3's names for them).
-bool isV3Material(const std::string& type);
-
 /// The BSDF of a pbrt-v3 material at ctx. `regularize` as in Materials::bxdf.
 std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures& tx,
                                        const TextureEvalContext& ctx, SampledWavelengths& lambda,

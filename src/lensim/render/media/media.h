@@ -23,6 +23,8 @@ struct Medium;
 
 namespace lensim::render {
 
+class SubsurfaceMedium;
+
 /// Scattering properties at a point of a medium.
 struct MediumProperties {
   SampledSpectrum sigma_a, sigma_s;  ///< absorption and scattering coefficients (1/m)
@@ -167,10 +169,17 @@ class Media {
   /// Whether medium index i is a subsurface material's inside.
   bool isSubsurface(int i) const { return i >= n_scene_; }
   bool hasSubsurface() const { return has_subsurface_; }
+  /// Medium index i as the inside of a subsurface material with textured coefficients (its
+  /// walks need the coefficients at their entry point, SubsurfaceMedium::coefficientsAt), or
+  /// nullptr.
+  const SubsurfaceMedium* texturedSubsurface(int i) const {
+    return i < n_scene_ || textured_.empty() ? nullptr : textured_[size_t(i - n_scene_)];
+  }
 
  private:
   std::vector<std::unique_ptr<Medium>> media_;
   std::vector<int> subsurface_;  ///< per material: its medium index, or -1
+  std::vector<const SubsurfaceMedium*> textured_;  ///< per subsurface medium: textured, or null
   int n_scene_ = 0;
   bool any_ = false, has_subsurface_ = false;
 };

@@ -99,23 +99,25 @@ double albedoForDiffuseReflectance(double r) {
 SubsurfaceMedium::SubsurfaceMedium(const scene::Material& m) {
   scale_ = m.scale;
   g_ = m.ss_g;
-  if (m.ss_from_reflectance) {
-    reflectance_ = makeSpectrum(m.ss_reflectance, SpectrumType::Albedo);
-    mfp_ = makeSpectrum(m.ss_mfp, SpectrumType::Unbounded);
+  from_reflectance_ = m.ss_from_reflectance;
+  if (from_reflectance_)
+    textured_ = m.ss_reflectance.texture >= 0 || m.ss_mfp.texture >= 0;
+  else
+    textured_ = m.ss_sigma_a.texture >= 0 || m.ss_sigma_s.texture >= 0;
+  if (textured_) {
+    material_ = &m;
+  } else if (from_reflectance_) {
+    reflectance_ = makeSpectrum(m.ss_reflectance.spectrum, SpectrumType::Albedo);
+    mfp_ = makeSpectrum(m.ss_mfp.spectrum, SpectrumType::Unbounded);
   } else {
-    sigma_a_ = makeSpectrum(m.ss_sigma_a, SpectrumType::Unbounded);
-    sigma_s_ = makeSpectrum(m.ss_sigma_s, SpectrumType::Unbounded);
+    sigma_a_ = makeSpectrum(m.ss_sigma_a.spectrum, SpectrumType::Unbounded);
+    sigma_s_ = makeSpectrum(m.ss_sigma_s.spectrum, SpectrumType::Unbounded);
   }
 }
 
-MediumProperties SubsurfaceMedium::coefficients(const SampledWavelengths& lambda) const {
+MediumProperties SubsurfaceMedium::fromReflectance(const SampledSpectrum& r,
+                                                   const SampledSpectrum& mfp) const {
   MediumProperties mp;
-  if (!reflectance_) {
-    mp.sigma_a = clampZero(sigma_a_->sample(lambda) * scale_);
-    mp.sigma_s = clampZero(sigma_s_->sample(lambda) * scale_);
-    return mp;
-  }
-  const SampledSpectrum r = reflectance_->sample(lambda), mfp = mfp_->sample(lambda);
   for (int i = 0; i < kSpectrumSamples; ++i) {
     const double free_path = scale_ * mfp[i];
     const double sigma_t = free_path > 0 ? 1 / free_path : 0;
@@ -123,6 +125,38 @@ MediumProperties SubsurfaceMedium::coefficients(const SampledWavelengths& lambda
     mp.sigma_s[i] = a * sigma_t;
     mp.sigma_a[i] = (1 - a) * sigma_t;
   }
+  return mp;
+}
+
+MediumProperties SubsurfaceMedium::coefficients(const SampledWavelengths& lambda) const {
+  // Textured: the integrators track a WalkMedium of coefficientsAt instead (volpath.cpp,
+  // enterMedium); nothing reaches this, and it answers vacuum rather than a guess.
+  if (material_) return {};
+  if (!reflectance_) {
+    MediumProperties mp;
+    mp.sigma_a = clampZero(sigma_a_->sample(lambda) * scale_);
+    mp.sigma_s = clampZero(sigma_s_->sample(lambda) * scale_);
+    return mp;
+  }
+  return fromReflectance(reflectance_->sample(lambda), mfp_->sample(lambda));
+}
+
+MediumProperties SubsurfaceMedium::coefficientsAt(const Textures& textures,
+                                                  const TextureEvalContext& ctx,
+                                                  const SampledWavelengths& lambda) const {
+  if (!material_) return coefficients(lambda);
+  const scene::Material& m = *material_;
+  // pbrt-v4's GetBSSRDF: sigma_a, sigma_s clamped at zero; reflectance clamped to [0, 1] (by
+  // albedoForDiffuseReflectance) with mfp; all times scale.
+  if (from_reflectance_)
+    return fromReflectance(
+        textures.evalSpectrum(m.ss_reflectance, ctx, lambda, SpectrumType::Albedo),
+        textures.evalSpectrum(m.ss_mfp, ctx, lambda, SpectrumType::Unbounded));
+  MediumProperties mp;
+  mp.sigma_a =
+      clampZero(textures.evalSpectrum(m.ss_sigma_a, ctx, lambda, SpectrumType::Unbounded) * scale_);
+  mp.sigma_s =
+      clampZero(textures.evalSpectrum(m.ss_sigma_s, ctx, lambda, SpectrumType::Unbounded) * scale_);
   return mp;
 }
 

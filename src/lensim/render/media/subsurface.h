@@ -9,6 +9,7 @@
 #pragma once
 
 #include "lensim/render/media/media.h"
+#include "lensim/render/textures/textures.h"
 
 namespace lensim::scene {
 struct Material;
@@ -20,17 +21,52 @@ namespace lensim::render {
 /// `reflectance` and `mfp`, sigma_t = 1 / (scale mfp) and the single-scattering albedo whose
 /// semi-infinite, index-matched, isotropic medium has that diffuse reflectance
 /// (albedoForDiffuseReflectance).
+///
+/// Textured coefficients (any of the four a spectrum texture): the integrator evaluates them by
+/// coefficientsAt where a path enters the shape and runs that walk in a WalkMedium of those
+/// constant coefficients, as pbrt-v4 evaluates its BSSRDF's coefficients at the entry point
+/// (SubsurfaceMaterial::GetBSSRDF, src/pbrt/materials.h, called with the intersection where
+/// the BSDF sample refracts in). at() and majorants() serve untextured materials only.
 class SubsurfaceMedium final : public Medium {
  public:
   explicit SubsurfaceMedium(const scene::Material& m);
   MediumProperties at(const Vec3& p, const SampledWavelengths& lambda) const override;
   void majorants(const Vec3& o, const Vec3& d, double tmax, const SampledWavelengths& lambda,
                  const SegmentFn& fn) const override;
+  /// Some coefficient is a texture: walks need coefficientsAt and a WalkMedium.
+  bool textured() const { return textured_; }
+  /// The coefficients with the textures evaluated at ctx (the walk's entry point).
+  MediumProperties coefficientsAt(const Textures& textures, const TextureEvalContext& ctx,
+                                  const SampledWavelengths& lambda) const;
 
  private:
   MediumProperties coefficients(const SampledWavelengths& lambda) const;
+  /// sigma_a, sigma_s from reflectance r and mean free path mfp (before scale) per wavelength.
+  MediumProperties fromReflectance(const SampledSpectrum& r, const SampledSpectrum& mfp) const;
   SpectrumPtr sigma_a_, sigma_s_, reflectance_, mfp_;
+  const scene::Material* material_ = nullptr;  ///< the description (textured materials)
+  bool from_reflectance_ = false, textured_ = false;
   double scale_ = 1;
+};
+
+/// A homogeneous medium of given coefficients: the inside of a textured subsurface material
+/// for one random walk, with the coefficients evaluated where the walk entered.
+class WalkMedium final : public Medium {
+ public:
+  void set(const MediumProperties& mp, double g) {
+    mp_ = mp;
+    sigma_t_ = mp.sigma_a + mp.sigma_s;
+    g_ = g;
+  }
+  MediumProperties at(const Vec3&, const SampledWavelengths&) const override { return mp_; }
+  void majorants(const Vec3&, const Vec3&, double tmax, const SampledWavelengths&,
+                 const SegmentFn& fn) const override {
+    fn(0, tmax, sigma_t_);
+  }
+
+ private:
+  MediumProperties mp_;
+  SampledSpectrum sigma_t_;
 };
 
 /// The diffuse (hemispherical-hemispherical) reflectance of a semi-infinite medium of

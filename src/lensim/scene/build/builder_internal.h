@@ -43,6 +43,13 @@ struct GraphicsState {
   // MediumInterface: medium names ("" is vacuum) and where they were given.
   std::string inside_medium, outside_medium;
   FileLoc medium_loc;
+  // pbrt-v1–v3 files only: named materials belong to the graphics state (pbrt-v3
+  // src/core/api.cpp: GraphicsState::namedMaterials, saved by AttributeBegin and restored by
+  // AttributeEnd), and NamedMaterial names one that the Shape looks up in its own scope
+  // (GraphicsState::CreateMaterial). Shared until a block writes it (copy on write).
+  std::shared_ptr<const std::map<std::string, int>> scoped_materials;
+  std::string scoped_material_name;  ///< NamedMaterial's name, looked up at each Shape
+  FileLoc scoped_material_loc;
 };
 
 class Builder {
@@ -99,6 +106,7 @@ class Builder {
 
   void integrator(const Directive& d);
   void integratorBdpt(ParamSet& ps, Integrator& it);
+  void integratorDirectLighting(ParamSet& ps, Integrator& it);
 
   void texture(const Directive& d);
 
@@ -106,6 +114,12 @@ class Builder {
   void hairMaterial(Material& m, ParamSet& ps, const FileLoc& loc);  // build/hair.cpp
 
   int currentMaterial();
+  /// The named material `name` for a NamedMaterial or a mix: pbrt-v1–v3 files look in the
+  /// current block's scope, pbrt-v4 files in the global table; -1 if not (yet) defined.
+  int namedMaterial(const std::string& name) const;
+  /// pbrt-v1–v3 semantics of MakeNamedMaterial / NamedMaterial (scene/build/named_materials.cpp).
+  void makeNamedMaterialScoped(const Directive& d, Material m);
+  void namedMaterialScoped(const Directive& d);
 
   void checkStackMemory(const Directive& d);
 

@@ -36,11 +36,7 @@ void Builder::integrator(const Directive& d) {
   } else if (type == "bdpt") {
     integratorBdpt(ps, it);
   } else if (type == "directlighting") {
-    // As pbrt-v4's --upgrade: direct lighting is a path tracer of depth 1.
-    ps.markAllUsed();
-    it.max_depth = 1;
-    warnOnce("integrator " + type, d.loc,
-             "integrator \"directlighting\" (pbrt-v1–v3) renders as \"path\" with maxdepth 1");
+    integratorDirectLighting(ps, it);
   } else {
     ps.markAllUsed();
     // pbrt-v4's other integrators (bdpt, mlt, sppm, ...) handle media: volpath keeps them.
@@ -75,6 +71,24 @@ void Builder::integratorBdpt(ParamSet& ps, Integrator& it) {
                        "the image is rendered as usual",
                        name));
     }
+}
+
+// pbrt-v3's CreateDirectLightingIntegrator (src/integrators/directlighting.cpp): maxdepth
+// (default 5, read above), strategy "all" (default) or "one", an unknown strategy warned and
+// "all" used; pixelbounds as path's. pbrt-v2's DirectLightingIntegrator reads the same two.
+void Builder::integratorDirectLighting(ParamSet& ps, Integrator& it) {
+  it.type = "directlighting";
+  const std::string strategy = ps.getString({"strategy"}, "all");
+  it.all_lights = strategy != "one";
+  if (strategy != "all" && strategy != "one")
+    warn(ps.peek({"strategy"})->loc,
+         fmt::format("directlighting strategy \"{}\" is unknown (expected \"all\" or \"one\"); "
+                     "\"all\" is used, as pbrt-v3 does",
+                     strategy));
+  if (it.max_depth < 0)
+    throw Error(ps.peek({"maxdepth"})->loc,
+                fmt::format("directlighting maxdepth {} must not be negative", it.max_depth));
+  if (const Param* p = ps.find({"pixelbounds"}, {ParamType::Integer})) ps.expectCount(*p, 4);
 }
 
 }  // namespace lensim::scene::detail

@@ -3,6 +3,20 @@
 
 namespace lensim::scene::detail {
 
+namespace {
+
+// pbrt-v1–v3's per-light "nsamples" (pbrt-v3: Light::nSamples = max(1, nsamples)), the samples
+// per hit of the directlighting integrator's "all" strategy; at most 65536.
+int lightSamples(ParamSet& ps) {
+  const int n = ps.getInt({"nsamples", "samples"}, 1);
+  if (n > 65536)
+    throw Error(ps.peek({"nsamples", "samples"})->loc,
+                fmt::format("nsamples {} is more than 65536 light samples per hit", n));
+  return std::max(1, n);
+}
+
+}  // namespace
+
 // ---- light scale ---------------------------------------------------------------------------
 // pbrt-v4 reads a light's "scale" as a float; pbrt-v3 as a spectrum (`"rgb scale"`, `"color
 // scale"`, `"spectrum scale"`: pbrt-v3's CreatePointLight & co. call
@@ -62,7 +76,7 @@ void Builder::light(const Directive& d) {
   l.transform = gs_.ctm[0];
   const Param* scale_param = findLightScale(ps);
   l.power = ps.findFloat({"power", "illuminance"});
-  ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
+  l.n_samples = lightSamples(ps);  // pbrt-v1–v3 sample count
   auto emission = [&](ParamSet::Names names) {
     const Param* p = ps.find(names, {ParamType::Rgb, ParamType::Spectrum, ParamType::Blackbody});
     if (p) l.emission = spectrumOf(*p);
@@ -139,7 +153,7 @@ void Builder::areaLight(const Directive& d) {
     const Param* scale_param = findLightScale(ps);
     l.two_sided = ps.getBool({"twosided"}, false);
     l.power = ps.findFloat({"power"});
-    ps.getInt({"nsamples", "samples"}, 1);  // pbrt-v1–v3 sample count
+    l.n_samples = lightSamples(ps);  // pbrt-v1–v3 sample count
     if (const Param* fn = ps.find({"filename"}, {ParamType::String})) {
       l.filename = resolve(fn->strings[0], fn->loc, "image file");
     }

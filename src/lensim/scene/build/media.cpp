@@ -234,7 +234,7 @@ void Builder::resolveMedia() {
          "lensim (pbrt-v4's does); it renders as \"volpath\"");
     scene_.integrator.type = "volpath";
   }
-  if (used && scene_.integrator.type == "path")
+  if (used && (scene_.integrator.type == "path" || scene_.integrator.type == "directlighting"))
     warn(
         scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc,
         fmt::format("the scene has participating media but integrator \"{}\" ignores them; "
