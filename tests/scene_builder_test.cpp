@@ -425,7 +425,7 @@ TEST(Shapes, PlyMeshesAreLoadedRelativeToTheScene) {
 TEST(Builder, UnsupportedTypesWarnOnceWithAFallback) {
   Scene s = testutil::buildText(
       "Camera \"environment\"\nSampler \"bestcandidate\" \"integer pixelsamples\" 8\n"
-      "Film \"gbuffer\"\nIntegrator \"mlt\" \"integer maxdepth\" 7\nWorldBegin\n"
+      "Film \"photo\"\nIntegrator \"mlt\" \"integer maxdepth\" 7\nWorldBegin\n"
       "Material \"kdsubsurface\" \"float eta\" 1\nMaterial \"kdsubsurface\"\n"
       "Shape \"curve\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\n"
       "Texture \"w\" \"float\" \"ptex\"\nLightSource \"sky\"\n",

@@ -183,17 +183,22 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       // The film's filename is relative to the directory lensim runs in, as in pbrt.
       std::vector<std::string> outs = o->outfiles;
       if (outs.empty()) outs.push_back(s.film.filename);
-      // pbrt-v4's spectral film writes EXR only (SpectralFilm::Create); its bucket sums are not
-      // the exact fixed-point sums that parts, checkpoints and lensim merge need.
-      if (s.film.type == "spectral" && (part_mode || !checkpoint.empty()))
+      // pbrt-v4's spectral and gbuffer films write EXR only (SpectralFilm::Create,
+      // GBufferFilm::Create); their extra channels are not the exact fixed-point sums that parts,
+      // checkpoints and lensim merge need.
+      const bool layered = s.film.type == "spectral" || s.film.type == "gbuffer";
+      if (layered && (part_mode || !checkpoint.empty()))
         throw Error(s.film.loc,
-                    "Film \"spectral\" cannot be rendered as parts or checkpointed (--tile, "
-                    "--spp-range, --part, --checkpoint, --resume): its spectral channels are not "
-                    "kept as exact sums for lensim merge; render it whole, or use Film \"rgb\"");
+                    fmt::format("Film \"{}\" cannot be rendered as parts or checkpointed "
+                                "(--tile, --spp-range, --part, --checkpoint, --resume): its extra "
+                                "channels are not kept as exact sums for lensim merge; render it "
+                                "whole, or use Film \"rgb\"",
+                                s.film.type));
       for (const std::string& out : outs)
-        if (s.film.type == "spectral" && io::imageFormatFromPath(out) != io::ImageFormat::Exr)
-          throw Error(FileLoc{out}, "Film \"spectral\" writes EXR only (as pbrt-v4): use an "
-                                    ".exr output");
+        if (layered && io::imageFormatFromPath(out) != io::ImageFormat::Exr)
+          throw Error(FileLoc{out}, fmt::format("Film \"{}\" writes EXR only (as pbrt-v4): use "
+                                                "an .exr output",
+                                                s.film.type));
       for (const std::string& out : outs)  // fail early
         if (io::imageFormatFromPath(out) != io::ImageFormat::Exr && part_mode)
           throw Error(FileLoc{out},

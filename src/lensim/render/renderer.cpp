@@ -20,6 +20,7 @@
 #include "lensim/render/integrators/directlighting.h"
 #include "lensim/render/integrators/integrator.h"
 #include "lensim/render/integrators/lighttracer.h"
+#include "lensim/render/film/gbuffer.h"
 #include "lensim/render/integrators/volpath.h"
 #include "lensim/render/media/media.h"
 #include "lensim/render/parts.h"
@@ -268,6 +269,13 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     }
   }
   const double shutter_open = scene.camera.shutter_open;
+  // Film "gbuffer" (pbrt-v4's GBufferFilm): its coordinate system and the differential scale
+  // pbrt-v4 applies to camera rays, max(1/8, 1/sqrt(samples per pixel)).
+  const bool gbuffer = film.gbuffer();
+  const Transform gbuffer_from_world = scene.film.gbuffer_coordinates == "world"
+                                           ? Transform()
+                                           : scene.camera.camera_from_world;
+  const double gbuffer_diff_scale = std::max(0.125, 1 / std::sqrt(double(spp)));
   const double shutter_length = scene.camera.shutter_close - scene.camera.shutter_open;
   // The splats' scale for `n` samples per pixel taken: one light path per sample of every
   // pixel rendered, the image normalised per pixel of the full image (camera.h).
@@ -438,6 +446,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             double u_lambda[kB];
             SampledWavelengths lambdas[kB];
             std::optional<camera::CameraRay> cam_rays[kB];
+            // Film "gbuffer": the rays of film points kDifferentialEpsilon pixel to the right and
+            // below (differentials for dzdx, dzdy) and the first visible surface.
+            camera::CameraSample cs_shift[kB];
+            std::optional<camera::CameraRay> dx_rays[kB], dy_rays[kB];
             std::vector<BdptSplat> bdpt_splats;
             if (light_tracer) {
               for (int y = y0; y < y1 && !tile_cancelled; ++y)
@@ -486,6 +498,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     path_dimension = sampler->dimension();
                   }
                   cam->generateRays(cs, m, cam_rays);
+                  if (gbuffer) gbufferDifferentials(*cam, cs, m, cs_shift, dx_rays, dy_rays);
                   for (int k = 0; k < m; ++k) {
                     ++n_samples;
                     SampledWavelengths& lambda = lambdas[k];
@@ -542,6 +555,13 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                       finite = finite && std::isfinite(L[c]);
                     if (!finite) {
                       ++n_bad;
+                      continue;
+                    }
+                    if (gbuffer && ray && !bdpt) {
+                      const auto vs = visibleSurface(
+                          sc, differential(*ray, dx_rays[k], dy_rays[k]), lambda,
+                          gbuffer_from_world, gbuffer_diff_scale, counts);
+                      film.addSample(x, y, L, lambda, fs[k].weight, vs ? &*vs : nullptr);
                       continue;
                     }
                     film.addSample(x, y, L, lambda, fs[k].weight);

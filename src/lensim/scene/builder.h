@@ -370,6 +370,9 @@ struct Film {
   /// over [lambda_min_nm, lambda_max_nm] beside the RGB.
   int spectral_buckets = 16;
   double lambda_min_nm = 360, lambda_max_nm = 830;
+  /// pbrt-v4 "gbuffer" film (type "gbuffer"): "coordinatesystem" of its positions and normals,
+  /// "camera" or "world".
+  std::string gbuffer_coordinates = "camera";
 };
 
 /// The sampler description; `type` is the pbrt-v4 sampler lensim uses.

@@ -18,7 +18,11 @@ const std::vector<std::string>& pbrtCameraSensorNames() {
 }
 
 const std::vector<std::string>& bundledSensorNames() {
-  static const std::vector<std::string> names = {"cie1931"};
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n = {"cie1931"};
+    for (const std::string& c : pbrtCameraSensorNames()) n.push_back(c);
+    return n;
+  }();
   return names;
 }
 
@@ -26,9 +30,7 @@ SensorSupport sensorSupport(const std::string& name) {
   const auto has = [&](const std::vector<std::string>& v) {
     return std::find(v.begin(), v.end(), name) != v.end();
   };
-  if (has(bundledSensorNames())) return SensorSupport::Applied;
-  if (has(pbrtCameraSensorNames())) return SensorSupport::NotBundled;
-  return SensorSupport::Unknown;
+  return has(bundledSensorNames()) ? SensorSupport::Applied : SensorSupport::Unknown;
 }
 
 double sensorImagingRatio(double exposure_time_s, double iso) {

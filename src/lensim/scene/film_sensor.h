@@ -1,6 +1,7 @@
 // pbrt-v4's film sensor model (src/pbrt/film.cpp, PixelSensor::Create; src/pbrt/util/spectrum.cpp,
-// the named sensor curves and Spectra::D): the sensor names pbrt-v4 knows, which of them lensim
-// applies, the imaging ratio of ISO and exposure time, and the white-balance temperature.
+// the named sensor curves and Spectra::D): the sensor names pbrt-v4 knows, the imaging ratio of
+// ISO and exposure time, and the white-balance temperature. The sensors themselves (curves,
+// matrices) are render/film/pixel_sensor.h.
 #pragma once
 
 #include <string>
@@ -10,18 +11,18 @@ namespace lensim::scene {
 
 /// The camera sensors pbrt-v4 names (`Film "rgb" "string sensor"`): each is a set of measured
 /// spectral response curves `<name>_r`, `_g`, `_b` in pbrt-v4's named spectra
-/// (src/pbrt/util/spectrum.cpp, NamedSpectra), from the camera spectral sensitivity database of
-/// Jiang, Liu, Gu & Süsstrunk, "What is the space of spectral sensitivity functions for digital
-/// color cameras?", WACV 2013 (as pbrt-v4 cites). "cie1931" is not among them.
+/// (src/pbrt/util/spectrum.cpp), the PhysLight measurements of Langlands and Fascione (Weta
+/// Digital, 2020) that lensim bundles in data/sensors/camera_sensors.csv. "cie1931" is not among
+/// them.
 const std::vector<std::string>& pbrtCameraSensorNames();
 
-/// The sensors lensim applies: "cie1931" (the CIE 1931 2-degree observer: the film records XYZ).
+/// The sensors lensim applies: "cie1931" (the CIE 1931 2-degree observer: the film records XYZ)
+/// and every camera of pbrtCameraSensorNames().
 const std::vector<std::string>& bundledSensorNames();
 
 enum class SensorSupport {
-  Applied,      ///< lensim has the curves and applies them
-  NotBundled,   ///< pbrt-v4 knows the name; lensim does not have its measured curves
-  Unknown,      ///< pbrt-v4 does not know the name either (pbrt-v4: "unknown sensor type")
+  Applied,  ///< lensim has the curves and applies them
+  Unknown,  ///< pbrt-v4 does not know the name (pbrt-v4: "unknown sensor type")
 };
 SensorSupport sensorSupport(const std::string& name);
 

@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include "lensim/render/film/gbuffer.h"
+#include "lensim/render/film/pixel_sensor.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/film_sensor.h"
@@ -38,73 +40,41 @@ Vec2 daylightChromaticity(double t) {
   return {x, -3.0 * x * x + 2.870 * x - 0.275};
 }
 
-namespace {
-
-using Mat3 = std::array<double, 9>;
-Mat3 mul(const Mat3& a, const Mat3& b) {
-  Mat3 r{};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k) r[3 * i + j] += a[3 * i + k] * b[3 * k + j];
-  return r;
-}
-Vec3 mulVec(const Mat3& m, const Vec3& v) {
-  return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
-          m[6] * v.x + m[7] * v.y + m[8] * v.z};
-}
-Mat3 invert(const Mat3& m) {
-  const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
-                     m[2] * (m[3] * m[7] - m[4] * m[6]);
-  return {(m[4] * m[8] - m[5] * m[7]) / det, (m[2] * m[7] - m[1] * m[8]) / det,
-          (m[1] * m[5] - m[2] * m[4]) / det, (m[5] * m[6] - m[3] * m[8]) / det,
-          (m[0] * m[8] - m[2] * m[6]) / det, (m[2] * m[3] - m[0] * m[5]) / det,
-          (m[3] * m[7] - m[4] * m[6]) / det, (m[1] * m[6] - m[0] * m[7]) / det,
-          (m[0] * m[4] - m[1] * m[3]) / det};
-}
-
-/// Bradford von Kries adaptation from white xy `src` to white XYZ `dst` (Lam 1985; the matrix
-/// as published by Lindbloom).
-Mat3 bradford(Vec2 src, const Vec3& dst) {
-  const Mat3 mb{0.8951, 0.2664, -0.1614, -0.7502, 1.7135, 0.0367, 0.0389, -0.0685, 1.0296};
-  const Vec3 src_xyz{src.x / src.y, 1.0, (1 - src.x - src.y) / src.y};
-  const Vec3 ls = mulVec(mb, src_xyz), ld = mulVec(mb, dst / dst.y);
-  const Mat3 d{ld.x / ls.x, 0, 0, 0, ld.y / ls.y, 0, 0, 0, ld.z / ls.z};
-  return mul(invert(mb), mul(d, mb));
-}
-
-}  // namespace
-
 Film::Film(const scene::Scene& scene, PixelBounds bounds)
     : bounds_(bounds), pixels_(size_t(std::max(0LL, bounds.area()))) {
   const double exposure = scene.camera.shutter_close - scene.camera.shutter_open;
   // pbrt-v4's imaging ratio (film.cpp, PixelSensor::Create), times pbrt-v3's film "scale". A
   // camera with no shutter interval (shutteropen == shutterclose) records as if open 1 s.
-  imaging_ratio_ =
+  const double imaging_ratio =
       scene::sensorImagingRatio(exposure > 0 ? exposure : 1, scene.film.iso) * scene.film.scale;
   max_component_ = scene.film.max_component_value;
-  if (scene.film.white_balance_k > 0) {
-    // pbrt-v4's cie1931 sensor with "whitebalance": adapt the scene white (daylight of that
-    // temperature) to the output colour space's white.
-    white_balance_ = true;
-    // pbrt-v4's Spectra::D takes T x 1.4388 / 1.4380 as the CCT, so 6500 means D65.
-    xyz_balance_ = bradford(daylightChromaticity(scene::whiteBalanceCct(scene.film.white_balance_k)),
-                            RGBColorSpace::sRGB().toXyz({1, 1, 1}));
-  }
+  // pbrt-v4's PixelSensor::Create: "cie1931" (XYZ; white balanced only with "whitebalance") or a
+  // named camera (balanced for "whitebalance", 6500 K by default).
+  sensor_ =
+      std::make_shared<PixelSensor>(scene.film.sensor, scene.film.white_balance_k, imaging_ratio);
   if (scene.film.type == "spectral") {
     n_buckets_ = scene.film.spectral_buckets;
     lambda_min_ = scene.film.lambda_min_nm;
     lambda_max_ = scene.film.lambda_max_nm;
     bucket_sums_.assign(pixels_.size() * size_t(n_buckets_), 0.0);
   }
+  if (scene.film.type == "gbuffer") gbuf_.assign(pixels_.size(), GBufferPixel{});
+}
+
+Vec3 Film::toSensorRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const {
+  // pbrt-v4's RGBFilm::AddSample: the sensor RGB, clamped to "maxcomponentvalue" there.
+  Vec3 s = sensor_->toSensorRgb(L, lambda);
+  const double m = std::max({s.x, s.y, s.z});
+  if (m > max_component_) s = s * (max_component_ / m);
+  return s;
+}
+
+Vec3 Film::outputRgb(const Vec3& sensor_rgb) const {
+  return RGBColorSpace::sRGB().toRgb(mulMat3(sensor_->xyzFromSensorRgb(), sensor_rgb));
 }
 
 Vec3 Film::toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const {
-  Vec3 xyz = sampledToXyz(L, lambda) * imaging_ratio_;
-  if (white_balance_) xyz = mulVec(xyz_balance_, xyz);
-  Vec3 rgb = RGBColorSpace::sRGB().toRgb(xyz);
-  const double m = std::max({rgb.x, rgb.y, rgb.z});
-  if (m > max_component_) rgb = rgb * (max_component_ / m);
-  return rgb;
+  return outputRgb(toSensorRgb(L, lambda));
 }
 
 Int128 Film::toFixed(double v) {
@@ -123,8 +93,33 @@ std::array<float, 3> Film::pixelValue(const PixelSum& p) {
 
 void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
                      double w) {
-  const Vec3 rgb = toRgb(L, lambda);
-  PixelSum& p = pixels_[size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0)];
+  addSample(x, y, L, lambda, w, nullptr);
+}
+
+void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
+                     double w, const VisibleSurface* vs) {
+  const Vec3 sensor_rgb = toSensorRgb(L, lambda);
+  const Vec3 rgb = outputRgb(sensor_rgb);
+  const size_t i = size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0);
+  if (vs && !gbuf_.empty()) {
+    // pbrt-v4's GBufferFilm::AddSample.
+    GBufferPixel& g = gbuf_[i];
+    g.weight += w;
+    g.p += vs->p * w;
+    g.n += vs->n * w;
+    g.ns += vs->ns * w;
+    g.u += vs->uv.x * w;
+    g.v += vs->uv.y * w;
+    g.dzdx += vs->dzdx * w;
+    g.dzdy += vs->dzdy * w;
+    g.albedo += vs->albedo * w;
+    ++g.count;
+    const Vec3 delta = sensor_rgb - g.mean;
+    g.mean += delta / double(g.count);
+    const Vec3 delta2 = sensor_rgb - g.mean;
+    g.m2 += Vec3{delta.x * delta2.x, delta.y * delta2.y, delta.z * delta2.z};
+  }
+  PixelSum& p = pixels_[i];
   p.rgb[0] += toFixed(w * rgb.x);
   p.rgb[1] += toFixed(w * rgb.y);
   p.rgb[2] += toFixed(w * rgb.z);
@@ -154,8 +149,8 @@ void Film::addSpectral(int x, int y, SampledSpectrum L, const SampledWavelengths
   for (int i = 0; i < kSpectrumSamples; ++i) {
     const double l = lambda.lambda(i), pdf = lambda.pdf(i);
     if (!(pdf > 0) || l < lambda_min_ || l >= lambda_max_) continue;
-    const int b = std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) /
-                                                (lambda_max_ - lambda_min_)));
+    const int b =
+        std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) / (lambda_max_ - lambda_min_)));
     sums[b] += w * L[i] / (pdf * kSpectrumSamples * width);
   }
 }
@@ -191,8 +186,8 @@ void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& 
         for (int k = 0; k < kSpectrumSamples; ++k) {
           const double l = lambda.lambda(k), pdf = lambda.pdf(k);
           if (!(pdf > 0) || l < lambda_min_ || l >= lambda_max_) continue;
-          const int b = std::min(n_buckets_ - 1, int(n_buckets_ * (l - lambda_min_) /
-                                                      (lambda_max_ - lambda_min_)));
+          const int b = std::min(n_buckets_ - 1,
+                                 int(n_buckets_ * (l - lambda_min_) / (lambda_max_ - lambda_min_)));
           bucket_splats_[i * size_t(n_buckets_) + size_t(b)] +=
               w * std::min(L[k], max_component_) / (pdf * kSpectrumSamples * width);
         }
@@ -207,9 +202,37 @@ std::string Film::bucketChannel(int b) const {
   return "S0." + l;
 }
 
+const std::vector<std::string>& Film::gbufferChannels() {
+  static const std::vector<std::string> c = {"Albedo.R",
+                                             "Albedo.G",
+                                             "Albedo.B",
+                                             "P.X",
+                                             "P.Y",
+                                             "P.Z",
+                                             "dzdx",
+                                             "dzdy",
+                                             "N.X",
+                                             "N.Y",
+                                             "N.Z",
+                                             "Ns.X",
+                                             "Ns.Y",
+                                             "Ns.Z",
+                                             "u",
+                                             "v",
+                                             "Variance.R",
+                                             "Variance.G",
+                                             "Variance.B",
+                                             "RelativeVariance.R",
+                                             "RelativeVariance.G",
+                                             "RelativeVariance.B"};
+  return c;
+}
+
 io::Image Film::image() const {
   std::vector<std::string> channels = {"R", "G", "B"};
   for (int b = 0; b < n_buckets_; ++b) channels.push_back(bucketChannel(b));
+  if (!gbuf_.empty())
+    for (const std::string& c : gbufferChannels()) channels.push_back(c);
   io::Image im(bounds_.width(), bounds_.height(), std::move(channels));
   for (int y = 0; y < bounds_.height(); ++y)
     for (int x = 0; x < bounds_.width(); ++x) {
@@ -229,7 +252,56 @@ io::Image Film::image() const {
               float(bucket_splats_[i * size_t(n_buckets_) + size_t(b)] * splat_scale_);
       }
     }
+  if (!gbuf_.empty()) {
+    // pbrt-v4's GBufferFilm::GetImage: albedo over the pixel's whole weight; position, (u, v) and
+    // depth slopes over the weight of the samples that saw a surface; the normals' sums
+    // normalised; |dzdx|, |dzdy|; the sample variance of the sensor RGB and that over its mean.
+    const int c0 = 3 + n_buckets_;
+    for (int y = 0; y < bounds_.height(); ++y)
+      for (int x = 0; x < bounds_.width(); ++x) {
+        const size_t i = size_t(y) * size_t(bounds_.width()) + size_t(x);
+        const GBufferPixel& g = gbuf_[i];
+        const double w_all = double(pixels_[i].weight) / kFixedScale;
+        const Vec3 albedo = w_all != 0 ? g.albedo / w_all : Vec3{};
+        const double w = g.weight != 0 ? g.weight : 1;
+        const Vec3 pos = g.p / w;
+        const auto unit = [](const Vec3& v) {
+          const double l = length(v);
+          return l > 0 ? v / l : Vec3{};
+        };
+        const Vec3 n = unit(g.n), ns = unit(g.ns);
+        const Vec3 var = g.count > 1 ? g.m2 / double(g.count - 1) : Vec3{};
+        const auto rel = [&](double v, double m) { return g.count < 1 || m == 0 ? 0.0 : v / m; };
+        const double values[22] = {albedo.x,
+                                   albedo.y,
+                                   albedo.z,
+                                   pos.x,
+                                   pos.y,
+                                   pos.z,
+                                   std::abs(g.dzdx / w),
+                                   std::abs(g.dzdy / w),
+                                   n.x,
+                                   n.y,
+                                   n.z,
+                                   ns.x,
+                                   ns.y,
+                                   ns.z,
+                                   g.u / w,
+                                   g.v / w,
+                                   var.x,
+                                   var.y,
+                                   var.z,
+                                   rel(var.x, g.mean.x),
+                                   rel(var.y, g.mean.y),
+                                   rel(var.z, g.mean.z)};
+        for (int c = 0; c < 22; ++c) im.at(x, y, c0 + c) = float(values[c]);
+      }
+  }
   if (n_buckets_ > 0) {
+    // The OpenEXR spectral layout's attributes (Fichet et al., JCGT 2021), as pbrt-v4's
+    // SpectralFilm::GetImage writes them.
+    im.metadata["spectralLayoutVersion"] = "1.0";
+    im.metadata["emissiveUnits"] = "W.m^-2.sr^-1";
     im.metadata["lensim:spectral"] =
         fmt::format("{} buckets over [{}, {}] nm: radiance (as pbrt-v4's spectral film)",
                     n_buckets_, lambda_min_, lambda_max_);

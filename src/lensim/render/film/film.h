@@ -1,6 +1,6 @@
 // The film: accumulates filtered spectral samples as RGB in the output colour space (linear
-// sRGB) through the CIE 1931 matching functions (pbrt-v4's "rgb" film with the "cie1931"
-// sensor), over the pixel bounds being rendered.
+// sRGB) through the film's sensor (pbrt-v4's PixelSensor: the CIE 1931 matching functions, or a
+// camera's measured sensitivities; film/pixel_sensor.h), over the pixel bounds being rendered.
 #pragma once
 
 #include <array>
@@ -19,6 +19,8 @@ struct Scene;
 namespace lensim::render {
 
 class Filter;
+class PixelSensor;
+struct VisibleSurface;
 
 /// A half-open rectangle of pixels [x0, x1) x [y0, y1) in the full image's raster.
 struct PixelBounds {
@@ -66,13 +68,34 @@ class Film {
   /// weight w. Not thread-safe for the same pixel; different pixels may be added concurrently.
   void addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
                  double w);
-  /// The RGB of a sample as the film would record it (before the filter weight).
+  /// As addSample, for a gbuffer film with the sample's first visible surface (null: the camera
+  /// ray hit nothing, or the integrator gives none).
+  void addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda, double w,
+                 const VisibleSurface* vs);
+  /// The RGB of a sample as the film would record it (before the filter weight): the sensor's
+  /// RGB (toSensorRgb) in the output colour space (outputRgb).
   Vec3 toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const;
+  /// The sensor RGB of a sample (pbrt-v4's PixelSensor::ToSensorRGB with the imaging ratio),
+  /// scaled down to "maxcomponentvalue" in its largest component as pbrt-v4 does.
+  Vec3 toSensorRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const;
+  /// Output (linear sRGB) from sensor RGB: the sensor's XYZ-from-RGB matrix, then XYZ to sRGB.
+  Vec3 outputRgb(const Vec3& sensor_rgb) const;
+  /// The film's sensor (pbrt-v4's PixelSensor: "cie1931" or a named camera).
+  const PixelSensor& sensor() const { return *sensor_; }
   /// The image so far: channels R, G, B, bounds-sized; for the spectral film (pbrt-v4's
   /// SpectralFilm) then one channel per wavelength bucket, named as pbrt-v4 names them after
   /// the OpenEXR spectral layout of Fichet et al. (JCGT 2021): "S0." and the bucket's centre
-  /// wavelength as "%.3fnm" with the decimal point written as a comma ("S0.374,688nm").
+  /// wavelength as "%.3fnm" with the decimal point written as a comma ("S0.374,688nm"); for the
+  /// gbuffer film (pbrt-v4's GBufferFilm) then its auxiliary channels (gbufferChannels()).
   io::Image image() const;
+
+  /// Whether this film records pbrt-v4's gbuffer channels (Film "gbuffer"); such films, like
+  /// spectral ones, are not written as parts.
+  bool gbuffer() const { return !gbuf_.empty(); }
+  /// The gbuffer's channels after R, G, B, in pbrt-v4's order and names (src/pbrt/film.cpp,
+  /// GBufferFilm::GetImage): Albedo.R/G/B, P.X/Y/Z, dzdx, dzdy, N.X/Y/Z, Ns.X/Y/Z, u, v,
+  /// Variance.R/G/B, RelativeVariance.R/G/B.
+  static const std::vector<std::string>& gbufferChannels();
 
   /// Whether this film records spectral buckets (Film "spectral"); such films are not
   /// written as parts (their bucket sums are floating point, not the exact fixed-point sums).
@@ -119,20 +142,31 @@ class Film {
  private:
   PixelBounds bounds_;
   std::vector<PixelSum> pixels_;
-  double imaging_ratio_ = 1, max_component_ = 1e300;
-  bool white_balance_ = false;
-  std::array<double, 9> xyz_balance_{};  ///< von Kries (Bradford) adaptation, row-major
+  double max_component_ = 1e300;
+  std::shared_ptr<const PixelSensor> sensor_;
   // Spectral buckets (Film "spectral"): per pixel, n_buckets_ sums of filter-weighted bucket
   // radiance estimates; a bucket's value is its sum over the pixel's weight sum.
   int n_buckets_ = 0;
   double lambda_min_ = 360, lambda_max_ = 830;
   std::vector<double> bucket_sums_;
   void addSpectral(int x, int y, SampledSpectrum L, const SampledWavelengths& lambda, double w);
+  // Gbuffer (Film "gbuffer", pbrt-v4's GBufferFilm::Pixel): per pixel, the filter-weighted sums
+  // of the visible surfaces' data over the samples that have one (weight), the albedo's sum
+  // (divided by the pixel's whole weight, as pbrt-v4), and a running variance (Welford) of the
+  // unweighted sensor RGB of those samples.
+  struct GBufferPixel {
+    double weight = 0;
+    Vec3 p, n, ns, albedo;
+    double u = 0, v = 0, dzdx = 0, dzdy = 0;
+    long long count = 0;
+    Vec3 mean, m2;
+  };
+  std::vector<GBufferPixel> gbuf_;
   // Splats (see enableSplats).
   const Filter* splat_filter_ = nullptr;
   double splat_scale_ = 1;
   std::vector<std::array<Int128, 3>> splats_;
-  std::vector<double> bucket_splats_;  ///< spectral films: per pixel, n_buckets_ splat sums
+  std::vector<double> bucket_splats_;          ///< spectral films: per pixel, n_buckets_ splat sums
   static constexpr size_t kSplatLocks = 1024;  ///< lock stripes (by pixel index)
   std::unique_ptr<std::mutex[]> splat_locks_;
 };

@@ -135,32 +135,16 @@ void Builder::camera(const Directive& d) {
   scene_.camera = std::move(c);
 }
 
-// pbrt-v4's "sensor" (src/pbrt/film.cpp, PixelSensor::Create): a name pbrt-v4 does not know
-// is an error there ("unknown sensor type") and here; a camera pbrt-v4 knows but whose
-// measured curves lensim does not bundle is warned and recorded through the CIE 1931 observer.
+// pbrt-v4's "sensor" (src/pbrt/film.cpp, PixelSensor::Create): "cie1931" or one of pbrt-v4's
+// named cameras (whose measured curves lensim bundles); any other name is an error there
+// ("unknown sensor type") and here.
 void Builder::checkSensor(ParamSet& ps, const Film& f) {
   const Param* p = ps.find({"sensor"}, {ParamType::String});
-  if (!p) return;
-  const auto list = [](const std::vector<std::string>& v) {
-    std::string out;
-    for (const std::string& n : v) out += (out.empty() ? "" : ", ") + n;
-    return out;
-  };
-  switch (sensorSupport(f.sensor)) {
-    case SensorSupport::Applied:
-      return;
-    case SensorSupport::NotBundled:
-      warn(p->loc, fmt::format("\"sensor\": the measured response curves of pbrt-v4's camera "
-                               "sensor \"{}\" are not bundled with lensim; the film records "
-                               "CIE 1931 XYZ instead (sensors lensim applies: {})",
-                               f.sensor, list(bundledSensorNames())));
-      return;
-    case SensorSupport::Unknown:
-      throw Error(p->loc,
-                  fmt::format("\"sensor\": unknown sensor \"{}\"; expected {} or one "
-                              "of pbrt-v4's camera sensors ({})",
-                              f.sensor, list(bundledSensorNames()), list(pbrtCameraSensorNames())));
-  }
+  if (!p || sensorSupport(f.sensor) == SensorSupport::Applied) return;
+  std::string list;
+  for (const std::string& n : bundledSensorNames()) list += (list.empty() ? "" : ", ") + n;
+  throw Error(p->loc,
+              fmt::format("\"sensor\": unknown sensor \"{}\"; expected one of {}", f.sensor, list));
 }
 
 // pbrt-v4's SpectralFilm::Create (src/pbrt/film.cpp): "nbuckets" (16), "lambdamin" and
@@ -196,6 +180,16 @@ void Builder::film(const Directive& d) {
   f.type = "rgb";
   if (type == "spectral") {
     spectralFilm(ps, f);
+  } else if (type == "gbuffer") {
+    // pbrt-v4's GBufferFilm::Create (src/pbrt/film.cpp): "coordinatesystem" "camera" (default)
+    // or "world"; EXR output only (checked where the output is known).
+    f.type = "gbuffer";
+    f.gbuffer_coordinates = ps.getString({"coordinatesystem"}, "camera");
+    if (f.gbuffer_coordinates != "camera" && f.gbuffer_coordinates != "world")
+      throw Error(ps.peek({"coordinatesystem"})->loc,
+                  fmt::format("\"coordinatesystem\": unknown coordinate system \"{}\" for the "
+                              "gbuffer film; expected \"camera\" or \"world\"",
+                              f.gbuffer_coordinates));
   } else if (type != "rgb" && type != "image")
     warnOnce(
         "film " + type, d.loc,
@@ -236,7 +230,6 @@ void Builder::film(const Directive& d) {
   f.max_component_value = ps.getFloat({"maxcomponentvalue", "maxsampleluminance"}, 1e300);
   f.save_fp16 = ps.getBool({"savefp16"}, true);
   ps.getBool({"display"}, false);  // pbrt-v2 image film: open a window
-  if (type == "gbuffer") ps.markAllUsed();
   if (f.x_resolution <= 0 || f.y_resolution <= 0)
     throw Error(d.loc, "film resolution must be positive");
   finish(ps);
