@@ -1,5 +1,6 @@
 // Participating media in scene files: MakeNamedMedium, MediumInterface on shapes and at the
 // camera, presets, and located errors for bad media.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "lensim/scene/builder.h"
@@ -330,4 +331,33 @@ Shape "sphere"
   EXPECT_TRUE(warned);
   // mlt is not rendered; its stand-in renders media (pbrt-v4 files).
   EXPECT_EQ(buildText("Integrator \"mlt\"\nWorldBegin\n").integrator.type, "volpath");
+}
+
+// bdpt's and lighttracer's subpaths do not run the subsurface walk: bdpt renders such a scene
+// with volpath (warned), lighttracer warns; without a subsurface shape bdpt stays bdpt.
+TEST(SceneMedia, SubsurfaceShapesMakeBdptRenderWithVolpath) {
+  auto withIntegrator = [](const std::string& integrator, const std::string& material) {
+    return buildText(fmt::format(R"(
+Integrator "{}"
+WorldBegin
+Material "{}"
+Shape "sphere"
+)",
+                                 integrator, material));
+  };
+  auto warned = [](const scene::Scene& s, const std::string& text) {
+    for (const Diagnostic& d : s.diagnostics)
+      if (d.message.find(text) != std::string::npos) return true;
+    return false;
+  };
+  const scene::Scene b = withIntegrator("bdpt", "subsurface");
+  ASSERT_EQ(errorsOf(b), "");
+  EXPECT_EQ(b.integrator.type, "volpath");
+  EXPECT_TRUE(warned(b, "does not walk inside \"subsurface\""));
+  const scene::Scene l = withIntegrator("lighttracer", "subsurface");
+  EXPECT_EQ(l.integrator.type, "lighttracer");
+  EXPECT_TRUE(warned(l, "render as their dielectric boundary"));
+  const scene::Scene d = withIntegrator("bdpt", "diffuse");
+  EXPECT_EQ(d.integrator.type, "bdpt");
+  EXPECT_FALSE(warned(d, "subsurface"));
 }

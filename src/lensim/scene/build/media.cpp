@@ -230,6 +230,22 @@ void Builder::resolveMedia() {
   bool used = scene_.camera.medium >= 0;
   for (const Shape& sh : scene_.shapes)
     used = used || sh.inside_medium >= 0 || sh.outside_medium >= 0;
+  // The subsurface random walk (render/media/subsurface.h) runs in volpath (and path, which uses
+  // its code for such scenes); bdpt's and lighttracer's subpaths do not walk inside, so they
+  // would render a subsurface shape as its bare dielectric boundary.
+  bool subsurface = false;
+  for (const Shape& sh : scene_.shapes)
+    subsurface = subsurface || (sh.material >= 0 &&
+                                scene_.materials[size_t(sh.material)].kind == MaterialKind::Subsurface);
+  const FileLoc iloc = scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc;
+  if (subsurface && scene_.integrator.type == "bdpt") {
+    warn(iloc, "integrator \"bdpt\" does not walk inside \"subsurface\" materials in lensim; the "
+               "scene renders with \"volpath\", which does");
+    scene_.integrator.type = "volpath";
+  } else if (subsurface && scene_.integrator.type == "lighttracer") {
+    warn(iloc, "integrator \"lighttracer\" does not walk inside \"subsurface\" materials in "
+               "lensim: they render as their dielectric boundary (use \"volpath\")");
+  }
   if (used && (scene_.integrator.type == "path" || scene_.integrator.type == "directlighting"))
     warn(
         scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc,
