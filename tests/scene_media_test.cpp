@@ -234,8 +234,9 @@ WorldBegin
   EXPECT_EQ(v.temperature_offset, 300);
   EXPECT_EQ(v.temperature_scale, 2);
   // Defaults as pbrt-v4's CloudMedium::Create.
-  const scene::Medium& d =
-      buildText("MakeNamedMedium \"c\" \"string type\" \"cloud\"\nWorldBegin\n").media.at(0);
+  const scene::Scene defaults =
+      buildText("MakeNamedMedium \"c\" \"string type\" \"cloud\"\nWorldBegin\n");
+  const scene::Medium& d = defaults.media.at(0);
   EXPECT_EQ(d.cloud_density, 1);
   EXPECT_EQ(d.wispiness, 1);
   EXPECT_EQ(d.frequency, 5);
