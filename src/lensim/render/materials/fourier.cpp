@@ -8,11 +8,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <map>
-#include <mutex>
 
 #include "lensim/render/spectra/spectrum.h"
 #include "lensim/util/error.h"
+#include "lensim/util/path_cache.h"
 #include "lensim/util/file.h"
 #include "lensim/util/limits.h"
 
@@ -186,15 +185,7 @@ FourierBSDFTable FourierBSDFTable::parse(std::string_view b, const std::string& 
 }
 
 std::shared_ptr<const FourierBSDFTable> FourierBSDFTable::loadCached(const std::string& path) {
-  static std::mutex mutex;
-  static std::map<std::string, std::shared_ptr<const FourierBSDFTable>> cache;
-  {
-    std::lock_guard lock(mutex);
-    if (auto it = cache.find(path); it != cache.end()) return it->second;
-  }
-  auto table = std::make_shared<const FourierBSDFTable>(read(path));
-  std::lock_guard lock(mutex);
-  return cache.emplace(path, std::move(table)).first->second;
+  return loadOncePerPath<FourierBSDFTable>(path, [](const std::string& p) { return read(p); });
 }
 
 bool FourierBSDFTable::weights(double x, int& offset, double w[4]) const {

@@ -5,8 +5,6 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
-#include <map>
-#include <mutex>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -14,6 +12,7 @@
 #include "lensim/render/materials/microfacet.h"
 #include "lensim/sampling/sampling.h"
 #include "lensim/util/error.h"
+#include "lensim/util/path_cache.h"
 #include "lensim/util/file.h"
 #include "lensim/util/limits.h"
 
@@ -254,15 +253,7 @@ void MeasuredBRDF::buildLobes() {
 }
 
 std::shared_ptr<const MeasuredBRDF> MeasuredBRDF::loadCached(const std::string& path) {
-  static std::mutex mutex;
-  static std::map<std::string, std::shared_ptr<const MeasuredBRDF>> cache;
-  {
-    std::lock_guard lock(mutex);
-    if (auto it = cache.find(path); it != cache.end()) return it->second;
-  }
-  auto brdf = std::make_shared<const MeasuredBRDF>(readIrregularBRDF(path));
-  std::lock_guard lock(mutex);
-  return cache.emplace(path, std::move(brdf)).first->second;
+  return loadOncePerPath<MeasuredBRDF>(path, readIrregularBRDF);
 }
 
 std::vector<double> MeasuredBRDF::interpolate(double theta_i, double theta_o, double dphi) const {

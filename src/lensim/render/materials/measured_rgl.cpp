@@ -3,14 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <map>
-#include <mutex>
 
 #include <fmt/format.h>
 
 #include "lensim/render/materials/tensor_file.h"
 #include "lensim/sampling/sampling.h"
 #include "lensim/util/error.h"
+#include "lensim/util/path_cache.h"
 #include "lensim/util/file.h"
 #include "lensim/util/limits.h"
 
@@ -248,21 +247,9 @@ std::shared_ptr<const RGLMeasuredBRDF> RGLMeasuredBRDF::loadCached(const std::st
   thread_local std::string last_path;
   thread_local std::shared_ptr<const RGLMeasuredBRDF> last;
   if (last && last_path == path) return last;
-  static std::mutex mutex;
-  static std::map<std::string, std::shared_ptr<const RGLMeasuredBRDF>> cache;
-  std::shared_ptr<const RGLMeasuredBRDF> found;
-  {
-    std::lock_guard lock(mutex);
-    if (auto it = cache.find(path); it != cache.end()) found = it->second;
-  }
-  if (!found) {
-    auto brdf = std::make_shared<const RGLMeasuredBRDF>(read(path));
-    std::lock_guard lock(mutex);
-    found = cache.emplace(path, std::move(brdf)).first->second;
-  }
+  last = loadOncePerPath<RGLMeasuredBRDF>(path, [](const std::string& p) { return read(p); });
   last_path = path;
-  last = found;
-  return found;
+  return last;
 }
 
 SampledSpectrum RGLMeasuredBRDF::values(Vec2 sample, double phi_o, double theta_o,
