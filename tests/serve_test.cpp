@@ -12,7 +12,6 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -149,13 +148,22 @@ Fixture* ServeTest::fixture = nullptr;
 lensim::serve::Server* ServeTest::server = nullptr;
 std::thread* ServeTest::thread = nullptr;
 
-/// Server-sent events of a preview stream: (event, data) pairs.
+/// Server-sent events of a preview stream: (event, data) pairs. Parsed by hand: the data lines
+/// carry base64 PNGs of tens of kilobytes, and libstdc++'s std::regex matches `.*` by recursion
+/// (one stack frame per character), which overflowed the stack under AddressSanitizer.
 std::vector<std::pair<std::string, json>> parseEvents(const std::string& body) {
   std::vector<std::pair<std::string, json>> out;
-  std::regex re("event: (\\w+)\ndata: (.*)\n\n");
-  for (auto it = std::sregex_iterator(body.begin(), body.end(), re); it != std::sregex_iterator();
-       ++it)
-    out.push_back({(*it)[1], json::parse((*it)[2].str())});
+  size_t at = 0;
+  while ((at = body.find("event: ", at)) != std::string::npos) {
+    const size_t name_end = body.find('\n', at);
+    if (name_end == std::string::npos || body.compare(name_end + 1, 6, "data: ") != 0) break;
+    const size_t data_begin = name_end + 7;
+    const size_t data_end = body.find("\n\n", data_begin);
+    if (data_end == std::string::npos) break;
+    out.push_back({body.substr(at + 7, name_end - at - 7),
+                   json::parse(body.substr(data_begin, data_end - data_begin))});
+    at = data_end + 2;
+  }
   return out;
 }
 
@@ -540,6 +548,11 @@ TEST_F(ServeTest, FiftyConcurrentRequestsAllAnswered) {
 }
 
 TEST_F(ServeTest, MemoryStaysFlatOver500Requests) {
+#if defined(__SANITIZE_ADDRESS__)
+  // AddressSanitizer keeps freed memory in quarantine (256 MB by default), so the resident size
+  // grows with every request whether or not anything leaks; LeakSanitizer checks leaks there.
+  GTEST_SKIP() << "resident size is not meaningful under AddressSanitizer";
+#endif
   const std::vector<std::string> mix = {"/api/lens?lens=dgauss.50mm.dat&fnumber=4&focus=2",
                                         "/api/diagram?lens=dgauss.50mm.dat",
                                         "/api/plot?kind=spot&lens=sub/telephoto.250mm.dat",
