@@ -1,20 +1,26 @@
 // pbrt-v4's gbuffer film (issue 12): the auxiliary channels of the first visible surface, as
 // pbrt-v4's GBufferFilm writes them (src/pbrt/film.cpp). Expected values are closed forms of the
 // scene's geometry (a plane at a known depth and tilt seen by a perspective camera), the
-// material's reflectance, and the sample-variance estimator computed here in two passes.
+// material's reflectance, and the sample-variance estimator computed here in two passes; with
+// bdpt and lighttracer, a moving camera (the shutter mean of the depth) and the variance of
+// splatted estimates (the pixels' scatter). Film "savefp16" (half EXR) is tested here too.
 #include <ImfChannelList.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
+#include "cli_run.h"
 #include "lensim/io/image.h"
 #include "lensim/render/film/film.h"
 #include "lensim/render/film/gbuffer.h"
@@ -284,6 +290,240 @@ TEST(FilmGBuffer, ExrChannelsAsPbrtV4) {
                                       "RelativeVariance.B"};
   EXPECT_EQ(got, want);
   std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace lensim
+
+namespace lensim {
+namespace {
+
+/// planeScene with another integrator.
+std::string withIntegrator(std::string text, const std::string& integrator) {
+  const std::string from = "Integrator \"path\"";
+  text.replace(text.find(from), from.size(), "Integrator \"" + integrator + "\"");
+  return text;
+}
+
+// bdpt and lighttracer fill the auxiliary channels too (pbrt-v4 leaves them 0 there: its
+// BDPTIntegrator::Li ignores the VisibleSurface argument and LightPathIntegrator adds no camera
+// samples). Their camera rays are sampled as path's, so every geometric channel and the albedo
+// equal path's exactly; and they are the plane's closed form (P.Z = 2, N = Ns = (0, 0, -1)).
+TEST(FilmGBuffer, BdptAndLightTracerFillTheAuxiliaryChannels) {
+  const std::string text = planeScene(2, 0);
+  const io::Image ip = testutil::renderText(text).image;
+  const char* geometric[] = {"Albedo.R", "Albedo.G", "Albedo.B", "P.X",  "P.Y",  "P.Z",
+                             "dzdx",     "dzdy",     "N.X",      "N.Y",  "N.Z",  "Ns.X",
+                             "Ns.Y",     "Ns.Z",     "u",        "v"};
+  for (const char* integrator : {"bdpt", "lighttracer"}) {
+    const render::RenderResult r = testutil::renderText(withIntegrator(text, integrator));
+    const io::Image& im = r.image;
+    ASSERT_EQ(im.channels, ip.channels);
+    int differing_rgb = 0, positive_variance = 0;
+    for (int y = 0; y < kRes; ++y)
+      for (int x = 0; x < kRes; ++x) {
+        EXPECT_NEAR(at(im, "P.Z", x, y), 2.0, 1e-5) << integrator;
+        EXPECT_NEAR(at(im, "N.Z", x, y), -1, 1e-6) << integrator;
+        EXPECT_NEAR(at(im, "Ns.Z", x, y), -1, 1e-6) << integrator;
+        for (const char* c : geometric)
+          EXPECT_EQ(at(im, c, x, y), at(ip, c, x, y)) << integrator << " " << c << " " << x
+                                                      << " " << y;
+        differing_rgb += at(im, "G", x, y) != at(ip, "G", x, y);
+        positive_variance += at(im, "Variance.G", x, y) > 0;
+        // A pixel with a (splatted or sampled) value has a variance; one without has none
+        // (the light tracer's 16 paths per pixel reach few of the 81 pixels of this view).
+        EXPECT_EQ(at(im, "Variance.G", x, y) > 0, at(im, "G", x, y) > 0) << integrator;
+      }
+    std::printf("%s: albedo.G %.4f (path %.4f), %d of %d pixels with another RGB than path's, "
+                "%d with a positive variance\n",
+                integrator, at(im, "Albedo.G", 4, 4), at(ip, "Albedo.G", 4, 4), differing_rgb,
+                kRes * kRes, positive_variance);
+    // The RGB is the integrator's own (not a fallback to path), with a variance.
+    EXPECT_GT(differing_rgb, kRes * kRes / 2) << integrator;
+    EXPECT_GT(positive_variance, 0) << integrator;
+  }
+}
+
+// The variance of a splatted estimate (lighttracer; bdpt adds its t = 1 splats to the variance
+// of its camera samples): a Lambertian plane filling the view, lit head-on by a distant light,
+// has the same expected radiance in every pixel, so the scatter of the pixel values over the
+// image estimates the variance of one pixel's value, which the Variance channel over spp must
+// match. With a box filter of radius 1/2 a splat lands on one pixel. The sensor is CIE 1931, so
+// sensor G is Y = the luminance of the output linear sRGB.
+TEST(FilmGBuffer, SplattedVarianceMatchesThePixelScatter) {
+  constexpr int kN = 32, kSpp = 16;
+  const double h = 0.55;  // the view at z = 2 is 2 tan(15 deg) = 0.536 wide each way
+  for (const char* integrator : {"lighttracer", "bdpt"}) {
+    const std::string text = fmt::format(R"(
+LookAt 0 0 0  0 0 1  0 1 0
+Camera "perspective" "float fov" 30
+Film "gbuffer" "integer xresolution" {} "integer yresolution" {} "string filename" "g.exr"
+PixelFilter "box"
+Sampler "independent" "integer pixelsamples" {}
+Integrator "{}" "integer maxdepth" 1
+WorldBegin
+LightSource "distant" "rgb L" [1 1 1] "point3 from" [0 0 0] "point3 to" [0 0 1]
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-{} -{} 2  {} -{} 2  {} {} 2  -{} {} 2]
+  "integer indices" [0 1 2 0 2 3]
+)",
+                                         kN, kN, kSpp, integrator, h, h, h, h, h, h, h, h);
+    const io::Image im = testutil::renderText(text).image;
+    std::vector<double> lum;
+    double variance = 0;
+    for (int y = 0; y < kN; ++y)
+      for (int x = 0; x < kN; ++x) {
+        lum.push_back(0.2126729 * at(im, "R", x, y) + 0.7151522 * at(im, "G", x, y) +
+                      0.0721750 * at(im, "B", x, y));
+        variance += at(im, "Variance.G", x, y) / (kN * kN);
+      }
+    double mean = 0, scatter = 0;
+    for (double v : lum) mean += v / double(lum.size());
+    for (double v : lum) scatter += (v - mean) * (v - mean) / double(lum.size() - 1);
+    const double predicted = variance / kSpp;
+    std::printf("%s: mean Y %.5f, pixel scatter %.4g, Variance.G / spp %.4g (ratio %.3f)\n",
+                integrator, mean, scatter, predicted, predicted / scatter);
+    // 1024 pixels: the scatter's own relative error is about sqrt(2 / 1024) = 4.4 %.
+    EXPECT_NEAR(predicted / scatter, 1.0, 0.15) << integrator;
+    // And the image is right: albedo 0.5 under unit irradiance, radiance 0.5 / pi (the mean of
+    // 1024 pixels scatters by 1%).
+    EXPECT_NEAR(mean, 0.5 / M_PI, 0.05 * 0.5 / M_PI) << integrator;
+  }
+}
+
+// A camera moving during the shutter: pbrt-v4's VisibleSurface takes the camera transform at
+// the sample's time (CameraFromRender(si.time), src/pbrt/film.cpp). The camera moves from
+// z = 0 to z = 1 over the shutter [0, 1] toward a plane at z = 5: a sample at time t sees the
+// plane at camera-space depth 5 - t, so P.Z averaged over the image is the shutter mean 4.5
+// (the start transform alone would give 5); in world coordinates P.Z is 5 at every time.
+TEST(FilmGBuffer, MovingCameraDepthIsTheShutterMean) {
+  const auto scene = [](const std::string& film_extra) {
+    return fmt::format(R"(
+TransformTimes 0 1
+ActiveTransform StartTime
+LookAt 0 0 0  0 0 1  0 1 0
+ActiveTransform EndTime
+LookAt 0 0 1  0 0 2  0 1 0
+ActiveTransform All
+Camera "perspective" "float fov" 40 "float shutteropen" 0 "float shutterclose" 1
+Film "gbuffer" "integer xresolution" 9 "integer yresolution" 9 "string filename" "g.exr" {}
+PixelFilter "box"
+Sampler "independent" "integer pixelsamples" 64
+Integrator "path" "integer maxdepth" 1
+WorldBegin
+LightSource "distant" "rgb L" [1 1 1] "point3 from" [0 0 0] "point3 to" [0 0 1]
+Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
+Shape "trianglemesh" "point3 P" [-10 -10 5  10 -10 5  10 10 5  -10 10 5]
+  "integer indices" [0 1 2 0 2 3]
+)",
+                       film_extra);
+  };
+  const io::Image cam = testutil::renderText(scene("")).image;
+  const io::Image world =
+      testutil::renderText(scene("\"string coordinatesystem\" \"world\"")).image;
+  double mean = 0, lo = 1e9, hi = -1e9;
+  for (int y = 0; y < 9; ++y)
+    for (int x = 0; x < 9; ++x) {
+      const double z = at(cam, "P.Z", x, y);
+      mean += z / 81;
+      lo = std::min(lo, z), hi = std::max(hi, z);
+      EXPECT_NEAR(at(world, "P.Z", x, y), 5, 1e-5);
+      EXPECT_NEAR(at(cam, "N.Z", x, y), -1, 1e-6);
+      EXPECT_NEAR(at(cam, "dzdx", x, y), 0, 1e-5);
+    }
+  // 5184 uniform shutter times: the mean of 5 - t scatters by 0.289 / 72 = 0.004.
+  std::printf("moving camera: camera-space P.Z over the image %.4f (closed form 4.5), pixels "
+              "%.3f to %.3f\n",
+              mean, lo, hi);
+  EXPECT_NEAR(mean, 4.5, 0.016);
+  EXPECT_GT(lo, 4.0);
+  EXPECT_LT(hi, 5.0);
+}
+
+// Film "bool savefp16": lensim writes 32-bit float EXR by default (pbrt-v4 defaults to half);
+// an explicit true writes HALF channels, which hold the values to half precision (11
+// significant bits), and values beyond half's range are written as +-65504 with a warning that
+// counts them (never as infinities).
+TEST(FilmSaveFp16, HalfChannelsWhenAskedClampedToTheHalfRange) {
+  EXPECT_FALSE(testutil::buildText(planeScene(2, 0)).film.save_fp16);
+  EXPECT_TRUE(testutil::buildText(planeScene(2, 0, "\"bool savefp16\" true")).film.save_fp16);
+  EXPECT_FALSE(testutil::buildText(planeScene(2, 0, "\"bool savefp16\" false")).film.save_fp16);
+
+  io::Image im(3, 2, {"R", "G", "B"});
+  const float values[18] = {0.1f,  1.0f,  3.14159f, 1e6f,  -1e6f,  65504.0f,
+                            -2.5f, 1e-3f, 12345.6f, 0.0f,  7e4f,   0.333f,
+                            1e-5f, 42.0f, 0.5f,     100.f, 60000.f, 2.0f};
+  for (int i = 0; i < 18; ++i) im.pixels[size_t(i)] = values[i];
+  im.metadata["lensim:spp"] = "4";
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string half_path = (dir / "lensim_fp16_test.exr").string(),
+                    float_path = (dir / "lensim_fp32_test.exr").string();
+  io::ImageWriteOptions wo;
+  wo.exr_half = true;
+  testing::internal::CaptureStderr();
+  io::writeImage(half_path, im, wo);
+  const std::string warning = testing::internal::GetCapturedStderr();
+  io::writeImage(float_path, im);
+  const auto type = [](const std::string& path) {
+    Imf::InputFile f(path.c_str());
+    std::set<int> types;
+    for (auto it = f.header().channels().begin(); it != f.header().channels().end(); ++it)
+      types.insert(int(it.channel().type));
+    return types;
+  };
+  EXPECT_EQ(type(half_path), std::set<int>{int(Imf::HALF)});
+  EXPECT_EQ(type(float_path), std::set<int>{int(Imf::FLOAT)});
+  // 1e6, -1e6 (one pixel) and 7e4 (another): 2 pixels, 3 values.
+  EXPECT_NE(warning.find("2 pixels (3 values)"), std::string::npos) << warning;
+  const io::Image back = io::readImage(half_path);
+  EXPECT_EQ(back.metadata.at("lensim:spp"), "4");
+  for (int i = 0; i < 18; ++i) {
+    const double want = std::clamp(double(values[i]), -65504.0, 65504.0);
+    // Half: 10 stored mantissa bits (relative rounding error <= 2^-11) above 2^-14, absolute
+    // steps of 2^-24 below.
+    EXPECT_NEAR(back.pixels[size_t(i)], want, std::abs(want) * 0x1p-11 + 0x1p-25) << i;
+  }
+  EXPECT_EQ(back.pixels[3], 65504.0f);
+  EXPECT_EQ(back.pixels[4], -65504.0f);
+  std::filesystem::remove(half_path);
+  std::filesystem::remove(float_path);
+}
+
+// Through the CLI: "savefp16" true in the scene gives a half EXR, the default a float one; the
+// two renders (deterministic) agree within half precision.
+TEST(FilmSaveFp16, RenderWritesHalfOnlyWhenTheSceneAsks) {
+  const auto dir = std::filesystem::temp_directory_path();
+  std::vector<io::Image> images;
+  for (const bool fp16 : {true, false}) {
+    const std::string scene_path = (dir / "lensim_fp16_scene.pbrt").string();
+    const std::string out = (dir / "lensim_fp16_out.exr").string();
+    {
+      std::ofstream f(scene_path);
+      f << fmt::format(R"(
+LookAt 0 0 0  0 0 1  0 1 0
+Camera "perspective" "float fov" 40
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4 {}
+Sampler "independent" "integer pixelsamples" 1
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+)",
+                       fp16 ? "\"bool savefp16\" true" : "");
+    }
+    const test::CliResult r =
+        test::runLensim(fmt::format("render {} --quiet --outfile {}", scene_path, out));
+    ASSERT_EQ(r.status, 0) << r.out;
+    Imf::InputFile f(out.c_str());
+    EXPECT_EQ(f.header().channels().findChannel("G")->type, fp16 ? Imf::HALF : Imf::FLOAT);
+    images.push_back(io::readImage(out));
+    std::filesystem::remove(out);
+    std::filesystem::remove(scene_path);
+  }
+  ASSERT_EQ(images[0].pixels.size(), images[1].pixels.size());
+  for (size_t i = 0; i < images[0].pixels.size(); ++i) {
+    const float full = images[1].pixels[i];
+    EXPECT_GT(full, 0.0f);
+    EXPECT_NEAR(images[0].pixels[i], full, full * 0x1p-11) << i;
+  }
 }
 
 }  // namespace

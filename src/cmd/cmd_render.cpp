@@ -207,6 +207,7 @@ void registerRenderCommand(CLI::App& app, Action& action) {
       render::RenderResult res = render::render(s, ro);
       io::ImageWriteOptions wo;
       wo.tiff_format = io::TiffSampleFormat::Float32;
+      wo.exr_half = s.film.save_fp16;  // Film "bool savefp16" true
       if (part_mode && res.stats.partial && !checkpoint.empty()) {
         // An interrupted part is not written: a part file that exists is complete (merge jobs
         // wait for them); the finished tiles are in the checkpoint.

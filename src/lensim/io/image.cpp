@@ -6,6 +6,7 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+#include <Imath/half.h>
 #include <dlfcn.h>
 #include <unistd.h>
 
@@ -144,13 +145,49 @@ std::vector<std::string> colorChannelNames(int samples, bool alpha_last) {
 // owner, ...; checked with OIIO 2.4), so the metadata would not come back as written; and the
 // channel layout and the incomplete-file check below are what lensim's EXR readers rely on.
 
-void writeExr(const std::string& path, const Image& image) {
+// With `half` (Film "savefp16" true) the channels are 16-bit HALF, as pbrt-v4 writes them
+// (src/pbrt/film.cpp, RGBFilm::GetImage: PixelFormat::Half when writeFP16); `report_as` names
+// the file in the warning about values clamped to half's range.
+void writeExr(const std::string& path, const std::string& report_as, const Image& image,
+              bool half) {
   Imf::Header header(image.width, image.height);
   header.compression() = Imf::ZIP_COMPRESSION;
   for (const auto& [key, value] : image.metadata) header.insert(key, Imf::StringAttribute(value));
   Imf::FrameBuffer fb;
   const size_t nc = image.channels.size();
+  std::vector<Imath::half> halves;
+  if (half) {
+    // Half's largest finite value; anything larger in magnitude would become an infinity.
+    constexpr float kHalfMax = 65504.0f;
+    halves.resize(image.pixels.size());
+    size_t clamped_values = 0, clamped_pixels = 0;
+    for (size_t p = 0; p < image.pixels.size(); p += nc) {
+      bool pixel_clamped = false;
+      for (size_t c = 0; c < nc; ++c) {
+        float v = image.pixels[p + c];
+        if (!std::isfinite(v)) v = 0;  // never written (the renderer writes such values as 0)
+        if (std::abs(v) > kHalfMax) {
+          v = std::copysign(kHalfMax, v);
+          ++clamped_values;
+          pixel_clamped = true;
+        }
+        halves[p + c] = Imath::half(v);
+      }
+      clamped_pixels += pixel_clamped;
+    }
+    if (clamped_values > 0)
+      logWarning(fmt::format("{}: {} pixels ({} values) exceed the half-float range of a "
+                             "\"savefp16\" EXR and are written as +-65504",
+                             report_as, clamped_pixels, clamped_values));
+  }
   for (size_t c = 0; c < nc; ++c) {
+    if (half) {
+      header.channels().insert(image.channels[c], Imf::Channel(Imf::HALF));
+      fb.insert(image.channels[c],
+                Imf::Slice(Imf::HALF, (char*)(halves.data() + c), sizeof(Imath::half) * nc,
+                           sizeof(Imath::half) * nc * image.width));
+      continue;
+    }
     header.channels().insert(image.channels[c], Imf::Channel(Imf::FLOAT));
     fb.insert(image.channels[c], Imf::Slice(Imf::FLOAT, (char*)(image.pixels.data() + c),
                                             sizeof(float) * nc, sizeof(float) * nc * image.width));
@@ -585,7 +622,7 @@ void writeImage(const std::string& path, const Image& image, const ImageWriteOpt
       writeWithOiio(tmp, path, image, format, options);
       return;
     }
-    writeExr(tmp, image);
+    writeExr(tmp, path, image, options.exr_half);
     // OpenEXR finishes the file (line offsets) in a destructor that swallows errors: read it
     // back, so that a full disk is an error and not a truncated image.
     bool complete = false;

@@ -64,6 +64,10 @@ enum class TiffSampleFormat { UInt16, Float32 };
 /// Options for writeImage.
 struct ImageWriteOptions {
   TiffSampleFormat tiff_format = TiffSampleFormat::Float32;
+  /// EXR: 16-bit HALF channels instead of 32-bit FLOAT (pbrt-v4's Film "savefp16"). Values
+  /// beyond half's largest finite value (65504) are written as +-65504, with a warning that
+  /// counts them, never as infinities.
+  bool exr_half = false;
 };
 
 /// Image file formats lensim writes.

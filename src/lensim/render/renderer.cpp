@@ -272,16 +272,15 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   // Film "gbuffer" (pbrt-v4's GBufferFilm): its coordinate system and the differential scale
   // pbrt-v4 applies to camera rays, max(1/8, 1/sqrt(samples per pixel)).
   const bool gbuffer = film.gbuffer();
-  const Transform gbuffer_from_world = scene.film.gbuffer_coordinates == "world"
-                                           ? Transform()
-                                           : scene.camera.camera_from_world;
+  const GBufferFrame gbuffer_frame(scene);
   const double gbuffer_diff_scale = std::max(0.125, 1 / std::sqrt(double(spp)));
   const double shutter_length = scene.camera.shutter_close - scene.camera.shutter_open;
   // The splats' scale for `n` samples per pixel taken: one light path per sample of every
   // pixel rendered, the image normalised per pixel of the full image (camera.h).
   auto setSplatScale = [&](int n) {
     film.setSplatScale(double(x_res) * double(y_res) /
-                       (double(std::max(n, 1)) * double(bounds.area())));
+                           (double(std::max(n, 1)) * double(bounds.area())),
+                       n);
   };
 
   RenderResult result;
@@ -451,6 +450,35 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
             camera::CameraSample cs_shift[kB];
             std::optional<camera::CameraRay> dx_rays[kB], dy_rays[kB];
             std::vector<BdptSplat> bdpt_splats;
+            Transform gbuffer_scratch;
+            // Sample k of the batch: pixel (x, y), sample index i. Dimension order: wavelength,
+            // film (filter), lens, time, then the path (path_dimension).
+            int path_dimension = 0;
+            const auto cameraSample = [&](int x, int y, int i, int k) {
+              sampler->startPixelSample({x, y}, i);
+              u_lambda[k] = sampler->get1D();
+              fs[k] = filter->sample(sampler->getPixel2D());
+              cs[k].lens = sampler->get2D();
+              cs[k].time = sampler->get1D();
+              cs[k].film_raster = {x + 0.5 + fs[k].p.x, y + 0.5 + fs[k].p.y};
+              lambdas[k] = SampledWavelengths::sampleVisible(u_lambda[k]);
+              static_assert(camera::kCameraWavelengths == kSpectrumSamples);
+              for (int c = 0; c < kSpectrumSamples; ++c)
+                cs[k].lambda_nm[size_t(c)] = lambdas[k].lambda(c);
+              cs[k].pixel_centre = {x + 0.5, y + 0.5};
+              // bdpt keeps a dispersive lens's hero wavelength only (as pbrt-v4 does): its light
+              // subpaths share the camera path's wavelengths.
+              cs[k].filter = opt.dispersion_hero_only || bdpt ? nullptr : filter.get();
+              cs[k].filter_weight = fs[k].weight;
+              path_dimension = sampler->dimension();
+            };
+            // Film "gbuffer": the first visible surface of camera ray k of the batch.
+            const auto visible = [&](int k) {
+              return visibleSurface(
+                  sc, differential(*cam_rays[k], dx_rays[k], dy_rays[k]), lambdas[k],
+                  gbuffer_frame.outputFromWorld(cam_rays[k]->time, gbuffer_scratch),
+                  gbuffer_diff_scale, counts);
+            };
             if (light_tracer) {
               for (int y = y0; y < y1 && !tile_cancelled; ++y)
                 for (int x = x0; x < x1; ++x) {
@@ -466,6 +494,21 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     n_bad += uint64_t(light_tracer->trace(lambda, *sampler, film, counts));
                     ++n_samples;
                   }
+                  // Film "gbuffer": the light tracer traces no camera rays, so the auxiliary
+                  // channels get camera rays of their own, sampled as path's are (the same
+                  // sampler dimensions: the same rays and wavelengths as path's for the same
+                  // pixel sample).
+                  if (gbuffer)
+                    for (int i0 = pass_begin; i0 < pass_end; i0 += kB) {
+                      const int m = std::min(kB, pass_end - i0);
+                      for (int k = 0; k < m; ++k) cameraSample(x, y, i0 + k, k);
+                      cam->generateRays(cs, m, cam_rays);
+                      gbufferDifferentials(*cam, cs, m, cs_shift, dx_rays, dy_rays);
+                      for (int k = 0; k < m; ++k) {
+                        const auto vs = cam_rays[k] ? visible(k) : std::nullopt;
+                        film.addVisibleSurface(x, y, fs[k].weight, vs ? &*vs : nullptr);
+                      }
+                    }
                 }
             }
             for (int y = y0; y < (light_tracer ? y0 : y1); ++y)
@@ -477,26 +520,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                     break;
                   }
                   const int m = std::min(kB, pass_end - i0);
-                  int path_dimension = 0;
-                  for (int k = 0; k < m; ++k) {
-                    sampler->startPixelSample({x, y}, i0 + k);
-                    // Dimension order: wavelength, film (filter), lens, time, then the path.
-                    u_lambda[k] = sampler->get1D();
-                    fs[k] = filter->sample(sampler->getPixel2D());
-                    cs[k].lens = sampler->get2D();
-                    cs[k].time = sampler->get1D();
-                    cs[k].film_raster = {x + 0.5 + fs[k].p.x, y + 0.5 + fs[k].p.y};
-                    lambdas[k] = SampledWavelengths::sampleVisible(u_lambda[k]);
-                    static_assert(camera::kCameraWavelengths == kSpectrumSamples);
-                    for (int c = 0; c < kSpectrumSamples; ++c)
-                      cs[k].lambda_nm[size_t(c)] = lambdas[k].lambda(c);
-                    cs[k].pixel_centre = {x + 0.5, y + 0.5};
-                    // bdpt keeps a dispersive lens's hero wavelength only (as pbrt-v4 does):
-                    // its light subpaths share the camera path's wavelengths.
-                    cs[k].filter = opt.dispersion_hero_only || bdpt ? nullptr : filter.get();
-                    cs[k].filter_weight = fs[k].weight;
-                    path_dimension = sampler->dimension();
-                  }
+                  for (int k = 0; k < m; ++k) cameraSample(x, y, i0 + k, k);
                   cam->generateRays(cs, m, cam_rays);
                   if (gbuffer) gbufferDifferentials(*cam, cs, m, cs_shift, dx_rays, dy_rays);
                   for (int k = 0; k < m; ++k) {
@@ -557,10 +581,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                       ++n_bad;
                       continue;
                     }
-                    if (gbuffer && ray && !bdpt) {
-                      const auto vs = visibleSurface(
-                          sc, differential(*ray, dx_rays[k], dy_rays[k]), lambda,
-                          gbuffer_from_world, gbuffer_diff_scale, counts);
+                    // Film "gbuffer" (also with bdpt, whose camera subpath starts with the
+                    // same camera ray and first surface as path's).
+                    if (gbuffer && ray) {
+                      const auto vs = visible(k);
                       film.addSample(x, y, L, lambda, fs[k].weight, vs ? &*vs : nullptr);
                       continue;
                     }

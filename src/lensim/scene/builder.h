@@ -364,7 +364,9 @@ struct Film {
   double white_balance_k = 0;
   std::string sensor = "cie1931";
   double max_component_value = 1e300;
-  bool save_fp16 = true;
+  /// `savefp16`: EXR output as 16-bit half floats. pbrt-v4 defaults it to true; lensim writes
+  /// 32-bit float unless the file asks (float holds every half value exactly and more).
+  bool save_fp16 = false;
   bool defaulted = true;
   /// pbrt-v4 "spectral" film (type "spectral"): radiance in `spectral_buckets` equal buckets
   /// over [lambda_min_nm, lambda_max_nm] beside the RGB.

@@ -101,23 +101,18 @@ void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavele
   const Vec3 sensor_rgb = toSensorRgb(L, lambda);
   const Vec3 rgb = outputRgb(sensor_rgb);
   const size_t i = size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0);
-  if (vs && !gbuf_.empty()) {
+  if (!gbuf_.empty()) {
     // pbrt-v4's GBufferFilm::AddSample.
     GBufferPixel& g = gbuf_[i];
-    g.weight += w;
-    g.p += vs->p * w;
-    g.n += vs->n * w;
-    g.ns += vs->ns * w;
-    g.u += vs->uv.x * w;
-    g.v += vs->uv.y * w;
-    g.dzdx += vs->dzdx * w;
-    g.dzdy += vs->dzdy * w;
-    g.albedo += vs->albedo * w;
-    ++g.count;
-    const Vec3 delta = sensor_rgb - g.mean;
-    g.mean += delta / double(g.count);
-    const Vec3 delta2 = sensor_rgb - g.mean;
-    g.m2 += Vec3{delta.x * delta2.x, delta.y * delta2.y, delta.z * delta2.z};
+    g.weight_all += w;
+    if (vs) {
+      addAux(g, w, *vs);
+      ++g.count;
+      const Vec3 delta = sensor_rgb - g.mean;
+      g.mean += delta / double(g.count);
+      const Vec3 delta2 = sensor_rgb - g.mean;
+      g.m2 += Vec3{delta.x * delta2.x, delta.y * delta2.y, delta.z * delta2.z};
+    }
   }
   PixelSum& p = pixels_[i];
   p.rgb[0] += toFixed(w * rgb.x);
@@ -125,6 +120,26 @@ void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavele
   p.rgb[2] += toFixed(w * rgb.z);
   p.weight += toFixed(w);
   if (n_buckets_ > 0) addSpectral(x, y, L, lambda, w);
+}
+
+void Film::addAux(GBufferPixel& g, double w, const VisibleSurface& vs) {
+  g.weight += w;
+  g.p += vs.p * w;
+  g.n += vs.n * w;
+  g.ns += vs.ns * w;
+  g.u += vs.uv.x * w;
+  g.v += vs.uv.y * w;
+  g.dzdx += vs.dzdx * w;
+  g.dzdy += vs.dzdy * w;
+  g.albedo += vs.albedo * w;
+}
+
+void Film::addVisibleSurface(int x, int y, double w, const VisibleSurface* vs) {
+  if (gbuf_.empty()) return;
+  GBufferPixel& g =
+      gbuf_[size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0)];
+  g.weight_all += w;
+  if (vs) addAux(g, w, *vs);
 }
 
 // pbrt-v4's SpectralFilm::AddSample (src/pbrt/film.h) adds each wavelength's radiance times
@@ -164,7 +179,8 @@ void Film::enableSplats(const Filter& filter) {
 
 void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda) {
   if (!splat_filter_) return;
-  const Vec3 rgb = toRgb(L, lambda);
+  const Vec3 sensor_rgb = toSensorRgb(L, lambda);
+  const Vec3 rgb = outputRgb(sensor_rgb);
   const Vec2 r = splat_filter_->radius();
   const double norm = 1 / splat_filter_->integral();
   // Pixels whose centre (x + 0.5, y + 0.5) lies within the filter radius of p.
@@ -180,6 +196,11 @@ void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& 
       const Int128 v[3] = {toFixed(w * rgb.x), toFixed(w * rgb.y), toFixed(w * rgb.z)};
       std::lock_guard lock(splat_locks_[i % kSplatLocks]);
       for (int c = 0; c < 3; ++c) splats_[i][size_t(c)] += v[c];
+      if (!gbuf_.empty()) {
+        const Vec3 y = sensor_rgb * w;
+        gbuf_[i].splat_sum += y;
+        gbuf_[i].splat_sq += Vec3{y.x * y.x, y.y * y.y, y.z * y.z};
+      }
       if (n_buckets_ > 0) {
         // As addSpectral, the bucket estimate of the splat's radiance.
         const double width = (lambda_max_ - lambda_min_) / n_buckets_;
@@ -261,8 +282,7 @@ io::Image Film::image() const {
       for (int x = 0; x < bounds_.width(); ++x) {
         const size_t i = size_t(y) * size_t(bounds_.width()) + size_t(x);
         const GBufferPixel& g = gbuf_[i];
-        const double w_all = double(pixels_[i].weight) / kFixedScale;
-        const Vec3 albedo = w_all != 0 ? g.albedo / w_all : Vec3{};
+        const Vec3 albedo = g.weight_all != 0 ? g.albedo / g.weight_all : Vec3{};
         const double w = g.weight != 0 ? g.weight : 1;
         const Vec3 pos = g.p / w;
         const auto unit = [](const Vec3& v) {
@@ -270,8 +290,28 @@ io::Image Film::image() const {
           return l > 0 ? v / l : Vec3{};
         };
         const Vec3 n = unit(g.n), ns = unit(g.ns);
-        const Vec3 var = g.count > 1 ? g.m2 / double(g.count - 1) : Vec3{};
-        const auto rel = [&](double v, double m) { return g.count < 1 || m == 0 ? 0.0 : v / m; };
+        Vec3 var = g.count > 1 ? g.m2 / double(g.count - 1) : Vec3{};
+        Vec3 mean = g.count > 0 ? g.mean : Vec3{};
+        if (!splats_.empty()) {
+          // The splatted part of the pixel (lighttracer; bdpt's t = 1 strategies), as a
+          // variance per light path of the pixel's estimate so that, as for the sampled part,
+          // Variance / spp is the variance of the pixel value. The pixel's splatted value is
+          // V = s sum_j Y_j over the M = spp A light paths started in the A pixels rendered
+          // (s: the splat scale), Y_j path j's filtered splats on this pixel. Its estimated
+          // variance is s^2 sum Y_j^2 - V^2 / M; times spp that is spp s^2 sum Y_j^2 - V^2 / A.
+          // sum Y_j^2 is taken over the splats (a path splatting twice on one pixel counts as
+          // two paths, which underestimates slightly). The two parts are added (their
+          // covariance is ignored: a sample's splats land elsewhere than its own pixel).
+          const double s = splat_scale_, spp = std::max(splat_spp_, 1);
+          const double area = double(bounds_.area());
+          const Vec3 v = g.splat_sum * s;
+          const auto part = [&](double sq, double val) {
+            return std::max(0.0, spp * s * s * sq - val * val / area);
+          };
+          var += Vec3{part(g.splat_sq.x, v.x), part(g.splat_sq.y, v.y), part(g.splat_sq.z, v.z)};
+          mean += v;
+        }
+        const auto rel = [&](double v, double m) { return m == 0 ? 0.0 : v / m; };
         const double values[22] = {albedo.x,
                                    albedo.y,
                                    albedo.z,
@@ -291,9 +331,9 @@ io::Image Film::image() const {
                                    var.x,
                                    var.y,
                                    var.z,
-                                   rel(var.x, g.mean.x),
-                                   rel(var.y, g.mean.y),
-                                   rel(var.z, g.mean.z)};
+                                   rel(var.x, mean.x),
+                                   rel(var.y, mean.y),
+                                   rel(var.z, mean.z)};
         for (int c = 0; c < 22; ++c) im.at(x, y, c0 + c) = float(values[c]);
       }
   }

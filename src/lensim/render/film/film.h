@@ -72,6 +72,10 @@ class Film {
   /// ray hit nothing, or the integrator gives none).
   void addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda, double w,
                  const VisibleSurface* vs);
+  /// For a gbuffer film whose radiance is splatted (lighttracer): the auxiliary data of a camera
+  /// sample of pixel (x, y) with filter weight w, traced for them alone (vs null: the ray hit
+  /// nothing); the pixel's RGB and variance come from the splats.
+  void addVisibleSurface(int x, int y, double w, const VisibleSurface* vs);
   /// The RGB of a sample as the film would record it (before the filter weight): the sensor's
   /// RGB (toSensorRgb) in the output colour space (outputRgb).
   Vec3 toRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const;
@@ -135,7 +139,12 @@ class Film {
   void addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda);
   /// The factor image() applies to the splat sums: 1 / (light paths per pixel of the full
   /// image), pbrt-v4's 1 / spp for a render of the whole image.
-  void setSplatScale(double scale) { splat_scale_ = scale; }
+  /// `samples_per_pixel`: the light paths started per pixel rendered, for a gbuffer film's
+  /// variance of the splatted estimate.
+  void setSplatScale(double scale, int samples_per_pixel = 1) {
+    splat_scale_ = scale;
+    splat_spp_ = samples_per_pixel;
+  }
   /// The splat sums (R, G, B in fixed point), row by row over bounds(); empty without splats.
   const std::vector<std::array<Int128, 3>>& splatSums() const { return splats_; }
 
@@ -154,8 +163,12 @@ class Film {
   // of the visible surfaces' data over the samples that have one (weight), the albedo's sum
   // (divided by the pixel's whole weight, as pbrt-v4), and a running variance (Welford) of the
   // unweighted sensor RGB of those samples.
+  // weight_all: the filter weights of all the pixel's camera samples (the albedo's divisor).
+  // splat_sum, splat_sq: a splatting integrator's per-pixel sums of the splats' filter-weighted
+  // sensor RGB and of its squares (the variance of the splatted estimate; see image()).
   struct GBufferPixel {
-    double weight = 0;
+    double weight = 0, weight_all = 0;
+    Vec3 splat_sum, splat_sq;
     Vec3 p, n, ns, albedo;
     double u = 0, v = 0, dzdx = 0, dzdy = 0;
     long long count = 0;
@@ -165,6 +178,8 @@ class Film {
   // Splats (see enableSplats).
   const Filter* splat_filter_ = nullptr;
   double splat_scale_ = 1;
+  int splat_spp_ = 1;
+  void addAux(GBufferPixel& g, double w, const VisibleSurface& vs);
   std::vector<std::array<Int128, 3>> splats_;
   std::vector<double> bucket_splats_;          ///< spectral films: per pixel, n_buckets_ splat sums
   static constexpr size_t kSplatLocks = 1024;  ///< lock stripes (by pixel index)

@@ -21,6 +21,18 @@ Vec3 planeOffset(const Vec3& p, const Vec3& n, const Vec3& o, const Vec3& d) {
 
 }  // namespace
 
+GBufferFrame::GBufferFrame(const scene::Scene& scene) {
+  if (scene.film.gbuffer_coordinates == "world") return;
+  static_ = scene.camera.camera_from_world;
+  world_from_camera_ = camera::worldFromCamera(scene);
+}
+
+const Transform& GBufferFrame::outputFromWorld(double time, Transform& scratch) const {
+  if (!world_from_camera_.isAnimated()) return static_;
+  scratch = inverse(world_from_camera_.interpolate(time));
+  return scratch;
+}
+
 void gbufferDifferentials(const camera::Camera& cam, const camera::CameraSample* cs, int n,
                           camera::CameraSample* shift, std::optional<camera::CameraRay>* dx,
                           std::optional<camera::CameraRay>* dy) {

@@ -8,6 +8,7 @@
 #include "lensim/camera/camera.h"
 #include "lensim/render/integrators/integrator.h"
 #include "lensim/render/spectra/spectrum.h"
+#include "lensim/util/animated_transform.h"
 #include "lensim/util/transform.h"
 
 namespace lensim::render {
@@ -43,6 +44,22 @@ void gbufferDifferentials(const camera::Camera& cam, const camera::CameraSample*
 CameraRayDifferential differential(const camera::CameraRay& ray,
                                    const std::optional<camera::CameraRay>& dx,
                                    const std::optional<camera::CameraRay>& dy);
+
+/// The gbuffer's output coordinates ("string coordinatesystem"): camera space at the sample's
+/// shutter time, or world space. pbrt-v4's VisibleSurface (src/pbrt/film.cpp) transforms the hit
+/// by cameraTransform.CameraFromRender(si.time), so a camera that moves during the shutter gives
+/// each sample's position, normals and depth slopes in the camera space of that sample's time.
+class GBufferFrame {
+ public:
+  explicit GBufferFrame(const scene::Scene& scene);
+  /// Output from world at shutter time `time` (the ray's time, seconds): the static transform
+  /// itself where the camera does not move, else `scratch` filled.
+  const Transform& outputFromWorld(double time, Transform& scratch) const;
+
+ private:
+  Transform static_;  ///< world: identity; camera: camera from world at the start time
+  AnimatedTransform world_from_camera_;  ///< animated only for "camera" with a moving camera
+};
 
 /// The first surface along the ray (pbrt-v4's PathIntegrator: the first intersection with a BSDF;
 /// surfaces cut out by alpha and "interface" materials are passed), or nullopt if the ray leaves

@@ -228,7 +228,9 @@ void Builder::film(const Directive& d) {
   f.sensor = ps.getString({"sensor"}, "cie1931");
   checkSensor(ps, f);
   f.max_component_value = ps.getFloat({"maxcomponentvalue", "maxsampleluminance"}, 1e300);
-  f.save_fp16 = ps.getBool({"savefp16"}, true);
+  // pbrt-v4 (src/pbrt/film.cpp, RGBFilm::Create) defaults "savefp16" to true; lensim's
+  // default is 32-bit float (docs/scene-support.md): only an explicit true writes half.
+  f.save_fp16 = ps.getBool({"savefp16"}, false);
   ps.getBool({"display"}, false);  // pbrt-v2 image film: open a window
   if (f.x_resolution <= 0 || f.y_resolution <= 0)
     throw Error(d.loc, "film resolution must be positive");
