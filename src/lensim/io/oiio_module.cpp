@@ -3,7 +3,10 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace lensim::io::oiio {
 namespace {
@@ -63,7 +66,32 @@ void* openImage(const std::string& path, Spec* out, std::string* error) {
 
 bool readImage(void* reader, PixelType type, void* data, std::string* error) {
   auto* in = static_cast<ImageInput*>(reader);
-  if (in->read_image(0, 0, 0, in->spec().nchannels, typeOf(type), data)) return true;
+  const ImageSpec& s = in->spec();
+  const TypeDesc t = typeOf(type);
+  if (s.channelformats.empty()) {
+    // Read the file's own pixel type (TypeDesc::UNKNOWN: straight into the buffer), then
+    // convert. Any other request makes OpenImageIO 2.4's read_scanlines convert through a
+    // temporary of 64 MB whatever the image's size (imageinput.cpp, "try to use around 64 MB";
+    // heaptrack: 67 MB at the peak for a 2x2 texture); the native copy costs the image's own
+    // size (half of the float image for half data).
+    const size_t values = size_t(s.image_pixels()) * size_t(s.nchannels);
+    std::vector<char> native(values * s.format.size());
+    if (!in->read_image(0, 0, 0, s.nchannels, TypeDesc::UNKNOWN, native.data())) {
+      *error = trimmed(in->geterror());
+      return false;
+    }
+    constexpr size_t kChunk = size_t(1) << 24;  // convert_pixel_values counts in int
+    for (size_t i = 0; i < values; i += kChunk) {
+      const int n = int(std::min(kChunk, values - i));
+      if (!OIIO::convert_pixel_values(s.format, native.data() + i * s.format.size(), t,
+                                      static_cast<char*>(data) + i * t.size(), n)) {
+        *error = "cannot convert the file's pixel values";
+        return false;
+      }
+    }
+    return true;
+  }
+  if (in->read_image(0, 0, 0, s.nchannels, t, data)) return true;
   *error = trimmed(in->geterror());
   return false;
 }
