@@ -312,8 +312,8 @@ std::string withIntegrator(std::string text, const std::string& integrator) {
 TEST(FilmGBuffer, BdptAndLightTracerFillTheAuxiliaryChannels) {
   const std::string text = planeScene(2, 0);
   const io::Image ip = testutil::renderText(text).image;
-  const char* geometric[] = {"Albedo.R", "Albedo.G", "Albedo.B", "P.X",  "P.Y",  "P.Z",
-                             "dzdx",     "dzdy",     "N.X",      "N.Y",  "N.Z",  "Ns.X",
+  const char* geometric[] = {"Albedo.R", "Albedo.G", "Albedo.B", "P.X", "P.Y", "P.Z",
+                             "dzdx",     "dzdy",     "N.X",      "N.Y", "N.Z", "Ns.X",
                              "Ns.Y",     "Ns.Z",     "u",        "v"};
   for (const char* integrator : {"bdpt", "lighttracer"}) {
     const render::RenderResult r = testutil::renderText(withIntegrator(text, integrator));
@@ -326,18 +326,19 @@ TEST(FilmGBuffer, BdptAndLightTracerFillTheAuxiliaryChannels) {
         EXPECT_NEAR(at(im, "N.Z", x, y), -1, 1e-6) << integrator;
         EXPECT_NEAR(at(im, "Ns.Z", x, y), -1, 1e-6) << integrator;
         for (const char* c : geometric)
-          EXPECT_EQ(at(im, c, x, y), at(ip, c, x, y)) << integrator << " " << c << " " << x
-                                                      << " " << y;
+          EXPECT_EQ(at(im, c, x, y), at(ip, c, x, y))
+              << integrator << " " << c << " " << x << " " << y;
         differing_rgb += at(im, "G", x, y) != at(ip, "G", x, y);
         positive_variance += at(im, "Variance.G", x, y) > 0;
         // A pixel with a (splatted or sampled) value has a variance; one without has none
         // (the light tracer's 16 paths per pixel reach few of the 81 pixels of this view).
         EXPECT_EQ(at(im, "Variance.G", x, y) > 0, at(im, "G", x, y) > 0) << integrator;
       }
-    std::printf("%s: albedo.G %.4f (path %.4f), %d of %d pixels with another RGB than path's, "
-                "%d with a positive variance\n",
-                integrator, at(im, "Albedo.G", 4, 4), at(ip, "Albedo.G", 4, 4), differing_rgb,
-                kRes * kRes, positive_variance);
+    std::printf(
+        "%s: albedo.G %.4f (path %.4f), %d of %d pixels with another RGB than path's, "
+        "%d with a positive variance\n",
+        integrator, at(im, "Albedo.G", 4, 4), at(ip, "Albedo.G", 4, 4), differing_rgb, kRes * kRes,
+        positive_variance);
     // The RGB is the integrator's own (not a fallback to path), with a variance.
     EXPECT_GT(differing_rgb, kRes * kRes / 2) << integrator;
     EXPECT_GT(positive_variance, 0) << integrator;
@@ -432,9 +433,10 @@ Shape "trianglemesh" "point3 P" [-10 -10 5  10 -10 5  10 10 5  -10 10 5]
       EXPECT_NEAR(at(cam, "dzdx", x, y), 0, 1e-5);
     }
   // 5184 uniform shutter times: the mean of 5 - t scatters by 0.289 / 72 = 0.004.
-  std::printf("moving camera: camera-space P.Z over the image %.4f (closed form 4.5), pixels "
-              "%.3f to %.3f\n",
-              mean, lo, hi);
+  std::printf(
+      "moving camera: camera-space P.Z over the image %.4f (closed form 4.5), pixels "
+      "%.3f to %.3f\n",
+      mean, lo, hi);
   EXPECT_NEAR(mean, 4.5, 0.016);
   EXPECT_GT(lo, 4.0);
   EXPECT_LT(hi, 5.0);
@@ -450,9 +452,8 @@ TEST(FilmSaveFp16, HalfChannelsWhenAskedClampedToTheHalfRange) {
   EXPECT_FALSE(testutil::buildText(planeScene(2, 0, "\"bool savefp16\" false")).film.save_fp16);
 
   io::Image im(3, 2, {"R", "G", "B"});
-  const float values[18] = {0.1f,  1.0f,  3.14159f, 1e6f,  -1e6f,  65504.0f,
-                            -2.5f, 1e-3f, 12345.6f, 0.0f,  7e4f,   0.333f,
-                            1e-5f, 42.0f, 0.5f,     100.f, 60000.f, 2.0f};
+  const float values[18] = {0.1f, 1.0f, 3.14159f, 1e6f,  -1e6f, 65504.0f, -2.5f, 1e-3f,   12345.6f,
+                            0.0f, 7e4f, 0.333f,   1e-5f, 42.0f, 0.5f,     100.f, 60000.f, 2.0f};
   for (int i = 0; i < 18; ++i) im.pixels[size_t(i)] = values[i];
   im.metadata["lensim:spp"] = "4";
   const auto dir = std::filesystem::temp_directory_path();

@@ -1,12 +1,12 @@
 #include "lensim/io/image.h"
 
+#include <Imath/half.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
-#include <Imath/half.h>
 #include <dlfcn.h>
 #include <unistd.h>
 
@@ -176,9 +176,10 @@ void writeExr(const std::string& path, const std::string& report_as, const Image
       clamped_pixels += pixel_clamped;
     }
     if (clamped_values > 0)
-      logWarning(fmt::format("{}: {} pixels ({} values) exceed the half-float range of a "
-                             "\"savefp16\" EXR and are written as +-65504",
-                             report_as, clamped_pixels, clamped_values));
+      logWarning(
+          fmt::format("{}: {} pixels ({} values) exceed the half-float range of a "
+                      "\"savefp16\" EXR and are written as +-65504",
+                      report_as, clamped_pixels, clamped_values));
   }
   for (size_t c = 0; c < nc; ++c) {
     if (half) {

@@ -278,9 +278,8 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   // The splats' scale for `n` samples per pixel taken: one light path per sample of every
   // pixel rendered, the image normalised per pixel of the full image (camera.h).
   auto setSplatScale = [&](int n) {
-    film.setSplatScale(double(x_res) * double(y_res) /
-                           (double(std::max(n, 1)) * double(bounds.area())),
-                       n);
+    film.setSplatScale(
+        double(x_res) * double(y_res) / (double(std::max(n, 1)) * double(bounds.area())), n);
   };
 
   RenderResult result;
