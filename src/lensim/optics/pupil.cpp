@@ -329,6 +329,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         }
     return std::nullopt;
   };
+  // Whether the checks of a polygon start their searches at its edges (not for an anamorphic
+  // wedge's blended polygon, which the true region at the wedge's middle leaves by more).
+  bool hint_guesses = true;
   auto boundaryPoints = [&](double h, int count, double offset, Vec2* centre_out,
                             const Polygon* hint) {
     std::vector<Vec2> pts;
@@ -362,9 +365,34 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       c = mid;
     }
     if (centre_out) *centre_out = *c;
+    // Where a neighbouring polygon is at hand, each search starts at its edge along u (seen
+    // from c): the region's boundary is usually within a percent of it, and the search accepts
+    // a blocked point the margin puts within kHintAccept of the boundary.
+    constexpr double kHintAccept = 1e-3;
+    const bool use_hint = from_hint && hint_guesses;
     for (int j = 0; j < count; ++j) {
       const Vec2 u = unit(offset + 2 * std::numbers::pi * j / count);
-      guess = boundary(h, *c, u, guess);
+      double reach = 0;
+      if (use_hint) {
+        // The farthest crossing of the ray c + t u with the hint polygon's edges.
+        const Vec2 d0 = *c - hint->centre;
+        for (int k = 0; k < nd; ++k) {
+          const Vec2 a = dirs_[size_t(k)] * hint->radius[size_t(k)];
+          const Vec2 b = dirs_[size_t((k + 1) % nd)] * hint->radius[size_t((k + 1) % nd)];
+          const Vec2 e = b - a;
+          const double den = cross2(u, e);
+          if (den == 0) continue;
+          const Vec2 w = a - d0;
+          const double t = cross2(w, e) / den, v = cross2(w, u) / den;
+          if (t > 0 && v >= 0 && v <= 1) reach = std::max(reach, t);
+        }
+      }
+      if (reach > 0) {
+        accept_slope = 0;
+        guess = boundary(h, *c, u, reach * (1 + 0.5 * kHintAccept), kHintAccept);
+      } else {
+        guess = boundary(h, *c, u, guess);
+      }
       pts.push_back(*c + u * guess);
     }
     return pts;
@@ -502,6 +530,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     // Filled on the side: blended() must give the unwidened polygon while checking.
     WedgeCheck wc;
     std::vector<double> R(static_cast<size_t>(nd));
+    hint_guesses = false;
     for (double h : kept) {
       Polygon poly;
       poly.r = h;
