@@ -5,8 +5,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <numbers>
 
@@ -779,18 +777,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   traces_total += traces;
   };  // buildSector
   // The stages: each a list of (wedge, stage, k0, k1) tasks.
-  const bool profile = std::getenv("LENSIM_PUPIL_PROFILE") != nullptr;
   auto runStage = [&](const std::vector<std::array<int, 4>>& tasks) {
-    const long before = traces_total;
-    const auto ts = std::chrono::steady_clock::now();
-    struct Report {
-      bool on; long before; std::chrono::steady_clock::time_point ts; std::atomic<long>& total;
-      int stage;
-      ~Report() {
-        if (on) std::fprintf(stderr, "pupil stage %d: %ld traces, %.3f s\n", stage, total - before,
-                             std::chrono::duration<double>(std::chrono::steady_clock::now() - ts).count());
-      }
-    } report{profile, before, ts, traces_total, tasks.empty() ? -1 : tasks[0][1]};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 1),
                       [&](const tbb::blocked_range<size_t>& range) {
                         for (size_t i = range.begin(); i != range.end(); ++i)
