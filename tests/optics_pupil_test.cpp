@@ -339,8 +339,9 @@ TEST(ExitPupilSampler, WavelengthBandBoundsHoldEveryWavelengthsRays) {
 // the Cassegrain's hole with a vertex distance per direction, and the anamorphic lenses' bounds
 // blended by azimuth between wedge edges, and the searches that accept a blocked point near a
 // predicted boundary (the wavelength bands' vertices, the checks from a polygon's edges).
-// Densely: 250 rear-plane points (750 for 0014) for each of 400 film points that see something, at wavelengths inside every band (not only the band's ends); no ray
-// that gets through may start outside its band's bound. Waste is checked as in bench/lens-table.
+// Densely: 250 rear-plane points (750 for 0014) for each of 400 film points that see something, at
+// wavelengths inside every band (not only the band's ends); no ray that gets through may start
+// outside its band's bound. Waste is checked as in bench/lens-table.
 TEST(ExitPupilSampler, ReshapedBoundsHoldEveryPassingRayInTheCameraSetUp) {
   struct Budget {
     const char* lens;

@@ -705,7 +705,8 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       std::vector<size_t> order(band_lens.size());
       for (size_t i = 0; i < order.size(); ++i) order[i] = i;
       std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        return std::abs(x_of(*band_lens[a]) - x_of(lens)) < std::abs(x_of(*band_lens[b]) - x_of(lens));
+        return std::abs(x_of(*band_lens[a]) - x_of(lens)) <
+               std::abs(x_of(*band_lens[b]) - x_of(lens));
       });
       for (size_t i : order) {
         cur = {band_lens[i]};
