@@ -414,9 +414,35 @@ TEST(Checkpoint, ResumeAfterSigkillEqualsUninterruptedRender) {
     fs::remove(ck), fs::remove(out);
     const pid_t pid = spawn(killed);
     ASSERT_GT(pid, 0);
-    std::this_thread::sleep_for(std::chrono::duration<double>(when(rng)));
-    kill(pid, SIGKILL);
-    waitFor(pid);
+    bool reaped = false;
+    if (run % 2 == 0) {
+      // At a random moment (during a checkpoint write too).
+      std::this_thread::sleep_for(std::chrono::duration<double>(when(rng)));
+    } else {
+      // Once the checkpoint shows 1..5 of the 6 tiles done, so that half of the kills surely
+      // land while tiles are rendering, however loaded the machine is (timed kills alone may all
+      // land before the first or after the last tile there).
+      const int target = 1 + (run / 2) % 5;
+      while (!reaped) {
+        if (waitpid(pid, nullptr, WNOHANG) != 0) {
+          reaped = true;
+          break;
+        }
+        try {
+          if (fs::exists(ck)) {
+            const Part p = render::readPart(ck);
+            if (std::count(p.tile_done.begin(), p.tile_done.end(), 1) >= target) break;
+          }
+        } catch (const std::exception&) {
+          // replaced between the check and the read: look again
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+    }
+    if (!reaped) {
+      kill(pid, SIGKILL);
+      waitFor(pid);
+    }
     int st;
     if (fs::exists(ck)) {
       const Part p = render::readPart(ck);  // never half-written

@@ -337,19 +337,28 @@ TEST(ExitPupilSampler, WavelengthBandBoundsHoldEveryWavelengthsRays) {
 // The bounds this session's changes reshaped, in the camera's set-up (bench/lens-table: 36x24 mm
 // film, focused at 3.3 m, wide open, the camera's six wavelength bands for a dispersive lens):
 // the Cassegrain's hole with a vertex distance per direction, and the anamorphic lenses' bounds
-// blended by azimuth between wedge edges. Densely: 250 rear-plane points for each of 400 film
-// points that see something, at wavelengths inside every band (not only the band's ends); no ray
-// that gets through may start outside its band's bound. Waste is checked as in bench/lens-table.
+// blended by azimuth between wedge edges, and the searches that accept a blocked point near a
+// predicted boundary (the wavelength bands' vertices, the checks from a polygon's edges).
+// Densely: 250 rear-plane points (750 for 0014) for each of 400 film points that see something, at
+// wavelengths inside every band (not only the band's ends); no ray that gets through may start
+// outside its band's bound. Waste is checked as in bench/lens-table.
 TEST(ExitPupilSampler, ReshapedBoundsHoldEveryPassingRayInTheCameraSetUp) {
   struct Budget {
     const char* lens;
     double max_waste;
+    int rear_points = 250;  // per film point (0014's region is a small share of the square)
   };
   // Measured waste: Cassegrain 4.0% (13.3% with the scaled-copy hole), lentil:2003 2.5%,
   // lentil:2004 7.0% (12.6% with each wedge the union of its edges' regions): over the issue's
   // 5%, see the README's lens table.
-  const Budget budgets[] = {
-      {"lenses:cassegrain.500mm", 0.05}, {"lentil:2003", 0.05}, {"lentil:2004", 0.08}};
+  // lentil:0005 (spherical) and 0014 (four even aspheres), both dispersive: their wavelength
+  // bands' vertex distances are accepted from one blocked trace near the predicted boundary,
+  // and every polygon's checks start at its edges (measured 3.4% and 5.1% on the film).
+  const Budget budgets[] = {{"lenses:cassegrain.500mm", 0.05},
+                            {"lentil:2003", 0.05},
+                            {"lentil:2004", 0.08},
+                            {"lentil:0005", 0.05},
+                            {"lentil:0014", 0.06, 750}};
   for (const Budget& b : budgets) {
     SCOPED_TRACE(b.lens);
     FocusedLens fl =
@@ -389,7 +398,7 @@ TEST(ExitPupilSampler, ReshapedBoundsHoldEveryPassingRayInTheCameraSetUp) {
       const LensSystem& lens = dispersive ? at[w] : *fl.lens;
       if (!(sampler.area_mm2(film, band) > 0)) continue;
       ++films;
-      for (int k = 0; k < 250; ++k) {
+      for (int k = 0; k < b.rear_points; ++k) {
         const Vec2 q{(2 * u(rng) - 1) * rr, (2 * u(rng) - 1) * rr};
         if (!lens.traceFromFilmPoint(film, q).ok()) continue;
         ++passing;

@@ -18,26 +18,11 @@ using namespace lensim;
 using lensim::io::Image;
 using lensim::render::RenderOptions;
 using lensim::testutil::regionMean;
+using lensim::testutil::RegionStats;
+using lensim::testutil::regionStats;
 using lensim::testutil::renderText;
 
 namespace {
-
-struct Stats {
-  double mean = 0, sem = 0;
-};
-Stats regionStats(const Image& im, int c, int x0, int x1, int y0, int y1) {
-  double s = 0, s2 = 0;
-  int n = 0;
-  for (int y = y0; y < y1; ++y)
-    for (int x = x0; x < x1; ++x) {
-      const double v = im.at(x, y, c);
-      s += v, s2 += v * v, ++n;
-    }
-  Stats r;
-  r.mean = s / n;
-  r.sem = std::sqrt(std::max(0.0, s2 / n - r.mean * r.mean) / (n - 1));
-  return r;
-}
 
 /// Chandrasekhar's H function for isotropic scattering of albedo a, from its original form
 /// H(mu) = 1 + (a/2) mu H(mu) int_0^1 H(mu') / (mu + mu') dmu', iterated on a midpoint rule of
@@ -94,7 +79,7 @@ Shape "sphere" "float radius" 1
                                          integrator);
     const Image im = renderText(text).image;
     for (int c = 0; c < 3; ++c) {
-      const Stats s = regionStats(im, c, 0, 16, 0, 16);
+      const RegionStats s = regionStats(im, c, 0, 16, 0, 16);
       std::printf("%s furnace channel %d: %.4f +- %.4f\n", integrator, c, s.mean, s.sem);
       EXPECT_NEAR(s.mean, 1.0, 4 * s.sem + 0.003) << "channel " << c;
     }
@@ -142,7 +127,7 @@ Shape "trianglemesh" "point3 P" [-50 -50 0  50 -50 0  50 50 0  -50 50 0
                                            integrator, 1 - a, 1 - a, a, a);
       const Image im = renderText(text).image;
       const double expected = 1 - ChandrasekharH(a)(1) * std::sqrt(1 - a);
-      const Stats s = regionStats(im, 1, 0, 16, 0, 16);
+      const RegionStats s = regionStats(im, 1, 0, 16, 0, 16);
       std::printf("slab albedo %.2f (%s): L %.4f +- %.4f, 1 - H(1) sqrt(1-a) = %.4f\n", a,
                   integrator, s.mean, s.sem, expected);
       EXPECT_NEAR(s.mean, expected, 4 * s.sem + 0.003);

@@ -19,32 +19,15 @@
 using namespace lensim;
 using lensim::io::Image;
 using lensim::render::RenderOptions;
+using lensim::testutil::RegionStats;
+using lensim::testutil::regionStats;
 using lensim::testutil::renderText;
 using lensim::testutil::TempDir;
 
 namespace {
 
-struct Stats {
-  double mean = 0, sem = 0;
-};
-/// Mean and standard error of channel c over the pixels [x0, x1) x [y0, y1), whose values are
-/// independent estimates of one expectation.
-Stats regionStats(const Image& im, int c, int x0, int x1, int y0, int y1) {
-  double s = 0, s2 = 0;
-  int n = 0;
-  for (int y = y0; y < y1; ++y)
-    for (int x = x0; x < x1; ++x) {
-      const double v = im.at(x, y, c);
-      s += v, s2 += v * v, ++n;
-    }
-  Stats r;
-  r.mean = s / n;
-  r.sem = std::sqrt(std::max(0.0, s2 / n - r.mean * r.mean) / (n - 1));
-  return r;
-}
-
 /// z statistic of the difference of two independent estimates.
-double zOf(const Stats& a, const Stats& b) {
+double zOf(const RegionStats& a, const RegionStats& b) {
   return (a.mean - b.mean) / std::sqrt(a.sem * a.sem + b.sem * b.sem);
 }
 
@@ -134,7 +117,7 @@ Texture "ss" "spectrum" "checkerboard" "float uscale" 2 "float vscale" 1
   const std::tuple<double, int, int> halves[] = {{0.5, kLowU0, kLowU1}, {0.9, kHighU0, kHighU1}};
   for (const auto& [a, x0, x1] : halves) {
     const double expected = 1 - chandrasekharH1(a) * std::sqrt(1 - a);
-    const Stats s = regionStats(im, 1, x0, x1, 0, 16);
+    const RegionStats s = regionStats(im, 1, x0, x1, 0, 16);
     std::printf("checkerboard sigma, half of albedo %.1f: L %.4f +- %.4f, closed form %.4f\n", a,
                 s.mean, s.sem, expected);
     EXPECT_NEAR(s.mean, expected, 4 * s.sem + 0.003) << "albedo " << a;
@@ -161,8 +144,8 @@ Texture "r" "spectrum" "checkerboard" "float uscale" 2 "float vscale" 1
                                                          r),
                                              64, 2))
                             .image;
-    const Stats t = regionStats(textured, 1, x0, x1, 0, 16);
-    const Stats u = regionStats(plain, 1, 0, 16, 0, 16);
+    const RegionStats t = regionStats(textured, 1, x0, x1, 0, 16);
+    const RegionStats u = regionStats(plain, 1, 0, 16, 0, 16);
     const double z = zOf(t, u);
     std::printf(
         "checkerboard reflectance %.1f: textured %.4f +- %.4f, untextured %.4f +- %.4f, "
@@ -170,8 +153,8 @@ Texture "r" "spectrum" "checkerboard" "float uscale" 2 "float vscale" 1
         r, t.mean, t.sem, u.mean, u.sem, z);
     EXPECT_LT(std::abs(z), 4) << "reflectance " << r;
   }
-  const Stats lo = regionStats(textured, 1, kLowU0, kLowU1, 0, 16);
-  const Stats hi = regionStats(textured, 1, kHighU0, kHighU1, 0, 16);
+  const RegionStats lo = regionStats(textured, 1, kLowU0, kLowU1, 0, 16);
+  const RegionStats hi = regionStats(textured, 1, kHighU0, kHighU1, 0, 16);
   EXPECT_GT(hi.mean - lo.mean, 10 * std::hypot(lo.sem, hi.sem));
 }
 
@@ -261,7 +244,7 @@ Shape "sphere" "float radius" 1
                                             material))
                          .image;
     for (int c = 0; c < 3; ++c) {
-      const Stats s = regionStats(im, c, 0, 16, 0, 16);
+      const RegionStats s = regionStats(im, c, 0, 16, 0, 16);
       std::printf("textured furnace channel %d: %.4f +- %.4f\n", c, s.mean, s.sem);
       EXPECT_NEAR(s.mean, 1.0, 4 * s.sem + 0.003) << material << "\nchannel " << c;
     }

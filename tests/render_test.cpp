@@ -18,27 +18,11 @@
 
 using lensim::io::Image;
 using lensim::render::RenderOptions;
+using lensim::testutil::RegionStats;
+using lensim::testutil::regionStats;
 using lensim::testutil::renderText;
 
 namespace {
-
-/// Mean and standard error of the mean of channel c over a pixel rectangle.
-struct RegionStats {
-  double mean = 0, sem = 0;
-};
-RegionStats regionStats(const Image& im, int c, int x0, int x1, int y0, int y1) {
-  double s = 0, s2 = 0;
-  int n = 0;
-  for (int y = y0; y < y1; ++y)
-    for (int x = x0; x < x1; ++x) {
-      const double v = im.at(x, y, c);
-      s += v, s2 += v * v, ++n;
-    }
-  RegionStats r;
-  r.mean = s / n;
-  r.sem = std::sqrt(std::max(0.0, s2 / n - r.mean * r.mean) / (n - 1));
-  return r;
-}
 
 const char* kFurnaceHeader = R"(
 LookAt 0 0 -5  0 0 0  0 1 0

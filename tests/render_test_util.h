@@ -1,6 +1,7 @@
 // Helpers shared by the renderer tests: render scene text, block statistics of images.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -25,6 +26,25 @@ inline double regionMean(const io::Image& im, int c, int x0, int x1, int y0, int
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x) s += im.at(x, y, c);
   return s / double((x1 - x0) * (y1 - y0));
+}
+
+/// Mean of channel c over a pixel rectangle and the standard error of that mean (from the
+/// pixels' spread: each pixel an independent estimate).
+struct RegionStats {
+  double mean = 0, sem = 0;
+};
+inline RegionStats regionStats(const io::Image& im, int c, int x0, int x1, int y0, int y1) {
+  double s = 0, s2 = 0;
+  int n = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const double v = im.at(x, y, c);
+      s += v, s2 += v * v, ++n;
+    }
+  RegionStats r;
+  r.mean = s / n;
+  r.sem = std::sqrt(std::max(0.0, s2 / n - r.mean * r.mean) / (n - 1));
+  return r;
 }
 
 /// Luminance (Rec. 709 weights) of pixel (x, y) of an RGB image.

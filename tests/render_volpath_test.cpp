@@ -25,6 +25,8 @@ using namespace lensim;
 using lensim::io::Image;
 using lensim::render::RenderOptions;
 using lensim::testutil::buildText;
+using lensim::testutil::RegionStats;
+using lensim::testutil::regionStats;
 using lensim::testutil::renderText;
 
 namespace {
@@ -55,24 +57,6 @@ struct Direct {
     sc.max_depth = scene.integrator.max_depth;
   }
 };
-
-/// Mean and standard error of the mean of the values of a region of channel c.
-struct Stats {
-  double mean = 0, sem = 0;
-};
-Stats regionStats(const Image& im, int c, int x0, int x1, int y0, int y1) {
-  double s = 0, s2 = 0;
-  int n = 0;
-  for (int y = y0; y < y1; ++y)
-    for (int x = x0; x < x1; ++x) {
-      const double v = im.at(x, y, c);
-      s += v, s2 += v * v, ++n;
-    }
-  Stats r;
-  r.mean = s / n;
-  r.sem = std::sqrt(std::max(0.0, s2 / n - r.mean * r.mean) / (n - 1));
-  return r;
-}
 
 /// Transmittance along the ray (o, dir) at each wavelength of one set, estimated by volpath as
 /// radiance over that of the emitter seen along (o_clear, dir). The hero-wavelength estimator is
@@ -226,7 +210,7 @@ AttributeEnd
         world;
     const Image im = renderText(text).image;
     for (int c = 0; c < 3; ++c) {
-      const Stats s = regionStats(im, c, 0, 16, 0, 16);
+      const RegionStats s = regionStats(im, c, 0, 16, 0, 16);
       std::printf("furnace channel %d: %.4f +- %.4f\n", c, s.mean, s.sem);
       if (dark)
         EXPECT_LT(s.mean, 0.8) << "channel " << c;
@@ -277,7 +261,7 @@ AttributeEnd
                                        sigma_s, g, thickness, thickness, thickness, thickness);
   const Image im = renderText(text).image;
   for (int c = 0; c < 3; ++c) {
-    const Stats s = regionStats(im, c, 0, 16, 0, 16);
+    const RegionStats s = regionStats(im, c, 0, 16, 0, 16);
     std::printf("single scattering channel %d: %.5f +- %.5f, closed form %.5f\n", c, s.mean, s.sem,
                 expected);
     EXPECT_NEAR(s.mean, expected, 4 * s.sem + 1e-3 * expected) << "channel " << c;
@@ -423,7 +407,7 @@ AttributeEnd
 )";
     const Image im = renderText(text).image;
     for (int c = 0; c < 3; ++c) {
-      const Stats s = regionStats(im, c, 0, 16, 0, 16);
+      const RegionStats s = regionStats(im, c, 0, 16, 0, 16);
       std::printf("area-emitter furnace %d channel %d: %.4f +- %.4f\n", k, c, s.mean, s.sem);
       if (k == 2)
         EXPECT_LT(s.mean, 0.8) << "channel " << c;
@@ -456,7 +440,7 @@ AttributeEnd
 )";
   const Image im = renderText(text).image;
   for (int c = 0; c < 3; ++c) {
-    const Stats s = regionStats(im, c, 0, 16, 0, 16);
+    const RegionStats s = regionStats(im, c, 0, 16, 0, 16);
     std::printf("rgbgrid furnace channel %d: %.4f +- %.4f\n", c, s.mean, s.sem);
     EXPECT_NEAR(s.mean, 1.0, 4 * s.sem + 0.005) << "channel " << c;
   }
@@ -579,7 +563,7 @@ Shape "trianglemesh" "point3 P" [-5 1 -5  5 1 -5  5 1 5  -5 1 5] "integer indice
   const Image a = renderText(scene(false)).image;
   const Image b = renderText(scene(true)).image;
   for (int c = 0; c < 3; ++c) {
-    const Stats sa = regionStats(a, c, 0, 16, 0, 16), sb = regionStats(b, c, 0, 16, 0, 16);
+    const RegionStats sa = regionStats(a, c, 0, 16, 0, 16), sb = regionStats(b, c, 0, 16, 0, 16);
     ASSERT_GT(sa.mean, 0.01);
     EXPECT_NEAR(sb.mean, sa.mean, 4 * std::hypot(sa.sem, sb.sem) + 1e-4) << "channel " << c;
   }

@@ -174,8 +174,16 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // not yet pinned, so that two or three traces usually close the bracket; bisection (or
   // geometric steps while one side is open) where a secant step falls outside the bracket or
   // fails to halve it.
+  // accept > 0: a blocked point whose margin says that the boundary lies within `accept`
+  // (relative) before it ends the search without a passing point next to it (one or two traces
+  // where the guess is good, as in the wavelength bands, whose boundaries are near the lens's
+  // own). It is still a blocked point, so that the region (star-shaped about c, as everywhere
+  // here) ends before it: the bound holds it as before, only the overshoot grows (up to
+  // `accept`, estimated from the margin's slope; an underestimate costs waste, not rays).
   double slope_hint = 0;  // d(margin)/ds at the last boundary
-  auto boundary = [&](double h, Vec2 c, Vec2 u, double guess) {
+  double accept_slope = 0;  // accept > 0: d(margin)/ds along u measured before, or 0
+  double last_slope = 0;    // the last search's latest two traces' slope (0: none)
+  auto boundary = [&](double h, Vec2 c, Vec2 u, double guess, double accept = 0) {
     constexpr double tol = 1e-3;
     double lo = 0, glo = kInf, hi = kInf, ghi = kInf;
     double s0 = 0, g0 = kInf, s1 = 0, g1 = kInf;  // the two latest evaluations
@@ -189,11 +197,21 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       }
     };
     eval(std::max(guess, 1e-6 * rr));
-    double f = 1.0 / 16;
+    // With a good guess (accept > 0) the steps while one side is open start small, and a
+    // bracket as narrow as `accept` ends the search too (where the margin jumps to infinity at
+    // the boundary, a ray missing a surface, it has no slope to accept by).
+    double f = accept > 0 ? 2 * accept : 1.0 / 16;
+    const double tol_end = std::max(tol, accept);
     double last_width = kInf;
     bool force_bisect = false;
     for (int it = 0; it < 80; ++it) {
-      if (hi < kInf && hi - lo <= tol * hi) break;
+      if (hi < kInf && hi - lo <= tol_end * hi) break;
+      if (accept > 0 && hi < kInf && s1 == hi && std::isfinite(ghi)) {
+        // The slope from the two latest traces along u, else the one measured along u for
+        // the neighbouring wavelength (accept_slope).
+        const double sl = std::isfinite(g0) && s0 != s1 ? (g1 - g0) / (s1 - s0) : accept_slope;
+        if (sl > 0 && std::isfinite(sl) && ghi - 1 <= sl * accept * hi) break;
+      }
       if (hi == kInf && lo >= 4 * rr) return lo;  // beyond any real region: give up there
       if (lo == 0 && hi <= 1e-9 * rr) return hi;  // the region has no extent along u
       double x = std::numeric_limits<double>::quiet_NaN();
@@ -204,15 +222,20 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
           x = s1 + (1 - g1) / slope_hint;
         // Aim a hair toward the bracket's far end, so that the near one stays and the far one
         // moves to within the tolerance.
-        if (std::isfinite(x)) x += (hi - x <= x - lo ? -0.4 : 0.4) * tol * std::abs(x);
+        if (std::isfinite(x)) {
+          if (accept > 0)  // aim at the blocked side, within reach of acceptance
+            x += 0.5 * accept * std::abs(x);
+          else
+            x += (hi - x <= x - lo ? -0.4 : 0.4) * tol * std::abs(x);
+        }
       }
       force_bisect = false;
       if (hi < kInf && lo > 0) {
         if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
       } else if (hi < kInf) {  // nothing passing found along u yet
-        if (!(x > 0 && x < hi)) x = hi / (1 + f), f *= 2;
+        if (!(x > 0 && x < hi) || (accept > 0 && x < hi / (1 + f))) x = hi / (1 + f), f *= 2;
       } else {  // nothing blocked yet
-        if (!(x > lo)) x = lo * (1 + f), f *= 2;
+        if (!(x > lo) || (accept > 0 && x > lo * (1 + f))) x = lo * (1 + f), f *= 2;
         x = std::min(x, 2 * lo + 1e-6 * rr);
       }
       eval(x);
@@ -225,6 +248,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     }
     if (std::isfinite(glo) && std::isfinite(ghi) && hi > lo && ghi > glo)
       slope_hint = (ghi - glo) / (hi - lo);
+    last_slope = std::isfinite(g0) && std::isfinite(g1) && s0 != s1 && (g1 - g0) / (s1 - s0) > 0
+                     ? (g1 - g0) / (s1 - s0)
+                     : 0.0;
     return hi;
   };
   // Boundary points of the region at film radius h, seen from a point inside it, in `count`
@@ -264,16 +290,27 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       double step = reach / kGrid;
       for (int it = 0; it < 400 && step > 1e-4 * reach; ++it) {
         bool moved = false;
+        double rise = 0;  // the most the margin rose over the probes around `best`
         for (int k = 0; k < kDirs; ++k) {
           const Vec2 q = best + unit(2 * std::numbers::pi * k / kDirs) * step;
           const double g = margin(h, q);
           if (g <= 1) return q;
           if (g < g_best) {
+            // A descent too slow to reach 1 within the iterations left (even at twice the
+            // pace) ends the search where it would have ended anyway.
+            const double fell = g_best - g;
             best = q, g_best = g, moved = true;
+            if (g_best - 1 > 2 * (400 - it) * fell) it = 400;
             break;
           }
+          rise = std::max(rise, g - g_best);
         }
-        if (!moved) step *= 0.5;
+        if (moved) continue;
+        // No probe went down: the least margin near `best` lies within a step of it, and the
+        // margin changes by about `rise` over a step; where that cannot bring it down to 1 (by
+        // twice over), smaller steps cannot either: this start has no passing point near it.
+        if (step < reach / (4 * kGrid) && g_best - 1 > 2 * rise) break;
+        step *= 0.5;
       }
       g_least = std::min(g_least, g_best);
     }
@@ -290,6 +327,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         }
     return std::nullopt;
   };
+  // Whether the checks of a polygon start their searches at its edges (not for an anamorphic
+  // wedge's blended polygon, which the true region at the wedge's middle leaves by more).
+  bool hint_guesses = true;
   auto boundaryPoints = [&](double h, int count, double offset, Vec2* centre_out,
                             const Polygon* hint) {
     std::vector<Vec2> pts;
@@ -323,9 +363,34 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       c = mid;
     }
     if (centre_out) *centre_out = *c;
+    // Where a neighbouring polygon is at hand, each search starts at its edge along u (seen
+    // from c): the region's boundary is usually within a percent of it, and the search accepts
+    // a blocked point the margin puts within kHintAccept of the boundary.
+    constexpr double kHintAccept = 1e-3;
+    const bool use_hint = from_hint && hint_guesses;
     for (int j = 0; j < count; ++j) {
       const Vec2 u = unit(offset + 2 * std::numbers::pi * j / count);
-      guess = boundary(h, *c, u, guess);
+      double reach = 0;
+      if (use_hint) {
+        // The farthest crossing of the ray c + t u with the hint polygon's edges.
+        const Vec2 d0 = *c - hint->centre;
+        for (int k = 0; k < nd; ++k) {
+          const Vec2 a = dirs_[size_t(k)] * hint->radius[size_t(k)];
+          const Vec2 b = dirs_[size_t((k + 1) % nd)] * hint->radius[size_t((k + 1) % nd)];
+          const Vec2 e = b - a;
+          const double den = cross2(u, e);
+          if (den == 0) continue;
+          const Vec2 w = a - d0;
+          const double t = cross2(w, e) / den, v = cross2(w, u) / den;
+          if (t > 0 && v >= 0 && v <= 1) reach = std::max(reach, t);
+        }
+      }
+      if (reach > 0) {
+        accept_slope = 0;
+        guess = boundary(h, *c, u, reach * (1 + 0.5 * kHintAccept), kHintAccept);
+      } else {
+        guess = boundary(h, *c, u, guess);
+      }
       pts.push_back(*c + u * guess);
     }
     return pts;
@@ -463,6 +528,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     // Filled on the side: blended() must give the unwidened polygon while checking.
     WedgeCheck wc;
     std::vector<double> R(static_cast<size_t>(nd));
+    hint_guesses = false;
     for (double h : kept) {
       Polygon poly;
       poly.r = h;
@@ -626,16 +692,49 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     const Polygon& base = done[k];
     const double h = base.r;
     if (!base.empty) {
-      const std::vector<double>* prev = &base.raw;
-      for (size_t i = 0; i < band_lens.size(); ++i) {
+      // Each vertex distance is predicted from the distances already known at this node (the
+      // lens's own, and the band lenses' solved before), linearly in 1/lambda^2 through the two
+      // nearest wavelengths, and accepted from one blocked trace where the margin puts the
+      // boundary within kBandAccept before it (boundary(): still a blocked point, so that no
+      // passing ray falls outside; the overshoot is at most ~0.2% of the distance).
+      constexpr double kBandAccept = 2e-3;
+      auto x_of = [](const LensSystem& L) { return 1 / (L.wavelength_nm() * L.wavelength_nm()); };
+      std::vector<std::pair<double, const std::vector<double>*>> known{{x_of(lens), &base.raw}};
+      std::vector<double> slopes(size_t(nd), 0.0), pred(size_t(nd), 0.0);
+      // Nearest the lens's own wavelength first, so that each prediction is a short step.
+      std::vector<size_t> order(band_lens.size());
+      for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+      std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        return std::abs(x_of(*band_lens[a]) - x_of(lens)) <
+               std::abs(x_of(*band_lens[b]) - x_of(lens));
+      });
+      for (size_t i : order) {
         cur = {band_lens[i]};
         inside[i] = passes(h, base.centre);
         dist[i].assign(size_t(nd), 0.0);
         if (!inside[i]) continue;
-        for (int j = 0; j < nd; ++j)
-          dist[i][size_t(j)] =
-              boundary(h, base.centre, dirs_[size_t(j)], (*prev)[size_t(j)]);
-        prev = &dist[i];
+        const double xi = x_of(*band_lens[i]);
+        std::sort(known.begin(), known.end(), [&](const auto& a, const auto& b) {
+          return std::abs(a.first - xi) < std::abs(b.first - xi);
+        });
+        for (int j = 0; j < nd; ++j) {
+          const double da = (*known[0].second)[size_t(j)];
+          double d = da;
+          if (known.size() > 1 && known[1].first != known[0].first) {
+            const double db = (*known[1].second)[size_t(j)];
+            d = da + (db - da) * (xi - known[0].first) / (known[1].first - known[0].first);
+            d = std::clamp(d, 0.5 * da, 2 * da);
+          }
+          pred[size_t(j)] = d;
+        }
+        for (int j = 0; j < nd; ++j) {
+          accept_slope = slopes[size_t(j)];
+          if (accept_slope > 0) slope_hint = accept_slope;
+          dist[i][size_t(j)] = boundary(h, base.centre, dirs_[size_t(j)],
+                                        pred[size_t(j)] * (1 + 0.5 * kBandAccept), kBandAccept);
+          if (last_slope > 0) slopes[size_t(j)] = last_slope;
+        }
+        known.push_back({xi, &dist[i]});
       }
     }
     for (size_t b = 0; b < opts.bands.size(); ++b) {
@@ -716,6 +815,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   tasks.clear();
   for (int sec = 0; sec < n_sectors; ++sec) tasks.push_back({sec, 3, 0, 0});
   runStage(tasks);
+  tasks.clear();
   sets_.assign(work[0].sets.size(), {});
   for (Work& w : work)
     for (size_t set = 0; set < w.sets.size(); ++set) sets_[set].push_back(std::move(w.sets[set]));

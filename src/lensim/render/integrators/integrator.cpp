@@ -78,17 +78,7 @@ std::optional<SurfaceHit> intersectScene(const SceneContext& sc, Ray ray, RayCou
 
 bool occludedScene(const SceneContext& sc, const Vec3& p, const Vec3& n, const Vec3& p_light,
                    bool infinite, const Vec3& wi, double time, RayCounts& counts) {
-  const Vec3 o = offsetOrigin(p, n, wi);
-  Ray r;
-  r.o = o;
-  r.time = time;
-  if (infinite) {
-    r.d = wi;
-    r.tmax = INFINITY;
-  } else {
-    r.d = p_light - o;
-    r.tmax = 1 - 1e-4;
-  }
+  const Ray r = shadowRay(offsetOrigin(p, n, wi), infinite ? wi : p_light, infinite, time);
   if (!sc.has_alpha) {
     ++counts.shadow;
     return sc.accel->occluded(r);

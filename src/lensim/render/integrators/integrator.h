@@ -37,7 +37,7 @@ struct SceneContext {
   /// BSDF-sampled rays from the hit skip everything closer than epsilon (scene units). With a
   /// scaled camera transform this skips shadows and distant light hits.
   bool pbrt_v2_epsilon = false;
-  Transform camera_from_world;  ///< for pbrt_v2_epsilon
+  Transform camera_from_world;   ///< for pbrt_v2_epsilon
   const Media* media = nullptr;  ///< participating media (volpath); nullptr or empty: none
   int camera_medium = -1;        ///< the medium camera rays start in (Scene::media index)
   bool has_interfaces = false;   ///< some material is "interface" (volpath's shadow rays pass)
@@ -53,6 +53,17 @@ struct RayCounts {
 
 /// The closest hit along the ray, skipping surfaces cut out by alpha textures.
 std::optional<SurfaceHit> intersectScene(const SceneContext& sc, Ray ray, RayCounts& counts);
+/// A shadow ray from `origin` (already offset) to the point `to`, stopping just short of it
+/// (t < 1 - 1e-4 with the unnormalised direction to - origin), or, when `infinite`, along the
+/// direction `to` without end.
+inline Ray shadowRay(const Vec3& origin, const Vec3& to, bool infinite, double time) {
+  Ray r;
+  r.o = origin;
+  r.time = time;
+  r.d = infinite ? to : to - origin;
+  r.tmax = infinite ? INFINITY : 1 - 1e-4;
+  return r;
+}
 /// Whether the segment from p (offset along n) to p_light is blocked at shutter time `time`;
 /// infinite: toward direction wi without end.
 bool occludedScene(const SceneContext& sc, const Vec3& p, const Vec3& n, const Vec3& p_light,

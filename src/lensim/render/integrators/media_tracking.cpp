@@ -117,23 +117,14 @@ SampledSpectrum segmentTransmittance(const SceneContext& sc, const Vec3& from, c
   const Vec3 w0 = to_infinite ? to : normalize(to - from);
   const bool media = sc.scene_media && sc.media && !sc.media->empty();
   if (!media && !sc.has_interfaces)
-    return SampledSpectrum(occludedScene(sc, from, from_ng, to, to_infinite, w0, time, counts) ? 0.0
-                                                                                         : 1.0);
+    return SampledSpectrum(
+        occludedScene(sc, from, from_ng, to, to_infinite, w0, time, counts) ? 0.0 : 1.0);
   const bool on_surface = from_ng.x != 0 || from_ng.y != 0 || from_ng.z != 0;
   Vec3 origin = on_surface ? offsetOrigin(from, from_ng, w0) : from;
   SampledSpectrum T(1.0);
   // As volpath's shadow rays (pbrt-v4's SampleLd and its Transmittance loop).
   for (int guard = 0; guard < 256; ++guard) {
-    Ray ray;
-    ray.o = origin;
-    ray.time = time;
-    if (to_infinite) {
-      ray.d = to;
-      ray.tmax = INFINITY;
-    } else {
-      ray.d = to - origin;
-      ray.tmax = 1 - 1e-4;
-    }
+    const Ray ray = shadowRay(origin, to, to_infinite, time);
     auto hit = intersectScene(sc, ray, counts);
     if (hit && !isInterfaceHit(sc, *hit, -ray.d)) return SampledSpectrum(0.0);
     if (const Medium* m = media ? sc.media->get(medium) : nullptr) {

@@ -91,16 +91,7 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
       enterMedium(sc, medium, v.medium, {v.hit->p, v.hit->uv, v.hit->ns}, lambda, walk, walk_index);
     Vec3 origin = v.bsdf ? offsetOrigin(v.p, v.ng, ls->wi) : v.p;
     for (int guard = 0; guard < 256; ++guard) {
-      Ray r;
-      r.o = origin;
-      r.time = v.time;
-      if (ls->infinite) {
-        r.d = ls->wi;
-        r.tmax = INFINITY;
-      } else {
-        r.d = ls->p_light - origin;
-        r.tmax = 1 - 1e-4;
-      }
+      const Ray r = shadowRay(origin, ls->infinite ? ls->wi : ls->p_light, ls->infinite, v.time);
       auto hit = intersectScene(sc, r, counts);
       if (hit && !isInterfaceHit(sc, *hit, -r.d)) return {};
       if (const Medium* m = trackedMedium(sc, medium, walk_index, walk)) {
@@ -153,7 +144,8 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
   bool specular_bounce = false, any_non_specular = false;
   double eta_scale = 1;
   Vec3 prev_p;
-  Vec3 prev_n{0, 0, 0};  ///< the previous vertex's shading normal (zero in a medium), for the light sampler
+  // The previous vertex's shading normal (zero in a medium), for the light sampler.
+  Vec3 prev_n{0, 0, 0};
   int depth = 0, interfaces = 0, walk_steps = 0;
   // The walk in a textured subsurface material: its medium index and coefficients.
   WalkMedium walk;
@@ -260,7 +252,8 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
         if (depth == 0 || specular_bounce) {
           L += beta * Le / wavelengthMean(r_u, lambda);
         } else {
-          const double p_l = sc.lights->pmf({prev_p, prev_n}, light) * light->pdfLi(prev_p, ray.d, nullptr);
+          const double p_l =
+              sc.lights->pmf({prev_p, prev_n}, light) * light->pdfLi(prev_p, ray.d, nullptr);
           const SampledSpectrum rl = r_l * p_l;
           L += beta * Le / wavelengthMean(r_u + rl, lambda);
         }
@@ -275,7 +268,8 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
         if (depth == 0 || specular_bounce) {
           L += beta * Le / wavelengthMean(r_u, lambda);
         } else {
-          const double p_l = sc.lights->pmf({prev_p, prev_n}, area) * area->pdfLi(prev_p, ray.d, &h);
+          const double p_l =
+              sc.lights->pmf({prev_p, prev_n}, area) * area->pdfLi(prev_p, ray.d, &h);
           const SampledSpectrum rl = r_l * p_l;
           L += beta * Le / wavelengthMean(r_u + rl, lambda);
         }
