@@ -314,6 +314,30 @@ SagGradient ShapeIntersector::sagContinued(double x, double y) const {
   return g;
 }
 
+double ShapeIntersector::sagZ(double x, double y) const {
+  const double r2 = x * x + y * y;
+  // Only the plain asphere inside the bound has a cheaper form; elsewhere the full evaluation.
+  if (toroidal_ || r2 > bound_r_ * bound_r_) return sagContinued(x, y).z;
+  const double arg = 1 - ax_ * x * x - ay_ * y * y;
+  if (!(arg > 0)) return sagContinued(x, y).z;
+  const double z0 = (cx_ * x * x + cy_ * y * y) / (1 + std::sqrt(arg));
+  double z = 0;  // summed apart and added last, as sagContinued does: the same value
+  if (!terms_.empty()) {
+    const double r = std::sqrt(r2);
+    double rk = 1;  // r^k, as in sagContinued
+    int k = 0;
+    for (const auto& [p, a] : terms_) {
+      if (p == 1) {
+        z += a * r;
+      } else {
+        while (k < p - 2) rk *= r, ++k;
+        z += a * rk * r2;
+      }
+    }
+  }
+  return z0 + z;
+}
+
 std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, const Vec3& d,
                                                                  double t_min) const {
   // The part of the ray inside the slab.
@@ -338,9 +362,9 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
   }
   auto g = [&](double t, SagGradient* sg) {
     const double x = o.x + t * d.x, y = o.y + t * d.y;
-    const SagGradient s = sagContinued(x, y);
-    if (sg) *sg = s;
-    return o.z + t * d.z - s.z;
+    if (!sg) return o.z + t * d.z - sagZ(x, y);
+    *sg = sagContinued(x, y);
+    return o.z + t * d.z - sg->z;
   };
   // Aspheres on a quadric base: Newton's method from the base quadric's hit, accepted when it
   // converges inside the slab and g keeps its sign from the slab's entry to just before the root
@@ -349,8 +373,8 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
     if (auto tq = quadricRoot(o, d, t_min); tq && *tq >= ta && *tq <= tb) {
       double t = *tq;
       bool converged = false;
+      SagGradient s;  // at the last iterate before t
       for (int it = 0; it < 12; ++it) {
-        SagGradient s;
         const double gt = g(t, &s);
         const double dg = d.z - s.dzdx * d.x - s.dzdy * d.y;
         if (dg == 0 || !std::isfinite(dg)) break;
@@ -371,8 +395,8 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
           first = gk != 0 && (gk < 0) == (g0 < 0);
         }
         if (first) {
-          SagGradient s;
-          g(t, &s);
+          // The normal from the gradient at the last iterate, which lies within 1e-13 (1 + |t|)
+          // of t: no further evaluation.
           const Vec3 n{s.dzdx, s.dzdy, -1.0};
           if (std::isfinite(n.x) && std::isfinite(n.y)) return Hit{t, normalize(n)};
         }

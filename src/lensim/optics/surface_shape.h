@@ -108,6 +108,8 @@ class ShapeIntersector {
 
   /// Sag with the flat continuation beyond bound_r.
   SagGradient sagContinued(double x, double y) const;
+  /// sagContinued(x, y).z without the gradient (the first-crossing checks of the Newton solve).
+  double sagZ(double x, double y) const;
 
  private:
   double radius_ = 0;
