@@ -195,8 +195,8 @@ void runScene(const std::string& name, std::string (*text)(const std::string&), 
   double rmse[2] = {0, 0}, rel[2] = {0, 0}, cpu[2] = {0, 0};
   for (int k = 0; k < seeds; ++k)
     for (int i = 0; i < 2; ++i) {
-      const Render r = renderOnce(i == 0 ? path : bdpt, i == 0 ? spp_path : spp_bdpt, 100 + k,
-                                  threads);
+      const Render r =
+          renderOnce(i == 0 ? path : bdpt, i == 0 ? spp_path : spp_bdpt, 100 + k, threads);
       const Error2 e = errorOf(r.image, ref.image);
       rmse[i] += e.rmse / seeds;
       rel[i] += e.rel_mse / seeds;

@@ -51,9 +51,15 @@ void readFormat(benchmark::State& state, const std::string& ext) {
   state.SetItemsProcessed(state.iterations() * int64_t{kWidth} * kHeight);
 }
 
-void BM_ReadPng8(benchmark::State& s) { readFormat(s, ".png"); }
-void BM_ReadTiff16(benchmark::State& s) { readFormat(s, ".tif"); }
-void BM_ReadExrFloat(benchmark::State& s) { readFormat(s, ".exr"); }
+void BM_ReadPng8(benchmark::State& s) {
+  readFormat(s, ".png");
+}
+void BM_ReadTiff16(benchmark::State& s) {
+  readFormat(s, ".tif");
+}
+void BM_ReadExrFloat(benchmark::State& s) {
+  readFormat(s, ".exr");
+}
 
 BENCHMARK(BM_ReadPng8)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_ReadTiff16)->Unit(benchmark::kMillisecond)->MinTime(2.0);

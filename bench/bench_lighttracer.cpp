@@ -60,9 +60,10 @@ int main(int argc, char** argv) {
       fmt::print("{:<12} per sample: shortest {:.3f} us  median {:.3f} us\n", names[k], best[k],
                  median[k]);
     }
-    fmt::print("lighttracer/path: shortest {:.3f}, median {:.3f} ({} rounds, {} spp, {:.0f} "
-               "samples, 1 thread)\n",
-               best[1] / best[0], median[1] / median[0], rounds, spp, samples);
+    fmt::print(
+        "lighttracer/path: shortest {:.3f}, median {:.3f} ({} rounds, {} spp, {:.0f} "
+        "samples, 1 thread)\n",
+        best[1] / best[0], median[1] / median[0], rounds, spp, samples);
   } catch (const Error& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 1;

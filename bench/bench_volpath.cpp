@@ -79,13 +79,15 @@ int main(int argc, char** argv) {
       cmedian[k] = cpu[k][cpu[k].size() / 2];
     }
     for (int k = 0; k < 2; ++k)
-      fmt::print("{:<8} shortest {:.4f} s  median {:.4f} s  (CPU: shortest {:.4f} s, median "
-                 "{:.4f} s)\n",
-                 names[k], best[k], median[k], cbest[k], cmedian[k]);
-    fmt::print("volpath/path: shortest {:.3f}, median {:.3f}; CPU time: shortest {:.3f}, median "
-               "{:.3f} ({} rounds, {} spp, 1 thread)\n",
-               best[1] / best[0], median[1] / median[0], cbest[1] / cbest[0],
-               cmedian[1] / cmedian[0], rounds, spp);
+      fmt::print(
+          "{:<8} shortest {:.4f} s  median {:.4f} s  (CPU: shortest {:.4f} s, median "
+          "{:.4f} s)\n",
+          names[k], best[k], median[k], cbest[k], cmedian[k]);
+    fmt::print(
+        "volpath/path: shortest {:.3f}, median {:.3f}; CPU time: shortest {:.3f}, median "
+        "{:.3f} ({} rounds, {} spp, 1 thread)\n",
+        best[1] / best[0], median[1] / median[0], cbest[1] / cbest[0], cmedian[1] / cmedian[0],
+        rounds, spp);
   } catch (const Error& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 1;

@@ -26,7 +26,9 @@ int main(int argc, char** argv) {
   size_t total = 0;
   for (size_t t = 0; t < n; ++t) {
     const auto& target = targets[t];
-    if (!only.empty() && std::find(only.begin(), only.end(), std::string(target.name)) == only.end()) continue;
+    if (!only.empty() &&
+        std::find(only.begin(), only.end(), std::string(target.name)) == only.end())
+      continue;
     const fs::path dir = root / std::string(target.name);
     if (!fs::is_directory(dir)) {
       std::fprintf(stderr, "%s: no corpus folder %s\n", std::string(target.name).c_str(),
@@ -42,7 +44,8 @@ int main(int argc, char** argv) {
     std::string slowest_name;
     for (const fs::path& f : files) {
       std::ifstream in(f, std::ios::binary);
-      const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      const std::string data((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
       const auto t0 = std::chrono::steady_clock::now();
       try {
         target.run(reinterpret_cast<const uint8_t*>(data.data()), data.size());

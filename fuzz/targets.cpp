@@ -157,7 +157,8 @@ int fuzzImage(const uint8_t* data, size_t size) {
   if (size >= 2 && data[0] == 'P' && (data[1] == 'F' || data[1] == 'f')) ext = ".pfm";
   if (size >= 2 && data[0] == '#' && data[1] == '?') ext = ".hdr";
   if (size >= 2 && data[0] == 0xff && data[1] == 0xd8) ext = ".jpg";
-  if (size >= 18 && data[1] <= 1 && ((data[2] >= 1 && data[2] <= 3) || (data[2] >= 9 && data[2] <= 11)))
+  if (size >= 18 && data[1] <= 1 &&
+      ((data[2] >= 1 && data[2] <= 3) || (data[2] >= 9 && data[2] <= 11)))
     ext = ".tga";
   const std::string path = writeScratch(std::string("fuzz") + ext, data, size);
   return guarded([&] { (void)io::readImage(path); });
@@ -229,12 +230,18 @@ int fuzzFourier(const uint8_t* data, size_t size) {
 
 const Target* targets(size_t& count) {
   static const Target all[] = {
-      {"lens", fuzzLens},          {"scene_tokens", fuzzSceneTokens},
-      {"scene_parse", fuzzSceneParse}, {"scene_build", fuzzSceneBuild},
-      {"scene_render", fuzzSceneRender}, {"ply", fuzzPly},
-      {"image", fuzzImage},        {"brdf", fuzzBrdf},
-      {"zmx", fuzzZmx},            {"lens_json", fuzzLensJson},
-      {"bsdf", fuzzBsdf},          {"fourier", fuzzFourier},
+      {"lens", fuzzLens},
+      {"scene_tokens", fuzzSceneTokens},
+      {"scene_parse", fuzzSceneParse},
+      {"scene_build", fuzzSceneBuild},
+      {"scene_render", fuzzSceneRender},
+      {"ply", fuzzPly},
+      {"image", fuzzImage},
+      {"brdf", fuzzBrdf},
+      {"zmx", fuzzZmx},
+      {"lens_json", fuzzLensJson},
+      {"bsdf", fuzzBsdf},
+      {"fourier", fuzzFourier},
   };
   count = sizeof all / sizeof all[0];
   return all;

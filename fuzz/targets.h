@@ -25,20 +25,20 @@ struct Target {
 /// libFuzzer's RSS limit) and no log output.
 void initFuzzing();
 
-int fuzzLens(const uint8_t* data, size_t size);           ///< lens prescription, then focus
-int fuzzSceneTokens(const uint8_t* data, size_t size);    ///< the scene tokenizer
-int fuzzSceneParse(const uint8_t* data, size_t size);     ///< tokenizer + parser
-int fuzzSceneBuild(const uint8_t* data, size_t size);     ///< parser + builder
-int fuzzSceneRender(const uint8_t* data, size_t size);    ///< builder + a 4x4 render, 1 spp
-int fuzzPly(const uint8_t* data, size_t size);            ///< PLY meshes
-int fuzzImage(const uint8_t* data, size_t size);          ///< image headers and data (every format)
-int fuzzBrdf(const uint8_t* data, size_t size);           ///< pbrt-v2 irregular .brdf
-int fuzzZmx(const uint8_t* data, size_t size);            ///< Zemax .zmx lens files, then focus
-int fuzzLensJson(const uint8_t* data, size_t size);       ///< lensim/lentil/ISET JSON lenses
-int fuzzBsdf(const uint8_t* data, size_t size);           ///< RGL measured BSDF (.bsdf), then
-                                                          ///< evaluation and sampling
-int fuzzFourier(const uint8_t* data, size_t size);        ///< pbrt-v3 tabulated BSDF (SCATFUN),
-                                                          ///< then evaluation and sampling
+int fuzzLens(const uint8_t* data, size_t size);         ///< lens prescription, then focus
+int fuzzSceneTokens(const uint8_t* data, size_t size);  ///< the scene tokenizer
+int fuzzSceneParse(const uint8_t* data, size_t size);   ///< tokenizer + parser
+int fuzzSceneBuild(const uint8_t* data, size_t size);   ///< parser + builder
+int fuzzSceneRender(const uint8_t* data, size_t size);  ///< builder + a 4x4 render, 1 spp
+int fuzzPly(const uint8_t* data, size_t size);          ///< PLY meshes
+int fuzzImage(const uint8_t* data, size_t size);        ///< image headers and data (every format)
+int fuzzBrdf(const uint8_t* data, size_t size);         ///< pbrt-v2 irregular .brdf
+int fuzzZmx(const uint8_t* data, size_t size);          ///< Zemax .zmx lens files, then focus
+int fuzzLensJson(const uint8_t* data, size_t size);     ///< lensim/lentil/ISET JSON lenses
+int fuzzBsdf(const uint8_t* data, size_t size);         ///< RGL measured BSDF (.bsdf), then
+                                                        ///< evaluation and sampling
+int fuzzFourier(const uint8_t* data, size_t size);      ///< pbrt-v3 tabulated BSDF (SCATFUN),
+                                                        ///< then evaluation and sampling
 
 /// Every target, in a fixed order.
 const Target* targets(size_t& count);

@@ -55,8 +55,8 @@ TEST(Curve, BasesConvertExactlyToCubicBezier) {
       worst = std::max(worst, length(curvePoint(cb, s, t) -
                                      cubicBSpline(P[s], P[s + 1], P[s + 2], P[s + 3], t)));
     for (size_t s = 0; s < 3; ++s)
-      worst = std::max(worst, length(curvePoint(qb, s, t) -
-                                     quadraticBSpline(P[s], P[s + 1], P[s + 2], t)));
+      worst = std::max(
+          worst, length(curvePoint(qb, s, t) - quadraticBSpline(P[s], P[s + 1], P[s + 2], t)));
     for (size_t s = 0; s < 2; ++s)
       worst = std::max(worst, length(curvePoint(qz, s, t) -
                                      quadraticBezier(P[2 * s], P[2 * s + 1], P[2 * s + 2], t)));
@@ -80,8 +80,8 @@ TEST(Curve, WidthIsLinearFromWidth0ToWidth1AcrossSegments) {
   EXPECT_NEAR(curveArea(tube), 12 * kPi, 1e-8);
   // A quarter circle of radius 1 (quadratic Bézier is not a circle; use the arc length of the
   // parabola y = x^2 from 0 to 1 instead: (2 sqrt5 + asinh 2)/4), width 0.1.
-  const Curve para = makeCurve(CurveKind::Flat, false, 2, {{0, 0, 0}, {0.5, 0, 0}, {1, 1, 0}}, 0.1,
-                               0.1, {});
+  const Curve para =
+      makeCurve(CurveKind::Flat, false, 2, {{0, 0, 0}, {0.5, 0, 0}, {1, 1, 0}}, 0.1, 0.1, {});
   EXPECT_NEAR(curveArea(para), 0.1 * (2 * std::sqrt(5.0) + std::asinh(2.0)) / 4, 1e-9);
 }
 
@@ -154,7 +154,8 @@ Material "diffuse" "rgb reflectance" [0 0 0]
   // A B-spline of the same line with width0 0.2 to width1 0.6 (mean 0.4 over the screen, whose
   // part of the curve is the middle of three equal segments).
   EXPECT_NEAR(mean(R"(Shape "curve" "string basis" "bspline" "float width0" 0.2 "float width1" 0.6
-      "point3 P" [-5 0 0  -3 0 0  -1 0 0  1 0 0  3 0 0  5 0 0])") / sky,
+      "point3 P" [-5 0 0  -3 0 0  -1 0 0  1 0 0  3 0 0  5 0 0])") /
+                  sky,
               1 - 4 * 0.4 / 16, 4e-3);
 }
 

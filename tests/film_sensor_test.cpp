@@ -107,7 +107,8 @@ TEST(FilmSensor, IsoAndExposureScaleAsPbrtV4) {
   EXPECT_DOUBLE_EQ(scene::sensorImagingRatio(0.5, 400), 2.0);
   EXPECT_DOUBLE_EQ(scene::sensorImagingRatio(1.0 / 60, 1600), 16.0 / 60);
   const Film base = filmOf("");
-  const Film scaled = filmOf("\"float iso\" 400", "\"float shutteropen\" 0.25 \"float shutterclose\" 0.75");
+  const Film scaled =
+      filmOf("\"float iso\" 400", "\"float shutteropen\" 0.25 \"float shutterclose\" 0.75");
   const Film dim = filmOf("\"float iso\" 50", "\"float shutteropen\" 0 \"float shutterclose\" 0.5");
   const SampledWavelengths lambda = SampledWavelengths::sampleUniform(0.3);
   const SampledSpectrum L(1.0);
@@ -118,8 +119,8 @@ TEST(FilmSensor, IsoAndExposureScaleAsPbrtV4) {
 
   // And in a render: a Lambertian plane of albedo 0.5 under a distant light of unit irradiance
   // facing it has luminance 0.5/pi; ISO 400 with a 0.5 s shutter doubles it.
-  std::string text = sceneWithFilm("\"float iso\" 400",
-                                   "\"float shutteropen\" 0 \"float shutterclose\" 0.5");
+  std::string text =
+      sceneWithFilm("\"float iso\" 400", "\"float shutteropen\" 0 \"float shutterclose\" 0.5");
   text.replace(text.find("reflectance\" [1 1 1]"), 21, "reflectance\" [0.5 0.5 0.5]");
   const io::Image im = testutil::renderText(text).image;
   double y = 0;
@@ -131,8 +132,8 @@ TEST(FilmSensor, IsoAndExposureScaleAsPbrtV4) {
 
 // pbrt-v4's white balance (cie1931 sensor with "whitebalance" T): von Kries adaptation in the
 // Bradford LMS space from the white of CIE illuminant D at T x 1.4388 / 1.4380 (a blackbody
-// below 4000 K) to the output space's white (D65 for sRGB). Then the illuminant's own white records as equal RGB, and
-// "whitebalance" 6500 (= D65) changes nothing.
+// below 4000 K) to the output space's white (D65 for sRGB). Then the illuminant's own white records
+// as equal RGB, and "whitebalance" 6500 (= D65) changes nothing.
 TEST(FilmSensor, WhiteBalanceMapsTheIlluminantWhiteToEqualRgb) {
   EXPECT_NEAR(scene::whiteBalanceCct(6500), 6503.6, 0.1);
   // A blackbody at the temperature pbrt-v4's Spectra::D uses for "whitebalance" 3000 (below
@@ -159,7 +160,6 @@ TEST(FilmSensor, WhiteBalanceMapsTheIlluminantWhiteToEqualRgb) {
   EXPECT_NEAR(sb.x / sb.y, 1.0, 2e-3);
   EXPECT_NEAR(sb.z / sb.y, 1.0, 2e-3);
 }
-
 
 // pbrt-v4's spectral film (src/pbrt/film.h, SpectralFilm): R, G, B as the rgb film, then one
 // channel of radiance per wavelength bucket, "S0.<centre>nm" with a decimal comma. A white

@@ -35,7 +35,9 @@ void writeBytes(const std::string& path, const Bytes& b) {
   out.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
 }
 
-void append(Bytes& b, const std::string& s) { b.insert(b.end(), s.begin(), s.end()); }
+void append(Bytes& b, const std::string& s) {
+  b.insert(b.end(), s.begin(), s.end());
+}
 
 void appendLe16(Bytes& b, int v) {
   b.push_back(static_cast<uint8_t>(v & 255));
@@ -89,7 +91,8 @@ void appendTgaPixel(Bytes& b, const Rgba& p, int bits) {
 std::string writeTga(const TempDir& dir, const std::string& name,
                      const std::vector<std::vector<Rgba>>& rows, int bits, bool top_origin) {
   const int h = static_cast<int>(rows.size()), w = static_cast<int>(rows[0].size());
-  Bytes b = tgaHeader(bits == 8 ? 3 : 2, w, h, bits, (top_origin ? 0x20 : 0) | (bits == 32 ? 8 : 0));
+  Bytes b =
+      tgaHeader(bits == 8 ? 3 : 2, w, h, bits, (top_origin ? 0x20 : 0) | (bits == 32 ? 8 : 0));
   for (int i = 0; i < h; ++i)
     for (const Rgba& p : rows[top_origin ? i : h - 1 - i]) appendTgaPixel(b, p, bits);
   const std::string path = dir.file(name);
@@ -156,9 +159,10 @@ std::string writeHdr(const TempDir& dir, const std::string& name,
                      const std::vector<std::vector<Rgbe>>& rows, bool rle) {
   const int h = static_cast<int>(rows.size()), w = static_cast<int>(rows[0].size());
   Bytes b;
-  append(b, "#?RADIANCE\n# written byte by byte by lensim's image_formats_test\n"
-            "FORMAT=32-bit_rle_rgbe\n\n-Y " +
-                std::to_string(h) + " +X " + std::to_string(w) + "\n");
+  append(b,
+         "#?RADIANCE\n# written byte by byte by lensim's image_formats_test\n"
+         "FORMAT=32-bit_rle_rgbe\n\n-Y " +
+             std::to_string(h) + " +X " + std::to_string(w) + "\n");
   for (const auto& row : rows) {
     if (!rle) {
       for (const Rgbe& p : row)
@@ -408,8 +412,9 @@ TEST(ImageFormats, TexturesFromTgaPfmAndHdrRender) {
     }
   expectTexels(renderTexture(writeTga(dir, "t.tga", rows, 24, false)), srgb, "TGA");
   expectTexels(renderTexture(writeTgaRle(dir, "r.tga", rows, 24, true)), srgb, "TGA RLE");
-  expectTexels(renderTexture(writeTga(dir, "l.tga", rows, 24, false), "\"string encoding\" \"linear\""),
-               linear, "TGA linear");
+  expectTexels(
+      renderTexture(writeTga(dir, "l.tga", rows, 24, false), "\"string encoding\" \"linear\""),
+      linear, "TGA linear");
   expectTexels(renderTexture(writePfm(dir, "t.pfm", floats, "-1", true)), srgb, "PFM");
   double by256[2][2][3];
   for (int y = 0; y < 2; ++y)
@@ -439,7 +444,8 @@ Sampler "independent" "integer pixelsamples" 16
 PixelFilter "box"
 Integrator "path" "integer maxdepth" 1
 WorldBegin
-LightSource "infinite" "string filename" ")" + grey + R"("
+LightSource "infinite" "string filename" ")" +
+                            grey + R"("
 Texture "img" "spectrum" "imagemap" "string filename" ")" +
                             tga + R"(" "string filter" "point"
 Material "diffusetransmission" "texture reflectance" "img" "rgb transmittance" [0 0 0]
@@ -467,10 +473,11 @@ Shape "bilinearmesh" "point3 P" [0.5 -0.5 0  -0.5 -0.5 0  0.5 0.5 0  -0.5 0.5 0]
         stats(c, {{0, 3, 0, 3}, {13, 16, 0, 3}, {0, 3, 13, 16}, {13, 16, 13, 16}});
     const auto [top, top_sem] = stats(c, {{5, 11, 5, 7}});
     const auto [bottom, bottom_sem] = stats(c, {{5, 11, 9, 11}});
-    std::printf("channel %d: sky %.4f +- %.4f (0.5), top %.4f +- %.4f (%.4f), bottom %.4f +- "
-                "%.4f (%.4f)\n",
-                c, sky, sky_sem, top, top_sem, 0.5 * srgbDecode(tb[c]), bottom, bottom_sem,
-                0.5 * srgbDecode(bb[c]));
+    std::printf(
+        "channel %d: sky %.4f +- %.4f (0.5), top %.4f +- %.4f (%.4f), bottom %.4f +- "
+        "%.4f (%.4f)\n",
+        c, sky, sky_sem, top, top_sem, 0.5 * srgbDecode(tb[c]), bottom, bottom_sem,
+        0.5 * srgbDecode(bb[c]));
     // Spectral noise (wavelengths sampled per pixel sample), plus 1 % for the RGB -> spectrum ->
     // RGB round trip of the upsampled reflectance and illuminant.
     EXPECT_NEAR(sky, 0.5, 5 * sky_sem + 0.005);
@@ -485,9 +492,10 @@ Camera "perspective" "float fov" 60
 Film "rgb" "integer xresolution" 4 "integer yresolution" 4 "string filename" "s.exr"
 Sampler "independent" "integer pixelsamples" 64
 WorldBegin
-LightSource "infinite" "string filename" ")" + coloured + R"("
+LightSource "infinite" "string filename" ")" +
+                               coloured + R"("
 )")
-                          .image;
+                        .image;
   const double want[3] = {0.25, 0.5, 1.0};
   for (int c = 0; c < 3; ++c) {
     const double v = lensim::testutil::regionMean(sky, c, 0, 4, 0, 4);
@@ -543,8 +551,8 @@ TEST(ImageFormats, HeaderSizesAreCheckedAgainstTheMemoryBudgetBeforeReading) {
   Bytes hdr;
   append(hdr, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 60000 +X 60000\n");
   hdr.insert(hdr.end(), 64, 1);
-  for (const auto& [name, bytes] :
-       std::vector<std::pair<std::string, Bytes>>{{"huge.tga", tga}, {"huge.pfm", pfm}, {"huge.hdr", hdr}}) {
+  for (const auto& [name, bytes] : std::vector<std::pair<std::string, Bytes>>{
+           {"huge.tga", tga}, {"huge.pfm", pfm}, {"huge.hdr", hdr}}) {
     SCOPED_TRACE(name);
     const std::string path = dir.file(name);
     writeBytes(path, bytes);

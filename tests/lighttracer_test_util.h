@@ -53,7 +53,8 @@ inline LtComparison compareLightTracer(const std::function<std::string(const cha
     const io::Image im = renderText(lt_scene, o).image;
     means[k] = imageMean(im);
     io::Image& h = halves[k / (kRuns / 2)];
-    if (h.pixels.empty()) h = im;
+    if (h.pixels.empty())
+      h = im;
     else
       for (size_t i = 0; i < h.pixels.size(); ++i) h.pixels[i] += im.pixels[i];
   }

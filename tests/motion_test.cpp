@@ -186,11 +186,12 @@ struct SquareScene {
     if (instancing == 0)
       f << "AttributeBegin\n" << motion.str() << shape.str() << "AttributeEnd\n";
     else if (instancing == 1)
-      f << "ObjectBegin \"square\"\n" << shape.str() << "ObjectEnd\nAttributeBegin\n"
+      f << "ObjectBegin \"square\"\n"
+        << shape.str() << "ObjectEnd\nAttributeBegin\n"
         << motion.str() << "ObjectInstance \"square\"\nAttributeEnd\n";
     else
-      f << "ObjectBegin \"square\"\n" << motion.str() << shape.str()
-        << "ObjectEnd\nObjectInstance \"square\"\n";
+      f << "ObjectBegin \"square\"\n"
+        << motion.str() << shape.str() << "ObjectEnd\nObjectInstance \"square\"\n";
     return f.str();
   }
 };
@@ -279,8 +280,8 @@ TEST(MotionBlur, MovingInstancesAreSmearedAlike) {
   for (int instancing : {1, 2}) {
     SquareScene s;
     s.instancing = instancing;
-    const double z = maxZ(renderSquare(s, 3), c, s.spp,
-                          [](int x, int y) { return coverage(x, y, kTravel); });
+    const double z =
+        maxZ(renderSquare(s, 3), c, s.spp, [](int x, int y) { return coverage(x, y, kTravel); });
     EXPECT_LT(z, 4.5) << "instancing " << instancing;
   }
 }
@@ -288,8 +289,8 @@ TEST(MotionBlur, MovingInstancesAreSmearedAlike) {
 // A bar turning 90 degrees about the view axis over the shutter: each pixel's coverage is the
 // share of its area and of the shutter during which the bar, turned by 90 t degrees (a constant
 // rate), covers it; expected from an independent Monte Carlo of that geometry (2e4 points per
-// pixel), compared per 4 x 4 block. Interpolating the matrices instead (pbrt's decomposition not used) would shrink the bar
-// midway by cos 45 degrees: that model is rejected.
+// pixel), compared per 4 x 4 block. Interpolating the matrices instead (pbrt's decomposition not
+// used) would shrink the bar midway by cos 45 degrees: that model is rejected.
 TEST(MotionBlur, TurningBarFollowsTheDecomposedRotation) {
   constexpr int N = 24;
   constexpr double a = 0.8, b = 0.12, depth = 2;  // bar half-length, half-width; plane z = 2
@@ -303,9 +304,9 @@ TEST(MotionBlur, TurningBarFollowsTheDecomposedRotation) {
        "\"spectrum L\" [300 2 800 2]\n"
     << "Material \"diffuse\" \"spectrum reflectance\" [300 0.5 800 0.5]\n"
     << "ActiveTransform EndTime\nRotate 90 0 0 1\nActiveTransform All\n"
-    << "Shape \"bilinearmesh\" \"point3 P\" [" << -a << " " << -b << " " << depth << " " << a
-    << " " << -b << " " << depth << " " << -a << " " << b << " " << depth << " " << a << " " << b
-    << " " << depth << "]\n";
+    << "Shape \"bilinearmesh\" \"point3 P\" [" << -a << " " << -b << " " << depth << " " << a << " "
+    << -b << " " << depth << " " << -a << " " << b << " " << depth << " " << a << " " << b << " "
+    << depth << "]\n";
   render::RenderOptions o;
   o.seed = 4;
   o.threads = 2;
@@ -438,8 +439,7 @@ TEST(MotionBlur, EveryIntegratorTracesThePathAtItsTime) {
       if (camera_moves) s.object_travel = 0, s.camera_travel = -kTravel;
       std::string text = s.text();
       const std::string from = "Integrator \"path\"";
-      text.replace(text.find(from), from.size(),
-                   std::string("Integrator \"") + integrator + "\"");
+      text.replace(text.find(from), from.size(), std::string("Integrator \"") + integrator + "\"");
       render::RenderOptions o;
       o.seed = 5;
       o.threads = 2;
@@ -486,15 +486,13 @@ TEST(MotionBlur, RealisticCameraSmearFollowsTheLensMagnification) {
       << "Translate " << (camera_travel != 0 ? 0 : -travel_m / 2) << " 0 0\n";
     if (camera_travel == 0)
       f << "ActiveTransform EndTime\nTranslate " << travel_m << " 0 0\nActiveTransform All\n";
-    f
-      << "Shape \"bilinearmesh\" \"point3 P\" [" << -half << " " << -half << " " << D << " " << half
+    f << "Shape \"bilinearmesh\" \"point3 P\" [" << -half << " " << -half << " " << D << " " << half
       << " " << -half << " " << D << " " << -half << " " << half << " " << D << " " << half << " "
       << half << " " << D << "]\n";
     return f.str();
   };
   auto profile = [&](double open, double close, double camera_travel = 0) {
-    return columnProfile(
-        testutil::renderText(sceneText(open, close, camera_travel), {}).image);
+    return columnProfile(testutil::renderText(sceneText(open, close, camera_travel), {}).image);
   };
   // The paraxial prediction: magnification m = s' / s from the principal planes (lens space,
   // mm, +z toward the film; the object lies D in front of the film).
@@ -549,8 +547,8 @@ TEST(MotionScene, UnanimatedThingsAreWarnedAndAnimatedAreaLightsRefused) {
   for (const auto& d : s.diagnostics) all += d.message + "\n";
   EXPECT_NE(all.find("animated lights are not supported"), std::string::npos) << all;
   EXPECT_NE(all.find("animated texture transforms are not supported"), std::string::npos) << all;
-  const scene::Scene bad = testutil::buildText(
-      head + "AreaLightSource \"diffuse\"\nShape \"sphere\"\nAttributeEnd\n");
+  const scene::Scene bad =
+      testutil::buildText(head + "AreaLightSource \"diffuse\"\nShape \"sphere\"\nAttributeEnd\n");
   ASSERT_TRUE(bad.hasErrors());
   bool found = false;
   for (const auto& d : bad.diagnostics)

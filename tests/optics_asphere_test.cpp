@@ -79,9 +79,9 @@ TEST(Asphere, FloatBatchTracerCollimatesThePointAtTheFocus) {
     ASSERT_TRUE(res[k].ok()) << k;
     EXPECT_LT(std::hypot(res[k].ray.direction.x, res[k].ray.direction.y), 2e-5f) << k;
     // The same ray through the scalar double tracer agrees.
-    const Ray rd{{0, 0, double(zf)},
-                 {double(rays[k].direction.x), double(rays[k].direction.y),
-                  double(rays[k].direction.z)}};
+    const Ray rd{
+        {0, 0, double(zf)},
+        {double(rays[k].direction.x), double(rays[k].direction.y), double(rays[k].direction.z)}};
     const TraceResult t = lens.tracer().traceFromFilm(rd);
     ASSERT_TRUE(t.ok());
     EXPECT_NEAR(t.ray.origin.x, res[k].ray.origin.x, 1e-4);

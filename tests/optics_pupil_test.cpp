@@ -212,24 +212,27 @@ TEST(ExitPupilSampler, AnamorphicBoundsContainEveryPassingRay) {
       }
       if (auto s = sampler.sample(film, {u01(rng), u01(rng)})) {
         ++sampled;
-        sampled_ok += fl.lens->traceFromFilmPoint(film, {s->rear_point_mm.x, s->rear_point_mm.y}).ok();
+        sampled_ok +=
+            fl.lens->traceFromFilmPoint(film, {s->rear_point_mm.x, s->rear_point_mm.y}).ok();
       }
     }
     EXPECT_GT(passing, 300);
     // Measured: 0 of 10630 (2003) and 0 of 12023 (2004) with 4 wedges of 2 azimuths (with one
     // bound over 8 azimuths around the whole circle: 1 of 12023 outside); allowed: below 1e-3.
     EXPECT_LE(outside, passing / 1000) << outside << " of " << passing << " passing rays outside";
-    std::printf("%s: %d of %d passing rays outside the bounds; %.1f%% of %d bound samples blocked; build %.3f s, %ld traces, %d intervals\n",
-                name, outside, passing, 100.0 * (sampled - sampled_ok) / std::max(sampled, 1), sampled,
-                sampler.buildSeconds(), sampler.tracesAtBuild(), sampler.intervals());
+    std::printf(
+        "%s: %d of %d passing rays outside the bounds; %.1f%% of %d bound samples blocked; build "
+        "%.3f s, %ld traces, %d intervals\n",
+        name, outside, passing, 100.0 * (sampled - sampled_ok) / std::max(sampled, 1), sampled,
+        sampler.buildSeconds(), sampler.tracesAtBuild(), sampler.intervals());
   }
 }
 
 // The budgets for lenses that are not spherical, for the bound at one wavelength (the
 // camera widens a dispersive aspheric/anamorphic lens's bound by 5%, see realistic.cpp): at most
-// 5% of the samples inside the image circle wasted, and a bounded build cost. Start-up time is not asserted
-// (bench/lens-table measures it); its machine-independent proxy, the number of rays traced to
-// build the bound, is. Each aspheric trace costs a few microseconds (Newton solves), so the
+// 5% of the samples inside the image circle wasted, and a bounded build cost. Start-up time is not
+// asserted (bench/lens-table measures it); its machine-independent proxy, the number of rays traced
+// to build the bound, is. Each aspheric trace costs a few microseconds (Newton solves), so the
 // asphere's limit is set well under what the former dense bracketing traced (201228 for
 // ACL3026U, 160038 for lentil:0014) and the anamorphic's under the former 584276 (lentil:2003).
 TEST(ExitPupilSampler, AsphericAndAnamorphicLensesMeetTheBudgets) {

@@ -30,8 +30,8 @@ std::string singletZmx(const std::string& unit, double scale) {
       "  PARM 2 {}\n  DISZ {}\n  GLAS ___BLANK 1 0 1.6 50 0 0 0 0 0 0\n  CONI -0.5\n  DIAM {}\n"
       "SURF 3\n  TYPE STANDARD\n  CURV {}\n  DISZ {}\n  DIAM {}\nSURF 4\n  TYPE STANDARD\n"
       "  CURV 0\n  DISZ 0\n  DIAM 1\n",
-      unit, 10 / scale, 2 / scale, 5 / scale, 0.02 * scale, 1e-6 * scale * scale * scale,
-      4 / scale, 10 / scale, -0.01 * scale, 45 / scale, 10 / scale);
+      unit, 10 / scale, 2 / scale, 5 / scale, 0.02 * scale, 1e-6 * scale * scale * scale, 4 / scale,
+      10 / scale, -0.01 * scale, 45 / scale, 10 / scale);
 }
 
 std::u16string toU16(const std::string& s) {
@@ -95,8 +95,8 @@ TEST(ZmxReader, EncodingsAndLineEndingsGiveTheSameLens) {
   std::string crlf;
   for (char c : lf) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
   const LensPrescription a = parseZmx(lf, "a.zmx");
-  for (const std::string& bytes : {crlf, utf16Bytes(crlf, true), utf16Bytes(lf, false),
-                                   std::string("\xEF\xBB\xBF") + lf}) {
+  for (const std::string& bytes :
+       {crlf, utf16Bytes(crlf, true), utf16Bytes(lf, false), std::string("\xEF\xBB\xBF") + lf}) {
     const LensPrescription b = parseZmx(bytes, "b.zmx");
     ASSERT_EQ(a.surfaces.size(), b.surfaces.size());
     for (size_t i = 0; i < a.surfaces.size(); ++i) {
@@ -172,9 +172,9 @@ TEST(ZmxReader, SharedSamplesReadOrAreRefusedWithReasons) {
 TEST(JsonLens, LentilDesignsAllRead) {
   // All 24 designs of lentil's database, by name from the catalogue.
   int n = 0, aspheric = 0, anamorphic = 0;
-  for (const char* key : {"0001", "0002", "0003", "0004", "0005", "0006", "0007", "0008", "0009",
-                          "0010", "0011", "0012", "0013", "0014", "0015", "0016", "2001", "2002",
-                          "2003", "2004", "9991", "9992", "9993", "9994"}) {
+  for (const char* key : {"0001", "0002", "0003", "0004", "0005", "0006", "0007", "0008",
+                          "0009", "0010", "0011", "0012", "0013", "0014", "0015", "0016",
+                          "2001", "2002", "2003", "2004", "9991", "9992", "9993", "9994"}) {
     const LensPrescription p = readLensFile(std::string("lentil:") + key);
     EXPECT_EQ(p.format, "lentil");
     // Every design but the single-cylinder test lens 9991 (no power in y) has y-section data.
@@ -211,7 +211,8 @@ TEST(JsonLens, LentilAsphereAndGlass) {
 
 TEST(JsonLens, IsetJsonMatchesTheDatTable) {
   // ISET's JSON double Gauss (tests/data/iset/, from ISET/isetlens).
-  const LensPrescription j = readLensFile(lensim::test::dataPath("iset/dgauss.77deg.3.5201mm.json"));
+  const LensPrescription j =
+      readLensFile(lensim::test::dataPath("iset/dgauss.77deg.3.5201mm.json"));
   EXPECT_EQ(j.format, "iset-json");
   ASSERT_EQ(j.surfaces.size(), 11u);
   EXPECT_TRUE(j.surfaces[5].isStop());
@@ -221,13 +222,11 @@ TEST(JsonLens, IsetJsonMatchesTheDatTable) {
 
 TEST(JsonLens, LensimJsonRoundTripsEveryFormat) {
   const auto tmp = std::filesystem::temp_directory_path() / "lensim_roundtrip.json";
-  for (const std::string& src : {lensim::test::lensPath("dgauss.50mm.dat"), std::string("lentil:0014"),
-                                std::string("lentil:2003"),
-                                sharedLens("zmx/ACL3026U-Zemax(ZMX).zmx")}) {
+  for (const std::string& src :
+       {lensim::test::lensPath("dgauss.50mm.dat"), std::string("lentil:0014"),
+        std::string("lentil:2003"), sharedLens("zmx/ACL3026U-Zemax(ZMX).zmx")}) {
     const LensPrescription a = readLensFile(src);
-    {
-      std::ofstream(tmp) << writeLensJson(a);
-    }
+    { std::ofstream(tmp) << writeLensJson(a); }
     const LensPrescription b = readLensFile(tmp.string());
     ASSERT_EQ(a.surfaces.size(), b.surfaces.size()) << src;
     for (size_t i = 0; i < a.surfaces.size(); ++i) {

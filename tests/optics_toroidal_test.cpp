@@ -155,9 +155,10 @@ TEST(Toroidal, InfiniteRadiusOfRotationIsTheCylinder) {
 TEST(Toroidal, HitsLieOnTheTorusWithItsGradientAsNormal) {
   // (d) A circular y curve of radius r rotated about an axis at R: the torus
   // F = (sqrt(x^2 + (z - R)^2) - sgn(R) (R - r))^2 + y^2 - r^2 = 0 (tube radius |r|, the tube's
-  // centre |R - r| from the axis). Hits (rays in the x-z plane, then any rays) satisfy it to 1e-9 mm (|F| / |grad F|)
-  // and the normal is grad F.
-  for (const auto& [r, R] : {std::pair{40.0, 20.0}, std::pair{15.0, 50.0}, std::pair{-30.0, -18.0}}) {
+  // centre |R - r| from the axis). Hits (rays in the x-z plane, then any rays) satisfy it to 1e-9
+  // mm (|F| / |grad F|) and the normal is grad F.
+  for (const auto& [r, R] :
+       {std::pair{40.0, 20.0}, std::pair{15.0, 50.0}, std::pair{-30.0, -18.0}}) {
     const double semi = 9;
     const ShapeIntersector isect(r, toroid(R), semi);
     std::mt19937_64 rng(11);
@@ -315,9 +316,8 @@ TEST(Toroidal, SampleAnamorphicFirstOrderDataAgreeWithAYNuTrace) {
   for (int section = 0; section < 2; ++section) {
     double y = 1, nu = 0, n = 1;
     for (size_t k = 1; k + 1 < raw.size(); ++k) {
-      const double c = section == 0 && raw[k].toroidal
-                           ? (raw[k].rot != 0 ? 1 / raw[k].rot : 0.0)
-                           : raw[k].curv;
+      const double c =
+          section == 0 && raw[k].toroidal ? (raw[k].rot != 0 ? 1 / raw[k].rot : 0.0) : raw[k].curv;
       // The surfaces map one to one (the stop is a plane of its own in this file).
       const double n2 = lens.interfaces()[k - 1].ior_after;
       nu = nu - y * c * (n2 - n);

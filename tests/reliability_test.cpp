@@ -39,8 +39,7 @@ struct TempDir {
   fs::path path;
   TempDir() {
     path = fs::temp_directory_path() /
-           ("lensim-reliability-" + std::to_string(::getpid()) + "-" +
-            std::to_string(counter()++));
+           ("lensim-reliability-" + std::to_string(::getpid()) + "-" + std::to_string(counter()++));
     fs::remove_all(path);
     fs::create_directories(path);
   }
@@ -93,7 +92,8 @@ TEST(Reliability, NonFiniteNumbersInScenesAreRefusedAtTheirLocation) {
       {"translate_1e39.pbrt", "translate_1e39.pbrt:3:15", "1e+39 is out of range"},
       {"pointlight_nan.pbrt", "pointlight_nan.pbrt:6:52", "expected a finite number"},
       {"pointlight_inf.pbrt", "pointlight_inf.pbrt:6:52", "found inf"},
-      {"distant_from_eq_to.pbrt", "distant_from_eq_to.pbrt:6:1", "\"from\" and \"to\" are the same"},
+      {"distant_from_eq_to.pbrt", "distant_from_eq_to.pbrt:6:1",
+       "\"from\" and \"to\" are the same"},
       {"sphere_radius_nan.pbrt", "sphere_radius_nan.pbrt:3:31", "expected a finite number"},
       {"mesh_vertex_inf.pbrt", "mesh_vertex_inf.pbrt:3:48", "found inf"},
       {"arealight_1e300.pbrt", "arealight_1e300.pbrt:6:36", "out of range"},
@@ -152,7 +152,8 @@ TEST(Reliability, SizesFromFilesAreCheckedAgainstTheMemoryBudget) {
   TempDir dir;
   for (const auto& c : cases) {
     SCOPED_TRACE(c.file);
-    CliResult r = lensim::test::runLensim(std::string(c.args) + " " + kData + c.file +
+    CliResult r =
+        lensim::test::runLensim(std::string(c.args) + " " + kData + c.file +
                                 (contains(c.args, "render") ? " -o " + (dir / "o.exr") : ""));
     EXPECT_EQ(r.status, 1) << r.out;
     EXPECT_TRUE(contains(r.out, c.message)) << r.out;
@@ -205,7 +206,8 @@ TEST(Reliability, SampleCountsThatOverflowAreRefused) {
   EXPECT_TRUE(contains(r.out, "2147483647 samples per pixel: expected 1 to 16777216")) << r.out;
   EXPECT_FALSE(fs::exists(dir / "o.exr"));
   r = run("check " + kData + "pixelsamples_int_max.pbrt");
-  expectLocatedError(r, kData + "pixelsamples_int_max.pbrt", "pixelsamples 2147483647 is too large");
+  expectLocatedError(r, kData + "pixelsamples_int_max.pbrt",
+                     "pixelsamples 2147483647 is too large");
   r = run("check " + kData + "stratified_65536.pbrt");
   expectLocatedError(r, kData + "stratified_65536.pbrt", "65536 x 65536 samples per pixel");
 }
@@ -373,7 +375,7 @@ TEST(Reliability, SceneValueErrorsCarryTheirLocation) {
 TEST(Reliability, FocusErrorsNameTheLensFile) {
   // A focus distance inside the lens cannot be reached; the error names the lens file.
   CliResult r = run("lens info " + std::string(LENSIM_SOURCE_DIR) +
-                       "/lenses/dgauss.50mm.dat --focus-distance 0.001");
+                    "/lenses/dgauss.50mm.dat --focus-distance 0.001");
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_TRUE(contains(r.out, "dgauss.50mm.dat: error: ")) << r.out;
 }
@@ -387,9 +389,9 @@ TEST(ReliabilityUtil, EscapeTextKeepsValidUtf8AndEscapesTheRest) {
   EXPECT_EQ(escapeText("tab\there\n"), "tab\\there\\n");
   EXPECT_EQ(escapeText("tab\there\n", true), "tab\there\n");
   EXPECT_EQ(escapeText("\x1b[31m"), "\\x1b[31m");
-  EXPECT_EQ(escapeText("µm ×"), "µm ×");                 // valid UTF-8 stays
-  EXPECT_EQ(escapeText("\xff\xfe"), "\\xff\\xfe");       // invalid bytes
-  EXPECT_EQ(escapeText("\xc3"), "\\xc3");                // truncated sequence
+  EXPECT_EQ(escapeText("µm ×"), "µm ×");                     // valid UTF-8 stays
+  EXPECT_EQ(escapeText("\xff\xfe"), "\\xff\\xfe");           // invalid bytes
+  EXPECT_EQ(escapeText("\xc3"), "\\xc3");                    // truncated sequence
   EXPECT_EQ(escapeText("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a surrogate
   EXPECT_EQ(escapeText("\x7f"), "\\x7f");
 }
@@ -448,9 +450,7 @@ TEST(ReliabilityUtil, RequireFiniteAndRange) {
 
 TEST(ReliabilityUtil, ReadRegularFileCapsTheSize) {
   TempDir dir;
-  {
-    std::ofstream(dir / "f.txt") << "0123456789";
-  }
+  { std::ofstream(dir / "f.txt") << "0123456789"; }
   EXPECT_EQ(lensim::readRegularFile(dir / "f.txt", "test file"), "0123456789");
   EXPECT_THROW(lensim::readRegularFile(dir / "f.txt", "test file", 5), lensim::Error);
   EXPECT_THROW(lensim::readRegularFile(dir / "missing", "test file"), lensim::Error);

@@ -12,13 +12,13 @@
 #include <vector>
 
 #include "lensim/camera/camera.h"
-#include "lensim/render/shapes/accel.h"
-#include "lensim/render/integrators/bdpt.h"
 #include "lensim/render/image_compare.h"
+#include "lensim/render/integrators/bdpt.h"
 #include "lensim/render/lights/lights.h"
 #include "lensim/render/materials/materials.h"
-#include "lensim/sampling/sampler.h"
+#include "lensim/render/shapes/accel.h"
 #include "lensim/render/textures/textures.h"
+#include "lensim/sampling/sampler.h"
 #include "render_test_util.h"
 #include "scene_test_util.h"
 #include "test_paths.h"
@@ -151,9 +151,8 @@ Split split(const Direct& d, const std::vector<Vertex>& cam, int s, bool recompu
     y0.type = VertexType::Light;
     for (int k = 1; k < n; ++k) {
       Vertex& v = path[size_t(k)];
-      v.pdf_fwd =
-          render::bdpt::pdf(d.ctx, cam[size_t(k - 1)], k >= 2 ? &cam[size_t(k - 2)] : nullptr, v,
-                            550);
+      v.pdf_fwd = render::bdpt::pdf(d.ctx, cam[size_t(k - 1)],
+                                    k >= 2 ? &cam[size_t(k - 2)] : nullptr, v, 550);
       if (k == n - 1)
         v.pdf_rev = render::bdpt::pdfLightOrigin(d.ctx, y0, cam[size_t(n - 2)]);
       else if (k == n - 2)
@@ -202,8 +201,8 @@ double weightSum(Direct& d, const std::vector<Vertex>& cam, std::vector<double>*
       continue;
     }
     Split sp = split(d, cam, s, recompute);
-    const double w = render::bdpt::misWeight(d.ctx, sp.light.data(), sp.camera.data(), sp.sampled,
-                                             s, t, 550);
+    const double w =
+        render::bdpt::misWeight(d.ctx, sp.light.data(), sp.camera.data(), sp.sampled, s, t, 550);
     if (weights) weights->push_back(w);
     sum += w;
   }
@@ -291,7 +290,8 @@ TEST(Bdpt, MisWeightsAreTheBalanceHeuristicOfClosedFormDensities) {
         double sum = 0;
         for (double ps : p) sum += std::pow(ps, exponent);
         for (size_t s = 0; s < p.size(); ++s)
-          EXPECT_NEAR(w[s], std::pow(p[s], exponent) / sum, 1e-12 + (recompute ? 1e-6 : 5e-3) * w[s])
+          EXPECT_NEAR(w[s], std::pow(p[s], exponent) / sum,
+                      1e-12 + (recompute ? 1e-6 : 5e-3) * w[s])
               << "strategy s = " << s << " of a path of " << n << " vertices"
               << (recompute ? "" : " (the walks' densities)");
       }
@@ -327,7 +327,8 @@ namespace {
 /// cannot see a point light through it, bdpt can.)
 std::string litBox(const std::string& camera, const std::string& integrator,
                    const std::string& extra = "") {
-  return camera + fmt::format(R"(Integrator "{}" "integer maxdepth" 5
+  return camera +
+         fmt::format(R"(Integrator "{}" "integer maxdepth" 5
 WorldBegin
 AttributeBegin
   AreaLightSource "diffuse" "rgb L" [6 6 6]
@@ -354,7 +355,7 @@ AttributeBegin
   Shape "sphere" "float radius" 0.3
 AttributeEnd
 )",
-                              integrator) +
+                     integrator) +
          extra;
 }
 
@@ -495,7 +496,6 @@ PixelFilter "box" "float xradius" 0.5 "float yradius" 0.5
     EXPECT_LE(r.z_failures, 1) << render::formatCompare(r);
     EXPECT_EQ(r.outliers, 0) << render::formatCompare(r);
     EXPECT_EQ(whole.z_failures, 0) << render::formatCompare(whole);
-    std::printf("%s: bdpt/path mean ratio %.4f, %d z failures\n", lens, r.mean_ratio,
-                r.z_failures);
+    std::printf("%s: bdpt/path mean ratio %.4f, %d z failures\n", lens, r.mean_ratio, r.z_failures);
   }
 }

@@ -160,8 +160,8 @@ TEST(RenderCommand, ErrorsExitWithStatusOne) {
 TEST(RenderCommand, BadCropWindowSaysWhichValueAndWhatIsExpected) {
   lensim::testutil::TempDir dir("lensim-render-crop");
   const std::string scene = dir.write("s.pbrt", kScene);
-  Result r = run("render " + scene + " --quiet -o " + dir.file("o.exr") +
-                 " --cropwindow 0 1 nan 1");
+  Result r =
+      run("render " + scene + " --quiet -o " + dir.file("o.exr") + " --cropwindow 0 1 nan 1");
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_NE(r.out.find("error: --cropwindow: y0 is nan; expected a finite fraction of the image, "
                        "in [0, 1] (--cropwindow x0 x1 y0 y1)"),
@@ -170,8 +170,7 @@ TEST(RenderCommand, BadCropWindowSaysWhichValueAndWhatIsExpected) {
   EXPECT_EQ(r.out.find("s.pbrt"), std::string::npos) << r.out;  // not the scene's fault
   r = run("render " + scene + " --quiet -o " + dir.file("o.exr") + " --cropwindow 0.2 0.2 0 1");
   EXPECT_EQ(r.status, 1) << r.out;
-  EXPECT_NE(r.out.find("error: --cropwindow gives empty pixel bounds"), std::string::npos)
-      << r.out;
+  EXPECT_NE(r.out.find("error: --cropwindow gives empty pixel bounds"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(dir.file("o.exr")));
 }
 

@@ -57,8 +57,8 @@ AttributeEnd
                      camera, res, res, integrator, wall);
 }
 
-using testutil::LtComparison;
 using testutil::compareLightTracer;
+using testutil::LtComparison;
 
 /// The z-test passes (at most max_fail blocks beyond the Bonferroni bound) and the image means
 /// agree within 4 standard errors.
@@ -72,20 +72,17 @@ void expectAgree(const LtComparison& c, const std::string& what, int max_fail = 
 
 TEST(LightTracer, PinholeAgreesWithPath) {
   const std::string cam = R"(Camera "perspective" "float fov" 45)";
-  expectAgree(compareLightTracer([&](const char* i) { return box(cam, i); }, 8, 64),
-              "pinhole");
+  expectAgree(compareLightTracer([&](const char* i) { return box(cam, i); }, 8, 64), "pinhole");
 }
 
 TEST(LightTracer, ThinLensAgreesWithPath) {
   const std::string cam =
       R"(Camera "perspective" "float fov" 45 "float lensradius" 0.08 "float focaldistance" 3)";
-  expectAgree(compareLightTracer([&](const char* i) { return box(cam, i); }, 8, 64),
-              "thin lens");
+  expectAgree(compareLightTracer([&](const char* i) { return box(cam, i); }, 8, 64), "thin lens");
 }
 
 TEST(LightTracer, OrthographicAgreesWithPath) {
-  const std::string cam =
-      R"(Camera "orthographic" "float screenwindow" [-0.9 0.9 -0.9 0.9])";
+  const std::string cam = R"(Camera "orthographic" "float screenwindow" [-0.9 0.9 -0.9 0.9])";
   expectAgree(compareLightTracer([&](const char* i) { return box(cam, i); }, 8, 64),
               "orthographic");
   const std::string thin =
@@ -161,14 +158,13 @@ TEST(LightTracer, RefusesTilesAndCheckpoints) {
   }
 }
 
-
 namespace {
 
 /// The realistic camera with a lens of ../shared/lenses at full aperture (the stop's diameter;
 /// pbrt-v4's default is 1 mm), focused at 3 m.
 std::string realisticCamera(const std::string& lens) {
-  const double stop = lens == "dgauss.50mm.dat"   ? 17.1
-                      : lens == "wide.22mm.dat"   ? 8.756
+  const double stop = lens == "dgauss.50mm.dat"    ? 17.1
+                      : lens == "wide.22mm.dat"    ? 8.756
                       : lens == "fisheye.10mm.dat" ? 6.08
                                                    : 40.5;  // telephoto.250mm.dat
   return fmt::format(
@@ -198,8 +194,8 @@ double squareMean(const Image& im, int x0, int y0, int n) {
 // ratio 0.998 +- 0.003; fisheye 3 x 512 spp against 8192 spp, 0.996-0.999.
 // That the comparison can fail: RealisticWrongExposureIsFound.
 TEST(LightTracer, RealisticLensesAgreeWithPath) {
-  for (const char* lens : {"dgauss.50mm.dat", "wide.22mm.dat", "fisheye.10mm.dat",
-                           "telephoto.250mm.dat"}) {
+  for (const char* lens :
+       {"dgauss.50mm.dat", "wide.22mm.dat", "fisheye.10mm.dat", "telephoto.250mm.dat"}) {
     SCOPED_TRACE(lens);
     const std::string cam = realisticCamera(lens);
     expectAgree(compareLightTracer([&](const char* i) { return box(cam, i, 16); }, 32, 128, 4),
@@ -248,8 +244,8 @@ AttributeEnd
 // the film point the ray was generated from (within float precision), and sampleWi from a point
 // on that ray finds the same film point.
 TEST(LightTracer, ImportanceRetracesCameraRays) {
-  for (const char* lens : {"dgauss.50mm.dat", "wide.22mm.dat", "fisheye.10mm.dat",
-                           "telephoto.250mm.dat"}) {
+  for (const char* lens :
+       {"dgauss.50mm.dat", "wide.22mm.dat", "fisheye.10mm.dat", "telephoto.250mm.dat"}) {
     SCOPED_TRACE(lens);
     const scene::Scene s = testutil::buildText(
         "LookAt 0 1 -3.2  0 1 0  0 1 0\n" + realisticCamera(lens) +
@@ -272,16 +268,18 @@ TEST(LightTracer, ImportanceRetracesCameraRays) {
       const double w = cam->importance(ray->origin, ray->direction, 0, &raster, ray->time);
       if (w > 0) {
         ++n_found;
-        worst = std::max(worst, std::hypot(raster.x - cs.film_raster.x, raster.y - cs.film_raster.y));
+        worst =
+            std::max(worst, std::hypot(raster.x - cs.film_raster.x, raster.y - cs.film_raster.y));
       }
       // sampleWi from points on the ray (3 m and 1 m out) can pick the ray's front point.
       for (double t : {3.0, 1.0})
         n_outside +=
             cam->pdfWiPos(ray->origin + ray->direction * t, ray->origin, ray->time) > 0 ? 0 : 1;
     }
-    std::printf("%s: %d of %d camera rays retraced, worst raster error %.2g px, %d of %d front "
-                "points outside sampleWi's region\n",
-                lens, n_found, n_rays, worst, n_outside, 2 * n_rays);
+    std::printf(
+        "%s: %d of %d camera rays retraced, worst raster error %.2g px, %d of %d front "
+        "points outside sampleWi's region\n",
+        lens, n_found, n_rays, worst, n_outside, 2 * n_rays);
     EXPECT_GT(n_rays, 100);
     // The float tracer may stop a ray grazing a clear aperture's edge one way and not the
     // other: at most 1%.
@@ -291,7 +289,6 @@ TEST(LightTracer, ImportanceRetracesCameraRays) {
   }
 }
 
-
 // The comparison of realistic renders can fail: the light tracer through the double Gauss at
 // full aperture against the path tracer at 14 mm (2/3 of the exposure) is found.
 TEST(LightTracer, RealisticWrongExposureIsFound) {
@@ -299,8 +296,8 @@ TEST(LightTracer, RealisticWrongExposureIsFound) {
   std::string pt = lt;
   pt.replace(pt.find("aperturediameter\" 17.1"), 22, "aperturediameter\" 14.0");
   const LtComparison c = compareLightTracer(
-      [&](const char* i) { return box(std::string(i) == "lighttracer" ? lt : pt, i, 16); }, 32,
-      128, 4);
+      [&](const char* i) { return box(std::string(i) == "lighttracer" ? lt : pt, i, 16); }, 32, 128,
+      4);
   std::printf("full aperture vs 14 mm: %s\n", c.summary().c_str());
   EXPECT_GT(c.result.z_failures, 1);
   EXPECT_GT(std::abs(c.mean_z), 4.0);

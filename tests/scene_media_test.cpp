@@ -246,9 +246,11 @@ WorldBegin
 )")),
             "test.pbrt:1:1: error: medium \"v\": nanovdb needs \"string filename\" (a .nvdb "
             "file)\n");
-  EXPECT_NE(errorsOf(buildText(R"(MakeNamedMedium "v" "string type" "nanovdb" "string filename" "no.nvdb"
-)")).find("NanoVDB file \"no.nvdb\" not found"),
-            std::string::npos);
+  EXPECT_NE(
+      errorsOf(buildText(R"(MakeNamedMedium "v" "string type" "nanovdb" "string filename" "no.nvdb"
+)"))
+          .find("NanoVDB file \"no.nvdb\" not found"),
+      std::string::npos);
   EXPECT_EQ(errorsOf(buildText(R"(MakeNamedMedium "c" "string type" "cloud" "float density" -1
 )")),
             "test.pbrt:1:43: error: medium \"c\": density -1 must not be negative\n");

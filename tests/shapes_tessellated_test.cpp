@@ -225,11 +225,11 @@ TEST(TessellatedShapes, BadParametersAreErrorsAtTheirLocation) {
                 .find("expected nu*nv = 4 heights, got 3"),
             std::string::npos);
   EXPECT_NE(err(R"(Shape "heightfield" "float Pz" [0 0 0 0])").find("nu"), std::string::npos);
-  EXPECT_NE(err(R"(Shape "paraboloid" "float phimax" 400)").find("phimax 400"),
-            std::string::npos);
-  EXPECT_NE(err(R"(Shape "nurbs" "integer nu" 2 "integer nv" 2 "integer uorder" 2 "integer vorder" 2 "float uknots" [0 0 1] "float vknots" [0 0 1 1] "point3 P" [0 0 0 1 0 0 0 1 0 1 1 0])")
-                .find("expected 4 knots, got 3"),
-            std::string::npos);
+  EXPECT_NE(err(R"(Shape "paraboloid" "float phimax" 400)").find("phimax 400"), std::string::npos);
+  EXPECT_NE(
+      err(R"(Shape "nurbs" "integer nu" 2 "integer nv" 2 "integer uorder" 2 "integer vorder" 2 "float uknots" [0 0 1] "float vknots" [0 0 1 1] "point3 P" [0 0 0 1 0 0 0 1 0 1 1 0])")
+          .find("expected 4 knots, got 3"),
+      std::string::npos);
 }
 
 TEST(TessellatedShapes, BlackShapesAgainstAUniformSkyCoverTheirProjectedArea) {

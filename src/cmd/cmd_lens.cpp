@@ -21,8 +21,8 @@
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/plots.h"
-#include "lensim/util/log.h"
 #include "lensim/util/file.h"
+#include "lensim/util/log.h"
 #include "lensim/util/svg.h"
 
 namespace lensim::cmd {
@@ -268,9 +268,8 @@ int runInfo(const LensArgs& args, bool as_json) {
                                      p.entrance_pupil_diameter_mm, p.entrance_pupil_z_mm));
   line("exit pupil", fmt::format("diameter {:.4f} mm at z = {:.4f} mm", p.exit_pupil_diameter_mm,
                                  p.exit_pupil_z_mm));
-  line("f-number",
-       fmt::format("f/{:.3f} paraxial (infinity), working f/{:.3f} at this focus", p.f_number,
-                   working_f));
+  line("f-number", fmt::format("f/{:.3f} paraxial (infinity), working f/{:.3f} at this focus",
+                               p.f_number, working_f));
   line("real f-number",
        fmt::format("f/{:.3f} (marginal ray from infinity at {:.4f} mm, stopped by surface {} "
                    "line {}; 1/(2 sin u') f/{:.3f})",
@@ -278,9 +277,10 @@ int runInfo(const LensArgs& args, bool as_json) {
                    pr.surfaces[p.real_limit_surface].loc.line, p.real_image_space_f_number));
   const std::string focus_text =
       beyond_infinity_mm
-          ? fmt::format("beyond infinity: the film is {:.4f} mm in front of the infinity focus "
-                        "(object conjugate 1/s = {:.4f} dioptres; no real object is sharp)",
-                        *beyond_infinity_mm, vergence_dpt)
+          ? fmt::format(
+                "beyond infinity: the film is {:.4f} mm in front of the infinity focus "
+                "(object conjugate 1/s = {:.4f} dioptres; no real object is sharp)",
+                *beyond_infinity_mm, vergence_dpt)
       : at_inf ? std::string("infinity")
                : fmt::format("{:.6g} m from the film", fl.focus_distance_m);
   line("focus", fmt::format("{} ({} method); closest {:.4f} m", focus_text,
@@ -373,9 +373,10 @@ int runConvert(const std::string& in, const std::string& out) {
   else if (ext == ".dat")
     text = writeLensDat(p);
   else
-    throw Error(fmt::format("cannot write '{}': lensim writes lenses as .json (any lens) or .dat "
-                            "(spherical lenses)",
-                            out));
+    throw Error(
+        fmt::format("cannot write '{}': lensim writes lenses as .json (any lens) or .dat "
+                    "(spherical lenses)",
+                    out));
   writeFileAtomically(out, text);
   logInfo(fmt::format("wrote {} ({} surfaces)", out, p.surfaces.size()));
   return 0;
@@ -476,8 +477,8 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
       // are the lens's rays in that plane (a biconic's or toroid's section profile), with the
       // same film plane.
       for (bool x_section : {false, true}) {
-        LensPrescription sec = x_section ? xSection(fl.lens->prescription())
-                                         : ySection(fl.lens->prescription());
+        LensPrescription sec =
+            x_section ? xSection(fl.lens->prescription()) : ySection(fl.lens->prescription());
         sec.name += x_section ? " (x-z section)" : " (y-z section)";
         LensSetup setup;
         setup.film_distance_mm = fl.lens->filmDistance_mm();
@@ -636,7 +637,8 @@ int runPlot(const LensArgs& args, const PlotArgs& pa) {
 }  // namespace
 
 void registerLensCommands(CLI::App& app, Action& action) {
-  CLI::App* lens = app.add_subcommand("lens", "Analyse a lens prescription (.dat, .zmx, .json, lentil:KEY)");
+  CLI::App* lens =
+      app.add_subcommand("lens", "Analyse a lens prescription (.dat, .zmx, .json, lentil:KEY)");
   lens->require_subcommand(1);
 
   {
@@ -718,8 +720,7 @@ void registerLensCommands(CLI::App& app, Action& action) {
     convert->add_option("IN", *in, "Lens file (.dat, .zmx, .json) or name (lentil:0003)")
         ->required();
     convert->add_option("OUT", *out, "Output .json or .dat")->required();
-    convert->callback(
-        [&action, in, out] { action = [in, out] { return runConvert(*in, *out); }; });
+    convert->callback([&action, in, out] { action = [in, out] { return runConvert(*in, *out); }; });
   }
 }
 

@@ -116,9 +116,10 @@ void registerRenderCommand(CLI::App& app, Action& action) {
         static const char* const kCropNames[4] = {"x0", "x1", "y0", "y1"};
         for (int i = 0; i < 4; ++i)
           if (!std::isfinite(o->crop[size_t(i)]))
-            throw Error(fmt::format("--cropwindow: {} is {}; expected a finite fraction of the "
-                                    "image, in [0, 1] (--cropwindow x0 x1 y0 y1)",
-                                    kCropNames[i], o->crop[size_t(i)]));
+            throw Error(
+                fmt::format("--cropwindow: {} is {}; expected a finite fraction of the "
+                            "image, in [0, 1] (--cropwindow x0 x1 y0 y1)",
+                            kCropNames[i], o->crop[size_t(i)]));
         ro.crop = std::array<double, 4>{o->crop[0], o->crop[1], o->crop[2], o->crop[3]};
       }
       if (o->pixelbounds.size() == 4)

@@ -42,10 +42,11 @@ bool isAnalysisKind(const std::string& kind) {
 }
 
 void addAnalysisOptions(CLI::App* cmd, AnalysisArgs& a) {
-  cmd->add_option("--wavelengths", a.wavelengths,
-                  "mtf, mtf-focus, fans, field, psf: wavelengths in nm with optional weights, "
-                  "e.g. 486.13:1,587.56:2,656.27:1 (default: --wavelength, else the lens's primary); "
-                  "spot: one spot per wavelength in its colour");
+  cmd->add_option(
+      "--wavelengths", a.wavelengths,
+      "mtf, mtf-focus, fans, field, psf: wavelengths in nm with optional weights, "
+      "e.g. 486.13:1,587.56:2,656.27:1 (default: --wavelength, else the lens's primary); "
+      "spot: one spot per wavelength in its colour");
   cmd->add_option("--max-frequency", a.max_frequency,
                   "mtf: highest spatial frequency, cycles/mm (default: the diffraction cutoff)");
   cmd->add_option(
@@ -71,10 +72,9 @@ void runAnalysis(const std::string& kind, const FocusedLens& fl, double diag,
     if (!(f >= 0 && f <= 1.5))
       throw Error(
           fmt::format("--fields: {} is not a fraction of the half-diagonal in [0, 1.5]", f));
-  const SpectralLens sl =
-      a.wavelengths.empty()
-          ? spectral(fl, {{fl.lens->wavelength_nm(), 1}})
-          : spectral(fl, parseWavelengths(a.wavelengths, "--wavelengths"));
+  const SpectralLens sl = a.wavelengths.empty()
+                              ? spectral(fl, {{fl.lens->wavelength_nm(), 1}})
+                              : spectral(fl, parseWavelengths(a.wavelengths, "--wavelengths"));
   auto need = [&](bool any) {
     if (!any)
       throw Error(fmt::format(

@@ -15,12 +15,13 @@ namespace lensim::cmd {
 
 /// Options of the analyses, added to `lens plot`.
 struct AnalysisArgs {
-  std::string wavelengths;  ///< nm, optionally :weight, comma-separated; empty: the lens's wavelength
-  double max_frequency = 0;            ///< mtf: cycles/mm (0: the diffraction cutoff)
-  double frequency = 0;                ///< mtf-focus: cycles/mm (0: a quarter of the cutoff)
-  double focus_range_mm = 0;           ///< mtf-focus: half-width of the film shift
-  int pupil_cells = 0;                 ///< 0: automatic
-  bool geometric_only = false;         ///< mtf: skip the diffraction MTF
+  std::string
+      wavelengths;  ///< nm, optionally :weight, comma-separated; empty: the lens's wavelength
+  double max_frequency = 0;     ///< mtf: cycles/mm (0: the diffraction cutoff)
+  double frequency = 0;         ///< mtf-focus: cycles/mm (0: a quarter of the cutoff)
+  double focus_range_mm = 0;    ///< mtf-focus: half-width of the film shift
+  int pupil_cells = 0;          ///< 0: automatic
+  bool geometric_only = false;  ///< mtf: skip the diffraction MTF
 };
 
 /// The kinds handled here.

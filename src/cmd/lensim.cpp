@@ -9,8 +9,8 @@
 #include "lensim/util/error.h"
 #include "lensim/util/interrupt.h"
 #include "lensim/util/limits.h"
-#include "lensim/util/text.h"
 #include "lensim/util/log.h"
+#include "lensim/util/text.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"lensim: a physically based renderer built around real camera lenses"};
@@ -47,8 +47,10 @@ int main(int argc, char** argv) {
   if (!memory_limit.empty()) {
     auto bytes = lensim::parseMemorySize(memory_limit);
     if (!bytes) {
-      std::fprintf(stderr, "lensim: error: --memory-limit: expected a size such as 4G or 512M, "
-                   "found '%s'\n", lensim::shortToken(memory_limit).c_str());
+      std::fprintf(stderr,
+                   "lensim: error: --memory-limit: expected a size such as 4G or 512M, "
+                   "found '%s'\n",
+                   lensim::shortToken(memory_limit).c_str());
       return 1;
     }
     lensim::setMemoryBudgetBytes(*bytes);

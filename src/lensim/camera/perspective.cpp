@@ -63,8 +63,8 @@ class ProjectiveCamera : public Camera {
       throw Error(c.loc, "camera: focaldistance must be positive with a lens radius");
     film_ = FilmSampleBounds(scene);
     const double sx = window_[1] - window_[0], sy = window_[3] - window_[2];
-    image_area_ = ortho_ ? std::abs(sx * sy)
-                         : std::abs(sx * sy) * tan_half_fov_ * tan_half_fov_;  // at z = 1
+    image_area_ =
+        ortho_ ? std::abs(sx * sy) : std::abs(sx * sy) * tan_half_fov_ * tan_half_fov_;  // at z = 1
     lens_area_ = lens_radius_ > 0 ? M_PI * lens_radius_ * lens_radius_ : 1.0;
   }
 
@@ -100,8 +100,8 @@ class ProjectiveCamera : public Camera {
     if (ortho_) return orthoSampleWi(ref_c, u, cw);
     // pbrt-v4's PerspectiveCamera::SampleWi: a uniform point on the lens disc (the eye for a
     // pinhole), its solid-angle density at ref and the importance of the ray toward ref.
-    const Vec2 l = lens_radius_ > 0 ? render::sampleUniformDiskConcentric(u) * lens_radius_
-                                    : Vec2{0, 0};
+    const Vec2 l =
+        lens_radius_ > 0 ? render::sampleUniformDiskConcentric(u) * lens_radius_ : Vec2{0, 0};
     CameraWiSample s;
     s.p_lens = cw.applyPoint({l.x, l.y, 0});
     const Vec3 d = s.p_lens - ref;
@@ -161,8 +161,7 @@ class ProjectiveCamera : public Camera {
       // by the lens point: fd^2 / (pi r^2 cos^3); a pinhole's direction is a delta (pdf 1).
       const double c = d_c.z;
       if (lens_radius_ == 0) return {1 / image_area_, 1};
-      return {1 / image_area_,
-              focal_distance_ * focal_distance_ / (lens_area_ * c * c * c)};
+      return {1 / image_area_, focal_distance_ * focal_distance_ / (lens_area_ * c * c * c)};
     }
     if (We(o_c, d_c, &raster) == 0) return {};
     // pbrt-v4's PerspectiveCamera::PDF_We.

@@ -116,7 +116,8 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
       for (int i = 0; i <= 64; ++i)
         for (int k = 0; k < 16; ++k) {
           const double h = r * i / 64, a = 2 * M_PI * k / 16;
-          if (auto sg = optics::surfaceSag(f.radius_mm, f.shape, h * std::cos(a), h * std::sin(a))) {
+          if (auto sg =
+                  optics::surfaceSag(f.radius_mm, f.shape, h * std::cos(a), h * std::sin(a))) {
             front_zmin_mm_ = std::min(front_zmin_mm_, f.z_mm + sg->z);
             front_zmax_mm_ = std::max(front_zmax_mm_, f.z_mm + sg->z);
           }
@@ -130,8 +131,7 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
 
 int RealisticCamera::bandAt(double lambda_nm) const {
   if (band_edges_nm_.size() < 2 || !(lambda_nm > 0)) return -1;
-  const auto it =
-      std::upper_bound(band_edges_nm_.begin() + 1, band_edges_nm_.end() - 1, lambda_nm);
+  const auto it = std::upper_bound(band_edges_nm_.begin() + 1, band_edges_nm_.end() - 1, lambda_nm);
   return static_cast<int>(it - (band_edges_nm_.begin() + 1));
 }
 
@@ -351,8 +351,8 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
 
 std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample) const {
   const Vec2 film = filmPoint(sample.film_raster);
-  const std::optional<FilmRay> f = filmRay(
-      sample, film, pupil_->sample(film, sample.lens, bandAt(sample.lambda_nm[0])));
+  const std::optional<FilmRay> f =
+      filmRay(sample, film, pupil_->sample(film, sample.lens, bandAt(sample.lambda_nm[0])));
   if (!f) return std::nullopt;
   if (dispersive_) return dispersiveRay(sample, *f);
   const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f->ray);
@@ -387,7 +387,8 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
       Vec2 f[kB], v[kB];
       int idx[kB], m = 0;
       for (int j = i; j < n; ++j)
-        if (!done[j] && band[j] == band[i]) f[m] = film[j], v[m] = u[j], idx[m++] = j, done[j] = true;
+        if (!done[j] && band[j] == band[i])
+          f[m] = film[j], v[m] = u[j], idx[m++] = j, done[j] = true;
       std::optional<optics::PupilSample> got[kB];
       pupil_->sampleBatch(f, v, m, got, band[i]);
       for (int k = 0; k < m; ++k) ps[idx[k]] = got[k];
@@ -423,22 +424,22 @@ bool RealisticCamera::reachesFilm(const CameraSample& sample) const {
 std::string RealisticCamera::describe() const {
   const optics::LensSystem& lens = *lens_.lens;
   return fmt::format(
-      "realistic: {} ({}), f = {:.2f} mm, f/{:.2f}, film distance {:.3f} mm, focus {}, "
-      "{:.1f} x {:.1f} mm film, aperture {}{}",
-      lens.prescription().name, lens.prescription().path, lens_.paraxial.effective_focal_length_mm,
-      lens_.paraxial.f_number, lens.filmDistance_mm(),
-      std::isinf(lens_.focus_distance_m) ? std::string("at infinity")
-                                         : fmt::format("{:.4g} m", lens_.focus_distance_m),
-      2 * half_width_mm_, 2 * half_height_mm_, settings_.aperture.describe(),
-      dispersive_ ? fmt::format(", dispersive (focused at {:.2f} nm; hero wavelength only)",
-                                lens.wavelength_nm())
-                  : std::string()) +
+             "realistic: {} ({}), f = {:.2f} mm, f/{:.2f}, film distance {:.3f} mm, focus {}, "
+             "{:.1f} x {:.1f} mm film, aperture {}{}",
+             lens.prescription().name, lens.prescription().path,
+             lens_.paraxial.effective_focal_length_mm, lens_.paraxial.f_number,
+             lens.filmDistance_mm(),
+             std::isinf(lens_.focus_distance_m) ? std::string("at infinity")
+                                                : fmt::format("{:.4g} m", lens_.focus_distance_m),
+             2 * half_width_mm_, 2 * half_height_mm_, settings_.aperture.describe(),
+             dispersive_ ? fmt::format(", dispersive (focused at {:.2f} nm; hero wavelength only)",
+                                       lens.wavelength_nm())
+                         : std::string()) +
          fmt::format("; exit-pupil bound: {} traces, {:.3f} s, {} radial intervals{}{}",
                      pupil_->tracesAtBuild(), pupil_->buildSeconds(), pupil_->intervals(),
                      pupil_->rotationallySymmetric() ? "" : ", 2-D (anamorphic)",
-                     pupil_->bands() > 0
-                         ? fmt::format(", {} wavelength bands", pupil_->bands())
-                         : std::string());
+                     pupil_->bands() > 0 ? fmt::format(", {} wavelength bands", pupil_->bands())
+                                         : std::string());
 }
 
 std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,

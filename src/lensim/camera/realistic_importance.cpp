@@ -105,8 +105,7 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
   thread_local std::vector<Vec3f> path;
   path.clear();
   const optics::TraceResultT<float> r = tracer.traceFromScene(
-      optics::RayT<float>{Vec3f(o), Vec3f(d_lens)}, {},
-      front_hit || front_out ? &path : nullptr);
+      optics::RayT<float>{Vec3f(o), Vec3f(d_lens)}, {}, front_hit || front_out ? &path : nullptr);
   if (!r.ok()) return std::nullopt;
   if (front_out) {
     if (path.size() < 2) return std::nullopt;
@@ -214,22 +213,22 @@ void RealisticCamera::buildFrontBounds() const {
       cs.film_raster = {x0 + (i + 0.5) / kFilm * (x1 - x0), y0 + (j + 0.5) / kFilm * (y1 - y0)};
       const Vec2 film = filmPoint(cs.film_raster);
       for (int a = 0; a < kPupil * kPupil; ++a) {
-          // The R2 low-discrepancy sequence (Roberts 2018) over all the rays: every film point
-          // gets other pupil points.
-          const double n = double((i * kFilm + j) * kPupil * kPupil + a);
-          const Vec2 u{std::fmod(0.5 + n * 0.7548776662466927, 1.0),
-                       std::fmod(0.5 + n * 0.5698402909980532, 1.0)};
-          const std::optional<FilmRay> f = filmRay(cs, film, pupil_->sample(film, u));
-          if (!f) continue;
-          const optics::TraceResultT<float> r = lens.tracerFloat().traceFromFilm(f->ray);
-          if (!r.ok()) continue;
-          const Vec3 p{r.ray.origin}, w = -normalize(Vec3{r.ray.direction});
-          if (!(w.z > 0)) continue;
-          const int k = int(std::acos(std::min(1.0, w.z)) / t.step_rad);
-          if (k >= kBins) continue;
-          const double phi = std::atan2(w.y, w.x), c = std::cos(phi), sn = std::sin(phi);
-          pts[size_t(k)].push_back({p.x * c + p.y * sn, -p.x * sn + p.y * c});
-        }
+        // The R2 low-discrepancy sequence (Roberts 2018) over all the rays: every film point
+        // gets other pupil points.
+        const double n = double((i * kFilm + j) * kPupil * kPupil + a);
+        const Vec2 u{std::fmod(0.5 + n * 0.7548776662466927, 1.0),
+                     std::fmod(0.5 + n * 0.5698402909980532, 1.0)};
+        const std::optional<FilmRay> f = filmRay(cs, film, pupil_->sample(film, u));
+        if (!f) continue;
+        const optics::TraceResultT<float> r = lens.tracerFloat().traceFromFilm(f->ray);
+        if (!r.ok()) continue;
+        const Vec3 p{r.ray.origin}, w = -normalize(Vec3{r.ray.direction});
+        if (!(w.z > 0)) continue;
+        const int k = int(std::acos(std::min(1.0, w.z)) / t.step_rad);
+        if (k >= kBins) continue;
+        const double phi = std::atan2(w.y, w.x), c = std::cos(phi), sn = std::sin(phi);
+        pts[size_t(k)].push_back({p.x * c + p.y * sn, -p.x * sn + p.y * c});
+      }
     }
   t.centre.assign(kBins, 0.0);
   t.radius.assign(kBins, -1.0);

@@ -27,12 +27,12 @@
 
 #include <fmt/format.h>
 
+#include "lensim/io/oiio_module.h"
 #include "lensim/util/error.h"
 #include "lensim/util/file.h"
 #include "lensim/util/limits.h"
 #include "lensim/util/log.h"
 #include "lensim/util/text.h"
-#include "lensim/io/oiio_module.h"
 
 namespace lensim::io {
 
@@ -225,11 +225,14 @@ void checkExrHeader(const std::string& path) {
   // their own size, a channel list runs to its empty name; strings, vectors, previews and unknown
   // types allocate what they claim. Follow it the same way.
   static const std::map<std::string, size_t> fixed = {
-      {"box2i", 16}, {"box2f", 16}, {"compression", 1}, {"lineOrder", 1}, {"float", 4},
-      {"double", 8}, {"int", 4}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16}, {"v3i", 12}, {"v3f", 12},
-      {"v3d", 24}, {"m33f", 36}, {"m44f", 64}, {"m33d", 72}, {"m44d", 128},
-      {"chromaticities", 32}, {"envmap", 1}, {"keycode", 28}, {"timecode", 8}, {"rational", 8},
-      {"tiledesc", 9}, {"deepImageState", 1}};
+      {"box2i", 16},    {"box2f", 16},   {"compression", 1},
+      {"lineOrder", 1}, {"float", 4},    {"double", 8},
+      {"int", 4},       {"v2i", 8},      {"v2f", 8},
+      {"v2d", 16},      {"v3i", 12},     {"v3f", 12},
+      {"v3d", 24},      {"m33f", 36},    {"m44f", 64},
+      {"m33d", 72},     {"m44d", 128},   {"chromaticities", 32},
+      {"envmap", 1},    {"keycode", 28}, {"timecode", 8},
+      {"rational", 8},  {"tiledesc", 9}, {"deepImageState", 1}};
   for (int header = 0; header < 1000; ++header) {
     for (;;) {
       const std::string name = cstring("attribute name");
@@ -249,10 +252,11 @@ void checkExrHeader(const std::string& path) {
           pos += 16;  // pixel type, pLinear, reserved, x and y sampling
         }
       } else if (type == "preview") {
-        const int64_t w = static_cast<uint32_t>(int32At(pos)), h = static_cast<uint32_t>(int32At(pos + 4));
+        const int64_t w = static_cast<uint32_t>(int32At(pos)),
+                      h = static_cast<uint32_t>(int32At(pos + 4));
         if (w * h * 4 > static_cast<int64_t>(n - pos))
-          fail(path, fmt::format("bad EXR header: a {}x{} preview image in a {}-byte file", w, h,
-                                 n));
+          fail(path,
+               fmt::format("bad EXR header: a {}x{} preview image in a {}-byte file", w, h, n));
         pos += 8 + static_cast<size_t>(w * h * 4);
       } else {
         pos += static_cast<size_t>(size);  // string, stringvector, floatvector, unknown types
@@ -278,7 +282,8 @@ std::map<std::string, std::string> exrStringAttributes(const std::string& path) 
 
 // ---------------------------------------------------------------------------------------------
 // The OpenImageIO module, loaded on first use (see oiio_module.h). Looked for in
-// $LENSIM_OIIO_MODULE, beside the executable, in ../lib/lensim from it, and where this build put it.
+// $LENSIM_OIIO_MODULE, beside the executable, in ../lib/lensim from it, and where this build put
+// it.
 
 const oiio::Api& oiioApi() {
   static const oiio::Api* api = nullptr;
@@ -291,7 +296,8 @@ const oiio::Api& oiioApi() {
     const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
     if (!ec) {
       candidates.push_back((exe.parent_path() / "liblensim_oiio.so").string());
-      candidates.push_back((exe.parent_path() / ".." / "lib" / "lensim" / "liblensim_oiio.so").string());
+      candidates.push_back(
+          (exe.parent_path() / ".." / "lib" / "lensim" / "liblensim_oiio.so").string());
     }
 #ifdef LENSIM_OIIO_MODULE_PATH
     candidates.push_back(LENSIM_OIIO_MODULE_PATH);
@@ -404,9 +410,8 @@ Image readWithOiio(const std::string& path, const ImageReadOptions& options) {
   if (w64 <= 0 || h64 <= 0 || nc <= 0 || w64 > 1000000 || h64 > 1000000 || nc > 4096)
     fail(path, fmt::format("bad image size {}x{} with {} channels", w64, h64, nc));
   const int w = static_cast<int>(w64), h = static_cast<int>(h64);
-  const bool any_uint32 =
-      std::find(spec.channel_is_uint32.begin(), spec.channel_is_uint32.end(), true) !=
-      spec.channel_is_uint32.end();
+  const bool any_uint32 = std::find(spec.channel_is_uint32.begin(), spec.channel_is_uint32.end(),
+                                    true) != spec.channel_is_uint32.end();
 
   // Names and order in the Image; `from[i]`: the file channel of Image channel i.
   std::vector<std::string> names;
@@ -418,8 +423,7 @@ Image readWithOiio(const std::string& path, const ImageReadOptions& options) {
           std::find(spec.channel_names.begin(), spec.channel_names.end(), names[i]) -
           spec.channel_names.begin());
   } else {
-    names = colorChannelNames(static_cast<int>(nc),
-                              spec.alpha_channel == nc - 1 && nc != 3);
+    names = colorChannelNames(static_cast<int>(nc), spec.alpha_channel == nc - 1 && nc != 3);
     for (int i = 0; i < nc; ++i) from[i] = i;
   }
   bool identity = true;
@@ -496,8 +500,7 @@ Image readWithOiio(const std::string& path, const ImageReadOptions& options) {
 void writePfm(const std::string& path, const std::string& report_as, const Image& image,
               const std::vector<int>& source) {
   const int nc = static_cast<int>(source.size());
-  std::string out = fmt::format("{}\n{} {}\n{}\n", nc == 3 ? "PF" : "Pf", image.width,
-                                image.height,
+  std::string out = fmt::format("{}\n{} {}\n{}\n", nc == 3 ? "PF" : "Pf", image.width, image.height,
                                 std::endian::native == std::endian::little ? "-1" : "1");
   const size_t header = out.size();
   out.resize(header + static_cast<size_t>(image.width) * image.height * nc * sizeof(float));
@@ -547,8 +550,8 @@ void writeWithOiio(const std::string& path, const std::string& report_as, const 
   spec.type = eight_bit ? oiio::PixelType::UInt8
               : sixteen ? oiio::PixelType::UInt16
                         : oiio::PixelType::Float;
-  spec.channel_names =
-      colour_channels == 1 ? std::vector<std::string>{"Y"} : std::vector<std::string>{"R", "G", "B"};
+  spec.channel_names = colour_channels == 1 ? std::vector<std::string>{"Y"}
+                                            : std::vector<std::string>{"R", "G", "B"};
   if (layout.has_alpha) {
     spec.channel_names.push_back("A");
     spec.alpha_channel = spp - 1;
@@ -570,8 +573,8 @@ void writeWithOiio(const std::string& path, const std::string& report_as, const 
         const float clamped = std::clamp(std::isnan(v) ? 0.0f : v, 0.0f, 1.0f);
         if (eight_bit) {
           const bool alpha = layout.has_alpha && c == spp - 1;
-          u8[i] = static_cast<uint8_t>(
-              std::lround((alpha ? clamped : linearToSrgb(clamped)) * 255.0f));
+          u8[i] =
+              static_cast<uint8_t>(std::lround((alpha ? clamped : linearToSrgb(clamped)) * 255.0f));
         } else if (sixteen) {
           u16[i] = static_cast<uint16_t>(std::lround(clamped * 65535.0f));
         } else {
@@ -606,8 +609,7 @@ Image readImage(const std::string& path, const ImageReadOptions& options) {
   size_t bad = 0;
   for (float& v : image.pixels)
     if (!std::isfinite(v)) v = 0, ++bad;
-  if (bad)
-    logWarning(fmt::format("{}: {} NaN or infinite pixel values read as 0", path, bad));
+  if (bad) logWarning(fmt::format("{}: {} NaN or infinite pixel values read as 0", path, bad));
   return image;
 }
 

@@ -58,7 +58,8 @@ void* openImage(const std::string& path, Spec* out, std::string* error) {
   out->channel_names.assign(s.channelnames.begin(), s.channelnames.end());
   out->channel_is_uint32.assign(s.nchannels, false);
   for (int c = 0; c < s.nchannels; ++c) {
-    const TypeDesc t = c < static_cast<int>(s.channelformats.size()) ? s.channelformats[c] : s.format;
+    const TypeDesc t =
+        c < static_cast<int>(s.channelformats.size()) ? s.channelformats[c] : s.format;
     out->channel_is_uint32[c] = t.basetype == TypeDesc::UINT32 || t.basetype == TypeDesc::INT32;
   }
   return in.release();
@@ -103,8 +104,7 @@ void closeImage(void* reader) {
   delete in;
 }
 
-bool writeImage(const std::string& path, const WriteSpec& w, const void* data,
-                std::string* error) {
+bool writeImage(const std::string& path, const WriteSpec& w, const void* data, std::string* error) {
   const TypeDesc type = typeOf(w.type);
   ImageSpec spec(w.width, w.height, static_cast<int>(w.channel_names.size()), type);
   spec.channelnames = w.channel_names;

@@ -21,11 +21,11 @@ struct Spec {
   int width = 0, height = 0, nchannels = 0;  ///< the data window
   int alpha_channel = -1;
   bool deep = false;
-  bool is_float = false;         ///< the widest channel type is floating point
-  int bytes_per_channel = 1;     ///< of the widest channel type
-  int bits_per_sample = 8;       ///< as stored (e.g. 8 for a palette PNG)
-  std::string format;            ///< "png", "openexr", "targa", "pnm", "hdr", "jpeg", ...
-  std::string color_space;       ///< oiio:ColorSpace, e.g. "sRGB", "Linear"
+  bool is_float = false;      ///< the widest channel type is floating point
+  int bytes_per_channel = 1;  ///< of the widest channel type
+  int bits_per_sample = 8;    ///< as stored (e.g. 8 for a palette PNG)
+  std::string format;         ///< "png", "openexr", "targa", "pnm", "hdr", "jpeg", ...
+  std::string color_space;    ///< oiio:ColorSpace, e.g. "sRGB", "Linear"
   std::vector<std::string> channel_names;
   std::vector<bool> channel_is_uint32;  ///< per channel: 32-bit integer (EXR UINT)
 };
@@ -36,8 +36,8 @@ struct WriteSpec {
   std::vector<std::string> channel_names;
   int alpha_channel = -1;
   PixelType type = PixelType::Float;
-  std::string color_space;   ///< "sRGB" for 8-bit output, empty otherwise
-  std::string compression;   ///< e.g. "zip", "jpeg:95"; empty for the format's default
+  std::string color_space;  ///< "sRGB" for 8-bit output, empty otherwise
+  std::string compression;  ///< e.g. "zip", "jpeg:95"; empty for the format's default
 };
 
 struct Api {

@@ -5,8 +5,8 @@
 
 #include <algorithm>
 #include <bit>
-#include <cmath>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <sstream>
@@ -186,7 +186,8 @@ std::string readGzFile(const std::string& path) {
     data.append(buf, static_cast<size_t>(n));
     if (static_cast<double>(data.size()) > budget) {
       gzclose(f);
-      checkMemory(static_cast<double>(data.size()) * 2, FileLoc{path}, "decompressing this PLY file");
+      checkMemory(static_cast<double>(data.size()) * 2, FileLoc{path},
+                  "decompressing this PLY file");
     }
   }
   gzclose(f);
@@ -267,9 +268,10 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
     for (const Element& e : elements) {
       const size_t per = std::max<size_t>(1, minElementBytes(e, format));
       if (e.count > body_bytes / per)
-        throw Error(fmt::format("{}: PLY element \"{}\" claims {} entries, but the file has only "
-                                "{} bytes of data (at least {} bytes an entry)",
-                                name, e.name, e.count, body_bytes, per));
+        throw Error(
+            fmt::format("{}: PLY element \"{}\" claims {} entries, but the file has only "
+                        "{} bytes of data (at least {} bytes an entry)",
+                        name, e.name, e.count, body_bytes, per));
     }
   }
   PlyMesh mesh;
@@ -315,9 +317,10 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
         }
         for (int k : {ix, iy, iz})
           if (!(std::abs(vals[static_cast<size_t>(k)]) <= kMaxSceneNumber))
-            throw Error(fmt::format("{}: vertex {} has a coordinate that is not a finite number "
-                                    "({})",
-                                    name, v, vals[static_cast<size_t>(k)]));
+            throw Error(
+                fmt::format("{}: vertex {} has a coordinate that is not a finite number "
+                            "({})",
+                            name, v, vals[static_cast<size_t>(k)]));
         mesh.positions.push_back(Vec3f(Vec3{vals[ix], vals[iy], vals[iz]}));
         if (normals) mesh.normals.push_back(Vec3f(Vec3{vals[inx], vals[iny], vals[inz]}));
         if (uvs) mesh.uvs.push_back({float(vals[iu]), float(vals[iv])});

@@ -52,8 +52,8 @@ AnamorphicData anamorphicData(const LensSystem& lens) {
     }
   };
   LensSystemOptions opts;
-  opts.film_distance_mm = lens.filmDistance_mm() > 0 ? std::optional(lens.filmDistance_mm())
-                                                       : std::nullopt;
+  opts.film_distance_mm =
+      lens.filmDistance_mm() > 0 ? std::optional(lens.filmDistance_mm()) : std::nullopt;
   if (lens.stopDiameter_mm()) opts.aperture_diameter_mm = lens.stopDiameter_mm();
   a.y = tryParaxial(lens);
   a.x = tryParaxial(LensSystem(xSection(lens.prescription()), opts));

@@ -316,13 +316,9 @@ void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double 
     if (!r.result.ok() && !pts.empty()) {
       auto [bx, by] = pts.back();
       doc.line(bx - 3, by - 3, bx + 3, by + 3,
-               {{"class", "block-mark"},
-                {"stroke", colour},
-                {"stroke-width", "1.5"}});
+               {{"class", "block-mark"}, {"stroke", colour}, {"stroke-width", "1.5"}});
       doc.line(bx - 3, by + 3, bx + 3, by - 3,
-               {{"class", "block-mark"},
-                {"stroke", colour},
-                {"stroke-width", "1.5"}});
+               {{"class", "block-mark"}, {"stroke", colour}, {"stroke-width", "1.5"}});
     }
   }
 

@@ -113,8 +113,8 @@ void checkSurface(const LensSurface& s, int index, int mirrors = 0) {
                                    "aperture {} mm)",
                                    index, s.aperture_diameter_mm / 2));
   if (s.ior < 1)
-    throw Error(s.loc, fmt::format("surface {}: index of refraction {} is not physical", index,
-                                   s.ior));
+    throw Error(s.loc,
+                fmt::format("surface {}: index of refraction {} is not physical", index, s.ior));
   if (s.semiAperture_mm() >= sagDomainRadius(s.radius_mm, s.shape))
     throw Error(s.loc, fmt::format("surface {}: semi-aperture {} mm exceeds the surface's "
                                    "extent",
@@ -235,8 +235,7 @@ LensPrescription parseIset(const json& j, std::string_view text, const std::stri
     s.aperture_diameter_mm = 2 * getNumber(e, "semi_aperture", s.loc, "surface");
     if (auto k = optNumber(e, "conic_constant", s.loc, "surface")) s.shape.conic = *k;
     if (s.radius_mm == 0) {
-      if (stop_seen)
-        throw Error(s.loc, "second aperture stop (radius 0)");
+      if (stop_seen) throw Error(s.loc, "second aperture stop (radius 0)");
       stop_seen = true;
     }
     checkSurface(s, int(i));
@@ -259,14 +258,13 @@ LensPrescription parseLentil(const json& db, std::string_view text, const std::s
   LensPrescription p;
   p.path = path;
   p.format = "lentil";
-  p.name = fmt::format("lentil {} {} {} {}", key, lens.value("company", ""),
-                       lens.value("product-name", ""),
-                       lens.contains("year") && lens["year"].is_number()
-                           ? std::to_string(lens["year"].get<int>())
-                           : std::string());
-  const char* elements_key =
-      lens.contains("optical-elements-adjusted") ? "optical-elements-adjusted"
-                                                 : "optical-elements-patent";
+  p.name = fmt::format(
+      "lentil {} {} {} {}", key, lens.value("company", ""), lens.value("product-name", ""),
+      lens.contains("year") && lens["year"].is_number() ? std::to_string(lens["year"].get<int>())
+                                                        : std::string());
+  const char* elements_key = lens.contains("optical-elements-adjusted")
+                                 ? "optical-elements-adjusted"
+                                 : "optical-elements-patent";
   // Locations: the element arrays of this design, found after the design's key in the text.
   size_t design_pos = text.find("\"" + key + "\"");
   std::vector<size_t> offs;
@@ -444,10 +442,11 @@ std::string writeLensJson(const LensPrescription& p) {
 }
 
 std::string writeLensDat(const LensPrescription& p) {
-  std::string out = fmt::format("# {}\n# converted by lensim from {} ({})\n", p.name, p.path,
-                                p.format);
-  out += "# radius thickness index aperture (mm; planes that are not the stop are written as "
-         "radius 1e9)\n";
+  std::string out =
+      fmt::format("# {}\n# converted by lensim from {} ({})\n", p.name, p.path, p.format);
+  out +=
+      "# radius thickness index aperture (mm; planes that are not the stop are written as "
+      "radius 1e9)\n";
   int stops = 0;
   for (size_t i = 0; i < p.surfaces.size(); ++i) {
     const LensSurface& s = p.surfaces[i];
@@ -471,8 +470,8 @@ std::string writeLensDat(const LensPrescription& p) {
     double radius = s.radius_mm;
     if (s.isStop()) {
       if (s.radius_mm != 0)
-        throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: the stop is curved",
-                                       i));
+        throw Error(s.loc,
+                    fmt::format("surface {} cannot be written to .dat: the stop is curved", i));
       if (s.ior != 1 && !(i > 0 && p.surfaces[i - 1].ior == s.ior))
         throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: the stop changes "
                                        "the medium",

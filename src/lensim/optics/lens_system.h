@@ -146,9 +146,9 @@ class LensTracer {
 
   std::vector<T> radius_, inv_radius_, z_, semi2_, inner2_, eta_before_, eta_after_;
   std::vector<std::uint8_t> is_stop_, is_mirror_, per_lane_;
-  bool reversed_ = false;                   // odd number of mirrors: image space unfolded
-  T z_unfold_ = 0;                          // 2 z_rear
-  std::vector<int> shape_index_;            // -1: spherical (the quadratic); else into shapes_
+  bool reversed_ = false;         // odd number of mirrors: image space unfolded
+  T z_unfold_ = 0;                // 2 z_rear
+  std::vector<int> shape_index_;  // -1: spherical (the quadratic); else into shapes_
   std::vector<ShapeIntersector> shapes_;
 };
 

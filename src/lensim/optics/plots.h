@@ -19,10 +19,10 @@ struct SpotField {
   /// Indices into points_mm of a coarser hexapolar pattern (every `step`-th ring and ray), for
   /// drawing: the full set is thousands of points.
   std::vector<int> display;
-  Vec2 centroid_mm;             ///< centroid on the film
+  Vec2 centroid_mm;  ///< centroid on the film
   double rms_radius_mm = 0;
   int rays_traced = 0;
-  int rings = 0;                ///< hexapolar rings across the pupil circle
+  int rings = 0;  ///< hexapolar rings across the pupil circle
 };
 
 /// Spot diagrams at fractions of the film half-diagonal, for the lens's current focus and stop.

@@ -165,7 +165,8 @@ LensPrescription parseLensPrescription(std::string_view text, const std::string&
       continue;
     }
     if (p.surfaces.size() >= kMaxLensSurfaces)
-      throw Error(loc, fmt::format("too many surfaces: at most {} rows are read", kMaxLensSurfaces));
+      throw Error(loc,
+                  fmt::format("too many surfaces: at most {} rows are read", kMaxLensSurfaces));
     if (cols.size() < 4 || cols.size() > 6)
       throw Error(loc, fmt::format("expected 4 numbers (radius, thickness, index of refraction, "
                                    "aperture diameter), optionally followed by the Abbe number "

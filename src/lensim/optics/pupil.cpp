@@ -77,705 +77,709 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // same state (no search hints carried over from another task), so that the bounds do not
   // depend on how the tasks are scheduled.
   struct Work {
-    std::vector<Polygon> initial;                                // stage 0
-    std::vector<std::vector<Polygon>> refined;                   // stage 1, per interval
+    std::vector<Polygon> initial;               // stage 0
+    std::vector<std::vector<Polygon>> refined;  // stage 1, per interval
     std::vector<std::vector<std::vector<double>>> refined_scales;
-    std::vector<Polygon> done;                                   // all nodes, by radius
-    std::vector<std::vector<double>> scales;                     // per interval
-    std::vector<std::vector<Polygon>> band_nodes;                // stage 2
-    std::vector<Sector> sets;                                    // stage 3
+    std::vector<Polygon> done;                     // all nodes, by radius
+    std::vector<std::vector<double>> scales;       // per interval
+    std::vector<std::vector<Polygon>> band_nodes;  // stage 2
+    std::vector<Sector> sets;                      // stage 3
   };
   std::vector<Work> work(static_cast<size_t>(n_sectors));
   std::atomic<long> traces_total{0};
   auto buildSector = [&](int sec, int stage, int k0, int k1) {
-  Work& w = work[size_t(sec)];
-  long traces = 0;
-  std::vector<double> az;  // anamorphic: the film azimuth whose regions count
-  // The margin of a rear-plane point: the ray from the film point toward it, traced without
-  // clipping, and the largest ratio of a hit's distance from the axis to that surface's clear
-  // semi-aperture (and of the point's to the rear disc's radius); infinite where the ray misses
-  // a surface or is totally reflected. The ray gets through (the clipped trace) exactly where
-  // the margin is <= 1, and the margin varies continuously across the rear plane, so that a
-  // boundary is found by the secant method (a few traces) rather than by bisection (~9), and a
-  // sliver of region by minimising it rather than by a blind grid.
-  std::vector<Vec3> path;
-  auto margin1 = [&](const LensSystem& L, Vec2 film, Vec2 a) {
-    double m2 = disc2 > 0 ? (a.x * a.x + a.y * a.y) / disc2 : 0.0;
-    if (m2 > 1) return std::sqrt(m2);  // outside the rear disc: no trace needed
-    ++traces;
-    path.clear();
-    const TraceResult r = L.traceFromFilmPoint(film, a, TraceOptions{.clip_apertures = false},
-                                               &path);
-    if (r.reason == BlockReason::Miss) return kInf;
-    const std::vector<Interface>& ifs = L.interfaces();
-    const int n = static_cast<int>(ifs.size());
-    // path[0] is the film point, path[k] the hit on surface n - k. Where the ray goes into a
-    // rarer medium, sin^2 of its refracted angle counts too (>= 1: total internal reflection),
-    // so that a boundary set by total internal reflection is no jump either.
-    for (size_t k = 1; k < path.size() && int(k) <= n; ++k) {
-      const Interface& in = ifs[size_t(n - int(k))];
-      const Vec3 q = path[k];
-      const double semi = in.semi_aperture_mm;
-      const double r2 = q.x * q.x + q.y * q.y;
-      m2 = std::max(m2, semi > 0 ? r2 / (semi * semi) : (r2 > 0 ? kInf : 0.0));
-      if (in.ior_after > in.ior_before) {
-        Vec3 normal{0, 0, -1};
-        if (!in.shape.isSpherical()) {
-          const std::optional<SagGradient> sg = surfaceSag(in.radius_mm, in.shape, q.x, q.y);
-          if (!sg) continue;
-          normal = normalize(Vec3{sg->dzdx, sg->dzdy, -1});
-        } else if (in.radius_mm != 0) {
-          normal = Vec3{q.x, q.y, q.z - in.z_mm - in.radius_mm} * (1 / in.radius_mm);
-        }
-        const double cos_i = dot(normalize(q - path[k - 1]), normal);
-        const double eta = in.ior_after / in.ior_before;
-        m2 = std::max(m2, eta * eta * std::max(0.0, 1 - cos_i * cos_i));
-      }
-    }
-    return std::sqrt(m2);
-  };
-  // The lens's margin; where it blocks, the least over the other wavelengths' lenses too (the
-  // bound holds the union of their regions). <= 1 exactly where some lens lets the ray through.
-  // The lenses whose regions count (the first traced first): the lens and also_cover while
-  // building the lens's own bound; a band's lenses, or one of them, while re-solving a band's.
-  std::vector<const LensSystem*> cur{&lens};
-  cur.insert(cur.end(), opts.also_cover.begin(), opts.also_cover.end());
-  auto marginCover = [&](Vec2 film, Vec2 a) {
-    double m = margin1(*cur[0], film, a);
-    if (m <= 1) return m;
-    for (size_t i = 1; i < cur.size(); ++i) m = std::min(m, margin1(*cur[i], film, a));
-    return m;
-  };
-  // The checks of a polygon (below) use the azimuths half-way between the polygon's own, so
-  // that the regions of film points between them are covered too.
-  int last_az = 0;  // the azimuth that passed last: neighbouring points usually pass there too
-  auto margin = [&](double h, Vec2 a) {
-    if (rotational_) return marginCover({h, 0}, a);
-    const int n_az = static_cast<int>(az.size());
-    double best = kInf;
-    for (int i = 0; i < n_az; ++i) {
-      const int k = (last_az + i) % n_az;
-      const double phi = az[size_t(k)];
-      const double ca = std::cos(phi), sa = std::sin(phi);
-      const double m = marginCover({h * ca, h * sa}, toFilmAzimuth(a, h, ca, sa));
-      if (m <= 1) {
-        last_az = k;
-        return m;
-      }
-      best = std::min(best, m);
-    }
-    return best;
-  };
-  auto passes = [&](double h, Vec2 a) { return margin(h, a) <= 1; };
-  // Distance from c (inside the region) to the region's boundary along u: the first blocked
-  // point, with a passing point within 1e-3 relative before it. From a guess (usually the
-  // neighbouring direction's distance, within a few percent), secant steps on the margin
-  // (started with the slope found at the last boundary) aim a hair past the root on the side
-  // not yet pinned, so that two or three traces usually close the bracket; bisection (or
-  // geometric steps while one side is open) where a secant step falls outside the bracket or
-  // fails to halve it.
-  // accept > 0: a blocked point whose margin says that the boundary lies within `accept`
-  // (relative) before it ends the search without a passing point next to it (one or two traces
-  // where the guess is good, as in the wavelength bands, whose boundaries are near the lens's
-  // own). It is still a blocked point, so that the region (star-shaped about c, as everywhere
-  // here) ends before it: the bound holds it as before, only the overshoot grows (up to
-  // `accept`, estimated from the margin's slope; an underestimate costs waste, not rays).
-  double slope_hint = 0;  // d(margin)/ds at the last boundary
-  double accept_slope = 0;  // accept > 0: d(margin)/ds along u measured before, or 0
-  double last_slope = 0;    // the last search's latest two traces' slope (0: none)
-  auto boundary = [&](double h, Vec2 c, Vec2 u, double guess, double accept = 0) {
-    constexpr double tol = 1e-3;
-    double lo = 0, glo = kInf, hi = kInf, ghi = kInf;
-    double s0 = 0, g0 = kInf, s1 = 0, g1 = kInf;  // the two latest evaluations
-    auto eval = [&](double s) {
-      const double g = margin(h, c + u * s);
-      s0 = s1, g0 = g1, s1 = s, g1 = g;
-      if (g <= 1) {
-        if (s > lo) lo = s, glo = g;
-      } else if (s < hi) {
-        hi = s, ghi = g;
-      }
-    };
-    eval(std::max(guess, 1e-6 * rr));
-    // With a good guess (accept > 0) the steps while one side is open start small, and a
-    // bracket as narrow as `accept` ends the search too (where the margin jumps to infinity at
-    // the boundary, a ray missing a surface, it has no slope to accept by).
-    double f = accept > 0 ? 2 * accept : 1.0 / 16;
-    const double tol_end = std::max(tol, accept);
-    double last_width = kInf;
-    bool force_bisect = false;
-    for (int it = 0; it < 80; ++it) {
-      if (hi < kInf && hi - lo <= tol_end * hi) break;
-      if (accept > 0 && hi < kInf && s1 == hi && std::isfinite(ghi)) {
-        // The slope from the two latest traces along u, else the one measured along u for
-        // the neighbouring wavelength (accept_slope).
-        const double sl = std::isfinite(g0) && s0 != s1 ? (g1 - g0) / (s1 - s0) : accept_slope;
-        if (sl > 0 && std::isfinite(sl) && ghi - 1 <= sl * accept * hi) break;
-      }
-      if (hi == kInf && lo >= 4 * rr) return lo;  // beyond any real region: give up there
-      if (lo == 0 && hi <= 1e-9 * rr) return hi;  // the region has no extent along u
-      double x = std::numeric_limits<double>::quiet_NaN();
-      if (!force_bisect) {
-        if (std::isfinite(g0) && std::isfinite(g1) && g1 != g0 && s1 != s0)
-          x = s1 + (1 - g1) * (s1 - s0) / (g1 - g0);
-        else if (std::isfinite(g1) && slope_hint > 0)
-          x = s1 + (1 - g1) / slope_hint;
-        // Aim a hair toward the bracket's far end, so that the near one stays and the far one
-        // moves to within the tolerance.
-        if (std::isfinite(x)) {
-          if (accept > 0)  // aim at the blocked side, within reach of acceptance
-            x += 0.5 * accept * std::abs(x);
-          else
-            x += (hi - x <= x - lo ? -0.4 : 0.4) * tol * std::abs(x);
-        }
-      }
-      force_bisect = false;
-      if (hi < kInf && lo > 0) {
-        if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
-      } else if (hi < kInf) {  // nothing passing found along u yet
-        if (!(x > 0 && x < hi) || (accept > 0 && x < hi / (1 + f))) x = hi / (1 + f), f *= 2;
-      } else {  // nothing blocked yet
-        if (!(x > lo) || (accept > 0 && x > lo * (1 + f))) x = lo * (1 + f), f *= 2;
-        x = std::min(x, 2 * lo + 1e-6 * rr);
-      }
-      eval(x);
-      // A secant step that does not halve the bracket twice running gives way to bisection.
-      if (hi < kInf && lo > 0) {
-        const double w = hi - lo;
-        if (w > 0.5 * last_width) force_bisect = true;
-        last_width = w;
-      }
-    }
-    if (std::isfinite(glo) && std::isfinite(ghi) && hi > lo && ghi > glo)
-      slope_hint = (ghi - glo) / (hi - lo);
-    last_slope = std::isfinite(g0) && std::isfinite(g1) && s0 != s1 && (g1 - g0) / (s1 - s0) > 0
-                     ? (g1 - g0) / (s1 - s0)
-                     : 0.0;
-    return hi;
-  };
-  // Boundary points of the region at film radius h, seen from a point inside it, in `count`
-  // directions starting at angle `offset`. Empty if the film point sees nothing.
-  // A point inside the region at film radius h: the neighbour's centre or the real chief ray,
-  // else (near the edge of the image circle, where the region is tiny) the least margin around
-  // a neighbour's polygon: the best point of a coarse grid, then a pattern search.
-  auto findInside = [&](double h, const Polygon* hint) -> std::optional<Vec2> {
-    // The neighbouring polygon's centre usually lies inside; the real chief ray's search costs
-    // many traces.
-    if (hint && !hint->empty && passes(h, hint->centre)) return hint->centre;
-    std::optional<Vec2> c = passingRearAim(lens, p, h);
-    if (c && passes(h, *c)) return c;
-    if (!hint || hint->empty) return std::nullopt;
-    const double reach = 1.5 * *std::max_element(hint->radius.begin(), hint->radius.end());
-    // The margin on a coarse grid; then pattern searches from its three least points (the
-    // region can be a thin crescent whose least margin lies off one search's path).
-    constexpr int kGrid = 9;
-    std::vector<std::pair<double, Vec2>> starts;
-    for (int iy = 0; iy < kGrid; ++iy)
-      for (int ix = 0; ix < kGrid; ++ix) {
-        const Vec2 a = hint->centre + Vec2{reach * (2.0 * (ix + 0.5) / kGrid - 1),
-                                           reach * (2.0 * (iy + 0.5) / kGrid - 1)};
-        const double g = margin(h, a);
-        if (g <= 1) return a;
-        starts.push_back({g, a});
-      }
-    std::partial_sort(starts.begin(), starts.begin() + 3, starts.end(),
-                      [](const auto& x, const auto& y) { return x.first < y.first; });
-    double g_least = kInf;
-    for (int st = 0; st < 3 && std::isfinite(starts[size_t(st)].first); ++st) {
-      auto [g_best, best] = starts[size_t(st)];
-      // The margin is the largest of a few smooth functions (one per limiting surface): its
-      // minimum often lies on a ridge where two of them are equal, so the search tries 16
-      // directions before halving its step.
-      constexpr int kDirs = 16;
-      double step = reach / kGrid;
-      for (int it = 0; it < 400 && step > 1e-4 * reach; ++it) {
-        bool moved = false;
-        double rise = 0;  // the most the margin rose over the probes around `best`
-        for (int k = 0; k < kDirs; ++k) {
-          const Vec2 q = best + unit(2 * std::numbers::pi * k / kDirs) * step;
-          const double g = margin(h, q);
-          if (g <= 1) return q;
-          if (g < g_best) {
-            // A descent too slow to reach 1 within the iterations left (even at twice the
-            // pace) ends the search where it would have ended anyway.
-            const double fell = g_best - g;
-            best = q, g_best = g, moved = true;
-            if (g_best - 1 > 2 * (400 - it) * fell) it = 400;
-            break;
+    Work& w = work[size_t(sec)];
+    long traces = 0;
+    std::vector<double> az;  // anamorphic: the film azimuth whose regions count
+    // The margin of a rear-plane point: the ray from the film point toward it, traced without
+    // clipping, and the largest ratio of a hit's distance from the axis to that surface's clear
+    // semi-aperture (and of the point's to the rear disc's radius); infinite where the ray misses
+    // a surface or is totally reflected. The ray gets through (the clipped trace) exactly where
+    // the margin is <= 1, and the margin varies continuously across the rear plane, so that a
+    // boundary is found by the secant method (a few traces) rather than by bisection (~9), and a
+    // sliver of region by minimising it rather than by a blind grid.
+    std::vector<Vec3> path;
+    auto margin1 = [&](const LensSystem& L, Vec2 film, Vec2 a) {
+      double m2 = disc2 > 0 ? (a.x * a.x + a.y * a.y) / disc2 : 0.0;
+      if (m2 > 1) return std::sqrt(m2);  // outside the rear disc: no trace needed
+      ++traces;
+      path.clear();
+      const TraceResult r =
+          L.traceFromFilmPoint(film, a, TraceOptions{.clip_apertures = false}, &path);
+      if (r.reason == BlockReason::Miss) return kInf;
+      const std::vector<Interface>& ifs = L.interfaces();
+      const int n = static_cast<int>(ifs.size());
+      // path[0] is the film point, path[k] the hit on surface n - k. Where the ray goes into a
+      // rarer medium, sin^2 of its refracted angle counts too (>= 1: total internal reflection),
+      // so that a boundary set by total internal reflection is no jump either.
+      for (size_t k = 1; k < path.size() && int(k) <= n; ++k) {
+        const Interface& in = ifs[size_t(n - int(k))];
+        const Vec3 q = path[k];
+        const double semi = in.semi_aperture_mm;
+        const double r2 = q.x * q.x + q.y * q.y;
+        m2 = std::max(m2, semi > 0 ? r2 / (semi * semi) : (r2 > 0 ? kInf : 0.0));
+        if (in.ior_after > in.ior_before) {
+          Vec3 normal{0, 0, -1};
+          if (!in.shape.isSpherical()) {
+            const std::optional<SagGradient> sg = surfaceSag(in.radius_mm, in.shape, q.x, q.y);
+            if (!sg) continue;
+            normal = normalize(Vec3{sg->dzdx, sg->dzdy, -1});
+          } else if (in.radius_mm != 0) {
+            normal = Vec3{q.x, q.y, q.z - in.z_mm - in.radius_mm} * (1 / in.radius_mm);
           }
-          rise = std::max(rise, g - g_best);
-        }
-        if (moved) continue;
-        // No probe went down: the least margin near `best` lies within a step of it, and the
-        // margin changes by about `rise` over a step; where that cannot bring it down to 1 (by
-        // twice over), smaller steps cannot either: this start has no passing point near it.
-        if (step < reach / (4 * kGrid) && g_best - 1 > 2 * rise) break;
-        step *= 0.5;
-      }
-      g_least = std::min(g_least, g_best);
-    }
-    // Against the rear disc's hard edge the crescent can be thinner still: where the margin
-    // came within 2% of passing, a fine grid as well (fine enough to find slivers a hundredth of
-    // the neighbour's size), as the bounds of the CS348B set-ups need (tests/optics_pupil_test).
-    if (disc2 == 0 || g_least > 1.02) return std::nullopt;
-    for (int grid : {24, 96})
-      for (int iy = 0; iy < grid; ++iy)
-        for (int ix = 0; ix < grid; ++ix) {
-          const Vec2 a = hint->centre + Vec2{reach * (2.0 * (ix + 0.5) / grid - 1),
-                                             reach * (2.0 * (iy + 0.5) / grid - 1)};
-          if (passes(h, a)) return a;
-        }
-    return std::nullopt;
-  };
-  // Whether the checks of a polygon start their searches at its edges (not for an anamorphic
-  // wedge's blended polygon, which the true region at the wedge's middle leaves by more).
-  bool hint_guesses = true;
-  auto boundaryPoints = [&](double h, int count, double offset, Vec2* centre_out,
-                            const Polygon* hint) {
-    std::vector<Vec2> pts;
-    std::optional<Vec2> c = findInside(h, hint);
-    if (!c) return pts;
-    // Move toward the middle of the region (the found point may lie near its edge, where the
-    // chief ray is vignetted): the centre of a coarse ring of boundary points, twice. Not for
-    // the check points of a polygon whose own centre lies inside the region: they are measured
-    // from that centre, at the directions half-way between the polygon's (a third of a check's
-    // traces saved).
-    const bool from_hint = !centre_out && hint && !hint->empty && c->x == hint->centre.x &&
-                           c->y == hint->centre.y;
-    // Each boundary search starts from the last one's distance (the neighbour's polygon's
-    // size for the first).
-    double guess = 0.1 * rr;
-    if (hint && !hint->empty) {
-      guess = 0;
-      for (double v : hint->radius) guess += v / nd;
-    }
-    for (int it = 0; it < (from_hint ? 0 : 2); ++it) {
-      Vec2 lo_pt{1e300, 1e300}, hi_pt{-1e300, -1e300};
-      for (int j = 0; j < 12; ++j) {
-        const Vec2 u = unit(2 * std::numbers::pi * j / 12);
-        guess = boundary(h, *c, u, guess);
-        const Vec2 q = *c + u * guess;
-        lo_pt = {std::min(lo_pt.x, q.x), std::min(lo_pt.y, q.y)};
-        hi_pt = {std::max(hi_pt.x, q.x), std::max(hi_pt.y, q.y)};
-      }
-      const Vec2 mid = (lo_pt + hi_pt) * 0.5;
-      if (!passes(h, mid)) break;
-      c = mid;
-    }
-    if (centre_out) *centre_out = *c;
-    // Where a neighbouring polygon is at hand, each search starts at its edge along u (seen
-    // from c): the region's boundary is usually within a percent of it, and the search accepts
-    // a blocked point the margin puts within kHintAccept of the boundary.
-    constexpr double kHintAccept = 1e-3;
-    const bool use_hint = from_hint && hint_guesses;
-    for (int j = 0; j < count; ++j) {
-      const Vec2 u = unit(offset + 2 * std::numbers::pi * j / count);
-      double reach = 0;
-      if (use_hint) {
-        // The farthest crossing of the ray c + t u with the hint polygon's edges.
-        const Vec2 d0 = *c - hint->centre;
-        for (int k = 0; k < nd; ++k) {
-          const Vec2 a = dirs_[size_t(k)] * hint->radius[size_t(k)];
-          const Vec2 b = dirs_[size_t((k + 1) % nd)] * hint->radius[size_t((k + 1) % nd)];
-          const Vec2 e = b - a;
-          const double den = cross2(u, e);
-          if (den == 0) continue;
-          const Vec2 w = a - d0;
-          const double t = cross2(w, e) / den, v = cross2(w, u) / den;
-          if (t > 0 && v >= 0 && v <= 1) reach = std::max(reach, t);
+          const double cos_i = dot(normalize(q - path[k - 1]), normal);
+          const double eta = in.ior_after / in.ior_before;
+          m2 = std::max(m2, eta * eta * std::max(0.0, 1 - cos_i * cos_i));
         }
       }
-      if (reach > 0) {
-        accept_slope = 0;
-        guess = boundary(h, *c, u, reach * (1 + 0.5 * kHintAccept), kHintAccept);
-      } else {
-        guess = boundary(h, *c, u, guess);
-      }
-      pts.push_back(*c + u * guess);
-    }
-    return pts;
-  };
-  // Widens the polygon until it contains the points: a point beyond the edge between vertices j
-  // and j+1 scales both vertices by the ratio, which scales that edge about the centre. Returns
-  // the per-vertex factors (1 where nothing reaches beyond).
-  auto coverFactors = [&](const Polygon& poly, const std::vector<Vec2>& pts) {
-    std::vector<double> f(nd, 1.0);
-    for (const Vec2& q : pts) {
-      const Vec2 d = q - poly.centre;
-      const double dist = std::hypot(d.x, d.y);
-      if (dist == 0) continue;
-      double ang = std::atan2(d.y, d.x);
-      if (ang < 0) ang += 2 * std::numbers::pi;
-      const int j = std::min(static_cast<int>(ang / dphi), nd - 1);
-      const int j1 = (j + 1) % nd;
-      const Vec2 a = unit(j * dphi) * poly.radius[j];
-      const Vec2 b = unit((j + 1) * dphi) * poly.radius[j1];
-      // Where the ray from the centre along d meets the edge a-b.
-      const Vec2 w = d * (1 / dist);
-      const double denom = cross2(b - a, w);
-      const double reach = denom != 0 ? cross2(b - a, a) / denom : 0;
-      const double need = reach > 0 ? dist / reach : 4.0;  // degenerate edge: be generous
-      f[j] = std::max(f[j], need);
-      f[j1] = std::max(f[j1], need);
-    }
-    return f;
-  };
-
-  // Boundary points that check a polygon (at the film azimuth being built).
-  auto checkPoints = [&](double h, double offset, const Polygon* hint) {
-    return boundaryPoints(h, nd, offset, nullptr, hint);
-  };
-  // A node: the region's polygon at radius h, checked at the half-way directions.
-  auto makeNode = [&](double h, const Polygon* hint) {
-    Polygon poly;
-    poly.r = h;
-    std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &poly.centre, hint);
-    if (pts.empty()) return poly;
-    poly.empty = false;
-    for (const Vec2& q : pts)
-      poly.radius.push_back(std::hypot(q.x - poly.centre.x, q.y - poly.centre.y));
-    const std::vector<double> f = coverFactors(poly, checkPoints(h, 0.5 * dphi, &poly));
-    poly.raw = poly.radius;
-    poly.node_f = f;
-    for (int j = 0; j < nd; ++j) poly.radius[j] *= f[j];
-    return poly;
-  };
-  auto area = [&](const Polygon& poly) {
-    if (poly.empty) return 0.0;
-    double sum = 0;
-    for (int j = 0; j < nd; ++j) sum += poly.radius[j] * poly.radius[(j + 1) % nd];
-    return 0.5 * sum * std::sin(dphi);
-  };
-
-  // Uniform nodes first; then each interval is checked half-way: the interpolated polygon must
-  // contain the true region there. Where it would have to grow by more than a few percent, or
-  // the region changes fast (at the edge of the image circle), the interval is split.
-  const double min_width = film_radius_mm / (ni * 16.0);
-  if (!rotational_) {
-    // The wedge edge's azimuth (a wedge's checks, stage 4, set their own).
-    az = {sec * wedge};
-    last_az = 0;
-  }
-  if (stage == 0) {
-    for (int k = 0; k <= ni; ++k)
-      w.initial.push_back(makeNode(film_radius_mm * k / ni, k > 0 ? &w.initial.back() : nullptr));
-    traces_total += traces;
-    return;
-  }
-  if (stage == 1) {
-  // The uniform interval k0: its nodes after its left end, and each sub-interval's scales.
-  std::vector<Polygon>& done = w.refined[size_t(k0)];
-  std::vector<std::vector<double>>& scales = w.refined_scales[size_t(k0)];
-  std::vector<Polygon> stack{w.initial[size_t(k0) + 1]};  // right ends still to process, nearest last
-  Polygon left = w.initial[size_t(k0)];
-  while (!stack.empty()) {
-    Polygon right = stack.back();
-    const double h = 0.5 * (left.r + right.r);
-    Polygon interp;
-    const bool any = interpolateBetween(left, right, h, interp);
-    std::vector<double> f(nd, 1.0);
-    bool split = false;
-    if (any) {
-      f = coverFactors(interp, checkPoints(h, 0.25 * dphi, &interp));
-      const double worst = *std::max_element(f.begin(), f.end());
-      const double a0 = area(left), a1 = area(right);
-      const bool fast = left.empty != right.empty || std::max(a0, a1) > 1.25 * std::min(a0, a1);
-      split = (worst > 1.03 || fast) && right.r - left.r > 2 * min_width;
-    }
-    if (split) {
-      stack.push_back(makeNode(h, left.empty ? &right : &left));
-      continue;
-    }
-    if (any && left.empty != right.empty) {
-      // At the edge of the image circle the region moves and vanishes within the interval:
-      // check it all across.
-      for (double t : {0.1, 0.3, 0.7, 0.9, 0.99}) {
-        const double ht = left.r + t * (right.r - left.r);
-        Polygon at;
-        interpolateBetween(left, right, ht, at);
-        const std::vector<double> g =
-            coverFactors(at, checkPoints(ht, 0.25 * dphi, &at));
-        for (int j = 0; j < nd; ++j) f[j] = std::max(f[j], g[j]);
-      }
-    }
-    // Where the region vanishes (the edge of the image circle) it changes shape fastest: triple
-    // the margin there.
-    // Anamorphic bounds cover several azimuths' regions at once and change shape faster: a
-    // wider margin.
-    const double base_margin = opts.margin;
-    const double margin = left.empty != right.empty ? 3 * base_margin : base_margin;
-    for (double& v : f) v *= 1 + margin;
-    scales.push_back(std::move(f));
-    done.push_back(right);
-    stack.pop_back();
-    left = right;
-  }
-  traces_total += traces;
-  return;
-  }  // stage 1
-  if (stage == 4) {
-    // Anamorphic: wedge `sec`'s blended polygon checked against the true region at its middle
-    // azimuth, at both edges' nodes and interval middles; the factors that widen it to hold the
-    // boundary points found, with the safety margin.
-    std::vector<double> rs;
-    for (int l : {sec, sec + 1})
-      for (const Interval& iv : sets_[0][size_t(l)].intervals)
-        rs.insert(rs.end(), {iv.r0, 0.5 * (iv.r0 + iv.r1), iv.r1});
-    std::sort(rs.begin(), rs.end());
-    std::vector<double> kept;
-    for (double r : rs)
-      if (kept.empty() || r - kept.back() > 0.25 * min_width) kept.push_back(r);
-    // Filled on the side: blended() must give the unwidened polygon while checking.
-    WedgeCheck wc;
-    std::vector<double> R(static_cast<size_t>(nd));
-    hint_guesses = false;
-    for (double h : kept) {
-      Polygon poly;
-      poly.r = h;
-      std::vector<double> f(size_t(nd), 1.0);
-      for (double sw : kWedgeChecks) {
-        if (!blended(0, sec, h, sw, poly.centre, R.data())) continue;
-        az = {(sec + sw) * wedge};
-        last_az = 0;
-        poly.empty = false;
-        poly.radius = R;
-        for (double off : {0.25, 0.75}) {
-          const std::vector<double> g =
-              coverFactors(poly, boundaryPoints(h, nd, off * dphi, nullptr, &poly));
-          for (int j = 0; j < nd; ++j) f[size_t(j)] = std::max(f[size_t(j)], g[size_t(j)]);
+      return std::sqrt(m2);
+    };
+    // The lens's margin; where it blocks, the least over the other wavelengths' lenses too (the
+    // bound holds the union of their regions). <= 1 exactly where some lens lets the ray through.
+    // The lenses whose regions count (the first traced first): the lens and also_cover while
+    // building the lens's own bound; a band's lenses, or one of them, while re-solving a band's.
+    std::vector<const LensSystem*> cur{&lens};
+    cur.insert(cur.end(), opts.also_cover.begin(), opts.also_cover.end());
+    auto marginCover = [&](Vec2 film, Vec2 a) {
+      double m = margin1(*cur[0], film, a);
+      if (m <= 1) return m;
+      for (size_t i = 1; i < cur.size(); ++i) m = std::min(m, margin1(*cur[i], film, a));
+      return m;
+    };
+    // The checks of a polygon (below) use the azimuths half-way between the polygon's own, so
+    // that the regions of film points between them are covered too.
+    int last_az = 0;  // the azimuth that passed last: neighbouring points usually pass there too
+    auto margin = [&](double h, Vec2 a) {
+      if (rotational_) return marginCover({h, 0}, a);
+      const int n_az = static_cast<int>(az.size());
+      double best = kInf;
+      for (int i = 0; i < n_az; ++i) {
+        const int k = (last_az + i) % n_az;
+        const double phi = az[size_t(k)];
+        const double ca = std::cos(phi), sa = std::sin(phi);
+        const double m = marginCover({h * ca, h * sa}, toFilmAzimuth(a, h, ca, sa));
+        if (m <= 1) {
+          last_az = k;
+          return m;
         }
+        best = std::min(best, m);
       }
-      for (double& v : f)
-        if (v > 1) v *= 1 + opts.margin;
-      wc.r.push_back(h);
-      wc.f.push_back(std::move(f));
-    }
-    wedges_[size_t(sec)] = std::move(wc);
-    traces_total += traces;
-    return;
-  }
-  const std::vector<Polygon>& done = w.done;
-  auto makeSector = [&](const std::vector<Polygon>& nodes) {
-    Sector out;
-    out.intervals = buildIntervals(nodes, w.scales);
-    // Central obscurations: a hole in each interval's polygon (rotationally symmetric lenses).
-    if (obscured && rotational_) {
-      auto passesAll = [&](double h, Vec2 a) {  // with obscurations, at any wavelength covered
-        ++traces;
-        if (lens.traceFromFilmPoint({h, 0}, a).ok()) return true;
-        for (const LensSystem* other : opts.also_cover) {
-          ++traces;
-          if (other->traceFromFilmPoint({h, 0}, a).ok()) return true;
+      return best;
+    };
+    auto passes = [&](double h, Vec2 a) { return margin(h, a) <= 1; };
+    // Distance from c (inside the region) to the region's boundary along u: the first blocked
+    // point, with a passing point within 1e-3 relative before it. From a guess (usually the
+    // neighbouring direction's distance, within a few percent), secant steps on the margin
+    // (started with the slope found at the last boundary) aim a hair past the root on the side
+    // not yet pinned, so that two or three traces usually close the bracket; bisection (or
+    // geometric steps while one side is open) where a secant step falls outside the bracket or
+    // fails to halve it.
+    // accept > 0: a blocked point whose margin says that the boundary lies within `accept`
+    // (relative) before it ends the search without a passing point next to it (one or two traces
+    // where the guess is good, as in the wavelength bands, whose boundaries are near the lens's
+    // own). It is still a blocked point, so that the region (star-shaped about c, as everywhere
+    // here) ends before it: the bound holds it as before, only the overshoot grows (up to
+    // `accept`, estimated from the margin's slope; an underestimate costs waste, not rays).
+    double slope_hint = 0;    // d(margin)/ds at the last boundary
+    double accept_slope = 0;  // accept > 0: d(margin)/ds along u measured before, or 0
+    double last_slope = 0;    // the last search's latest two traces' slope (0: none)
+    auto boundary = [&](double h, Vec2 c, Vec2 u, double guess, double accept = 0) {
+      constexpr double tol = 1e-3;
+      double lo = 0, glo = kInf, hi = kInf, ghi = kInf;
+      double s0 = 0, g0 = kInf, s1 = 0, g1 = kInf;  // the two latest evaluations
+      auto eval = [&](double s) {
+        const double g = margin(h, c + u * s);
+        s0 = s1, g0 = g1, s1 = s, g1 = g;
+        if (g <= 1) {
+          if (s > lo) lo = s, glo = g;
+        } else if (s < hi) {
+          hi = s, ghi = g;
         }
-        return false;
       };
-      // Along each direction of the polygon (centre c, vertex distances R): the distance from
-      // the centre to the first passing point (the edge of the blocked middle), a 16th of the
-      // vertex distance at a time, then bisected to a 1024th. All zero where the centre itself
-      // passes (no blocked middle there).
-      auto holeDistances = [&](double h, Vec2 c, const std::vector<double>& R) {
-        std::vector<double> d(size_t(nd), 0.0);
-        if (passesAll(h, c)) return d;
-        for (int j = 0; j < nd; ++j) {
-          constexpr int kSteps = 16;
-          double lo = 0, hi = 1;
-          for (int s = 1; s <= kSteps; ++s) {
-            const double f = double(s) / kSteps;
-            if (passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * f))) {
-              hi = f;
+      eval(std::max(guess, 1e-6 * rr));
+      // With a good guess (accept > 0) the steps while one side is open start small, and a
+      // bracket as narrow as `accept` ends the search too (where the margin jumps to infinity at
+      // the boundary, a ray missing a surface, it has no slope to accept by).
+      double f = accept > 0 ? 2 * accept : 1.0 / 16;
+      const double tol_end = std::max(tol, accept);
+      double last_width = kInf;
+      bool force_bisect = false;
+      for (int it = 0; it < 80; ++it) {
+        if (hi < kInf && hi - lo <= tol_end * hi) break;
+        if (accept > 0 && hi < kInf && s1 == hi && std::isfinite(ghi)) {
+          // The slope from the two latest traces along u, else the one measured along u for
+          // the neighbouring wavelength (accept_slope).
+          const double sl = std::isfinite(g0) && s0 != s1 ? (g1 - g0) / (s1 - s0) : accept_slope;
+          if (sl > 0 && std::isfinite(sl) && ghi - 1 <= sl * accept * hi) break;
+        }
+        if (hi == kInf && lo >= 4 * rr) return lo;  // beyond any real region: give up there
+        if (lo == 0 && hi <= 1e-9 * rr) return hi;  // the region has no extent along u
+        double x = std::numeric_limits<double>::quiet_NaN();
+        if (!force_bisect) {
+          if (std::isfinite(g0) && std::isfinite(g1) && g1 != g0 && s1 != s0)
+            x = s1 + (1 - g1) * (s1 - s0) / (g1 - g0);
+          else if (std::isfinite(g1) && slope_hint > 0)
+            x = s1 + (1 - g1) / slope_hint;
+          // Aim a hair toward the bracket's far end, so that the near one stays and the far one
+          // moves to within the tolerance.
+          if (std::isfinite(x)) {
+            if (accept > 0)  // aim at the blocked side, within reach of acceptance
+              x += 0.5 * accept * std::abs(x);
+            else
+              x += (hi - x <= x - lo ? -0.4 : 0.4) * tol * std::abs(x);
+          }
+        }
+        force_bisect = false;
+        if (hi < kInf && lo > 0) {
+          if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+        } else if (hi < kInf) {  // nothing passing found along u yet
+          if (!(x > 0 && x < hi) || (accept > 0 && x < hi / (1 + f))) x = hi / (1 + f), f *= 2;
+        } else {  // nothing blocked yet
+          if (!(x > lo) || (accept > 0 && x > lo * (1 + f))) x = lo * (1 + f), f *= 2;
+          x = std::min(x, 2 * lo + 1e-6 * rr);
+        }
+        eval(x);
+        // A secant step that does not halve the bracket twice running gives way to bisection.
+        if (hi < kInf && lo > 0) {
+          const double w = hi - lo;
+          if (w > 0.5 * last_width) force_bisect = true;
+          last_width = w;
+        }
+      }
+      if (std::isfinite(glo) && std::isfinite(ghi) && hi > lo && ghi > glo)
+        slope_hint = (ghi - glo) / (hi - lo);
+      last_slope = std::isfinite(g0) && std::isfinite(g1) && s0 != s1 && (g1 - g0) / (s1 - s0) > 0
+                       ? (g1 - g0) / (s1 - s0)
+                       : 0.0;
+      return hi;
+    };
+    // Boundary points of the region at film radius h, seen from a point inside it, in `count`
+    // directions starting at angle `offset`. Empty if the film point sees nothing.
+    // A point inside the region at film radius h: the neighbour's centre or the real chief ray,
+    // else (near the edge of the image circle, where the region is tiny) the least margin around
+    // a neighbour's polygon: the best point of a coarse grid, then a pattern search.
+    auto findInside = [&](double h, const Polygon* hint) -> std::optional<Vec2> {
+      // The neighbouring polygon's centre usually lies inside; the real chief ray's search costs
+      // many traces.
+      if (hint && !hint->empty && passes(h, hint->centre)) return hint->centre;
+      std::optional<Vec2> c = passingRearAim(lens, p, h);
+      if (c && passes(h, *c)) return c;
+      if (!hint || hint->empty) return std::nullopt;
+      const double reach = 1.5 * *std::max_element(hint->radius.begin(), hint->radius.end());
+      // The margin on a coarse grid; then pattern searches from its three least points (the
+      // region can be a thin crescent whose least margin lies off one search's path).
+      constexpr int kGrid = 9;
+      std::vector<std::pair<double, Vec2>> starts;
+      for (int iy = 0; iy < kGrid; ++iy)
+        for (int ix = 0; ix < kGrid; ++ix) {
+          const Vec2 a = hint->centre + Vec2{reach * (2.0 * (ix + 0.5) / kGrid - 1),
+                                             reach * (2.0 * (iy + 0.5) / kGrid - 1)};
+          const double g = margin(h, a);
+          if (g <= 1) return a;
+          starts.push_back({g, a});
+        }
+      std::partial_sort(starts.begin(), starts.begin() + 3, starts.end(),
+                        [](const auto& x, const auto& y) { return x.first < y.first; });
+      double g_least = kInf;
+      for (int st = 0; st < 3 && std::isfinite(starts[size_t(st)].first); ++st) {
+        auto [g_best, best] = starts[size_t(st)];
+        // The margin is the largest of a few smooth functions (one per limiting surface): its
+        // minimum often lies on a ridge where two of them are equal, so the search tries 16
+        // directions before halving its step.
+        constexpr int kDirs = 16;
+        double step = reach / kGrid;
+        for (int it = 0; it < 400 && step > 1e-4 * reach; ++it) {
+          bool moved = false;
+          double rise = 0;  // the most the margin rose over the probes around `best`
+          for (int k = 0; k < kDirs; ++k) {
+            const Vec2 q = best + unit(2 * std::numbers::pi * k / kDirs) * step;
+            const double g = margin(h, q);
+            if (g <= 1) return q;
+            if (g < g_best) {
+              // A descent too slow to reach 1 within the iterations left (even at twice the
+              // pace) ends the search where it would have ended anyway.
+              const double fell = g_best - g;
+              best = q, g_best = g, moved = true;
+              if (g_best - 1 > 2 * (400 - it) * fell) it = 400;
               break;
             }
-            lo = f;
+            rise = std::max(rise, g - g_best);
           }
-          for (int it = 0; it < 6 && hi < 1; ++it) {
-            const double mid = 0.5 * (lo + hi);
-            (passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * mid)) ? hi : lo) = mid;
-          }
-          d[size_t(j)] = lo * R[size_t(j)];
+          if (moved) continue;
+          // No probe went down: the least margin near `best` lies within a step of it, and the
+          // margin changes by about `rise` over a step; where that cannot bring it down to 1 (by
+          // twice over), smaller steps cannot either: this start has no passing point near it.
+          if (step < reach / (4 * kGrid) && g_best - 1 > 2 * rise) break;
+          step *= 0.5;
         }
-        return d;
-      };
-      for (Interval& iv : out.intervals) {
-        if (iv.empty) continue;
-        auto at = [&](double t, Vec2& c, std::vector<double>& R) {
-          c = iv.c0 * (1 - t) + iv.c1 * t;
-          R.resize(size_t(nd));
-          for (int j = 0; j < nd; ++j) R[size_t(j)] = iv.A[size_t(j)] * (1 - t) + iv.B[size_t(j)] * t;
-          return iv.r0 + t * (iv.r1 - iv.r0);
+        g_least = std::min(g_least, g_best);
+      }
+      // Against the rear disc's hard edge the crescent can be thinner still: where the margin
+      // came within 2% of passing, a fine grid as well (fine enough to find slivers a hundredth of
+      // the neighbour's size), as the bounds of the CS348B set-ups need (tests/optics_pupil_test).
+      if (disc2 == 0 || g_least > 1.02) return std::nullopt;
+      for (int grid : {24, 96})
+        for (int iy = 0; iy < grid; ++iy)
+          for (int ix = 0; ix < grid; ++ix) {
+            const Vec2 a = hint->centre + Vec2{reach * (2.0 * (ix + 0.5) / grid - 1),
+                                               reach * (2.0 * (iy + 0.5) / grid - 1)};
+            if (passes(h, a)) return a;
+          }
+      return std::nullopt;
+    };
+    // Whether the checks of a polygon start their searches at its edges (not for an anamorphic
+    // wedge's blended polygon, which the true region at the wedge's middle leaves by more).
+    bool hint_guesses = true;
+    auto boundaryPoints = [&](double h, int count, double offset, Vec2* centre_out,
+                              const Polygon* hint) {
+      std::vector<Vec2> pts;
+      std::optional<Vec2> c = findInside(h, hint);
+      if (!c) return pts;
+      // Move toward the middle of the region (the found point may lie near its edge, where the
+      // chief ray is vignetted): the centre of a coarse ring of boundary points, twice. Not for
+      // the check points of a polygon whose own centre lies inside the region: they are measured
+      // from that centre, at the directions half-way between the polygon's (a third of a check's
+      // traces saved).
+      const bool from_hint =
+          !centre_out && hint && !hint->empty && c->x == hint->centre.x && c->y == hint->centre.y;
+      // Each boundary search starts from the last one's distance (the neighbour's polygon's
+      // size for the first).
+      double guess = 0.1 * rr;
+      if (hint && !hint->empty) {
+        guess = 0;
+        for (double v : hint->radius) guess += v / nd;
+      }
+      for (int it = 0; it < (from_hint ? 0 : 2); ++it) {
+        Vec2 lo_pt{1e300, 1e300}, hi_pt{-1e300, -1e300};
+        for (int j = 0; j < 12; ++j) {
+          const Vec2 u = unit(2 * std::numbers::pi * j / 12);
+          guess = boundary(h, *c, u, guess);
+          const Vec2 q = *c + u * guess;
+          lo_pt = {std::min(lo_pt.x, q.x), std::min(lo_pt.y, q.y)};
+          hi_pt = {std::max(hi_pt.x, q.x), std::max(hi_pt.y, q.y)};
+        }
+        const Vec2 mid = (lo_pt + hi_pt) * 0.5;
+        if (!passes(h, mid)) break;
+        c = mid;
+      }
+      if (centre_out) *centre_out = *c;
+      // Where a neighbouring polygon is at hand, each search starts at its edge along u (seen
+      // from c): the region's boundary is usually within a percent of it, and the search accepts
+      // a blocked point the margin puts within kHintAccept of the boundary.
+      constexpr double kHintAccept = 1e-3;
+      const bool use_hint = from_hint && hint_guesses;
+      for (int j = 0; j < count; ++j) {
+        const Vec2 u = unit(offset + 2 * std::numbers::pi * j / count);
+        double reach = 0;
+        if (use_hint) {
+          // The farthest crossing of the ray c + t u with the hint polygon's edges.
+          const Vec2 d0 = *c - hint->centre;
+          for (int k = 0; k < nd; ++k) {
+            const Vec2 a = dirs_[size_t(k)] * hint->radius[size_t(k)];
+            const Vec2 b = dirs_[size_t((k + 1) % nd)] * hint->radius[size_t((k + 1) % nd)];
+            const Vec2 e = b - a;
+            const double den = cross2(u, e);
+            if (den == 0) continue;
+            const Vec2 w = a - d0;
+            const double t = cross2(w, e) / den, v = cross2(w, u) / den;
+            if (t > 0 && v >= 0 && v <= 1) reach = std::max(reach, t);
+          }
+        }
+        if (reach > 0) {
+          accept_slope = 0;
+          guess = boundary(h, *c, u, reach * (1 + 0.5 * kHintAccept), kHintAccept);
+        } else {
+          guess = boundary(h, *c, u, guess);
+        }
+        pts.push_back(*c + u * guess);
+      }
+      return pts;
+    };
+    // Widens the polygon until it contains the points: a point beyond the edge between vertices j
+    // and j+1 scales both vertices by the ratio, which scales that edge about the centre. Returns
+    // the per-vertex factors (1 where nothing reaches beyond).
+    auto coverFactors = [&](const Polygon& poly, const std::vector<Vec2>& pts) {
+      std::vector<double> f(nd, 1.0);
+      for (const Vec2& q : pts) {
+        const Vec2 d = q - poly.centre;
+        const double dist = std::hypot(d.x, d.y);
+        if (dist == 0) continue;
+        double ang = std::atan2(d.y, d.x);
+        if (ang < 0) ang += 2 * std::numbers::pi;
+        const int j = std::min(static_cast<int>(ang / dphi), nd - 1);
+        const int j1 = (j + 1) % nd;
+        const Vec2 a = unit(j * dphi) * poly.radius[j];
+        const Vec2 b = unit((j + 1) * dphi) * poly.radius[j1];
+        // Where the ray from the centre along d meets the edge a-b.
+        const Vec2 w = d * (1 / dist);
+        const double denom = cross2(b - a, w);
+        const double reach = denom != 0 ? cross2(b - a, a) / denom : 0;
+        const double need = reach > 0 ? dist / reach : 4.0;  // degenerate edge: be generous
+        f[j] = std::max(f[j], need);
+        f[j1] = std::max(f[j1], need);
+      }
+      return f;
+    };
+
+    // Boundary points that check a polygon (at the film azimuth being built).
+    auto checkPoints = [&](double h, double offset, const Polygon* hint) {
+      return boundaryPoints(h, nd, offset, nullptr, hint);
+    };
+    // A node: the region's polygon at radius h, checked at the half-way directions.
+    auto makeNode = [&](double h, const Polygon* hint) {
+      Polygon poly;
+      poly.r = h;
+      std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &poly.centre, hint);
+      if (pts.empty()) return poly;
+      poly.empty = false;
+      for (const Vec2& q : pts)
+        poly.radius.push_back(std::hypot(q.x - poly.centre.x, q.y - poly.centre.y));
+      const std::vector<double> f = coverFactors(poly, checkPoints(h, 0.5 * dphi, &poly));
+      poly.raw = poly.radius;
+      poly.node_f = f;
+      for (int j = 0; j < nd; ++j) poly.radius[j] *= f[j];
+      return poly;
+    };
+    auto area = [&](const Polygon& poly) {
+      if (poly.empty) return 0.0;
+      double sum = 0;
+      for (int j = 0; j < nd; ++j) sum += poly.radius[j] * poly.radius[(j + 1) % nd];
+      return 0.5 * sum * std::sin(dphi);
+    };
+
+    // Uniform nodes first; then each interval is checked half-way: the interpolated polygon must
+    // contain the true region there. Where it would have to grow by more than a few percent, or
+    // the region changes fast (at the edge of the image circle), the interval is split.
+    const double min_width = film_radius_mm / (ni * 16.0);
+    if (!rotational_) {
+      // The wedge edge's azimuth (a wedge's checks, stage 4, set their own).
+      az = {sec * wedge};
+      last_az = 0;
+    }
+    if (stage == 0) {
+      for (int k = 0; k <= ni; ++k)
+        w.initial.push_back(makeNode(film_radius_mm * k / ni, k > 0 ? &w.initial.back() : nullptr));
+      traces_total += traces;
+      return;
+    }
+    if (stage == 1) {
+      // The uniform interval k0: its nodes after its left end, and each sub-interval's scales.
+      std::vector<Polygon>& done = w.refined[size_t(k0)];
+      std::vector<std::vector<double>>& scales = w.refined_scales[size_t(k0)];
+      std::vector<Polygon> stack{
+          w.initial[size_t(k0) + 1]};  // right ends still to process, nearest last
+      Polygon left = w.initial[size_t(k0)];
+      while (!stack.empty()) {
+        Polygon right = stack.back();
+        const double h = 0.5 * (left.r + right.r);
+        Polygon interp;
+        const bool any = interpolateBetween(left, right, h, interp);
+        std::vector<double> f(nd, 1.0);
+        bool split = false;
+        if (any) {
+          f = coverFactors(interp, checkPoints(h, 0.25 * dphi, &interp));
+          const double worst = *std::max_element(f.begin(), f.end());
+          const double a0 = area(left), a1 = area(right);
+          const bool fast = left.empty != right.empty || std::max(a0, a1) > 1.25 * std::min(a0, a1);
+          split = (worst > 1.03 || fast) && right.r - left.r > 2 * min_width;
+        }
+        if (split) {
+          stack.push_back(makeNode(h, left.empty ? &right : &left));
+          continue;
+        }
+        if (any && left.empty != right.empty) {
+          // At the edge of the image circle the region moves and vanishes within the interval:
+          // check it all across.
+          for (double t : {0.1, 0.3, 0.7, 0.9, 0.99}) {
+            const double ht = left.r + t * (right.r - left.r);
+            Polygon at;
+            interpolateBetween(left, right, ht, at);
+            const std::vector<double> g = coverFactors(at, checkPoints(ht, 0.25 * dphi, &at));
+            for (int j = 0; j < nd; ++j) f[j] = std::max(f[j], g[j]);
+          }
+        }
+        // Where the region vanishes (the edge of the image circle) it changes shape fastest: triple
+        // the margin there.
+        // Anamorphic bounds cover several azimuths' regions at once and change shape faster: a
+        // wider margin.
+        const double base_margin = opts.margin;
+        const double margin = left.empty != right.empty ? 3 * base_margin : base_margin;
+        for (double& v : f) v *= 1 + margin;
+        scales.push_back(std::move(f));
+        done.push_back(right);
+        stack.pop_back();
+        left = right;
+      }
+      traces_total += traces;
+      return;
+    }  // stage 1
+    if (stage == 4) {
+      // Anamorphic: wedge `sec`'s blended polygon checked against the true region at its middle
+      // azimuth, at both edges' nodes and interval middles; the factors that widen it to hold the
+      // boundary points found, with the safety margin.
+      std::vector<double> rs;
+      for (int l : {sec, sec + 1})
+        for (const Interval& iv : sets_[0][size_t(l)].intervals)
+          rs.insert(rs.end(), {iv.r0, 0.5 * (iv.r0 + iv.r1), iv.r1});
+      std::sort(rs.begin(), rs.end());
+      std::vector<double> kept;
+      for (double r : rs)
+        if (kept.empty() || r - kept.back() > 0.25 * min_width) kept.push_back(r);
+      // Filled on the side: blended() must give the unwidened polygon while checking.
+      WedgeCheck wc;
+      std::vector<double> R(static_cast<size_t>(nd));
+      hint_guesses = false;
+      for (double h : kept) {
+        Polygon poly;
+        poly.r = h;
+        std::vector<double> f(size_t(nd), 1.0);
+        for (double sw : kWedgeChecks) {
+          if (!blended(0, sec, h, sw, poly.centre, R.data())) continue;
+          az = {(sec + sw) * wedge};
+          last_az = 0;
+          poly.empty = false;
+          poly.radius = R;
+          for (double off : {0.25, 0.75}) {
+            const std::vector<double> g =
+                coverFactors(poly, boundaryPoints(h, nd, off * dphi, nullptr, &poly));
+            for (int j = 0; j < nd; ++j) f[size_t(j)] = std::max(f[size_t(j)], g[size_t(j)]);
+          }
+        }
+        for (double& v : f)
+          if (v > 1) v *= 1 + opts.margin;
+        wc.r.push_back(h);
+        wc.f.push_back(std::move(f));
+      }
+      wedges_[size_t(sec)] = std::move(wc);
+      traces_total += traces;
+      return;
+    }
+    const std::vector<Polygon>& done = w.done;
+    auto makeSector = [&](const std::vector<Polygon>& nodes) {
+      Sector out;
+      out.intervals = buildIntervals(nodes, w.scales);
+      // Central obscurations: a hole in each interval's polygon (rotationally symmetric lenses).
+      if (obscured && rotational_) {
+        auto passesAll = [&](double h, Vec2 a) {  // with obscurations, at any wavelength covered
+          ++traces;
+          if (lens.traceFromFilmPoint({h, 0}, a).ok()) return true;
+          for (const LensSystem* other : opts.also_cover) {
+            ++traces;
+            if (other->traceFromFilmPoint({h, 0}, a).ok()) return true;
+          }
+          return false;
         };
-        Vec2 c;
-        std::vector<double> R;
-        std::vector<double> d[3];
-        bool any = true;
-        for (int e = 0; e < 3 && any; ++e) {
-          d[e] = holeDistances(at(0.5 * e, c, R), c, R);
-          any = *std::max_element(d[e].begin(), d[e].end()) > 0;
-        }
-        if (!any) continue;
-        // The hole's vertex distances at the ends: each no farther than the blocked middle's edge
-        // at its end and (so that the interpolated hole lies inside at the middle too) at the
-        // middle; pulled in by the safety margin.
-        const double pull = 1 - opts.margin;
-        std::vector<double> HA(static_cast<size_t>(nd)), HB(static_cast<size_t>(nd));
-        for (int j = 0; j < nd; ++j) {
-          HA[size_t(j)] = std::min(d[0][size_t(j)], d[1][size_t(j)]) * pull;
-          HB[size_t(j)] = std::min(d[2][size_t(j)], d[1][size_t(j)]) * pull;
-        }
-        // Check the hole between the ends: every vertex of the hole and the middle of every edge
-        // blocked; else shrink it.
-        double k = 1;
-        for (int tries = 0; tries < 4; ++tries) {
-          bool ok = true;
-          for (double t : {0.25, 0.75}) {
-            const double h = at(t, c, R);
-            for (int j = 0; j < nd && ok; ++j) {
-              const int j1 = (j + 1) % nd;
-              const Vec2 a = dirs_[size_t(j)] * (k * (HA[size_t(j)] * (1 - t) + HB[size_t(j)] * t));
-              const Vec2 b = dirs_[size_t(j1)] * (k * (HA[size_t(j1)] * (1 - t) + HB[size_t(j1)] * t));
-              ok = !passesAll(h, c + a) && !passesAll(h, c + (a + b) * 0.5);
+        // Along each direction of the polygon (centre c, vertex distances R): the distance from
+        // the centre to the first passing point (the edge of the blocked middle), a 16th of the
+        // vertex distance at a time, then bisected to a 1024th. All zero where the centre itself
+        // passes (no blocked middle there).
+        auto holeDistances = [&](double h, Vec2 c, const std::vector<double>& R) {
+          std::vector<double> d(size_t(nd), 0.0);
+          if (passesAll(h, c)) return d;
+          for (int j = 0; j < nd; ++j) {
+            constexpr int kSteps = 16;
+            double lo = 0, hi = 1;
+            for (int s = 1; s <= kSteps; ++s) {
+              const double f = double(s) / kSteps;
+              if (passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * f))) {
+                hi = f;
+                break;
+              }
+              lo = f;
             }
+            for (int it = 0; it < 6 && hi < 1; ++it) {
+              const double mid = 0.5 * (lo + hi);
+              (passesAll(h, c + dirs_[size_t(j)] * (R[size_t(j)] * mid)) ? hi : lo) = mid;
+            }
+            d[size_t(j)] = lo * R[size_t(j)];
           }
-          if (ok) break;
-          k = tries < 3 ? k * 0.8 : 0.0;
-        }
-        if (!(k > 0)) continue;
-        for (int j = 0; j < nd; ++j) HA[size_t(j)] *= k, HB[size_t(j)] *= k;
-        // The fan's prefix sums count the polygon minus the hole.
-        for (int j = 0; j < nd; ++j) {
-          const int j1 = (j + 1) % nd;
-          double* p = &iv.P[3 * size_t(j)];
-          p[3] = p[0] + iv.A[size_t(j)] * iv.A[size_t(j1)] - HA[size_t(j)] * HA[size_t(j1)];
-          p[4] = p[1] + iv.A[size_t(j)] * iv.B[size_t(j1)] + iv.B[size_t(j)] * iv.A[size_t(j1)] -
-                 HA[size_t(j)] * HB[size_t(j1)] - HB[size_t(j)] * HA[size_t(j1)];
-          p[5] = p[2] + iv.B[size_t(j)] * iv.B[size_t(j1)] - HB[size_t(j)] * HB[size_t(j1)];
-        }
-        iv.HA = std::move(HA);
-        iv.HB = std::move(HB);
-      }
-    }
-    // A table from film radius to the first interval that can hold it, so that a lookup is a
-    // table read and a step or two instead of a binary search.
-    if (!out.intervals.empty() && film_radius_mm_ > 0) {
-      constexpr int kLut = 512;
-      std::vector<int> lut(kLut + 1);
-      for (int k = 0; k <= kLut; ++k)
-        lut[size_t(k)] = intervalIn(out.intervals, {}, 0, film_radius_mm_ * k / kLut);
-      out.lut_scale = kLut / film_radius_mm_;
-      out.lut = std::move(lut);
-    }
-    return out;
-  };
-  if (stage == 3) {
-    w.sets.push_back(makeSector(done));
-    for (const std::vector<Polygon>& nodes : w.band_nodes) w.sets.push_back(makeSector(nodes));
-    traces_total += traces;
-    return;
-  }
-  // Stage 2: the bands' nodes k0 .. k1 - 1.
-  // Wavelength bands: the same nodes, each vertex distance the farthest of the band's lenses'
-  // boundaries along the vertex's direction from the node's centre (each lens's region is
-  // star-shaped about it, so that this is the union's), each from the lens's own distance (two
-  // or three traces), times the node's own check factors; the intervals keep their widening.
-  // Where the centre lies outside one of the band's regions, or where the lens's region is
-  // empty next to one that is not (the edge of the image circle moves with the wavelength),
-  // the union's polygon is traced from scratch.
-  // Each lens's distances once per node (neighbouring bands share their edge's lens), each
-  // started from the last lens's (the bands' lenses come in order of wavelength).
-  std::vector<const LensSystem*> band_lens;
-  for (const std::vector<const LensSystem*>& band : opts.bands)
-    for (const LensSystem* L : band)
-      if (std::find(band_lens.begin(), band_lens.end(), L) == band_lens.end())
-        band_lens.push_back(L);
-  std::vector<std::vector<double>> dist(band_lens.size());
-  std::vector<char> inside(band_lens.size());
-  for (size_t k = size_t(k0); k < size_t(k1) && !opts.bands.empty(); ++k) {
-    const Polygon& base = done[k];
-    const double h = base.r;
-    if (!base.empty) {
-      // Each vertex distance is predicted from the distances already known at this node (the
-      // lens's own, and the band lenses' solved before), linearly in 1/lambda^2 through the two
-      // nearest wavelengths, and accepted from one blocked trace where the margin puts the
-      // boundary within kBandAccept before it (boundary(): still a blocked point, so that no
-      // passing ray falls outside; the overshoot is at most ~0.2% of the distance).
-      constexpr double kBandAccept = 2e-3;
-      auto x_of = [](const LensSystem& L) { return 1 / (L.wavelength_nm() * L.wavelength_nm()); };
-      std::vector<std::pair<double, const std::vector<double>*>> known{{x_of(lens), &base.raw}};
-      std::vector<double> slopes(size_t(nd), 0.0), pred(size_t(nd), 0.0);
-      // Nearest the lens's own wavelength first, so that each prediction is a short step.
-      std::vector<size_t> order(band_lens.size());
-      for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-      std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        return std::abs(x_of(*band_lens[a]) - x_of(lens)) <
-               std::abs(x_of(*band_lens[b]) - x_of(lens));
-      });
-      for (size_t i : order) {
-        cur = {band_lens[i]};
-        inside[i] = passes(h, base.centre);
-        dist[i].assign(size_t(nd), 0.0);
-        if (!inside[i]) continue;
-        const double xi = x_of(*band_lens[i]);
-        std::sort(known.begin(), known.end(), [&](const auto& a, const auto& b) {
-          return std::abs(a.first - xi) < std::abs(b.first - xi);
-        });
-        for (int j = 0; j < nd; ++j) {
-          const double da = (*known[0].second)[size_t(j)];
-          double d = da;
-          if (known.size() > 1 && known[1].first != known[0].first) {
-            const double db = (*known[1].second)[size_t(j)];
-            d = da + (db - da) * (xi - known[0].first) / (known[1].first - known[0].first);
-            d = std::clamp(d, 0.5 * da, 2 * da);
+          return d;
+        };
+        for (Interval& iv : out.intervals) {
+          if (iv.empty) continue;
+          auto at = [&](double t, Vec2& c, std::vector<double>& R) {
+            c = iv.c0 * (1 - t) + iv.c1 * t;
+            R.resize(size_t(nd));
+            for (int j = 0; j < nd; ++j)
+              R[size_t(j)] = iv.A[size_t(j)] * (1 - t) + iv.B[size_t(j)] * t;
+            return iv.r0 + t * (iv.r1 - iv.r0);
+          };
+          Vec2 c;
+          std::vector<double> R;
+          std::vector<double> d[3];
+          bool any = true;
+          for (int e = 0; e < 3 && any; ++e) {
+            d[e] = holeDistances(at(0.5 * e, c, R), c, R);
+            any = *std::max_element(d[e].begin(), d[e].end()) > 0;
           }
-          pred[size_t(j)] = d;
+          if (!any) continue;
+          // The hole's vertex distances at the ends: each no farther than the blocked middle's edge
+          // at its end and (so that the interpolated hole lies inside at the middle too) at the
+          // middle; pulled in by the safety margin.
+          const double pull = 1 - opts.margin;
+          std::vector<double> HA(static_cast<size_t>(nd)), HB(static_cast<size_t>(nd));
+          for (int j = 0; j < nd; ++j) {
+            HA[size_t(j)] = std::min(d[0][size_t(j)], d[1][size_t(j)]) * pull;
+            HB[size_t(j)] = std::min(d[2][size_t(j)], d[1][size_t(j)]) * pull;
+          }
+          // Check the hole between the ends: every vertex of the hole and the middle of every edge
+          // blocked; else shrink it.
+          double k = 1;
+          for (int tries = 0; tries < 4; ++tries) {
+            bool ok = true;
+            for (double t : {0.25, 0.75}) {
+              const double h = at(t, c, R);
+              for (int j = 0; j < nd && ok; ++j) {
+                const int j1 = (j + 1) % nd;
+                const Vec2 a =
+                    dirs_[size_t(j)] * (k * (HA[size_t(j)] * (1 - t) + HB[size_t(j)] * t));
+                const Vec2 b =
+                    dirs_[size_t(j1)] * (k * (HA[size_t(j1)] * (1 - t) + HB[size_t(j1)] * t));
+                ok = !passesAll(h, c + a) && !passesAll(h, c + (a + b) * 0.5);
+              }
+            }
+            if (ok) break;
+            k = tries < 3 ? k * 0.8 : 0.0;
+          }
+          if (!(k > 0)) continue;
+          for (int j = 0; j < nd; ++j) HA[size_t(j)] *= k, HB[size_t(j)] *= k;
+          // The fan's prefix sums count the polygon minus the hole.
+          for (int j = 0; j < nd; ++j) {
+            const int j1 = (j + 1) % nd;
+            double* p = &iv.P[3 * size_t(j)];
+            p[3] = p[0] + iv.A[size_t(j)] * iv.A[size_t(j1)] - HA[size_t(j)] * HA[size_t(j1)];
+            p[4] = p[1] + iv.A[size_t(j)] * iv.B[size_t(j1)] + iv.B[size_t(j)] * iv.A[size_t(j1)] -
+                   HA[size_t(j)] * HB[size_t(j1)] - HB[size_t(j)] * HA[size_t(j1)];
+            p[5] = p[2] + iv.B[size_t(j)] * iv.B[size_t(j1)] - HB[size_t(j)] * HB[size_t(j1)];
+          }
+          iv.HA = std::move(HA);
+          iv.HB = std::move(HB);
         }
-        for (int j = 0; j < nd; ++j) {
-          accept_slope = slopes[size_t(j)];
-          if (accept_slope > 0) slope_hint = accept_slope;
-          dist[i][size_t(j)] = boundary(h, base.centre, dirs_[size_t(j)],
-                                        pred[size_t(j)] * (1 + 0.5 * kBandAccept), kBandAccept);
-          if (last_slope > 0) slopes[size_t(j)] = last_slope;
-        }
-        known.push_back({xi, &dist[i]});
       }
+      // A table from film radius to the first interval that can hold it, so that a lookup is a
+      // table read and a step or two instead of a binary search.
+      if (!out.intervals.empty() && film_radius_mm_ > 0) {
+        constexpr int kLut = 512;
+        std::vector<int> lut(kLut + 1);
+        for (int k = 0; k <= kLut; ++k)
+          lut[size_t(k)] = intervalIn(out.intervals, {}, 0, film_radius_mm_ * k / kLut);
+        out.lut_scale = kLut / film_radius_mm_;
+        out.lut = std::move(lut);
+      }
+      return out;
+    };
+    if (stage == 3) {
+      w.sets.push_back(makeSector(done));
+      for (const std::vector<Polygon>& nodes : w.band_nodes) w.sets.push_back(makeSector(nodes));
+      traces_total += traces;
+      return;
     }
-    for (size_t b = 0; b < opts.bands.size(); ++b) {
-      const std::vector<const LensSystem*>& band = opts.bands[b];
-      Polygon& node = w.band_nodes[b][k];
-      if (band.empty()) continue;
-      bool all_in = !base.empty;
+    // Stage 2: the bands' nodes k0 .. k1 - 1.
+    // Wavelength bands: the same nodes, each vertex distance the farthest of the band's lenses'
+    // boundaries along the vertex's direction from the node's centre (each lens's region is
+    // star-shaped about it, so that this is the union's), each from the lens's own distance (two
+    // or three traces), times the node's own check factors; the intervals keep their widening.
+    // Where the centre lies outside one of the band's regions, or where the lens's region is
+    // empty next to one that is not (the edge of the image circle moves with the wavelength),
+    // the union's polygon is traced from scratch.
+    // Each lens's distances once per node (neighbouring bands share their edge's lens), each
+    // started from the last lens's (the bands' lenses come in order of wavelength).
+    std::vector<const LensSystem*> band_lens;
+    for (const std::vector<const LensSystem*>& band : opts.bands)
       for (const LensSystem* L : band)
-        all_in = all_in && inside[size_t(std::find(band_lens.begin(), band_lens.end(), L) -
-                                         band_lens.begin())];
-      if (all_in) {
-        for (int j = 0; j < nd; ++j) {
-          double d = 0;
-          for (const LensSystem* L : band)
-            d = std::max(d, dist[size_t(std::find(band_lens.begin(), band_lens.end(), L) -
-                                        band_lens.begin())][size_t(j)]);
-          node.radius[size_t(j)] = d * base.node_f[size_t(j)];
+        if (std::find(band_lens.begin(), band_lens.end(), L) == band_lens.end())
+          band_lens.push_back(L);
+    std::vector<std::vector<double>> dist(band_lens.size());
+    std::vector<char> inside(band_lens.size());
+    for (size_t k = size_t(k0); k < size_t(k1) && !opts.bands.empty(); ++k) {
+      const Polygon& base = done[k];
+      const double h = base.r;
+      if (!base.empty) {
+        // Each vertex distance is predicted from the distances already known at this node (the
+        // lens's own, and the band lenses' solved before), linearly in 1/lambda^2 through the two
+        // nearest wavelengths, and accepted from one blocked trace where the margin puts the
+        // boundary within kBandAccept before it (boundary(): still a blocked point, so that no
+        // passing ray falls outside; the overshoot is at most ~0.2% of the distance).
+        constexpr double kBandAccept = 2e-3;
+        auto x_of = [](const LensSystem& L) { return 1 / (L.wavelength_nm() * L.wavelength_nm()); };
+        std::vector<std::pair<double, const std::vector<double>*>> known{{x_of(lens), &base.raw}};
+        std::vector<double> slopes(size_t(nd), 0.0), pred(size_t(nd), 0.0);
+        // Nearest the lens's own wavelength first, so that each prediction is a short step.
+        std::vector<size_t> order(band_lens.size());
+        for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+          return std::abs(x_of(*band_lens[a]) - x_of(lens)) <
+                 std::abs(x_of(*band_lens[b]) - x_of(lens));
+        });
+        for (size_t i : order) {
+          cur = {band_lens[i]};
+          inside[i] = passes(h, base.centre);
+          dist[i].assign(size_t(nd), 0.0);
+          if (!inside[i]) continue;
+          const double xi = x_of(*band_lens[i]);
+          std::sort(known.begin(), known.end(), [&](const auto& a, const auto& b) {
+            return std::abs(a.first - xi) < std::abs(b.first - xi);
+          });
+          for (int j = 0; j < nd; ++j) {
+            const double da = (*known[0].second)[size_t(j)];
+            double d = da;
+            if (known.size() > 1 && known[1].first != known[0].first) {
+              const double db = (*known[1].second)[size_t(j)];
+              d = da + (db - da) * (xi - known[0].first) / (known[1].first - known[0].first);
+              d = std::clamp(d, 0.5 * da, 2 * da);
+            }
+            pred[size_t(j)] = d;
+          }
+          for (int j = 0; j < nd; ++j) {
+            accept_slope = slopes[size_t(j)];
+            if (accept_slope > 0) slope_hint = accept_slope;
+            dist[i][size_t(j)] = boundary(h, base.centre, dirs_[size_t(j)],
+                                          pred[size_t(j)] * (1 + 0.5 * kBandAccept), kBandAccept);
+            if (last_slope > 0) slopes[size_t(j)] = last_slope;
+          }
+          known.push_back({xi, &dist[i]});
         }
-        continue;
       }
-      const Polygon* hint = !base.empty ? &base
-                            : k > 0 && !done[k - 1].empty ? &done[k - 1]
-                            : k + 1 < done.size() && !done[k + 1].empty ? &done[k + 1]
+      for (size_t b = 0; b < opts.bands.size(); ++b) {
+        const std::vector<const LensSystem*>& band = opts.bands[b];
+        Polygon& node = w.band_nodes[b][k];
+        if (band.empty()) continue;
+        bool all_in = !base.empty;
+        for (const LensSystem* L : band)
+          all_in =
+              all_in &&
+              inside[size_t(std::find(band_lens.begin(), band_lens.end(), L) - band_lens.begin())];
+        if (all_in) {
+          for (int j = 0; j < nd; ++j) {
+            double d = 0;
+            for (const LensSystem* L : band)
+              d = std::max(d, dist[size_t(std::find(band_lens.begin(), band_lens.end(), L) -
+                                          band_lens.begin())][size_t(j)]);
+            node.radius[size_t(j)] = d * base.node_f[size_t(j)];
+          }
+          continue;
+        }
+        const Polygon* hint = !base.empty                                 ? &base
+                              : k > 0 && !done[k - 1].empty               ? &done[k - 1]
+                              : k + 1 < done.size() && !done[k + 1].empty ? &done[k + 1]
                                                                           : nullptr;
-      if (!hint) continue;
-      cur = band;
-      Polygon np;
-      np.r = h;
-      const std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &np.centre, hint);
-      if (!pts.empty()) {
-        np.empty = false;
-        for (int j = 0; j < nd; ++j) {
-          const Vec2 q = pts[size_t(j)];
-          const double f = base.empty ? 1.0 : base.node_f[size_t(j)];
-          np.radius.push_back(std::hypot(q.x - np.centre.x, q.y - np.centre.y) * f);
+        if (!hint) continue;
+        cur = band;
+        Polygon np;
+        np.r = h;
+        const std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &np.centre, hint);
+        if (!pts.empty()) {
+          np.empty = false;
+          for (int j = 0; j < nd; ++j) {
+            const Vec2 q = pts[size_t(j)];
+            const double f = base.empty ? 1.0 : base.node_f[size_t(j)];
+            np.radius.push_back(std::hypot(q.x - np.centre.x, q.y - np.centre.y) * f);
+          }
         }
+        node = np;
       }
-      node = np;
     }
-  }
-  traces_total += traces;
+    traces_total += traces;
   };  // buildSector
   // The stages: each a list of (wedge, stage, k0, k1) tasks.
   auto runStage = [&](const std::vector<std::array<int, 4>>& tasks) {
@@ -855,8 +859,7 @@ int ExitPupilSampler::intervalFor(double r) const {
 }
 
 int ExitPupilSampler::intervalIn(const std::vector<Interval>& intervals,
-                                 const std::vector<int>& radius_lut, double lut_scale,
-                                 double r) {
+                                 const std::vector<int>& radius_lut, double lut_scale, double r) {
   // Intervals are sorted by radius; the first whose upper end reaches r.
   const int last = static_cast<int>(intervals.size()) - 1;
   if (!radius_lut.empty()) {
@@ -919,7 +922,8 @@ const ExitPupilSampler::Interval* ExitPupilSampler::locate(Vec2 film_mm, double&
   // Rotationally symmetric lenses only (anamorphic ones: blended()).
   const Sector* sec = &sectors.front();
   if (sec->intervals.empty()) return nullptr;
-  const Interval& iv = sec->intervals[size_t(intervalIn(sec->intervals, sec->lut, sec->lut_scale, r))];
+  const Interval& iv =
+      sec->intervals[size_t(intervalIn(sec->intervals, sec->lut, sec->lut_scale, r))];
   if (iv.empty) return nullptr;
   t = iv.r1 > iv.r0 ? std::clamp((r - iv.r0) / (iv.r1 - iv.r0), 0.0, 1.0) : 0.0;
   const double inv_r = r > 0 ? 1 / r : 0.0;
@@ -981,8 +985,7 @@ bool ExitPupilSampler::blended(int set, int wedge, double r, double s, Vec2& c, 
   return true;
 }
 
-std::optional<PupilSample> ExitPupilSampler::sampleAnamorphic(Vec2 film_mm, Vec2 u,
-                                                              int set) const {
+std::optional<PupilSample> ExitPupilSampler::sampleAnamorphic(Vec2 film_mm, Vec2 u, int set) const {
   const int nd = directions_;
   int wedge;
   double s, r;
@@ -993,7 +996,8 @@ std::optional<PupilSample> ExitPupilSampler::sampleAnamorphic(Vec2 film_mm, Vec2
   Vec2 c;
   if (!blended(set, wedge, r, s, c, R.data())) return std::nullopt;
   P[0] = 0;
-  for (int j = 0; j < nd; ++j) P[size_t(j) + 1] = P[size_t(j)] + R[size_t(j)] * R[size_t((j + 1) % nd)];
+  for (int j = 0; j < nd; ++j)
+    P[size_t(j) + 1] = P[size_t(j)] + R[size_t(j)] * R[size_t((j + 1) % nd)];
   const double total = P[size_t(nd)];
   if (!(total > 0)) return std::nullopt;
   // A fan triangle by area, then uniform in it (as sampleBatch).
@@ -1016,7 +1020,8 @@ std::optional<PupilSample> ExitPupilSampler::sampleAnamorphic(Vec2 film_mm, Vec2
 void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
                                    std::optional<PupilSample>* out, int band) const {
   if (!rotational_) {
-    for (int i = 0; i < std::min(n, kBatch); ++i) out[i] = sampleAnamorphic(film_mm[i], u[i], band + 1);
+    for (int i = 0; i < std::min(n, kBatch); ++i)
+      out[i] = sampleAnamorphic(film_mm[i], u[i], band + 1);
     return;
   }
   const int nd = directions_;
@@ -1094,8 +1099,7 @@ void ExitPupilSampler::sampleBatch(const Vec2* film_mm, const Vec2* u, int n,
     // From the +x film frame to the film point's azimuth.
     const Vec2 f = film_mm[lane[k]];
     const Vec2 rear = toFilmAzimuth(local, std::hypot(f.x, f.y), ca[k], sa[k]);
-    out[lane[k]] = PupilSample{{rear.x, rear.y, z_rear_mm_},
-                               0.5 * total[k] * dirs_[1].y};
+    out[lane[k]] = PupilSample{{rear.x, rear.y, z_rear_mm_}, 0.5 * total[k] * dirs_[1].y};
   }
 }
 

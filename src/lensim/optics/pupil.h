@@ -148,8 +148,8 @@ class ExitPupilSampler {
     std::vector<double> HA, HB;
     bool hasHole() const { return !HA.empty(); }
   };
-  static int intervalIn(const std::vector<Interval>& intervals,
-                        const std::vector<int>& radius_lut, double lut_scale, double r);
+  static int intervalIn(const std::vector<Interval>& intervals, const std::vector<int>& radius_lut,
+                        double lut_scale, double r);
   std::vector<Interval> buildIntervals(const std::vector<Polygon>& nodes,
                                        const std::vector<std::vector<double>>& scales) const;
   // Anamorphic: the polygon of bound set `set` for film radius r in wedge `wedge`, blended at

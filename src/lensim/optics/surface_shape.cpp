@@ -270,8 +270,8 @@ SagGradient ShapeIntersector::sagContinued(double x, double y) const {
     // The flat annulus beyond the bound, at the rim's sag in this direction.
     const double s = bound_r_ / std::sqrt(r2);
     auto g = surfaceSag(radius_, shape_, x * s, y * s);
-    if (!g && toroidal_) g = toroidSag(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x * s,
-                                       y * s, true);
+    if (!g && toroidal_)
+      g = toroidSag(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x * s, y * s, true);
     return {g ? g->z : 0.0, 0.0, 0.0};
   }
   if (toroidal_) {

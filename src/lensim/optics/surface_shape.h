@@ -17,7 +17,8 @@
 //              rotated about the axis parallel to y that crosses the z axis at z = R (the radius
 //              of rotation, rotation_radius_mm; R = 0 means infinite: a cylinder flat in x).
 //              A point of the curve at height y is rho = R - f(y) from that axis, so
-//                z(x,y) = R - sgn(rho) sqrt(rho^2 - x^2) = f + x^2 / (rho + sgn(rho) sqrt(rho^2 - x^2))
+//                z(x,y) = R - sgn(rho) sqrt(rho^2 - x^2) = f + x^2 / (rho + sgn(rho) sqrt(rho^2 -
+//                x^2))
 //              Its x-z section is the circle of radius R, its y-z section the curve f.
 // The toroidal definition is Zemax OpticStudio's ("Toroidal" in the OpticStudio User Guide,
 // Surface Types: a curve in the Y-Z plane with base radius, conic and the polynomial terms
@@ -114,7 +115,7 @@ class ShapeIntersector {
  private:
   double radius_ = 0;
   SurfaceShape shape_;
-  double cx_ = 0, cy_ = 0, ax_ = 0, ay_ = 0;    // cached section curvatures and (1 + k) c^2
+  double cx_ = 0, cy_ = 0, ax_ = 0, ay_ = 0;   // cached section curvatures and (1 + k) c^2
   std::vector<std::pair<int, double>> terms_;  // the non-zero polynomial terms (power, coeff)
   // Quadrics (rotational conics and cylinders without polynomial terms) have a closed form:
   // cx x^2 + cy y^2 + e z^2 - 2 z = 0, the vertex sheet where 1 - e z > 0.

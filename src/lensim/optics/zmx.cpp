@@ -70,9 +70,9 @@ std::string decodeTextFile(std::string_view bytes, const std::string& path) {
       throw Error(FileLoc{path, line, 0},
                   fmt::format("malformed {} text: unpaired low surrogate 0x{:04X}", enc, cu));
     } else if (cu == 0) {
-      throw Error(FileLoc{path, line, 0},
-                  fmt::format("malformed {} text: a NUL character (is the file really {}?)", enc,
-                              enc));
+      throw Error(
+          FileLoc{path, line, 0},
+          fmt::format("malformed {} text: a NUL character (is the file really {}?)", enc, enc));
     }
     if (cu == '\n') ++line;
     appendUtf8(out, cu);
@@ -185,14 +185,13 @@ void ZmxParser::readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& sh
       shape.poly[power] = v;
     } else if (v != 0) {
       throw Error(parmLoc(z, i),
-                  i == 13
-                      ? fmt::format("surface {}: TOROIDAL PARM {} = {}: Zernike sag terms on a "
-                                    "toroidal surface are not supported",
-                                    z.number, i, v)
-                      : fmt::format("surface {}: TOROIDAL PARM {} = {}: a toroidal surface has "
-                                    "parameters 1 (radius of rotation) and 2-8 (y^2 .. y^14 "
-                                    "terms) only",
-                                    z.number, i, v));
+                  i == 13 ? fmt::format("surface {}: TOROIDAL PARM {} = {}: Zernike sag terms on a "
+                                        "toroidal surface are not supported",
+                                        z.number, i, v)
+                          : fmt::format("surface {}: TOROIDAL PARM {} = {}: a toroidal surface has "
+                                        "parameters 1 (radius of rotation) and 2-8 (y^2 .. y^14 "
+                                        "terms) only",
+                                        z.number, i, v));
     }
   }
   if (z.xdat_loc)
@@ -229,8 +228,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     if (end == std::string::npos) end = text.size();
     std::string_view line(text.data() + pos, end - pos);
     ++line_no;
-    pos = (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n') ? end + 2
-                                                                                 : end + 1;
+    pos = (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n') ? end + 2 : end + 1;
     if (end == text.size() && line.empty()) break;
     last_line = line_no;
     const std::vector<Tok> t = tokens(line);
@@ -259,8 +257,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     if (key == "SURF") {
       const int n = inum(1, "surface number");
       if (n != int(surfs.size()))
-        throw Error(loc, fmt::format("surfaces out of order: SURF {} where SURF {} was expected",
-                                     n, surfs.size()));
+        throw Error(loc, fmt::format("surfaces out of order: SURF {} where SURF {} was expected", n,
+                                     surfs.size()));
       surfs.push_back({});
       cur = &surfs.back();
       cur->number = n;
@@ -336,9 +334,10 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       cur->type_loc = loc;
       if (cur->type != "STANDARD" && cur->type != "EVENASPH" && cur->type != "ODDASPH" &&
           cur->type != "TOROIDAL")
-        throw surfErr(fmt::format("TYPE {} is not supported (lensim models STANDARD, EVENASPH, "
-                                  "ODDASPH and TOROIDAL surfaces)",
-                                  cur->type));
+        throw surfErr(
+            fmt::format("TYPE {} is not supported (lensim models STANDARD, EVENASPH, "
+                        "ODDASPH and TOROIDAL surfaces)",
+                        cur->type));
     } else if (key == "CURV") {
       cur->curv = num(1, "curvature");
     } else if (key == "DISZ") {
@@ -409,9 +408,10 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                                   cur->number));
     } else if (key == "SQAP" || key == "ELAP" || key == "SQOB" || key == "ELOB" || key == "UDAP" ||
                key == "UDOB") {
-      throw surfErr(fmt::format("{} (a surface aperture or obscuration other than circular) is "
-                                "not supported",
-                                key));
+      throw surfErr(
+          fmt::format("{} (a surface aperture or obscuration other than circular) is "
+                      "not supported",
+                      key));
     } else if (key == "SCBD" || key == "DECX" || key == "DECY" || key == "TILT") {
       // Surface decentres and tilts: refused unless all zero.
       for (size_t i = 2; i < t.size(); ++i)
@@ -471,9 +471,9 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     if (!z.has_disz)
       throw Error(z.loc, fmt::format("surface {}: no DISZ (thickness) line", z.number));
     if (!z.disz)
-      throw Error(z.disz_loc,
-                  fmt::format("surface {}: thickness INFINITY is allowed for the object only",
-                              z.number));
+      throw Error(
+          z.disz_loc,
+          fmt::format("surface {}: thickness INFINITY is allowed for the object only", z.number));
     // Thicknesses are signed (Zemax): negative after an odd number of mirrors, where the light
     // travels toward -z; any other sign would need a ray to go backward.
     mirrors += z.mirror ? 1 : 0;
@@ -533,8 +533,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       // The constant index (used where dispersion is not) is the catalogue's n_d for a
       // catalogue glass, else the n_d written on the GLAS line; resolveGlass (glass.h) gives the
       // lens system the glass's n(lambda) and warns about a name it does not know.
-      const CatalogGlass* known =
-          z.glass == "___BLANK" ? nullptr : findGlassOrSuccessor(z.glass);
+      const CatalogGlass* known = z.glass == "___BLANK" ? nullptr : findGlassOrSuccessor(z.glass);
       if (known) {
         s.ior = known->listed_n_d;
         if (z.n_d && z.glass != "___BLANK") {

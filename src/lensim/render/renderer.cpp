@@ -16,11 +16,11 @@
 #include <vector>
 
 #include "lensim/camera/camera.h"
+#include "lensim/render/film/gbuffer.h"
 #include "lensim/render/integrators/bdpt.h"
 #include "lensim/render/integrators/directlighting.h"
 #include "lensim/render/integrators/integrator.h"
 #include "lensim/render/integrators/lighttracer.h"
-#include "lensim/render/film/gbuffer.h"
 #include "lensim/render/integrators/volpath.h"
 #include "lensim/render/media/media.h"
 #include "lensim/render/parts.h"
@@ -129,10 +129,10 @@ RenderPlan planRender(const scene::Scene& scene, const RenderOptions& opt) {
                                           bounds.x1, bounds.y0, bounds.y1);
     // Bounds from the command line are not the scene file's fault.
     if (opt.pixelbounds || opt.crop)
-      throw Error(fmt::format("{} gives {} on the {}x{} film; expected a window of at least one "
-                              "pixel",
-                              opt.pixelbounds ? "--pixelbounds" : "--cropwindow", empty, x_res,
-                              y_res));
+      throw Error(
+          fmt::format("{} gives {} on the {}x{} film; expected a window of at least one "
+                      "pixel",
+                      opt.pixelbounds ? "--pixelbounds" : "--cropwindow", empty, x_res, y_res));
     throw Error(scene.film.loc, empty);
   }
   const PixelBounds full_bounds = bounds;
@@ -212,9 +212,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const bool direct_lighting = scene.integrator.type == "directlighting";
   const DirectLightingOptions direct_opt{scene.integrator.all_lights, scene.integrator.max_depth};
   if (direct_lighting && opt.pbrt_v2_quirks)
-    logWarning(fmt::format("{}: --pbrt-v2-quirks: pbrt-v2's ray epsilon is reproduced by the path "
-                           "integrator only; \"directlighting\" uses lensim's ray offsets",
-                           scene.integrator.loc.str()));
+    logWarning(
+        fmt::format("{}: --pbrt-v2-quirks: pbrt-v2's ray epsilon is reproduced by the path "
+                    "integrator only; \"directlighting\" uses lensim's ray offsets",
+                    scene.integrator.loc.str()));
   for (const scene::Material& m : scene.materials)
     sc.has_interfaces = sc.has_interfaces || m.kind == scene::MaterialKind::Interface;
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
@@ -223,7 +224,8 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   // (scene/film_sensor.cpp).
   const int spp_req = opt.spp.value_or(scene.sampler.pixel_samples);
   if (spp_req <= 0 || spp_req > kMaxSamplesPerPixel)
-    throw Error(fmt::format("{} samples per pixel: expected 1 to {}", spp_req, kMaxSamplesPerPixel));
+    throw Error(
+        fmt::format("{} samples per pixel: expected 1 to {}", spp_req, kMaxSamplesPerPixel));
   const int seed = opt.seed.value_or(scene.sampler.seed);
   std::unique_ptr<Sampler> proto = makeSampler(scene, spp_req, seed);
   const int spp = proto->samplesPerPixel();
@@ -410,206 +412,207 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
     throw Error("progressive passes (on_pass) do not combine with checkpoints or resume");
   int pass_begin = spp_begin, pass_end = spp_begin, passes = 0;
   for (; pass_begin < spp_end && !cancelled.load(); pass_begin = pass_end, ++passes) {
-  pass_end = !opt.on_pass ? spp_end
-             : pass_begin == spp_begin
-                 ? spp_begin + 1
-                 : std::min(spp_end, spp_begin + 2 * (pass_begin - spp_begin));
-  if (opt.on_pass && passes > 0) {
-    for (auto& d : done) d.store(0, std::memory_order_relaxed);
-    tiles_done = 0;
-  }
-  try {
-    tbb::parallel_for(
-        tbb::blocked_range<int>(0, n_tiles, 1), [&](const tbb::blocked_range<int>& r) {
-          std::unique_ptr<Sampler> sampler = proto->clone();
-          for (int tile = r.begin(); tile != r.end(); ++tile) {
-            if (stopRequested()) {
-              cancelled = true;
-              return;
-            }
-            if (done[size_t(tile)].load()) continue;  // resumed
-            bool tile_cancelled = false;
-            RayCounts counts;
-            uint64_t n_samples = 0, n_rays = 0, n_none = 0, n_outside = 0, n_bad = 0;
-            const int tx = tile % tiles_x, ty = tile / tiles_x;
-            const int x0 = bounds.x0 + tx * kTile, y0 = bounds.y0 + ty * kTile;
-            const int x1 = std::min(x0 + kTile, bounds.x1), y1 = std::min(y0 + kTile, bounds.y1);
-            // A pixel's samples go in batches: first the camera dimensions of each sample, then
-            // the camera rays of the batch together (the realistic camera traces them through
-            // the lens side by side), then each sample's path, the sampler restarted at the
-            // dimension after the camera's. The values are those of one sample at a time.
-            constexpr int kB = camera::Camera::kMaxBatch;
-            camera::CameraSample cs[kB];
-            FilterSample fs[kB];
-            double u_lambda[kB];
-            SampledWavelengths lambdas[kB];
-            std::optional<camera::CameraRay> cam_rays[kB];
-            // Film "gbuffer": the rays of film points kDifferentialEpsilon pixel to the right and
-            // below (differentials for dzdx, dzdy) and the first visible surface.
-            camera::CameraSample cs_shift[kB];
-            std::optional<camera::CameraRay> dx_rays[kB], dy_rays[kB];
-            std::vector<BdptSplat> bdpt_splats;
-            Transform gbuffer_scratch;
-            // Sample k of the batch: pixel (x, y), sample index i. Dimension order: wavelength,
-            // film (filter), lens, time, then the path (path_dimension).
-            int path_dimension = 0;
-            const auto cameraSample = [&](int x, int y, int i, int k) {
-              sampler->startPixelSample({x, y}, i);
-              u_lambda[k] = sampler->get1D();
-              fs[k] = filter->sample(sampler->getPixel2D());
-              cs[k].lens = sampler->get2D();
-              cs[k].time = sampler->get1D();
-              cs[k].film_raster = {x + 0.5 + fs[k].p.x, y + 0.5 + fs[k].p.y};
-              lambdas[k] = SampledWavelengths::sampleVisible(u_lambda[k]);
-              static_assert(camera::kCameraWavelengths == kSpectrumSamples);
-              for (int c = 0; c < kSpectrumSamples; ++c)
-                cs[k].lambda_nm[size_t(c)] = lambdas[k].lambda(c);
-              cs[k].pixel_centre = {x + 0.5, y + 0.5};
-              // bdpt keeps a dispersive lens's hero wavelength only (as pbrt-v4 does): its light
-              // subpaths share the camera path's wavelengths.
-              cs[k].filter = opt.dispersion_hero_only || bdpt ? nullptr : filter.get();
-              cs[k].filter_weight = fs[k].weight;
-              path_dimension = sampler->dimension();
-            };
-            // Film "gbuffer": the first visible surface of camera ray k of the batch.
-            const auto visible = [&](int k) {
-              return visibleSurface(
-                  sc, differential(*cam_rays[k], dx_rays[k], dy_rays[k]), lambdas[k],
-                  gbuffer_frame.outputFromWorld(cam_rays[k]->time, gbuffer_scratch),
-                  gbuffer_diff_scale, counts);
-            };
-            if (light_tracer) {
-              for (int y = y0; y < y1 && !tile_cancelled; ++y)
-                for (int x = x0; x < x1; ++x) {
-                  if (stopRequested()) {
-                    cancelled = true;
-                    tile_cancelled = true;
-                    break;
-                  }
-                  for (int i = pass_begin; i < pass_end; ++i) {
-                    sampler->startPixelSample({x, y}, i);
-                    // Dimension order: wavelength, then the light path.
-                    SampledWavelengths lambda = SampledWavelengths::sampleVisible(sampler->get1D());
-                    n_bad += uint64_t(light_tracer->trace(lambda, *sampler, film, counts));
-                    ++n_samples;
-                  }
-                  // Film "gbuffer": the light tracer traces no camera rays, so the auxiliary
-                  // channels get camera rays of their own, sampled as path's are (the same
-                  // sampler dimensions: the same rays and wavelengths as path's for the same
-                  // pixel sample).
-                  if (gbuffer)
-                    for (int i0 = pass_begin; i0 < pass_end; i0 += kB) {
-                      const int m = std::min(kB, pass_end - i0);
-                      for (int k = 0; k < m; ++k) cameraSample(x, y, i0 + k, k);
-                      cam->generateRays(cs, m, cam_rays);
-                      gbufferDifferentials(*cam, cs, m, cs_shift, dx_rays, dy_rays);
-                      for (int k = 0; k < m; ++k) {
-                        const auto vs = cam_rays[k] ? visible(k) : std::nullopt;
-                        film.addVisibleSurface(x, y, fs[k].weight, vs ? &*vs : nullptr);
-                      }
+    pass_end = !opt.on_pass ? spp_end
+               : pass_begin == spp_begin
+                   ? spp_begin + 1
+                   : std::min(spp_end, spp_begin + 2 * (pass_begin - spp_begin));
+    if (opt.on_pass && passes > 0) {
+      for (auto& d : done) d.store(0, std::memory_order_relaxed);
+      tiles_done = 0;
+    }
+    try {
+      tbb::parallel_for(
+          tbb::blocked_range<int>(0, n_tiles, 1), [&](const tbb::blocked_range<int>& r) {
+            std::unique_ptr<Sampler> sampler = proto->clone();
+            for (int tile = r.begin(); tile != r.end(); ++tile) {
+              if (stopRequested()) {
+                cancelled = true;
+                return;
+              }
+              if (done[size_t(tile)].load()) continue;  // resumed
+              bool tile_cancelled = false;
+              RayCounts counts;
+              uint64_t n_samples = 0, n_rays = 0, n_none = 0, n_outside = 0, n_bad = 0;
+              const int tx = tile % tiles_x, ty = tile / tiles_x;
+              const int x0 = bounds.x0 + tx * kTile, y0 = bounds.y0 + ty * kTile;
+              const int x1 = std::min(x0 + kTile, bounds.x1), y1 = std::min(y0 + kTile, bounds.y1);
+              // A pixel's samples go in batches: first the camera dimensions of each sample, then
+              // the camera rays of the batch together (the realistic camera traces them through
+              // the lens side by side), then each sample's path, the sampler restarted at the
+              // dimension after the camera's. The values are those of one sample at a time.
+              constexpr int kB = camera::Camera::kMaxBatch;
+              camera::CameraSample cs[kB];
+              FilterSample fs[kB];
+              double u_lambda[kB];
+              SampledWavelengths lambdas[kB];
+              std::optional<camera::CameraRay> cam_rays[kB];
+              // Film "gbuffer": the rays of film points kDifferentialEpsilon pixel to the right and
+              // below (differentials for dzdx, dzdy) and the first visible surface.
+              camera::CameraSample cs_shift[kB];
+              std::optional<camera::CameraRay> dx_rays[kB], dy_rays[kB];
+              std::vector<BdptSplat> bdpt_splats;
+              Transform gbuffer_scratch;
+              // Sample k of the batch: pixel (x, y), sample index i. Dimension order: wavelength,
+              // film (filter), lens, time, then the path (path_dimension).
+              int path_dimension = 0;
+              const auto cameraSample = [&](int x, int y, int i, int k) {
+                sampler->startPixelSample({x, y}, i);
+                u_lambda[k] = sampler->get1D();
+                fs[k] = filter->sample(sampler->getPixel2D());
+                cs[k].lens = sampler->get2D();
+                cs[k].time = sampler->get1D();
+                cs[k].film_raster = {x + 0.5 + fs[k].p.x, y + 0.5 + fs[k].p.y};
+                lambdas[k] = SampledWavelengths::sampleVisible(u_lambda[k]);
+                static_assert(camera::kCameraWavelengths == kSpectrumSamples);
+                for (int c = 0; c < kSpectrumSamples; ++c)
+                  cs[k].lambda_nm[size_t(c)] = lambdas[k].lambda(c);
+                cs[k].pixel_centre = {x + 0.5, y + 0.5};
+                // bdpt keeps a dispersive lens's hero wavelength only (as pbrt-v4 does): its light
+                // subpaths share the camera path's wavelengths.
+                cs[k].filter = opt.dispersion_hero_only || bdpt ? nullptr : filter.get();
+                cs[k].filter_weight = fs[k].weight;
+                path_dimension = sampler->dimension();
+              };
+              // Film "gbuffer": the first visible surface of camera ray k of the batch.
+              const auto visible = [&](int k) {
+                return visibleSurface(
+                    sc, differential(*cam_rays[k], dx_rays[k], dy_rays[k]), lambdas[k],
+                    gbuffer_frame.outputFromWorld(cam_rays[k]->time, gbuffer_scratch),
+                    gbuffer_diff_scale, counts);
+              };
+              if (light_tracer) {
+                for (int y = y0; y < y1 && !tile_cancelled; ++y)
+                  for (int x = x0; x < x1; ++x) {
+                    if (stopRequested()) {
+                      cancelled = true;
+                      tile_cancelled = true;
+                      break;
                     }
-                }
-            }
-            for (int y = y0; y < (light_tracer ? y0 : y1); ++y)
-              for (int x = x0; x < x1; ++x)
-                for (int i0 = pass_begin; i0 < pass_end; i0 += kB) {
-                  if (((i0 - pass_begin) & 63) == 0 && stopRequested()) {
-                    cancelled = true;
-                    tile_cancelled = true;
-                    break;
+                    for (int i = pass_begin; i < pass_end; ++i) {
+                      sampler->startPixelSample({x, y}, i);
+                      // Dimension order: wavelength, then the light path.
+                      SampledWavelengths lambda =
+                          SampledWavelengths::sampleVisible(sampler->get1D());
+                      n_bad += uint64_t(light_tracer->trace(lambda, *sampler, film, counts));
+                      ++n_samples;
+                    }
+                    // Film "gbuffer": the light tracer traces no camera rays, so the auxiliary
+                    // channels get camera rays of their own, sampled as path's are (the same
+                    // sampler dimensions: the same rays and wavelengths as path's for the same
+                    // pixel sample).
+                    if (gbuffer)
+                      for (int i0 = pass_begin; i0 < pass_end; i0 += kB) {
+                        const int m = std::min(kB, pass_end - i0);
+                        for (int k = 0; k < m; ++k) cameraSample(x, y, i0 + k, k);
+                        cam->generateRays(cs, m, cam_rays);
+                        gbufferDifferentials(*cam, cs, m, cs_shift, dx_rays, dy_rays);
+                        for (int k = 0; k < m; ++k) {
+                          const auto vs = cam_rays[k] ? visible(k) : std::nullopt;
+                          film.addVisibleSurface(x, y, fs[k].weight, vs ? &*vs : nullptr);
+                        }
+                      }
                   }
-                  const int m = std::min(kB, pass_end - i0);
-                  for (int k = 0; k < m; ++k) cameraSample(x, y, i0 + k, k);
-                  cam->generateRays(cs, m, cam_rays);
-                  if (gbuffer) gbufferDifferentials(*cam, cs, m, cs_shift, dx_rays, dy_rays);
-                  for (int k = 0; k < m; ++k) {
-                    ++n_samples;
-                    SampledWavelengths& lambda = lambdas[k];
-                    const std::optional<camera::CameraRay>& ray = cam_rays[k];
-                    // A dispersive lens refracted the ray at the hero wavelength only.
-                    if (ray && ray->hero_only) lambda.terminateSecondary();
-                    SampledSpectrum L(0.0);
-                    if (bdpt) {
-                      // Also without a camera ray: the light subpath's splats do not need it.
-                      if (!ray) {
+              }
+              for (int y = y0; y < (light_tracer ? y0 : y1); ++y)
+                for (int x = x0; x < x1; ++x)
+                  for (int i0 = pass_begin; i0 < pass_end; i0 += kB) {
+                    if (((i0 - pass_begin) & 63) == 0 && stopRequested()) {
+                      cancelled = true;
+                      tile_cancelled = true;
+                      break;
+                    }
+                    const int m = std::min(kB, pass_end - i0);
+                    for (int k = 0; k < m; ++k) cameraSample(x, y, i0 + k, k);
+                    cam->generateRays(cs, m, cam_rays);
+                    if (gbuffer) gbufferDifferentials(*cam, cs, m, cs_shift, dx_rays, dy_rays);
+                    for (int k = 0; k < m; ++k) {
+                      ++n_samples;
+                      SampledWavelengths& lambda = lambdas[k];
+                      const std::optional<camera::CameraRay>& ray = cam_rays[k];
+                      // A dispersive lens refracted the ray at the hero wavelength only.
+                      if (ray && ray->hero_only) lambda.terminateSecondary();
+                      SampledSpectrum L(0.0);
+                      if (bdpt) {
+                        // Also without a camera ray: the light subpath's splats do not need it.
+                        if (!ray) {
+                          ++n_none;
+                          n_outside += !cam->reachesFilm(cs[k]);
+                        } else {
+                          ++n_rays;
+                        }
+                        sampler->startPixelSample({x, y}, i0 + k, path_dimension);
+                        bdpt_splats.clear();
+                        const double time =
+                            ray ? ray->time : shutter_open + cs[k].time * shutter_length;
+                        L = bdpt->Li(ray ? &*ray : nullptr, time, lambda, *sampler, counts,
+                                     bdpt_splats);
+                        for (const BdptSplat& sp : bdpt_splats) {
+                          bool ok = true;
+                          for (int c = 0; c < kSpectrumSamples; ++c)
+                            ok = ok && std::isfinite(sp.L[c]);
+                          if (ok)
+                            film.addSplat(sp.raster, sp.L, lambda);
+                          else
+                            ++n_bad;
+                        }
+                      } else if (!ray) {
                         ++n_none;
                         n_outside += !cam->reachesFilm(cs[k]);
                       } else {
                         ++n_rays;
+                        sampler->startPixelSample({x, y}, i0 + k, path_dimension);
+                        L = direct_lighting
+                                ? directLightingLi(sc, direct_opt, ray->origin, ray->direction,
+                                                   ray->time, lambda, *sampler, counts)
+                            : volpath ? volpathLi(sc, ray->origin, ray->direction, ray->time,
+                                                  sc.scene_media ? sc.camera_medium : -1, lambda,
+                                                  *sampler, counts)
+                                      : pathLi(sc, ray->origin, ray->direction, ray->time, lambda,
+                                               *sampler, counts);
+                        if (ray->per_wavelength && !lambda.secondaryTerminated()) {
+                          for (int c = 0; c < kSpectrumSamples; ++c)
+                            L[c] *= ray->wavelength_weight[size_t(c)];
+                        } else {
+                          L = L * ray->weight;
+                        }
                       }
-                      sampler->startPixelSample({x, y}, i0 + k, path_dimension);
-                      bdpt_splats.clear();
-                      const double time =
-                          ray ? ray->time : shutter_open + cs[k].time * shutter_length;
-                      L = bdpt->Li(ray ? &*ray : nullptr, time, lambda, *sampler, counts,
-                                   bdpt_splats);
-                      for (const BdptSplat& sp : bdpt_splats) {
-                        bool ok = true;
-                        for (int c = 0; c < kSpectrumSamples; ++c) ok = ok && std::isfinite(sp.L[c]);
-                        if (ok)
-                          film.addSplat(sp.raster, sp.L, lambda);
-                        else
-                          ++n_bad;
+                      bool finite = true;
+                      for (int c = 0; c < kSpectrumSamples; ++c)
+                        finite = finite && std::isfinite(L[c]);
+                      if (!finite) {
+                        ++n_bad;
+                        continue;
                       }
-                    } else if (!ray) {
-                      ++n_none;
-                      n_outside += !cam->reachesFilm(cs[k]);
-                    } else {
-                      ++n_rays;
-                      sampler->startPixelSample({x, y}, i0 + k, path_dimension);
-                      L = direct_lighting
-                              ? directLightingLi(sc, direct_opt, ray->origin, ray->direction,
-                                                 ray->time, lambda, *sampler, counts)
-                          : volpath
-                              ? volpathLi(sc, ray->origin, ray->direction, ray->time,
-                                          sc.scene_media ? sc.camera_medium : -1, lambda,
-                                          *sampler, counts)
-                              : pathLi(sc, ray->origin, ray->direction, ray->time, lambda,
-                                       *sampler, counts);
-                      if (ray->per_wavelength && !lambda.secondaryTerminated()) {
-                        for (int c = 0; c < kSpectrumSamples; ++c)
-                          L[c] *= ray->wavelength_weight[size_t(c)];
-                      } else {
-                        L = L * ray->weight;
+                      // Film "gbuffer" (also with bdpt, whose camera subpath starts with the
+                      // same camera ray and first surface as path's).
+                      if (gbuffer && ray) {
+                        const auto vs = visible(k);
+                        film.addSample(x, y, L, lambda, fs[k].weight, vs ? &*vs : nullptr);
+                        continue;
                       }
+                      film.addSample(x, y, L, lambda, fs[k].weight);
                     }
-                    bool finite = true;
-                    for (int c = 0; c < kSpectrumSamples; ++c)
-                      finite = finite && std::isfinite(L[c]);
-                    if (!finite) {
-                      ++n_bad;
-                      continue;
-                    }
-                    // Film "gbuffer" (also with bdpt, whose camera subpath starts with the
-                    // same camera ray and first surface as path's).
-                    if (gbuffer && ray) {
-                      const auto vs = visible(k);
-                      film.addSample(x, y, L, lambda, fs[k].weight, vs ? &*vs : nullptr);
-                      continue;
-                    }
-                    film.addSample(x, y, L, lambda, fs[k].weight);
                   }
-                }
-            camera_samples += n_samples;
-            camera_rays += n_rays;
-            no_ray += n_none;
-            outside += n_outside;
-            nonfinite += n_bad;
-            rays += counts.intersect + counts.shadow;
-            if (!tile_cancelled) {
-              done[size_t(tile)].store(1, std::memory_order_release);
-              ++tiles_done;
+              camera_samples += n_samples;
+              camera_rays += n_rays;
+              no_ray += n_none;
+              outside += n_outside;
+              nonfinite += n_bad;
+              rays += counts.intersect + counts.shadow;
+              if (!tile_cancelled) {
+                done[size_t(tile)].store(1, std::memory_order_release);
+                ++tiles_done;
+              }
             }
-          }
-        });
-  } catch (...) {
-    stopProgress();  // a joinable thread must not outlive the render
-    throw;
-  }
-  setSplatScale(pass_end - spp_begin);
-  if (opt.on_pass && !cancelled.load() && (opt.cancel == nullptr || !opt.cancel->load()) &&
-      !opt.on_pass(film.image(), pass_end - spp_begin))
-    cancelled = true;
+          });
+    } catch (...) {
+      stopProgress();  // a joinable thread must not outlive the render
+      throw;
+    }
+    setSplatScale(pass_end - spp_begin);
+    if (opt.on_pass && !cancelled.load() && (opt.cancel == nullptr || !opt.cancel->load()) &&
+        !opt.on_pass(film.image(), pass_end - spp_begin))
+      cancelled = true;
   }
   stopProgress();
   if (checkpoint_error) std::rethrow_exception(checkpoint_error);
@@ -633,13 +636,15 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
       ++st.nonfinite_pixels;
     }
   if (st.invalid_rays > 0)
-    logWarning(fmt::format("{} rays with a non-finite or huge origin or direction were dropped "
-                           "(check the scene's numbers)",
-                           st.invalid_rays));
+    logWarning(
+        fmt::format("{} rays with a non-finite or huge origin or direction were dropped "
+                    "(check the scene's numbers)",
+                    st.invalid_rays));
   if (st.nonfinite_pixels > 0)
-    logWarning(fmt::format("{} pixel values were NaN or infinite and are written as 0 (check the "
-                           "scene's light and film values)",
-                           st.nonfinite_pixels));
+    logWarning(
+        fmt::format("{} pixel values were NaN or infinite and are written as 0 (check the "
+                    "scene's light and film values)",
+                    st.nonfinite_pixels));
   auto& md = result.image.metadata;
   md["lensim:spp"] = std::to_string(spp);
   md["lensim:setup_seconds"] = fmt::format("{:.3f}", st.load_s + st.setup_s);

@@ -98,31 +98,31 @@ struct RenderOptions {
 
 /// What happened during a render.
 struct RenderStats {
-  double wall_s = 0;             ///< rendering time (excluding scene and camera set-up)
-  double setup_s = 0;            ///< building the acceleration structure, lights, textures
-  double load_s = 0;             ///< reading, parsing and building the scene before (RenderOptions)
-  double camera_startup_s = 0;   ///< the camera's startupSeconds()
+  double wall_s = 0;            ///< rendering time (excluding scene and camera set-up)
+  double setup_s = 0;           ///< building the acceleration structure, lights, textures
+  double load_s = 0;            ///< reading, parsing and building the scene before (RenderOptions)
+  double camera_startup_s = 0;  ///< the camera's startupSeconds()
   double camera_startup_cpu_s = 0;  ///< the camera's startupCpuSeconds()
-  uint64_t camera_samples = 0;   ///< camera samples taken
-  uint64_t camera_rays = 0;      ///< camera samples that produced a ray
-  uint64_t no_ray_samples = 0;   ///< camera samples without a ray (blocked by the lens)
-  uint64_t outside_samples = 0;  ///< of those, samples where no light reaches the film (outside
-                                 ///< the image circle: camera::Camera::reachesFilm)
-  uint64_t nonfinite_samples = 0;  ///< NaN/inf radiance samples, discarded
-  uint64_t rays = 0;               ///< all rays traced (intersection and shadow)
-  uint64_t invalid_rays = 0;       ///< rays with non-finite or huge numbers, dropped (Accel)
-  uint64_t nonfinite_pixels = 0;   ///< NaN/inf pixel values of the image, written as 0
+  uint64_t camera_samples = 0;      ///< camera samples taken
+  uint64_t camera_rays = 0;         ///< camera samples that produced a ray
+  uint64_t no_ray_samples = 0;      ///< camera samples without a ray (blocked by the lens)
+  uint64_t outside_samples = 0;     ///< of those, samples where no light reaches the film (outside
+                                    ///< the image circle: camera::Camera::reachesFilm)
+  uint64_t nonfinite_samples = 0;   ///< NaN/inf radiance samples, discarded
+  uint64_t rays = 0;                ///< all rays traced (intersection and shadow)
+  uint64_t invalid_rays = 0;        ///< rays with non-finite or huge numbers, dropped (Accel)
+  uint64_t nonfinite_pixels = 0;    ///< NaN/inf pixel values of the image, written as 0
   int spp = 0;
   int spp_begin = 0, spp_end = 0;  ///< the sample indices taken, [spp_begin, spp_end)
   int threads = 0;
   int tiles_resumed = 0;  ///< tiles taken from RenderOptions::resume
-  bool partial = false;  ///< cancelled before every tile was done
-  std::string camera;    ///< the camera's description
+  bool partial = false;   ///< cancelled before every tile was done
+  std::string camera;     ///< the camera's description
 };
 
 struct RenderResult {
-  io::Image image;  ///< R, G, B over the rendered pixel bounds; metadata describes the render
-  PixelBounds bounds;          ///< the pixels rendered
+  io::Image image;     ///< R, G, B over the rendered pixel bounds; metadata describes the render
+  PixelBounds bounds;  ///< the pixels rendered
   PixelBounds full_bounds;     ///< the pixel bounds of the whole render (bounds, unless a tile)
   std::vector<PixelSum> sums;  ///< the exact film sums over bounds (RenderOptions::keep_sums)
   RenderStats stats;

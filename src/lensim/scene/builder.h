@@ -218,7 +218,7 @@ struct Shape {
   int object = -1;             ///< index into Scene::objects when part of an object definition
   // Quadrics (scene units, degrees).
   double radius = 1, inner_radius = 0, height = 0, zmin = -1, zmax = 1, phimax_deg = 360;
-  int mesh = -1;  ///< index into Scene::meshes for meshes
+  int mesh = -1;   ///< index into Scene::meshes for meshes
   int curve = -1;  ///< index into Scene::curves for curves
   /// Index into Scene::motions when the transform is animated (ActiveTransform; `transform` is
   /// then the start transform), -1 for a static shape.

@@ -24,8 +24,8 @@ int curveSegmentCount(bool bspline, int degree, size_t count) {
   return int((count - 1) / d);
 }
 
-Curve makeCurve(CurveKind kind, bool bspline, int degree, const std::vector<Vec3>& P,
-                double width0, double width1, const std::vector<Vec3>& normals) {
+Curve makeCurve(CurveKind kind, bool bspline, int degree, const std::vector<Vec3>& P, double width0,
+                double width1, const std::vector<Vec3>& normals) {
   Curve c;
   c.kind = kind;
   const int n = curveSegmentCount(bspline, degree, P.size());
@@ -33,7 +33,8 @@ Curve makeCurve(CurveKind kind, bool bspline, int degree, const std::vector<Vec3
     Bezier b;
     if (!bspline) {
       const size_t o = size_t(seg * degree);
-      b = degree == 2 ? elevate(P[o], P[o + 1], P[o + 2]) : Bezier{P[o], P[o + 1], P[o + 2], P[o + 3]};
+      b = degree == 2 ? elevate(P[o], P[o + 1], P[o + 2])
+                      : Bezier{P[o], P[o + 1], P[o + 2], P[o + 3]};
     } else {
       const size_t o = size_t(seg);
       if (degree == 2) {

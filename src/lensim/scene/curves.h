@@ -20,17 +20,17 @@ enum class CurveKind { Flat, Cylinder, Ribbon };
 /// Cubic Bézier segments, 4 control points each (not shared), in object space.
 struct Curve {
   CurveKind kind = CurveKind::Flat;
-  std::vector<Vec3> cp;         ///< 4 per segment
-  std::vector<double> width;    ///< per control point: linear in u along each segment
-  std::vector<Vec3> normal;     ///< ribbon: per control point (normalised), else empty
+  std::vector<Vec3> cp;       ///< 4 per segment
+  std::vector<double> width;  ///< per control point: linear in u along each segment
+  std::vector<Vec3> normal;   ///< ribbon: per control point (normalised), else empty
   size_t segments() const { return cp.size() / 4; }
 };
 
 /// Converts pbrt's control points (`basis` "bezier" or "bspline", `degree` 2 or 3) to a Curve;
 /// `normals` are the ribbon's nSegments + 1 normals or empty. The caller has checked the counts
 /// (curveSegmentCount).
-Curve makeCurve(CurveKind kind, bool bspline, int degree, const std::vector<Vec3>& P,
-                double width0, double width1, const std::vector<Vec3>& normals);
+Curve makeCurve(CurveKind kind, bool bspline, int degree, const std::vector<Vec3>& P, double width0,
+                double width1, const std::vector<Vec3>& normals);
 /// The number of segments pbrt makes of `count` control points, or -1 if the count is invalid
 /// (Bézier: degree + 1 + k degree; B-spline: at least degree + 1).
 int curveSegmentCount(bool bspline, int degree, size_t count);

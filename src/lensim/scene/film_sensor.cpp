@@ -9,10 +9,10 @@ const std::vector<std::string>& pbrtCameraSensorNames() {
   // The names (without the _r/_g/_b suffix) of pbrt-v4's named camera sensor spectra,
   // src/pbrt/util/spectrum.cpp.
   static const std::vector<std::string> names = {
-      "canon_eos_100d",    "canon_eos_1dx_mkii", "canon_eos_200d",  "canon_eos_200d_mkii",
-      "canon_eos_5d",      "canon_eos_5d_mkii",  "canon_eos_5d_mkiii", "canon_eos_5d_mkiv",
-      "canon_eos_5ds",     "canon_eos_m",        "hasselblad_l1d_20c", "nikon_d810",
-      "nikon_d850",        "sony_ilce_6400",     "sony_ilce_7m3",   "sony_ilce_7rm3",
+      "canon_eos_100d", "canon_eos_1dx_mkii", "canon_eos_200d",     "canon_eos_200d_mkii",
+      "canon_eos_5d",   "canon_eos_5d_mkii",  "canon_eos_5d_mkiii", "canon_eos_5d_mkiv",
+      "canon_eos_5ds",  "canon_eos_m",        "hasselblad_l1d_20c", "nikon_d810",
+      "nikon_d850",     "sony_ilce_6400",     "sony_ilce_7m3",      "sony_ilce_7rm3",
       "sony_ilce_9"};
   return names;
 }
@@ -37,6 +37,8 @@ double sensorImagingRatio(double exposure_time_s, double iso) {
   return exposure_time_s * iso / 100;
 }
 
-double whiteBalanceCct(double temperature_k) { return temperature_k * 1.4388 / 1.4380; }
+double whiteBalanceCct(double temperature_k) {
+  return temperature_k * 1.4388 / 1.4380;
+}
 
 }  // namespace lensim::scene

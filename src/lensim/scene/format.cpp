@@ -113,9 +113,7 @@ std::string summary(const Scene& scene) {
   const Integrator& in = scene.integrator;
   line(fmt::format(
       "integrator: {}, maxdepth {}{}", renamed(in.type_as_written, in.type), in.max_depth,
-      in.defaulted
-          ? (scene.legacy_syntax ? " (pbrt-v1–v3 default)" : " (default)")
-          : ""));
+      in.defaulted ? (scene.legacy_syntax ? " (pbrt-v1–v3 default)" : " (default)") : ""));
 
   // Shapes.
   std::vector<std::pair<std::string, int>> world, inObjects;

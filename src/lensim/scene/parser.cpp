@@ -193,7 +193,8 @@ std::optional<std::string> readSceneText(const std::string& path) {
       if (n == 0) break;
       data.append(buf, static_cast<size_t>(n));
       // A small .gz can expand without bound: the decompressed text counts against the budget.
-      if ((data.size() & ((size_t{1} << 26) - 1)) < sizeof buf || data.size() > kMaxSceneFileBytes) {
+      if ((data.size() & ((size_t{1} << 26) - 1)) < sizeof buf ||
+          data.size() > kMaxSceneFileBytes) {
         if (data.size() > kMaxSceneFileBytes) {
           gzclose(f);
           throw Error(FileLoc{path, 0, 0},

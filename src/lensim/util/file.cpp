@@ -105,7 +105,8 @@ std::string readRegularFile(const std::string& path, std::string_view what, uint
     throw Error(FileLoc{path}, fmt::format("cannot read {}: not a regular file", what));
   }
   std::string out;
-  out.reserve(static_cast<size_t>(std::min<uint64_t>(static_cast<uint64_t>(st.st_size), max_bytes)));
+  out.reserve(
+      static_cast<size_t>(std::min<uint64_t>(static_cast<uint64_t>(st.st_size), max_bytes)));
   char buf[1 << 16];
   for (;;) {
     const ssize_t n = ::read(fd, buf, sizeof buf);
@@ -118,7 +119,8 @@ std::string readRegularFile(const std::string& path, std::string_view what, uint
     if (n == 0) break;
     if (out.size() + static_cast<size_t>(n) > max_bytes) {
       ::close(fd);
-      throw Error(FileLoc{path}, fmt::format("{} is too large: more than {} bytes", what, max_bytes));
+      throw Error(FileLoc{path},
+                  fmt::format("{} is too large: more than {} bytes", what, max_bytes));
     }
     out.append(buf, static_cast<size_t>(n));
   }

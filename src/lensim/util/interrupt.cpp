@@ -22,8 +22,8 @@ extern "C" void onInterrupt(int sig) {
   g_signal.compare_exchange_strong(expected, sig);
   g_flag.store(true);
   const int seen = g_signals_seen.fetch_add(1) + 1;
-  if (g_critical.load() > 0) return;                   // finish writing first
-  if (g_cancellable.load() > 0 && seen == 1) return;   // stop and write what there is
+  if (g_critical.load() > 0) return;                  // finish writing first
+  if (g_cancellable.load() > 0 && seen == 1) return;  // stop and write what there is
   ::_exit(128 + g_signal.load());                     // nothing is half-written now
 }
 
@@ -38,17 +38,27 @@ void installInterruptHandlers() {
   ::sigaction(SIGTERM, &sa, nullptr);
 }
 
-const std::atomic<bool>& interruptFlag() { return g_flag; }
-int interruptSignal() { return g_signal.load(); }
+const std::atomic<bool>& interruptFlag() {
+  return g_flag;
+}
+int interruptSignal() {
+  return g_signal.load();
+}
 int interruptExitStatus() {
   const int s = g_signal.load();
   return s ? 128 + s : 0;
 }
 
-CancellableScope::CancellableScope() { g_cancellable.fetch_add(1); }
-CancellableScope::~CancellableScope() { g_cancellable.fetch_sub(1); }
+CancellableScope::CancellableScope() {
+  g_cancellable.fetch_add(1);
+}
+CancellableScope::~CancellableScope() {
+  g_cancellable.fetch_sub(1);
+}
 
-CriticalScope::CriticalScope() { g_critical.fetch_add(1); }
+CriticalScope::CriticalScope() {
+  g_critical.fetch_add(1);
+}
 CriticalScope::~CriticalScope() {
   if (g_critical.fetch_sub(1) == 1 && g_flag.load() && g_cancellable.load() == 0)
     ::_exit(128 + g_signal.load());

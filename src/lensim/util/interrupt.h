@@ -18,7 +18,9 @@ void installInterruptHandlers();
 
 /// The flag a cancellable computation polls (true once a signal arrived).
 const std::atomic<bool>& interruptFlag();
-inline bool interrupted() { return interruptFlag().load(std::memory_order_relaxed); }
+inline bool interrupted() {
+  return interruptFlag().load(std::memory_order_relaxed);
+}
 
 /// The first signal received (SIGINT or SIGTERM), 0 if none.
 int interruptSignal();

@@ -28,7 +28,9 @@ uint64_t memoryBudgetBytes() {
   return phys ? phys / 2 : (uint64_t{8} << 30);
 }
 
-void setMemoryBudgetBytes(uint64_t bytes) { g_budget.store(bytes); }
+void setMemoryBudgetBytes(uint64_t bytes) {
+  g_budget.store(bytes);
+}
 
 std::optional<uint64_t> parseMemorySize(std::string_view text) {
   while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back())))
@@ -59,7 +61,8 @@ std::optional<uint64_t> parseMemorySize(std::string_view text) {
 
 std::string formatBytes(double bytes) {
   if (!(bytes < 1e30)) return "an unbounded amount of memory";
-  if (bytes >= 1024.0 * 1024 * 1024) return fmt::format("{:.1f} GiB", bytes / (1024.0 * 1024 * 1024));
+  if (bytes >= 1024.0 * 1024 * 1024)
+    return fmt::format("{:.1f} GiB", bytes / (1024.0 * 1024 * 1024));
   if (bytes >= 1024.0 * 1024) return fmt::format("{:.1f} MiB", bytes / (1024.0 * 1024));
   if (bytes >= 1024.0) return fmt::format("{:.1f} KiB", bytes / 1024.0);
   return fmt::format("{:.0f} bytes", bytes);
@@ -68,9 +71,10 @@ std::string formatBytes(double bytes) {
 void checkMemory(double bytes, const FileLoc& loc, std::string_view what) {
   const uint64_t budget = memoryBudgetBytes();
   if (!(bytes <= static_cast<double>(budget)))
-    throw Error(loc, fmt::format("{} needs about {}, more than the memory limit of {} "
-                                 "(--memory-limit)",
-                                 what, formatBytes(bytes), formatBytes(static_cast<double>(budget))));
+    throw Error(loc,
+                fmt::format("{} needs about {}, more than the memory limit of {} "
+                            "(--memory-limit)",
+                            what, formatBytes(bytes), formatBytes(static_cast<double>(budget))));
 }
 
 std::optional<uint64_t> checkedMul(uint64_t a, uint64_t b) {
@@ -87,16 +91,15 @@ std::optional<uint64_t> checkedAdd(uint64_t a, uint64_t b) {
 
 void requireFinite(double value, const FileLoc& loc, std::string_view what, double max_abs) {
   if (!std::isfinite(value))
-    throw Error(loc, fmt::format("expected a finite number{}{}, found {}", what.empty() ? "" : " for ",
-                                 what, value));
+    throw Error(loc, fmt::format("expected a finite number{}{}, found {}",
+                                 what.empty() ? "" : " for ", what, value));
   if (std::abs(value) > max_abs)
-    throw Error(loc, fmt::format("{}{:g} is out of range; expected a magnitude <= {:g}",
-                                 what.empty() ? "number " : fmt::format("{} ", what), value,
-                                 max_abs));
+    throw Error(loc,
+                fmt::format("{}{:g} is out of range; expected a magnitude <= {:g}",
+                            what.empty() ? "number " : fmt::format("{} ", what), value, max_abs));
 }
 
-void requireInRange(double value, double lo, double hi, const FileLoc& loc,
-                    std::string_view what) {
+void requireInRange(double value, double lo, double hi, const FileLoc& loc, std::string_view what) {
   if (!(value >= lo && value <= hi))
     throw Error(loc, fmt::format("{} {:g} is out of range; expected a value in [{:g}, {:g}]", what,
                                  value, lo, hi));

@@ -51,7 +51,6 @@ void requireFinite(double value, const FileLoc& loc, std::string_view what,
 
 /// Throws Error at `loc` unless lo <= value <= hi (and finite):
 /// "<what> 1e+300 is out of range; expected a value in [1e-06, 1e+06]".
-void requireInRange(double value, double lo, double hi, const FileLoc& loc,
-                    std::string_view what);
+void requireInRange(double value, double lo, double hi, const FileLoc& loc, std::string_view what);
 
 }  // namespace lensim

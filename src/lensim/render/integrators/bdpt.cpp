@@ -200,8 +200,8 @@ int mediumToward(const Context& ctx, const Vertex& v, const Vec3& w) {
 /// The transmittance of a connection from the camera-side vertex a to b (to the direction wi
 /// when b is on an infinite light), traced from a, whose medium is known.
 SampledSpectrum connectionT(const Context& ctx, const Vertex& a, const Vertex& b, bool infinite,
-                            const Vec3& wi, double time, const SampledWavelengths& lambda,
-                            Rng& rng, RayCounts& counts) {
+                            const Vec3& wi, double time, const SampledWavelengths& lambda, Rng& rng,
+                            RayCounts& counts) {
   const Vec3 w = infinite ? wi : normalize(b.p - a.p);
   const Vec3 ng = a.onSurface() ? a.ng : Vec3{0, 0, 0};
   return segmentTransmittance(*ctx.sc, a.p, ng, mediumToward(ctx, a, w), infinite ? wi : b.p,
@@ -449,8 +449,8 @@ double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex
   const bool pt_delta = pt ? pt->delta : false, qs_delta = qs ? qs->delta : false;
   double new_pt_rev = 0, new_pt_minus_rev = 0, new_qs_rev = 0, new_qs_minus_rev = 0;
   if (pt)
-    new_pt_rev = s > 0 ? pdf(ctx, *qs, qs_minus, *pt, lambda_nm)
-                       : pdfLightOrigin(ctx, *pt, *pt_minus);
+    new_pt_rev =
+        s > 0 ? pdf(ctx, *qs, qs_minus, *pt, lambda_nm) : pdfLightOrigin(ctx, *pt, *pt_minus);
   if (pt_minus)
     new_pt_minus_rev =
         s > 0 ? pdf(ctx, *pt, qs, *pt_minus, lambda_nm) : pdfLight(ctx, *pt, *pt_minus);
@@ -566,8 +566,8 @@ int lightSubpath(const Context& ctx, double time, SampledWavelengths& lambda, Sa
   // The light's own surface must not stop its ray.
   const Vec3 o = on_surface ? offsetOrigin(le->o, le->n, le->d) : le->o;
   const int n =
-      randomWalk(ctx, Ray{o, le->d, INFINITY, time}, v.medium, lambda, sampler, rng, beta, le->pdf_dir,
-                 max_vertices - 1, TransportMode::Importance, counts, path, nullptr);
+      randomWalk(ctx, Ray{o, le->d, INFINITY, time}, v.medium, lambda, sampler, rng, beta,
+                 le->pdf_dir, max_vertices - 1, TransportMode::Importance, counts, path, nullptr);
   // Infinite lights: the first surface vertex's density is the disk's positional density
   // projected onto it, and the light vertex's the direction's (pbrt-v4).
   if (isInfiniteLight(v)) {

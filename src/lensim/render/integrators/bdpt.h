@@ -55,8 +55,8 @@
 #include <string>
 #include <vector>
 
-#include "lensim/render/materials/bsdf.h"
 #include "lensim/render/integrators/integrator.h"
+#include "lensim/render/materials/bsdf.h"
 
 namespace lensim::camera {
 class Camera;

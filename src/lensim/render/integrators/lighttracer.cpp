@@ -66,9 +66,10 @@ LightTracer::LightTracer(const SceneContext& sc, const camera::Camera& camera)
           "path starts in a medium); \"volpath\" or \"bdpt\" render it");
   }
   for (const auto& [type, n] : left_out)
-    logWarning(fmt::format("integrator \"lighttracer\": {} {} light{} cannot start light paths "
-                           "(no emission sampling) and {} left out of the image",
-                           n, type, n > 1 ? "s" : "", n > 1 ? "are" : "is"));
+    logWarning(
+        fmt::format("integrator \"lighttracer\": {} {} light{} cannot start light paths "
+                    "(no emission sampling) and {} left out of the image",
+                    n, type, n > 1 ? "s" : "", n > 1 ? "are" : "is"));
 }
 
 int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
@@ -80,8 +81,9 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
   const double time = shutter_open_ + u_time * (shutter_close_ - shutter_open_);
   // The light, by power.
   const double x = u_light * cdf_.back();
-  const size_t k = size_t(std::min<std::ptrdiff_t>(
-      std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin(), std::ptrdiff_t(cdf_.size()) - 1));
+  const size_t k =
+      size_t(std::min<std::ptrdiff_t>(std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin(),
+                                      std::ptrdiff_t(cdf_.size()) - 1));
   const double pmf = (cdf_[k] - (k > 0 ? cdf_[k - 1] : 0.0)) / cdf_.back();
   if (!(pmf > 0)) return 0;
   const Light& light = *lights_[k];

@@ -467,8 +467,7 @@ class UniformInfiniteLight final : public Light {
 class ImageInfiniteLight final : public Light {
  public:
   const char* typeName() const override { return "infinite (image)"; }
-  ImageInfiniteLight(const scene::Light& desc, double scale, double scene_radius,
-                     Vec3 scene_centre)
+  ImageInfiniteLight(const scene::Light& desc, double scale, double scene_radius, Vec3 scene_centre)
       : world_from_light_(desc.transform),
         light_from_world_(inverse(desc.transform)),
         scale_(scale),

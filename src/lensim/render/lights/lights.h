@@ -41,10 +41,10 @@ struct LightLiSample {
 
 /// A ray leaving a light (light tracing, bidirectional methods): pbrt-v4's LightLeSample.
 struct LightLeSample {
-  Vec3 o, d;          ///< origin on the light, unit direction
-  SampledSpectrum L;  ///< radiance leaving along d (intensity for point lights)
-  double pdf_pos = 0; ///< per unit area of the light's surface (1 for a point light: a delta)
-  double pdf_dir = 0; ///< per steradian of d
+  Vec3 o, d;                ///< origin on the light, unit direction
+  SampledSpectrum L;        ///< radiance leaving along d (intensity for point lights)
+  double pdf_pos = 0;       ///< per unit area of the light's surface (1 for a point light: a delta)
+  double pdf_dir = 0;       ///< per steradian of d
   bool on_surface = false;  ///< an area light: n is its surface normal at o (the side of d
                             ///< for two-sided lights is not implied)
   Vec3 n;

@@ -11,9 +11,9 @@
 
 #include "lensim/render/spectra/spectrum.h"
 #include "lensim/util/error.h"
-#include "lensim/util/path_cache.h"
 #include "lensim/util/file.h"
 #include "lensim/util/limits.h"
+#include "lensim/util/path_cache.h"
 
 namespace lensim::render {
 

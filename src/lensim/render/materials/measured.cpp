@@ -12,9 +12,9 @@
 #include "lensim/render/materials/microfacet.h"
 #include "lensim/sampling/sampling.h"
 #include "lensim/util/error.h"
-#include "lensim/util/path_cache.h"
 #include "lensim/util/file.h"
 #include "lensim/util/limits.h"
+#include "lensim/util/path_cache.h"
 
 namespace lensim::render {
 

@@ -178,7 +178,7 @@ class Media {
 
  private:
   std::vector<std::unique_ptr<Medium>> media_;
-  std::vector<int> subsurface_;  ///< per material: its medium index, or -1
+  std::vector<int> subsurface_;                    ///< per material: its medium index, or -1
   std::vector<const SubsurfaceMedium*> textured_;  ///< per subsurface medium: textured, or null
   int n_scene_ = 0;
   bool any_ = false, has_subsurface_ = false;

@@ -484,7 +484,9 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
 
 Accel::~Accel() = default;
 
-uint64_t Accel::invalidRays() const { return impl_->invalid_rays.load(); }
+uint64_t Accel::invalidRays() const {
+  return impl_->invalid_rays.load();
+}
 
 const WorldMesh* Accel::worldMesh(int shape) const {
   if (shape < 0 || static_cast<size_t>(shape) >= impl_->shape_world_mesh.size()) return nullptr;
@@ -586,8 +588,8 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   Vec2 uv;
   if (r.curve) {
     const CurveHitGeometry g =
-        curveHitGeometry(*r.curve, r.curve_space, static_cast<size_t>(h.prim), rh.hit.u,
-                         rh.hit.v, Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, o + d * h.t, d);
+        curveHitGeometry(*r.curve, r.curve_space, static_cast<size_t>(h.prim), rh.hit.u, rh.hit.v,
+                         Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, o + d * h.t, d);
     p = g.p;
     ng = r.flip ? -g.n : g.n;
     ns = ng;

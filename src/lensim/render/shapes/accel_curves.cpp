@@ -49,9 +49,8 @@ RTCGeometry newCurveGeometry(RTCDevice device, const scene::Curve& curve, const 
   if (curve.kind == scene::CurveKind::Cylinder) type = RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE;
   if (curve.kind == scene::CurveKind::Ribbon) type = RTC_GEOMETRY_TYPE_NORMAL_ORIENTED_BEZIER_CURVE;
   RTCGeometry g = rtcNewGeometry(device, type);
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                        RTC_FORMAT_FLOAT4, 4 * sizeof(float),
-                                                        c.p.size()));
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+      g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), c.p.size()));
   for (size_t k = 0; k < c.p.size(); ++k) {
     v[4 * k] = float(c.p[k].x), v[4 * k + 1] = float(c.p[k].y), v[4 * k + 2] = float(c.p[k].z);
     v[4 * k + 3] = float(c.radius[k]);

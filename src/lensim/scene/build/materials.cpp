@@ -1,6 +1,6 @@
 // Builder: materials (Material, MakeNamedMaterial) and the default material.
-#include "lensim/util/file.h"
 #include "lensim/scene/build/builder_internal.h"
+#include "lensim/util/file.h"
 
 namespace lensim::scene::detail {
 

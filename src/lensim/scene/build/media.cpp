@@ -235,16 +235,18 @@ void Builder::resolveMedia() {
   // would render a subsurface shape as its bare dielectric boundary.
   bool subsurface = false;
   for (const Shape& sh : scene_.shapes)
-    subsurface = subsurface || (sh.material >= 0 &&
-                                scene_.materials[size_t(sh.material)].kind == MaterialKind::Subsurface);
+    subsurface = subsurface || (sh.material >= 0 && scene_.materials[size_t(sh.material)].kind ==
+                                                        MaterialKind::Subsurface);
   const FileLoc iloc = scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc;
   if (subsurface && scene_.integrator.type == "bdpt") {
-    warn(iloc, "integrator \"bdpt\" does not walk inside \"subsurface\" materials in lensim; the "
-               "scene renders with \"volpath\", which does");
+    warn(iloc,
+         "integrator \"bdpt\" does not walk inside \"subsurface\" materials in lensim; the "
+         "scene renders with \"volpath\", which does");
     scene_.integrator.type = "volpath";
   } else if (subsurface && scene_.integrator.type == "lighttracer") {
-    warn(iloc, "integrator \"lighttracer\" does not walk inside \"subsurface\" materials in "
-               "lensim: they render as their dielectric boundary (use \"volpath\")");
+    warn(iloc,
+         "integrator \"lighttracer\" does not walk inside \"subsurface\" materials in "
+         "lensim: they render as their dielectric boundary (use \"volpath\")");
   }
   if (used && (scene_.integrator.type == "path" || scene_.integrator.type == "directlighting"))
     warn(
