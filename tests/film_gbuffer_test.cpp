@@ -149,8 +149,9 @@ TEST(FilmGBuffer, TiltedPlaneDepthSlope) {
 // the lens: a fronto-parallel plane 3 m in front of the camera reads P.Z = 3 and N = (0, 0, -1)
 // wherever the lens images it, and its albedo in the image centre (as pbrt-v4, the albedo is
 // averaged over all the pixel's samples, so samples the lens blocks dilute it toward the corners).
-TEST(FilmGBuffer, RealisticCameraSeesThePlaneBeyondTheLens) {
-  const std::string text = fmt::format(R"(
+/// The 50 mm double Gauss focused at 3 m on a grey plane at z = 3, lit head-on.
+std::string realisticPlaneScene() {
+  return fmt::format(R"(
 LookAt 0 0 0  0 0 1  0 1 0
 Camera "realistic" "string lensfile" "{}" "float aperturediameter" 5 "float focusdistance" 3
 Film "gbuffer" "integer xresolution" 8 "integer yresolution" 8 "float diagonal" 35
@@ -164,8 +165,11 @@ Material "diffuse" "rgb reflectance" [0.5 0.5 0.5]
 Shape "trianglemesh" "point3 P" [-10 -10 3  10 -10 3  10 10 3  -10 10 3]
   "integer indices" [0 1 2 0 2 3]
 )",
-                                       lensim::test::lensPath("dgauss.50mm.dat"));
-  const io::Image im = testutil::renderText(text).image;
+                     lensim::test::lensPath("dgauss.50mm.dat"));
+}
+
+TEST(FilmGBuffer, RealisticCameraSeesThePlaneBeyondTheLens) {
+  const io::Image im = testutil::renderText(realisticPlaneScene()).image;
   int covered = 0;
   double albedo = 0, centre = 0;
   for (int y = 0; y < 8; ++y)
@@ -342,6 +346,28 @@ TEST(FilmGBuffer, BdptAndLightTracerFillTheAuxiliaryChannels) {
     // The RGB is the integrator's own (not a fallback to path), with a variance.
     EXPECT_GT(differing_rgb, kRes * kRes / 2) << integrator;
     EXPECT_GT(positive_variance, 0) << integrator;
+  }
+}
+
+// Through the realistic camera too, bdpt's and lighttracer's auxiliary channels are path's: the
+// same camera rays (through the double Gauss) see the same plane at z = 3.
+TEST(FilmGBuffer, BdptAndLightTracerThroughTheRealisticCamera) {
+  const std::string text = realisticPlaneScene();
+  const io::Image ip = testutil::renderText(text).image;
+  for (const char* integrator : {"bdpt", "lighttracer"}) {
+    const io::Image im = testutil::renderText(withIntegrator(text, integrator)).image;
+    ASSERT_EQ(im.channels, ip.channels);
+    int covered = 0;
+    for (int y = 0; y < 8; ++y)
+      for (int x = 0; x < 8; ++x) {
+        for (const char* c : {"Albedo.G", "P.X", "P.Y", "P.Z", "N.Z", "Ns.Z", "u", "v"})
+          EXPECT_EQ(at(im, c, x, y), at(ip, c, x, y))
+              << integrator << " " << c << " " << x << " " << y;
+        if (at(im, "N.Z", x, y) == 0) continue;
+        ++covered;
+        EXPECT_NEAR(at(im, "P.Z", x, y), 3, 1e-5) << integrator;
+      }
+    EXPECT_GE(covered, 60) << integrator;
   }
 }
 
