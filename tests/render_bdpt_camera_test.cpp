@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "direct_world_util.h"
 #include "lensim/camera/camera.h"
 #include "lensim/render/image_compare.h"
 #include "lensim/render/integrators/bdpt.h"
@@ -36,29 +37,13 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 
 /// A scene and its camera, for calling the bdpt functions directly with bdpt's own context.
-struct Direct {
-  scene::Scene scene;
-  std::unique_ptr<render::Accel> accel;
-  std::unique_ptr<render::Textures> textures;
-  std::unique_ptr<render::Materials> materials;
-  std::unique_ptr<render::LightSet> lights;
+struct Direct : testutil::DirectWorld {
   std::unique_ptr<camera::Camera> cam;
-  render::SceneContext sc;
   std::unique_ptr<render::BdptIntegrator> bdpt;
 
-  explicit Direct(const std::string& text) : scene(testutil::buildText(text, "bdpt-cam.pbrt")) {
-    if (scene.hasErrors()) throw Error(formatDiagnostics(scene.diagnostics));
-    accel = std::make_unique<render::Accel>(scene);
-    textures = std::make_unique<render::Textures>(scene);
-    materials = std::make_unique<render::Materials>(scene, *textures);
-    lights = std::make_unique<render::LightSet>(scene, *accel, *textures);
+  explicit Direct(const std::string& text)
+      : DirectWorld(testutil::buildText(text, "bdpt-cam.pbrt")) {
     cam = camera::makeCamera(scene);
-    sc.scene = &scene;
-    sc.accel = accel.get();
-    sc.textures = textures.get();
-    sc.materials = materials.get();
-    sc.lights = lights.get();
-    sc.max_depth = scene.integrator.max_depth;
     bdpt = std::make_unique<render::BdptIntegrator>(sc, *cam);
   }
   const render::bdpt::Context& ctx() const { return bdpt->context(); }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "direct_world_util.h"
 #include "lensim/camera/camera.h"
 #include "lensim/render/image_compare.h"
 #include "lensim/render/integrators/bdpt.h"
@@ -49,29 +50,12 @@ class HemisphereCamera final : public camera::Camera {
 };
 
 /// A scene built for calling the bdpt functions directly.
-struct Direct {
-  scene::Scene scene;
-  std::unique_ptr<render::Accel> accel;
-  std::unique_ptr<render::Textures> textures;
-  std::unique_ptr<render::Materials> materials;
-  std::unique_ptr<render::LightSet> lights;
+struct Direct : testutil::DirectWorld {
   std::unique_ptr<render::LightSampler> light_sampler;
-  render::SceneContext sc;
   HemisphereCamera camera;
   render::bdpt::Context ctx;
 
-  explicit Direct(const std::string& text) : scene(buildText(text, "bdpt-test.pbrt")) {
-    if (scene.hasErrors()) throw Error(formatDiagnostics(scene.diagnostics));
-    accel = std::make_unique<render::Accel>(scene);
-    textures = std::make_unique<render::Textures>(scene);
-    materials = std::make_unique<render::Materials>(scene, *textures);
-    lights = std::make_unique<render::LightSet>(scene, *accel, *textures);
-    sc.scene = &scene;
-    sc.accel = accel.get();
-    sc.textures = textures.get();
-    sc.materials = materials.get();
-    sc.lights = lights.get();
-    sc.max_depth = scene.integrator.max_depth;
+  explicit Direct(const std::string& text) : DirectWorld(buildText(text, "bdpt-test.pbrt")) {
     std::vector<const render::Light*> all;
     for (size_t i = 0; i < lights->size(); ++i) all.push_back(&lights->light(i));
     light_sampler = render::LightSampler::create("power", all);

@@ -15,6 +15,7 @@
 #include <random>
 #include <string>
 
+#include "direct_world_util.h"
 #include "lensim/render/integrators/volpath.h"
 #include "lensim/render/lights/lights.h"
 #include "lensim/render/materials/materials.h"
@@ -65,31 +66,9 @@ void writeNvdb(const fs::path& file, int n, double h, const nanovdb::Vec3d& orig
 }
 
 /// A scene built for calling the integrator directly.
-struct Direct {
-  scene::Scene scene;
-  std::unique_ptr<render::Accel> accel;
-  std::unique_ptr<render::Textures> textures;
-  std::unique_ptr<render::Materials> materials;
-  std::unique_ptr<render::LightSet> lights;
-  std::unique_ptr<render::Media> media;
-  render::SceneContext sc;
-
+struct Direct : testutil::DirectWorld {
   Direct(const std::string& text, const fs::path& dir)
-      : scene(scene::build(scene::parseString(text, (dir / "scene.pbrt").string()))) {
-    if (scene.hasErrors()) throw Error(formatDiagnostics(scene.diagnostics));
-    accel = std::make_unique<render::Accel>(scene);
-    textures = std::make_unique<render::Textures>(scene);
-    materials = std::make_unique<render::Materials>(scene, *textures);
-    lights = std::make_unique<render::LightSet>(scene, *accel, *textures);
-    media = std::make_unique<render::Media>(scene);
-    sc.scene = &scene;
-    sc.accel = accel.get();
-    sc.textures = textures.get();
-    sc.materials = materials.get();
-    sc.lights = lights.get();
-    sc.media = media.get();
-    sc.max_depth = scene.integrator.max_depth;
-  }
+      : DirectWorld(scene::build(scene::parseString(text, (dir / "scene.pbrt").string()))) {}
 };
 
 /// Mean radiance (and its standard error) at each wavelength of the set drawn with u0, over

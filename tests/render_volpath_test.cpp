@@ -11,6 +11,7 @@
 #include <numbers>
 #include <string>
 
+#include "direct_world_util.h"
 #include "lensim/render/image_compare.h"
 #include "lensim/render/integrators/volpath.h"
 #include "lensim/render/lights/lights.h"
@@ -32,30 +33,8 @@ using lensim::testutil::renderText;
 namespace {
 
 /// A scene built for calling the integrator directly.
-struct Direct {
-  scene::Scene scene;
-  std::unique_ptr<render::Accel> accel;
-  std::unique_ptr<render::Textures> textures;
-  std::unique_ptr<render::Materials> materials;
-  std::unique_ptr<render::LightSet> lights;
-  std::unique_ptr<render::Media> media;
-  render::SceneContext sc;
-
-  explicit Direct(const std::string& text) : scene(buildText(text, "volpath-test.pbrt")) {
-    if (scene.hasErrors()) throw Error(formatDiagnostics(scene.diagnostics));
-    accel = std::make_unique<render::Accel>(scene);
-    textures = std::make_unique<render::Textures>(scene);
-    materials = std::make_unique<render::Materials>(scene, *textures);
-    lights = std::make_unique<render::LightSet>(scene, *accel, *textures);
-    media = std::make_unique<render::Media>(scene);
-    sc.scene = &scene;
-    sc.accel = accel.get();
-    sc.textures = textures.get();
-    sc.materials = materials.get();
-    sc.lights = lights.get();
-    sc.media = media.get();
-    sc.max_depth = scene.integrator.max_depth;
-  }
+struct Direct : testutil::DirectWorld {
+  explicit Direct(const std::string& text) : DirectWorld(buildText(text, "volpath-test.pbrt")) {}
 };
 
 /// Transmittance along the ray (o, dir) at each wavelength of one set, estimated by volpath as
