@@ -292,22 +292,8 @@ SagGradient ShapeIntersector::sagContinued(double x, double y) const {
     return *surfaceSag(radius_, shape_, x, y);  // the domain's rim (not inside bound_r_)
   }
   if (!terms_.empty()) {
-    const double r = std::sqrt(r2);
-    double z = 0, slope_over_r = 0;
-    double rk = 1;  // r^k; the terms come in increasing powers
-    int k = 0;
-    for (const auto& [p, a] : terms_) {
-      if (p == 1) {
-        z += a * r;
-        if (r > 0) slope_over_r += a / r;
-      } else {
-        while (k < p - 2) rk *= r, ++k;
-        const double rpm2 = rk;
-        z += a * rpm2 * r2;
-        slope_over_r += p * a * rpm2;
-      }
-    }
-    g.z += z;
+    double slope_over_r;
+    g.z += polynomialSag(r2, slope_over_r);
     g.dzdx += slope_over_r * x;
     g.dzdy += slope_over_r * y;
   }
@@ -321,21 +307,28 @@ double ShapeIntersector::sagZ(double x, double y) const {
   const double arg = 1 - ax_ * x * x - ay_ * y * y;
   if (!(arg > 0)) return sagContinued(x, y).z;
   const double z0 = (cx_ * x * x + cy_ * y * y) / (1 + std::sqrt(arg));
-  double z = 0;  // summed apart and added last, as sagContinued does: the same value
-  if (!terms_.empty()) {
-    const double r = std::sqrt(r2);
-    double rk = 1;  // r^k, as in sagContinued
-    int k = 0;
-    for (const auto& [p, a] : terms_) {
-      if (p == 1) {
-        z += a * r;
-      } else {
-        while (k < p - 2) rk *= r, ++k;
-        z += a * rk * r2;
-      }
+  if (terms_.empty()) return z0;
+  double slope_over_r;
+  return z0 + polynomialSag(r2, slope_over_r);  // as sagContinued adds it: the same value
+}
+
+double ShapeIntersector::polynomialSag(double r2, double& slope_over_r) const {
+  const double r = std::sqrt(r2);
+  double z = 0;
+  slope_over_r = 0;
+  double rk = 1;  // r^k; the terms come in increasing powers
+  int k = 0;
+  for (const auto& [p, a] : terms_) {
+    if (p == 1) {
+      z += a * r;
+      if (r > 0) slope_over_r += a / r;
+    } else {
+      while (k < p - 2) rk *= r, ++k;
+      z += a * rk * r2;
+      slope_over_r += p * a * rk;
     }
   }
-  return z0 + z;
+  return z;
 }
 
 std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, const Vec3& d,

@@ -111,6 +111,8 @@ class ShapeIntersector {
   SagGradient sagContinued(double x, double y) const;
   /// sagContinued(x, y).z without the gradient (the first-crossing checks of the Newton solve).
   double sagZ(double x, double y) const;
+  /// The polynomial terms' sag at r^2 = r2 and their slope dz/dr over r (for the gradient).
+  double polynomialSag(double r2, double& slope_over_r) const;
 
  private:
   double radius_ = 0;
