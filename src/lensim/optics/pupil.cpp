@@ -98,40 +98,15 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     // the margin is <= 1, and the margin varies continuously across the rear plane, so that a
     // boundary is found by the secant method (a few traces) rather than by bisection (~9), and a
     // sliver of region by minimising it rather than by a blind grid.
-    std::vector<Vec3> path;
     auto margin1 = [&](const LensSystem& L, Vec2 film, Vec2 a) {
       double m2 = disc2 > 0 ? (a.x * a.x + a.y * a.y) / disc2 : 0.0;
       if (m2 > 1) return std::sqrt(m2);  // outside the rear disc: no trace needed
       ++traces;
-      path.clear();
+      // The tracer takes the largest ratio over the surfaces, and sin^2 of the refracted angle
+      // where the ray goes into a rarer medium (total internal reflection is no jump either).
       const TraceResult r =
-          L.traceFromFilmPoint(film, a, TraceOptions{.clip_apertures = false}, &path);
+          L.traceFromFilmPoint(film, a, TraceOptions{.clip_apertures = false, .margin2 = &m2});
       if (r.reason == BlockReason::Miss) return kInf;
-      const std::vector<Interface>& ifs = L.interfaces();
-      const int n = static_cast<int>(ifs.size());
-      // path[0] is the film point, path[k] the hit on surface n - k. Where the ray goes into a
-      // rarer medium, sin^2 of its refracted angle counts too (>= 1: total internal reflection),
-      // so that a boundary set by total internal reflection is no jump either.
-      for (size_t k = 1; k < path.size() && int(k) <= n; ++k) {
-        const Interface& in = ifs[size_t(n - int(k))];
-        const Vec3 q = path[k];
-        const double semi = in.semi_aperture_mm;
-        const double r2 = q.x * q.x + q.y * q.y;
-        m2 = std::max(m2, semi > 0 ? r2 / (semi * semi) : (r2 > 0 ? kInf : 0.0));
-        if (in.ior_after > in.ior_before) {
-          Vec3 normal{0, 0, -1};
-          if (!in.shape.isSpherical()) {
-            const std::optional<SagGradient> sg = surfaceSag(in.radius_mm, in.shape, q.x, q.y);
-            if (!sg) continue;
-            normal = normalize(Vec3{sg->dzdx, sg->dzdy, -1});
-          } else if (in.radius_mm != 0) {
-            normal = Vec3{q.x, q.y, q.z - in.z_mm - in.radius_mm} * (1 / in.radius_mm);
-          }
-          const double cos_i = dot(normalize(q - path[k - 1]), normal);
-          const double eta = in.ior_after / in.ior_before;
-          m2 = std::max(m2, eta * eta * std::max(0.0, 1 - cos_i * cos_i));
-        }
-      }
       return std::sqrt(m2);
     };
     // The lens's margin; where it blocks, the least over the other wavelengths' lenses too (the
@@ -740,43 +715,115 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
           known.push_back({xi, &dist[i]});
         }
       }
+      // Where a band's lens has no distances about the node's centre (the centre lies outside
+      // its region, or the lens's own region is empty here: near the edge of the image circle,
+      // which moves with the wavelength), that lens's polygon is traced from scratch, once per
+      // node (neighbouring bands share their edge's lens), or found empty. A band is then the
+      // union of its lenses' polygons: empty, the one polygon that is not, or the farthest of
+      // the distances about the node's centre; only a band whose lenses' regions lie about
+      // different centres is traced from scratch as a union.
+      const Polygon* hint = !base.empty                                 ? &base
+                            : k > 0 && !done[k - 1].empty               ? &done[k - 1]
+                            : k + 1 < done.size() && !done[k + 1].empty ? &done[k + 1]
+                                                                        : nullptr;
+      // Per band lens: 0 not yet traced, 1 distances about the node's centre (dist), 2 empty,
+      // 3 a polygon of its own (own[i]).
+      std::vector<char> state(band_lens.size(), 0);
+      std::vector<Polygon> own(band_lens.size());
+      auto scratch = [&](const std::vector<const LensSystem*>& lenses, const Polygon* hint) {
+        Polygon np;
+        np.r = h;
+        if (!hint) return np;
+        cur = lenses;
+        const std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &np.centre, hint);
+        if (pts.empty()) return np;
+        np.empty = false;
+        for (int j = 0; j < nd; ++j) {
+          const Vec2 q = pts[size_t(j)];
+          const double f = base.empty ? 1.0 : base.node_f[size_t(j)];
+          np.radius.push_back(std::hypot(q.x - np.centre.x, q.y - np.centre.y) * f);
+        }
+        return np;
+      };
+      auto lensState = [&](size_t i) {
+        if (state[i] == 0) {
+          if (!base.empty && inside[i]) {
+            state[i] = 1;
+          } else {
+            // From the nearest wavelength's polygon of its own where there is one (its centre
+            // usually lies inside this lens's region too).
+            const Polygon* from = hint;
+            for (size_t d = 1; d < band_lens.size() && from == hint; ++d)
+              for (size_t n : {i - d, i + d})
+                if (n < band_lens.size() && state[n] == 3) {
+                  from = &own[n];
+                  break;
+                }
+            own[i] = scratch({band_lens[i]}, from);
+            state[i] = own[i].empty ? 2 : 3;
+          }
+        }
+        return state[i];
+      };
       for (size_t b = 0; b < opts.bands.size(); ++b) {
         const std::vector<const LensSystem*>& band = opts.bands[b];
         Polygon& node = w.band_nodes[b][k];
         if (band.empty()) continue;
-        bool all_in = !base.empty;
-        for (const LensSystem* L : band)
-          all_in =
-              all_in &&
-              inside[size_t(std::find(band_lens.begin(), band_lens.end(), L) - band_lens.begin())];
-        if (all_in) {
+        std::vector<size_t> about_centre, own_poly;
+        std::vector<const LensSystem*> seeing;
+        for (const LensSystem* L : band) {
+          const size_t i =
+              size_t(std::find(band_lens.begin(), band_lens.end(), L) - band_lens.begin());
+          const char st = lensState(i);
+          if (st == 1) about_centre.push_back(i);
+          if (st == 3) own_poly.push_back(i);
+          if (st != 2) seeing.push_back(L);
+        }
+        if (seeing.empty()) {
+          node = Polygon{};
+          node.r = h;
+        } else if (own_poly.empty()) {
+          node = base;
           for (int j = 0; j < nd; ++j) {
             double d = 0;
-            for (const LensSystem* L : band)
-              d = std::max(d, dist[size_t(std::find(band_lens.begin(), band_lens.end(), L) -
-                                          band_lens.begin())][size_t(j)]);
+            for (size_t i : about_centre) d = std::max(d, dist[i][size_t(j)]);
             node.radius[size_t(j)] = d * base.node_f[size_t(j)];
           }
-          continue;
-        }
-        const Polygon* hint = !base.empty                                 ? &base
-                              : k > 0 && !done[k - 1].empty               ? &done[k - 1]
-                              : k + 1 < done.size() && !done[k + 1].empty ? &done[k + 1]
-                                                                          : nullptr;
-        if (!hint) continue;
-        cur = band;
-        Polygon np;
-        np.r = h;
-        const std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &np.centre, hint);
-        if (!pts.empty()) {
-          np.empty = false;
-          for (int j = 0; j < nd; ++j) {
-            const Vec2 q = pts[size_t(j)];
-            const double f = base.empty ? 1.0 : base.node_f[size_t(j)];
-            np.radius.push_back(std::hypot(q.x - np.centre.x, q.y - np.centre.y) * f);
+        } else if (seeing.size() == 1) {
+          node = own[own_poly[0]];
+        } else {
+          // Lenses that see something about different centres: about the centre of one's own
+          // polygon, where the others' regions hold it too (the union is star-shaped about it),
+          // the farthest of their distances; else the union traced from scratch.
+          bool done_union = false;
+          for (size_t a : own_poly) {
+            const Polygon& pa = own[a];
+            std::vector<double> far = pa.radius;
+            bool ok = true;
+            for (const LensSystem* L : seeing) {
+              const size_t i =
+                  size_t(std::find(band_lens.begin(), band_lens.end(), L) - band_lens.begin());
+              if (i == a) continue;
+              cur = {L};
+              if (!passes(h, pa.centre)) {
+                ok = false;
+                break;
+              }
+              double guess = pa.radius[0];
+              for (int j = 0; j < nd; ++j) {
+                guess = boundary(h, pa.centre, dirs_[size_t(j)], guess);
+                const double f = base.empty ? 1.0 : base.node_f[size_t(j)];
+                far[size_t(j)] = std::max(far[size_t(j)], guess * f);
+              }
+            }
+            if (!ok) continue;
+            node = pa;
+            node.radius = far;
+            done_union = true;
+            break;
           }
+          if (!done_union) node = scratch(seeing, hint);
         }
-        node = np;
       }
     }
     traces_total += traces;
