@@ -36,6 +36,44 @@ Vec2 uniformFilm(std::mt19937_64& rng) {
   return {u(rng) * w, u(rng) * h};
 }
 
+// A lens in the realistic camera's set-up (bench/lens-table: 36x24 mm film, focused at 3.3 m, wide
+// open, the camera's six wavelength bands for a dispersive lens) and its bounds, with lenses at
+// wavelengths across each band (`inside`: where in the band, 0 and 1 its ends).
+struct CameraSetUp {
+  FocusedLens fl;
+  double half_w = 43.3 * 3 / std::sqrt(13.0) / 2, half_h = 43.3 * 2 / std::sqrt(13.0) / 2;
+  bool dispersive = false;
+  std::vector<LensSystem> edge_lenses, at;  // band edges; wavelengths inside the bands
+  std::vector<int> band_of;                 // the band of each of `at`
+  std::optional<ExitPupilSampler> sampler;
+
+  CameraSetUp(const std::string& lens, const std::vector<double>& inside)
+      : fl(focusLens(readLensFile(lens),
+                     {.aperture_diameter_mm = 100.0, .focus_distance_m = 3.3})) {
+    ExitPupilOptions o;
+    for (const Interface& in : fl.lens->interfaces())
+      if (!in.shape.isRotational()) o.rotational = false;
+    constexpr int kBands = 6;
+    std::vector<double> edges;
+    dispersive = fl.lens->dispersive();
+    if (dispersive) {
+      const double a = 1 / (360.0 * 360.0), c = 1 / (830.0 * 830.0);
+      for (int k = 0; k <= kBands; ++k) edges.push_back(1 / std::sqrt(a + (c - a) * k / kBands));
+      for (double l : edges) edge_lenses.push_back(fl.lens->atWavelength(l));
+      for (int k = 0; k < kBands; ++k) o.bands.push_back({&edge_lenses[k], &edge_lenses[k + 1]});
+      for (int k = 0; k < kBands; ++k)
+        for (double t : inside) {
+          at.push_back(fl.lens->atWavelength(edges[k] + t * (edges[k + 1] - edges[k])));
+          band_of.push_back(k);
+        }
+    }
+    sampler.emplace(*fl.lens, fl.paraxial, std::hypot(half_w, half_h), o);
+  }
+  // The lens at wavelength `w` (the lens itself when it is not dispersive) and its band.
+  const LensSystem& lens(size_t w) const { return dispersive ? at[w % at.size()] : *fl.lens; }
+  int band(size_t w) const { return dispersive ? band_of[w % at.size()] : -1; }
+};
+
 }  // namespace
 
 // Every ray that gets through the lens starts toward a point inside the bounds: sampling only the
@@ -364,41 +402,18 @@ TEST(ExitPupilSampler, ReshapedBoundsHoldEveryPassingRayInTheCameraSetUp) {
                             {"lentil:0014", 0.06, 750}};
   for (const Budget& b : budgets) {
     SCOPED_TRACE(b.lens);
-    FocusedLens fl =
-        focusLens(readLensFile(b.lens), {.aperture_diameter_mm = 100.0, .focus_distance_m = 3.3});
-    const double half_w = 43.3 * 3 / std::sqrt(13.0) / 2, half_h = 43.3 * 2 / std::sqrt(13.0) / 2;
-    ExitPupilOptions o;
-    for (const Interface& in : fl.lens->interfaces())
-      if (!in.shape.isRotational()) o.rotational = false;
-    constexpr int kBands = 6;
-    std::vector<double> edges;
-    std::vector<LensSystem> edge_lenses;
-    const bool dispersive = fl.lens->dispersive();
-    if (dispersive) {
-      const double a = 1 / (360.0 * 360.0), c = 1 / (830.0 * 830.0);
-      for (int k = 0; k <= kBands; ++k) edges.push_back(1 / std::sqrt(a + (c - a) * k / kBands));
-      for (double l : edges) edge_lenses.push_back(fl.lens->atWavelength(l));
-      for (int k = 0; k < kBands; ++k) o.bands.push_back({&edge_lenses[k], &edge_lenses[k + 1]});
-    }
-    ExitPupilSampler sampler(*fl.lens, fl.paraxial, std::hypot(half_w, half_h), o);
-    std::vector<LensSystem> at;  // wavelengths inside each band
-    std::vector<int> band_of;
-    if (dispersive) {
-      for (int k = 0; k < kBands; ++k)
-        for (double t : {0.15, 0.5, 0.85}) {
-          at.push_back(fl.lens->atWavelength(edges[k] + t * (edges[k + 1] - edges[k])));
-          band_of.push_back(k);
-        }
-    }
+    const CameraSetUp cs(b.lens, {0.15, 0.5, 0.85});
+    const ExitPupilSampler& sampler = *cs.sampler;
+    const double half_w = cs.half_w, half_h = cs.half_h;
+    const FocusedLens& fl = cs.fl;
     std::mt19937_64 rng(31);
     std::uniform_real_distribution<double> u(0, 1);
     const double rr = 1.5 * fl.lens->interfaces().back().semi_aperture_mm;
     int films = 0, passing = 0, outside = 0, samples = 0, wasted = 0;
     for (int tries = 0; films < 400 && tries < 100000; ++tries) {
       const Vec2 film{(2 * u(rng) - 1) * half_w, (2 * u(rng) - 1) * half_h};
-      const size_t w = dispersive ? size_t(tries) % at.size() : 0;
-      const int band = dispersive ? band_of[w] : -1;
-      const LensSystem& lens = dispersive ? at[w] : *fl.lens;
+      const int band = cs.band(size_t(tries));
+      const LensSystem& lens = cs.lens(size_t(tries));
       if (!(sampler.area_mm2(film, band) > 0)) continue;
       ++films;
       for (int k = 0; k < b.rear_points; ++k) {
@@ -421,5 +436,58 @@ TEST(ExitPupilSampler, ReshapedBoundsHoldEveryPassingRayInTheCameraSetUp) {
     std::printf("%s: %d of %d passing rays outside; %.2f%% of %d samples wasted; %ld traces\n",
                 b.lens, outside, passing, 100.0 * wasted / samples, samples,
                 sampler.tracesAtBuild());
+  }
+}
+
+// A denser check, over the whole film (film points that see nothing at the wavelength included)
+// and at the bands' ends as well as inside them: 3000 film points, 300 rear-plane points each. The
+// bounds miss a few passing rays, all of them near the edge of the image circle, where the region
+// shrinks to a sliver and moves fast with the film point and the wavelength, and where the
+// blended polygon of an anamorphic wedge follows it least. Measured (the bounds of 23 November,
+// before and after that day's stage-2 change alike): lentil:0005 2 of 81,339, 0014 5 of 14,698,
+// 2004 6 of 148,564, and the toroidal anamorphic 299 of 158,610 (0.19%; at film radii 14.4-18.5
+// mm, its image circle's x radius 16.9 mm, mostly at film azimuths 25-35 degrees, between wedge
+// checks). The caps below fail on a bound that loses more, or loses rays away from the edge.
+TEST(ExitPupilSampler, RaysOutsideTheBoundsAreFewAndOnlyNearTheEdgeOfTheImageCircle) {
+  struct Cap {
+    const char* lens;
+    double max_outside;  // share of the passing rays
+    double edge;         // share of the farthest passing film radius beyond which they may lie
+  };
+  const Cap caps[] = {{"lentil:0005", 1e-4, 0.85},
+                      {"lentil:0014", 6e-4, 0.85},
+                      {"lentil:2004", 1e-4, 0.75},
+                      {"lenses:toroidal-anamorphic.50mm", 2.5e-3, 0.6}};
+  for (const Cap& c : caps) {
+    SCOPED_TRACE(c.lens);
+    const CameraSetUp cs(c.lens, {0.0, 0.3, 0.7, 1.0});
+    std::mt19937_64 rng(77);
+    std::uniform_real_distribution<double> u(0, 1);
+    const double rr = 1.5 * cs.fl.lens->interfaces().back().semi_aperture_mm;
+    long passing = 0, outside = 0;
+    double r_far = 0, r_out = kFilmDiagonal * 10;  // farthest passing, nearest outside
+    for (int f = 0; f < 3000; ++f) {
+      const Vec2 film{(2 * u(rng) - 1) * cs.half_w, (2 * u(rng) - 1) * cs.half_h};
+      const double r = std::hypot(film.x, film.y);
+      for (int k = 0; k < 300; ++k) {
+        const Vec2 q{(2 * u(rng) - 1) * rr, (2 * u(rng) - 1) * rr};
+        if (!cs.lens(size_t(f)).traceFromFilmPoint(film, q).ok()) continue;
+        ++passing;
+        r_far = std::max(r_far, r);
+        if (!cs.sampler->contains(film, q, cs.band(size_t(f)))) {
+          ++outside;
+          r_out = std::min(r_out, r);
+        }
+      }
+    }
+    std::printf(
+        "%s: %ld of %ld passing rays outside, the nearest at film radius %.2f mm (%.2f of "
+        "the farthest passing, %.2f mm)\n",
+        c.lens, outside, passing, outside ? r_out : 0.0, outside ? r_out / r_far : 0.0, r_far);
+    EXPECT_GT(passing, 10000);
+    EXPECT_LE(double(outside), c.max_outside * double(passing));
+    if (outside > 0) {
+      EXPECT_GE(r_out, c.edge * r_far);
+    }
   }
 }
