@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <type_traits>
 
 namespace lensim::optics {
@@ -81,23 +80,6 @@ template <typename T>
 }  // namespace
 
 template <typename T>
-template <typename U>
-void LensTracer<T>::addMargin(int i, bool from_film, Vec3T<U> hit, Vec3T<U> d, Vec3T<U> normal,
-                              double& m2) const {
-  const double r2 = double(hit.x) * double(hit.x) + double(hit.y) * double(hit.y);
-  const double semi2 = double(semi2_[i]);
-  m2 = std::max(m2,
-                semi2 > 0 ? r2 / semi2 : (r2 > 0 ? std::numeric_limits<double>::infinity() : 0.0));
-  if (is_mirror_[i]) return;
-  const double eta_i = double(from_film ? eta_after_[i] : eta_before_[i]);
-  const double eta_t = double(from_film ? eta_before_[i] : eta_after_[i]);
-  if (!(eta_i > eta_t)) return;  // no total internal reflection going into a denser medium
-  const double cos_i = double(dot(normal, d));
-  const double eta = eta_i / eta_t;
-  m2 = std::max(m2, eta * eta * std::max(0.0, 1 - cos_i * cos_i));
-}
-
-template <typename T>
 BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
                                     Vec3T<T>& d, Vec3T<T>& hit) const {
   if (shape_index_[i] >= 0) return traceShaped(i, from_film, opts, o, d, hit);
@@ -145,7 +127,6 @@ BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& o
     if (r2 > semi2_[i]) return BlockReason::Aperture;
     if (opts.obscurations && r2 < inner2_[i]) return BlockReason::Obscured;
   }
-  if (opts.margin2) addMargin(i, from_film, hit, d, normal, *opts.margin2);
   if (is_mirror_[i]) {
     d = d - normal * (T(2) * dot(d, normal));
     return BlockReason::None;
@@ -342,7 +323,6 @@ BlockReason LensTracer<T>::traceShaped(int i, bool from_film, const TraceOptions
     if (r2 > double(semi2_[i])) return BlockReason::Aperture;
     if (opts.obscurations && r2 < double(inner2_[i])) return BlockReason::Obscured;
   }
-  if (opts.margin2) addMargin(i, from_film, p, dir, h->normal, *opts.margin2);
   if (is_mirror_[i]) {
     dir = dir - h->normal * (2 * dot(dir, h->normal));
     d = {T(dir.x), T(dir.y), T(dir.z)};

@@ -87,13 +87,6 @@ struct TraceOptions {
   /// false: ignore central obscurations (searches for the outer boundary of a beam or pupil,
   /// which an obscured centre would otherwise hide); only with clip_apertures.
   bool obscurations = true;
-  /// With clip_apertures false: if set, receives the largest over the surfaces reached of the
-  /// squared ratio of the hit's distance from the axis to the clear semi-aperture and, where the
-  /// ray goes into a rarer medium, of sin^2 of its refracted angle (>= 1: total internal
-  /// reflection). The ray would get through the clipped trace exactly where it is <= 1; it varies
-  /// continuously, so that searches for a beam's boundary can use it (the exit pupil's). Left as
-  /// it was when nothing is reached; the caller starts it at 0.
-  double* margin2 = nullptr;
 };
 /// Options for searches of the outer boundary of a beam or pupil (clear apertures only).
 inline constexpr TraceOptions kOuterBoundary{true, false};
@@ -144,10 +137,6 @@ class LensTracer {
   // new direction, or why it stopped. Used by the batch tracer for the lanes of such surfaces.
   BlockReason traceOne(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o, Vec3T<T>& d,
                        Vec3T<T>& hit) const;
-  // TraceOptions::margin2 at surface i for the ray arriving along d (unit) at hit.
-  template <typename U>
-  void addMargin(int i, bool from_film, Vec3T<U> hit, Vec3T<U> d, Vec3T<U> normal,
-                 double& m2) const;
   // Image space after an odd number of mirrors runs toward -z; the tracers unfold it (mirror z
   // about the rear vertex plane) so that the film lies at +z as for any lens.
   void unfold(Vec3T<T>& o, Vec3T<T>& d) const {
