@@ -77,7 +77,10 @@ struct ExitPupilOptions {
   /// band's bound must hold. The bounds share the lens's own structure (its film radii, polygon
   /// centres and the widening its checks found) and re-solve only each polygon's vertex
   /// distances, as the farthest of the band's lenses' boundaries: a few traces per vertex
-  /// instead of a build of their own. sample(..., band) etc. use them.
+  /// instead of a build of their own. Where a band's lens sees nothing about a node's centre
+  /// (near the edge of the image circle, which moves with the wavelength), that lens's polygon is
+  /// traced on its own once per node, or found empty, and shared by the two bands it bounds.
+  /// sample(..., band) etc. use them.
   std::vector<std::vector<const LensSystem*>> bands;
 };
 
