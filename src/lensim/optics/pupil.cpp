@@ -755,18 +755,21 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // 3 a polygon of its own (own[i]).
       std::vector<char> state(band_lens.size(), 0);
       std::vector<Polygon> own(band_lens.size());
-      auto scratch = [&](const std::vector<const LensSystem*>& lenses, const Polygon* hint) {
+      // The node's check factors, which every band polygon traced here takes over.
+      auto nodeF = [&](int j) { return base.empty ? 1.0 : base.node_f[size_t(j)]; };
+      // The polygon of the union of the band lenses `lenses` (indices), from `from`.
+      auto scratch = [&](const std::vector<size_t>& lenses, const Polygon* from) {
         Polygon np;
         np.r = h;
-        if (!hint) return np;
-        cur = lenses;
-        const std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &np.centre, hint);
+        if (!from) return np;
+        cur.clear();
+        for (size_t i : lenses) cur.push_back(band_lens[i]);
+        const std::vector<Vec2> pts = boundaryPoints(h, nd, 0.0, &np.centre, from);
         if (pts.empty()) return np;
         np.empty = false;
         for (int j = 0; j < nd; ++j) {
           const Vec2 q = pts[size_t(j)];
-          const double f = base.empty ? 1.0 : base.node_f[size_t(j)];
-          np.radius.push_back(std::hypot(q.x - np.centre.x, q.y - np.centre.y) * f);
+          np.radius.push_back(std::hypot(q.x - np.centre.x, q.y - np.centre.y) * nodeF(j));
         }
         return np;
       };
@@ -784,7 +787,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
                   from = &own[n];
                   break;
                 }
-            own[i] = scratch({band_lens[i]}, from);
+            own[i] = scratch(std::vector<size_t>{i}, from);
             state[i] = own[i].empty ? 2 : 3;
           }
         }
@@ -794,15 +797,14 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         const std::vector<const LensSystem*>& band = opts.bands[b];
         Polygon& node = w.band_nodes[b][k];
         if (band.empty()) continue;
-        std::vector<size_t> about_centre, own_poly;
-        std::vector<const LensSystem*> seeing;
+        std::vector<size_t> about_centre, own_poly, seeing;  // indices into band_lens
         for (const LensSystem* L : band) {
           const size_t i =
               size_t(std::find(band_lens.begin(), band_lens.end(), L) - band_lens.begin());
           const char st = lensState(i);
           if (st == 1) about_centre.push_back(i);
           if (st == 3) own_poly.push_back(i);
-          if (st != 2) seeing.push_back(L);
+          if (st != 2) seeing.push_back(i);
         }
         if (seeing.empty()) {
           node = Polygon{};
@@ -825,11 +827,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
             const Polygon& pa = own[a];
             std::vector<double> far = pa.radius;
             bool ok = true;
-            for (const LensSystem* L : seeing) {
-              const size_t i =
-                  size_t(std::find(band_lens.begin(), band_lens.end(), L) - band_lens.begin());
+            for (size_t i : seeing) {
               if (i == a) continue;
-              cur = {L};
+              cur = {band_lens[i]};
               if (!passes(h, pa.centre)) {
                 ok = false;
                 break;
@@ -837,8 +837,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
               double guess = pa.radius[0];
               for (int j = 0; j < nd; ++j) {
                 guess = boundary(h, pa.centre, dirs_[size_t(j)], guess);
-                const double f = base.empty ? 1.0 : base.node_f[size_t(j)];
-                far[size_t(j)] = std::max(far[size_t(j)], guess * f);
+                far[size_t(j)] = std::max(far[size_t(j)], guess * nodeF(j));
               }
             }
             if (!ok) continue;
