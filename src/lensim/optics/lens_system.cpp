@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <type_traits>
 
 namespace lensim::optics {
@@ -60,8 +61,11 @@ namespace {
 
 // Refracts unit direction d at a surface with unit normal n (either orientation), going from
 // index eta_i to eta_t. Returns false on total internal reflection.
+// sin2_out: where given, receives sin^2 of the refracted angle (>= 1: total internal
+// reflection); left alone between equal indices.
 template <typename T>
-[[gnu::always_inline]] inline bool refract(Vec3T<T>& d, Vec3T<T> n, T eta_i, T eta_t) {
+[[gnu::always_inline]] inline bool refract(Vec3T<T>& d, Vec3T<T> n, T eta_i, T eta_t,
+                                           T* sin2_out = nullptr) {
   if (eta_i == eta_t) return true;
   T cos_i = -dot(n, d);
   if (cos_i < 0) {  // make the normal face the incoming ray
@@ -70,6 +74,7 @@ template <typename T>
   }
   T eta = eta_i / eta_t;
   T sin2_t = eta * eta * std::max(T(0), T(1) - cos_i * cos_i);
+  if (sin2_out) *sin2_out = sin2_t;
   if (sin2_t >= T(1)) return false;
   T cos_t = std::sqrt(T(1) - sin2_t);
   // Unit length for unit d and n (|eta d_tangential|^2 + cos_t^2 = 1); not renormalised.
@@ -81,8 +86,8 @@ template <typename T>
 
 template <typename T>
 BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
-                                    Vec3T<T>& d, Vec3T<T>& hit) const {
-  if (shape_index_[i] >= 0) return traceShaped(i, from_film, opts, o, d, hit);
+                                    Vec3T<T>& d, Vec3T<T>& hit, T* sin2) const {
+  if (shape_index_[i] >= 0) return traceShaped(i, from_film, opts, o, d, hit, sin2);
   // A ray may start on the previous surface; accept roots a hair behind the origin so that
   // surfaces touching at the rim do not lose rays to rounding.
   const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
@@ -133,7 +138,7 @@ BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& o
   }
   const T eta_i = from_film ? eta_after_[i] : eta_before_[i];
   const T eta_t = from_film ? eta_before_[i] : eta_after_[i];
-  if (!refract(d, normal, eta_i, eta_t)) return BlockReason::TotalInternalReflection;
+  if (!refract(d, normal, eta_i, eta_t, sin2)) return BlockReason::TotalInternalReflection;
   return BlockReason::None;
 }
 
@@ -165,15 +170,51 @@ TraceResultT<T> LensTracer<T>::trace(const RayT<T>& in, const TraceOptions& opts
 
 template <typename T>
 void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<T>* results) const {
+  traceBatch<false>(rays, n, results, nullptr);
+}
+
+template <typename T>
+void LensTracer<T>::marginSquaredBatch(const RayT<T>* rays, int n, T* m2) const {
+  traceBatch<true>(rays, n, nullptr, m2);
+}
+
+template <typename T>
+T LensTracer<T>::marginSquared(const RayT<T>& ray) const {
+  Vec3T<T> o = ray.origin, d = ray.direction;
+  if (reversed_) unfold(o, d);
+  const TraceOptions opts{.clip_apertures = false};
+  T m2(0);
+  for (int i = size() - 1; i >= 0; --i) {
+    Vec3T<T> p{};
+    T sin2(0);
+    const BlockReason why = traceOne(i, true, opts, o, d, p, &sin2);
+    if (why == BlockReason::Miss) return std::numeric_limits<T>::infinity();
+    const T r2 = p.x * p.x + p.y * p.y;
+    const T semi2 = semi2_[i];
+    m2 = std::max(
+        m2, semi2 > T(0) ? r2 / semi2 : (r2 > T(0) ? std::numeric_limits<T>::infinity() : T(0)));
+    if (eta_after_[i] > eta_before_[i]) m2 = std::max(m2, sin2);
+    if (why != BlockReason::None) return m2;  // totally reflected here
+    o = p;
+  }
+  return m2;
+}
+
+template <typename T>
+template <bool kMargin>
+void LensTracer<T>::traceBatch(const RayT<T>* rays, int n, TraceResultT<T>* results,
+                               T* margin2) const {
   // Structure of arrays. Per surface, a branch-free loop over all lanes that the compiler
   // vectorises (blocked lanes keep computing, their values are ignored; conditions are 0/1
   // values of type T because GCC does not vectorise mixed bool masks here; the library is
   // built with -fno-math-errno -fno-trapping-math so that square roots, divisions and selects
   // can be), then a short loop that records the lanes blocked at that surface.
+  // kMargin: no clipping; each lane's margin (marginSquared) instead of a result.
   T ox[kBatch], oy[kBatch], oz[kBatch], dx[kBatch], dy[kBatch], dz[kBatch];
   T px[kBatch], py[kBatch], pz[kBatch], ex[kBatch], ey[kBatch], ez[kBatch];
   T fate[kBatch];  // 0 through, 1 miss, 2 aperture, 3 total internal reflection, 4 obscured
   T sx[kBatch] = {}, sy[kBatch] = {};
+  T mg[kBatch] = {}, term[kBatch] = {};  // kMargin: the margin so far, this surface's
   bool alive[kBatch];
   n = std::min(n, kBatch);
   // Lanes computed: n rounded up to a multiple of 4 (a vector of floats), the rest copies.
@@ -186,12 +227,20 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
     alive[j] = j < n;
   }
   const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
-  const T zero(0), one(1);
+  const T zero(0), one(1), inf = std::numeric_limits<T>::infinity();
   for (int i = size() - 1; i >= 0; --i) {
     const T R = radius_[i], inv_r = inv_radius_[i], zv = z_[i], semi2 = semi2_[i];
     const T eta_i = eta_after_[i], eta_t = eta_before_[i];
     const T eta = eta_i / eta_t;
     const T refracts = eta_i != eta_t ? one : zero;
+    // kMargin: whether sin^2 of the refracted angle counts (into a rarer medium).
+    const T rarer = eta_i > eta_t ? one : zero;
+    // kMargin: this surface's term of the margin, from the hit's r^2 and sin^2 of the
+    // refracted angle (as marginSquared).
+    auto marginTerm = [&](T r2, T sin2_t) {
+      const T ra = semi2 > zero ? r2 / semi2 : (r2 > zero ? inf : zero);
+      return std::max(ra, rarer != zero ? sin2_t : zero);
+    };
     // A plane (the stop); refracting only between different indices, which a stop rarely has:
     // the common case gets its own loop without the refraction, which vectorises.
     auto planeLanes = [&](auto refract_tag) {
@@ -202,13 +251,14 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         const T t = dz[j] != zero ? tq : zero;
         const T hit = dz[j] != zero ? (t >= t_min ? one : zero) : zero;
         px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
-        const T inside = px[j] * px[j] + py[j] * py[j] <= semi2 ? one : zero;
-        T tir = zero;
+        const T r2 = px[j] * px[j] + py[j] * py[j];
+        const T inside = kMargin || r2 <= semi2 ? one : zero;
+        T tir = zero, sin2_t = zero;
         if constexpr (kRefract) {
           T cos_i = dz[j];  // -(n . d) with the normal (0, 0, -1)
           const T s = cos_i < zero ? -one : one;
           cos_i *= s;
-          const T sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
+          sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
           tir = sin2_t >= one ? one : zero;
           const T cos_t = std::sqrt(std::max(zero, one - sin2_t));
           const T k = (eta * cos_i - cos_t) * s;
@@ -217,17 +267,21 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         } else {
           ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
         }
+        if constexpr (kMargin) term[j] = marginTerm(r2, sin2_t);
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
     };
     if (per_lane_[i]) {
       // A non-spherical surface (the bracketed Newton solve), a mirror or an obscured surface:
       // lane by lane (spherical refracting lenses never come here).
+      const TraceOptions opts{.clip_apertures = !kMargin};
       for (int j = 0; j < nv; ++j) {
         Vec3T<T> o{ox[j], oy[j], oz[j]}, d{dx[j], dy[j], dz[j]}, p{};
-        const BlockReason why = traceOne(i, true, TraceOptions{}, o, d, p);
+        T sin2_t = zero;
+        const BlockReason why = traceOne(i, true, opts, o, d, p, kMargin ? &sin2_t : nullptr);
         px[j] = p.x, py[j] = p.y, pz[j] = p.z;
         ex[j] = d.x, ey[j] = d.y, ez[j] = d.z;
+        if constexpr (kMargin) term[j] = marginTerm(p.x * p.x + p.y * p.y, sin2_t);
         fate[j] = why == BlockReason::None                      ? zero
                   : why == BlockReason::Miss                    ? one
                   : why == BlockReason::Aperture                ? T(2)
@@ -257,7 +311,8 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         const T nx = (ox[j] + dx[j] * t) * inv_r, ny = (oy[j] + dy[j] * t) * inv_r,
                 nz = (rz + dz[j] * t - R) * inv_r;
         px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
-        const T inside = px[j] * px[j] + py[j] * py[j] <= semi2 ? one : zero;
+        const T r2 = px[j] * px[j] + py[j] * py[j];
+        const T inside = kMargin || r2 <= semi2 ? one : zero;
         T cos_i = -(nx * dx[j] + ny * dy[j] + nz * dz[j]);
         const T s = cos_i < zero ? -one : one;
         cos_i *= s;
@@ -268,29 +323,42 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
         ex[j] = refracts != zero ? dx[j] * eta + nx * k : dx[j];
         ey[j] = refracts != zero ? dy[j] * eta + ny * k : dy[j];
         ez[j] = refracts != zero ? dz[j] * eta + nz * k : dz[j];
+        if constexpr (kMargin) term[j] = marginTerm(r2, refracts != zero ? sin2_t : zero);
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
     }
-    const bool stop = is_stop_[i] != 0;
-    for (int j = 0; j < n; ++j) {
-      if (!alive[j]) continue;
-      if (fate[j] == one) {
-        results[j] = {RayT<T>{{ox[j], oy[j], oz[j]}, {dx[j], dy[j], dz[j]}},
-                      i,
-                      BlockReason::Miss,
-                      {sx[j], sy[j]}};
-        alive[j] = false;
-        continue;
+    if constexpr (kMargin) {
+      for (int j = 0; j < n; ++j) {
+        if (!alive[j]) continue;
+        if (fate[j] == one) {
+          mg[j] = inf, alive[j] = false;
+          continue;
+        }
+        mg[j] = std::max(mg[j], term[j]);
+        if (fate[j] != zero) alive[j] = false;  // totally reflected here
       }
-      if (stop) sx[j] = px[j], sy[j] = py[j];
-      if (fate[j] != zero) {
-        results[j] = {RayT<T>{{px[j], py[j], pz[j]}, {dx[j], dy[j], dz[j]}},
-                      i,
-                      fate[j] == T(2)   ? BlockReason::Aperture
-                      : fate[j] == T(3) ? BlockReason::TotalInternalReflection
-                                        : BlockReason::Obscured,
-                      {sx[j], sy[j]}};
-        alive[j] = false;
+    } else {
+      const bool stop = is_stop_[i] != 0;
+      for (int j = 0; j < n; ++j) {
+        if (!alive[j]) continue;
+        if (fate[j] == one) {
+          results[j] = {RayT<T>{{ox[j], oy[j], oz[j]}, {dx[j], dy[j], dz[j]}},
+                        i,
+                        BlockReason::Miss,
+                        {sx[j], sy[j]}};
+          alive[j] = false;
+          continue;
+        }
+        if (stop) sx[j] = px[j], sy[j] = py[j];
+        if (fate[j] != zero) {
+          results[j] = {RayT<T>{{px[j], py[j], pz[j]}, {dx[j], dy[j], dz[j]}},
+                        i,
+                        fate[j] == T(2)   ? BlockReason::Aperture
+                        : fate[j] == T(3) ? BlockReason::TotalInternalReflection
+                                          : BlockReason::Obscured,
+                        {sx[j], sy[j]}};
+          alive[j] = false;
+        }
       }
     }
     for (int j = 0; j < nv; ++j) {
@@ -298,17 +366,21 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
       dx[j] = ex[j], dy[j] = ey[j], dz[j] = ez[j];
     }
   }
-  for (int j = 0; j < n; ++j)
-    if (alive[j])
-      results[j] = {RayT<T>{{ox[j], oy[j], oz[j]}, {dx[j], dy[j], dz[j]}},
-                    -1,
-                    BlockReason::None,
-                    {sx[j], sy[j]}};
+  if constexpr (kMargin) {
+    for (int j = 0; j < n; ++j) margin2[j] = mg[j];
+  } else {
+    for (int j = 0; j < n; ++j)
+      if (alive[j])
+        results[j] = {RayT<T>{{ox[j], oy[j], oz[j]}, {dx[j], dy[j], dz[j]}},
+                      -1,
+                      BlockReason::None,
+                      {sx[j], sy[j]}};
+  }
 }
 
 template <typename T>
 BlockReason LensTracer<T>::traceShaped(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
-                                       Vec3T<T>& d, Vec3T<T>& hit) const {
+                                       Vec3T<T>& d, Vec3T<T>& hit, T* sin2) const {
   const ShapeIntersector& shape = shapes_[size_t(shape_index_[i])];
   const double t_min = std::is_same_v<T, float> ? -1e-4 : -1e-9;
   const Vec3 rel{double(o.x), double(o.y), double(o.z) - double(z_[i])};
@@ -330,7 +402,10 @@ BlockReason LensTracer<T>::traceShaped(int i, bool from_film, const TraceOptions
   }
   const double eta_i = from_film ? double(eta_after_[i]) : double(eta_before_[i]);
   const double eta_t = from_film ? double(eta_before_[i]) : double(eta_after_[i]);
-  if (!refract(dir, h->normal, eta_i, eta_t)) return BlockReason::TotalInternalReflection;
+  double s2 = 0;
+  const bool through = refract(dir, h->normal, eta_i, eta_t, &s2);
+  if (sin2) *sin2 = T(s2);
+  if (!through) return BlockReason::TotalInternalReflection;
   d = {T(dir.x), T(dir.y), T(dir.z)};
   return BlockReason::None;
 }
@@ -497,16 +572,20 @@ void LensSystem::rebuildTracers() {
   tracer_f_ = LensTracer<float>(interfaces_);
 }
 
-TraceResult LensSystem::traceFromFilmPoint(Vec2 film_mm, Vec2 rear_plane_mm,
-                                           const TraceOptions& opts,
-                                           std::vector<Vec3>* path) const {
+Ray LensSystem::filmPointRay(Vec2 film_mm, Vec2 rear_plane_mm) const {
   Vec3 from{film_mm.x, film_mm.y, filmZ_mm()};
   Vec3 to{rear_plane_mm.x, rear_plane_mm.y, rearVertexZ_mm()};
   Vec3 dir = to - from;
   if (!(dir.z < 0))
     throw Error(fmt::format("film distance {} mm: the film must lie behind the rear vertex",
                             film_distance_mm_));
-  return tracer_d_.traceFromFilm(Ray{from, normalize(dir)}, opts, path);
+  return Ray{from, normalize(dir)};
+}
+
+TraceResult LensSystem::traceFromFilmPoint(Vec2 film_mm, Vec2 rear_plane_mm,
+                                           const TraceOptions& opts,
+                                           std::vector<Vec3>* path) const {
+  return tracer_d_.traceFromFilm(filmPointRay(film_mm, rear_plane_mm), opts, path);
 }
 
 }  // namespace lensim::optics

@@ -118,6 +118,16 @@ class LensTracer {
   /// obscured and non-spherical surfaces are traced lane by lane.
   void traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<T>* results) const;
 
+  /// The square of a ray's aperture margin (from the film): the ray traced without clipping,
+  /// the largest over the surfaces of (hit's distance from the axis / clear semi-aperture)^2
+  /// and, where it goes into a rarer medium, sin^2 of the refracted angle (>= 1: totally
+  /// reflected, where the trace ends); infinite where it misses a surface. At most 1 exactly
+  /// where the clipped trace gets through (obscurations aside), and continuous across rays
+  /// up to a miss, so that a search for the edge of a beam can use secant steps on it.
+  T marginSquared(const RayT<T>& ray) const;
+  /// marginSquared for n <= kBatch rays at once (as traceFromFilmBatch): m2[0 .. n).
+  void marginSquaredBatch(const RayT<T>* rays, int n, T* m2) const;
+
   int size() const { return static_cast<int>(radius_.size()); }
 
   /// Replaces the indices of the interfaces (size() values each, the media before and after
@@ -125,6 +135,9 @@ class LensTracer {
   void setIndices(const double* before, const double* after);
 
  private:
+  // traceFromFilmBatch (kMargin false) and marginSquaredBatch (true): the same loops.
+  template <bool kMargin>
+  void traceBatch(const RayT<T>* rays, int n, TraceResultT<T>* results, T* margin2) const;
   template <bool kFromFilm>
   TraceResultT<T> trace(const RayT<T>& ray, const TraceOptions& opts,
                         std::vector<Vec3T<T>>* path) const;
@@ -132,11 +145,12 @@ class LensTracer {
   // Traces surface i with its ShapeIntersector (in double precision): hit point and refracted
   // direction, or why it stopped.
   BlockReason traceShaped(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o, Vec3T<T>& d,
-                          Vec3T<T>& hit) const;
+                          Vec3T<T>& hit, T* sin2 = nullptr) const;
   // One surface for one ray (any kind: sphere, plane, shaped, mirror, obscured): hit point and
   // new direction, or why it stopped. Used by the batch tracer for the lanes of such surfaces.
+  // sin2: where given, receives sin^2 of the refracted angle where the indices differ.
   BlockReason traceOne(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o, Vec3T<T>& d,
-                       Vec3T<T>& hit) const;
+                       Vec3T<T>& hit, T* sin2 = nullptr) const;
   // Image space after an odd number of mirrors runs toward -z; the tracers unfold it (mirror z
   // about the rear vertex plane) so that the film lies at +z as for any lens.
   void unfold(Vec3T<T>& o, Vec3T<T>& d) const {
@@ -225,6 +239,13 @@ class LensSystem {
   const LensTracer<double>& tracer() const { return tracer_d_; }
   const LensTracer<float>& tracerFloat() const { return tracer_f_; }
 
+  /// LensTracer::marginSquared (double) of the ray from a film point toward a point on the plane
+  /// of the rear vertex.
+  double marginSquaredFromFilmPoint(Vec2 film_mm, Vec2 rear_plane_mm) const {
+    return tracer_d_.marginSquared(filmPointRay(film_mm, rear_plane_mm));
+  }
+  /// The ray from a film point toward a point on the plane of the rear vertex.
+  Ray filmPointRay(Vec2 film_mm, Vec2 rear_plane_mm) const;
   /// Exact trace from a film point toward a point on the plane of the rear vertex.
   TraceResult traceFromFilmPoint(Vec2 film_mm, Vec2 rear_plane_mm, const TraceOptions& opts = {},
                                  std::vector<Vec3>* path = nullptr) const;

@@ -98,41 +98,11 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     // the margin is <= 1, and the margin varies continuously across the rear plane, so that a
     // boundary is found by the secant method (a few traces) rather than by bisection (~9), and a
     // sliver of region by minimising it rather than by a blind grid.
-    std::vector<Vec3> path;
     auto margin1 = [&](const LensSystem& L, Vec2 film, Vec2 a) {
-      double m2 = disc2 > 0 ? (a.x * a.x + a.y * a.y) / disc2 : 0.0;
+      const double m2 = disc2 > 0 ? (a.x * a.x + a.y * a.y) / disc2 : 0.0;
       if (m2 > 1) return std::sqrt(m2);  // outside the rear disc: no trace needed
       ++traces;
-      path.clear();
-      const TraceResult r =
-          L.traceFromFilmPoint(film, a, TraceOptions{.clip_apertures = false}, &path);
-      if (r.reason == BlockReason::Miss) return kInf;
-      const std::vector<Interface>& ifs = L.interfaces();
-      const int n = static_cast<int>(ifs.size());
-      // path[0] is the film point, path[k] the hit on surface n - k. Where the ray goes into a
-      // rarer medium, sin^2 of its refracted angle counts too (>= 1: total internal reflection),
-      // so that a boundary set by total internal reflection is no jump either.
-      for (size_t k = 1; k < path.size() && int(k) <= n; ++k) {
-        const Interface& in = ifs[size_t(n - int(k))];
-        const Vec3 q = path[k];
-        const double semi = in.semi_aperture_mm;
-        const double r2 = q.x * q.x + q.y * q.y;
-        m2 = std::max(m2, semi > 0 ? r2 / (semi * semi) : (r2 > 0 ? kInf : 0.0));
-        if (in.ior_after > in.ior_before) {
-          Vec3 normal{0, 0, -1};
-          if (!in.shape.isSpherical()) {
-            const std::optional<SagGradient> sg = surfaceSag(in.radius_mm, in.shape, q.x, q.y);
-            if (!sg) continue;
-            normal = normalize(Vec3{sg->dzdx, sg->dzdy, -1});
-          } else if (in.radius_mm != 0) {
-            normal = Vec3{q.x, q.y, q.z - in.z_mm - in.radius_mm} * (1 / in.radius_mm);
-          }
-          const double cos_i = dot(normalize(q - path[k - 1]), normal);
-          const double eta = in.ior_after / in.ior_before;
-          m2 = std::max(m2, eta * eta * std::max(0.0, 1 - cos_i * cos_i));
-        }
-      }
-      return std::sqrt(m2);
+      return std::sqrt(std::max(m2, L.marginSquaredFromFilmPoint(film, a)));
     };
     // The lens's margin; where it blocks, the least over the other wavelengths' lenses too (the
     // bound holds the union of their regions). <= 1 exactly where some lens lets the ray through.
