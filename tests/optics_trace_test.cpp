@@ -317,6 +317,13 @@ TEST(LensTracer, BatchMatchesSingleTraces) {
     checkBatch(lens.tracer(), lens, rng);
     checkBatch(lens.tracerFloat(), lens, rng);
   }
+  // Cylinders (lentil:2004; the double tracer intersects quadrics side by side).
+  {
+    SCOPED_TRACE("lentil:2004");
+    const FocusedLens fl = focusLens(readLensFile("lentil:2004"), {});
+    checkBatch(fl.lens->tracer(), *fl.lens, rng);
+    checkBatch(fl.lens->tracerFloat(), *fl.lens, rng);
+  }
   // A stop between glass and air refracts (the batch's other plane loop).
   SCOPED_TRACE("stop in glass");
   const FocusedLens fl = focusLens(parseLensPrescription("40 6 1.6 24\n"

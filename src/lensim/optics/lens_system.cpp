@@ -41,11 +41,14 @@ LensTracer<T>::LensTracer(const std::vector<Interface>& interfaces) {
     is_stop_.push_back(s.is_stop ? 1 : 0);
     is_mirror_.push_back(s.is_mirror ? 1 : 0);
     if (s.is_mirror) reversed_ = !reversed_;
+    quadric_.emplace_back();
     if (s.shape.isSpherical()) {
       shape_index_.push_back(-1);
     } else {
       shape_index_.push_back(static_cast<int>(shapes_.size()));
       shapes_.emplace_back(s.radius_mm, s.shape, s.semi_aperture_mm);
+      if (!s.is_mirror && s.obscuration_radius_mm == 0)
+        quadric_.back() = shapes_.back().quadricForm();
     }
     per_lane_.push_back(shape_index_.back() >= 0 || s.is_mirror || s.obscuration_radius_mm > 0);
   }
@@ -80,6 +83,71 @@ template <typename T>
   // Unit length for unit d and n (|eta d_tangential|^2 + cos_t^2 = 1); not renormalised.
   d = d * eta + n * (eta * cos_i - cos_t);
   return true;
+}
+
+// A refracting quadric (a cylinder, a conic) for lanes [0, nv) side by side: the same operations
+// as traceShaped with ShapeIntersector::intersect's closed form (direction normalised, hit on the
+// vertex sheet, normal from the quadric's gradient, refraction as refract()), so the same
+// results. The lanes the closed form does not decide (a ray nearly parallel to the slab, a
+// quadratic without its leading term, no root on the vertex sheet) are marked in one_by_one for
+// the caller to trace one by one. margin: no clipping, and each lane's margin term (as
+// LensTracer::marginSquared) in term.
+void quadricLanes(const ShapeIntersector::QuadricForm& Q, double zv, double semi2, double eta_i,
+                  double eta_t, bool margin, int nv, const double* ox, const double* oy,
+                  const double* oz, const double* dx, const double* dy, const double* dz,
+                  double* px, double* py, double* pz, double* ex, double* ey, double* ez,
+                  double* fate, double* term, bool* one_by_one) {
+  const double t_min = -1e-9, zero = 0, one = 1, inf = std::numeric_limits<double>::infinity();
+  const double eta = eta_i / eta_t;
+  const double refracts = eta_i != eta_t ? one : zero, rarer = eta_i > eta_t ? one : zero;
+  double defer[LensTracer<double>::kBatch];
+  for (int j = 0; j < nv; ++j) {
+    const double len = std::sqrt(dx[j] * dx[j] + dy[j] * dy[j] + dz[j] * dz[j]);
+    const double ux = dx[j] / len, uy = dy[j] / len, uz = dz[j] / len;
+    const double rx = ox[j], ry = oy[j], rz = oz[j] - zv;
+    // The slab.
+    const double t0 = (Q.z_lo - rz) / uz, t1 = (Q.z_hi - rz) / uz;
+    const double ta = std::max(std::min(t0, t1), t_min), tb = std::max(t0, t1);
+    const double flat = std::abs(uz) > 1e-12 ? zero : one;
+    const double crosses = ta <= tb ? one : zero;
+    // A t^2 + 2 B t + C = 0; stable roots; the nearest on the vertex sheet.
+    const double A = Q.cx * ux * ux + Q.cy * uy * uy + Q.e * uz * uz;
+    const double B = Q.cx * rx * ux + Q.cy * ry * uy + Q.e * rz * uz - uz;
+    const double C = Q.cx * rx * rx + Q.cy * ry * ry + Q.e * rz * rz - 2 * rz;
+    const double disc = B * B - A * C;
+    const double q = -(B + std::copysign(std::sqrt(std::max(disc, zero)), B));
+    const double r0 = q / A, r1 = q != zero ? C / q : r0;
+    const double lo = std::min(r0, r1), hi = std::max(r0, r1);
+    const double ok_lo = lo >= t_min ? (1 - Q.e * (rz + lo * uz) > zero ? one : zero) : zero;
+    const double ok_hi = hi >= t_min ? (1 - Q.e * (rz + hi * uz) > zero ? one : zero) : zero;
+    const double t = ok_lo != zero ? lo : hi;
+    const double root = A != zero && disc >= zero ? std::max(ok_lo, ok_hi) : zero;
+    // Not decided here: flat, or crossing the slab without a root.
+    defer[j] = flat != zero ? one : (crosses != zero && root == zero ? one : zero);
+    const double hx = rx + ux * t, hy = ry + uy * t, hz = rz + uz * t;
+    px[j] = hx, py[j] = hy, pz[j] = hz + zv;
+    const double gx = Q.cx * hx, gy = Q.cy * hy, gz = Q.e * hz - 1;
+    const double glen = std::sqrt(gx * gx + gy * gy + gz * gz);
+    const double nx = gx / glen, ny = gy / glen, nz = gz / glen;
+    const double r2 = hx * hx + hy * hy;
+    const double inside = margin || r2 <= semi2 ? one : zero;
+    double cos_i = -(nx * ux + ny * uy + nz * uz);
+    const double s = cos_i < zero ? -one : one;
+    cos_i *= s;
+    const double sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
+    const double tir = sin2_t >= one ? refracts : zero;
+    const double cos_t = std::sqrt(std::max(zero, one - sin2_t));
+    const double k = (eta * cos_i - cos_t) * s;
+    ex[j] = refracts != zero ? ux * eta + nx * k : ux;
+    ey[j] = refracts != zero ? uy * eta + ny * k : uy;
+    ez[j] = refracts != zero ? uz * eta + nz * k : uz;
+    if (margin) {
+      const double ra = semi2 > zero ? r2 / semi2 : (r2 > zero ? inf : zero);
+      term[j] = std::max(ra, rarer != zero && refracts != zero ? sin2_t : zero);
+    }
+    fate[j] = crosses != zero ? (inside != zero ? (tir != zero ? 3.0 : zero) : 2.0) : one;
+  }
+  for (int j = 0; j < nv; ++j) one_by_one[j] = defer[j] != zero;
 }
 
 }  // namespace
@@ -271,11 +339,23 @@ void LensTracer<T>::traceBatch(const RayT<T>* rays, int n, TraceResultT<T>* resu
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
     };
+    // Lanes to trace one by one (traceOne), after a quadric's side-by-side loop.
+    bool one_by_one[kBatch] = {};
+    bool quadric_lanes = false;
+    if constexpr (std::is_same_v<T, double>) {
+      if (quadric_[i]) {
+        quadricLanes(*quadric_[i], zv, semi2, eta_i, eta_t, kMargin, nv, ox, oy, oz, dx, dy, dz, px,
+                     py, pz, ex, ey, ez, fate, term, one_by_one);
+        quadric_lanes = true;
+      }
+    }
     if (per_lane_[i]) {
       // A non-spherical surface (the bracketed Newton solve), a mirror or an obscured surface:
-      // lane by lane (spherical refracting lenses never come here).
+      // lane by lane (spherical refracting lenses never come here); of a quadric only the lanes
+      // its loop left.
       const TraceOptions opts{.clip_apertures = !kMargin};
       for (int j = 0; j < nv; ++j) {
+        if (quadric_lanes && !one_by_one[j]) continue;
         Vec3T<T> o{ox[j], oy[j], oz[j]}, d{dx[j], dy[j], dz[j]}, p{};
         T sin2_t = zero;
         const BlockReason why = traceOne(i, true, opts, o, d, p, kMargin ? &sin2_t : nullptr);

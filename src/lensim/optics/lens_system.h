@@ -164,6 +164,9 @@ class LensTracer {
   T z_unfold_ = 0;                // 2 z_rear
   std::vector<int> shape_index_;  // -1: spherical (the quadratic); else into shapes_
   std::vector<ShapeIntersector> shapes_;
+  // Per surface: a refracting quadric without obscuration (a cylinder, a conic), which the
+  // double batch tracer intersects side by side (its form; else none).
+  std::vector<std::optional<ShapeIntersector::QuadricForm>> quadric_;
 };
 
 extern template class LensTracer<double>;

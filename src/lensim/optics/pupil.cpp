@@ -26,6 +26,128 @@ Vec2 unit(double phi) {
 double cross2(Vec2 a, Vec2 b) {
   return a.x * b.y - a.y * b.x;
 }
+double dot2(Vec2 a, Vec2 b) {
+  return a.x * b.x + a.y * b.y;
+}
+
+// The farthest crossing t > 0 of the ray from + t u with the edges of the closed polygon
+// `verts` (0 where it crosses none).
+double farthestCrossing(const std::vector<Vec2>& verts, Vec2 from, Vec2 u) {
+  double reach = 0;
+  const size_t n = verts.size();
+  for (size_t k = 0; k < n; ++k) {
+    const Vec2 a = verts[k] - from, e = verts[(k + 1) % n] - verts[k];
+    const double den = cross2(u, e);
+    if (den == 0) continue;
+    const double t = cross2(a, e) / den, v = cross2(a, u) / den;
+    if (t > 0 && v >= 0 && v <= 1) reach = std::max(reach, t);
+  }
+  return reach;
+}
+
+// One search for the distance from a point inside a region to the region's boundary along a
+// direction, on the margin (see the sampler's constructor, boundary()): a state machine, so that
+// many searches can run side by side with their traces batched. `x` is the distance to evaluate
+// next; feed() takes the margin there and sets the next `x`, or `done` and `result`.
+struct EdgeSearch {
+  static constexpr double kTol = 1e-3;
+  double rr, accept, slope_hint, accept_slope;
+  double f, tol_end;
+  double lo = 0, glo = kInf, hi = kInf, ghi = kInf;
+  double s0 = 0, g0 = kInf, s1 = 0, g1 = kInf;  // the two latest evaluations
+  double last_width = kInf;
+  bool force_bisect = false, first = true;
+  int it = 0;
+  double x = 0;
+  bool done = false;
+  double result = 0;
+  // Where the search ended on a bracket (not given up): the margin's slope across the bracket
+  // (0: none), and the latest two traces' slope (0: none).
+  bool bracketed = false;
+  double bracket_slope = 0, last_slope = 0;
+
+  EdgeSearch(double guess, double accept_, double rr_, double slope_hint_, double accept_slope_)
+      : rr(rr_), accept(accept_), slope_hint(slope_hint_), accept_slope(accept_slope_) {
+    x = std::max(guess, 1e-6 * rr);
+    // With a good guess (accept > 0) the steps while one side is open start small, and a
+    // bracket as narrow as `accept` ends the search too (where the margin jumps to infinity at
+    // the boundary, a ray missing a surface, it has no slope to accept by).
+    f = accept > 0 ? 2 * accept : 1.0 / 16;
+    tol_end = std::max(kTol, accept);
+  }
+  void feed(double g) {
+    s0 = s1, g0 = g1, s1 = x, g1 = g;
+    if (g <= 1) {
+      if (x > lo) lo = x, glo = g;
+    } else if (x < hi) {
+      hi = x, ghi = g;
+    }
+    // A secant step that does not halve the bracket twice running gives way to bisection.
+    if (!first && hi < kInf && lo > 0) {
+      const double w = hi - lo;
+      if (w > 0.5 * last_width) force_bisect = true;
+      last_width = w;
+    }
+    first = false;
+    advance();
+  }
+
+ private:
+  void finish() {
+    if (std::isfinite(glo) && std::isfinite(ghi) && hi > lo && ghi > glo)
+      bracket_slope = (ghi - glo) / (hi - lo);
+    last_slope = std::isfinite(g0) && std::isfinite(g1) && s0 != s1 && (g1 - g0) / (s1 - s0) > 0
+                     ? (g1 - g0) / (s1 - s0)
+                     : 0.0;
+    bracketed = true;
+    result = hi;
+    done = true;
+  }
+  void advance() {
+    if (it >= 80) return finish();
+    if (hi < kInf && hi - lo <= tol_end * hi) return finish();
+    if (accept > 0 && hi < kInf && s1 == hi && std::isfinite(ghi)) {
+      // The slope from the two latest traces along u, else the one measured along u for
+      // the neighbouring wavelength (accept_slope).
+      const double sl = std::isfinite(g0) && s0 != s1 ? (g1 - g0) / (s1 - s0) : accept_slope;
+      if (sl > 0 && std::isfinite(sl) && ghi - 1 <= sl * accept * hi) return finish();
+    }
+    if (hi == kInf && lo >= 4 * rr) {  // beyond any real region: give up there
+      result = lo, done = true;
+      return;
+    }
+    if (lo == 0 && hi <= 1e-9 * rr) {  // the region has no extent along u
+      result = hi, done = true;
+      return;
+    }
+    double xn = std::numeric_limits<double>::quiet_NaN();
+    if (!force_bisect) {
+      if (std::isfinite(g0) && std::isfinite(g1) && g1 != g0 && s1 != s0)
+        xn = s1 + (1 - g1) * (s1 - s0) / (g1 - g0);
+      else if (std::isfinite(g1) && slope_hint > 0)
+        xn = s1 + (1 - g1) / slope_hint;
+      // Aim a hair toward the bracket's far end, so that the near one stays and the far one
+      // moves to within the tolerance.
+      if (std::isfinite(xn)) {
+        if (accept > 0)  // aim at the blocked side, within reach of acceptance
+          xn += 0.5 * accept * std::abs(xn);
+        else
+          xn += (hi - xn <= xn - lo ? -0.4 : 0.4) * kTol * std::abs(xn);
+      }
+    }
+    force_bisect = false;
+    if (hi < kInf && lo > 0) {
+      if (!(xn > lo && xn < hi)) xn = 0.5 * (lo + hi);
+    } else if (hi < kInf) {  // nothing passing found along u yet
+      if (!(xn > 0 && xn < hi) || (accept > 0 && xn < hi / (1 + f))) xn = hi / (1 + f), f *= 2;
+    } else {  // nothing blocked yet
+      if (!(xn > lo) || (accept > 0 && xn > lo * (1 + f))) xn = lo * (1 + f), f *= 2;
+      xn = std::min(xn, 2 * lo + 1e-6 * rr);
+    }
+    x = xn;
+    ++it;
+  }
+};
 
 }  // namespace
 
@@ -137,6 +259,47 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       return best;
     };
     auto passes = [&](double h, Vec2 a) { return margin(h, a) <= 1; };
+    // margin() at n rear-plane points for film radius h, the same values, with the traces of
+    // each lens batched (LensTracer::marginSquaredBatch: the rays overlap in the processor).
+    constexpr int kB = LensTracer<double>::kBatch;
+    auto marginBatch = [&](double h, const Vec2* a, int n, double* out) {
+      if (!rotational_ && az.size() != 1) {
+        for (int j = 0; j < n; ++j) out[j] = margin(h, a[j]);
+        return;
+      }
+      double ca = 1, sa = 0;
+      if (!rotational_) ca = std::cos(az[0]), sa = std::sin(az[0]);
+      const Vec2 film{h * ca, h * sa};
+      std::vector<int> todo(static_cast<size_t>(n));
+      for (int j = 0; j < n; ++j) todo[size_t(j)] = j;
+      for (size_t k = 0; k < cur.size() && !todo.empty(); ++k) {
+        const LensSystem& L = *cur[k];
+        // As marginCover: the first lens's margin, else the least of all lenses'.
+        auto put = [&](int j, double v) { out[j] = k == 0 ? v : std::min(out[j], v); };
+        Ray rays[kB];
+        int lane[kB];
+        double d2s[kB], m2[kB];
+        int m = 0;
+        auto flush = [&] {
+          L.tracer().marginSquaredBatch(rays, m, m2);
+          traces += m;
+          for (int i = 0; i < m; ++i) put(lane[i], std::sqrt(std::max(d2s[i], m2[i])));
+          m = 0;
+        };
+        for (int j : todo) {
+          const Vec2 r = rotational_ ? a[j] : toFilmAzimuth(a[j], h, ca, sa);
+          const double d2 = disc2 > 0 ? (r.x * r.x + r.y * r.y) / disc2 : 0.0;
+          if (d2 > 1) {  // outside the rear disc: no trace needed
+            put(j, std::sqrt(d2));
+            continue;
+          }
+          rays[m] = L.filmPointRay(film, r), lane[m] = j, d2s[m] = d2;
+          if (++m == kB) flush();
+        }
+        if (m > 0) flush();
+        if (k == 0) std::erase_if(todo, [&](int j) { return out[j] <= 1; });
+      }
+    };
     // Distance from c (inside the region) to the region's boundary along u: the first blocked
     // point, with a passing point within 1e-3 relative before it. From a guess (usually the
     // neighbouring direction's distance, within a few percent), secant steps on the margin
@@ -153,75 +316,50 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     double slope_hint = 0;    // d(margin)/ds at the last boundary
     double accept_slope = 0;  // accept > 0: d(margin)/ds along u measured before, or 0
     double last_slope = 0;    // the last search's latest two traces' slope (0: none)
+    auto settle = [&](const EdgeSearch& e) {
+      if (!e.bracketed) return;
+      if (e.bracket_slope > 0) slope_hint = e.bracket_slope;
+      last_slope = e.last_slope;
+    };
     auto boundary = [&](double h, Vec2 c, Vec2 u, double guess, double accept = 0) {
-      constexpr double tol = 1e-3;
-      double lo = 0, glo = kInf, hi = kInf, ghi = kInf;
-      double s0 = 0, g0 = kInf, s1 = 0, g1 = kInf;  // the two latest evaluations
-      auto eval = [&](double s) {
-        const double g = margin(h, c + u * s);
-        s0 = s1, g0 = g1, s1 = s, g1 = g;
-        if (g <= 1) {
-          if (s > lo) lo = s, glo = g;
-        } else if (s < hi) {
-          hi = s, ghi = g;
-        }
-      };
-      eval(std::max(guess, 1e-6 * rr));
-      // With a good guess (accept > 0) the steps while one side is open start small, and a
-      // bracket as narrow as `accept` ends the search too (where the margin jumps to infinity at
-      // the boundary, a ray missing a surface, it has no slope to accept by).
-      double f = accept > 0 ? 2 * accept : 1.0 / 16;
-      const double tol_end = std::max(tol, accept);
-      double last_width = kInf;
-      bool force_bisect = false;
-      for (int it = 0; it < 80; ++it) {
-        if (hi < kInf && hi - lo <= tol_end * hi) break;
-        if (accept > 0 && hi < kInf && s1 == hi && std::isfinite(ghi)) {
-          // The slope from the two latest traces along u, else the one measured along u for
-          // the neighbouring wavelength (accept_slope).
-          const double sl = std::isfinite(g0) && s0 != s1 ? (g1 - g0) / (s1 - s0) : accept_slope;
-          if (sl > 0 && std::isfinite(sl) && ghi - 1 <= sl * accept * hi) break;
-        }
-        if (hi == kInf && lo >= 4 * rr) return lo;  // beyond any real region: give up there
-        if (lo == 0 && hi <= 1e-9 * rr) return hi;  // the region has no extent along u
-        double x = std::numeric_limits<double>::quiet_NaN();
-        if (!force_bisect) {
-          if (std::isfinite(g0) && std::isfinite(g1) && g1 != g0 && s1 != s0)
-            x = s1 + (1 - g1) * (s1 - s0) / (g1 - g0);
-          else if (std::isfinite(g1) && slope_hint > 0)
-            x = s1 + (1 - g1) / slope_hint;
-          // Aim a hair toward the bracket's far end, so that the near one stays and the far one
-          // moves to within the tolerance.
-          if (std::isfinite(x)) {
-            if (accept > 0)  // aim at the blocked side, within reach of acceptance
-              x += 0.5 * accept * std::abs(x);
-            else
-              x += (hi - x <= x - lo ? -0.4 : 0.4) * tol * std::abs(x);
-          }
-        }
-        force_bisect = false;
-        if (hi < kInf && lo > 0) {
-          if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
-        } else if (hi < kInf) {  // nothing passing found along u yet
-          if (!(x > 0 && x < hi) || (accept > 0 && x < hi / (1 + f))) x = hi / (1 + f), f *= 2;
-        } else {  // nothing blocked yet
-          if (!(x > lo) || (accept > 0 && x > lo * (1 + f))) x = lo * (1 + f), f *= 2;
-          x = std::min(x, 2 * lo + 1e-6 * rr);
-        }
-        eval(x);
-        // A secant step that does not halve the bracket twice running gives way to bisection.
-        if (hi < kInf && lo > 0) {
-          const double w = hi - lo;
-          if (w > 0.5 * last_width) force_bisect = true;
-          last_width = w;
-        }
+      EdgeSearch e(guess, accept, rr, slope_hint, accept_slope);
+      while (!e.done) e.feed(margin(h, c + u * e.x));
+      settle(e);
+      return e.result;
+    };
+    // boundary() along `count` directions u[j] from c at once (guesses guess[j]): the searches
+    // run side by side, each round's traces batched. accept_slopes: per direction (nullptr: 0;
+    // where > 0 also the search's slope hint). The shared hints end as after the searches one
+    // after another; last_slopes (if given) gets each search's last_slope where it ended on a
+    // bracket.
+    std::vector<EdgeSearch> es;
+    std::vector<Vec2> es_pts;
+    std::vector<int> es_lane;
+    std::vector<double> es_g;
+    auto boundaries = [&](double h, Vec2 c, const Vec2* u, const double* guess, int count,
+                          double accept, const double* accept_slopes, double* out,
+                          double* last_slopes) {
+      es.clear();
+      for (int j = 0; j < count; ++j) {
+        const double as = accept_slopes ? accept_slopes[j] : 0.0;
+        es.emplace_back(guess[j], accept, rr, as > 0 ? as : slope_hint, as);
       }
-      if (std::isfinite(glo) && std::isfinite(ghi) && hi > lo && ghi > glo)
-        slope_hint = (ghi - glo) / (hi - lo);
-      last_slope = std::isfinite(g0) && std::isfinite(g1) && s0 != s1 && (g1 - g0) / (s1 - s0) > 0
-                       ? (g1 - g0) / (s1 - s0)
-                       : 0.0;
-      return hi;
+      for (;;) {
+        es_pts.clear(), es_lane.clear();
+        for (int j = 0; j < count; ++j)
+          if (!es[size_t(j)].done)
+            es_pts.push_back(c + u[j] * es[size_t(j)].x), es_lane.push_back(j);
+        if (es_pts.empty()) break;
+        es_g.resize(es_pts.size());
+        marginBatch(h, es_pts.data(), int(es_pts.size()), es_g.data());
+        for (size_t i = 0; i < es_lane.size(); ++i) es[size_t(es_lane[i])].feed(es_g[i]);
+      }
+      for (int j = 0; j < count; ++j) {
+        const EdgeSearch& e = es[size_t(j)];
+        out[j] = e.result;
+        settle(e);
+        if (last_slopes && e.bracketed) last_slopes[j] = e.last_slope;
+      }
     };
     // Boundary points of the region at film radius h, seen from a point inside it, in `count`
     // directions starting at angle `offset`. Empty if the film point sees nothing.
@@ -238,16 +376,29 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       const double reach = 1.5 * *std::max_element(hint->radius.begin(), hint->radius.end());
       // The margin on a coarse grid; then pattern searches from its three least points (the
       // region can be a thin crescent whose least margin lies off one search's path).
+      // The grids' points are traced a batch at a time, in order; the first passing point found
+      // is returned.
+      auto grid = [&](int n, std::vector<std::pair<double, Vec2>>* margins) -> std::optional<Vec2> {
+        Vec2 pts[kB];
+        double g[kB];
+        for (int k0 = 0; k0 < n * n; k0 += kB) {
+          const int m = std::min(kB, n * n - k0);
+          for (int i = 0; i < m; ++i) {
+            const int ix = (k0 + i) % n, iy = (k0 + i) / n;
+            pts[i] = hint->centre +
+                     Vec2{reach * (2.0 * (ix + 0.5) / n - 1), reach * (2.0 * (iy + 0.5) / n - 1)};
+          }
+          marginBatch(h, pts, m, g);
+          for (int i = 0; i < m; ++i) {
+            if (g[i] <= 1) return pts[i];
+            if (margins) margins->push_back({g[i], pts[i]});
+          }
+        }
+        return std::nullopt;
+      };
       constexpr int kGrid = 9;
       std::vector<std::pair<double, Vec2>> starts;
-      for (int iy = 0; iy < kGrid; ++iy)
-        for (int ix = 0; ix < kGrid; ++ix) {
-          const Vec2 a = hint->centre + Vec2{reach * (2.0 * (ix + 0.5) / kGrid - 1),
-                                             reach * (2.0 * (iy + 0.5) / kGrid - 1)};
-          const double g = margin(h, a);
-          if (g <= 1) return a;
-          starts.push_back({g, a});
-        }
+      if (std::optional<Vec2> a = grid(kGrid, &starts)) return a;
       std::partial_sort(starts.begin(), starts.begin() + 3, starts.end(),
                         [](const auto& x, const auto& y) { return x.first < y.first; });
       double g_least = kInf;
@@ -288,13 +439,8 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // came within 2% of passing, a fine grid as well (fine enough to find slivers a hundredth of
       // the neighbour's size), as the bounds of the CS348B set-ups need (tests/optics_pupil_test).
       if (disc2 == 0 || g_least > 1.02) return std::nullopt;
-      for (int grid : {24, 96})
-        for (int iy = 0; iy < grid; ++iy)
-          for (int ix = 0; ix < grid; ++ix) {
-            const Vec2 a = hint->centre + Vec2{reach * (2.0 * (ix + 0.5) / grid - 1),
-                                               reach * (2.0 * (iy + 0.5) / grid - 1)};
-            if (passes(h, a)) return a;
-          }
+      for (int n : {24, 96})
+        if (std::optional<Vec2> a = grid(n, nullptr)) return a;
       return std::nullopt;
     };
     // Whether the checks of a polygon start their searches at its edges (not for an anamorphic
@@ -312,19 +458,28 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // traces saved).
       const bool from_hint =
           !centre_out && hint && !hint->empty && c->x == hint->centre.x && c->y == hint->centre.y;
-      // Each boundary search starts from the last one's distance (the neighbour's polygon's
-      // size for the first).
+      // The ring's searches start at the neighbouring polygon's mean size (a tenth of the rear
+      // element's radius without one), the second ring's at the first ring's points.
       double guess = 0.1 * rr;
       if (hint && !hint->empty) {
         guess = 0;
         for (double v : hint->radius) guess += v / nd;
       }
+      constexpr int kRing = 12;
+      std::vector<Vec2> ring_u, ring;  // the last ring's boundary points
+      for (int j = 0; j < kRing; ++j) ring_u.push_back(unit(2 * std::numbers::pi * j / kRing));
+      std::vector<double> ring_g(kRing, guess), ring_d(kRing);
       for (int it = 0; it < (from_hint ? 0 : 2); ++it) {
+        if (!ring.empty())
+          for (int j = 0; j < kRing; ++j)
+            ring_g[size_t(j)] = std::max(1e-6 * rr, dot2(ring[size_t(j)] - *c, ring_u[size_t(j)]));
+        boundaries(h, *c, ring_u.data(), ring_g.data(), kRing, 0.0, nullptr, ring_d.data(),
+                   nullptr);
+        ring.clear();
         Vec2 lo_pt{1e300, 1e300}, hi_pt{-1e300, -1e300};
-        for (int j = 0; j < 12; ++j) {
-          const Vec2 u = unit(2 * std::numbers::pi * j / 12);
-          guess = boundary(h, *c, u, guess);
-          const Vec2 q = *c + u * guess;
+        for (int j = 0; j < kRing; ++j) {
+          const Vec2 q = *c + ring_u[size_t(j)] * ring_d[size_t(j)];
+          ring.push_back(q);
           lo_pt = {std::min(lo_pt.x, q.x), std::min(lo_pt.y, q.y)};
           hi_pt = {std::max(hi_pt.x, q.x), std::max(hi_pt.y, q.y)};
         }
@@ -337,27 +492,53 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // from c): the region's boundary is usually within a percent of it, and the search accepts
       // a blocked point the margin puts within kHintAccept of the boundary.
       constexpr double kHintAccept = 1e-3;
-      const bool use_hint = from_hint && hint_guesses;
+      const bool use_hint = from_hint;
+      // An anamorphic wedge's blended polygon (hint_guesses false) is a looser guess: the
+      // searches start at its edges without accepting early.
+      const double hint_accept = hint_guesses ? kHintAccept : 0.0;
+      std::vector<Vec2> us(static_cast<size_t>(count));
+      std::vector<double> reaches(static_cast<size_t>(count), 0.0);
+      bool all_reach = use_hint;
+      std::vector<Vec2> hint_pts;
+      if (use_hint)
+        for (int k = 0; k < nd; ++k)
+          hint_pts.push_back(hint->centre + dirs_[size_t(k)] * hint->radius[size_t(k)]);
       for (int j = 0; j < count; ++j) {
         const Vec2 u = unit(offset + 2 * std::numbers::pi * j / count);
-        double reach = 0;
-        if (use_hint) {
-          // The farthest crossing of the ray c + t u with the hint polygon's edges.
-          const Vec2 d0 = *c - hint->centre;
-          for (int k = 0; k < nd; ++k) {
-            const Vec2 a = dirs_[size_t(k)] * hint->radius[size_t(k)];
-            const Vec2 b = dirs_[size_t((k + 1) % nd)] * hint->radius[size_t((k + 1) % nd)];
-            const Vec2 e = b - a;
-            const double den = cross2(u, e);
-            if (den == 0) continue;
-            const Vec2 w = a - d0;
-            const double t = cross2(w, e) / den, v = cross2(w, u) / den;
-            if (t > 0 && v >= 0 && v <= 1) reach = std::max(reach, t);
-          }
+        us[size_t(j)] = u;
+        // The farthest crossing of the ray c + t u with the hint polygon's edges.
+        const double reach = use_hint ? farthestCrossing(hint_pts, *c, u) : 0.0;
+        reaches[size_t(j)] = reach * (1 + 0.5 * hint_accept);
+        all_reach = all_reach && reach > 0;
+      }
+      if (!use_hint && !ring.empty()) {
+        // A new polygon: each search starts at the last ring's edge along its direction, all
+        // side by side.
+        std::vector<double> g(static_cast<size_t>(count)), d(static_cast<size_t>(count));
+        bool all = true;
+        for (int j = 0; j < count && all; ++j) {
+          g[size_t(j)] = farthestCrossing(ring, *c, us[size_t(j)]);
+          all = g[size_t(j)] > 0;
         }
-        if (reach > 0) {
+        if (all) {
+          boundaries(h, *c, us.data(), g.data(), count, 0.0, nullptr, d.data(), nullptr);
+          for (int j = 0; j < count; ++j) pts.push_back(*c + us[size_t(j)] * d[size_t(j)]);
+          return pts;
+        }
+      }
+      if (all_reach) {
+        // Every search starts at the hint's edge: side by side.
+        std::vector<double> d(static_cast<size_t>(count));
+        boundaries(h, *c, us.data(), reaches.data(), count, hint_accept, nullptr, d.data(),
+                   nullptr);
+        for (int j = 0; j < count; ++j) pts.push_back(*c + us[size_t(j)] * d[size_t(j)]);
+        return pts;
+      }
+      for (int j = 0; j < count; ++j) {
+        const Vec2 u = us[size_t(j)];
+        if (reaches[size_t(j)] > 0) {
           accept_slope = 0;
-          guess = boundary(h, *c, u, reach * (1 + 0.5 * kHintAccept), kHintAccept);
+          guess = boundary(h, *c, u, reaches[size_t(j)], hint_accept);
         } else {
           guess = boundary(h, *c, u, guess);
         }
@@ -700,13 +881,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
             }
             pred[size_t(j)] = d;
           }
-          for (int j = 0; j < nd; ++j) {
-            accept_slope = slopes[size_t(j)];
-            if (accept_slope > 0) slope_hint = accept_slope;
-            dist[i][size_t(j)] = boundary(h, base.centre, dirs_[size_t(j)],
-                                          pred[size_t(j)] * (1 + 0.5 * kBandAccept), kBandAccept);
-            if (last_slope > 0) slopes[size_t(j)] = last_slope;
-          }
+          for (double& v : pred) v *= 1 + 0.5 * kBandAccept;
+          std::vector<double> ls = slopes;
+          boundaries(h, base.centre, dirs_.data(), pred.data(), nd, kBandAccept, slopes.data(),
+                     dist[i].data(), ls.data());
+          for (int j = 0; j < nd; ++j)
+            if (ls[size_t(j)] > 0) slopes[size_t(j)] = ls[size_t(j)];
           known.push_back({xi, &dist[i]});
         }
       }
@@ -804,11 +984,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
                 ok = false;
                 break;
               }
-              double guess = pa.radius[0];
-              for (int j = 0; j < nd; ++j) {
-                guess = boundary(h, pa.centre, dirs_[size_t(j)], guess);
-                far[size_t(j)] = std::max(far[size_t(j)], guess * nodeF(j));
-              }
+              // From this polygon's own distances (the other lens's region is much like it).
+              std::vector<double> g(static_cast<size_t>(nd)), d(static_cast<size_t>(nd));
+              for (int j = 0; j < nd; ++j) g[size_t(j)] = pa.radius[size_t(j)] / nodeF(j);
+              boundaries(h, pa.centre, dirs_.data(), g.data(), nd, 0.0, nullptr, d.data(), nullptr);
+              for (int j = 0; j < nd; ++j)
+                far[size_t(j)] = std::max(far[size_t(j)], d[size_t(j)] * nodeF(j));
             }
             if (!ok) continue;
             node = pa;

@@ -107,6 +107,19 @@ class ShapeIntersector {
   /// Ray origin relative to the vertex and unit direction; roots below t_min are ignored.
   std::optional<Hit> intersect(const Vec3& rel_origin, const Vec3& dir, double t_min) const;
 
+  /// A quadric's closed form (cx x^2 + cy y^2 + e z^2 - 2 z = 0, the vertex sheet where
+  /// 1 - e z > 0) and the slab [z_lo, z_hi] of the continued surface, for tracers that intersect
+  /// quadrics side by side: the hit is the nearest root >= t_min on the vertex sheet, found where
+  /// the ray crosses the slab, the quadratic's leading coefficient is not 0 and such a root
+  /// exists (else intersect() decides). nullopt for other shapes.
+  struct QuadricForm {
+    double cx, cy, e, z_lo, z_hi;
+  };
+  std::optional<QuadricForm> quadricForm() const {
+    if (!quadric_) return std::nullopt;
+    return QuadricForm{qcx_, qcy_, qe_, z_lo_, z_hi_};
+  }
+
   /// Sag with the flat continuation beyond bound_r.
   SagGradient sagContinued(double x, double y) const;
   /// sagContinued(x, y).z without the gradient (the first-crossing checks of the Newton solve).
