@@ -128,7 +128,7 @@ std::optional<ChiefRay> chiefRayFromScene(const LensSystem& lens, const Paraxial
 }
 
 std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p,
-                                   double film_height_mm) {
+                                   double film_height_mm, bool scan) {
   const double h = film_height_mm;
   const Vec3 film{h, 0, lens.filmZ_mm()};
   const double z_rear = lens.rearVertexZ_mm();
@@ -142,6 +142,7 @@ std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p
     const Vec2 a = toRear(c->film_ray.origin + c->film_ray.direction);
     if (passes(a)) return a;
   }
+  if (!scan) return std::nullopt;
   constexpr int kGrid = 41;
   auto scanDisc = [&](auto&& point_at) -> std::optional<Vec2> {
     for (int iy = 0; iy < kGrid; ++iy)

@@ -370,7 +370,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // The neighbouring polygon's centre usually lies inside; the real chief ray's search costs
       // many traces.
       if (hint && !hint->empty && passes(h, hint->centre)) return hint->centre;
-      std::optional<Vec2> c = passingRearAim(lens, p, h);
+      // The grids over the whole exit pupil and rear element (passingRearAim's scan) only
+      // without a neighbouring polygon to search about (below).
+      std::optional<Vec2> c = passingRearAim(lens, p, h, !hint || hint->empty);
       if (c && passes(h, *c)) return c;
       if (!hint || hint->empty) return std::nullopt;
       const double reach = 1.5 * *std::max_element(hint->radius.begin(), hint->radius.end());
