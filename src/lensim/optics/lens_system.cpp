@@ -90,14 +90,15 @@ template <typename T>
 // vertex sheet, normal from the quadric's gradient, refraction as refract()), so the same
 // results. The lanes the closed form does not decide (a ray nearly parallel to the slab, a
 // quadratic without its leading term, no root on the vertex sheet) are marked in one_by_one for
-// the caller to trace one by one. margin: no clipping, and each lane's margin term (as
+// the caller to trace one by one. kMargin: no clipping, and each lane's margin term (as
 // LensTracer::marginSquared) in term.
+template <bool kMargin>
 void quadricLanes(const ShapeIntersector::QuadricForm& Q, double zv, double semi2, double eta_i,
-                  double eta_t, bool margin, int nv, const double* ox, const double* oy,
-                  const double* oz, const double* dx, const double* dy, const double* dz,
-                  double* px, double* py, double* pz, double* ex, double* ey, double* ez,
-                  double* fate, double* term, bool* one_by_one) {
-  const double t_min = -1e-9, zero = 0, one = 1, inf = std::numeric_limits<double>::infinity();
+                  double eta_t, int nv, const double* ox, const double* oy, const double* oz,
+                  const double* dx, const double* dy, const double* dz, double* px, double* py,
+                  double* pz, double* ex, double* ey, double* ez, double* fate, double* term,
+                  bool* one_by_one) {
+  const double t_min = -1e-9, zero = 0, one = 1;
   const double eta = eta_i / eta_t;
   const double refracts = eta_i != eta_t ? one : zero, rarer = eta_i > eta_t ? one : zero;
   double defer[LensTracer<double>::kBatch];
@@ -130,7 +131,7 @@ void quadricLanes(const ShapeIntersector::QuadricForm& Q, double zv, double semi
     const double glen = std::sqrt(gx * gx + gy * gy + gz * gz);
     const double nx = gx / glen, ny = gy / glen, nz = gz / glen;
     const double r2 = hx * hx + hy * hy;
-    const double inside = margin || r2 <= semi2 ? one : zero;
+    const double inside = kMargin || r2 <= semi2 ? one : zero;
     double cos_i = -(nx * ux + ny * uy + nz * uz);
     const double s = cos_i < zero ? -one : one;
     cos_i *= s;
@@ -141,9 +142,9 @@ void quadricLanes(const ShapeIntersector::QuadricForm& Q, double zv, double semi
     ex[j] = refracts != zero ? ux * eta + nx * k : ux;
     ey[j] = refracts != zero ? uy * eta + ny * k : uy;
     ez[j] = refracts != zero ? uz * eta + nz * k : uz;
-    if (margin) {
-      const double ra = semi2 > zero ? r2 / semi2 : (r2 > zero ? inf : zero);
-      term[j] = std::max(ra, rarer != zero && refracts != zero ? sin2_t : zero);
+    if constexpr (kMargin) {
+      const double ra = r2 / semi2;  // as LensTracer::traceBatch's marginTerm
+      term[j] = std::max(ra != ra ? zero : ra, sin2_t * rarer);
     }
     fate[j] = crosses != zero ? (inside != zero ? (tir != zero ? 3.0 : zero) : 2.0) : one;
   }
@@ -270,8 +271,8 @@ T LensTracer<T>::marginSquared(const RayT<T>& ray) const {
 
 template <typename T>
 template <bool kMargin>
-void LensTracer<T>::traceBatch(const RayT<T>* rays, int n, TraceResultT<T>* results,
-                               T* margin2) const {
+__attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch(
+    const RayT<T>* rays, int n, TraceResultT<T>* results, T* margin2) const {
   // Structure of arrays. Per surface, a branch-free loop over all lanes that the compiler
   // vectorises (blocked lanes keep computing, their values are ignored; conditions are 0/1
   // values of type T because GCC does not vectorise mixed bool masks here; the library is
@@ -306,8 +307,9 @@ void LensTracer<T>::traceBatch(const RayT<T>* rays, int n, TraceResultT<T>* resu
     // kMargin: this surface's term of the margin, from the hit's r^2 and sin^2 of the
     // refracted angle (as marginSquared).
     auto marginTerm = [&](T r2, T sin2_t) {
-      const T ra = semi2 > zero ? r2 / semi2 : (r2 > zero ? inf : zero);
-      return std::max(ra, rarer != zero ? sin2_t : zero);
+      // r2 / semi2, and for a zero semi-aperture infinite (0 / 0 on the axis: 0), branch-free.
+      const T ra = r2 / semi2;
+      return std::max(ra != ra ? zero : ra, sin2_t * rarer);
     };
     // A plane (the stop); refracting only between different indices, which a stop rarely has:
     // the common case gets its own loop without the refraction, which vectorises.
@@ -344,8 +346,8 @@ void LensTracer<T>::traceBatch(const RayT<T>* rays, int n, TraceResultT<T>* resu
     bool quadric_lanes = false;
     if constexpr (std::is_same_v<T, double>) {
       if (quadric_[i]) {
-        quadricLanes(*quadric_[i], zv, semi2, eta_i, eta_t, kMargin, nv, ox, oy, oz, dx, dy, dz, px,
-                     py, pz, ex, ey, ez, fate, term, one_by_one);
+        quadricLanes<kMargin>(*quadric_[i], zv, semi2, eta_i, eta_t, nv, ox, oy, oz, dx, dy, dz, px,
+                              py, pz, ex, ey, ez, fate, term, one_by_one);
         quadric_lanes = true;
       }
     }
