@@ -144,14 +144,39 @@ std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p
   }
   if (!scan) return std::nullopt;
   constexpr int kGrid = 41;
+  // Without obscurations (where kOuterBoundary is the plain trace) the grid's points are traced
+  // in order a batch at a time (LensTracer::traceFromFilmBatch, the same results).
+  bool obscured = false;
+  for (const Interface& s : lens.interfaces()) obscured = obscured || s.obscuration_radius_mm > 0;
   auto scanDisc = [&](auto&& point_at) -> std::optional<Vec2> {
+    constexpr int kB = LensTracer<double>::kBatch;
+    Vec2 pts[kB];
+    Ray rays[kB];
+    TraceResult res[kB];
+    int m = 0;
+    auto flush = [&]() -> std::optional<Vec2> {
+      lens.tracer().traceFromFilmBatch(rays, m, res);
+      const int n = m;
+      m = 0;
+      for (int i = 0; i < n; ++i)
+        if (res[i].ok()) return pts[i];
+      return std::nullopt;
+    };
     for (int iy = 0; iy < kGrid; ++iy)
       for (int ix = 0; ix < kGrid; ++ix) {
         const double u = 2.0 * ix / (kGrid - 1) - 1, v = 2.0 * iy / (kGrid - 1) - 1;
         if (u * u + v * v > 1) continue;
         const Vec2 a = point_at(u, v);
-        if (passes(a)) return a;
+        if (obscured) {
+          if (passes(a)) return a;
+          continue;
+        }
+        pts[m] = a;
+        rays[m] = lens.filmPointRay({h, 0}, a);
+        if (++m == kB)
+          if (auto found = flush()) return found;
       }
+    if (m > 0) return flush();
     return std::nullopt;
   };
   // The exit pupil (paraxial), overfilled, when it lies between the lens and the film side.

@@ -357,7 +357,9 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
       // its loop left.
       const TraceOptions opts{.clip_apertures = !kMargin};
       for (int j = 0; j < nv; ++j) {
-        if (quadric_lanes && !one_by_one[j]) continue;
+        // Lanes already stopped (or padding) are skipped: a blocked ray can cost a non-spherical
+        // surface's slowest search.
+        if (j >= n || !alive[j] || (quadric_lanes && !one_by_one[j])) continue;
         Vec3T<T> o{ox[j], oy[j], oz[j]}, d{dx[j], dy[j], dz[j]}, p{};
         T sin2_t = zero;
         const BlockReason why = traceOne(i, true, opts, o, d, p, kMargin ? &sin2_t : nullptr);

@@ -370,9 +370,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // The neighbouring polygon's centre usually lies inside; the real chief ray's search costs
       // many traces.
       if (hint && !hint->empty && passes(h, hint->centre)) return hint->centre;
-      // The grids over the whole exit pupil and rear element (passingRearAim's scan) only
-      // without a neighbouring polygon to search about (below).
-      std::optional<Vec2> c = passingRearAim(lens, p, h, !hint || hint->empty);
+      // The grids over the whole exit pupil and rear element (passingRearAim's scan, up to
+      // ~2,600 traces of the lens's own at film azimuth 0): for an anamorphic lens only without a
+      // neighbouring polygon to search about (below). A rotationally symmetric lens keeps it:
+      // without it the bound's edge at the image circle moves out a little (lentil:0014 on the
+      // 36x24 film: 4.7% -> 5.2% of its samples wasted) for ~20% of its start-up.
+      std::optional<Vec2> c = passingRearAim(lens, p, h, rotational_ || !hint || hint->empty);
       if (c && passes(h, *c)) return c;
       if (!hint || hint->empty) return std::nullopt;
       const double reach = 1.5 * *std::max_element(hint->radius.begin(), hint->radius.end());
