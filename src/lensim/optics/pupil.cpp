@@ -121,9 +121,10 @@ struct EdgeSearch {
       return;
     }
     double xn = std::numeric_limits<double>::quiet_NaN();
+    bool secant = false;  // xn from the latest two evaluations
     if (!force_bisect) {
       if (std::isfinite(g0) && std::isfinite(g1) && g1 != g0 && s1 != s0)
-        xn = s1 + (1 - g1) * (s1 - s0) / (g1 - g0);
+        xn = s1 + (1 - g1) * (s1 - s0) / (g1 - g0), secant = true;
       else if (std::isfinite(g1) && slope_hint > 0)
         xn = s1 + (1 - g1) / slope_hint;
       // Aim a hair toward the bracket's far end, so that the near one stays and the far one
@@ -139,9 +140,14 @@ struct EdgeSearch {
     if (hi < kInf && lo > 0) {
       if (!(xn > lo && xn < hi)) xn = 0.5 * (lo + hi);
     } else if (hi < kInf) {  // nothing passing found along u yet
-      if (!(xn > 0 && xn < hi) || (accept > 0 && xn < hi / (1 + f))) xn = hi / (1 + f), f *= 2;
+      // With a good guess (accept > 0) a step from one point's slope goes at most f; a secant
+      // step (the margin is smooth there, often nearly flat: the guess can be off by 10-20%)
+      // at most half the way to the centre.
+      const bool far = accept > 0 && xn < hi / (1 + f) && !(secant && xn >= 0.5 * hi);
+      if (!(xn > 0 && xn < hi) || far) xn = hi / (1 + f), f *= 2;
     } else {  // nothing blocked yet
-      if (!(xn > lo) || (accept > 0 && xn > lo * (1 + f))) xn = lo * (1 + f), f *= 2;
+      const bool far = accept > 0 && xn > lo * (1 + f) && !(secant && xn <= 2 * lo);
+      if (!(xn > lo) || far) xn = lo * (1 + f), f *= 2;
       xn = std::min(xn, 2 * lo + 1e-6 * rr);
     }
     x = xn;
