@@ -454,9 +454,6 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         if (std::optional<Vec2> a = grid(n, nullptr)) return a;
       return std::nullopt;
     };
-    // Whether the checks of a polygon start their searches at its edges (not for an anamorphic
-    // wedge's blended polygon, which the true region at the wedge's middle leaves by more).
-    bool hint_guesses = true;
     auto boundaryPoints = [&](double h, int count, double offset, Vec2* centre_out,
                               const Polygon* hint) {
       std::vector<Vec2> pts;
@@ -504,9 +501,6 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // a blocked point the margin puts within kHintAccept of the boundary.
       constexpr double kHintAccept = 1e-3;
       const bool use_hint = from_hint;
-      // An anamorphic wedge's blended polygon (hint_guesses false) is a looser guess: the
-      // searches start at its edges without accepting early.
-      const double hint_accept = hint_guesses ? kHintAccept : 0.0;
       std::vector<Vec2> us(static_cast<size_t>(count));
       std::vector<double> reaches(static_cast<size_t>(count), 0.0);
       bool all_reach = use_hint;
@@ -519,7 +513,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         us[size_t(j)] = u;
         // The farthest crossing of the ray c + t u with the hint polygon's edges.
         const double reach = use_hint ? farthestCrossing(hint_pts, *c, u) : 0.0;
-        reaches[size_t(j)] = reach * (1 + 0.5 * hint_accept);
+        reaches[size_t(j)] = reach * (1 + 0.5 * kHintAccept);
         all_reach = all_reach && reach > 0;
       }
       if (!use_hint && !ring.empty()) {
@@ -540,7 +534,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       if (all_reach) {
         // Every search starts at the hint's edge: side by side.
         std::vector<double> d(static_cast<size_t>(count));
-        boundaries(h, *c, us.data(), reaches.data(), count, hint_accept, nullptr, d.data(),
+        boundaries(h, *c, us.data(), reaches.data(), count, kHintAccept, nullptr, d.data(),
                    nullptr);
         for (int j = 0; j < count; ++j) pts.push_back(*c + us[size_t(j)] * d[size_t(j)]);
         return pts;
@@ -549,7 +543,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         const Vec2 u = us[size_t(j)];
         if (reaches[size_t(j)] > 0) {
           accept_slope = 0;
-          guess = boundary(h, *c, u, reaches[size_t(j)], hint_accept);
+          guess = boundary(h, *c, u, reaches[size_t(j)], kHintAccept);
         } else {
           guess = boundary(h, *c, u, guess);
         }
@@ -690,7 +684,6 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // Filled on the side: blended() must give the unwidened polygon while checking.
       WedgeCheck wc;
       std::vector<double> R(static_cast<size_t>(nd));
-      hint_guesses = false;
       for (double h : kept) {
         Polygon poly;
         poly.r = h;
