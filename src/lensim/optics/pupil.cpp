@@ -131,7 +131,7 @@ struct EdgeSearch {
       // moves to within the tolerance.
       if (std::isfinite(xn)) {
         if (accept > 0)  // aim at the blocked side, within reach of acceptance
-          xn += 0.5 * accept * std::abs(xn);
+          xn += 0.3 * accept * std::abs(xn);
         else
           xn += (hi - xn <= xn - lo ? -0.4 : 0.4) * kTol * std::abs(xn);
       }
