@@ -85,6 +85,26 @@ template <typename T>
   return true;
 }
 
+// refract() for one lane of a batch, branch-free (the same operations, so the same results):
+// the direction (dx, dy, dz) refracted at the unit normal n (either orientation) into e, where
+// `refracts` is 1 (else e = d); sin2_t: sin^2 of the refracted angle; tir: 1 where totally
+// reflected (and refracting).
+template <typename T>
+[[gnu::always_inline]] inline void refractLane(T dx, T dy, T dz, T nx, T ny, T nz, T eta,
+                                               T refracts, T& ex, T& ey, T& ez, T& sin2_t, T& tir) {
+  const T zero(0), one(1);
+  T cos_i = -(nx * dx + ny * dy + nz * dz);
+  const T s = cos_i < zero ? -one : one;
+  cos_i *= s;
+  sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
+  tir = sin2_t >= one ? refracts : zero;
+  const T cos_t = std::sqrt(std::max(zero, one - sin2_t));
+  const T k = (eta * cos_i - cos_t) * s;
+  ex = refracts != zero ? dx * eta + nx * k : dx;
+  ey = refracts != zero ? dy * eta + ny * k : dy;
+  ez = refracts != zero ? dz * eta + nz * k : dz;
+}
+
 // A refracting quadric (a cylinder, a conic) for lanes [0, nv) side by side: the same operations
 // as traceShaped with ShapeIntersector::intersect's closed form (direction normalised, hit on the
 // vertex sheet, normal from the quadric's gradient, refraction as refract()), so the same
@@ -93,11 +113,11 @@ template <typename T>
 // the caller to trace one by one. kMargin: no clipping, and each lane's margin term (as
 // LensTracer::marginSquared) in term.
 template <bool kMargin>
-void quadricLanes(const ShapeIntersector::QuadricForm& Q, double zv, double semi2, double eta_i,
-                  double eta_t, int nv, const double* ox, const double* oy, const double* oz,
-                  const double* dx, const double* dy, const double* dz, double* px, double* py,
-                  double* pz, double* ex, double* ey, double* ez, double* fate, double* term,
-                  bool* one_by_one) {
+[[gnu::always_inline]] inline void quadricLanes(
+    const ShapeIntersector::QuadricForm& Q, double zv, double semi2, double eta_i, double eta_t,
+    int nv, const double* ox, const double* oy, const double* oz, const double* dx,
+    const double* dy, const double* dz, double* px, double* py, double* pz, double* ex, double* ey,
+    double* ez, double* fate, double* term, bool* one_by_one) {
   const double t_min = -1e-9, zero = 0, one = 1;
   const double eta = eta_i / eta_t;
   const double refracts = eta_i != eta_t ? one : zero, rarer = eta_i > eta_t ? one : zero;
@@ -132,16 +152,8 @@ void quadricLanes(const ShapeIntersector::QuadricForm& Q, double zv, double semi
     const double nx = gx / glen, ny = gy / glen, nz = gz / glen;
     const double r2 = hx * hx + hy * hy;
     const double inside = kMargin || r2 <= semi2 ? one : zero;
-    double cos_i = -(nx * ux + ny * uy + nz * uz);
-    const double s = cos_i < zero ? -one : one;
-    cos_i *= s;
-    const double sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
-    const double tir = sin2_t >= one ? refracts : zero;
-    const double cos_t = std::sqrt(std::max(zero, one - sin2_t));
-    const double k = (eta * cos_i - cos_t) * s;
-    ex[j] = refracts != zero ? ux * eta + nx * k : ux;
-    ey[j] = refracts != zero ? uy * eta + ny * k : uy;
-    ez[j] = refracts != zero ? uz * eta + nz * k : uz;
+    double sin2_t, tir;
+    refractLane(ux, uy, uz, nx, ny, nz, eta, refracts, ex[j], ey[j], ez[j], sin2_t, tir);
     if constexpr (kMargin) {
       const double ra = r2 / semi2;  // as LensTracer::traceBatch's marginTerm
       term[j] = std::max(ra != ra ? zero : ra, sin2_t * rarer);
@@ -397,16 +409,9 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
         px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
         const T r2 = px[j] * px[j] + py[j] * py[j];
         const T inside = kMargin || r2 <= semi2 ? one : zero;
-        T cos_i = -(nx * dx[j] + ny * dy[j] + nz * dz[j]);
-        const T s = cos_i < zero ? -one : one;
-        cos_i *= s;
-        const T sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
-        const T tir = sin2_t >= one ? refracts : zero;
-        const T cos_t = std::sqrt(std::max(zero, one - sin2_t));
-        const T k = (eta * cos_i - cos_t) * s;
-        ex[j] = refracts != zero ? dx[j] * eta + nx * k : dx[j];
-        ey[j] = refracts != zero ? dy[j] * eta + ny * k : dy[j];
-        ez[j] = refracts != zero ? dz[j] * eta + nz * k : dz[j];
+        T sin2_t, tir;
+        refractLane(dx[j], dy[j], dz[j], nx, ny, nz, eta, refracts, ex[j], ey[j], ez[j], sin2_t,
+                    tir);
         if constexpr (kMargin) term[j] = marginTerm(r2, refracts != zero ? sin2_t : zero);
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
