@@ -201,8 +201,8 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // neighbour's polygon, one wedge a task; (1) each uniform interval's checks and refinement,
   // one interval a task; (2) the wavelength bands' vertex distances, a few nodes a task; (3) the
   // sampling tables (and an obscuration's hole), one wedge edge a task; (4) anamorphic: each
-  // wedge's checks of its blended polygon, one wedge a task. Each task starts from the
-  // same state (no search hints carried over from another task), so that the bounds do not
+  // wedge's checks of its blended polygon, 8 film radii of a wedge a task. Each task starts from
+  // the same state (no search hints carried over from another task), so that the bounds do not
   // depend on how the tasks are scheduled.
   struct Work {
     std::vector<Polygon> initial;               // stage 0
@@ -214,6 +214,13 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     std::vector<Sector> sets;                      // stage 3
   };
   std::vector<Work> work(static_cast<size_t>(n_sectors));
+  // The narrowest radial interval refinement makes.
+  const double min_width = film_radius_mm / (ni * 16.0);
+  // Anamorphic, stage 4: per wedge, the film radii at which its blended polygon is checked (both
+  // edges' nodes and interval middles), and the checks found, a task's share of the radii each.
+  constexpr int kWedgeRadiiPerTask = 8;
+  std::vector<std::vector<double>> wedge_radii;
+  std::vector<std::vector<WedgeCheck>> wedge_parts;
   std::atomic<long> traces_total{0};
   auto buildSector = [&](int sec, int stage, int k0, int k1) {
     Work& w = work[size_t(sec)];
@@ -606,7 +613,6 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     // Uniform nodes first; then each interval is checked half-way: the interpolated polygon must
     // contain the true region there. Where it would have to grow by more than a few percent, or
     // the region changes fast (at the edge of the image circle), the interval is split.
-    const double min_width = film_radius_mm / (ni * 16.0);
     if (!rotational_) {
       // The wedge edge's azimuth (a wedge's checks, stage 4, set their own).
       az = {sec * wedge};
@@ -673,18 +679,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // Anamorphic: wedge `sec`'s blended polygon checked against the true region at its middle
       // azimuth, at both edges' nodes and interval middles; the factors that widen it to hold the
       // boundary points found, with the safety margin.
-      std::vector<double> rs;
-      for (int l : {sec, sec + 1})
-        for (const Interval& iv : sets_[0][size_t(l)].intervals)
-          rs.insert(rs.end(), {iv.r0, 0.5 * (iv.r0 + iv.r1), iv.r1});
-      std::sort(rs.begin(), rs.end());
-      std::vector<double> kept;
-      for (double r : rs)
-        if (kept.empty() || r - kept.back() > 0.25 * min_width) kept.push_back(r);
+      // Radii k0 .. k1 - 1 of the wedge's (each check is independent of the others).
       // Filled on the side: blended() must give the unwidened polygon while checking.
       WedgeCheck wc;
       std::vector<double> R(static_cast<size_t>(nd));
-      for (double h : kept) {
+      for (int k = k0; k < k1; ++k) {
+        const double h = wedge_radii[size_t(sec)][size_t(k)];
         Polygon poly;
         poly.r = h;
         std::vector<double> f(size_t(nd), 1.0);
@@ -705,7 +705,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         wc.r.push_back(h);
         wc.f.push_back(std::move(f));
       }
-      wedges_[size_t(sec)] = std::move(wc);
+      wedge_parts[size_t(sec)][size_t(k0 / kWedgeRadiiPerTask)] = std::move(wc);
       traces_total += traces;
       return;
     }
@@ -1051,9 +1051,31 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     for (size_t set = 0; set < w.sets.size(); ++set) sets_[set].push_back(std::move(w.sets[set]));
   if (!rotational_) {
     wedges_.assign(size_t(n_wedges), {});
-    for (int wdg = 0; wdg < n_wedges; ++wdg) tasks.push_back({wdg, 4, 0, 0});
+    wedge_radii.assign(size_t(n_wedges), {});
+    wedge_parts.assign(size_t(n_wedges), {});
+    for (int wdg = 0; wdg < n_wedges; ++wdg) {
+      std::vector<double> rs;
+      for (int l : {wdg, wdg + 1})
+        for (const Interval& iv : sets_[0][size_t(l)].intervals)
+          rs.insert(rs.end(), {iv.r0, 0.5 * (iv.r0 + iv.r1), iv.r1});
+      std::sort(rs.begin(), rs.end());
+      std::vector<double>& kept = wedge_radii[size_t(wdg)];
+      for (double r : rs)
+        if (kept.empty() || r - kept.back() > 0.25 * min_width) kept.push_back(r);
+      const int n = static_cast<int>(kept.size());
+      wedge_parts[size_t(wdg)].resize(size_t((n + kWedgeRadiiPerTask - 1) / kWedgeRadiiPerTask));
+      for (int k = 0; k < n; k += kWedgeRadiiPerTask)
+        tasks.push_back({wdg, 4, k, std::min(n, k + kWedgeRadiiPerTask)});
+    }
     runStage(tasks);
     tasks.clear();
+    for (int wdg = 0; wdg < n_wedges; ++wdg)
+      for (WedgeCheck& part : wedge_parts[size_t(wdg)]) {
+        WedgeCheck& wc = wedges_[size_t(wdg)];
+        wc.r.insert(wc.r.end(), part.r.begin(), part.r.end());
+        wc.f.insert(wc.f.end(), std::make_move_iterator(part.f.begin()),
+                    std::make_move_iterator(part.f.end()));
+      }
   }
   traces_ = traces_total;
   intervals_ = sets_[0].front().intervals;
