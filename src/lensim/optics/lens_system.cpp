@@ -336,16 +336,9 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
         const T r2 = px[j] * px[j] + py[j] * py[j];
         const T inside = kMargin || r2 <= semi2 ? one : zero;
         T tir = zero, sin2_t = zero;
-        if constexpr (kRefract) {
-          T cos_i = dz[j];  // -(n . d) with the normal (0, 0, -1)
-          const T s = cos_i < zero ? -one : one;
-          cos_i *= s;
-          sin2_t = eta * eta * std::max(zero, one - cos_i * cos_i);
-          tir = sin2_t >= one ? one : zero;
-          const T cos_t = std::sqrt(std::max(zero, one - sin2_t));
-          const T k = (eta * cos_i - cos_t) * s;
-          // n * k = (0, 0, -k)
-          ex[j] = dx[j] * eta, ey[j] = dy[j] * eta, ez[j] = dz[j] * eta - k;
+        if constexpr (kRefract) {  // the normal (0, 0, -1)
+          refractLane(dx[j], dy[j], dz[j], zero, zero, -one, eta, one, ex[j], ey[j], ez[j], sin2_t,
+                      tir);
         } else {
           ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
         }
