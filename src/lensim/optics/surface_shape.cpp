@@ -44,20 +44,23 @@ Coeffs coeffsOf(double radius_mm, const SurfaceShape& shape) {
 struct Profile {
   double f, df;
 };
+// kSlope false: f only (df left 0; f the same value).
+template <bool kSlope = true>
 std::optional<Profile> toroidProfile(double c, double a, const std::vector<double>& poly,
                                      double y) {
   // a = (1 + k) c^2; f = c y^2 / (1 + S), f' = c y / S with S = sqrt(1 - a y^2).
   const double arg = 1 - a * y * y;
   if (arg < 0) return std::nullopt;
   const double S = std::sqrt(arg);
-  Profile p;
+  Profile p{};
   p.f = c * y * y / (1 + S);
-  p.df = S > 0 ? c * y / S
-               : (y != 0 ? std::copysign(std::numeric_limits<double>::infinity(), c * y) : 0.0);
+  if constexpr (kSlope)
+    p.df = S > 0 ? c * y / S
+                 : (y != 0 ? std::copysign(std::numeric_limits<double>::infinity(), c * y) : 0.0);
   double yp = 1;  // y^(p-1)
   for (size_t k = 1; k < poly.size(); ++k) {
     const double a_p = poly[k];
-    if (a_p != 0) p.df += double(k) * a_p * yp;
+    if (kSlope && a_p != 0) p.df += double(k) * a_p * yp;
     yp *= y;
     if (a_p != 0) p.f += a_p * yp;
   }
@@ -68,9 +71,11 @@ std::optional<Profile> toroidProfile(double c, double a, const std::vector<doubl
 // rho = R - f(y); gradient dz/dx = x / q, dz/dy = rho f' / q (from q^2 = rho^2 - x^2).
 // rot = 0: the cylinder z = f(y). `clamp`: rho^2 - x^2 < 0 (just outside the domain, from the
 // sampled domain radius) is taken as 0 instead of failing.
+// kGradient false: the sag only (the gradient left 0; z the same value).
+template <bool kGradient = true>
 std::optional<SagGradient> toroidSag(double c, double a, const std::vector<double>& poly,
                                      double rot, double x, double y, bool clamp) {
-  const auto pr = toroidProfile(c, a, poly, y);
+  const auto pr = toroidProfile<kGradient>(c, a, poly, y);
   if (!pr) return std::nullopt;
   if (rot == 0) return SagGradient{pr->f, 0.0, pr->df};
   const double rho = rot - pr->f;
@@ -80,9 +85,10 @@ std::optional<SagGradient> toroidSag(double c, double a, const std::vector<doubl
     d = 0;
   }
   const double q = std::copysign(std::sqrt(d), rho);
-  SagGradient g;
+  SagGradient g{};
   if (rho + q == 0) return std::nullopt;  // rho = 0: the curve meets the axis of rotation
   g.z = pr->f + x * x / (rho + q);
+  if constexpr (!kGradient) return g;
   if (q != 0) {
     g.dzdx = x / q;
     g.dzdy = rho * pr->df / q;
@@ -302,8 +308,13 @@ SagGradient ShapeIntersector::sagContinued(double x, double y) const {
 
 double ShapeIntersector::sagZ(double x, double y) const {
   const double r2 = x * x + y * y;
-  // Only the plain asphere inside the bound has a cheaper form; elsewhere the full evaluation.
-  if (toroidal_ || r2 > bound_r_ * bound_r_) return sagContinued(x, y).z;
+  // Inside the bound the plain asphere and the toroid have cheaper forms (no gradient: the same
+  // z); elsewhere the full evaluation.
+  if (r2 > bound_r_ * bound_r_) return sagContinued(x, y).z;
+  if (toroidal_) {  // as sagContinued: 0 where the toroid is undefined (not reached inside)
+    const auto g = toroidSag<false>(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x, y, true);
+    return g ? g->z : 0.0;
+  }
   const double arg = 1 - ax_ * x * x - ay_ * y * y;
   if (!(arg > 0)) return sagContinued(x, y).z;
   const double z0 = (cx_ * x * x + cy_ * y * y) / (1 + std::sqrt(arg));
