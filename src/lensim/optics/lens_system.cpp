@@ -85,6 +85,16 @@ template <typename T>
   return true;
 }
 
+// One surface's term of a ray's margin (LensTracer::marginSquared): (r / semi-aperture)^2 at the
+// hit (infinite for a zero semi-aperture off the axis, 0 on it) and, where the ray goes into a
+// rarer medium (rarer 1, else 0), sin^2 of the refracted angle. Branch-free, so that the batch
+// loops vectorise.
+template <typename T>
+[[gnu::always_inline]] inline T marginTerm(T r2, T semi2, T sin2_t, T rarer) {
+  const T ra = r2 / semi2;  // 0 / 0 on the axis of a zero aperture: NaN, taken as 0
+  return std::max(ra != ra ? T(0) : ra, sin2_t * rarer);
+}
+
 // refract() for one lane of a batch, branch-free (the same operations, so the same results):
 // the direction (dx, dy, dz) refracted at the unit normal n (either orientation) into e, where
 // `refracts` is 1 (else e = d); sin2_t: sin^2 of the refracted angle; tir: 1 where totally
@@ -154,10 +164,7 @@ template <bool kMargin>
     const double inside = kMargin || r2 <= semi2 ? one : zero;
     double sin2_t, tir;
     refractLane(ux, uy, uz, nx, ny, nz, eta, refracts, ex[j], ey[j], ez[j], sin2_t, tir);
-    if constexpr (kMargin) {
-      const double ra = r2 / semi2;  // as LensTracer::traceBatch's marginTerm
-      term[j] = std::max(ra != ra ? zero : ra, sin2_t * rarer);
-    }
+    if constexpr (kMargin) term[j] = marginTerm(r2, semi2, sin2_t, rarer);
     fate[j] = crosses != zero ? (inside != zero ? (tir != zero ? 3.0 : zero) : 2.0) : one;
   }
   for (int j = 0; j < nv; ++j) one_by_one[j] = defer[j] != zero;
@@ -270,11 +277,8 @@ T LensTracer<T>::marginSquared(const RayT<T>& ray) const {
     T sin2(0);
     const BlockReason why = traceOne(i, true, opts, o, d, p, &sin2);
     if (why == BlockReason::Miss) return std::numeric_limits<T>::infinity();
-    const T r2 = p.x * p.x + p.y * p.y;
-    const T semi2 = semi2_[i];
-    m2 = std::max(
-        m2, semi2 > T(0) ? r2 / semi2 : (r2 > T(0) ? std::numeric_limits<T>::infinity() : T(0)));
-    if (eta_after_[i] > eta_before_[i]) m2 = std::max(m2, sin2);
+    const T rarer = eta_after_[i] > eta_before_[i] ? T(1) : T(0);
+    m2 = std::max(m2, marginTerm(p.x * p.x + p.y * p.y, semi2_[i], sin2, rarer));
     if (why != BlockReason::None) return m2;  // totally reflected here
     o = p;
   }
@@ -316,13 +320,6 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
     const T refracts = eta_i != eta_t ? one : zero;
     // kMargin: whether sin^2 of the refracted angle counts (into a rarer medium).
     const T rarer = eta_i > eta_t ? one : zero;
-    // kMargin: this surface's term of the margin, from the hit's r^2 and sin^2 of the
-    // refracted angle (as marginSquared).
-    auto marginTerm = [&](T r2, T sin2_t) {
-      // r2 / semi2, and for a zero semi-aperture infinite (0 / 0 on the axis: 0), branch-free.
-      const T ra = r2 / semi2;
-      return std::max(ra != ra ? zero : ra, sin2_t * rarer);
-    };
     // A plane (the stop); refracting only between different indices, which a stop rarely has:
     // the common case gets its own loop without the refraction, which vectorises.
     auto planeLanes = [&](auto refract_tag) {
@@ -342,7 +339,7 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
         } else {
           ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
         }
-        if constexpr (kMargin) term[j] = marginTerm(r2, sin2_t);
+        if constexpr (kMargin) term[j] = marginTerm(r2, semi2, sin2_t, rarer);
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
     };
@@ -370,7 +367,7 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
         const BlockReason why = traceOne(i, true, opts, o, d, p, kMargin ? &sin2_t : nullptr);
         px[j] = p.x, py[j] = p.y, pz[j] = p.z;
         ex[j] = d.x, ey[j] = d.y, ez[j] = d.z;
-        if constexpr (kMargin) term[j] = marginTerm(p.x * p.x + p.y * p.y, sin2_t);
+        if constexpr (kMargin) term[j] = marginTerm(p.x * p.x + p.y * p.y, semi2, sin2_t, rarer);
         fate[j] = why == BlockReason::None                      ? zero
                   : why == BlockReason::Miss                    ? one
                   : why == BlockReason::Aperture                ? T(2)
@@ -405,7 +402,7 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
         T sin2_t, tir;
         refractLane(dx[j], dy[j], dz[j], nx, ny, nz, eta, refracts, ex[j], ey[j], ez[j], sin2_t,
                     tir);
-        if constexpr (kMargin) term[j] = marginTerm(r2, refracts != zero ? sin2_t : zero);
+        if constexpr (kMargin) term[j] = marginTerm(r2, semi2, sin2_t, rarer);
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
     }
