@@ -128,7 +128,7 @@ std::optional<ChiefRay> chiefRayFromScene(const LensSystem& lens, const Paraxial
 }
 
 std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p,
-                                   double film_height_mm, bool scan) {
+                                   double film_height_mm) {
   const double h = film_height_mm;
   const Vec3 film{h, 0, lens.filmZ_mm()};
   const double z_rear = lens.rearVertexZ_mm();
@@ -142,7 +142,6 @@ std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p
     const Vec2 a = toRear(c->film_ray.origin + c->film_ray.direction);
     if (passes(a)) return a;
   }
-  if (!scan) return std::nullopt;
   constexpr int kGrid = 41;
   // Without obscurations (where kOuterBoundary is the plain trace) the grid's points are traced
   // in order a batch at a time (LensTracer::traceFromFilmBatch, the same results).

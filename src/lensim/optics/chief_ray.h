@@ -31,11 +31,10 @@ std::optional<ChiefRay> chiefRayFromScene(const LensSystem& lens, const Paraxial
                                           double field_angle_deg);
 
 /// A point on the rear-vertex plane toward which a ray from the film point (h, 0) gets through
-/// every clear aperture: the real chief ray's crossing if it gets through, else (with `scan`)
-/// the first of grids over the exit pupil and over the rear element. nullopt: the film point
-/// sees nothing (or, without `scan`, its chief ray does not get through).
+/// every clear aperture: the real chief ray's crossing if it gets through, else the first of
+/// grids over the exit pupil and over the rear element. nullopt: the film point sees nothing.
 std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p,
-                                   double film_height_mm, bool scan = true);
+                                   double film_height_mm);
 
 /// True if at least one ray from the film point (h, 0) gets through the lens.
 bool filmPointSeesScene(const LensSystem& lens, const ParaxialData& p, double film_height_mm);

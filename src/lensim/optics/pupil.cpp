@@ -383,18 +383,17 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // The neighbouring polygon's centre usually lies inside; the real chief ray's search costs
       // many traces.
       if (hint && !hint->empty && passes(h, hint->centre)) return hint->centre;
-      // The grids over the whole exit pupil and rear element (passingRearAim's scan, up to
-      // ~2,600 traces of the lens's own at film azimuth 0): for an anamorphic lens only without a
-      // neighbouring polygon to search about (below). A rotationally symmetric lens keeps it:
-      // without it the bound's edge at the image circle moves out a little (lentil:0014 on the
-      // 36x24 film: 4.7% -> 5.2% of its samples wasted) for ~20% of its start-up.
-      // An anamorphic lens with a neighbouring polygon skips passingRearAim altogether: its
-      // chief ray is solved for film azimuth 0 only.
+      // passingRearAim (the real chief ray, then grids over the whole exit pupil and rear
+      // element: up to ~2,600 traces of the lens's own, at film azimuth 0): for an anamorphic
+      // lens only without a neighbouring polygon to search about (below), since it solves for
+      // azimuth 0. A rotationally symmetric lens keeps it: without it the bound's edge at the
+      // image circle moves out a little (lentil:0014 on the 36x24 film: 4.7% -> 5.2% of its
+      // samples wasted) for ~20% of its start-up.
       const bool near = hint && !hint->empty;
       std::optional<Vec2> c;
-      if (rotational_ || !near) c = passingRearAim(lens, p, h, rotational_ || !near);
+      if (rotational_ || !near) c = passingRearAim(lens, p, h);
       if (c && passes(h, *c)) return c;
-      if (!hint || hint->empty) return std::nullopt;
+      if (!near) return std::nullopt;
       const double reach = 1.5 * *std::max_element(hint->radius.begin(), hint->radius.end());
       // The margin on a coarse grid; then pattern searches from its three least points (the
       // region can be a thin crescent whose least margin lies off one search's path).
@@ -507,54 +506,40 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         c = mid;
       }
       if (centre_out) *centre_out = *c;
-      // Where a neighbouring polygon is at hand, each search starts at its edge along u (seen
-      // from c): the region's boundary is usually within a percent of it, and the search accepts
-      // a blocked point the margin puts within kHintAccept of the boundary.
+      // Each search starts at an edge along its direction u (seen from c), and all run side by
+      // side: the checks of a neighbouring polygon from its centre at that polygon's edge (the
+      // region's boundary is usually within a percent of it; a blocked point the margin puts
+      // within kHintAccept of the boundary ends the search), a new polygon's searches at its
+      // last ring's edge. Where an edge is not crossed, one after another instead, each from
+      // the last one's distance (the checks from their edge where it is crossed).
       constexpr double kHintAccept = 1e-3;
-      const bool use_hint = from_hint;
-      std::vector<Vec2> us(static_cast<size_t>(count));
-      std::vector<double> reaches(static_cast<size_t>(count), 0.0);
-      bool all_reach = use_hint;
-      std::vector<Vec2> hint_pts;
-      if (use_hint)
+      const double accept = from_hint ? kHintAccept : 0.0;
+      std::vector<Vec2> edge;  // the polygon whose edges the searches start at
+      if (from_hint)
         for (int k = 0; k < nd; ++k)
-          hint_pts.push_back(hint->centre + dirs_[size_t(k)] * hint->radius[size_t(k)]);
+          edge.push_back(hint->centre + dirs_[size_t(k)] * hint->radius[size_t(k)]);
+      else
+        edge = ring;
+      std::vector<Vec2> us(static_cast<size_t>(count));
+      std::vector<double> starts(static_cast<size_t>(count), 0.0);
+      bool all = !edge.empty();
       for (int j = 0; j < count; ++j) {
-        const Vec2 u = unit(offset + 2 * std::numbers::pi * j / count);
-        us[size_t(j)] = u;
-        // The farthest crossing of the ray c + t u with the hint polygon's edges.
-        const double reach = use_hint ? farthestCrossing(hint_pts, *c, u) : 0.0;
-        reaches[size_t(j)] = reach * (1 + 0.5 * kHintAccept);
-        all_reach = all_reach && reach > 0;
+        us[size_t(j)] = unit(offset + 2 * std::numbers::pi * j / count);
+        if (!edge.empty())
+          starts[size_t(j)] = farthestCrossing(edge, *c, us[size_t(j)]) * (1 + 0.5 * accept);
+        all = all && starts[size_t(j)] > 0;
       }
-      if (!use_hint && !ring.empty()) {
-        // A new polygon: each search starts at the last ring's edge along its direction, all
-        // side by side.
-        std::vector<double> g(static_cast<size_t>(count)), d(static_cast<size_t>(count));
-        bool all = true;
-        for (int j = 0; j < count && all; ++j) {
-          g[size_t(j)] = farthestCrossing(ring, *c, us[size_t(j)]);
-          all = g[size_t(j)] > 0;
-        }
-        if (all) {
-          boundaries(h, *c, us.data(), g.data(), count, 0.0, nullptr, d.data(), nullptr);
-          for (int j = 0; j < count; ++j) pts.push_back(*c + us[size_t(j)] * d[size_t(j)]);
-          return pts;
-        }
-      }
-      if (all_reach) {
-        // Every search starts at the hint's edge: side by side.
+      if (all) {
         std::vector<double> d(static_cast<size_t>(count));
-        boundaries(h, *c, us.data(), reaches.data(), count, kHintAccept, nullptr, d.data(),
-                   nullptr);
+        boundaries(h, *c, us.data(), starts.data(), count, accept, nullptr, d.data(), nullptr);
         for (int j = 0; j < count; ++j) pts.push_back(*c + us[size_t(j)] * d[size_t(j)]);
         return pts;
       }
       for (int j = 0; j < count; ++j) {
         const Vec2 u = us[size_t(j)];
-        if (reaches[size_t(j)] > 0) {
+        if (from_hint && starts[size_t(j)] > 0) {
           accept_slope = 0;
-          guess = boundary(h, *c, u, reaches[size_t(j)], kHintAccept);
+          guess = boundary(h, *c, u, starts[size_t(j)], kHintAccept);
         } else {
           guess = boundary(h, *c, u, guess);
         }
