@@ -29,7 +29,11 @@ struct Workload {
 
 Workload makeWorkload(const std::string& file) {
   Workload w;
-  w.lens = focusLens(readLensFile(std::string(LENSIM_SOURCE_DIR) + "/lenses/" + file), {}).lens;
+  w.lens = focusLens(readLensFile(file.find(':') != std::string::npos
+                                      ? file
+                                      : std::string(LENSIM_SOURCE_DIR) + "/lenses/" + file),
+                     {})
+               .lens;
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> u(0, 1);
   auto disk = [&](double r) {
@@ -91,6 +95,27 @@ void BM_TraceFromFilmBatch(benchmark::State& state, const std::string& file) {
       benchmark::Counter(static_cast<double>(traced), benchmark::Counter::kIsRate);
 }
 
+// The exit-pupil build's trace: ray margins (LensTracer<double>::marginSquaredBatch) in batches
+// of LensTracer::kBatch, for lenses whose non-spherical surfaces the batch intersects side by
+// side (quadrics, toroids) and the double Gauss.
+void BM_MarginSquaredBatch(benchmark::State& state, const std::string& file) {
+  Workload w = makeWorkload(file);
+  const LensTracer<double>& tracer = w.lens->tracer();
+  constexpr int kB = LensTracer<double>::kBatch;
+  double m2[kB];
+  size_t i = 0, traced = 0;
+  for (auto _ : state) {
+    tracer.marginSquaredBatch(&w.rays[i], kB, m2);
+    benchmark::DoNotOptimize(m2);
+    traced += kB;
+    i += kB;
+    if (i + kB > w.rays.size()) i = 0;
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(traced));
+  state.counters["traces/s"] =
+      benchmark::Counter(static_cast<double>(traced), benchmark::Counter::kIsRate);
+}
+
 // Building the exit-pupil bounds a realistic camera samples (start-up cost), and the share of
 // camera samples, over a 3:2 film of 35 mm diagonal, that the bounds waste (no ray gets through).
 void BM_ExitPupilBuild(benchmark::State& state, const std::string& file) {
@@ -133,6 +158,10 @@ void registerAll() {
                                  std::string(file))
         ->Unit(benchmark::kMillisecond);
   }
+  for (const char* file :
+       {"dgauss.50mm.dat", "lentil:2004", "lentil:0014", "toroidal-anamorphic.50mm.zmx"})
+    benchmark::RegisterBenchmark((std::string("MarginSquaredBatch<double>/") + file).c_str(),
+                                 BM_MarginSquaredBatch, std::string(file));
 }
 
 }  // namespace

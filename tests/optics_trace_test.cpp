@@ -298,7 +298,9 @@ void checkBatch(const LensTracer<T>& tracer, const LensSystem& lens, std::mt1993
       if (!one.ok()) continue;
       ++ok;
       EXPECT_EQ(one.ray.origin.x, batch[j].ray.origin.x);
+      EXPECT_EQ(one.ray.origin.y, batch[j].ray.origin.y);
       EXPECT_EQ(one.ray.origin.z, batch[j].ray.origin.z);
+      EXPECT_EQ(one.ray.direction.x, batch[j].ray.direction.x);
       EXPECT_EQ(one.ray.direction.y, batch[j].ray.direction.y);
       EXPECT_EQ(one.ray.direction.z, batch[j].ray.direction.z);
       EXPECT_EQ(one.stop_point.x, batch[j].stop_point.x);
@@ -317,10 +319,13 @@ TEST(LensTracer, BatchMatchesSingleTraces) {
     checkBatch(lens.tracer(), lens, rng);
     checkBatch(lens.tracerFloat(), lens, rng);
   }
-  // Cylinders (lentil:2004; the double tracer intersects quadrics side by side).
-  {
-    SCOPED_TRACE("lentil:2004");
-    const FocusedLens fl = focusLens(readLensFile("lentil:2004"), {});
+  // Surfaces the batch intersects side by side: cylinders (lentil:2004), toroids (Newton's
+  // method lane by lane), conics and aspheres on a conic base (lentil:0014).
+  for (const std::string& file :
+       {std::string("lentil:2004"), std::string("lentil:0014"),
+        std::string(LENSIM_SOURCE_DIR) + "/lenses/toroidal-anamorphic.50mm.zmx"}) {
+    SCOPED_TRACE(file);
+    const FocusedLens fl = focusLens(readLensFile(file), {});
     checkBatch(fl.lens->tracer(), *fl.lens, rng);
     checkBatch(fl.lens->tracerFloat(), *fl.lens, rng);
   }

@@ -129,16 +129,20 @@ std::optional<ChiefRay> chiefRayFromScene(const LensSystem& lens, const Paraxial
 
 std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p,
                                    double film_height_mm) {
-  const double h = film_height_mm;
-  const Vec3 film{h, 0, lens.filmZ_mm()};
+  return passingRearAim(lens, p, Vec2{film_height_mm, 0});
+}
+
+std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p, Vec2 film_mm) {
+  const double h = film_mm.x;
+  const Vec3 film{film_mm.x, film_mm.y, lens.filmZ_mm()};
   const double z_rear = lens.rearVertexZ_mm();
-  auto passes = [&](Vec2 a) { return lens.traceFromFilmPoint({h, 0}, a, kOuterBoundary).ok(); };
+  auto passes = [&](Vec2 a) { return lens.traceFromFilmPoint(film_mm, a, kOuterBoundary).ok(); };
   // Where the line from the film point through `q` crosses the rear-vertex plane.
   auto toRear = [&](const Vec3& q) {
     const double t = (z_rear - film.z) / (q.z - film.z);
     return Vec2{film.x + t * (q.x - film.x), film.y + t * (q.y - film.y)};
   };
-  if (auto c = chiefRayFromFilm(lens, p, h)) {
+  if (auto c = film_mm.y == 0 ? chiefRayFromFilm(lens, p, h) : std::nullopt) {
     const Vec2 a = toRear(c->film_ray.origin + c->film_ray.direction);
     if (passes(a)) return a;
   }
@@ -171,7 +175,7 @@ std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p
           continue;
         }
         pts[m] = a;
-        rays[m] = lens.filmPointRay({h, 0}, a);
+        rays[m] = lens.filmPointRay(film_mm, a);
         if (++m == kB)
           if (auto found = flush()) return found;
       }
@@ -192,12 +196,23 @@ bool filmPointSeesScene(const LensSystem& lens, const ParaxialData& p, double fi
   return passingRearAim(lens, p, film_height_mm).has_value();
 }
 
+bool filmPointSeesScene(const LensSystem& lens, const ParaxialData& p, Vec2 film_mm) {
+  return passingRearAim(lens, p, film_mm).has_value();
+}
+
 FieldOfView fieldOfView(const LensSystem& lens, const ParaxialData& p, double film_diagonal_mm) {
   FieldOfView fov;
   const double h = film_diagonal_mm / 2;
   fov.paraxial_deg = 2 * std::atan(h / std::abs(p.effective_focal_length_mm)) * kDeg;
+  bool rotational = true;
+  for (const Interface& s : lens.interfaces()) rotational = rotational && s.shape.isRotational();
   auto covered = [&](double hh) -> std::optional<ChiefRay> {
     if (!filmPointSeesScene(lens, p, hh)) return std::nullopt;
+    for (int k = 1; !rotational && k <= 6; ++k) {
+      const double phi = std::numbers::pi / 2 * k / 6;
+      if (!filmPointSeesScene(lens, p, Vec2{hh * std::cos(phi), hh * std::sin(phi)}))
+        return std::nullopt;
+    }
     return chiefRayFromFilm(lens, p, hh);
   };
   if (auto c = covered(h)) {

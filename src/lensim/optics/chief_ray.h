@@ -35,12 +35,20 @@ std::optional<ChiefRay> chiefRayFromScene(const LensSystem& lens, const Paraxial
 /// grids over the exit pupil and over the rear element. nullopt: the film point sees nothing.
 std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p,
                                    double film_height_mm);
+/// The same for any film point (x, y): the chief ray is tried only on the x axis (y = 0).
+std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p, Vec2 film_mm);
 
 /// True if at least one ray from the film point (h, 0) gets through the lens.
 bool filmPointSeesScene(const LensSystem& lens, const ParaxialData& p, double film_height_mm);
+/// True if at least one ray from the film point (x, y) gets through the lens.
+bool filmPointSeesScene(const LensSystem& lens, const ParaxialData& p, Vec2 film_mm);
 
 /// Field of view for a film diagonal. A film point is inside the image circle when some ray from
-/// it gets through the lens; its field angle is that of its chief ray.
+/// it gets through the lens; its field angle is that of its chief ray (on the x axis). For a lens
+/// that is not rotationally symmetric (anamorphic: symmetric under x -> -x and y -> -y) a film
+/// radius is covered when the film points at azimuths 0, 15, .., 90 degrees all see the scene,
+/// so that the image circle is the largest circle inside the image area, whose extent differs
+/// along x and y.
 struct FieldOfView {
   double paraxial_deg = 0;                         ///< 2 atan(diagonal / 2 / EFL)
   std::optional<double> real_deg;                  ///< from the real chief ray to the film corner

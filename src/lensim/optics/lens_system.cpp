@@ -41,14 +41,14 @@ LensTracer<T>::LensTracer(const std::vector<Interface>& interfaces) {
     is_stop_.push_back(s.is_stop ? 1 : 0);
     is_mirror_.push_back(s.is_mirror ? 1 : 0);
     if (s.is_mirror) reversed_ = !reversed_;
-    quadric_.emplace_back();
+    lanes_.push_back(0);
     if (s.shape.isSpherical()) {
       shape_index_.push_back(-1);
     } else {
       shape_index_.push_back(static_cast<int>(shapes_.size()));
       shapes_.emplace_back(s.radius_mm, s.shape, s.semi_aperture_mm);
-      if (!s.is_mirror && s.obscuration_radius_mm == 0)
-        quadric_.back() = shapes_.back().quadricForm();
+      if (!s.is_mirror && s.obscuration_radius_mm == 0 && shapes_.back().hasLanes())
+        lanes_.back() = 1;
     }
     per_lane_.push_back(shape_index_.back() >= 0 || s.is_mirror || s.obscuration_radius_mm > 0);
   }
@@ -115,59 +115,48 @@ template <typename T>
   ez = refracts != zero ? dz * eta + nz * k : dz;
 }
 
-// A refracting quadric (a cylinder, a conic) for lanes [0, nv) side by side: the same operations
-// as traceShaped with ShapeIntersector::intersect's closed form (direction normalised, hit on the
-// vertex sheet, normal from the quadric's gradient, refraction as refract()), so the same
-// results. The lanes the closed form does not decide (a ray nearly parallel to the slab, a
-// quadratic without its leading term, no root on the vertex sheet) are marked in one_by_one for
-// the caller to trace one by one. kMargin: no clipping, and each lane's margin term (as
+// A refracting non-spherical surface that ShapeIntersector intersects side by side (a quadric:
+// a cylinder or a conic; a toroid) for lanes [0, nv): the same operations as traceShaped (in
+// double precision: direction normalised, ShapeIntersector::intersectLanes for intersect(),
+// clipping at the clear aperture, refraction as refract()), so the same results. Lanes that
+// intersectLanes does not decide are marked in one_by_one for the caller to trace one by one;
+// lanes not alive are not solved. kMargin: no clipping, and each lane's margin term (as
 // LensTracer::marginSquared) in term.
-template <bool kMargin>
-[[gnu::always_inline]] inline void quadricLanes(
-    const ShapeIntersector::QuadricForm& Q, double zv, double semi2, double eta_i, double eta_t,
-    int nv, const double* ox, const double* oy, const double* oz, const double* dx,
-    const double* dy, const double* dz, double* px, double* py, double* pz, double* ex, double* ey,
-    double* ez, double* fate, double* term, bool* one_by_one) {
-  const double t_min = -1e-9, zero = 0, one = 1;
-  const double eta = eta_i / eta_t;
-  const double refracts = eta_i != eta_t ? one : zero, rarer = eta_i > eta_t ? one : zero;
-  double defer[LensTracer<double>::kBatch];
+template <typename T, bool kMargin>
+[[gnu::always_inline]] inline void shapeLanes(const ShapeIntersector& shape, T zv, T semi2, T eta_i,
+                                              T eta_t, int nv, const bool* alive, const T* ox,
+                                              const T* oy, const T* oz, const T* dx, const T* dy,
+                                              const T* dz, T* px, T* py, T* pz, T* ex, T* ey, T* ez,
+                                              T* fate, T* term, bool* one_by_one) {
+  constexpr int kLanes = ShapeIntersector::kLanes;
+  static_assert(kLanes >= LensTracer<T>::kBatch);
+  const double t_min = std::is_same_v<T, float> ? -1e-4 : -1e-9, zero = 0, one = 1;
+  const double eta = double(eta_i) / double(eta_t);
+  const double refracts = double(eta_i) != double(eta_t) ? one : zero;
+  const T rarer = eta_i > eta_t ? T(1) : T(0);
+  double rx[kLanes], ry[kLanes], rz[kLanes], ux[kLanes], uy[kLanes], uz[kLanes], live[kLanes];
+  double t[kLanes], nx[kLanes], ny[kLanes], nz[kLanes], status[kLanes];
   for (int j = 0; j < nv; ++j) {
-    const double len = std::sqrt(dx[j] * dx[j] + dy[j] * dy[j] + dz[j] * dz[j]);
-    const double ux = dx[j] / len, uy = dy[j] / len, uz = dz[j] / len;
-    const double rx = ox[j], ry = oy[j], rz = oz[j] - zv;
-    // The slab.
-    const double t0 = (Q.z_lo - rz) / uz, t1 = (Q.z_hi - rz) / uz;
-    const double ta = std::max(std::min(t0, t1), t_min), tb = std::max(t0, t1);
-    const double flat = std::abs(uz) > 1e-12 ? zero : one;
-    const double crosses = ta <= tb ? one : zero;
-    // A t^2 + 2 B t + C = 0; stable roots; the nearest on the vertex sheet.
-    const double A = Q.cx * ux * ux + Q.cy * uy * uy + Q.e * uz * uz;
-    const double B = Q.cx * rx * ux + Q.cy * ry * uy + Q.e * rz * uz - uz;
-    const double C = Q.cx * rx * rx + Q.cy * ry * ry + Q.e * rz * rz - 2 * rz;
-    const double disc = B * B - A * C;
-    const double q = -(B + std::copysign(std::sqrt(std::max(disc, zero)), B));
-    const double r0 = q / A, r1 = q != zero ? C / q : r0;
-    const double lo = std::min(r0, r1), hi = std::max(r0, r1);
-    const double ok_lo = lo >= t_min ? (1 - Q.e * (rz + lo * uz) > zero ? one : zero) : zero;
-    const double ok_hi = hi >= t_min ? (1 - Q.e * (rz + hi * uz) > zero ? one : zero) : zero;
-    const double t = ok_lo != zero ? lo : hi;
-    const double root = A != zero && disc >= zero ? std::max(ok_lo, ok_hi) : zero;
-    // Not decided here: flat, or crossing the slab without a root.
-    defer[j] = flat != zero ? one : (crosses != zero && root == zero ? one : zero);
-    const double hx = rx + ux * t, hy = ry + uy * t, hz = rz + uz * t;
-    px[j] = hx, py[j] = hy, pz[j] = hz + zv;
-    const double gx = Q.cx * hx, gy = Q.cy * hy, gz = Q.e * hz - 1;
-    const double glen = std::sqrt(gx * gx + gy * gy + gz * gz);
-    const double nx = gx / glen, ny = gy / glen, nz = gz / glen;
-    const double r2 = hx * hx + hy * hy;
-    const double inside = kMargin || r2 <= semi2 ? one : zero;
-    double sin2_t, tir;
-    refractLane(ux, uy, uz, nx, ny, nz, eta, refracts, ex[j], ey[j], ez[j], sin2_t, tir);
-    if constexpr (kMargin) term[j] = marginTerm(r2, semi2, sin2_t, rarer);
-    fate[j] = crosses != zero ? (inside != zero ? (tir != zero ? 3.0 : zero) : 2.0) : one;
+    const double x = double(dx[j]), y = double(dy[j]), z = double(dz[j]);
+    const double len = std::sqrt(x * x + y * y + z * z);
+    ux[j] = x / len, uy[j] = y / len, uz[j] = z / len;
+    rx[j] = double(ox[j]), ry[j] = double(oy[j]), rz[j] = double(oz[j]) - double(zv);
+    live[j] = alive[j] ? one : zero;
   }
-  for (int j = 0; j < nv; ++j) one_by_one[j] = defer[j] != zero;
+  shape.intersectLanes(nv, live, rx, ry, rz, ux, uy, uz, t_min, t, nx, ny, nz, status);
+  for (int j = 0; j < nv; ++j) {
+    const double hx = rx[j] + ux[j] * t[j], hy = ry[j] + uy[j] * t[j], hz = rz[j] + uz[j] * t[j];
+    px[j] = T(hx), py[j] = T(hy), pz[j] = T(hz + double(zv));
+    const double inside = kMargin || hx * hx + hy * hy <= double(semi2) ? one : zero;
+    double sin2_t, tir, e[3];
+    refractLane(ux[j], uy[j], uz[j], nx[j], ny[j], nz[j], eta, refracts, e[0], e[1], e[2], sin2_t,
+                tir);
+    ex[j] = T(e[0]), ey[j] = T(e[1]), ez[j] = T(e[2]);
+    if constexpr (kMargin)
+      term[j] = marginTerm(px[j] * px[j] + py[j] * py[j], semi2, T(sin2_t), rarer);
+    fate[j] = status[j] == one ? T(1) : (inside != zero ? (tir != zero ? T(3) : T(0)) : T(2));
+  }
+  for (int j = 0; j < nv; ++j) one_by_one[j] = status[j] == 2;
 }
 
 }  // namespace
@@ -343,16 +332,13 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
         fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
       }
     };
-    // Lanes to trace one by one (traceOne), after a quadric's side-by-side loop.
+    // Lanes to trace one by one (traceOne), after a non-spherical surface's side-by-side loop.
     bool one_by_one[kBatch] = {};
-    bool quadric_lanes = false;
-    if constexpr (std::is_same_v<T, double>) {
-      if (quadric_[i]) {
-        quadricLanes<kMargin>(*quadric_[i], zv, semi2, eta_i, eta_t, nv, ox, oy, oz, dx, dy, dz, px,
-                              py, pz, ex, ey, ez, fate, term, one_by_one);
-        quadric_lanes = true;
-      }
-    }
+    const bool side_by_side = lanes_[i] != 0;
+    if (side_by_side)
+      shapeLanes<T, kMargin>(shapes_[size_t(shape_index_[i])], zv, semi2, eta_i, eta_t, nv, alive,
+                             ox, oy, oz, dx, dy, dz, px, py, pz, ex, ey, ez, fate, term,
+                             one_by_one);
     if (per_lane_[i]) {
       // A non-spherical surface (the bracketed Newton solve), a mirror or an obscured surface:
       // lane by lane (spherical refracting lenses never come here); of a quadric only the lanes
@@ -361,7 +347,7 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
       for (int j = 0; j < nv; ++j) {
         // Lanes already stopped (or padding) are skipped: a blocked ray can cost a non-spherical
         // surface's slowest search.
-        if (j >= n || !alive[j] || (quadric_lanes && !one_by_one[j])) continue;
+        if (j >= n || !alive[j] || (side_by_side && !one_by_one[j])) continue;
         Vec3T<T> o{ox[j], oy[j], oz[j]}, d{dx[j], dy[j], dz[j]}, p{};
         T sin2_t = zero;
         const BlockReason why = traceOne(i, true, opts, o, d, p, kMargin ? &sin2_t : nullptr);

@@ -272,45 +272,67 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       return best;
     };
     auto passes = [&](double h, Vec2 a) { return margin(h, a) <= 1; };
-    // margin() at n rear-plane points for film radius h, the same values, with the traces of
-    // each lens batched (LensTracer::marginSquaredBatch: the rays overlap in the processor).
+    // margin() at n rear-plane points for film radius h, with the traces of each lens batched
+    // (LensTracer::marginSquaredBatch: the rays overlap in the processor). The same values where
+    // one azimuth is searched (rotational lenses, a polygon's own azimuth); over several, the
+    // points try them in the same order, all from the azimuth that passed last before the call
+    // (margin() moves on from each point's), so a passing point's value can be another
+    // azimuth's (still <= 1, and > 1 exactly where margin()'s is).
     constexpr int kB = LensTracer<double>::kBatch;
+    std::vector<int> mb_todo, mb_left;
+    std::vector<double> mb_val;
     auto marginBatch = [&](double h, const Vec2* a, int n, double* out) {
-      if (!rotational_ && az.size() != 1) {
-        for (int j = 0; j < n; ++j) out[j] = margin(h, a[j]);
-        return;
-      }
-      double ca = 1, sa = 0;
-      if (!rotational_) ca = std::cos(az[0]), sa = std::sin(az[0]);
-      const Vec2 film{h * ca, h * sa};
-      std::vector<int> todo(static_cast<size_t>(n));
-      for (int j = 0; j < n; ++j) todo[size_t(j)] = j;
-      for (size_t k = 0; k < cur.size() && !todo.empty(); ++k) {
-        const LensSystem& L = *cur[k];
-        // As marginCover: the first lens's margin, else the least of all lenses'.
-        auto put = [&](int j, double v) { out[j] = k == 0 ? v : std::min(out[j], v); };
-        Ray rays[kB];
-        int lane[kB];
-        double d2s[kB], m2[kB];
-        int m = 0;
-        auto flush = [&] {
-          L.tracer().marginSquaredBatch(rays, m, m2);
-          traces += m;
-          for (int i = 0; i < m; ++i) put(lane[i], std::sqrt(std::max(d2s[i], m2[i])));
-          m = 0;
-        };
-        for (int j : todo) {
-          const Vec2 r = rotational_ ? a[j] : toFilmAzimuth(a[j], h, ca, sa);
-          const double d2 = disc2 > 0 ? (r.x * r.x + r.y * r.y) / disc2 : 0.0;
-          if (d2 > 1) {  // outside the rear disc: no trace needed
-            put(j, std::sqrt(d2));
-            continue;
+      const int n_az = rotational_ ? 1 : static_cast<int>(az.size());
+      const int az0 = rotational_ ? 0 : last_az;
+      mb_val.assign(size_t(n), kInf);
+      mb_left.resize(size_t(n));
+      for (int j = 0; j < n; ++j) mb_left[size_t(j)] = j, out[j] = kInf;
+      for (int i = 0; i < n_az && !mb_left.empty(); ++i) {
+        const int kaz = (az0 + i) % n_az;
+        double ca = 1, sa = 0;
+        if (!rotational_) ca = std::cos(az[size_t(kaz)]), sa = std::sin(az[size_t(kaz)]);
+        const Vec2 film{h * ca, h * sa};
+        mb_todo = mb_left;
+        for (size_t k = 0; k < cur.size() && !mb_todo.empty(); ++k) {
+          const LensSystem& L = *cur[k];
+          // As marginCover: the first lens's margin, else the least of all lenses'.
+          auto put = [&](int j, double v) {
+            mb_val[size_t(j)] = k == 0 ? v : std::min(mb_val[size_t(j)], v);
+          };
+          Ray rays[kB];
+          int lane[kB];
+          double d2s[kB], m2[kB];
+          int m = 0;
+          auto flush = [&] {
+            L.tracer().marginSquaredBatch(rays, m, m2);
+            traces += m;
+            for (int q = 0; q < m; ++q) put(lane[q], std::sqrt(std::max(d2s[q], m2[q])));
+            m = 0;
+          };
+          for (int j : mb_todo) {
+            const Vec2 r = rotational_ ? a[j] : toFilmAzimuth(a[j], h, ca, sa);
+            const double d2 = disc2 > 0 ? (r.x * r.x + r.y * r.y) / disc2 : 0.0;
+            if (d2 > 1) {  // outside the rear disc: no trace needed
+              put(j, std::sqrt(d2));
+              continue;
+            }
+            rays[m] = L.filmPointRay(film, r), lane[m] = j, d2s[m] = d2;
+            if (++m == kB) flush();
           }
-          rays[m] = L.filmPointRay(film, r), lane[m] = j, d2s[m] = d2;
-          if (++m == kB) flush();
+          if (m > 0) flush();
+          if (k == 0) std::erase_if(mb_todo, [&](int j) { return mb_val[size_t(j)] <= 1; });
         }
-        if (m > 0) flush();
-        if (k == 0) std::erase_if(todo, [&](int j) { return out[j] <= 1; });
+        // As margin(): the first azimuth where a point passes, else the least over them.
+        for (int j : mb_left) {
+          const double v = mb_val[size_t(j)];
+          if (v <= 1) {
+            out[j] = v;
+            if (!rotational_) last_az = kaz;
+          } else {
+            out[j] = std::min(out[j], v);
+          }
+        }
+        std::erase_if(mb_left, [&](int j) { return out[j] <= 1; });
       }
     };
     // Distance from c (inside the region) to the region's boundary along u: the first blocked
@@ -428,24 +450,33 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         // The margin is the largest of a few smooth functions (one per limiting surface): its
         // minimum often lies on a ridge where two of them are equal, so the search tries 16
         // directions before halving its step.
-        constexpr int kDirs = 16;
+        constexpr int kDirs = 16, kGroup = 8;
         double step = reach / kGrid;
         for (int it = 0; it < 400 && step > 1e-4 * reach; ++it) {
           bool moved = false;
           double rise = 0;  // the most the margin rose over the probes around `best`
-          for (int k = 0; k < kDirs; ++k) {
-            const Vec2 q = best + unit(2 * std::numbers::pi * k / kDirs) * step;
-            const double g = margin(h, q);
-            if (g <= 1) return q;
-            if (g < g_best) {
-              // A descent too slow to reach 1 within the iterations left (even at twice the
-              // pace) ends the search where it would have ended anyway.
-              const double fell = g_best - g;
-              best = q, g_best = g, moved = true;
-              if (g_best - 1 > 2 * (400 - it) * fell) it = 400;
-              break;
+          // The probes are traced kGroup at a time (batched); taken in order as one at a time
+          // (the first passing probe, else the first that goes down), so that the traces past
+          // it are the price of the batch.
+          for (int k0 = 0; k0 < kDirs && !moved; k0 += kGroup) {
+            Vec2 qs[kGroup];
+            double gs[kGroup];
+            for (int i = 0; i < kGroup; ++i)
+              qs[i] = best + unit(2 * std::numbers::pi * (k0 + i) / kDirs) * step;
+            marginBatch(h, qs, kGroup, gs);
+            for (int i = 0; i < kGroup; ++i) {
+              const double g = gs[i];
+              if (g <= 1) return qs[i];
+              if (g < g_best) {
+                // A descent too slow to reach 1 within the iterations left (even at twice the
+                // pace) ends the search where it would have ended anyway.
+                const double fell = g_best - g;
+                best = qs[i], g_best = g, moved = true;
+                if (g_best - 1 > 2 * (400 - it) * fell) it = 400;
+                break;
+              }
+              rise = std::max(rise, g - g_best);
             }
-            rise = std::max(rise, g - g_best);
           }
           if (moved) continue;
           // No probe went down: the least margin near `best` lies within a step of it, and the

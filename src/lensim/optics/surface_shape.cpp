@@ -100,6 +100,58 @@ std::optional<SagGradient> toroidSag(double c, double a, const std::vector<doubl
   return g;
 }
 
+// toroidSag<kGradient>(c, a, poly, rot, x, y, clamp = true) for lanes [0, n) side by side, with
+// the same operations (so the same values) where the scalar function, as ShapeIntersector's
+// sagContinued and sagZ call it, takes its common path: r^2 <= bound2 (inside bound_r), the y
+// curve's square root positive and rho^2 - x^2 > 0. bad[j] is 1 for lanes off that path (their
+// values are not used). Conditions are 0/1 doubles so that GCC vectorises the loops.
+constexpr int kLanes = ShapeIntersector::kLanes;
+template <bool kGradient>
+[[gnu::always_inline]] inline void toroidSagLanes(double c, double a,
+                                                  const std::vector<double>& poly, double rot,
+                                                  double bound2, int n, const double* x,
+                                                  const double* y, double* z, double* gx,
+                                                  double* gy, double* bad) {
+  double f[kLanes], df[kLanes] = {}, yp[kLanes];
+  for (int j = 0; j < n; ++j) {
+    const double xj = x[j], yj = y[j];
+    const double arg = 1 - a * yj * yj;
+    bad[j] = std::max(xj * xj + yj * yj > bound2 ? 1.0 : 0.0, arg > 0 ? 0.0 : 1.0);
+    const double S = std::sqrt(std::max(arg, 0.0));
+    f[j] = c * yj * yj / (1 + S);
+    if constexpr (kGradient) df[j] = c * yj / S;
+    yp[j] = 1;
+  }
+  for (size_t k = 1; k < poly.size(); ++k) {
+    const double a_p = poly[k];
+    if (a_p == 0) {
+      for (int j = 0; j < n; ++j) yp[j] *= y[j];
+      continue;
+    }
+    for (int j = 0; j < n; ++j) {
+      if constexpr (kGradient) df[j] += double(k) * a_p * yp[j];
+      yp[j] *= y[j];
+      f[j] += a_p * yp[j];
+    }
+  }
+  if (rot == 0) {
+    for (int j = 0; j < n; ++j) z[j] = f[j], gx[j] = 0, gy[j] = df[j];
+    return;
+  }
+  for (int j = 0; j < n; ++j) {
+    const double xj = x[j];
+    const double rho = rot - f[j];
+    const double d = rho * rho - xj * xj;
+    bad[j] = std::max(bad[j], d > 0 ? 0.0 : 1.0);
+    const double q = std::copysign(std::sqrt(std::max(d, 0.0)), rho);
+    z[j] = f[j] + xj * xj / (rho + q);
+    if constexpr (kGradient) {
+      gx[j] = xj / q;
+      gy[j] = rho * df[j] / q;
+    }
+  }
+}
+
 double toroidA(double radius_mm, const SurfaceShape& shape) {
   const double c = radius_mm != 0 ? 1 / radius_mm : 0.0;
   return (1 + shape.conic) * c * c;
@@ -268,6 +320,123 @@ std::optional<double> ShapeIntersector::quadricRoot(const Vec3& o, const Vec3& d
     return t;
   }
   return std::nullopt;
+}
+
+__attribute__((target_clones("avx2", "default"))) void ShapeIntersector::intersectLanes(
+    int n, const double* __restrict live, const double* __restrict ox, const double* __restrict oy,
+    const double* __restrict oz, const double* __restrict dx, const double* __restrict dy,
+    const double* __restrict dz, double t_min, double* __restrict t, double* __restrict nx,
+    double* __restrict ny, double* __restrict nz, double* __restrict status) const {
+  // intersect()'s operations lane by lane in branch-free loops (selects of 0/1 doubles), so that
+  // the compiler vectorises them and each lane's values are the scalar ones; a lane that would
+  // take another branch there is given status 2 and intersect() traces it.
+  const double zero = 0, one = 1, two = 2, kMax = std::numeric_limits<double>::max();
+  // Members as locals: the compiler cannot tell that the stores below leave them alone.
+  const bool quadric = quadric_;
+  const double quad = quadric ? one : zero;  // (a select on a bool stops the vectoriser)
+  const double cx = qcx_, cy = qcy_, e = qe_, z_lo = z_lo_, z_hi = z_hi_;
+  n = std::min(n, kLanes);
+  double ta[kLanes], tb[kLanes];
+  for (int j = 0; j < n; ++j) {
+    // The slab.
+    const double t0 = (z_lo - oz[j]) / dz[j], t1 = (z_hi - oz[j]) / dz[j];
+    ta[j] = std::max(std::min(t0, t1), t_min), tb[j] = std::max(t0, t1);
+    const double flat = std::abs(dz[j]) > 1e-12 ? zero : one;
+    const double crosses = ta[j] <= tb[j] ? one : zero;
+    // quadricRoot: A t^2 + 2 B t + C = 0; stable roots; the nearest on the vertex sheet.
+    const double A = cx * dx[j] * dx[j] + cy * dy[j] * dy[j] + e * dz[j] * dz[j];
+    const double B = cx * ox[j] * dx[j] + cy * oy[j] * dy[j] + e * oz[j] * dz[j] - dz[j];
+    const double C = cx * ox[j] * ox[j] + cy * oy[j] * oy[j] + e * oz[j] * oz[j] - 2 * oz[j];
+    const double disc = B * B - A * C;
+    const double q = -(B + std::copysign(std::sqrt(std::max(disc, zero)), B));
+    const double r0 = q / A, r1 = q != zero ? C / q : r0;
+    const double lo = std::min(r0, r1), hi = std::max(r0, r1);
+    const double ok_lo = lo >= t_min ? (1 - e * (oz[j] + lo * dz[j]) > zero ? one : zero) : zero;
+    const double ok_hi = hi >= t_min ? (1 - e * (oz[j] + hi * dz[j]) > zero ? one : zero) : zero;
+    const double tq = ok_lo != zero ? lo : hi;
+    const double root = A != zero ? (disc >= zero ? std::max(ok_lo, ok_hi) : zero) : zero;
+    t[j] = tq;
+    // A toroid's Newton solve starts from a quadric hit inside the slab.
+    const double in_slab = tq >= ta[j] ? (tq <= tb[j] ? one : zero) : zero;
+    const double start = std::max(std::min(root, in_slab), std::min(root, quad));
+    status[j] = flat != zero ? two : (crosses == zero ? one : (start != zero ? zero : two));
+  }
+  if (quadric) {  // the normal from the quadric's gradient (2 cx x, 2 cy y, 2 e z - 2)
+    for (int j = 0; j < n; ++j) {
+      const double hx = ox[j] + dx[j] * t[j], hy = oy[j] + dy[j] * t[j], hz = oz[j] + dz[j] * t[j];
+      const double gx = cx * hx, gy = cy * hy, gz = e * hz - 1;
+      const double len = std::sqrt(gx * gx + gy * gy + gz * gz);
+      nx[j] = gx / len, ny[j] = gy / len, nz[j] = gz / len;
+    }
+    return;
+  }
+
+  // A toroid: Newton's method from the quadric's hit, kept inside the slab (as intersect()).
+  const double rot = *shape_.rotation_radius_mm, bound2 = bound_r_ * bound_r_;
+  const double c = cy_, a = ay_;
+  double act[kLanes], sx[kLanes] = {}, sy[kLanes] = {};
+  double x[kLanes], y[kLanes], z[kLanes], gx[kLanes], gy[kLanes], bad[kLanes];
+  // Whether any lane is still iterating (a loop of its own: a reduction in the lanes' loops
+  // would stop their vectorisation).
+  auto anyActive = [&] {
+    bool any = false;
+    for (int j = 0; j < n; ++j) any = any || act[j] != zero;
+    return any;
+  };
+  for (int j = 0; j < n; ++j) act[j] = live[j] != zero ? (status[j] == zero ? one : zero) : zero;
+  for (int it = 0; it < 12 && anyActive(); ++it) {
+    for (int j = 0; j < n; ++j) x[j] = ox[j] + t[j] * dx[j], y[j] = oy[j] + t[j] * dy[j];
+    toroidSagLanes<true>(c, a, shape_.poly, rot, bound2, n, x, y, z, gx, gy, bad);
+    for (int j = 0; j < n; ++j) {
+      const double gt = oz[j] + t[j] * dz[j] - z[j];
+      const double dg = dz[j] - gx[j] * dx[j] - gy[j] * dy[j];
+      const double tn = t[j] - gt / dg;
+      // intersect() stops here. (0/1 values combined with max: a nested select whose outer
+      // branch is a constant stops the vectoriser.)
+      const double fails =
+          std::max(std::max(bad[j], dg == zero ? one : zero),
+                   std::max(std::abs(dg) <= kMax ? zero : one,
+                            std::max(tn >= ta[j] ? zero : one, tn <= tb[j] ? zero : one)));
+      const double step = std::abs(tn - t[j]);
+      const double done = step <= 1e-13 * (1 + std::abs(tn)) ? one : zero;
+      const double on = act[j] != zero ? one - fails : zero;
+      status[j] = act[j] != zero ? (fails != zero ? two : status[j]) : status[j];
+      t[j] = on != zero ? tn : t[j];
+      sx[j] = on != zero ? gx[j] : sx[j];
+      sy[j] = on != zero ? gy[j] : sy[j];
+      act[j] = on != zero ? one - done : zero;
+    }
+  }
+  // Still iterating after 12 steps: not converged.
+  for (int j = 0; j < n; ++j) {
+    status[j] = act[j] != zero ? two : status[j];
+    act[j] = live[j] != zero ? (status[j] == zero ? one : zero) : zero;
+  }
+  // The first-crossing check: g keeps its sign from the slab's entry to just before the root.
+  double g0[kLanes], first[kLanes], sag[kLanes];
+  for (int k = 0; k <= 4; ++k) {
+    for (int j = 0; j < n; ++j) {
+      const double tk = k == 0 ? ta[j] : ta[j] + (t[j] - ta[j]) * k / 5.0;
+      x[j] = ox[j] + tk * dx[j], y[j] = oy[j] + tk * dy[j], z[j] = oz[j] + tk * dz[j];
+    }
+    toroidSagLanes<false>(c, a, shape_.poly, rot, bound2, n, x, y, sag, nullptr, nullptr, bad);
+    if (k == 0)
+      for (int j = 0; j < n; ++j) g0[j] = z[j] - sag[j], first[j] = one;
+    for (int j = 0; j < n; ++j) {
+      const double gk = z[j] - sag[j];
+      // gk != 0 with g0's sign (for k = 0: g0 != 0).
+      const double same = gk < zero ? (g0[j] < zero ? one : zero)
+                                    : (gk > zero ? (g0[j] > zero ? one : zero) : zero);
+      first[j] = bad[j] != zero ? zero : std::min(first[j], same);
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    // The normal from the gradient at the last iterate (as intersect()).
+    const double finite = std::abs(sx[j]) <= kMax ? (std::abs(sy[j]) <= kMax ? one : zero) : zero;
+    const double len = std::sqrt(sx[j] * sx[j] + sy[j] * sy[j] + 1.0);  // |(sx, sy, -1)|
+    nx[j] = sx[j] / len, ny[j] = sy[j] / len, nz[j] = -1.0 / len;
+    status[j] = act[j] != zero ? (std::min(first[j], finite) == zero ? two : status[j]) : status[j];
+  }
 }
 
 SagGradient ShapeIntersector::sagContinued(double x, double y) const {

@@ -107,18 +107,21 @@ class ShapeIntersector {
   /// Ray origin relative to the vertex and unit direction; roots below t_min are ignored.
   std::optional<Hit> intersect(const Vec3& rel_origin, const Vec3& dir, double t_min) const;
 
-  /// A quadric's closed form (cx x^2 + cy y^2 + e z^2 - 2 z = 0, the vertex sheet where
-  /// 1 - e z > 0) and the slab [z_lo, z_hi] of the continued surface, for tracers that intersect
-  /// quadrics side by side: the hit is the nearest root >= t_min on the vertex sheet, found where
-  /// the ray crosses the slab, the quadratic's leading coefficient is not 0 and such a root
-  /// exists (else intersect() decides). nullopt for other shapes.
-  struct QuadricForm {
-    double cx, cy, e, z_lo, z_hi;
-  };
-  std::optional<QuadricForm> quadricForm() const {
-    if (!quadric_) return std::nullopt;
-    return QuadricForm{qcx_, qcy_, qe_, z_lo_, z_hi_};
-  }
+  /// intersect() for up to kLanes rays side by side (the batch tracers), with the same
+  /// operations, so the same hits: a quadric's closed form, and a toroid's Newton solve from its
+  /// base quadric with the first-crossing check. Origins relative to the vertex, unit
+  /// directions; lanes with live[j] == 0 are not solved. status[j]: 0 a hit (t[j] and the unit
+  /// normal set), 1 a miss (the ray does not cross the surface's slab), 2 not decided here, for
+  /// intersect() to decide: a ray nearly parallel to the slab, no root on the quadric's vertex
+  /// sheet (a quadratic without its leading term), and for a toroid a quadric hit outside the
+  /// slab, Newton's method leaving the slab or not converging, a point beyond bound_r or at the
+  /// rim of the sag's domain, or a sign change before the root. Only where hasLanes().
+  static constexpr int kLanes = 16;
+  bool hasLanes() const { return quadric_ || toroidal_; }
+  void intersectLanes(int n, const double* live, const double* ox, const double* oy,
+                      const double* oz, const double* dx, const double* dy, const double* dz,
+                      double t_min, double* t, double* nx, double* ny, double* nz,
+                      double* status) const;
 
   /// Sag with the flat continuation beyond bound_r.
   SagGradient sagContinued(double x, double y) const;
