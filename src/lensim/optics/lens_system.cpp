@@ -120,8 +120,8 @@ template <typename T>
 // double precision: direction normalised, ShapeIntersector::intersectLanes for intersect(),
 // clipping at the clear aperture, refraction as refract()), so the same results. Lanes that
 // intersectLanes does not decide are marked in one_by_one for the caller to trace one by one;
-// lanes not alive are not solved. kMargin: no clipping, and each lane's margin term (as
-// LensTracer::marginSquared) in term.
+// lanes not alive are not solved (fate 1, their other values unset). kMargin: no clipping, and each
+// lane's margin term (as LensTracer::marginSquared) in term.
 template <typename T, bool kMargin>
 [[gnu::always_inline]] inline void shapeLanes(const ShapeIntersector& shape, T zv, T semi2, T eta_i,
                                               T eta_t, int nv, const bool* alive, const T* ox,
@@ -134,29 +134,46 @@ template <typename T, bool kMargin>
   const double eta = double(eta_i) / double(eta_t);
   const double refracts = double(eta_i) != double(eta_t) ? one : zero;
   const T rarer = eta_i > eta_t ? T(1) : T(0);
-  double rx[kLanes], ry[kLanes], rz[kLanes], ux[kLanes], uy[kLanes], uz[kLanes], live[kLanes];
-  double t[kLanes], nx[kLanes], ny[kLanes], nz[kLanes], status[kLanes];
+  // The live lanes packed to the front (a toroid's Newton solve costs every lane it is given),
+  // padded to a multiple of 4 with copies of the first.
+  int idx[kLanes], m = 0;
   for (int j = 0; j < nv; ++j) {
+    one_by_one[j] = false, fate[j] = T(1);
+    if (alive[j]) idx[m++] = j;
+  }
+  if (m == 0) return;
+  const int mv = std::min(kLanes, (m + 3) & ~3);
+  for (int i = m; i < mv; ++i) idx[i] = idx[0];
+  double rx[kLanes], ry[kLanes], rz[kLanes], ux[kLanes], uy[kLanes], uz[kLanes];
+  double t[kLanes], nx[kLanes], ny[kLanes], nz[kLanes], status[kLanes];
+  for (int i = 0; i < mv; ++i) {
+    const int j = idx[i];
     const double x = double(dx[j]), y = double(dy[j]), z = double(dz[j]);
     const double len = std::sqrt(x * x + y * y + z * z);
-    ux[j] = x / len, uy[j] = y / len, uz[j] = z / len;
-    rx[j] = double(ox[j]), ry[j] = double(oy[j]), rz[j] = double(oz[j]) - double(zv);
-    live[j] = alive[j] ? one : zero;
+    ux[i] = x / len, uy[i] = y / len, uz[i] = z / len;
+    rx[i] = double(ox[j]), ry[i] = double(oy[j]), rz[i] = double(oz[j]) - double(zv);
   }
-  shape.intersectLanes(nv, live, rx, ry, rz, ux, uy, uz, t_min, t, nx, ny, nz, status);
-  for (int j = 0; j < nv; ++j) {
-    const double hx = rx[j] + ux[j] * t[j], hy = ry[j] + uy[j] * t[j], hz = rz[j] + uz[j] * t[j];
-    px[j] = T(hx), py[j] = T(hy), pz[j] = T(hz + double(zv));
+  shape.intersectLanes(mv, rx, ry, rz, ux, uy, uz, t_min, t, nx, ny, nz, status);
+  T qx[kLanes], qy[kLanes], qz[kLanes], fx[kLanes], fy[kLanes], fz[kLanes], fa[kLanes],
+      tm[kLanes] = {};
+  for (int i = 0; i < mv; ++i) {
+    const double hx = rx[i] + ux[i] * t[i], hy = ry[i] + uy[i] * t[i], hz = rz[i] + uz[i] * t[i];
+    qx[i] = T(hx), qy[i] = T(hy), qz[i] = T(hz + double(zv));
     const double inside = kMargin || hx * hx + hy * hy <= double(semi2) ? one : zero;
     double sin2_t, tir, e[3];
-    refractLane(ux[j], uy[j], uz[j], nx[j], ny[j], nz[j], eta, refracts, e[0], e[1], e[2], sin2_t,
+    refractLane(ux[i], uy[i], uz[i], nx[i], ny[i], nz[i], eta, refracts, e[0], e[1], e[2], sin2_t,
                 tir);
-    ex[j] = T(e[0]), ey[j] = T(e[1]), ez[j] = T(e[2]);
+    fx[i] = T(e[0]), fy[i] = T(e[1]), fz[i] = T(e[2]);
     if constexpr (kMargin)
-      term[j] = marginTerm(px[j] * px[j] + py[j] * py[j], semi2, T(sin2_t), rarer);
-    fate[j] = status[j] == one ? T(1) : (inside != zero ? (tir != zero ? T(3) : T(0)) : T(2));
+      tm[i] = marginTerm(qx[i] * qx[i] + qy[i] * qy[i], semi2, T(sin2_t), rarer);
+    fa[i] = status[i] == one ? T(1) : (inside != zero ? (tir != zero ? T(3) : T(0)) : T(2));
   }
-  for (int j = 0; j < nv; ++j) one_by_one[j] = status[j] == 2;
+  for (int i = 0; i < m; ++i) {
+    const int j = idx[i];
+    px[j] = qx[i], py[j] = qy[i], pz[j] = qz[i], ex[j] = fx[i], ey[j] = fy[i], ez[j] = fz[i];
+    fate[j] = fa[i], one_by_one[j] = status[i] == 2;
+    if constexpr (kMargin) term[j] = tm[i];
+  }
 }
 
 }  // namespace

@@ -323,10 +323,10 @@ std::optional<double> ShapeIntersector::quadricRoot(const Vec3& o, const Vec3& d
 }
 
 __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::intersectLanes(
-    int n, const double* __restrict live, const double* __restrict ox, const double* __restrict oy,
-    const double* __restrict oz, const double* __restrict dx, const double* __restrict dy,
-    const double* __restrict dz, double t_min, double* __restrict t, double* __restrict nx,
-    double* __restrict ny, double* __restrict nz, double* __restrict status) const {
+    int n, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
+    const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
+    double t_min, double* __restrict t, double* __restrict nx, double* __restrict ny,
+    double* __restrict nz, double* __restrict status) const {
   // intersect()'s operations lane by lane in branch-free loops (selects of 0/1 doubles), so that
   // the compiler vectorises them and each lane's values are the scalar ones; a lane that would
   // take another branch there is given status 2 and intersect() traces it.
@@ -383,7 +383,7 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
     for (int j = 0; j < n; ++j) any = any || act[j] != zero;
     return any;
   };
-  for (int j = 0; j < n; ++j) act[j] = live[j] != zero ? (status[j] == zero ? one : zero) : zero;
+  for (int j = 0; j < n; ++j) act[j] = status[j] == zero ? one : zero;
   for (int it = 0; it < 12 && anyActive(); ++it) {
     for (int j = 0; j < n; ++j) x[j] = ox[j] + t[j] * dx[j], y[j] = oy[j] + t[j] * dy[j];
     toroidSagLanes<true>(c, a, shape_.poly, rot, bound2, n, x, y, z, gx, gy, bad);
@@ -410,7 +410,7 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
   // Still iterating after 12 steps: not converged.
   for (int j = 0; j < n; ++j) {
     status[j] = act[j] != zero ? two : status[j];
-    act[j] = live[j] != zero ? (status[j] == zero ? one : zero) : zero;
+    act[j] = status[j] == zero ? one : zero;
   }
   // The first-crossing check: g keeps its sign from the slab's entry to just before the root.
   double g0[kLanes], first[kLanes], sag[kLanes];

@@ -110,7 +110,7 @@ class ShapeIntersector {
   /// intersect() for up to kLanes rays side by side (the batch tracers), with the same
   /// operations, so the same hits: a quadric's closed form, and a toroid's Newton solve from its
   /// base quadric with the first-crossing check. Origins relative to the vertex, unit
-  /// directions; lanes with live[j] == 0 are not solved. status[j]: 0 a hit (t[j] and the unit
+  /// directions. status[j]: 0 a hit (t[j] and the unit
   /// normal set), 1 a miss (the ray does not cross the surface's slab), 2 not decided here, for
   /// intersect() to decide: a ray nearly parallel to the slab, no root on the quadric's vertex
   /// sheet (a quadratic without its leading term), and for a toroid a quadric hit outside the
@@ -118,10 +118,9 @@ class ShapeIntersector {
   /// rim of the sag's domain, or a sign change before the root. Only where hasLanes().
   static constexpr int kLanes = 16;
   bool hasLanes() const { return quadric_ || toroidal_; }
-  void intersectLanes(int n, const double* live, const double* ox, const double* oy,
-                      const double* oz, const double* dx, const double* dy, const double* dz,
-                      double t_min, double* t, double* nx, double* ny, double* nz,
-                      double* status) const;
+  void intersectLanes(int n, const double* ox, const double* oy, const double* oz, const double* dx,
+                      const double* dy, const double* dz, double t_min, double* t, double* nx,
+                      double* ny, double* nz, double* status) const;
 
   /// Sag with the flat continuation beyond bound_r.
   SagGradient sagContinued(double x, double y) const;
