@@ -152,6 +152,56 @@ template <bool kGradient>
   }
 }
 
+// ShapeIntersector's sagContinued (kGradient) and sagZ for an asphere on a conic base (the
+// biconic formula with the polynomial terms, powers of r) for lanes [0, n), with the same
+// operations where they take their common path: r^2 <= bound2 and the conic's square root
+// positive; bad[j] is 1 for the other lanes.
+template <bool kGradient>
+[[gnu::always_inline]] inline void asphereSagLanes(double cx, double cy, double ax, double ay,
+                                                   const std::vector<std::pair<int, double>>& terms,
+                                                   double bound2, int n, const double* x,
+                                                   const double* y, double* z, double* gx,
+                                                   double* gy, double* bad) {
+  double r2[kLanes], r[kLanes], rk[kLanes], slope[kLanes];
+  for (int j = 0; j < n; ++j) {
+    const double xj = x[j], yj = y[j];
+    r2[j] = xj * xj + yj * yj;
+    const double arg = 1 - ax * xj * xj - ay * yj * yj;
+    bad[j] = std::max(r2[j] > bound2 ? 1.0 : 0.0, arg > 0 ? 0.0 : 1.0);
+    const double S = std::sqrt(std::max(arg, 0.0)), N = cx * xj * xj + cy * yj * yj;
+    const double den = 1 + S;
+    z[j] = N / den;
+    if constexpr (kGradient) {
+      const double inv = 1 / (den * den), nS = N / S;
+      gx[j] = (2 * cx * xj * den + nS * ax * xj) * inv;
+      gy[j] = (2 * cy * yj * den + nS * ay * yj) * inv;
+    }
+  }
+  if (terms.empty()) return;
+  // polynomialSag: the terms in increasing powers, r^(p-2) kept in rk.
+  double pz[kLanes];
+  for (int j = 0; j < n; ++j) r[j] = std::sqrt(r2[j]), rk[j] = 1, slope[j] = 0, pz[j] = 0;
+  int k = 0;
+  for (const auto& [p, a] : terms) {
+    if (p == 1) {
+      for (int j = 0; j < n; ++j) {
+        pz[j] += a * r[j];
+        slope[j] += r[j] > 0 ? a / r[j] : 0.0;
+      }
+      continue;
+    }
+    for (; k < p - 2; ++k)
+      for (int j = 0; j < n; ++j) rk[j] *= r[j];
+    for (int j = 0; j < n; ++j) {
+      pz[j] += a * rk[j] * r2[j];
+      slope[j] += p * a * rk[j];
+    }
+  }
+  for (int j = 0; j < n; ++j) z[j] += pz[j];
+  if constexpr (kGradient)
+    for (int j = 0; j < n; ++j) gx[j] += slope[j] * x[j], gy[j] += slope[j] * y[j];
+}
+
 double toroidA(double radius_mm, const SurfaceShape& shape) {
   const double c = radius_mm != 0 ? 1 / radius_mm : 0.0;
   return (1 + shape.conic) * c * c;
@@ -371,8 +421,10 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
     return;
   }
 
-  // A toroid: Newton's method from the quadric's hit, kept inside the slab (as intersect()).
-  const double rot = *shape_.rotation_radius_mm, bound2 = bound_r_ * bound_r_;
+  // A toroid or an asphere on a quadric base: Newton's method from the quadric's hit, kept
+  // inside the slab (as intersect()).
+  const bool toroidal = toroidal_;
+  const double rot = toroidal ? *shape_.rotation_radius_mm : 0.0, bound2 = bound_r_ * bound_r_;
   const double c = cy_, a = ay_;
   double act[kLanes], sx[kLanes] = {}, sy[kLanes] = {};
   double x[kLanes], y[kLanes], z[kLanes], gx[kLanes], gy[kLanes], bad[kLanes];
@@ -386,7 +438,10 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
   for (int j = 0; j < n; ++j) act[j] = status[j] == zero ? one : zero;
   for (int it = 0; it < 12 && anyActive(); ++it) {
     for (int j = 0; j < n; ++j) x[j] = ox[j] + t[j] * dx[j], y[j] = oy[j] + t[j] * dy[j];
-    toroidSagLanes<true>(c, a, shape_.poly, rot, bound2, n, x, y, z, gx, gy, bad);
+    if (toroidal)
+      toroidSagLanes<true>(c, a, shape_.poly, rot, bound2, n, x, y, z, gx, gy, bad);
+    else
+      asphereSagLanes<true>(cx_, cy_, ax_, ay_, terms_, bound2, n, x, y, z, gx, gy, bad);
     for (int j = 0; j < n; ++j) {
       const double gt = oz[j] + t[j] * dz[j] - z[j];
       const double dg = dz[j] - gx[j] * dx[j] - gy[j] * dy[j];
@@ -419,7 +474,11 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
       const double tk = k == 0 ? ta[j] : ta[j] + (t[j] - ta[j]) * k / 5.0;
       x[j] = ox[j] + tk * dx[j], y[j] = oy[j] + tk * dy[j], z[j] = oz[j] + tk * dz[j];
     }
-    toroidSagLanes<false>(c, a, shape_.poly, rot, bound2, n, x, y, sag, nullptr, nullptr, bad);
+    if (toroidal)
+      toroidSagLanes<false>(c, a, shape_.poly, rot, bound2, n, x, y, sag, nullptr, nullptr, bad);
+    else
+      asphereSagLanes<false>(cx_, cy_, ax_, ay_, terms_, bound2, n, x, y, sag, nullptr, nullptr,
+                             bad);
     if (k == 0)
       for (int j = 0; j < n; ++j) g0[j] = z[j] - sag[j], first[j] = one;
     for (int j = 0; j < n; ++j) {

@@ -108,16 +108,16 @@ class ShapeIntersector {
   std::optional<Hit> intersect(const Vec3& rel_origin, const Vec3& dir, double t_min) const;
 
   /// intersect() for up to kLanes rays side by side (the batch tracers), with the same
-  /// operations, so the same hits: a quadric's closed form, and a toroid's Newton solve from its
-  /// base quadric with the first-crossing check. Origins relative to the vertex, unit
-  /// directions. status[j]: 0 a hit (t[j] and the unit
-  /// normal set), 1 a miss (the ray does not cross the surface's slab), 2 not decided here, for
-  /// intersect() to decide: a ray nearly parallel to the slab, no root on the quadric's vertex
-  /// sheet (a quadratic without its leading term), and for a toroid a quadric hit outside the
-  /// slab, Newton's method leaving the slab or not converging, a point beyond bound_r or at the
-  /// rim of the sag's domain, or a sign change before the root. Only where hasLanes().
+  /// operations, so the same hits: a quadric's closed form, and the Newton solve from the base
+  /// quadric with the first-crossing check of a toroid or an asphere on a quadric base. Origins
+  /// relative to the vertex, unit directions. status[j]: 0 a hit (t[j] and the unit normal set), 1
+  /// a miss (the ray does not cross the surface's slab), 2 not decided here, for intersect() to
+  /// decide: a ray nearly parallel to the slab, no root on the quadric's vertex sheet (a quadratic
+  /// without its leading term), and for a Newton solve a quadric hit outside the slab, Newton's
+  /// method leaving the slab or not converging, a point beyond bound_r or at the rim of the sag's
+  /// domain, or a sign change before the root. Only where hasLanes().
   static constexpr int kLanes = 16;
-  bool hasLanes() const { return quadric_ || toroidal_; }
+  bool hasLanes() const { return quadric_ || base_quadric_; }
   void intersectLanes(int n, const double* ox, const double* oy, const double* oz, const double* dx,
                       const double* dy, const double* dz, double t_min, double* t, double* nx,
                       double* ny, double* nz, double* status) const;
