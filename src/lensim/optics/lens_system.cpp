@@ -269,6 +269,11 @@ void LensTracer<T>::traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<
 
 template <typename T>
 void LensTracer<T>::marginSquaredBatch(const RayT<T>* rays, int n, T* m2) const {
+  // One ray: the plain trace (the same value) without a batch's padding lanes.
+  if (n == 1) {
+    m2[0] = marginSquared(rays[0]);
+    return;
+  }
   traceBatch<true>(rays, n, nullptr, m2);
 }
 

@@ -244,11 +244,6 @@ class LensSystem {
   const LensTracer<double>& tracer() const { return tracer_d_; }
   const LensTracer<float>& tracerFloat() const { return tracer_f_; }
 
-  /// LensTracer::marginSquared (double) of the ray from a film point toward a point on the plane
-  /// of the rear vertex.
-  double marginSquaredFromFilmPoint(Vec2 film_mm, Vec2 rear_plane_mm) const {
-    return tracer_d_.marginSquared(filmPointRay(film_mm, rear_plane_mm));
-  }
   /// The ray from a film point toward a point on the plane of the rear vertex.
   Ray filmPointRay(Vec2 film_mm, Vec2 rear_plane_mm) const;
   /// Exact trace from a film point toward a point on the plane of the rear vertex.

@@ -233,51 +233,20 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     // the margin is <= 1, and the margin varies continuously across the rear plane, so that a
     // boundary is found by the secant method (a few traces) rather than by bisection (~9), and a
     // sliver of region by minimising it rather than by a blind grid.
-    auto margin1 = [&](const LensSystem& L, Vec2 film, Vec2 a) {
-      const double m2 = disc2 > 0 ? (a.x * a.x + a.y * a.y) / disc2 : 0.0;
-      if (m2 > 1) return std::sqrt(m2);  // outside the rear disc: no trace needed
-      ++traces;
-      return std::sqrt(std::max(m2, L.marginSquaredFromFilmPoint(film, a)));
-    };
     // The lens's margin; where it blocks, the least over the other wavelengths' lenses too (the
     // bound holds the union of their regions). <= 1 exactly where some lens lets the ray through.
     // The lenses whose regions count (the first traced first): the lens and also_cover while
     // building the lens's own bound; a band's lenses, or one of them, while re-solving a band's.
     std::vector<const LensSystem*> cur{&lens};
     cur.insert(cur.end(), opts.also_cover.begin(), opts.also_cover.end());
-    auto marginCover = [&](Vec2 film, Vec2 a) {
-      double m = margin1(*cur[0], film, a);
-      if (m <= 1) return m;
-      for (size_t i = 1; i < cur.size(); ++i) m = std::min(m, margin1(*cur[i], film, a));
-      return m;
-    };
     // The checks of a polygon (below) use the azimuths half-way between the polygon's own, so
-    // that the regions of film points between them are covered too.
-    int last_az = 0;  // the azimuth that passed last: neighbouring points usually pass there too
-    auto margin = [&](double h, Vec2 a) {
-      if (rotational_) return marginCover({h, 0}, a);
-      const int n_az = static_cast<int>(az.size());
-      double best = kInf;
-      for (int i = 0; i < n_az; ++i) {
-        const int k = (last_az + i) % n_az;
-        const double phi = az[size_t(k)];
-        const double ca = std::cos(phi), sa = std::sin(phi);
-        const double m = marginCover({h * ca, h * sa}, toFilmAzimuth(a, h, ca, sa));
-        if (m <= 1) {
-          last_az = k;
-          return m;
-        }
-        best = std::min(best, m);
-      }
-      return best;
-    };
-    auto passes = [&](double h, Vec2 a) { return margin(h, a) <= 1; };
-    // margin() at n rear-plane points for film radius h, with the traces of each lens batched
-    // (LensTracer::marginSquaredBatch: the rays overlap in the processor). The same values where
-    // one azimuth is searched (rotational lenses, a polygon's own azimuth); over several, the
-    // points try them in the same order, all from the azimuth that passed last before the call
-    // (margin() moves on from each point's), so a passing point's value can be another
-    // azimuth's (still <= 1, and > 1 exactly where margin()'s is).
+    // that the regions of film points between them are covered too: an anamorphic lens's margin
+    // is the first passing azimuth's, tried from the one that passed last (neighbouring points
+    // usually pass there too), else the least over them.
+    int last_az = 0;
+    // The margin at n rear-plane points for film radius h, the traces of each lens batched
+    // (LensTracer::marginSquaredBatch: the rays overlap in the processor). Over several
+    // azimuths all points try them from the one that passed last before the call.
     constexpr int kB = LensTracer<double>::kBatch;
     std::vector<int> mb_todo, mb_left;
     std::vector<double> mb_val;
@@ -295,7 +264,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         mb_todo = mb_left;
         for (size_t k = 0; k < cur.size() && !mb_todo.empty(); ++k) {
           const LensSystem& L = *cur[k];
-          // As marginCover: the first lens's margin, else the least of all lenses'.
+          // The first lens's margin, else the least of all lenses'.
           auto put = [&](int j, double v) {
             mb_val[size_t(j)] = k == 0 ? v : std::min(mb_val[size_t(j)], v);
           };
@@ -322,7 +291,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
           if (m > 0) flush();
           if (k == 0) std::erase_if(mb_todo, [&](int j) { return mb_val[size_t(j)] <= 1; });
         }
-        // As margin(): the first azimuth where a point passes, else the least over them.
+        // The first azimuth where a point passes, else the least over them.
         for (int j : mb_left) {
           const double v = mb_val[size_t(j)];
           if (v <= 1) {
@@ -335,6 +304,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         std::erase_if(mb_left, [&](int j) { return out[j] <= 1; });
       }
     };
+    auto margin = [&](double h, Vec2 a) {
+      double m;
+      marginBatch(h, &a, 1, &m);
+      return m;
+    };
+    auto passes = [&](double h, Vec2 a) { return margin(h, a) <= 1; };
     // Distance from c (inside the region) to the region's boundary along u: the first blocked
     // point, with a passing point within 1e-3 relative before it. From a guess (usually the
     // neighbouring direction's distance, within a few percent), secant steps on the margin
