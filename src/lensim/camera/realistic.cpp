@@ -8,6 +8,7 @@
 #include <cmath>
 #include <ctime>
 
+#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
@@ -80,8 +81,8 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
     pupil_options.rear_disc_radius_mm = lens_.lens->interfaces().back().semi_aperture_mm;
     pupil_options.radial_bins = 48;
   }
-  for (const optics::Interface& in : lens_.lens->interfaces())
-    if (!in.shape.isRotational()) pupil_options.rotational = false;  // anamorphic: 2-D bound
+  // Anamorphic: a 2-D bound.
+  pupil_options.rotational = optics::isRotationallySymmetric(lens_.lens->prescription());
   const double film_radius = std::hypot(half_width_mm_, half_height_mm_);
   // Other wavelengths move the region's edge (the lens's power changes by about 1/V_d between F
   // and C, and much more toward 360 nm), so rays of 360-830 nm must not be lost (checked

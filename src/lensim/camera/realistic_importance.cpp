@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "lensim/camera/realistic.h"
+#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/sampling.h"
 
@@ -252,10 +253,7 @@ RealisticCamera::FrontDisc RealisticCamera::frontDisc(const Vec3& r) const {
   const optics::Interface& front = lens.interfaces().front();
   const double R = front.semi_aperture_mm;
   const FrontDisc whole{{0, 0}, R};
-  bool rotational = true;
-  for (const optics::Interface& in : lens.interfaces())
-    rotational = rotational && in.shape.isRotational();
-  if (!rotational) return whole;
+  if (!optics::isRotationallySymmetric(lens.prescription())) return whole;
   std::call_once(*front_once_, [this] { buildFrontBounds(); });
   const FrontBoundTable& t = front_bounds_;
   const Vec3 to_front = Vec3{0, 0, front.z_mm} - r;

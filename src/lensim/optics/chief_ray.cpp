@@ -4,6 +4,8 @@
 #include <functional>
 #include <numbers>
 
+#include "lensim/optics/anamorphic.h"
+
 namespace lensim::optics {
 
 namespace {
@@ -204,8 +206,7 @@ FieldOfView fieldOfView(const LensSystem& lens, const ParaxialData& p, double fi
   FieldOfView fov;
   const double h = film_diagonal_mm / 2;
   fov.paraxial_deg = 2 * std::atan(h / std::abs(p.effective_focal_length_mm)) * kDeg;
-  bool rotational = true;
-  for (const Interface& s : lens.interfaces()) rotational = rotational && s.shape.isRotational();
+  const bool rotational = isRotationallySymmetric(lens.prescription());
   auto covered = [&](double hh) -> std::optional<ChiefRay> {
     if (!filmPointSeesScene(lens, p, hh)) return std::nullopt;
     for (int k = 1; !rotational && k <= 6; ++k) {
