@@ -116,12 +116,13 @@ template <typename T>
 }
 
 // A refracting non-spherical surface that ShapeIntersector intersects side by side (a quadric:
-// a cylinder or a conic; a toroid) for lanes [0, nv): the same operations as traceShaped (in
-// double precision: direction normalised, ShapeIntersector::intersectLanes for intersect(),
-// clipping at the clear aperture, refraction as refract()), so the same results. Lanes that
-// intersectLanes does not decide are marked in one_by_one for the caller to trace one by one;
-// lanes not alive are not solved (fate 1, their other values unset). kMargin: no clipping, and each
-// lane's margin term (as LensTracer::marginSquared) in term.
+// a cylinder or a conic; a toroid or an asphere on a quadric base) for lanes [0, nv): the same
+// operations as traceShaped (in double precision: direction normalised,
+// ShapeIntersector::intersectLanes for intersect(), clipping at the clear aperture, refraction as
+// refract()), so the same results. Lanes that intersectLanes does not decide are marked in
+// one_by_one for the caller to trace one by one; lanes not alive are not solved (fate 1, their
+// other values unset). kMargin: no clipping, and each lane's margin term (as
+// LensTracer::marginSquared) in term.
 template <typename T, bool kMargin>
 [[gnu::always_inline]] inline void shapeLanes(const ShapeIntersector& shape, T zv, T semi2, T eta_i,
                                               T eta_t, int nv, const bool* alive, const T* ox,
@@ -363,8 +364,8 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
                              one_by_one);
     if (per_lane_[i]) {
       // A non-spherical surface (the bracketed Newton solve), a mirror or an obscured surface:
-      // lane by lane (spherical refracting lenses never come here); of a quadric only the lanes
-      // its loop left.
+      // lane by lane (spherical refracting lenses never come here); of a side-by-side surface
+      // only the lanes shapeLanes left.
       const TraceOptions opts{.clip_apertures = !kMargin};
       for (int j = 0; j < nv; ++j) {
         // Lanes already stopped (or padding) are skipped: a blocked ray can cost a non-spherical

@@ -114,9 +114,10 @@ class LensTracer {
   static constexpr int kBatch = 16;
   /// Traces n <= kBatch rays from the film as traceFromFilm does each (same operations, same
   /// results), surface by surface across the rays: independent rays overlap in the processor,
-  /// which hides the latency of each trace's chain of square roots and divisions. Quadrics
-  /// and toroids go side by side too (ShapeIntersector::intersectLanes); mirrors, obscured
-  /// surfaces, other aspheres and the rays those do not decide are traced lane by lane.
+  /// which hides the latency of each trace's chain of square roots and divisions. Quadrics,
+  /// toroids and aspheres on a quadric base go side by side too
+  /// (ShapeIntersector::intersectLanes); mirrors, obscured surfaces, other shapes and the rays
+  /// those do not decide are traced lane by lane.
   void traceFromFilmBatch(const RayT<T>* rays, int n, TraceResultT<T>* results) const;
 
   /// The square of a ray's aperture margin (from the film): the ray traced without clipping,
@@ -166,8 +167,8 @@ class LensTracer {
   std::vector<int> shape_index_;  // -1: spherical (the quadratic); else into shapes_
   std::vector<ShapeIntersector> shapes_;
   // Per surface: 1 for a refracting non-spherical surface without obscuration whose intersector
-  // works side by side (ShapeIntersector::hasLanes: quadrics, toroids), which the batch tracers
-  // intersect so.
+  // works side by side (ShapeIntersector::hasLanes: quadrics, toroids, aspheres on a quadric base),
+  // which the batch tracers intersect so.
   std::vector<std::uint8_t> lanes_;
 };
 

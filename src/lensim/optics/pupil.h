@@ -27,8 +27,9 @@
 // overshoot, not containment, depends on the guess.
 // A polygon's searches (one per direction, each a small state machine) run side by side and
 // their rays are traced in batches (LensTracer::marginSquaredBatch, vectorised across the rays
-// for spherical, quadric and toroidal surfaces), which hides the latency of each trace's chain of
-// square roots and divisions: about 3x cheaper a trace than one at a time.
+// for spherical surfaces, quadrics, toroids and aspheres on a quadric base), which hides the
+// latency of each trace's chain of square roots and divisions: about 3x cheaper a trace than one at
+// a time.
 //
 // Measured (tests/optics_pupil_test.cpp and a 2-million-ray check): no passing ray outside the
 // bounds for the double Gauss, wide-angle and telephoto; for the fisheye one in two million,

@@ -406,7 +406,7 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
     const double tq = ok_lo != zero ? lo : hi;
     const double root = A != zero ? (disc >= zero ? std::max(ok_lo, ok_hi) : zero) : zero;
     t[j] = tq;
-    // A toroid's Newton solve starts from a quadric hit inside the slab.
+    // A Newton solve (toroid, asphere) starts from a quadric hit inside the slab.
     const double in_slab = tq >= ta[j] ? (tq <= tb[j] ? one : zero) : zero;
     const double start = std::max(std::min(root, in_slab), std::min(root, quad));
     status[j] = flat != zero ? two : (crosses == zero ? one : (start != zero ? zero : two));

@@ -17,8 +17,8 @@
 //              rotated about the axis parallel to y that crosses the z axis at z = R (the radius
 //              of rotation, rotation_radius_mm; R = 0 means infinite: a cylinder flat in x).
 //              A point of the curve at height y is rho = R - f(y) from that axis, so
-//                z(x,y) = R - sgn(rho) sqrt(rho^2 - x^2) = f + x^2 / (rho + sgn(rho) sqrt(rho^2 -
-//                x^2))
+//                z(x,y) = R - sgn(rho) sqrt(rho^2 - x^2)
+//                       = f + x^2 / (rho + sgn(rho) sqrt(rho^2 - x^2))
 //              Its x-z section is the circle of radius R, its y-z section the curve f.
 // The toroidal definition is Zemax OpticStudio's ("Toroidal" in the OpticStudio User Guide,
 // Surface Types: a curve in the Y-Z plane with base radius, conic and the polynomial terms
@@ -126,10 +126,10 @@ class ShapeIntersector {
   SagGradient sagContinued(double x, double y) const;
   /// sagContinued(x, y).z without the gradient (the first-crossing checks of the Newton solve).
   double sagZ(double x, double y) const;
-  /// The polynomial terms' sag at r^2 = r2 and their slope dz/dr over r (for the gradient).
-  double polynomialSag(double r2, double& slope_over_r) const;
 
  private:
+  // The polynomial terms' sag at r^2 = r2 and their slope dz/dr over r (for the gradient).
+  double polynomialSag(double r2, double& slope_over_r) const;
   double radius_ = 0;
   SurfaceShape shape_;
   double cx_ = 0, cy_ = 0, ax_ = 0, ay_ = 0;   // cached section curvatures and (1 + k) c^2
