@@ -83,7 +83,15 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   }
   // Anamorphic: a 2-D bound.
   pupil_options.rotational = optics::isRotationallySymmetric(lens_.lens->prescription());
-  const double film_radius = std::hypot(half_width_mm_, half_height_mm_);
+  // The film's samples reach beyond the image by the pixel filter's radius less half a pixel
+  // (film_bounds.h): the bounds cover that rectangle (an anamorphic lens's only as far as it
+  // reaches at each azimuth, ExitPupilOptions::film_half_extent_mm).
+  const Vec2 sampled{half_width_mm_ * (1 + 2 * std::max(0.0, settings_.filter_radius.x - 0.5) /
+                                               settings_.x_resolution),
+                     half_height_mm_ * (1 + 2 * std::max(0.0, settings_.filter_radius.y - 0.5) /
+                                                settings_.y_resolution)};
+  pupil_options.film_half_extent_mm = sampled;
+  const double film_radius = std::hypot(sampled.x, sampled.y);
   // Other wavelengths move the region's edge (the lens's power changes by about 1/V_d between F
   // and C, and much more toward 360 nm), so rays of 360-830 nm must not be lost (checked
   // through the film irradiance at 450 and 620 nm in tests/render_dispersion_test.cpp, and ray

@@ -195,6 +195,27 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   // Where across a wedge its blended polygon is checked against the true region (checking at a
   // quarter and three quarters as well found nothing more in lentil:2004 at twice the traces).
   const std::vector<double> kWedgeChecks = {0.5};
+  // Anamorphic on a film rectangle (ExitPupilOptions::film_half_extent_mm): each wedge edge's
+  // nodes are the same film radii as over the whole film radius, up to the first at or past the
+  // rectangle's farthest point at the azimuths of the edge's two wedges; each wedge's checks reach
+  // the first past its own farthest point. A film point lies within both edges' reach.
+  std::vector<int> sector_nodes(size_t(n_sectors), ni);  // intervals along each edge
+  std::vector<double> wedge_reach(size_t(n_wedges), film_radius_mm);
+  if (const Vec2 e = opts.film_half_extent_mm; !rotational_ && e.x > 0 && e.y > 0) {
+    // The rectangle's farthest point at azimuths [lo, hi] (its distance grows up to the corner's
+    // azimuth and falls after it).
+    auto farthest = [&](double lo, double hi) {
+      const double a = std::clamp(std::atan2(e.y, e.x), lo, hi);
+      const double c = std::cos(a), s = std::sin(a);
+      return std::min({film_radius_mm, c > 0 ? e.x / c : kInf, s > 0 ? e.y / s : kInf});
+    };
+    for (int sec = 0; sec < n_sectors; ++sec) {
+      const double r = farthest(std::max(0, sec - 1) * wedge, std::min(n_wedges, sec + 1) * wedge);
+      sector_nodes[size_t(sec)] = std::clamp(int(std::ceil(r / film_radius_mm * ni - 1e-9)), 1, ni);
+    }
+    for (int wdg = 0; wdg < n_wedges; ++wdg)
+      wedge_reach[size_t(wdg)] = farthest(wdg * wedge, (wdg + 1) * wedge);
+  }
   // Each wedge's bound is built on its own (its own azimuths); a rotational lens has one. The
   // build runs in stages whose pieces are independent, so that they run side by side (TBB; the
   // start-up budget is wall time on two cores): (0) the uniform nodes, each found from its
@@ -614,7 +635,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       last_az = 0;
     }
     if (stage == 0) {
-      for (int k = 0; k <= ni; ++k)
+      for (int k = 0; k <= sector_nodes[size_t(sec)]; ++k)
         w.initial.push_back(makeNode(film_radius_mm * k / ni, k > 0 ? &w.initial.back() : nullptr));
       traces_total += traces;
       return;
@@ -1015,9 +1036,10 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   runStage(tasks);
   tasks.clear();
   for (int sec = 0; sec < n_sectors; ++sec) {
-    work[size_t(sec)].refined.assign(size_t(ni), {});
-    work[size_t(sec)].refined_scales.assign(size_t(ni), {});
-    for (int k = 0; k < ni; ++k) tasks.push_back({sec, 1, k, k + 1});
+    const int nk = sector_nodes[size_t(sec)];
+    work[size_t(sec)].refined.assign(size_t(nk), {});
+    work[size_t(sec)].refined_scales.assign(size_t(nk), {});
+    for (int k = 0; k < nk; ++k) tasks.push_back({sec, 1, k, k + 1});
   }
   runStage(tasks);
   tasks.clear();
@@ -1025,7 +1047,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   for (int sec = 0; sec < n_sectors; ++sec) {
     Work& w = work[size_t(sec)];
     w.done = {w.initial[0]};
-    for (int k = 0; k < ni; ++k) {
+    for (int k = 0; k < sector_nodes[size_t(sec)]; ++k) {
       w.done.insert(w.done.end(), w.refined[size_t(k)].begin(), w.refined[size_t(k)].end());
       w.scales.insert(w.scales.end(), w.refined_scales[size_t(k)].begin(),
                       w.refined_scales[size_t(k)].end());
@@ -1055,8 +1077,10 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
           rs.insert(rs.end(), {iv.r0, 0.5 * (iv.r0 + iv.r1), iv.r1});
       std::sort(rs.begin(), rs.end());
       std::vector<double>& kept = wedge_radii[size_t(wdg)];
-      for (double r : rs)
+      for (double r : rs) {
+        if (!kept.empty() && kept.back() >= wedge_reach[size_t(wdg)]) break;
         if (kept.empty() || r - kept.back() > 0.25 * min_width) kept.push_back(r);
+      }
       const int n = static_cast<int>(kept.size());
       wedge_parts[size_t(wdg)].resize(size_t((n + kWedgeRadiiPerTask - 1) / kWedgeRadiiPerTask));
       for (int k = 0; k < n; k += kWedgeRadiiPerTask)
@@ -1195,6 +1219,11 @@ bool ExitPupilSampler::blended(int set, int wedge, double r, double s, Vec2& c, 
   if (set < 0 || set >= static_cast<int>(sets_.size())) return false;
   if (r > film_radius_mm_ * (1 + 1e-9)) return false;
   const std::vector<Sector>& lines = sets_[size_t(set)];
+  // Beyond an edge's reach (a film rectangle's, ExitPupilOptions::film_half_extent_mm): no bound.
+  for (int l : {wedge, wedge + 1}) {
+    const std::vector<Interval>& ivs = lines[size_t(l)].intervals;
+    if (!ivs.empty() && r > ivs.back().r1 * (1 + 1e-9)) return false;
+  }
   auto lineAt = [&](const Sector& L, Vec2& cc, double* RR) {
     if (L.intervals.empty()) return false;
     const Interval& iv = L.intervals[size_t(intervalIn(L.intervals, L.lut, L.lut_scale, r))];

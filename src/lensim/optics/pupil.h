@@ -73,6 +73,13 @@ struct ExitPupilOptions {
   /// bound was the union of its edges' regions, which wasted 13.8% of lentil:2004's samples.)
   bool rotational = true;
   int sectors = 4;  ///< anamorphic: wedges of the first quadrant
+  /// Anamorphic: the film's rectangle where points are sampled, half width and half height (mm,
+  /// centred on the axis; 0: a disc of the film radius). The bound along each wedge edge then
+  /// reaches only as far as the rectangle does at the azimuths of its two wedges, and each
+  /// wedge's checks as far as it does across that wedge: on a wide film the short side's wedges
+  /// stop short of the film radius, and with them often the costliest part of the build, the
+  /// region's vanishing edge beyond the image circle.
+  Vec2 film_half_extent_mm{0, 0};
   /// The same lens at other wavelengths (a dispersive lens at the ends of the spectrum): a
   /// rear-plane point counts as passing if it passes through any of them too, so that the bound
   /// holds the region of every wavelength without a wide blanket margin. Traced only where the
