@@ -880,6 +880,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
           band_lens.push_back(L);
     std::vector<std::vector<double>> dist(band_lens.size());
     std::vector<char> inside(band_lens.size());
+    // The band lenses found to see nothing at a node of this task: at its farther nodes they see
+    // nothing either (past the edge of their image circle, as stage 0 takes the lens's own), so
+    // that the search that finds a region empty (a grid and pattern searches, ~400 traces) runs
+    // once per lens and task rather than at every node of the zone where the edge of the image
+    // circle moves with the wavelength (the toroidal anamorphic on 36x24: up to 16 nodes).
+    std::vector<char> seen_empty(band_lens.size(), 0);
     for (size_t k = size_t(k0); k < size_t(k1) && !opts.bands.empty(); ++k) {
       const Polygon& base = done[k];
       const double h = base.r;
@@ -975,8 +981,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
                   from = &own[n];
                   break;
                 }
-            own[i] = scratch(std::vector<size_t>{i}, from);
-            state[i] = own[i].empty ? 2 : 3;
+            if (!seen_empty[i]) own[i] = scratch(std::vector<size_t>{i}, from);
+            state[i] = seen_empty[i] || own[i].empty ? 2 : 3;
+            seen_empty[i] = state[i] == 2;
           }
         }
         return state[i];
@@ -1061,7 +1068,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   }
   runStage(tasks);
   tasks.clear();
-  constexpr int kBandNodesPerTask = 4;
+  constexpr int kBandNodesPerTask = 8;
   for (int sec = 0; sec < n_sectors; ++sec) {
     Work& w = work[size_t(sec)];
     w.done = {w.initial[0]};
