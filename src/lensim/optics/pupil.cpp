@@ -243,6 +243,10 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   std::vector<std::vector<double>> wedge_radii;
   std::vector<std::vector<WedgeCheck>> wedge_parts;
   std::atomic<long> traces_total{0};
+  // Past the image circle, as far as the uniform nodes tell (after stage 0): the least over the
+  // wedge edges of the first empty node's radius after one that is not (the film radius if there
+  // is none); film points there see nothing in that edge's direction.
+  double r_ic = film_radius_mm;
   auto buildSector = [&](int sec, int stage, int k0, int k1) {
     Work& w = work[size_t(sec)];
     long traces = 0;
@@ -676,7 +680,14 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
           f = coverFactors(interp, checkPoints(h, 0.25 * dphi, &interp));
           const double worst = *std::max_element(f.begin(), f.end());
           const double a0 = area(left), a1 = area(right);
-          const bool fast = left.empty != right.empty || std::max(a0, a1) > 1.25 * std::min(a0, a1);
+          // Where the region's area changes fast, interpolation wastes samples: split. Not
+          // beyond the image circle, whose samples the waste budget leaves out, and where the
+          // region shrinks to nothing at the edge (the splits there cost the toroidal anamorphic
+          // on 36x24 15% of its traces for 11.37% of the film's samples wasted instead of
+          // 11.36%); an interval the checks would widen by over 3%, or the one where the
+          // region vanishes, is split all the same.
+          const bool fast = left.empty != right.empty ||
+                            (left.r < r_ic && std::max(a0, a1) > 1.25 * std::min(a0, a1));
           split = (worst > 1.03 || fast) && right.r - left.r > 2 * min_width;
         }
         if (split) {
@@ -1060,6 +1071,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   for (int sec = 0; sec < n_sectors; ++sec) tasks.push_back({sec, 0, 0, 0});
   runStage(tasks);
   tasks.clear();
+  for (const Work& w : work)
+    for (size_t k = 1; k < w.initial.size(); ++k)
+      if (w.initial[k].empty && !w.initial[k - 1].empty) {
+        r_ic = std::min(r_ic, w.initial[k].r);
+        break;
+      }
   for (int sec = 0; sec < n_sectors; ++sec) {
     const int nk = sector_nodes[size_t(sec)];
     work[size_t(sec)].refined.assign(size_t(nk), {});
