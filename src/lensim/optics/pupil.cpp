@@ -683,8 +683,8 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
           // Where the region's area changes fast, interpolation wastes samples: split. Not
           // beyond the image circle, whose samples the waste budget leaves out, and where the
           // region shrinks to nothing at the edge (the splits there cost the toroidal anamorphic
-          // on 36x24 15% of its traces for 11.37% of the film's samples wasted instead of
-          // 11.36%); an interval the checks would widen by over 3%, or the one where the
+          // on 36x24 an eighth of its traces for 11.37% of the film's samples wasted instead of
+          // 11.35%); an interval the checks would widen by over 3%, or the one where the
           // region vanishes, is split all the same.
           const bool fast = left.empty != right.empty ||
                             (left.r < r_ic && std::max(a0, a1) > 1.25 * std::min(a0, a1));
