@@ -151,8 +151,7 @@ std::optional<Vec2> passingRearAim(const LensSystem& lens, const ParaxialData& p
   constexpr int kGrid = 41;
   // Without obscurations (where kOuterBoundary is the plain trace) the grid's points are traced
   // in order a batch at a time (LensTracer::traceFromFilmBatch, the same results).
-  bool obscured = false;
-  for (const Interface& s : lens.interfaces()) obscured = obscured || s.obscuration_radius_mm > 0;
+  const bool obscured = lens.hasObscuration();
   auto scanDisc = [&](auto&& point_at) -> std::optional<Vec2> {
     constexpr int kB = LensTracer<double>::kBatch;
     Vec2 pts[kB];

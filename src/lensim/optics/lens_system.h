@@ -191,6 +191,12 @@ class LensSystem {
 
   const LensPrescription& prescription() const { return prescription_; }
   const std::vector<Interface>& interfaces() const { return interfaces_; }
+  /// True if some surface has a central obscuration (a catadioptric lens's secondary mirror).
+  bool hasObscuration() const {
+    for (const Interface& s : interfaces_)
+      if (s.obscuration_radius_mm > 0) return true;
+    return false;
+  }
   int surfaceCount() const { return static_cast<int>(interfaces_.size()); }
 
   /// Index of the radius-0 stop, if the file has one.

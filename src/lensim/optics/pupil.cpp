@@ -172,8 +172,7 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
   const double rr = 1.5 * lens.interfaces().back().semi_aperture_mm;
 
   const double disc2 = opts.rear_disc_radius_mm * opts.rear_disc_radius_mm;
-  bool obscured = false;
-  for (const Interface& s : lens.interfaces()) obscured = obscured || s.obscuration_radius_mm > 0;
+  const bool obscured = lens.hasObscuration();
   // Anamorphic: the paraxial chief ray from film height h crosses the rear plane at kappa h
   // (aimed at the exit pupil's centre).
   if (!rotational_) {
