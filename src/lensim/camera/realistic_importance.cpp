@@ -33,7 +33,6 @@
 #include <vector>
 
 #include "lensim/camera/realistic.h"
-#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/sampling.h"
 
@@ -253,7 +252,7 @@ RealisticCamera::FrontDisc RealisticCamera::frontDisc(const Vec3& r) const {
   const optics::Interface& front = lens.interfaces().front();
   const double R = front.semi_aperture_mm;
   const FrontDisc whole{{0, 0}, R};
-  if (!optics::isRotationallySymmetric(lens.prescription())) return whole;
+  if (!pupil_->rotationallySymmetric()) return whole;  // anamorphic
   std::call_once(*front_once_, [this] { buildFrontBounds(); });
   const FrontBoundTable& t = front_bounds_;
   const Vec3 to_front = Vec3{0, 0, front.z_mm} - r;
