@@ -635,7 +635,10 @@ void LensSystem::setWavelength(double lambda_nm) {
   indicesAt(lambda_nm, before.data(), after.data());
   for (size_t i = 0; i < interfaces_.size(); ++i)
     interfaces_[i].ior_before = before[i], interfaces_[i].ior_after = after[i];
-  rebuildTracers();
+  // Only the indices change: the tracers keep their surfaces' intersectors (whose set-up samples
+  // each non-spherical surface's sag).
+  tracer_d_.setIndices(before.data(), after.data());
+  tracer_f_.setIndices(before.data(), after.data());
 }
 
 LensSystem LensSystem::atWavelength(double lambda_nm) const {

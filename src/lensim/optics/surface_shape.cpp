@@ -330,6 +330,7 @@ ShapeIntersector::ShapeIntersector(double radius_mm, const SurfaceShape& shape,
     quadric_ = false;
     qcx_ = rot != 0 ? 1 / rot : 0.0, qcy_ = c;
     qe_ = c != 0 ? (1 + shape.conic) * c : qcx_;
+    boundSagCurvature();
     return;
   }
   // Quadric when (1 + k) c is the same for every curved section.
@@ -342,6 +343,119 @@ ShapeIntersector::ShapeIntersector(double radius_mm, const SurfaceShape& shape,
       qcx_ = k.cx, qcy_ = k.cy, qe_ = k.cx != 0 ? ex : ey;
     }
   }
+  if (!quadric_) boundSagCurvature();
+}
+
+void ShapeIntersector::boundSagCurvature() {
+  // The largest spectral norm of the sag's Hessian, from central differences of its gradient on
+  // the slab's polar grid (over a quadrant: every shape here is symmetric in x -> -x and
+  // y -> -y), doubled for the extremes between samples, as the slab is padded. Infinite where
+  // the sag is undefined within a step of the disc (a surface whose domain ends at bound_r).
+  const double rot = toroidal_ ? *shape_.rotation_radius_mm : 0.0;
+  auto gradient = [&](double x, double y) -> std::optional<SagGradient> {
+    if (toroidal_) return toroidSag(cy_, ay_, shape_.poly, rot, x, y, false);
+    return surfaceSag(radius_, shape_, x, y);
+  };
+  const double h = 1e-5 * bound_r_;
+  const int n_ang = shape_.isRotational() ? 1 : 9;
+  double most = 0;
+  for (int a = 0; a < n_ang; ++a) {
+    const double phi = n_ang == 1 ? 0.0 : (std::numbers::pi / 2) * a / (n_ang - 1);
+    for (int k = 0; k <= 128; ++k) {
+      const double r = bound_r_ * k / 128, x = r * std::cos(phi), y = r * std::sin(phi);
+      const auto px = gradient(x + h, y), mx = gradient(x - h, y);
+      const auto py = gradient(x, y + h), my = gradient(x, y - h);
+      if (!px || !mx || !py || !my) return;
+      const double hxx = (px->dzdx - mx->dzdx) / (2 * h), hyy = (py->dzdy - my->dzdy) / (2 * h);
+      const double hxy = 0.5 * ((px->dzdy - mx->dzdy) + (py->dzdx - my->dzdx)) / (2 * h);
+      // The symmetric 2x2 matrix's largest absolute eigenvalue.
+      const double norm = 0.5 * std::abs(hxx + hyy) + std::hypot(0.5 * (hxx - hyy), hxy);
+      if (!std::isfinite(norm)) return;
+      most = std::max(most, norm);
+    }
+  }
+  hess_bound_ = 2 * most;
+}
+
+// Whether the Newton solve's root t is the first crossing after the slab's entry ta, from the
+// bound on the sag's curvature: g(tau) = z(tau) - sag(x(tau), y(tau)) along the ray has
+// |g''| <= H |d_xy|^2 (H the bound on the Hessian's norm) wherever the path stays inside the disc
+// of radius bound_r (so from ta to t when both ends do: the disc is convex), so that
+// g(t - delta) = g(t) - g'(t) delta + e with |e| <= H |d_xy|^2 delta^2 / 2: g keeps the sign of
+// -g'(t) for delta up to 2 |g'(t)| / (H |d_xy|^2). Asked for half of that (g'(t) is taken from
+// the gradient at the last iterate, within 1e-13 of t), on [ta, t). Near the axis and at the
+// usual angles it holds by a wide margin (a lens's ray crosses a slab a few millimetres deep at
+// a slope well below 1, where g'' is a few hundredths of g'); where it does not, the solve checks
+// g's sign at points along the ray instead. intersectLanes computes the same expression.
+bool ShapeIntersector::firstCrossingProven(double ox, double oy, double dx, double dy, double dz,
+                                           double ta, double t, double sx, double sy) const {
+  const double xa = ox + ta * dx, ya = oy + ta * dy, xt = ox + t * dx, yt = oy + t * dy;
+  const double bound2 = bound_r_ * bound_r_;
+  const double slope = dz - sx * dx - sy * dy;
+  const double curv = hess_bound_ * (dx * dx + dy * dy);
+  return xa * xa + ya * ya <= bound2 && xt * xt + yt * yt <= bound2 &&
+         (t - ta) * curv < std::abs(slope);
+}
+
+// The first root of g(t) = z(t) - sag(x(t), y(t)) on [lo, hi], a part of the ray inside the disc
+// of radius bound_r, isolated with the bound on g'' (H |d_xy|^2, as firstCrossingProven): the
+// segments are visited left to right and halved; one whose ends have g of one sign holds no
+// root where g cannot reach 0 between them (it lies within H |d_xy|^2 w^2 / 8 of its chord on a
+// segment of width w), and one whose ends differ in sign holds exactly one where g's slope at
+// its middle is steeper than the curvature can turn over half its width (g is monotone there).
+// That one is the bracket. (A 16-sample scan missed pairs of crossings of a ray grazing the
+// surface, and a crossing near the start of a long slab.) Segments narrower than 1e-12 (1 + |t|)
+// are not halved: a ray tangent to the surface there does not cross it.
+bool ShapeIntersector::firstBracketInside(const Vec3& o, const Vec3& d, double lo, double hi,
+                                          double& a, double& ga, double& b, double& gb) const {
+  const double curv = hess_bound_ * (d.x * d.x + d.y * d.y);
+  auto g = [&](double t, double* slope) {
+    const double x = o.x + t * d.x, y = o.y + t * d.y;
+    if (!slope) return o.z + t * d.z - sagZ(x, y);
+    const SagGradient s = sagContinued(x, y);
+    *slope = d.z - s.dzdx * d.x - s.dzdy * d.y;
+    return o.z + t * d.z - s.z;
+  };
+  struct Seg {
+    double a, ga, b, gb;
+  };
+  // Depth-first, the left half on top; at most one pending right half per level.
+  constexpr int kMaxDepth = 60;
+  Seg stack[kMaxDepth + 2];
+  int n = 0;
+  stack[n++] = {lo, g(lo, nullptr), hi, g(hi, nullptr)};
+  int evaluations = 0;
+  while (n > 0) {
+    const Seg s = stack[--n];
+    if (s.ga == 0) {
+      a = b = s.a, ga = gb = 0;
+      return true;
+    }
+    const bool change = s.gb == 0 || (s.gb < 0) != (s.ga < 0);
+    const double w = s.b - s.a, m = 0.5 * (s.a + s.b);
+    double gm;
+    if (!change) {
+      const double reach = curv * w * w / 8;
+      if (s.ga < 0 ? std::max(s.ga, s.gb) + reach < 0 : std::min(s.ga, s.gb) - reach > 0) continue;
+    } else {
+      double slope;
+      gm = g(m, &slope);
+      ++evaluations;
+      if (std::abs(slope) > curv * w / 2) {
+        a = s.a, ga = s.ga, b = s.b, gb = s.gb;
+        return true;
+      }
+    }
+    if (w <= 1e-12 * (1 + std::abs(m)) || n >= kMaxDepth || evaluations > 4096) {
+      if (!change) continue;
+      a = s.a, ga = s.ga, b = s.b, gb = s.gb;  // tangent or unresolved: a root lies here
+      return true;
+    }
+    if (!change) gm = g(m, nullptr), ++evaluations;
+    stack[n++] = {m, gm, s.b, s.gb};
+    stack[n++] = {s.a, s.ga, m, gm};
+  }
+  return false;
 }
 
 std::optional<double> ShapeIntersector::quadricRoot(const Vec3& o, const Vec3& d,
@@ -468,8 +582,24 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
     act[j] = status[j] == zero ? one : zero;
   }
   // The first-crossing check: g keeps its sign from the slab's entry to just before the root.
-  double g0[kLanes], first[kLanes], sag[kLanes];
-  for (int k = 0; k <= 4; ++k) {
+  // Proven from the bound on the sag's curvature (firstCrossingProven, the same expression), else
+  // checked at 5 points along the ray: those only where a lane needs them.
+  const double hb = hess_bound_;
+  double g0[kLanes], first[kLanes], sag[kLanes], proven[kLanes];
+  for (int j = 0; j < n; ++j) {
+    const double xa = ox[j] + ta[j] * dx[j], ya = oy[j] + ta[j] * dy[j];
+    const double xt = ox[j] + t[j] * dx[j], yt = oy[j] + t[j] * dy[j];
+    const double slope = dz[j] - sx[j] * dx[j] - sy[j] * dy[j];
+    const double curv = hb * (dx[j] * dx[j] + dy[j] * dy[j]);
+    const double in_a = xa * xa + ya * ya <= bound2 ? one : zero;
+    const double in_t = xt * xt + yt * yt <= bound2 ? one : zero;
+    const double near = (t[j] - ta[j]) * curv < std::abs(slope) ? one : zero;
+    proven[j] = std::min(std::min(in_a, in_t), near);
+    first[j] = one;
+  }
+  bool check = false;
+  for (int j = 0; j < n; ++j) check = check || (act[j] != zero && proven[j] == zero);
+  for (int k = 0; k <= 4 && check; ++k) {
     for (int j = 0; j < n; ++j) {
       const double tk = k == 0 ? ta[j] : ta[j] + (t[j] - ta[j]) * k / 5.0;
       x[j] = ox[j] + tk * dx[j], y[j] = oy[j] + tk * dy[j], z[j] = oz[j] + tk * dz[j];
@@ -494,7 +624,8 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
     const double finite = std::abs(sx[j]) <= kMax ? (std::abs(sy[j]) <= kMax ? one : zero) : zero;
     const double len = std::sqrt(sx[j] * sx[j] + sy[j] * sy[j] + 1.0);  // |(sx, sy, -1)|
     nx[j] = sx[j] / len, ny[j] = sy[j] / len, nz[j] = -1.0 / len;
-    status[j] = act[j] != zero ? (std::min(first[j], finite) == zero ? two : status[j]) : status[j];
+    const double ok = std::min(std::max(first[j], proven[j]), finite);
+    status[j] = act[j] != zero ? (ok == zero ? two : status[j]) : status[j];
   }
 }
 
@@ -600,7 +731,8 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
   };
   // Aspheres on a quadric base: Newton's method from the base quadric's hit, accepted when it
   // converges inside the slab and g keeps its sign from the slab's entry to just before the root
-  // (checked at 4 points; so the root is the first crossing); else the bracketing search below.
+  // (from the bound on the sag's curvature, else checked at 5 points; so the root is the first
+  // crossing); else the bracketing search below.
   if (base_quadric_ && !quadric_) {
     if (auto tq = quadricRoot(o, d, t_min); tq && *tq >= ta && *tq <= tb) {
       double t = *tq;
@@ -620,11 +752,15 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
         }
       }
       if (converged) {
-        const double g0 = g(ta, nullptr);
-        bool first = g0 != 0;
-        for (int k = 1; k <= 4 && first; ++k) {
-          const double gk = g(ta + (t - ta) * k / 5.0, nullptr);
-          first = gk != 0 && (gk < 0) == (g0 < 0);
+        // Else g's sign at the slab's entry and 4 points up to the root.
+        bool first = firstCrossingProven(o.x, o.y, d.x, d.y, d.z, ta, t, s.dzdx, s.dzdy);
+        if (!first) {
+          const double g0 = g(ta, nullptr);
+          first = g0 != 0;
+          for (int k = 1; k <= 4 && first; ++k) {
+            const double gk = g(ta + (t - ta) * k / 5.0, nullptr);
+            first = gk != 0 && (gk < 0) == (g0 < 0);
+          }
         }
         if (first) {
           // The normal from the gradient at the last iterate, which lies within 1e-13 (1 + |t|)
@@ -635,20 +771,43 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
       }
     }
   }
-  // First sign change along the ray: the nearest crossing.
-  constexpr int kSamples = 16;
-  double a = ta, ga = g(ta, nullptr);
-  double b = ta, gb = ga;
-  bool found = ga == 0;
-  for (int k = 1; k <= kSamples && !found; ++k) {
-    b = ta + (tb - ta) * k / kSamples;
-    gb = g(b, nullptr);
-    if (gb == 0 || (gb < 0) != (ga < 0)) {
-      found = true;
-      break;
+  // The first crossing along the ray: a bracket [a, b] of it (g(a) and g(b) of opposite signs, or
+  // g(a) = 0), in the parts of [ta, tb] before, inside and after the cylinder of radius bound_r
+  // in turn. Inside it the sag is smooth and the bound on its curvature isolates the first root
+  // (firstBracketInside); outside it (the flat continuation, and inside for a surface without
+  // the bound) the first sign change over 16 samples.
+  double a = ta, ga = 0, b = ta, gb = 0;
+  bool found = false;
+  auto sampled = [&](double lo, double hi) {
+    constexpr int kSamples = 16;
+    a = lo, ga = g(lo, nullptr), b = lo, gb = ga;
+    if (ga == 0) return true;
+    for (int k = 1; k <= kSamples; ++k) {
+      b = lo + (hi - lo) * k / kSamples;
+      gb = g(b, nullptr);
+      if (gb == 0 || (gb < 0) != (ga < 0)) return true;
+      a = b, ga = gb;
     }
-    a = b, ga = gb;
+    return false;
+  };
+  // The ray inside the cylinder: t in [c0, c1].
+  double c0 = tb, c1 = tb;
+  {
+    const double A = d.x * d.x + d.y * d.y, B = o.x * d.x + o.y * d.y;
+    const double C = o.x * o.x + o.y * o.y - bound_r_ * bound_r_;
+    if (A == 0) {
+      if (C <= 0) c0 = ta;
+    } else if (const double disc = B * B - A * C; disc >= 0) {
+      const double q = std::sqrt(disc);
+      c0 = std::clamp((-B - q) / A, ta, tb), c1 = std::clamp((-B + q) / A, ta, tb);
+    }
   }
+  if (c0 > ta) found = sampled(ta, c0);
+  if (!found && c1 > c0) {
+    found = std::isfinite(hess_bound_) ? firstBracketInside(o, d, c0, c1, a, ga, b, gb)
+                                       : sampled(c0, c1);
+  }
+  if (!found && tb > c1) found = sampled(c1, tb);
   if (!found) return std::nullopt;
   double t;
   if (ga == 0) {

@@ -27,6 +27,7 @@
 // sag terms are not modelled); LensForge's "Toric Y" surface documents the same surface.
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -143,6 +144,14 @@ class ShapeIntersector {
   double qcx_ = 0, qcy_ = 0, qe_ = 0;
   std::optional<double> quadricRoot(const Vec3& o, const Vec3& d, double t_min) const;
   bool toroidal_ = false;
+  // The first-crossing proof of the Newton solve (firstCrossingProven): a bound on the spectral
+  // norm of the sag's Hessian over the disc of radius bound_r (infinite: none).
+  void boundSagCurvature();
+  bool firstCrossingProven(double ox, double oy, double dx, double dy, double dz, double ta,
+                           double t, double sx, double sy) const;
+  bool firstBracketInside(const Vec3& o, const Vec3& d, double lo, double hi, double& a, double& ga,
+                          double& b, double& gb) const;
+  double hess_bound_ = std::numeric_limits<double>::infinity();
   double bound_r_ = 0;
   double z_lo_ = 0, z_hi_ = 0;  // slab of the (continued) surface relative to the vertex
 };
