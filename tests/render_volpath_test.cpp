@@ -508,7 +508,15 @@ Shape "sphere" "float radius" 0.35
     o.seed = 6;
     o.spp = 128;
     const Image ref2 = renderText(box("path"), o).image;
+    // The reference's noise from a second path render at 32 spp: path's variance per sample is
+    // not volpath's in every block (taking it as equal, 3 of 48 comparisons over 12 sets of seeds
+    // had 2 blocks beyond the bound; with this 1 of 48, and at 4x the samples none).
+    o.seed = 7;
+    o.spp = 32;
+    const Image ref2_low = renderText(box("path"), o).image;
     co.second = &e;
+    co.reference_low = &ref2_low;
+    co.reference_low_spp = 32;
     const render::CompareResult r2 = render::compareImages(c, ref2, co);
     EXPECT_LE(r2.z_failures, 1) << "box\n" << render::formatCompare(r2);
     EXPECT_EQ(r2.outliers, 0) << "box\n" << render::formatCompare(r2);

@@ -66,8 +66,18 @@ struct EdgeSearch {
   bool bracketed = false;
   double bracket_slope = 0, last_slope = 0;
 
-  EdgeSearch(double guess, double accept_, double rr_, double slope_hint_, double accept_slope_)
-      : rr(rr_), accept(accept_), slope_hint(slope_hint_), accept_slope(accept_slope_) {
+  // cover: the search of a check (a polygon's edge is the guess, and only a boundary beyond it
+  // matters): a blocked first trace there ends it with result 0 (the region, star-shaped about
+  // the search's origin, ends before the edge: nothing to widen).
+  bool cover = false;
+
+  EdgeSearch(double guess, double accept_, double rr_, double slope_hint_, double accept_slope_,
+             bool cover_ = false)
+      : rr(rr_),
+        accept(accept_),
+        slope_hint(slope_hint_),
+        accept_slope(accept_slope_),
+        cover(cover_) {
     x = std::max(guess, 1e-6 * rr);
     // With a good guess (accept > 0) the steps while one side is open start small, and a
     // bracket as narrow as `accept` ends the search too (where the margin jumps to infinity at
@@ -76,6 +86,10 @@ struct EdgeSearch {
     tol_end = std::max(kTol, accept);
   }
   void feed(double g) {
+    if (cover && first && g > 1) {
+      result = 0, done = true;
+      return;
+    }
     s0 = s1, g0 = g1, s1 = x, g1 = g;
     if (g <= 1) {
       if (x > lo) lo = x, glo = g;
@@ -355,8 +369,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       if (e.bracket_slope > 0) slope_hint = e.bracket_slope;
       last_slope = e.last_slope;
     };
-    auto boundary = [&](double h, Vec2 c, Vec2 u, double guess, double accept = 0) {
-      EdgeSearch e(guess, accept, rr, slope_hint, accept_slope);
+    auto boundary = [&](double h, Vec2 c, Vec2 u, double guess, double accept = 0,
+                        bool cover = false) {
+      EdgeSearch e(guess, accept, rr, slope_hint, accept_slope, cover);
       while (!e.done) e.feed(margin(h, c + u * e.x));
       settle(e);
       return e.result;
@@ -372,11 +387,11 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
     std::vector<double> es_g;
     auto boundaries = [&](double h, Vec2 c, const Vec2* u, const double* guess, int count,
                           double accept, const double* accept_slopes, double* out,
-                          double* last_slopes) {
+                          double* last_slopes, bool cover = false) {
       es.clear();
       for (int j = 0; j < count; ++j) {
         const double as = accept_slopes ? accept_slopes[j] : 0.0;
-        es.emplace_back(guess[j], accept, rr, as > 0 ? as : slope_hint, as);
+        es.emplace_back(guess[j], accept, rr, as > 0 ? as : slope_hint, as, cover);
       }
       for (;;) {
         es_pts.clear(), es_lane.clear();
@@ -542,8 +557,18 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       // within kHintAccept of the boundary ends the search), a new polygon's searches at its
       // last ring's edge. Where an edge is not crossed, one after another instead, each from
       // the last one's distance (the checks from their edge where it is crossed).
+      // A check's search starts just inside the polygon's edge (by kHintAccept), and where that
+      // is blocked it ends there (EdgeSearch::cover): the region ends inside the polygon along
+      // that direction, and the check needs no more (one trace instead of a search for the
+      // boundary: an interval's or a wedge's polygon is widened past the region by the safety
+      // margin, so most of its checks end so). A boundary closer to the edge than that is still
+      // found, and may widen the polygon by the margin as one beyond it does, as the searches
+      // from just past the edge did before (the region touches the polygon there, and may reach
+      // past it between the directions: starting half as far inside, the toroidal anamorphic
+      // lost a ray at 0.62 of its farthest film radius instead of 0.70).
       constexpr double kHintAccept = 1e-3;
       const double accept = from_hint ? kHintAccept : 0.0;
+      const bool cover = from_hint;
       std::vector<Vec2> edge;  // the polygon whose edges the searches start at
       if (from_hint)
         for (int k = 0; k < nd; ++k)
@@ -556,12 +581,15 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       for (int j = 0; j < count; ++j) {
         us[size_t(j)] = unit(offset + 2 * std::numbers::pi * j / count);
         if (!edge.empty())
-          starts[size_t(j)] = farthestCrossing(edge, *c, us[size_t(j)]) * (1 + 0.5 * accept);
+          starts[size_t(j)] =
+              farthestCrossing(edge, *c, us[size_t(j)]) * (1 + (cover ? -1.0 : 0.5) * accept);
         all = all && starts[size_t(j)] > 0;
       }
       if (all) {
         std::vector<double> d(static_cast<size_t>(count));
-        boundaries(h, *c, us.data(), starts.data(), count, accept, nullptr, d.data(), nullptr);
+        boundaries(h, *c, us.data(), starts.data(), count, accept, nullptr, d.data(), nullptr,
+                   cover);
+        // (A covered direction's point is the centre, which widens nothing.)
         for (int j = 0; j < count; ++j) pts.push_back(*c + us[size_t(j)] * d[size_t(j)]);
         return pts;
       }
@@ -569,10 +597,12 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
         const Vec2 u = us[size_t(j)];
         if (from_hint && starts[size_t(j)] > 0) {
           accept_slope = 0;
-          guess = boundary(h, *c, u, starts[size_t(j)], kHintAccept);
-        } else {
-          guess = boundary(h, *c, u, guess);
+          const double d = boundary(h, *c, u, starts[size_t(j)], kHintAccept, cover);
+          pts.push_back(*c + u * d);
+          if (d > 0) guess = d;
+          continue;
         }
+        guess = boundary(h, *c, u, guess);
         pts.push_back(*c + u * guess);
       }
       return pts;
