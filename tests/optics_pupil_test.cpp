@@ -444,11 +444,11 @@ TEST(ExitPupilSampler, ReshapedBoundsHoldEveryPassingRayInTheCameraSetUp) {
 // and at the bands' ends as well as inside them: 3000 film points, 300 rear-plane points each. The
 // bounds miss a few passing rays, all of them near the edge of the image circle, where the region
 // shrinks to a sliver and moves fast with the film point and the wavelength, and where the
-// blended polygon of an anamorphic wedge follows it least. Measured (23 November, after the band
-// change; before it the same but 294 for the toroidal): lentil:0005 2 of 81,339, 0014 5 of 14,698,
-// 2004 6 of 148,564, and the toroidal anamorphic 301 of 158,610 (0.19%; at film radii 14.4-18.5
-// mm, its image circle's x radius 16.9 mm, mostly at film azimuths 25-35 degrees, between wedge
-// checks). The caps below fail on a bound that loses more, or loses rays away from the edge.
+// blended polygon of an anamorphic wedge follows it least. Measured (23 November, checks that end
+// where the polygon covers the region): lentil:0005 2 of 81,339, 0014 6 of 14,698, 2004 6 of
+// 148,564, and the toroidal anamorphic 290 of 158,610 (0.18%; at film radii 14.4-18.5 mm, its
+// image circle's x radius 16.9 mm, mostly at film azimuths 25-35 degrees, between wedge checks).
+// The caps below fail on a bound that loses more, or loses rays away from the edge.
 TEST(ExitPupilSampler, RaysOutsideTheBoundsAreFewAndOnlyNearTheEdgeOfTheImageCircle) {
   struct Cap {
     const char* lens;

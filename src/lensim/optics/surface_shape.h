@@ -88,14 +88,16 @@ double sagDomainRadius(double radius_mm, const SurfaceShape& shape);
 /// inside the sag's domain) and continued beyond it as a flat annulus at the rim's sag, so that
 /// every ray crossing the slab [min sag, max sag] crosses the surface exactly once more than it
 /// leaves it; hits beyond the clear aperture are then clipped by the caller. The first root along
-/// the ray is found by sampling g(t) = z(t) - sag(x(t), y(t)) across the slab for the first sign
-/// change, then refined by Newton steps kept inside the bracket (bisection when a step leaves
-/// it), to ~1e-12 mm. There is only one sheet (the sag function's), so no wrong-sheet hits.
+/// the ray of g(t) = z(t) - sag(x(t), y(t)) is bracketed (inside bound_r by halving with a bound
+/// on the sag's curvature, which isolates it; beyond, by sampling for the first sign change),
+/// then refined by Newton steps kept inside the bracket (bisection when a step leaves it), to
+/// ~1e-12 mm. There is only one sheet (the sag function's), so no wrong-sheet hits.
 /// Conics and cylinders without polynomial terms are quadrics: their hits come from the
 /// quadratic, on the vertex sheet (hits beyond bound_r on the true quadric; the flat
 /// continuation only where the line misses the vertex sheet). Toroids start Newton's method from
 /// the quadric with their vertex curvatures (1/R in x, the y curve's c and conic), as aspheres
-/// start from their base quadric, with the same first-crossing check and bracketed fallback.
+/// start from their base quadric, with the same first-crossing check (a proof from the curvature
+/// bound, else g's sign at points before the root) and bracketed fallback.
 class ShapeIntersector {
  public:
   ShapeIntersector() = default;
