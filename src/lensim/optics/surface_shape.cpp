@@ -351,11 +351,7 @@ void ShapeIntersector::boundSagCurvature() {
   // the slab's polar grid (over a quadrant: every shape here is symmetric in x -> -x and
   // y -> -y), doubled for the extremes between samples, as the slab is padded. Infinite where
   // the sag is undefined within a step of the disc (a surface whose domain ends at bound_r).
-  const double rot = toroidal_ ? *shape_.rotation_radius_mm : 0.0;
-  auto gradient = [&](double x, double y) -> std::optional<SagGradient> {
-    if (toroidal_) return toroidSag(cy_, ay_, shape_.poly, rot, x, y, false);
-    return surfaceSag(radius_, shape_, x, y);
-  };
+  auto gradient = [&](double x, double y) { return surfaceSag(radius_, shape_, x, y); };
   const double h = 1e-5 * bound_r_;
   const int n_ang = shape_.isRotational() ? 1 : 9;
   double most = 0;
@@ -397,6 +393,13 @@ bool ShapeIntersector::firstCrossingProven(double ox, double oy, double dx, doub
          (t - ta) * curv < std::abs(slope);
 }
 
+double ShapeIntersector::alongRay(const Vec3& o, const Vec3& d, double t, SagGradient* sg) const {
+  const double x = o.x + t * d.x, y = o.y + t * d.y;
+  if (!sg) return o.z + t * d.z - sagZ(x, y);
+  *sg = sagContinued(x, y);
+  return o.z + t * d.z - sg->z;
+}
+
 // The first root of g(t) = z(t) - sag(x(t), y(t)) on [lo, hi], a part of the ray inside the disc
 // of radius bound_r, isolated with the bound on g'' (H |d_xy|^2, as firstCrossingProven): the
 // segments are visited left to right and halved; one whose ends have g of one sign holds no
@@ -409,13 +412,7 @@ bool ShapeIntersector::firstCrossingProven(double ox, double oy, double dx, doub
 bool ShapeIntersector::firstBracketInside(const Vec3& o, const Vec3& d, double lo, double hi,
                                           double& a, double& ga, double& b, double& gb) const {
   const double curv = hess_bound_ * (d.x * d.x + d.y * d.y);
-  auto g = [&](double t, double* slope) {
-    const double x = o.x + t * d.x, y = o.y + t * d.y;
-    if (!slope) return o.z + t * d.z - sagZ(x, y);
-    const SagGradient s = sagContinued(x, y);
-    *slope = d.z - s.dzdx * d.x - s.dzdy * d.y;
-    return o.z + t * d.z - s.z;
-  };
+  auto g = [&](double t) { return alongRay(o, d, t, nullptr); };
   struct Seg {
     double a, ga, b, gb;
   };
@@ -423,7 +420,7 @@ bool ShapeIntersector::firstBracketInside(const Vec3& o, const Vec3& d, double l
   constexpr int kMaxDepth = 60;
   Seg stack[kMaxDepth + 2];
   int n = 0;
-  stack[n++] = {lo, g(lo, nullptr), hi, g(hi, nullptr)};
+  stack[n++] = {lo, g(lo), hi, g(hi)};
   int evaluations = 0;
   while (n > 0) {
     const Seg s = stack[--n];
@@ -438,10 +435,10 @@ bool ShapeIntersector::firstBracketInside(const Vec3& o, const Vec3& d, double l
       const double reach = curv * w * w / 8;
       if (s.ga < 0 ? std::max(s.ga, s.gb) + reach < 0 : std::min(s.ga, s.gb) - reach > 0) continue;
     } else {
-      double slope;
-      gm = g(m, &slope);
+      SagGradient sg;
+      gm = alongRay(o, d, m, &sg);
       ++evaluations;
-      if (std::abs(slope) > curv * w / 2) {
+      if (std::abs(d.z - sg.dzdx * d.x - sg.dzdy * d.y) > curv * w / 2) {
         a = s.a, ga = s.ga, b = s.b, gb = s.gb;
         return true;
       }
@@ -451,7 +448,7 @@ bool ShapeIntersector::firstBracketInside(const Vec3& o, const Vec3& d, double l
       a = s.a, ga = s.ga, b = s.b, gb = s.gb;  // tangent or unresolved: a root lies here
       return true;
     }
-    if (!change) gm = g(m, nullptr), ++evaluations;
+    if (!change) gm = g(m), ++evaluations;
     stack[n++] = {m, gm, s.b, s.gb};
     stack[n++] = {s.a, s.ga, m, gm};
   }
@@ -610,7 +607,7 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
       asphereSagLanes<false>(cx_, cy_, ax_, ay_, terms_, bound2, n, x, y, sag, nullptr, nullptr,
                              bad);
     if (k == 0)
-      for (int j = 0; j < n; ++j) g0[j] = z[j] - sag[j], first[j] = one;
+      for (int j = 0; j < n; ++j) g0[j] = z[j] - sag[j];
     for (int j = 0; j < n; ++j) {
       const double gk = z[j] - sag[j];
       // gk != 0 with g0's sign (for k = 0: g0 != 0).
@@ -723,12 +720,7 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
     }
     // No vertex-sheet hit: the general search below finds the continuation beyond bound_r.
   }
-  auto g = [&](double t, SagGradient* sg) {
-    const double x = o.x + t * d.x, y = o.y + t * d.y;
-    if (!sg) return o.z + t * d.z - sagZ(x, y);
-    *sg = sagContinued(x, y);
-    return o.z + t * d.z - sg->z;
-  };
+  auto g = [&](double t, SagGradient* sg) { return alongRay(o, d, t, sg); };
   // Aspheres on a quadric base: Newton's method from the base quadric's hit, accepted when it
   // converges inside the slab and g keeps its sign from the slab's entry to just before the root
   // (from the bound on the sag's curvature, else checked at 5 points; so the root is the first

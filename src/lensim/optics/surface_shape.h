@@ -153,6 +153,9 @@ class ShapeIntersector {
                            double t, double sx, double sy) const;
   bool firstBracketInside(const Vec3& o, const Vec3& d, double lo, double hi, double& a, double& ga,
                           double& b, double& gb) const;
+  // g(t) = z(t) - sag(x(t), y(t)) along the ray o + t d (the continued sag), and where sg is
+  // given the sag and its gradient there.
+  double alongRay(const Vec3& o, const Vec3& d, double t, SagGradient* sg) const;
   double hess_bound_ = std::numeric_limits<double>::infinity();
   double bound_r_ = 0;
   double z_lo_ = 0, z_hi_ = 0;  // slab of the (continued) surface relative to the vertex
