@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "lensim/camera/camera.h"
+#include "lensim/render/film/film.h"
 #include "lensim/render/integrators/media_tracking.h"
 #include "lensim/render/materials/layered.h"
 #include "lensim/scene/builder.h"
@@ -100,7 +101,8 @@ int randomWalk(const Context& ctx, Ray ray, int medium, SampledWavelengths& lamb
                TransportMode mode, RayCounts& counts, Vertex* path, SampledSpectrum* L_medium) {
   if (max_depth <= 0) return 0;
   const SceneContext& sc = *ctx.sc;
-  int bounces = 0, interfaces = 0;
+  int bounces = 0;
+  InterfaceGuard interfaces;
   bool any_non_specular = false;
   double pdf_fwd = pdf_dir;
   SampledSpectrum r(1.0);
@@ -158,7 +160,7 @@ int randomWalk(const Context& ctx, Ray ray, int medium, SampledWavelengths& lamb
       break;
     }
     if (!makeSurfaceVertex(ctx, *hit, ray.d, lambda, sc.regularize && any_non_specular, v)) {
-      if (++interfaces > 100) break;
+      if (interfaces.cross()) break;
       if (ctx.media) medium = mediumAfter(sc, *hit, ray.d, medium, false);
       ray.o = offsetOrigin(hit->p, hit->ng, ray.d);
       continue;
@@ -662,6 +664,43 @@ SampledSpectrum BdptIntegrator::Li(const camera::CameraRay* ray, double time,
         L += Lpath;
     }
   return L;
+}
+
+namespace {
+
+class BdptFamilyIntegrator final : public Integrator {
+ public:
+  BdptFamilyIntegrator(const SceneContext& sc, const camera::Camera& camera) : bdpt_(sc, camera) {}
+  bool splats() const override { return true; }
+  bool estimatesWithoutCameraRay() const override { return true; }
+  bool heroWavelengthOnly() const override { return true; }
+  SampledSpectrum Li(const camera::CameraRay* ray, double time, SampledWavelengths& lambda,
+                     Sampler& sampler, RayCounts& counts, Film& film,
+                     uint64_t& dropped) const override {
+    // The t = 1 splats of a sample, kept per thread to save an allocation per sample.
+    thread_local std::vector<BdptSplat> splats;
+    splats.clear();
+    const SampledSpectrum L = bdpt_.Li(ray, time, lambda, sampler, counts, splats);
+    for (const BdptSplat& sp : splats) {
+      bool ok = true;
+      for (int c = 0; c < kSpectrumSamples; ++c) ok = ok && std::isfinite(sp.L[c]);
+      if (ok)
+        film.addSplat(sp.raster, sp.L, lambda);
+      else
+        ++dropped;
+    }
+    return L;
+  }
+
+ private:
+  BdptIntegrator bdpt_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> makeBdptFamilyIntegrator(const SceneContext& sc,
+                                                     const camera::Camera& camera) {
+  return std::make_unique<BdptFamilyIntegrator>(sc, camera);
 }
 
 }  // namespace lensim::render

@@ -55,7 +55,7 @@
 #include <string>
 #include <vector>
 
-#include "lensim/render/integrators/integrator.h"
+#include "lensim/render/integrators/base.h"
 #include "lensim/render/materials/bsdf.h"
 
 namespace lensim::camera {
@@ -182,5 +182,10 @@ class BdptIntegrator {
   bdpt::Context ctx_;
   std::unique_ptr<LightSampler> light_sampler_;
 };
+
+/// bdpt as an integrator of the family (base.h): BdptIntegrator::Li, its splats added to the
+/// film. Throws for what BdptIntegrator::unsupported names.
+std::unique_ptr<Integrator> makeBdptFamilyIntegrator(const SceneContext& sc,
+                                                     const camera::Camera& camera);
 
 }  // namespace lensim::render

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lensim/render/integrators/base.h"
 #include "lensim/scene/builder.h"
 
 namespace lensim::render {
@@ -69,7 +70,7 @@ SampledSpectrum li(Ctx& c, Ray ray, int depth) {
   int material = -1;
   TextureEvalContext tctx;
   // Surfaces without a BSDF (pbrt's "interface") are passed at the same depth.
-  for (int interfaces = 0;; ++interfaces) {
+  for (InterfaceGuard interfaces;;) {
     hit = intersectScene(c.sc, ray, c.counts);
     if (!hit) {
       for (const Light* light : c.sc.lights->infinite()) L += light->Le(ray.d, c.lambda);
@@ -79,7 +80,7 @@ SampledSpectrum li(Ctx& c, Ray ray, int depth) {
     material =
         c.sc.materials->resolve(c.sc.scene->shapes[size_t(hit->shape)].material, tctx, -ray.d);
     if (!c.sc.materials->isInterface(material)) break;
-    if (interfaces == 100) return L;
+    if (interfaces.cross()) return L;
     ray.o = offsetOrigin(hit->p, hit->ng, ray.d);
   }
   const SurfaceHit& h = *hit;
@@ -133,6 +134,29 @@ SampledSpectrum directLightingLi(const SceneContext& sc, const DirectLightingOpt
                                  SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts) {
   Ctx c{sc, opt, lambda, sampler, counts, time};
   return li(c, Ray{o, d, INFINITY, time}, 0);
+}
+
+namespace {
+
+class DirectLightingIntegrator final : public RayIntegrator {
+ public:
+  DirectLightingIntegrator(const SceneContext& sc, const DirectLightingOptions& opt)
+      : sc_(&sc), opt_(opt) {}
+  SampledSpectrum rayLi(const Vec3& o, const Vec3& d, double time, SampledWavelengths& lambda,
+                        Sampler& sampler, RayCounts& counts) const override {
+    return directLightingLi(*sc_, opt_, o, d, time, lambda, sampler, counts);
+  }
+
+ private:
+  const SceneContext* sc_;
+  DirectLightingOptions opt_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> makeDirectLightingIntegrator(const SceneContext& sc,
+                                                         const DirectLightingOptions& opt) {
+  return std::make_unique<DirectLightingIntegrator>(sc, opt);
 }
 
 }  // namespace lensim::render

@@ -21,7 +21,7 @@
 // deterministically.
 #pragma once
 
-#include "lensim/render/integrators/integrator.h"
+#include "lensim/render/integrators/base.h"
 
 namespace lensim::render {
 
@@ -35,5 +35,9 @@ struct DirectLightingOptions {
 SampledSpectrum directLightingLi(const SceneContext& sc, const DirectLightingOptions& opt,
                                  const Vec3& o, const Vec3& d, double time,
                                  SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts);
+
+/// The directlighting integrator over `sc` (base.h), which must outlive it.
+std::unique_ptr<Integrator> makeDirectLightingIntegrator(const SceneContext& sc,
+                                                         const DirectLightingOptions& opt);
 
 }  // namespace lensim::render

@@ -5,6 +5,8 @@
 // falls below 1.
 #include "lensim/render/integrators/integrator.h"
 
+#include "lensim/render/integrators/base.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -94,45 +96,30 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, dou
   double prev_pdf = 0;  // BSDF pdf of the last sampled direction (solid angle)
   Vec3 prev_p;
   Vec3 prev_ns;  // shading normal there (the light sampler's context)
-  int depth = 0, interfaces = 0;
+  int depth = 0;
+  InterfaceGuard interfaces;
   bool any_non_specular = false;
   Ray ray{o, d, INFINITY, time};
   for (;;) {
     auto hit = intersectScene(sc, ray, counts);
-    if (!hit) {
-      for (const Light* light : sc.lights->infinite()) {
-        const SampledSpectrum Le = light->Le(ray.d, lambda);
-        if (Le.isBlack()) continue;
-        if (depth == 0 || specular_bounce) {
-          L += beta * Le;
-        } else {
-          const double pl =
-              sc.lights->pmf({prev_p, prev_ns}, light) * light->pdfLi(prev_p, ray.d, nullptr);
-          L += beta * Le * powerHeuristic(1, prev_pdf, 1, pl);
-        }
-      }
-      break;
-    }
+    // Emission found by BSDF sampling, weighted against light sampling by the power heuristic.
+    foundEmission(sc, ray, hit ? &*hit : nullptr, lambda, prev_p, prev_ns,
+                  depth == 0 || specular_bounce,
+                  [&](const SampledSpectrum& Le, std::optional<double> pl) {
+                    if (!pl)
+                      L += beta * Le;
+                    else
+                      L += beta * Le * powerHeuristic(1, prev_pdf, 1, *pl);
+                  });
+    if (!hit) break;
     const SurfaceHit& h = *hit;
     const Vec3 wo = -ray.d;
     const double skip = sc.pbrt_v2_epsilon ? pbrtV2Epsilon(sc, h, ray, depth == 0) : 0.0;
-    if (const Light* area = sc.lights->areaLight(h.shape, h.prim)) {
-      const SampledSpectrum Le = area->L(h, wo, lambda);
-      if (!Le.isBlack()) {
-        if (depth == 0 || specular_bounce) {
-          L += beta * Le;
-        } else {
-          const double pl =
-              sc.lights->pmf({prev_p, prev_ns}, area) * area->pdfLi(prev_p, ray.d, &h);
-          L += beta * Le * powerHeuristic(1, prev_pdf, 1, pl);
-        }
-      }
-    }
     const TextureEvalContext tctx{h.p, h.uv, h.ns};
     const int material =
         sc.materials->resolve(sc.scene->shapes[size_t(h.shape)].material, tctx, wo);
     if (sc.materials->isInterface(material)) {
-      if (++interfaces > 100) break;
+      if (interfaces.cross()) break;
       ray.o = offsetOrigin(h.p, h.ng, ray.d);
       continue;
     }
@@ -186,6 +173,26 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, dou
     }
   }
   return L;
+}
+
+namespace {
+
+class PathIntegrator final : public RayIntegrator {
+ public:
+  explicit PathIntegrator(const SceneContext& sc) : sc_(&sc) {}
+  SampledSpectrum rayLi(const Vec3& o, const Vec3& d, double time, SampledWavelengths& lambda,
+                        Sampler& sampler, RayCounts& counts) const override {
+    return pathLi(*sc_, o, d, time, lambda, sampler, counts);
+  }
+
+ private:
+  const SceneContext* sc_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> makePathIntegrator(const SceneContext& sc) {
+  return std::make_unique<PathIntegrator>(sc);
 }
 
 }  // namespace lensim::render

@@ -142,7 +142,8 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
   if (light.isInfinite() || light.isDeltaDirection())
     beta *= transmittanceFromInfinity(*sc_, medium, lambda);
   Ray ray{les->on_surface ? offsetOrigin(les->o, les->n, les->d) : les->o, les->d, INFINITY, time};
-  int depth = 0, interfaces = 0;
+  int depth = 0;
+  InterfaceGuard interfaces;
   for (;;) {
     const auto hit = intersectScene(*sc_, ray, counts);
     if (const Medium* m = media_ ? sc_->media->get(medium) : nullptr) {
@@ -177,7 +178,7 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
     const int material =
         sc_->materials->resolve(sc_->scene->shapes[size_t(h.shape)].material, tctx, wo);
     if (sc_->materials->isInterface(material)) {
-      if (++interfaces > 100) break;
+      if (interfaces.cross()) break;
       if (media_) medium = mediumAfter(*sc_, h, ray.d, medium, false);
       ray.o = offsetOrigin(h.p, h.ng, ray.d);
       continue;
@@ -212,6 +213,34 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
     ray = Ray{offsetOrigin(h.p, h.ng, bs->wi), bs->wi, INFINITY, time};
   }
   return dropped;
+}
+
+namespace {
+
+class LightTracerIntegrator final : public Integrator {
+ public:
+  LightTracerIntegrator(const SceneContext& sc, const camera::Camera& camera)
+      : tracer_(sc, camera) {}
+  bool splats() const override { return true; }
+  bool tracesLightPaths() const override { return true; }
+  int traceLightPath(SampledWavelengths& lambda, Sampler& sampler, Film& film,
+                     RayCounts& counts) const override {
+    return tracer_.trace(lambda, sampler, film, counts);
+  }
+  SampledSpectrum Li(const camera::CameraRay*, double, SampledWavelengths&, Sampler&, RayCounts&,
+                     Film&, uint64_t&) const override {
+    return SampledSpectrum(0.0);  // never called: tracesLightPaths()
+  }
+
+ private:
+  LightTracer tracer_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> makeLightTracerIntegrator(const SceneContext& sc,
+                                                      const camera::Camera& camera) {
+  return std::make_unique<LightTracerIntegrator>(sc, camera);
 }
 
 }  // namespace lensim::render

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "lensim/render/integrators/integrator.h"
+#include "lensim/render/integrators/base.h"
 
 namespace lensim::camera {
 class Camera;
@@ -39,5 +39,10 @@ class LightTracer {
   double shutter_open_ = 0, shutter_close_ = 0;
   bool media_ = false;  ///< the scene's media are tracked
 };
+
+/// The light tracer as an integrator of the family (base.h): one light path per pixel sample.
+/// Throws as LightTracer's constructor.
+std::unique_ptr<Integrator> makeLightTracerIntegrator(const SceneContext& sc,
+                                                      const camera::Camera& camera);
 
 }  // namespace lensim::render

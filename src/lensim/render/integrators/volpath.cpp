@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "lensim/render/integrators/base.h"
 #include "lensim/render/integrators/media_tracking.h"
 #include "lensim/render/materials/layered.h"
 #include "lensim/render/media/media.h"
@@ -146,7 +147,8 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
   Vec3 prev_p;
   // The previous vertex's shading normal (zero in a medium), for the light sampler.
   Vec3 prev_n{0, 0, 0};
-  int depth = 0, interfaces = 0, walk_steps = 0;
+  int depth = 0, walk_steps = 0;
+  InterfaceGuard interfaces;
   // The walk in a textured subsurface material: its medium index and coefficients.
   WalkMedium walk;
   int walk_index = -1;
@@ -245,42 +247,27 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
       r_l *= T_maj / T_maj[0];
     }
 
-    if (!hit) {
-      for (const Light* light : sc.lights->infinite()) {
-        const SampledSpectrum Le = light->Le(ray.d, lambda);
-        if (Le.isBlack()) continue;
-        if (depth == 0 || specular_bounce) {
-          L += beta * Le / wavelengthMean(r_u, lambda);
-        } else {
-          const double p_l =
-              sc.lights->pmf({prev_p, prev_n}, light) * light->pdfLi(prev_p, ray.d, nullptr);
-          const SampledSpectrum rl = r_l * p_l;
-          L += beta * Le / wavelengthMean(r_u + rl, lambda);
-        }
-      }
-      break;
-    }
+    // Emission found by BSDF or phase sampling: the balance heuristic over the averaged r_u and
+    // r_l.
+    foundEmission(sc, ray, hit ? &*hit : nullptr, lambda, prev_p, prev_n,
+                  depth == 0 || specular_bounce,
+                  [&](const SampledSpectrum& Le, std::optional<double> p_l) {
+                    if (!p_l) {
+                      L += beta * Le / wavelengthMean(r_u, lambda);
+                    } else {
+                      const SampledSpectrum rl = r_l * *p_l;
+                      L += beta * Le / wavelengthMean(r_u + rl, lambda);
+                    }
+                  });
+    if (!hit) break;
     const SurfaceHit& h = *hit;
     const Vec3 wo = -ray.d;
-    if (const Light* area = sc.lights->areaLight(h.shape, h.prim)) {
-      const SampledSpectrum Le = area->L(h, wo, lambda);
-      if (!Le.isBlack()) {
-        if (depth == 0 || specular_bounce) {
-          L += beta * Le / wavelengthMean(r_u, lambda);
-        } else {
-          const double p_l =
-              sc.lights->pmf({prev_p, prev_n}, area) * area->pdfLi(prev_p, ray.d, &h);
-          const SampledSpectrum rl = r_l * p_l;
-          L += beta * Le / wavelengthMean(r_u + rl, lambda);
-        }
-      }
-    }
     const TextureEvalContext tctx{h.p, h.uv, h.ns};
     const int material =
         sc.materials->resolve(sc.scene->shapes[size_t(h.shape)].material, tctx, wo);
     if (sc.materials->isInterface(material)) {
       // A medium boundary without a surface: the ray goes on, into the other medium.
-      if (++interfaces > 100) break;
+      if (interfaces.cross()) break;
       medium = mediumAfter(sc, h, ray.d, medium);
       ray.o = offsetOrigin(h.p, h.ng, ray.d);
       continue;
@@ -331,6 +318,27 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
     }
   }
   return L;
+}
+
+namespace {
+
+class VolPathIntegrator final : public RayIntegrator {
+ public:
+  explicit VolPathIntegrator(const SceneContext& sc) : sc_(&sc) {}
+  SampledSpectrum rayLi(const Vec3& o, const Vec3& d, double time, SampledWavelengths& lambda,
+                        Sampler& sampler, RayCounts& counts) const override {
+    return volpathLi(*sc_, o, d, time, sc_->scene_media ? sc_->camera_medium : -1, lambda,
+                     sampler, counts);
+  }
+
+ private:
+  const SceneContext* sc_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> makeVolPathIntegrator(const SceneContext& sc) {
+  return std::make_unique<VolPathIntegrator>(sc);
 }
 
 }  // namespace lensim::render

@@ -9,7 +9,7 @@
 // pbrt-v4's volpath does.
 #pragma once
 
-#include "lensim/render/integrators/integrator.h"
+#include "lensim/render/integrators/base.h"
 
 namespace lensim::render {
 
@@ -18,6 +18,10 @@ namespace lensim::render {
 SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, double time,
                           int medium, SampledWavelengths& lambda, Sampler& sampler,
                           RayCounts& counts);
+/// The volpath integrator over `sc` (base.h), which must outlive it. Camera rays start in the
+/// camera's medium when the scene's media are rendered (SceneContext::scene_media).
+std::unique_ptr<Integrator> makeVolPathIntegrator(const SceneContext& sc);
+
 /// The same at shutter time 0 (a scene without motion looks the same at every time).
 inline SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, int medium,
                                  SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts) {
