@@ -206,7 +206,6 @@ class LensSystem {
   /// The largest stop diameter the file allows.
   std::optional<double> maxStopDiameter_mm() const { return max_stop_diameter_mm_; }
 
-  double frontVertexZ_mm() const { return 0.0; }
   double rearVertexZ_mm() const { return interfaces_.back().z_mm; }
   double filmDistance_mm() const { return film_distance_mm_; }
   /// The film plane. After an odd number of mirrors the image lies toward -z from the rear

@@ -1192,10 +1192,6 @@ bool ExitPupilSampler::interpolateBetween(const Polygon& a, const Polygon& b, do
   return true;
 }
 
-int ExitPupilSampler::intervalFor(double r) const {
-  return intervalIn(intervals_, radius_lut_, lut_scale_, r);
-}
-
 int ExitPupilSampler::intervalIn(const std::vector<Interval>& intervals,
                                  const std::vector<int>& radius_lut, double lut_scale, double r) {
   // Intervals are sorted by radius; the first whose upper end reaches r.

@@ -146,7 +146,6 @@ class ExitPupilSampler {
   };
   // The unscaled polygon interpolated between two nodes at radius r (used while building).
   bool interpolateBetween(const Polygon& a, const Polygon& b, double r, Polygon& poly) const;
-  int intervalFor(double r) const;
   // Sampling tables of one interval: the scaled vertex distances at its two ends (the distance
   // at film radius r is A (1 - t) + B t), and prefix sums of the fan's triangle products split by
   // powers of t, so that the fan's cumulative area at any t costs three multiplies.

@@ -134,11 +134,6 @@ std::string ParamSet::getString(Names names, const std::string& def) {
   return findString(names).value_or(def);
 }
 
-std::vector<double> ParamSet::getFloats(Names names) {
-  const Param* p = find(names, {ParamType::Float});
-  return p ? p->numbers : std::vector<double>{};
-}
-
 std::vector<int> ParamSet::getInts(Names names) {
   const Param* p = find(names, {ParamType::Integer});
   std::vector<int> r;

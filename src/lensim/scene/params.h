@@ -38,7 +38,6 @@ class ParamSet {
   bool getBool(Names names, bool def);
   std::string getString(Names names, const std::string& def);
   std::optional<std::string> findString(Names names);
-  std::vector<double> getFloats(Names names);
   std::vector<int> getInts(Names names);
   std::optional<Vec3> findPoint3(Names names);
   /// All values of a point3/vector3/normal3 array parameter.

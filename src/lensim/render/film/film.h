@@ -130,7 +130,6 @@ class Film {
   /// Makes the film accept splats (allocates the splat sums), reconstructed with `filter`
   /// (which must outlive the film).
   void enableSplats(const Filter& filter);
-  bool splatsEnabled() const { return splat_filter_ != nullptr; }
   /// Adds the splat L (carried by lambda) at the continuous raster position p (full image): to
   /// each pixel of bounds() whose filter support holds p, with weight f(p - centre) / (integral
   /// of f), so that a splat adds its whole value to the image and the splatted image is filtered
@@ -145,8 +144,6 @@ class Film {
     splat_scale_ = scale;
     splat_spp_ = samples_per_pixel;
   }
-  /// The splat sums (R, G, B in fixed point), row by row over bounds(); empty without splats.
-  const std::vector<std::array<Int128, 3>>& splatSums() const { return splats_; }
 
  private:
   PixelBounds bounds_;

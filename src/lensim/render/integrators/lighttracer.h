@@ -28,8 +28,6 @@ class LightTracer {
   /// its random numbers from the sampler as it stands; splats into the film. Returns the number
   /// of splats dropped for non-finite values.
   int trace(SampledWavelengths& lambda, Sampler& sampler, Film& film, RayCounts& counts) const;
-  /// Whether any light can start a path.
-  bool hasLights() const { return !lights_.empty(); }
 
  private:
   const SceneContext* sc_;

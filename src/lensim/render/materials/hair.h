@@ -54,9 +54,8 @@ class HairBxDF final : public BxDF {
   /// sigma_a = (ln c / (5.969 - 0.215 bn + 2.532 bn^2 - 10.73 bn^3 + 5.574 bn^4 + 0.245 bn^5))^2.
   static SampledSpectrum sigmaAFromReflectance(const SampledSpectrum& c, double beta_n);
 
-  /// The longitudinal variance v_p and logistic scale s (exposed for tests).
+  /// The longitudinal variance v_p (exposed for tests).
   double variance(int p) const { return v_[size_t(p)]; }
-  double logisticScale() const { return s_; }
 
  private:
   struct WoTerms;

@@ -53,8 +53,6 @@ inline double roughnessToAlpha(double roughness) {
 class TrowbridgeReitz {
  public:
   TrowbridgeReitz(double alpha_x, double alpha_y);
-  double alphaX() const { return ax_; }
-  double alphaY() const { return ay_; }
   /// True when the surface is so smooth it is treated as a perfect specular interface.
   bool effectivelySmooth() const { return std::max(ax_, ay_) < 1e-3; }
   /// Microfacet normal density D(wm) (sr^-1, projected: integral of D cos = 1).

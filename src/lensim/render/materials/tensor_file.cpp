@@ -83,10 +83,6 @@ void TensorFile::fail(uint64_t byte, const std::string& message) const {
   throw Error(FileLoc{path_}, fmt::format("byte {}: {}", byte, message));
 }
 
-bool TensorFile::hasMagic(std::string_view bytes) {
-  return bytes.size() >= sizeof kMagic && std::memcmp(bytes.data(), kMagic, sizeof kMagic) == 0;
-}
-
 TensorFile TensorFile::read(const std::string& path) {
   return TensorFile(readRegularFile(path, "measured BSDF file"), path);
 }

@@ -61,8 +61,6 @@ class TensorFile {
   TensorFile(std::string bytes, std::string path);
   /// Reads a regular file of at most 1 GiB and parses it.
   static TensorFile read(const std::string& path);
-  /// True when `bytes` starts with the tensor-file magic ("tensor_file\0").
-  static bool hasMagic(std::string_view bytes);
 
   const std::string& path() const { return path_; }
   const std::vector<TensorField>& fields() const { return fields_; }

@@ -53,9 +53,6 @@ class NanoVDBMedium final : public Medium {
   /// The majorant grid's resolution and its cells (largest density per cell, before scale).
   static constexpr int kRes = 64;
   const std::vector<double>& majorantCells() const { return majorant_; }
-  /// The medium-space bounds the majorant grid covers.
-  Vec3 boundsMin() const { return p0_; }
-  Vec3 boundsMax() const { return p1_; }
 
  private:
   struct Grids;

@@ -86,11 +86,6 @@ class SampledSpectrum {
     for (double x : v_) m = std::max(m, x);
     return m;
   }
-  double minValue() const {
-    double m = v_[0];
-    for (double x : v_) m = std::min(m, x);
-    return m;
-  }
   double average() const {
     double s = 0;
     for (double x : v_) s += x;
