@@ -22,6 +22,7 @@
 #include "lensim/render/parts.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
+#include "lensim/util/check.h"
 #include "lensim/util/error.h"
 #include "lensim/util/limits.h"
 #include "lensim/util/log.h"
@@ -71,6 +72,7 @@ struct TileGrid {
   int count() const { return tiles_x * tiles_y; }
   /// Tile t's pixels, relative to bounds' corner.
   PixelBounds local(int t) const {
+    CHECK(t >= 0 && t < count());
     const int tx = t % tiles_x, ty = t / tiles_x;
     return {tx * kTile, std::min(bounds.width(), (tx + 1) * kTile), ty * kTile,
             std::min(bounds.height(), (ty + 1) * kTile)};

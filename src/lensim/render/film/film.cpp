@@ -15,6 +15,7 @@
 #include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/film_sensor.h"
+#include "lensim/util/check.h"
 
 namespace lensim::render {
 
@@ -98,6 +99,7 @@ void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavele
 
 void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
                      double w, const VisibleSurface* vs) {
+  DCHECK(x >= bounds_.x0 && x < bounds_.x1 && y >= bounds_.y0 && y < bounds_.y1);
   const Vec3 sensor_rgb = toSensorRgb(L, lambda);
   const Vec3 rgb = outputRgb(sensor_rgb);
   const size_t i = size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0);

@@ -14,6 +14,7 @@
 #include "lensim/render/integrators/volpath.h"
 #include "lensim/render/media/media.h"
 #include "lensim/scene/builder.h"
+#include "lensim/util/check.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
 
@@ -23,6 +24,8 @@ SampledSpectrum RayIntegrator::Li(const camera::CameraRay* ray, double /*time*/,
                                   SampledWavelengths& lambda, Sampler& sampler,
                                   RayCounts& counts, Film& /*film*/,
                                   uint64_t& /*dropped*/) const {
+  DCHECK(ray != nullptr);
+  DCHECK(std::abs(length(ray->direction) - 1) < 1e-6);
   SampledSpectrum L = rayLi(ray->origin, ray->direction, ray->time, lambda, sampler, counts);
   // A dispersive lens that weights each wavelength by its own film point.
   if (ray->per_wavelength && !lambda.secondaryTerminated()) {
@@ -61,6 +64,7 @@ const IntegratorName& lookup(const std::string& type) {
 }  // namespace
 
 std::unique_ptr<Integrator> makeIntegrator(const IntegratorSetup& setup) {
+  CHECK(setup.scene && setup.sc && setup.media && setup.camera);
   const scene::Scene& scene = *setup.scene;
   SceneContext& sc = *setup.sc;
   const Media& media = *setup.media;
