@@ -33,7 +33,8 @@ Mesh reference(Mesh m, int levels) {
     for (size_t f = 0; f < mesh.idx.size(); f += 3)
       for (int k = 0; k < 3; ++k) {
         int a = mesh.idx[f + size_t(k)], b = mesh.idx[f + size_t((k + 1) % 3)];
-        edges[{std::min(a, b), std::max(a, b)}].opposite.push_back(mesh.idx[f + size_t((k + 2) % 3)]);
+        edges[{std::min(a, b), std::max(a, b)}].opposite.push_back(
+            mesh.idx[f + size_t((k + 2) % 3)]);
       }
     ring.assign(mesh.P.size(), {});
     bnd.assign(mesh.P.size(), {});
@@ -123,11 +124,13 @@ Mesh grid(int n, bool shuffle) {
   std::vector<int> perm(size_t((n + 1) * (n + 1)));
   for (size_t i = 0; i < perm.size(); ++i) perm[i] = int(i);
   if (shuffle)
-    for (size_t i = 0; i < perm.size(); ++i) std::swap(perm[i], perm[(i * 7919 + 13) % perm.size()]);
+    for (size_t i = 0; i < perm.size(); ++i)
+      std::swap(perm[i], perm[(i * 7919 + 13) % perm.size()]);
   m.P.resize(perm.size());
   for (int y = 0; y <= n; ++y)
     for (int x = 0; x <= n; ++x)
-      m.P[size_t(perm[size_t(y * (n + 1) + x)])] = {double(x), double(y), std::sin(x * 0.7) * std::cos(y * 0.4)};
+      m.P[size_t(perm[size_t(y * (n + 1) + x)])] = {double(x), double(y),
+                                                    std::sin(x * 0.7) * std::cos(y * 0.4)};
   auto v = [&](int x, int y) { return perm[size_t(y * (n + 1) + x)]; };
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
@@ -193,7 +196,8 @@ TEST(LoopSubdivision, KeepsTheEulerCharacteristic) {
     loopSubdivide(P, idx, 2);
     long E = 0;
     EXPECT_EQ(euler(P, idx, E), chi);
-    const long V1 = long(m.P.size()) + E0, F1 = long(m.idx.size() / 3) * 4, E1 = 2 * E0 + 3 * long(m.idx.size() / 3);
+    const long V1 = long(m.P.size()) + E0, F1 = long(m.idx.size() / 3) * 4,
+               E1 = 2 * E0 + 3 * long(m.idx.size() / 3);
     EXPECT_EQ(long(P.size()), V1 + E1);
     EXPECT_EQ(long(idx.size() / 3), 4 * F1);
   }

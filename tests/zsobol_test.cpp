@@ -44,13 +44,27 @@ uint64_t refMurmur64A(const unsigned char* key, size_t len, uint64_t seed) {
     h *= m;
   }
   switch (len & 7) {
-    case 7: h ^= uint64_t(key[6]) << 48; [[fallthrough]];
-    case 6: h ^= uint64_t(key[5]) << 40; [[fallthrough]];
-    case 5: h ^= uint64_t(key[4]) << 32; [[fallthrough]];
-    case 4: h ^= uint64_t(key[3]) << 24; [[fallthrough]];
-    case 3: h ^= uint64_t(key[2]) << 16; [[fallthrough]];
-    case 2: h ^= uint64_t(key[1]) << 8; [[fallthrough]];
-    case 1: h ^= uint64_t(key[0]); h *= m;
+    case 7:
+      h ^= uint64_t(key[6]) << 48;
+      [[fallthrough]];
+    case 6:
+      h ^= uint64_t(key[5]) << 40;
+      [[fallthrough]];
+    case 5:
+      h ^= uint64_t(key[4]) << 32;
+      [[fallthrough]];
+    case 4:
+      h ^= uint64_t(key[3]) << 24;
+      [[fallthrough]];
+    case 3:
+      h ^= uint64_t(key[2]) << 16;
+      [[fallthrough]];
+    case 2:
+      h ^= uint64_t(key[1]) << 8;
+      [[fallthrough]];
+    case 1:
+      h ^= uint64_t(key[0]);
+      h *= m;
   }
   h ^= h >> r;
   h *= m;
@@ -132,7 +146,8 @@ struct RefZSobol {
     }
     if (pow2Samples) {
       int digit = mortonIndex & 1;
-      sampleIndex |= digit ^ (refMixBits((mortonIndex >> 1) ^ (0x55555555u * uint64_t(dimension))) & 1);
+      sampleIndex |=
+          digit ^ (refMixBits((mortonIndex >> 1) ^ (0x55555555u * uint64_t(dimension))) & 1);
     }
     return sampleIndex;
   }
@@ -228,7 +243,9 @@ TEST(ZSobol, EveryPixelIsAZeroTwoNet) {
             const int nx = 1 << a, ny = n / nx;
             std::vector<int> count(size_t(n), 0);
             for (Vec2 p : pts) ++count[size_t(int(p.y * ny) * nx + int(p.x * nx))];
-            for (int c : count) ASSERT_EQ(c, 1) << "randomization " << int(r) << " n " << n << " dim " << dim << " " << nx << "x" << ny;
+            for (int c : count)
+              ASSERT_EQ(c, 1) << "randomization " << int(r) << " n " << n << " dim " << dim << " "
+                              << nx << "x" << ny;
           }
           // 1-D values are stratified too: one per interval of length 1/n.
           std::vector<int> count(size_t(n), 0);

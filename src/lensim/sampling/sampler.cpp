@@ -215,11 +215,13 @@ uint64_t spreadBits2(uint64_t x) {
 
 // The 24 permutations of a base-4 digit, in pbrt-v4's order; entry p maps digit d to
 // (kDigitPermutations[p] >> 2d) & 3.
-constexpr uint8_t kDigitPermutations[24] = {
-    0xe4, 0xb4, 0xd8, 0x78, 0x6c, 0x9c, 0xe1, 0xb1, 0xc9, 0x39, 0x2d, 0x8d,
-    0xc6, 0x36, 0xd2, 0x72, 0x4e, 0x1e, 0x27, 0x87, 0x1b, 0x4b, 0x63, 0x93};
+constexpr uint8_t kDigitPermutations[24] = {0xe4, 0xb4, 0xd8, 0x78, 0x6c, 0x9c, 0xe1, 0xb1,
+                                            0xc9, 0x39, 0x2d, 0x8d, 0xc6, 0x36, 0xd2, 0x72,
+                                            0x4e, 0x1e, 0x27, 0x87, 0x1b, 0x4b, 0x63, 0x93};
 
-int ceilLog2(uint64_t v) { return v <= 1 ? 0 : 64 - std::countl_zero(v - 1); }
+int ceilLog2(uint64_t v) {
+  return v <= 1 ? 0 : 64 - std::countl_zero(v - 1);
+}
 
 }  // namespace
 
@@ -228,9 +230,10 @@ SobolRandomization parseSobolRandomization(const std::string& name) {
   if (name == "none") return SobolRandomization::None;
   if (name == "permutedigits") return SobolRandomization::PermuteDigits;
   if (name == "owen") return SobolRandomization::Owen;
-  throw Error(fmt::format("sampler randomization \"{}\": expected \"none\", \"permutedigits\", "
-                          "\"fastowen\" or \"owen\"",
-                          name));
+  throw Error(
+      fmt::format("sampler randomization \"{}\": expected \"none\", \"permutedigits\", "
+                  "\"fastowen\" or \"owen\"",
+                  name));
 }
 
 ZSobolSampler::ZSobolSampler(int samples_per_pixel, Point2i full_resolution,
@@ -238,8 +241,8 @@ ZSobolSampler::ZSobolSampler(int samples_per_pixel, Point2i full_resolution,
     : spp_(samples_per_pixel), seed_(seed), randomization_(randomization) {
   if (spp_ <= 0) throw Error(fmt::format("pixelsamples must be positive (got {})", spp_));
   if (full_resolution.x <= 0 || full_resolution.y <= 0)
-    throw Error(fmt::format("film resolution {} x {}: expected positive sizes",
-                            full_resolution.x, full_resolution.y));
+    throw Error(fmt::format("film resolution {} x {}: expected positive sizes", full_resolution.x,
+                            full_resolution.y));
   log2_spp_ = ceilLog2(static_cast<uint64_t>(spp_));
   const int res_log2 =
       ceilLog2(static_cast<uint64_t>(std::max(full_resolution.x, full_resolution.y)));
@@ -273,8 +276,10 @@ uint64_t ZSobolSampler::sampleIndex() const {
 
 uint32_t ZSobolSampler::scramble(uint32_t v, uint32_t hash) const {
   switch (randomization_) {
-    case SobolRandomization::None: return v;
-    case SobolRandomization::PermuteDigits: return v ^ hash;
+    case SobolRandomization::None:
+      return v;
+    case SobolRandomization::PermuteDigits:
+      return v ^ hash;
     case SobolRandomization::FastOwen: {
       uint32_t x = reverseBits(v);
       x ^= x * 0x3d20adeaU;
@@ -289,8 +294,7 @@ uint32_t ZSobolSampler::scramble(uint32_t v, uint32_t hash) const {
       if (hash & 1u) v ^= 1u << 31;
       for (int b = 1; b < 32; ++b) {
         const uint32_t mask = ~0u << (32 - b);
-        if (static_cast<uint32_t>(pbrtMixBits((v & mask) ^ hash)) & (1u << b))
-          v ^= 1u << (31 - b);
+        if (static_cast<uint32_t>(pbrtMixBits((v & mask) ^ hash)) & (1u << b)) v ^= 1u << (31 - b);
       }
       return v;
     }
@@ -309,10 +313,10 @@ Vec2 ZSobolSampler::get2D() {
   const uint64_t index = sampleIndex();
   dim_ += 2;
   const uint64_t bits = pbrtHash(dim_, seed_);
-  return {toUnit(scramble(sobolDimension0(static_cast<uint32_t>(index)),
-                          static_cast<uint32_t>(bits))),
-          toUnit(scramble(sobolDimension1(static_cast<uint32_t>(index)),
-                          static_cast<uint32_t>(bits >> 32)))};
+  return {
+      toUnit(scramble(sobolDimension0(static_cast<uint32_t>(index)), static_cast<uint32_t>(bits))),
+      toUnit(scramble(sobolDimension1(static_cast<uint32_t>(index)),
+                      static_cast<uint32_t>(bits >> 32)))};
 }
 
 std::unique_ptr<Sampler> ZSobolSampler::clone() const {

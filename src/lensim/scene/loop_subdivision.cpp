@@ -14,13 +14,13 @@ namespace {
 struct Topology {
   // Unique edges in (lo, hi) order.
   std::vector<int> edge_lo, edge_hi;
-  std::vector<int> edge_faces;           // triangles on the edge
-  std::vector<int> opp0, opp1;           // opposite vertices of the first two triangles
-  std::vector<int> edge_of;              // corner 3f+e -> edge (v_e, v_e+1) of triangle f
-  std::vector<size_t> ring_start;        // one-ring of v: ring[ring_start[v], ring_start[v+1])
-  std::vector<int> ring;                 // ascending vertex indices
-  std::vector<int> boundary_count;       // boundary edges at the vertex (counted per end)
-  std::vector<int> boundary0, boundary1; // the first two neighbours across boundary edges
+  std::vector<int> edge_faces;            // triangles on the edge
+  std::vector<int> opp0, opp1;            // opposite vertices of the first two triangles
+  std::vector<int> edge_of;               // corner 3f+e -> edge (v_e, v_e+1) of triangle f
+  std::vector<size_t> ring_start;         // one-ring of v: ring[ring_start[v], ring_start[v+1])
+  std::vector<int> ring;                  // ascending vertex indices
+  std::vector<int> boundary_count;        // boundary edges at the vertex (counted per end)
+  std::vector<int> boundary0, boundary1;  // the first two neighbours across boundary edges
 
   // `full`: also the per-edge data a subdivision step needs (opposite vertices, edge_of).
   Topology(size_t nv, const std::vector<int>& idx, bool full) {
@@ -105,12 +105,15 @@ struct Topology {
   size_t valence(size_t v) const { return ring_start[v + 1] - ring_start[v]; }
   Vec3 ringSum(const std::vector<Vec3>& P, size_t v) const {
     Vec3 sum;
-    for (size_t i = ring_start[v]; i < ring_start[v + 1]; ++i) sum += P[static_cast<size_t>(ring[i])];
+    for (size_t i = ring_start[v]; i < ring_start[v + 1]; ++i)
+      sum += P[static_cast<size_t>(ring[i])];
     return sum;
   }
 };
 
-double beta(size_t n) { return n == 3 ? 3.0 / 16 : 3.0 / (8.0 * static_cast<double>(n)); }
+double beta(size_t n) {
+  return n == 3 ? 3.0 / 16 : 3.0 / (8.0 * static_cast<double>(n));
+}
 
 }  // namespace
 
