@@ -247,30 +247,60 @@ ZSobolSampler::ZSobolSampler(int samples_per_pixel, Point2i full_resolution,
   const int res_log2 =
       ceilLog2(static_cast<uint64_t>(std::max(full_resolution.x, full_resolution.y)));
   base4_digits_ = res_log2 + (log2_spp_ + 1) / 2;
+  pixel_digit_ = (log2_spp_ + 1) / 2;
 }
 
 void ZSobolSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
   dim_ = dimension;
+  if (pixel != pixel_) {
+    pixel_ = pixel;
+    if (++stamp_ == 0) std::fill(pixel_stamp_.begin(), pixel_stamp_.end(), 0u), stamp_ = 1;
+  }
   morton_ = (((spreadBits2(static_cast<uint32_t>(pixel.y)) << 1) |
               spreadBits2(static_cast<uint32_t>(pixel.x)))
              << log2_spp_) |
             static_cast<uint64_t>(sample_index);
 }
 
-uint64_t ZSobolSampler::sampleIndex() const {
-  // pbrt-v4 ZSobolSampler::GetSampleIndex: each base-4 digit of the Morton index, from the
-  // top, goes through one of the 24 permutations chosen by a hash of the digits above it.
-  const bool odd = (log2_spp_ & 1) != 0;
+// Digits from_digit > i >= to_digit of pbrt-v4 ZSobolSampler::GetSampleIndex: each base-4 digit
+// of the Morton index, from the top, goes through one of the 24 permutations chosen by a hash of
+// the digits above it and the dimension.
+uint64_t ZSobolSampler::permuteDigits(int from_digit, int to_digit) const {
+  const int odd = log2_spp_ & 1;
   const uint64_t dim_salt = 0x55555555ULL * static_cast<uint64_t>(dim_);
   uint64_t index = 0;
-  for (int i = base4_digits_ - 1; i >= (odd ? 1 : 0); --i) {
-    const int shift = 2 * i - (odd ? 1 : 0);
+  for (int i = from_digit - 1; i >= to_digit; --i) {
+    const int shift = 2 * i - odd;
     const unsigned digit = static_cast<unsigned>(morton_ >> shift) & 3u;
     const uint64_t higher = morton_ >> (shift + 2);
     const unsigned p = static_cast<unsigned>((pbrtMixBits(higher ^ dim_salt) >> 24) % 24);
     index |= static_cast<uint64_t>((kDigitPermutations[p] >> (2 * digit)) & 3u) << shift;
   }
-  if (odd) index |= (morton_ & 1) ^ (pbrtMixBits((morton_ >> 1) ^ dim_salt) & 1);
+  return index;
+}
+
+uint64_t ZSobolSampler::sampleIndex() const {
+  const int odd = log2_spp_ & 1;
+  // The pixel's digits (cached per dimension), then the sample's.
+  uint64_t index;
+  const size_t d = static_cast<size_t>(dim_);
+  if (d < pixel_part_.size() && pixel_stamp_[d] == stamp_) {
+    index = pixel_part_[d];
+  } else {
+    index = permuteDigits(base4_digits_, pixel_digit_);
+    if (d < 256) {
+      if (d >= pixel_part_.size()) {
+        pixel_part_.resize(d + 1, 0);
+        pixel_stamp_.resize(d + 1, 0);
+      }
+      pixel_part_[d] = index;
+      pixel_stamp_[d] = stamp_;
+    }
+  }
+  index |= permuteDigits(pixel_digit_, odd);
+  if (odd)
+    index |= (morton_ & 1) ^
+             (pbrtMixBits((morton_ >> 1) ^ (0x55555555ULL * static_cast<uint64_t>(dim_))) & 1);
   return index;
 }
 

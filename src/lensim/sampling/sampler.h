@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "lensim/sampling/sampling.h"
 #include "lensim/util/vec.h"
@@ -132,10 +133,19 @@ class ZSobolSampler final : public Sampler {
 
  private:
   uint32_t scramble(uint32_t v, uint32_t hash) const;
+  uint64_t permuteDigits(int from_digit, int to_digit) const;
   int spp_, seed_, log2_spp_, base4_digits_;
+  int pixel_digit_;  ///< the lowest base-4 digit made of pixel bits only
   SobolRandomization randomization_;
   uint64_t morton_ = 0;
   int dim_ = 0;
+  // The permuted pixel digits depend only on (pixel, dimension): kept per dimension for the
+  // current pixel (valid where pixel_stamp_[dim] == stamp_), as a pixel's samples follow
+  // each other.
+  Point2i pixel_{-1, -1};
+  uint32_t stamp_ = 1;  // 0 marks an entry never written
+  mutable std::vector<uint64_t> pixel_part_;
+  mutable std::vector<uint32_t> pixel_stamp_;
 };
 
 /// Parses pbrt-v4's "randomization" values ("none", "permutedigits", "fastowen", "owen"; empty
