@@ -19,7 +19,7 @@ namespace lensim::scene {
 /// ascending vertex index, so the result is deterministic.
 ///
 /// The topology is kept in flat arrays (edges found by a counting sort on their smaller
-/// vertex), about 100 bytes a triangle of the last level at the peak.
+/// vertex); figures in docs/performance.md.
 void loopSubdivide(std::vector<Vec3>& P, std::vector<int>& idx, int levels);
 
 }  // namespace lensim::scene
