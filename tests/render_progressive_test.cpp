@@ -32,7 +32,7 @@ Shape "sphere" "float radius" 0.5
 
 TEST(ProgressiveRender, PassesDoubleAndTheLastImageIsTheOnePassRender) {
   RenderOptions one;
-  one.spp = 12;  // the padded Sobol sampler rounds it up to 16
+  one.spp = 12;  // zsobol renders the 12 requested; the last pass is short
   const auto whole = renderText(kScene, one);
   RenderOptions prog = one;
   std::vector<int> done;
@@ -43,7 +43,7 @@ TEST(ProgressiveRender, PassesDoubleAndTheLastImageIsTheOnePassRender) {
     return true;
   };
   const auto r = renderText(kScene, prog);
-  EXPECT_EQ(done, (std::vector<int>{1, 2, 4, 8, 16}));
+  EXPECT_EQ(done, (std::vector<int>{1, 2, 4, 8, 12}));
   EXPECT_FALSE(r.stats.partial);
   EXPECT_EQ(r.stats.camera_samples, whole.stats.camera_samples);
   ASSERT_EQ(r.image.pixels.size(), whole.image.pixels.size());

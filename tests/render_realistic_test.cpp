@@ -56,12 +56,15 @@ TEST(RealisticRender, BoxDgaussMatchesPbrtV4) {
   const scene::Scene s = scene::loadScene(dir + "box-dgauss.pbrt");
   const io::Image ref = io::readImage(dir + "box-dgauss.exr");
   render::RenderOptions o;
-  o.spp = 16;
+  // 32 spp: at 16 the dim block (8, 7) lies 3-5% under the reference with either sampler (its
+  // mean rests on rare bright paths), and with the scene's zsobol the seed pair 1/2 puts it just
+  // beyond 5 sigma + 2%; at 32 no block is (measured 2026-11-29).
+  o.spp = 32;
   o.seed = 1;
   const render::RenderResult a = render::render(s, o);
   o.seed = 2;
   const io::Image b = render::render(s, o).image;
-  const render::CompareResult m = compare(a.image, b, ref, 16, 1024, 20);
+  const render::CompareResult m = compare(a.image, b, ref, 32, 1024, 20);
   std::printf(
       "box-dgauss vs pbrt-v4: mean ratio %.4f, mean |block diff| %.4f of the mean, %.0f%% of "
       "blocks beyond z %.2f, %.0f%% beyond 5 sigma + 2%%, no-ray samples %.2f%%\n",

@@ -41,6 +41,10 @@ std::unique_ptr<Sampler> makeSampler(const scene::Scene& scene, int spp, int see
     if (xs * xs != spp) xs = spp;
     return std::make_unique<StratifiedSampler>(xs, spp / xs, scene.sampler.jitter, seed);
   }
+  if (t == "zsobol")
+    return std::make_unique<ZSobolSampler>(
+        spp, Point2i{scene.film.x_resolution, scene.film.y_resolution},
+        parseSobolRandomization(scene.sampler.randomization), seed);
   if (t != "paddedsobol") {
     static std::once_flag once;
     std::call_once(once, [&] {

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "lensim/sampling/sampling.h"
 #include "lensim/util/vec.h"
@@ -105,6 +106,51 @@ class PaddedSobolSampler final : public Sampler {
   Point2i pixel_{};
   int index_ = 0, dim_ = 0;
 };
+
+/// Randomisation of pbrt-v4's Sobol samplers ("string randomization").
+enum class SobolRandomization { None, PermuteDigits, FastOwen, Owen };
+
+/// pbrt-v4's ZSobolSampler (Ahmed & Wonka 2020, "Screen-space blue-noise diffusion of Monte
+/// Carlo sampling error via hierarchical ordering of pixels"): the sample index is the Morton
+/// code of the pixel followed by the sample number, its base-4 digits permuted by a hash of the
+/// higher digits and the dimension, and the value is the first (1-D) or first two (2-D) Sobol
+/// dimensions at that index, scrambled by a hash of (dimension, seed). For power-of-two sample
+/// counts the values are pbrt-v4's (in double precision); other counts draw the requested
+/// number of samples from the next power of two's index block (pbrt-v4 warns and uses a power
+/// of two).
+class ZSobolSampler final : public Sampler {
+ public:
+  ZSobolSampler(int samples_per_pixel, Point2i full_resolution,
+                SobolRandomization randomization = SobolRandomization::FastOwen, int seed = 0);
+  int samplesPerPixel() const override { return spp_; }
+  void startPixelSample(Point2i pixel, int sample_index, int dimension = 0) override;
+  double get1D() override;
+  Vec2 get2D() override;
+  int dimension() const override { return dim_; }
+  std::unique_ptr<Sampler> clone() const override;
+  /// The permuted Sobol index of the current pixel sample at the current dimension.
+  uint64_t sampleIndex() const;
+
+ private:
+  uint32_t scramble(uint32_t v, uint32_t hash) const;
+  uint64_t permuteDigits(int from_digit, int to_digit) const;
+  int spp_, seed_, log2_spp_, base4_digits_;
+  int pixel_digit_;  ///< the lowest base-4 digit made of pixel bits only
+  SobolRandomization randomization_;
+  uint64_t morton_ = 0;
+  int dim_ = 0;
+  // The permuted pixel digits depend only on (pixel, dimension): kept per dimension for the
+  // current pixel (valid where pixel_stamp_[dim] == stamp_), as a pixel's samples follow
+  // each other.
+  Point2i pixel_{-1, -1};
+  uint32_t stamp_ = 1;  // 0 marks an entry never written
+  mutable std::vector<uint64_t> pixel_part_;
+  mutable std::vector<uint32_t> pixel_stamp_;
+};
+
+/// Parses pbrt-v4's "randomization" values ("none", "permutedigits", "fastowen", "owen"; empty
+/// is "fastowen"); throws Error naming the value otherwise.
+SobolRandomization parseSobolRandomization(const std::string& name);
 
 /// The unscrambled first (van der Corput) and second Sobol dimensions as 32-bit fractions.
 uint32_t sobolDimension0(uint32_t index);

@@ -281,6 +281,9 @@ RTCGeometry newMotionGeometry(RTCDevice device, MotionWrapper* w) {
 
 }  // namespace
 
+// Top-level primitives above which the BVH is built with Embree's medium quality.
+constexpr size_t kHighQualityBuildLimit = size_t{1} << 20;
+
 Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.scene = &scene;
@@ -347,6 +350,15 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
     m.shape_record[i] = static_cast<int>(m.records.size());
     m.records.push_back(std::move(r));
   }
+  // Embree's high-quality build (spatial splits) pays for itself on scenes of moderate size; on
+  // millions of top-level primitives it costs more time and memory in the build than it saves in
+  // a render, so those get the medium (binned SAH) build.
+  size_t top_primitives = 0;
+  for (const ShapeRecord& r : m.records)
+    if (r.desc->object < 0 && !r.motion && r.vertices_per_face > 0)
+      top_primitives += r.indices.size() / static_cast<size_t>(r.vertices_per_face);
+  if (top_primitives > kHighQualityBuildLimit)
+    rtcSetSceneBuildQuality(m.top, RTC_BUILD_QUALITY_MEDIUM);
   for (size_t ri = 0; ri < m.records.size(); ++ri) {
     ShapeRecord& r = m.records[ri];
     const scene::Shape& s = *r.desc;

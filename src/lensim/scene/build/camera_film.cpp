@@ -248,6 +248,12 @@ void Builder::sampler(const Directive& d) {
                                            "paddedsobol", "zsobol",     "pmj02bn"};
   s.seed = ps.getInt({"seed"}, 0);
   s.randomization = ps.getString({"randomization"}, "");
+  if (!s.randomization.empty() && s.randomization != "none" && s.randomization != "permutedigits" &&
+      s.randomization != "fastowen" && s.randomization != "owen")
+    throw Error(ps.peek({"randomization"})->loc,
+                fmt::format("sampler randomization \"{}\": expected \"none\", "
+                            "\"permutedigits\", \"fastowen\" or \"owen\"",
+                            s.randomization));
   ps.getBool({"samplepixelcenter"}, false);  // pbrt-v3 halton
   if (type == "stratified") {
     int x = ps.getInt({"xsamples"}, 4), y = ps.getInt({"ysamples"}, 4);
