@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <map>
 
+#include "lensim/optics/auto_semi_diameter.h"
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
@@ -216,6 +217,11 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   std::vector<double> wavl;
   std::optional<int> pwav;
   std::optional<int> n_waves;
+  // Fields (FTYP type and count, XFLN/YFLN values) and ray aiming, for automatic semi-diameters.
+  int field_type = 0, n_fields = 0;
+  FileLoc field_loc;
+  std::vector<double> xfln, yfln;
+  std::optional<FileLoc> vignetting_loc, ray_aiming_loc;
   std::vector<ZSurface> surfs;
   ZSurface* cur = nullptr;
   bool sequential_seen = false;
@@ -322,7 +328,24 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       } else if (key == "PWAV") {
         pwav = inum(1, "primary wavelength number");
       } else if (key == "FTYP") {
+        // FTYP type telecentric fields wavelengths ...
+        if (t.size() >= 2) field_type = inum(1, "field type");
+        if (t.size() >= 4) n_fields = inum(3, "number of fields");
         if (t.size() >= 5) n_waves = int(number(t[4], line_no, "number of wavelengths"));
+        field_loc = loc;
+      } else if (key == "XFLN" || key == "YFLN") {
+        auto& v = key == "XFLN" ? xfln : yfln;
+        v.clear();
+        for (size_t i = 1; i < t.size(); ++i) v.push_back(number(t[i], line_no, "field value"));
+        if (!field_loc.valid()) field_loc = loc;
+      } else if (key == "VDXN" || key == "VDYN" || key == "VCXN" || key == "VCYN") {
+        // Vignetting factors: they shrink the pupil OpticStudio's automatic apertures use.
+        for (size_t i = 1; i < t.size(); ++i)
+          if (number(t[i], line_no, "vignetting factor") != 0 && !vignetting_loc)
+            vignetting_loc = FileLoc{path_, line_no, t[i].col};
+      } else if (key == "RAIM") {
+        if (t.size() >= 2 && number(t[1], line_no, "ray aiming") != 0)
+          ray_aiming_loc = FileLoc{path_, line_no, t[1].col};
       }
       continue;
     }
@@ -457,6 +480,15 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     p.diagnostics.push_back({Severity::Note, surfs[1].loc,
                              "no STOP line: surface 1 is the aperture stop (Zemax's default)"});
   }
+  // Surfaces without a semi-diameter (no DIAM, DIAM 0) get one from real rays below; until then
+  // a placeholder larger than any ray height (bounded by the surface's extent).
+  std::vector<std::pair<int, const ZSurface*>> auto_rows;  // row in p.surfaces, its surface
+  double placeholder_mm = enpd ? *enpd * unit_mm : 0.0;
+  for (size_t k = 1; k + 1 < surfs.size(); ++k) {
+    if (surfs[k].disz) placeholder_mm += std::abs(*surfs[k].disz) * unit_mm;
+    if (surfs[k].diam) placeholder_mm = std::max(placeholder_mm, 4 * *surfs[k].diam * unit_mm);
+  }
+  placeholder_mm = std::max(4 * placeholder_mm, 1.0);
   double ior_before = 1;
   GlassSpec glass_before;
   // Whether the n_d on the file's GLAS lines are the glasses' data: catalogue glasses checked,
@@ -484,11 +516,19 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                               "(+z, and -z after an odd number of mirrors)",
                               z.number, *z.disz, *z.disz < 0 ? "negative" : "positive", mirrors,
                               mirrors == 1 ? "" : "s"));
-    if (!z.diam)
-      throw Error(z.loc, fmt::format("surface {}: no DIAM (semi-diameter) line; lensim needs "
-                                     "every surface's clear aperture",
-                                     z.number));
-    double semi = (z.clap_max ? *z.clap_max : *z.diam) * unit_mm;
+    const bool auto_semi = !z.clap_max && (!z.diam || *z.diam == 0);
+    if (auto_semi && int(k) == stop_surface && floa)
+      throw Error(z.diam_loc.valid() ? z.diam_loc : z.loc,
+                  fmt::format("surface {} is the stop and has no semi-diameter (no DIAM or DIAM "
+                              "0), and the system aperture is FLOA (the stop's size): nothing "
+                              "sets the aperture; give the stop a DIAM or the file an ENPD or "
+                              "FNUM",
+                              z.number));
+    double semi =
+        auto_semi ? std::min(placeholder_mm,
+                             0.999 * sagDomainRadius(z.curv != 0 ? unit_mm / z.curv : 0.0,
+                                                     SurfaceShape{}))
+                  : (z.clap_max ? *z.clap_max : *z.diam) * unit_mm;
     if (!(semi > 0))
       throw Error(z.diam_loc,
                   fmt::format("surface {}: semi-diameter {} must be > 0", z.number, *z.diam));
@@ -552,6 +592,10 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       }
     }
     const double domain = sagDomainRadius(s.radius_mm, s.shape);
+    if (auto_semi && semi >= 0.999 * domain) {
+      semi = 0.999 * domain;
+      s.aperture_diameter_mm = 2 * semi;
+    }
     if (s.shape.isToroidal() && semi >= domain) {
       // Within the y curve's own extent, the radius of rotation is what is too small.
       SurfaceShape y_curve = s.shape;
@@ -613,6 +657,14 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     p.surfaces.push_back(s);
   }
 
+  for (size_t r = 0; r < p.surfaces.size(); ++r)
+    for (size_t k = 1; k + 1 < surfs.size(); ++k) {
+      const ZSurface& z = surfs[k];
+      if (z.loc.line == p.surfaces[r].loc.line && !z.clap_max && (!z.diam || *z.diam == 0) &&
+          !p.surfaces[r].stop_flag.value_or(false))
+        auto_rows.push_back({int(r), &z});
+    }
+
   // An unknown glass falls back on its GLAS line's n_d and V_d (resolveGlass warns). Some files
   // carry placeholders there instead (US05331467-1.zmx: 1.5 and 40 on every line): say so when
   // most of the catalogue glasses of the same file disagree with the catalogue.
@@ -628,6 +680,9 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   // The system aperture sets the stop's size (paraxially: the entrance pupil is the image of the
   // stop, so its diameter scales with the stop's).
   const auto stop_index = p.stopIndex();
+  const ZSurface& stop_z = surfs[size_t(stop_surface)];
+  const bool stop_auto = !stop_z.clap_max && (!stop_z.diam || *stop_z.diam == 0);
+  std::optional<double> epd_mm;
   if (stop_index && (enpd || fnum) && !floa) {
     LensSystem sys(p);
     const auto& in = sys.interfaces();
@@ -650,9 +705,15 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       p.aperture_spec = fmt::format("FNUM {}", *fnum);
     }
     const double semi_new = semi_now * epd_target / epd_now;
+    epd_mm = epd_target;
     const LensSurface& stop_row = p.surfaces[size_t(st)];
     const double extent = sagDomainRadius(stop_row.radius_mm, stop_row.shape);
-    if (semi_new >= extent) {
+    if (semi_new >= extent && stop_auto) {
+      throw Error(aperture_loc,
+                  fmt::format("{}: the stop (surface {}, no DIAM) would need a semi-diameter of "
+                              "{:.6g} mm, beyond its surface's extent ({:.6g} mm)",
+                              p.aperture_spec, stop_z.number, semi_new, extent));
+    } else if (semi_new >= extent) {
       // A curved stop (a mirror) cannot open beyond its surface: keep DIAM's size.
       p.diagnostics.push_back(
           {Severity::Warning, aperture_loc,
@@ -662,7 +723,13 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     } else {
       p.surfaces[size_t(st)].aperture_diameter_mm = 2 * semi_new;
     }
-    if (semi_new < extent && std::abs(semi_new / semi_now - 1) > 1e-6)
+    if (stop_auto)
+      p.diagnostics.push_back(
+          {Severity::Note, stop_z.loc,
+           fmt::format("surface {} (the stop) has no semi-diameter in the file: {:.6g} mm from "
+                       "{}",
+                       stop_z.number, semi_new, p.aperture_spec)});
+    else if (semi_new < extent && std::abs(semi_new / semi_now - 1) > 1e-6)
       p.diagnostics.push_back(
           {Severity::Note, aperture_loc,
            fmt::format("{}: the stop's semi-diameter is {:.6g} mm (DIAM gives {:.6g} mm)",
@@ -671,6 +738,50 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     p.aperture_spec = "FLOA (stop semi-diameter from DIAM)";
   }
   (void)inserted_stop;
+
+  if (!auto_rows.empty()) {
+    if (ray_aiming_loc)
+      throw Error(*ray_aiming_loc,
+                  "ray aiming (RAIM) with surfaces whose semi-diameters OpticStudio computes (no "
+                  "DIAM or DIAM 0): lensim computes them with ray aiming off only");
+    if (vignetting_loc)
+      throw Error(*vignetting_loc,
+                  "vignetting factors with surfaces whose semi-diameters OpticStudio computes (no "
+                  "DIAM or DIAM 0) are not supported");
+    AutoSemiDiameterSpec spec;
+    spec.fields_loc = field_loc.valid() ? field_loc : auto_rows.front().second->loc;
+    if (field_type != 0 && field_type != 1)
+      throw Error(spec.fields_loc,
+                  fmt::format("field type {} (FTYP): automatic semi-diameters need field angles "
+                              "(0) or object heights (1)",
+                              field_type));
+    spec.object_heights = field_type == 1;
+    const size_t count = n_fields > 0 ? size_t(n_fields) : std::max(xfln.size(), yfln.size());
+    for (size_t i = 0; i < count; ++i) {
+      const double fx = i < xfln.size() ? xfln[i] : 0.0, fy = i < yfln.size() ? yfln[i] : 0.0;
+      spec.fields.push_back(spec.object_heights ? std::pair{fx * unit_mm, fy * unit_mm}
+                                                : std::pair{fx, fy});
+    }
+    spec.entrance_pupil_diameter_mm = epd_mm.value_or(0.0);
+    std::vector<int> rows;
+    for (const auto& [row, z] : auto_rows) rows.push_back(row);
+    const std::vector<double> semi = computeAutoSemiDiameters(p, rows, spec);
+    for (size_t i = 0; i < rows.size(); ++i) {
+      LensSurface& s = p.surfaces[size_t(rows[i])];
+      const ZSurface& z = *auto_rows[i].second;
+      if (s.obscuration_radius_mm >= semi[i])
+        throw Error(z.inner_loc, fmt::format("surface {}: obscuration radius {} is not inside the "
+                                             "computed semi-diameter {:.6g}",
+                                             z.number, z.inner_radius, semi[i] / unit_mm));
+      s.aperture_diameter_mm = 2 * semi[i];
+      p.diagnostics.push_back(
+          {Severity::Note, z.diam_loc.valid() ? z.diam_loc : z.loc,
+           fmt::format("surface {}: {}: semi-diameter {:.6g} mm computed from real rays (the "
+                       "largest ray height of {} field{} at the edge of the entrance pupil)",
+                       z.number, z.diam ? "DIAM 0" : "no DIAM", semi[i] / unit_mm,
+                       spec.fields.size(), spec.fields.size() == 1 ? "" : "s")});
+    }
+  }
   return p;
 }
 

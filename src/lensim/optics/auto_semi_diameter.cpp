@@ -1,0 +1,136 @@
+#include "lensim/optics/auto_semi_diameter.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "lensim/optics/lens_system.h"
+#include "lensim/optics/paraxial.h"
+#include "lensim/optics/surface_shape.h"
+
+namespace lensim::optics {
+
+namespace {
+
+// Points around the pupil's edge (besides its centre, the chief ray).
+constexpr int kPupilEdgePoints = 64;
+
+// The paraxial entrance pupil: its z (lens space) and the stop's height per unit height at the
+// entrance pupil (the pupil magnification's inverse), from the stop's position alone.
+struct PupilPlane {
+  double z_mm = 0;
+  double stop_per_pupil = 1;
+};
+
+PupilPlane paraxialEntrancePupil(const LensSystem& sys, int stop) {
+  if (stop == 0) return {};
+  const auto& in = sys.interfaces();
+  // (y, n u) from the front vertex plane to just after surface stop - 1, then to the stop.
+  const RayMatrix m = systemMatrix(sys, 0, stop - 1);
+  const double t = (in[size_t(stop)].z_mm - in[size_t(stop - 1)].z_mm) / in[size_t(stop)].nBefore();
+  const double a = m.a + t * m.c, b = m.b + t * m.d;
+  if (a == 0)
+    throw Error(sys.prescription().surfaces[size_t(stop)].loc,
+                "automatic semi-diameters: the stop is imaged to infinity in object space (no "
+                "entrance pupil to aim rays at)");
+  // The ray through the stop's centre: y0 a + w0 b = 0; it crosses the axis at z = -y0 / w0.
+  return {b / a, a};
+}
+
+}  // namespace
+
+std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
+                                             const std::vector<int>& surfaces,
+                                             const AutoSemiDiameterSpec& spec) {
+  std::vector<double> semi(surfaces.size(), 0.0);
+  if (surfaces.empty()) return semi;
+  const LensSystem base(p);
+  const auto stop = base.stopIndex();
+  if (!stop) throw Error(p.surfaces.front().loc, "automatic semi-diameters need an aperture stop");
+  const PupilPlane ep = paraxialEntrancePupil(base, *stop);
+  // The entrance pupil's radius: given, else the stop's image (FLOA: the stop's size).
+  const double rp = spec.entrance_pupil_diameter_mm > 0
+                        ? spec.entrance_pupil_diameter_mm / 2
+                        : base.interfaces()[size_t(*stop)].semi_aperture_mm /
+                              std::abs(ep.stop_per_pupil);
+  if (!(rp > 0) || !std::isfinite(rp))
+    throw Error(spec.fields_loc, fmt::format("automatic semi-diameters: entrance pupil radius "
+                                             "{} mm must be > 0 and finite",
+                                             rp));
+  const bool finite = p.object_distance_mm.has_value();
+  if (spec.object_heights && !finite)
+    throw Error(spec.fields_loc, "automatic semi-diameters: object-height fields need a finite "
+                                 "object distance (the object surface's DISZ)");
+  std::vector<double> waves = p.wavelengths_nm;
+  if (waves.empty()) waves.push_back(base.wavelength_nm());
+  std::vector<std::pair<double, double>> fields = spec.fields;
+  if (fields.empty()) fields.push_back({0.0, 0.0});
+
+  // Launch planes: well in front of the lens (and of the entrance pupil).
+  double track = 0;
+  for (const LensSurface& s : p.surfaces) track += std::abs(s.thickness_mm);
+  const double z_launch = std::min(ep.z_mm, 0.0) - track - 10 * rp - 1;
+
+  const TraceOptions unclipped{false, false};
+  std::vector<Vec3> path;
+  for (double lambda : waves) {
+    const LensSystem sys = base.atWavelength(lambda);
+    for (size_t f = 0; f < fields.size(); ++f) {
+      const auto [fx, fy] = fields[f];
+      for (int k = -1; k < kPupilEdgePoints; ++k) {
+        const double phi = 2 * std::numbers::pi * k / kPupilEdgePoints;
+        const Vec3 pupil{k < 0 ? 0.0 : rp * std::cos(phi), k < 0 ? 0.0 : rp * std::sin(phi),
+                         ep.z_mm};
+        Ray ray;
+        if (spec.object_heights || finite) {
+          Vec3 obj{fx, fy, -*p.object_distance_mm};
+          if (!spec.object_heights) {
+            // A field angle from a finite object: the chief ray's slope through the pupil centre.
+            const double tx = std::tan(fx * std::numbers::pi / 180);
+            const double ty = std::tan(fy * std::numbers::pi / 180);
+            obj = {(obj.z - ep.z_mm) * tx, (obj.z - ep.z_mm) * ty, obj.z};
+          }
+          ray.origin = obj;
+          ray.direction = normalize(pupil - obj);
+        } else {
+          const Vec3 d = normalize(Vec3{std::tan(fx * std::numbers::pi / 180),
+                                        std::tan(fy * std::numbers::pi / 180), 1.0});
+          ray.direction = d;
+          ray.origin = pupil + d * ((z_launch - ep.z_mm) / d.z);
+        }
+        path.clear();
+        const TraceResult r = sys.tracer().traceFromScene(ray, unclipped, &path);
+        if (!r.ok() && r.blocked_surface >= 0) {
+          const LensSurface& s = p.surfaces[size_t(r.blocked_surface)];
+          throw Error(s.loc,
+                      fmt::format("automatic semi-diameters: the {} ray of field {} ({}, {}) at "
+                                  "{:.6g} nm {} surface {} (the file gives no semi-diameter "
+                                  "where such rays could be stopped)",
+                                  k < 0 ? "chief" : "pupil-edge", f + 1, fx, fy, lambda,
+                                  r.reason == BlockReason::TotalInternalReflection
+                                      ? "is totally reflected at"
+                                      : "misses",
+                                  r.blocked_surface));
+        }
+        for (size_t i = 0; i < surfaces.size(); ++i) {
+          const size_t at = size_t(surfaces[i]) + 1;  // path[0] is the ray's origin
+          if (at < path.size()) semi[i] = std::max(semi[i], std::hypot(path[at].x, path[at].y));
+        }
+      }
+    }
+  }
+  for (size_t i = 0; i < surfaces.size(); ++i) {
+    const LensSurface& s = p.surfaces[size_t(surfaces[i])];
+    semi[i] *= 1 + 1e-9;
+    const double extent = sagDomainRadius(s.radius_mm, s.shape);
+    if (!(semi[i] > 0) || semi[i] >= extent)
+      throw Error(s.loc, fmt::format("automatic semi-diameters: the rays need a semi-diameter of "
+                                     "{:.6g} mm on surface {}, beyond the surface's extent "
+                                     "({:.6g} mm)",
+                                     semi[i], surfaces[i], extent));
+  }
+  return semi;
+}
+
+}  // namespace lensim::optics
