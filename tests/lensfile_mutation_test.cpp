@@ -107,7 +107,7 @@ struct Mutant {
   std::string text;
 };
 
-// Every mutation of one file, deterministic; `stride` keeps every stride-th number mutation.
+// The mutations of one file, deterministic: every stride-th of each kind (time).
 std::vector<Mutant> mutate(const std::string& text, size_t stride) {
   const std::vector<std::string> lines = splitLines(text);
   std::vector<Mutant> out;
@@ -115,8 +115,8 @@ std::vector<Mutant> mutate(const std::string& text, size_t stride) {
   for (size_t i = 0; i < lines.size(); ++i) {
     std::vector<std::string> m = lines;
     m.erase(m.begin() + long(i));
-    out.push_back({fmt::format("delete line {}", i + 1), joinLines(m)});
-    if (i % 3 == 1)
+    if (i % stride == 0) out.push_back({fmt::format("delete line {}", i + 1), joinLines(m)});
+    if (i % (3 * stride) == 1)
       out.push_back({fmt::format("truncate after line {}", i + 1),
                      joinLines({lines.begin(), lines.begin() + long(i)}) + lines[i].substr(
                                                                                0, lines[i].size() / 2)});
@@ -137,14 +137,14 @@ std::vector<Mutant> mutate(const std::string& text, size_t stride) {
       if (keyOf(lines[i]) == key) at.push_back(i);
     for (size_t a = 0; a < at.size(); ++a)
       for (size_t b = a + 1; b < at.size() && b < a + 4; ++b) {
-        if (lines[at[a]] == lines[at[b]]) continue;
+        if (lines[at[a]] == lines[at[b]] || counter++ % stride != 0) continue;
         std::vector<std::string> m = lines;
         std::swap(m[at[a]], m[at[b]]);
         out.push_back({fmt::format("swap lines {} and {}", at[a] + 1, at[b] + 1), joinLines(m)});
       }
   }
   // Adjacent lines swapped (a surface's line moved into the next block).
-  for (size_t i = 0; i + 1 < lines.size(); i += 2) {
+  for (size_t i = 0; i + 1 < lines.size(); i += 2 * stride) {
     std::vector<std::string> m = lines;
     std::swap(m[i], m[i + 1]);
     out.push_back({fmt::format("swap lines {} and {}", i + 1, i + 2), joinLines(m)});
@@ -198,6 +198,8 @@ TEST(LensFileMutation, SwappedToroidalAndStandardTypesDoNotCrash) {
   int ok = 0;
   for (size_t a : toroidal)
     for (size_t b : standard) {
+      // Surface 9's TYPE STANDARD (the crash) with every toroid, a few other pairs (time).
+      if (lines[b - 1].find("SURF 9") == std::string::npos && (a + b) % 5 != 0) continue;
       std::vector<std::string> m = lines;
       std::swap(m[a], m[b]);
       SCOPED_TRACE(fmt::format("swap lines {} and {}", a + 1, b + 1));
@@ -211,12 +213,12 @@ TEST(LensFileMutation, SwappedToroidalAndStandardTypesDoNotCrash) {
 }
 
 TEST(LensFileMutation, ZemaxFiles) {
-  runMutations(test::lensPath("toroidal-anamorphic.50mm.zmx"), 7);
-  runMutations(std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/zmax_37992.zmx", 5);
+  runMutations(test::lensPath("toroidal-anamorphic.50mm.zmx"), 9);
+  runMutations(std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/US00583336-2-scaled.zmx", 3);
 }
 
 TEST(LensFileMutation, DatAndJsonFiles) {
-  runMutations(test::lensPath("dgauss.50mm.dat"), 1);
+  runMutations(test::lensPath("dgauss.50mm.dat"), 2);
   runMutations(test::lensPath("fisheye.10mm.dat"), 3);
   runMutations(test::lensPath("cassegrain.500mm.json"), 3);
   runMutations(test::lensPath("us583336-double-gauss.json"), 3);
