@@ -120,7 +120,9 @@ std::vector<Mutant> mutate(const std::string& text, size_t stride) {
       out.push_back({fmt::format("truncate after line {}", i + 1),
                      joinLines({lines.begin(), lines.begin() + long(i)}) + lines[i].substr(
                                                                                0, lines[i].size() / 2)});
-    const auto nums = numberTokens(lines[i]);
+    // The first two numbers of a line (the values; the rest are mostly solve flags).
+    auto nums = numberTokens(lines[i]);
+    if (nums.size() > 2) nums.resize(2);
     for (const auto& [s, n] : nums) {
       for (const char* v : {"0", "-1", "1e300", "nan"}) {
         if (counter++ % stride != 0) continue;
@@ -213,8 +215,8 @@ TEST(LensFileMutation, SwappedToroidalAndStandardTypesDoNotCrash) {
 }
 
 TEST(LensFileMutation, ZemaxFiles) {
-  runMutations(test::lensPath("toroidal-anamorphic.50mm.zmx"), 9);
-  runMutations(std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/US00583336-2-scaled.zmx", 3);
+  runMutations(test::lensPath("toroidal-anamorphic.50mm.zmx"), 7);
+  runMutations(std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/US00583336-2-scaled.zmx", 4);
 }
 
 TEST(LensFileMutation, DatAndJsonFiles) {
