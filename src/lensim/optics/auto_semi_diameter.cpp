@@ -73,6 +73,8 @@ std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
   const double z_launch = std::min(ep.z_mm, 0.0) - track - 10 * rp - 1;
 
   const TraceOptions unclipped{false, false};
+  std::vector<bool> computed(p.surfaces.size(), false);
+  for (int i : surfaces) computed[size_t(i)] = true;
   std::vector<Vec3> path;
   for (double lambda : waves) {
     const LensSystem sys = base.atWavelength(lambda);
@@ -101,22 +103,32 @@ std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
         }
         path.clear();
         const TraceResult r = sys.tracer().traceFromScene(ray, unclipped, &path);
-        if (!r.ok() && r.blocked_surface >= 0) {
+        // Where the ray is stopped by an aperture the file gives (the stop aside: rays aimed at
+        // the paraxial pupil may pass its rim, as in OpticStudio), it counts no further.
+        size_t reach = path.size() - 1;  // surfaces [0, reach) were met
+        for (size_t j = 0; j < reach; ++j) {
+          const Interface& in = sys.interfaces()[j];
+          if (computed[j] || in.is_stop) continue;
+          if (std::hypot(path[j + 1].x, path[j + 1].y) > in.semi_aperture_mm) {
+            reach = j;
+            break;
+          }
+        }
+        if (!r.ok() && r.blocked_surface >= 0 && size_t(r.blocked_surface) <= reach) {
           const LensSurface& s = p.surfaces[size_t(r.blocked_surface)];
           throw Error(s.loc,
                       fmt::format("automatic semi-diameters: the {} ray of field {} ({}, {}) at "
-                                  "{:.6g} nm {} surface {} (the file gives no semi-diameter "
-                                  "where such rays could be stopped)",
+                                  "{:.6g} nm {} this surface before any aperture the file gives "
+                                  "stops it",
                                   k < 0 ? "chief" : "pupil-edge", f + 1, fx, fy, lambda,
                                   r.reason == BlockReason::TotalInternalReflection
                                       ? "is totally reflected at"
-                                      : "misses",
-                                  r.blocked_surface));
+                                      : "misses"));
         }
-        for (size_t i = 0; i < surfaces.size(); ++i) {
-          const size_t at = size_t(surfaces[i]) + 1;  // path[0] is the ray's origin
-          if (at < path.size()) semi[i] = std::max(semi[i], std::hypot(path[at].x, path[at].y));
-        }
+        for (size_t i = 0; i < surfaces.size(); ++i)
+          if (size_t(surfaces[i]) < reach)
+            semi[i] = std::max(semi[i], std::hypot(path[size_t(surfaces[i]) + 1].x,
+                                                   path[size_t(surfaces[i]) + 1].y));
       }
     }
   }
@@ -126,9 +138,8 @@ std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
     const double extent = sagDomainRadius(s.radius_mm, s.shape);
     if (!(semi[i] > 0) || semi[i] >= extent)
       throw Error(s.loc, fmt::format("automatic semi-diameters: the rays need a semi-diameter of "
-                                     "{:.6g} mm on surface {}, beyond the surface's extent "
-                                     "({:.6g} mm)",
-                                     semi[i], surfaces[i], extent));
+                                     "{:.6g} mm here, beyond the surface's extent ({:.6g} mm)",
+                                     semi[i], extent));
   }
   return semi;
 }

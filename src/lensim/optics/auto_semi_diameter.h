@@ -29,8 +29,9 @@ struct AutoSemiDiameterSpec {
 
 /// The surfaces of `p` (indices into p.surfaces) whose semi-diameters are to be computed: each
 /// gets the largest ray height over the rays of `spec` (times 1 + 1e-9, so that those rays pass).
-/// The other surfaces' apertures are ignored while tracing; the placeholder apertures of the
-/// computed ones must lie inside their surfaces' extents. Returns the semi-diameters found (mm),
+/// A ray counts up to the first surface whose given semi-diameter it passes outside (the stop
+/// excepted: rays aimed at the paraxial pupil may pass its rim); the placeholder apertures of the
+/// computed surfaces must lie inside their surfaces' extents. Returns the semi-diameters found (mm),
 /// in the order of `surfaces`. Throws a located Error where a ray misses a surface or is totally
 /// reflected, or where a surface cannot be as large as its rays need.
 std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,

@@ -778,7 +778,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
           {Severity::Note, z.diam_loc.valid() ? z.diam_loc : z.loc,
            fmt::format("surface {}: {}: semi-diameter {:.6g} mm computed from real rays (the "
                        "largest ray height of {} field{} at the edge of the entrance pupil)",
-                       z.number, z.diam ? "DIAM 0" : "no DIAM", semi[i] / unit_mm,
+                       z.number, z.diam ? "DIAM 0" : "no DIAM", semi[i],
                        spec.fields.size(), spec.fields.size() == 1 ? "" : "s")});
     }
   }
