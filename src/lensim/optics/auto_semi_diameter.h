@@ -2,10 +2,10 @@
 // `DIAM` line, `DIAM 0`): the largest height at which any real ray of the file's fields,
 // wavelengths and system aperture meets the surface.
 //
-// The rays are those of OpticStudio's default ray aiming (off: `RAIM 0`): the chief ray through
-// the centre of the paraxial entrance pupil and rays through points around its edge (the
-// entrance pupil diameter from ENPD, FNUM or the stop's size), from every field (angles, or
-// object heights for a finite object) at every wavelength, traced exactly without apertures.
+// The rays: the chief ray and rays around the edge of the pupil (its diameter from ENPD, FNUM or
+// the stop's size), from every field (angles, or object heights for a finite object) at every
+// wavelength, traced exactly. Without ray aiming (OpticStudio's default) they pass through the
+// paraxial entrance pupil; with it they are aimed at the real stop.
 #pragma once
 
 #include <optional>
@@ -25,6 +25,9 @@ struct AutoSemiDiameterSpec {
   /// The entrance pupil's diameter; 0: the paraxial image of the stop (FLOA).
   double entrance_pupil_diameter_mm = 0;
   FileLoc fields_loc;               ///< the field lines, for messages
+  /// Real ray aiming (OpticStudio's RAIM on): each ray is aimed so that it meets the stop at the
+  /// pupil point scaled to the stop's radius; off: at the paraxial entrance pupil.
+  bool aim_at_stop = false;
 };
 
 /// The surfaces of `p` (indices into p.surfaces) whose semi-diameters are to be computed: each

@@ -344,8 +344,11 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
           if (number(t[i], line_no, "vignetting factor") != 0 && !vignetting_loc)
             vignetting_loc = FileLoc{path_, line_no, t[i].col};
       } else if (key == "RAIM") {
-        if (t.size() >= 2 && number(t[1], line_no, "ray aiming") != 0)
-          ray_aiming_loc = FileLoc{path_, line_no, t[1].col};
+        // Ray aiming: the second value is its mode (0 off). Inferred from the optiland sample
+        // circular_aperture_example_*.zmx (`RAIM 0 1 ...`), whose automatic semi-diameters
+        // OpticStudio computed with rays aimed at the real stop (reproduced to 1e-6 that way).
+        if (t.size() >= 3 && number(t[2], line_no, "ray aiming") != 0)
+          ray_aiming_loc = FileLoc{path_, line_no, t[2].col};
       }
       continue;
     }
@@ -740,10 +743,6 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   (void)inserted_stop;
 
   if (!auto_rows.empty()) {
-    if (ray_aiming_loc)
-      throw Error(*ray_aiming_loc,
-                  "ray aiming (RAIM) with surfaces whose semi-diameters OpticStudio computes (no "
-                  "DIAM or DIAM 0): lensim computes them with ray aiming off only");
     if (vignetting_loc)
       throw Error(*vignetting_loc,
                   "vignetting factors with surfaces whose semi-diameters OpticStudio computes (no "
@@ -756,6 +755,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                               "(0) or object heights (1)",
                               field_type));
     spec.object_heights = field_type == 1;
+    spec.aim_at_stop = ray_aiming_loc.has_value();
     const size_t count = n_fields > 0 ? size_t(n_fields) : std::max(xfln.size(), yfln.size());
     for (size_t i = 0; i < count; ++i) {
       const double fx = i < xfln.size() ? xfln[i] : 0.0, fy = i < yfln.size() ? yfln[i] : 0.0;
@@ -777,9 +777,11 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       p.diagnostics.push_back(
           {Severity::Note, z.diam_loc.valid() ? z.diam_loc : z.loc,
            fmt::format("surface {}: {}: semi-diameter {:.6g} mm computed from real rays (the "
-                       "largest ray height of {} field{} at the edge of the entrance pupil)",
+                       "largest ray height of {} field{} at the pupil's edge, {})",
                        z.number, z.diam ? "DIAM 0" : "no DIAM", semi[i],
-                       spec.fields.size(), spec.fields.size() == 1 ? "" : "s")});
+                       spec.fields.size(), spec.fields.size() == 1 ? "" : "s",
+                       spec.aim_at_stop ? "rays aimed at the real stop (RAIM)"
+                                        : "rays through the paraxial entrance pupil")});
     }
   }
   return p;
