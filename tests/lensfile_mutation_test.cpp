@@ -219,6 +219,11 @@ TEST(LensFileMutation, ZemaxFiles) {
   runMutations(std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/US00583336-2-scaled.zmx", 4);
 }
 
+// Surfaces without DIAM: the automatic semi-diameters' rays under every mutation.
+TEST(LensFileMutation, ZemaxFileWithoutSemiDiameters) {
+  runMutations(std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/optiland/lens1.zmx", 1);
+}
+
 TEST(LensFileMutation, DatAndJsonFiles) {
   runMutations(test::lensPath("dgauss.50mm.dat"), 2);
   runMutations(test::lensPath("fisheye.10mm.dat"), 3);

@@ -323,8 +323,16 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       } else if (key == "WAVM") {
         const int i = inum(1, "wavelength number");
         wavm[i] = num(2, "wavelength (micrometres)");
+        if (!(wavm[i] > 0))
+          throw Error(FileLoc{path_, line_no, t[2].col},
+                      fmt::format("wavelength {} micrometres must be > 0", wavm[i]));
       } else if (key == "WAVL") {
-        for (size_t i = 1; i < t.size(); ++i) wavl.push_back(number(t[i], line_no, "wavelength"));
+        for (size_t i = 1; i < t.size(); ++i) {
+          wavl.push_back(number(t[i], line_no, "wavelength"));
+          if (!(wavl.back() > 0))
+            throw Error(FileLoc{path_, line_no, t[i].col},
+                        fmt::format("wavelength {} micrometres must be > 0", wavl.back()));
+        }
       } else if (key == "PWAV") {
         pwav = inum(1, "primary wavelength number");
       } else if (key == "FTYP") {
@@ -532,9 +540,13 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                              0.999 * sagDomainRadius(z.curv != 0 ? unit_mm / z.curv : 0.0,
                                                      SurfaceShape{}))
                   : (z.clap_max ? *z.clap_max : *z.diam) * unit_mm;
+    if (!(semi > 0) && auto_semi)
+      throw Error(z.loc, fmt::format("surface {}: no semi-diameter in the file, and its curvature "
+                                     "{} leaves no extent to compute one on",
+                                     z.number, z.curv));
     if (!(semi > 0))
-      throw Error(z.diam_loc,
-                  fmt::format("surface {}: semi-diameter {} must be > 0", z.number, *z.diam));
+      throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} must be > 0", z.number,
+                                          semi / unit_mm));
 
     LensSurface s;
     s.loc = z.loc;
