@@ -92,11 +92,10 @@ std::vector<std::pair<size_t, size_t>> numberTokens(const std::string& line) {
                                line[i] == ':' || line[i] == '[' || line[i] == ']'))
       ++i;
     const size_t s = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != ',' &&
-           line[i] != ']')
+    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != ',' && line[i] != ']')
       ++i;
-    if (i > s && (std::isdigit(static_cast<unsigned char>(line[s])) || line[s] == '-' ||
-                  line[s] == '.'))
+    if (i > s &&
+        (std::isdigit(static_cast<unsigned char>(line[s])) || line[s] == '-' || line[s] == '.'))
       out.push_back({s, i - s});
   }
   return out;
@@ -118,8 +117,8 @@ std::vector<Mutant> mutate(const std::string& text, size_t stride) {
     if (i % stride == 0) out.push_back({fmt::format("delete line {}", i + 1), joinLines(m)});
     if (i % (3 * stride) == 1)
       out.push_back({fmt::format("truncate after line {}", i + 1),
-                     joinLines({lines.begin(), lines.begin() + long(i)}) + lines[i].substr(
-                                                                               0, lines[i].size() / 2)});
+                     joinLines({lines.begin(), lines.begin() + long(i)}) +
+                         lines[i].substr(0, lines[i].size() / 2)});
     // The first two numbers of a line (the values; the rest are mostly solve flags).
     auto nums = numberTokens(lines[i]);
     if (nums.size() > 2) nums.resize(2);

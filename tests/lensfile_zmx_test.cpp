@@ -28,7 +28,9 @@ std::string slurp(const std::string& path) {
   return ss.str();
 }
 
-std::string zmxDir() { return std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/"; }
+std::string zmxDir() {
+  return std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/";
+}
 
 std::vector<std::string> linesOf(const std::string& text) {
   std::vector<std::string> out;
@@ -55,9 +57,9 @@ std::vector<std::string> words(const std::string& line) {
 // n_d of the glasses the corpus names, from the vendors' catalogues (Schott optical glass
 // data sheets 2017/2023, Ohara catalogue 2023): independent of lensim's glass table.
 const std::map<std::string, double> kPublishedNd = {
-    {"N-SK4", 1.61272},  {"SF1", 1.71736},    {"S-LAH64", 1.78800}, {"N-BAK1", 1.57250},
-    {"N-BALF4", 1.57956}, {"N-SK16", 1.62041}, {"N-SF2", 1.64769},   {"N-LAK9", 1.69100},
-    {"N-BK7", 1.51680}};
+    {"N-SK4", 1.61272},  {"SF1", 1.71736},     {"S-LAH64", 1.78800},
+    {"N-BAK1", 1.57250}, {"N-BALF4", 1.57956}, {"N-SK16", 1.62041},
+    {"N-SF2", 1.64769},  {"N-LAK9", 1.69100},  {"N-BK7", 1.51680}};
 
 // An independent paraxial (y, nu) trace of a .zmx file's surfaces at the d line: curvatures
 // (with EVENASPH PARM 1, the r^2 term, adding 2 a_1), signed thicknesses, n_d from the table

@@ -21,10 +21,10 @@ namespace lensim::optics {
 struct AutoSemiDiameterSpec {
   /// Field points: angles in degrees (x, y) or, for object_heights, object heights in mm.
   std::vector<std::pair<double, double>> fields;
-  bool object_heights = false;      ///< fields are object heights (a finite object only)
+  bool object_heights = false;  ///< fields are object heights (a finite object only)
   /// The entrance pupil's diameter; 0: the paraxial image of the stop (FLOA).
   double entrance_pupil_diameter_mm = 0;
-  FileLoc fields_loc;               ///< the field lines, for messages
+  FileLoc fields_loc;  ///< the field lines, for messages
   /// Real ray aiming (OpticStudio's RAIM on): each ray is aimed so that it meets the stop at the
   /// pupil point scaled to the stop's radius; off: at the paraxial entrance pupil.
   bool aim_at_stop = false;
@@ -34,9 +34,9 @@ struct AutoSemiDiameterSpec {
 /// gets the largest ray height over the rays of `spec` (times 1 + 1e-9, so that those rays pass).
 /// A ray counts up to the first surface whose given semi-diameter it passes outside (the stop
 /// excepted: rays aimed at the paraxial pupil may pass its rim); the placeholder apertures of the
-/// computed surfaces must lie inside their surfaces' extents. Returns the semi-diameters found (mm),
-/// in the order of `surfaces`. Throws a located Error where a ray misses a surface or is totally
-/// reflected, or where a surface cannot be as large as its rays need.
+/// computed surfaces must lie inside their surfaces' extents. Returns the semi-diameters found
+/// (mm), in the order of `surfaces`. Throws a located Error where a ray misses a surface or is
+/// totally reflected, or where a surface cannot be as large as its rays need.
 std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
                                              const std::vector<int>& surfaces,
                                              const AutoSemiDiameterSpec& spec);

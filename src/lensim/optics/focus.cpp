@@ -230,9 +230,9 @@ FocusedLens focusLens(LensPrescription prescription, const LensSetup& setup) {
       placeFilm(fl, setup);
     } catch (const Error& e) {
       if (e.loc().valid()) throw;
-      throw Error(FileLoc{lens.prescription().path, 0, 0},
-                  fmt::format("{} (the lens file's own film position or infinity focus)",
-                              e.message()));
+      throw Error(
+          FileLoc{lens.prescription().path, 0, 0},
+          fmt::format("{} (the lens file's own film position or infinity focus)", e.message()));
     }
     return fl;
   }

@@ -535,11 +535,10 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                               "sets the aperture; give the stop a DIAM or the file an ENPD or "
                               "FNUM",
                               z.number));
-    double semi =
-        auto_semi ? std::min(placeholder_mm,
-                             0.999 * sagDomainRadius(z.curv != 0 ? unit_mm / z.curv : 0.0,
-                                                     SurfaceShape{}))
-                  : (z.clap_max ? *z.clap_max : *z.diam) * unit_mm;
+    double semi = auto_semi ? std::min(placeholder_mm,
+                                       0.999 * sagDomainRadius(z.curv != 0 ? unit_mm / z.curv : 0.0,
+                                                               SurfaceShape{}))
+                            : (z.clap_max ? *z.clap_max : *z.diam) * unit_mm;
     if (!(semi > 0) && auto_semi)
       throw Error(z.loc, fmt::format("surface {}: no semi-diameter in the file, and its curvature "
                                      "{} leaves no extent to compute one on",
@@ -790,8 +789,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
           {Severity::Note, z.diam_loc.valid() ? z.diam_loc : z.loc,
            fmt::format("surface {}: {}: semi-diameter {:.6g} mm computed from real rays (the "
                        "largest ray height of {} field{} at the pupil's edge, {})",
-                       z.number, z.diam ? "DIAM 0" : "no DIAM", semi[i],
-                       spec.fields.size(), spec.fields.size() == 1 ? "" : "s",
+                       z.number, z.diam ? "DIAM 0" : "no DIAM", semi[i], spec.fields.size(),
+                       spec.fields.size() == 1 ? "" : "s",
                        spec.aim_at_stop ? "rays aimed at the real stop (RAIM)"
                                         : "rays through the paraxial entrance pupil")});
     }
