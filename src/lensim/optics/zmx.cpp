@@ -210,7 +210,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   p.name = std::filesystem::path(path_).stem().string();
 
   double unit_mm = 1;
-  std::optional<double> enpd, fnum;
+  std::optional<double> enpd, fnum, obna;
   bool floa = false;
   FileLoc aperture_loc;
   std::map<int, double> wavm;  // index -> micrometres
@@ -316,7 +316,16 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       } else if (key == "FLOA") {
         floa = true;
         aperture_loc = loc;
-      } else if (key == "OBNA" || key == "OBSC" || key == "NUMA") {
+      } else if (key == "OBNA") {
+        // Object-space numerical aperture (object space is air): sin of the axial marginal ray's
+        // angle; the value is the first number.
+        obna = num(1, "object-space numerical aperture");
+        aperture_loc = FileLoc{path_, line_no, t[1].col};
+        if (!(*obna > 0 && *obna < 1))
+          throw Error(aperture_loc, fmt::format("object-space numerical aperture {} must be > 0 "
+                                                "and < 1 (the object is in air)",
+                                                *obna));
+      } else if (key == "OBSC" || key == "NUMA") {
         throw Error(loc, fmt::format("system aperture {} (object-space numerical aperture or "
                                      "cone angle) is not supported; use ENPD, FNUM or FLOA",
                                      key));
@@ -697,15 +706,19 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   const ZSurface& stop_z = surfs[size_t(stop_surface)];
   const bool stop_auto = !stop_z.clap_max && (!stop_z.diam || *stop_z.diam == 0);
   std::optional<double> epd_mm;
-  if (stop_index && (enpd || fnum) && !floa) {
+  if (stop_index && (enpd || fnum || obna) && !floa) {
     LensSystem sys(p);
     const auto& in = sys.interfaces();
     const int st = *stop_index;
-    double y_stop = 1;
+    // (y, n u) at the stop per unit height (y_stop) and per unit angle (w_stop) of a ray at the
+    // front vertex: the entrance pupil lies where y_stop y + w_stop u = 0 for y = -z u.
+    double y_stop = 1, w_stop = 0;
     if (st > 0) {
       const RayMatrix m = systemMatrix(sys, 0, st - 1);
-      y_stop =
-          m.a + (in[size_t(st)].z_mm - in[size_t(st - 1)].z_mm) / in[size_t(st)].nBefore() * m.c;
+      const double reduced =
+          (in[size_t(st)].z_mm - in[size_t(st - 1)].z_mm) / in[size_t(st)].nBefore();
+      y_stop = m.a + reduced * m.c;
+      w_stop = m.b + reduced * m.d;
     }
     const double semi_now = p.surfaces[size_t(st)].semiAperture_mm();
     const double epd_now = 2 * semi_now / std::abs(y_stop);
@@ -713,6 +726,21 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     if (enpd) {
       epd_target = *enpd * unit_mm;
       p.aperture_spec = fmt::format("ENPD {} mm", epd_target);
+    } else if (obna) {
+      // The axial marginal ray from the object point at angle asin(NA) to the paraxial entrance
+      // pupil's edge.
+      if (!p.object_distance_mm)
+        throw Error(aperture_loc, fmt::format("OBNA {}: an object-space numerical aperture needs "
+                                              "a finite object (the object surface's DISZ is "
+                                              "INFINITY)",
+                                              *obna));
+      const double to_pupil = *p.object_distance_mm + w_stop / y_stop;
+      if (!(to_pupil > 0))
+        throw Error(aperture_loc, fmt::format("OBNA {}: the entrance pupil lies {:.6g} mm in "
+                                              "front of the object",
+                                              *obna, -to_pupil));
+      epd_target = 2 * to_pupil * std::tan(std::asin(*obna));
+      p.aperture_spec = fmt::format("OBNA {}", *obna);
     } else {
       const ParaxialData para = computeParaxial(sys);
       epd_target = std::abs(para.effective_focal_length_mm) / *fnum;
