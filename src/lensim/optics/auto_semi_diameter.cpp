@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -15,6 +16,8 @@ namespace {
 
 // Points around the pupil's edge (besides its centre, the chief ray).
 constexpr int kPupilEdgePoints = 64;
+// Bounds on the work (OpticStudio's own limits are 200 fields and 24 wavelengths).
+constexpr size_t kMaxFields = 200, kMaxWavelengths = 64;
 
 // The paraxial entrance pupil: its z (lens space) and the stop's height per unit height at the
 // entrance pupil (the pupil magnification's inverse), from the stop's position alone.
@@ -64,8 +67,15 @@ std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
     throw Error(spec.fields_loc,
                 "automatic semi-diameters: object-height fields need a finite "
                 "object distance (the object surface's DISZ)");
-  std::vector<double> waves = p.wavelengths_nm;
+  std::vector<double> waves = p.wavelengths_nm;  // each distinct one once
+  std::sort(waves.begin(), waves.end());
+  waves.erase(std::unique(waves.begin(), waves.end()), waves.end());
   if (waves.empty()) waves.push_back(base.wavelength_nm());
+  if (waves.size() > kMaxWavelengths || spec.fields.size() > kMaxFields)
+    throw Error(spec.fields_loc,
+                fmt::format("automatic semi-diameters: {} fields and {} wavelengths; at most {} "
+                            "and {} are traced",
+                            spec.fields.size(), waves.size(), kMaxFields, kMaxWavelengths));
   std::vector<std::pair<double, double>> fields = spec.fields;
   if (fields.empty()) fields.push_back({0.0, 0.0});
 
@@ -122,9 +132,9 @@ std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
         if (spec.aim_at_stop) {
           // Real ray aiming: the point of the pupil's plane whose ray meets the stop at the
           // pupil point scaled to the stop (Newton's method, differences for the Jacobian),
-          // continued from the axis (the chief ray, by field) or from the chief ray (by pupil
-          // radius) in steps.
-          const int steps = 32;
+          // continued from the axis (the chief ray, by field: 32 steps) or from the chief ray
+          // (by pupil radius: 4 steps).
+          const int steps = k < 0 ? 32 : 4;
           Vec2 target{}, start = k < 0 ? Vec2{0, 0} : guess;
           bool converged = false;
           for (int step = 1; step <= steps; ++step) {

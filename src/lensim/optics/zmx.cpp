@@ -795,7 +795,9 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                               field_type));
     spec.object_heights = field_type == 1;
     spec.aim_at_stop = ray_aiming_loc.has_value();
-    const size_t count = n_fields > 0 ? size_t(n_fields) : std::max(xfln.size(), yfln.size());
+    // FTYP's count of the XFLN/YFLN values (a count beyond them adds no field).
+    const size_t listed = std::max(xfln.size(), yfln.size());
+    const size_t count = n_fields > 0 ? std::min(size_t(n_fields), listed) : listed;
     for (size_t i = 0; i < count; ++i) {
       const double fx = i < xfln.size() ? xfln[i] : 0.0, fy = i < yfln.size() ? yfln[i] : 0.0;
       spec.fields.push_back(spec.object_heights ? std::pair{fx * unit_mm, fy * unit_mm}
