@@ -154,7 +154,7 @@ std::vector<Mutant> mutate(const std::string& text, size_t stride) {
 }
 
 void runMutations(const std::string& path, size_t stride) {
-  const std::string text = slurp(path);
+  const std::string text = decodeTextFile(slurp(path), path);  // UTF-16 files as UTF-8
   ASSERT_FALSE(text.empty()) << path;
   const std::string name = std::filesystem::path(path).filename().string();
   ASSERT_EQ(lensInfoOutcome(text, name), "ok") << path;
@@ -221,6 +221,10 @@ TEST(LensFileMutation, ZemaxFiles) {
 // Surfaces without DIAM: the automatic semi-diameters' rays under every mutation.
 TEST(LensFileMutation, ZemaxFileWithoutSemiDiameters) {
   runMutations(std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/optiland/lens1.zmx", 1);
+  // With ray aiming (RAIM) and a surface with DIAM 0.
+  runMutations(std::string(LENSIM_SHARED_DIR) +
+                   "/lenses/zmx/optiland/circular_aperture_example_with_aperture.zmx",
+               40);
 }
 
 TEST(LensFileMutation, DatAndJsonFiles) {
