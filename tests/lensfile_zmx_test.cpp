@@ -164,6 +164,33 @@ TEST(ZmxAutoSemiDiameter, PlateBehindAStopInClosedForm) {
   EXPECT_NEAR(p.surfaces[0].semiAperture_mm(), r, 1e-9);  // the stop, from ENPD
 }
 
+// Paraxial image-height fields (FTYP 2) of an object at infinity are the angles atan(h / EFL):
+// lens1 with its 3 angles written as image heights gives the same semi-diameters.
+TEST(ZmxAutoSemiDiameter, ParaxialImageHeightFields) {
+  const std::string path = zmxDir() + "optiland/lens1.zmx";
+  const std::string text = slurp(path);
+  const LensPrescription angles = parseZmx(text, path);
+  const double efl = lensimEfl(angles);  // at the d line; the file's primary is the d line too
+  std::string heights;
+  for (const std::string& line : linesOf(text)) {
+    const auto w = words(line);
+    if (!w.empty() && w[0] == "FTYP") {
+      heights += "FTYP 2 0 3 3 0 0 0\n";
+    } else if (!w.empty() && w[0] == "YFLN") {
+      heights += "YFLN";
+      for (size_t i = 1; i < w.size(); ++i)
+        heights += fmt::format(" {:.17g}", efl * std::tan(std::stod(w[i]) * M_PI / 180));
+      heights += "\n";
+    } else {
+      heights += line + "\n";
+    }
+  }
+  const LensPrescription p = parseZmx(heights, path);
+  ASSERT_EQ(p.surfaces.size(), angles.surfaces.size());
+  for (size_t i = 0; i < p.surfaces.size(); ++i)
+    EXPECT_NEAR(p.surfaces[i].semiAperture_mm(), angles.surfaces[i].semiAperture_mm(), 1e-9);
+}
+
 TEST(ZmxAutoSemiDiameter, StopWithoutSizeUnderFloaIsRefusedAtItsLine) {
   const std::string zmx =
       "MODE SEQ\nFLOA\nSURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  CURV 0\n  DISZ 5\n"

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <numbers>
 
 #include "lensim/optics/auto_semi_diameter.h"
 #include "lensim/optics/glass.h"
@@ -788,18 +789,32 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                   "DIAM or DIAM 0) are not supported");
     AutoSemiDiameterSpec spec;
     spec.fields_loc = field_loc.valid() ? field_loc : auto_rows.front().second->loc;
-    if (field_type != 0 && field_type != 1)
+    // Paraxial image heights (type 2) of an object at infinity are the angles atan(h / EFL).
+    const bool image_heights = field_type == 2 && !p.object_distance_mm;
+    if (field_type != 0 && field_type != 1 && !image_heights)
       throw Error(spec.fields_loc,
                   fmt::format("field type {} (FTYP): automatic semi-diameters need field angles "
-                              "(0) or object heights (1)",
+                              "(0), object heights (1) or, for an object at infinity, paraxial "
+                              "image heights (2)",
                               field_type));
     spec.object_heights = field_type == 1;
+    double efl = 0;
+    if (image_heights) {
+      efl = computeParaxial(LensSystem(p)).effective_focal_length_mm;
+      if (!std::isfinite(efl) || efl == 0)
+        throw Error(spec.fields_loc, "paraxial image-height fields (FTYP 2) of an afocal lens");
+    }
     spec.aim_at_stop = ray_aiming_loc.has_value();
     // FTYP's count of the XFLN/YFLN values (a count beyond them adds no field).
     const size_t listed = std::max(xfln.size(), yfln.size());
     const size_t count = n_fields > 0 ? std::min(size_t(n_fields), listed) : listed;
     for (size_t i = 0; i < count; ++i) {
       const double fx = i < xfln.size() ? xfln[i] : 0.0, fy = i < yfln.size() ? yfln[i] : 0.0;
+      if (image_heights) {
+        spec.fields.push_back({std::atan(fx * unit_mm / efl) * 180 / std::numbers::pi,
+                               std::atan(fy * unit_mm / efl) * 180 / std::numbers::pi});
+        continue;
+      }
       spec.fields.push_back(spec.object_heights ? std::pair{fx * unit_mm, fy * unit_mm}
                                                 : std::pair{fx, fy});
     }
