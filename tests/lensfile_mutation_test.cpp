@@ -72,7 +72,16 @@ LensPrescription parseByExtension(const std::string& text, const std::string& na
 // outcome "ok", or the error; anything but lensim::Error escapes and fails the test.
 std::string lensInfoOutcome(const std::string& text, const std::string& name) {
   try {
-    FocusedLens fl = focusLens(parseByExtension(text, name), LensSetup{});
+    LensPrescription p = parseByExtension(text, name);
+    FocusedLens fl = [&] {
+      try {
+        return focusLens(std::move(p), LensSetup{});
+      } catch (const Error& e) {
+        // Focus errors have no row of their own: the CLI names the lens file (setUpLens).
+        if (e.loc().valid()) throw;
+        throw Error(FileLoc{name}, e.message());
+      }
+    }();
     const LensSystem& lens = *fl.lens;
     (void)workingFNumber(lens, fl.paraxial, std::nullopt);
     (void)fieldOfView(lens, fl.paraxial, 43.27);

@@ -209,11 +209,6 @@ std::vector<Diagnostic> FocusedLens::allDiagnostics() const {
   return all;
 }
 
-namespace {
-// Places the film of a built lens as `setup` asks (focusLens).
-void placeFilm(FocusedLens& fl, const LensSetup& setup);
-}  // namespace
-
 FocusedLens focusLens(LensPrescription prescription, const LensSetup& setup) {
   if (setup.focus_distance_m && setup.film_distance_mm)
     throw Error("give a focus distance or a film distance, not both");
@@ -223,26 +218,6 @@ FocusedLens focusLens(LensPrescription prescription, const LensSetup& setup) {
   fl.lens = std::make_unique<LensSystem>(std::move(prescription), opts);
   fl.paraxial = computeParaxial(*fl.lens);
   LensSystem& lens = *fl.lens;
-  // Without a focus or film distance the lens's own data place the film (its last thickness, else
-  // infinity focus): a failure then comes from the lens file, and says so.
-  if (!setup.film_distance_mm && !setup.focus_distance_m) {
-    try {
-      placeFilm(fl, setup);
-    } catch (const Error& e) {
-      if (e.loc().valid()) throw;
-      throw Error(
-          FileLoc{lens.prescription().path, 0, 0},
-          fmt::format("{} (the lens file's own film position or infinity focus)", e.message()));
-    }
-    return fl;
-  }
-  placeFilm(fl, setup);
-  return fl;
-}
-
-namespace {
-void placeFilm(FocusedLens& fl, const LensSetup& setup) {
-  LensSystem& lens = *fl.lens;
   if (setup.film_distance_mm) {
     lens.setFilmDistance_mm(*setup.film_distance_mm);
   } else if (!setup.focus_distance_m && lens.prescription().fileFilmDistance_mm() > 0) {
@@ -251,11 +226,11 @@ void placeFilm(FocusedLens& fl, const LensSetup& setup) {
     const double D = setup.focus_distance_m ? *setup.focus_distance_m : kInf;
     lens.setFilmDistance_mm(filmDistanceForFocus(lens, fl.paraxial, D, setup.focus_method));
     fl.focus_distance_m = D;
-    return;
+    return fl;
   }
   fl.focus_distance_m =
       focusDistanceForFilm(lens, fl.paraxial, lens.filmDistance_mm(), setup.focus_method);
+  return fl;
 }
-}  // namespace
 
 }  // namespace lensim::optics
