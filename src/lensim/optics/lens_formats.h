@@ -19,8 +19,9 @@ std::string decodeTextFile(std::string_view bytes, const std::string& path);
 
 /// Parses a Zemax `.zmx` file (sequential mode). Surfaces: STANDARD, EVENASPH, ODDASPH, TOROIDAL
 /// (with CONI, PARM); UNIT MM/CM/IN/M; GLAS (catalogue name with the file's n_d/V_d, ___BLANK model
-/// glass); DIAM (semi-diameter), STOP, DISZ (INFINITY for the object); WAVM/WAVL + PWAV;
-/// ENPD / FNUM / FLOA set the stop's size. Anything else that changes the optics (coordinate
+/// glass); DIAM (semi-diameter; without it, or 0, computed from real rays as OpticStudio does:
+/// auto_semi_diameter.h), STOP, DISZ (INFINITY for the object); WAVM/WAVL + PWAV;
+/// ENPD / FNUM / OBNA / FLOA set the stop's size. Anything else that changes the optics (coordinate
 /// breaks, other surface types, mirrors, tilts, non-sequential mode) is refused at its line.
 LensPrescription parseZmx(std::string_view bytes, const std::string& path);
 

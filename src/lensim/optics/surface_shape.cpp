@@ -134,8 +134,10 @@ template <bool kGradient>
       f[j] += a_p * yp[j];
     }
   }
-  if (rot == 0) {
-    for (int j = 0; j < n; ++j) z[j] = f[j], gx[j] = 0, gy[j] = df[j];
+  if (rot == 0) {  // a cylinder: the y curve itself (gx, gy are null without kGradient)
+    for (int j = 0; j < n; ++j) z[j] = f[j];
+    if constexpr (kGradient)
+      for (int j = 0; j < n; ++j) gx[j] = 0, gy[j] = df[j];
     return;
   }
   for (int j = 0; j < n; ++j) {

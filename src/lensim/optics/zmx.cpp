@@ -10,7 +10,9 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <numbers>
 
+#include "lensim/optics/auto_semi_diameter.h"
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
@@ -209,13 +211,18 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   p.name = std::filesystem::path(path_).stem().string();
 
   double unit_mm = 1;
-  std::optional<double> enpd, fnum;
+  std::optional<double> enpd, fnum, obna;
   bool floa = false;
   FileLoc aperture_loc;
   std::map<int, double> wavm;  // index -> micrometres
   std::vector<double> wavl;
   std::optional<int> pwav;
   std::optional<int> n_waves;
+  // Fields (FTYP type and count, XFLN/YFLN values) and ray aiming, for automatic semi-diameters.
+  int field_type = 0, n_fields = 0;
+  FileLoc field_loc;
+  std::vector<double> xfln, yfln;
+  std::optional<FileLoc> vignetting_loc, ray_aiming_loc;
   std::vector<ZSurface> surfs;
   ZSurface* cur = nullptr;
   bool sequential_seen = false;
@@ -310,19 +317,56 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       } else if (key == "FLOA") {
         floa = true;
         aperture_loc = loc;
-      } else if (key == "OBNA" || key == "OBSC" || key == "NUMA") {
+      } else if (key == "OBNA") {
+        // Object-space numerical aperture (object space is air): sin of the axial marginal ray's
+        // angle; the value is the first number.
+        obna = num(1, "object-space numerical aperture");
+        aperture_loc = FileLoc{path_, line_no, t[1].col};
+        if (!(*obna > 0 && *obna < 1))
+          throw Error(aperture_loc, fmt::format("object-space numerical aperture {} must be > 0 "
+                                                "and < 1 (the object is in air)",
+                                                *obna));
+      } else if (key == "OBSC" || key == "NUMA") {
         throw Error(loc, fmt::format("system aperture {} (object-space numerical aperture or "
                                      "cone angle) is not supported; use ENPD, FNUM or FLOA",
                                      key));
       } else if (key == "WAVM") {
         const int i = inum(1, "wavelength number");
         wavm[i] = num(2, "wavelength (micrometres)");
+        if (!(wavm[i] > 0))
+          throw Error(FileLoc{path_, line_no, t[2].col},
+                      fmt::format("wavelength {} micrometres must be > 0", wavm[i]));
       } else if (key == "WAVL") {
-        for (size_t i = 1; i < t.size(); ++i) wavl.push_back(number(t[i], line_no, "wavelength"));
+        for (size_t i = 1; i < t.size(); ++i) {
+          wavl.push_back(number(t[i], line_no, "wavelength"));
+          if (!(wavl.back() > 0))
+            throw Error(FileLoc{path_, line_no, t[i].col},
+                        fmt::format("wavelength {} micrometres must be > 0", wavl.back()));
+        }
       } else if (key == "PWAV") {
         pwav = inum(1, "primary wavelength number");
       } else if (key == "FTYP") {
+        // FTYP type telecentric fields wavelengths ...
+        if (t.size() >= 2) field_type = inum(1, "field type");
+        if (t.size() >= 4) n_fields = inum(3, "number of fields");
         if (t.size() >= 5) n_waves = int(number(t[4], line_no, "number of wavelengths"));
+        field_loc = loc;
+      } else if (key == "XFLN" || key == "YFLN") {
+        auto& v = key == "XFLN" ? xfln : yfln;
+        v.clear();
+        for (size_t i = 1; i < t.size(); ++i) v.push_back(number(t[i], line_no, "field value"));
+        if (!field_loc.valid()) field_loc = loc;
+      } else if (key == "VDXN" || key == "VDYN" || key == "VCXN" || key == "VCYN") {
+        // Vignetting factors: they shrink the pupil OpticStudio's automatic apertures use.
+        for (size_t i = 1; i < t.size(); ++i)
+          if (number(t[i], line_no, "vignetting factor") != 0 && !vignetting_loc)
+            vignetting_loc = FileLoc{path_, line_no, t[i].col};
+      } else if (key == "RAIM") {
+        // Ray aiming: the second value is its mode (0 off). Inferred from the optiland sample
+        // circular_aperture_example_*.zmx (`RAIM 0 1 ...`), whose automatic semi-diameters
+        // OpticStudio computed with rays aimed at the real stop (reproduced to 1e-6 that way).
+        if (t.size() >= 3 && number(t[2], line_no, "ray aiming") != 0)
+          ray_aiming_loc = FileLoc{path_, line_no, t[2].col};
       }
       continue;
     }
@@ -457,6 +501,15 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     p.diagnostics.push_back({Severity::Note, surfs[1].loc,
                              "no STOP line: surface 1 is the aperture stop (Zemax's default)"});
   }
+  // Surfaces without a semi-diameter (no DIAM, DIAM 0) get one from real rays below; until then
+  // a placeholder larger than any ray height (bounded by the surface's extent).
+  std::vector<std::pair<int, const ZSurface*>> auto_rows;  // row in p.surfaces, its surface
+  double placeholder_mm = enpd ? *enpd * unit_mm : 0.0;
+  for (size_t k = 1; k + 1 < surfs.size(); ++k) {
+    if (surfs[k].disz) placeholder_mm += std::abs(*surfs[k].disz) * unit_mm;
+    if (surfs[k].diam) placeholder_mm = std::max(placeholder_mm, 4 * *surfs[k].diam * unit_mm);
+  }
+  placeholder_mm = std::max(4 * placeholder_mm, 1.0);
   double ior_before = 1;
   GlassSpec glass_before;
   // Whether the n_d on the file's GLAS lines are the glasses' data: catalogue glasses checked,
@@ -484,14 +537,25 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                               "(+z, and -z after an odd number of mirrors)",
                               z.number, *z.disz, *z.disz < 0 ? "negative" : "positive", mirrors,
                               mirrors == 1 ? "" : "s"));
-    if (!z.diam)
-      throw Error(z.loc, fmt::format("surface {}: no DIAM (semi-diameter) line; lensim needs "
-                                     "every surface's clear aperture",
-                                     z.number));
-    double semi = (z.clap_max ? *z.clap_max : *z.diam) * unit_mm;
+    const bool auto_semi = !z.clap_max && (!z.diam || *z.diam == 0);
+    if (auto_semi && int(k) == stop_surface && floa)
+      throw Error(z.diam_loc.valid() ? z.diam_loc : z.loc,
+                  fmt::format("surface {} is the stop and has no semi-diameter (no DIAM or DIAM "
+                              "0), and the system aperture is FLOA (the stop's size): nothing "
+                              "sets the aperture; give the stop a DIAM or the file an ENPD or "
+                              "FNUM",
+                              z.number));
+    double semi = auto_semi ? std::min(placeholder_mm,
+                                       0.999 * sagDomainRadius(z.curv != 0 ? unit_mm / z.curv : 0.0,
+                                                               SurfaceShape{}))
+                            : (z.clap_max ? *z.clap_max : *z.diam) * unit_mm;
+    if (!(semi > 0) && auto_semi)
+      throw Error(z.loc, fmt::format("surface {}: no semi-diameter in the file, and its curvature "
+                                     "{} leaves no extent to compute one on",
+                                     z.number, z.curv));
     if (!(semi > 0))
-      throw Error(z.diam_loc,
-                  fmt::format("surface {}: semi-diameter {} must be > 0", z.number, *z.diam));
+      throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} must be > 0", z.number,
+                                          semi / unit_mm));
 
     LensSurface s;
     s.loc = z.loc;
@@ -552,6 +616,10 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       }
     }
     const double domain = sagDomainRadius(s.radius_mm, s.shape);
+    if (auto_semi && semi >= 0.999 * domain) {
+      semi = 0.999 * domain;
+      s.aperture_diameter_mm = 2 * semi;
+    }
     if (s.shape.isToroidal() && semi >= domain) {
       // Within the y curve's own extent, the radius of rotation is what is too small.
       SurfaceShape y_curve = s.shape;
@@ -613,6 +681,14 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     p.surfaces.push_back(s);
   }
 
+  for (size_t r = 0; r < p.surfaces.size(); ++r)
+    for (size_t k = 1; k + 1 < surfs.size(); ++k) {
+      const ZSurface& z = surfs[k];
+      if (z.loc.line == p.surfaces[r].loc.line && !z.clap_max && (!z.diam || *z.diam == 0) &&
+          !p.surfaces[r].stop_flag.value_or(false))
+        auto_rows.push_back({int(r), &z});
+    }
+
   // An unknown glass falls back on its GLAS line's n_d and V_d (resolveGlass warns). Some files
   // carry placeholders there instead (US05331467-1.zmx: 1.5 and 40 on every line): say so when
   // most of the catalogue glasses of the same file disagree with the catalogue.
@@ -628,15 +704,22 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   // The system aperture sets the stop's size (paraxially: the entrance pupil is the image of the
   // stop, so its diameter scales with the stop's).
   const auto stop_index = p.stopIndex();
-  if (stop_index && (enpd || fnum) && !floa) {
+  const ZSurface& stop_z = surfs[size_t(stop_surface)];
+  const bool stop_auto = !stop_z.clap_max && (!stop_z.diam || *stop_z.diam == 0);
+  std::optional<double> epd_mm;
+  if (stop_index && (enpd || fnum || obna) && !floa) {
     LensSystem sys(p);
     const auto& in = sys.interfaces();
     const int st = *stop_index;
-    double y_stop = 1;
+    // (y, n u) at the stop per unit height (y_stop) and per unit angle (w_stop) of a ray at the
+    // front vertex: the entrance pupil lies where y_stop y + w_stop u = 0 for y = -z u.
+    double y_stop = 1, w_stop = 0;
     if (st > 0) {
       const RayMatrix m = systemMatrix(sys, 0, st - 1);
-      y_stop =
-          m.a + (in[size_t(st)].z_mm - in[size_t(st - 1)].z_mm) / in[size_t(st)].nBefore() * m.c;
+      const double reduced =
+          (in[size_t(st)].z_mm - in[size_t(st - 1)].z_mm) / in[size_t(st)].nBefore();
+      y_stop = m.a + reduced * m.c;
+      w_stop = m.b + reduced * m.d;
     }
     const double semi_now = p.surfaces[size_t(st)].semiAperture_mm();
     const double epd_now = 2 * semi_now / std::abs(y_stop);
@@ -644,15 +727,36 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     if (enpd) {
       epd_target = *enpd * unit_mm;
       p.aperture_spec = fmt::format("ENPD {} mm", epd_target);
+    } else if (obna) {
+      // The axial marginal ray from the object point at angle asin(NA) to the paraxial entrance
+      // pupil's edge.
+      if (!p.object_distance_mm)
+        throw Error(aperture_loc, fmt::format("OBNA {}: an object-space numerical aperture needs "
+                                              "a finite object (the object surface's DISZ is "
+                                              "INFINITY)",
+                                              *obna));
+      const double to_pupil = *p.object_distance_mm + w_stop / y_stop;
+      if (!(to_pupil > 0))
+        throw Error(aperture_loc, fmt::format("OBNA {}: the entrance pupil lies {:.6g} mm in "
+                                              "front of the object",
+                                              *obna, -to_pupil));
+      epd_target = 2 * to_pupil * std::tan(std::asin(*obna));
+      p.aperture_spec = fmt::format("OBNA {}", *obna);
     } else {
       const ParaxialData para = computeParaxial(sys);
       epd_target = std::abs(para.effective_focal_length_mm) / *fnum;
       p.aperture_spec = fmt::format("FNUM {}", *fnum);
     }
     const double semi_new = semi_now * epd_target / epd_now;
+    epd_mm = epd_target;
     const LensSurface& stop_row = p.surfaces[size_t(st)];
     const double extent = sagDomainRadius(stop_row.radius_mm, stop_row.shape);
-    if (semi_new >= extent) {
+    if (semi_new >= extent && stop_auto) {
+      throw Error(aperture_loc,
+                  fmt::format("{}: the stop (surface {}, no DIAM) would need a semi-diameter of "
+                              "{:.6g} mm, beyond its surface's extent ({:.6g} mm)",
+                              p.aperture_spec, stop_z.number, semi_new, extent));
+    } else if (semi_new >= extent) {
       // A curved stop (a mirror) cannot open beyond its surface: keep DIAM's size.
       p.diagnostics.push_back(
           {Severity::Warning, aperture_loc,
@@ -662,7 +766,13 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     } else {
       p.surfaces[size_t(st)].aperture_diameter_mm = 2 * semi_new;
     }
-    if (semi_new < extent && std::abs(semi_new / semi_now - 1) > 1e-6)
+    if (stop_auto)
+      p.diagnostics.push_back(
+          {Severity::Note, stop_z.loc,
+           fmt::format("surface {} (the stop) has no semi-diameter in the file: {:.6g} mm from "
+                       "{}",
+                       stop_z.number, semi_new, p.aperture_spec)});
+    else if (semi_new < extent && std::abs(semi_new / semi_now - 1) > 1e-6)
       p.diagnostics.push_back(
           {Severity::Note, aperture_loc,
            fmt::format("{}: the stop's semi-diameter is {:.6g} mm (DIAM gives {:.6g} mm)",
@@ -671,6 +781,65 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     p.aperture_spec = "FLOA (stop semi-diameter from DIAM)";
   }
   (void)inserted_stop;
+
+  if (!auto_rows.empty()) {
+    if (vignetting_loc)
+      throw Error(*vignetting_loc,
+                  "vignetting factors with surfaces whose semi-diameters OpticStudio computes (no "
+                  "DIAM or DIAM 0) are not supported");
+    AutoSemiDiameterSpec spec;
+    spec.fields_loc = field_loc.valid() ? field_loc : auto_rows.front().second->loc;
+    // Paraxial image heights (type 2) of an object at infinity are the angles atan(h / EFL).
+    const bool image_heights = field_type == 2 && !p.object_distance_mm;
+    if (field_type != 0 && field_type != 1 && !image_heights)
+      throw Error(spec.fields_loc,
+                  fmt::format("field type {} (FTYP): automatic semi-diameters need field angles "
+                              "(0), object heights (1) or, for an object at infinity, paraxial "
+                              "image heights (2)",
+                              field_type));
+    spec.object_heights = field_type == 1;
+    double efl = 0;
+    if (image_heights) {
+      efl = computeParaxial(LensSystem(p)).effective_focal_length_mm;
+      if (!std::isfinite(efl) || efl == 0)
+        throw Error(spec.fields_loc, "paraxial image-height fields (FTYP 2) of an afocal lens");
+    }
+    spec.aim_at_stop = ray_aiming_loc.has_value();
+    // FTYP's count of the XFLN/YFLN values (a count beyond them adds no field).
+    const size_t listed = std::max(xfln.size(), yfln.size());
+    const size_t count = n_fields > 0 ? std::min(size_t(n_fields), listed) : listed;
+    for (size_t i = 0; i < count; ++i) {
+      const double fx = i < xfln.size() ? xfln[i] : 0.0, fy = i < yfln.size() ? yfln[i] : 0.0;
+      if (image_heights) {
+        spec.fields.push_back({std::atan(fx * unit_mm / efl) * 180 / std::numbers::pi,
+                               std::atan(fy * unit_mm / efl) * 180 / std::numbers::pi});
+        continue;
+      }
+      spec.fields.push_back(spec.object_heights ? std::pair{fx * unit_mm, fy * unit_mm}
+                                                : std::pair{fx, fy});
+    }
+    spec.entrance_pupil_diameter_mm = epd_mm.value_or(0.0);
+    std::vector<int> rows;
+    for (const auto& [row, z] : auto_rows) rows.push_back(row);
+    const std::vector<double> semi = computeAutoSemiDiameters(p, rows, spec);
+    for (size_t i = 0; i < rows.size(); ++i) {
+      LensSurface& s = p.surfaces[size_t(rows[i])];
+      const ZSurface& z = *auto_rows[i].second;
+      if (s.obscuration_radius_mm >= semi[i])
+        throw Error(z.inner_loc, fmt::format("surface {}: obscuration radius {} is not inside the "
+                                             "computed semi-diameter {:.6g}",
+                                             z.number, z.inner_radius, semi[i] / unit_mm));
+      s.aperture_diameter_mm = 2 * semi[i];
+      p.diagnostics.push_back(
+          {Severity::Note, z.diam_loc.valid() ? z.diam_loc : z.loc,
+           fmt::format("surface {}: {}: semi-diameter {:.6g} mm computed from real rays (the "
+                       "largest ray height of {} field{} at the pupil's edge, {})",
+                       z.number, z.diam ? "DIAM 0" : "no DIAM", semi[i], spec.fields.size(),
+                       spec.fields.size() == 1 ? "" : "s",
+                       spec.aim_at_stop ? "rays aimed at the real stop (RAIM)"
+                                        : "rays through the paraxial entrance pupil")});
+    }
+  }
   return p;
 }
 
