@@ -35,6 +35,14 @@ double percentile(std::vector<double> v, double q) {
 
 }  // namespace
 
+LensPrescription toleranceNominal(const DesignJob& job) {
+  LensPrescription p = job.start;
+  for (const Tolerance& t : job.tolerance.tolerances)
+    if (t.kind == Tolerance::Kind::Index || t.kind == Tolerance::Kind::Abbe)
+      p = applyTolerance(std::move(p), t, 0);
+  return p;
+}
+
 LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double value) {
   LensSurface& s = p.surfaces[t.surface];
   switch (t.kind) {
@@ -101,7 +109,7 @@ double drawTolerance(const Tolerance& t, std::uint64_t seed, int build, int inde
 }
 
 LensPrescription asBuiltLens(const DesignJob& job, int build) {
-  LensPrescription p = job.start;
+  LensPrescription p = toleranceNominal(job);
   const auto& tols = job.tolerance.tolerances;
   for (size_t i = 0; i < tols.size(); ++i)
     p = applyTolerance(std::move(p), tols[i],
@@ -115,15 +123,16 @@ LensPrescription asBuiltLens(const DesignJob& job, int build) {
 
 ToleranceResult runTolerancing(const DesignJob& job) {
   ToleranceResult r;
-  r.nominal = toleranceCriterion(job, job.start);
+  const LensPrescription nominal = toleranceNominal(job);
+  r.nominal = toleranceCriterion(job, nominal);
   const auto& tols = job.tolerance.tolerances;
   r.sensitivity.resize(tols.size());
   tbb::parallel_for(0, static_cast<int>(tols.size()), [&](int i) {
     SensitivityRow& row = r.sensitivity[i];
     row.label = tols[i].label();
-    row.plus = toleranceCriterion(job, applyTolerance(job.start, tols[i], tols[i].delta)) - r.nominal;
+    row.plus = toleranceCriterion(job, applyTolerance(nominal, tols[i], tols[i].delta)) - r.nominal;
     row.minus =
-        toleranceCriterion(job, applyTolerance(job.start, tols[i], -tols[i].delta)) - r.nominal;
+        toleranceCriterion(job, applyTolerance(nominal, tols[i], -tols[i].delta)) - r.nominal;
   });
   double s2 = 0;
   for (const SensitivityRow& row : r.sensitivity) {
@@ -134,7 +143,7 @@ ToleranceResult runTolerancing(const DesignJob& job) {
   const int n = job.tolerance.monte_carlo;
   r.builds.assign(n, 0);
   tbb::parallel_for(0, n, [&](int k) {
-    LensPrescription p = job.start;
+    LensPrescription p = nominal;
     for (size_t i = 0; i < tols.size(); ++i)
       p = applyTolerance(std::move(p), tols[i],
                          drawTolerance(tols[i], job.tolerance.seed, k, static_cast<int>(i)));

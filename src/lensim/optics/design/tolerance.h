@@ -23,6 +23,10 @@
 
 namespace lensim::optics::design {
 
+/// The job's lens as toleranced: media with index or Abbe tolerances become the model glasses
+/// through their (n_d, V_d), so that a zero offset changes nothing.
+LensPrescription toleranceNominal(const DesignJob& job);
+
 /// A prescription with the tolerance applied at offset `value` (radius mm, thickness mm, index,
 /// Abbe number). Index and Abbe tolerances make the medium a model glass through the perturbed
 /// (n_d, V_d).
