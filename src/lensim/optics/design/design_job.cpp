@@ -224,13 +224,14 @@ std::vector<double> numberArray(const json& j, const char* key, std::string_view
   return out;
 }
 
-// The lens the operands are evaluated on: every clear aperture but the stop's opened to the
-// surface's extent (floating apertures), the film at the last thickness.
+// The lens the operands are evaluated on: every clear aperture but the stop's doubled, within the
+// surface's extent (floating apertures; the chief-ray searches scale with the largest aperture,
+// so not unbounded), the film at the last thickness.
 FocusedLens evaluationLens(LensPrescription p) {
   for (LensSurface& s : p.surfaces) {
     if (s.isStop()) continue;
     const double extent = sagDomainRadius(s.radius_mm, s.shape);
-    s.aperture_diameter_mm = 2 * std::min(0.999 * extent, 1e4);
+    s.aperture_diameter_mm = std::min(2 * 0.999 * extent, 2 * s.aperture_diameter_mm);
   }
   LensSetup setup;
   if (!(p.fileFilmDistance_mm() > 0))

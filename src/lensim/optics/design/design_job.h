@@ -5,8 +5,8 @@
 // Every operand is computed by the workbench's own code on the lens the variables describe:
 // paraxial data (paraxial.h), real chief rays (chief_ray.h) and exact traces of hexapolar pupil
 // samples (field_rays.h) for RMS spots. Objects are at infinity; fields are angles (degrees).
-// During optimisation the clear apertures of every surface but the stop float (they are opened
-// to the surface's extent) and spot rays are not clipped: the paraxial entrance pupil, aimed at
+// During optimisation the clear apertures of every surface but the stop float (they are doubled,
+// within the surface's extent) and spot rays are not clipped: the paraxial entrance pupil, aimed at
 // the real chief ray, defines each beam, so the merit is smooth in the variables.
 #pragma once
 

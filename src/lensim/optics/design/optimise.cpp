@@ -70,15 +70,15 @@ DesignResult optimiseDesign(const DesignJob& job,
       say(fmt::format("{} iteration {:3d}  merit {:.6e}  lambda {:.1e}  dominant: {}", name, it,
                       merit, lambda, top));
     };
-    LmResult res;
     try {
-      res = levenbergMarquardt(f, x0, lo, hi, opts);
+      operandValues(job, base);
     } catch (const Error& e) {
-      throw Error(fmt::format("{}: the starting lens cannot be evaluated (every operand must be "
-                              "computable: a focal lens, real chief rays at every field, beams "
+      throw Error(fmt::format("{}: the starting lens cannot be evaluated: {} (every operand must "
+                              "be computable: a focal lens, real chief rays at every field, beams "
                               "that reach the film)",
-                              job.path));
+                              job.path, e.message()));
     }
+    const LmResult res = levenbergMarquardt(f, x0, lo, hi, opts);
     out.lens = applyVariables(vars, base, res.x);
     if (out.iterations == 0) out.initial_merit = res.initial_merit;
     out.merit = res.merit;
