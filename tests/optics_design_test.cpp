@@ -365,6 +365,11 @@ TEST(LensDesign, JobErrorsNameTheLineAndValue) {
   tol.replace(tol.find("\"radius\", \"surface\": 2"), 8, "\"tilt\"");
   EXPECT_NE(err(tol).find("bad.json:9:7: error: \"tilt\" tolerances are not modelled"), std::string::npos)
       << err(tol);
+  tol = toleranceJob("singlet.dat", 1, "uniform");
+  tol.replace(tol.find("\"delta\": 0.2"), 12, "\"delta\": 5.0");
+  EXPECT_NE(err(tol).find("bad.json:7:7: error: \"delta\" 5 must be below the thickness 4 mm"),
+            std::string::npos)
+      << err(tol);
   EXPECT_NE(err("{\"lens\": \"singlet.dat\",\n \"rings\": 0}").find("bad.json:2:2: error: \"rings\" 0"),
             std::string::npos);
   EXPECT_NE(err("{\"lens\": \"singlet.dat\",,}").find("bad.json:1:24: error: not valid JSON"),

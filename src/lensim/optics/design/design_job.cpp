@@ -182,6 +182,22 @@ Tolerance parseTolerance(const json& e, const FileLoc& loc, const LensPrescripti
     throw Error(loc, fmt::format("surface {}: the medium after it is air: index and Abbe "
                                  "tolerances need glass",
                                  t.surface));
+  if (t.kind == Tolerance::Kind::Radius && !(t.delta < std::abs(s.radius_mm)))
+    throw Error(loc, fmt::format("\"delta\" {} must be below the radius's magnitude {} mm (a "
+                                 "build would flip or flatten the surface)",
+                                 t.delta, std::abs(s.radius_mm)));
+  if (t.kind == Tolerance::Kind::Thickness && !(t.delta < s.thickness_mm))
+    throw Error(loc, fmt::format("\"delta\" {} must be below the thickness {} mm", t.delta,
+                                 s.thickness_mm));
+  if (t.kind == Tolerance::Kind::Index || t.kind == Tolerance::Kind::Abbe) {
+    const Glass g = resolveGlass(s.glass, s.ior);
+    const bool index = t.kind == Tolerance::Kind::Index;
+    const double base = index ? g.n_d() - 1 : g.v_d();
+    if (!(t.delta < base))
+      throw Error(loc, fmt::format("\"delta\" {} must be below the medium's {} ({}) so that every "
+                                   "build is physical",
+                                   t.delta, index ? "n_d - 1" : "V_d", base));
+  }
   const std::string d = e.value("distribution", std::string("uniform"));
   if (d == "uniform") t.distribution = Tolerance::Distribution::Uniform;
   else if (d == "normal") t.distribution = Tolerance::Distribution::Normal;

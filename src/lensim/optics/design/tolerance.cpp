@@ -147,7 +147,13 @@ ToleranceResult runTolerancing(const DesignJob& job) {
     for (size_t i = 0; i < tols.size(); ++i)
       p = applyTolerance(std::move(p), tols[i],
                          drawTolerance(tols[i], job.tolerance.seed, k, static_cast<int>(i)));
-    r.builds[k] = toleranceCriterion(job, p);
+    try {
+      r.builds[k] = toleranceCriterion(job, p);
+    } catch (const Error& e) {
+      // Leaving the build out would bias the statistics: refuse instead.
+      throw Error(fmt::format("Monte Carlo build {} (seed {}) cannot be evaluated: {}", k,
+                              job.tolerance.seed, e.message()));
+    }
   });
   if (n > 0) {
     double m = 0;
