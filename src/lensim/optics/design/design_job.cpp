@@ -42,14 +42,13 @@ double number(const json& j, const char* key, const FileLoc& loc, std::optional<
   return v;
 }
 
-int surfaceIndex(const json& j, const FileLoc& loc, const LensPrescription& p, bool last_ok) {
+int surfaceIndex(const json& j, const FileLoc& loc, const LensPrescription& p) {
   const double v = number(j, "surface", loc);
   const int n = static_cast<int>(p.surfaces.size());
   if (v != std::floor(v) || v < 0 || v >= n)
     throw Error(loc, fmt::format("\"surface\" {} is not a row of the lens: expected 0 to {} "
                                  "(0-based rows of {})",
                                  v, n - 1, p.path));
-  (void)last_ok;
   return static_cast<int>(v);
 }
 
@@ -77,7 +76,7 @@ Variable parseVariable(const json& e, const FileLoc& loc, const LensPrescription
   checkKeys(e, loc, {"type", "surface", "power", "min", "max"});
   const std::string t =
       kindOf(e, loc, {"curvature", "thickness", "conic", "asphere", "glass_nd", "glass_vd"});
-  v.surface = surfaceIndex(e, loc, p, true);
+  v.surface = surfaceIndex(e, loc, p);
   const LensSurface& s = p.surfaces[v.surface];
   if (t == "curvature") {
     v.kind = Variable::Kind::Curvature;
@@ -139,7 +138,7 @@ Operand parseOperand(const json& e, const FileLoc& loc, const LensPrescription& 
   const bool zero_target = o.kind == Operand::Kind::RmsSpot;
   if (o.kind == Operand::Kind::Thickness) {
     if (!limits) throw Error(loc, "a thickness operand needs \"min\" and/or \"max\" (mm)");
-    o.surface = surfaceIndex(e, loc, p, true);
+    o.surface = surfaceIndex(e, loc, p);
   } else if (!limits) {
     o.target = number(e, "target", loc, zero_target ? std::optional<double>(0.0) : std::nullopt);
   }
@@ -171,7 +170,7 @@ Tolerance parseTolerance(const json& e, const FileLoc& loc, const LensPrescripti
            : k == "thickness" ? Tolerance::Kind::Thickness
            : k == "index"     ? Tolerance::Kind::Index
                               : Tolerance::Kind::Abbe;
-  t.surface = surfaceIndex(e, loc, p, true);
+  t.surface = surfaceIndex(e, loc, p);
   const LensSurface& s = p.surfaces[t.surface];
   t.delta = number(e, "delta", loc);
   if (!(t.delta > 0)) throw Error(loc, fmt::format("\"delta\" {} must be > 0", t.delta));

@@ -10,6 +10,7 @@
 // the real chief ray, defines each beam, so the merit is smooth in the variables.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
