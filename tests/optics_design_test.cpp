@@ -110,40 +110,48 @@ double independentBfl(const std::vector<Row>& rows) {
   return -y / nu;
 }
 
+// Exact trace of one ray (origin at z = 0, the first row's vertex) through spherical rows by
+// vector refraction, to the plane at the last thickness: the (x, y) it meets there.
+std::pair<double, double> independentTrace(const std::vector<Row>& rows, double ox, double oy,
+                                           const double dir[3]) {
+  double o[3] = {ox, oy, 0}, d[3] = {dir[0], dir[1], dir[2]};
+  double z = 0, n = 1;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i].radius != 0) {
+      const double R = rows[i].radius, cz = z + R;
+      const double oc[3] = {o[0], o[1], o[2] - cz};
+      const double b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
+      const double c = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - R * R;
+      const double disc = std::sqrt(b * b - c);
+      // The root on the vertex side: for R > 0 the nearer hit, for R < 0 the farther one.
+      const double t = R > 0 ? -b - disc : -b + disc;
+      for (int k = 0; k < 3; ++k) o[k] += t * d[k];
+      // The unit normal facing the incoming ray (toward -z at the vertex).
+      const double nrm[3] = {o[0] / R, o[1] / R, (o[2] - cz) / R};
+      const double mu = n / rows[i].n_after;
+      const double cosi = -(nrm[0] * d[0] + nrm[1] * d[1] + nrm[2] * d[2]);
+      const double k2 = 1 - mu * mu * (1 - cosi * cosi);
+      for (int k = 0; k < 3; ++k) d[k] = mu * d[k] + (mu * cosi - std::sqrt(k2)) * nrm[k];
+    }
+    n = rows[i].n_after;
+    z += rows[i].thickness;
+  }
+  const double t = (z - o[2]) / d[2];
+  return {o[0] + t * d[0], o[1] + t * d[1]};
+}
+
 // RMS spot (mm) of the on-axis beam filling a stop of radius `stop_r` at the first row (z = 0),
-// on the plane at the last thickness: exact vector refraction, a dense square grid of rays.
+// on the plane at the last thickness: a dense square grid of rays.
 double independentAxialRms(const std::vector<Row>& rows, double stop_r) {
   const int grid = 160;
+  const double axis[3] = {0, 0, 1};
   double sx = 0, sy = 0, sxx = 0;
   int count = 0;
   for (int iy = 0; iy < grid; ++iy)
     for (int ix = 0; ix < grid; ++ix) {
       const double px = stop_r * (2.0 * (ix + 0.5) / grid - 1), py = stop_r * (2.0 * (iy + 0.5) / grid - 1);
       if (px * px + py * py > stop_r * stop_r) continue;
-      double o[3] = {px, py, 0}, d[3] = {0, 0, 1};
-      double z = 0, n = 1;
-      for (size_t i = 0; i < rows.size(); ++i) {
-        if (rows[i].radius != 0) {
-          const double R = rows[i].radius, cz = z + R;
-          const double oc[3] = {o[0], o[1], o[2] - cz};
-          const double b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
-          const double c = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - R * R;
-          const double disc = std::sqrt(b * b - c);
-          // The root on the vertex side: for R > 0 the nearer hit, for R < 0 the farther one.
-          const double t = R > 0 ? -b - disc : -b + disc;
-          for (int k = 0; k < 3; ++k) o[k] += t * d[k];
-          // The unit normal facing the incoming ray (toward -z at the vertex).
-          const double nrm[3] = {o[0] / R, o[1] / R, (o[2] - cz) / R};
-          const double mu = n / rows[i].n_after;
-          const double cosi = -(nrm[0] * d[0] + nrm[1] * d[1] + nrm[2] * d[2]);
-          const double k2 = 1 - mu * mu * (1 - cosi * cosi);
-          for (int k = 0; k < 3; ++k) d[k] = mu * d[k] + (mu * cosi - std::sqrt(k2)) * nrm[k];
-        }
-        n = rows[i].n_after;
-        z += rows[i].thickness;
-      }
-      const double t = (z - o[2]) / d[2];
-      const double x = o[0] + t * d[0], y = o[1] + t * d[1];
+      const auto [x, y] = independentTrace(rows, px, py, axis);
       sx += x, sy += y, sxx += x * x + y * y;
       ++count;
     }
@@ -249,6 +257,34 @@ TEST(LensDesign, GlassVariablesSnapToTheCatalogue) {
   ASSERT_NE(GlassCatalog::builtin().find(s.glass.name), nullptr) << s.glass.name;
   EXPECT_GE(*s.glass.n_d, 1.59);
   EXPECT_LE(*s.glass.n_d, 1.71);
+}
+
+TEST(LensDesign, OperandValuesAgreeWithTheIndependentTrace) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  std::string text = singletJob("singlet.dat");
+  const std::string from = "    {\"type\": \"rms_spot\", \"weight\": 100}\n";
+  text.replace(text.find(from), from.size(),
+               "    {\"type\": \"bfl\", \"target\": 0},\n"
+               "    {\"type\": \"total_track\", \"target\": 0},\n"
+               "    {\"type\": \"image_height\", \"field_deg\": 6, \"target\": 0},\n"
+               "    {\"type\": \"distortion\", \"field_deg\": 6, \"target\": 0},\n"
+               "    {\"type\": \"thickness\", \"surface\": 1, \"min\": 5}\n");
+  const DesignJob job = readDesignJob(dir.write("job.json", text));
+  const std::vector<double> v = operandValues(job, job.start);
+  const std::vector<Row> rows = rowsOf(job.start);
+  const double efl = independentEfl(rows);
+  EXPECT_NEAR(v[0], efl, 1e-9 * efl);
+  EXPECT_NEAR(v[1], independentBfl(rows), 1e-9 * efl);
+  EXPECT_NEAR(v[2], 99.0, 1e-12);
+  // The chief ray of a stop-first lens goes through the front vertex (the stop's centre).
+  const double th = 6 * M_PI / 180, dir6[3] = {std::sin(th), 0, std::cos(th)};
+  const double h = independentTrace(rows, 0, 0, dir6).first;
+  EXPECT_NEAR(v[3], h, 1e-9);
+  EXPECT_NEAR(v[4], 100 * (h - efl * std::tan(th)) / (efl * std::tan(th)), 1e-7);
+  EXPECT_NEAR(v[5], 4, 1e-12);
+  // The limit operand's residual: the weighted shortfall below the minimum.
+  EXPECT_NEAR(operandResidual(job.operands[5], v[5]), 1.0, 1e-12);
 }
 
 // --- Tolerancing -------------------------------------------------------------------------------
