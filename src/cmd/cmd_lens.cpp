@@ -722,6 +722,7 @@ void registerLensCommands(CLI::App& app, Action& action) {
     convert->add_option("OUT", *out, "Output .json or .dat")->required();
     convert->callback([&action, in, out] { action = [in, out] { return runConvert(*in, *out); }; });
   }
+  registerDesignCommands(lens, action);
 }
 
 }  // namespace lensim::cmd

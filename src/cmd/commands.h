@@ -16,6 +16,8 @@ using Action = std::function<int()>;
 
 /// `lensim lens ...`: lens analysis (info, trace).
 void registerLensCommands(CLI::App& app, Action& action);
+/// `lensim lens optimise|tolerance JOB`: lens design (cmd_design.cpp), under `lens`.
+void registerDesignCommands(CLI::App* lens, Action& action);
 
 /// `lensim check SCENE [--format]`: parse and build a pbrt scene, print a summary.
 void registerCheckCommand(CLI::App& app, Action& action);

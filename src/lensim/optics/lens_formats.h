@@ -8,6 +8,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "lensim/optics/prescription.h"
 
@@ -45,6 +46,14 @@ struct LensRef {
   std::string lentil_key;
 };
 LensRef resolveLensName(const std::string& name);
+
+/// nlohmann::json keeps no positions, so the line of every element of an array of objects is
+/// found by a small scan of the text: the offsets of the '{' that open the elements of the array
+/// that is the value of `key` (at any depth; the n-th such array is chosen by `occurrence`).
+std::vector<size_t> arrayElementOffsets(std::string_view text, std::string_view key,
+                                        int occurrence = 0);
+/// The line and column of a byte offset of a text.
+FileLoc locAt(std::string_view text, size_t offset, const std::string& path);
 
 /// Where the `lenses/` catalogue is (LENSIM_LENSES_DIR, else the source tree's lenses/).
 std::string lensCatalogueDir();

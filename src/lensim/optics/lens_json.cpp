@@ -11,15 +11,10 @@
 
 namespace lensim::optics {
 
-namespace {
-
 using nlohmann::json;
 
-// nlohmann::json keeps no positions, so the line of every element of an array of objects is
-// found by a small scan of the text: the offsets of the '{' that open the elements of the array
-// that is the value of `key` (at any depth; the n-th such array is chosen by `occurrence`).
 std::vector<size_t> arrayElementOffsets(std::string_view text, std::string_view key,
-                                        int occurrence = 0) {
+                                        int occurrence) {
   std::vector<size_t> out;
   int depth = 0;
   int found = -1;
@@ -75,6 +70,8 @@ FileLoc locAt(std::string_view text, size_t offset, const std::string& path) {
   }
   return FileLoc{path, line, col};
 }
+
+namespace {
 
 double getNumber(const json& j, const char* key, const FileLoc& loc, const char* what) {
   auto it = j.find(key);

@@ -1,0 +1,560 @@
+#include "lensim/optics/design/design_job.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+#include "lensim/optics/chief_ray.h"
+#include "lensim/optics/field_rays.h"
+#include "lensim/optics/focus.h"
+#include "lensim/optics/glass.h"
+#include "lensim/optics/lens_formats.h"
+#include "lensim/optics/paraxial.h"
+#include "lensim/util/file.h"
+
+namespace lensim::optics::design {
+
+namespace {
+
+using nlohmann::json;
+constexpr double kDeg = std::numbers::pi / 180;
+
+// Where a top-level key is written (its opening quote), else the file's start.
+FileLoc keyLoc(std::string_view text, const std::string& key, const std::string& path) {
+  const size_t at = text.find("\"" + key + "\"");
+  return locAt(text, at == std::string_view::npos ? 0 : at, path);
+}
+
+double number(const json& j, const char* key, const FileLoc& loc, std::optional<double> def = {}) {
+  auto it = j.find(key);
+  if (it == j.end()) {
+    if (def) return *def;
+    throw Error(loc, fmt::format("missing \"{}\" (a number)", key));
+  }
+  if (!it->is_number())
+    throw Error(loc, fmt::format("\"{}\" is {}: expected a number", key, it->dump()));
+  const double v = it->get<double>();
+  if (!std::isfinite(v)) throw Error(loc, fmt::format("\"{}\" must be finite", key));
+  return v;
+}
+
+int surfaceIndex(const json& j, const FileLoc& loc, const LensPrescription& p) {
+  const double v = number(j, "surface", loc);
+  const int n = static_cast<int>(p.surfaces.size());
+  if (v != std::floor(v) || v < 0 || v >= n)
+    throw Error(loc, fmt::format("\"surface\" {} is not a row of the lens: expected 0 to {} "
+                                 "(0-based rows of {})",
+                                 v, n - 1, p.path));
+  return static_cast<int>(v);
+}
+
+std::string kindOf(const json& e, const FileLoc& loc, const std::vector<std::string>& allowed) {
+  auto it = e.find("type");
+  if (it == e.end() || !it->is_string())
+    throw Error(loc, fmt::format("missing \"type\": expected one of {}", fmt::join(allowed, ", ")));
+  const std::string t = it->get<std::string>();
+  if (std::find(allowed.begin(), allowed.end(), t) == allowed.end())
+    throw Error(loc, fmt::format("unknown type \"{}\": expected one of {}", t,
+                                 fmt::join(allowed, ", ")));
+  return t;
+}
+
+void checkKeys(const json& e, const FileLoc& loc, const std::vector<std::string>& allowed) {
+  for (auto it = e.begin(); it != e.end(); ++it)
+    if (std::find(allowed.begin(), allowed.end(), it.key()) == allowed.end())
+      throw Error(loc, fmt::format("unknown key \"{}\": expected one of {}", it.key(),
+                                   fmt::join(allowed, ", ")));
+}
+
+Variable parseVariable(const json& e, const FileLoc& loc, const LensPrescription& p) {
+  Variable v;
+  v.loc = loc;
+  checkKeys(e, loc, {"type", "surface", "power", "min", "max"});
+  const std::string t =
+      kindOf(e, loc, {"curvature", "thickness", "conic", "asphere", "glass_nd", "glass_vd"});
+  v.surface = surfaceIndex(e, loc, p);
+  const LensSurface& s = p.surfaces[v.surface];
+  if (t == "curvature") {
+    v.kind = Variable::Kind::Curvature;
+    if (s.isStop()) throw Error(loc, fmt::format("surface {} is the stop: it has no curvature", v.surface));
+  } else if (t == "thickness") {
+    v.kind = Variable::Kind::Thickness;
+    v.lower = 0;
+  } else if (t == "conic") {
+    v.kind = Variable::Kind::Conic;
+  } else if (t == "asphere") {
+    v.kind = Variable::Kind::Asphere;
+    const double pw = number(e, "power", loc);
+    if (pw != std::floor(pw) || pw < 2 || pw > 20)
+      throw Error(loc, fmt::format("\"power\" {} is not an aspheric term: expected an integer "
+                                   "from 2 to 20 (the coefficient of r^power)",
+                                   pw));
+    v.power = static_cast<int>(pw);
+  } else {
+    v.kind = t == "glass_nd" ? Variable::Kind::GlassIndex : Variable::Kind::GlassAbbe;
+    const bool air = s.glass.empty() && (s.ior == 1 || s.ior == 0);
+    if (air || s.mirror)
+      throw Error(loc, fmt::format("surface {}: the medium after it is {}: a glass variable "
+                                   "needs glass",
+                                   v.surface, s.mirror ? "a mirror's" : "air"));
+    if (v.kind == Variable::Kind::GlassIndex) v.lower = 1.4, v.upper = 2.0;
+    else v.lower = 20, v.upper = 95;
+  }
+  if ((v.kind == Variable::Kind::Curvature || v.kind == Variable::Kind::Conic ||
+       v.kind == Variable::Kind::Asphere) && !s.shape.isRotational())
+    throw Error(loc, fmt::format("surface {} is not rotationally symmetric: only rotational "
+                                 "surfaces are optimised",
+                                 v.surface));
+  v.lower = number(e, "min", loc, v.lower);
+  v.upper = number(e, "max", loc, v.upper);
+  if (!(v.lower < v.upper))
+    throw Error(loc, fmt::format("\"min\" {} must be below \"max\" {}", v.lower, v.upper));
+  return v;
+}
+
+Operand parseOperand(const json& e, const FileLoc& loc, const LensPrescription& p) {
+  Operand o;
+  o.loc = loc;
+  checkKeys(e, loc, {"type", "target", "weight", "min", "max", "field_deg", "wavelength_nm",
+                     "surface"});
+  static const std::vector<std::string> kinds = {
+      "efl", "f_number", "bfl", "total_track", "rms_spot", "distortion", "lateral_color",
+      "longitudinal_color", "thickness", "image_height"};
+  const std::string t = kindOf(e, loc, kinds);
+  o.kind = static_cast<Operand::Kind>(std::find(kinds.begin(), kinds.end(), t) - kinds.begin());
+  o.weight = number(e, "weight", loc, 1.0);
+  if (!(o.weight >= 0)) throw Error(loc, fmt::format("\"weight\" {} must be >= 0", o.weight));
+  if (e.contains("min")) o.min = number(e, "min", loc);
+  if (e.contains("max")) o.max = number(e, "max", loc);
+  const bool limits = o.min || o.max;
+  if (limits && e.contains("target"))
+    throw Error(loc, "give either \"target\" or limits (\"min\", \"max\"), not both");
+  if (o.min && o.max && !(*o.min <= *o.max))
+    throw Error(loc, fmt::format("\"min\" {} must not exceed \"max\" {}", *o.min, *o.max));
+  const bool zero_target = o.kind == Operand::Kind::RmsSpot;
+  if (o.kind == Operand::Kind::Thickness) {
+    if (!limits) throw Error(loc, "a thickness operand needs \"min\" and/or \"max\" (mm)");
+    o.surface = surfaceIndex(e, loc, p);
+  } else if (!limits) {
+    o.target = number(e, "target", loc, zero_target ? std::optional<double>(0.0) : std::nullopt);
+  }
+  if (e.contains("field_deg")) {
+    o.field_deg = number(e, "field_deg", loc);
+    if (!(o.field_deg >= 0 && o.field_deg < 89))
+      throw Error(loc, fmt::format("\"field_deg\" {} must be in [0, 89)", o.field_deg));
+  }
+  if (e.contains("wavelength_nm")) {
+    o.wavelength_nm = number(e, "wavelength_nm", loc);
+    if (!(o.wavelength_nm >= 200 && o.wavelength_nm <= 2500))
+      throw Error(loc, fmt::format("\"wavelength_nm\" {} must be in [200, 2500]", o.wavelength_nm));
+  }
+  return o;
+}
+
+Tolerance parseTolerance(const json& e, const FileLoc& loc, const LensPrescription& p) {
+  Tolerance t;
+  t.loc = loc;
+  const std::string k = kindOf(e, loc, {"radius", "thickness", "index", "abbe", "decentre",
+                                        "decenter", "tilt", "irregularity"});
+  if (k == "decentre" || k == "decenter" || k == "tilt" || k == "irregularity")
+    throw Error(loc, fmt::format("\"{}\" tolerances are not modelled: lensim's lenses are "
+                                 "rotationally symmetric about one axis (radius, thickness, index "
+                                 "and abbe are)",
+                                 k));
+  checkKeys(e, loc, {"type", "surface", "delta", "distribution"});
+  t.kind = k == "radius"      ? Tolerance::Kind::Radius
+           : k == "thickness" ? Tolerance::Kind::Thickness
+           : k == "index"     ? Tolerance::Kind::Index
+                              : Tolerance::Kind::Abbe;
+  t.surface = surfaceIndex(e, loc, p);
+  const LensSurface& s = p.surfaces[t.surface];
+  t.delta = number(e, "delta", loc);
+  if (!(t.delta > 0)) throw Error(loc, fmt::format("\"delta\" {} must be > 0", t.delta));
+  if (t.kind == Tolerance::Kind::Radius && s.isStop())
+    throw Error(loc, fmt::format("surface {} is the stop: it has no radius", t.surface));
+  if ((t.kind == Tolerance::Kind::Index || t.kind == Tolerance::Kind::Abbe) &&
+      (s.mirror || (s.glass.empty() && (s.ior == 1 || s.ior == 0))))
+    throw Error(loc, fmt::format("surface {}: the medium after it is air: index and Abbe "
+                                 "tolerances need glass",
+                                 t.surface));
+  if (t.kind == Tolerance::Kind::Radius && !(t.delta < std::abs(s.radius_mm)))
+    throw Error(loc, fmt::format("\"delta\" {} must be below the radius's magnitude {} mm (a "
+                                 "build would flip or flatten the surface)",
+                                 t.delta, std::abs(s.radius_mm)));
+  if (t.kind == Tolerance::Kind::Thickness && !(t.delta < s.thickness_mm))
+    throw Error(loc, fmt::format("\"delta\" {} must be below the thickness {} mm", t.delta,
+                                 s.thickness_mm));
+  if (t.kind == Tolerance::Kind::Index || t.kind == Tolerance::Kind::Abbe) {
+    const Glass g = resolveGlass(s.glass, s.ior);
+    const bool index = t.kind == Tolerance::Kind::Index;
+    const double base = index ? g.n_d() - 1 : g.v_d();
+    if (!(t.delta < base))
+      throw Error(loc, fmt::format("\"delta\" {} must be below the medium's {} ({}) so that every "
+                                   "build is physical",
+                                   t.delta, index ? "n_d - 1" : "V_d", base));
+  }
+  const std::string d = e.value("distribution", std::string("uniform"));
+  if (d == "uniform") t.distribution = Tolerance::Distribution::Uniform;
+  else if (d == "normal") t.distribution = Tolerance::Distribution::Normal;
+  else if (d == "end_point") t.distribution = Tolerance::Distribution::EndPoint;
+  else
+    throw Error(loc, fmt::format("\"distribution\" \"{}\": expected uniform, normal or end_point", d));
+  return t;
+}
+
+template <typename T, typename F>
+std::vector<T> parseArray(const json& j, const char* key, std::string_view text,
+                          const std::string& path, F parse) {
+  std::vector<T> out;
+  auto it = j.find(key);
+  if (it == j.end()) return out;
+  if (!it->is_array())
+    throw Error(keyLoc(text, key, path), fmt::format("\"{}\" must be an array of objects", key));
+  const auto offs = arrayElementOffsets(text, key);
+  for (size_t i = 0; i < it->size(); ++i) {
+    const FileLoc loc = i < offs.size() ? locAt(text, offs[i], path) : keyLoc(text, key, path);
+    if (!(*it)[i].is_object())
+      throw Error(loc, fmt::format("\"{}\"[{}] must be an object", key, i));
+    out.push_back(parse((*it)[i], loc));
+  }
+  return out;
+}
+
+std::vector<double> numberArray(const json& j, const char* key, std::string_view text,
+                                const std::string& path, double lo, double hi) {
+  std::vector<double> out;
+  const FileLoc loc = keyLoc(text, key, path);
+  const json& a = j.at(key);
+  if (!a.is_array() || a.empty())
+    throw Error(loc, fmt::format("\"{}\" must be a non-empty array of numbers", key));
+  for (const json& v : a) {
+    if (!v.is_number() || !(v.get<double>() >= lo && v.get<double>() <= hi))
+      throw Error(loc, fmt::format("\"{}\": {} is not a number in [{}, {}]", key, v.dump(), lo, hi));
+    out.push_back(v.get<double>());
+  }
+  return out;
+}
+
+// The lens the operands are evaluated on: every clear aperture but the stop's doubled, within the
+// surface's extent (floating apertures; the chief-ray searches scale with the largest aperture,
+// so not unbounded), the film at the last thickness.
+FocusedLens evaluationLens(LensPrescription p) {
+  for (LensSurface& s : p.surfaces) {
+    if (s.isStop()) continue;
+    const double extent = sagDomainRadius(s.radius_mm, s.shape);
+    s.aperture_diameter_mm = std::min(2 * 0.999 * extent, 2 * s.aperture_diameter_mm);
+  }
+  LensSetup setup;
+  if (!(p.fileFilmDistance_mm() > 0))
+    throw Error(fmt::format("the film distance (last thickness) {} mm must be > 0",
+                            p.fileFilmDistance_mm()));
+  setup.film_distance_mm = p.fileFilmDistance_mm();
+  return focusLens(std::move(p), setup);
+}
+
+double totalTrack(const LensPrescription& p) {
+  double t = 0;
+  for (const LensSurface& s : p.surfaces) t += s.thickness_mm;
+  return t;
+}
+
+double chiefHeight(const LensSystem& lens, const ParaxialData& par, double field_deg) {
+  if (field_deg == 0) return 0;
+  auto c = chiefRayFromScene(lens, par, field_deg);
+  if (!c) throw Error(fmt::format("no real chief ray at {} deg", field_deg));
+  return c->film_height_mm;
+}
+
+}  // namespace
+
+const char* variableKindName(Variable::Kind k) {
+  switch (k) {
+    case Variable::Kind::Curvature: return "curvature";
+    case Variable::Kind::Thickness: return "thickness";
+    case Variable::Kind::Conic: return "conic";
+    case Variable::Kind::Asphere: return "asphere";
+    case Variable::Kind::GlassIndex: return "glass_nd";
+    case Variable::Kind::GlassAbbe: return "glass_vd";
+  }
+  return "?";
+}
+
+const char* operandKindName(Operand::Kind k) {
+  static const char* names[] = {"efl", "f_number", "bfl", "total_track", "rms_spot", "distortion",
+                                "lateral_color", "longitudinal_color", "thickness", "image_height"};
+  return names[static_cast<int>(k)];
+}
+
+std::string Operand::label() const {
+  switch (kind) {
+    case Kind::RmsSpot: return fmt::format("rms_spot({:g} deg, {:g} nm)", field_deg, wavelength_nm);
+    case Kind::Distortion:
+    case Kind::LateralColor:
+    case Kind::ImageHeight: return fmt::format("{}({:g} deg)", operandKindName(kind), field_deg);
+    case Kind::Thickness: return fmt::format("thickness(surface {})", surface);
+    default: return operandKindName(kind);
+  }
+}
+
+std::string Tolerance::label() const {
+  static const char* names[] = {"radius", "thickness", "index", "abbe"};
+  return fmt::format("{} surface {} +-{:g}", names[static_cast<int>(kind)], surface, delta);
+}
+
+DesignJob parseDesignJob(std::string_view text, const std::string& path) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw Error(locAt(text, e.byte > 0 ? e.byte - 1 : 0, path),
+                fmt::format("not valid JSON: {}", e.what()));
+  }
+  if (!j.is_object()) throw Error(FileLoc{path, 1, 1}, "a design job must be a JSON object");
+  const FileLoc top{path, 1, 1};
+  checkKeys(j, top, {"$schema", "lens", "wavelengths_nm", "fields_deg", "rings", "variables",
+                     "operands", "snap_glass", "max_iterations", "tolerancing"});
+  DesignJob job;
+  job.path = path;
+  if (!j.contains("lens") || !j["lens"].is_string())
+    throw Error(keyLoc(text, "lens", path), "\"lens\" must name the starting lens file");
+  std::string lens = j["lens"].get<std::string>();
+  const bool catalogue = lens.rfind("lentil:", 0) == 0 || lens.rfind("lenses:", 0) == 0;
+  if (!catalogue && std::filesystem::path(lens).is_relative())
+    lens = (std::filesystem::path(path).parent_path() / lens).string();
+  try {
+    job.start = readLensFile(lens);
+  } catch (const Error& e) {
+    throw Error(keyLoc(text, "lens", path), fmt::format("cannot read the lens: {}", nestedMessage(e)));
+  }
+  if (!job.start.stopIndex())
+    throw Error(keyLoc(text, "lens", path), "the lens has no aperture stop row: a design needs "
+                                            "one (it sets the beam)");
+  job.wavelengths_nm = j.contains("wavelengths_nm")
+                           ? numberArray(j, "wavelengths_nm", text, path, 200, 2500)
+                           : std::vector<double>{primaryWavelength_nm(job.start)};
+  job.fields_deg = j.contains("fields_deg") ? numberArray(j, "fields_deg", text, path, 0, 89)
+                                            : std::vector<double>{0};
+  job.rings = static_cast<int>(number(j, "rings", keyLoc(text, "rings", path), 6.0));
+  if (job.rings < 1 || job.rings > 64)
+    throw Error(keyLoc(text, "rings", path), fmt::format("\"rings\" {} must be 1 to 64", job.rings));
+  job.max_iterations =
+      static_cast<int>(number(j, "max_iterations", keyLoc(text, "max_iterations", path), 50.0));
+  if (job.max_iterations < 0 || job.max_iterations > 100000)
+    throw Error(keyLoc(text, "max_iterations", path), "\"max_iterations\" must be 0 to 100000");
+  job.snap_glass = j.value("snap_glass", true);
+  const LensPrescription& p = job.start;
+  job.variables = parseArray<Variable>(j, "variables", text, path,
+                                       [&](const json& e, const FileLoc& l) { return parseVariable(e, l, p); });
+  std::vector<Operand> ops = parseArray<Operand>(
+      j, "operands", text, path, [&](const json& e, const FileLoc& l) { return parseOperand(e, l, p); });
+  // An RMS spot without a field or wavelength stands for every field and wavelength of the job.
+  const auto offs = arrayElementOffsets(text, "operands");
+  for (size_t i = 0; i < ops.size(); ++i) {
+    const json& e = j["operands"][i];
+    if (ops[i].kind != Operand::Kind::RmsSpot) {
+      job.operands.push_back(ops[i]);
+      continue;
+    }
+    const std::vector<double> fs =
+        e.contains("field_deg") ? std::vector<double>{ops[i].field_deg} : job.fields_deg;
+    const std::vector<double> ws =
+        e.contains("wavelength_nm") ? std::vector<double>{ops[i].wavelength_nm} : job.wavelengths_nm;
+    for (double f : fs)
+      for (double w : ws) {
+        Operand o = ops[i];
+        o.field_deg = f, o.wavelength_nm = w;
+        job.operands.push_back(o);
+      }
+  }
+  if (j.contains("tolerancing")) {
+    const json& t = j["tolerancing"];
+    const FileLoc tl = keyLoc(text, "tolerancing", path);
+    if (!t.is_object()) throw Error(tl, "\"tolerancing\" must be an object");
+    checkKeys(t, tl, {"tolerances", "criterion", "compensator", "monte_carlo", "seed"});
+    job.tolerance.tolerances = parseArray<Tolerance>(
+        t, "tolerances", text, path, [&](const json& e, const FileLoc& l) { return parseTolerance(e, l, p); });
+    job.tolerance.criterion = t.value("criterion", std::string("rms_spot"));
+    static const std::vector<std::string> crit = {"rms_spot", "efl", "bfl", "f_number",
+                                                  "total_track", "longitudinal_color"};
+    if (std::find(crit.begin(), crit.end(), job.tolerance.criterion) == crit.end())
+      throw Error(tl, fmt::format("\"criterion\" \"{}\": expected one of {}", job.tolerance.criterion,
+                                  fmt::join(crit, ", ")));
+    const std::string comp = t.value("compensator", std::string("back_focus"));
+    if (comp != "back_focus" && comp != "none")
+      throw Error(tl, fmt::format("\"compensator\" \"{}\": expected back_focus or none", comp));
+    job.tolerance.back_focus_compensator = comp == "back_focus";
+    const double n = number(t, "monte_carlo", tl, 100.0);
+    if (n != std::floor(n) || n < 0 || n > 1e6)
+      throw Error(tl, fmt::format("\"monte_carlo\" {} must be an integer 0 to 1000000", n));
+    job.tolerance.monte_carlo = static_cast<int>(n);
+    const double seed = number(t, "seed", tl, 1.0);
+    if (seed != std::floor(seed) || seed < 0 || seed > 9.0e15)
+      throw Error(tl, fmt::format("\"seed\" {} must be a non-negative integer", seed));
+    job.tolerance.seed = static_cast<std::uint64_t>(seed);
+  }
+  return job;
+}
+
+DesignJob readDesignJob(const std::string& path) {
+  return parseDesignJob(readRegularFile(path, "design job", kMaxLensFileBytes), path);
+}
+
+std::vector<double> variableValues(const std::vector<Variable>& vars, const LensPrescription& p) {
+  std::vector<double> x;
+  for (const Variable& v : vars) {
+    const LensSurface& s = p.surfaces[v.surface];
+    switch (v.kind) {
+      case Variable::Kind::Curvature: x.push_back(s.radius_mm == 0 ? 0 : 1 / s.radius_mm); break;
+      case Variable::Kind::Thickness: x.push_back(s.thickness_mm); break;
+      case Variable::Kind::Conic: x.push_back(s.shape.conic); break;
+      case Variable::Kind::Asphere:
+        x.push_back(static_cast<int>(s.shape.poly.size()) > v.power ? s.shape.poly[v.power] : 0);
+        break;
+      case Variable::Kind::GlassIndex:
+      case Variable::Kind::GlassAbbe: {
+        const Glass g = resolveGlass(s.glass, s.ior);
+        const double vd = g.v_d();
+        x.push_back(v.kind == Variable::Kind::GlassIndex ? g.n_d() : (std::isfinite(vd) ? vd : 60));
+        break;
+      }
+    }
+  }
+  return x;
+}
+
+LensPrescription applyVariables(const std::vector<Variable>& vars, LensPrescription p,
+                                const std::vector<double>& x) {
+  for (size_t k = 0; k < vars.size(); ++k) {
+    const Variable& v = vars[k];
+    LensSurface& s = p.surfaces[v.surface];
+    switch (v.kind) {
+      case Variable::Kind::Curvature: s.radius_mm = x[k] == 0 ? 0 : 1 / x[k]; break;
+      case Variable::Kind::Thickness: s.thickness_mm = x[k]; break;
+      case Variable::Kind::Conic: s.shape.conic = x[k]; break;
+      case Variable::Kind::Asphere:
+        if (static_cast<int>(s.shape.poly.size()) <= v.power) s.shape.poly.resize(v.power + 1, 0);
+        s.shape.poly[v.power] = x[k];
+        break;
+      case Variable::Kind::GlassIndex:
+      case Variable::Kind::GlassAbbe: {
+        // A model glass through (n_d, V_d): start from the medium's current values.
+        const Glass g = resolveGlass(s.glass, s.ior);
+        double nd = s.glass.name.empty() && s.glass.n_d ? *s.glass.n_d : g.n_d();
+        double vd = s.glass.name.empty() && s.glass.v_d ? *s.glass.v_d : g.v_d();
+        if (!std::isfinite(vd)) vd = 60;
+        (v.kind == Variable::Kind::GlassIndex ? nd : vd) = x[k];
+        s.glass.name.clear();
+        s.glass.n_d = nd;
+        s.glass.v_d = vd;
+        s.ior = nd;
+        break;
+      }
+    }
+  }
+  // A radius shorter than the clear aperture: the aperture shrinks to what the surface allows.
+  for (LensSurface& s : p.surfaces) {
+    const double extent = sagDomainRadius(s.radius_mm, s.shape);
+    if (s.semiAperture_mm() >= extent) s.aperture_diameter_mm = 2 * 0.98 * extent;
+  }
+  return p;
+}
+
+SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double lambda_nm,
+                            double primary_nm, int rings) {
+  const FocusedLens fl = evaluationLens(p);
+  const LensSystem prim = fl.lens->atWavelength(primary_nm);
+  const ParaxialData pp = computeParaxial(prim);
+  auto chief = chiefRayFromScene(prim, pp, field_deg);
+  if (!chief) throw Error(fmt::format("no real chief ray at {} deg", field_deg));
+  Vec3 d = normalize(chief->scene_ray.direction);
+  if (d.z < 0) d = -d;
+  const Ray& c = chief->scene_ray;
+  const double t_ep = (pp.entrance_pupil_z_mm - c.origin.z) / c.direction.z;
+  const Vec3 centre = c.origin + c.direction * t_ep;
+  FieldBundle::PupilRegion region;
+  region.centre = {0, 0};
+  region.radius.assign(4, pp.entrance_pupil_diameter_mm / 2);
+  const LensSystem lens = fl.lens->atWavelength(lambda_nm);
+  const double film_z = lens.filmZ_mm();
+  // Weighted moments of the hit (x, y) and of the slopes (u, v) = d(x, y)/dz.
+  double sw = 0, sx = 0, sy = 0, su = 0, sv = 0, sxx = 0, sxu = 0, suu = 0;
+  for (const PupilPoint& q : hexapolarPupil(region, rings)) {
+    const Vec3 aim = centre + Vec3{q.offset_mm.x, q.offset_mm.y, 0};
+    const double back = (aim.z + 10 * pp.entrance_pupil_diameter_mm + 10) / d.z;
+    const TraceResult r = lens.tracer().traceFromScene({aim - d * back, d}, TraceOptions{false});
+    if (!r.ok() || !(r.ray.direction.z > 0))
+      throw Error(fmt::format("a ray of the {} deg beam does not reach the film", field_deg));
+    const double t = (film_z - r.ray.origin.z) / r.ray.direction.z;
+    const double x = r.ray.origin.x + r.ray.direction.x * t, y = r.ray.origin.y + r.ray.direction.y * t;
+    const double u = r.ray.direction.x / r.ray.direction.z, v = r.ray.direction.y / r.ray.direction.z;
+    const double w = q.weight;
+    sw += w, sx += w * x, sy += w * y, su += w * u, sv += w * v;
+    sxx += w * (x * x + y * y), sxu += w * (x * u + y * v), suu += w * (u * u + v * v);
+  }
+  SpotQuadratic out;
+  out.a = std::max(0.0, sxx / sw - (sx * sx + sy * sy) / (sw * sw));
+  out.b = sxu / sw - (sx * su + sy * sv) / (sw * sw);
+  out.c = std::max(0.0, suu / sw - (su * su + sv * sv) / (sw * sw));
+  return out;
+}
+
+double rmsSpot_mm(const LensPrescription& p, double field_deg, double lambda_nm, double primary_nm,
+                  int rings) {
+  return std::sqrt(spotQuadratic(p, field_deg, lambda_nm, primary_nm, rings).a);
+}
+
+std::vector<double> operandValues(const DesignJob& job, const LensPrescription& p) {
+  const double primary = job.wavelengths_nm.front();
+  FocusedLens fl = evaluationLens(p);
+  fl.lens->setWavelength(primary);
+  fl.paraxial = computeParaxial(*fl.lens);
+  const ParaxialData& par = fl.paraxial;
+  auto paraxialAt = [&](double nm) { return computeParaxial(fl.lens->atWavelength(nm)); };
+  std::vector<double> out;
+  for (const Operand& o : job.operands) {
+    double v = 0;
+    switch (o.kind) {
+      case Operand::Kind::Efl: v = par.effective_focal_length_mm; break;
+      case Operand::Kind::FNumber: v = par.f_number; break;
+      case Operand::Kind::Bfl: v = par.back_focal_length_mm; break;
+      case Operand::Kind::TotalTrack: v = totalTrack(p); break;
+      case Operand::Kind::RmsSpot: v = rmsSpot_mm(p, o.field_deg, o.wavelength_nm, primary, job.rings); break;
+      case Operand::Kind::Distortion: {
+        if (o.field_deg == 0) break;
+        const double ref = par.effective_focal_length_mm * std::tan(o.field_deg * kDeg);
+        v = 100 * (chiefHeight(*fl.lens, par, o.field_deg) - ref) / ref;
+        break;
+      }
+      case Operand::Kind::LateralColor: {
+        const LensSystem f = fl.lens->atWavelength(kLineF_nm), c = fl.lens->atWavelength(kLineC_nm);
+        v = chiefHeight(f, computeParaxial(f), o.field_deg) -
+            chiefHeight(c, computeParaxial(c), o.field_deg);
+        break;
+      }
+      case Operand::Kind::LongitudinalColor:
+        v = paraxialAt(kLineF_nm).back_focal_length_mm - paraxialAt(kLineC_nm).back_focal_length_mm;
+        break;
+      case Operand::Kind::Thickness: v = p.surfaces[o.surface].thickness_mm; break;
+      case Operand::Kind::ImageHeight: v = chiefHeight(*fl.lens, par, o.field_deg); break;
+    }
+    if (!std::isfinite(v)) throw Error(fmt::format("{} is not finite", o.label()));
+    out.push_back(v);
+  }
+  return out;
+}
+
+double operandResidual(const Operand& o, double value) {
+  if (o.min || o.max) {
+    double ex = 0;
+    if (o.min && value < *o.min) ex = *o.min - value;
+    if (o.max && value > *o.max) ex = value - *o.max;
+    return o.weight * ex;
+  }
+  return o.weight * (value - o.target);
+}
+
+}  // namespace lensim::optics::design

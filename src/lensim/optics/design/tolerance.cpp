@@ -1,0 +1,173 @@
+#include "lensim/optics/design/tolerance.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "lensim/optics/glass.h"
+
+namespace lensim::optics::design {
+
+namespace {
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+// A uniform double in [0, 1) from the generator's top 53 bits.
+double unit(std::mt19937_64& g) { return static_cast<double>(g() >> 11) * 0x1.0p-53; }
+
+// Percentile by linear interpolation between order statistics.
+double percentile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  const double pos = q * (v.size() - 1);
+  const size_t i = static_cast<size_t>(pos);
+  if (i + 1 >= v.size()) return v.back();
+  return v[i] + (pos - i) * (v[i + 1] - v[i]);
+}
+
+}  // namespace
+
+LensPrescription toleranceNominal(const DesignJob& job) {
+  LensPrescription p = job.start;
+  for (const Tolerance& t : job.tolerance.tolerances)
+    if (t.kind == Tolerance::Kind::Index || t.kind == Tolerance::Kind::Abbe)
+      p = applyTolerance(std::move(p), t, 0);
+  return p;
+}
+
+LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double value) {
+  LensSurface& s = p.surfaces[t.surface];
+  switch (t.kind) {
+    case Tolerance::Kind::Radius: s.radius_mm += value; break;
+    case Tolerance::Kind::Thickness: s.thickness_mm += value; break;
+    case Tolerance::Kind::Index:
+    case Tolerance::Kind::Abbe: {
+      const Glass g = resolveGlass(s.glass, s.ior);
+      double nd = g.n_d(), vd = g.v_d();
+      (t.kind == Tolerance::Kind::Index ? nd : vd) += value;
+      s.glass.name.clear();
+      s.glass.n_d = nd;
+      s.glass.v_d = vd;
+      s.ior = nd;
+      break;
+    }
+  }
+  return p;
+}
+
+double toleranceCriterion(const DesignJob& job, const LensPrescription& p, double* film_shift_mm) {
+  if (film_shift_mm) *film_shift_mm = 0;
+  const std::string& c = job.tolerance.criterion;
+  if (c != "rms_spot") {
+    DesignJob one = job;
+    Operand o;
+    o.kind = c == "efl"         ? Operand::Kind::Efl
+             : c == "f_number"  ? Operand::Kind::FNumber
+             : c == "bfl"       ? Operand::Kind::Bfl
+             : c == "total_track" ? Operand::Kind::TotalTrack
+                                  : Operand::Kind::LongitudinalColor;
+    one.operands = {o};
+    return operandValues(one, p)[0];
+  }
+  // Mean over fields and wavelengths of the squared RMS radius, a quadratic in the film shift.
+  SpotQuadratic sum;
+  const double primary = job.wavelengths_nm.front();
+  for (double f : job.fields_deg)
+    for (double w : job.wavelengths_nm) {
+      const SpotQuadratic q = spotQuadratic(p, f, w, primary, job.rings);
+      sum.a += q.a, sum.b += q.b, sum.c += q.c;
+    }
+  const double n = static_cast<double>(job.fields_deg.size() * job.wavelengths_nm.size());
+  double dz = 0;
+  if (job.tolerance.back_focus_compensator && sum.c > 0) dz = -sum.b / sum.c;
+  if (film_shift_mm) *film_shift_mm = dz;
+  return std::sqrt(std::max(0.0, (sum.a + 2 * sum.b * dz + sum.c * dz * dz) / n));
+}
+
+double drawTolerance(const Tolerance& t, std::uint64_t seed, int build, int index) {
+  std::mt19937_64 g(splitmix64(splitmix64(seed) ^ (static_cast<std::uint64_t>(build) << 20 |
+                                                   static_cast<std::uint64_t>(index))));
+  switch (t.distribution) {
+    case Tolerance::Distribution::Uniform: return t.delta * (2 * unit(g) - 1);
+    case Tolerance::Distribution::EndPoint: return unit(g) < 0.5 ? -t.delta : t.delta;
+    case Tolerance::Distribution::Normal:
+      for (;;) {  // Box-Muller, sigma = delta / 2, redrawn beyond +-delta
+        const double u1 = 1 - unit(g), u2 = unit(g);
+        const double z = std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+        if (std::abs(z) <= 2) return 0.5 * t.delta * z;
+      }
+  }
+  return 0;
+}
+
+LensPrescription asBuiltLens(const DesignJob& job, int build) {
+  LensPrescription p = toleranceNominal(job);
+  const auto& tols = job.tolerance.tolerances;
+  for (size_t i = 0; i < tols.size(); ++i)
+    p = applyTolerance(std::move(p), tols[i],
+                       drawTolerance(tols[i], job.tolerance.seed, build, static_cast<int>(i)));
+  double dz = 0;
+  toleranceCriterion(job, p, &dz);
+  p.surfaces.back().thickness_mm += dz;
+  p.name = fmt::format("{} (as built {}, seed {})", job.start.name, build, job.tolerance.seed);
+  return p;
+}
+
+ToleranceResult runTolerancing(const DesignJob& job) {
+  ToleranceResult r;
+  const LensPrescription nominal = toleranceNominal(job);
+  r.nominal = toleranceCriterion(job, nominal);
+  const auto& tols = job.tolerance.tolerances;
+  r.sensitivity.resize(tols.size());
+  tbb::parallel_for(0, static_cast<int>(tols.size()), [&](int i) {
+    SensitivityRow& row = r.sensitivity[i];
+    row.label = tols[i].label();
+    row.plus = toleranceCriterion(job, applyTolerance(nominal, tols[i], tols[i].delta)) - r.nominal;
+    row.minus =
+        toleranceCriterion(job, applyTolerance(nominal, tols[i], -tols[i].delta)) - r.nominal;
+  });
+  double s2 = 0;
+  for (const SensitivityRow& row : r.sensitivity) {
+    const double m = std::max(std::abs(row.plus), std::abs(row.minus));
+    s2 += m * m;
+  }
+  r.rss_change = std::sqrt(s2);
+  const int n = job.tolerance.monte_carlo;
+  r.builds.assign(n, 0);
+  tbb::parallel_for(0, n, [&](int k) {
+    LensPrescription p = nominal;
+    for (size_t i = 0; i < tols.size(); ++i)
+      p = applyTolerance(std::move(p), tols[i],
+                         drawTolerance(tols[i], job.tolerance.seed, k, static_cast<int>(i)));
+    try {
+      r.builds[k] = toleranceCriterion(job, p);
+    } catch (const Error& e) {
+      // Leaving the build out would bias the statistics: refuse instead.
+      throw Error(fmt::format("Monte Carlo build {} (seed {}) cannot be evaluated: {}", k,
+                              job.tolerance.seed, e.message()));
+    }
+  });
+  if (n > 0) {
+    double m = 0;
+    for (double v : r.builds) m += v;
+    r.mean = m / n;
+    double v2 = 0;
+    for (double v : r.builds) v2 += (v - r.mean) * (v - r.mean);
+    r.stddev = n > 1 ? std::sqrt(v2 / (n - 1)) : 0;
+    r.p10 = percentile(r.builds, 0.1);
+    r.p50 = percentile(r.builds, 0.5);
+    r.p90 = percentile(r.builds, 0.9);
+    r.worst = *std::max_element(r.builds.begin(), r.builds.end());
+  }
+  return r;
+}
+
+}  // namespace lensim::optics::design

@@ -1,0 +1,65 @@
+// Tolerancing: how a design degrades when built. Each tolerance (radius, thickness, index, Abbe
+// number of one surface or medium) is applied alone at its +- limits (the sensitivity table),
+// then all at once, drawn from their distributions, for N Monte Carlo builds.
+//
+// The criterion is the RMS spot radius over the job's fields and wavelengths (the root of the
+// mean of the squared RMS radii) or a first-order quantity (efl, bfl, ...). The back-focus
+// compensator moves the film to the plane that minimises the RMS-spot criterion: the squared
+// spot radius is a quadratic in the film shift (rays are straight behind the lens), so the
+// optimum is exact, not searched.
+//
+// Distributions over [-delta, delta]: uniform; normal with sigma = delta / 2, truncated at
+// +-delta; end_point: -delta or +delta with equal chance. Builds draw from a 64-bit Mersenne
+// Twister seeded by (seed, build index) through splitmix64, with the conversions written here
+// (not the standard library's distributions, whose output is implementation-defined), so a seed
+// gives the same builds on every platform and thread count.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "lensim/optics/design/design_job.h"
+
+namespace lensim::optics::design {
+
+/// The job's lens as toleranced: media with index or Abbe tolerances become the model glasses
+/// through their (n_d, V_d), so that a zero offset changes nothing.
+LensPrescription toleranceNominal(const DesignJob& job);
+
+/// A prescription with the tolerance applied at offset `value` (radius mm, thickness mm, index,
+/// Abbe number). Index and Abbe tolerances make the medium a model glass through the perturbed
+/// (n_d, V_d).
+LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double value);
+
+/// The criterion of a lens (see above), with the film moved by the compensator when enabled;
+/// `film_shift_mm` receives that shift (0 without compensator).
+double toleranceCriterion(const DesignJob& job, const LensPrescription& p,
+                          double* film_shift_mm = nullptr);
+
+/// The draw of one tolerance for build `build` (reproducible, see above): an offset in
+/// [-delta, delta].
+double drawTolerance(const Tolerance& t, std::uint64_t seed, int build, int index);
+
+struct SensitivityRow {
+  std::string label;
+  double plus = 0, minus = 0;  ///< criterion change at +delta and -delta
+};
+
+struct ToleranceResult {
+  double nominal = 0;
+  std::vector<SensitivityRow> sensitivity;
+  /// Root-sum-square of the larger change of each row: the linear estimate of the worst case
+  /// spread.
+  double rss_change = 0;
+  std::vector<double> builds;  ///< the criterion of every Monte Carlo build, in build order
+  double mean = 0, stddev = 0, p10 = 0, p50 = 0, p90 = 0, worst = 0;
+};
+
+/// Runs the sensitivity table and the Monte Carlo builds (in parallel).
+ToleranceResult runTolerancing(const DesignJob& job);
+
+/// As-built lens number `build` (0-based) of the Monte Carlo run, compensator applied.
+LensPrescription asBuiltLens(const DesignJob& job, int build);
+
+}  // namespace lensim::optics::design

@@ -1,0 +1,440 @@
+// Lens design (issue 33): damped least squares on closed-form problems, a singlet optimised to a
+// target focal length checked by an independent trace written here, tolerancing against a
+// linear prediction, seeds, and the job file's errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "cli_run.h"
+#include "lensim/optics/design/design_job.h"
+#include "lensim/optics/design/levenberg_marquardt.h"
+#include "lensim/optics/design/tolerance.h"
+#include "lensim/optics/glass.h"
+#include "lensim/optics/lens_formats.h"
+
+namespace fs = std::filesystem;
+using namespace lensim;
+using namespace lensim::optics;
+using namespace lensim::optics::design;
+
+namespace {
+
+// --- Closed-form problems --------------------------------------------------------------------
+
+bool rosenbrock(const std::vector<double>& x, std::vector<double>& r) {
+  r = {10 * (x[1] - x[0] * x[0]), 1 - x[0]};
+  return true;
+}
+
+TEST(LevenbergMarquardt, RosenbrockReachesTheMinimum) {
+  const LmResult r = levenbergMarquardt(rosenbrock, {-1.2, 1.0}, {}, {});
+  EXPECT_NEAR(r.x[0], 1, 1e-6);
+  EXPECT_NEAR(r.x[1], 1, 1e-6);
+  EXPECT_LT(r.merit, 1e-12);
+  EXPECT_GT(r.initial_merit, 1);
+}
+
+TEST(LevenbergMarquardt, ExponentialFitRecoversTheParameters) {
+  // y = a exp(b t) sampled without noise: least squares recovers a = 2.5, b = -0.7 exactly.
+  std::vector<double> t, y;
+  for (int i = 0; i < 20; ++i) t.push_back(0.25 * i), y.push_back(2.5 * std::exp(-0.7 * 0.25 * i));
+  auto f = [&](const std::vector<double>& x, std::vector<double>& r) {
+    r.resize(t.size());
+    for (size_t i = 0; i < t.size(); ++i) r[i] = x[0] * std::exp(x[1] * t[i]) - y[i];
+    return true;
+  };
+  const LmResult r = levenbergMarquardt(f, {1.0, 0.0}, {}, {});
+  EXPECT_NEAR(r.x[0], 2.5, 1e-7);
+  EXPECT_NEAR(r.x[1], -0.7, 1e-7);
+}
+
+TEST(LevenbergMarquardt, BoundsHoldAndTheBoundedMinimumIsFound) {
+  // (x - 3)^2 + (y + 1)^2 with x <= 2, y >= 0: the minimum is the corner (2, 0).
+  auto f = [](const std::vector<double>& x, std::vector<double>& r) {
+    r = {x[0] - 3, x[1] + 1};
+    return true;
+  };
+  const LmResult r = levenbergMarquardt(f, {0.0, 5.0}, {-10, 0}, {2, 10});
+  EXPECT_NEAR(r.x[0], 2, 1e-9);
+  EXPECT_NEAR(r.x[1], 0, 1e-9);
+  EXPECT_NEAR(r.merit, 2, 1e-9);
+}
+
+TEST(LevenbergMarquardt, FiniteDifferenceJacobianMatchesAnalytic) {
+  const std::vector<double> x{-0.8, 0.3};
+  std::vector<double> r0, jac;
+  rosenbrock(x, r0);
+  ASSERT_TRUE(finiteDifferenceJacobian(rosenbrock, x, r0, {}, {}, {}, jac));
+  const double analytic[4] = {-20 * x[0], 10, -1, 0};
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(jac[k], analytic[k], 1e-6 * std::max(1.0, std::abs(analytic[k])));
+}
+
+TEST(LevenbergMarquardt, CholeskySolvesAndRefusesIndefinite) {
+  std::vector<double> x;
+  ASSERT_TRUE(solveCholesky({4, 2, 2, 3}, {2, 1}, 2, x));
+  EXPECT_NEAR(4 * x[0] + 2 * x[1], 2, 1e-12);
+  EXPECT_NEAR(2 * x[0] + 3 * x[1], 1, 1e-12);
+  EXPECT_FALSE(solveCholesky({1, 2, 2, 1}, {1, 1}, 2, x));
+}
+
+// --- An independent sequential tracer for spherical lenses (stop first, objects at infinity) ---
+
+struct Row {
+  double radius, thickness, n_after;
+};
+
+// Paraxial y-nu trace of a ray parallel to the axis at height 1: EFL = -1 / (n u') at the end.
+double independentEfl(const std::vector<Row>& rows) {
+  double y = 1, nu = 0, n = 1;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const double c = rows[i].radius == 0 ? 0 : 1 / rows[i].radius;
+    nu -= y * (rows[i].n_after - n) * c;
+    n = rows[i].n_after;
+    if (i + 1 < rows.size()) y += rows[i].thickness * nu / n;
+  }
+  return -1 / nu;
+}
+
+// Paraxial back focal length: rear vertex to where the ray above crosses the axis.
+double independentBfl(const std::vector<Row>& rows) {
+  double y = 1, nu = 0, n = 1;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const double c = rows[i].radius == 0 ? 0 : 1 / rows[i].radius;
+    nu -= y * (rows[i].n_after - n) * c;
+    n = rows[i].n_after;
+    if (i + 1 < rows.size()) y += rows[i].thickness * nu / n;
+  }
+  return -y / nu;
+}
+
+// Exact trace of one ray (origin at z = 0, the first row's vertex) through spherical rows by
+// vector refraction, to the plane at the last thickness: the (x, y) it meets there.
+std::pair<double, double> independentTrace(const std::vector<Row>& rows, double ox, double oy,
+                                           const double dir[3]) {
+  double o[3] = {ox, oy, 0}, d[3] = {dir[0], dir[1], dir[2]};
+  double z = 0, n = 1;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i].radius != 0) {
+      const double R = rows[i].radius, cz = z + R;
+      const double oc[3] = {o[0], o[1], o[2] - cz};
+      const double b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
+      const double c = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - R * R;
+      const double disc = std::sqrt(b * b - c);
+      // The root on the vertex side: for R > 0 the nearer hit, for R < 0 the farther one.
+      const double t = R > 0 ? -b - disc : -b + disc;
+      for (int k = 0; k < 3; ++k) o[k] += t * d[k];
+      // The unit normal facing the incoming ray (toward -z at the vertex).
+      const double nrm[3] = {o[0] / R, o[1] / R, (o[2] - cz) / R};
+      const double mu = n / rows[i].n_after;
+      const double cosi = -(nrm[0] * d[0] + nrm[1] * d[1] + nrm[2] * d[2]);
+      const double k2 = 1 - mu * mu * (1 - cosi * cosi);
+      for (int k = 0; k < 3; ++k) d[k] = mu * d[k] + (mu * cosi - std::sqrt(k2)) * nrm[k];
+    }
+    n = rows[i].n_after;
+    z += rows[i].thickness;
+  }
+  const double t = (z - o[2]) / d[2];
+  return {o[0] + t * d[0], o[1] + t * d[1]};
+}
+
+// RMS spot (mm) of the on-axis beam filling a stop of radius `stop_r` at the first row (z = 0),
+// on the plane at the last thickness: a dense square grid of rays.
+double independentAxialRms(const std::vector<Row>& rows, double stop_r) {
+  const int grid = 160;
+  const double axis[3] = {0, 0, 1};
+  double sx = 0, sy = 0, sxx = 0;
+  int count = 0;
+  for (int iy = 0; iy < grid; ++iy)
+    for (int ix = 0; ix < grid; ++ix) {
+      const double px = stop_r * (2.0 * (ix + 0.5) / grid - 1), py = stop_r * (2.0 * (iy + 0.5) / grid - 1);
+      if (px * px + py * py > stop_r * stop_r) continue;
+      const auto [x, y] = independentTrace(rows, px, py, axis);
+      sx += x, sy += y, sxx += x * x + y * y;
+      ++count;
+    }
+  const double mx = sx / count, my = sy / count;
+  return std::sqrt(sxx / count - mx * mx - my * my);
+}
+
+std::vector<Row> rowsOf(const LensPrescription& p) {
+  std::vector<Row> rows;
+  for (const LensSurface& s : p.surfaces) rows.push_back({s.radius_mm, s.thickness_mm, s.ior == 0 ? 1 : s.ior});
+  return rows;
+}
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() /
+           ("lensim_design_" + std::to_string(std::random_device{}()));
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(path / name) << text;
+    return (path / name).string();
+  }
+};
+
+// A biconvex N-BK7 singlet behind a 20 mm stop, with a constant index (no dispersion) so the
+// independent tracer needs no dispersion formula.
+const char* kSinglet =
+    "# singlet\n"
+    "0      5    1       20\n"
+    "80     4    1.5168  30\n"
+    "-120   90   1       30\n";
+
+std::string singletJob(const std::string& lens, const std::string& extra = "",
+                      const std::string& extra_variables = "") {
+  return std::string("{\n  \"lens\": \"") + lens + "\",\n"
+         "  \"fields_deg\": [0],\n"
+         "  \"variables\": [\n" + extra_variables +
+         "    {\"type\": \"curvature\", \"surface\": 1},\n"
+         "    {\"type\": \"curvature\", \"surface\": 2},\n"
+         "    {\"type\": \"thickness\", \"surface\": 2, \"min\": 50, \"max\": 150}\n"
+         "  ],\n"
+         "  \"operands\": [\n"
+         "    {\"type\": \"efl\", \"target\": 100, \"weight\": 1000},\n"
+         "    {\"type\": \"rms_spot\", \"weight\": 100}\n"
+         "  ]" + extra + "\n}\n";
+}
+
+TEST(LensDesign, SingletReachesTargetEflWithSmallerSpotByIndependentTrace) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  const std::string job_path = dir.write("job.json", singletJob("singlet.dat"));
+  const DesignJob job = readDesignJob(job_path);
+  const DesignResult r = optimiseDesign(job);
+  const std::vector<Row> before = rowsOf(job.start), after = rowsOf(r.lens);
+  // The target focal length, by the independent paraxial trace.
+  EXPECT_NEAR(independentEfl(after), 100, 1e-3);
+  EXPECT_GT(std::abs(independentEfl(before) - 100), 5);
+  // The spot: smaller than the start's (focused at its own paraxial focus for fairness), and the
+  // design's own RMS agrees with the independent dense-grid trace within 2%.
+  std::vector<Row> before_focused = before;
+  before_focused.back().thickness = independentBfl(before);
+  const double rms_before = independentAxialRms(before_focused, 10);
+  const double rms_after = independentAxialRms(after, 10);
+  EXPECT_LT(rms_after, 0.8 * rms_before) << rms_before << " -> " << rms_after;
+  EXPECT_NEAR(rmsSpot_mm(r.lens, 0, kLineD_nm, kLineD_nm, job.rings), rms_after, 0.02 * rms_after);
+  // Reproducible: the same job gives the same lens.
+  const DesignResult again = optimiseDesign(job);
+  for (size_t i = 0; i < after.size(); ++i) {
+    EXPECT_EQ(again.lens.surfaces[i].radius_mm, r.lens.surfaces[i].radius_mm);
+    EXPECT_EQ(again.lens.surfaces[i].thickness_mm, r.lens.surfaces[i].thickness_mm);
+  }
+}
+
+TEST(LensDesign, SpotQuadraticMatchesSpotsOnShiftedFilms) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  const DesignJob job = readDesignJob(dir.write("job.json", singletJob("singlet.dat")));
+  const SpotQuadratic q = spotQuadratic(job.start, 3, kLineD_nm, kLineD_nm, 6);
+  for (double dz : {-2.0, 0.5, 3.0}) {
+    LensPrescription p = job.start;
+    p.surfaces.back().thickness_mm += dz;
+    const double rms = rmsSpot_mm(p, 3, kLineD_nm, kLineD_nm, 6);
+    EXPECT_NEAR(rms * rms, q.a + 2 * q.b * dz + q.c * dz * dz, 1e-9 * (1 + rms * rms));
+  }
+}
+
+TEST(LensDesign, GlassVariablesSnapToTheCatalogue) {
+  TempDir dir;
+  dir.write("singlet.dat",
+            "0      5    1       20\n"
+            "80     4    1.5168  30  64.17 N-BK7\n"
+            "-120   90   1       30\n");
+  const std::string job = dir.write(
+      "job.json",
+      singletJob("singlet.dat", ",\n  \"max_iterations\": 5",
+                 "    {\"type\": \"glass_nd\", \"surface\": 1, \"min\": 1.6, \"max\": 1.7},\n"));
+  const DesignResult r = optimiseDesign(readDesignJob(job));
+  ASSERT_EQ(r.snapped.size(), 1u);
+  const LensSurface& s = r.lens.surfaces[1];
+  ASSERT_NE(GlassCatalog::builtin().find(s.glass.name), nullptr) << s.glass.name;
+  EXPECT_GE(*s.glass.n_d, 1.59);
+  EXPECT_LE(*s.glass.n_d, 1.71);
+}
+
+TEST(LensDesign, OperandValuesAgreeWithTheIndependentTrace) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  std::string text = singletJob("singlet.dat");
+  const std::string from = "    {\"type\": \"rms_spot\", \"weight\": 100}\n";
+  text.replace(text.find(from), from.size(),
+               "    {\"type\": \"bfl\", \"target\": 0},\n"
+               "    {\"type\": \"total_track\", \"target\": 0},\n"
+               "    {\"type\": \"image_height\", \"field_deg\": 6, \"target\": 0},\n"
+               "    {\"type\": \"distortion\", \"field_deg\": 6, \"target\": 0},\n"
+               "    {\"type\": \"thickness\", \"surface\": 1, \"min\": 5}\n");
+  const DesignJob job = readDesignJob(dir.write("job.json", text));
+  const std::vector<double> v = operandValues(job, job.start);
+  const std::vector<Row> rows = rowsOf(job.start);
+  const double efl = independentEfl(rows);
+  EXPECT_NEAR(v[0], efl, 1e-9 * efl);
+  EXPECT_NEAR(v[1], independentBfl(rows), 1e-9 * efl);
+  EXPECT_NEAR(v[2], 99.0, 1e-12);
+  // The chief ray of a stop-first lens goes through the front vertex (the stop's centre).
+  const double th = 6 * M_PI / 180, dir6[3] = {std::sin(th), 0, std::cos(th)};
+  const double h = independentTrace(rows, 0, 0, dir6).first;
+  EXPECT_NEAR(v[3], h, 1e-9);
+  EXPECT_NEAR(v[4], 100 * (h - efl * std::tan(th)) / (efl * std::tan(th)), 1e-7);
+  EXPECT_NEAR(v[5], 4, 1e-12);
+  // The limit operand's residual: the weighted shortfall below the minimum.
+  EXPECT_NEAR(operandResidual(job.operands[5], v[5]), 1.0, 1e-12);
+}
+
+// --- Tolerancing -------------------------------------------------------------------------------
+
+std::string toleranceJob(const std::string& lens, int seed, const std::string& dist) {
+  return std::string("{\n  \"lens\": \"") + lens + "\",\n"
+         "  \"tolerancing\": {\n"
+         "    \"criterion\": \"bfl\", \"compensator\": \"none\", \"monte_carlo\": 2000,\n"
+         "    \"seed\": " + std::to_string(seed) + ",\n"
+         "    \"tolerances\": [\n"
+         "      {\"type\": \"thickness\", \"surface\": 1, \"delta\": 0.2, \"distribution\": \"" + dist + "\"},\n"
+         "      {\"type\": \"radius\", \"surface\": 1, \"delta\": 0.5, \"distribution\": \"" + dist + "\"},\n"
+         "      {\"type\": \"radius\", \"surface\": 2, \"delta\": 0.5, \"distribution\": \"" + dist + "\"}\n"
+         "    ]\n  }\n}\n";
+}
+
+TEST(LensTolerance, MonteCarloSpreadMatchesTheLinearPrediction) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  const DesignJob job = readDesignJob(dir.write("job.json", toleranceJob("singlet.dat", 7, "uniform")));
+  const ToleranceResult r = runTolerancing(job);
+  const std::vector<Row> nominal = rowsOf(job.start);
+  EXPECT_NEAR(r.nominal, independentBfl(nominal), 1e-9);
+  // Linear response: slopes by central differences of the independent paraxial trace; uniform
+  // on [-d, d] has variance d^2 / 3.
+  double var = 0;
+  const struct { int row; bool radius; double d; } tols[] = {{1, false, 0.2}, {1, true, 0.5}, {2, true, 0.5}};
+  for (const auto& t : tols) {
+    std::vector<Row> a = nominal, b = nominal;
+    const double h = 1e-4;
+    (t.radius ? a[t.row].radius : a[t.row].thickness) += h;
+    (t.radius ? b[t.row].radius : b[t.row].thickness) -= h;
+    const double slope = (independentBfl(a) - independentBfl(b)) / (2 * h);
+    var += slope * slope * t.d * t.d / 3;
+  }
+  const double sd = std::sqrt(var), n = static_cast<double>(r.builds.size());
+  // Mean within 4 standard errors (plus the small second-order bias); sd within 6%.
+  EXPECT_NEAR(r.mean, r.nominal, 4 * sd / std::sqrt(n) + 1e-3 * sd);
+  EXPECT_NEAR(r.stddev, sd, 0.06 * sd);
+  EXPECT_GE(r.p90, r.p50);
+  // Seeds reproduce exactly; another seed differs.
+  const ToleranceResult again = runTolerancing(job);
+  EXPECT_EQ(again.builds, r.builds);
+  const DesignJob other = readDesignJob(dir.write("job2.json", toleranceJob("singlet.dat", 8, "uniform")));
+  EXPECT_NE(runTolerancing(other).builds, r.builds);
+}
+
+TEST(LensTolerance, DistributionsHaveTheirStatedShapes) {
+  Tolerance t;
+  t.delta = 2;
+  double m2u = 0, m2n = 0, maxn = 0;
+  const int n = 20000;
+  for (int k = 0; k < n; ++k) {
+    t.distribution = Tolerance::Distribution::Uniform;
+    const double u = drawTolerance(t, 3, k, 0);
+    m2u += u * u;
+    t.distribution = Tolerance::Distribution::Normal;
+    const double g = drawTolerance(t, 3, k, 0);
+    m2n += g * g;
+    maxn = std::max(maxn, std::abs(g));
+    t.distribution = Tolerance::Distribution::EndPoint;
+    EXPECT_EQ(std::abs(drawTolerance(t, 3, k, 0)), 2.0);
+  }
+  EXPECT_NEAR(m2u / n, 4.0 / 3, 0.03);  // d^2 / 3
+  // sigma = d / 2 truncated at 2 sigma: variance sigma^2 (1 - 2 * 2 phi(2) / (2 Phi(2) - 1)).
+  const double phi2 = std::exp(-2.0) / std::sqrt(2 * M_PI), Phi2m = std::erf(2 / std::sqrt(2.0));
+  EXPECT_NEAR(m2n / n, 1.0 * (1 - 4 * phi2 / Phi2m), 0.02);
+  EXPECT_LE(maxn, 2.0);
+}
+
+TEST(LensTolerance, CompensatorMinimisesTheSpot) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  std::string text = toleranceJob("singlet.dat", 1, "uniform");
+  const std::string from = "\"bfl\", \"compensator\": \"none\"";
+  text.replace(text.find(from), from.size(), "\"rms_spot\", \"compensator\": \"back_focus\"");
+  const DesignJob job = readDesignJob(dir.write("job.json", text));
+  double dz = 0;
+  const double best = toleranceCriterion(job, job.start, &dz);
+  // The film the compensator chose is a minimum of the RMS spot.
+  for (double e : {-0.05, 0.05}) {
+    LensPrescription p = job.start;
+    p.surfaces.back().thickness_mm += dz + e;
+    EXPECT_GT(rmsSpot_mm(p, 0, job.wavelengths_nm[0], job.wavelengths_nm[0], job.rings), best);
+  }
+  // An as-built lens carries its compensated film distance and reproduces its criterion.
+  const LensPrescription b = asBuiltLens(job, 3);
+  DesignJob fixed = job;
+  fixed.tolerance.back_focus_compensator = false;
+  const ToleranceResult r = runTolerancing(job);
+  EXPECT_NEAR(toleranceCriterion(fixed, b), r.builds[3], 1e-9);
+}
+
+// --- Errors ----------------------------------------------------------------------------------
+
+TEST(LensDesign, JobErrorsNameTheLineAndValue) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  auto err = [&](const std::string& text) {
+    try {
+      readDesignJob(dir.write("bad.json", text));
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::string job = singletJob("singlet.dat");
+  job.replace(job.find("\"efl\""), 5, "\"eff\"");
+  EXPECT_NE(err(job).find("bad.json:10:5: error: unknown type \"eff\""), std::string::npos) << err(job);
+  job = singletJob("singlet.dat");
+  job.replace(job.find("\"surface\": 2}"), 13, "\"surface\": 7}");
+  EXPECT_NE(err(job).find("bad.json:6:5: error: \"surface\" 7 is not a row"), std::string::npos) << err(job);
+  std::string tol = toleranceJob("singlet.dat", 1, "uniform");
+  tol.replace(tol.find("\"radius\", \"surface\": 2"), 8, "\"tilt\"");
+  EXPECT_NE(err(tol).find("bad.json:9:7: error: \"tilt\" tolerances are not modelled"), std::string::npos)
+      << err(tol);
+  tol = toleranceJob("singlet.dat", 1, "uniform");
+  tol.replace(tol.find("\"delta\": 0.2"), 12, "\"delta\": 5.0");
+  EXPECT_NE(err(tol).find("bad.json:7:7: error: \"delta\" 5 must be below the thickness 4 mm"),
+            std::string::npos)
+      << err(tol);
+  EXPECT_NE(err("{\"lens\": \"singlet.dat\",\n \"rings\": 0}").find("bad.json:2:2: error: \"rings\" 0"),
+            std::string::npos);
+  EXPECT_NE(err("{\"lens\": \"singlet.dat\",,}").find("bad.json:1:24: error: not valid JSON"),
+            std::string::npos)
+      << err("{\"lens\": \"singlet.dat\",,}");
+}
+
+TEST(LensDesignCli, OptimiseAndToleranceRun) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  const std::string job = dir.write("job.json", singletJob("singlet.dat"));
+  const std::string out = (dir.path / "out.json").string();
+  test::CliResult r = test::runLensim("lens optimise " + job + " -o " + out);
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("iteration   1  merit"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("dominant: "), std::string::npos);
+  const LensPrescription p = readLensFile(out);
+  EXPECT_NEAR(independentEfl(rowsOf(p)), 100, 1e-3);
+  // A bad output name is refused before the run, nothing written.
+  r = test::runLensim("lens optimise " + job + " -o " + (dir.path / "out.zmx").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_FALSE(fs::exists(dir.path / "out.zmx"));
+  const std::string tj = dir.write("tol.json", toleranceJob("singlet.dat", 5, "normal"));
+  r = test::runLensim("lens tolerance " + tj + " --builds-dir " + (dir.path / "b").string() +
+                      " --write-builds 2");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("Monte Carlo 2000 builds (seed 5)"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(dir.path / "b" / "build-0001.json"));
+  EXPECT_NO_THROW(readLensFile((dir.path / "b" / "build-0000.json").string()));
+}
+
+}  // namespace
