@@ -244,3 +244,149 @@ TEST(ZemaxCoatingFile, BadInputIsRefusedAtItsLine) {
   EXPECT_NE(err("COAT A\nMGF2 0.25\nCOAT A\n").find("c.dat:3:1: error: coating A is defined twice"),
             std::string::npos);
 }
+
+// ---- Coated lenses: lens files, transmittance, ghosts ----
+
+#include <filesystem>
+#include <fstream>
+
+#include "lensim/optics/coating/ghosts.h"
+#include "lensim/optics/coating/lens_coatings.h"
+#include "lensim/optics/lens_system.h"
+#include "lensim/optics/prescription.h"
+
+namespace {
+
+std::string writeTemp(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::temp_directory_path() / "lensim_coating_test";
+  std::filesystem::create_directories(dir);
+  const auto p = dir / name;
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+// A plate of index n, thickness t, in air (a lens file in lensim's JSON).
+std::string plateJson(const std::string& top, const std::string& s0, double n) {
+  return "{\"format\": \"lensim-lens\", " + top +
+         "\"surfaces\": [\n"
+         "  {\"radius_mm\": 0, \"thickness_mm\": 5, \"semi_aperture_mm\": 10, \"ior\": " +
+         std::to_string(n) + s0 +
+         "},\n"
+         "  {\"radius_mm\": 0, \"thickness_mm\": 1, \"semi_aperture_mm\": 10},\n"
+         "  {\"radius_mm\": 0, \"thickness_mm\": 50, \"semi_aperture_mm\": 10, \"stop\": true}\n"
+         "]}\n";
+}
+
+}  // namespace
+
+TEST(CoatedLens, JsonCoatingsDefaultsAndUnknownNames) {
+  const LensPrescription p = readLensFile(writeTemp(
+      "plate.json", plateJson("\"coating\": \"multi\", ", ", \"coating\": \"single\"", 1.5168)));
+  const LensCoatings c = resolveCoatings(p);
+  ASSERT_EQ(c.label.size(), 3u);
+  EXPECT_EQ(c.label[0], "single");
+  EXPECT_EQ(c.label[1], "multi");
+  EXPECT_EQ(c.label[2], "index-matched");
+  // Unknown names: refused at the surface's line / the key's line.
+  try {
+    readLensFile(writeTemp("bad.json", plateJson("", ", \"coating\": \"nope\"", 1.5)));
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json:2:3: error: unknown coating 'nope'"),
+              std::string::npos)
+        << e.what();
+  }
+  try {
+    readLensFile(writeTemp("bad2.json", plateJson("\n\"coating\": \"quad\",\n", "", 1.5)));
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad2.json:2:1: error: unknown lens-wide coating 'quad'"),
+              std::string::npos)
+        << e.what();
+  }
+  // A coating file beside the lens defines more names.
+  writeTemp("mine.dat", "MATE M\n0.55 1.38 0\nCOAT MINE\nM 0.25\n");
+  const LensPrescription q = readLensFile(writeTemp(
+      "plate2.json", plateJson("\"coating_file\": \"mine.dat\", \"coating\": \"MINE\", ", "", 1.5)));
+  EXPECT_EQ(resolveCoatings(q).label[0], "MINE");
+}
+
+TEST(CoatedLens, UncoatedDoubleGaussTransmittanceIsTheProductOfFresnelLosses) {
+  LensSystem lens(readLensFile(std::string(LENSIM_SOURCE_DIR) + "/lenses/dgauss.50mm.dat"));
+  const LensCoatings c = resolveCoatings(lens.prescription());
+  // Independent: (1 - ((n1 - n2) / (n1 + n2))^2) over the interfaces at 550 nm.
+  std::vector<double> nb(size_t(lens.surfaceCount())), na(size_t(lens.surfaceCount()));
+  lens.indicesAt(550, nb.data(), na.data());
+  double want = 1;
+  int air_glass = 0;
+  for (size_t k = 0; k < nb.size(); ++k) {
+    want *= 1 - sq((nb[k] - na[k]) / (nb[k] + na[k]));
+    air_glass += (nb[k] == 1) != (na[k] == 1);
+  }
+  EXPECT_EQ(air_glass, 8);
+  const double t = axialTransmittance(lens, c, 550);
+  EXPECT_NEAR(t, want, 1e-12);
+  // Eight air-glass surfaces of 1.6-1.7 glass: about 60 %.
+  EXPECT_GT(t, 0.55);
+  EXPECT_LT(t, 0.66);
+  // Multicoated, it passes over 97 %.
+  LensPrescription pm = lens.prescription();
+  pm.default_coating = "multi";
+  LensSystem multi(pm);
+  EXPECT_GT(axialTransmittance(multi, resolveCoatings(pm), 550), 0.97);
+}
+
+TEST(CoatedLens, PlateGhostCarriesRSquaredAndStaysCollimated) {
+  // An uncoated plate: the one ghost (reflected at the back, then the front) carries R^2 of the
+  // direct beam: the second term of T = (1 - R)^2 (1 + R^2 + R^4 + ...) = (1 - R)^2 / (1 - R^2).
+  const double n = 1.5168;
+  LensSystem lens(readLensFile(writeTemp("plate3.json", plateJson("", "", n))));
+  const LensCoatings c = resolveCoatings(lens.prescription());
+  const double w[] = {550};
+  const GhostAnalysis g = analyseGhosts(lens, c, w);
+  const double r = sq((n - 1) / (n + 1));
+  // Surfaces: 0 front, 1 back, 2 the stop in air (it reflects nothing).
+  ASSERT_EQ(g.ghosts.size(), 3u);
+  EXPECT_EQ(g.ghosts[0].b, 1);
+  EXPECT_EQ(g.ghosts[0].a, 0);
+  EXPECT_EQ(g.ghosts[1].relative_intensity, 0.0);
+  EXPECT_NEAR(g.ghosts[0].relative_intensity, r * r, 1e-14);
+  EXPECT_NEAR(g.direct_transmittance[0] * (1 + g.ghosts[0].relative_intensity),
+              sq(1 - r) * (1 + r * r), 1e-14);
+  EXPECT_TRUE(std::isinf(g.ghosts[0].focus_z_mm));
+  EXPECT_NEAR(g.ghosts[0].film_diameter_mm, 20, 1e-9);
+}
+
+TEST(CoatedLens, GhostFocusOfAPlanoConvexLensMatchesVergences) {
+  // Plano-convex: R = 50 mm front, flat back, t = 5 mm, n = 1.5. Ghost (1, 0): refract at the
+  // front, reflect at the flat back (no power), reflect at the front from inside (a concave
+  // mirror of radius 50 mm in glass: vergence change 2 n / R), refract out at the flat back.
+  // Independently with reduced vergences V = n / s (mm^-1), all distances from the surfaces:
+  const double rr = 50, t = 5, n = 1.5;
+  double v = (n - 1) / rr;                       // after the front surface (object at infinity)
+  auto transfer = [](double v0, double d, double idx) { return 1 / (1 / v0 - d / idx); };
+  v = transfer(v, t, n);                         // at the back surface
+  // Reflection at the flat back: unfolding the path, the vergence continues; then travel back.
+  v = transfer(v, t, n);                         // at the front surface, from inside
+  v += 2 * n / rr;                               // reflection at the front (concave from inside)
+  v = transfer(v, t, n);                         // at the back again
+  // Refraction at the flat back into air: V unchanged (reduced vergence); focus behind it:
+  const double s_focus = 1 / v;                  // in air, from the back surface
+  const std::string text =
+      "{\"format\": \"lensim-lens\", \"surfaces\": [\n"
+      "  {\"radius_mm\": 50, \"thickness_mm\": 5, \"semi_aperture_mm\": 10, \"ior\": 1.5},\n"
+      "  {\"radius_mm\": 0, \"thickness_mm\": 1, \"semi_aperture_mm\": 10},\n"
+      "  {\"radius_mm\": 0, \"thickness_mm\": 90, \"semi_aperture_mm\": 10, \"stop\": true}\n"
+      "]}\n";
+  LensSystem lens(readLensFile(writeTemp("pcx.json", text)));
+  const double w[] = {550};
+  const GhostAnalysis g = analyseGhosts(lens, resolveCoatings(lens.prescription()), w);
+  ASSERT_EQ(g.ghosts.size(), 3u);
+  ASSERT_EQ(g.ghosts[0].b, 1);
+  EXPECT_NEAR(g.ghosts[0].focus_z_mm, t + s_focus, 1e-9);
+  // Its energy: R_back (glass to air) * R_front (from inside) over the direct beam, with the
+  // front surface's transmission counted once on both paths.
+  const double r = sq((n - 1) / (n + 1));
+  EXPECT_NEAR(g.ghosts[0].relative_intensity, r * r * std::min(1.0, g.ghosts[0].aperture_fraction),
+              1e-14);
+}

@@ -78,10 +78,11 @@ GhostAnalysis analyseGhosts(const LensSystem& lens, const LensCoatings& coatings
       for (size_t w = 0; w < nw; ++w) {
         double e = r_fwd[w][size_t(b)] * r_bwd[w][size_t(a)];
         for (int k = 0; k < n; ++k) {
-          if (k < a || k > b) e *= t_fwd[w][size_t(k)];
+          // Passed forward once: before a, and from b on (b after the reflections).
+          if (k < a || k >= b) e *= t_fwd[w][size_t(k)];
           if (k > a && k < b) e *= t_fwd[w][size_t(k)] * t_bwd[w][size_t(k)] * t_fwd[w][size_t(k)];
         }
-        // Surfaces a and b are passed forward once before the reflections (a) or not at all (b).
+        // Surface a is passed forward once, before the reflections.
         e *= t_fwd[w][size_t(a)];
         const double rel = out.direct_transmittance[w] > 0
                                ? e * g.aperture_fraction / out.direct_transmittance[w]
