@@ -329,11 +329,24 @@ TEST(CoatedLens, UncoatedDoubleGaussTransmittanceIsTheProductOfFresnelLosses) {
   // Eight air-glass surfaces of 1.6-1.7 glass: about 60 %.
   EXPECT_GT(t, 0.55);
   EXPECT_LT(t, 0.66);
-  // Multicoated, it passes over 97 %.
+  // Multicoated: at the stack's design wavelength (510 nm) each air-glass surface reflects as
+  // two quarter waves, Y = n_MgF2^2 n_glass / n_Al2O3^2; cemented surfaces stay bare.
   LensPrescription pm = lens.prescription();
   pm.default_coating = "multi";
   LensSystem multi(pm);
-  EXPECT_GT(axialTransmittance(multi, resolveCoatings(pm), 550), 0.97);
+  lens.indicesAt(510, nb.data(), na.data());
+  double want_multi = 1;
+  for (size_t k = 0; k < nb.size(); ++k) {
+    if ((nb[k] == 1) != (na[k] == 1)) {
+      const double y = sq(1.38) * std::max(nb[k], na[k]) / sq(1.63);
+      want_multi *= 1 - sq((1 - y) / (1 + y));
+    } else {
+      want_multi *= 1 - sq((nb[k] - na[k]) / (nb[k] + na[k]));
+    }
+  }
+  const double tm = axialTransmittance(multi, resolveCoatings(pm), 510);
+  EXPECT_NEAR(tm, want_multi, 1e-12);
+  EXPECT_GT(tm, 0.92);  // uncoated: 0.59
 }
 
 TEST(CoatedLens, PlateGhostCarriesRSquaredAndStaysCollimated) {
@@ -389,4 +402,40 @@ TEST(CoatedLens, GhostFocusOfAPlanoConvexLensMatchesVergences) {
   const double r = sq((n - 1) / (n + 1));
   EXPECT_NEAR(g.ghosts[0].relative_intensity, r * r * std::min(1.0, g.ghosts[0].aperture_fraction),
               1e-14);
+}
+
+TEST(CoatedLens, ZemaxCoatNamesResolveThroughTheCoatingFileBesideTheLens) {
+  std::ifstream in(std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/US00583336-2-scaled.zmx",
+                   std::ios::binary);
+  ASSERT_TRUE(in);
+  std::string lines, line;
+  std::vector<std::string> v;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    v.push_back(line);
+  }
+  auto zmxWith = [&](const std::string& coat) {
+    std::string out;
+    for (size_t i = 0; i < v.size(); ++i) {
+      if (v[i].rfind("COFN", 0) == 0) continue;  // the file's own (COATING.DAT, absent)
+      out += v[i] + "\n";
+      if (v[i] == "MODE SEQ") out += "COFN QF \"ZCOAT.DAT\" \"SCATTER_PROFILE.DAT\"\n";
+      if (v[i] == "SURF 1") out += "  COAT " + coat + "\n";
+    }
+    return out;
+  };
+  writeTemp("ZCOAT.DAT", "MATE MGF2\n0.4 1.38 0\n0.7 1.38 0\nCOAT QW\nMGF2 0.25\n");
+  const LensPrescription p = readLensFile(writeTemp("coated.zmx", zmxWith("QW")));
+  const LensCoatings c = resolveCoatings(p);
+  EXPECT_EQ(c.label[0], "QW");
+  EXPECT_EQ(c.label[1], "uncoated");
+  // Unknown: refused at the COAT line (one COFN line added, the two of the file dropped).
+  try {
+    readLensFile(writeTemp("coated2.zmx", zmxWith("NOPE")));
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("coated2.zmx:66:8: error: unknown coating 'NOPE'"),
+              std::string::npos)
+        << e.what();
+  }
 }
