@@ -50,6 +50,7 @@ struct GhostArgs {
   std::string wavelengths;
   int top = 0;
   double focus_tolerance_mm = 0.05;
+  std::string coating;  // overrides the lens-wide default coating
   bool as_json = false;
 };
 
@@ -57,7 +58,12 @@ int runGhosts(const LensArgs& args, const GhostArgs& ga) {
   FocusedLens fl = setUpLens(args);
   const LensSystem& lens = *fl.lens;
   logDiagnostics(fl.allDiagnostics());
-  const LensCoatings coatings = resolveCoatings(lens.prescription());
+  LensPrescription pr_coated = lens.prescription();
+  if (!ga.coating.empty()) {
+    pr_coated.default_coating = ga.coating;
+    pr_coated.default_coating_loc = FileLoc{};  // named on the command line
+  }
+  const LensCoatings coatings = resolveCoatings(pr_coated);
   std::vector<double> wl = visibleBand();
   if (!ga.wavelengths.empty()) {
     wl.clear();
@@ -191,6 +197,9 @@ void registerLensGhostsCommand(CLI::App& lens, Action& action) {
   cmd->add_option("--top", ga->top, "Show the N brightest ghosts only")->check(CLI::Range(1, 100000));
   cmd->add_option("--focus-tolerance", ga->focus_tolerance_mm,
                   "A ghost is in focus when its film diameter is below this (mm; default 0.05)");
+  cmd->add_option("--coating", ga->coating,
+                  "Lens-wide coating of the air-glass surfaces that name none (uncoated, single, "
+                  "multi, or a name of the lens's coating file), instead of the file's");
   cmd->add_flag("--json", ga->as_json, "Print one JSON object");
   cmd->callback([&action, args, ga] {
     action = [args, ga] { return runGhosts(*args, *ga); };
