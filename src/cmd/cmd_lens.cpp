@@ -11,6 +11,7 @@
 #include <string>
 
 #include "commands.h"
+#include "flare_report.h"
 #include "lens_analysis.h"
 #include "lens_options.h"
 #include "lensim/optics/anamorphic.h"
@@ -214,6 +215,7 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["primary_wavelength_nm"] = primaryWavelength_nm(pr);
     j["dispersive"] = lens.dispersive();
     j["elements"] = elementsJson(lens);
+    j["coatings"] = coatingsJson(lens);
     j["diagnostics"] = diagnosticsJson(fl);
     std::cout << j.dump(2) << "\n";
     return 0;
@@ -308,6 +310,7 @@ int runInfo(const LensArgs& args, bool as_json) {
                      "across it (paraxial {:.3f} deg)",
                      *fov.image_circle_diameter_mm, args.film_diagonal_mm, *fov.real_max_deg,
                      fov.paraxial_deg));
+  printCoatings(lens);
   std::cout << fmt::format("\n  {:>3} {:>5} {:>12} {:>11} {:>8} {:>10} {:>11}\n", "#", "line",
                            "radius", "thickness", "index", "aperture", "z");
   for (int i = 0; i < lens.surfaceCount(); ++i) {
@@ -651,6 +654,7 @@ void registerLensCommands(CLI::App& app, Action& action) {
       action = [args, as_json] { return runInfo(*args, *as_json); };
     });
   }
+  registerLensGhostsCommand(*lens, action);
   {
     auto* trace = lens->add_subcommand(
         "trace", "Trace one exact ray from a film point toward a point on the rear-vertex plane");

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "lensim/optics/coating/lens_coatings.h"
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_formats.h"
 
@@ -73,6 +74,33 @@ FileLoc locAt(std::string_view text, size_t offset, const std::string& path) {
 
 namespace {
 
+// Where a key of the top-level object is written (its quote), for errors about its value.
+FileLoc keyLoc(std::string_view text, std::string_view key, const std::string& path) {
+  int depth = 0;
+  bool in_string = false;
+  size_t start = 0;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+        if (depth == 1 && text.substr(start + 1, i - start - 1) == key)
+          return locAt(text, start, path);
+      }
+    } else if (c == '"') {
+      in_string = true;
+      start = i;
+    } else if (c == '{' || c == '[') {
+      ++depth;
+    } else if (c == '}' || c == ']') {
+      --depth;
+    }
+  }
+  return FileLoc{path, 1, 1};
+}
+
 double getNumber(const json& j, const char* key, const FileLoc& loc, const char* what) {
   auto it = j.find(key);
   if (it == j.end() || !it->is_number())
@@ -131,6 +159,21 @@ LensPrescription parseLensim(const json& j, std::string_view text, const std::st
     p.primary_wavelength_nm = w->get<double>();
   if (auto w = j.find("object_distance_mm"); w != j.end() && w->is_number())
     p.object_distance_mm = w->get<double>();
+  const FileLoc top{path, 1, 1};
+  if (auto c = j.find("coating"); c != j.end()) {
+    if (!c->is_string())
+      throw Error(top, "\"coating\" (the lens-wide default) must be a coating name: "
+                       "\"uncoated\", \"single\", \"multi\" or one of the coating file's");
+    p.default_coating = c->get<std::string>();
+    p.default_coating_loc = keyLoc(text, "coating", path);
+  }
+  if (auto c = j.find("coating_file"); c != j.end()) {
+    if (!c->is_string()) throw Error(top, "\"coating_file\" must be a path");
+    // Relative to the lens file's folder.
+    p.coating_file =
+        (std::filesystem::path(path).parent_path() / c->get<std::string>()).lexically_normal().string();
+    p.coating_file_loc = keyLoc(text, "coating_file", path);
+  }
   const auto offs = arrayElementOffsets(text, "surfaces");
   const json& surfs = j.at("surfaces");
   int mirrors = 0;
@@ -187,6 +230,12 @@ LensPrescription parseLensim(const json& j, std::string_view text, const std::st
       if (!e.contains("ior") && s.glass.n_d) s.ior = *s.glass.n_d;
     }
     s.obscuration_radius_mm = optNumber(e, "obscuration_radius_mm", s.loc, what).value_or(0.0);
+    if (auto c = e.find("coating"); c != e.end()) {
+      if (!c->is_string())
+        throw Error(s.loc, fmt::format("surface {}: \"coating\" must be a coating name", i));
+      s.coating = c->get<std::string>();
+      s.coating_loc = s.loc;
+    }
     if (auto m = e.find("mirror"); m != e.end()) {
       if (!m->is_boolean())
         throw Error(s.loc, fmt::format("surface {}: \"mirror\" must be true or false", i));
@@ -207,6 +256,8 @@ LensPrescription parseLensim(const json& j, std::string_view text, const std::st
     checkSurface(s, int(i), mirrors);
     p.surfaces.push_back(s);
   }
+  // Unknown coating names are refused here, at their line.
+  resolveCoatings(p);
   return p;
 }
 
@@ -405,6 +456,9 @@ std::string writeLensJson(const LensPrescription& p) {
   if (p.primary_wavelength_nm) j["primary_wavelength_nm"] = *p.primary_wavelength_nm;
   if (p.object_distance_mm) j["object_distance_mm"] = *p.object_distance_mm;
   j["source"] = fmt::format("{} ({})", p.path, p.format);
+  if (!p.default_coating.empty()) j["coating"] = p.default_coating;
+  if (!p.coating_file.empty())
+    j["coating_file"] = std::filesystem::absolute(p.coating_file).lexically_normal().string();
   json surfs = json::array();
   for (const LensSurface& s : p.surfaces) {
     json e;
@@ -415,6 +469,7 @@ std::string writeLensJson(const LensPrescription& p) {
     if (s.isStop()) e["stop"] = true;
     if (s.mirror) e["mirror"] = true;
     if (s.obscuration_radius_mm > 0) e["obscuration_radius_mm"] = s.obscuration_radius_mm;
+    if (!s.coating.empty()) e["coating"] = s.coating;
     if (s.shape.conic != 0) e["conic"] = s.shape.conic;
     if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
     if (s.shape.conic_x != 0) e["conic_x"] = s.shape.conic_x;

@@ -67,6 +67,10 @@ struct LensSurface {
   /// catadioptric lens's secondary mirror or the hole in its primary; Zemax `OBSC 0 r`, the
   /// inner radius of `CLAP rmin r`). 0: none.
   double obscuration_radius_mm = 0;
+  /// The coating on this surface as the file names it (JSON "coating", Zemax COAT); empty: the
+  /// lens-wide default on an air-glass surface, none on a cemented one (coating/lens_coatings.h).
+  std::string coating;
+  FileLoc coating_loc;
 
   bool isStop() const { return stop_flag ? *stop_flag : radius_mm == 0; }
   double semiAperture_mm() const { return aperture_diameter_mm / 2; }
@@ -91,6 +95,14 @@ struct LensPrescription {
   /// The file's system aperture, when it states one (Zemax ENPD / FNUM): the stop diameter has
   /// already been set from it; kept for reports.
   std::string aperture_spec;
+  /// The coating of the air-glass surfaces that name none (JSON top-level "coating":
+  /// "uncoated", "single", "multi" or a coating file's name); empty: uncoated.
+  std::string default_coating;
+  FileLoc default_coating_loc;
+  /// A Zemax coating file (COATING.DAT syntax) defining further coating names, resolved against
+  /// the lens file's folder (JSON "coating_file", Zemax COFN); empty: none.
+  std::string coating_file;
+  FileLoc coating_file_loc;
   /// Warnings and notes (crossing surfaces, layout guesses); errors are thrown instead.
   std::vector<Diagnostic> diagnostics;
 

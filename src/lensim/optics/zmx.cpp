@@ -12,7 +12,11 @@
 #include <map>
 #include <numbers>
 
+<<<<<<< ours
 #include "lensim/optics/auto_semi_diameter.h"
+=======
+#include "lensim/optics/coating/lens_coatings.h"
+>>>>>>> theirs
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
@@ -130,6 +134,8 @@ struct ZSurface {
   double inner_radius = 0;  // central obscuration (OBSC 0 r, or CLAP's minimum radius)
   FileLoc inner_loc;
   bool mirror = false;
+  std::string coating;  // COAT name
+  FileLoc coating_loc;
 };
 
 class ZmxParser {
@@ -226,6 +232,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   std::vector<ZSurface> surfs;
   ZSurface* cur = nullptr;
   bool sequential_seen = false;
+  std::string cofn;
+  FileLoc cofn_loc;
 
   int line_no = 0;
   size_t pos = 0;
@@ -296,6 +304,17 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
         else
           throw Error(FileLoc{path_, line_no, t[1].col},
                       fmt::format("unknown lens unit '{}'; expected MM, CM, IN or M", u));
+      } else if (key == "COFN") {
+        // The coating file: the first name ending in .DAT ("COFN [QF] "COATING.DAT" ...").
+        for (size_t i = 1; i < t.size(); ++i) {
+          std::string_view f = t[i].text;
+          if (f.size() >= 2 && f.front() == '"' && f.back() == '"') f = f.substr(1, f.size() - 2);
+          if (f.size() > 4 && (f.substr(f.size() - 4) == ".DAT" || f.substr(f.size() - 4) == ".dat")) {
+            cofn = std::string(f);
+            cofn_loc = FileLoc{path_, line_no, t[i].col};
+            break;
+          }
+        }
       } else if (key == "NAME") {
         const size_t s = line.find("NAME") + 4;
         std::string name(line.substr(std::min(s, line.size())));
@@ -407,6 +426,12 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       // Extra data (`XDAT n value ...`): a toroid's Zernike sag terms; kept to refuse them.
       const double v = num(2, "extra data value");
       if (v != 0 && !cur->xdat_loc) cur->xdat_loc = FileLoc{path_, line_no, t[2].col};
+    } else if (key == "COAT") {
+      // A Zemax coating name (defined in the COFN coating file); "COAT" alone: none.
+      if (t.size() >= 2) {
+        cur->coating = std::string(t[1].text);
+        cur->coating_loc = FileLoc{path_, line_no, t[1].col};
+      }
     } else if (key == "GLAS") {
       need(t, 2, line_no, "glass");
       cur->glass = std::string(t[1].text);
@@ -576,6 +601,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       readToroidal(z, unit_mm, s.shape);
     }
     s.mirror = z.mirror;
+    s.coating = z.coating;
+    s.coating_loc = z.coating_loc;
     if (z.inner_radius > 0) {
       s.obscuration_radius_mm = z.inner_radius * unit_mm;
       if (!(s.obscuration_radius_mm < semi))
@@ -781,6 +808,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     p.aperture_spec = "FLOA (stop semi-diameter from DIAM)";
   }
   (void)inserted_stop;
+<<<<<<< ours
 
   if (!auto_rows.empty()) {
     if (vignetting_loc)
@@ -838,6 +866,28 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                        spec.fields.size() == 1 ? "" : "s",
                        spec.aim_at_stop ? "rays aimed at the real stop (RAIM)"
                                         : "rays through the paraxial entrance pupil")});
+=======
+  // Coatings: with the coating file beside the lens file, unknown COAT names are refused at
+  // their line; without it they are kept and refused where coatings are used (flare analyses),
+  // so that the lens still loads for everything else.
+  if (!cofn.empty()) {
+    const std::filesystem::path f = std::filesystem::path(path_).parent_path() / cofn;
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(f, ec)) {
+      p.coating_file = f.lexically_normal().string();
+      p.coating_file_loc = cofn_loc;
+      resolveCoatings(p);
+    } else {
+      for (const LensSurface& s : p.surfaces)
+        if (!s.coating.empty()) {
+          p.diagnostics.push_back(
+              {Severity::Note, s.coating_loc,
+               fmt::format("coating '{}' is defined in {}, which is not beside the lens file: "
+                           "the lens's coatings are unknown (flare analyses refuse it)",
+                           s.coating, cofn)});
+          break;
+        }
+>>>>>>> theirs
     }
   }
   return p;

@@ -1,0 +1,209 @@
+// `lensim lens ghosts` and the coating lines of `lensim lens info` (issue 31).
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "flare_report.h"
+#include "lens_options.h"
+#include "lensim/optics/coating/ghosts.h"
+#include "lensim/optics/coating/lens_coatings.h"
+#include "lensim/optics/focus.h"
+#include "lensim/optics/lens_system.h"
+#include "lensim/util/log.h"
+
+namespace lensim::cmd {
+
+using json = nlohmann::json;
+using namespace lensim::optics;
+
+namespace {
+
+// The wavelengths reflection losses are reported at: blue, green, red, and the visible band
+// 400..700 nm in 10 nm steps (its mean: an equal-energy white light).
+const double kReportWavelengths[] = {450, 550, 650};
+
+std::vector<double> visibleBand() {
+  std::vector<double> w;
+  for (int l = 400; l <= 700; l += 10) w.push_back(l);
+  return w;
+}
+
+double meanTransmittance(const LensSystem& lens, const LensCoatings& c) {
+  double sum = 0;
+  const std::vector<double> band = visibleBand();
+  for (double l : band) sum += axialTransmittance(lens, c, l);
+  return sum / double(band.size());
+}
+
+std::string fmtInf(double v, const char* f) {
+  return std::isfinite(v) ? fmt::format(fmt::runtime(f), v) : std::string("inf");
+}
+
+json finiteOr(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+struct GhostArgs {
+  std::string wavelengths;
+  int top = 0;
+  double focus_tolerance_mm = 0.05;
+  std::string coating;  // overrides the lens-wide default coating
+  bool as_json = false;
+};
+
+int runGhosts(const LensArgs& args, const GhostArgs& ga) {
+  FocusedLens fl = setUpLens(args);
+  const LensSystem& lens = *fl.lens;
+  logDiagnostics(fl.allDiagnostics());
+  LensPrescription pr_coated = lens.prescription();
+  if (!ga.coating.empty()) {
+    pr_coated.default_coating = ga.coating;
+    pr_coated.default_coating_loc = FileLoc{};  // named on the command line
+  }
+  const LensCoatings coatings = resolveCoatings(pr_coated);
+  std::vector<double> wl = visibleBand();
+  if (!ga.wavelengths.empty()) {
+    wl.clear();
+    size_t pos = 0;
+    while (pos <= ga.wavelengths.size()) {
+      size_t end = ga.wavelengths.find(',', pos);
+      if (end == std::string::npos) end = ga.wavelengths.size();
+      const std::string item = ga.wavelengths.substr(pos, end - pos);
+      double v = 0;
+      try {
+        size_t used = 0;
+        v = std::stod(item, &used);
+        if (used != item.size()) throw std::invalid_argument(item);
+      } catch (const std::exception&) {
+        throw Error(fmt::format("--wavelengths: '{}' is not a number (expected nm, "
+                                "comma-separated)",
+                                item));
+      }
+      checkWavelength(v, "--wavelengths");
+      wl.push_back(v);
+      pos = end + 1;
+    }
+  }
+  if (!(ga.focus_tolerance_mm > 0))
+    throw Error(fmt::format("--focus-tolerance {} must be > 0 (mm)", ga.focus_tolerance_mm));
+  GhostAnalysis g = analyseGhosts(lens, coatings, wl);
+  const size_t shown =
+      ga.top > 0 ? std::min(g.ghosts.size(), size_t(ga.top)) : g.ghosts.size();
+  double total = 0;
+  for (const Ghost& h : g.ghosts) total += h.relative_intensity;
+  double direct = 0;
+  for (double t : g.direct_transmittance) direct += t;
+  direct /= double(std::max<size_t>(1, g.direct_transmittance.size()));
+  const auto& pr = lens.prescription();
+  if (ga.as_json) {
+    json j;
+    j["lens"] = pr.path;
+    j["wavelengths_nm"] = g.wavelengths_nm;
+    j["direct_transmittance"] = g.direct_transmittance;
+    j["direct_transmittance_mean"] = direct;
+    j["film_z_mm"] = lens.filmZ_mm();
+    j["ghost_count"] = g.ghosts.size();
+    j["total_relative_intensity"] = total;
+    j["focus_tolerance_mm"] = ga.focus_tolerance_mm;
+    json arr = json::array();
+    for (size_t i = 0; i < shown; ++i) {
+      const Ghost& h = g.ghosts[i];
+      arr.push_back({{"first_reflection_surface", h.b},
+                     {"second_reflection_surface", h.a},
+                     {"relative_intensity", h.relative_intensity},
+                     {"relative_intensity_per_wavelength", h.relative_intensity_per_wavelength},
+                     {"aperture_fraction", h.aperture_fraction},
+                     {"focus_z_mm", finiteOr(h.focus_z_mm)},
+                     {"defocus_mm", finiteOr(h.defocus_mm)},
+                     {"film_diameter_mm", h.film_diameter_mm},
+                     {"in_focus", h.film_diameter_mm < ga.focus_tolerance_mm}});
+    }
+    j["ghosts"] = arr;
+    std::cout << j.dump(2) << "\n";
+    return 0;
+  }
+  std::cout << fmt::format(
+      "{}: {} two-reflection ghosts of an axial point at infinity ({} wavelength{} {:.0f}..{:.0f} "
+      "nm; direct transmittance {:.4f}; all ghosts together {:.3e} of the direct image)\n",
+      pr.name, g.ghosts.size(), wl.size(), wl.size() == 1 ? "" : "s,", wl.front(), wl.back(),
+      direct, total);
+  std::cout << fmt::format("\n  {:>4} {:>7} {:>12} {:>9} {:>12} {:>11} {:>11}  {}\n", "rank",
+                           "I,J", "intensity", "aperture", "focus z", "defocus", "film diam",
+                           "focus");
+  for (size_t i = 0; i < shown; ++i) {
+    const Ghost& h = g.ghosts[i];
+    std::cout << fmt::format("  {:>4} {:>7} {:>12.4e} {:>9.4f} {:>12} {:>11} {:>11.4f}  {}\n",
+                             i + 1, fmt::format("{},{}", h.b, h.a), h.relative_intensity,
+                             h.aperture_fraction, fmtInf(h.focus_z_mm, "{:.4f}"),
+                             fmtInf(h.defocus_mm, "{:.4f}"), h.film_diameter_mm,
+                             h.film_diameter_mm < ga.focus_tolerance_mm ? "in focus" : "");
+  }
+  std::cout << "\n  I,J: reflected first at surface I (toward the scene), then at J; intensity: "
+               "ghost energy / direct image energy; aperture: fraction of the entrance beam the "
+               "clear apertures pass on the ghost path; focus z, defocus (focus - film) and film "
+               "diameter in mm (paraxial)\n";
+  return 0;
+}
+
+}  // namespace
+
+json coatingsJson(const LensSystem& lens) {
+  LensCoatings c;
+  try {
+    c = resolveCoatings(lens.prescription());
+  } catch (const Error& e) {
+    return json{{"error", e.what()}};
+  }
+  json j;
+  j["surfaces"] = c.label;
+  json t = json::object();
+  for (double l : kReportWavelengths) t[fmt::format("{:.0f}", l)] = axialTransmittance(lens, c, l);
+  j["axial_transmittance"] = t;
+  j["axial_transmittance_400_700"] = meanTransmittance(lens, c);
+  return j;
+}
+
+void printCoatings(const LensSystem& lens) {
+  LensCoatings c;
+  try {
+    c = resolveCoatings(lens.prescription());
+  } catch (const Error& e) {
+    std::cout << fmt::format("  {:<26}not available: {}\n", "coatings", e.what());
+    return;
+  }
+  std::string list;
+  for (size_t k = 0; k < c.label.size(); ++k)
+    list += fmt::format("{}{} {}", k ? ", " : "", k, c.label[k]);
+  std::cout << fmt::format("  {:<26}{}\n", "coatings", list);
+  std::string t;
+  for (double l : kReportWavelengths)
+    t += fmt::format("{:.4f} at {:.0f} nm, ", axialTransmittance(lens, c, l), l);
+  std::cout << fmt::format("  {:<26}{}mean {:.4f} over 400..700 nm (reflection losses, axial)\n",
+                           "transmittance", t, meanTransmittance(lens, c));
+}
+
+void registerLensGhostsCommand(CLI::App& lens, Action& action) {
+  auto* cmd = lens.add_subcommand(
+      "ghosts", "Two-reflection ghosts of an axial point at infinity: intensity, focus, size");
+  auto args = std::make_shared<LensArgs>();
+  auto ga = std::make_shared<GhostArgs>();
+  addLensOptions(cmd, *args);
+  cmd->add_option("--wavelengths", ga->wavelengths,
+                  "Wavelengths (nm, comma-separated) the intensities are averaged over; default "
+                  "400..700 in 10 nm steps");
+  cmd->add_option("--top", ga->top, "Show the N brightest ghosts only")->check(CLI::Range(1, 100000));
+  cmd->add_option("--focus-tolerance", ga->focus_tolerance_mm,
+                  "A ghost is in focus when its film diameter is below this (mm; default 0.05)");
+  cmd->add_option("--coating", ga->coating,
+                  "Lens-wide coating of the air-glass surfaces that name none (uncoated, single, "
+                  "multi, or a name of the lens's coating file), instead of the file's");
+  cmd->add_flag("--json", ga->as_json, "Print one JSON object");
+  cmd->callback([&action, args, ga] {
+    action = [args, ga] { return runGhosts(*args, *ga); };
+  });
+}
+
+}  // namespace lensim::cmd

@@ -1,0 +1,24 @@
+// Coatings and reflection losses in `lensim lens info`, and `lensim lens ghosts` (issue 31).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+
+namespace lensim::optics {
+class LensSystem;
+}
+
+namespace lensim::cmd {
+
+/// The lens's coatings and its axial transmittance (reflection losses) for `lens info --json`;
+/// {"error": message} when the coatings cannot be resolved (a Zemax coating file not beside the
+/// lens file).
+nlohmann::json coatingsJson(const optics::LensSystem& lens);
+/// The same as text lines for `lens info`.
+void printCoatings(const optics::LensSystem& lens);
+
+/// `lensim lens ghosts LENS`: the two-reflection ghosts ranked by intensity.
+void registerLensGhostsCommand(CLI::App& lens, Action& action);
+
+}  // namespace lensim::cmd
