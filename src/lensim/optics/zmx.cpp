@@ -12,11 +12,8 @@
 #include <map>
 #include <numbers>
 
-<<<<<<< ours
 #include "lensim/optics/auto_semi_diameter.h"
-=======
 #include "lensim/optics/coating/lens_coatings.h"
->>>>>>> theirs
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
@@ -808,7 +805,6 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     p.aperture_spec = "FLOA (stop semi-diameter from DIAM)";
   }
   (void)inserted_stop;
-<<<<<<< ours
 
   if (!auto_rows.empty()) {
     if (vignetting_loc)
@@ -866,7 +862,9 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                        spec.fields.size() == 1 ? "" : "s",
                        spec.aim_at_stop ? "rays aimed at the real stop (RAIM)"
                                         : "rays through the paraxial entrance pupil")});
-=======
+    }
+  }
+
   // Coatings: with the coating file beside the lens file, unknown COAT names are refused at
   // their line; without it they are kept and refused where coatings are used (flare analyses),
   // so that the lens still loads for everything else.
@@ -887,7 +885,6 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                            s.coating, cofn)});
           break;
         }
->>>>>>> theirs
     }
   }
   return p;
