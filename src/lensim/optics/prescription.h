@@ -72,6 +72,17 @@ struct LensSurface {
   double semiAperture_mm() const { return aperture_diameter_mm / 2; }
 };
 
+/// One configuration of a multi-configuration lens (a zoom position, a focus position): the
+/// whole surface table as it is in that configuration (rows match LensPrescription::surfaces one
+/// to one), with the configuration's system data.
+struct LensConfiguration {
+  std::vector<LensSurface> surfaces;
+  std::string aperture_spec;  ///< the system aperture in this configuration, when stated
+  std::optional<double> object_distance_mm;  ///< unset: infinity or not given
+  std::vector<double> wavelengths_nm;        ///< empty: the prescription's
+  FileLoc loc;  ///< where the configuration (or its first operand) is written
+};
+
 /// A lens prescription read from a file: surfaces front to back and what was noticed about them.
 struct LensPrescription {
   std::string path;  ///< the file it came from
@@ -91,6 +102,11 @@ struct LensPrescription {
   /// The file's system aperture, when it states one (Zemax ENPD / FNUM): the stop diameter has
   /// already been set from it; kept for reports.
   std::string aperture_spec;
+  /// Multi-configuration data (Zemax MNUM and its operands, lensim JSON "configurations"):
+  /// every configuration's surfaces; empty for a lens with one configuration.
+  /// `surfaces` holds the active one (`active_configuration`, 1-based) as the file stores it.
+  std::vector<LensConfiguration> configurations;
+  int active_configuration = 1;
   /// Warnings and notes (crossing surfaces, layout guesses); errors are thrown instead.
   std::vector<Diagnostic> diagnostics;
 
