@@ -16,6 +16,7 @@
 #include "lensim/optics/anamorphic.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/chromatic.h"
+#include "lensim/optics/configurations.h"
 #include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_formats.h"
@@ -112,6 +113,47 @@ json diagnosticsJson(const FocusedLens& fl) {
   return arr;
 }
 
+// `lens info --configs`: first-order data of every configuration, each set up (focus, film)
+// as the other options say.
+int runConfigs(const LensArgs& args, bool as_json) {
+  if (args.configuration || args.zoom_focal_length_mm)
+    throw Error("--configs lists every configuration; it takes neither --config nor --focal-length");
+  const int count = configurationCount(readLensFile(args.lens_path));
+  json arr = json::array();
+  if (!as_json)
+    std::cout << fmt::format("{:>6} {:>12} {:>9} {:>11} {:>11} {:>13}\n", "config", "EFL mm",
+                             "f-number", "BFL mm", "field deg", "track mm");
+  for (int n = 1; n <= count; ++n) {
+    LensArgs one = args;
+    one.configuration = n;
+    const FocusedLens fl = setUpLens(one);
+    const ParaxialData& p = fl.paraxial;
+    const FieldOfView fov = fieldOfView(*fl.lens, p, args.film_diagonal_mm);
+    const double field = fov.real_deg ? *fov.real_deg : fov.paraxial_deg;
+    arr.push_back({{"configuration", n},
+                   {"effective_focal_length_mm", p.effective_focal_length_mm},
+                   {"f_number", p.f_number},
+                   {"back_focal_length_mm", p.back_focal_length_mm},
+                   {"field_of_view_deg", field},
+                   {"field_of_view_is_real", fov.real_deg.has_value()},
+                   {"total_track_mm", totalTrack(*fl.lens)}});
+    if (!as_json)
+      std::cout << fmt::format("{:>6} {:>12.4f} {:>9.3f} {:>11.4f} {:>11.3f}{} {:>12.4f}\n", n,
+                               p.effective_focal_length_mm, p.f_number, p.back_focal_length_mm,
+                               field, fov.real_deg ? " " : "p", totalTrack(*fl.lens));
+  }
+  if (as_json)
+    std::cout << json{{"lens", args.lens_path}, {"film_diagonal_mm", args.film_diagonal_mm},
+                      {"configurations", arr}}
+                     .dump(2)
+              << "\n";
+  else
+    std::cout << fmt::format("field: real chief ray to the corner of a {:.2f} mm diagonal (p: "
+                             "paraxial, the corner sees nothing); track: front vertex to film\n",
+                             args.film_diagonal_mm);
+  return 0;
+}
+
 int runInfo(const LensArgs& args, bool as_json) {
   FocusedLens fl = setUpLens(args);
   const LensSystem& lens = *fl.lens;
@@ -152,6 +194,8 @@ int runInfo(const LensArgs& args, bool as_json) {
                  {"surface_count", lens.surfaceCount()}};
     if (!pr.aperture_spec.empty()) j["lens"]["aperture_spec"] = pr.aperture_spec;
     if (pr.object_distance_mm) j["lens"]["object_distance_mm"] = *pr.object_distance_mm;
+    j["lens"]["configurations"] = configurationCount(readLensFile(args.lens_path));
+    if (args.configuration) j["lens"]["configuration"] = *args.configuration;
     if (pr.nominal_focal_length_mm)
       j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
     j["effective_focal_length_mm"] = p.effective_focal_length_mm;
@@ -229,6 +273,12 @@ int runInfo(const LensArgs& args, bool as_json) {
   else
     line("file", fmt::format("{} ({}, {} surfaces{})", pr.path, pr.format, lens.surfaceCount(),
                              pr.aperture_spec.empty() ? "" : ", aperture " + pr.aperture_spec));
+  if (const int count = configurationCount(readLensFile(args.lens_path)); count > 1)
+    line("configurations", args.configuration
+                               ? fmt::format("{} of {}", *args.configuration, count)
+                               : fmt::format("{} (showing the file's surface data; --config N, "
+                                             "--configs for all)",
+                                             count));
   if (pr.nominal_focal_length_mm)
     line("stated focal length", fmt::format("{:.3f} mm", *pr.nominal_focal_length_mm));
   line("effective focal length", fmt::format("{:.4f} mm", p.effective_focal_length_mm));
@@ -463,9 +513,28 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
   opts.film_diagonal_mm = common.film_diagonal_mm;
   opts.source = args.from == "scene" ? DiagramSource::Scene : DiagramSource::Film;
   std::vector<LensDiagram> diagrams;
+  int columns = 0;
+  bool same_scale = args.same_scale;
   for (const std::string& path : args.lenses) {
     LensArgs one = common;
     one.lens_path = path;
+    // A zoom lens without --config/--focal-length: every configuration, stacked at one scale.
+    if (!one.configuration && !one.zoom_focal_length_mm && args.lenses.size() == 1 &&
+        args.wavelengths.empty()) {
+      const int count = configurationCount(readLensFile(path));
+      if (count > 1) {
+        for (int n = 1; n <= count; ++n) {
+          one.configuration = n;
+          FocusedLens fc = setUpLens(one);
+          LensDiagram d = buildLensDiagram(fc, opts);
+          d.annotations.push_back(fmt::format("configuration {} of {}: EFL {:.2f} mm", n, count,
+                                              fc.paraxial.effective_focal_length_mm));
+          diagrams.push_back(std::move(d));
+        }
+        columns = 1, same_scale = true;
+        continue;
+      }
+    }
     FocusedLens fl = setUpLens(one);
     logDiagnostics(fl.allDiagnostics());
     if (args.wavelengths.empty()) {
@@ -503,7 +572,7 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     d.annotations.push_back(fmt::format("wavelengths {} nm (in their colours)", names));
     diagrams.push_back(std::move(d));
   }
-  writeFileAtomically(args.output, lensDiagramSheet(diagrams, args.same_scale));
+  writeFileAtomically(args.output, lensDiagramSheet(diagrams, same_scale, columns));
   logInfo(fmt::format("wrote {} ({} lens{})", args.output, diagrams.size(),
                       diagrams.size() == 1 ? "" : "es"));
   return 0;
@@ -647,8 +716,14 @@ void registerLensCommands(CLI::App& app, Action& action) {
     auto as_json = std::make_shared<bool>(false);
     addLensOptions(info, *args);
     info->add_flag("--json", *as_json, "Print one JSON object");
-    info->callback([&action, args, as_json] {
-      action = [args, as_json] { return runInfo(*args, *as_json); };
+    auto configs = std::make_shared<bool>(false);
+    info->add_flag("--configs", *configs,
+                   "Table of every configuration of a zoom lens: EFL, f-number, BFL, field of "
+                   "view, total track");
+    info->callback([&action, args, as_json, configs] {
+      action = [args, as_json, configs] {
+        return *configs ? runConfigs(*args, *as_json) : runInfo(*args, *as_json);
+      };
     });
   }
   {
