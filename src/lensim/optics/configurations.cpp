@@ -94,7 +94,7 @@ ZoomSetting zoomToFocalLength(const LensPrescription& p, double efl_mm) {
   if (!(std::isfinite(efl_mm) && efl_mm != 0))
     throw Error(FileLoc{p.path},
                 fmt::format("focal length {} mm: expected a finite, non-zero value", efl_mm));
-  std::vector<double> f(size_t(count));
+  std::vector<double> f(static_cast<size_t>(count));
   for (int n = 1; n <= count; ++n) f[size_t(n - 1)] = configurationEfl_mm(p, n);
   for (int n = 1; n < count; ++n) {
     const double lo = f[size_t(n - 1)], hi = f[size_t(n)];
