@@ -274,11 +274,13 @@ int runInfo(const LensArgs& args, bool as_json) {
     line("file", fmt::format("{} ({}, {} surfaces{})", pr.path, pr.format, lens.surfaceCount(),
                              pr.aperture_spec.empty() ? "" : ", aperture " + pr.aperture_spec));
   if (const int count = configurationCount(readLensFile(args.lens_path)); count > 1)
-    line("configurations", args.configuration
-                               ? fmt::format("{} of {}", *args.configuration, count)
-                               : fmt::format("{} (showing the file's surface data; --config N, "
-                                             "--configs for all)",
-                                             count));
+    line("configurations",
+         args.configuration ? fmt::format("{} of {}", *args.configuration, count)
+         : args.zoom_focal_length_mm
+             ? fmt::format("{}; zoomed to {} mm between two of them (see the log)", count,
+                           *args.zoom_focal_length_mm)
+             : fmt::format("{} (showing the file's surface data; --config N, --configs for all)",
+                           count));
   if (pr.nominal_focal_length_mm)
     line("stated focal length", fmt::format("{:.3f} mm", *pr.nominal_focal_length_mm));
   line("effective focal length", fmt::format("{:.4f} mm", p.effective_focal_length_mm));
