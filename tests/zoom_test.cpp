@@ -10,6 +10,7 @@
 
 #include "cli_run.h"
 #include "lensim/optics/configurations.h"
+#include "lensim/optics/focus.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/util/error.h"
 #include "test_paths.h"
@@ -168,6 +169,71 @@ TEST(Zoom, CliConfigsTable) {
   const test::CliResult bad = test::runLensim("lens info --config 9 " + zoomPath());
   EXPECT_EQ(bad.status, 1) << bad.out;
   EXPECT_NE(bad.out.find("configurations 1 to 3"), std::string::npos) << bad.out;
+}
+
+// Group focusing: a three-element lens whose middle element moves (gap 1 grows by x, gap 3
+// shrinks by x). Checked by a y-nu trace written here: the film stays at the infinity focus's
+// place, and the object at the focus distance images onto it.
+constexpr std::array<Row, 6> kGroupLens = {
+    {{50, 4, 1.6}, {-200, 10, 1}, {40, 4, 1.6}, {100, 10, 1}, {-30, 3, 1.6}, {-60, 0, 1}}};
+const char* const kGroupLensJson = R"({"format": "lensim-lens", "surfaces": [
+  {"radius_mm": 50, "thickness_mm": 4, "semi_aperture_mm": 6, "ior": 1.6},
+  {"radius_mm": -200, "thickness_mm": 10, "semi_aperture_mm": 6},
+  {"radius_mm": 40, "thickness_mm": 4, "semi_aperture_mm": 6, "ior": 1.6, "stop": false},
+  {"radius_mm": 100, "thickness_mm": 10, "semi_aperture_mm": 6},
+  {"radius_mm": -30, "thickness_mm": 3, "semi_aperture_mm": 6, "ior": 1.6},
+  {"radius_mm": -60, "thickness_mm": 0, "semi_aperture_mm": 6}],
+  "focus_group": {"1": 1, "3": -1}})";
+
+// Traces (y, nu) through the group lens with gaps a, b; returns {y, u} after the last surface
+// and the rear vertex z.
+std::array<double, 3> traceGroupLens(double a, double b, double y, double u) {
+  double n = 1, z = 0;
+  for (size_t i = 0; i < kGroupLens.size(); ++i) {
+    const double nu = n * u - y * (kGroupLens[i].n - n) / kGroupLens[i].r;
+    n = kGroupLens[i].n;
+    u = nu / n;
+    if (i + 1 == kGroupLens.size()) break;
+    const double t = i == 1 ? a : i == 3 ? b : kGroupLens[i].t;
+    y += t * u;
+    z += t;
+  }
+  return {y, u, z};
+}
+
+TEST(GroupFocus, FilmStaysAndTheObjectImagesOnIt) {
+  const LensPrescription p = optics::parseLensJson(kGroupLensJson, "group.json");
+  ASSERT_EQ(p.focus_group.size(), 2u);
+  // Infinity focus with the group at rest: the film is the BFL behind the rear vertex.
+  const auto inf = traceGroupLens(10, 10, 1, 0);
+  const double track = inf[2] - inf[0] / inf[1];
+  for (double d_m : {2.0, 1.0, 0.5}) {
+    optics::LensSetup setup;
+    setup.focus_distance_m = d_m;
+    const optics::FocusedLens fl = optics::focusLens(p, setup);
+    const auto& rows = fl.lens->prescription().surfaces;
+    const double a = rows[1].thickness_mm, b = rows[3].thickness_mm;
+    EXPECT_NEAR(a + b, 20, 1e-9);  // the group moved as one
+    EXPECT_LT(a, 10);              // closer focus: the middle element moves forward
+    EXPECT_NEAR(fl.lens->filmZ_mm(), track, 1e-6);
+    // The axial object d_m from the film images on the film.
+    const double s = track - d_m * 1000;  // object z (front vertex at 0)
+    const double u0 = 1e-3;
+    const auto out = traceGroupLens(a, b, -s * u0, u0);
+    const double image_z = out[2] - out[0] / out[1];
+    EXPECT_NEAR(image_z, track, 1e-6 * track) << d_m;
+    // Breathing: the focal length is that of the moved group, not of the lens at rest.
+    EXPECT_NEAR(fl.paraxial.effective_focal_length_mm,
+                -1 / traceGroupLens(a, b, 1, 0)[1], 1e-9 * 60);
+  }
+  // Unit focusing of the same lens keeps the spacings.
+  LensPrescription unit = p;
+  unit.focus_group.clear();
+  optics::LensSetup setup;
+  setup.focus_distance_m = 1.0;
+  EXPECT_EQ(optics::focusLens(unit, setup).lens->prescription().surfaces[1].thickness_mm, 10);
+  // Round trip through the JSON writer keeps the group.
+  EXPECT_EQ(optics::parseLensJson(optics::writeLensJson(p), "g.json").focus_group, p.focus_group);
 }
 
 }  // namespace

@@ -197,6 +197,31 @@ void readLensimConfigurations(const json& j, std::string_view text, const std::s
   if (p.configurations.size() == 1) p.configurations.clear();  // nothing to choose
 }
 
+// lensim JSON "focus_group": surface index -> rate (mm of thickness per mm of group travel).
+void readLensimFocusGroup(const json& j, const std::string& path, LensPrescription& p) {
+  auto it = j.find("focus_group");
+  if (it == j.end()) return;
+  const FileLoc top{path, 1, 1};
+  if (!it->is_object() || it->empty())
+    throw Error(top, "\"focus_group\" must map surface indices (\"4\") to rates (1, -1)");
+  for (const auto& [k, v] : it->items()) {
+    size_t used = 0;
+    int index = -1;
+    try {
+      index = std::stoi(k, &used);
+    } catch (...) {
+      index = -1;
+    }
+    if (used != k.size() || index < 0 || index + 1 >= int(p.surfaces.size()))
+      throw Error(top, fmt::format("\"focus_group\": \"{}\" is not a gap between surfaces "
+                                   "(0 to {})",
+                                   k, int(p.surfaces.size()) - 2));
+    if (!v.is_number() || v.get<double>() == 0 || !std::isfinite(v.get<double>()))
+      throw Error(top, fmt::format("\"focus_group\": \"{}\": expected a non-zero rate", k));
+    p.focus_group.emplace_back(index, v.get<double>());
+  }
+}
+
 // The configurations as lensim JSON: each configuration's differences from `surfaces`.
 json lensimConfigurationsJson(const LensPrescription& p) {
   json arr = json::array();
@@ -307,6 +332,7 @@ LensPrescription parseLensim(const json& j, std::string_view text, const std::st
     p.surfaces.push_back(s);
   }
   readLensimConfigurations(j, text, path, p);
+  readLensimFocusGroup(j, path, p);
   return p;
 }
 
@@ -535,6 +561,11 @@ std::string writeLensJson(const LensPrescription& p) {
     surfs.push_back(e);
   }
   j["surfaces"] = surfs;
+  if (!p.focus_group.empty()) {
+    json g = json::object();
+    for (const auto& [row, rate] : p.focus_group) g[std::to_string(row)] = rate;
+    j["focus_group"] = g;
+  }
   if (!p.configurations.empty()) {
     j["configurations"] = lensimConfigurationsJson(p);
     j["active_configuration"] = p.active_configuration;

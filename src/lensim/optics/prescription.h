@@ -20,6 +20,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "lensim/optics/surface_shape.h"
@@ -107,6 +108,10 @@ struct LensPrescription {
   /// `surfaces` holds the active one (`active_configuration`, 1-based) as the file stores it.
   std::vector<LensConfiguration> configurations;
   int active_configuration = 1;
+  /// Group focusing (lensim JSON "focus_group"): surface row -> rate; moving the group by x mm
+  /// changes that row's thickness by rate * x (an inner group: +1 on the gap before it, -1 on
+  /// the gap after). Empty: the whole lens moves to focus (unit focusing). focusLens solves x.
+  std::vector<std::pair<int, double>> focus_group;
   /// Warnings and notes (crossing surfaces, layout guesses); errors are thrown instead.
   std::vector<Diagnostic> diagnostics;
 
