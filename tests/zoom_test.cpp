@@ -236,5 +236,23 @@ TEST(GroupFocus, FilmStaysAndTheObjectImagesOnIt) {
   EXPECT_EQ(optics::parseLensJson(optics::writeLensJson(p), "g.json").focus_group, p.focus_group);
 }
 
+TEST(GroupFocus, CliBreathingPlot) {
+  const std::string lens = test::dataPath("lenses/group_focus_triplet.json");
+  const test::CliResult r = test::runLensim("lens plot breathing --json --film-diagonal 20 -o " +
+                                            ::testing::TempDir() + "/breathing.svg " + lens);
+  ASSERT_EQ(r.status, 0) << r.out;
+  const size_t at = r.out.find('{');
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::string js = r.out.substr(at);
+  // Both curves, and the group curve's focal lengths are those of the moved group: shorter
+  // than at rest when focused close (the middle element moves forward), see the test above.
+  for (const char* key : {"\"unit\"", "\"group\""})
+    EXPECT_NE(js.find(key), std::string::npos) << js;
+  const size_t g = js.find("\"group\"");
+  const std::string efl_key = "\"effective_focal_length_mm\": ";
+  const double first_group_efl = std::stod(js.substr(js.find(efl_key, g) + efl_key.size()));
+  EXPECT_LT(first_group_efl, -1 / traceGroupLens(10, 10, 1, 0)[1] - 0.5) << js;
+}
+
 }  // namespace
 }  // namespace lensim

@@ -24,6 +24,7 @@
 #include "lensim/optics/plots.h"
 #include "lensim/util/file.h"
 #include "lensim/util/log.h"
+#include "lensim/util/plot.h"
 #include "lensim/util/svg.h"
 
 namespace lensim::cmd {
@@ -602,7 +603,69 @@ json finiteOrNull(const std::vector<double>& v) {
   return arr;
 }
 
+// `lens plot breathing`: the field of view against the focus distance (log-spaced from the
+// closest focus to 100 m) for unit focusing (the whole lens moves) and, when the lens has a
+// focus group, group focusing; the film stays the same size.
+std::string breathingPlot(const LensArgs& args, json& j) {
+  const LensPrescription p = applyConfigurationArgs(args, readLensFile(args.lens_path));
+  LensSetup setup;
+  setup.aperture_diameter_mm = args.aperture_diameter_mm;
+  setup.focus_method = args.focus_method;
+  LensPrescription unit = p;
+  unit.focus_group.clear();
+  const FocusedLens at_inf = focusLens(unit, setup);
+  const double closest = closestFocusDistance_m(*at_inf.lens, at_inf.paraxial);
+  plot::Chart chart;
+  chart.title = fmt::format("Focus breathing: {}", p.name);
+  chart.x_label = "focus distance from the film (m)";
+  chart.y_label = fmt::format("field of view on a {:.1f} mm diagonal (deg)", args.film_diagonal_mm);
+  chart.x_log = true;
+  std::vector<std::pair<std::string, const LensPrescription*>> kinds = {{"unit", &unit}};
+  if (!p.focus_group.empty()) kinds.push_back({"group", &p});
+  const double lo = std::max(closest * 1.02, 1e-3), hi = 100;
+  for (size_t k = 0; k < kinds.size(); ++k) {
+    plot::Series series;
+    series.name = kinds[k].first + " focusing";
+    series.color = plot::paletteColor(int(k));
+    json arr = json::array();
+    for (int i = 0; i <= 40; ++i) {
+      const double d = lo * std::pow(hi / lo, i / 40.0);
+      LensSetup at = setup;
+      at.focus_distance_m = d;
+      try {
+        const FocusedLens fl = focusLens(*kinds[k].second, at);
+        const FieldOfView fov = fieldOfView(*fl.lens, fl.paraxial, args.film_diagonal_mm);
+        const double deg = fov.real_deg ? *fov.real_deg : fov.paraxial_deg;
+        series.points.push_back({d, deg});
+        arr.push_back({{"focus_distance_m", d},
+                       {"field_of_view_deg", deg},
+                       {"effective_focal_length_mm", fl.paraxial.effective_focal_length_mm}});
+      } catch (const Error&) {
+        // this focusing cannot reach d: no point
+      }
+    }
+    j[kinds[k].first] = arr;
+    chart.series.push_back(std::move(series));
+  }
+  const FieldOfView f_inf = fieldOfView(*at_inf.lens, at_inf.paraxial, args.film_diagonal_mm);
+  j["field_of_view_at_infinity_deg"] = f_inf.real_deg ? *f_inf.real_deg : f_inf.paraxial_deg;
+  chart.notes.push_back(fmt::format("at infinity: {:.3f} deg", j["field_of_view_at_infinity_deg"]
+                                                                  .get<double>()));
+  svg::Document doc(640, 440);
+  doc.rect(0, 0, 640, 440, {{"fill", "#ffffff"}});
+  chart.render(doc, 0, 0, 640, 440);
+  return doc.str();
+}
+
 int runPlot(const LensArgs& args, const PlotArgs& pa) {
+  if (pa.kind == "breathing") {
+    json j{{"kind", pa.kind}, {"lens", args.lens_path}};
+    const std::string svg_text = breathingPlot(args, j);
+    writeFileAtomically(pa.output, svg_text);
+    if (pa.as_json) std::cout << j.dump(2) << "\n";
+    logInfo(fmt::format("wrote {}", pa.output));
+    return 0;
+  }
   FocusedLens fl = setUpLens(args);
   logDiagnostics(fl.allDiagnostics());
   std::string svg_text;
@@ -775,9 +838,10 @@ void registerLensCommands(CLI::App& app, Action& action) {
     plot->add_option("KIND", pa->kind,
                      "spot, distortion, vignetting, focus, chromatic (focal shift against "
                      "wavelength), lateral-color (F and C image height minus d), mtf, mtf-focus, "
-                     "fans, field or psf")
+                     "fans, field, psf or breathing (field of view against focus distance)")
         ->required()
-        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus", "chromatic",
+        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus", "breathing",
+                               "chromatic",
                                "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf"}));
     addLensOptions(plot, *args);
     plot->add_option("-o,--output", pa->output, "Output SVG file")->required();
