@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "cli_run.h"
@@ -252,6 +253,23 @@ TEST(GroupFocus, CliBreathingPlot) {
   const std::string efl_key = "\"effective_focal_length_mm\": ";
   const double first_group_efl = std::stod(js.substr(js.find(efl_key, g) + efl_key.size()));
   EXPECT_LT(first_group_efl, -1 / traceGroupLens(10, 10, 1, 0)[1] - 0.5) << js;
+}
+
+TEST(GroupFocus, CliInfoMagnificationAtTheFocusedDistance) {
+  const std::string lens = test::dataPath("lenses/group_focus_triplet.json");
+  const test::CliResult r =
+      test::runLensim("lens info --json --focus-distance 1 " + lens + " 2>/dev/null");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  const double a = j["surfaces"][1]["thickness_mm"], b = j["surfaces"][3]["thickness_mm"];
+  EXPECT_NEAR(a + b, 20, 1e-9);
+  // Independent: m = u / u' of an axial ray from the object (y-nu trace above).
+  const auto inf = traceGroupLens(10, 10, 1, 0);
+  const double track = inf[2] - inf[0] / inf[1];
+  const double s = track - 1000, u0 = 1e-3;
+  const auto out = traceGroupLens(a, b, -s * u0, u0);
+  EXPECT_NEAR(j["magnification"].get<double>(), u0 / out[1], 1e-9);
+  EXPECT_TRUE(j["group_focusing"].get<bool>());
 }
 
 }  // namespace

@@ -185,6 +185,10 @@ int runInfo(const LensArgs& args, bool as_json) {
   // it (the film is focused for a beam converging toward a point behind the lens).
   const double s_i = lens.filmZ_mm() - p.principal_plane_back_z_mm;
   const double vergence_dpt = 1000 * (1 / p.effective_focal_length_mm - 1 / s_i);
+  // Paraxial lateral magnification at the focused distance (object and image in air): -s_i/s_o
+  // from the principal planes.
+  std::optional<double> magnification;
+  if (object_z) magnification = -s_i / (p.principal_plane_front_z_mm - *object_z);
 
   if (as_json) {
     json j;
@@ -234,6 +238,8 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["film_in_front_of_infinity_focus_mm"] =
         beyond_infinity_mm ? json(*beyond_infinity_mm) : json(nullptr);
     j["object_vergence_dpt"] = vergence_dpt;
+    j["magnification"] = magnification ? json(*magnification) : json(nullptr);
+    if (!pr.focus_group.empty()) j["group_focusing"] = true;
     j["focus_method"] = focusMethodName(args.focus_method);
     j["closest_focus_distance_m"] = closest;
     j["film_diagonal_mm"] = args.film_diagonal_mm;
@@ -338,6 +344,10 @@ int runInfo(const LensArgs& args, bool as_json) {
                : fmt::format("{:.6g} m from the film", fl.focus_distance_m);
   line("focus", fmt::format("{} ({} method); closest {:.4f} m", focus_text,
                             focusMethodName(args.focus_method), closest));
+  if (magnification)
+    line("magnification", fmt::format("{:.6f} (paraxial, at the focused distance){}",
+                                      *magnification,
+                                      pr.focus_group.empty() ? "" : "; focused by the focus group"));
   line("film distance",
        fmt::format("{:.4f} mm {} the rear vertex", lens.filmDistance_mm(),
                    lens.imageSpaceReversed() ? "in front of (image space reversed by the mirrors)"
