@@ -17,6 +17,7 @@
 #include "lensim/optics/anamorphic.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/chromatic.h"
+#include "lensim/optics/configurations.h"
 #include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_formats.h"
@@ -24,6 +25,7 @@
 #include "lensim/optics/plots.h"
 #include "lensim/util/file.h"
 #include "lensim/util/log.h"
+#include "lensim/util/plot.h"
 #include "lensim/util/svg.h"
 
 namespace lensim::cmd {
@@ -113,6 +115,47 @@ json diagnosticsJson(const FocusedLens& fl) {
   return arr;
 }
 
+// `lens info --configs`: first-order data of every configuration, each set up (focus, film)
+// as the other options say.
+int runConfigs(const LensArgs& args, bool as_json) {
+  if (args.configuration || args.zoom_focal_length_mm)
+    throw Error("--configs lists every configuration; it takes neither --config nor --focal-length");
+  const int count = configurationCount(readLensFile(args.lens_path));
+  json arr = json::array();
+  if (!as_json)
+    std::cout << fmt::format("{:>6} {:>12} {:>9} {:>11} {:>11} {:>13}\n", "config", "EFL mm",
+                             "f-number", "BFL mm", "field deg", "track mm");
+  for (int n = 1; n <= count; ++n) {
+    LensArgs one = args;
+    one.configuration = n;
+    const FocusedLens fl = setUpLens(one);
+    const ParaxialData& p = fl.paraxial;
+    const FieldOfView fov = fieldOfView(*fl.lens, p, args.film_diagonal_mm);
+    const double field = fov.real_deg ? *fov.real_deg : fov.paraxial_deg;
+    arr.push_back({{"configuration", n},
+                   {"effective_focal_length_mm", p.effective_focal_length_mm},
+                   {"f_number", p.f_number},
+                   {"back_focal_length_mm", p.back_focal_length_mm},
+                   {"field_of_view_deg", field},
+                   {"field_of_view_is_real", fov.real_deg.has_value()},
+                   {"total_track_mm", totalTrack(*fl.lens)}});
+    if (!as_json)
+      std::cout << fmt::format("{:>6} {:>12.4f} {:>9.3f} {:>11.4f} {:>11.3f}{} {:>12.4f}\n", n,
+                               p.effective_focal_length_mm, p.f_number, p.back_focal_length_mm,
+                               field, fov.real_deg ? " " : "p", totalTrack(*fl.lens));
+  }
+  if (as_json)
+    std::cout << json{{"lens", args.lens_path}, {"film_diagonal_mm", args.film_diagonal_mm},
+                      {"configurations", arr}}
+                     .dump(2)
+              << "\n";
+  else
+    std::cout << fmt::format("field: real chief ray to the corner of a {:.2f} mm diagonal (p: "
+                             "paraxial, the corner sees nothing); track: front vertex to film\n",
+                             args.film_diagonal_mm);
+  return 0;
+}
+
 int runInfo(const LensArgs& args, bool as_json) {
   FocusedLens fl = setUpLens(args);
   const LensSystem& lens = *fl.lens;
@@ -143,6 +186,10 @@ int runInfo(const LensArgs& args, bool as_json) {
   // it (the film is focused for a beam converging toward a point behind the lens).
   const double s_i = lens.filmZ_mm() - p.principal_plane_back_z_mm;
   const double vergence_dpt = 1000 * (1 / p.effective_focal_length_mm - 1 / s_i);
+  // Paraxial lateral magnification at the focused distance (object and image in air): -s_i/s_o
+  // from the principal planes.
+  std::optional<double> magnification;
+  if (object_z) magnification = -s_i / (p.principal_plane_front_z_mm - *object_z);
 
   if (as_json) {
     json j;
@@ -153,6 +200,8 @@ int runInfo(const LensArgs& args, bool as_json) {
                  {"surface_count", lens.surfaceCount()}};
     if (!pr.aperture_spec.empty()) j["lens"]["aperture_spec"] = pr.aperture_spec;
     if (pr.object_distance_mm) j["lens"]["object_distance_mm"] = *pr.object_distance_mm;
+    j["lens"]["configurations"] = configurationCount(readLensFile(args.lens_path));
+    if (args.configuration) j["lens"]["configuration"] = *args.configuration;
     if (pr.nominal_focal_length_mm)
       j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
     j["effective_focal_length_mm"] = p.effective_focal_length_mm;
@@ -190,6 +239,8 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["film_in_front_of_infinity_focus_mm"] =
         beyond_infinity_mm ? json(*beyond_infinity_mm) : json(nullptr);
     j["object_vergence_dpt"] = vergence_dpt;
+    j["magnification"] = magnification ? json(*magnification) : json(nullptr);
+    if (!pr.focus_group.empty()) j["group_focusing"] = true;
     j["focus_method"] = focusMethodName(args.focus_method);
     j["closest_focus_distance_m"] = closest;
     j["film_diagonal_mm"] = args.film_diagonal_mm;
@@ -231,6 +282,14 @@ int runInfo(const LensArgs& args, bool as_json) {
   else
     line("file", fmt::format("{} ({}, {} surfaces{})", pr.path, pr.format, lens.surfaceCount(),
                              pr.aperture_spec.empty() ? "" : ", aperture " + pr.aperture_spec));
+  if (const int count = configurationCount(readLensFile(args.lens_path)); count > 1)
+    line("configurations",
+         args.configuration ? fmt::format("{} of {}", *args.configuration, count)
+         : args.zoom_focal_length_mm
+             ? fmt::format("{}; zoomed to {} mm between two of them (see the log)", count,
+                           *args.zoom_focal_length_mm)
+             : fmt::format("{} (showing the file's surface data; --config N, --configs for all)",
+                           count));
   if (pr.nominal_focal_length_mm)
     line("stated focal length", fmt::format("{:.3f} mm", *pr.nominal_focal_length_mm));
   line("effective focal length", fmt::format("{:.4f} mm", p.effective_focal_length_mm));
@@ -287,6 +346,10 @@ int runInfo(const LensArgs& args, bool as_json) {
                : fmt::format("{:.6g} m from the film", fl.focus_distance_m);
   line("focus", fmt::format("{} ({} method); closest {:.4f} m", focus_text,
                             focusMethodName(args.focus_method), closest));
+  if (magnification)
+    line("magnification", fmt::format("{:.6f} (paraxial, at the focused distance){}",
+                                      *magnification,
+                                      pr.focus_group.empty() ? "" : "; focused by the focus group"));
   line("film distance",
        fmt::format("{:.4f} mm {} the rear vertex", lens.filmDistance_mm(),
                    lens.imageSpaceReversed() ? "in front of (image space reversed by the mirrors)"
@@ -466,9 +529,28 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
   opts.film_diagonal_mm = common.film_diagonal_mm;
   opts.source = args.from == "scene" ? DiagramSource::Scene : DiagramSource::Film;
   std::vector<LensDiagram> diagrams;
+  int columns = 0;
+  bool same_scale = args.same_scale;
   for (const std::string& path : args.lenses) {
     LensArgs one = common;
     one.lens_path = path;
+    // A zoom lens without --config/--focal-length: every configuration, stacked at one scale.
+    if (!one.configuration && !one.zoom_focal_length_mm && args.lenses.size() == 1 &&
+        args.wavelengths.empty()) {
+      const int count = configurationCount(readLensFile(path));
+      if (count > 1) {
+        for (int n = 1; n <= count; ++n) {
+          one.configuration = n;
+          FocusedLens fc = setUpLens(one);
+          LensDiagram d = buildLensDiagram(fc, opts);
+          d.annotations.push_back(fmt::format("configuration {} of {}: EFL {:.2f} mm", n, count,
+                                              fc.paraxial.effective_focal_length_mm));
+          diagrams.push_back(std::move(d));
+        }
+        columns = 1, same_scale = true;
+        continue;
+      }
+    }
     FocusedLens fl = setUpLens(one);
     logDiagnostics(fl.allDiagnostics());
     if (args.wavelengths.empty()) {
@@ -506,7 +588,7 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     d.annotations.push_back(fmt::format("wavelengths {} nm (in their colours)", names));
     diagrams.push_back(std::move(d));
   }
-  writeFileAtomically(args.output, lensDiagramSheet(diagrams, args.same_scale));
+  writeFileAtomically(args.output, lensDiagramSheet(diagrams, same_scale, columns));
   logInfo(fmt::format("wrote {} ({} lens{})", args.output, diagrams.size(),
                       diagrams.size() == 1 ? "" : "es"));
   return 0;
@@ -534,7 +616,69 @@ json finiteOrNull(const std::vector<double>& v) {
   return arr;
 }
 
+// `lens plot breathing`: the field of view against the focus distance (log-spaced from the
+// closest focus to 100 m) for unit focusing (the whole lens moves) and, when the lens has a
+// focus group, group focusing; the film stays the same size.
+std::string breathingPlot(const LensArgs& args, json& j) {
+  const LensPrescription p = applyConfigurationArgs(args, readLensFile(args.lens_path));
+  LensSetup setup;
+  setup.aperture_diameter_mm = args.aperture_diameter_mm;
+  setup.focus_method = args.focus_method;
+  LensPrescription unit = p;
+  unit.focus_group.clear();
+  const FocusedLens at_inf = focusLens(unit, setup);
+  const double closest = closestFocusDistance_m(*at_inf.lens, at_inf.paraxial);
+  plot::Chart chart;
+  chart.title = fmt::format("Focus breathing: {}", p.name);
+  chart.x_label = "focus distance from the film (m)";
+  chart.y_label = fmt::format("field of view on a {:.1f} mm diagonal (deg)", args.film_diagonal_mm);
+  chart.x_log = true;
+  std::vector<std::pair<std::string, const LensPrescription*>> kinds = {{"unit", &unit}};
+  if (!p.focus_group.empty()) kinds.push_back({"group", &p});
+  const double lo = std::max(closest * 1.02, 1e-3), hi = 100;
+  for (size_t k = 0; k < kinds.size(); ++k) {
+    plot::Series series;
+    series.name = kinds[k].first + " focusing";
+    series.color = plot::paletteColor(int(k));
+    json arr = json::array();
+    for (int i = 0; i <= 40; ++i) {
+      const double d = lo * std::pow(hi / lo, i / 40.0);
+      LensSetup at = setup;
+      at.focus_distance_m = d;
+      try {
+        const FocusedLens fl = focusLens(*kinds[k].second, at);
+        const FieldOfView fov = fieldOfView(*fl.lens, fl.paraxial, args.film_diagonal_mm);
+        const double deg = fov.real_deg ? *fov.real_deg : fov.paraxial_deg;
+        series.points.push_back({d, deg});
+        arr.push_back({{"focus_distance_m", d},
+                       {"field_of_view_deg", deg},
+                       {"effective_focal_length_mm", fl.paraxial.effective_focal_length_mm}});
+      } catch (const Error&) {
+        // this focusing cannot reach d: no point
+      }
+    }
+    j[kinds[k].first] = arr;
+    chart.series.push_back(std::move(series));
+  }
+  const FieldOfView f_inf = fieldOfView(*at_inf.lens, at_inf.paraxial, args.film_diagonal_mm);
+  j["field_of_view_at_infinity_deg"] = f_inf.real_deg ? *f_inf.real_deg : f_inf.paraxial_deg;
+  chart.notes.push_back(fmt::format("at infinity: {:.3f} deg", j["field_of_view_at_infinity_deg"]
+                                                                  .get<double>()));
+  svg::Document doc(640, 440);
+  doc.rect(0, 0, 640, 440, {{"fill", "#ffffff"}});
+  chart.render(doc, 0, 0, 640, 440);
+  return doc.str();
+}
+
 int runPlot(const LensArgs& args, const PlotArgs& pa) {
+  if (pa.kind == "breathing") {
+    json j{{"kind", pa.kind}, {"lens", args.lens_path}};
+    const std::string svg_text = breathingPlot(args, j);
+    writeFileAtomically(pa.output, svg_text);
+    if (pa.as_json) std::cout << j.dump(2) << "\n";
+    logInfo(fmt::format("wrote {}", pa.output));
+    return 0;
+  }
   FocusedLens fl = setUpLens(args);
   logDiagnostics(fl.allDiagnostics());
   std::string svg_text;
@@ -650,8 +794,14 @@ void registerLensCommands(CLI::App& app, Action& action) {
     auto as_json = std::make_shared<bool>(false);
     addLensOptions(info, *args);
     info->add_flag("--json", *as_json, "Print one JSON object");
-    info->callback([&action, args, as_json] {
-      action = [args, as_json] { return runInfo(*args, *as_json); };
+    auto configs = std::make_shared<bool>(false);
+    info->add_flag("--configs", *configs,
+                   "Table of every configuration of a zoom lens: EFL, f-number, BFL, field of "
+                   "view, total track");
+    info->callback([&action, args, as_json, configs] {
+      action = [args, as_json, configs] {
+        return *configs ? runConfigs(*args, *as_json) : runInfo(*args, *as_json);
+      };
     });
   }
   registerLensGhostsCommand(*lens, action);
@@ -702,9 +852,10 @@ void registerLensCommands(CLI::App& app, Action& action) {
     plot->add_option("KIND", pa->kind,
                      "spot, distortion, vignetting, focus, chromatic (focal shift against "
                      "wavelength), lateral-color (F and C image height minus d), mtf, mtf-focus, "
-                     "fans, field or psf")
+                     "fans, field, psf or breathing (field of view against focus distance)")
         ->required()
-        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus", "chromatic",
+        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus", "breathing",
+                               "chromatic",
                                "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf"}));
     addLensOptions(plot, *args);
     plot->add_option("-o,--output", pa->output, "Output SVG file")->required();

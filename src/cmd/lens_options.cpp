@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "lensim/optics/configurations.h"
 #include "lensim/optics/glass.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/util/log.h"
@@ -52,6 +53,25 @@ void addLensSetupOptions(CLI::App* cmd, LensArgs& args) {
   cmd->add_flag("--glass-match", args.glass_match,
                 "Give each element the catalogue glass nearest its index and Abbe number (prints "
                 "the choice)");
+  auto* config = cmd->add_option("--config", args.configuration,
+                                 "Configuration N (1-based) of a multi-configuration (zoom) lens");
+  cmd->add_option("--focal-length", args.zoom_focal_length_mm,
+                  "Zoom lens: set the spacings for this focal length (mm), interpolated "
+                  "linearly between the two neighbouring configurations")
+      ->excludes(config);
+}
+
+optics::LensPrescription applyConfigurationArgs(const LensArgs& args,
+                                                optics::LensPrescription prescription) {
+  if (args.configuration) return optics::selectConfiguration(prescription, *args.configuration);
+  if (args.zoom_focal_length_mm) {
+    optics::ZoomSetting z = optics::zoomToFocalLength(prescription, *args.zoom_focal_length_mm);
+    logInfo(fmt::format("zoom: configurations {} and {} at t = {:.6f} (thicknesses linear in t): "
+                        "EFL {:.6f} mm for {:.6f} mm requested",
+                        z.config_a, z.config_b, z.t, z.achieved_efl_mm, z.requested_efl_mm));
+    return std::move(z.prescription);
+  }
+  return prescription;
 }
 
 optics::FocusedLens setUpLens(const LensArgs& args) {
@@ -63,7 +83,8 @@ optics::FocusedLens setUpLens(const LensArgs& args) {
     setup.focus_distance_m = parseDistance_m(args.focus_distance, "--focus-distance");
   if (!(args.film_diagonal_mm > 0))
     throw Error(fmt::format("--film-diagonal {} mm must be > 0", args.film_diagonal_mm));
-  optics::LensPrescription prescription = optics::readLensFile(args.lens_path);
+  optics::LensPrescription prescription =
+      applyConfigurationArgs(args, optics::readLensFile(args.lens_path));
   if (args.glass_match)
     for (const Diagnostic& d : optics::matchCatalogGlasses(prescription)) logDiagnostic(d);
   // Focus at the primary wavelength, then the indices (and paraxial data) at --wavelength.

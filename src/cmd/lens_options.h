@@ -25,7 +25,16 @@ struct LensArgs {
   std::optional<double> wavelength_nm;
   /// `--glass-match`: each element gets the nearest catalogue glass.
   bool glass_match = false;
+  /// `--config N`: configuration N (1-based) of a multi-configuration (zoom) lens.
+  std::optional<int> configuration;
+  /// `--focal-length MM`: a zoom lens set to this paraxial EFL (configurations interpolated).
+  std::optional<double> zoom_focal_length_mm;
 };
+
+/// Applies --config / --focal-length to a prescription read from args.lens_path (logs the zoom
+/// setting found for --focal-length).
+optics::LensPrescription applyConfigurationArgs(const LensArgs& args,
+                                                optics::LensPrescription prescription);
 
 /// Adds --aperture-diameter, --focus-distance, --film-distance, --film-diagonal and
 /// --focus-method (everything but the LENS argument).

@@ -9,6 +9,7 @@
 #include <ctime>
 
 #include "lensim/optics/anamorphic.h"
+#include "lensim/optics/configurations.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
@@ -34,6 +35,23 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   if (!(settings_.film_diagonal_mm > 0))
     throw Error(fmt::format("film diagonal {} mm must be > 0", settings_.film_diagonal_mm));
   optics::LensPrescription prescription = optics::readLensFile(settings_.lens_path);
+  if (settings_.configuration || settings_.zoom_focal_length_mm) {
+    try {
+      if (settings_.configuration) {
+        prescription = optics::selectConfiguration(prescription, *settings_.configuration);
+      } else {
+        optics::ZoomSetting z =
+            optics::zoomToFocalLength(prescription, *settings_.zoom_focal_length_mm);
+        logInfo(fmt::format("{}: zoom between configurations {} and {} at t = {:.6f} "
+                            "(thicknesses linear in t): EFL {:.6f} mm for {:.6f} mm requested",
+                            settings_.zoom_loc.str(), z.config_a, z.config_b, z.t,
+                            z.achieved_efl_mm, z.requested_efl_mm));
+        prescription = std::move(z.prescription);
+      }
+    } catch (const Error& e) {
+      throw Error(settings_.zoom_loc, e.message());
+    }
+  }
 
   // The set stop radius (the aperture shape's unit); the physical stop opens to the shape's
   // extent, and the shape decides what passes.
@@ -488,6 +506,9 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.exposure_time = c.shutter_close - c.shutter_open;
       s.simple_weighting = r.simple_weighting;
       s.glass_match = r.glass_match;
+      s.configuration = r.configuration;
+      s.zoom_focal_length_mm = r.zoom_focal_length_mm;
+      s.zoom_loc = r.zoom_loc;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

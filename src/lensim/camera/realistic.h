@@ -77,6 +77,12 @@ struct RealisticSettings {
   /// Give every element of the lens the catalogue glass nearest to its index (and V_d), as
   /// `lens info --glass-match` does (the scene's "bool glassmatch"), so an old lens disperses.
   bool glass_match = false;
+  /// A multi-configuration (zoom) lens: configuration N (1-based; the scene's "integer
+  /// configuration"), or the focal length in mm the spacings are interpolated for ("float
+  /// focallength"; optics/configurations.h). `zoom_loc`: the parameter, for errors.
+  std::optional<int> configuration;
+  std::optional<double> zoom_focal_length_mm;
+  FileLoc zoom_loc;
   /// The pixel filter's radius (pixels): film points this far beyond the image's edge still
   /// reach its edge pixels (camera importance accepts them; film_bounds.h).
   Vec2 filter_radius{0.5, 0.5};

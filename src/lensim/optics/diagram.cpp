@@ -349,9 +349,10 @@ void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double 
   doc.endGroup();
 }
 
-std::string lensDiagramSheet(const std::vector<LensDiagram>& diagrams, bool same_scale) {
+std::string lensDiagramSheet(const std::vector<LensDiagram>& diagrams, bool same_scale,
+                             int columns) {
   const int count = static_cast<int>(diagrams.size());
-  const int cols = count > 1 ? 2 : 1;
+  const int cols = columns > 0 ? std::min(columns, std::max(count, 1)) : count > 1 ? 2 : 1;
   const int rows = (count + cols - 1) / cols;
   const double cw = 720, ch = 420;
   svg::Document doc(cw * cols, ch * rows);

@@ -70,8 +70,9 @@ double fitScale(const LensDiagram& d, double w, double h);
 void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double y, double w,
                      double h, double px_per_mm);
 
-/// A sheet of diagrams in a grid (two columns when there are several), each fitted to its cell
-/// or all at the scale of the largest (`same_scale`).
-std::string lensDiagramSheet(const std::vector<LensDiagram>& diagrams, bool same_scale);
+/// A sheet of diagrams in a grid (`columns`; 0: two columns when there are several), each
+/// fitted to its cell or all at the scale of the largest (`same_scale`).
+std::string lensDiagramSheet(const std::vector<LensDiagram>& diagrams, bool same_scale,
+                             int columns = 0);
 
 }  // namespace lensim::optics

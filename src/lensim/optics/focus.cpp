@@ -215,6 +215,15 @@ FocusedLens focusLens(LensPrescription prescription, const LensSetup& setup) {
   LensSystemOptions opts;
   opts.aperture_diameter_mm = setup.aperture_diameter_mm;
   FocusedLens fl;
+  if (!prescription.focus_group.empty() && setup.focus_distance_m &&
+      std::isfinite(*setup.focus_distance_m)) {
+    GroupFocus g = focusByGroup(prescription, setup, *setup.focus_distance_m);
+    fl.lens = std::make_unique<LensSystem>(std::move(g.prescription), opts);
+    fl.paraxial = computeParaxial(*fl.lens);
+    fl.lens->setFilmDistance_mm(g.film_distance_mm);
+    fl.focus_distance_m = *setup.focus_distance_m;
+    return fl;
+  }
   fl.lens = std::make_unique<LensSystem>(std::move(prescription), opts);
   fl.paraxial = computeParaxial(*fl.lens);
   LensSystem& lens = *fl.lens;

@@ -67,7 +67,21 @@ struct FocusedLens {
   std::vector<Diagnostic> allDiagnostics() const;
 };
 
-/// Builds and focuses a lens. With neither distance given: the file's film distance if it has
+/// Group focusing (LensPrescription::focus_group): the prescription with the group moved by
+/// `shift_mm` so that an object `focus_distance_m` from the film is in focus (by `method`) on a
+/// film that stays where the infinity focus puts it relative to the front vertex.
+struct GroupFocus {
+  LensPrescription prescription;
+  double shift_mm = 0;
+  double film_distance_mm = 0;  ///< from the rear vertex of the moved lens
+};
+/// Solves the group position by bisection over the range where every moved thickness stays >= 0.
+/// Throws lensim::Error when no position in that range focuses the distance.
+GroupFocus focusByGroup(const LensPrescription& p, const LensSetup& setup,
+                        double focus_distance_m);
+
+/// Builds and focuses a lens. A lens with a focus group focuses a finite focus distance by
+/// moving the group (focusByGroup); others move the whole lens. With neither distance given: the file's film distance if it has
 /// one (last row thickness > 0), else focus at infinity. Throws lensim::Error on bad settings.
 FocusedLens focusLens(LensPrescription prescription, const LensSetup& setup);
 

@@ -146,6 +146,127 @@ void checkSurface(const LensSurface& s, int index, int mirrors = 0) {
                                    index, s.semiAperture_mm()));
 }
 
+// lensim JSON "configurations" (a zoom): an array of objects, each overriding surfaces by their
+// 0-based index: {"name": "wide", "thickness_mm": {"4": 2.604}, "semi_aperture_mm": {...},
+// "radius_mm": {...}}; "active_configuration" (1-based) says which one "surfaces" shows.
+void readLensimConfigurations(const json& j, std::string_view text, const std::string& path,
+                              LensPrescription& p) {
+  auto it = j.find("configurations");
+  if (it == j.end()) return;
+  const FileLoc top{path, 1, 1};
+  if (!it->is_array() || it->empty())
+    throw Error(top, "\"configurations\" must be a non-empty array of objects");
+  const auto offs = arrayElementOffsets(text, "configurations");
+  for (size_t c = 0; c < it->size(); ++c) {
+    const json& e = (*it)[c];
+    const FileLoc loc = c < offs.size() ? locAt(text, offs[c], path) : top;
+    if (!e.is_object())
+      throw Error(loc, fmt::format("configuration {}: expected an object", c + 1));
+    LensConfiguration cfg;
+    cfg.loc = loc;
+    cfg.surfaces = p.surfaces;
+    cfg.object_distance_mm = p.object_distance_mm;
+    for (const auto& [key, value] : e.items()) {
+      if (key == "name") continue;
+      if (key != "thickness_mm" && key != "semi_aperture_mm" && key != "radius_mm")
+        throw Error(loc, fmt::format("configuration {}: \"{}\" is not supported (a "
+                                     "configuration sets \"thickness_mm\", "
+                                     "\"semi_aperture_mm\" and \"radius_mm\" by surface index)",
+                                     c + 1, key));
+      if (!value.is_object())
+        throw Error(loc, fmt::format("configuration {}: \"{}\" must map surface indices "
+                                     "(\"0\", \"1\", ...) to numbers",
+                                     c + 1, key));
+      for (const auto& [k, v] : value.items()) {
+        size_t used = 0;
+        int index = -1;
+        try {
+          index = std::stoi(k, &used);
+        } catch (...) {
+          index = -1;
+        }
+        if (used != k.size() || index < 0 || index >= int(p.surfaces.size()))
+          throw Error(loc, fmt::format("configuration {}: \"{}\": surface index \"{}\" is not "
+                                       "0 to {}",
+                                       c + 1, key, k, p.surfaces.size() - 1));
+        if (!v.is_number() || !std::isfinite(v.get<double>()))
+          throw Error(loc, fmt::format("configuration {}: \"{}\" of surface {}: expected a "
+                                       "number",
+                                       c + 1, key, index));
+        LensSurface& s = cfg.surfaces[size_t(index)];
+        const double x = v.get<double>();
+        if (key == "thickness_mm")
+          s.thickness_mm = x;
+        else if (key == "semi_aperture_mm")
+          s.aperture_diameter_mm = 2 * x;
+        else
+          s.radius_mm = x;
+      }
+    }
+    int mirrors = 0;
+    for (size_t i = 0; i < cfg.surfaces.size(); ++i) {
+      mirrors += cfg.surfaces[i].mirror ? 1 : 0;
+      try {
+        checkSurface(cfg.surfaces[i], int(i), mirrors);
+      } catch (const Error& err) {
+        throw Error(loc, fmt::format("configuration {}: {}", c + 1, err.message()));
+      }
+    }
+    p.configurations.push_back(std::move(cfg));
+  }
+  if (auto a = j.find("active_configuration"); a != j.end()) {
+    if (!a->is_number_integer() || a->get<int>() < 1 || a->get<int>() > int(it->size()))
+      throw Error(top, fmt::format("\"active_configuration\" must be 1 to {}", it->size()));
+    p.active_configuration = a->get<int>();
+  }
+  if (p.configurations.size() == 1) p.configurations.clear();  // nothing to choose
+}
+
+// lensim JSON "focus_group": surface index -> rate (mm of thickness per mm of group travel).
+void readLensimFocusGroup(const json& j, const std::string& path, LensPrescription& p) {
+  auto it = j.find("focus_group");
+  if (it == j.end()) return;
+  const FileLoc top{path, 1, 1};
+  if (!it->is_object() || it->empty())
+    throw Error(top, "\"focus_group\" must map surface indices (\"4\") to rates (1, -1)");
+  for (const auto& [k, v] : it->items()) {
+    size_t used = 0;
+    int index = -1;
+    try {
+      index = std::stoi(k, &used);
+    } catch (...) {
+      index = -1;
+    }
+    if (used != k.size() || index < 0 || index + 1 >= int(p.surfaces.size()))
+      throw Error(top, fmt::format("\"focus_group\": \"{}\" is not a gap between surfaces "
+                                   "(0 to {})",
+                                   k, int(p.surfaces.size()) - 2));
+    if (!v.is_number() || v.get<double>() == 0 || !std::isfinite(v.get<double>()))
+      throw Error(top, fmt::format("\"focus_group\": \"{}\": expected a non-zero rate", k));
+    p.focus_group.emplace_back(index, v.get<double>());
+  }
+}
+
+// The configurations as lensim JSON: each configuration's differences from `surfaces`.
+json lensimConfigurationsJson(const LensPrescription& p) {
+  json arr = json::array();
+  for (const LensConfiguration& c : p.configurations) {
+    json e = json::object(), t = json::object(), a = json::object(), r = json::object();
+    for (size_t i = 0; i < c.surfaces.size() && i < p.surfaces.size(); ++i) {
+      const LensSurface &x = c.surfaces[i], &base = p.surfaces[i];
+      if (x.thickness_mm != base.thickness_mm) t[std::to_string(i)] = x.thickness_mm;
+      if (x.aperture_diameter_mm != base.aperture_diameter_mm)
+        a[std::to_string(i)] = x.semiAperture_mm();
+      if (x.radius_mm != base.radius_mm) r[std::to_string(i)] = x.radius_mm;
+    }
+    if (!t.empty()) e["thickness_mm"] = t;
+    if (!a.empty()) e["semi_aperture_mm"] = a;
+    if (!r.empty()) e["radius_mm"] = r;
+    arr.push_back(e);
+  }
+  return arr;
+}
+
 LensPrescription parseLensim(const json& j, std::string_view text, const std::string& path) {
   LensPrescription p;
   p.path = path;
@@ -258,6 +379,9 @@ LensPrescription parseLensim(const json& j, std::string_view text, const std::st
   }
   // Unknown coating names are refused here, at their line.
   resolveCoatings(p);
+
+  readLensimConfigurations(j, text, path, p);
+  readLensimFocusGroup(j, path, p);
   return p;
 }
 
@@ -490,6 +614,15 @@ std::string writeLensJson(const LensPrescription& p) {
     surfs.push_back(e);
   }
   j["surfaces"] = surfs;
+  if (!p.focus_group.empty()) {
+    json g = json::object();
+    for (const auto& [row, rate] : p.focus_group) g[std::to_string(row)] = rate;
+    j["focus_group"] = g;
+  }
+  if (!p.configurations.empty()) {
+    j["configurations"] = lensimConfigurationsJson(p);
+    j["active_configuration"] = p.active_configuration;
+  }
   return j.dump(2) + "\n";
 }
 

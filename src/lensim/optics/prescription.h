@@ -20,6 +20,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "lensim/optics/surface_shape.h"
@@ -76,6 +77,17 @@ struct LensSurface {
   double semiAperture_mm() const { return aperture_diameter_mm / 2; }
 };
 
+/// One configuration of a multi-configuration lens (a zoom position, a focus position): the
+/// whole surface table as it is in that configuration (rows match LensPrescription::surfaces one
+/// to one), with the configuration's system data.
+struct LensConfiguration {
+  std::vector<LensSurface> surfaces;
+  std::string aperture_spec;  ///< the system aperture in this configuration, when stated
+  std::optional<double> object_distance_mm;  ///< unset: infinity or not given
+  std::vector<double> wavelengths_nm;        ///< empty: the prescription's
+  FileLoc loc;  ///< where the configuration (or its first operand) is written
+};
+
 /// A lens prescription read from a file: surfaces front to back and what was noticed about them.
 struct LensPrescription {
   std::string path;  ///< the file it came from
@@ -103,6 +115,16 @@ struct LensPrescription {
   /// the lens file's folder (JSON "coating_file", Zemax COFN); empty: none.
   std::string coating_file;
   FileLoc coating_file_loc;
+
+  /// Multi-configuration data (Zemax MNUM and its operands, lensim JSON "configurations"):
+  /// every configuration's surfaces; empty for a lens with one configuration.
+  /// `surfaces` holds the active one (`active_configuration`, 1-based) as the file stores it.
+  std::vector<LensConfiguration> configurations;
+  int active_configuration = 1;
+  /// Group focusing (lensim JSON "focus_group"): surface row -> rate; moving the group by x mm
+  /// changes that row's thickness by rate * x (an inner group: +1 on the gap before it, -1 on
+  /// the gap after). Empty: the whole lens moves to focus (unit focusing). focusLens solves x.
+  std::vector<std::pair<int, double>> focus_group;
   /// Warnings and notes (crossing surfaces, layout guesses); errors are thrown instead.
   std::vector<Diagnostic> diagnostics;
 

@@ -6,6 +6,7 @@
 // library reads it, so this is hand-written.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -168,8 +169,157 @@ class ZmxParser {
   }
   void readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& shape) const;
 
+ public:
+  // Multi-configuration data: `MNUM count active`, then one row per operand and configuration,
+  // `OPERAND argument configuration value ...` (operand-major; the shape OpticStudio writes,
+  // e.g. `THIC 5 2 25.27 0 0 0 1 1 1 0 0 "" 0`; `MOFF` rows are empty operand rows).
+  struct McRow {
+    std::string op;
+    int arg = 0;
+    int config = 1;
+    std::string value;
+    FileLoc loc, value_loc;
+  };
+  int mcCount() const { return mc_count_.value_or(1); }
+  int mcActive() const { return mc_active_; }
+  const FileLoc& mcLoc() const { return mc_loc_; }
+  /// Parse with configuration `n`'s operand values applied over the surface data.
+  void setConfiguration(int n) { apply_config_ = n; }
+
+ private:
+  bool readMultiConfig(const std::vector<Tok>& t, int line_no);
+  void applyMultiConfig(std::vector<ZSurface>& surfs, std::optional<double>& enpd,
+                        std::optional<double>& fnum, bool floa, std::map<int, double>& wavm) const;
+
+  std::optional<int> mc_count_;
+  int mc_active_ = 1;
+  FileLoc mc_loc_;
+  std::vector<McRow> mc_rows_;
+  std::optional<int> apply_config_;
+
   std::string path_;
 };
+
+// One line of multi-configuration data; returns false when the line is not one (it is then read
+// as usual). Operands lensim does not model are refused at their line.
+bool ZmxParser::readMultiConfig(const std::vector<Tok>& t, int line_no) {
+  const std::string_view key = t[0].text;
+  const FileLoc loc{path_, line_no, t[0].col};
+  auto integer = [&](size_t i, const char* what) {
+    const double v = number(t[i], line_no, what);
+    if (v != std::floor(v) || std::abs(v) > 1e6)
+      throw Error(FileLoc{path_, line_no, t[i].col},
+                  fmt::format("expected an integer for the {}, found '{}'", what, t[i].text));
+    return int(v);
+  };
+  if (key == "MNUM") {
+    need(t, 2, line_no, "configuration count");
+    const int n = integer(1, "number of configurations");
+    if (n < 1 || n > 1000)
+      throw Error(FileLoc{path_, line_no, t[1].col},
+                  fmt::format("MNUM {}: expected 1 to 1000 configurations", n));
+    mc_count_ = n;
+    mc_loc_ = loc;
+    if (t.size() >= 3) {
+      mc_active_ = integer(2, "active configuration");
+      if (mc_active_ < 1 || mc_active_ > n)
+        throw Error(FileLoc{path_, line_no, t[2].col},
+                    fmt::format("MNUM {} {}: the active configuration must be 1 to {}", n,
+                                mc_active_, n));
+    }
+    return true;
+  }
+  if (!mc_count_ || key.size() != 4 || t.size() < 3) return false;
+  for (char c : key)
+    if (!(c >= 'A' && c <= 'Z') && !(c >= '0' && c <= '9')) return false;
+  if (key == "MOFF") return true;  // an empty operand row
+  static constexpr std::string_view kModelled[] = {"THIC", "CURV", "CONI", "GLSS", "APER",
+                                                   "SDIA", "STPS", "WAVE"};
+  if (std::find(std::begin(kModelled), std::end(kModelled), key) == std::end(kModelled))
+    throw Error(loc, fmt::format("multi-configuration operand {} is not supported; lensim models "
+                                 "THIC, CURV, CONI, GLSS, APER, SDIA, STPS and WAVE",
+                                 key));
+  need(t, 4, line_no, "operand");
+  McRow r;
+  r.op = std::string(key);
+  r.arg = integer(1, "operand's surface or number");
+  r.config = integer(2, "configuration number");
+  if (r.config < 1 || r.config > *mc_count_)
+    throw Error(FileLoc{path_, line_no, t[2].col},
+                fmt::format("{}: configuration {} is not one of the {} configurations MNUM "
+                            "declares",
+                            key, r.config, *mc_count_));
+  r.value = std::string(t[3].text);
+  if (r.value.size() >= 2 && r.value.front() == '"' && r.value.back() == '"')
+    r.value = r.value.substr(1, r.value.size() - 2);
+  r.loc = loc;
+  r.value_loc = FileLoc{path_, line_no, t[3].col};
+  if (r.op != "GLSS") number(t[3], line_no, "operand value");  // checked now, used later
+  mc_rows_.push_back(std::move(r));
+  return true;
+}
+
+// Puts configuration apply_config_'s operand values over the surface and system data.
+void ZmxParser::applyMultiConfig(std::vector<ZSurface>& surfs, std::optional<double>& enpd,
+                                 std::optional<double>& fnum, bool floa,
+                                 std::map<int, double>& wavm) const {
+  if (!apply_config_) return;
+  const int last_lens = int(surfs.size()) - 2;
+  for (const McRow& r : mc_rows_) {
+    if (r.config != *apply_config_) continue;
+    const double v = r.op == "GLSS" ? 0.0 : std::strtod(r.value.c_str(), nullptr);
+    auto surface = [&](int lo, int hi) -> ZSurface& {
+      if (r.arg < lo || r.arg > hi)
+        throw Error(r.loc, fmt::format("{} {}: expected a surface {} to {}", r.op, r.arg, lo, hi));
+      return surfs[size_t(r.arg)];
+    };
+    if (r.op == "THIC") {
+      ZSurface& z = surface(0, last_lens);
+      z.has_disz = true;
+      if (r.arg == 0 && std::abs(v) >= 1e10)
+        z.disz.reset();  // OpticStudio writes 1e10 for an object at infinity
+      else
+        z.disz = v;
+      z.disz_loc = r.value_loc;
+    } else if (r.op == "CURV") {
+      surface(1, last_lens).curv = v;
+    } else if (r.op == "CONI") {
+      surface(1, last_lens).conic = v;
+    } else if (r.op == "SDIA") {
+      ZSurface& z = surface(1, last_lens);
+      z.diam = v, z.clap_max.reset();
+      z.diam_loc = r.value_loc;
+    } else if (r.op == "GLSS") {
+      ZSurface& z = surface(1, last_lens);
+      if (r.value == "MIRROR")
+        throw Error(r.value_loc, "GLSS MIRROR: a configuration cannot turn a surface into a mirror");
+      z.glass = r.value;
+      z.glass_loc = r.value_loc;
+      z.n_d.reset(), z.v_d.reset();
+    } else if (r.op == "STPS") {
+      const int n = int(v);
+      if (double(n) != v || n < 1 || n > last_lens)
+        throw Error(r.value_loc, fmt::format("STPS {}: expected a surface 1 to {}", r.value,
+                                             last_lens));
+      for (ZSurface& z : surfs) z.stop = false;
+      surfs[size_t(n)].stop = true;
+    } else if (r.op == "APER") {
+      if (floa || (!enpd && !fnum))
+        throw Error(r.loc, "APER: the file's system aperture is not ENPD or FNUM; lensim changes "
+                           "those two per configuration");
+      if (!(v > 0))
+        throw Error(r.value_loc, fmt::format("APER {}: expected a value > 0", r.value));
+      (enpd ? enpd : fnum) = v;
+    } else if (r.op == "WAVE") {
+      if (wavm.find(r.arg) == wavm.end())
+        throw Error(r.loc, fmt::format("WAVE {}: the file has no wavelength {} (WAVM)", r.arg,
+                                       r.arg));
+      if (!(v > 0))
+        throw Error(r.value_loc, fmt::format("WAVE {}: expected a wavelength > 0 um", r.value));
+      wavm[r.arg] = v;
+    }
+  }
+}
 
 // TYPE TOROIDAL, as OpticStudio defines it (OpticStudio User Guide, "Toroidal"; see
 // surface_shape.h): PARM 0 extrapolate (ignored: lensim continues every surface flat beyond its
@@ -247,6 +397,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     if (t.empty()) continue;
     const std::string_view key = t[0].text;
     const FileLoc loc{path_, line_no, t[0].col};
+    if ((key == "MNUM" || mc_count_) && readMultiConfig(t, line_no)) continue;
     auto num = [&](size_t i, const char* what) {
       need(t, i + 1, line_no, what);
       return number(t[i], line_no, what);
@@ -485,6 +636,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
           throw surfErr(fmt::format("{}: tilted or decentred surfaces are not supported", key));
     }
   }
+
+  applyMultiConfig(surfs, enpd, fnum, floa, wavm);
 
   if (!sequential_seen && surfs.empty())
     throw Error(FileLoc{path_, last_line, 0},
@@ -892,8 +1045,41 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
 
 }  // namespace
 
+namespace {
+
+// Every configuration of a multi-configuration file: the file parsed again with that
+// configuration's operands applied (so that ENPD/FNUM, curved stops and glasses are treated as in
+// any file).
+void readZmxConfigurations(const ZmxParser& base, std::string_view bytes, const std::string& path,
+                           LensPrescription& p) {
+  p.active_configuration = base.mcActive();
+  if (base.mcCount() < 2) return;
+  for (int n = 1; n <= base.mcCount(); ++n) {
+    ZmxParser c(path);
+    c.setConfiguration(n);
+    LensPrescription q = c.parse(bytes);
+    if (q.surfaces.size() != p.surfaces.size())
+      throw Error(base.mcLoc(), fmt::format("configuration {} has {} surfaces and the file's data "
+                                            "{}: a stop moved (STPS) to or from a curved surface "
+                                            "is not supported",
+                                            n, q.surfaces.size(), p.surfaces.size()));
+    LensConfiguration cfg;
+    cfg.surfaces = std::move(q.surfaces);
+    cfg.aperture_spec = q.aperture_spec;
+    cfg.object_distance_mm = q.object_distance_mm;
+    cfg.wavelengths_nm = q.wavelengths_nm;
+    cfg.loc = base.mcLoc();
+    p.configurations.push_back(std::move(cfg));
+  }
+}
+
+}  // namespace
+
 LensPrescription parseZmx(std::string_view bytes, const std::string& path) {
-  return ZmxParser(path).parse(bytes);
+  ZmxParser base(path);
+  LensPrescription p = base.parse(bytes);
+  readZmxConfigurations(base, bytes, path, p);
+  return p;
 }
 
 }  // namespace lensim::optics

@@ -295,6 +295,10 @@ struct Realistic {
   double blade_rotation_deg = 0;           ///< `bladerotation`
   /// `glassmatch`: each element gets the nearest catalogue glass (dispersion for old lenses)
   bool glass_match = false;
+  /// `configuration` (integer, 1-based) or `focallength` (mm) of a zoom lens; zoom_loc: where
+  std::optional<int> configuration;
+  std::optional<double> zoom_focal_length_mm;
+  FileLoc zoom_loc;
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 

@@ -98,6 +98,19 @@ void Builder::camera(const Directive& d) {
       // pbrt-v3's default is true; pbrt-v4 has no such parameter (always irradiance).
       r.simple_weighting = ps.getBool({"simpleweighting"}, scene_.legacy_syntax);
       r.glass_match = ps.getBool({"glassmatch"}, false);
+      if (const Param* cf = ps.find({"configuration"}, {ParamType::Integer})) {
+        ps.expectCount(*cf, 1);
+        if (!(cf->numbers[0] >= 1)) ps.fail(*cf, "expected a configuration number >= 1");
+        r.configuration = static_cast<int>(cf->numbers[0]);
+        r.zoom_loc = cf->loc;
+      }
+      if (const Param* fl = ps.find({"focallength"}, {ParamType::Float})) {
+        ps.expectCount(*fl, 1);
+        if (r.configuration) ps.fail(*fl, "give configuration or focallength, not both");
+        if (!(fl->numbers[0] > 0)) ps.fail(*fl, "expected a focal length > 0 (mm)");
+        r.zoom_focal_length_mm = fl->numbers[0];
+        r.zoom_loc = fl->loc;
+      }
       if (const Param* fd = ps.find({"filmdistance"}, {ParamType::Float})) {
         ps.expectCount(*fd, 1);
         if (!(fd->numbers[0] > 0)) ps.fail(*fd, "film distance must be positive (mm)");
