@@ -161,3 +161,167 @@ TEST(SensorDng, MonochromeDngDecodes) {
   ASSERT_EQ(st, 0);
   EXPECT_EQ(got, expectedDn(im, cfg, 0, 0));
 }
+
+namespace {
+
+// CIE L*a*b* of XYZ relative to the white (Xn, Yn, Zn).
+std::array<double, 3> lab(const Vec3& xyz, const Vec3& white) {
+  auto f = [](double t) {
+    return t > 216.0 / 24389 ? std::cbrt(t) : (24389.0 / 27 * t + 16) / 116;
+  };
+  const double fx = f(xyz.x / white.x), fy = f(xyz.y / white.y), fz = f(xyz.z / white.z);
+  return {116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz)};
+}
+
+// CIEDE2000 (Sharma, Wu and Dalal, Color Res. Appl. 30, 2005), written out from the paper.
+double deltaE2000(const std::array<double, 3>& p, const std::array<double, 3>& q) {
+  const double kPi = M_PI;
+  const double L1 = p[0], a1 = p[1], b1 = p[2], L2 = q[0], a2 = q[1], b2 = q[2];
+  const double C1 = std::hypot(a1, b1), C2 = std::hypot(a2, b2), Cm = (C1 + C2) / 2;
+  const double G = 0.5 * (1 - std::sqrt(std::pow(Cm, 7) / (std::pow(Cm, 7) + std::pow(25.0, 7))));
+  const double a1p = (1 + G) * a1, a2p = (1 + G) * a2;
+  const double C1p = std::hypot(a1p, b1), C2p = std::hypot(a2p, b2);
+  auto hue = [&](double b, double a) {
+    if (a == 0 && b == 0) return 0.0;
+    double h = std::atan2(b, a) * 180 / kPi;
+    return h < 0 ? h + 360 : h;
+  };
+  const double h1p = hue(b1, a1p), h2p = hue(b2, a2p);
+  const double dLp = L2 - L1, dCp = C2p - C1p;
+  double dhp = 0;
+  if (C1p * C2p != 0) {
+    dhp = h2p - h1p;
+    if (dhp > 180) dhp -= 360;
+    if (dhp < -180) dhp += 360;
+  }
+  const double dHp = 2 * std::sqrt(C1p * C2p) * std::sin(dhp / 2 * kPi / 180);
+  const double Lpm = (L1 + L2) / 2, Cpm = (C1p + C2p) / 2;
+  double hpm = h1p + h2p;
+  if (C1p * C2p != 0) {
+    if (std::abs(h1p - h2p) <= 180)
+      hpm = (h1p + h2p) / 2;
+    else
+      hpm = (h1p + h2p < 360) ? (h1p + h2p + 360) / 2 : (h1p + h2p - 360) / 2;
+  }
+  const double T = 1 - 0.17 * std::cos((hpm - 30) * kPi / 180) +
+                   0.24 * std::cos(2 * hpm * kPi / 180) +
+                   0.32 * std::cos((3 * hpm + 6) * kPi / 180) -
+                   0.20 * std::cos((4 * hpm - 63) * kPi / 180);
+  const double dTheta = 30 * std::exp(-std::pow((hpm - 275) / 25, 2));
+  const double Rc = 2 * std::sqrt(std::pow(Cpm, 7) / (std::pow(Cpm, 7) + std::pow(25.0, 7)));
+  const double Sl = 1 + 0.015 * std::pow(Lpm - 50, 2) / std::sqrt(20 + std::pow(Lpm - 50, 2));
+  const double Sc = 1 + 0.045 * Cpm, Sh = 1 + 0.015 * Cpm * T;
+  const double Rt = -std::sin(2 * dTheta * kPi / 180) * Rc;
+  return std::sqrt(std::pow(dLp / Sl, 2) + std::pow(dCp / Sc, 2) + std::pow(dHp / Sh, 2) +
+                   Rt * (dCp / Sc) * (dHp / Sh));
+}
+
+// The 24 patches of the shared Ohta (1997) reflectance table.
+std::vector<PiecewiseLinearSpectrum> ohtaPatches() {
+  std::ifstream in(std::string(LENSIM_SHARED_DIR) + "/data/colorchecker/colorchecker-ohta1997.csv");
+  std::vector<double> lambda;
+  std::vector<std::vector<double>> refl(24);
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::stringstream ss(line);
+    std::string v;
+    std::getline(ss, v, ',');
+    lambda.push_back(std::stod(v));
+    for (int i = 0; i < 24 && std::getline(ss, v, ','); ++i) refl[size_t(i)].push_back(std::stod(v));
+  }
+  std::vector<PiecewiseLinearSpectrum> out;
+  for (const auto& r : refl) out.emplace_back(lambda, r);
+  return out;
+}
+
+class Product final : public Spectrum {
+ public:
+  Product(const Spectrum& a, const Spectrum& b) : a_(a), b_(b) {}
+  double eval(double l) const override { return a_.eval(l) * b_.eval(l); }
+  double maxValue() const override { return a_.maxValue() * b_.maxValue(); }
+
+ private:
+  const Spectrum &a_, &b_;
+};
+
+}  // namespace
+
+TEST(SensorDng, ColorCheckerDevelopedByDcrawEmuWithinDeltaE2000) {
+  // The chart lit by D65 as the sensor records it (noise on), written as a DNG, developed by
+  // LibRaw's dcraw_emu (as-shot white balance, AHD demosaic, the DNG's ColorMatrix2 to linear
+  // sRGB), against the patches' colours computed here from the same reflectances and the CIE
+  // 1931 observer. Exposure is normalised on the white patch.
+  const std::vector<PiecewiseLinearSpectrum> patches = ohtaPatches();
+  ASSERT_EQ(patches.size(), 24u);
+  const std::shared_ptr<const Spectrum> d65 = daylightIlluminant(6500);
+  SensorConfig cfg;
+  cfg.seed = 3;
+  const SensorModel m(cfg);
+  const auto white = m.expectedElectrons(Product(patches[18], *d65));
+  const double scale = 40000 / std::max({white[0], white[1], white[2]});
+  const int p = 24, w = 6 * p, h = 4 * p;
+  io::Image im(w, h, {"R", "G", "B"});
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const auto e = m.expectedElectrons(Product(patches[size_t((y / p) * 6 + x / p)], *d65));
+      for (int c = 0; c < 3; ++c) im.at(x, y, c) = float(e[size_t(c)] * scale);
+    }
+  im.metadata[kRawSensorKey] = cfg.toText();
+  const std::string dir = tmpDir("colour");
+  const std::string path = dir + "/chart.dng";
+  writeRawImage(path, im, 0, 0);
+  int st = -1;
+  const std::string log = run("dcraw_emu -w -o 1 -4 -q 3 -T " + path, &st);
+  ASSERT_EQ(st, 0) << log;
+  const io::Image dev = io::readImage(path + ".tiff");
+  ASSERT_EQ(dev.width, w);
+  ASSERT_EQ(dev.height, h);
+  // Linear sRGB to XYZ (IEC 61966-2-1).
+  auto toXyz = [](double r, double g, double b) {
+    return Vec3{0.4124 * r + 0.3576 * g + 0.1805 * b, 0.2126 * r + 0.7152 * g + 0.0722 * b,
+                0.0193 * r + 0.1192 * g + 0.9505 * b};
+  };
+  std::vector<Vec3> got, want;
+  const ConstantSpectrum one(1.0);
+  const Vec3 wn = spectrumToXyz(Product(one, *d65));
+  for (int k = 0; k < 24; ++k) {
+    double s[3] = {0, 0, 0};
+    int n = 0;
+    for (int y = (k / 6) * p + 6; y < (k / 6) * p + p - 6; ++y)
+      for (int x = (k % 6) * p + 6; x < (k % 6) * p + p - 6; ++x, ++n)
+        for (int c = 0; c < 3; ++c) s[c] += dev.at(x, y, c);
+    got.push_back(toXyz(s[0] / n, s[1] / n, s[2] / n));
+    want.push_back(spectrumToXyz(Product(patches[size_t(k)], *d65)) / wn.y);
+  }
+  const double expose = want[18].y / got[18].y;
+  const Vec3 white_ref = wn / wn.y;
+  double sum = 0, worst = 0;
+  for (int k = 0; k < 24; ++k) {
+    const double de = deltaE2000(lab(got[size_t(k)] * expose, white_ref), lab(want[size_t(k)], white_ref));
+    sum += de;
+    worst = std::max(worst, de);
+  }
+  const double mean = sum / 24;
+  std::printf("ColorChecker through dcraw_emu: mean dE2000 %.2f, max %.2f\n", mean, worst);
+  EXPECT_LT(mean, 3.0);
+}
+
+TEST(SensorDng, DarktableDevelopsTheDng) {
+  if (std::system("command -v darktable-cli >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "darktable-cli is not installed (scripts/install-deps installs it)";
+  const std::string dir = tmpDir("darktable");
+  SensorConfig cfg;
+  const io::Image im = electronImage(32, 32, cfg);
+  const std::string path = dir + "/dt.dng", out = dir + "/dt.png";
+  std::filesystem::remove(out);
+  writeRawImage(path, im, 0, 0);
+  int st = -1;
+  const std::string log = run("timeout 60 darktable-cli " + path + " " + out +
+                                  " --core --configdir " + dir + "/config --library :memory:",
+                              &st);
+  ASSERT_EQ(st, 0) << log;
+  const io::Image dev = io::readImage(out);
+  EXPECT_EQ(dev.width, 32);
+  EXPECT_EQ(dev.height, 32);
+}
