@@ -325,3 +325,75 @@ TEST(SensorDng, DarktableDevelopsTheDng) {
   EXPECT_EQ(dev.width, 32);
   EXPECT_EQ(dev.height, 32);
 }
+
+TEST(SensorDng, SplitRenderMergedHasTheSameNoiseAsOneRender) {
+  // Film "raw" through the CLI: the whole image with 1 and 2 threads, and two tiles merged by
+  // lensim merge, give the very same noisy raw values (the noise is applied once, per pixel
+  // position, at write or merge time).
+  const std::string dir = tmpDir("split");
+  const std::string scene = dir + "/raw.pbrt";
+  {
+    std::ofstream f(scene);
+    f << "LookAt 0 0 0  0 0 1  0 1 0\n"
+         "Camera \"perspective\" \"float fov\" 40\n"
+         "Sampler \"independent\" \"integer pixelsamples\" 4 \"integer seed\" 9\n"
+         "Film \"raw\" \"integer xresolution\" 32 \"integer yresolution\" 24\n"
+         "  \"float nits\" 0.05 \"float fnumber\" 2.8 \"float readnoise\" 3 \"float prnu\" 0.01\n"
+         "  \"float dsnu\" 2 \"string cfa\" \"GRBG\"\n"
+         "WorldBegin\n"
+         "LightSource \"infinite\" \"blackbody L\" [5000]\n"
+         "LightSource \"point\" \"blackbody I\" [3000] \"float scale\" 2\n"
+         "Material \"diffuse\" \"rgb reflectance\" [0.8 0.3 0.2]\n"
+         "Shape \"sphere\" \"float radius\" 1\n";  // seen from inside, lit by the point light
+  }
+  using lensim::test::runLensim;
+  auto decode = [&](const std::string& dng) {
+    int st = -1, w = 0, h = 0;
+    const auto v = parsePgm(run("dcraw -D -4 -c " + dng, &st), w, h);
+    EXPECT_EQ(st, 0) << dng;
+    return v;
+  };
+  auto r = runLensim("render -q --threads 1 " + scene + " -o " + dir + "/one.dng");
+  ASSERT_EQ(r.status, 0) << r.out;
+  r = runLensim("render -q --threads 2 " + scene + " -o " + dir + "/two.dng");
+  ASSERT_EQ(r.status, 0) << r.out;
+  for (int t = 0; t < 2; ++t) {
+    r = runLensim("render -q --tile " + std::to_string(t) + "/2 " + scene + " -o " + dir +
+                  "/part" + std::to_string(t) + ".exr");
+    ASSERT_EQ(r.status, 0) << r.out;
+  }
+  r = runLensim("merge -q " + dir + "/merged.dng " + dir + "/part0.exr " + dir + "/part1.exr");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const auto one = decode(dir + "/one.dng");
+  ASSERT_EQ(one.size(), 32u * 24u);
+  EXPECT_EQ(decode(dir + "/two.dng"), one);
+  EXPECT_EQ(decode(dir + "/merged.dng"), one);
+  // The image is not flat black: some signal above the black level.
+  int lit = 0;
+  for (uint16_t v : one) lit += v > 512 + 50;
+  EXPECT_GT(lit, 100);
+  // The EXR output carries the noise-free electrons and the same DN.
+  r = runLensim("render -q " + scene + " -o " + dir + "/one.exr");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const io::Image exr = io::readImage(dir + "/one.exr");
+  const auto dn = exr.channelIndex("DN");
+  ASSERT_TRUE(dn.has_value());
+  ASSERT_TRUE(exr.channelIndex("electrons").has_value());
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 32; ++x)
+      ASSERT_EQ(exr.at(x, y, *dn), float(one[size_t(y * 32 + x)])) << x << "," << y;
+  // Bad output and bad parameters are refused with the file and the value.
+  r = runLensim("render -q " + scene + " -o " + dir + "/x.png");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find(".dng or .exr"), std::string::npos) << r.out;
+  const std::string bad = dir + "/bad.pbrt";
+  {
+    std::ofstream f(bad);
+    f << "Film \"raw\" \"integer adcbits\" 20\nWorldBegin\n";
+  }
+  r = runLensim("render -q " + bad + " -o " + dir + "/bad.dng");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("bad.pbrt:1:1"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"adcbits\": 20"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad.dng"));
+}
