@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -11,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "lensim/render/film/pixel_sensor.h"
+#include "lensim/util/file.h"
 
 namespace lensim::render {
 
@@ -113,8 +113,7 @@ double SpectralTable::eval(double l) const {
 // ---- QE files ----
 
 std::vector<SpectralTable> readQeFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(FileLoc{path}, "cannot open the QE file");
+  std::istringstream in(readRegularFile(path, "QE file", uint64_t{16} << 20));
   std::vector<double> lambda;
   std::vector<std::vector<double>> qe;
   int n_cols = 0, line_no = 0;
