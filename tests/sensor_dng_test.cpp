@@ -397,3 +397,81 @@ TEST(SensorDng, SplitRenderMergedHasTheSameNoiseAsOneRender) {
   EXPECT_NE(r.out.find("\"adcbits\": 20"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad.dng"));
 }
+
+TEST(SensorDng, RenderedColorCheckerDevelopedByDcrawEmu) {
+  // End to end: the 24 patches as spectral diffuse quads (the Ohta 1997 reflectances) under a
+  // uniform D65 sky, rendered to a raw DNG with noise, developed by dcraw_emu as above.
+  std::ifstream csv(std::string(LENSIM_SHARED_DIR) +
+                    "/data/colorchecker/colorchecker-ohta1997.csv");
+  std::vector<std::string> spectra(24);
+  std::string line;
+  std::getline(csv, line);
+  while (std::getline(csv, line)) {
+    std::stringstream ss(line);
+    std::string lambda, v;
+    std::getline(ss, lambda, ',');
+    for (int i = 0; i < 24 && std::getline(ss, v, ','); ++i)
+      spectra[size_t(i)] += lambda + " " + v + " ";
+  }
+  const std::string dir = tmpDir("chart_scene");
+  const std::string scene = dir + "/chart.pbrt";
+  {
+    std::ofstream f(scene);
+    f << "LookAt 0 0 -5  0 0 0  0 1 0\n"
+         "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1\n"
+         "Sampler \"independent\" \"integer pixelsamples\" 16\n"
+         "Film \"raw\" \"integer xresolution\" 240 \"integer yresolution\" 160\n"
+         "  \"float pixelpitch\" 5 \"float nits\" 10 \"float fnumber\" 4\n"
+         "Integrator \"path\" \"integer maxdepth\" 1\n"
+         "WorldBegin\n"
+         "LightSource \"infinite\" \"spectrum L\" \"stdillum-D65\"\n";
+    // Patch k: column k % 6, row k / 6 (row 0 at the top), 0.16 wide on a 0.2 grid.
+    for (int k = 0; k < 24; ++k) {
+      const double cx = (k % 6 - 2.5) * 0.2, cy = (1.5 - k / 6) * 0.2, r = 0.08;
+      f << "AttributeBegin\nMaterial \"diffuse\" \"spectrum reflectance\" [" << spectra[size_t(k)]
+        << "]\nShape \"bilinearmesh\" \"point3 P\" [" << cx - r << " " << cy - r << " 0 "
+        << cx + r << " " << cy - r << " 0 " << cx - r << " " << cy + r << " 0 " << cx + r << " "
+        << cy + r << " 0]\nAttributeEnd\n";
+    }
+  }
+  auto r = lensim::test::runLensim("render -q " + scene + " -o " + dir + "/chart.dng");
+  ASSERT_EQ(r.status, 0) << r.out;
+  int st = -1;
+  const std::string log = run("dcraw_emu -w -o 1 -4 -q 3 -T " + dir + "/chart.dng", &st);
+  ASSERT_EQ(st, 0) << log;
+  const io::Image dev = io::readImage(dir + "/chart.dng.tiff");
+  ASSERT_EQ(dev.width, 240);
+  ASSERT_EQ(dev.height, 160);
+  const std::vector<PiecewiseLinearSpectrum> patches = ohtaPatches();
+  const std::shared_ptr<const Spectrum> d65 = daylightIlluminant(6500);
+  const ConstantSpectrum one(1.0);
+  const Vec3 wn = spectrumToXyz(Product(one, *d65));
+  auto toXyz = [](double r, double g, double b) {
+    return Vec3{0.4124 * r + 0.3576 * g + 0.1805 * b, 0.2126 * r + 0.7152 * g + 0.0722 * b,
+                0.0193 * r + 0.1192 * g + 0.9505 * b};
+  };
+  const double px = 0.9 / 160;  // world units per pixel at the chart (5 tan(5.14 deg) x 2 / 160)
+  std::vector<Vec3> got, want;
+  for (int k = 0; k < 24; ++k) {
+    const double cx = (k % 6 - 2.5) * 0.2, cy = (1.5 - k / 6) * 0.2;
+    const int x0 = int(std::lround(120 + cx / px)), y0 = int(std::lround(80 - cy / px));
+    double s[3] = {0, 0, 0};
+    int n = 0;
+    for (int y = y0 - 7; y < y0 + 7; ++y)
+      for (int x = x0 - 7; x < x0 + 7; ++x, ++n)
+        for (int c = 0; c < 3; ++c) s[c] += dev.at(x, y, c);
+    got.push_back(toXyz(s[0] / n, s[1] / n, s[2] / n));
+    want.push_back(spectrumToXyz(Product(patches[size_t(k)], *d65)) / wn.y);
+  }
+  const double expose = want[18].y / got[18].y;
+  double sum = 0, worst = 0;
+  for (int k = 0; k < 24; ++k) {
+    const double de =
+        deltaE2000(lab(got[size_t(k)] * expose, wn / wn.y), lab(want[size_t(k)], wn / wn.y));
+    sum += de;
+    worst = std::max(worst, de);
+  }
+  std::printf("rendered ColorChecker through dcraw_emu: mean dE2000 %.2f, max %.2f\n", sum / 24,
+              worst);
+  EXPECT_LT(sum / 24, 3.0);
+}

@@ -208,12 +208,14 @@ void registerRenderCommand(CLI::App& app, Action& action) {
             io::imageFormatFromPath(out) != io::ImageFormat::Exr)
           throw Error(FileLoc{out}, "Film \"raw\" writes a .dng raw file or an .exr of its "
                                     "electrons and raw values: use a .dng or .exr output");
-      for (const std::string& out : outs)  // fail early
-        if (part_mode && (render::isDngPath(out) ||
-                          io::imageFormatFromPath(out) != io::ImageFormat::Exr))
+      for (const std::string& out : outs) {  // fail early (an unknown extension too)
+        const bool exr = !(raw && render::isDngPath(out)) &&
+                         io::imageFormatFromPath(out) == io::ImageFormat::Exr;
+        if (part_mode && !exr)
           throw Error(FileLoc{out},
                       "--tile, --spp-range and --part write EXR parts (exact sums for lensim "
                       "merge): use an .exr output");
+      }
       render::RenderResult res = render::render(s, ro);
       io::ImageWriteOptions wo;
       wo.tiff_format = io::TiffSampleFormat::Float32;
