@@ -407,7 +407,8 @@ namespace {
 // *worst). The patches are located from the black patch's centroid (Y 3 % of the sky's; the only
 // region of the lower right quarter below 5 %), which gives the image scale.
 double renderedChartDeltaE(const std::string& name, const std::string& camera, double distance,
-                           const std::string& film_extra, double* worst) {
+                           const std::string& film_extra, double* worst,
+                           bool lensim_develop = false) {
   std::ifstream csv(std::string(LENSIM_SHARED_DIR) +
                     "/data/colorchecker/colorchecker-ohta1997.csv");
   std::vector<std::string> spectra(24);
@@ -445,9 +446,16 @@ double renderedChartDeltaE(const std::string& name, const std::string& camera, d
   auto r = lensim::test::runLensim("render -q " + scene + " -o " + dir + "/chart.dng");
   EXPECT_EQ(r.status, 0) << r.out;
   int st = -1;
-  const std::string log = run("dcraw_emu -w -o 1 -4 -q 3 -T " + dir + "/chart.dng", &st);
-  EXPECT_EQ(st, 0) << log;
-  const io::Image dev = io::readImage(dir + "/chart.dng.tiff");
+  std::string developed = dir + "/chart.dng.tiff";
+  if (lensim_develop) {
+    developed = dir + "/developed.exr";
+    r = lensim::test::runLensim("develop -q " + dir + "/chart.dng -o " + developed);
+    EXPECT_EQ(r.status, 0) << r.out;
+  } else {
+    const std::string log = run("dcraw_emu -w -o 1 -4 -q 3 -T " + dir + "/chart.dng", &st);
+    EXPECT_EQ(st, 0) << log;
+  }
+  const io::Image dev = io::readImage(developed);
   if (dev.width != 240 || dev.height != 160) {
     ADD_FAILURE() << "developed image " << dev.width << "x" << dev.height;
     return 1e9;
@@ -517,4 +525,26 @@ TEST(SensorDng, ColorCheckerThroughDoubleGaussDevelopedByDcrawEmu) {
   std::printf("ColorChecker through the double Gauss, dcraw_emu: mean dE2000 %.2f, max %.2f\n",
               mean, worst);
   EXPECT_LT(mean, 3.0);
+}
+
+TEST(SensorDng, ColorCheckerThroughDoubleGaussDevelopedByLensim) {
+  // The same DNG developed by lensim's own pipeline (`lensim develop`).
+  double worst = 0;
+  const double mean = renderedChartDeltaE(
+      "chart_dgauss_lensim",
+      "Camera \"realistic\" \"string lensfile\" \"" + std::string(LENSIM_SOURCE_DIR) +
+          "/lenses/dgauss.50mm.dat\" \"float aperturediameter\" 12.5 \"float focusdistance\" 6 "
+          "\"float shutterclose\" 1",
+      6, "\"float diagonal\" 15", &worst, true);
+  std::printf("ColorChecker through the double Gauss, lensim develop: mean dE2000 %.2f, max %.2f\n",
+              mean, worst);
+  EXPECT_LT(mean, 3.0);
+  // Refusals: not a DNG, an unknown output format.
+  auto r = lensim::test::runLensim("develop " + std::string(LENSIM_SOURCE_DIR) +
+                                   "/lenses/dgauss.50mm.dat -o " + tmpDir("dev_bad") + "/x.png");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("dgauss.50mm.dat: error: cannot read the file as TIFF/DNG"),
+            std::string::npos)
+      << r.out;
+  EXPECT_FALSE(std::filesystem::exists(tmpDir("dev_bad") + "/x.png"));
 }

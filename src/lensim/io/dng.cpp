@@ -134,7 +134,103 @@ void writeTo(const std::string& path, const DngImage& im) {
   check(TIFFRewriteDirectory(tif), path, "main directory");
 }
 
+template <typename T>
+bool getArray(TIFF* tif, ttag_t tag, const T*& values, int& n) {
+  const TIFFField* f = TIFFFieldWithTag(tif, tag);
+  if (!f) return false;
+  void* p = nullptr;
+  if (TIFFFieldPassCount(f)) {
+    if (TIFFFieldReadCount(f) == TIFF_VARIABLE2) {
+      uint32_t c = 0;
+      if (!TIFFGetField(tif, tag, &c, &p)) return false;
+      n = int(c);
+    } else {
+      uint16_t c = 0;
+      if (!TIFFGetField(tif, tag, &c, &p)) return false;
+      n = c;
+    }
+  } else {
+    if (!TIFFGetField(tif, tag, &p)) return false;
+    n = TIFFFieldReadCount(f);
+  }
+  values = static_cast<const T*>(p);
+  return p != nullptr;
+}
+
 }  // namespace
+
+DngImage readDng(const std::string& path) {
+  registerTags();
+  requireRegularFile(path, "DNG file");
+  TIFF* tif = TIFFOpen(path.c_str(), "r");
+  if (!tif) throw Error(FileLoc{path}, "cannot read the file as TIFF/DNG");
+  struct Closer {
+    TIFF* t;
+    ~Closer() { TIFFClose(t); }
+  } closer{tif};
+  auto unsupported = [&](const std::string& what) {
+    return Error(FileLoc{path}, fmt::format("unsupported DNG: {}; expected an uncompressed 16-bit "
+                                            "CFA or LinearRaw image (as lensim writes)",
+                                            what));
+  };
+  DngImage im;
+  uint32_t w = 0, h = 0;
+  uint16_t bits = 0, spp = 1, comp = 1, photometric = 0, planar = 1;
+  TIFFGetField(tif, TIFFTAG_IMAGEWIDTH, &w);
+  TIFFGetField(tif, TIFFTAG_IMAGELENGTH, &h);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_BITSPERSAMPLE, &bits);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLESPERPIXEL, &spp);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_COMPRESSION, &comp);
+  TIFFGetFieldDefaulted(tif, TIFFTAG_PLANARCONFIG, &planar);
+  TIFFGetField(tif, TIFFTAG_PHOTOMETRIC, &photometric);
+  if (bits != 16) throw unsupported(fmt::format("{} bits per sample", bits));
+  if (spp != 1) throw unsupported(fmt::format("{} samples per pixel", spp));
+  if (comp != COMPRESSION_NONE) throw unsupported(fmt::format("compression {}", comp));
+  if (photometric != PHOTOMETRIC_CFA && photometric != kPhotometricLinearRaw)
+    throw unsupported(fmt::format("photometric interpretation {}", photometric));
+  if (w == 0 || h == 0 || uint64_t(w) * h > (uint64_t{1} << 28))
+    throw unsupported(fmt::format("{}x{} pixels", w, h));
+  im.width = int(w);
+  im.height = int(h);
+  im.mono = photometric == kPhotometricLinearRaw;
+  im.data.resize(size_t(w) * h);
+  if (TIFFScanlineSize64(tif) != uint64_t(w) * 2) throw unsupported("scanline layout");
+  for (uint32_t y = 0; y < h; ++y)
+    if (TIFFReadScanline(tif, im.data.data() + size_t(y) * w, y, 0) != 1)
+      throw Error(FileLoc{path}, fmt::format("cannot read image row {}", y));
+  int n = 0;
+  if (!im.mono) {
+    const uint16_t* dim = nullptr;
+    const uint8_t* pat = nullptr;
+    if (!getArray(tif, TIFFTAG_CFAREPEATPATTERNDIM, dim, n) || n != 2 || dim[0] != 2 ||
+        dim[1] != 2)
+      throw unsupported("no 2x2 CFARepeatPatternDim");
+    if (!getArray(tif, TIFFTAG_CFAPATTERN, pat, n) || n != 4) throw unsupported("no CFAPattern");
+    for (int k = 0; k < 4; ++k) {
+      if (pat[k] > 2) throw unsupported(fmt::format("CFA colour {}", pat[k]));
+      im.cfa[size_t(k)] = pat[k];
+    }
+  }
+  const float* f = nullptr;
+  if (getArray(tif, TIFFTAG_BLACKLEVEL, f, n) && n >= 1) im.black_level = uint32_t(f[0]);
+  const uint32_t* wl = nullptr;
+  im.white_level = 65535;
+  if (getArray(tif, TIFFTAG_WHITELEVEL, wl, n) && n >= 1) im.white_level = wl[0];
+  if (!(im.white_level > im.black_level))
+    throw unsupported(fmt::format("WhiteLevel {} not above BlackLevel {}", im.white_level,
+                                  im.black_level));
+  if (!im.mono) {
+    if ((getArray(tif, TIFFTAG_COLORMATRIX2, f, n) && n == 9) ||
+        (getArray(tif, TIFFTAG_COLORMATRIX1, f, n) && n == 9)) {
+      for (int i = 0; i < 9; ++i) im.color_matrix2[size_t(i)] = f[i];
+    } else {
+      throw unsupported("no 3x3 ColorMatrix1/2");
+    }
+    if (getArray(tif, TIFFTAG_ASSHOTNEUTRAL, f, n) && n == 3)
+      for (int i = 0; i < 3; ++i) im.as_shot_neutral[size_t(i)] = f[i];
+  }
+  return im;
+}
 
 void writeDng(const std::string& path, const DngImage& im) {
   if (im.width <= 0 || im.height <= 0 || im.data.size() != size_t(im.width) * size_t(im.height))

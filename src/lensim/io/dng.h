@@ -27,6 +27,11 @@ struct DngImage {
   std::string lens_model;
 };
 
+/// Reads an uncompressed 16-bit DNG with one CFA (2x2 pattern) or LinearRaw image in its first
+/// directory, as writeDng writes them (colour matrices: ColorMatrix2, else ColorMatrix1, into
+/// color_matrix2); throws lensim::Error naming the file and what is unsupported otherwise.
+DngImage readDng(const std::string& path);
+
 /// Writes `image` to `path` (atomically: a temporary file renamed into place); throws
 /// lensim::Error on failure.
 void writeDng(const std::string& path, const DngImage& image);
