@@ -397,6 +397,24 @@ TEST(SensorDng, SplitRenderMergedHasTheSameNoiseAsOneRender) {
   EXPECT_NE(r.out.find("bad.pbrt:1:1"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"adcbits\": 20"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad.dng"));
+  // A QE file beside the scene, with a bad value: its row and column.
+  {
+    std::ofstream q(dir + "/qe.csv");
+    q << "# lambda_nm, qe_r, qe_g, qe_b\n400, 0.1, 0.2, 0.3\n700, 0.1, 1.2, 0.3\n";
+    std::ofstream f(bad);
+    f << "Film \"raw\" \"string qe\" \"qe.csv\"\nWorldBegin\n";
+  }
+  r = runLensim("render -q " + bad + " -o " + dir + "/bad.dng");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("qe.csv:3:11: error: quantum efficiency 1.2"), std::string::npos) << r.out;
+  // A DNG needs Film "raw".
+  {
+    std::ofstream f(bad);
+    f << "Film \"rgb\"\nWorldBegin\n";
+  }
+  r = runLensim("render -q " + bad + " -o " + dir + "/bad.dng");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad.dng"));
 }
 
 namespace {
