@@ -2,6 +2,8 @@
 // does not, so they are registered here with a tag extender.
 #include "lensim/io/dng.h"
 
+#include <cstdarg>
+#include <cstdio>
 #include <mutex>
 
 #include <fmt/format.h>
@@ -24,6 +26,41 @@ const TIFFFieldInfo kExtraFields[] = {
 
 TIFFExtendProc g_parent_extender = nullptr;
 
+// libtiff's messages, kept for lensim's own error instead of printed (while a DNG is read or
+// written on this thread).
+thread_local std::string t_tiff_message;
+thread_local bool t_capture = false;
+TIFFErrorHandler g_parent_error = nullptr, g_parent_warning = nullptr;
+
+void captureMessage(const char* module, const char* fmt, va_list ap) {
+  char buf[512];
+  std::vsnprintf(buf, sizeof buf, fmt, ap);
+  t_tiff_message = buf;
+  (void)module;
+}
+
+void errorHandler(const char* module, const char* fmt, va_list ap) {
+  if (t_capture) return captureMessage(module, fmt, ap);
+  if (g_parent_error) g_parent_error(module, fmt, ap);
+}
+
+void warningHandler(const char* module, const char* fmt, va_list ap) {
+  if (t_capture) return;  // unknown-tag warnings and the like: not the user's concern
+  if (g_parent_warning) g_parent_warning(module, fmt, ap);
+}
+
+// Captures libtiff's messages for the scope's lifetime.
+struct CaptureTiffMessages {
+  CaptureTiffMessages() {
+    t_capture = true;
+    t_tiff_message.clear();
+  }
+  ~CaptureTiffMessages() { t_capture = false; }
+  static std::string reason() {
+    return t_tiff_message.empty() ? std::string() : " (" + t_tiff_message + ")";
+  }
+};
+
 void extendTags(TIFF* tif) {
   TIFFMergeFieldInfo(tif, kExtraFields, sizeof(kExtraFields) / sizeof(kExtraFields[0]));
   if (g_parent_extender) g_parent_extender(tif);
@@ -31,7 +68,11 @@ void extendTags(TIFF* tif) {
 
 void registerTags() {
   static std::once_flag once;
-  std::call_once(once, [] { g_parent_extender = TIFFSetTagExtender(extendTags); });
+  std::call_once(once, [] {
+    g_parent_extender = TIFFSetTagExtender(extendTags);
+    g_parent_error = TIFFSetErrorHandler(errorHandler);
+    g_parent_warning = TIFFSetWarningHandler(warningHandler);
+  });
 }
 
 // libtiff's custom tags take (count, array) or only (array) depending on the field's definition;
@@ -44,7 +85,9 @@ void setArray(TIFF* tif, ttag_t tag, const T* values, int n, const std::string& 
     ok = TIFFSetField(tif, tag, uint16_t(n), values);
   else if (f)
     ok = TIFFSetField(tif, tag, values);
-  if (!ok) throw Error(FileLoc{path}, fmt::format("libtiff cannot write DNG tag {}", tag));
+  if (!ok)
+    throw Error(FileLoc{path}, fmt::format("libtiff cannot write DNG tag {}{}", tag,
+                                           CaptureTiffMessages::reason()));
 }
 
 void setFloats(TIFF* tif, ttag_t tag, const double* v, int n, const std::string& path) {
@@ -54,13 +97,17 @@ void setFloats(TIFF* tif, ttag_t tag, const double* v, int n, const std::string&
 }
 
 void check(int ok, const std::string& path, const char* what) {
-  if (!ok) throw Error(FileLoc{path}, fmt::format("writing the DNG failed: {}", what));
+  if (!ok)
+    throw Error(FileLoc{path},
+                fmt::format("writing the DNG failed: {}{}", what, CaptureTiffMessages::reason()));
 }
 
 void writeTo(const std::string& path, const DngImage& im) {
   registerTags();
+  CaptureTiffMessages capture;
   TIFF* tif = TIFFOpen(path.c_str(), "w");
-  if (!tif) throw Error(FileLoc{path}, "cannot create the DNG file");
+  if (!tif)
+    throw Error(FileLoc{path}, "cannot create the DNG file" + CaptureTiffMessages::reason());
   struct Closer {
     TIFF* t;
     ~Closer() { TIFFClose(t); }
@@ -162,8 +209,10 @@ bool getArray(TIFF* tif, ttag_t tag, const T*& values, int& n) {
 DngImage readDng(const std::string& path) {
   registerTags();
   requireRegularFile(path, "DNG file");
+  CaptureTiffMessages capture;
   TIFF* tif = TIFFOpen(path.c_str(), "r");
-  if (!tif) throw Error(FileLoc{path}, "cannot read the file as TIFF/DNG");
+  if (!tif)
+    throw Error(FileLoc{path}, "cannot read the file as TIFF/DNG" + CaptureTiffMessages::reason());
   struct Closer {
     TIFF* t;
     ~Closer() { TIFFClose(t); }
@@ -197,7 +246,8 @@ DngImage readDng(const std::string& path) {
   if (TIFFScanlineSize64(tif) != uint64_t(w) * 2) throw unsupported("scanline layout");
   for (uint32_t y = 0; y < h; ++y)
     if (TIFFReadScanline(tif, im.data.data() + size_t(y) * w, y, 0) != 1)
-      throw Error(FileLoc{path}, fmt::format("cannot read image row {}", y));
+      throw Error(FileLoc{path},
+                  fmt::format("cannot read image row {}{}", y, CaptureTiffMessages::reason()));
   int n = 0;
   if (!im.mono) {
     const uint16_t* dim = nullptr;
