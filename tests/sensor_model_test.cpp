@@ -284,6 +284,31 @@ TEST(SensorModel, FixedPatternNoiseIsSeededAndMeasurable) {
   EXPECT_NEAR(prnu_est, 0.01, 0.001);
 }
 
+TEST(SensorModel, DarkFramesGiveDarkCurrentAndDsnu) {
+  // 16 dark frames of one sensor averaged: the mean gives the dark current, the spatial spread
+  // of the per-pixel means (less the averaged temporal noise) the DSNU.
+  const int w = 64, h = 64, frames = 16;
+  std::vector<double> acc(size_t(w * h), 0);
+  SensorConfig fc = noiseConfig();
+  fc.dark_current_e_s = 2;
+  fc.exposure_s = 10;  // 20 e-
+  fc.dsnu_e = 6;
+  fc.pattern_seed = 8;
+  for (int f = 0; f < frames; ++f) {
+    fc.seed = uint64_t(500 + f);
+    const auto dn = digitizeImage(SensorModel(fc), flat(w, h, 0), w, h, 0, 0);
+    for (size_t i = 0; i < acc.size(); ++i) acc[i] += dn[i] / double(frames);
+  }
+  double s = 0, ss = 0;
+  for (double v : acc) s += v, ss += v * v;
+  const double n = double(acc.size()), mean = s / n;
+  const double g = fc.gainDnPerE();
+  EXPECT_NEAR((mean - fc.black_level_dn) / g / fc.exposure_s, 2.0, 0.05 * 2.0);
+  const double spatial2 = ss / n - mean * mean;
+  const double temporal2 = ((20 + 16.0) * g * g + 1.0 / 12) / frames;
+  EXPECT_NEAR(std::sqrt(spatial2 - temporal2) / g, 6.0, 0.05 * 6.0);
+}
+
 TEST(SensorModel, NoiseIndependentOfSplitAndReproducibleFromSeed) {
   SensorConfig cfg = noiseConfig();
   cfg.seed = 11;
