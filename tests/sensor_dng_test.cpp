@@ -397,6 +397,31 @@ TEST(SensorDng, SplitRenderMergedHasTheSameNoiseAsOneRender) {
   EXPECT_NE(r.out.find("bad.pbrt:1:1"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"adcbits\": 20"), std::string::npos) << r.out;
   EXPECT_FALSE(std::filesystem::exists(dir + "/bad.dng"));
+  // A QE file travels with the parts: lensim merge does not need it.
+  {
+    std::ofstream q(dir + "/qe_ok.csv");
+    q << "400, 0.1, 0.2, 0.3\n550, 0.2, 0.6, 0.2\n700, 0.5, 0.1, 0.05\n";
+    std::ifstream in(scene);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string t = text.str();
+    t.replace(t.find("\"string cfa\""), 0, "\"string qe\" \"qe_ok.csv\" ");
+    std::ofstream f(dir + "/qe.pbrt");
+    f << t;
+  }
+  r = runLensim("render -q " + dir + "/qe.pbrt -o " + dir + "/qe_one.dng");
+  ASSERT_EQ(r.status, 0) << r.out;
+  for (int t = 0; t < 2; ++t) {
+    r = runLensim("render -q --tile " + std::to_string(t) + "/2 " + dir + "/qe.pbrt -o " + dir +
+                  "/qe_part" + std::to_string(t) + ".exr");
+    ASSERT_EQ(r.status, 0) << r.out;
+  }
+  std::filesystem::remove(dir + "/qe_ok.csv");
+  r = runLensim("merge -q " + dir + "/qe_merged.dng " + dir + "/qe_part0.exr " + dir +
+                "/qe_part1.exr");
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_EQ(decode(dir + "/qe_merged.dng"), decode(dir + "/qe_one.dng"));
+  EXPECT_NE(decode(dir + "/qe_one.dng"), one);
   // A QE file beside the scene, with a bad value: its row and column.
   {
     std::ofstream q(dir + "/qe.csv");

@@ -8,11 +8,13 @@
 #include <fmt/format.h>
 
 #include "lensim/io/dng.h"
+#include "lensim/render/film/pixel_sensor.h"
 #include "lensim/render/sensor/sensor_color.h"
 #include "lensim/render/sensor/sensor_model.h"
 #include "lensim/render/spectra/spectrum.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
+#include "lensim/util/file.h"
 
 namespace lensim::render {
 
@@ -61,6 +63,9 @@ std::map<std::string, std::string> rawMetadata(const scene::Scene& scene,
                                                const SensorConfig& config) {
   std::map<std::string, std::string> m;
   m[kRawSensorKey] = config.toText();
+  const auto& names = cameraSensorNames();
+  if (std::find(names.begin(), names.end(), config.qe) == names.end())
+    m[kRawQeKey] = readRegularFile(config.qe, "QE file", uint64_t{16} << 20);
   const scene::Film& f = scene.film;
   if (f.raw_fnumber > 0) m[kRawFNumberKey] = fmt::format("{:.17g}", f.raw_fnumber);
   if (f.raw_focal_mm > 0) m[kRawFocalKey] = fmt::format("{:.17g}", f.raw_focal_mm);
@@ -86,7 +91,9 @@ void writeRawImage(const std::string& path, const io::Image& image, int x0, int 
   if (ext != "dng" && ext != "exr")
     throw Error(FileLoc{path}, fmt::format("Film \"raw\" writes .dng or .exr files; got \".{}\"",
                                            ext));
-  const SensorModel model(SensorConfig::fromText(it->second));
+  auto qe = image.metadata.find(kRawQeKey);
+  const SensorModel model(SensorConfig::fromText(it->second), FileLoc{},
+                          qe == image.metadata.end() ? nullptr : &qe->second);
   const SensorConfig& cfg = model.config();
   const int w = image.width, h = image.height;
   if (image.channelCount() < 3)

@@ -21,6 +21,8 @@ inline constexpr const char* kRawLensKey = "lensim:raw_lens";      ///< lens nam
 inline constexpr const char* kRawFNumberKey = "lensim:raw_fnumber";
 inline constexpr const char* kRawFocalKey = "lensim:raw_focal_mm";
 inline constexpr const char* kRawWhiteBalanceKey = "lensim:raw_whitebalance";
+/// A QE file's content, so that lensim merge does not need the file.
+inline constexpr const char* kRawQeKey = "lensim:raw_qe";
 
 /// The sensor of a scene's Film "raw" as rendered: exposure time from the camera's shutter
 /// interval (1 s if none), the film's ISO, the noise seed from the sampler's seed and the film's

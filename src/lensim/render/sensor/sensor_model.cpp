@@ -113,7 +113,11 @@ double SpectralTable::eval(double l) const {
 // ---- QE files ----
 
 std::vector<SpectralTable> readQeFile(const std::string& path) {
-  std::istringstream in(readRegularFile(path, "QE file", uint64_t{16} << 20));
+  return parseQeText(readRegularFile(path, "QE file", uint64_t{16} << 20), path);
+}
+
+std::vector<SpectralTable> parseQeText(const std::string& text, const std::string& path) {
+  std::istringstream in(text);
   std::vector<double> lambda;
   std::vector<std::vector<double>> qe;
   int n_cols = 0, line_no = 0;
@@ -174,7 +178,7 @@ std::vector<SpectralTable> readQeFile(const std::string& path) {
 
 // ---- SensorModel ----
 
-SensorModel::SensorModel(SensorConfig config, const FileLoc& loc)
+SensorModel::SensorModel(SensorConfig config, const FileLoc& loc, const std::string* qe_text)
     : config_(std::move(config)), cfa_(parseCfa(config_.cfa, loc)), loc_(loc) {
   config_.validate(loc);
   std::array<SpectralTable, 3> raw;
@@ -193,7 +197,7 @@ SensorModel::SensorModel(SensorConfig config, const FileLoc& loc)
   } else {
     std::vector<SpectralTable> t;
     try {
-      t = readQeFile(config_.qe);
+      t = qe_text ? parseQeText(*qe_text, config_.qe) : readQeFile(config_.qe);
     } catch (const Error& e) {
       if (config_.qe.find('/') == std::string::npos && config_.qe.find('.') == std::string::npos) {
         std::string list;

@@ -43,8 +43,10 @@ struct SpectralTable {
 
 class SensorModel {
  public:
-  /// Loads the QE curves (throws lensim::Error at loc for a bad file or name).
-  explicit SensorModel(SensorConfig config, const FileLoc& loc = {});
+  /// Loads the QE curves (throws lensim::Error at loc for a bad file or name); `qe_text`: the
+  /// QE file's content, when it travels with the image instead of being read from config.qe.
+  explicit SensorModel(SensorConfig config, const FileLoc& loc = {},
+                       const std::string* qe_text = nullptr);
   const SensorConfig& config() const { return config_; }
   CfaLayout cfa() const { return cfa_; }
   /// Quantum efficiency of channel c at lambda, including the IR-cut filter.
@@ -81,5 +83,7 @@ std::vector<uint16_t> digitizeImage(const SensorModel& m, const std::vector<floa
 /// "lambda_nm, qe" for a monochrome sensor), QE as fractions in [0, 1], wavelengths increasing.
 /// Returns the 3 (or 1) channel tables; throws lensim::Error "file:line:col: ..." on bad input.
 std::vector<SpectralTable> readQeFile(const std::string& path);
+/// The same for a QE file's content (`path` names it in errors).
+std::vector<SpectralTable> parseQeText(const std::string& text, const std::string& path);
 
 }  // namespace lensim::render
