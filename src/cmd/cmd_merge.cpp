@@ -10,6 +10,7 @@
 #include "commands.h"
 #include "lensim/io/image.h"
 #include "lensim/render/parts.h"
+#include "lensim/render/sensor/raw_output.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
 
@@ -45,7 +46,7 @@ void registerMergeCommand(CLI::App& app, Action& action) {
       parts.reserve(o->parts.size());
       if (o->keep_sums && io::imageFormatFromPath(o->out) != io::ImageFormat::Exr)
         throw Error(FileLoc{o->out}, "--part writes an EXR part: use an .exr output");
-      io::imageFormatFromPath(o->out);  // fail before reading the parts
+      if (!render::isDngPath(o->out)) io::imageFormatFromPath(o->out);  // fail before reading
       for (const std::string& p : o->parts) parts.push_back(render::readPart(p));
       render::Part merged = render::mergeParts(parts, o->partial_samples);
       merged.metadata["lensim:merged_parts"] = std::to_string(parts.size());
@@ -55,7 +56,13 @@ void registerMergeCommand(CLI::App& app, Action& action) {
         io::Image im = render::sumsImage(merged.bounds, merged.sums);
         for (const auto& [key, value] : merged.metadata)
           if (key != "lensim:part") im.metadata[key] = value;
-        io::writeImage(o->out, im);
+        // A raw film's parts hold expected electrons: the sensor's noise is applied here, once.
+        if (render::isRawImage(im))
+          render::writeRawImage(o->out, im, merged.bounds.x0, merged.bounds.y0);
+        else if (render::isDngPath(o->out))
+          throw Error(FileLoc{o->out}, "a .dng output needs the parts of a Film \"raw\" render");
+        else
+          io::writeImage(o->out, im);
       }
       if (!lensim::quiet())
         logInfo(fmt::format("merged {} parts into {} ({}x{}, {} spp)", parts.size(), o->out,

@@ -18,6 +18,7 @@
 #include "lensim/render/autofocus_scene.h"
 #include "lensim/render/parts.h"
 #include "lensim/render/renderer.h"
+#include "lensim/render/sensor/raw_output.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/interrupt.h"
@@ -200,11 +201,21 @@ void registerRenderCommand(CLI::App& app, Action& action) {
           throw Error(FileLoc{out}, fmt::format("Film \"{}\" writes EXR only (as pbrt-v4): use "
                                                 "an .exr output",
                                                 s.film.type));
-      for (const std::string& out : outs)  // fail early
-        if (io::imageFormatFromPath(out) != io::ImageFormat::Exr && part_mode)
+      // Film "raw" (docs/sensor.md): a DNG raw file or an EXR of its electrons and DN.
+      const bool raw = s.film.type == "raw";
+      for (const std::string& out : outs)
+        if (raw && !part_mode && !render::isDngPath(out) &&
+            io::imageFormatFromPath(out) != io::ImageFormat::Exr)
+          throw Error(FileLoc{out}, "Film \"raw\" writes a .dng raw file or an .exr of its "
+                                    "electrons and raw values: use a .dng or .exr output");
+      for (const std::string& out : outs) {  // fail early (an unknown extension too)
+        const bool exr = !(raw && render::isDngPath(out)) &&
+                         io::imageFormatFromPath(out) == io::ImageFormat::Exr;
+        if (part_mode && !exr)
           throw Error(FileLoc{out},
                       "--tile, --spp-range and --part write EXR parts (exact sums for lensim "
                       "merge): use an .exr output");
+      }
       render::RenderResult res = render::render(s, ro);
       io::ImageWriteOptions wo;
       wo.tiff_format = io::TiffSampleFormat::Float32;
@@ -227,7 +238,11 @@ void registerRenderCommand(CLI::App& app, Action& action) {
         p.sums = std::move(res.sums);
         for (const std::string& out : outs) render::writePart(out, p);
       } else {
-        for (const std::string& out : outs) io::writeImage(out, res.image, wo);
+        for (const std::string& out : outs)
+          if (raw)
+            render::writeRawImage(out, res.image, res.bounds.x0, res.bounds.y0);
+          else
+            io::writeImage(out, res.image, wo);
       }
       if (res.stats.tiles_resumed > 0 && !quiet)
         logInfo(

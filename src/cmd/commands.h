@@ -36,6 +36,9 @@ void registerServeCommand(CLI::App& app, Action& action);
 /// `lensim merge OUT PART...`: merge the parts of a distributed render exactly.
 void registerMergeCommand(CLI::App& app, Action& action);
 
+/// `lensim develop RAW.dng -o OUT`: a raw DNG developed to an image (docs/sensor.md).
+void registerDevelopCommand(CLI::App& app, Action& action);
+
 /// `lensim dispatch SCENE --engine slurm|kubernetes --jobs N`: cluster job files.
 void registerDispatchCommand(CLI::App& app, Action& action);
 

@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   lensim::cmd::registerServeCommand(app, action);
   lensim::cmd::registerMergeCommand(app, action);
   lensim::cmd::registerDispatchCommand(app, action);
+  lensim::cmd::registerDevelopCommand(app, action);
 
   try {
     app.parse(argc, argv);

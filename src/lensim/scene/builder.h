@@ -19,6 +19,7 @@
 #include "lensim/scene/curves.h"
 #include "lensim/scene/parser.h"
 #include "lensim/util/animated_transform.h"
+#include "lensim/scene/sensor_config.h"
 #include "lensim/util/error.h"
 #include "lensim/util/transform.h"
 #include "lensim/util/vec.h"
@@ -379,6 +380,13 @@ struct Film {
   /// pbrt-v4 "gbuffer" film (type "gbuffer"): "coordinatesystem" of its positions and normals,
   /// "camera" or "world".
   std::string gbuffer_coordinates = "camera";
+  /// Film "raw" (type "raw", issue 34): the camera sensor (its exposure time, ISO and seed are
+  /// filled in from the camera, film and sampler when rendered); `raw_nits`: the luminance
+  /// (cd/m^2) of a unit-luminance scene radiance; `raw_fnumber`: the f-number of a camera
+  /// without a lens (perspective, ...), and the EXIF f-number; `raw_focal_mm`: EXIF focal length.
+  SensorConfig raw_sensor;
+  double raw_nits = 1, raw_fnumber = 0, raw_focal_mm = 0;
+  int raw_noise_seed = 0;
 };
 
 /// The sampler description; `type` is the pbrt-v4 sampler lensim uses.

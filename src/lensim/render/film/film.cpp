@@ -12,6 +12,8 @@
 
 #include "lensim/render/film/gbuffer.h"
 #include "lensim/render/film/pixel_sensor.h"
+#include "lensim/render/sensor/raw_output.h"
+#include "lensim/render/sensor/sensor_model.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/scene/film_sensor.h"
@@ -60,6 +62,17 @@ Film::Film(const scene::Scene& scene, PixelBounds bounds)
     bucket_sums_.assign(pixels_.size() * size_t(n_buckets_), 0.0);
   }
   if (scene.film.type == "gbuffer") gbuf_.assign(pixels_.size(), GBufferPixel{});
+  if (scene.film.type == "raw") {
+    raw_ = std::make_shared<SensorModel>(rawSensorConfig(scene), scene.film.loc);
+    raw_metadata_ = rawMetadata(scene, raw_->config());
+  }
+}
+
+Vec3 Film::recorded(const Vec3& sensor_rgb, const SampledSpectrum& L,
+                    const SampledWavelengths& lambda) const {
+  if (!raw_) return outputRgb(sensor_rgb);
+  const std::array<double, 3> e = raw_->expectedElectrons(L, lambda);
+  return {e[0], e[1], e[2]};
 }
 
 Vec3 Film::toSensorRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const {
@@ -101,7 +114,7 @@ void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavele
                      double w, const VisibleSurface* vs) {
   DCHECK(x >= bounds_.x0 && x < bounds_.x1 && y >= bounds_.y0 && y < bounds_.y1);
   const Vec3 sensor_rgb = toSensorRgb(L, lambda);
-  const Vec3 rgb = outputRgb(sensor_rgb);
+  const Vec3 rgb = recorded(sensor_rgb, L, lambda);
   const size_t i = size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0);
   if (!gbuf_.empty()) {
     // pbrt-v4's GBufferFilm::AddSample.
@@ -182,7 +195,7 @@ void Film::enableSplats(const Filter& filter) {
 void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda) {
   if (!splat_filter_) return;
   const Vec3 sensor_rgb = toSensorRgb(L, lambda);
-  const Vec3 rgb = outputRgb(sensor_rgb);
+  const Vec3 rgb = recorded(sensor_rgb, L, lambda);
   const Vec2 r = splat_filter_->radius();
   const double norm = 1 / splat_filter_->integral();
   // Pixels whose centre (x + 0.5, y + 0.5) lies within the filter radius of p.
@@ -339,6 +352,7 @@ io::Image Film::image() const {
         for (int c = 0; c < 22; ++c) im.at(x, y, c0 + c) = float(values[c]);
       }
   }
+  for (const auto& [key, value] : raw_metadata_) im.metadata[key] = value;
   if (n_buckets_ > 0) {
     // The OpenEXR spectral layout's attributes (Fichet et al., JCGT 2021), as pbrt-v4's
     // SpectralFilm::GetImage writes them.

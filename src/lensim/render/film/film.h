@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -20,6 +21,7 @@ namespace lensim::render {
 
 class Filter;
 class PixelSensor;
+class SensorModel;
 struct VisibleSurface;
 
 /// A half-open rectangle of pixels [x0, x1) x [y0, y1) in the full image's raster.
@@ -84,6 +86,10 @@ class Film {
   Vec3 toSensorRgb(const SampledSpectrum& L, const SampledWavelengths& lambda) const;
   /// Output (linear sRGB) from sensor RGB: the sensor's XYZ-from-RGB matrix, then XYZ to sRGB.
   Vec3 outputRgb(const Vec3& sensor_rgb) const;
+  /// Film "raw": the camera sensor whose expected photo-electrons per colour channel the film
+  /// accumulates (in place of RGB; the noise is applied when the image is written,
+  /// render/sensor/raw_output.h); null for other films.
+  const SensorModel* rawSensor() const { return raw_.get(); }
   /// The film's sensor (pbrt-v4's PixelSensor: "cie1931" or a named camera).
   const PixelSensor& sensor() const { return *sensor_; }
   /// The image so far: channels R, G, B, bounds-sized; for the spectral film (pbrt-v4's
@@ -150,6 +156,11 @@ class Film {
   std::vector<PixelSum> pixels_;
   double max_component_ = 1e300;
   std::shared_ptr<const PixelSensor> sensor_;
+  std::shared_ptr<const SensorModel> raw_;
+  std::map<std::string, std::string> raw_metadata_;  ///< raw_output.h's keys
+  /// What the film accumulates for a sample: output RGB, or a raw film's expected electrons.
+  Vec3 recorded(const Vec3& sensor_rgb, const SampledSpectrum& L,
+                const SampledWavelengths& lambda) const;
   // Spectral buckets (Film "spectral"): per pixel, n_buckets_ sums of filter-weighted bucket
   // radiance estimates; a bucket's value is its sum over the pixel's weight sum.
   int n_buckets_ = 0;

@@ -101,6 +101,7 @@ class Builder {
   void checkSensor(ParamSet& ps, const Film& f);
 
   void spectralFilm(ParamSet& ps, Film& f);
+  void rawFilm(ParamSet& ps, Film& f);
 
   void film(const Directive& d);
 

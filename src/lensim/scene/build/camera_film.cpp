@@ -183,6 +183,53 @@ void Builder::spectralFilm(ParamSet& ps, Film& f) {
                             f.lambda_min_nm, f.lambda_max_nm));
 }
 
+// Film "raw" (issue 34, docs/sensor.md): the camera sensor's parameters, each with its unit.
+void Builder::rawFilm(ParamSet& ps, Film& f) {
+  f.type = "raw";
+  SensorConfig& s = f.raw_sensor;
+  const std::string qe = ps.getString({"qe"}, s.qe);
+  // A QE file is resolved like the scene's other files; a bundled camera name is kept.
+  s.qe = qe.find('/') != std::string::npos || qe.find('.') != std::string::npos
+             ? resolve(qe, ps.peek({"qe"})->loc, "QE file")
+             : qe;
+  s.cfa = ps.getString({"cfa"}, s.cfa);
+  s.peak_qe = ps.getFloat({"peakqe"}, s.peak_qe);
+  s.ircut_nm = ps.getFloat({"ircut"}, s.ircut_nm);
+  s.ircut_width_nm = ps.getFloat({"ircutwidth"}, s.ircut_width_nm);
+  s.pixel_pitch_um = ps.getFloat({"pixelpitch"}, 0);
+  s.fill_factor = ps.getFloat({"fillfactor"}, s.fill_factor);
+  s.base_iso = ps.getFloat({"baseiso"}, s.base_iso);
+  s.temperature_c = ps.getFloat({"temperature"}, s.temperature_c);
+  s.dark_current_e_s = ps.getFloat({"darkcurrent"}, s.dark_current_e_s);
+  s.dark_ref_c = ps.getFloat({"darkreftemperature"}, s.dark_ref_c);
+  s.dark_doubling_c = ps.getFloat({"darkdoubling"}, s.dark_doubling_c);
+  s.read_noise_e = ps.getFloat({"readnoise"}, s.read_noise_e);
+  s.dsnu_e = ps.getFloat({"dsnu"}, s.dsnu_e);
+  s.prnu = ps.getFloat({"prnu"}, s.prnu);
+  s.full_well_e = ps.getFloat({"fullwell"}, s.full_well_e);
+  s.conversion_gain_e_dn = ps.getFloat({"conversiongain"}, s.conversion_gain_e_dn);
+  s.adc_bits = ps.getInt({"adcbits"}, s.adc_bits);
+  s.black_level_dn = ps.getInt({"blacklevel"}, s.black_level_dn);
+  s.pattern_seed = uint64_t(uint32_t(ps.getInt({"patternseed"}, int(s.pattern_seed))));
+  f.raw_noise_seed = ps.getInt({"noiseseed"}, 0);
+  s.noise = ps.getBool({"noise"}, true);
+  f.raw_nits = ps.getFloat({"nits"}, 1);
+  f.raw_fnumber = ps.getFloat({"fnumber"}, 0);
+  f.raw_focal_mm = ps.getFloat({"focallength"}, 0);
+  if (!(f.raw_nits > 0 && f.raw_nits < 1e30))
+    throw Error(ps.peek({"nits"})->loc,
+                fmt::format("\"nits\": {} is out of range; expected a positive luminance "
+                            "(cd/m^2) of unit scene radiance",
+                            f.raw_nits));
+  if (!(f.raw_fnumber >= 0 && f.raw_fnumber <= 1000))
+    throw Error(ps.peek({"fnumber"})->loc,
+                fmt::format("\"fnumber\": {} is out of range; expected (0, 1000]", f.raw_fnumber));
+  if (!(f.raw_focal_mm >= 0 && f.raw_focal_mm <= 1e5))
+    throw Error(ps.peek({"focallength"})->loc,
+                fmt::format("\"focallength\": {} mm is out of range; expected (0, 1e5] mm",
+                            f.raw_focal_mm));
+}
+
 void Builder::film(const Directive& d) {
   const std::string& type = d.strings[0];
   ParamSet ps(d.params, d.loc, fmt::format("Film \"{}\"", type));
@@ -193,6 +240,8 @@ void Builder::film(const Directive& d) {
   f.type = "rgb";
   if (type == "spectral") {
     spectralFilm(ps, f);
+  } else if (type == "raw") {
+    rawFilm(ps, f);
   } else if (type == "gbuffer") {
     // pbrt-v4's GBufferFilm::Create (src/pbrt/film.cpp): "coordinatesystem" "camera" (default)
     // or "world"; EXR output only (checked where the output is known).
@@ -241,6 +290,14 @@ void Builder::film(const Directive& d) {
   f.sensor = ps.getString({"sensor"}, "cie1931");
   checkSensor(ps, f);
   f.max_component_value = ps.getFloat({"maxcomponentvalue", "maxsampleluminance"}, 1e300);
+  if (f.type == "raw") {
+    // The pixel pitch from the film's diagonal and resolution unless given.
+    if (f.raw_sensor.pixel_pitch_um == 0)
+      f.raw_sensor.pixel_pitch_um =
+          f.diagonal_mm * 1000 / std::hypot(double(f.x_resolution), double(f.y_resolution));
+    f.raw_sensor.iso = f.iso;
+    f.raw_sensor.validate(d.loc);
+  }
   // pbrt-v4 (src/pbrt/film.cpp, RGBFilm::Create) defaults "savefp16" to true; lensim's
   // default is 32-bit float (docs/scene-support.md): only an explicit true writes half.
   f.save_fp16 = ps.getBool({"savefp16"}, false);

@@ -1,0 +1,39 @@
+// A raw DNG writer (Adobe DNG 1.4 specification) on libtiff: one uncompressed 16-bit CFA (or
+// monochrome LinearRaw) image with the colour and exposure metadata raw developers need.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lensim::io {
+
+struct DngImage {
+  int width = 0, height = 0;
+  std::vector<uint16_t> data;            ///< width x height DN, row-major
+  bool mono = false;                     ///< LinearRaw with one sample (no CFA, no colour)
+  std::array<uint8_t, 4> cfa{0, 1, 1, 2};  ///< 2x2 CFAPattern (0 red, 1 green, 2 blue), row-major
+  int bits = 14;
+  uint32_t black_level = 0, white_level = 16383;
+  std::array<double, 9> color_matrix1{}, color_matrix2{};      ///< XYZ -> camera
+  std::array<double, 9> forward_matrix1{}, forward_matrix2{};  ///< camera -> XYZ D50
+  std::array<double, 3> as_shot_neutral{1, 1, 1};
+  int illuminant1 = 17, illuminant2 = 21;  ///< EXIF LightSource codes (A, D65)
+  std::string make = "lensim", model = "lensim sensor", unique_model = "lensim sensor";
+  std::string software = "lensim";
+  // EXIF (0: not written).
+  double exposure_s = 0, f_number = 0, focal_length_mm = 0, iso = 0;
+  std::string lens_model;
+};
+
+/// Reads an uncompressed 16-bit DNG with one CFA (2x2 pattern) or LinearRaw image in its first
+/// directory, as writeDng writes them (colour matrices: ColorMatrix2, else ColorMatrix1, into
+/// color_matrix2); throws lensim::Error naming the file and what is unsupported otherwise.
+DngImage readDng(const std::string& path);
+
+/// Writes `image` to `path` (atomically: a temporary file renamed into place); throws
+/// lensim::Error on failure.
+void writeDng(const std::string& path, const DngImage& image);
+
+}  // namespace lensim::io

@@ -1,0 +1,102 @@
+// The raw development pipeline (develop.h).
+#include "lensim/render/sensor/develop.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "lensim/render/film/pixel_sensor.h"
+
+namespace lensim::render {
+
+namespace {
+
+int mirror(int i, int n) {
+  // Reflection about the first and last pixel keeps a pixel's CFA parity.
+  while (i < 0 || i >= n) i = i < 0 ? -i : 2 * (n - 1) - i;
+  return i;
+}
+
+// Malvar-He-Cutler kernels (x8), indexed [dy + 2][dx + 2].
+constexpr double kGAtRB[5][5] = {{0, 0, -1, 0, 0}, {0, 0, 2, 0, 0}, {-1, 2, 4, 2, -1},
+                                 {0, 0, 2, 0, 0},   {0, 0, -1, 0, 0}};
+// At a green pixel: the colour of its horizontal neighbours (kAtGRow), of its vertical ones
+// (kAtGCol).
+constexpr double kAtGRow[5][5] = {{0, 0, 0.5, 0, 0}, {0, -1, 0, -1, 0}, {-1, 4, 5, 4, -1},
+                                  {0, -1, 0, -1, 0}, {0, 0, 0.5, 0, 0}};
+constexpr double kAtGCol[5][5] = {{0, 0, -1, 0, 0}, {0, -1, 4, -1, 0}, {0.5, 0, 5, 0, 0.5},
+                                  {0, -1, 4, -1, 0}, {0, 0, -1, 0, 0}};
+// At a red pixel, blue (and at a blue pixel, red).
+constexpr double kRBAtBR[5][5] = {{0, 0, -1.5, 0, 0}, {0, 2, 0, 2, 0}, {-1.5, 0, 6, 0, -1.5},
+                                  {0, 2, 0, 2, 0},    {0, 0, -1.5, 0, 0}};
+
+}  // namespace
+
+io::Image developRaw(const io::DngImage& raw, double exposure_ev) {
+  const int w = raw.width, h = raw.height;
+  const double black = raw.black_level, range = double(raw.white_level) - black;
+  auto channel = [&](int x, int y) { return raw.mono ? 0 : int(raw.cfa[size_t((y & 1) * 2 + (x & 1))]); };
+  // 1-2: linear, white-balanced mosaic.
+  std::vector<double> m(size_t(w) * size_t(h));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * size_t(w) + size_t(x);
+      double v = (double(raw.data[i]) - black) / range;
+      if (!raw.mono) {
+        const double n = raw.as_shot_neutral[size_t(channel(x, y))];
+        v /= n > 0 ? n : 1;
+      }
+      m[i] = v;
+    }
+  const double gain = std::exp2(exposure_ev);
+  io::Image out(w, h, {"R", "G", "B"});
+  if (raw.mono) {
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c)
+          out.at(x, y, c) = float(std::max(0.0, m[size_t(y) * size_t(w) + size_t(x)] * gain));
+    return out;
+  }
+  // 4: camera to sRGB (dcraw's cam_xyz_coeff).
+  const Mat3d xyz_from_srgb = {0.4124564, 0.3575761, 0.1804375, 0.2126729, 0.7151522,
+                               0.0721750, 0.0193339, 0.1191920, 0.9503041};
+  Mat3d cm;
+  std::copy(raw.color_matrix2.begin(), raw.color_matrix2.end(), cm.begin());
+  Mat3d cam_rgb = mulMat3(cm, xyz_from_srgb);
+  for (int r = 0; r < 3; ++r) {
+    double s = 0;
+    for (int c = 0; c < 3; ++c) s += cam_rgb[size_t(3 * r + c)];
+    for (int c = 0; c < 3; ++c) cam_rgb[size_t(3 * r + c)] /= s != 0 ? s : 1;
+  }
+  const Mat3d rgb_cam = invertMat3(cam_rgb);
+  // 3: demosaic.
+  auto conv = [&](const double (&k)[5][5], int x, int y) {
+    double s = 0;
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx)
+        if (k[dy + 2][dx + 2] != 0)
+          s += k[dy + 2][dx + 2] *
+               m[size_t(mirror(y + dy, h)) * size_t(w) + size_t(mirror(x + dx, w))];
+    return s / 8;
+  };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int c = channel(x, y);
+      double v[3];
+      v[c] = m[size_t(y) * size_t(w) + size_t(x)];
+      if (c == 1) {
+        const int hc = channel(mirror(x + 1, w), y), vc = 2 - hc;
+        v[hc] = conv(kAtGRow, x, y);
+        v[vc] = conv(kAtGCol, x, y);
+      } else {
+        v[1] = conv(kGAtRB, x, y);
+        v[2 - c] = conv(kRBAtBR, x, y);
+      }
+      const Vec3 rgb = mulMat3(rgb_cam, Vec3{v[0], v[1], v[2]});
+      out.at(x, y, 0) = float(std::max(0.0, rgb.x * gain));
+      out.at(x, y, 1) = float(std::max(0.0, rgb.y * gain));
+      out.at(x, y, 2) = float(std::max(0.0, rgb.z * gain));
+    }
+  return out;
+}
+
+}  // namespace lensim::render

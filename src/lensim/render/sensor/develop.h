@@ -1,0 +1,23 @@
+// A simple raw development pipeline (`lensim develop`): from a DNG's mosaic to a linear sRGB
+// image. Steps, in order:
+//   1. linearise: (DN - BlackLevel) / (WhiteLevel - BlackLevel);
+//   2. white balance: each CFA channel divided by its AsShotNeutral component;
+//   3. demosaic: Malvar, He and Cutler, "High-quality linear interpolation for demosaicing of
+//      Bayer-patterned color images" (ICASSP 2004), 5x5 gradient-corrected kernels, the image
+//      mirrored at its edges;
+//   4. colour: camera to linear sRGB through the DNG's ColorMatrix (D65, else the only one), as
+//      dcraw does: cam_from_rgb = ColorMatrix x XYZ_from_sRGB, rows normalised to sum 1 (so the
+//      balanced neutral stays neutral), inverted;
+//   5. exposure: times 2^exposure_ev; negative values clamped to 0.
+// The sRGB transfer curve (the tone curve) is applied by the image writer for 8-bit outputs.
+#pragma once
+
+#include "lensim/io/dng.h"
+#include "lensim/io/image.h"
+
+namespace lensim::render {
+
+/// The developed image (channels R, G, B, linear sRGB).
+io::Image developRaw(const io::DngImage& raw, double exposure_ev = 0);
+
+}  // namespace lensim::render

@@ -1,0 +1,150 @@
+// Raw film output (raw_output.h).
+#include "lensim/render/sensor/raw_output.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "lensim/io/dng.h"
+#include "lensim/render/film/pixel_sensor.h"
+#include "lensim/render/sensor/sensor_color.h"
+#include "lensim/render/sensor/sensor_model.h"
+#include "lensim/render/spectra/spectrum.h"
+#include "lensim/scene/builder.h"
+#include "lensim/util/error.h"
+#include "lensim/util/file.h"
+
+namespace lensim::render {
+
+namespace {
+
+double metaNumber(const io::Image& im, const char* key) {
+  auto it = im.metadata.find(key);
+  if (it == im.metadata.end()) return 0;
+  try {
+    return std::stod(it->second);
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
+
+std::string lowerExtension(const std::string& path) {
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string::npos || path.find('/', dot) != std::string::npos) return "";
+  std::string e = path.substr(dot + 1);
+  for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+}  // namespace
+
+scene::SensorConfig rawSensorConfig(const scene::Scene& scene) {
+  const scene::Film& f = scene.film;
+  SensorConfig c = f.raw_sensor;
+  const double shutter = scene.camera.shutter_close - scene.camera.shutter_open;
+  c.exposure_s = shutter > 0 ? shutter : 1;
+  c.iso = f.iso;
+  c.seed = uint64_t(uint32_t(scene.sampler.seed)) * 0x100000000ULL + uint32_t(f.raw_noise_seed);
+  // Luminance L_v = 683 lm/W x integral(L ybar); lensim's unit radiance has
+  // integral(L ybar) = CIE_Y_integral (its spectra have unit luminance Y).
+  double scale = f.raw_nits / (683.0 * cieYIntegral());
+  const bool irradiance = scene.camera.realistic && !scene.camera.realistic->simple_weighting;
+  if (!irradiance) {
+    const double n = f.raw_fnumber > 0 ? f.raw_fnumber : 4;
+    scale *= M_PI / (4 * n * n);
+  }
+  c.irradiance_scale = scale;
+  return c;
+}
+
+std::map<std::string, std::string> rawMetadata(const scene::Scene& scene,
+                                               const SensorConfig& config) {
+  std::map<std::string, std::string> m;
+  m[kRawSensorKey] = config.toText();
+  const auto& names = cameraSensorNames();
+  if (std::find(names.begin(), names.end(), config.qe) == names.end())
+    m[kRawQeKey] = readRegularFile(config.qe, "QE file", uint64_t{16} << 20);
+  const scene::Film& f = scene.film;
+  if (f.raw_fnumber > 0) m[kRawFNumberKey] = fmt::format("{:.17g}", f.raw_fnumber);
+  if (f.raw_focal_mm > 0) m[kRawFocalKey] = fmt::format("{:.17g}", f.raw_focal_mm);
+  if (f.white_balance_k > 0) m[kRawWhiteBalanceKey] = fmt::format("{:.17g}", f.white_balance_k);
+  if (scene.camera.realistic) {
+    std::string name = scene.camera.realistic->lens_file_as_written;
+    const size_t slash = name.find_last_of("/:");
+    if (slash != std::string::npos) name = name.substr(slash + 1);
+    m[kRawLensKey] = name;
+  }
+  return m;
+}
+
+bool isRawImage(const io::Image& image) { return image.metadata.count(kRawSensorKey) > 0; }
+
+bool isDngPath(const std::string& path) { return lowerExtension(path) == "dng"; }
+
+void writeRawImage(const std::string& path, const io::Image& image, int x0, int y0) {
+  auto it = image.metadata.find(kRawSensorKey);
+  if (it == image.metadata.end())
+    throw Error(FileLoc{path}, "not a raw film's image (no sensor description)");
+  const std::string ext = lowerExtension(path);
+  if (ext != "dng" && ext != "exr")
+    throw Error(FileLoc{path}, fmt::format("Film \"raw\" writes .dng or .exr files; got \".{}\"",
+                                           ext));
+  auto qe = image.metadata.find(kRawQeKey);
+  const SensorModel model(SensorConfig::fromText(it->second), FileLoc{},
+                          qe == image.metadata.end() ? nullptr : &qe->second);
+  const SensorConfig& cfg = model.config();
+  const int w = image.width, h = image.height;
+  if (image.channelCount() < 3)
+    throw Error(FileLoc{path}, "a raw film's image needs its R, G, B electron channels");
+  std::vector<float> rgb(size_t(w) * size_t(h) * 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) rgb[(size_t(y) * size_t(w) + size_t(x)) * 3 + size_t(c)] =
+          image.at(x, y, c);
+  const std::vector<uint16_t> dn = digitizeImage(model, rgb, w, h, x0, y0);
+  if (ext == "exr") {
+    io::Image out(w, h, {"R", "G", "B", "electrons", "DN"});
+    out.metadata = image.metadata;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        for (int c = 0; c < 3; ++c) out.at(x, y, c) = image.at(x, y, c);
+        out.at(x, y, 3) = image.at(x, y, cfaChannel(model.cfa(), x0 + x, y0 + y));
+        out.at(x, y, 4) = float(dn[size_t(y) * size_t(w) + size_t(x)]);
+      }
+    io::writeImage(path, out);
+    return;
+  }
+  io::DngImage d;
+  d.width = w;
+  d.height = h;
+  d.data = dn;
+  d.mono = model.cfa() == CfaLayout::Mono;
+  // The written image's 2x2 pattern starts at (x0, y0) of the full image's.
+  for (int k = 0; k < 4; ++k)
+    d.cfa[size_t(k)] = uint8_t(cfaChannel(model.cfa(), x0 + (k & 1), y0 + (k >> 1)));
+  d.bits = cfg.adc_bits;
+  d.black_level = uint32_t(cfg.black_level_dn);
+  d.white_level = uint32_t(cfg.whiteLevel());
+  if (!d.mono) {
+    const DngColor col = fitDngColor(model, metaNumber(image, kRawWhiteBalanceKey));
+    std::copy(col.color_matrix1.begin(), col.color_matrix1.end(), d.color_matrix1.begin());
+    std::copy(col.color_matrix2.begin(), col.color_matrix2.end(), d.color_matrix2.begin());
+    std::copy(col.forward_matrix1.begin(), col.forward_matrix1.end(), d.forward_matrix1.begin());
+    std::copy(col.forward_matrix2.begin(), col.forward_matrix2.end(), d.forward_matrix2.begin());
+    d.as_shot_neutral = {col.as_shot_neutral.x, col.as_shot_neutral.y, col.as_shot_neutral.z};
+    d.illuminant1 = DngColor::kIlluminant1;
+    d.illuminant2 = DngColor::kIlluminant2;
+  }
+  d.model = "lensim sensor " + cfg.qe;
+  d.unique_model = "lensim " + cfg.qe;
+  d.exposure_s = cfg.exposure_s;
+  d.iso = cfg.iso;
+  d.f_number = metaNumber(image, kRawFNumberKey);
+  d.focal_length_mm = metaNumber(image, kRawFocalKey);
+  if (auto l = image.metadata.find(kRawLensKey); l != image.metadata.end()) d.lens_model = l->second;
+  io::writeDng(path, d);
+}
+
+}  // namespace lensim::render

@@ -1,0 +1,138 @@
+// Sensor parameters (sensor_config.h).
+#include "lensim/scene/sensor_config.h"
+
+#include <cmath>
+#include <map>
+#include <sstream>
+#include <type_traits>
+
+#include <fmt/format.h>
+
+namespace lensim::scene {
+
+
+namespace {
+// Every field with its text name, for toText/fromText.
+template <typename F>
+void forEachField(SensorConfig& c, F&& f) {
+  f("qe", c.qe);
+  f("cfa", c.cfa);
+  f("peakqe", c.peak_qe);
+  f("ircut", c.ircut_nm);
+  f("ircutwidth", c.ircut_width_nm);
+  f("pixelpitch", c.pixel_pitch_um);
+  f("fillfactor", c.fill_factor);
+  f("exposuretime", c.exposure_s);
+  f("iso", c.iso);
+  f("baseiso", c.base_iso);
+  f("irradiancescale", c.irradiance_scale);
+  f("temperature", c.temperature_c);
+  f("darkcurrent", c.dark_current_e_s);
+  f("darkreftemperature", c.dark_ref_c);
+  f("darkdoubling", c.dark_doubling_c);
+  f("readnoise", c.read_noise_e);
+  f("dsnu", c.dsnu_e);
+  f("prnu", c.prnu);
+  f("fullwell", c.full_well_e);
+  f("conversiongain", c.conversion_gain_e_dn);
+  f("adcbits", c.adc_bits);
+  f("blacklevel", c.black_level_dn);
+  f("seed", c.seed);
+  f("patternseed", c.pattern_seed);
+  f("noise", c.noise);
+}
+}  // namespace
+
+std::string SensorConfig::toText() const {
+  std::string out;
+  SensorConfig c = *this;
+  forEachField(c, [&](const char* key, auto& v) {
+    using T = std::decay_t<decltype(v)>;
+    if constexpr (std::is_same_v<T, std::string>)
+      out += fmt::format("{}={}\n", key, v);
+    else if constexpr (std::is_same_v<T, double>)
+      out += fmt::format("{}={:.17g}\n", key, v);
+    else
+      out += fmt::format("{}={}\n", key, v);
+  });
+  return out;
+}
+
+SensorConfig SensorConfig::fromText(const std::string& text) {
+  std::map<std::string, std::string> kv;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    const size_t eq = line.find('=');
+    if (eq != std::string::npos) kv[line.substr(0, eq)] = line.substr(eq + 1);
+  }
+  SensorConfig c;
+  forEachField(c, [&](const char* key, auto& v) {
+    auto it = kv.find(key);
+    if (it == kv.end()) throw Error(fmt::format("sensor description: missing \"{}\"", key));
+    using T = std::decay_t<decltype(v)>;
+    try {
+      if constexpr (std::is_same_v<T, std::string>)
+        v = it->second;
+      else if constexpr (std::is_same_v<T, double>)
+        v = std::stod(it->second);
+      else if constexpr (std::is_same_v<T, bool>)
+        v = it->second == "true" || it->second == "1";
+      else if constexpr (std::is_same_v<T, uint64_t>)
+        v = std::stoull(it->second);
+      else
+        v = std::stoi(it->second);
+    } catch (const std::exception&) {
+      throw Error(fmt::format("sensor description: bad \"{}\" value \"{}\"", key, it->second));
+    }
+  });
+  return c;
+}
+
+void SensorConfig::validate(const FileLoc& loc) const {
+  auto need = [&](bool ok, const char* key, double v, const char* expected) {
+    if (!ok) throw Error(loc, fmt::format("\"{}\": {} is out of range; expected {}", key, v,
+                                          expected));
+  };
+  if (cfa != "RGGB" && cfa != "BGGR" && cfa != "GRBG" && cfa != "GBRG" && cfa != "mono")
+    throw Error(loc, fmt::format("\"cfa\": unknown colour filter array \"{}\"; expected RGGB, "
+                                 "BGGR, GRBG, GBRG or mono",
+                                 cfa));
+  need(peak_qe > 0 && peak_qe <= 1, "peakqe", peak_qe, "(0, 1]");
+  need(ircut_nm == 0 || (ircut_nm >= 360 && ircut_nm <= 1100), "ircut", ircut_nm,
+       "0 (none) or a wavelength in [360, 1100] nm");
+  need(ircut_width_nm > 0 && ircut_width_nm <= 200, "ircutwidth", ircut_width_nm,
+       "(0, 200] nm");
+  need(pixel_pitch_um > 0 && pixel_pitch_um <= 1000, "pixelpitch", pixel_pitch_um,
+       "(0, 1000] micrometres");
+  need(fill_factor > 0 && fill_factor <= 1, "fillfactor", fill_factor, "(0, 1]");
+  need(exposure_s > 0 && exposure_s <= 1e6, "exposuretime", exposure_s, "(0, 1e6] s");
+  need(iso > 0 && iso <= 1e7, "iso", iso, "(0, 1e7]");
+  need(base_iso > 0 && base_iso <= 1e7, "baseiso", base_iso, "(0, 1e7]");
+  need(irradiance_scale > 0 && irradiance_scale < 1e30, "irradiancescale", irradiance_scale,
+       "a positive number (W m^-2 nm^-1 per unit film value)");
+  need(temperature_c >= -273.15 && temperature_c <= 500, "temperature", temperature_c,
+       "[-273.15, 500] degrees C");
+  need(dark_current_e_s >= 0 && dark_current_e_s <= 1e9, "darkcurrent", dark_current_e_s,
+       "[0, 1e9] e-/s");
+  need(dark_ref_c >= -273.15 && dark_ref_c <= 500, "darkreftemperature", dark_ref_c,
+       "[-273.15, 500] degrees C");
+  need(dark_doubling_c > 0 && dark_doubling_c <= 1000, "darkdoubling", dark_doubling_c,
+       "(0, 1000] degrees C");
+  need(read_noise_e >= 0 && read_noise_e <= 1e6, "readnoise", read_noise_e, "[0, 1e6] e-");
+  need(dsnu_e >= 0 && dsnu_e <= 1e6, "dsnu", dsnu_e, "[0, 1e6] e-");
+  need(prnu >= 0 && prnu <= 1, "prnu", prnu, "[0, 1]");
+  need(full_well_e >= 1 && full_well_e <= 1e9, "fullwell", full_well_e, "[1, 1e9] e-");
+  need(conversion_gain_e_dn > 0 && conversion_gain_e_dn <= 1e6, "conversiongain",
+       conversion_gain_e_dn, "(0, 1e6] e-/DN");
+  need(adc_bits >= 8 && adc_bits <= 16, "adcbits", adc_bits, "8 to 16");
+  need(black_level_dn >= 0 && black_level_dn < (1 << adc_bits) - 1, "blacklevel",
+       black_level_dn, "0 to 2^adcbits - 2");
+}
+
+double SensorConfig::darkCurrent() const {
+  return dark_current_e_s * std::exp2((temperature_c - dark_ref_c) / dark_doubling_c);
+}
+
+double SensorConfig::gainDnPerE() const { return (iso / base_iso) / conversion_gain_e_dn; }
+
+}  // namespace lensim::scene

@@ -1,0 +1,52 @@
+// The parameters of a camera's sensor (Film "raw", issue 34), each in the unit its name says;
+// the model that uses them is render/sensor/sensor_model.h, the parameters' documentation
+// docs/sensor.md.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "lensim/util/error.h"
+
+namespace lensim::scene {
+
+/// The sensor's parameters, each in the unit its name says. Defaults: see docs/sensor.md.
+struct SensorConfig {
+  std::string qe = "canon_eos_5d_mkiv";  ///< bundled camera curves, or a QE file (docs/sensor.md)
+  std::string cfa = "RGGB";
+  double peak_qe = 0.5;          ///< bundled (relative) curves: QE at the highest peak
+  double ircut_nm = 0;           ///< IR-cut filter 50 % wavelength (0: none)
+  double ircut_width_nm = 10;    ///< its logistic edge width
+  double pixel_pitch_um = 5.36;  ///< pixel pitch (micrometres)
+  double fill_factor = 1;        ///< light-collecting fraction of the pixel (0, 1]
+  double exposure_s = 0.01;      ///< exposure time (seconds)
+  double iso = 100, base_iso = 100;
+  double irradiance_scale = 1;   ///< W m^-2 nm^-1 per unit of the film's spectral value
+  double temperature_c = 25;
+  double dark_current_e_s = 0.2;  ///< dark current at dark_ref_c (e-/s per pixel)
+  double dark_ref_c = 25;
+  double dark_doubling_c = 6.3;   ///< dark current doubles every this many degrees C
+  double read_noise_e = 3;        ///< read noise (e- rms)
+  double dsnu_e = 0;              ///< dark-signal non-uniformity (e- rms, fixed pattern)
+  double prnu = 0;                ///< photo-response non-uniformity (fraction rms)
+  double full_well_e = 60000;
+  double conversion_gain_e_dn = 4;  ///< e- per DN at base ISO
+  int adc_bits = 14;
+  int black_level_dn = 512;
+  uint64_t seed = 0;          ///< frame seed (temporal noise)
+  uint64_t pattern_seed = 1;  ///< sensor seed (fixed-pattern noise)
+  bool noise = true;          ///< false: expected values only (no random noise)
+
+  /// Key=value text of every field (parts carry it to lensim merge); fromText inverts it.
+  std::string toText() const;
+  static SensorConfig fromText(const std::string& text);
+  /// Checks every range; throws lensim::Error at loc naming the bad value.
+  void validate(const FileLoc& loc = {}) const;
+  /// Dark current at temperature_c (e-/s).
+  double darkCurrent() const;
+  /// DN per electron: (iso / base_iso) / conversion_gain_e_dn.
+  double gainDnPerE() const;
+  int whiteLevel() const { return (1 << adc_bits) - 1; }
+};
+
+}  // namespace lensim::scene
