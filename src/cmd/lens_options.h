@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "lensim/optics/focus.h"
 #include "lensim/util/vec.h"
@@ -25,6 +26,12 @@ struct LensArgs {
   std::optional<double> wavelength_nm;
   /// `--glass-match`: each element gets the nearest catalogue glass.
   bool glass_match = false;
+  /// `--glass-catalog FILE` (repeatable): catalogues searched before the built-in ones.
+  std::vector<std::string> glass_catalogs;
+  /// `--model-glass`: a glass in no catalogue becomes the model glass of its n_d and V_d.
+  bool model_glass = false;
+  /// `--glass-extrapolate`: a wavelength outside a glass formula's range is used (a warning).
+  bool glass_extrapolate = false;
 };
 
 /// Adds --aperture-diameter, --focus-distance, --film-distance, --film-diagonal and
@@ -34,6 +41,9 @@ void addLensSetupOptions(CLI::App* cmd, LensArgs& args);
 /// Adds LENS and --aperture-diameter, --focus-distance, --film-distance, --film-diagonal,
 /// --focus-method to a subcommand.
 void addLensOptions(CLI::App* cmd, LensArgs& args);
+
+/// Sets the process's glass choices from --glass-catalog, --model-glass, --glass-extrapolate.
+void applyGlassOptions(const LensArgs& args);
 
 /// Reads the lens file and focuses it as the arguments say.
 optics::FocusedLens setUpLens(const LensArgs& args);

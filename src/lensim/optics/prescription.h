@@ -40,6 +40,8 @@ struct GlassSpec {
   std::optional<double> n_d;  ///< index at the d line (587.56 nm), when the file gives it
   std::optional<double> v_d;  ///< Abbe number V_d, when the file gives it
   FileLoc loc;                ///< where the glass is named (for errors about it)
+  /// Catalogues to search first, in order (a Zemax file's GCAT line); the rest follow.
+  std::vector<std::string> catalogs;
 
   bool empty() const { return name.empty() && !v_d; }
 };

@@ -12,6 +12,7 @@
 #include <map>
 
 #include "lensim/optics/glass.h"
+#include "lensim/optics/glass/library.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/paraxial.h"
@@ -214,6 +215,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   FileLoc aperture_loc;
   std::map<int, double> wavm;  // index -> micrometres
   std::vector<double> wavl;
+  std::vector<std::string> gcat;  // GCAT: glass catalogues, lower case, in search order
   std::optional<int> pwav;
   std::optional<int> n_waves;
   std::vector<ZSurface> surfs;
@@ -289,6 +291,19 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
         else
           throw Error(FileLoc{path_, line_no, t[1].col},
                       fmt::format("unknown lens unit '{}'; expected MM, CM, IN or M", u));
+      } else if (key == "GCAT") {
+        // The glass catalogues the GLAS names come from, in the order they are searched.
+        for (size_t i = 1; i < t.size(); ++i) {
+          std::string c(t[i].text);
+          for (char& ch : c) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+          if (!glassLibrary().hasCatalog(c))
+            p.diagnostics.push_back(
+                {Severity::Warning, FileLoc{path_, line_no, t[i].col},
+                 fmt::format("GCAT: lensim has no glass catalogue '{}' (--glass-catalog FILE "
+                             "adds one); its glasses are looked up in the others",
+                             t[i].text)});
+          gcat.push_back(std::move(c));
+        }
       } else if (key == "NAME") {
         const size_t s = line.find("NAME") + 4;
         std::string name(line.substr(std::min(s, line.size())));
@@ -530,10 +545,11 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       s.glass.loc = z.glass_loc;
       s.glass.n_d = z.n_d;
       s.glass.v_d = z.v_d;
+      s.glass.catalogs = gcat;
       // The constant index (used where dispersion is not) is the catalogue's n_d for a
       // catalogue glass, else the n_d written on the GLAS line; resolveGlass (glass.h) gives the
       // lens system the glass's n(lambda) and warns about a name it does not know.
-      const CatalogGlass* known = z.glass == "___BLANK" ? nullptr : findGlassOrSuccessor(z.glass);
+      const CatalogGlass* known = z.glass == "___BLANK" ? nullptr : findGlassOrSuccessor(z.glass, nullptr, gcat);
       if (known) {
         s.ior = known->listed_n_d;
         if (z.n_d && z.glass != "___BLANK") {
@@ -544,7 +560,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                                          *z.n_d, known->listed_n_d);
           }
         }
-      } else if (z.n_d && *z.n_d >= 1) {
+      } else if (z.n_d && *z.n_d >= 1 && (z.glass == "___BLANK" || modelGlassAllowed())) {
         s.ior = *z.n_d;
         if (z.glass != "___BLANK") glas_fallbacks.push_back({z.glass, z.glass_loc});
       } else {

@@ -1,4 +1,5 @@
 // Builder: Camera, Film, Sampler and PixelFilter directives.
+#include "lensim/optics/glass/library.h"
 #include "lensim/scene/build/builder_internal.h"
 
 namespace lensim::scene::detail {
@@ -98,6 +99,11 @@ void Builder::camera(const Directive& d) {
       // pbrt-v3's default is true; pbrt-v4 has no such parameter (always irradiance).
       r.simple_weighting = ps.getBool({"simpleweighting"}, scene_.legacy_syntax);
       r.glass_match = ps.getBool({"glassmatch"}, false);
+      // "string glasscatalog": catalogue files (.agf, .csv) searched for the lens's glasses
+      // before the built-in ones (optics/glass/library.h); errors point at this parameter.
+      if (const Param* gc = ps.find({"glasscatalog"}, {ParamType::String}))
+        for (const std::string& f : gc->strings)
+          optics::addGlassCatalogFile(resolve(f, gc->loc, "glass catalogue"), gc->loc);
       if (const Param* fd = ps.find({"filmdistance"}, {ParamType::Float})) {
         ps.expectCount(*fd, 1);
         if (!(fd->numbers[0] > 0)) ps.fail(*fd, "film distance must be positive (mm)");
