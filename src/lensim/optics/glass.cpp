@@ -329,6 +329,12 @@ GlassCatalog GlassCatalog::fromAgf(std::string_view bytes, const std::string& pa
     const double lo = a.min_um > 0 ? a.min_um * 1000 : 365, hi = a.max_um > 0 ? a.max_um * 1000 : 1014;
     g.glass = Glass::zemax(vendor, a.name, ZemaxFormula(a.formula), a.coefficients, lo, hi,
                            std::move(a.transmittance));
+    // A listed n_d of 1 or less is "not given" (Misc's crystals and plastics).
+    const double n_d = g.glass.n_d();
+    if (g.listed_n_d > 1 && g.glass.inRange(kLineD_nm) && !(std::abs(n_d - g.listed_n_d) <= 1e-3))
+      g.problem = fmt::format("its catalogue's formula ({}) gives n_d {:.6f} but the catalogue "
+                              "lists {} ({}:{})",
+                              g.glass.formulaName(), n_d, g.listed_n_d, path, a.loc.line);
     cat.glasses_.push_back(std::move(g));
   }
   return cat;
@@ -385,8 +391,21 @@ const GlassCatalog& GlassCatalog::builtin() {
     const GlassCatalog csv = parse(embedded::kGlassCatalogCsv, "<built-in glass catalogue>");
     GlassCatalog extra;
     extra.catalogs_ = {"csv"};
-    for (const CatalogGlass& g : csv.glasses_)
-      if (!all.find(g.vendor + ":" + g.name)) extra.glasses_.push_back(g);
+    for (const CatalogGlass& g : csv.glasses_) {
+      const CatalogGlass* agf = all.find(g.vendor + ":" + g.name);
+      if (!agf) {
+        extra.glasses_.push_back(g);
+        continue;
+      }
+      // Some AGF coefficients (CDGM's Schott-formula fits) miss the V_d their own file lists by
+      // up to 0.09, where the maker's spreadsheet (the CSV) gives it to 0.002: the spreadsheet's
+      // formula is used for those, the AGF's data otherwise.
+      const double agf_err = std::abs(agf->glass.v_d() - agf->listed_v_d);
+      const double csv_err = std::abs(g.glass.v_d() - g.listed_v_d);
+      if (agf_err > 0.02 && csv_err < 0.005 && std::abs(g.listed_n_d - agf->listed_n_d) < 1e-4 &&
+          std::abs(g.listed_v_d - agf->listed_v_d) < 0.02)
+        const_cast<CatalogGlass*>(agf)->glass = g.glass;
+    }
     all.append(extra);
     return all;
   }();
@@ -529,6 +548,9 @@ Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagn
   if (!spec.name.empty()) {
     const GlassCatalog& cat = glassLibrary();
     if (const CatalogGlass* g = cat.find(spec.name, spec.catalogs)) {
+      if (!g->problem.empty())
+        throw Error(spec.loc, fmt::format("glass '{}' ({}): {}; lensim does not use it",
+                                          spec.name, g->qualifiedName(), g->problem));
       const double n_d = g->glass.n_d();
       if (spec.n_d && std::abs(*spec.n_d - n_d) > 1e-3)
         note(Severity::Note,

@@ -110,6 +110,9 @@ struct CatalogGlass {
   /// (AGF), "" when the catalogue gives none.
   std::string status;
   double listed_n_d = 0, listed_v_d = 0;
+  /// Why the glass cannot be used, when its catalogue's formula does not give the n_d the
+  /// catalogue lists (by more than 1e-3: e.g. a CD line of zeros); "" for a usable glass.
+  std::string problem;
   Glass glass;
   /// "schott:N-BK7"
   std::string qualifiedName() const;

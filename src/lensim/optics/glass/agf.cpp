@@ -294,16 +294,20 @@ std::vector<AgfGlass> parseAgf(std::string_view bytes, const std::string& path) 
                                         "expected 0 < min < max",
                                         g.name, t[1].text, t[2].text));
     } else if (key == "IT") {
-      if (t.size() < 4)
-        throw Error(loc(0), "IT line: expected IT wavelength transmittance thickness");
+      // Vendors' files have rows that carry no transmittance: a value missing (Schott), -999 for
+      // "not measured" (Hoya), a thickness of 0 (Nikon), a typo above 1 (Hikari). Such rows are
+      // skipped and counted; a value that is not a number is an error.
+      for (size_t i = 1; i < t.size(); ++i) number(i, "IT value");
+      if (t.size() < 4) {
+        ++g.skipped_transmittance_rows;
+        continue;
+      }
       TransmittanceRow r{number(1, "IT wavelength"), number(2, "IT transmittance"),
                          number(3, "IT thickness")};
-      if (!(r.lambda_um > 0)) throw Error(loc(1), fmt::format("IT wavelength {} must be > 0", t[1].text));
-      if (r.tau < 0 || r.tau > 1)
-        throw Error(loc(2), fmt::format("glass '{}': internal transmittance {} is outside 0..1",
-                                        g.name, t[2].text));
-      if (!(r.thickness_mm > 0))
-        throw Error(loc(3), fmt::format("IT thickness {} must be > 0 mm", t[3].text));
+      if (!(r.lambda_um > 0) || r.tau < 0 || r.tau > 1 || !(r.thickness_mm > 0)) {
+        ++g.skipped_transmittance_rows;
+        continue;
+      }
       g.transmittance.push_back(r);
     } else {
       std::vector<double>& v = key == "TD" ? g.thermal : key == "OD" ? g.other : g.extra;

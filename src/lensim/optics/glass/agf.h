@@ -67,6 +67,9 @@ struct AgfGlass {
   ZemaxCoefficients coefficients{};
   double min_um = 0, max_um = 0;  ///< LD; 0/0 when the file gives no LD line
   std::vector<TransmittanceRow> transmittance;
+  /// IT rows that carry no usable transmittance (a value missing, tau outside 0..1, thickness
+  /// 0: found in the makers' own files), skipped.
+  int skipped_transmittance_rows = 0;
   std::vector<double> thermal, other, extra;  ///< TD, OD, ED as read
   FileLoc loc;                                ///< the NM line
 };
@@ -82,7 +85,7 @@ std::string decodeText(std::string_view bytes, const std::string& path);
 /// Parses an AGF file (bytes as stored; decoded with decodeText). Throws lensim::Error
 /// (`path:line:col`) for a malformed line: a number that is not one, an NM line without its
 /// fields, a formula number Zemax does not define, a CD/LD/IT line before any NM, an LD range
-/// that is empty, a transmittance outside 0..1.
+/// that is empty.
 std::vector<AgfGlass> parseAgf(std::string_view bytes, const std::string& path);
 
 }  // namespace lensim::optics
