@@ -720,7 +720,17 @@ void registerLensCommands(CLI::App& app, Action& action) {
     convert->add_option("IN", *in, "Lens file (.dat, .zmx, .json) or name (lentil:0003)")
         ->required();
     convert->add_option("OUT", *out, "Output .json or .dat")->required();
-    convert->callback([&action, in, out] { action = [in, out] { return runConvert(*in, *out); }; });
+    auto glass = std::make_shared<LensArgs>();
+    convert->add_option("--glass-catalog", glass->glass_catalogs,
+                        "Glass catalogue file (.agf or .csv) searched first; repeatable");
+    convert->add_flag("--model-glass", glass->model_glass,
+                      "A glass in no catalogue becomes a model glass from its n_d and V_d");
+    convert->callback([&action, in, out, glass] {
+      action = [in, out, glass] {
+        applyGlassOptions(*glass);
+        return runConvert(*in, *out);
+      };
+    });
   }
 }
 
