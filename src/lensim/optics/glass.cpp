@@ -570,16 +570,16 @@ Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagn
                                 : std::string()));
       return g->glass;
     }
-    if (spec.n_d && spec.v_d && modelGlassAllowed()) {
+    if (spec.n_d && spec.v_d && (!spec.model_needs_option || modelGlassAllowed())) {
       Glass m = Glass::model(*spec.n_d, *spec.v_d, spec.loc);
       note(Severity::Warning,
-           fmt::format("glass '{}' is in no glass catalogue; --model-glass: using a model glass "
-                       "from the file's n_d {} and V_d {} (two-term Cauchy)",
+           fmt::format("glass '{}' is not in the catalogue; using a model glass from the file's "
+                       "n_d {} and V_d {} (two-term Cauchy)",
                        spec.name, *spec.n_d, *spec.v_d));
       return m;
     }
     const std::vector<std::string> hints = cat.suggestions(spec.name);
-    std::string msg = fmt::format("glass '{}' is in no glass catalogue", spec.name);
+    std::string msg = fmt::format("unknown glass '{}'", spec.name);
     if (!hints.empty()) {
       msg += "; did you mean ";
       for (size_t i = 0; i < hints.size(); ++i)
@@ -587,11 +587,10 @@ Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagn
       msg += "?";
     }
     msg += spec.n_d && spec.v_d
-               ? fmt::format(" (--model-glass uses the file's n_d {} and V_d {} as a model glass; "
-                             "--glass-catalog FILE adds a catalogue)",
+               ? fmt::format(" (it is in no glass catalogue; --model-glass uses the file's n_d {} "
+                             "and V_d {} as a model glass; --glass-catalog FILE adds a catalogue)",
                              *spec.n_d, *spec.v_d)
-               : std::string(" (give n_d and V_d instead for a model glass; --glass-catalog FILE "
-                             "adds a catalogue)");
+               : std::string(" (give n_d and V_d instead for a model glass)");
     throw Error(spec.loc, msg);
   }
   if (spec.v_d) {

@@ -546,6 +546,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       s.glass.n_d = z.n_d;
       s.glass.v_d = z.v_d;
       s.glass.catalogs = gcat;
+      s.glass.model_needs_option = true;
       // The constant index (used where dispersion is not) is the catalogue's n_d for a
       // catalogue glass, else the n_d written on the GLAS line; resolveGlass (glass.h) gives the
       // lens system the glass's n(lambda) and warns about a name it does not know.
