@@ -490,7 +490,7 @@ def check_convert(lensim, root):
             jsonschema.validate(json.load(open(out)), schema)
         except jsonschema.ValidationError as e:
             fail(f"convert {src}: the JSON does not follow the schema: {e.message}")
-        a = json.loads(run([lensim, "lens", "info", src, "--json"]).stdout)
+        a = json.loads(run([lensim, "lens", "info", src, "--json", "--model-glass"]).stdout)
         b = json.loads(run([lensim, "lens", "info", out, "--json"]).stdout)
         if abs(a["effective_focal_length_mm"] - b["effective_focal_length_mm"]) > 1e-9 * abs(
                 a["effective_focal_length_mm"]):
