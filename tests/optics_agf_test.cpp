@@ -6,8 +6,11 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <sys/wait.h>
 
 #include "lensim/optics/glass.h"
 #include "lensim/optics/glass/agf.h"
@@ -436,4 +439,51 @@ TEST(GlassLibrary, UserCatalogueFirst) {
   const std::string bad = tempFile("bad.agf", "NM A 2 0 1.5 50 0 0\nCD 1 2 x\n");
   EXPECT_NE(errorOf([&] { addGlassCatalogFile(bad); }).find("bad.agf:2:8: error:"),
             std::string::npos);
+}
+
+namespace {
+
+struct ShellRun {
+  int status;
+  std::string out;
+};
+
+ShellRun runShell(const std::string& cmd) {
+  const std::string out_path = tempFile("cli.out", "");
+  const int rc = std::system((cmd + " > " + out_path + " 2>&1").c_str());
+  std::ifstream in(out_path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, ss.str()};
+}
+
+}  // namespace
+
+// The command line: LENSIM_GLASS_PATH (a folder of .agf files), --glass-catalog before it,
+// --model-glass, and lens info naming the glass used.
+TEST(GlassLibrary, CommandLineAndEnvironment) {
+  const std::string lens = tempFile("envlens.zmx", zmxWithGlass("", "ENV-GLASS 0 0 1.5 50"));
+  const auto dir = std::filesystem::temp_directory_path() / "lensim_agf_test" / "envcat";
+  std::filesystem::create_directories(dir);
+  std::ofstream((dir / "envcat.agf").string(), std::ios::binary)
+      << "NM ENV-GLASS 2 0 1.59523 40 0 0\nCD 1.5 0.01 0 0 0 0\nLD 0.3 2.0\n";
+  const std::string other = tempFile("first.agf",
+                                     "NM ENV-GLASS 2 0 1.68929 40 0 0\nCD 1.8 0.01 0 0 0 0\n"
+                                     "LD 0.3 2.0\n");
+  const std::string bin = LENSIM_BINARY;
+  const ShellRun refused = runShell(bin + " lens info " + lens);
+  EXPECT_EQ(refused.status, 1) << refused.out;
+  EXPECT_NE(refused.out.find("envlens.zmx:15:8: error: unknown glass 'ENV-GLASS'"),
+            std::string::npos)
+      << refused.out;
+  const ShellRun model = runShell(bin + " lens info " + lens + " --model-glass");
+  EXPECT_EQ(model.status, 0) << model.out;
+  EXPECT_NE(model.out.find("model n_d 1.5 V_d 50 (Cauchy)"), std::string::npos) << model.out;
+  const ShellRun env = runShell("LENSIM_GLASS_PATH=" + dir.string() + " " + bin + " lens info " + lens);
+  EXPECT_EQ(env.status, 0) << env.out;
+  EXPECT_NE(env.out.find("envcat:ENV-GLASS"), std::string::npos) << env.out;
+  const ShellRun both = runShell("LENSIM_GLASS_PATH=" + dir.string() + " " + bin + " lens info " +
+                            lens + " --glass-catalog " + other);
+  EXPECT_EQ(both.status, 0) << both.out;
+  EXPECT_NE(both.out.find("first:ENV-GLASS"), std::string::npos) << both.out;
 }

@@ -458,6 +458,7 @@ std::vector<std::string> GlassCatalog::suggestions(std::string_view name, int co
   };
   std::vector<Scored> scored;
   for (const CatalogGlass& g : glasses_) {
+    if (!g.problem.empty()) continue;  // never suggest a glass lensim refuses
     const std::string f = folded(g.name);
     const bool contains = !key.empty() && f.find(key) != std::string::npos;
     scored.push_back({contains ? 0 : 1, editDistance(key, f), rank(g), &g});
