@@ -487,3 +487,28 @@ TEST(GlassLibrary, CommandLineAndEnvironment) {
   EXPECT_EQ(both.status, 0) << both.out;
   EXPECT_NE(both.out.find("first:ENV-GLASS"), std::string::npos) << both.out;
 }
+
+// The scene's realistic camera: "string glasscatalog" adds a catalogue for its lens's glasses;
+// a catalogue file that is not there is an error at that scene line.
+TEST(GlassLibrary, SceneGlassCatalogue) {
+  const std::string lens = tempFile("scenelens.zmx", zmxWithGlass("", "SCENE-GLASS"));
+  const std::string cat = tempFile("scenecat.agf",
+                                   "NM SCENE-GLASS 2 0 1.59523 40 0 0\nCD 1.5 0.01 0 0 0 0\n"
+                                   "LD 0.3 2.0\n");
+  auto scene = [&](const std::string& catalogue) {
+    return tempFile("glass.pbrt", "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"realistic\" \"string "
+                                  "lensfile\" \"" + lens + "\" \"float focusdistance\" 3\n"
+                                  "  \"string glasscatalog\" \"" + catalogue + "\"\n"
+                                  "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                                  "Sampler \"independent\" \"integer pixelsamples\" 1\n"
+                                  "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n");
+  };
+  const std::string bin = LENSIM_BINARY;
+  const std::string out = tempFile("glass.exr", "");
+  const ShellRun ok = runShell(bin + " render " + scene(cat) + " -o " + out + " --quiet");
+  EXPECT_EQ(ok.status, 0) << ok.out;
+  const ShellRun missing =
+      runShell(bin + " render " + scene("/nonexistent/none.agf") + " -o " + out + " --quiet");
+  EXPECT_EQ(missing.status, 1) << missing.out;
+  EXPECT_NE(missing.out.find("glass.pbrt:3:"), std::string::npos) << missing.out;
+}
