@@ -138,8 +138,15 @@ TEST(LensGlassCli, ErrorsAreLocatedAndExitOne) {
   const auto w = runLensim("lens info " + kLandscape + " --wavelength 50");
   EXPECT_EQ(w.status, 1);
   EXPECT_NE(w.out.find("--wavelength"), std::string::npos) << w.out;
-  // Outside a formula's valid range: a warning, and the formula is used.
-  const auto o = runLensim("lens info " + kLandscape + " --wavelength 1200");
+  // Outside a formula's valid range (Schott's AGF: N-SF66 390-2500 nm): an error; with
+  // --glass-extrapolate a warning, and the formula is used.
+  const auto e = runLensim("lens info " + kLandscape + " --wavelength 350");
+  EXPECT_EQ(e.status, 1) << e.out;
+  EXPECT_NE(e.out.find("error: --wavelength 350 nm is outside the valid range of schott:N-SF66 "
+                       "(390-2500 nm"),
+            std::string::npos)
+      << e.out;
+  const auto o = runLensim("lens info " + kLandscape + " --wavelength 350 --glass-extrapolate");
   EXPECT_EQ(o.status, 0) << o.out;
   EXPECT_NE(o.out.find("outside the valid range"), std::string::npos) << o.out;
 }

@@ -427,27 +427,31 @@ TEST(Mirror, ReadersLocateErrorsAndRoundTrip) {
   std::filesystem::remove(bj);
 }
 
-// US 5,331,467 (a 1000 mm f/7.5 Mangin reflex telephoto): its glass E-LAFH3 is in no current
-// catalogue and its GLAS lines carry placeholders (n_d 1.5, V_d 40 on every line). With the
-// glass that replaces it (Hikari J-LAFH3, the substitution ray-optics makes for this file), the
+// US 5,331,467 (a 1000 mm f/7.5 Mangin reflex telephoto): its glass E-LAFH3 is an obsolete
+// glass that Hikari's AGF catalogue still lists (n_d 1.795041, V_d 28.69, as its successor
+// J-LAFH3), and its GLAS lines carry placeholders (n_d 1.5, V_d 40 on every line). The
 // first-order data are ray-optics' (../shared/lenses/SOURCES.md: EFL 999.6388 mm, BFL
-// 75.3805 mm, at the primary wavelength; independent of lensim) and a real axial beam through
+// 75.3805 mm, at the primary wavelength; independent of lensim), which substitutes J-LAFH3's
+// spreadsheet formula: to 2 ppm, the difference between the two formulas; a real axial beam through
 // both Mangin mirrors comes to a focus: RMS spot at the paraxial focus far below the blur of the
 // placeholder glass, whose EFL was -9224 mm.
 TEST(Mirror, ManginTelephotoFocusesWithTheSuccessorGlass) {
   const LensPrescription p = readLensFile(sharedLens("zmx/US05331467-1.zmx"));
   const LensSystem lens(p);
   const ParaxialData para = computeParaxial(lens);
-  EXPECT_NEAR(para.effective_focal_length_mm, 999.6388, 1e-4);
-  EXPECT_NEAR(para.back_focal_length_mm, 75.3805, 1e-4);
+  EXPECT_NEAR(para.effective_focal_length_mm, 999.6388, 2e-3);
+  EXPECT_NEAR(para.back_focal_length_mm, 75.3805, 3e-4);
   EXPECT_NEAR(para.f_number, 7.5, 1e-9);  // FNUM 7.5 sets the stop
   std::vector<Diagnostic> diags;
   resolveGlasses(p, &diags);
   bool warned = false;
   for (const Diagnostic& d : diags)
     warned = warned || (d.message.find("'E-LAFH3'") != std::string::npos &&
-                        d.message.find("hikari:J-LAFH3") != std::string::npos);
-  EXPECT_TRUE(warned);
+                        d.message.find("replaces it") != std::string::npos);
+  EXPECT_FALSE(warned);  // a catalogue glass: no substitution
+  bool found = false;
+  for (const Glass& g : resolveGlasses(p)) found = found || g.describe() == "hikari:E-LAFH3";
+  EXPECT_TRUE(found);
   // Axial rays between the central obscuration (25 mm) and the rim, at the paraxial focus.
   const double z_focus = para.back_focal_point_z_mm;
   double s2 = 0;

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "lensim/optics/glass/library.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/paraxial.h"
@@ -153,6 +154,11 @@ TEST(ZmxReader, BadUtf16IsALocatedError) {
 TEST(ZmxReader, SharedSamplesReadOrAreRefusedWithReasons) {
   // The refracting and the on-axis mirror samples read (optics_mirror_test.cpp checks the
   // mirror ones); the coordinate-break ones are refused where the unsupported surface is.
+  // ACL3026U's glass B270 is in no catalogue: read with --model-glass's choice (its GLAS line's
+  // n_d and V_d as a model glass); without it the file is refused at that line.
+  setModelGlassAllowed(false);
+  EXPECT_THROW(readLensFile(sharedLens("zmx/ACL3026U-Zemax(ZMX).zmx")), Error);
+  setModelGlassAllowed(true);
   const LensPrescription acl = readLensFile(sharedLens("zmx/ACL3026U-Zemax(ZMX).zmx"));
   EXPECT_EQ(acl.format, "zmx");
   const LensSystem acl_sys(acl);
@@ -221,6 +227,7 @@ TEST(JsonLens, IsetJsonMatchesTheDatTable) {
 }
 
 TEST(JsonLens, LensimJsonRoundTripsEveryFormat) {
+  setModelGlassAllowed(true);  // ACL3026U's B270 is in no catalogue (--model-glass)
   const auto tmp = std::filesystem::temp_directory_path() / "lensim_roundtrip.json";
   for (const std::string& src :
        {lensim::test::lensPath("dgauss.50mm.dat"), std::string("lentil:0014"),

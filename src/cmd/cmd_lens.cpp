@@ -120,6 +120,7 @@ json diagnosticsJson(const FocusedLens& fl) {
 int runConfigs(const LensArgs& args, bool as_json) {
   if (args.configuration || args.zoom_focal_length_mm)
     throw Error("--configs lists every configuration; it takes neither --config nor --focal-length");
+  applyGlassOptions(args);
   const int count = configurationCount(readLensFile(args.lens_path));
   json arr = json::array();
   if (!as_json)
@@ -537,6 +538,7 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     // A zoom lens without --config/--focal-length: every configuration, stacked at one scale.
     if (!one.configuration && !one.zoom_focal_length_mm && args.lenses.size() == 1 &&
         args.wavelengths.empty()) {
+      applyGlassOptions(one);
       const int count = configurationCount(readLensFile(path));
       if (count > 1) {
         for (int n = 1; n <= count; ++n) {
@@ -620,6 +622,7 @@ json finiteOrNull(const std::vector<double>& v) {
 // closest focus to 100 m) for unit focusing (the whole lens moves) and, when the lens has a
 // focus group, group focusing; the film stays the same size.
 std::string breathingPlot(const LensArgs& args, json& j) {
+  applyGlassOptions(args);
   const LensPrescription p = applyConfigurationArgs(args, readLensFile(args.lens_path));
   LensSetup setup;
   setup.aperture_diameter_mm = args.aperture_diameter_mm;
@@ -875,7 +878,17 @@ void registerLensCommands(CLI::App& app, Action& action) {
     convert->add_option("IN", *in, "Lens file (.dat, .zmx, .json) or name (lentil:0003)")
         ->required();
     convert->add_option("OUT", *out, "Output .json or .dat")->required();
-    convert->callback([&action, in, out] { action = [in, out] { return runConvert(*in, *out); }; });
+    auto glass = std::make_shared<LensArgs>();
+    convert->add_option("--glass-catalog", glass->glass_catalogs,
+                        "Glass catalogue file (.agf or .csv) searched first; repeatable");
+    convert->add_flag("--model-glass", glass->model_glass,
+                      "A glass in no catalogue becomes a model glass from its n_d and V_d");
+    convert->callback([&action, in, out, glass] {
+      action = [in, out, glass] {
+        applyGlassOptions(*glass);
+        return runConvert(*in, *out);
+      };
+    });
   }
   registerDesignCommands(lens, action);
 }

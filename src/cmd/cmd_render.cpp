@@ -15,6 +15,7 @@
 
 #include "commands.h"
 #include "lensim/io/image.h"
+#include "lensim/optics/glass/library.h"
 #include "lensim/render/autofocus_scene.h"
 #include "lensim/render/parts.h"
 #include "lensim/render/renderer.h"
@@ -41,6 +42,9 @@ void registerRenderCommand(CLI::App& app, Action& action) {
     // Distributed renders and checkpoints (docs/cluster.md).
     std::string tile, spp_range, checkpoint, checkpoint_every = "60s", resume;
     bool part = false;
+    // Glass look-up (docs/glass.md).
+    std::vector<std::string> glass_catalogs;
+    bool model_glass = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* r = app.add_subcommand("render", "Render a pbrt scene (v4, or the v1–v3 syntax)");
@@ -86,6 +90,12 @@ void registerRenderCommand(CLI::App& app, Action& action) {
                 "Continue the render saved in this checkpoint (it must be of the same scene, "
                 "seed, samples, tile and sample range); checkpoints go on to it unless "
                 "--checkpoint names another file");
+  r->add_option("--glass-catalog", o->glass_catalogs,
+                "Glass catalogue file (.agf or .csv) searched before the scene's and the "
+                "built-in ones; repeatable (docs/glass.md)");
+  r->add_flag("--model-glass", o->model_glass,
+              "A lens glass in no catalogue becomes a model glass from the n_d and V_d its lens "
+              "file gives; without it such a glass is an error");
   r->callback([o, seed, every, &action]() {
     o->has_seed = seed->count() > 0;
     if (every->count() > 0 && o->checkpoint.empty() && o->resume.empty())
@@ -94,6 +104,8 @@ void registerRenderCommand(CLI::App& app, Action& action) {
     action = [o]() -> int {
       const bool quiet = o->quiet || lensim::quiet();
       const auto t_load = std::chrono::steady_clock::now();
+      optics::setModelGlassAllowed(o->model_glass);
+      for (const std::string& f : o->glass_catalogs) optics::addGlassCatalogFile(f, FileLoc{f});
       scene::Scene s = scene::loadScene(o->scene);
       const double load_s =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();

@@ -9,6 +9,7 @@
 
 #include "lensim/optics/configurations.h"
 #include "lensim/optics/glass.h"
+#include "lensim/optics/glass/library.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/util/log.h"
 
@@ -59,6 +60,22 @@ void addLensSetupOptions(CLI::App* cmd, LensArgs& args) {
                   "Zoom lens: set the spacings for this focal length (mm), interpolated "
                   "linearly between the two neighbouring configurations")
       ->excludes(config);
+  cmd->add_option("--glass-catalog", args.glass_catalogs,
+                  "Glass catalogue file (.agf or .csv) searched before the built-in ones; "
+                  "repeatable, searched in the order given (docs/glass.md)");
+  cmd->add_flag("--model-glass", args.model_glass,
+                "A glass in no catalogue becomes a model glass from the n_d and V_d its lens "
+                "file gives (reported in lens info); without it such a glass is an error");
+  cmd->add_flag("--glass-extrapolate", args.glass_extrapolate,
+                "Use a glass formula outside its catalogue's wavelength range (a warning); "
+                "without it that is an error");
+}
+
+void applyGlassOptions(const LensArgs& args) {
+  optics::setModelGlassAllowed(args.model_glass);
+  optics::setGlassExtrapolationAllowed(args.glass_extrapolate);
+  for (const std::string& f : args.glass_catalogs)
+    optics::addGlassCatalogFile(f, FileLoc{f});
 }
 
 optics::LensPrescription applyConfigurationArgs(const LensArgs& args,
@@ -83,6 +100,7 @@ optics::FocusedLens setUpLens(const LensArgs& args) {
     setup.focus_distance_m = parseDistance_m(args.focus_distance, "--focus-distance");
   if (!(args.film_diagonal_mm > 0))
     throw Error(fmt::format("--film-diagonal {} mm must be > 0", args.film_diagonal_mm));
+  applyGlassOptions(args);
   optics::LensPrescription prescription =
       applyConfigurationArgs(args, optics::readLensFile(args.lens_path));
   if (args.glass_match)
@@ -104,10 +122,10 @@ optics::FocusedLens setUpLens(const LensArgs& args) {
       const optics::Glass& g = fl.lens->glasses()[i];
       if (g.dispersive() && !g.inRange(l)) {
         const auto& row = fl.lens->prescription().surfaces[i];
-        logDiagnostic({Severity::Warning, row.glass.loc.valid() ? row.glass.loc : row.loc,
-                       fmt::format("--wavelength {} nm is outside the valid range of {} ({}-{} "
-                                   "nm); its formula is used there anyway",
-                                   l, g.describe(), g.minWavelength_nm(), g.maxWavelength_nm())});
+        std::vector<Diagnostic> warnings;
+        optics::checkGlassRange(g, l, row.glass.loc.valid() ? row.glass.loc : row.loc,
+                                "--wavelength", &warnings);
+        for (const Diagnostic& d : warnings) logDiagnostic(d);
         break;  // once
       }
     }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "lensim/optics/focus.h"
 #include "lensim/util/vec.h"
@@ -29,6 +30,13 @@ struct LensArgs {
   std::optional<int> configuration;
   /// `--focal-length MM`: a zoom lens set to this paraxial EFL (configurations interpolated).
   std::optional<double> zoom_focal_length_mm;
+
+  /// `--glass-catalog FILE` (repeatable): catalogues searched before the built-in ones.
+  std::vector<std::string> glass_catalogs;
+  /// `--model-glass`: a glass in no catalogue becomes the model glass of its n_d and V_d.
+  bool model_glass = false;
+  /// `--glass-extrapolate`: a wavelength outside a glass formula's range is used (a warning).
+  bool glass_extrapolate = false;
 };
 
 /// Applies --config / --focal-length to a prescription read from args.lens_path (logs the zoom
@@ -43,6 +51,9 @@ void addLensSetupOptions(CLI::App* cmd, LensArgs& args);
 /// Adds LENS and --aperture-diameter, --focus-distance, --film-distance, --film-diagonal,
 /// --focus-method to a subcommand.
 void addLensOptions(CLI::App* cmd, LensArgs& args);
+
+/// Sets the process's glass choices from --glass-catalog, --model-glass, --glass-extrapolate.
+void applyGlassOptions(const LensArgs& args);
 
 /// Reads the lens file and focuses it as the arguments say.
 optics::FocusedLens setUpLens(const LensArgs& args);

@@ -8,6 +8,13 @@
 #include <cmath>
 #include <tuple>
 
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "lensim/optics/glass/embedded.h"
+#include "lensim/optics/glass/library.h"
+
 namespace lensim::embedded {
 extern const char* const kGlassCatalogCsv;
 }
@@ -45,11 +52,77 @@ Glass Glass::formula(std::string vendor, std::string name, DispersionFormula f,
                      const std::array<double, 9>& c, double min_nm, double max_nm) {
   Glass g;
   g.formula_ = f;
-  g.c_ = c;
+  std::copy(c.begin(), c.end(), g.c_.begin());
+  g.c_[9] = 0;
   g.vendor_ = std::move(vendor);
   g.name_ = std::move(name);
   g.min_nm_ = min_nm, g.max_nm_ = max_nm;
   return g;
+}
+
+Glass Glass::zemax(std::string vendor, std::string name, ZemaxFormula f,
+                   const ZemaxCoefficients& c, double min_nm, double max_nm,
+                   std::vector<TransmittanceRow> transmittance) {
+  Glass g;
+  g.formula_ = DispersionFormula::Zemax;
+  g.zemax_ = f;
+  g.c_ = c;
+  g.vendor_ = std::move(vendor);
+  g.name_ = std::move(name);
+  g.min_nm_ = min_nm, g.max_nm_ = max_nm;
+  if (!transmittance.empty()) {
+    std::stable_sort(transmittance.begin(), transmittance.end(),
+                     [](const TransmittanceRow& a, const TransmittanceRow& b) {
+                       return a.lambda_um < b.lambda_um;
+                     });
+    g.transmittance_ =
+        std::make_shared<const std::vector<TransmittanceRow>>(std::move(transmittance));
+  }
+  return g;
+}
+
+std::string Glass::formulaName() const {
+  switch (formula_) {
+    case DispersionFormula::Constant:
+      return "constant";
+    case DispersionFormula::Sellmeier3:
+      return "sellmeier3";
+    case DispersionFormula::Schott6:
+      return "schott6";
+    case DispersionFormula::Hikari9:
+      return "hikari9";
+    case DispersionFormula::Cauchy2:
+      return "Cauchy";
+    case DispersionFormula::Zemax:
+      return zemaxFormulaName(int(zemax_));
+  }
+  return "";
+}
+
+double Glass::internalTransmittance(double lambda_nm, double thickness_mm) const {
+  if (!hasTransmittance() || thickness_mm <= 0) return 1;
+  const std::vector<TransmittanceRow>& rows = *transmittance_;
+  // Absorption coefficient (1/mm) of a row; a row of transmittance 0 is floored so that it
+  // interpolates.
+  auto alpha = [](const TransmittanceRow& r) {
+    return -std::log(std::max(r.tau, 1e-300)) / r.thickness_mm;
+  };
+  const double l = lambda_nm * 1e-3;
+  double a;
+  if (l <= rows.front().lambda_um) {
+    a = alpha(rows.front());
+  } else if (l >= rows.back().lambda_um) {
+    a = alpha(rows.back());
+  } else {
+    size_t i = 1;
+    while (rows[i].lambda_um < l) ++i;
+    const TransmittanceRow &lo = rows[i - 1], &hi = rows[i];
+    const double t = hi.lambda_um > lo.lambda_um
+                         ? (l - lo.lambda_um) / (hi.lambda_um - lo.lambda_um)
+                         : 1.0;
+    a = (1 - t) * alpha(lo) + t * alpha(hi);
+  }
+  return std::exp(-a * thickness_mm);
 }
 
 double Glass::index(double lambda_nm) const {
@@ -73,6 +146,8 @@ double Glass::index(double lambda_nm) const {
           c[0] + l2 * (c[1] + l2 * c[2]) +
           i2 * (c[3] + i2 * (c[4] + i2 * (c[5] + i2 * (c[6] + i2 * (c[7] + i2 * c[8]))))));
     }
+    case DispersionFormula::Zemax:
+      return zemaxIndex(zemax_, c, l);
   }
   return c[0];
 }
@@ -143,13 +218,20 @@ int editDistance(const std::string& a, const std::string& b) {
   return prev[b.size()];
 }
 
-// Lookup preference for a bare name that several vendors use.
-int vendorRank(const std::string& vendor) {
-  static const char* order[] = {"SCHOTT", "OHARA", "HOYA", "CDGM", "SUMITA", "HIKARI"};
-  const std::string v = upper(vendor);
-  for (int i = 0; i < 6; ++i)
-    if (v == order[i]) return i;
-  return 6;
+bool equalNoCase(std::string_view a, std::string_view b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (std::toupper(static_cast<unsigned char>(a[i])) !=
+        std::toupper(static_cast<unsigned char>(b[i])))
+      return false;
+  return true;
+}
+
+// "schott:N-BK7" -> ("schott", "N-BK7"); "N-BK7" -> ("", "N-BK7").
+std::pair<std::string_view, std::string_view> splitQualified(std::string_view name) {
+  if (const size_t colon = name.find(':'); colon != std::string_view::npos)
+    return {name.substr(0, colon), name.substr(colon + 1)};
+  return {{}, name};
 }
 
 std::vector<std::string_view> splitCsv(std::string_view line) {
@@ -224,32 +306,141 @@ GlassCatalog GlassCatalog::parse(std::string_view csv, const std::string& path) 
       throw Error(column(4),
                   fmt::format("formula {} needs {} coefficients, found {}", f[4], needed, nc));
     g.glass = Glass::formula(g.vendor, g.name, formula, c);
+    g.catalog = "csv";
+    cat.glasses_.push_back(std::move(g));
+  }
+  cat.catalogs_ = {"csv"};
+  return cat;
+}
+
+GlassCatalog GlassCatalog::fromAgf(std::string_view bytes, const std::string& path,
+                                   const std::string& catalog, const std::string& vendor) {
+  GlassCatalog cat;
+  cat.catalogs_ = {catalog};
+  for (AgfGlass& a : parseAgf(bytes, path)) {
+    CatalogGlass g;
+    g.vendor = vendor;
+    g.name = a.name;
+    g.catalog = catalog;
+    g.status = agfStatusName(a.status);
+    g.listed_n_d = a.listed_n_d;
+    g.listed_v_d = a.listed_v_d;
+    // Without an LD line the formula's range is unknown: the visible, as the CSV catalogue's.
+    const double lo = a.min_um > 0 ? a.min_um * 1000 : 365, hi = a.max_um > 0 ? a.max_um * 1000 : 1014;
+    g.glass = Glass::zemax(vendor, a.name, ZemaxFormula(a.formula), a.coefficients, lo, hi,
+                           std::move(a.transmittance));
+    // A listed n_d of 1 or less is "not given" (Misc's crystals and plastics).
+    const double n_d = g.glass.n_d();
+    if (g.listed_n_d > 1 && g.glass.inRange(kLineD_nm) && !(std::abs(n_d - g.listed_n_d) <= 1e-3))
+      g.problem = fmt::format("its catalogue's formula ({}) gives n_d {:.6f} but the catalogue "
+                              "lists {} ({}:{})",
+                              g.glass.formulaName(), n_d, g.listed_n_d, path, a.loc.line);
     cat.glasses_.push_back(std::move(g));
   }
   return cat;
 }
 
+GlassCatalog GlassCatalog::load(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(FileLoc{path}, "cannot open the glass catalogue");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  const std::filesystem::path p(path);
+  std::string ext = p.extension().string(), stem = p.stem().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  std::string key = stem;
+  for (char& c : key) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".agf") return fromAgf(ss.str(), path, key, stem);
+  if (ext == ".csv") {
+    GlassCatalog cat = parse(decodeText(ss.str(), path), path);
+    for (CatalogGlass& g : cat.glasses_) g.catalog = key;
+    cat.catalogs_ = {key};
+    return cat;
+  }
+  throw Error(FileLoc{path}, fmt::format("glass catalogue '{}': expected a .agf (Zemax) or .csv "
+                                         "file",
+                                         p.filename().string()));
+}
+
+void GlassCatalog::append(const GlassCatalog& other) {
+  glasses_.insert(glasses_.end(), other.glasses_.begin(), other.glasses_.end());
+  for (const std::string& c : other.catalogs_)
+    if (!hasCatalog(c)) catalogs_.push_back(c);
+}
+
+bool GlassCatalog::hasCatalog(std::string_view name) const {
+  for (const std::string& c : catalogs_)
+    if (equalNoCase(c, name)) return true;
+  return false;
+}
+
+int GlassCatalog::rank(const CatalogGlass& g) const {
+  for (size_t i = 0; i < catalogs_.size(); ++i)
+    if (catalogs_[i] == g.catalog) return int(i);
+  return int(catalogs_.size());
+}
+
 const GlassCatalog& GlassCatalog::builtin() {
-  static const GlassCatalog cat = parse(embedded::kGlassCatalogCsv, "<built-in glass catalogue>");
+  static const GlassCatalog cat = [] {
+    GlassCatalog all;
+    for (const embedded::EmbeddedAgf& f : embedded::agfFiles())
+      all.append(fromAgf(std::string_view(reinterpret_cast<const char*>(f.begin),
+                                          size_t(f.end - f.begin)),
+                         fmt::format("<built-in {}.agf>", f.stem), f.stem, f.vendor));
+    // The CSV catalogue's glasses that no AGF file has (by vendor and name).
+    const GlassCatalog csv = parse(embedded::kGlassCatalogCsv, "<built-in glass catalogue>");
+    GlassCatalog extra;
+    extra.catalogs_ = {"csv"};
+    for (const CatalogGlass& g : csv.glasses_) {
+      const CatalogGlass* agf = all.find(g.vendor + ":" + g.name);
+      if (!agf) {
+        extra.glasses_.push_back(g);
+        continue;
+      }
+      // Some AGF coefficients (CDGM's Schott-formula fits) miss the V_d their own file lists by
+      // up to 0.09, where the maker's spreadsheet (the CSV) gives it to 0.002: the spreadsheet's
+      // formula is used for those, the AGF's data otherwise.
+      const double agf_err = std::abs(agf->glass.v_d() - agf->listed_v_d);
+      const double csv_err = std::abs(g.glass.v_d() - g.listed_v_d);
+      if (agf_err > 0.02 && csv_err < 0.005 && std::abs(g.listed_n_d - agf->listed_n_d) < 1e-4 &&
+          std::abs(g.listed_v_d - agf->listed_v_d) < 0.02)
+        const_cast<CatalogGlass*>(agf)->glass = g.glass;
+    }
+    all.append(extra);
+    return all;
+  }();
   return cat;
 }
 
+const std::vector<std::string>& GlassCatalog::builtinCatalogNames() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const embedded::EmbeddedAgf& f : embedded::agfFiles()) n.push_back(f.stem);
+    return n;
+  }();
+  return names;
+}
+
 const CatalogGlass* GlassCatalog::find(std::string_view name) const {
-  std::string vendor;
-  std::string_view bare = name;
-  if (const size_t colon = name.find(':'); colon != std::string_view::npos) {
-    vendor = upper(name.substr(0, colon));
-    bare = name.substr(colon + 1);
-  }
-  const std::string key = upper(bare);
+  return find(name, {});
+}
+
+const CatalogGlass* GlassCatalog::find(std::string_view name,
+                                       const std::vector<std::string>& first) const {
+  const auto [prefix, bare] = splitQualified(name);
+  auto order = [&](const CatalogGlass& g) {
+    for (size_t i = 0; i < first.size(); ++i)
+      if (equalNoCase(first[i], g.catalog)) return int(i);
+    return int(first.size()) + rank(g);
+  };
   const CatalogGlass* best = nullptr;
+  int best_order = 0;
   for (const CatalogGlass& g : glasses_) {
-    if (upper(g.name) != key) continue;
-    if (!vendor.empty()) {
-      if (upper(g.vendor) == vendor) return &g;
+    if (!equalNoCase(g.name, bare)) continue;
+    if (!prefix.empty() && !equalNoCase(prefix, g.catalog) && !equalNoCase(prefix, g.vendor))
       continue;
-    }
-    if (!best || vendorRank(g.vendor) < vendorRank(best->vendor)) best = &g;
+    const int o = order(g);
+    if (!best || o < best_order) best = &g, best_order = o;
   }
   return best;
 }
@@ -267,9 +458,10 @@ std::vector<std::string> GlassCatalog::suggestions(std::string_view name, int co
   };
   std::vector<Scored> scored;
   for (const CatalogGlass& g : glasses_) {
+    if (!g.problem.empty()) continue;  // never suggest a glass lensim refuses
     const std::string f = folded(g.name);
     const bool contains = !key.empty() && f.find(key) != std::string::npos;
-    scored.push_back({contains ? 0 : 1, editDistance(key, f), vendorRank(g.vendor), &g});
+    scored.push_back({contains ? 0 : 1, editDistance(key, f), rank(g), &g});
   }
   std::stable_sort(scored.begin(), scored.end(), [](const Scored& a, const Scored& b) {
     return std::tie(a.contains, a.distance, a.rank) < std::tie(b.contains, b.distance, b.rank);
@@ -288,10 +480,15 @@ std::vector<std::string> GlassCatalog::suggestions(std::string_view name, int co
 const CatalogGlass& GlassCatalog::nearest(double n_d, double v_d) const {
   const CatalogGlass* best = nullptr;
   double best_d = std::numeric_limits<double>::infinity();
+  // Among the six makers' catalogues (and the CSV's glasses), the glasses old lenses used.
+  static const char* const kMakers[] = {"schott", "ohara", "hoya", "cdgm", "sumita", "hikari", "csv"};
   for (const CatalogGlass& g : glasses_) {
+    if (std::none_of(std::begin(kMakers), std::end(kMakers),
+                     [&](const char* m) { return g.catalog == m; }))
+      continue;
     double d;
     if (std::isnan(v_d)) {
-      if (vendorRank(g.vendor) != 0) continue;
+      if (!equalNoCase(g.vendor, "Schott")) continue;
       d = std::abs(g.listed_n_d - n_d);
     } else {
       d = std::hypot(100 * (g.listed_n_d - n_d), g.listed_v_d - v_d);
@@ -324,10 +521,11 @@ constexpr FormerName kFormerNames[] = {
 
 }  // namespace
 
-const CatalogGlass* findGlassOrSuccessor(std::string_view name, bool* successor_of) {
+const CatalogGlass* findGlassOrSuccessor(std::string_view name, bool* successor_of,
+                                         const std::vector<std::string>& catalogs) {
   if (successor_of) *successor_of = false;
-  const GlassCatalog& cat = GlassCatalog::builtin();
-  if (const CatalogGlass* g = cat.find(name)) return g;
+  const GlassCatalog& cat = glassLibrary();
+  if (const CatalogGlass* g = cat.find(name, catalogs)) return g;
   std::string_view bare = name;
   if (const size_t colon = name.find(':'); colon != std::string_view::npos)
     bare = name.substr(colon + 1);
@@ -349,8 +547,11 @@ Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagn
     if (diags) diags->push_back({s, spec.loc, std::move(msg)});
   };
   if (!spec.name.empty()) {
-    const GlassCatalog& cat = GlassCatalog::builtin();
-    if (const CatalogGlass* g = cat.find(spec.name)) {
+    const GlassCatalog& cat = glassLibrary();
+    if (const CatalogGlass* g = cat.find(spec.name, spec.catalogs)) {
+      if (!g->problem.empty())
+        throw Error(spec.loc, fmt::format("glass '{}' ({}): {}; lensim does not use it",
+                                          spec.name, g->qualifiedName(), g->problem));
       const double n_d = g->glass.n_d();
       if (spec.n_d && std::abs(*spec.n_d - n_d) > 1e-3)
         note(Severity::Note,
@@ -360,7 +561,8 @@ Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagn
       return g->glass;
     }
     bool successor = false;
-    if (const CatalogGlass* g = findGlassOrSuccessor(spec.name, &successor); g && successor) {
+    if (const CatalogGlass* g = findGlassOrSuccessor(spec.name, &successor, spec.catalogs);
+        g && successor) {
       note(Severity::Warning,
            fmt::format("glass '{}' is not in the catalogue; using {} (n_d {:.6f}, V_d {:.2f}), "
                        "the glass that replaces it{}",
@@ -369,7 +571,7 @@ Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagn
                                 : std::string()));
       return g->glass;
     }
-    if (spec.n_d && spec.v_d) {
+    if (spec.n_d && spec.v_d && (!spec.model_needs_option || modelGlassAllowed())) {
       Glass m = Glass::model(*spec.n_d, *spec.v_d, spec.loc);
       note(Severity::Warning,
            fmt::format("glass '{}' is not in the catalogue; using a model glass from the file's "
@@ -385,7 +587,11 @@ Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagn
         msg += (i == 0 ? "" : (i + 1 == hints.size() ? " or " : ", ")) + hints[i];
       msg += "?";
     }
-    msg += " (give n_d and V_d instead for a model glass)";
+    msg += spec.n_d && spec.v_d
+               ? fmt::format(" (it is in no glass catalogue; --model-glass uses the file's n_d {} "
+                             "and V_d {} as a model glass; --glass-catalog FILE adds a catalogue)",
+                             *spec.n_d, *spec.v_d)
+               : std::string(" (give n_d and V_d instead for a model glass)");
     throw Error(spec.loc, msg);
   }
   if (spec.v_d) {

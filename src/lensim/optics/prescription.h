@@ -41,6 +41,12 @@ struct GlassSpec {
   std::optional<double> n_d;  ///< index at the d line (587.56 nm), when the file gives it
   std::optional<double> v_d;  ///< Abbe number V_d, when the file gives it
   FileLoc loc;                ///< where the glass is named (for errors about it)
+  /// Catalogues to search first, in order (a Zemax file's GCAT line); the rest follow.
+  std::vector<std::string> catalogs;
+  /// A Zemax GLAS line: its n_d and V_d are often placeholders, so a name in no catalogue becomes
+  /// the model glass of them only with --model-glass (glass/library.h); elsewhere (lensim JSON,
+  /// lentil, .dat) n_d and V_d are the lens's data and make the model glass with a warning.
+  bool model_needs_option = false;
 
   bool empty() const { return name.empty() && !v_d; }
 };

@@ -16,6 +16,7 @@
 #include "lensim/optics/auto_semi_diameter.h"
 #include "lensim/optics/coating/lens_coatings.h"
 #include "lensim/optics/glass.h"
+#include "lensim/optics/glass/library.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/paraxial.h"
@@ -369,6 +370,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   FileLoc aperture_loc;
   std::map<int, double> wavm;  // index -> micrometres
   std::vector<double> wavl;
+  std::vector<std::string> gcat;  // GCAT: glass catalogues, lower case, in search order
   std::optional<int> pwav;
   std::optional<int> n_waves;
   // Fields (FTYP type and count, XFLN/YFLN values) and ray aiming, for automatic semi-diameters.
@@ -462,6 +464,19 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
             cofn_loc = FileLoc{path_, line_no, t[i].col};
             break;
           }
+        }
+      } else if (key == "GCAT") {
+        // The glass catalogues the GLAS names come from, in the order they are searched.
+        for (size_t i = 1; i < t.size(); ++i) {
+          std::string c(t[i].text);
+          for (char& ch : c) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+          if (!glassLibrary().hasCatalog(c))
+            p.diagnostics.push_back(
+                {Severity::Warning, FileLoc{path_, line_no, t[i].col},
+                 fmt::format("GCAT: lensim has no glass catalogue '{}' (--glass-catalog FILE "
+                             "adds one); its glasses are looked up in the others",
+                             t[i].text)});
+          gcat.push_back(std::move(c));
         }
       } else if (key == "NAME") {
         const size_t s = line.find("NAME") + 4;
@@ -771,10 +786,12 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       s.glass.loc = z.glass_loc;
       s.glass.n_d = z.n_d;
       s.glass.v_d = z.v_d;
+      s.glass.catalogs = gcat;
+      s.glass.model_needs_option = true;
       // The constant index (used where dispersion is not) is the catalogue's n_d for a
       // catalogue glass, else the n_d written on the GLAS line; resolveGlass (glass.h) gives the
       // lens system the glass's n(lambda) and warns about a name it does not know.
-      const CatalogGlass* known = z.glass == "___BLANK" ? nullptr : findGlassOrSuccessor(z.glass);
+      const CatalogGlass* known = z.glass == "___BLANK" ? nullptr : findGlassOrSuccessor(z.glass, nullptr, gcat);
       if (known) {
         s.ior = known->listed_n_d;
         if (z.n_d && z.glass != "___BLANK") {
@@ -785,7 +802,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                                          *z.n_d, known->listed_n_d);
           }
         }
-      } else if (z.n_d && *z.n_d >= 1) {
+      } else if (z.n_d && *z.n_d >= 1 && (z.glass == "___BLANK" || modelGlassAllowed())) {
         s.ior = *z.n_d;
         if (z.glass != "___BLANK") glas_fallbacks.push_back({z.glass, z.glass_loc});
       } else {

@@ -1,4 +1,5 @@
 // Builder: Camera, Film, Sampler and PixelFilter directives.
+#include "lensim/optics/glass/library.h"
 #include "lensim/scene/build/builder_internal.h"
 
 namespace lensim::scene::detail {
@@ -111,6 +112,12 @@ void Builder::camera(const Directive& d) {
         r.zoom_focal_length_mm = fl->numbers[0];
         r.zoom_loc = fl->loc;
       }
+
+      // "string glasscatalog": catalogue files (.agf, .csv) searched for the lens's glasses
+      // before the built-in ones (optics/glass/library.h); errors point at this parameter.
+      if (const Param* gc = ps.find({"glasscatalog"}, {ParamType::String}))
+        for (const std::string& f : gc->strings)
+          optics::addGlassCatalogFile(resolve(f, gc->loc, "glass catalogue"), gc->loc);
       if (const Param* fd = ps.find({"filmdistance"}, {ParamType::Float})) {
         ps.expectCount(*fd, 1);
         if (!(fd->numbers[0] > 0)) ps.fail(*fd, "film distance must be positive (mm)");
