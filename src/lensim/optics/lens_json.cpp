@@ -593,6 +593,14 @@ std::string writeLensJson(const LensPrescription& p) {
     if (s.isStop()) e["stop"] = true;
     if (s.mirror) e["mirror"] = true;
     if (s.obscuration_radius_mm > 0) e["obscuration_radius_mm"] = s.obscuration_radius_mm;
+    if (s.aperture_shape != ApertureShape::Circle)
+      throw Error(s.loc, fmt::format("surface {}: its {} aperture ({} x {} mm half-widths) "
+                                     "cannot be written to a lens JSON file, whose apertures "
+                                     "are circles",
+                                     surfs.size(),
+                                     s.aperture_shape == ApertureShape::Rectangle ? "rectangular"
+                                                                                  : "elliptical",
+                                     s.aperture_half_x_mm, s.aperture_half_y_mm));
     if (!s.coating.empty()) e["coating"] = s.coating;
     if (s.shape.conic != 0) e["conic"] = s.shape.conic;
     if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
@@ -639,6 +647,10 @@ std::string writeLensDat(const LensPrescription& p) {
       throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: it is a mirror (the "
                                      ".dat format has refracting surfaces only); write .json "
                                      "instead",
+                                     i));
+    if (s.aperture_shape != ApertureShape::Circle)
+      throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: its aperture is not "
+                                     "a circle (Zemax SQAP/ELAP)",
                                      i));
     if (s.obscuration_radius_mm > 0)
       throw Error(s.loc, fmt::format("surface {} cannot be written to .dat: it has a central "

@@ -36,6 +36,10 @@ LensTracer<T>::LensTracer(const std::vector<Interface>& interfaces) {
     z_.push_back(T(s.z_mm));
     semi2_.push_back(T(s.semi_aperture_mm * s.semi_aperture_mm));
     inner2_.push_back(T(s.obscuration_radius_mm * s.obscuration_radius_mm));
+    aperture_shape_.push_back(s.aperture_shape);
+    half_x_.push_back(T(s.aperture_half_x_mm));
+    half_y_.push_back(T(s.aperture_half_y_mm));
+    const bool shaped_aperture = s.aperture_shape != ApertureShape::Circle;
     eta_before_.push_back(T(s.ior_before));
     eta_after_.push_back(T(s.ior_after));
     is_stop_.push_back(s.is_stop ? 1 : 0);
@@ -47,10 +51,12 @@ LensTracer<T>::LensTracer(const std::vector<Interface>& interfaces) {
     } else {
       shape_index_.push_back(static_cast<int>(shapes_.size()));
       shapes_.emplace_back(s.radius_mm, s.shape, s.semi_aperture_mm);
-      if (!s.is_mirror && s.obscuration_radius_mm == 0 && shapes_.back().hasLanes())
+      if (!s.is_mirror && s.obscuration_radius_mm == 0 && !shaped_aperture &&
+          shapes_.back().hasLanes())
         lanes_.back() = 1;
     }
-    per_lane_.push_back(shape_index_.back() >= 0 || s.is_mirror || s.obscuration_radius_mm > 0);
+    per_lane_.push_back(shape_index_.back() >= 0 || s.is_mirror || s.obscuration_radius_mm > 0 ||
+                        shaped_aperture);
   }
   if (!interfaces.empty()) z_unfold_ = T(2 * interfaces.back().z_mm);
 }
@@ -180,6 +186,16 @@ template <typename T, bool kMargin>
 }  // namespace
 
 template <typename T>
+BlockReason LensTracer<T>::clip(int i, const TraceOptions& opts, T x, T y) const {
+  const T r2 = x * x + y * y;
+  if (r2 > semi2_[i]) return BlockReason::Aperture;
+  if (!insideApertureShape(aperture_shape_[i], half_x_[i], half_y_[i], x, y))
+    return BlockReason::Aperture;
+  if (opts.obscurations && r2 < inner2_[i]) return BlockReason::Obscured;
+  return BlockReason::None;
+}
+
+template <typename T>
 BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
                                     Vec3T<T>& d, Vec3T<T>& hit, T* sin2) const {
   if (shape_index_[i] >= 0) return traceShaped(i, from_film, opts, o, d, hit, sin2);
@@ -223,9 +239,8 @@ BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& o
   }
   hit = o + d * t;
   if (opts.clip_apertures) {
-    const T r2 = hit.x * hit.x + hit.y * hit.y;
-    if (r2 > semi2_[i]) return BlockReason::Aperture;
-    if (opts.obscurations && r2 < inner2_[i]) return BlockReason::Obscured;
+    const BlockReason why = clip(i, opts, hit.x, hit.y);
+    if (why != BlockReason::None) return why;
   }
   if (is_mirror_[i]) {
     d = d - normal * (T(2) * dot(d, normal));
@@ -479,9 +494,8 @@ BlockReason LensTracer<T>::traceShaped(int i, bool from_film, const TraceOptions
   const Vec3 p = rel + dir * h->t;
   hit = {T(p.x), T(p.y), T(p.z + double(z_[i]))};
   if (opts.clip_apertures) {
-    const double r2 = p.x * p.x + p.y * p.y;
-    if (r2 > double(semi2_[i])) return BlockReason::Aperture;
-    if (opts.obscurations && r2 < double(inner2_[i])) return BlockReason::Obscured;
+    const BlockReason why = clip(i, opts, T(p.x), T(p.y));
+    if (why != BlockReason::None) return why;
   }
   if (is_mirror_[i]) {
     dir = dir - h->normal * (2 * dot(dir, h->normal));
@@ -535,6 +549,9 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
     in.shape = s.shape;
     in.is_mirror = s.mirror;
     in.obscuration_radius_mm = s.obscuration_radius_mm;
+    in.aperture_shape = s.aperture_shape;
+    in.aperture_half_x_mm = s.aperture_half_x_mm;
+    in.aperture_half_y_mm = s.aperture_half_y_mm;
     if (!(s.obscuration_radius_mm >= 0) || s.obscuration_radius_mm >= s.semiAperture_mm())
       throw Error(s.loc, fmt::format("surface {}: obscuration radius {} mm must be >= 0 and "
                                      "smaller than the semi-aperture {} mm",

@@ -66,6 +66,9 @@ struct Interface {
   bool is_mirror = false;
   /// Rays meeting the surface closer than this to the axis are blocked (0: no obscuration).
   double obscuration_radius_mm = 0;
+  /// A rectangular or elliptical aperture inside the semi-aperture (LensSurface's).
+  ApertureShape aperture_shape = ApertureShape::Circle;
+  double aperture_half_x_mm = 0, aperture_half_y_mm = 0;
   /// The direction of travel along z in the medium before and after the surface: +1 toward the
   /// film, -1 after an odd number of mirrors. Paraxial optics uses the signed indices
   /// n * direction (the n -> -n convention for mirrors), the exact tracer the magnitudes.
@@ -146,6 +149,8 @@ class LensTracer {
 
   // Traces surface i with its ShapeIntersector (in double precision): hit point and refracted
   // direction, or why it stopped.
+  /// The apertures of surface i at the point (x, y) it is met: Aperture, Obscured or None.
+  BlockReason clip(int i, const TraceOptions& opts, T x, T y) const;
   BlockReason traceShaped(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o, Vec3T<T>& d,
                           Vec3T<T>& hit, T* sin2 = nullptr) const;
   // One surface for one ray (any kind: sphere, plane, shaped, mirror, obscured): hit point and
@@ -161,6 +166,8 @@ class LensTracer {
   }
 
   std::vector<T> radius_, inv_radius_, z_, semi2_, inner2_, eta_before_, eta_after_;
+  std::vector<T> half_x_, half_y_;  // a Rectangle or Ellipse aperture's half-widths
+  std::vector<ApertureShape> aperture_shape_;
   std::vector<std::uint8_t> is_stop_, is_mirror_, per_lane_;
   bool reversed_ = false;         // odd number of mirrors: image space unfolded
   T z_unfold_ = 0;                // 2 z_rear

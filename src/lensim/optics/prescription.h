@@ -15,6 +15,7 @@
 // spaces or tabs separate columns; CR, LF and CRLF line endings are all accepted.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -52,6 +53,23 @@ struct GlassSpec {
 };
 
 /// One refracting surface (or the stop), as written in the file. Lengths in millimetres.
+/// The outline of a surface's clear aperture. Circle: the semi-aperture (and the obscuration
+/// radius); Rectangle (Zemax `SQAP`): |x| <= half_x, |y| <= half_y; Ellipse (Zemax `ELAP`):
+/// (x / half_x)^2 + (y / half_y)^2 <= 1; both centred on the axis.
+enum class ApertureShape { Circle, Rectangle, Ellipse };
+
+/// Whether the point (x, y) of a surface lies inside a Rectangle or Ellipse aperture (true for
+/// Circle: the semi-aperture test is the caller's).
+template <typename T>
+inline bool insideApertureShape(ApertureShape shape, T half_x, T half_y, T x, T y) {
+  if (shape == ApertureShape::Rectangle) return std::abs(x) <= half_x && std::abs(y) <= half_y;
+  if (shape == ApertureShape::Ellipse) {
+    const T u = x / half_x, v = y / half_y;
+    return u * u + v * v <= T(1);
+  }
+  return true;
+}
+
 struct LensSurface {
   double radius_mm = 0;     ///< signed radius of curvature; > 0: centre toward the film
   double thickness_mm = 0;  ///< axial distance to the next surface (last row: to the film)
@@ -74,6 +92,10 @@ struct LensSurface {
   /// catadioptric lens's secondary mirror or the hole in its primary; Zemax `OBSC 0 r`, the
   /// inner radius of `CLAP rmin r`). 0: none.
   double obscuration_radius_mm = 0;
+  /// A rectangular or elliptical aperture (Zemax SQAP, ELAP) with these half-widths; the
+  /// semi-aperture is then the radius of the circle around it.
+  ApertureShape aperture_shape = ApertureShape::Circle;
+  double aperture_half_x_mm = 0, aperture_half_y_mm = 0;
   /// The coating on this surface as the file names it (JSON "coating", Zemax COAT); empty: the
   /// lens-wide default on an air-glass surface, none on a cemented one (coating/lens_coatings.h).
   std::string coating;

@@ -129,7 +129,10 @@ struct ZSurface {
   std::string glass;
   std::optional<double> n_d, v_d;
   FileLoc glass_loc;
-  std::optional<double> clap_max;
+  std::optional<double> clap_max;  // CLAP's maximum radius, or the circle around SQAP/ELAP's
+  ApertureShape aperture_shape = ApertureShape::Circle;  // SQAP: Rectangle, ELAP: Ellipse
+  double half_x = 0, half_y = 0;                          // their half-widths
+  FileLoc aperture_loc;                                   // the SQAP/ELAP/CLAP line
   double inner_radius = 0;  // central obscuration (OBSC 0 r, or CLAP's minimum radius)
   FileLoc inner_loc;
   bool mirror = false;
@@ -620,6 +623,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                                       "maximum",
                                       cur->number, key, rmin, rmax));
       if (key == "CLAP") {
+        if (cur->aperture_shape != ApertureShape::Circle)
+          throw surfErr("CLAP: the surface already has an aperture (one per surface)");
         cur->clap_max = rmax;
         if (rmin > 0) cur->inner_radius = rmin, cur->inner_loc = vloc;
       } else {
@@ -638,8 +643,32 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                       fmt::format("surface {}: OBDC: decentred apertures (off-axis mirrors) are "
                                   "not supported",
                                   cur->number));
-    } else if (key == "SQAP" || key == "ELAP" || key == "SQOB" || key == "ELOB" || key == "UDAP" ||
-               key == "UDOB") {
+    } else if (key == "SQAP" || key == "ELAP") {
+      // Rectangular `SQAP hx hy` and elliptical `ELAP hx hy` apertures, centred (their decentre
+      // is the OBDC line): the half-widths in x and y, as OpticStudio writes them (Thorlabs'
+      // 4 mm x 6 mm cylindrical lens LJ1598L1: `SQAP 3.0 2 0`). Further values are refused
+      // unless 0.
+      const double hx = num(1, "aperture x half-width");
+      const double hy = num(2, "aperture y half-width");
+      if (!(hx > 0) || !(hy > 0) || !std::isfinite(hx) || !std::isfinite(hy))
+        throw Error(FileLoc{path_, line_no, t[!(hx > 0) || !std::isfinite(hx) ? 1 : 2].col},
+                    fmt::format("surface {}: {} half-widths {} {}: expected two finite values "
+                                "> 0",
+                                cur->number, key, hx, hy));
+      for (size_t i = 3; i < t.size(); ++i)
+        if (number(t[i], line_no, "aperture data") != 0)
+          throw Error(FileLoc{path_, line_no, t[i].col},
+                      fmt::format("surface {}: {}: value {} is {}; only centred apertures "
+                                  "(hx hy 0) are supported",
+                                  cur->number, key, i, t[i].text));
+      if (cur->clap_max)
+        throw surfErr(fmt::format("{}: the surface already has an aperture (one per surface)",
+                                  key));
+      cur->aperture_shape = key == "SQAP" ? ApertureShape::Rectangle : ApertureShape::Ellipse;
+      cur->half_x = hx, cur->half_y = hy;
+      cur->clap_max = key == "SQAP" ? std::hypot(hx, hy) : std::max(hx, hy);
+      cur->aperture_loc = FileLoc{path_, line_no, t[0].col};
+    } else if (key == "SQOB" || key == "ELOB" || key == "UDAP" || key == "UDOB") {
       throw surfErr(
           fmt::format("{} (a surface aperture or obscuration other than circular) is "
                       "not supported",
@@ -768,6 +797,9 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     s.mirror = z.mirror;
     s.coating = z.coating;
     s.coating_loc = z.coating_loc;
+    s.aperture_shape = z.aperture_shape;
+    s.aperture_half_x_mm = z.half_x * unit_mm;
+    s.aperture_half_y_mm = z.half_y * unit_mm;
     if (z.inner_radius > 0) {
       s.obscuration_radius_mm = z.inner_radius * unit_mm;
       if (!(s.obscuration_radius_mm < semi))
