@@ -589,9 +589,12 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       cur->parm[i] = num(2, "parameter value");
       cur->parm_loc[i] = FileLoc{path_, line_no, t[2].col};
     } else if (key == "XDAT" && cur->type == "TOROIDAL") {
-      // Extra data (`XDAT n value ...`): a toroid's Zernike sag terms; kept to refuse them.
+      // Extra data (`XDAT n value ...`): a toroid's Zernike sag terms (1: the number of terms,
+      // 2: their normalisation radius, 3 on: the coefficients); kept to refuse them. The
+      // radius alone changes nothing.
+      const int n = inum(1, "extra data number");
       const double v = num(2, "extra data value");
-      if (v != 0 && !cur->xdat_loc) cur->xdat_loc = FileLoc{path_, line_no, t[2].col};
+      if (v != 0 && n != 2 && !cur->xdat_loc) cur->xdat_loc = FileLoc{path_, line_no, t[2].col};
     } else if (key == "COAT") {
       // A Zemax coating name (defined in the COFN coating file); "COAT" alone: none.
       if (t.size() >= 2) {
@@ -857,6 +860,13 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                                                z.number, z.parm.count(1) ? z.parm.at(1) : 0.0,
                                                domain / unit_mm, semi / unit_mm));
     }
+    if (semi >= domain && z.aperture_shape != ApertureShape::Circle)
+      throw Error(z.aperture_loc,
+                  fmt::format("surface {}: the corners of its {} aperture lie {} mm from the "
+                              "axis, beyond the surface's extent ({} mm) in some direction; "
+                              "lensim bounds a surface by a circle about the axis",
+                              z.number, z.aperture_shape == ApertureShape::Rectangle ? "SQAP" : "ELAP",
+                              semi, domain));
     if (semi >= domain)
       throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} mm exceeds the surface's "
                                           "extent ({} mm)",
