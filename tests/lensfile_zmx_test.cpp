@@ -216,7 +216,7 @@ TEST(ZmxRefusals, EachAtItsLine) {
   const Case cases[] = {
       {"  TYPE COORDBRK", "COORDBRK"}, {"  TYPE DGRATING", "DGRATING"},
       {"  TYPE QTYPEASP", "QTYPEASP"}, {"  TYPE SZERNSAG", "SZERNSAG"},
-      {"  SQAP 2 3 0", "SQAP"},        {"  ELAP 2 3 0", "ELAP"},
+      {"  SQOB 2 3 0", "SQOB"},        {"  ELAP 2 3 0.5", "ELAP"},
       {"  OBSC 1 2 0", "OBSC"},        {"  OBDC 0.5 0", "OBDC"},
       {"  DECX 0 1.5", "DECX"},
   };
@@ -310,7 +310,9 @@ TEST(ZmxCorpus, EveryFileReadsOrIsRefusedAtItsLine) {
       {"optiland/lens_thorlabs_iso_8859_1.zmx", 0, "", true},
       {"optiland/one_mirror_up_45deg.zmx", 106, "COORDBRK", false},
       {"optiland/simple_fold_mirror_up.zmx", 92, "COORDBRK", false},
-      {"optiland/thorlabs_lj1598l1.zmx", 89, "SQAP", false},
+      // A cylinder (R 2.02 mm) with a 3 x 2 mm half-width SQAP: the rectangle's corners lie
+      // beyond the radius lensim bounds the surface by.
+      {"optiland/thorlabs_lj1598l1.zmx", 89, "corners of its SQAP", false},
   };
   // The table covers the folder.
   size_t files = 0;
