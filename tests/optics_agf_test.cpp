@@ -269,9 +269,9 @@ TEST(AgfReader, EncodingsAndLineEnds) {
     EXPECT_EQ(agfStatusName(gs[1].status), "obsolete");
   }
   // Latin-1 becomes UTF-8; UTF-8 stays.
-  EXPECT_EQ(decodeText("Cat\xe9", "x"), "Cat\xc3\xa9");
-  EXPECT_EQ(decodeText("Cat\xc3\xa9", "x"), "Cat\xc3\xa9");
-  EXPECT_NE(errorOf([] { decodeText("\xFF\xFE\x41", "odd.agf"); }).find("odd number of bytes"),
+  EXPECT_EQ(decodeTextFile("Cat\xe9", "x"), "Cat\xc3\xa9");
+  EXPECT_EQ(decodeTextFile("Cat\xc3\xa9", "x"), "Cat\xc3\xa9");
+  EXPECT_NE(errorOf([] { decodeTextFile("\xFF\xFE\x41", "odd.agf"); }).find("odd number of bytes"),
             std::string::npos);
 }
 
