@@ -12,8 +12,10 @@
 #include "lens_options.h"
 #include "lensim/optics/coating/ghosts.h"
 #include "lensim/optics/coating/lens_coatings.h"
+#include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_system.h"
+#include "lensim/util/file.h"
 #include "lensim/util/log.h"
 
 namespace lensim::cmd {
@@ -183,6 +185,56 @@ void printCoatings(const LensSystem& lens) {
     t += fmt::format("{:.4f} at {:.0f} nm, ", axialTransmittance(lens, c, l), l);
   std::cout << fmt::format("  {:<26}{}mean {:.4f} over 400..700 nm (reflection losses, axial)\n",
                            "transmittance", t, meanTransmittance(lens, c));
+}
+
+int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
+                 const std::string& output) {
+  // I,J: two non-negative integers.
+  const size_t comma = ghost.find(',');
+  int ij[2] = {0, 0};
+  bool parsed = comma != std::string::npos;
+  for (int k = 0; parsed && k < 2; ++k) {
+    const std::string item = k == 0 ? ghost.substr(0, comma) : ghost.substr(comma + 1);
+    parsed = !item.empty() && item.size() < 6 &&
+             item.find_first_not_of("0123456789") == std::string::npos;
+    if (parsed) ij[k] = std::stoi(item);
+  }
+  if (!parsed)
+    throw Error(fmt::format("--ghost '{}': expected I,J (two surface indices, as `lens ghosts` "
+                            "lists them)",
+                            ghost));
+  if (rays < 1 || rays > 1000) throw Error(fmt::format("--rays {}: expected 1 to 1000", rays));
+  FocusedLens fl = setUpLens(args);
+  logDiagnostics(fl.allDiagnostics());
+  const LensSystem& lens = *fl.lens;
+  DiagramOptions opts;
+  opts.rays = rays;
+  opts.film_diagonal_mm = args.film_diagonal_mm;
+  opts.fields = {0.0};
+  LensDiagram d = buildLensDiagram(fl, opts);
+  try {
+    setGhostBundle(d, fl, ij[0], ij[1], rays);
+  } catch (const Error& e) {
+    throw Error(fmt::format("--ghost {}: {}", ghost, e.what()));
+  }
+  // The paraxial ghost focus and intensity, as `lens ghosts` reports them (when the coatings
+  // resolve; the drawing does not need them).
+  try {
+    const std::vector<double> band = visibleBand();
+    const GhostAnalysis g = analyseGhosts(lens, resolveCoatings(lens.prescription()), band);
+    for (const Ghost& h : g.ghosts)
+      if (h.b == ij[0] && h.a == ij[1])
+        d.annotations.push_back(fmt::format(
+            "paraxial focus z {} mm (film at {:.3f} mm), film diameter {:.3f} mm, relative "
+            "intensity {:.3e}",
+            fmtInf(h.focus_z_mm, "{:.3f}"), lens.filmZ_mm(), h.film_diameter_mm,
+            h.relative_intensity));
+  } catch (const Error& e) {
+    logWarning(fmt::format("ghost intensity not annotated: {}", e.what()));
+  }
+  writeFileAtomically(output, lensDiagramSheet({d}, false, 1));
+  logInfo(fmt::format("wrote {} (ghost {},{}, {} rays)", output, ij[0], ij[1], rays));
+  return 0;
 }
 
 void registerLensGhostsCommand(CLI::App& lens, Action& action) {

@@ -516,9 +516,20 @@ struct DrawArgs {
   std::string from = "film";
   bool same_scale = false;
   std::string wavelengths;  ///< --wavelengths: bundles at each, in their colours
+  std::string ghost;        ///< --ghost I,J: the rays of that ghost (cmd_flare.cpp)
 };
 
 int runDraw(const LensArgs& common, const DrawArgs& args) {
+  if (!args.ghost.empty()) {
+    if (args.lenses.size() != 1 || !args.wavelengths.empty())
+      throw Error(fmt::format("--ghost {}: draws one lens at its primary wavelength (got {} "
+                              "lenses{})",
+                              args.ghost, args.lenses.size(),
+                              args.wavelengths.empty() ? "" : " and --wavelengths"));
+    LensArgs one = common;
+    one.lens_path = args.lenses.front();
+    return runGhostDraw(one, args.ghost, args.rays, args.output);
+  }
   DiagramOptions opts;
   opts.fields = parseList(args.fields, "--fields");
   for (double f : opts.fields)
@@ -839,6 +850,9 @@ void registerLensCommands(CLI::App& app, Action& action) {
     draw->add_option("--rays", d->rays, "Rays per bundle (default 11)");
     draw->add_option("--from", d->from, "Trace bundles from the film or from the scene")
         ->check(CLI::IsMember({"film", "scene"}));
+    draw->add_option("--ghost", d->ghost,
+                     "Draw the ghost that reflects at surface I, then at J < I (I,J as `lens "
+                     "ghosts` lists them): an axial bundle from infinity, traced exactly");
     draw->add_flag("--same-scale", d->same_scale, "Draw every lens of a sheet at one scale");
     draw->add_option("--wavelengths", d->wavelengths,
                      "Trace the bundles at each wavelength (nm, comma-separated), drawn in their "
