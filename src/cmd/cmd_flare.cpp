@@ -200,7 +200,7 @@ int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
     if (parsed) ij[k] = std::stoi(item);
   }
   if (!parsed)
-    throw Error(fmt::format("--ghost '{}': expected I,J (two surface indices, as `lens ghosts` "
+    throw Error(fmt::format("ghost {}: expected I,J (two surface indices, as `lens ghosts` "
                             "lists them)",
                             ghost));
   if (rays < 1 || rays > 1000) throw Error(fmt::format("--rays {}: expected 1 to 1000", rays));
@@ -212,11 +212,7 @@ int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
   opts.film_diagonal_mm = args.film_diagonal_mm;
   opts.fields = {0.0};
   LensDiagram d = buildLensDiagram(fl, opts);
-  try {
-    setGhostBundle(d, fl, ij[0], ij[1], rays);
-  } catch (const Error& e) {
-    throw Error(fmt::format("--ghost {}: {}", ghost, e.what()));
-  }
+  setGhostBundle(d, fl, ij[0], ij[1], rays);  // refuses a bad pair, naming it
   // The paraxial ghost focus and intensity, as `lens ghosts` reports them (when the coatings
   // resolve; the drawing does not need them).
   try {
