@@ -685,6 +685,7 @@ std::string breathingPlot(const LensArgs& args, json& j) {
 }
 
 int runPlot(const LensArgs& args, const PlotArgs& pa) {
+  if (pa.kind == "ghosts") return runGhostPlot(args, pa.output, pa.as_json);  // cmd_flare.cpp
   if (pa.kind == "breathing") {
     json j{{"kind", pa.kind}, {"lens", args.lens_path}};
     const std::string svg_text = breathingPlot(args, j);
@@ -869,11 +870,13 @@ void registerLensCommands(CLI::App& app, Action& action) {
     plot->add_option("KIND", pa->kind,
                      "spot, distortion, vignetting, focus, chromatic (focal shift against "
                      "wavelength), lateral-color (F and C image height minus d), mtf, mtf-focus, "
-                     "fans, field, psf or breathing (field of view against focus distance)")
+                     "fans, field, psf, breathing (field of view against focus distance) or ghosts "
+                     "(the brightest ghosts' intensities, issue 31)")
         ->required()
         ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus", "breathing",
                                "chromatic",
-                               "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf"}));
+                               "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf",
+                               "ghosts"}));
     addLensOptions(plot, *args);
     plot->add_option("-o,--output", pa->output, "Output SVG file")->required();
     plot->add_option("--fields", pa->fields,

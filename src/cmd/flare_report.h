@@ -25,6 +25,11 @@ void printCoatings(const optics::LensSystem& lens);
 int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
                  const std::string& output);
 
+/// `lensim lens plot ghosts LENS -o OUT`: a bar chart of the brightest ghosts' intensities
+/// (log10 of ghost / direct energy, 400..700 nm, the lens's coatings); `as_json` also prints
+/// the plotted numbers.
+int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json);
+
 /// `lensim lens ghosts LENS`: the two-reflection ghosts ranked by intensity.
 void registerLensGhostsCommand(CLI::App& lens, Action& action);
 
