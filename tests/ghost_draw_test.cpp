@@ -168,3 +168,33 @@ TEST(GhostDraw, CliRefusesBadPairs) {
     EXPECT_FALSE(std::filesystem::exists(out)) << bad;
   }
 }
+
+TEST(GhostDraw, PlotGhostsBarsAreProportionalToLensGhostsIntensities) {
+  const auto r = runLensim("lens ghosts " + kGauss + " --json --top 20");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const json j = json::parse(r.out.substr(r.out.find("{\n")));
+  const std::string out = tempPath("ghosts.svg");
+  std::filesystem::remove(out);
+  const auto p = runLensim("lens plot ghosts " + kGauss + " -o " + out);
+  ASSERT_EQ(p.status, 0) << p.out;
+  std::ifstream in(out);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string svg = ss.str();
+  // The bars in order: their heights (pixels) from the rect elements.
+  std::vector<double> heights;
+  for (size_t at = svg.find("class=\"bar\""); at != std::string::npos;
+       at = svg.find("class=\"bar\"", at + 1)) {
+    const size_t rect = svg.rfind("<rect", at);
+    const size_t h = svg.find("height=\"", rect);
+    ASSERT_LT(h, at);
+    heights.push_back(std::stod(svg.substr(h + 8)));
+  }
+  ASSERT_EQ(heights.size(), 20u);
+  const double i0 = j["ghosts"][0]["relative_intensity"];
+  for (size_t k = 0; k < heights.size(); ++k) {
+    const double ik = j["ghosts"][k]["relative_intensity"];
+    EXPECT_NEAR(heights[k] / heights[0], ik / i0, 1e-4) << "bar " << k;
+  }
+  EXPECT_NE(svg.find("1: 10,9"), std::string::npos);  // the brightest, as `lens ghosts` ranks it
+}
