@@ -156,7 +156,7 @@ void Chart::render(svg::Document& doc, double x, double y, double w, double h) c
     }
     if (s.style == Style::Bars) {
       doc.beginGroup({{"class", "series bars"}, {"fill", s.color}});
-      const double base = mapY(std::clamp(s.bar_base, std::min(y0, y1), std::max(y0, y1)));
+      const double base = mapY(std::clamp(0.0, std::min(y0, y1), std::max(y0, y1)));
       for (const auto& [px, py] : s.points) {
         if (!std::isfinite(px) || !std::isfinite(py) || x_log) continue;
         const double l = mapX(px - 0.5 * s.bar_width), r = mapX(px + 0.5 * s.bar_width);

@@ -15,7 +15,7 @@ enum class Style {
   Line,
   Dashed,
   Markers,
-  Bars,  ///< a bar per point, from bar_base (clamped to the y range) to the point
+  Bars,  ///< a bar per point, from y = 0 (clamped to the y range) to the point
 };
 
 /// One data series: points in data units.
@@ -26,7 +26,6 @@ struct Series {
   std::vector<std::pair<double, double>> points;
   double marker_radius = 1.6;
   double bar_width = 0.8;  ///< Bars: width in x data units
-  double bar_base = 0;     ///< Bars: where bars start (y data units; -inf: the bottom axis)
 };
 
 /// A chart: axes, series, labels. Ranges are found from the data unless given.
