@@ -153,7 +153,7 @@ TEST(GhostDraw, CliDrawsOnePolylinePerGhostRay) {
   const std::string svg = ss.str();
   EXPECT_EQ(countOf(svg, "class=\"ghost-ray\""), 13u);
   EXPECT_EQ(countOf(svg, "data-ghost=\"10,8\""), 13u);
-  EXPECT_EQ(countOf(svg, "class=\"ray\""), 0u);  // only the ghost's rays
+  EXPECT_EQ(countOf(svg, "class=\"ray\""), 0u);                          // only the ghost's rays
   EXPECT_NE(svg.find("paraxial focus z 54.501 mm"), std::string::npos);  // from `lens ghosts`
 }
 

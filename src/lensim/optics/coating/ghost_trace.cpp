@@ -12,19 +12,22 @@ std::vector<Interface> ghostPathInterfaces(const LensSystem& lens, int first, in
   const int n = lens.surfaceCount();
   const std::string pair = fmt::format("{},{}", first, second);
   if (lens.mirrorCount() > 0)
-    throw Error(fmt::format("ghost {}: the lens has mirrors (ghosts of catadioptric lenses are "
-                            "not modelled)",
-                            pair));
+    throw Error(
+        fmt::format("ghost {}: the lens has mirrors (ghosts of catadioptric lenses are "
+                    "not modelled)",
+                    pair));
   if (!(second >= 0 && second < first && first < n))
-    throw Error(fmt::format("ghost {}: expected I,J with 0 <= J < I <= {} (surface indices as "
-                            "`lens ghosts` lists them: reflected first at I, then at J)",
-                            pair, n - 1));
+    throw Error(
+        fmt::format("ghost {}: expected I,J with 0 <= J < I <= {} (surface indices as "
+                    "`lens ghosts` lists them: reflected first at I, then at J)",
+                    pair, n - 1));
   const auto& s = lens.interfaces();
   for (int k : {first, second})
     if (s[size_t(k)].ior_before == s[size_t(k)].ior_after)
-      throw Error(fmt::format("ghost {}: surface {} has the same index on both sides ({}) and "
-                              "reflects nothing",
-                              pair, k, s[size_t(k)].is_stop ? "the aperture stop" : "a dummy"));
+      throw Error(
+          fmt::format("ghost {}: surface {} has the same index on both sides ({}) and "
+                      "reflects nothing",
+                      pair, k, s[size_t(k)].is_stop ? "the aperture stop" : "a dummy"));
   std::vector<Interface> path;
   for (int k = 0; k < first; ++k) path.push_back(s[size_t(k)]);
   auto mirror = [&](int k, double medium, int dir_before) {
