@@ -203,9 +203,10 @@ int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
     if (parsed) ij[k] = std::stoi(item);
   }
   if (!parsed)
-    throw Error(fmt::format("ghost {}: expected I,J (two surface indices, as `lens ghosts` "
-                            "lists them)",
-                            ghost));
+    throw Error(
+        fmt::format("ghost {}: expected I,J (two surface indices, as `lens ghosts` "
+                    "lists them)",
+                    ghost));
   if (rays < 1 || rays > 1000) throw Error(fmt::format("--rays {}: expected 1 to 1000", rays));
   FocusedLens fl = setUpLens(args);
   logDiagnostics(fl.allDiagnostics());
@@ -269,13 +270,13 @@ int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json) 
                      {"first_reflection_surface", h.b},
                      {"second_reflection_surface", h.a},
                      {"relative_intensity", h.relative_intensity}});
-    if (bars.points.size() <= 6) top += fmt::format("{}{}: {},{}", top.empty() ? "" : "  ",
-                                                   bars.points.size(), h.b, h.a);
+    if (bars.points.size() <= 6)
+      top += fmt::format("{}{}: {},{}", top.empty() ? "" : "  ", bars.points.size(), h.b, h.a);
   }
   chart.y_range = std::pair{0.0, 1.3 * brightest / unit};
   chart.x_range = std::pair{0.3, double(bars.points.size()) + 0.7};
-  chart.notes.push_back(fmt::format("all {} ghosts together {:.3e} of the direct image",
-                                    g.ghosts.size(), total));
+  chart.notes.push_back(
+      fmt::format("all {} ghosts together {:.3e} of the direct image", g.ghosts.size(), total));
   chart.notes.push_back("I,J of the brightest: " + top);
   chart.series.push_back(std::move(bars));
   svg::Document doc(720, 440);

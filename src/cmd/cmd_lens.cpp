@@ -522,10 +522,10 @@ struct DrawArgs {
 int runDraw(const LensArgs& common, const DrawArgs& args) {
   if (!args.ghost.empty()) {
     if (args.lenses.size() != 1 || !args.wavelengths.empty())
-      throw Error(fmt::format("--ghost {}: draws one lens at its primary wavelength (got {} "
-                              "lenses{})",
-                              args.ghost, args.lenses.size(),
-                              args.wavelengths.empty() ? "" : " and --wavelengths"));
+      throw Error(fmt::format(
+          "--ghost {}: draws one lens at its primary wavelength (got {} "
+          "lenses{})",
+          args.ghost, args.lenses.size(), args.wavelengths.empty() ? "" : " and --wavelengths"));
     LensArgs one = common;
     one.lens_path = args.lenses.front();
     return runGhostDraw(one, args.ghost, args.rays, args.output);
@@ -873,10 +873,9 @@ void registerLensCommands(CLI::App& app, Action& action) {
                      "fans, field, psf, breathing (field of view against focus distance) or ghosts "
                      "(the brightest ghosts' intensities, issue 31)")
         ->required()
-        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus", "breathing",
-                               "chromatic",
-                               "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf",
-                               "ghosts"}));
+        ->check(
+            CLI::IsMember({"spot", "distortion", "vignetting", "focus", "breathing", "chromatic",
+                           "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf", "ghosts"}));
     addLensOptions(plot, *args);
     plot->add_option("-o,--output", pa->output, "Output SVG file")->required();
     plot->add_option("--fields", pa->fields,
