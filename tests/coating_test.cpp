@@ -9,6 +9,8 @@
 #include <numbers>
 #include <vector>
 
+#include <unistd.h>
+
 #include "lensim/optics/coating/coating.h"
 #include "lensim/optics/coating/thin_film.h"
 #include "lensim/util/error.h"
@@ -258,7 +260,9 @@ TEST(ZemaxCoatingFile, BadInputIsRefusedAtItsLine) {
 namespace {
 
 std::string writeTemp(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::temp_directory_path() / "lensim_coating_test";
+  // A folder per process: ctest runs this file's tests as parallel processes.
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("lensim_coating_test-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const auto p = dir / name;
   std::ofstream(p) << text;

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <sstream>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include "lensim/optics/glass.h"
 #include "lensim/optics/glass/agf.h"
@@ -33,8 +34,14 @@ std::string errorOf(const std::function<void()>& f) {
   return "(no error)";
 }
 
+// A folder of this test process's own: ctest runs the tests of this file as parallel processes.
+std::filesystem::path tempDir() {
+  return std::filesystem::temp_directory_path() /
+         ("lensim_agf_test-" + std::to_string(::getpid()));
+}
+
 std::string tempFile(const std::string& name, const std::string& bytes) {
-  const auto dir = std::filesystem::temp_directory_path() / "lensim_agf_test";
+  const auto dir = tempDir();
   std::filesystem::create_directories(dir);
   const std::string path = (dir / name).string();
   std::ofstream(path, std::ios::binary) << bytes;
@@ -262,9 +269,9 @@ TEST(AgfReader, EncodingsAndLineEnds) {
     EXPECT_EQ(agfStatusName(gs[1].status), "obsolete");
   }
   // Latin-1 becomes UTF-8; UTF-8 stays.
-  EXPECT_EQ(decodeText("Cat\xe9", "x"), "Cat\xc3\xa9");
-  EXPECT_EQ(decodeText("Cat\xc3\xa9", "x"), "Cat\xc3\xa9");
-  EXPECT_NE(errorOf([] { decodeText("\xFF\xFE\x41", "odd.agf"); }).find("odd number of bytes"),
+  EXPECT_EQ(decodeTextFile("Cat\xe9", "x"), "Cat\xc3\xa9");
+  EXPECT_EQ(decodeTextFile("Cat\xc3\xa9", "x"), "Cat\xc3\xa9");
+  EXPECT_NE(errorOf([] { decodeTextFile("\xFF\xFE\x41", "odd.agf"); }).find("odd number of bytes"),
             std::string::npos);
 }
 
@@ -463,7 +470,7 @@ ShellRun runShell(const std::string& cmd) {
 // --model-glass, and lens info naming the glass used.
 TEST(GlassLibrary, CommandLineAndEnvironment) {
   const std::string lens = tempFile("envlens.zmx", zmxWithGlass("", "ENV-GLASS 0 0 1.5 50"));
-  const auto dir = std::filesystem::temp_directory_path() / "lensim_agf_test" / "envcat";
+  const auto dir = tempDir() / "envcat";
   std::filesystem::create_directories(dir);
   std::ofstream((dir / "envcat.agf").string(), std::ios::binary)
       << "NM ENV-GLASS 2 0 1.59523 40 0 0\nCD 1.5 0.01 0 0 0 0\nLD 0.3 2.0\n";

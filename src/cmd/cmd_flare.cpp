@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -12,9 +13,13 @@
 #include "lens_options.h"
 #include "lensim/optics/coating/ghosts.h"
 #include "lensim/optics/coating/lens_coatings.h"
+#include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_system.h"
+#include "lensim/util/file.h"
 #include "lensim/util/log.h"
+#include "lensim/util/plot.h"
+#include "lensim/util/svg.h"
 
 namespace lensim::cmd {
 
@@ -183,6 +188,110 @@ void printCoatings(const LensSystem& lens) {
     t += fmt::format("{:.4f} at {:.0f} nm, ", axialTransmittance(lens, c, l), l);
   std::cout << fmt::format("  {:<26}{}mean {:.4f} over 400..700 nm (reflection losses, axial)\n",
                            "transmittance", t, meanTransmittance(lens, c));
+}
+
+int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
+                 const std::string& output) {
+  // I,J: two non-negative integers.
+  const size_t comma = ghost.find(',');
+  int ij[2] = {0, 0};
+  bool parsed = comma != std::string::npos;
+  for (int k = 0; parsed && k < 2; ++k) {
+    const std::string item = k == 0 ? ghost.substr(0, comma) : ghost.substr(comma + 1);
+    parsed = !item.empty() && item.size() < 6 &&
+             item.find_first_not_of("0123456789") == std::string::npos;
+    if (parsed) ij[k] = std::stoi(item);
+  }
+  if (!parsed)
+    throw Error(
+        fmt::format("ghost {}: expected I,J (two surface indices, as `lens ghosts` "
+                    "lists them)",
+                    ghost));
+  if (rays < 1 || rays > 1000) throw Error(fmt::format("--rays {}: expected 1 to 1000", rays));
+  FocusedLens fl = setUpLens(args);
+  logDiagnostics(fl.allDiagnostics());
+  const LensSystem& lens = *fl.lens;
+  DiagramOptions opts;
+  opts.rays = rays;
+  opts.film_diagonal_mm = args.film_diagonal_mm;
+  opts.fields = {0.0};
+  LensDiagram d = buildLensDiagram(fl, opts);
+  setGhostBundle(d, fl, ij[0], ij[1], rays);  // refuses a bad pair, naming it
+  // The paraxial ghost focus and intensity, as `lens ghosts` reports them (when the coatings
+  // resolve; the drawing does not need them).
+  try {
+    const std::vector<double> band = visibleBand();
+    const GhostAnalysis g = analyseGhosts(lens, resolveCoatings(lens.prescription()), band);
+    for (const Ghost& h : g.ghosts)
+      if (h.b == ij[0] && h.a == ij[1])
+        d.annotations.push_back(fmt::format(
+            "paraxial focus z {} mm (film at {:.3f} mm), film diameter {:.3f} mm, relative "
+            "intensity {:.3e}",
+            fmtInf(h.focus_z_mm, "{:.3f}"), lens.filmZ_mm(), h.film_diameter_mm,
+            h.relative_intensity));
+  } catch (const Error& e) {
+    logWarning(fmt::format("ghost intensity not annotated: {}", e.what()));
+  }
+  writeFileAtomically(output, lensDiagramSheet({d}, false, 1));
+  logInfo(fmt::format("wrote {} (ghost {},{}, {} rays)", output, ij[0], ij[1], rays));
+  return 0;
+}
+
+int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json) {
+  FocusedLens fl = setUpLens(args);
+  logDiagnostics(fl.allDiagnostics());
+  const LensSystem& lens = *fl.lens;
+  const std::vector<double> band = visibleBand();
+  const GhostAnalysis g = analyseGhosts(lens, resolveCoatings(lens.prescription()), band);
+  constexpr size_t kShown = 20;  // the brightest; the rest are orders of magnitude fainter
+  // Linear bars in units of the brightest ghost's decade, with room above them for the notes.
+  const double brightest = g.ghosts.empty() ? 0.0 : g.ghosts.front().relative_intensity;
+  if (!(brightest > 0))
+    throw Error(fmt::format("{}: no ghost reaches the film (no two surfaces reflect)",
+                            lens.prescription().path));
+  const int decade = int(std::floor(std::log10(brightest)));
+  const double unit = std::pow(10.0, decade);
+  plot::Chart chart;
+  chart.title = fmt::format("Ghost intensities — {}", lens.prescription().name);
+  chart.x_label = "rank (brightest first)";
+  chart.y_label = fmt::format("ghost / direct image energy (x 1e{})", decade);
+  plot::Series bars;
+  bars.style = plot::Style::Bars;
+  bars.name = "axial, 400-700 nm";
+  json ranks = json::array();
+  double total = 0;
+  for (const Ghost& h : g.ghosts) total += h.relative_intensity;
+  std::string top;
+  for (const Ghost& h : g.ghosts) {
+    if (bars.points.size() == kShown || !(h.relative_intensity > 0)) break;
+    const double rank = double(bars.points.size() + 1);
+    bars.points.push_back({rank, h.relative_intensity / unit});
+    ranks.push_back({{"rank", rank},
+                     {"first_reflection_surface", h.b},
+                     {"second_reflection_surface", h.a},
+                     {"relative_intensity", h.relative_intensity}});
+    if (bars.points.size() <= 6)
+      top += fmt::format("{}{}: {},{}", top.empty() ? "" : "  ", bars.points.size(), h.b, h.a);
+  }
+  chart.y_range = std::pair{0.0, 1.3 * brightest / unit};
+  chart.x_range = std::pair{0.3, double(bars.points.size()) + 0.7};
+  chart.notes.push_back(
+      fmt::format("all {} ghosts together {:.3e} of the direct image", g.ghosts.size(), total));
+  chart.notes.push_back("I,J of the brightest: " + top);
+  chart.series.push_back(std::move(bars));
+  svg::Document doc(720, 440);
+  doc.rect(0, 0, 720, 440, {{"fill", "#ffffff"}});
+  chart.render(doc, 0, 0, 720, 440);
+  writeFileAtomically(output, doc.str());
+  if (as_json)
+    std::cout << json{{"kind", "ghosts"},
+                      {"lens", lens.prescription().path},
+                      {"total_relative_intensity", total},
+                      {"bars", ranks}}
+                     .dump(2)
+              << "\n";
+  logInfo(fmt::format("wrote {}", output));
+  return 0;
 }
 
 void registerLensGhostsCommand(CLI::App& lens, Action& action) {

@@ -516,9 +516,20 @@ struct DrawArgs {
   std::string from = "film";
   bool same_scale = false;
   std::string wavelengths;  ///< --wavelengths: bundles at each, in their colours
+  std::string ghost;        ///< --ghost I,J: the rays of that ghost (cmd_flare.cpp)
 };
 
 int runDraw(const LensArgs& common, const DrawArgs& args) {
+  if (!args.ghost.empty()) {
+    if (args.lenses.size() != 1 || !args.wavelengths.empty())
+      throw Error(fmt::format(
+          "--ghost {}: draws one lens at its primary wavelength (got {} "
+          "lenses{})",
+          args.ghost, args.lenses.size(), args.wavelengths.empty() ? "" : " and --wavelengths"));
+    LensArgs one = common;
+    one.lens_path = args.lenses.front();
+    return runGhostDraw(one, args.ghost, args.rays, args.output);
+  }
   DiagramOptions opts;
   opts.fields = parseList(args.fields, "--fields");
   for (double f : opts.fields)
@@ -674,6 +685,7 @@ std::string breathingPlot(const LensArgs& args, json& j) {
 }
 
 int runPlot(const LensArgs& args, const PlotArgs& pa) {
+  if (pa.kind == "ghosts") return runGhostPlot(args, pa.output, pa.as_json);  // cmd_flare.cpp
   if (pa.kind == "breathing") {
     json j{{"kind", pa.kind}, {"lens", args.lens_path}};
     const std::string svg_text = breathingPlot(args, j);
@@ -839,6 +851,9 @@ void registerLensCommands(CLI::App& app, Action& action) {
     draw->add_option("--rays", d->rays, "Rays per bundle (default 11)");
     draw->add_option("--from", d->from, "Trace bundles from the film or from the scene")
         ->check(CLI::IsMember({"film", "scene"}));
+    draw->add_option("--ghost", d->ghost,
+                     "Draw the ghost that reflects at surface I, then at J < I (I,J as `lens "
+                     "ghosts` lists them): an axial bundle from infinity, traced exactly");
     draw->add_flag("--same-scale", d->same_scale, "Draw every lens of a sheet at one scale");
     draw->add_option("--wavelengths", d->wavelengths,
                      "Trace the bundles at each wavelength (nm, comma-separated), drawn in their "
@@ -855,11 +870,12 @@ void registerLensCommands(CLI::App& app, Action& action) {
     plot->add_option("KIND", pa->kind,
                      "spot, distortion, vignetting, focus, chromatic (focal shift against "
                      "wavelength), lateral-color (F and C image height minus d), mtf, mtf-focus, "
-                     "fans, field, psf or breathing (field of view against focus distance)")
+                     "fans, field, psf, breathing (field of view against focus distance) or ghosts "
+                     "(the brightest ghosts' intensities, issue 31)")
         ->required()
-        ->check(CLI::IsMember({"spot", "distortion", "vignetting", "focus", "breathing",
-                               "chromatic",
-                               "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf"}));
+        ->check(
+            CLI::IsMember({"spot", "distortion", "vignetting", "focus", "breathing", "chromatic",
+                           "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf", "ghosts"}));
     addLensOptions(plot, *args);
     plot->add_option("-o,--output", pa->output, "Output SVG file")->required();
     plot->add_option("--fields", pa->fields,

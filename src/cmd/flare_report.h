@@ -11,12 +11,24 @@ class LensSystem;
 
 namespace lensim::cmd {
 
+struct LensArgs;
+
 /// The lens's coatings and its axial transmittance (reflection losses) for `lens info --json`;
 /// {"error": message} when the coatings cannot be resolved (a Zemax coating file not beside the
 /// lens file).
 nlohmann::json coatingsJson(const optics::LensSystem& lens);
 /// The same as text lines for `lens info`.
 void printCoatings(const optics::LensSystem& lens);
+
+/// `lensim lens draw LENS --ghost I,J -o OUT`: the lens diagram with the rays of the ghost that
+/// reflects at surface I, then at J (`ghost` is the option's text, checked here).
+int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
+                 const std::string& output);
+
+/// `lensim lens plot ghosts LENS -o OUT`: a bar chart of the brightest ghosts' intensities
+/// (log10 of ghost / direct energy, 400..700 nm, the lens's coatings); `as_json` also prints
+/// the plotted numbers.
+int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json);
 
 /// `lensim lens ghosts LENS`: the two-reflection ghosts ranked by intensity.
 void registerLensGhostsCommand(CLI::App& lens, Action& action);

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "lensim/optics/chief_ray.h"
+#include "lensim/optics/coating/ghost_trace.h"
 #include "lensim/util/plot.h"
 
 namespace lensim::optics {
@@ -230,6 +231,49 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
   return d;
 }
 
+void setGhostBundle(LensDiagram& d, const FocusedLens& fl, int first, int second, int rays) {
+  const LensSystem& lens = *fl.lens;
+  const LensTracer<double> tracer = ghostTracer(lens, first, second);  // throws for a bad pair
+  const auto& s = lens.interfaces();
+  double semi_max = 0;
+  for (const Interface& si : s) semi_max = std::max(semi_max, si.semi_aperture_mm);
+  const double x_limit = 1.3 * std::max(semi_max, d.film_half_height_mm);
+  const double z_front = d.z_min;
+  const std::string name = fmt::format("{},{}", first, second);
+  auto make = [&](double h) { return Ray{{h, 0, z_front}, {0, 0, 1}}; };
+  auto trace = [&](const Ray& r) { return tracer.traceFromScene(r); };
+  const double range = 1.5 * s.front().semi_aperture_mm;
+  const auto passing = passingRange(-range, range, make, trace);
+  const auto [lo, hi] = passing ? *passing : std::pair<double, double>{-range / 1.5, range / 1.5};
+  d.rays.clear();
+  d.field_values.clear();
+  const int count = std::max(1, rays);
+  for (int k = 0; k < count; ++k) {
+    DiagramRay ray;
+    ray.ghost = name;
+    ray.color = "#c0392b";
+    const double h = count == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * k / (count - 1);
+    ray.start = make(h);
+    ray.result = tracer.traceFromScene(ray.start, {}, &ray.points);
+    if (!ray.result.ok())  // the lens surface where it stopped, not the position on the path
+      ray.result.blocked_surface = ghostPathSurface(first, second, ray.result.blocked_surface);
+    const Ray& out = ray.result.ray;
+    if (ray.result.ok() && out.direction.z > 0) {
+      // On to the film, or to where the ray leaves the drawing (|x| = x_limit).
+      double t = (lens.filmZ_mm() - out.origin.z) / out.direction.z;
+      if (out.direction.x != 0)
+        t = std::min(t, (std::copysign(x_limit, out.direction.x) - out.origin.x) / out.direction.x);
+      if (t > 0) ray.points.push_back(out.origin + out.direction * t);
+    }
+    d.rays.push_back(std::move(ray));
+  }
+  d.annotations.push_back(fmt::format(
+      "ghost {}: an axial beam from infinity reflected at surface {}, then at surface {}", name,
+      first, second));
+  for (const DiagramRay& r : d.rays)
+    for (const Vec3& q : r.points) d.x_max = std::max(d.x_max, std::min(std::abs(q.x), x_limit));
+}
+
 double fitScale(const LensDiagram& d, double w, double h) {
   const double usable_w = w - 40, usable_h = h - 90;  // margins, title and annotations
   return std::min(usable_w / (d.z_max - d.z_min), usable_h / (2 * d.x_max));
@@ -303,11 +347,12 @@ void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double 
     const std::string colour = r.color.empty() ? plot::paletteColor(r.field) : r.color;
     std::vector<std::pair<double, double>> pts;
     for (const Vec3& q : r.points) pts.push_back(P(q.z, std::clamp(q.x, -clip, clip)));
-    svg::Attrs a{{"class", "ray"},
+    svg::Attrs a{{"class", r.ghost.empty() ? "ray" : "ghost-ray"},
                  {"data-field", std::to_string(r.field)},
                  {"stroke", colour},
                  {"stroke-width", "0.9"},
                  {"stroke-opacity", "0.85"}};
+    if (!r.ghost.empty()) a.push_back({"data-ghost", r.ghost});
     if (!r.result.ok()) {
       a.push_back({"data-blocked-at", std::to_string(r.result.blocked_surface)});
       a.push_back({"data-reason", blockReasonName(r.result.reason)});

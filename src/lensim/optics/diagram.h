@@ -33,6 +33,7 @@ struct DiagramRay {
   std::vector<Vec3> points;  ///< the tracer's path, then a short extension (if it got through)
   TraceResult result;        ///< the tracer's result
   std::string color;         ///< SVG colour; empty: the field's palette colour
+  std::string ghost;         ///< "I,J" for a ray of a ghost path (setGhostBundle); else empty
 };
 
 /// A glass element: the closed outline of its cross-section, (z, x) points in mm.
@@ -62,6 +63,13 @@ struct LensDiagram {
 
 /// Traces the bundles and outlines the elements of a focused lens.
 LensDiagram buildLensDiagram(const FocusedLens& lens, const DiagramOptions& opts);
+
+/// Replaces the diagram's bundles by the rays of the two-reflection ghost that reflects first at
+/// surface `first` and then at `second` (as `lens ghosts` numbers them): `rays` rays of an axial
+/// bundle from infinity, spread across the part of the entrance beam that gets through the
+/// ghost path, traced exactly (ghostTracer) to the film. Throws lensim::Error for a pair
+/// ghostPathInterfaces refuses.
+void setGhostBundle(LensDiagram& d, const FocusedLens& lens, int first, int second, int rays);
 
 /// Pixels per millimetre that fit the diagram into a w x h cell.
 double fitScale(const LensDiagram& d, double w, double h);

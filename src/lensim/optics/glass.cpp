@@ -12,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "lensim/optics/lens_formats.h"
 #include "lensim/optics/glass/embedded.h"
 #include "lensim/optics/glass/library.h"
 
@@ -352,7 +353,7 @@ GlassCatalog GlassCatalog::load(const std::string& path) {
   for (char& c : key) c = char(std::tolower(static_cast<unsigned char>(c)));
   if (ext == ".agf") return fromAgf(ss.str(), path, key, stem);
   if (ext == ".csv") {
-    GlassCatalog cat = parse(decodeText(ss.str(), path), path);
+    GlassCatalog cat = parse(decodeTextFile(ss.str(), path), path);
     for (CatalogGlass& g : cat.glasses_) g.catalog = key;
     cat.catalogs_ = {key};
     return cat;

@@ -15,7 +15,8 @@
 namespace lensim::optics {
 
 /// Decodes a text file's bytes to UTF-8: UTF-16 LE/BE with a byte-order mark, UTF-8 (with or
-/// without a BOM) or ASCII. Throws a located error for malformed UTF-16.
+/// without a BOM) or ASCII, and anything else read as Latin-1 (ISO 8859-1, as older Zemax files
+/// and vendors' glass catalogues are). Throws a located error for malformed UTF-16.
 std::string decodeTextFile(std::string_view bytes, const std::string& path);
 
 /// Parses a Zemax `.zmx` file (sequential mode). Surfaces: STANDARD, EVENASPH, ODDASPH, TOROIDAL

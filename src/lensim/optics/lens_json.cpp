@@ -146,6 +146,18 @@ void checkSurface(const LensSurface& s, int index, int mirrors = 0) {
                                    index, s.semiAperture_mm()));
 }
 
+// A JSON object key naming a surface index ("0", "12"); -1 when it is not a whole number >= 0.
+int surfaceIndexKey(const std::string& k) {
+  size_t used = 0;
+  int index = -1;
+  try {
+    index = std::stoi(k, &used);
+  } catch (...) {
+    return -1;
+  }
+  return used == k.size() ? index : -1;
+}
+
 // lensim JSON "configurations" (a zoom): an array of objects, each overriding surfaces by their
 // 0-based index: {"name": "wide", "thickness_mm": {"4": 2.604}, "semi_aperture_mm": {...},
 // "radius_mm": {...}}; "active_configuration" (1-based) says which one "surfaces" shows.
@@ -178,14 +190,8 @@ void readLensimConfigurations(const json& j, std::string_view text, const std::s
                                      "(\"0\", \"1\", ...) to numbers",
                                      c + 1, key));
       for (const auto& [k, v] : value.items()) {
-        size_t used = 0;
-        int index = -1;
-        try {
-          index = std::stoi(k, &used);
-        } catch (...) {
-          index = -1;
-        }
-        if (used != k.size() || index < 0 || index >= int(p.surfaces.size()))
+        const int index = surfaceIndexKey(k);
+        if (index < 0 || index >= int(p.surfaces.size()))
           throw Error(loc, fmt::format("configuration {}: \"{}\": surface index \"{}\" is not "
                                        "0 to {}",
                                        c + 1, key, k, p.surfaces.size() - 1));
@@ -230,14 +236,8 @@ void readLensimFocusGroup(const json& j, const std::string& path, LensPrescripti
   if (!it->is_object() || it->empty())
     throw Error(top, "\"focus_group\" must map surface indices (\"4\") to rates (1, -1)");
   for (const auto& [k, v] : it->items()) {
-    size_t used = 0;
-    int index = -1;
-    try {
-      index = std::stoi(k, &used);
-    } catch (...) {
-      index = -1;
-    }
-    if (used != k.size() || index < 0 || index + 1 >= int(p.surfaces.size()))
+    const int index = surfaceIndexKey(k);
+    if (index < 0 || index + 1 >= int(p.surfaces.size()))
       throw Error(top, fmt::format("\"focus_group\": \"{}\" is not a gap between surfaces "
                                    "(0 to {})",
                                    k, int(p.surfaces.size()) - 2));

@@ -43,6 +43,19 @@ void appendUtf8(std::string& out, std::uint32_t cp) {
   }
 }
 
+bool validUtf8(std::string_view s) {
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto b = static_cast<unsigned char>(s[i]);
+    const int extra = b < 0x80 ? 0 : (b >> 5) == 6 ? 1 : (b >> 4) == 14 ? 2 : (b >> 3) == 30 ? 3 : -1;
+    if (extra < 0 || i + size_t(extra) >= s.size() + (extra == 0 ? 1 : 0)) return false;
+    for (int k = 1; k <= extra; ++k)
+      if ((static_cast<unsigned char>(s[i + size_t(k)]) >> 6) != 2) return false;
+    i += size_t(extra) + 1;
+  }
+  return true;
+}
+
 }  // namespace
 
 std::string decodeTextFile(std::string_view bytes, const std::string& path) {
@@ -51,8 +64,12 @@ std::string decodeTextFile(std::string_view bytes, const std::string& path) {
   const bool be = bytes.size() >= 2 && u8(0) == 0xFE && u8(1) == 0xFF;
   if (!le && !be) {
     if (bytes.size() >= 3 && u8(0) == 0xEF && u8(1) == 0xBB && u8(2) == 0xBF)
-      return std::string(bytes.substr(3));
-    return std::string(bytes);
+      bytes.remove_prefix(3);
+    if (validUtf8(bytes)) return std::string(bytes);
+    std::string out;  // Latin-1 (ISO 8859-1): each byte is its code point
+    out.reserve(bytes.size() + bytes.size() / 8);
+    for (char c : bytes) appendUtf8(out, static_cast<unsigned char>(c));
+    return out;
   }
   std::string out;
   out.reserve(bytes.size() / 2);

@@ -154,7 +154,17 @@ void Chart::render(svg::Document& doc, double x, double y, double w, double h) c
       if (!std::isfinite(px) || !std::isfinite(py) || (x_log && px <= 0)) continue;
       pts.push_back({mapX(px), mapY(py)});
     }
-    if (s.style == Style::Markers) {
+    if (s.style == Style::Bars) {
+      doc.beginGroup({{"class", "series bars"}, {"fill", s.color}});
+      const double base = mapY(std::clamp(0.0, std::min(y0, y1), std::max(y0, y1)));
+      for (const auto& [px, py] : s.points) {
+        if (!std::isfinite(px) || !std::isfinite(py) || x_log) continue;
+        const double l = mapX(px - 0.5 * s.bar_width), r = mapX(px + 0.5 * s.bar_width);
+        const double top = std::min(mapY(py), base), bot = std::max(mapY(py), base);
+        doc.rect(l, top, r - l, bot - top, {{"class", "bar"}});
+      }
+      doc.endGroup();
+    } else if (s.style == Style::Markers) {
       doc.beginGroup({{"class", "series"}, {"fill", s.color}});
       for (const auto& [px, py] : pts) doc.circle(px, py, s.marker_radius);
       doc.endGroup();
@@ -172,6 +182,8 @@ void Chart::render(svg::Document& doc, double x, double y, double w, double h) c
     const double lx = ox + pw - 190;
     if (s.style == Style::Markers)
       doc.circle(lx + 10, ly - 4, 3, {{"fill", s.color}});
+    else if (s.style == Style::Bars)
+      doc.rect(lx + 4, ly - 9, 12, 10, {{"fill", s.color}});
     else
       doc.line(lx, ly - 4, lx + 20, ly - 4,
                {{"stroke", s.color},

@@ -11,7 +11,12 @@
 namespace lensim::plot {
 
 /// How a series is drawn.
-enum class Style { Line, Dashed, Markers };
+enum class Style {
+  Line,
+  Dashed,
+  Markers,
+  Bars,  ///< a bar per point, from y = 0 (clamped to the y range) to the point
+};
 
 /// One data series: points in data units.
 struct Series {
@@ -20,6 +25,7 @@ struct Series {
   Style style = Style::Line;
   std::vector<std::pair<double, double>> points;
   double marker_radius = 1.6;
+  double bar_width = 0.8;  ///< Bars: width in x data units
 };
 
 /// A chart: axes, series, labels. Ranges are found from the data unless given.

@@ -5,6 +5,9 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <string_view>
+
+#include "lensim/optics/lens_formats.h"
 
 namespace lensim::optics {
 
@@ -40,65 +43,6 @@ double schottSeries(const ZemaxCoefficients& c, int n, double l2) {
     s += c[size_t(i)] * inv;
   }
   return s;
-}
-
-void appendUtf8(std::string& out, std::uint32_t cp) {
-  if (cp < 0x80) {
-    out += char(cp);
-  } else if (cp < 0x800) {
-    out += char(0xC0 | (cp >> 6));
-    out += char(0x80 | (cp & 0x3F));
-  } else if (cp < 0x10000) {
-    out += char(0xE0 | (cp >> 12));
-    out += char(0x80 | ((cp >> 6) & 0x3F));
-    out += char(0x80 | (cp & 0x3F));
-  } else {
-    out += char(0xF0 | (cp >> 18));
-    out += char(0x80 | ((cp >> 12) & 0x3F));
-    out += char(0x80 | ((cp >> 6) & 0x3F));
-    out += char(0x80 | (cp & 0x3F));
-  }
-}
-
-bool validUtf8(std::string_view s) {
-  size_t i = 0;
-  while (i < s.size()) {
-    const auto b = static_cast<unsigned char>(s[i]);
-    const int extra = b < 0x80 ? 0 : (b >> 5) == 6 ? 1 : (b >> 4) == 14 ? 2 : (b >> 3) == 30 ? 3 : -1;
-    if (extra < 0 || i + size_t(extra) >= s.size() + (extra == 0 ? 1 : 0)) return false;
-    for (int k = 1; k <= extra; ++k)
-      if ((static_cast<unsigned char>(s[i + size_t(k)]) >> 6) != 2) return false;
-    i += size_t(extra) + 1;
-  }
-  return true;
-}
-
-std::string fromUtf16(std::string_view b, bool little, const std::string& path) {
-  if (b.size() % 2)
-    throw Error(FileLoc{path}, fmt::format("UTF-16 text with an odd number of bytes ({})", b.size()));
-  std::string out;
-  out.reserve(b.size() / 2);
-  auto unit = [&](size_t i) {
-    const auto lo = static_cast<unsigned char>(b[i + (little ? 0 : 1)]);
-    const auto hi = static_cast<unsigned char>(b[i + (little ? 1 : 0)]);
-    return std::uint32_t(lo | (hi << 8));
-  };
-  for (size_t i = 0; i < b.size(); i += 2) {
-    std::uint32_t u = unit(i);
-    if (u >= 0xD800 && u < 0xDC00 && i + 2 < b.size()) {
-      const std::uint32_t v = unit(i + 2);
-      if (v >= 0xDC00 && v < 0xE000) {
-        appendUtf8(out, 0x10000 + ((u - 0xD800) << 10) + (v - 0xDC00));
-        i += 2;
-        continue;
-      }
-    }
-    if (u >= 0xD800 && u < 0xE000)
-      throw Error(FileLoc{path}, fmt::format("UTF-16 text: unpaired surrogate 0x{:04X} at byte {}",
-                                             u, i));
-    appendUtf8(out, u);
-  }
-  return out;
 }
 
 bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
@@ -177,20 +121,8 @@ std::string agfStatusName(int status) {
   return status >= 0 && status <= 4 ? names[status] : fmt::format("status {}", status);
 }
 
-std::string decodeText(std::string_view b, const std::string& path) {
-  auto byte = [&](size_t i) { return static_cast<unsigned char>(b[i]); };
-  if (b.size() >= 2 && byte(0) == 0xFF && byte(1) == 0xFE) return fromUtf16(b.substr(2), true, path);
-  if (b.size() >= 2 && byte(0) == 0xFE && byte(1) == 0xFF) return fromUtf16(b.substr(2), false, path);
-  if (b.size() >= 3 && byte(0) == 0xEF && byte(1) == 0xBB && byte(2) == 0xBF) b.remove_prefix(3);
-  if (validUtf8(b)) return std::string(b);
-  std::string out;  // Latin-1: each byte is the code point
-  out.reserve(b.size() + b.size() / 8);
-  for (char c : b) appendUtf8(out, static_cast<unsigned char>(c));
-  return out;
-}
-
 std::vector<AgfGlass> parseAgf(std::string_view bytes, const std::string& path) {
-  const std::string text = decodeText(bytes, path);
+  const std::string text = decodeTextFile(bytes, path);
   std::vector<AgfGlass> out;
   // Split into lines at CRLF, LF or CR; a line that starts with a number continues the line
   // before it (long CD lines are wrapped so in some catalogues).

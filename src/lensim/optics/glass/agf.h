@@ -77,12 +77,7 @@ struct AgfGlass {
 /// "standard", "preferred", "obsolete", "special", "melt" or "status N".
 std::string agfStatusName(int status);
 
-/// Text in UTF-8: UTF-16 LE/BE with a byte-order mark transcoded, a UTF-8 byte-order mark
-/// dropped, text that is not valid UTF-8 read as Latin-1 (ISO-8859-1). Throws lensim::Error at
-/// `path` for UTF-16 with an odd byte count or an unpaired surrogate.
-std::string decodeText(std::string_view bytes, const std::string& path);
-
-/// Parses an AGF file (bytes as stored; decoded with decodeText). Throws lensim::Error
+/// Parses an AGF file (bytes as stored; decoded by decodeTextFile, optics/lens_formats.h). Throws lensim::Error
 /// (`path:line:col`) for a malformed line: a number that is not one, an NM line without its
 /// fields, a formula number Zemax does not define, a CD/LD/IT line before any NM, an LD range
 /// that is empty.
