@@ -14,6 +14,7 @@
 #include "flare_report.h"
 #include "lens_analysis.h"
 #include "lens_options.h"
+#include "lens_tilt.h"
 #include "lensim/optics/anamorphic.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/chromatic.h"
@@ -158,6 +159,7 @@ int runConfigs(const LensArgs& args, bool as_json) {
 }
 
 int runInfo(const LensArgs& args, bool as_json) {
+  const TiltShift tilt_shift = parseTiltShift(args.tilt, args.shift);
   FocusedLens fl = setUpLens(args);
   const LensSystem& lens = *fl.lens;
   const ParaxialData& p = fl.paraxial;
@@ -269,6 +271,7 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["elements"] = elementsJson(lens);
     j["coatings"] = coatingsJson(lens);
     j["diagnostics"] = diagnosticsJson(fl);
+    if (tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
     std::cout << j.dump(2) << "\n";
     return 0;
   }
@@ -374,6 +377,7 @@ int runInfo(const LensArgs& args, bool as_json) {
                      "across it (paraxial {:.3f} deg)",
                      *fov.image_circle_diameter_mm, args.film_diagonal_mm, *fov.real_max_deg,
                      fov.paraxial_deg));
+  if (tilt_shift.any()) printTiltShift(fl, tilt_shift, args.film_diagonal_mm);
   printCoatings(lens);
   std::cout << fmt::format("\n  {:>3} {:>5} {:>12} {:>11} {:>8} {:>10} {:>11}\n", "#", "line",
                            "radius", "thickness", "index", "aperture", "z");
@@ -813,6 +817,11 @@ void registerLensCommands(CLI::App& app, Action& action) {
     info->add_flag("--configs", *configs,
                    "Table of every configuration of a zoom lens: EFL, f-number, BFL, field of "
                    "view, total track");
+    info->add_option("--tilt", args->tilt,
+                     "X,Y: the lens tilted against the film about its x and y axes (degrees): "
+                     "reports the hinge line and the plane of focus (docs/zoom.md)");
+    info->add_option("--shift", args->shift,
+                     "X,Y: the lens axis shifted to this film point (mm)");
     info->callback([&action, args, as_json, configs] {
       action = [args, as_json, configs] {
         return *configs ? runConfigs(*args, *as_json) : runInfo(*args, *as_json);

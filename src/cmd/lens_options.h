@@ -30,6 +30,9 @@ struct LensArgs {
   std::optional<int> configuration;
   /// `--focal-length MM`: a zoom lens set to this paraxial EFL (configurations interpolated).
   std::optional<double> zoom_focal_length_mm;
+  /// `lens info --tilt X,Y` (degrees) and `--shift X,Y` (mm): the lens tilted and shifted
+  /// against the film (optics/tilt_shift.h); empty when not given.
+  std::string tilt, shift;
 
   /// `--glass-catalog FILE` (repeatable): catalogues searched before the built-in ones.
   std::vector<std::string> glass_catalogs;

@@ -12,6 +12,7 @@
 #include "lensim/optics/configurations.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/filter.h"
+#include "lensim/sampling/sampling.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
@@ -108,8 +109,11 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
                                                settings_.x_resolution),
                      half_height_mm_ * (1 + 2 * std::max(0.0, settings_.filter_radius.y - 0.5) /
                                                 settings_.y_resolution)};
-  pupil_options.film_half_extent_mm = sampled;
-  const double film_radius = std::hypot(sampled.x, sampled.y);
+  // A shifted lens sees the film up to |shift| farther from its axis: the bound covers that.
+  const Vec2 reach{sampled.x + std::abs(settings_.tilt_shift.shift_mm.x),
+                   sampled.y + std::abs(settings_.tilt_shift.shift_mm.y)};
+  pupil_options.film_half_extent_mm = reach;
+  const double film_radius = std::hypot(reach.x, reach.y);
   // Other wavelengths move the region's edge (the lens's power changes by about 1/V_d between F
   // and C, and much more toward 360 nm), so rays of 360-830 nm must not be lost (checked
   // through the film irradiance at 450 and 620 nm in tests/render_dispersion_test.cpp, and ray
@@ -150,10 +154,114 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
           }
         }
   }
+  setUpTiltShift(sampled);
   if (settings_.simple_weighting && !(centre_area_mm2_ > 0))
     throw Error("simpleweighting: no light reaches the centre of the film to normalise by");
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   startup_cpu_seconds_ = processCpuSeconds() - cpu0;
+}
+
+// Tilt and shift (optics/tilt_shift.h). Camera space is the film's frame; film points and the
+// rays leaving the lens are carried between it and lens space by the film's placement.
+// - Shift only: the film stays on the lens's normal plane, so the exit-pupil bound applies as
+//   it is, at the film point's position relative to the axis (built out to the film's corners
+//   plus the shift), with the usual weight cos^4(theta) A / z^2.
+// - Tilt: film points leave the plane the bound was built for, and the bound is not valid off
+//   it. Instead each film point samples a disc on the plane z = rear_zmax_mm_ (the rear
+//   surface's extreme toward the film) uniformly: every ray from the film that reaches the rear
+//   surface's clear aperture (|s| <= a, z_s in [zmin, zmax]) crosses that plane at
+//   (1 - t) x + t s with t = (x_z - zmax) / (x_z - z_s) in [t_min, 1], t_min = (x_z - zmax) /
+//   (x_z - zmin), so within radius max(a, (1 - t_min) |x| + t_min a) of the axis: the disc
+//   holds all of them and the estimate stays unbiased (the tracer stops the rest). The weight
+//   is the film irradiance integrand over that plane, cos_film cos_plane / r^2 times the disc's
+//   area, with cos_film against the tilted film's normal. This wastes more samples than the
+//   bound (the disc is the whole rear element, not the exit pupil's image of the stop): the
+//   price of staying exact for any tilt.
+void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
+  const optics::TiltShift& ts = settings_.tilt_shift;
+  if (!ts.any()) return;
+  const FileLoc& loc = settings_.tilt_shift_loc;
+  const optics::LensSystem& lens = *lens_.lens;
+  if (lens.mirrorCount() > 0)
+    throw Error(loc, "lenstilt/lensshift: not supported for a lens with mirrors (its image "
+                     "space is folded)");
+  if (settings_.origin_at_front_vertex || settings_.rear_disc_only ||
+      settings_.zero_if_neighbour_blocked)
+    throw Error(loc, "lenstilt/lensshift: not supported with the pbrt-v1/v2 camera conventions");
+  placement_.emplace(ts, lens.filmZ_mm());
+  if (!ts.tilted()) {
+    logInfo(fmt::format("{}: lens shifted by ({:g}, {:g}) mm: its axis meets the film there",
+                        loc.str(), ts.shift_mm.x, ts.shift_mm.y));
+    return;
+  }
+  const optics::Interface& r = lens.interfaces().back();
+  rear_semi_mm_ = r.semi_aperture_mm;
+  rear_zmin_mm_ = rear_zmax_mm_ = r.z_mm;
+  if (r.radius_mm != 0 || !r.shape.isSpherical())
+    for (int i = 0; i <= 64; ++i)
+      for (int k = 0; k < 16; ++k) {
+        const double h = rear_semi_mm_ * i / 64, a = 2 * M_PI * k / 16;
+        if (auto sg = optics::surfaceSag(r.radius_mm, r.shape, h * std::cos(a), h * std::sin(a))) {
+          rear_zmin_mm_ = std::min(rear_zmin_mm_, r.z_mm + sg->z);
+          rear_zmax_mm_ = std::max(rear_zmax_mm_, r.z_mm + sg->z);
+        }
+      }
+  // The sampled points' film plane must lie wholly behind the rear surface (z is linear over
+  // the film, so its corners decide).
+  for (int cx = -1; cx <= 1; cx += 2)
+    for (int cy = -1; cy <= 1; cy += 2) {
+      const Vec3 p = placement_->lensFromFilm({cx * sampled.x, cy * sampled.y});
+      if (!(p.z > rear_zmax_mm_ + 1e-3))
+        throw Error(loc, fmt::format("lenstilt [{:g} {:g}]: the film's corner ({:.3f}, {:.3f}) mm "
+                                     "comes to z = {:.4f} mm, into the lens (its rear surface "
+                                     "reaches z = {:.4f} mm); tilt less or focus farther",
+                                     ts.tilt_deg.x, ts.tilt_deg.y, cx * sampled.x,
+                                     cy * sampled.y, p.z, rear_zmax_mm_));
+    }
+  try {
+    scheimpflug_ = optics::scheimpflug(lens_.paraxial, *placement_);
+  } catch (const Error& e) {
+    throw Error(loc, e.message());
+  }
+  const optics::ScheimpflugData& sd = *scheimpflug_;
+  logInfo(fmt::format(
+      "{}: lens tilted {:.4f} deg (shift ({:g}, {:g}) mm): hinge line J = f / sin(tilt) = {:.2f} "
+      "mm from the front nodal point, through ({:.2f}, {:.2f}, {:.2f}) mm (lens space); plane of "
+      "focus through it meets the axis {} and lies at {:.3f} deg to the film (first-order)",
+      loc.str(), sd.tilt_deg, ts.shift_mm.x, ts.shift_mm.y, sd.hinge_distance_mm,
+      sd.hinge_point_mm.x, sd.hinge_point_mm.y, sd.hinge_point_mm.z,
+      std::isfinite(sd.object_distance_mm)
+          ? fmt::format("{:.4g} m in front of the front principal plane",
+                        sd.object_distance_mm / 1000)
+          : std::string("at infinity"),
+      sd.focus_plane_to_film_deg));
+}
+
+std::optional<RealisticCamera::FilmRay> RealisticCamera::placedFilmRay(const CameraSample& sample,
+                                                                       Vec2 film) const {
+  const Vec3 p = placement_->lensFromFilm(film);
+  if (!placement_->tiltShift().tilted()) {
+    const Vec2 at{p.x, p.y};
+    std::optional<FilmRay> f =
+        filmRay(sample, at, pupil_->sample(at, sample.lens, bandAt(sample.lambda_nm[0])));
+    if (f) {
+      const double z = lens_.lens->filmDistance_mm(), c2 = f->cos_theta * f->cos_theta;
+      f->g_per_mm2 = c2 * c2 / (z * z);
+    }
+    return f;
+  }
+  const double lat = std::hypot(p.x, p.y);
+  const double t_min = (p.z - rear_zmax_mm_) / (p.z - rear_zmin_mm_);
+  const double radius = std::max(rear_semi_mm_, (1 - t_min) * lat + t_min * rear_semi_mm_);
+  const Vec2 d = render::sampleUniformDiskConcentric(sample.lens);
+  const Vec3 q{radius * d.x, radius * d.y, rear_zmax_mm_};
+  const Vec3 to = q - p;
+  const double r2 = dot(to, to);
+  const Vec3 dir = to / std::sqrt(r2);
+  const double cos_plane = -dir.z, cos_film = -dot(dir, placement_->filmNormal());
+  if (!(cos_plane > 0) || !(cos_film > 0)) return std::nullopt;
+  return FilmRay{optics::RayT<float>{Vec3f(p), Vec3f(dir)}, cos_plane, M_PI * radius * radius,
+                 cos_film * cos_plane / r2};
 }
 
 int RealisticCamera::bandAt(double lambda_nm) const {
@@ -210,9 +318,14 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
   // Camera-space z: distance toward the scene from the film (pbrt-v3/v4) or from the front
   // vertex (the v1/v2 assignment's convention).
   const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens.filmZ_mm();
-  const Vec3 o_cam{r.ray.origin.x * u, r.ray.origin.y * u, (z0 - r.ray.origin.z) * u};
-  const Vec3 d_cam{double(r.ray.direction.x), double(r.ray.direction.y),
-                   -double(r.ray.direction.z)};
+  Vec3 o_cam{r.ray.origin.x * u, r.ray.origin.y * u, (z0 - r.ray.origin.z) * u};
+  Vec3 d_cam{double(r.ray.direction.x), double(r.ray.direction.y), -double(r.ray.direction.z)};
+  if (placement_) {  // camera space is the film's frame (film at z = 0, the scene toward +z)
+    const Vec3 o = placement_->filmFromLensPoint(Vec3(r.ray.origin));
+    const Vec3 d = placement_->filmFromLensVector(Vec3(r.ray.direction));
+    o_cam = {o.x * u, o.y * u, -o.z * u};
+    d_cam = {d.x, d.y, -d.z};
+  }
   CameraRay ray;
   // pbrt-v4's CameraBase::SampleTime (a time uniform over the shutter) and the camera transform
   // at that time (CameraTransform::RenderFromCamera); the lens itself is in camera space.
@@ -231,6 +344,9 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
   const double c2 = f.cos_theta * f.cos_theta;
   const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
   ray.weight = transmission * c2 * c2 * f.area_mm2 / norm;
+  if (placement_)  // the same integrand for a tilted film (placedFilmRay): G A, G = c^4 / z^2 untilted
+    ray.weight = transmission * f.g_per_mm2 * f.area_mm2 *
+                 (settings_.simple_weighting ? z * z / centre_area_mm2_ : 1.0);
   return ray;
 }
 
@@ -323,7 +439,8 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
   if (!r.ok()) return std::nullopt;
   std::optional<CameraRay> ray = finish(r, f, sample.time);
   if (!ray) return ray;
-  if (!sample.filter || !(sample.filter_weight != 0)) {
+  // (b) also for a tilted or shifted film: (c)'s densities assume the untilted, centred film.
+  if (!sample.filter || !(sample.filter_weight != 0) || placement_) {
     ray->hero_only = true;  // (b)
     return ray;
   }
@@ -379,7 +496,9 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
 std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample) const {
   const Vec2 film = filmPoint(sample.film_raster);
   const std::optional<FilmRay> f =
-      filmRay(sample, film, pupil_->sample(film, sample.lens, bandAt(sample.lambda_nm[0])));
+      placement_ ? placedFilmRay(sample, film)
+                 : filmRay(sample, film,
+                           pupil_->sample(film, sample.lens, bandAt(sample.lambda_nm[0])));
   if (!f) return std::nullopt;
   if (dispersive_) return dispersiveRay(sample, *f);
   const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f->ray);
@@ -389,6 +508,10 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
 
 void RealisticCamera::generateRays(const CameraSample* samples, int n,
                                    std::optional<CameraRay>* rays) const {
+  if (placement_) {  // one by one (tilt and shift: placedFilmRay)
+    for (int i = 0; i < std::min(n, int(kMaxBatch)); ++i) rays[i] = generateRay(samples[i]);
+    return;
+  }
   constexpr int kB = optics::LensTracer<float>::kBatch;
   static_assert(kB >= kMaxBatch);
   FilmRay lanes[kB];
@@ -445,6 +568,11 @@ bool RealisticCamera::reachesFilm(const CameraSample& sample) const {
   // lens's image circle shrinks with the wavelength; where the sample's band has no bound, no
   // pupil point is drawn and nothing is traced (counting those as wasted put lentil:0007 at
   // 5.7% instead of 4.2%).
+  if (placement_) {
+    if (placement_->tiltShift().tilted()) return true;  // the rear disc: no bound to consult
+    const Vec3 p = placement_->lensFromFilm(filmPoint(sample.film_raster));
+    return pupil_->area_mm2({p.x, p.y}, bandAt(sample.lambda_nm[0])) > 0;
+  }
   return pupil_->area_mm2(filmPoint(sample.film_raster), bandAt(sample.lambda_nm[0])) > 0;
 }
 
@@ -466,7 +594,15 @@ std::string RealisticCamera::describe() const {
                      pupil_->tracesAtBuild(), pupil_->buildSeconds(), pupil_->intervals(),
                      pupil_->rotationallySymmetric() ? "" : ", 2-D (anamorphic)",
                      pupil_->bands() > 0 ? fmt::format(", {} wavelength bands", pupil_->bands())
-                                         : std::string());
+                                         : std::string()) +
+         (placement_ ? fmt::format("; lens shift ({:g}, {:g}) mm, tilt ({:g}, {:g}) deg{} (no "
+                                   "camera importance)",
+                                   settings_.tilt_shift.shift_mm.x, settings_.tilt_shift.shift_mm.y,
+                                   settings_.tilt_shift.tilt_deg.x, settings_.tilt_shift.tilt_deg.y,
+                                   settings_.tilt_shift.tilted()
+                                       ? ", rays aimed at the rear element's disc"
+                                       : "")
+                     : std::string());
 }
 
 std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
@@ -509,6 +645,9 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.configuration = r.configuration;
       s.zoom_focal_length_mm = r.zoom_focal_length_mm;
       s.zoom_loc = r.zoom_loc;
+      s.tilt_shift.shift_mm = r.lens_shift_mm;
+      s.tilt_shift.tilt_deg = r.lens_tilt_deg;
+      s.tilt_shift_loc = r.tilt_shift_loc.valid() ? r.tilt_shift_loc : c.loc;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

@@ -36,6 +36,7 @@
 #include "lensim/camera/camera.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/pupil.h"
+#include "lensim/optics/tilt_shift.h"
 #include "lensim/util/transform.h"
 
 namespace lensim::camera {
@@ -83,6 +84,11 @@ struct RealisticSettings {
   std::optional<int> configuration;
   std::optional<double> zoom_focal_length_mm;
   FileLoc zoom_loc;
+  /// Tilt and shift (the scene's "lenstilt" and "lensshift"; optics/tilt_shift.h): camera
+  /// space is then the film's frame, the lens turned and shifted in it. tilt_shift_loc: the
+  /// parameter, for errors.
+  optics::TiltShift tilt_shift;
+  FileLoc tilt_shift_loc;
   /// The pixel filter's radius (pixels): film points this far beyond the image's edge still
   /// reach its edge pixels (camera importance accepts them; film_bounds.h).
   Vec2 filter_radius{0.5, 0.5};
@@ -105,7 +111,9 @@ class RealisticCamera final : public Camera {
   std::string describe() const override;
 
   // Camera importance (realistic_importance.cpp).
-  bool supportsImportance() const override { return true; }
+  /// Not for a tilted or shifted lens (the importance code assumes the film on the lens's
+  /// normal plane, centred on its axis): bdpt and lighttracer refuse such a camera.
+  bool supportsImportance() const override { return !placement_; }
   std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2 u,
                                          const std::array<double, kCameraWavelengths>& lambda_nm,
                                          double time) const override;
@@ -120,6 +128,10 @@ class RealisticCamera final : public Camera {
   Vec2 filmPoint(Vec2 raster) const;
   /// Area of the sampled rear-plane region at the film centre (simple weighting's A0), mm^2.
   double centreAreaMm2() const { return centre_area_mm2_; }
+  /// The film's placement against the lens when tilted or shifted.
+  const std::optional<optics::FilmPlacement>& placement() const { return placement_; }
+  /// The plane of sharp focus of a tilted film (first-order, optics/tilt_shift.h).
+  const std::optional<optics::ScheimpflugData>& scheimpflug() const { return scheimpflug_; }
   /// Diagnostics from setting up the lens (e.g. an aperture clamped to the stop's size).
   std::vector<Diagnostic> diagnostics() const { return lens_.allDiagnostics(); }
 
@@ -129,7 +141,12 @@ class RealisticCamera final : public Camera {
     optics::RayT<float> ray;
     double cos_theta = 1;  ///< to the axis
     double area_mm2 = 0;   ///< of the sampled pupil region
+    /// Tilted or shifted film: cos(at the film) cos(at the sampled plane) / distance^2 (1/mm^2),
+    /// the geometric factor of the film irradiance integral.
+    double g_per_mm2 = 0;
   };
+  /// A tilted or shifted film's ray for a sample (see realistic.cpp, "Tilt and shift").
+  std::optional<FilmRay> placedFilmRay(const CameraSample& sample, Vec2 film) const;
   /// The ray from the sample's film point toward its pupil point (ps: the pupil sample drawn
   /// for that film point).
   std::optional<FilmRay> filmRay(const CameraSample& sample, Vec2 film,
@@ -153,6 +170,13 @@ class RealisticCamera final : public Camera {
   double centre_area_mm2_ = 0;  // sampled region at the film centre (simple weighting)  // the set
                                 // stop radius: the aperture shape's unit
   double startup_seconds_ = 0, startup_cpu_seconds_ = 0;
+  /// Tilt and shift: the film's placement (none: the film on the axis, untilted) and, for a
+  /// tilt, the plane of focus and the sampled disc's plane (the rear surface's z extent and
+  /// clear semi-aperture, lens space).
+  std::optional<optics::FilmPlacement> placement_;
+  std::optional<optics::ScheimpflugData> scheimpflug_;
+  double rear_zmin_mm_ = 0, rear_zmax_mm_ = 0, rear_semi_mm_ = 0;
+  void setUpTiltShift(const Vec2& sampled_half_extent_mm);
   /// Dispersion (see realistic.cpp, "Dispersive lenses"): whether the lens disperses, and an id
   /// that keys each thread's re-indexed copy of the tracer to this camera.
   bool dispersive_ = false;

@@ -300,6 +300,10 @@ struct Realistic {
   std::optional<int> configuration;
   std::optional<double> zoom_focal_length_mm;
   FileLoc zoom_loc;
+  /// `lensshift` [x y] (mm) and `lenstilt` [x y] (degrees): the lens placed off the film's
+  /// centre and turned against it (optics/tilt_shift.h); tilt_shift_loc: the parameter.
+  Vec2 lens_shift_mm{0, 0}, lens_tilt_deg{0, 0};
+  FileLoc tilt_shift_loc;
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 

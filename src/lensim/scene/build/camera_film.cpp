@@ -1,4 +1,6 @@
 // Builder: Camera, Film, Sampler and PixelFilter directives.
+#include <cmath>
+
 #include "lensim/optics/glass/library.h"
 #include "lensim/scene/build/builder_internal.h"
 
@@ -141,6 +143,22 @@ void Builder::camera(const Directive& d) {
         const std::string& a = ap->strings[0];
         static const std::set<std::string> builtin = {"gaussian", "square", "pentagon", "star"};
         r.aperture = builtin.count(a) ? a : resolve(a, ap->loc, "aperture image");
+      }
+      // Tilt and shift (optics/tilt_shift.h): the lens axis meets the film at "lensshift"
+      // [x y] (mm, film coordinates) and turns about it by "lenstilt" [about x, about y] (deg).
+      if (const Param* sh = ps.find({"lensshift"}, {ParamType::Float})) {
+        ps.expectCount(*sh, 2);
+        for (double v : sh->numbers)
+          if (!(std::abs(v) <= 1000)) ps.fail(*sh, "expected a shift within +-1000 mm");
+        r.lens_shift_mm = {sh->numbers[0], sh->numbers[1]};
+        r.tilt_shift_loc = sh->loc;
+      }
+      if (const Param* tl = ps.find({"lenstilt"}, {ParamType::Float})) {
+        ps.expectCount(*tl, 2);
+        for (double v : tl->numbers)
+          if (!(std::abs(v) < 45)) ps.fail(*tl, "expected tilt angles within +-45 degrees");
+        r.lens_tilt_deg = {tl->numbers[0], tl->numbers[1]};
+        r.tilt_shift_loc = tl->loc;
       }
       c.realistic = r;
     }
