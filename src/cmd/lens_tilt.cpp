@@ -15,7 +15,11 @@ using nlohmann::json;
 optics::TiltShift parseTiltShift(const std::string& tilt, const std::string& shift) {
   optics::TiltShift ts;
   if (!tilt.empty()) {
-    ts.tilt_deg = parsePair(tilt, "--tilt");
+    try {
+      ts.tilt_deg = parsePair(tilt, "--tilt");
+    } catch (const Error&) {
+      throw Error(fmt::format("--tilt '{}': expected two numbers X,Y (degrees)", tilt));
+    }
     for (double a : {ts.tilt_deg.x, ts.tilt_deg.y})
       if (!(std::abs(a) < 45))
         throw Error(fmt::format("--tilt '{}': {} degrees is out of range; expected tilt angles "

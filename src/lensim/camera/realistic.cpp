@@ -181,6 +181,7 @@ void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
   const optics::TiltShift& ts = settings_.tilt_shift;
   if (!ts.any()) return;
   const FileLoc& loc = settings_.tilt_shift_loc;
+  const std::string where = loc.valid() ? loc.str() : std::string("lenstilt/lensshift");
   const optics::LensSystem& lens = *lens_.lens;
   if (lens.mirrorCount() > 0)
     throw Error(loc, "lenstilt/lensshift: not supported for a lens with mirrors (its image "
@@ -191,7 +192,7 @@ void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
   placement_.emplace(ts, lens.filmZ_mm());
   if (!ts.tilted()) {
     logInfo(fmt::format("{}: lens shifted by ({:g}, {:g}) mm: its axis meets the film there",
-                        loc.str(), ts.shift_mm.x, ts.shift_mm.y));
+                        where, ts.shift_mm.x, ts.shift_mm.y));
     return;
   }
   const optics::Interface& r = lens.interfaces().back();
@@ -228,7 +229,7 @@ void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
       "{}: lens tilted {:.4f} deg (shift ({:g}, {:g}) mm): hinge line J = f / sin(tilt) = {:.2f} "
       "mm from the front nodal point, through ({:.2f}, {:.2f}, {:.2f}) mm (lens space); plane of "
       "focus through it meets the axis {} and lies at {:.3f} deg to the film (first-order)",
-      loc.str(), sd.tilt_deg, ts.shift_mm.x, ts.shift_mm.y, sd.hinge_distance_mm,
+      where, sd.tilt_deg, ts.shift_mm.x, ts.shift_mm.y, sd.hinge_distance_mm,
       sd.hinge_point_mm.x, sd.hinge_point_mm.y, sd.hinge_point_mm.z,
       std::isfinite(sd.object_distance_mm)
           ? fmt::format("{:.4g} m in front of the front principal plane",
