@@ -80,8 +80,8 @@ TEST(TiltShift, ScheimpflugPlaneImagesOntoTheTiltedFilm) {
   const FocusedLens fl = dgauss(2.0, 10);
   const ParaxialData& p = fl.paraxial;
   const double f = p.effective_focal_length_mm;
-  for (const TiltShift ts : {TiltShift{{-6, 0}, {0, 0}}, TiltShift{{3, 4}, {2, -1}},
-                             TiltShift{{0, 1.5}, {0, 0}}}) {
+  for (const TiltShift ts :
+       {TiltShift{{-6, 0}, {0, 0}}, TiltShift{{3, 4}, {2, -1}}, TiltShift{{0, 1.5}, {0, 0}}}) {
     const FilmPlacement pl(ts, fl.lens->filmZ_mm());
     const ScheimpflugData s = scheimpflug(p, pl);
     const double theta = std::acos(std::cos(ts.tilt_deg.x * kDeg) * std::cos(ts.tilt_deg.y * kDeg));
@@ -174,7 +174,8 @@ TEST(TiltShift, RealRaysFromThePredictedPlaneConvergeOnTheTiltedFilm) {
   const ScheimpflugData s = scheimpflug(fl.paraxial, pl);
   const double dof = 8.0 * 1.1 * 0.03;  // working f-number about 8.8 at 1.5 m
   const double zh = fl.paraxial.principal_plane_front_z_mm;
-  const Vec3 n1{0, 0, fl.paraxial.nodal_point_front_z_mm}, n2{0, 0, fl.paraxial.nodal_point_back_z_mm};
+  const Vec3 n1{0, 0, fl.paraxial.nodal_point_front_z_mm},
+      n2{0, 0, fl.paraxial.nodal_point_back_z_mm};
   for (double fy : {-9.0, -5.0, 0.0, 5.0, 9.0})
     for (double fx : {0.0, 7.0}) {
       // The object point seen at film point (fx, fy): along the ray through the nodal points
@@ -185,8 +186,9 @@ TEST(TiltShift, RealRaysFromThePredictedPlaneConvergeOnTheTiltedFilm) {
       const Vec3 n = s.focus_plane_normal, h = s.hinge_point_mm;
       const Vec3 obj = n1 + d * (dot(n, h - n1) / dot(n, d));
       const Focus on = bestFocus(lens, pl, obj);
-      std::printf("film (%g, %g): best focus %+.2f mm off the film, rms %.4f mm there, %.4f on it\n",
-                  fx, fy, on.best_offset_mm, on.best_rms_mm, on.film_rms_mm);
+      std::printf(
+          "film (%g, %g): best focus %+.2f mm off the film, rms %.4f mm there, %.4f on it\n", fx,
+          fy, on.best_offset_mm, on.best_rms_mm, on.film_rms_mm);
       EXPECT_LT(std::abs(on.best_offset_mm), dof) << fx << " " << fy;
       EXPECT_LT(on.film_rms_mm, 0.03) << fx << " " << fy;
       // The untilted plane's point on the same line (the axial depth): off by the film's tilt

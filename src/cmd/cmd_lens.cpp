@@ -820,8 +820,7 @@ void registerLensCommands(CLI::App& app, Action& action) {
     info->add_option("--tilt", args->tilt,
                      "X,Y: the lens tilted against the film about its x and y axes (degrees): "
                      "reports the hinge line and the plane of focus (docs/zoom.md)");
-    info->add_option("--shift", args->shift,
-                     "X,Y: the lens axis shifted to this film point (mm)");
+    info->add_option("--shift", args->shift, "X,Y: the lens axis shifted to this film point (mm)");
     info->callback([&action, args, as_json, configs] {
       action = [args, as_json, configs] {
         return *configs ? runConfigs(*args, *as_json) : runInfo(*args, *as_json);

@@ -22,24 +22,28 @@ optics::TiltShift parseTiltShift(const std::string& tilt, const std::string& shi
     }
     for (double a : {ts.tilt_deg.x, ts.tilt_deg.y})
       if (!(std::abs(a) < 45))
-        throw Error(fmt::format("--tilt '{}': {} degrees is out of range; expected tilt angles "
-                                "within +-45 degrees",
-                                tilt, a));
+        throw Error(
+            fmt::format("--tilt '{}': {} degrees is out of range; expected tilt angles "
+                        "within +-45 degrees",
+                        tilt, a));
   }
   if (!shift.empty()) {
     ts.shift_mm = parsePair(shift, "--shift");
     for (double s : {ts.shift_mm.x, ts.shift_mm.y})
       if (!(std::abs(s) <= 1000))
-        throw Error(fmt::format("--shift '{}': {} mm is out of range; expected shifts within "
-                                "+-1000 mm",
-                                shift, s));
+        throw Error(
+            fmt::format("--shift '{}': {} mm is out of range; expected shifts within "
+                        "+-1000 mm",
+                        shift, s));
   }
   return ts;
 }
 
 namespace {
 
-json vec(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
+json vec(const Vec3& v) {
+  return json::array({v.x, v.y, v.z});
+}
 
 }  // namespace
 
@@ -86,9 +90,8 @@ void printTiltShift(const optics::FocusedLens& fl, const optics::TiltShift& ts,
   line("hinge line",
        fmt::format("J = f / sin(tilt) = {:.4f} mm from the front nodal point; nearest point "
                    "({:.4f}, {:.4f}, {:.4f}) mm, direction ({:.4f}, {:.4f}, {:.4f})",
-                   s.hinge_distance_mm, s.hinge_point_mm.x, s.hinge_point_mm.y,
-                   s.hinge_point_mm.z, s.hinge_direction.x, s.hinge_direction.y,
-                   s.hinge_direction.z));
+                   s.hinge_distance_mm, s.hinge_point_mm.x, s.hinge_point_mm.y, s.hinge_point_mm.z,
+                   s.hinge_direction.x, s.hinge_direction.y, s.hinge_direction.z));
   line("plane of focus",
        fmt::format("through the hinge line; meets the axis {}; {:.4f} deg to the film, {:.4f} deg "
                    "to the lens plane; normal ({:.5f}, {:.5f}, {:.5f}) (first-order)",

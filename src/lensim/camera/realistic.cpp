@@ -184,15 +184,16 @@ void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
   const std::string where = loc.valid() ? loc.str() : std::string("lenstilt/lensshift");
   const optics::LensSystem& lens = *lens_.lens;
   if (lens.mirrorCount() > 0)
-    throw Error(loc, "lenstilt/lensshift: not supported for a lens with mirrors (its image "
-                     "space is folded)");
+    throw Error(loc,
+                "lenstilt/lensshift: not supported for a lens with mirrors (its image "
+                "space is folded)");
   if (settings_.origin_at_front_vertex || settings_.rear_disc_only ||
       settings_.zero_if_neighbour_blocked)
     throw Error(loc, "lenstilt/lensshift: not supported with the pbrt-v1/v2 camera conventions");
   placement_.emplace(ts, lens.filmZ_mm());
   if (!ts.tilted()) {
-    logInfo(fmt::format("{}: lens shifted by ({:g}, {:g}) mm: its axis meets the film there",
-                        where, ts.shift_mm.x, ts.shift_mm.y));
+    logInfo(fmt::format("{}: lens shifted by ({:g}, {:g}) mm: its axis meets the film there", where,
+                        ts.shift_mm.x, ts.shift_mm.y));
     return;
   }
   const optics::Interface& r = lens.interfaces().back();
@@ -216,8 +217,8 @@ void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
         throw Error(loc, fmt::format("lenstilt [{:g} {:g}]: the film's corner ({:.3f}, {:.3f}) mm "
                                      "comes to z = {:.4f} mm, into the lens (its rear surface "
                                      "reaches z = {:.4f} mm); tilt less or focus farther",
-                                     ts.tilt_deg.x, ts.tilt_deg.y, cx * sampled.x,
-                                     cy * sampled.y, p.z, rear_zmax_mm_));
+                                     ts.tilt_deg.x, ts.tilt_deg.y, cx * sampled.x, cy * sampled.y,
+                                     p.z, rear_zmax_mm_));
     }
   try {
     scheimpflug_ = optics::scheimpflug(lens_.paraxial, *placement_);
@@ -229,8 +230,8 @@ void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
       "{}: lens tilted {:.4f} deg (shift ({:g}, {:g}) mm): hinge line J = f / sin(tilt) = {:.2f} "
       "mm from the front nodal point, through ({:.2f}, {:.2f}, {:.2f}) mm (lens space); plane of "
       "focus through it meets the axis {} and lies at {:.3f} deg to the film (first-order)",
-      where, sd.tilt_deg, ts.shift_mm.x, ts.shift_mm.y, sd.hinge_distance_mm,
-      sd.hinge_point_mm.x, sd.hinge_point_mm.y, sd.hinge_point_mm.z,
+      where, sd.tilt_deg, ts.shift_mm.x, ts.shift_mm.y, sd.hinge_distance_mm, sd.hinge_point_mm.x,
+      sd.hinge_point_mm.y, sd.hinge_point_mm.z,
       std::isfinite(sd.object_distance_mm)
           ? fmt::format("{:.4g} m in front of the front principal plane",
                         sd.object_distance_mm / 1000)
@@ -344,10 +345,13 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
   const double z = lens.filmDistance_mm();
   const double c2 = f.cos_theta * f.cos_theta;
   const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
-  ray.weight = transmission * c2 * c2 * f.area_mm2 / norm;
-  if (placement_)  // the same integrand for a tilted film (placedFilmRay): G A, G = c^4 / z^2 untilted
+  // A tilted or shifted film: the same integrand, T G A (placedFilmRay; G = cos^4 / z^2 when
+  // the film is not tilted).
+  if (placement_)
     ray.weight = transmission * f.g_per_mm2 * f.area_mm2 *
                  (settings_.simple_weighting ? z * z / centre_area_mm2_ : 1.0);
+  else
+    ray.weight = transmission * c2 * c2 * f.area_mm2 / norm;
   return ray;
 }
 
@@ -497,9 +501,9 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
 std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample) const {
   const Vec2 film = filmPoint(sample.film_raster);
   const std::optional<FilmRay> f =
-      placement_ ? placedFilmRay(sample, film)
-                 : filmRay(sample, film,
-                           pupil_->sample(film, sample.lens, bandAt(sample.lambda_nm[0])));
+      placement_
+          ? placedFilmRay(sample, film)
+          : filmRay(sample, film, pupil_->sample(film, sample.lens, bandAt(sample.lambda_nm[0])));
   if (!f) return std::nullopt;
   if (dispersive_) return dispersiveRay(sample, *f);
   const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f->ray);
@@ -596,14 +600,14 @@ std::string RealisticCamera::describe() const {
                      pupil_->rotationallySymmetric() ? "" : ", 2-D (anamorphic)",
                      pupil_->bands() > 0 ? fmt::format(", {} wavelength bands", pupil_->bands())
                                          : std::string()) +
-         (placement_ ? fmt::format("; lens shift ({:g}, {:g}) mm, tilt ({:g}, {:g}) deg{} (no "
-                                   "camera importance)",
-                                   settings_.tilt_shift.shift_mm.x, settings_.tilt_shift.shift_mm.y,
-                                   settings_.tilt_shift.tilt_deg.x, settings_.tilt_shift.tilt_deg.y,
-                                   settings_.tilt_shift.tilted()
-                                       ? ", rays aimed at the rear element's disc"
-                                       : "")
-                     : std::string());
+         (placement_
+              ? fmt::format(
+                    "; lens shift ({:g}, {:g}) mm, tilt ({:g}, {:g}) deg{} (no "
+                    "camera importance)",
+                    settings_.tilt_shift.shift_mm.x, settings_.tilt_shift.shift_mm.y,
+                    settings_.tilt_shift.tilt_deg.x, settings_.tilt_shift.tilt_deg.y,
+                    settings_.tilt_shift.tilted() ? ", rays aimed at the rear element's disc" : "")
+              : std::string());
 }
 
 std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,

@@ -54,15 +54,17 @@ bool FilmPlacement::intersectFilm(const Vec3& o, const Vec3& d, Vec2* film_mm, d
 
 ScheimpflugData scheimpflug(const ParaxialData& p, const FilmPlacement& placement) {
   if (!placement.tiltShift().tilted())
-    throw Error("Scheimpflug: the film is not tilted (its plane of focus is the lens's normal plane)");
+    throw Error(
+        "Scheimpflug: the film is not tilted (its plane of focus is the lens's normal plane)");
   const double f = p.effective_focal_length_mm;
   const double zh = p.principal_plane_front_z_mm, zh2 = p.principal_plane_back_z_mm;
   const double v = placement.filmZ_mm() - zh2;
   if (!(f > 0)) throw Error(fmt::format("Scheimpflug: focal length {} mm must be > 0", f));
   if (!(v > 0))
-    throw Error(fmt::format("Scheimpflug: the film's axial point lies {} mm from the rear "
-                            "principal plane; expected behind it (> 0)",
-                            v));
+    throw Error(
+        fmt::format("Scheimpflug: the film's axial point lies {} mm from the rear "
+                    "principal plane; expected behind it (> 0)",
+                    v));
   const Vec3 n = placement.filmNormal();  // unit, toward +z
   const double nl = std::hypot(n.x, n.y), nz = n.z;
   const Vec3 u_lat{n.x / nl, n.y / nl, 0};  // toward the hinge

@@ -23,8 +23,8 @@ namespace lensim::optics {
 
 /// Where the lens sits against the film (see the file comment).
 struct TiltShift {
-  Vec2 tilt_deg{0, 0};   ///< rotation about the film's x axis, then about its y axis (degrees)
-  Vec2 shift_mm{0, 0};   ///< the lens axis's meeting with the film, in film coordinates (mm)
+  Vec2 tilt_deg{0, 0};  ///< rotation about the film's x axis, then about its y axis (degrees)
+  Vec2 shift_mm{0, 0};  ///< the lens axis's meeting with the film, in film coordinates (mm)
   bool tilted() const { return tilt_deg.x != 0 || tilt_deg.y != 0; }
   bool shifted() const { return shift_mm.x != 0 || shift_mm.y != 0; }
   bool any() const { return tilted() || shifted(); }
@@ -59,7 +59,7 @@ class FilmPlacement {
 
 /// The first-order (thick-lens, paraxial) sharp plane of a tilted film.
 struct ScheimpflugData {
-  double tilt_deg = 0;         ///< the angle between the film and the lens's principal planes
+  double tilt_deg = 0;           ///< the angle between the film and the lens's principal planes
   double hinge_distance_mm = 0;  ///< J = f / sin(tilt): front nodal point to the hinge line
   /// The hinge line: the point of it nearest the front nodal point, and its direction (lens
   /// space); it lies in the front focal plane, in the plane through the front nodal point
