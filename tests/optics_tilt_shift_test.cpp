@@ -5,8 +5,10 @@
 
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
+#include "cli_run.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/tilt_shift.h"
@@ -199,4 +201,37 @@ TEST(TiltShift, RealRaysFromThePredictedPlaneConvergeOnTheTiltedFilm) {
         EXPECT_GT(std::abs(flat.best_offset_mm), 2 * dof) << fx << " " << fy;
       }
     }
+}
+
+namespace {
+
+double numberAfter(const std::string& out, const std::string& key) {
+  const size_t at = out.find("\"" + key + "\": ");
+  EXPECT_NE(at, std::string::npos) << key << "\n" << out;
+  return at == std::string::npos ? 0 : std::stod(out.substr(at + key.size() + 4));
+}
+
+}  // namespace
+
+// `lens info --tilt --shift`: J = EFL / sin(tilt) with the EFL it reports, the tilt angle from
+// cos(tilt) = cos(tx) cos(ty), and located refusals (exit 1).
+TEST(TiltShift, LensInfoReportsTheHingeAndRefusesBadValues) {
+  const std::string lens = lensim::test::lensPath("dgauss.50mm.dat");
+  const test::CliResult r =
+      test::runLensim("lens info --json --focus-distance 2 --tilt=3,-4 --shift=1,2 " + lens);
+  ASSERT_EQ(r.status, 0) << r.out;
+  const double efl = numberAfter(r.out, "effective_focal_length_mm");
+  const double theta = std::acos(std::cos(3 * kDeg) * std::cos(4 * kDeg));
+  EXPECT_NEAR(numberAfter(r.out, "tilt_angle_deg"), theta / kDeg, 1e-9);
+  EXPECT_NEAR(numberAfter(r.out, "hinge_distance_mm"), efl / std::sin(theta), 1e-6);
+  EXPECT_NEAR(numberAfter(r.out, "film_reach_from_axis_mm"), 17.5 + std::hypot(1.0, 2.0), 1e-9);
+  const test::CliResult text = test::runLensim("lens info --tilt=-8,0 " + lens);
+  ASSERT_EQ(text.status, 0) << text.out;
+  EXPECT_NE(text.out.find("hinge line"), std::string::npos) << text.out;
+  for (const char* bad : {"--tilt=50,0", "--tilt=a,b", "--shift=3", "--shift=2000,0"}) {
+    const test::CliResult b = test::runLensim(std::string("lens info ") + bad + " " + lens);
+    EXPECT_EQ(b.status, 1) << bad << ": " << b.out;
+    const std::string opt = std::string(bad).substr(0, std::string(bad).find('='));
+    EXPECT_NE(b.out.find(opt + " '"), std::string::npos) << b.out;
+  }
 }
