@@ -91,7 +91,7 @@ MtfData computeMtf(const SpectralLens& sl, double film_diagonal_mm, const MtfOpt
       double wused = 0;
       for (const WeightedWavelength& w : sl.wavelengths) {
         auto pf = computePupilFunction(sl.at(w.nm), *bundle, film_z, *image_point, w.nm,
-                                       opts.pupil_cells);
+                                       opts.pupil_cells, 0.25);
         if (!pf) continue;
         f.rays += pf->rays_traced;
         if (w.nm == primary) {
@@ -102,8 +102,8 @@ MtfData computeMtf(const SpectralLens& sl, double film_diagonal_mm, const MtfOpt
         f.strehl += w.weight * fo.strehl;
         wused += w.weight;
         for (int k = 0; k < ns; ++k) {
-          tan[k] += w.weight * fo.otfAt(d.frequency[k], 0);
-          sag[k] += w.weight * fo.otfAt(0, d.frequency[k]);
+          tan[k] += w.weight * fo.otfAlongAxis(d.frequency[k], false);
+          sag[k] += w.weight * fo.otfAlongAxis(d.frequency[k], true);
         }
       }
       if (wused == 0) continue;

@@ -222,6 +222,14 @@ FourierOptics fourierOptics(const PupilFunction& pf) {
   for (int y = 0; y < m; ++y)
     for (int x = 0; x < m; ++x)
       fo.psf[size_t((y + m / 2) % m) * m + (x + m / 2) % m] = raw[size_t(y) * m + x] / total;
+  fo.lsf_x.assign(m, 0.0);
+  fo.lsf_y.assign(m, 0.0);
+  for (int y = 0; y < m; ++y)
+    for (int x = 0; x < m; ++x) {
+      const double v = fo.psf[size_t(y) * m + x];
+      fo.lsf_x[x] += v;
+      fo.lsf_y[y] += v;
+    }
   // OTF = transform of the PSF (the pupil's autocorrelation), normalised to 1 at zero frequency.
   // The sign of the transform gives OTF(nu) = sum PSF(x) exp(-i 2 pi nu x).
   for (size_t k = 0; k < mm; ++k) {
@@ -248,6 +256,23 @@ std::complex<double> FourierOptics::otfAt(double nu_x, double nu_y) const {
   auto at = [&](int x, int y) { return otf[size_t((y + m) % m) * m + size_t((x + m) % m)]; };
   return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
          ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1));
+}
+
+std::complex<double> FourierOptics::otfAlongAxis(double nu, bool along_y) const {
+  const std::vector<double>& lsf = along_y ? lsf_y : lsf_x;
+  // exp(-i 2 pi nu x) by recurrence from P' outward in both directions (each side's phase
+  // error grows only as m epsilon).
+  const double w = -2 * std::numbers::pi * nu * psf_pitch_mm;
+  std::complex<double> sum = lsf[size_t(m / 2)];
+  const std::complex<double> step{std::cos(w), std::sin(w)};
+  std::complex<double> e = 1, ec = 1;
+  for (int k = 1; k <= m / 2; ++k) {
+    e *= step;
+    ec = std::conj(e);
+    if (m / 2 + k < m) sum += lsf[size_t(m / 2 + k)] * e;
+    sum += lsf[size_t(m / 2 - k)] * ec;
+  }
+  return sum;
 }
 
 double FourierOptics::psfAt(double dx, double dy) const {

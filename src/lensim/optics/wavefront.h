@@ -70,6 +70,12 @@ struct FourierOptics {
 
   /// OTF at (nu_x, nu_y) cycles/mm by bilinear interpolation (0 beyond the grid's reach).
   std::complex<double> otfAt(double nu_x, double nu_y) const;
+  /// OTF along x (tangential, nu_y = 0) or y (sagittal, nu_x = 0) at any frequency: the
+  /// Fourier sum of the PSF's line spread function at exactly that frequency, not an
+  /// interpolation between the grid's frequencies (cutoff / n apart, too coarse where an
+  /// aberrated lens's MTF falls steeply at low frequencies).
+  std::complex<double> otfAlongAxis(double nu, bool along_y) const;
+  std::vector<double> lsf_x, lsf_y;  ///< PSF summed over y / over x, index m/2 at P'
   /// PSF at a film offset from P' (mm) by bilinear interpolation (0 outside the grid).
   double psfAt(double dx, double dy) const;
 };
