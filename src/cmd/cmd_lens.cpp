@@ -217,8 +217,8 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["aperture_stop_surface"] = p.aperture_stop_surface;
     j["aperture_stop_is_file_stop"] = p.stop_is_file_stop;
     j["aperture_stop_diameter_mm"] = p.aperture_stop_diameter_mm;
-    j["axial_limit_surface"] = p.axial_limit_surface;
-    j["axial_limit_f_number"] = p.axial_limit_f_number;
+    j["paraxial_limit_surface"] = p.paraxial_limit_surface;
+    j["paraxial_limit_f_number"] = p.paraxial_limit_f_number;
     j["paraxial_f_number"] = p.f_number;
     j["real_f_number"] = p.real_f_number;
     j["real_image_space_f_number"] = p.real_image_space_f_number;
@@ -323,7 +323,7 @@ int runInfo(const LensArgs& args, bool as_json) {
                        : std::string(" (the file has no stop: this element limits the beam)")));
   const double real_f = p.real_f_number;
   if (p.real_limit_surface != p.aperture_stop_surface && p.stop_is_file_stop)
-    line("axial beam limit",
+    line("real axial limit",
          fmt::format("surface {} (line {}) clips the real axial beam more than the stop: f/{:.3f}",
                      p.real_limit_surface, pr.surfaces[p.real_limit_surface].loc.line, real_f));
   line("entrance pupil", fmt::format("diameter {:.4f} mm at z = {:.4f} mm",

@@ -73,13 +73,13 @@ ParaxialData computeParaxial(const LensSystem& lens) {
       double ratio = s[i].semi_aperture_mm / std::abs(y);
       if (ratio < best_ratio) {
         best_ratio = ratio;
-        p.axial_limit_surface = i;
+        p.paraxial_limit_surface = i;
       }
     }
     RayMatrix r = refraction(s[i]);
     w = r.c * y + w;
   }
-  p.axial_limit_f_number = std::abs(p.effective_focal_length_mm) / (2 * best_ratio);
+  p.paraxial_limit_f_number = std::abs(p.effective_focal_length_mm) / (2 * best_ratio);
   // The aperture stop is decided with real rays: a paraxial trace extrapolates the first-order
   // beam to the rim and can name the wrong surface (the ISET Petzval's front element, while
   // real rays above 17.84 mm are stopped by its stop row). The file's stop is the aperture stop

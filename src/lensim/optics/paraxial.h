@@ -48,8 +48,8 @@ struct ParaxialData {
   /// The surface that limits the paraxial axial bundle from infinity most (all clear apertures
   /// considered), and the f-number it gives. Differs from the stop when an element's clear
   /// aperture clips the axial beam before the stop does.
-  int axial_limit_surface = -1;
-  double axial_limit_f_number = 0;
+  int paraxial_limit_surface = -1;
+  double paraxial_limit_f_number = 0;
   double entrance_pupil_z_mm = 0;
   double entrance_pupil_diameter_mm = 0;
   double exit_pupil_z_mm = 0;
