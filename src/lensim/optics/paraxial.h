@@ -64,8 +64,11 @@ struct ParaxialData {
   double real_image_space_f_number = 0;
 };
 
-/// Computes the paraxial data. Throws lensim::Error for an afocal system.
-ParaxialData computeParaxial(const LensSystem& lens);
+/// Computes the paraxial data. Throws lensim::Error for an afocal system, and when no real ray
+/// parallel to the axis gets through. real_rays false: first-order data only (the stop is the
+/// file's stop row, else paraxial_limit_surface; the real_* fields stay unset), for reporting
+/// a lens no real ray passes.
+ParaxialData computeParaxial(const LensSystem& lens, bool real_rays = true);
 
 /// Paraxial working f-number 1/(2 n' |u'|) of the marginal ray from an axial object at
 /// `object_z_mm` (lens space; use nullopt for infinity).
