@@ -159,6 +159,9 @@ TEST(LensInfoRobustness, Latin1LensFileGivesUtf8Json) {
   ASSERT_EQ(r.status, 0) << r.out;
   const json j = jsonOf(r);
   const std::string name = j["lens"].value("name", std::string());
-  EXPECT_TRUE(has(name, "\xC3\x98" "18 mm")) << name;  // U+00D8 in UTF-8
+  EXPECT_TRUE(has(name,
+                  "\xC3\x98"
+                  "18 mm"))
+      << name;  // U+00D8 in UTF-8
   EXPECT_GT(j.value("effective_focal_length_mm", 0.0), 14.9);
 }

@@ -71,8 +71,10 @@ void expectDefaultGridConverged(const std::string& path, LensSetup setup = {}) {
   EXPECT_LT(def.fields[0].pupil_cells, 512) << path << ": the default must be a coarser grid";
   for (size_t k = 0; k < def.frequency.size(); ++k) {
     for (bool sag : {false, true}) {
-      const double a = (sag ? def.fields[0].diffraction_sagittal : def.fields[0].diffraction_tangential)[k];
-      const double b = (sag ? ref.fields[0].diffraction_sagittal : ref.fields[0].diffraction_tangential)[k];
+      const double a =
+          (sag ? def.fields[0].diffraction_sagittal : def.fields[0].diffraction_tangential)[k];
+      const double b =
+          (sag ? ref.fields[0].diffraction_sagittal : ref.fields[0].diffraction_tangential)[k];
       const double tol = b > 0.1 ? 0.005 * b : 0.002;
       EXPECT_NEAR(a, b, tol) << path << " at " << def.frequency[k] << " cycles/mm"
                              << (sag ? " sagittal" : " tangential");
@@ -96,8 +98,8 @@ TEST(MtfAccuracy, DefaultGridWithinHalfPercentOf512CellsOnTheDoubleGaussAtF2) {
   EXPECT_NEAR(def.working_f_number, 2.0, 0.05);
   o.pupil_cells = 512;
   const MtfData ref = computeMtf(monochromatic(fl), 35, o);
-  EXPECT_NEAR(def.fields[0].diffraction_tangential[1] / ref.fields[0].diffraction_tangential[1],
-              1, 0.005);
+  EXPECT_NEAR(def.fields[0].diffraction_tangential[1] / ref.fields[0].diffraction_tangential[1], 1,
+              0.005);
 }
 
 TEST(MtfAccuracy, DefaultGridWithinHalfPercentOf512CellsOnTheWideAngleAndTelephoto) {

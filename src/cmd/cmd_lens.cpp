@@ -249,12 +249,12 @@ int runInfoUnfocused(const LensArgs& args, bool as_json, const Error& why) {
     if (!r.ok()) axial = r;
   }
   if (axial)
-    warnings.push_back(
-        {Severity::Warning,
-         pr.surfaces[axial->blocked_surface].loc.valid() ? pr.surfaces[axial->blocked_surface].loc
-                                                         : FileLoc{args.lens_path},
-         fmt::format("the ray along the axis is stopped at surface {} ({})",
-                     axial->blocked_surface, blockReasonName(axial->reason))});
+    warnings.push_back({Severity::Warning,
+                        pr.surfaces[axial->blocked_surface].loc.valid()
+                            ? pr.surfaces[axial->blocked_surface].loc
+                            : FileLoc{args.lens_path},
+                        fmt::format("the ray along the axis is stopped at surface {} ({})",
+                                    axial->blocked_surface, blockReasonName(axial->reason))});
   for (const Diagnostic& d : warnings) logDiagnostic(d);
 
   if (as_json) {
@@ -312,30 +312,29 @@ int runInfoUnfocused(const LensArgs& args, bool as_json, const Error& why) {
   line("file", fmt::format("{} ({}, {} surfaces)", pr.path, pr.format, lens.surfaceCount()));
   line("not focused", why.message());
   if (angular_magnification)
-    line("afocal", fmt::format("no optical power; angular magnification {:.6f}",
-                               *angular_magnification));
+    line("afocal",
+         fmt::format("no optical power; angular magnification {:.6f}", *angular_magnification));
   if (p) {
     line("effective focal length", fmt::format("{:.4f} mm", p->effective_focal_length_mm));
     line("back focal length", fmt::format("{:.4f} mm (rear focal point z = {:.4f})",
                                           p->back_focal_length_mm, p->back_focal_point_z_mm));
     line("front focal length", fmt::format("{:.4f} mm (front focal point z = {:.4f})",
                                            p->front_focal_length_mm, p->front_focal_point_z_mm));
-    line("principal planes z", fmt::format("front {:.4f}, back {:.4f} mm",
-                                           p->principal_plane_front_z_mm,
-                                           p->principal_plane_back_z_mm));
-    line("aperture stop", fmt::format("surface {} (line {}), diameter {:.3f} mm",
-                                      p->aperture_stop_surface,
-                                      pr.surfaces[p->aperture_stop_surface].loc.line,
-                                      p->aperture_stop_diameter_mm));
+    line("principal planes z",
+         fmt::format("front {:.4f}, back {:.4f} mm", p->principal_plane_front_z_mm,
+                     p->principal_plane_back_z_mm));
+    line("aperture stop",
+         fmt::format("surface {} (line {}), diameter {:.3f} mm", p->aperture_stop_surface,
+                     pr.surfaces[p->aperture_stop_surface].loc.line, p->aperture_stop_diameter_mm));
     line("f-number", fmt::format("f/{:.3f} paraxial (infinity)", p->f_number));
     if (p->real_limit_surface >= 0)
       line("real f-number", fmt::format("f/{:.3f} (stopped by surface {})", p->real_f_number,
                                         p->real_limit_surface));
   }
   if (axial)
-    line("axial ray", fmt::format("stopped at surface {} (line {}): {}", axial->blocked_surface,
-                                  pr.surfaces[axial->blocked_surface].loc.line,
-                                  blockReasonName(axial->reason)));
+    line("axial ray",
+         fmt::format("stopped at surface {} (line {}): {}", axial->blocked_surface,
+                     pr.surfaces[axial->blocked_surface].loc.line, blockReasonName(axial->reason)));
   printSurfaceTables(lens);
   return 0;
 }

@@ -473,7 +473,8 @@ namespace {
 
 // ", aperturediameter D mm" of the Camera line, for errors its value may cause.
 std::string apertureNote(const scene::Camera& c) {
-  if (c.realistic) return fmt::format(", aperturediameter {} mm", c.realistic->aperture_diameter_mm);
+  if (c.realistic)
+    return fmt::format(", aperturediameter {} mm", c.realistic->aperture_diameter_mm);
   if (c.legacy_realistic)
     return fmt::format(", aperture_diameter {} mm", c.legacy_realistic->aperture_diameter_mm);
   return {};
@@ -542,10 +543,10 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
                                                   : std::string();
     const std::string other =
         e.loc().valid() && e.loc().file != lens ? e.loc().file + ": " : std::string();
-    throw Error(c.loc, fmt::format("realistic camera: {}{}{}", other, e.message(),
-                                   lens.empty() ? std::string()
-                                                : fmt::format(" (lens file {}{})", lens,
-                                                              apertureNote(c))));
+    throw Error(
+        c.loc, fmt::format("realistic camera: {}{}{}", other, e.message(),
+                           lens.empty() ? std::string()
+                                        : fmt::format(" (lens file {}{})", lens, apertureNote(c))));
   }
 }
 

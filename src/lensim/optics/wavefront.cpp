@@ -128,7 +128,6 @@ std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const 
                                      half * (2.0 * (iy + 0.5) / grid - 1)});
   if (!ref) return std::nullopt;
 
-
   PupilFunction pf;
   for (int n = cells > 0 ? cells : std::max(8, min_cells);; n *= 2) {
     pf = PupilFunction{};
@@ -171,7 +170,8 @@ std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const 
         double sum = 0;
         for (int sy = 0; sy < 4; ++sy)
           for (int sx = 0; sx < 4; ++sx)
-            if (auto L = pupilOpl(cellPoint(ix - 0.5 + (sx + 0.5) / 4, iy - 0.5 + (sy + 0.5) / 4))) {
+            if (auto L =
+                    pupilOpl(cellPoint(ix - 0.5 + (sx + 0.5) / 4, iy - 0.5 + (sy + 0.5) / 4))) {
               ++hits;
               sum += (*L - *ref) / lambda_mm;
             }

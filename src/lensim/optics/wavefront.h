@@ -7,10 +7,10 @@
 // image-space direction cosines, a polygon. Rays traced back from P' see a wider cone where
 // spherical aberration is large (the forward marginal ray misses P'), so they only give W.
 // The pupil is sampled on a regular grid of image-space direction cosines (times the image-side
-// index n') inside that edge: rays are traced backward from the image point P' on the film, one per grid cell, and
-// the optical path from P' to the object-side reference (a sphere about the object point, or a
-// plane normal to the chief ray for an object at infinity) gives the wave aberration W relative
-// to the chief ray: the reference sphere about P' is exact by construction, and on a
+// index n') inside that edge: rays are traced backward from the image point P' on the film, one per
+// grid cell, and the optical path from P' to the object-side reference (a sphere about the object
+// point, or a plane normal to the chief ray for an object at infinity) gives the wave aberration W
+// relative to the chief ray: the reference sphere about P' is exact by construction, and on a
 // direction-cosine grid the film-plane field is the plain 2-D Fourier transform
 //   U(dx) = sum A exp(i 2 pi (W + n' alpha . dx) / lambda),
 // so the PSF pitch is lambda / (M step) for an M-point transform and the OTF at grid shift k is at
@@ -55,11 +55,12 @@ struct PupilFunction {
 };
 
 /// The pupil function of the bundle at the wavelength, seen from image point P' on the plane
-/// z = film_z. `cells`: samples across; 0 picks `min_cells` and doubles it (up to `max_cells`) until W
-/// changes by less than `max_step_waves` between neighbouring cells. The PSF's field of view is
-/// lambda / step, and a wave slope of s waves per cell moves a ray s of that field from P': the
-/// MTF (the pupil's autocorrelation) needs s < 1/2; a PSF image without wrapped energy, s < 1/4.
-/// nullopt when no ray of the bundle gets through.
+/// z = film_z. `cells`: samples across; 0 picks `min_cells` and doubles it (up to `max_cells`)
+/// until W changes by less than `max_step_waves` between neighbouring cells. The PSF's field of
+/// view is lambda / step, and a wave slope of s waves per cell moves a ray s of that field from P':
+/// the OTF at the grid's frequencies needs s < 1/2; a PSF image without wrapped energy, and the
+/// MTF summed between those frequencies (mtf.h), s < 1/4. nullopt when no ray of the bundle
+/// gets through.
 std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const FieldBundle& b,
                                                   double film_z_mm, Vec2 image_point_mm,
                                                   double wavelength_nm, int cells = 0,
