@@ -111,8 +111,8 @@ optics::FocusedLens setUpLens(const LensArgs& args) {
       return optics::focusLens(std::move(prescription), setup);
     } catch (const Error& e) {
       // Focus and tracing errors have no row of their own: name the lens file (issue 16).
-      if (e.loc().valid()) throw;
-      throw Error(FileLoc{args.lens_path}, e.message());
+      if (e.loc().valid() && e.loc().line > 0) throw;
+      throw LensSetupError(e.loc().valid() ? e.loc() : FileLoc{args.lens_path}, e.message());
     }
   }();
   if (args.wavelength_nm) {

@@ -61,6 +61,13 @@ void applyGlassOptions(const LensArgs& args);
 /// Reads the lens file and focuses it as the arguments say.
 optics::FocusedLens setUpLens(const LensArgs& args);
 
+/// What setUpLens throws when the lens was read but cannot be set up (focusLens failed: an
+/// afocal lens, no real ray through it, a film inside the lens, a focus it cannot reach).
+class LensSetupError : public Error {
+ public:
+  using Error::Error;
+};
+
 /// Parses "X,Y" (two numbers); throws lensim::Error naming the option otherwise.
 Vec2 parsePair(const std::string& text, const std::string& option);
 

@@ -610,6 +610,19 @@ std::string RealisticCamera::describe() const {
               : std::string());
 }
 
+namespace {
+
+// ", aperturediameter D mm" of the Camera line, for errors its value may cause.
+std::string apertureNote(const scene::Camera& c) {
+  if (c.realistic)
+    return fmt::format(", aperturediameter {} mm", c.realistic->aperture_diameter_mm);
+  if (c.legacy_realistic)
+    return fmt::format(", aperture_diameter {} mm", c.legacy_realistic->aperture_diameter_mm);
+  return {};
+}
+
+}  // namespace
+
 std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
                                             const CameraOptions& options) {
   const scene::Camera& c = scene.camera;
@@ -665,9 +678,19 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
     logDiagnostics(camera->diagnostics());
     return camera;
   } catch (const Error& e) {
-    // Errors in the lens file keep their own location; the others belong to the camera.
-    if (e.loc().valid()) throw;
-    throw Error(c.loc, "realistic camera: " + e.message());
+    // Errors at a line of a file (the lens file's syntax, a glass) keep their location. The
+    // others (the lens as a whole: afocal, no real ray through it at this aperture, a film
+    // inside it; the camera's settings) belong to the Camera line, naming the lens file.
+    if (e.loc().valid() && e.loc().line > 0) throw;
+    const std::string lens = c.realistic          ? c.realistic->lens_file
+                             : c.legacy_realistic ? c.legacy_realistic->lens_file
+                                                  : std::string();
+    const std::string other =
+        e.loc().valid() && e.loc().file != lens ? e.loc().file + ": " : std::string();
+    throw Error(
+        c.loc, fmt::format("realistic camera: {}{}{}", other, e.message(),
+                           lens.empty() ? std::string()
+                                        : fmt::format(" (lens file {}{})", lens, apertureNote(c))));
   }
 }
 

@@ -15,6 +15,14 @@ namespace lensim::optics {
 
 namespace {
 
+// The automatic pupil grid of the MTF: 256 cells across at least, doubled to 512 until W changes
+// by less than a quarter wave between neighbouring cells. Measured against 512 cells (the OTF
+// summed at each frequency, otfAlongAxis): the double Gauss wide open, the wide-angle and the
+// telephoto within 0.5% where the MTF exceeds 0.1; 64 cells were up to 2.3% off (4% on the
+// wide-angle), 128 cells 1.4%, the half-wave criterion at 64 cells 3% with the interpolated OTF.
+constexpr int kMtfMinCells = 256;
+constexpr double kMtfMaxStepWaves = 0.25;
+
 double weightSum(const std::vector<WeightedWavelength>& wl) {
   double s = 0;
   for (const WeightedWavelength& w : wl) s += w.weight;
@@ -56,12 +64,13 @@ MtfData computeMtf(const SpectralLens& sl, double film_diagonal_mm, const MtfOpt
   const double wsum = weightSum(sl.wavelengths);
   MtfData d;
   d.wavelengths = sl.wavelengths;
-  // The on-axis real cone: its half-width in n' direction cosines is the image-space NA.
+  // The on-axis real cone: the half-width of the forward beam in n' direction cosines is the
+  // image-space NA (the edge does not depend on the grid: a coarse one will do).
   {
     auto axis = FieldBundle::fromFilmHeight(fl, lens0, 0);
     if (!axis) throw Error("no chief ray on the axis: cannot compute the MTF");
     auto p0 = chiefImagePoint(lens0, *axis, film_z);
-    auto pf = computePupilFunction(lens0, *axis, film_z, p0.value_or(Vec2{0, 0}), primary, 64);
+    auto pf = computePupilFunction(lens0, *axis, film_z, p0.value_or(Vec2{0, 0}), primary, 8);
     if (!pf) throw Error("no ray from the film centre gets through the lens");
     d.image_space_na = pf->halfWidth();
   }
@@ -91,7 +100,7 @@ MtfData computeMtf(const SpectralLens& sl, double film_diagonal_mm, const MtfOpt
       double wused = 0;
       for (const WeightedWavelength& w : sl.wavelengths) {
         auto pf = computePupilFunction(sl.at(w.nm), *bundle, film_z, *image_point, w.nm,
-                                       opts.pupil_cells);
+                                       opts.pupil_cells, kMtfMaxStepWaves, 512, kMtfMinCells);
         if (!pf) continue;
         f.rays += pf->rays_traced;
         if (w.nm == primary) {
@@ -102,8 +111,8 @@ MtfData computeMtf(const SpectralLens& sl, double film_diagonal_mm, const MtfOpt
         f.strehl += w.weight * fo.strehl;
         wused += w.weight;
         for (int k = 0; k < ns; ++k) {
-          tan[k] += w.weight * fo.otfAt(d.frequency[k], 0);
-          sag[k] += w.weight * fo.otfAt(0, d.frequency[k]);
+          tan[k] += w.weight * fo.otfAlongAxis(d.frequency[k], false);
+          sag[k] += w.weight * fo.otfAlongAxis(d.frequency[k], true);
         }
       }
       if (wused == 0) continue;
@@ -239,8 +248,8 @@ ThroughFocusData computeThroughFocusMtf(const SpectralLens& sl, double film_diag
             pf.opd_waves[k] += std::sqrt(std::max(0.0, g2)) * dz / lambda_mm;
           }
         const FourierOptics fo = fourierOptics(pf);
-        t += weight * fo.otfAt(frequency, 0);
-        s += weight * fo.otfAt(0, frequency);
+        t += weight * fo.otfAlongAxis(frequency, false);
+        s += weight * fo.otfAlongAxis(frequency, true);
         wused += weight;
       }
       f.diffraction_tangential.push_back(std::abs(t) / wused);

@@ -21,7 +21,7 @@ struct MtfOptions {
   int samples = 101;                      ///< frequencies from 0 to max_frequency
   bool geometric = true;
   bool diffraction = true;
-  int pupil_cells = 0;  ///< 0: automatic (64 to 512 until the phase is not aliased)
+  int pupil_cells = 0;  ///< 0: automatic (256, or 512 where W changes by > 1/4 wave a cell)
   int spot_rings = 64;  ///< hexapolar rings of the geometric MTF's spot (12,481 rays)
 };
 
@@ -39,7 +39,7 @@ struct MtfData {
   std::vector<WeightedWavelength> wavelengths;
   std::vector<double> frequency;          ///< cycles/mm
   std::vector<double> diffraction_limit;  ///< aberration-free MTF of the on-axis real cone
-  double image_space_na = 0;              ///< n' sin u of that cone
+  double image_space_na = 0;              ///< n' sin u of the forward beam's marginal ray
   double working_f_number = 0;            ///< 1 / (2 NA)
   double cutoff = 0;                      ///< 2 NA / lambda (primary wavelength), cycles/mm
   std::vector<MtfField> fields;           ///< fields without a chief ray are left out

@@ -39,7 +39,7 @@ RayMatrix systemMatrix(const LensSystem& lens, int first, int last) {
   return m;
 }
 
-ParaxialData computeParaxial(const LensSystem& lens) {
+ParaxialData computeParaxial(const LensSystem& lens, bool real_rays) {
   const auto& s = lens.interfaces();
   const int n = lens.surfaceCount();
   // Image space unfolded after an odd number of mirrors (lens_system.h): its index counts as
@@ -73,29 +73,34 @@ ParaxialData computeParaxial(const LensSystem& lens) {
       double ratio = s[i].semi_aperture_mm / std::abs(y);
       if (ratio < best_ratio) {
         best_ratio = ratio;
-        p.axial_limit_surface = i;
+        p.paraxial_limit_surface = i;
       }
     }
     RayMatrix r = refraction(s[i]);
     w = r.c * y + w;
   }
-  p.axial_limit_f_number = std::abs(p.effective_focal_length_mm) / (2 * best_ratio);
+  p.paraxial_limit_f_number = std::abs(p.effective_focal_length_mm) / (2 * best_ratio);
   // The aperture stop is decided with real rays: a paraxial trace extrapolates the first-order
   // beam to the rim and can name the wrong surface (the ISET Petzval's front element, while
   // real rays above 17.84 mm are stopped by its stop row). The file's stop is the aperture stop
   // when it (nearly) limits the real axial beam; an element that clips a few percent more is
   // reported (real_limit_surface), not promoted. A stop row that limits nothing (ISET's reversed
   // telephoto puts one at the image plane) is not the aperture stop: the limiting element is.
-  const RealAxialBeam real = realAxialBeam(lens, p.effective_focal_length_mm);
-  p.real_limit_surface = real.limit_surface;
-  p.real_marginal_height_mm = real.marginal_height_mm;
-  p.real_f_number = real.f_number_entrance;
-  p.real_image_space_f_number = real.f_number;
-  p.aperture_stop_surface = real.limit_surface;
-  if (lens.stopIndex()) {
-    const double stop_h = real.surface_limit_height_mm[*lens.stopIndex()];
-    if (stop_h <= kStopTolerance * real.marginal_height_mm)
-      p.aperture_stop_surface = *lens.stopIndex();
+  if (!real_rays) {
+    // First order only: the file's stop, else the surface that limits the paraxial beam.
+    p.aperture_stop_surface = lens.stopIndex() ? *lens.stopIndex() : p.paraxial_limit_surface;
+  } else {
+    const RealAxialBeam real = realAxialBeam(lens, p.effective_focal_length_mm);
+    p.real_limit_surface = real.limit_surface;
+    p.real_marginal_height_mm = real.marginal_height_mm;
+    p.real_f_number = real.f_number_entrance;
+    p.real_image_space_f_number = real.f_number;
+    p.aperture_stop_surface = real.limit_surface;
+    if (lens.stopIndex()) {
+      const double stop_h = real.surface_limit_height_mm[*lens.stopIndex()];
+      if (stop_h <= kStopTolerance * real.marginal_height_mm)
+        p.aperture_stop_surface = *lens.stopIndex();
+    }
   }
   const int st = p.aperture_stop_surface;
   p.stop_is_file_stop = s[st].is_stop;

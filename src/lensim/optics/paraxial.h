@@ -48,8 +48,8 @@ struct ParaxialData {
   /// The surface that limits the paraxial axial bundle from infinity most (all clear apertures
   /// considered), and the f-number it gives. Differs from the stop when an element's clear
   /// aperture clips the axial beam before the stop does.
-  int axial_limit_surface = -1;
-  double axial_limit_f_number = 0;
+  int paraxial_limit_surface = -1;
+  double paraxial_limit_f_number = 0;
   double entrance_pupil_z_mm = 0;
   double entrance_pupil_diameter_mm = 0;
   double exit_pupil_z_mm = 0;
@@ -64,8 +64,11 @@ struct ParaxialData {
   double real_image_space_f_number = 0;
 };
 
-/// Computes the paraxial data. Throws lensim::Error for an afocal system.
-ParaxialData computeParaxial(const LensSystem& lens);
+/// Computes the paraxial data. Throws lensim::Error for an afocal system, and when no real ray
+/// parallel to the axis gets through. real_rays false: first-order data only (the stop is the
+/// file's stop row, else paraxial_limit_surface; the real_* fields stay unset), for reporting
+/// a lens no real ray passes.
+ParaxialData computeParaxial(const LensSystem& lens, bool real_rays = true);
 
 /// Paraxial working f-number 1/(2 n' |u'|) of the marginal ray from an axial object at
 /// `object_z_mm` (lens space; use nullopt for infinity).

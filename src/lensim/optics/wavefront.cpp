@@ -10,6 +10,10 @@ namespace lensim::optics {
 
 namespace {
 
+// Azimuths along which the forward beam's edge is bisected: the 256-gon's chord is within
+// 1 - cos(pi / 256) = 7.5e-5 of a circular edge.
+constexpr int kEdgeDirections = 256;
+
 // Optical path (mm) from P' back through the lens to the object-side reference, or nullopt when
 // the ray is blocked. `a` is n' times the forward direction cosines (alpha, beta) at P'.
 struct BackTracer {
@@ -53,17 +57,15 @@ double perfectMtf(double v) {
 
 double PupilFunction::halfWidth() const {
   double r = 0;
-  for (int iy = 0; iy < n; ++iy)
-    for (int ix = 0; ix < n; ++ix)
-      if (amplitude[size_t(iy) * n + ix] > 0.5)
-        r = std::max(r, std::hypot((ix + 0.5 - 0.5 * n) * step, (iy + 0.5 - 0.5 * n) * step));
-  return r + 0.5 * step;
+  for (const Vec2& q : edge) r = std::max(r, std::hypot(q.x - centre.x, q.y - centre.y));
+  return r;
 }
 
 std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const FieldBundle& b,
                                                   double film_z_mm, Vec2 image_point_mm,
                                                   double wavelength_nm, int cells,
-                                                  double max_step_waves, int max_cells) {
+                                                  double max_step_waves, int max_cells,
+                                                  int min_cells) {
   const double n_img = lens.imageIor();
   BackTracer bt{lens, b, {image_point_mm.x, image_point_mm.y, film_z_mm}, n_img};
   long traced = 0;
@@ -71,49 +73,65 @@ std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const 
     ++traced;
     return bt.opl(a);
   };
-  // The passing cone: start from the chief ray's direction at P' (or search for a passing
-  // direction), bisect its boundary along 64 directions, and take the bounding square.
-  std::optional<Vec2> c;
-  {
-    TraceResult r = lens.tracer().traceFromScene(b.sceneRay({0, 0}), TraceOptions{false});
-    if (r.ok() && r.ray.direction.z > 0) {
-      const Vec2 a{n_img * r.ray.direction.x, n_img * r.ray.direction.y};
-      if (opl(a)) c = a;
-    }
+  // The beam's edge from the forward (object-side) beam: the boundary of the entrance-pupil
+  // region whose rays get through, traced forward to image-space direction cosines. Rays traced
+  // back from P' would see a different cone where the lens is aberrated (the forward marginal
+  // ray does not pass through P'): 3.9% wider for US 583,336 at f/4.5.
+  auto region = b.pupilRegion(lens, kEdgeDirections);
+  if (!region) return std::nullopt;
+  std::vector<Vec2> edge;
+  edge.reserve(region->radius.size());
+  for (size_t j = 0; j < region->radius.size(); ++j) {
+    const double ang = 2 * std::numbers::pi * double(j) / double(region->radius.size());
+    const Vec2 o = region->centre + Vec2{std::cos(ang), std::sin(ang)} * region->radius[j];
+    // Apertures ignored: the ray grazes the one that stops it.
+    TraceResult r = lens.tracer().traceFromScene(b.sceneRay(o), TraceOptions{false});
+    ++traced;
+    if (!r.ok() || !(r.ray.direction.z > 0)) continue;
+    edge.push_back({n_img * r.ray.direction.x, n_img * r.ray.direction.y});
   }
-  for (int grid : {16, 64}) {
-    for (int iy = 0; iy < grid && !c; ++iy)
-      for (int ix = 0; ix < grid && !c; ++ix) {
-        const Vec2 a{0.98 * n_img * (2.0 * (ix + 0.5) / grid - 1),
-                     0.98 * n_img * (2.0 * (iy + 0.5) / grid - 1)};
-        if (opl(a)) c = a;
-      }
-  }
-  if (!c) return std::nullopt;
-  Vec2 lo_pt = *c, hi_pt = *c;
-  for (int j = 0; j < 64; ++j) {
-    const double ang = 2 * std::numbers::pi * j / 64;
-    const Vec2 u{std::cos(ang), std::sin(ang)};
-    double lo = 0, hi = 1e-4 * n_img;
-    while (hi < 2 * n_img && opl(*c + u * hi)) {
-      lo = hi;
-      hi *= 2;
-    }
-    for (int it = 0; it < 30; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (opl(*c + u * mid) ? lo : hi) = mid;
-    }
-    const Vec2 q = *c + u * hi;
+  if (edge.size() < 8) return std::nullopt;
+  auto insideEdge = [&](Vec2 a) {  // even-odd rule: the edge polygon need not be convex
+    bool in = false;
+    for (size_t i = 0, j = edge.size() - 1; i < edge.size(); j = i++)
+      if ((edge[i].y > a.y) != (edge[j].y > a.y) &&
+          a.x < edge[j].x + (a.y - edge[j].y) * (edge[i].x - edge[j].x) / (edge[i].y - edge[j].y))
+        in = !in;
+    return in;
+  };
+  // A cell passes when its direction lies in the forward beam and its ray traced back from P'
+  // gets through (it gives W).
+  auto pupilOpl = [&](Vec2 a) -> std::optional<double> {
+    if (!insideEdge(a)) return std::nullopt;
+    return opl(a);
+  };
+  Vec2 lo_pt = edge[0], hi_pt = edge[0];
+  for (const Vec2& q : edge) {
     lo_pt = {std::min(lo_pt.x, q.x), std::min(lo_pt.y, q.y)};
     hi_pt = {std::max(hi_pt.x, q.x), std::max(hi_pt.y, q.y)};
   }
   const Vec2 centre = (lo_pt + hi_pt) * 0.5;
   const double half = 1.03 * 0.5 * std::max(hi_pt.x - lo_pt.x, hi_pt.y - lo_pt.y);
-  const double ref = opl(centre).value_or(*opl(*c));
+  // W's reference: the chief ray's direction at P' (or, vignetted, the grid centre, else any
+  // passing direction of the edge polygon's bounding square).
+  std::optional<double> ref;
+  {
+    TraceResult r = lens.tracer().traceFromScene(b.sceneRay({0, 0}), TraceOptions{false});
+    if (r.ok() && r.ray.direction.z > 0)
+      ref = pupilOpl({n_img * r.ray.direction.x, n_img * r.ray.direction.y});
+  }
+  if (!ref) ref = pupilOpl(centre);
+  for (int grid : {16, 64})
+    for (int iy = 0; iy < grid && !ref; ++iy)
+      for (int ix = 0; ix < grid && !ref; ++ix)
+        ref = pupilOpl(centre + Vec2{half * (2.0 * (ix + 0.5) / grid - 1),
+                                     half * (2.0 * (iy + 0.5) / grid - 1)});
+  if (!ref) return std::nullopt;
 
   PupilFunction pf;
-  for (int n = cells > 0 ? cells : 64;; n *= 2) {
+  for (int n = cells > 0 ? cells : std::max(8, min_cells);; n *= 2) {
     pf = PupilFunction{};
+    pf.edge = edge;
     pf.n = n;
     pf.step = 2 * half / n;
     pf.centre = centre;
@@ -130,10 +148,10 @@ std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const 
     for (int iy = 0; iy < n; ++iy)
       for (int ix = 0; ix < n; ++ix) {
         const size_t k = size_t(iy) * n + ix;
-        if (auto L = opl(cellPoint(ix, iy))) {
+        if (auto L = pupilOpl(cellPoint(ix, iy))) {
           pass[k] = 1;
           pf.amplitude[k] = 1;
-          pf.opd_waves[k] = (*L - ref) / lambda_mm;
+          pf.opd_waves[k] = (*L - *ref) / lambda_mm;
         }
       }
     // Edge cells (a 4-neighbour differs): 4x4 sub-rays give the covered fraction and mean W.
@@ -152,9 +170,10 @@ std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const 
         double sum = 0;
         for (int sy = 0; sy < 4; ++sy)
           for (int sx = 0; sx < 4; ++sx)
-            if (auto L = opl(cellPoint(ix - 0.5 + (sx + 0.5) / 4, iy - 0.5 + (sy + 0.5) / 4))) {
+            if (auto L =
+                    pupilOpl(cellPoint(ix - 0.5 + (sx + 0.5) / 4, iy - 0.5 + (sy + 0.5) / 4))) {
               ++hits;
-              sum += (*L - ref) / lambda_mm;
+              sum += (*L - *ref) / lambda_mm;
             }
         pf.amplitude[k] = hits / 16.0;
         pf.opd_waves[k] = hits > 0 ? sum / hits : 0.0;
@@ -222,6 +241,14 @@ FourierOptics fourierOptics(const PupilFunction& pf) {
   for (int y = 0; y < m; ++y)
     for (int x = 0; x < m; ++x)
       fo.psf[size_t((y + m / 2) % m) * m + (x + m / 2) % m] = raw[size_t(y) * m + x] / total;
+  fo.lsf_x.assign(m, 0.0);
+  fo.lsf_y.assign(m, 0.0);
+  for (int y = 0; y < m; ++y)
+    for (int x = 0; x < m; ++x) {
+      const double v = fo.psf[size_t(y) * m + x];
+      fo.lsf_x[x] += v;
+      fo.lsf_y[y] += v;
+    }
   // OTF = transform of the PSF (the pupil's autocorrelation), normalised to 1 at zero frequency.
   // The sign of the transform gives OTF(nu) = sum PSF(x) exp(-i 2 pi nu x).
   for (size_t k = 0; k < mm; ++k) {
@@ -248,6 +275,23 @@ std::complex<double> FourierOptics::otfAt(double nu_x, double nu_y) const {
   auto at = [&](int x, int y) { return otf[size_t((y + m) % m) * m + size_t((x + m) % m)]; };
   return (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x0 + 1, y0)) +
          ty * ((1 - tx) * at(x0, y0 + 1) + tx * at(x0 + 1, y0 + 1));
+}
+
+std::complex<double> FourierOptics::otfAlongAxis(double nu, bool along_y) const {
+  const std::vector<double>& lsf = along_y ? lsf_y : lsf_x;
+  // exp(-i 2 pi nu x) by recurrence from P' outward in both directions (each side's phase
+  // error grows only as m epsilon).
+  const double w = -2 * std::numbers::pi * nu * psf_pitch_mm;
+  std::complex<double> sum = lsf[size_t(m / 2)];
+  const std::complex<double> step{std::cos(w), std::sin(w)};
+  std::complex<double> e = 1, ec = 1;
+  for (int k = 1; k <= m / 2; ++k) {
+    e *= step;
+    ec = std::conj(e);
+    if (m / 2 + k < m) sum += lsf[size_t(m / 2 + k)] * e;
+    sum += lsf[size_t(m / 2 - k)] * ec;
+  }
+  return sum;
 }
 
 double FourierOptics::psfAt(double dx, double dy) const {

@@ -2,11 +2,15 @@
 // (FFT of the pupil) and the optical transfer function (FFT of the PSF), in the Debye
 // approximation on the film plane.
 //
+// The pupil's edge is the forward beam's: the boundary of the entrance-pupil region whose rays
+// from the object point get through (bisected along 256 azimuths), traced forward to its
+// image-space direction cosines, a polygon. Rays traced back from P' see a wider cone where
+// spherical aberration is large (the forward marginal ray misses P'), so they only give W.
 // The pupil is sampled on a regular grid of image-space direction cosines (times the image-side
-// index n'): rays are traced backward from the image point P' on the film, one per grid cell, and
-// the optical path from P' to the object-side reference (a sphere about the object point, or a
-// plane normal to the chief ray for an object at infinity) gives the wave aberration W relative
-// to the chief ray: the reference sphere about P' is exact by construction, and on a
+// index n') inside that edge: rays are traced backward from the image point P' on the film, one per
+// grid cell, and the optical path from P' to the object-side reference (a sphere about the object
+// point, or a plane normal to the chief ray for an object at infinity) gives the wave aberration W
+// relative to the chief ray: the reference sphere about P' is exact by construction, and on a
 // direction-cosine grid the film-plane field is the plain 2-D Fourier transform
 //   U(dx) = sum A exp(i 2 pi (W + n' alpha . dx) / lambda),
 // so the PSF pitch is lambda / (M step) for an M-point transform and the OTF at grid shift k is at
@@ -42,22 +46,26 @@ struct PupilFunction {
   long rays_traced = 0;
   double rms_opd_waves = 0;   ///< RMS of W over the pupil, piston removed (amplitude weighted)
   double max_step_waves = 0;  ///< largest change of W between neighbouring passing cells
+  std::vector<Vec2> edge;     ///< the forward beam's edge, n' direction cosines at P'
 
-  /// The numerical aperture n' sin u of the passing cone's half-width about the grid centre
-  /// (largest distance of a passing cell centre, plus half a cell).
+  /// n' sin u of the forward beam's half-width about the grid centre: the largest distance of
+  /// its edge from the centre (on axis, the image-space numerical aperture of the real
+  /// marginal ray).
   double halfWidth() const;
 };
 
 /// The pupil function of the bundle at the wavelength, seen from image point P' on the plane
-/// z = film_z. `cells`: samples across; 0 picks 64 and doubles it (up to `max_cells`) until W
-/// changes by less than `max_step_waves` between neighbouring cells. The PSF's field of view is
-/// lambda / step, and a wave slope of s waves per cell moves a ray s of that field from P': the
-/// MTF (the pupil's autocorrelation) needs s < 1/2; a PSF image without wrapped energy, s < 1/4.
-/// nullopt when no ray from P' gets through.
+/// z = film_z. `cells`: samples across; 0 picks `min_cells` and doubles it (up to `max_cells`)
+/// until W changes by less than `max_step_waves` between neighbouring cells. The PSF's field of
+/// view is lambda / step, and a wave slope of s waves per cell moves a ray s of that field from P':
+/// the OTF at the grid's frequencies needs s < 1/2; a PSF image without wrapped energy, and the
+/// MTF summed between those frequencies (mtf.h), s < 1/4. nullopt when no ray of the bundle
+/// gets through.
 std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const FieldBundle& b,
                                                   double film_z_mm, Vec2 image_point_mm,
                                                   double wavelength_nm, int cells = 0,
-                                                  double max_step_waves = 0.5, int max_cells = 512);
+                                                  double max_step_waves = 0.5, int max_cells = 512,
+                                                  int min_cells = 64);
 
 /// PSF and OTF of a pupil function, on an M x M grid with M = 2 n (no wrap-around in the OTF).
 struct FourierOptics {
@@ -70,6 +78,12 @@ struct FourierOptics {
 
   /// OTF at (nu_x, nu_y) cycles/mm by bilinear interpolation (0 beyond the grid's reach).
   std::complex<double> otfAt(double nu_x, double nu_y) const;
+  /// OTF along x (tangential, nu_y = 0) or y (sagittal, nu_x = 0) at any frequency: the
+  /// Fourier sum of the PSF's line spread function at exactly that frequency, not an
+  /// interpolation between the grid's frequencies (cutoff / n apart, too coarse where an
+  /// aberrated lens's MTF falls steeply at low frequencies).
+  std::complex<double> otfAlongAxis(double nu, bool along_y) const;
+  std::vector<double> lsf_x, lsf_y;  ///< PSF summed over y / over x, index m/2 at P'
   /// PSF at a film offset from P' (mm) by bilinear interpolation (0 outside the grid).
   double psfAt(double dx, double dy) const;
 };

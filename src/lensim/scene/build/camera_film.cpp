@@ -96,7 +96,13 @@ void Builder::camera(const Directive& d) {
       r.lens_file = lname.rfind("lentil:", 0) == 0 || lname.rfind("lenses:", 0) == 0
                         ? lname
                         : resolve(lname, lf->loc, "lens file");
-      r.aperture_diameter_mm = ps.getFloat({"aperturediameter"}, 1.0);
+      if (const Param* ad = ps.find({"aperturediameter"}, {ParamType::Float})) {
+        ps.expectCount(*ad, 1);
+        if (!(ad->numbers[0] > 0) || !std::isfinite(ad->numbers[0]))
+          ps.fail(*ad, fmt::format("{} mm: expected a finite aperture diameter > 0 (mm)",
+                                   ad->numbers[0]));
+        r.aperture_diameter_mm = ad->numbers[0];
+      }
       r.focus_distance_m = ps.getFloat({"focusdistance"}, 10.0);
       // pbrt-v3's default is true; pbrt-v4 has no such parameter (always irradiance).
       r.simple_weighting = ps.getBool({"simpleweighting"}, scene_.legacy_syntax);
