@@ -1,6 +1,7 @@
 // Pixel filters: pbrt-v4 defaults and shapes, and importance sampling against evaluation.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -81,5 +82,34 @@ TEST(Filter, SamplingIsUnbiasedForFilterWeightedIntegrals) {
     const double pdf_integral =
         quadrature(BoxFilter(f->radius()), [&](Vec2 p) { return f->pdf(p); });
     EXPECT_NEAR(pdf_integral, 1.0, 1e-3) << name;
+  }
+}
+
+TEST(GaussianFilter, TableWithinInterpolationBoundOfClosedForm) {
+  // The profile is tabulated with cells no wider than 1/256 pixel: linear interpolation is off
+  // by at most h^2/8 max|g''|, max|g''| = 1/(sqrt(2 pi) sigma^3) (at 0). Reference: the closed
+  // form written here, at off-grid offsets, for radii that are and are not multiples of 1/256.
+  for (auto [r, sigma] : {std::pair{1.5, 0.5}, std::pair{1.37, 0.3}, std::pair{2.0, 1.0}}) {
+    const GaussianFilter f({r, r * 0.8}, sigma);
+    for (double rr : {r, r * 0.8}) {
+      const double kPiD = 3.14159265358979323846;
+      auto g = [&](double x) {
+        return std::exp(-x * x / (2 * sigma * sigma)) / std::sqrt(2 * kPiD * sigma * sigma);
+      };
+      const double h = rr / std::ceil(rr * 256);
+      const double bound = h * h / 8 / (std::sqrt(2 * kPiD) * sigma * sigma * sigma);
+      double max_err = 0;
+      for (int i = 0; i <= 10000; ++i) {
+        const double x = -rr + 2 * rr * (i + 0.3183) / 10001;
+        const double want = std::abs(x) <= rr ? std::max(0.0, g(x) - g(rr)) : 0.0;
+        // eval is separable: probe one axis with the other at 0, whose table node is exact.
+        const double got = rr == r ? f.eval({x, 0}) / (g(0) - g(r * 0.8))
+                                   : f.eval({0, x}) / (g(0) - g(r));
+        max_err = std::max(max_err, std::abs(got - want));
+      }
+      EXPECT_LT(max_err, bound * 1.0001 + 1e-15) << r << " " << sigma << " axis " << rr;
+      EXPECT_GT(max_err, 0.0);
+      EXPECT_EQ(f.eval({rr == r ? rr * 1.0001 : 0.0, rr == r ? 0.0 : rr * 1.0001}), 0.0);
+    }
   }
 }

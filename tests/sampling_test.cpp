@@ -2,7 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <random>
 #include <set>
+#include <vector>
 
 #include "lensim/sampling/sampling.h"
 #include "stats.h"
@@ -184,4 +186,45 @@ TEST(Rng, AdvanceSkipsOutputs) {
   EXPECT_EQ(a.uniformU32(), b.uniformU32());
   b.advance(0);
   EXPECT_EQ(a.uniformU32(), b.uniformU32());
+}
+
+TEST(PiecewiseConstant1D, GuideTableFindsTheCellOfALinearScan) {
+  // Against the CDF inverted by a linear scan written here: the cell whose [cdf_o, cdf_o+1)
+  // holds u, skipping cells of zero probability. Functions with runs of zeros, a single cell,
+  // sizes that are and are not powers of two, a zero function (uniform).
+  std::mt19937 rng(2929);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  std::vector<std::vector<double>> fs = {{1.0}, {0.0, 0.0, 3.0}, {0.0, 0.0, 0.0, 0.0}};
+  for (int n : {2, 7, 64, 96, 1000}) {
+    std::vector<double> f(static_cast<size_t>(n));
+    for (auto& v : f) v = uni(rng) < 0.3 ? 0.0 : uni(rng) * (uni(rng) < 0.1 ? 1000.0 : 1.0);
+    fs.push_back(f);
+  }
+  for (const auto& f : fs) {
+    const PiecewiseConstant1D d(f, -2.0, 3.0);
+    const size_t n = f.size();
+    std::vector<double> cdf(n + 1, 0.0);
+    for (size_t i = 1; i <= n; ++i) cdf[i] = cdf[i - 1] + std::abs(f[i - 1]) * 5.0 / n;
+    const double total = cdf[n];
+    for (size_t i = 1; i <= n; ++i) cdf[i] = total > 0 ? cdf[i] / total : double(i) / n;
+    std::vector<double> us;
+    for (int i = 0; i < 3000; ++i) us.push_back(uni(rng));
+    for (double c : cdf) {  // exactly on and just around each CDF entry
+      if (c < 1) us.push_back(c);
+      us.push_back(std::nextafter(c, 0.0));
+    }
+    us.push_back(0.0);
+    us.push_back(std::nextafter(1.0, 0.0));
+    for (double u : us) {
+      size_t o = 0;
+      for (size_t i = 0; i <= n; ++i)
+        if (cdf[i] <= u) o = i;
+      o = std::min(o, n - 1);
+      const auto s = d.sample(u);
+      ASSERT_EQ(s.offset, static_cast<int>(o)) << "n " << n << " u " << u;
+      EXPECT_GE(s.x, -2.0);
+      EXPECT_LE(s.x, 3.0);
+      EXPECT_GT(s.pdf, 0.0);
+    }
+  }
 }

@@ -72,14 +72,36 @@ double BoxFilter::pdf(Vec2 p) const {
 
 GaussianFilter::GaussianFilter(Vec2 radius, double sigma) : Filter(radius), sigma_(sigma) {
   if (!(sigma > 0)) throw Error(fmt::format("gaussian filter sigma {} must be positive", sigma));
+  auto table = [&](double r) {
+    // n cells of width r / n <= 1 / kCellsPerPixel on [0, r], and one more node at r so that
+    // |x| = r has both neighbours.
+    const int n = static_cast<int>(std::ceil(r * kCellsPerPixel));
+    std::vector<double> t(static_cast<size_t>(n) + 2);
+    for (int i = 0; i <= n; ++i) t[size_t(i)] = eval1DExact(r * i / n, r);
+    t[size_t(n) + 1] = t[size_t(n)];
+    return t;
+  };
+  table_x_ = table(radius.x);
+  table_y_ = table(radius.y);
   init();
 }
 
-double GaussianFilter::eval1D(double x, double r) const {
+double GaussianFilter::eval1DExact(double x, double r) const {
   auto g = [&](double t) {
     return std::exp(-t * t / (2 * sigma_ * sigma_)) / std::sqrt(2 * kPi * sigma_ * sigma_);
   };
   return std::abs(x) > r ? 0.0 : std::max(0.0, g(x) - g(r));
+}
+
+double GaussianFilter::eval1D(double x, double r) const {
+  const double a = std::abs(x);
+  if (a > r) return 0.0;
+  // eval1D is only called with the filter's own radii.
+  const std::vector<double>& t = r == radius().x ? table_x_ : table_y_;
+  const double f = a / r * static_cast<double>(t.size() - 2);
+  const size_t i = static_cast<size_t>(f);
+  const double w = f - static_cast<double>(i);
+  return t[i] * (1 - w) + t[i + 1] * w;
 }
 
 MitchellFilter::MitchellFilter(Vec2 radius, double b, double c) : Filter(radius), b_(b), c_(c) {

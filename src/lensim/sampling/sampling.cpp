@@ -1,6 +1,7 @@
 #include "lensim/sampling/sampling.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include "lensim/util/error.h"
@@ -74,12 +75,29 @@ PiecewiseConstant1D::PiecewiseConstant1D(std::span<const double> f, double min, 
   } else {
     for (size_t i = 1; i <= n; ++i) cdf_[i] /= integral_;
   }
+  // A power of two, so that g / steps is exact and floor(u * steps) / steps <= u.
+  const size_t steps = std::bit_ceil(n);
+  guide_.resize(steps + 1);
+  size_t o = 0;
+  for (size_t g = 0; g <= steps; ++g) {
+    const double u = static_cast<double>(g) / static_cast<double>(steps);
+    while (o + 1 <= n && cdf_[o + 1] <= u) ++o;
+    guide_[g] = static_cast<int>(o);
+  }
 }
 
 PiecewiseConstant1D::Sample PiecewiseConstant1D::sample(double u) const {
-  // Last cdf entry <= u (cells with zero probability are skipped by upper_bound).
+  // Last cdf entry <= u (cells with zero probability are skipped by upper_bound). For u in
+  // [g, g + 1) / steps it lies between guide_[g] and guide_[g + 1].
   const int n = size();
-  int o = static_cast<int>(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()) - 1;
+  auto first = cdf_.begin(), last = cdf_.end();
+  const double steps = static_cast<double>(guide_.size() - 1);
+  if (u >= 0 && u < 1) {
+    const size_t g = static_cast<size_t>(u * steps);
+    first = cdf_.begin() + guide_[g] + 1;
+    last = cdf_.begin() + guide_[g + 1] + 1;
+  }
+  int o = static_cast<int>(std::upper_bound(first, last, u) - cdf_.begin()) - 1;
   o = std::clamp(o, 0, n - 1);
   double du = u - cdf_[o];
   const double width = cdf_[o + 1] - cdf_[o];

@@ -55,7 +55,9 @@ inline double powerHeuristic(int nf, double f_pdf, int ng, double g_pdf) {
 }
 
 /// A density proportional to |f| of a piecewise-constant function on [min, max] (n equal
-/// cells). A function that is zero everywhere is sampled uniformly.
+/// cells). A function that is zero everywhere is sampled uniformly. Sampling inverts the CDF with
+/// a guide table (the cells holding each of 2^k >= n equal steps of u) and a binary search
+/// between two guide entries, usually zero or one comparisons.
 class PiecewiseConstant1D {
  public:
   PiecewiseConstant1D() = default;
@@ -75,6 +77,8 @@ class PiecewiseConstant1D {
 
  private:
   std::vector<double> func_, cdf_;
+  /// guide_[g] = last index o with cdf_[o] <= g / (guide_.size() - 1).
+  std::vector<int> guide_;
   double min_ = 0, max_ = 1, integral_ = 0;
 };
 
