@@ -5,7 +5,6 @@
 #include <cmath>
 #include <numbers>
 
-#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/pupil/build.h"
 
 namespace lensim::optics {
@@ -19,33 +18,9 @@ ExitPupilSampler::ExitPupilSampler(const LensSystem& lens, const ParaxialData& p
       z_rear_mm_(lens.rearVertexZ_mm()),
       directions_(std::max(8, opts.directions)) {
   const auto t0 = std::chrono::steady_clock::now();
-  for (int j = 0; j < directions_; ++j)
-    dirs_.push_back(pupil::unit(2 * std::numbers::pi * j / directions_));
-  // Anamorphic: the paraxial chief ray from film height h crosses the rear plane at kappa h
-  // (aimed at the exit pupil's centre).
-  if (!rotational_) {
-    const double z_film = lens.filmZ_mm();
-    auto kappa = [&](double z_xp) {
-      return std::abs(z_xp - z_film) > 1e-9 ? (z_xp - z_rear_mm_) / (z_xp - z_film) : 0.0;
-    };
-    kappa_y_ = kappa(p.exit_pupil_z_mm);
-    const AnamorphicData ad = anamorphicData(lens);
-    kappa_x_ = ad.x ? kappa(ad.x->exit_pupil_z_mm) : kappa_y_;
-  }
-  pupil::Context ctx(lens, p, opts);
-  ctx.rotational = rotational_;
-  ctx.kappa_x = kappa_x_, ctx.kappa_y = kappa_y_;
-  ctx.nd = directions_;
-  ctx.dphi = 2 * std::numbers::pi / ctx.nd;
-  ctx.dirs = dirs_;
-  ctx.rr = 1.5 * lens.interfaces().back().semi_aperture_mm;
-  ctx.disc2 = opts.rear_disc_radius_mm * opts.rear_disc_radius_mm;
-  ctx.obscured = lens.hasObscuration();
-  ctx.film_radius = film_radius_mm;
-  ctx.ni = std::max(1, opts.radial_bins);
-  ctx.min_width = film_radius_mm / (ctx.ni * 16.0);
-  ctx.wedge = (std::numbers::pi / 2) / std::max(1, opts.sectors);
-  ctx.r_ic = film_radius_mm;
+  pupil::Context ctx(lens, p, film_radius_mm, opts);
+  dirs_ = ctx.dirs;
+  kappa_x_ = ctx.kappa_x, kappa_y_ = ctx.kappa_y;
   pupil::Bounds bounds = pupil::buildBounds(ctx);
   sets_ = std::move(bounds.sets);
   wedges_ = std::move(bounds.wedges);

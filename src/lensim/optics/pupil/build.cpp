@@ -5,11 +5,13 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <numbers>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/pupil/build.h"
 
 namespace lensim::optics::pupil {
@@ -135,6 +137,34 @@ std::vector<WedgeCheck> checkAllWedges(const Context& ctx, const std::vector<Sec
 }
 
 }  // namespace
+
+Context::Context(const LensSystem& lens_, const ParaxialData& p_, double film_radius_mm,
+                 const ExitPupilOptions& opts_)
+    : lens(lens_), p(p_), opts(opts_) {
+  rotational = opts.rotational;
+  nd = std::max(8, opts.directions);
+  for (int j = 0; j < nd; ++j) dirs.push_back(unit(2 * std::numbers::pi * j / nd));
+  // Anamorphic: the paraxial chief ray from film height h crosses the rear plane at kappa h
+  // (aimed at the exit pupil's centre).
+  if (!rotational) {
+    const double z_film = lens.filmZ_mm(), z_rear = lens.rearVertexZ_mm();
+    auto kappa = [&](double z_xp) {
+      return std::abs(z_xp - z_film) > 1e-9 ? (z_xp - z_rear) / (z_xp - z_film) : 0.0;
+    };
+    kappa_y = kappa(p.exit_pupil_z_mm);
+    const AnamorphicData ad = anamorphicData(lens);
+    kappa_x = ad.x ? kappa(ad.x->exit_pupil_z_mm) : kappa_y;
+  }
+  dphi = 2 * std::numbers::pi / nd;
+  rr = 1.5 * lens.interfaces().back().semi_aperture_mm;
+  disc2 = opts.rear_disc_radius_mm * opts.rear_disc_radius_mm;
+  obscured = lens.hasObscuration();
+  film_radius = film_radius_mm;
+  ni = std::max(1, opts.radial_bins);
+  min_width = film_radius_mm / (ni * 16.0);
+  wedge = (std::numbers::pi / 2) / std::max(1, opts.sectors);
+  r_ic = film_radius_mm;
+}
 
 Bounds buildBounds(Context& ctx) {
   // Anamorphic lenses are symmetric under x -> -x and y -> -y: bounds are built along the edges

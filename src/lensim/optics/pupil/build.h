@@ -33,8 +33,9 @@ struct Polygon {
 
 // What every stage reads: the lens, the options and the quantities derived from them.
 struct Context {
-  Context(const LensSystem& lens_, const ParaxialData& p_, const ExitPupilOptions& opts_)
-      : lens(lens_), p(p_), opts(opts_) {}
+  // Everything derived from the lens and options, for film points up to film_radius_mm.
+  Context(const LensSystem& lens, const ParaxialData& p, double film_radius_mm,
+          const ExitPupilOptions& opts);
   const LensSystem& lens;
   const ParaxialData& p;
   const ExitPupilOptions& opts;
