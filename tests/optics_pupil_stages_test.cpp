@@ -36,10 +36,10 @@ TEST(PupilStages, EdgeSearchEndsOnABlockedPointWithinTheTolerance) {
   for (double guess : {0.5, 3.0, 3.7, 9.0}) {
     for (int which = 0; which < 3; ++which) {
       int evals = 0;
-      const EdgeSearch e =
-          which == 0   ? runSearch(EdgeSearch(guess, 0, 10.0, 0, 0), linear, &evals)
-          : which == 1 ? runSearch(EdgeSearch(guess, 0, 10.0, 0, 0), quadratic, &evals)
-                       : runSearch(EdgeSearch(guess, 0, 10.0, 0, 0), jump, &evals);
+      const EdgeSearch e = which == 0 ? runSearch(EdgeSearch(guess, 0, 10.0, 0, 0), linear, &evals)
+                           : which == 1
+                               ? runSearch(EdgeSearch(guess, 0, 10.0, 0, 0), quadratic, &evals)
+                               : runSearch(EdgeSearch(guess, 0, 10.0, 0, 0), jump, &evals);
       SCOPED_TRACE(testing::Message() << "guess " << guess << " margin " << which);
       // Blocked (past d) and within the relative tolerance of the passing point before it.
       EXPECT_GT(e.result, d);
@@ -54,14 +54,15 @@ TEST(PupilStages, EdgeSearchAcceptsAGoodGuessWithinItsOvershoot) {
   // With accept > 0 a blocked point the slope puts within `accept` of the boundary ends it.
   const double d = 2.0, accept = 2e-3;
   int evals = 0;
-  const EdgeSearch e = runSearch(EdgeSearch(d * (1 + 0.5 * accept), accept, 10.0, 0.5, 0),
-                                 [&](double s) { return s / d; }, &evals);
+  const EdgeSearch e = runSearch(
+      EdgeSearch(d * (1 + 0.5 * accept), accept, 10.0, 0.5, 0), [&](double s) { return s / d; },
+      &evals);
   EXPECT_GT(e.result, d);
   EXPECT_LE(e.result, d * (1 + accept));
   EXPECT_LE(evals, 3);
   // A covering search whose first point is blocked ends there with 0 (nothing to widen).
-  const EdgeSearch c = runSearch(EdgeSearch(3.0, 1e-3, 10.0, 0, 0, true),
-                                 [&](double s) { return s / d; });
+  const EdgeSearch c =
+      runSearch(EdgeSearch(3.0, 1e-3, 10.0, 0, 0, true), [&](double s) { return s / d; });
   EXPECT_EQ(c.result, 0.0);
 }
 

@@ -100,7 +100,7 @@ class NodeBands {
         h_(done[k].r),
         state_(band_lens.size(), 0),
         own_(band_lens.size()) {
-    hint_ = !base_.empty                                 ? &base_
+    hint_ = !base_.empty                                ? &base_
             : k > 0 && !done[k - 1].empty               ? &done[k - 1]
             : k + 1 < done.size() && !done[k + 1].empty ? &done[k + 1]
                                                         : nullptr;

@@ -198,9 +198,9 @@ Bounds buildBounds(Context& ctx) {
   Bounds out;
   out.sets.assign(work[0].sets.size(), {});
   for (EdgeWork& w : work)
-    for (size_t set = 0; set < w.sets.size(); ++set) out.sets[set].push_back(std::move(w.sets[set]));
-  if (!ctx.rotational)
-    out.wedges = checkAllWedges(ctx, out.sets[0], n_wedges, wedge_reach, traces);
+    for (size_t set = 0; set < w.sets.size(); ++set)
+      out.sets[set].push_back(std::move(w.sets[set]));
+  if (!ctx.rotational) out.wedges = checkAllWedges(ctx, out.sets[0], n_wedges, wedge_reach, traces);
   out.traces = traces;
   return out;
 }

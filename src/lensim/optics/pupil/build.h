@@ -48,10 +48,10 @@ struct Context {
   double disc2 = 0;                 // the rear disc's radius squared (0: none)
   bool obscured = false;            // central obscurations
   double film_radius = 0;
-  int ni = 0;              // uniform radial intervals
-  double min_width = 0;    // the narrowest interval refinement makes
-  double wedge = 0;        // anamorphic: a wedge's angle
-  double r_ic = 0;         // past the image circle, as far as the uniform nodes tell (stage 1)
+  int ni = 0;            // uniform radial intervals
+  double min_width = 0;  // the narrowest interval refinement makes
+  double wedge = 0;      // anamorphic: a wedge's angle
+  double r_ic = 0;       // past the image circle, as far as the uniform nodes tell (stage 1)
 };
 
 // The polygon interpolated between nodes a and b at film radius r (the non-empty one where the

@@ -40,8 +40,8 @@ std::optional<Vec2> Probe::findInside(double h, const Polygon* hint) {
   double g_least = kInf;
   for (int st = 0; st < 3 && std::isfinite(starts[size_t(st)].first); ++st) {
     double g_end;
-    if (std::optional<Vec2> a = patternSearch(h, starts[size_t(st)].second,
-                                              starts[size_t(st)].first, reach, g_end))
+    if (std::optional<Vec2> a =
+            patternSearch(h, starts[size_t(st)].second, starts[size_t(st)].first, reach, g_end))
       return a;
     g_least = std::min(g_least, g_end);
   }
@@ -66,7 +66,8 @@ std::optional<Vec2> Probe::grid(double h, Vec2 centre, double reach, int n,
     const int m = std::min(kB, n * n - k0);
     for (int i = 0; i < m; ++i) {
       const int ix = (k0 + i) % n, iy = (k0 + i) / n;
-      pts[i] = centre + Vec2{reach * (2.0 * (ix + 0.5) / n - 1), reach * (2.0 * (iy + 0.5) / n - 1)};
+      pts[i] =
+          centre + Vec2{reach * (2.0 * (ix + 0.5) / n - 1), reach * (2.0 * (iy + 0.5) / n - 1)};
     }
     marginBatch(h, pts, m, g);
     for (int i = 0; i < m; ++i) {

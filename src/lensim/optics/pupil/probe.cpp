@@ -56,8 +56,8 @@ void Probe::marginBatch(double h, const Vec2* a, int n, double* out) {
         m = 0;
       };
       for (int j : mb_todo_) {
-        const Vec2 r = rotational ? a[j]
-                                  : toFilmAzimuth(false, ctx.kappa_x, ctx.kappa_y, a[j], h, ca, sa);
+        const Vec2 r =
+            rotational ? a[j] : toFilmAzimuth(false, ctx.kappa_x, ctx.kappa_y, a[j], h, ca, sa);
         const double d2 = ctx.disc2 > 0 ? (r.x * r.x + r.y * r.y) / ctx.disc2 : 0.0;
         if (d2 > 1) {  // outside the rear disc: no trace needed
           put(j, std::sqrt(d2));
@@ -117,8 +117,8 @@ double Probe::boundary(double h, Vec2 c, Vec2 u, double guess, double accept, bo
 // hint ends as after the searches one after another; last_slopes (if given) gets each search's
 // last_slope where it ended on a bracket.
 void Probe::boundaries(double h, Vec2 c, const Vec2* u, const double* guess, int count,
-                       double accept, const double* accept_slopes, double* out,
-                       double* last_slopes, bool cover) {
+                       double accept, const double* accept_slopes, double* out, double* last_slopes,
+                       bool cover) {
   es_.clear();
   for (int j = 0; j < count; ++j) {
     const double as = accept_slopes ? accept_slopes[j] : 0.0;
@@ -127,7 +127,8 @@ void Probe::boundaries(double h, Vec2 c, const Vec2* u, const double* guess, int
   for (;;) {
     es_pts_.clear(), es_lane_.clear();
     for (int j = 0; j < count; ++j)
-      if (!es_[size_t(j)].done) es_pts_.push_back(c + u[j] * es_[size_t(j)].x), es_lane_.push_back(j);
+      if (!es_[size_t(j)].done)
+        es_pts_.push_back(c + u[j] * es_[size_t(j)].x), es_lane_.push_back(j);
     if (es_pts_.empty()) break;
     es_g_.resize(es_pts_.size());
     marginBatch(h, es_pts_.data(), int(es_pts_.size()), es_g_.data());
@@ -153,8 +154,7 @@ std::vector<Vec2> Probe::centreRing(double h, Vec2& c, double guess) {
   for (int it = 0; it < 2; ++it) {
     if (!ring.empty())
       for (int j = 0; j < kRing; ++j)
-        ring_g[size_t(j)] =
-            std::max(1e-6 * ctx.rr, dot2(ring[size_t(j)] - c, ring_u[size_t(j)]));
+        ring_g[size_t(j)] = std::max(1e-6 * ctx.rr, dot2(ring[size_t(j)] - c, ring_u[size_t(j)]));
     boundaries(h, c, ring_u.data(), ring_g.data(), kRing, 0.0, nullptr, ring_d.data(), nullptr);
     ring.clear();
     Vec2 lo_pt{1e300, 1e300}, hi_pt{-1e300, -1e300};

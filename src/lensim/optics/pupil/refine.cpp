@@ -39,8 +39,7 @@ RefinedInterval refineInterval(Probe& probe, const Polygon& left_end, const Poly
     std::vector<double> f(nd, 1.0);
     bool split = false;
     if (any) {
-      f = coverFactors(ctx, interp,
-                       probe.boundaryPoints(h, nd, 0.25 * ctx.dphi, nullptr, &interp));
+      f = coverFactors(ctx, interp, probe.boundaryPoints(h, nd, 0.25 * ctx.dphi, nullptr, &interp));
       const double worst = *std::max_element(f.begin(), f.end());
       const double a0 = polygonArea(ctx, left), a1 = polygonArea(ctx, right);
       // Where the region's area changes fast, interpolation wastes samples: split. Not beyond

@@ -89,10 +89,8 @@ void cutHole(Probe& probe, Interval& iv) {
       const double h = polygonAt(iv, nd, t, c, R);
       for (int j = 0; j < nd && ok; ++j) {
         const int j1 = (j + 1) % nd;
-        const Vec2 a =
-            ctx.dirs[size_t(j)] * (k * (HA[size_t(j)] * (1 - t) + HB[size_t(j)] * t));
-        const Vec2 b =
-            ctx.dirs[size_t(j1)] * (k * (HA[size_t(j1)] * (1 - t) + HB[size_t(j1)] * t));
+        const Vec2 a = ctx.dirs[size_t(j)] * (k * (HA[size_t(j)] * (1 - t) + HB[size_t(j)] * t));
+        const Vec2 b = ctx.dirs[size_t(j1)] * (k * (HA[size_t(j1)] * (1 - t) + HB[size_t(j1)] * t));
         ok = !passesAll(probe, h, c + a) && !passesAll(probe, h, c + (a + b) * 0.5);
       }
     }

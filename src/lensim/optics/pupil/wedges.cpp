@@ -73,8 +73,8 @@ WedgeCheck checkWedge(Probe& probe, const std::vector<Sector>& lines, int wdg,
       poly.radius = R;
       // At a quarter and three quarters of the way between the polygon's directions: one search
       // for a point inside the region (not one per set of directions).
-      const std::vector<double> g = coverFactors(
-          ctx, poly, probe.boundaryPoints(h, 2 * nd, 0.25 * ctx.dphi, nullptr, &poly));
+      const std::vector<double> g =
+          coverFactors(ctx, poly, probe.boundaryPoints(h, 2 * nd, 0.25 * ctx.dphi, nullptr, &poly));
       for (int j = 0; j < nd; ++j) f[size_t(j)] = std::max(f[size_t(j)], g[size_t(j)]);
     }
     for (double& v : f)
