@@ -1,47 +1,51 @@
 // Exit-pupil sampling for a realistic camera: bounds of the region of the rear-vertex plane
 // through which light reaches each film point, so that camera rays are aimed only where they can
-// get through the lens.
+// get through the lens. Sampling is uniform in the bound, so a camera's estimator weight uses its
+// area.
 //
-// The region is found at film radii r_0 = 0 < r_1 < ... < r_n = film radius: from a point inside
-// it (the real chief ray's crossing), rays are searched to its boundary along fixed directions,
-// giving a star-shaped polygon. Between two radii the polygon's centre and vertex distances are
-// interpolated linearly. Each node's polygon is checked against boundary points at the half-way
-// directions, and each interval's interpolated polygon against the true boundary half-way
-// between the radii; where the region changes fast (near the edge of the image circle) the
-// interval is split, and wherever the true boundary reaches beyond an edge of the polygon, that
-// edge's vertices are moved out until it contains it; then all by a small safety margin. Film
-// points off the x axis use the bound rotated about the axis (the lens is rotationally symmetric;
-// for anamorphic lenses see ExitPupilOptions::rotational).
-// Sampling is uniform in the polygon, so a camera's estimator weight uses its area.
+// The bound. The region is found at film radii r_0 = 0 < r_1 < ... < r_n = film radius (nodes):
+// from a point inside it (the neighbouring node's centre or the real chief ray's crossing),
+// rays are searched to its boundary along fixed directions, giving a star-shaped polygon. Between
+// two radii the polygon's centre and vertex distances are interpolated linearly. Film points off
+// the x axis use the bound rotated about the axis; an anamorphic lens gets 2-D bounds (see
+// ExitPupilOptions::rotational).
 //
-// A boundary point is found on the ray's margin (its largest ratio of hit radius to clear
-// semi-aperture over the surfaces, with sin of the refracted angle where total internal
-// reflection can occur): it varies continuously, is <= 1 exactly where the ray gets through, and
-// its secant steps find a boundary in two or three traces (bisection took ~9); a region's sliver
-// near the edge of the image circle is found by pattern searches on it (a 96x96 grid before).
-// A dispersive lens gets bounds per wavelength band (ExitPupilOptions::bands) sharing the
-// lens's own structure; a band lens's vertex distance is predicted from those already found at
-// the node (linearly in 1/lambda^2) and a search from a good guess (that, or a checked polygon's
-// edge) ends at a blocked point the margin puts within 0.1-0.2% past the boundary: about two
-// traces a vertex. A blocked point still bounds the (star-shaped) region, so that only the
-// overshoot, not containment, depends on the guess.
-// A polygon's searches (one per direction, each a small state machine) run side by side and
-// their rays are traced in batches (LensTracer::marginSquaredBatch, vectorised across the rays
-// for spherical surfaces, quadrics, toroids and aspheres on a quadric base), which hides the
-// latency of each trace's chain of square roots and divisions: about 3x cheaper a trace than one at
-// a time.
+// The margin. A boundary point is found on the ray's margin: its largest ratio of hit radius to
+// clear semi-aperture over the surfaces (with sin of the refracted angle where total internal
+// reflection can occur). It varies continuously and is <= 1 exactly where the ray gets through,
+// so that secant steps find a boundary in two or three traces, and a sliver of region near the
+// edge of the image circle is found by a coarse grid and pattern searches on it. A search that
+// ends at a blocked point still bounds the (star-shaped) region, so that a guess changes only
+// the overshoot, not containment. A polygon's searches (one per direction, each a small state
+// machine) run side by side and their rays are traced in batches
+// (LensTracer::marginSquaredBatch).
+//
+// The build, in stages (optics/pupil/, declared in pupil/build.h; the pieces of each stage run
+// side by side, each from a fresh Probe, so that the bound does not depend on the schedule):
+//   0. nodes.cpp    the nodes at uniform film radii, each found from its neighbour and checked
+//                   against boundary points at the half-way directions;
+//   1. refine.cpp   each interval's interpolated polygon checked against the true boundary
+//                   half-way between its nodes; split where the region changes fast (near the
+//                   edge of the image circle); each edge's vertices moved out until it contains
+//                   the boundary points beyond it, then all by a safety margin;
+//   2. bands.cpp    a dispersive lens's wavelength bands (ExitPupilOptions::bands): the same
+//                   nodes, each vertex distance re-solved from a prediction linear in
+//                   1/lambda^2 (about two traces a vertex);
+//   3. tables.cpp   the sampling tables: per interval the scaled vertex distances at its ends and
+//                   prefix sums of the fan's areas, a table from film radius to interval, and for
+//                   lenses with central obscurations a hole: a second star-shaped polygon about
+//                   the same centre, each vertex the first passing point along its direction,
+//                   pulled in by the safety margin and checked with real rays in between;
+//   4. wedges.cpp   anamorphic lenses: each wedge's polygon blended between its edges' bounds,
+//                   checked against the true region at the wedge's middle azimuth and widened.
+// probe.cpp holds the margin and the boundary searches, find_inside.cpp the search for a point
+// inside the region, edge_search.h one search's state machine, bound.h the finished bound's data
+// and build.cpp the driver.
 //
 // Measured (tests/optics_pupil_test.cpp and a 2-million-ray check): no passing ray outside the
-// bounds for the double Gauss, wide-angle and telephoto; for the fisheye one in two million,
-// at a sharp corner of the region near the edge of its image circle, where a polygon vertex
-// cannot follow the corner exactly. 2-3% of the samples yield no ray.
-// Lenses with central obscurations (catadioptric lenses): the polygon is the outer boundary of
-// the region (obscurations ignored), and a hole is cut out of it: a second star-shaped polygon
-// about the same centre, each vertex the first passing point along its direction (found with
-// real rays at both ends and the middle of each radial interval, interpolated like the outer
-// one, pulled in by the safety margin and checked with real rays in between). Off axis the
-// secondary's shadow moves off the outer region's centre; a scaled copy of the outer polygon
-// (the former hole) had to shrink to its nearest side and wasted 13% of the Cassegrain's samples.
+// bounds for the double Gauss, wide-angle and telephoto; for the fisheye one in two million, at
+// a sharp corner of the region near the edge of its image circle, where a polygon vertex cannot
+// follow the corner exactly. 2-3% of the samples yield no ray.
 #pragma once
 
 #include <optional>
@@ -49,6 +53,7 @@
 
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/paraxial.h"
+#include "lensim/optics/pupil/bound.h"
 
 namespace lensim::optics {
 
@@ -69,8 +74,7 @@ struct ExitPupilOptions {
   /// (centre and vertex distances), widened where checks of the true region at the wedge's middle
   /// azimuth (at every node and interval middle of both edges) reach beyond it; sampling moves the
   /// bound back to the film point's azimuth without rotating it and mirrors it back (a 2-D bound:
-  /// an anamorphic lens's elliptical exit pupil keeps its orientation). (Before: each wedge's
-  /// bound was the union of its edges' regions, which wasted 13.8% of lentil:2004's samples.)
+  /// an anamorphic lens's elliptical exit pupil keeps its orientation).
   bool rotational = true;
   int sectors = 4;  ///< anamorphic: wedges of the first quadrant
   /// Anamorphic: the film's rectangle where points are sampled, half width and half height (mm,
@@ -135,37 +139,9 @@ class ExitPupilSampler {
   bool rotationallySymmetric() const { return rotational_; }
 
  private:
-  // A star-shaped polygon in the frame of a film point on the +x axis: vertices
-  // centre + radius[j] (cos 2 pi j / n, sin 2 pi j / n).
-  struct Polygon {
-    double r = 0;  // film radius of a node
-    bool empty = true;
-    Vec2 centre;
-    std::vector<double> radius;
-    std::vector<double> raw, node_f;  // vertex distances before the node's check, its factors
-  };
-  // The unscaled polygon interpolated between two nodes at radius r (used while building).
-  bool interpolateBetween(const Polygon& a, const Polygon& b, double r, Polygon& poly) const;
-  // Sampling tables of one interval: the scaled vertex distances at its two ends (the distance
-  // at film radius r is A (1 - t) + B t), and prefix sums of the fan's triangle products split by
-  // powers of t, so that the fan's cumulative area at any t costs three multiplies.
-  struct Interval {
-    double r0 = 0, r1 = 0;
-    bool empty = true;
-    Vec2 c0, c1;
-    std::vector<double> A, B;  // per vertex
-    std::vector<double> P;     // prefix sums P0, P1, P2 interleaved: 3 (n + 1) values
-    // A lens with central obscurations: a hole, the star-shaped polygon about the same centre
-    // with vertex distances HA (1 - t) + HB t, lies in the obscured (blocked) middle of the
-    // region all across the interval; samples are drawn from the polygon minus the hole (each
-    // fan triangle minus the hole's, a quadrilateral). Empty: no hole.
-    std::vector<double> HA, HB;
-    bool hasHole() const { return !HA.empty(); }
-  };
-  static int intervalIn(const std::vector<Interval>& intervals, const std::vector<int>& radius_lut,
-                        double lut_scale, double r);
-  std::vector<Interval> buildIntervals(const std::vector<Polygon>& nodes,
-                                       const std::vector<std::vector<double>>& scales) const;
+  using Interval = pupil::Interval;
+  using Sector = pupil::Sector;
+  using WedgeCheck = pupil::WedgeCheck;
   // Anamorphic: the polygon of bound set `set` for film radius r in wedge `wedge`, blended at
   // s in [0, 1] across it (centre c, vertex distances R[0 .. directions_)); false where it sees
   // nothing.
@@ -173,12 +149,7 @@ class ExitPupilSampler {
   // Anamorphic: the wedge, blend weight and film radius of a film point (any quadrant).
   void wedgeOf(Vec2 film_mm, int& wedge, double& s, double& r) const;
   std::optional<PupilSample> sampleAnamorphic(Vec2 film_mm, Vec2 u, int set) const;
-  // Anamorphic: per wedge, the film radii of its checks and the widening factors per vertex
-  // they found (a film radius between two uses the larger of theirs).
-  struct WedgeCheck {
-    std::vector<double> r;
-    std::vector<std::vector<double>> f;
-  };
+  // Anamorphic: per wedge, the checks of its blended polygon.
   std::vector<WedgeCheck> wedges_;
   // The interval, t and rotation for a film point; nullptr where it sees nothing.
   const Interval* locate(Vec2 film_mm, double& t, double& cos_a, double& sin_a, int set) const;
@@ -186,8 +157,7 @@ class ExitPupilSampler {
   // Where the rear-plane point `local` of the +x frame lies for a film point at distance r and
   // azimuth (ca, sa): rotated (symmetric lenses) or moved by the chief-ray model (anamorphic).
   Vec2 toFilmAzimuth(Vec2 local, double r, double ca, double sa) const {
-    if (rotational_) return {ca * local.x - sa * local.y, sa * local.x + ca * local.y};
-    return {local.x + (kappa_x_ * ca - kappa_x_) * r, local.y + kappa_y_ * sa * r};
+    return pupil::toFilmAzimuth(rotational_, kappa_x_, kappa_y_, local, r, ca, sa);
   }
 
   double film_radius_mm_;
@@ -200,13 +170,8 @@ class ExitPupilSampler {
   std::vector<Interval> intervals_;
   std::vector<int> radius_lut_;  // first interval for film radii k / lut_scale_
   double lut_scale_ = 0;
-  // The bounds: one set for rotationally symmetric lenses; one per wedge of the first quadrant
-  // for anamorphic ones (film points elsewhere are mirrored into it).
-  struct Sector {
-    std::vector<Interval> intervals;
-    std::vector<int> lut;
-    double lut_scale = 0;
-  };
+  // The bounds: one sector for rotationally symmetric lenses; one per wedge edge of the first
+  // quadrant for anamorphic ones (film points elsewhere are mirrored into it).
   // sets_[0]: the lens's own bounds; sets_[1 + b]: wavelength band b's.
   std::vector<std::vector<Sector>> sets_;
   double build_seconds_ = 0;
