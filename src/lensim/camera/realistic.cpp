@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <tuple>
 
 #include "lensim/optics/anamorphic.h"
 #include "lensim/optics/configurations.h"
@@ -134,26 +135,28 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   pupil_.emplace(*lens_.lens, lens_.paraxial, film_radius, pupil_options);
   centre_area_mm2_ = pupil_->area_mm2({0, 0});
   camera_from_world_ = inverse(settings_.world_from_camera.start());
-  {
-    // The front surface's axial extent (lens space), for light arriving from the scene.
-    const optics::Interface& f = lens_.lens->interfaces().front();
-    const double r = f.semi_aperture_mm;
-    front_zmin_mm_ = front_zmax_mm_ = f.z_mm;
-    if (f.radius_mm != 0 || !f.shape.isSpherical())
-      for (int i = 0; i <= 64; ++i)
-        for (int k = 0; k < 16; ++k) {
-          const double h = r * i / 64, a = 2 * M_PI * k / 16;
-          if (auto sg =
-                  optics::surfaceSag(f.radius_mm, f.shape, h * std::cos(a), h * std::sin(a))) {
-            front_zmin_mm_ = std::min(front_zmin_mm_, f.z_mm + sg->z);
-            front_zmax_mm_ = std::max(front_zmax_mm_, f.z_mm + sg->z);
-          }
-        }
-  }
+  // The front surface's axial extent (lens space), for light arriving from the scene.
+  std::tie(front_zmin_mm_, front_zmax_mm_) = surfaceZRange(lens_.lens->interfaces().front());
   if (settings_.simple_weighting && !(centre_area_mm2_ > 0))
     throw Error("simpleweighting: no light reaches the centre of the film to normalise by");
+  if (settings_.flare) setUpFlare();
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   startup_cpu_seconds_ = processCpuSeconds() - cpu0;
+}
+
+std::pair<double, double> RealisticCamera::surfaceZRange(const optics::Interface& f) {
+  const double r = f.semi_aperture_mm;
+  double zmin = f.z_mm, zmax = f.z_mm;
+  if (f.radius_mm != 0 || !f.shape.isSpherical())
+    for (int i = 0; i <= 64; ++i)
+      for (int k = 0; k < 16; ++k) {
+        const double h = r * i / 64, a = 2 * M_PI * k / 16;
+        if (auto sg = optics::surfaceSag(f.radius_mm, f.shape, h * std::cos(a), h * std::sin(a))) {
+          zmin = std::min(zmin, f.z_mm + sg->z);
+          zmax = std::max(zmax, f.z_mm + sg->z);
+        }
+      }
+  return {zmin, zmax};
 }
 
 int RealisticCamera::bandAt(double lambda_nm) const {
@@ -204,15 +207,28 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
         Vec2{r.stop_point.x / stop_radius_mm_, r.stop_point.y / stop_radius_mm_});
     if (transmission <= 0) return std::nullopt;
   }
+  CameraRay ray = placeRay(Vec3(r.ray.origin), Vec3(r.ray.direction), u_time);
+  // w = T cos^4(theta) A / z^2 (z: film to the rear-vertex plane, where the pupil is sampled);
+  // the film multiplies by the exposure time (and ISO / 100), as pbrt-v4's imaging ratio does.
+  const double c2 = f.cos_theta * f.cos_theta;
+  ray.weight = transmission * c2 * c2 * f.area_mm2 / weightNorm();
+  return ray;
+}
+
+double RealisticCamera::weightNorm() const {
+  const double z = lens_.lens->filmDistance_mm();
+  return settings_.simple_weighting ? centre_area_mm2_ : z * z;
+}
+
+CameraRay RealisticCamera::placeRay(const Vec3& o_lens, const Vec3& d_lens, double u_time) const {
   const optics::LensSystem& lens = *lens_.lens;
   // Lens space (mm, +z toward the film) to camera space (camera units, +z toward the scene).
   const double u = settings_.camera_units_per_mm;
   // Camera-space z: distance toward the scene from the film (pbrt-v3/v4) or from the front
   // vertex (the v1/v2 assignment's convention).
   const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens.filmZ_mm();
-  const Vec3 o_cam{r.ray.origin.x * u, r.ray.origin.y * u, (z0 - r.ray.origin.z) * u};
-  const Vec3 d_cam{double(r.ray.direction.x), double(r.ray.direction.y),
-                   -double(r.ray.direction.z)};
+  const Vec3 o_cam{o_lens.x * u, o_lens.y * u, (z0 - o_lens.z) * u};
+  const Vec3 d_cam{d_lens.x, d_lens.y, -d_lens.z};
   CameraRay ray;
   // pbrt-v4's CameraBase::SampleTime (a time uniform over the shutter) and the camera transform
   // at that time (CameraTransform::RenderFromCamera); the lens itself is in camera space.
@@ -225,12 +241,6 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
     place(settings_.world_from_camera.interpolate(ray.time));
   else
     place(settings_.world_from_camera.start());
-  // w = T cos^4(theta) A / z^2 (z: film to the rear-vertex plane, where the pupil is sampled);
-  // the film multiplies by the exposure time (and ISO / 100), as pbrt-v4's imaging ratio does.
-  const double z = lens.filmDistance_mm();
-  const double c2 = f.cos_theta * f.cos_theta;
-  const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
-  ray.weight = transmission * c2 * c2 * f.area_mm2 / norm;
   return ray;
 }
 
@@ -384,7 +394,9 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
   if (dispersive_) return dispersiveRay(sample, *f);
   const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f->ray);
   if (!r.ok()) return std::nullopt;
-  return finish(r, *f, sample.time);
+  std::optional<CameraRay> ray = finish(r, *f, sample.time);
+  if (ray && flare_) applyReflectionLosses(sample, *f, *ray);
+  return ray;
 }
 
 void RealisticCamera::generateRays(const CameraSample* samples, int n,
@@ -437,7 +449,11 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
   }
   lens_.lens->tracerFloat().traceFromFilmBatch(in, m, out);
   for (int k = 0; k < m; ++k)
-    if (out[k].ok()) rays[index[k]] = finish(out[k], lanes[k], samples[index[k]].time);
+    if (out[k].ok()) {
+      rays[index[k]] = finish(out[k], lanes[k], samples[index[k]].time);
+      if (rays[index[k]] && flare_)
+        applyReflectionLosses(samples[index[k]], lanes[k], *rays[index[k]]);
+    }
 }
 
 bool RealisticCamera::reachesFilm(const CameraSample& sample) const {
@@ -509,6 +525,10 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.configuration = r.configuration;
       s.zoom_focal_length_mm = r.zoom_focal_length_mm;
       s.zoom_loc = r.zoom_loc;
+      s.flare = r.flare;
+      s.flare_coating = r.flare_coating;
+      s.flare_loc = r.flare_loc;
+      s.flare_coating_loc = r.flare_coating_loc;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

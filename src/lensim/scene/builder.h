@@ -300,6 +300,13 @@ struct Realistic {
   std::optional<int> configuration;
   std::optional<double> zoom_focal_length_mm;
   FileLoc zoom_loc;
+  /// `flare`: camera rays also take two-reflection ghost paths (docs/flare.md); flare_loc: where
+  bool flare = false;
+  FileLoc flare_loc;
+  /// `flarecoating`: the lens-wide coating for flare (as `lens ghosts --coating`); empty: the
+  /// lens file's
+  std::string flare_coating;
+  FileLoc flare_coating_loc;
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 
