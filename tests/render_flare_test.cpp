@@ -28,13 +28,16 @@ std::string testFile(const std::string& name) {
 }
 
 /// An uncoated plane-parallel plate (index n, 5 mm) and behind it a stop of radius a, the film
-/// `film_mm` behind the stop; the plate's clear aperture is wide enough never to clip.
+/// `film_mm` behind the stop; the plate's clear aperture is wide enough never to clip. (Its
+/// front face has a radius of 200 m: lensim refuses afocal lenses; the power, 1/400 m, tilts no
+/// ray of the test by more than 2e-5 rad.)
 std::string writePlate(double n, double a, double film_mm) {
   const std::string path = testFile("plate.json");
   std::ofstream f(path);
   f << "{\"format\": \"lensim-lens\", \"name\": \"plate\", \"coating\": \"uncoated\", "
        "\"surfaces\": ["
-    << "{\"radius_mm\": 0, \"thickness_mm\": 5, \"semi_aperture_mm\": 40, \"ior\": " << n << "},"
+    << "{\"radius_mm\": 2e5, \"thickness_mm\": 5, \"semi_aperture_mm\": 40, \"ior\": " << n
+    << "},"
     << "{\"radius_mm\": 0, \"thickness_mm\": 2, \"semi_aperture_mm\": 40, \"ior\": 1},"
     << "{\"radius_mm\": 0, \"thickness_mm\": " << film_mm << ", \"semi_aperture_mm\": " << a
     << ", \"ior\": 1, \"stop\": true}]}\n";
@@ -43,13 +46,13 @@ std::string writePlate(double n, double a, double film_mm) {
 
 /// A scene: the camera inside a uniform environment of radiance 1.
 std::string writeScene(const std::string& name, const std::string& camera_params,
-                       const std::string& extra = "", int res = 16, int spp = 64) {
+                       const std::string& extra = "", double diagonal_mm = 35) {
   const std::string path = testFile(name);
   std::ofstream f(path);
   f << "Camera \"realistic\" " << camera_params << "\n"
-    << "Film \"rgb\" \"integer xresolution\" " << res << " \"integer yresolution\" " << res
-    << " \"float diagonal\" 35\n"
-    << "Sampler \"independent\" \"integer pixelsamples\" " << spp << "\n"
+    << "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16 \"float diagonal\" "
+    << diagonal_mm << "\n"
+    << "Sampler \"independent\" \"integer pixelsamples\" 64\n"
     << "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
     << extra << "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n";
   return path;
@@ -93,10 +96,14 @@ TEST(FlareRender, UncoatedPlateFlatFieldIsDirectPlusTwoReflectionTerm) {
   render::RenderOptions o;
   o.seed = 5;
   o.threads = 2;
-  const io::Image off = render::render(scene::loadScene(writeScene("plate_off.pbrt", common)), o).image;
-  const io::Image on =
-      render::render(scene::loadScene(writeScene("plate_on.pbrt", common + " \"bool flare\" true")), o)
-          .image;
+  // A 3.5 mm film: the centre pixels lie within 0.3 mm of the axis, where the cone's irradiance
+  // differs from the axial one by under 0.1%.
+  const io::Image off =
+      render::render(scene::loadScene(writeScene("plate_off.pbrt", common, "", 3.5)), o).image;
+  const io::Image on = render::render(scene::loadScene(writeScene(
+                                          "plate_on.pbrt", common + " \"bool flare\" true", "", 3.5)),
+                                      o)
+                           .image;
   ASSERT_EQ(off.channelCount(), 3);
   ASSERT_EQ(on.channelCount(), 6);
   ASSERT_EQ(on.channels[3], "ghost.R");
@@ -119,11 +126,9 @@ TEST(FlareRender, UncoatedPlateFlatFieldIsDirectPlusTwoReflectionTerm) {
       "%.6f, ghost/off %.4e (normal incidence: (1-R)^2 (1+R^2) = %.6f, plate T = %.6f)\n",
       c_off, e0, c_on, c_ghost, (ed + eg) / e0, eg / e0, (1 - r0) * (1 - r0) * (1 + r0 * r0),
       (1 - r0) * (1 - r0) / (1 - r0 * r0));
-  // The centre pixels lie within 1.6 mm of the axis: their cones differ from the axial one by
-  // cos^4 (under 1%); the ratios, not the absolute values, are compared tightly.
-  EXPECT_NEAR(c_off, e0, 0.01 * e0);
-  EXPECT_NEAR(c_on / c_off, (ed + eg) / e0, 1e-3);
-  EXPECT_NEAR(c_ghost / c_off, eg / e0, 0.02 * eg / e0);
+  EXPECT_NEAR(c_off, e0, 0.015 * e0);  // the pupil bound's blocked samples: ~1% noise
+  EXPECT_NEAR(c_on / c_off, (ed + eg) / e0, 3e-4);
+  EXPECT_NEAR(c_ghost / c_off, eg / e0, 0.01 * eg / e0);
 }
 
 // With "bool flare" false the render is the one without the parameter, bit for bit, with no ghost

@@ -136,11 +136,17 @@ void RealisticCamera::setUpFlare() {
   std::vector<double> wl;
   for (int l = 400; l <= 700; l += 10) wl.push_back(l);
   const optics::GhostAnalysis ga = optics::analyseGhosts(lens, f->coatings, wl);
-  if (ga.ghosts.empty()) throw Error(loc, "flare: the lens has no pair of reflecting surfaces");
+  // Pairs with a surface without an index step (the stop, a dummy surface) reflect nothing.
+  std::vector<optics::Ghost> pairs;
+  for (const optics::Ghost& g : ga.ghosts)
+    if (s[size_t(g.a)].ior_before != s[size_t(g.a)].ior_after &&
+        s[size_t(g.b)].ior_before != s[size_t(g.b)].ior_after)
+      pairs.push_back(g);
+  if (pairs.empty()) throw Error(loc, "flare: the lens has no pair of reflecting surfaces");
   double sum = 0;
-  for (const optics::Ghost& g : ga.ghosts) sum += std::max(0.0, g.relative_intensity);
-  const double m = double(ga.ghosts.size());
-  for (const optics::Ghost& g : ga.ghosts) {
+  for (const optics::Ghost& g : pairs) sum += std::max(0.0, g.relative_intensity);
+  const double m = double(pairs.size());
+  for (const optics::Ghost& g : pairs) {
     Flare::Path p;
     p.first = g.b, p.second = g.a;
     p.probability = (sum > 0 ? (1 - kUniformShare) * std::max(0.0, g.relative_intensity) / sum
