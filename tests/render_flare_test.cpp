@@ -41,8 +41,7 @@ std::string writePlate(double n, double a, double film_mm) {
   std::ofstream f(path);
   f << "{\"format\": \"lensim-lens\", \"name\": \"plate\", \"coating\": \"uncoated\", "
        "\"surfaces\": ["
-    << "{\"radius_mm\": 2e5, \"thickness_mm\": 5, \"semi_aperture_mm\": 40, \"ior\": " << n
-    << "},"
+    << "{\"radius_mm\": 2e5, \"thickness_mm\": 5, \"semi_aperture_mm\": 40, \"ior\": " << n << "},"
     << "{\"radius_mm\": 0, \"thickness_mm\": 2, \"semi_aperture_mm\": 40, \"ior\": 1},"
     << "{\"radius_mm\": 0, \"thickness_mm\": " << film_mm << ", \"semi_aperture_mm\": " << a
     << ", \"ior\": 1, \"stop\": true}]}\n";
@@ -105,10 +104,11 @@ TEST(FlareRender, UncoatedPlateFlatFieldIsDirectPlusTwoReflectionTerm) {
   // differs from the axial one by under 0.1%.
   const io::Image off =
       render::render(scene::loadScene(writeScene("plate_off.pbrt", common, "", 3.5)), o).image;
-  const io::Image on = render::render(scene::loadScene(writeScene(
-                                          "plate_on.pbrt", common + " \"bool flare\" true", "", 3.5)),
-                                      o)
-                           .image;
+  const io::Image on =
+      render::render(
+          scene::loadScene(writeScene("plate_on.pbrt", common + " \"bool flare\" true", "", 3.5)),
+          o)
+          .image;
   ASSERT_EQ(off.channelCount(), 3);
   ASSERT_EQ(on.channelCount(), 6);
   ASSERT_EQ(on.channels[3], "ghost.R");
@@ -131,6 +131,14 @@ TEST(FlareRender, UncoatedPlateFlatFieldIsDirectPlusTwoReflectionTerm) {
       "%.6f, ghost/off %.4e (normal incidence: (1-R)^2 (1+R^2) = %.6f, plate T = %.6f)\n",
       c_off, e0, c_on, c_ghost, (ed + eg) / e0, eg / e0, (1 - r0) * (1 - r0) * (1 + r0 * r0),
       (1 - r0) * (1 - r0) / (1 - r0 * r0));
+  // volpath renders the same ghosts (the same camera rays and weights; the sky seen directly).
+  const io::Image vol =
+      render::render(scene::loadScene(writeScene("plate_vol.pbrt", common + " \"bool flare\" true",
+                                                 "Integrator \"volpath\"\n", 3.5)),
+                     o)
+          .image;
+  EXPECT_NEAR(centre(vol, 0), c_on, 1e-6 * c_on);
+  EXPECT_NEAR(centre(vol, 3), c_ghost, 1e-6 * c_ghost);
   EXPECT_NEAR(c_off, e0, 0.015 * e0);  // the pupil bound's blocked samples: ~1% noise
   EXPECT_NEAR(c_on / c_off, (ed + eg) / e0, 3e-4);
   EXPECT_NEAR(c_ghost / c_off, eg / e0, 0.01 * eg / e0);
@@ -149,15 +157,18 @@ TEST(FlareRender, DoubleGaussFlatField) {
   o.spp = 32;
   const io::Image plain =
       render::render(scene::loadScene(writeScene("dg_plain.pbrt", common)), o).image;
-  const io::Image off = render::render(
-      scene::loadScene(writeScene("dg_off.pbrt", common + " \"bool flare\" false")), o).image;
+  const io::Image off =
+      render::render(scene::loadScene(writeScene("dg_off.pbrt", common + " \"bool flare\" false")),
+                     o)
+          .image;
   ASSERT_EQ(plain.channels, off.channels);
   ASSERT_EQ(plain.pixels, off.pixels);
-  const io::Image on = render::render(
-      scene::loadScene(writeScene("dg_on.pbrt", common + " \"bool flare\" true")), o).image;
+  const io::Image on =
+      render::render(scene::loadScene(writeScene("dg_on.pbrt", common + " \"bool flare\" true")), o)
+          .image;
   ASSERT_EQ(on.channelCount(), 6);
   // Independent: the prescription's index steps (dgauss.50mm.dat, in order) at normal incidence.
-  const double steps[][2] = {{1, 1.67},  {1.67, 1},    {1, 1.67},    {1.67, 1.699}, {1.699, 1},
+  const double steps[][2] = {{1, 1.67},  {1.67, 1},      {1, 1.67},  {1.67, 1.699}, {1.699, 1},
                              {1, 1.603}, {1.603, 1.658}, {1.658, 1}, {1, 1.717},    {1.717, 1}};
   double t = 1;
   for (const auto& s : steps) t *= 1 - fresnel(s[0], s[1], 0);
@@ -223,9 +234,11 @@ TEST(FlareRender, MulticoatingWeakensGhosts) {
   o.threads = 2;
   o.spp = 16;
   const io::Image un = render::render(scene::loadScene(writeScene("un.pbrt", common)), o).image;
-  const io::Image multi = render::render(
-      scene::loadScene(writeScene("multi.pbrt", common + " \"string flarecoating\" \"multi\"")), o)
-                              .image;
+  const io::Image multi =
+      render::render(
+          scene::loadScene(writeScene("multi.pbrt", common + " \"string flarecoating\" \"multi\"")),
+          o)
+          .image;
   std::printf("flat field: uncoated %.4f (ghosts %.3e), multicoated %.4f (ghosts %.3e)\n",
               centre(un, 0), centre(un, 3), centre(multi, 0), centre(multi, 3));
   EXPECT_GT(centre(multi, 0), 1.4 * (centre(un, 0) - centre(un, 3)));

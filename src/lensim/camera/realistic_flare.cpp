@@ -50,9 +50,9 @@ constexpr double kUniformShare = 0.1;
 /// the indices its coating sees (light from the first's side) and whether it reflects there.
 struct Step {
   int surface = 0;
-  double n_from = 1, n_to = 1;  ///< the path's media before and after (the same at a mirror)
+  double n_from = 1, n_to = 1;        ///< the path's media before and after (the same at a mirror)
   double coat_from = 1, coat_to = 1;  ///< the surface's media, the light's side first
-  bool mirror = false;  ///< the path reflects here (R), else it passes (T)
+  bool mirror = false;                ///< the path reflects here (R), else it passes (T)
   bool stop = false;
 };
 
@@ -113,11 +113,13 @@ void RealisticCamera::setUpFlare() {
   const optics::LensSystem& lens = *lens_.lens;
   const FileLoc& loc = settings_.flare_loc;
   if (dispersive_)
-    throw Error(loc, "flare: the lens disperses (a glass with dispersion, or glassmatch); "
-                     "flare is rendered for lenses with constant indices only");
+    throw Error(loc,
+                "flare: the lens disperses (a glass with dispersion, or glassmatch); "
+                "flare is rendered for lenses with constant indices only");
   if (lens.mirrorCount() > 0)
-    throw Error(loc, "flare: the lens has mirrors (ghosts of catadioptric lenses are not "
-                     "modelled)");
+    throw Error(loc,
+                "flare: the lens has mirrors (ghosts of catadioptric lenses are not "
+                "modelled)");
   auto f = std::make_shared<Flare>();
   optics::LensPrescription pr = lens.prescription();
   if (!settings_.flare_coating.empty()) {
@@ -149,15 +151,21 @@ void RealisticCamera::setUpFlare() {
   for (const optics::Ghost& g : pairs) {
     Flare::Path p;
     p.first = g.b, p.second = g.a;
-    p.probability = (sum > 0 ? (1 - kUniformShare) * std::max(0.0, g.relative_intensity) / sum
-                             : 0.0) +
-                    (sum > 0 ? kUniformShare : 1.0) / m;
-    const std::vector<optics::Interface> path = optics::ghostPathInterfaces(lens, p.first, p.second);
+    p.probability =
+        (sum > 0 ? (1 - kUniformShare) * std::max(0.0, g.relative_intensity) / sum : 0.0) +
+        (sum > 0 ? kUniformShare : 1.0) / m;
+    const std::vector<optics::Interface> path =
+        optics::ghostPathInterfaces(lens, p.first, p.second);
     p.tracer = optics::LensTracer<double>(path);
     for (int i = 0; i < int(path.size()); ++i) {
       const int k = optics::ghostPathSurface(p.first, p.second, i);
       const optics::Interface& in = path[size_t(i)];
-      Step st{k, in.ior_before, in.ior_after, in.ior_before, in.ior_after, in.is_mirror,
+      Step st{k,
+              in.ior_before,
+              in.ior_after,
+              in.ior_before,
+              in.ior_after,
+              in.is_mirror,
               s[size_t(k)].is_stop};
       // The reflecting surfaces, the indices of the light's side first: `first` is met from the
       // scene side, `second` from the film side.
@@ -217,8 +225,8 @@ void RealisticCamera::applyReflectionLosses(const CameraSample& sample, const Fi
 std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& sample) const {
   if (!flare_) return std::nullopt;
   const Flare& fl = *flare_;
-  const int k = int(std::lower_bound(fl.cdf.begin(), fl.cdf.end(), sample.ghost_u[0]) -
-                    fl.cdf.begin());
+  const int k =
+      int(std::lower_bound(fl.cdf.begin(), fl.cdf.end(), sample.ghost_u[0]) - fl.cdf.begin());
   const Flare::Path& path = fl.ghosts[size_t(std::min(k, int(fl.ghosts.size()) - 1))];
   // Every ray from the film point x that meets the rear element's clear aperture (radius r,
   // between z_lo and z_hi) crosses the plane z_hi at x (1 - t) + s t, t in [t_min, 1]: within
@@ -253,9 +261,8 @@ std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& s
   // Film irradiance per unit area of the sampling plane at distance D: cos^4(theta) / D^2.
   const double dist = z_film - fl.z_plane_mm, c = -dir.z;
   const double area = M_PI * radius * radius;
-  const double geometric =
-      shape * c * c * c * c * area / (dist * dist) * (lens.filmDistance_mm() *
-                                                       lens.filmDistance_mm() / weightNorm());
+  const double geometric = shape * c * c * c * c * area / (dist * dist) *
+                           (lens.filmDistance_mm() * lens.filmDistance_mm() / weightNorm());
   CameraRay ray = placeRay(r.ray.origin, r.ray.direction, sample.time);
   for (int i = 0; i < kCameraWavelengths; ++i)
     ray.wavelength_weight[size_t(i)] = geometric * factor[size_t(i)] / path.probability;

@@ -517,8 +517,8 @@ class TileRenderer {
     if (!g) return;
     ++tally.ghost_rays;
     sampler_->startPixelSample({x, y}, i, path_dimension_);
-    const SampledSpectrum L = j_.integrator->Li(&*g, g->time, lambda, *sampler_, tally.counts,
-                                                *j_.film, tally.nonfinite);
+    const SampledSpectrum L =
+        j_.integrator->Li(&*g, g->time, lambda, *sampler_, tally.counts, *j_.film, tally.nonfinite);
     for (int c = 0; c < kSpectrumSamples; ++c)
       if (!std::isfinite(L[c])) {
         ++tally.nonfinite;
@@ -632,8 +632,9 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
                                    "layer), not \"{}\"",
                                    scene.film.type));
     if (opt.keep_sums || opt.resume || opt.on_checkpoint)
-      throw Error(loc, "realistic camera: \"flare\" renders cannot be written as parts or "
-                       "checkpointed (the ghost layer is not kept in the exact sums)");
+      throw Error(loc,
+                  "realistic camera: \"flare\" renders cannot be written as parts or "
+                  "checkpointed (the ghost layer is not kept in the exact sums)");
     film.enableGhostLayer();
   }
   // Film "gbuffer" (pbrt-v4's GBufferFilm): its coordinate system and the differential scale

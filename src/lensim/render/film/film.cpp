@@ -137,7 +137,9 @@ void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavele
   if (n_buckets_ > 0) addSpectral(x, y, L, lambda, w);
 }
 
-void Film::enableGhostLayer() { ghost_.assign(pixels_.size(), {0, 0, 0}); }
+void Film::enableGhostLayer() {
+  ghost_.assign(pixels_.size(), {0, 0, 0});
+}
 
 const std::vector<std::string>& Film::ghostChannels() {
   static const std::vector<std::string> c = {"ghost.R", "ghost.G", "ghost.B"};
