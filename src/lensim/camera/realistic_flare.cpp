@@ -2,9 +2,10 @@
 //
 // With "bool flare" every camera ray may reflect at the lens's interfaces. The measurement is
 // the film irradiance over all paths through the lens with any number of reflections; lensim
-// keeps the paths with none (the direct image) and with two (the ghosts; paths with four
-// reflections carry about R^4 ~ 1e-6..1e-10 of the light and are left out: a bias below 1e-5 of
-// the image for the uncoated double Gauss, named in docs/flare.md).
+// keeps the paths with none (the direct image) and with two (the ghosts). Paths with four or
+// more reflections are left out: a bias of about the square of the ghosts' share of the light
+// (an estimate, not measured: (5.5e-2)^2 ~ 3e-3 of the image for the uncoated double Gauss,
+// ~1e-6 multicoated; a plate's four-reflection term is R^4 (1 - R)^2), named in docs/flare.md.
 //
 // Estimator. Each camera sample is split into two estimates, both added to the pixel:
 //  - the direct path, drawn as without flare, its weight multiplied per wavelength by the
