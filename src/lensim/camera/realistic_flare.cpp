@@ -24,11 +24,12 @@
 // Why: each ghost carries R^2 of the light (~3e-3 uncoated, 1e-5..1e-6 multicoated); Russian
 // roulette at each interface would spend almost every sample on the direct path (the
 // probability of a two-reflection path is ~R^2) and leave the ghosts as rare fireflies: per
-// sample 15x (uncoated) to 1,000x (coated) the variance of this estimator (bench/bench_flare). Splitting gives every sample one ghost path, and
-// the workbench's intensities send the samples to the ghosts that matter. Light tracing from the
-// lights would need the scene's lights to be sampled through the lens (bdpt's t = 1 strategy)
-// and Hullin-style bundles assume point lights; the split works for every light in the scene
-// (area lights, the sky, reflections) with the unidirectional integrators.
+// sample 15x (uncoated) to 1,000x (coated) the variance of this estimator (bench/bench_flare).
+// Splitting gives every sample one ghost path, and the workbench's intensities send the samples to
+// the ghosts that matter. Light tracing from the lights would need the scene's lights to be sampled
+// through the lens (bdpt's t = 1 strategy) and Hullin-style bundles assume point lights; the split
+// works for every light in the scene (area lights, the sky, reflections) with the unidirectional
+// integrators.
 #include <fmt/format.h>
 
 #include <algorithm>
