@@ -143,6 +143,21 @@ TEST(FlareRender, UncoatedPlateFlatFieldIsDirectPlusTwoReflectionTerm) {
   EXPECT_NEAR(c_off, e0, 0.015 * e0);  // the pupil bound's blocked samples: ~1% noise
   EXPECT_NEAR(c_on / c_off, (ed + eg) / e0, 3e-4);
   EXPECT_NEAR(c_ghost / c_off, eg / e0, 0.01 * eg / e0);
+  // A hexagonal stop: the ghost path is passed by the shape where it crosses the stop, as the
+  // direct path is; the ratios stay those of the cone (R hardly varies across it: R(0) = 0.0400,
+  // R(14 degrees) = 0.0401).
+  const std::string hex = common + " \"integer blades\" 6";
+  const io::Image hex_off =
+      render::render(scene::loadScene(writeScene("plate_hex_off.pbrt", hex, "", 3.5)), o).image;
+  const io::Image hex_on =
+      render::render(
+          scene::loadScene(writeScene("plate_hex_on.pbrt", hex + " \"bool flare\" true", "", 3.5)),
+          o)
+          .image;
+  std::printf("hexagonal stop: on/off %.6f, ghost/off %.4e\n",
+              centre(hex_on, 0) / centre(hex_off, 0), centre(hex_on, 3) / centre(hex_off, 0));
+  EXPECT_NEAR(centre(hex_on, 0) / centre(hex_off, 0), (ed + eg) / e0, 3e-4);
+  EXPECT_NEAR(centre(hex_on, 3) / centre(hex_off, 0), eg / e0, 0.02 * eg / e0);
 }
 
 // With "bool flare" false the render is the one without the parameter, bit for bit, with no ghost
