@@ -43,6 +43,9 @@ struct CameraSample {
   Vec2 pixel_centre;
   const render::Filter* filter = nullptr;
   double filter_weight = 1;
+  /// [0,1)^3 for a camera with flare (Camera::flare): the ghost path's choice of surface pair
+  /// ([0]) and its direction toward the lens ([1], [2]); unused otherwise.
+  std::array<double, 3> ghost_u{};
 };
 
 /// A camera ray in world space and the weight of its radiance estimate.
@@ -127,6 +130,17 @@ class Camera {
   virtual double startupCpuSeconds() const { return 0; }
   /// One line for logs: the type and its main settings.
   virtual std::string describe() const = 0;
+
+  // Lens flare (the realistic camera's "bool flare"; docs/flare.md, "Rendering ghosts").
+  /// Whether each camera sample also yields a ghost path (generateGhostRay), and generateRay's
+  /// weights include the lens's reflection losses.
+  virtual bool flare() const { return false; }
+  /// The ghost path of the sample (sample.ghost_u chooses it): a camera ray whose radiance,
+  /// weighted per wavelength (CameraRay::per_wavelength), the film adds to the direct path's in
+  /// the same sample; nullopt when the path is blocked (an estimate of zero).
+  virtual std::optional<CameraRay> generateGhostRay(const CameraSample& /*sample*/) const {
+    return std::nullopt;
+  }
 
   // Camera importance (light tracing, bdpt). Cameras that support it override all five.
   /// Whether sampleWi, importance and pdf are implemented.

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <tuple>
 
 #include "lensim/optics/anamorphic.h"
 #include "lensim/optics/configurations.h"
@@ -138,25 +139,12 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   pupil_.emplace(*lens_.lens, lens_.paraxial, film_radius, pupil_options);
   centre_area_mm2_ = pupil_->area_mm2({0, 0});
   camera_from_world_ = inverse(settings_.world_from_camera.start());
-  {
-    // The front surface's axial extent (lens space), for light arriving from the scene.
-    const optics::Interface& f = lens_.lens->interfaces().front();
-    const double r = f.semi_aperture_mm;
-    front_zmin_mm_ = front_zmax_mm_ = f.z_mm;
-    if (f.radius_mm != 0 || !f.shape.isSpherical())
-      for (int i = 0; i <= 64; ++i)
-        for (int k = 0; k < 16; ++k) {
-          const double h = r * i / 64, a = 2 * M_PI * k / 16;
-          if (auto sg =
-                  optics::surfaceSag(f.radius_mm, f.shape, h * std::cos(a), h * std::sin(a))) {
-            front_zmin_mm_ = std::min(front_zmin_mm_, f.z_mm + sg->z);
-            front_zmax_mm_ = std::max(front_zmax_mm_, f.z_mm + sg->z);
-          }
-        }
-  }
+  // The front surface's axial extent (lens space), for light arriving from the scene.
+  std::tie(front_zmin_mm_, front_zmax_mm_) = surfaceZRange(lens_.lens->interfaces().front());
   setUpTiltShift(sampled);
   if (settings_.simple_weighting && !(centre_area_mm2_ > 0))
     throw Error("simpleweighting: no light reaches the centre of the film to normalise by");
+  if (settings_.flare) setUpFlare();
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   startup_cpu_seconds_ = processCpuSeconds() - cpu0;
 }
@@ -187,6 +175,10 @@ void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
     throw Error(loc,
                 "lenstilt/lensshift: not supported for a lens with mirrors (its image "
                 "space is folded)");
+  if (settings_.flare)
+    throw Error(settings_.flare_loc.valid() ? settings_.flare_loc : loc,
+                "flare: not supported with lenstilt/lensshift (the ghost paths are traced for an "
+                "untilted, centred film)");
   if (settings_.origin_at_front_vertex || settings_.rear_disc_only ||
       settings_.zero_if_neighbour_blocked)
     throw Error(loc, "lenstilt/lensshift: not supported with the pbrt-v1/v2 camera conventions");
@@ -198,16 +190,7 @@ void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
   }
   const optics::Interface& r = lens.interfaces().back();
   rear_semi_mm_ = r.semi_aperture_mm;
-  rear_zmin_mm_ = rear_zmax_mm_ = r.z_mm;
-  if (r.radius_mm != 0 || !r.shape.isSpherical())
-    for (int i = 0; i <= 64; ++i)
-      for (int k = 0; k < 16; ++k) {
-        const double h = rear_semi_mm_ * i / 64, a = 2 * M_PI * k / 16;
-        if (auto sg = optics::surfaceSag(r.radius_mm, r.shape, h * std::cos(a), h * std::sin(a))) {
-          rear_zmin_mm_ = std::min(rear_zmin_mm_, r.z_mm + sg->z);
-          rear_zmax_mm_ = std::max(rear_zmax_mm_, r.z_mm + sg->z);
-        }
-      }
+  std::tie(rear_zmin_mm_, rear_zmax_mm_) = surfaceZRange(r);
   // The sampled points' film plane must lie wholly behind the rear surface (z is linear over
   // the film, so its corners decide).
   for (int cx = -1; cx <= 1; cx += 2)
@@ -266,6 +249,21 @@ std::optional<RealisticCamera::FilmRay> RealisticCamera::placedFilmRay(const Cam
                  cos_film * cos_plane / r2};
 }
 
+std::pair<double, double> RealisticCamera::surfaceZRange(const optics::Interface& f) {
+  const double r = f.semi_aperture_mm;
+  double zmin = f.z_mm, zmax = f.z_mm;
+  if (f.radius_mm != 0 || !f.shape.isSpherical())
+    for (int i = 0; i <= 64; ++i)
+      for (int k = 0; k < 16; ++k) {
+        const double h = r * i / 64, a = 2 * M_PI * k / 16;
+        if (auto sg = optics::surfaceSag(f.radius_mm, f.shape, h * std::cos(a), h * std::sin(a))) {
+          zmin = std::min(zmin, f.z_mm + sg->z);
+          zmax = std::max(zmax, f.z_mm + sg->z);
+        }
+      }
+  return {zmin, zmax};
+}
+
 int RealisticCamera::bandAt(double lambda_nm) const {
   if (band_edges_nm_.size() < 2 || !(lambda_nm > 0)) return -1;
   const auto it = std::upper_bound(band_edges_nm_.begin() + 1, band_edges_nm_.end() - 1, lambda_nm);
@@ -314,17 +312,39 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
         Vec2{r.stop_point.x / stop_radius_mm_, r.stop_point.y / stop_radius_mm_});
     if (transmission <= 0) return std::nullopt;
   }
+  CameraRay ray = placeRay(Vec3(r.ray.origin), Vec3(r.ray.direction), u_time);
+  // w = T cos^4(theta) A / z^2 (z: film to the rear-vertex plane, where the pupil is sampled);
+  // the film multiplies by the exposure time (and ISO / 100), as pbrt-v4's imaging ratio does.
+  const double c2 = f.cos_theta * f.cos_theta;
+  if (placement_) {
+    // A tilted or shifted film: the same integrand, T G A (placedFilmRay; G = cos^4 / z^2 when
+    // the film is not tilted).
+    const double z = lens_.lens->filmDistance_mm();
+    ray.weight = transmission * f.g_per_mm2 * f.area_mm2 *
+                 (settings_.simple_weighting ? z * z / centre_area_mm2_ : 1.0);
+  } else {
+    ray.weight = transmission * c2 * c2 * f.area_mm2 / weightNorm();
+  }
+  return ray;
+}
+
+double RealisticCamera::weightNorm() const {
+  const double z = lens_.lens->filmDistance_mm();
+  return settings_.simple_weighting ? centre_area_mm2_ : z * z;
+}
+
+CameraRay RealisticCamera::placeRay(const Vec3& o_lens, const Vec3& d_lens, double u_time) const {
   const optics::LensSystem& lens = *lens_.lens;
   // Lens space (mm, +z toward the film) to camera space (camera units, +z toward the scene).
   const double u = settings_.camera_units_per_mm;
   // Camera-space z: distance toward the scene from the film (pbrt-v3/v4) or from the front
   // vertex (the v1/v2 assignment's convention).
   const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens.filmZ_mm();
-  Vec3 o_cam{r.ray.origin.x * u, r.ray.origin.y * u, (z0 - r.ray.origin.z) * u};
-  Vec3 d_cam{double(r.ray.direction.x), double(r.ray.direction.y), -double(r.ray.direction.z)};
+  Vec3 o_cam{o_lens.x * u, o_lens.y * u, (z0 - o_lens.z) * u};
+  Vec3 d_cam{d_lens.x, d_lens.y, -d_lens.z};
   if (placement_) {  // camera space is the film's frame (film at z = 0, the scene toward +z)
-    const Vec3 o = placement_->filmFromLensPoint(Vec3(r.ray.origin));
-    const Vec3 d = placement_->filmFromLensVector(Vec3(r.ray.direction));
+    const Vec3 o = placement_->filmFromLensPoint(o_lens);
+    const Vec3 d = placement_->filmFromLensVector(d_lens);
     o_cam = {o.x * u, o.y * u, -o.z * u};
     d_cam = {d.x, d.y, -d.z};
   }
@@ -340,18 +360,6 @@ std::optional<CameraRay> RealisticCamera::finish(const optics::TraceResultT<floa
     place(settings_.world_from_camera.interpolate(ray.time));
   else
     place(settings_.world_from_camera.start());
-  // w = T cos^4(theta) A / z^2 (z: film to the rear-vertex plane, where the pupil is sampled);
-  // the film multiplies by the exposure time (and ISO / 100), as pbrt-v4's imaging ratio does.
-  const double z = lens.filmDistance_mm();
-  const double c2 = f.cos_theta * f.cos_theta;
-  const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
-  // A tilted or shifted film: the same integrand, T G A (placedFilmRay; G = cos^4 / z^2 when
-  // the film is not tilted).
-  if (placement_)
-    ray.weight = transmission * f.g_per_mm2 * f.area_mm2 *
-                 (settings_.simple_weighting ? z * z / centre_area_mm2_ : 1.0);
-  else
-    ray.weight = transmission * c2 * c2 * f.area_mm2 / norm;
   return ray;
 }
 
@@ -508,7 +516,9 @@ std::optional<CameraRay> RealisticCamera::generateRay(const CameraSample& sample
   if (dispersive_) return dispersiveRay(sample, *f);
   const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f->ray);
   if (!r.ok()) return std::nullopt;
-  return finish(r, *f, sample.time);
+  std::optional<CameraRay> ray = finish(r, *f, sample.time);
+  if (ray && flare_) applyReflectionLosses(sample, *f, *ray);
+  return ray;
 }
 
 void RealisticCamera::generateRays(const CameraSample* samples, int n,
@@ -565,7 +575,11 @@ void RealisticCamera::generateRays(const CameraSample* samples, int n,
   }
   lens_.lens->tracerFloat().traceFromFilmBatch(in, m, out);
   for (int k = 0; k < m; ++k)
-    if (out[k].ok()) rays[index[k]] = finish(out[k], lanes[k], samples[index[k]].time);
+    if (out[k].ok()) {
+      rays[index[k]] = finish(out[k], lanes[k], samples[index[k]].time);
+      if (rays[index[k]] && flare_)
+        applyReflectionLosses(samples[index[k]], lanes[k], *rays[index[k]]);
+    }
 }
 
 bool RealisticCamera::reachesFilm(const CameraSample& sample) const {
@@ -666,6 +680,10 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.tilt_shift.shift_mm = r.lens_shift_mm;
       s.tilt_shift.tilt_deg = r.lens_tilt_deg;
       s.tilt_shift_loc = r.tilt_shift_loc.valid() ? r.tilt_shift_loc : c.loc;
+      s.flare = r.flare;
+      s.flare_coating = r.flare_coating;
+      s.flare_loc = r.flare_loc;
+      s.flare_coating_loc = r.flare_coating_loc;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

@@ -30,6 +30,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "lensim/camera/aperture.h"
@@ -92,6 +93,13 @@ struct RealisticSettings {
   /// The pixel filter's radius (pixels): film points this far beyond the image's edge still
   /// reach its edge pixels (camera importance accepts them; film_bounds.h).
   Vec2 filter_radius{0.5, 0.5};
+  /// Lens flare (the scene's "bool flare"; realistic_flare.cpp): reflection losses in every
+  /// camera ray's weight and a two-reflection ghost path per sample. `flare_coating`: the
+  /// lens-wide coating instead of the lens file's ("string flarecoating"); the locations, for
+  /// errors.
+  bool flare = false;
+  std::string flare_coating;
+  FileLoc flare_loc, flare_coating_loc;
 };
 
 class RealisticCamera final : public Camera {
@@ -109,6 +117,17 @@ class RealisticCamera final : public Camera {
   double startupCpuSeconds() const override { return startup_cpu_seconds_; }
   bool reachesFilm(const CameraSample& sample) const override;
   std::string describe() const override;
+
+  // Lens flare (realistic_flare.cpp).
+  bool flare() const override { return flare_ != nullptr; }
+  std::optional<CameraRay> generateGhostRay(const CameraSample& sample) const override;
+  /// The ghost pairs the flare estimator chooses from (first reflection at `first`, then at
+  /// `second` < first) and the probability of each; empty without flare.
+  struct GhostChoice {
+    int first = 0, second = 0;
+    double probability = 0;
+  };
+  std::vector<GhostChoice> ghostChoices() const;
 
   // Camera importance (realistic_importance.cpp).
   /// Not for a tilted or shifted lens (the importance code assumes the film on the lens's
@@ -190,6 +209,20 @@ class RealisticCamera final : public Camera {
   const optics::LensTracer<float>& tracerAt(double lambda_nm) const;
   /// A dispersive lens's camera ray for a sample whose film ray is f (realistic.cpp).
   std::optional<CameraRay> dispersiveRay(const CameraSample& sample, const FilmRay& f) const;
+  /// The camera ray (world space, shutter time from u_time; weight unset) of a ray leaving the
+  /// lens at o_lens along d_lens (lens space, mm).
+  CameraRay placeRay(const Vec3& o_lens, const Vec3& d_lens, double u_time) const;
+  /// The denominator of the weight: z^2, or the centre's sampled area with simple weighting.
+  double weightNorm() const;
+  /// A surface's axial extent over its clear aperture (lens space z, mm): (min, max).
+  static std::pair<double, double> surfaceZRange(const optics::Interface& s);
+  /// Lens flare's precomputed data (realistic_flare.cpp); null without flare.
+  struct Flare;
+  std::shared_ptr<const Flare> flare_;
+  void setUpFlare();
+  /// With flare: scales the camera ray's weight, per wavelength, by the coatings' transmittance
+  /// at every surface the direct path f crosses, at its angles.
+  void applyReflectionLosses(const CameraSample& sample, const FilmRay& f, CameraRay& ray) const;
   /// Raster position of a film point (lens space, mm): the inverse of filmPoint.
   Vec2 rasterPoint(Vec2 film_mm) const;
 

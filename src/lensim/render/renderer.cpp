@@ -335,13 +335,15 @@ class BackgroundThreads {
 
 /// Camera samples, their outcomes and the rays traced, summed over tiles.
 struct SampleTally {
-  uint64_t samples = 0, rays = 0, no_ray = 0, outside = 0, nonfinite = 0;
+  uint64_t samples = 0, rays = 0, no_ray = 0, outside = 0, nonfinite = 0, ghost_rays = 0;
   RayCounts counts;
 };
 struct SharedTally {
-  std::atomic<uint64_t> samples{0}, rays{0}, no_ray{0}, outside{0}, nonfinite{0}, traced{0};
+  std::atomic<uint64_t> samples{0}, rays{0}, no_ray{0}, outside{0}, nonfinite{0}, traced{0},
+      ghost_rays{0};
   void add(const SampleTally& t) {
     samples += t.samples;
+    ghost_rays += t.ghost_rays;
     rays += t.rays;
     no_ray += t.no_ray;
     outside += t.outside;
@@ -420,6 +422,11 @@ class TileRenderer {
     cs_[k].filter =
         j_.dispersion_hero_only || j_.integrator->heroWavelengthOnly() ? nullptr : j_.filter;
     cs_[k].filter_weight = fs_[k].weight;
+    if (flare_) {  // the ghost path's pair and direction (realistic_flare.cpp)
+      cs_[k].ghost_u[0] = sampler_->get1D();
+      const Vec2 u = sampler_->get2D();
+      cs_[k].ghost_u[1] = u.x, cs_[k].ghost_u[2] = u.y;
+    }
     path_dimension_ = sampler_->dimension();
   }
 
@@ -476,6 +483,8 @@ class TileRenderer {
         ++tally.no_ray;
         tally.outside += !j_.cam->reachesFilm(cs_[k]);
       }
+      // Lens flare: the sample's ghost path, with the wavelengths as drawn.
+      if (flare_) ghostPath(x, y, i0 + k, k, lambda, tally);
       SampledSpectrum L(0.0);
       if (ray || j_.integrator->estimatesWithoutCameraRay()) {
         sampler_->startPixelSample({x, y}, i0 + k, path_dimension_);
@@ -500,7 +509,26 @@ class TileRenderer {
     }
   }
 
+  /// Lens flare (camera::Camera::flare): the ghost path of sample i of pixel (x, y), batch
+  /// entry k, its radiance added to the film's pixel and ghost layer. Its scene path takes the
+  /// same sampler dimensions as the direct path's (each is an unbiased estimate on its own).
+  void ghostPath(int x, int y, int i, int k, SampledWavelengths lambda, SampleTally& tally) {
+    const std::optional<camera::CameraRay> g = j_.cam->generateGhostRay(cs_[k]);
+    if (!g) return;
+    ++tally.ghost_rays;
+    sampler_->startPixelSample({x, y}, i, path_dimension_);
+    const SampledSpectrum L =
+        j_.integrator->Li(&*g, g->time, lambda, *sampler_, tally.counts, *j_.film, tally.nonfinite);
+    for (int c = 0; c < kSpectrumSamples; ++c)
+      if (!std::isfinite(L[c])) {
+        ++tally.nonfinite;
+        return;
+      }
+    j_.film->addGhost(x, y, L, lambda, fs_[k].weight);
+  }
+
   const Job& j_;
+  const bool flare_ = j_.cam->flare();
   std::unique_ptr<Sampler> sampler_;
   camera::CameraSample cs_[kB];
   FilterSample fs_[kB];
@@ -591,6 +619,24 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   setup.refuses_splats = splatRefusal(opt);
   const std::unique_ptr<Integrator> integrator = makeIntegrator(setup);
   if (integrator->splats()) film.enableSplats(*filter);
+  if (cam->flare()) {
+    // Lens flare (docs/flare.md, "Rendering ghosts"): camera paths only, into the ghost layer
+    // of an RGB film, rendered whole.
+    const FileLoc& loc = scene.camera.loc;
+    if (integrator->splats() || integrator->tracesLightPaths())
+      throw Error(loc, fmt::format("realistic camera: \"flare\" is rendered by the path, volpath "
+                                   "and directlighting integrators, not \"{}\"",
+                                   scene.integrator.type));
+    if (scene.film.type != "rgb")
+      throw Error(loc, fmt::format("realistic camera: \"flare\" needs Film \"rgb\" (its ghost "
+                                   "layer), not \"{}\"",
+                                   scene.film.type));
+    if (opt.keep_sums || opt.resume || opt.on_checkpoint)
+      throw Error(loc,
+                  "realistic camera: \"flare\" renders cannot be written as parts or "
+                  "checkpointed (the ghost layer is not kept in the exact sums)");
+    film.enableGhostLayer();
+  }
   // Film "gbuffer" (pbrt-v4's GBufferFilm): its coordinate system and the differential scale
   // pbrt-v4 applies to camera rays, max(1/8, 1/sqrt(samples per pixel)).
   const GBufferFrame gbuffer_frame(scene);
@@ -693,6 +739,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   st.wall_s = std::chrono::duration<double>(Clock::now() - background.start()).count();
   st.camera_samples = tally.samples;
   st.camera_rays = tally.rays;
+  st.ghost_rays = tally.ghost_rays;
   st.no_ray_samples = tally.no_ray;
   st.outside_samples = tally.outside;
   st.nonfinite_samples = tally.nonfinite;
@@ -721,6 +768,9 @@ std::string formatStats(const RenderStats& s) {
                      double(s.camera_samples) / w);
   out += fmt::format("camera rays          {} ({:.3g} camera rays/s)\n", s.camera_rays,
                      double(s.camera_rays) / w);
+  if (s.ghost_rays > 0)
+    out += fmt::format("ghost rays           {} (lens flare: ghost paths through the lens)\n",
+                       s.ghost_rays);
   const uint64_t inside = s.camera_samples - s.outside_samples;
   out += fmt::format(
       "samples without ray  {} ({} where no light reaches the film; {:.2f}% of the other {})\n",

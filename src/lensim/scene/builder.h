@@ -304,6 +304,14 @@ struct Realistic {
   /// centre and turned against it (optics/tilt_shift.h); tilt_shift_loc: the parameter.
   Vec2 lens_shift_mm{0, 0}, lens_tilt_deg{0, 0};
   FileLoc tilt_shift_loc;
+
+  /// `flare`: camera rays also take two-reflection ghost paths (docs/flare.md); flare_loc: where
+  bool flare = false;
+  FileLoc flare_loc;
+  /// `flarecoating`: the lens-wide coating for flare (as `lens ghosts --coating`); empty: the
+  /// lens file's
+  std::string flare_coating;
+  FileLoc flare_coating_loc;
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 

@@ -137,6 +137,28 @@ void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavele
   if (n_buckets_ > 0) addSpectral(x, y, L, lambda, w);
 }
 
+void Film::enableGhostLayer() {
+  ghost_.assign(pixels_.size(), {0, 0, 0});
+}
+
+const std::vector<std::string>& Film::ghostChannels() {
+  static const std::vector<std::string> c = {"ghost.R", "ghost.G", "ghost.B"};
+  return c;
+}
+
+void Film::addGhost(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
+                    double w) {
+  DCHECK(x >= bounds_.x0 && x < bounds_.x1 && y >= bounds_.y0 && y < bounds_.y1);
+  if (ghost_.empty()) return;
+  const Vec3 rgb = recorded(toSensorRgb(L, lambda), L, lambda);
+  const size_t i = size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0);
+  const Int128 v[3] = {toFixed(w * rgb.x), toFixed(w * rgb.y), toFixed(w * rgb.z)};
+  for (int c = 0; c < 3; ++c) {
+    pixels_[i].rgb[c] += v[c];
+    ghost_[i][size_t(c)] += v[c];
+  }
+}
+
 void Film::addAux(GBufferPixel& g, double w, const VisibleSurface& vs) {
   g.weight += w;
   g.p += vs.p * w;
@@ -269,6 +291,9 @@ io::Image Film::image() const {
   for (int b = 0; b < n_buckets_; ++b) channels.push_back(bucketChannel(b));
   if (!gbuf_.empty())
     for (const std::string& c : gbufferChannels()) channels.push_back(c);
+  const int ghost_c0 = int(channels.size());
+  if (!ghost_.empty())
+    for (const std::string& c : ghostChannels()) channels.push_back(c);
   io::Image im(bounds_.width(), bounds_.height(), std::move(channels));
   for (int y = 0; y < bounds_.height(); ++y)
     for (int x = 0; x < bounds_.width(); ++x) {
@@ -280,6 +305,10 @@ io::Image Film::image() const {
         for (int b = 0; b < n_buckets_; ++b)
           im.at(x, y, 3 + b) = float(bucket_sums_[i * size_t(n_buckets_) + size_t(b)] / w);
       }
+      if (!ghost_.empty() && pixels_[i].weight != 0)
+        for (int c = 0; c < 3; ++c)
+          im.at(x, y, ghost_c0 + c) =
+              float(double(ghost_[i][size_t(c)]) / double(pixels_[i].weight));
       if (!splats_.empty()) {
         for (int c = 0; c < 3; ++c)
           im.at(x, y, c) += float(double(splats_[i][size_t(c)]) / kFixedScale * splat_scale_);

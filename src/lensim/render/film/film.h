@@ -99,6 +99,18 @@ class Film {
   /// gbuffer film (pbrt-v4's GBufferFilm) then its auxiliary channels (gbufferChannels()).
   io::Image image() const;
 
+  /// Lens flare (the realistic camera's "bool flare"): the film also keeps the ghost paths'
+  /// part of the image, written after the other channels as the EXR layer "ghost" (channels
+  /// ghost.R, ghost.G, ghost.B); R, G, B hold the sum of the direct and ghost paths.
+  void enableGhostLayer();
+  bool ghostLayer() const { return !ghost_.empty(); }
+  /// The channel names of the ghost layer.
+  static const std::vector<std::string>& ghostChannels();
+  /// Adds the ghost path of a camera sample whose direct path addSample added (or will add)
+  /// with the same filter weight w: to the pixel's RGB sums and the ghost layer, not to its
+  /// weight (both paths belong to one sample). Not thread-safe for the same pixel.
+  void addGhost(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda, double w);
+
   /// Whether this film records pbrt-v4's gbuffer channels (Film "gbuffer"); such films, like
   /// spectral ones, are not written as parts.
   bool gbuffer() const { return !gbuf_.empty(); }
@@ -189,6 +201,7 @@ class Film {
   int splat_spp_ = 1;
   void addAux(GBufferPixel& g, double w, const VisibleSurface& vs);
   std::vector<std::array<Int128, 3>> splats_;
+  std::vector<std::array<Int128, 3>> ghost_;   ///< per pixel: the ghost paths' RGB sums
   std::vector<double> bucket_splats_;          ///< spectral films: per pixel, n_buckets_ splat sums
   static constexpr size_t kSplatLocks = 1024;  ///< lock stripes (by pixel index)
   std::unique_ptr<std::mutex[]> splat_locks_;

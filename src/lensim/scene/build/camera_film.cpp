@@ -166,6 +166,18 @@ void Builder::camera(const Directive& d) {
         r.lens_tilt_deg = {tl->numbers[0], tl->numbers[1]};
         r.tilt_shift_loc = tl->loc;
       }
+      // Lens flare (issue 31, docs/flare.md "Rendering ghosts"): "bool flare" and the
+      // lens-wide coating it renders with, "string flarecoating".
+      if (const Param* fp = ps.find({"flare"}, {ParamType::Bool})) {
+        ps.expectCount(*fp, 1);
+        r.flare = fp->bools[0];
+        r.flare_loc = fp->loc;
+      }
+      if (const Param* fc = ps.find({"flarecoating"}, {ParamType::String})) {
+        if (!r.flare) ps.fail(*fc, "applies only with \"bool flare\" true");
+        r.flare_coating = fc->strings[0];
+        r.flare_coating_loc = fc->loc;
+      }
       c.realistic = r;
     }
   } else {

@@ -1,0 +1,277 @@
+// Lens flare in the realistic camera (issue 31; docs/flare.md, "Rendering ghosts").
+//
+// With "bool flare" every camera ray may reflect at the lens's interfaces. The measurement is
+// the film irradiance over all paths through the lens with any number of reflections; lensim
+// keeps the paths with none (the direct image) and with two (the ghosts). Paths with four or
+// more reflections are left out: a bias of about the square of the ghosts' share of the light
+// (an estimate, not measured: (5.5e-2)^2 ~ 3e-3 of the image for the uncoated double Gauss,
+// ~1e-6 multicoated; a plate's four-reflection term is R^4 (1 - R)^2), named in docs/flare.md.
+//
+// Estimator. Each camera sample is split into two estimates, both added to the pixel:
+//  - the direct path, drawn as without flare, its weight multiplied per wavelength by the
+//    coatings' transmittance T at every surface it crosses, at its actual angles (so the
+//    exposure drops by the reflection losses, ~59% for the uncoated double Gauss);
+//  - one ghost path: a pair (first, second) chosen with probability p(pair) proportional to its
+//    paraxial intensity from the workbench (`lens ghosts`: coatings at normal incidence, the
+//    clear apertures' clipping), mixed with a uniform floor (kUniformShare / pairs) so that every
+//    pair that can carry light has p > 0 and the estimator stays unbiased; a direction from the
+//    sample's film point drawn uniformly over a disc of the plane where the rear element's
+//    clear aperture is nearest the film, large enough to hold every ray from that film point
+//    that reaches the rear element (so no path is missed; rays that miss the lens are blocked
+//    by the tracer and contribute 0); the exact trace of the ghost path (coating/ghost_trace.h);
+//    weight = T_shape cos^4(theta) A_disc / D^2 x (prod R at the two reflections x prod T at
+//    every other crossing, per wavelength, at the actual angles) / p(pair).
+// Why: each ghost carries R^2 of the light (~3e-3 uncoated, 1e-5..1e-6 multicoated); Russian
+// roulette at each interface would spend almost every sample on the direct path (the
+// probability of a two-reflection path is ~R^2) and leave the ghosts as rare fireflies: per
+// sample 15x (uncoated) to 1,000x (coated) the variance of this estimator (bench/bench_flare).
+// Splitting gives every sample one ghost path, and the workbench's intensities send the samples to
+// the ghosts that matter. Light tracing from the lights would need the scene's lights to be sampled
+// through the lens (bdpt's t = 1 strategy) and Hullin-style bundles assume point lights; the split
+// works for every light in the scene (area lights, the sky, reflections) with the unidirectional
+// integrators.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "lensim/camera/realistic.h"
+#include "lensim/optics/coating/ghost_trace.h"
+#include "lensim/optics/coating/ghosts.h"
+#include "lensim/optics/coating/lens_coatings.h"
+#include "lensim/sampling/sampling.h"
+#include "lensim/util/error.h"
+
+namespace lensim::camera {
+
+namespace {
+
+/// Probability share spread uniformly over the ghost pairs (the floor that keeps every pair).
+constexpr double kUniformShare = 0.1;
+
+/// One interface of a path (direct or ghost) as light from the scene meets it: the lens surface,
+/// the indices its coating sees (light from the first's side) and whether it reflects there.
+struct Step {
+  int surface = 0;
+  double n_from = 1, n_to = 1;        ///< the path's media before and after (the same at a mirror)
+  double coat_from = 1, coat_to = 1;  ///< the surface's media, the light's side first
+  bool mirror = false;                ///< the path reflects here (R), else it passes (T)
+  bool stop = false;
+};
+
+}  // namespace
+
+struct RealisticCamera::Flare {
+  optics::LensCoatings coatings;
+  std::vector<Step> direct;  ///< the lens's own surfaces
+  struct Path {
+    int first = 0, second = 0;
+    double probability = 0;
+    optics::LensTracer<double> tracer;
+    std::vector<Step> steps;
+  };
+  std::vector<Path> ghosts;
+  std::vector<double> cdf;  ///< cumulative probabilities (last = 1)
+  /// The plane (lens z, mm) where ghost directions are sampled: the rear element's clear
+  /// aperture nearest the film; t_min: the least fraction of the way from the film to the rear
+  /// element at which a ray to it crosses that plane.
+  double z_plane_mm = 0, t_min = 1, rear_radius_mm = 0;
+};
+
+namespace {
+
+/// Per wavelength: the product of R (reflections) and T (passes) over the path's steps, at the
+/// angles of a ray traced from the film with points pts (pts[0] the film point, pts[j] the hit
+/// at step size - j) leaving along out_dir. Steps without an index step and no mirror are
+/// skipped (T = 1).
+void pathFactor(const optics::LensCoatings& coatings, const std::vector<Step>& steps,
+                const std::vector<Vec3>& pts, const Vec3& out_dir,
+                const std::array<double, kCameraWavelengths>& lambda_nm, double primary_nm,
+                std::array<double, kCameraWavelengths>& factor) {
+  factor.fill(1.0);
+  const int m = int(steps.size());
+  for (int i = 0; i < m; ++i) {
+    const Step& s = steps[size_t(i)];
+    if (!s.mirror && s.n_from == s.n_to) continue;
+    const int j = m - i;
+    // a: the traced (film-to-scene) direction arriving at the surface, b: leaving it. Light
+    // from the scene arrives along -b in n_from and leaves along -a; the normal is parallel to
+    // n_to a - n_from b (Snell's law in vector form; for a mirror n_to = n_from).
+    const Vec3 a = normalize(pts[size_t(j)] - pts[size_t(j - 1)]);
+    const Vec3 b = j < m ? normalize(pts[size_t(j + 1)] - pts[size_t(j)]) : normalize(out_dir);
+    const Vec3 nrm = a * s.n_to - b * s.n_from;
+    const double len = length(nrm);
+    const double cos_i = len > 1e-12 ? std::min(1.0, std::abs(dot(b, nrm)) / len) : 1.0;
+    for (int c = 0; c < kCameraWavelengths; ++c) {
+      const double l = lambda_nm[size_t(c)] > 0 ? lambda_nm[size_t(c)] : primary_nm;
+      const optics::FilmRTA f = coatings.rta(s.surface, s.coat_from, s.coat_to, l, cos_i);
+      factor[size_t(c)] *= s.mirror ? f.R : f.T;
+    }
+  }
+}
+
+}  // namespace
+
+void RealisticCamera::setUpFlare() {
+  const optics::LensSystem& lens = *lens_.lens;
+  const FileLoc& loc = settings_.flare_loc;
+  if (dispersive_)
+    throw Error(loc,
+                "flare: the lens disperses (a glass with dispersion, or glassmatch); "
+                "flare is rendered for lenses with constant indices only");
+  if (lens.mirrorCount() > 0)
+    throw Error(loc,
+                "flare: the lens has mirrors (ghosts of catadioptric lenses are not "
+                "modelled)");
+  auto f = std::make_shared<Flare>();
+  optics::LensPrescription pr = lens.prescription();
+  if (!settings_.flare_coating.empty()) {
+    pr.default_coating = settings_.flare_coating;
+    pr.default_coating_loc = settings_.flare_coating_loc;
+  }
+  f->coatings = optics::resolveCoatings(pr);
+  const auto& s = lens.interfaces();
+  const int n = lens.surfaceCount();
+  for (int k = 0; k < n; ++k)
+    f->direct.push_back({k, s[size_t(k)].ior_before, s[size_t(k)].ior_after,
+                         s[size_t(k)].ior_before, s[size_t(k)].ior_after, false,
+                         s[size_t(k)].is_stop});
+
+  // The pairs and their paraxial intensities (400-700 nm, as `lens ghosts`).
+  std::vector<double> wl;
+  for (int l = 400; l <= 700; l += 10) wl.push_back(l);
+  const optics::GhostAnalysis ga = optics::analyseGhosts(lens, f->coatings, wl);
+  // Pairs with a surface without an index step (the stop, a dummy surface) reflect nothing.
+  std::vector<optics::Ghost> pairs;
+  for (const optics::Ghost& g : ga.ghosts)
+    if (s[size_t(g.a)].ior_before != s[size_t(g.a)].ior_after &&
+        s[size_t(g.b)].ior_before != s[size_t(g.b)].ior_after)
+      pairs.push_back(g);
+  if (pairs.empty()) throw Error(loc, "flare: the lens has no pair of reflecting surfaces");
+  double sum = 0;
+  for (const optics::Ghost& g : pairs) sum += std::max(0.0, g.relative_intensity);
+  const double m = double(pairs.size());
+  for (const optics::Ghost& g : pairs) {
+    Flare::Path p;
+    p.first = g.b, p.second = g.a;
+    p.probability =
+        (sum > 0 ? (1 - kUniformShare) * std::max(0.0, g.relative_intensity) / sum : 0.0) +
+        (sum > 0 ? kUniformShare : 1.0) / m;
+    const std::vector<optics::Interface> path =
+        optics::ghostPathInterfaces(lens, p.first, p.second);
+    p.tracer = optics::LensTracer<double>(path);
+    for (int i = 0; i < int(path.size()); ++i) {
+      const int k = optics::ghostPathSurface(p.first, p.second, i);
+      const optics::Interface& in = path[size_t(i)];
+      Step st{k,
+              in.ior_before,
+              in.ior_after,
+              in.ior_before,
+              in.ior_after,
+              in.is_mirror,
+              s[size_t(k)].is_stop};
+      // The reflecting surfaces, the indices of the light's side first: `first` is met from the
+      // scene side, `second` from the film side.
+      if (st.mirror) {
+        const bool from_scene = k == p.first;
+        st.coat_from = from_scene ? s[size_t(k)].ior_before : s[size_t(k)].ior_after;
+        st.coat_to = from_scene ? s[size_t(k)].ior_after : s[size_t(k)].ior_before;
+      }
+      p.steps.push_back(st);
+    }
+    f->ghosts.push_back(std::move(p));
+  }
+  double c = 0;
+  for (const Flare::Path& p : f->ghosts) f->cdf.push_back(c += p.probability);
+  f->cdf.back() = 1;
+
+  const auto [zlo, zhi] = surfaceZRange(s.back());
+  const double z_film = lens.filmZ_mm();
+  if (!(z_film > zhi))
+    throw Error(loc, "flare: the rear element reaches the film; no ghost direction can be drawn");
+  f->z_plane_mm = zhi;
+  f->t_min = (z_film - zhi) / (z_film - zlo);
+  f->rear_radius_mm = s.back().semi_aperture_mm;
+  flare_ = std::move(f);
+}
+
+std::vector<RealisticCamera::GhostChoice> RealisticCamera::ghostChoices() const {
+  std::vector<GhostChoice> out;
+  if (flare_)
+    for (const Flare::Path& p : flare_->ghosts) out.push_back({p.first, p.second, p.probability});
+  return out;
+}
+
+void RealisticCamera::applyReflectionLosses(const CameraSample& sample, const FilmRay& f,
+                                            CameraRay& ray) const {
+  // The float tracer again, now recording the hits: the same operations as the batch trace
+  // that made the ray, so the same surfaces.
+  thread_local std::vector<Vec3f> ptsf;
+  thread_local std::vector<Vec3> pts;
+  ptsf.clear();
+  const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f.ray, {}, &ptsf);
+  if (!r.ok()) {
+    ray.weight = 0;
+    return;
+  }
+  pts.clear();
+  for (const Vec3f& p : ptsf) pts.push_back(Vec3(p));
+  std::array<double, kCameraWavelengths> t{};
+  pathFactor(flare_->coatings, flare_->direct, pts, Vec3(r.ray.direction), sample.lambda_nm,
+             lens_.lens->wavelength_nm(), t);
+  for (int c = 0; c < kCameraWavelengths; ++c)
+    ray.wavelength_weight[size_t(c)] = ray.weight * t[size_t(c)];
+  ray.weight = ray.wavelength_weight[0];
+  ray.per_wavelength = true;
+}
+
+std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& sample) const {
+  if (!flare_) return std::nullopt;
+  const Flare& fl = *flare_;
+  const int k =
+      int(std::lower_bound(fl.cdf.begin(), fl.cdf.end(), sample.ghost_u[0]) - fl.cdf.begin());
+  const Flare::Path& path = fl.ghosts[size_t(std::min(k, int(fl.ghosts.size()) - 1))];
+  // Every ray from the film point x that meets the rear element's clear aperture (radius r,
+  // between z_lo and z_hi) crosses the plane z_hi at x (1 - t) + s t, t in [t_min, 1]: within
+  // r + |x| (1 - t_min) of x (1 - t_min).
+  const optics::LensSystem& lens = *lens_.lens;
+  const Vec2 x = filmPoint(sample.film_raster);
+  const double z_film = lens.filmZ_mm();
+  const double spread = 1 - fl.t_min;
+  const double radius = fl.rear_radius_mm + std::hypot(x.x, x.y) * spread;
+  const Vec2 d = render::sampleUniformDiskConcentric({sample.ghost_u[1], sample.ghost_u[2]});
+  const Vec3 from{x.x, x.y, z_film};
+  const Vec3 q{x.x * spread + radius * d.x, x.y * spread + radius * d.y, fl.z_plane_mm};
+  const Vec3 dir = normalize(q - from);
+  thread_local std::vector<Vec3> pts;
+  pts.clear();
+  const optics::TraceResult r = path.tracer.traceFromFilm(optics::Ray{from, dir}, {}, &pts);
+  if (!r.ok()) return std::nullopt;
+  // A shaped aperture passes the path at every crossing of the stop.
+  double shape = 1;
+  if (!settings_.aperture.isRound() && stop_radius_mm_ > 0) {
+    const int m = int(path.steps.size());
+    for (int i = 0; i < m; ++i)
+      if (path.steps[size_t(i)].stop) {
+        const Vec3& p = pts[size_t(m - i)];
+        shape *= settings_.aperture.transmission({p.x / stop_radius_mm_, p.y / stop_radius_mm_});
+      }
+    if (!(shape > 0)) return std::nullopt;
+  }
+  std::array<double, kCameraWavelengths> factor{};
+  pathFactor(fl.coatings, path.steps, pts, r.ray.direction, sample.lambda_nm, lens.wavelength_nm(),
+             factor);
+  // Film irradiance per unit area of the sampling plane at distance D: cos^4(theta) / D^2.
+  const double dist = z_film - fl.z_plane_mm, c = -dir.z;
+  const double area = M_PI * radius * radius;
+  const double geometric = shape * c * c * c * c * area / (dist * dist) *
+                           (lens.filmDistance_mm() * lens.filmDistance_mm() / weightNorm());
+  CameraRay ray = placeRay(r.ray.origin, r.ray.direction, sample.time);
+  for (int i = 0; i < kCameraWavelengths; ++i)
+    ray.wavelength_weight[size_t(i)] = geometric * factor[size_t(i)] / path.probability;
+  ray.weight = ray.wavelength_weight[0];
+  ray.per_wavelength = true;
+  return ray;
+}
+
+}  // namespace lensim::camera
