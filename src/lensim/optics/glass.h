@@ -78,6 +78,9 @@ class Glass {
   /// the absorption coefficient between rows and held at the end rows outside them; 1 for a
   /// glass without rows.
   double internalTransmittance(double lambda_nm, double thickness_mm) const;
+  /// The absorption coefficient (1/mm) internalTransmittance uses: exp(-alpha d) is the
+  /// transmittance of a path d mm long; 0 for a glass without rows.
+  double absorptionCoefficient_per_mm(double lambda_nm) const;
   bool hasTransmittance() const { return transmittance_ && !transmittance_->empty(); }
 
   /// "catalogue", "model" or "constant".
