@@ -165,7 +165,8 @@ TEST(OldGlassNames, MappedToTheSuccessorTheSourceNames) {
     ASSERT_EQ(d.size(), 1u);
     EXPECT_EQ(d[0].severity, Severity::Warning);
     const std::string expected =
-        fmt::format("lens.zmx:12:5: warning: {} is {}'s old name; using {} (n_d {:.6f}, V_d {:.2f})",
+        fmt::format("lens.zmx:12:5: warning: {} is {}'s old name; using {} (n_d {:.6f}, "
+                    "V_d {:.2f})",
                     c.name, c.maker, c.successor, g.n_d(), cat.find(c.successor)->listed_v_d);
     EXPECT_NE(d[0].str().find(expected), std::string::npos) << d[0].str();
   }

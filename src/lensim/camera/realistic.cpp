@@ -368,7 +368,8 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
     const Vec2 offset = rasterPoint(xf) - sample.pixel_centre;
     const double fw = filter.eval(offset);
     const double c = d.z / length(d), c2 = c * c;
-    w[size_t(j)] = fw * transmission(b.stop_point) * pathTransmittance(path, false, l) * z * z / norm;
+    w[size_t(j)] =
+        fw * transmission(b.stop_point) * pathTransmittance(path, false, l) * z * z / norm;
     if (settings_.rear_disc_only) {
       const double rr = lens.interfaces().back().semi_aperture_mm;
       if (q.x * q.x + q.y * q.y > rr * rr) continue;
