@@ -74,8 +74,9 @@ std::string writeLens30() {
   std::FILE* f = std::fopen(path.c_str(), "w");
   std::fprintf(f, "0 2 0 12\n");
   for (int e = 0; e < 13; ++e)
-    std::fprintf(f, "%d 3 1.6 20 - %s\n%d 1 0 20\n", 200 + 10 * e, glasses[e % 7], -300 - 10 * e);
-  std::fprintf(f, "120 3 1.6 20 - N-BK7\n-80 2 1.7 20 - N-SF66\n-400 0 0 20\n");
+    std::fprintf(f, "%d 3 1.6 20 - %s\n%d 1 0 20\n", 1500 + 10 * e, glasses[e % 7],
+                 -1500 - 10 * e);
+  std::fprintf(f, "300 3 1.6 20 - N-BK7\n-200 2 1.7 20 - N-SF66\n-800 0 0 20\n");
   std::fclose(f);
   return path;
 }
