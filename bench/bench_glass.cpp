@@ -17,8 +17,8 @@ using namespace lensim::optics;
 
 namespace {
 
-const std::vector<std::string> kNames = {"N-BK7", "N-SF66", "S-LAH64", "H-K9L", "J-LAFH3",
-                                         "E48R",  "CAF2",   "rii:PMMA", "F2",   "N-LASF9"};
+const std::vector<std::string> kNames = {"N-BK7", "N-SF66", "S-LAH64",  "H-K9L", "J-LAFH3",
+                                         "E48R",  "CAF2",   "rii:PMMA", "F2",    "N-LASF9"};
 
 void BM_GlassLookup(benchmark::State& state) {
   const GlassCatalog& cat = GlassCatalog::builtin();
@@ -55,10 +55,9 @@ void BM_ParseBuiltinAgf(benchmark::State& state) {
   for (auto _ : state) {
     size_t glasses = 0;
     for (const embedded::EmbeddedAgf& f : embedded::agfFiles())
-      glasses += GlassCatalog::fromAgf(
-                     std::string_view(reinterpret_cast<const char*>(f.begin),
-                                      size_t(f.end - f.begin)),
-                     f.stem, f.stem, f.vendor)
+      glasses += GlassCatalog::fromAgf(std::string_view(reinterpret_cast<const char*>(f.begin),
+                                                        size_t(f.end - f.begin)),
+                                       f.stem, f.stem, f.vendor)
                      .glasses()
                      .size();
     benchmark::DoNotOptimize(glasses);
@@ -74,8 +73,7 @@ std::string writeLens30() {
   std::FILE* f = std::fopen(path.c_str(), "w");
   std::fprintf(f, "0 2 0 12\n");
   for (int e = 0; e < 13; ++e)
-    std::fprintf(f, "%d 3 1.6 20 - %s\n%d 1 0 20\n", 1500 + 10 * e, glasses[e % 7],
-                 -1500 - 10 * e);
+    std::fprintf(f, "%d 3 1.6 20 - %s\n%d 1 0 20\n", 1500 + 10 * e, glasses[e % 7], -1500 - 10 * e);
   std::fprintf(f, "300 3 1.6 20 - N-BK7\n-200 2 1.7 20 - N-SF66\n-800 0 0 20\n");
   std::fclose(f);
   return path;

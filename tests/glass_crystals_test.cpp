@@ -103,10 +103,10 @@ TEST(CrystalGlasses, AgreeWithZemaxsCataloguesAndDoNotShadowThem) {
     const char* rii;
     const char* zemax;
     double tol;
-  } pairs[] = {{"F_SILICA", "misc:F_SILICA", 2e-5}, {"CAF2", "misc:CAF2", 2e-5},
-               {"MGF2", "infrared:MGF2", 2e-4},     {"BAF2", "infrared:BAF2", 2e-4},
+  } pairs[] = {{"F_SILICA", "misc:F_SILICA", 2e-5},     {"CAF2", "misc:CAF2", 2e-5},
+               {"MGF2", "infrared:MGF2", 2e-4},         {"BAF2", "infrared:BAF2", 2e-4},
                {"SAPPHIRE", "infrared:SAPPHIRE", 2e-4}, {"PMMA", "misc:PMMA", 2e-3},
-               {"POLYCARB", "misc:POLYCARB", 3e-3},  {"POLYSTYR", "misc:POLYSTYR", 3e-3}};
+               {"POLYCARB", "misc:POLYCARB", 3e-3},     {"POLYSTYR", "misc:POLYSTYR", 3e-3}};
   for (const auto& p : pairs) {
     SCOPED_TRACE(p.rii);
     const optics::CatalogGlass* a = cat.find(std::string("rii:") + p.rii);
@@ -164,10 +164,10 @@ TEST(OldGlassNames, MappedToTheSuccessorTheSourceNames) {
     EXPECT_NEAR(g.n_d(), cat.find(c.successor)->glass.n_d(), 1e-15);
     ASSERT_EQ(d.size(), 1u);
     EXPECT_EQ(d[0].severity, Severity::Warning);
-    const std::string expected =
-        fmt::format("lens.zmx:12:5: warning: {} is {}'s old name; using {} (n_d {:.6f}, "
-                    "V_d {:.2f})",
-                    c.name, c.maker, c.successor, g.n_d(), cat.find(c.successor)->listed_v_d);
+    const std::string expected = fmt::format(
+        "lens.zmx:12:5: warning: {} is {}'s old name; using {} (n_d {:.6f}, "
+        "V_d {:.2f})",
+        c.name, c.maker, c.successor, g.n_d(), cat.find(c.successor)->listed_v_d);
     EXPECT_NE(d[0].str().find(expected), std::string::npos) << d[0].str();
   }
   // BSC7, Hoya's current name for the type, is no one's old name: Hoya's glass, no warning.

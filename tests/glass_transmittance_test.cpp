@@ -259,8 +259,8 @@ AttributeBegin
   Shape "bilinearmesh" "point3 P" [-1 -1 0  1 -1 0  -1 1 0  1 1 0]
 AttributeEnd
 )",
-        lens, absorb ? "true" : "false", integrator, centre_nm - 12, centre_nm - 10,
-        centre_nm + 10, centre_nm + 12);
+        lens, absorb ? "true" : "false", integrator, centre_nm - 12, centre_nm - 10, centre_nm + 10,
+        centre_nm + 12);
     render::RenderOptions o;
     o.seed = 3;
     const render::RenderResult r = testutil::renderText(scene, o);

@@ -36,8 +36,8 @@ class LensAbsorption {
   double axial(double lambda_nm) const;
 
  private:
-  std::vector<Glass> media_;             // after surface i, i < surfaces - 1
-  std::vector<double> axial_mm_;         // |vertex spacing| after surface i
+  std::vector<Glass> media_;      // after surface i, i < surfaces - 1
+  std::vector<double> axial_mm_;  // |vertex spacing| after surface i
   std::vector<int> without_data_;
   bool any_ = false;
 };
