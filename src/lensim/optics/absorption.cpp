@@ -16,6 +16,20 @@ LensAbsorption::LensAbsorption(const LensSystem& lens) {
     else if (!g.isAir())
       without_data_.push_back(i);
   }
+  if (!any_) return;
+  const size_t m = media_.size();
+  table_.assign(size_t(kTo_nm - kFrom_nm + 1) * m, 0.0);
+  for (int l = kFrom_nm; l <= kTo_nm; ++l)
+    for (size_t i = 0; i < m; ++i)
+      table_[size_t(l - kFrom_nm) * m + i] = media_[i].absorptionCoefficient_per_mm(l);
+}
+
+double LensAbsorption::alpha(size_t i, double lambda_nm) const {
+  const double u = lambda_nm - kFrom_nm;
+  if (!(u >= 0 && u < kTo_nm - kFrom_nm)) return media_[i].absorptionCoefficient_per_mm(lambda_nm);
+  const size_t k = size_t(u), m = media_.size();
+  const double a = u - double(k), lo = table_[k * m + i], hi = table_[(k + 1) * m + i];
+  return lo + a * (hi - lo);
 }
 
 template <typename T>
@@ -35,7 +49,7 @@ double LensAbsorption::alongPath(const std::vector<Vec3T<T>>& path, bool from_fi
     const Vec3T<T> d = path[j + 1] - path[j];
     const double len = std::sqrt(double(d.x) * double(d.x) + double(d.y) * double(d.y) +
                                  double(d.z) * double(d.z));
-    optical_depth += g.absorptionCoefficient_per_mm(lambda_nm) * len;
+    optical_depth += alpha(size_t(medium), lambda_nm) * len;
   }
   return std::exp(-optical_depth);
 }

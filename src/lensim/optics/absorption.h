@@ -36,6 +36,13 @@ class LensAbsorption {
   double axial(double lambda_nm) const;
 
  private:
+  // The absorption coefficient of medium i at lambda: from the table between kFrom_nm and
+  // kTo_nm (every nanometre, linear in between: exact where the catalogue's rows lie on whole
+  // nanometres, as all of the built-in catalogues' rows below 1000 nm do; elsewhere the error
+  // stays inside the nanometre that holds the row), from the glass beyond.
+  double alpha(size_t i, double lambda_nm) const;
+  static constexpr int kFrom_nm = 300, kTo_nm = 1100;
+  std::vector<double> table_;     // (kTo_nm - kFrom_nm + 1) rows of media_.size() values
   std::vector<Glass> media_;      // after surface i, i < surfaces - 1
   std::vector<double> axial_mm_;  // |vertex spacing| after surface i
   std::vector<int> without_data_;
