@@ -122,6 +122,8 @@ TEST(CrystalGlasses, AgreeWithZemaxsCataloguesAndDoNotShadowThem) {
   // BAF2 bare is a maker's barium flint glass (Hoya's, CDGM's), not the crystal (n_d 1.4745).
   EXPECT_GT(cat.find("BAF2")->glass.n_d(), 1.55);
   EXPECT_TRUE(cat.hasCatalog("rii"));
+  // A GCAT line naming RII puts it first.
+  EXPECT_EQ(cat.find("CAF2", {"RII"})->glass.describe(), "rii:CAF2");
 }
 
 // Old names: refractiveindex.info's glass/optical/BK7/about.yml names the glass type BK7, BSL7,
