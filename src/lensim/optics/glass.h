@@ -127,7 +127,8 @@ struct CatalogGlass {
 class GlassCatalog {
  public:
   /// The catalogues compiled into lensim: the AGF files of data/glass/agf/ in the order of
-  /// builtinCatalogNames(), then the glasses of data/glass/catalog.csv that none of them has.
+  /// builtinCatalogNames(), then the glasses of data/glass/catalog.csv that none of them has,
+  /// then "rii", crystals and plastics from refractiveindex.info (glass/embedded.h).
   static const GlassCatalog& builtin();
   /// The built-in AGF catalogues' names (file stems), in search order: schott, ohara, hoya,
   /// cdgm, sumita, hikari, then the others.
