@@ -1,7 +1,9 @@
 // `lensim lens info|trace`: first-order data, focus and single exact rays from a prescription.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <CLI/CLI.hpp>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -15,6 +17,7 @@
 #include "lens_analysis.h"
 #include "lens_options.h"
 #include "lens_tilt.h"
+#include "lensim/optics/absorption.h"
 #include "lensim/optics/anamorphic.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/chromatic.h"
@@ -108,6 +111,42 @@ json elementsJson(const LensSystem& lens) {
                    {"n", lens.interfaces()[i].ior_after}});
   }
   return arr;
+}
+
+// The lens's internal transmittance on the axis (optics/absorption.h) at these wavelengths.
+constexpr std::array<double, 3> kTransmittanceWavelengths_nm{400, 550, 700};
+
+std::vector<std::string> elementsWithoutTransmittance(const LensAbsorption& a) {
+  std::vector<std::string> names;
+  for (int i : a.mediaWithoutData()) names.push_back(fmt::format("{}-{}", i, i + 1));
+  return names;
+}
+
+json transmittanceJson(const LensSystem& lens) {
+  const LensAbsorption a(lens);
+  json on_axis = json::array();
+  for (double l : kTransmittanceWavelengths_nm) on_axis.push_back(a.axial(l));
+  return {{"wavelengths_nm", kTransmittanceWavelengths_nm},
+          {"on_axis", on_axis},
+          {"has_data", a.any()},
+          {"elements_without_data", elementsWithoutTransmittance(a)}};
+}
+
+std::string transmittanceText(const LensSystem& lens) {
+  const LensAbsorption a(lens);
+  const std::vector<std::string> missing = elementsWithoutTransmittance(a);
+  if (!a.any())
+    return missing.empty() ? "no glass elements"
+                           : "1 (no glass has internal transmittance data; taken as 1)";
+  std::string s = "on axis";
+  for (double l : kTransmittanceWavelengths_nm)
+    s += fmt::format("{} {:.4f} at {:.0f} nm", l == kTransmittanceWavelengths_nm[0] ? "" : ",",
+                     a.axial(l), l);
+  s += " (internal, the catalogues' IT data)";
+  if (!missing.empty())
+    s += fmt::format("; element{} {} without data taken as 1", missing.size() == 1 ? "" : "s",
+                     fmt::join(missing, ", "));
+  return s;
 }
 
 json diagnosticsJson(const FocusedLens& fl) {
@@ -460,6 +499,7 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["primary_wavelength_nm"] = primaryWavelength_nm(pr);
     j["dispersive"] = lens.dispersive();
     j["elements"] = elementsJson(lens);
+    j["internal_transmittance"] = transmittanceJson(lens);
     j["coatings"] = coatingsJson(lens);
     j["diagnostics"] = diagnosticsJson(fl);
     if (tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
@@ -554,6 +594,7 @@ int runInfo(const LensArgs& args, bool as_json) {
                    lens.wavelength_nm(),
                    lens.wavelength_nm() == primaryWavelength_nm(pr) ? " (primary)" : "",
                    primaryWavelength_nm(pr), lens.dispersive() ? "" : "; no element disperses"));
+  line("glass transmittance", transmittanceText(lens));
   line("lens length / total track",
        fmt::format("{:.4f} mm / {:.4f} mm{}", lensLength(lens), totalTrack(lens),
                    lens.mirrorCount() > 0 ? " (folded: the axial extent of the surfaces / of "

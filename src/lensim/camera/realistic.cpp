@@ -74,6 +74,10 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   // Focus is solved at the lens's primary wavelength (the file's, else the d line).
   lens_ = optics::focusLens(std::move(prescription), setup);
   dispersive_ = lens_.lens->dispersive();
+  // Glasses with transmittance data are catalogue glasses, which disperse: absorption is applied
+  // where the wavelengths are (dispersiveRay, traceToFilm).
+  absorption_ = optics::LensAbsorption(*lens_.lens);
+  absorbs_ = settings_.glass_absorption && dispersive_ && absorption_.any();
   if (dispersive_) {
     const int n = lens_.lens->surfaceCount();
     const int steps = int(std::lround((kIndexTo_nm - kIndexFrom_nm) / kIndexStep_nm));
@@ -448,10 +452,16 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
     const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f.ray);
     return r.ok() ? finish(r, f, sample.time) : std::nullopt;
   }
-  const optics::TraceResultT<float> r = tracerAt(sample.lambda_nm[0]).traceFromFilm(f.ray);
+  // The paths through the lens, for the glasses' absorption (recorded only where they absorb).
+  thread_local std::vector<Vec3f> path;
+  path.clear();
+  const optics::TraceResultT<float> r =
+      tracerAt(sample.lambda_nm[0]).traceFromFilm(f.ray, {}, absorbs_ ? &path : nullptr);
   if (!r.ok()) return std::nullopt;
   std::optional<CameraRay> ray = finish(r, f, sample.time);
   if (!ray) return ray;
+  const double hero_transmittance = pathTransmittance(path, true, sample.lambda_nm[0]);
+  ray->weight *= hero_transmittance;
   // (b) also for a tilted or shifted film: (c)'s densities assume the untilted, centred film.
   if (!sample.filter || !(sample.filter_weight != 0) || placement_) {
     ray->hero_only = true;  // (b)
@@ -471,14 +481,16 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
   {
     const Vec2 o = sample.film_raster - sample.pixel_centre;
     const double c2 = f.cos_theta * f.cos_theta;
-    w[0] = filter.eval(o) * transmission(r.stop_point) * z * z / norm;
+    w[0] = filter.eval(o) * transmission(r.stop_point) * hero_transmittance * z * z / norm;
     p[0] = filter.pdf(o) / f.area_mm2 * z * z / (c2 * c2);
   }
   const optics::RayT<float> back{r.ray.origin, -r.ray.direction};
   for (int j = 1; j < kCameraWavelengths; ++j) {
     const double l = sample.lambda_nm[size_t(j)];
     if (!(l > 0)) continue;
-    const optics::TraceResultT<float> b = tracerAt(l).traceFromScene(back);
+    path.clear();
+    const optics::TraceResultT<float> b =
+        tracerAt(l).traceFromScene(back, {}, absorbs_ ? &path : nullptr);
     if (!b.ok() || !(b.ray.direction.z > 0)) continue;
     const Vec3 o{b.ray.origin}, d{b.ray.direction};
     const Vec3 x = o + d * ((z_film - o.z) / d.z), q = o + d * ((z_rear - o.z) / d.z);
@@ -486,7 +498,8 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
     const Vec2 offset = rasterPoint(xf) - sample.pixel_centre;
     const double fw = filter.eval(offset);
     const double c = d.z / length(d), c2 = c * c;
-    w[size_t(j)] = fw * transmission(b.stop_point) * z * z / norm;
+    w[size_t(j)] =
+        fw * transmission(b.stop_point) * pathTransmittance(path, false, l) * z * z / norm;
     if (settings_.rear_disc_only) {
       const double rr = lens.interfaces().back().semi_aperture_mm;
       if (q.x * q.x + q.y * q.y > rr * rr) continue;
@@ -674,6 +687,7 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.exposure_time = c.shutter_close - c.shutter_open;
       s.simple_weighting = r.simple_weighting;
       s.glass_match = r.glass_match;
+      s.glass_absorption = r.glass_absorption;
       s.configuration = r.configuration;
       s.zoom_focal_length_mm = r.zoom_focal_length_mm;
       s.zoom_loc = r.zoom_loc;

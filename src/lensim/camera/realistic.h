@@ -35,6 +35,7 @@
 
 #include "lensim/camera/aperture.h"
 #include "lensim/camera/camera.h"
+#include "lensim/optics/absorption.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/pupil.h"
 #include "lensim/optics/tilt_shift.h"
@@ -79,6 +80,10 @@ struct RealisticSettings {
   /// Give every element of the lens the catalogue glass nearest to its index (and V_d), as
   /// `lens info --glass-match` does (the scene's "bool glassmatch"), so an old lens disperses.
   bool glass_match = false;
+  /// Weigh each wavelength of a camera ray by the internal transmittance of its path through the
+  /// lens's glasses (optics/absorption.h; the scene's "bool glassabsorption", default true).
+  /// Glasses without transmittance data absorb nothing.
+  bool glass_absorption = true;
   /// A multi-configuration (zoom) lens: configuration N (1-based; the scene's "integer
   /// configuration"), or the focal length in mm the spacings are interpolated for ("float
   /// focallength"; optics/configurations.h). `zoom_loc`: the parameter, for errors.
@@ -199,6 +204,13 @@ class RealisticCamera final : public Camera {
   /// Dispersion (see realistic.cpp, "Dispersive lenses"): whether the lens disperses, and an id
   /// that keys each thread's re-indexed copy of the tracer to this camera.
   bool dispersive_ = false;
+  /// The glasses' absorption; absorbs_: on and some glass has data.
+  optics::LensAbsorption absorption_;
+  bool absorbs_ = false;
+  /// The internal transmittance at lambda_nm of a path the tracer recorded (1 when !absorbs_).
+  double pathTransmittance(const std::vector<Vec3f>& path, bool from_film, double lambda_nm) const {
+    return absorbs_ ? absorption_.alongPath(path, from_film, lambda_nm) : 1.0;
+  }
   std::uint64_t id_ = 0;
   /// The media's indices (after each surface) every kIndexStep_nm from kIndexFrom_nm, for
   /// re-indexing the tracer by linear interpolation (error < 2e-8, below the float tracer's

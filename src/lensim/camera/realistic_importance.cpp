@@ -104,8 +104,10 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
       dispersive_ && lambda_nm > 0 ? tracerAt(lambda_nm) : lens.tracerFloat();
   thread_local std::vector<Vec3f> path;
   path.clear();
-  const optics::TraceResultT<float> r = tracer.traceFromScene(
-      optics::RayT<float>{Vec3f(o), Vec3f(d_lens)}, {}, front_hit || front_out ? &path : nullptr);
+  const bool absorbs = absorbs_ && lambda_nm > 0;
+  const optics::TraceResultT<float> r =
+      tracer.traceFromScene(optics::RayT<float>{Vec3f(o), Vec3f(d_lens)}, {},
+                            front_hit || front_out || absorbs ? &path : nullptr);
   if (!r.ok()) return std::nullopt;
   if (front_out) {
     if (path.size() < 2) return std::nullopt;
@@ -146,6 +148,7 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
   const double units = settings_.camera_units_per_mm;
   hit.cos_theta = rd.z / length(rd);
   hit.importance = transmission * z * z / (norm * film_area_mm2 * units * units);
+  if (absorbs) hit.importance *= pathTransmittance(path, false, lambda_nm);
   return hit;
 }
 

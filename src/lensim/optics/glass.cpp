@@ -102,6 +102,11 @@ std::string Glass::formulaName() const {
 
 double Glass::internalTransmittance(double lambda_nm, double thickness_mm) const {
   if (!hasTransmittance() || thickness_mm <= 0) return 1;
+  return std::exp(-absorptionCoefficient_per_mm(lambda_nm) * thickness_mm);
+}
+
+double Glass::absorptionCoefficient_per_mm(double lambda_nm) const {
+  if (!hasTransmittance()) return 0;
   const std::vector<TransmittanceRow>& rows = *transmittance_;
   // Absorption coefficient (1/mm) of a row; a row of transmittance 0 is floored so that it
   // interpolates.
@@ -109,21 +114,14 @@ double Glass::internalTransmittance(double lambda_nm, double thickness_mm) const
     return -std::log(std::max(r.tau, 1e-300)) / r.thickness_mm;
   };
   const double l = lambda_nm * 1e-3;
-  double a;
-  if (l <= rows.front().lambda_um) {
-    a = alpha(rows.front());
-  } else if (l >= rows.back().lambda_um) {
-    a = alpha(rows.back());
-  } else {
-    size_t i = 1;
-    while (rows[i].lambda_um < l) ++i;
-    const TransmittanceRow &lo = rows[i - 1], &hi = rows[i];
-    const double t = hi.lambda_um > lo.lambda_um
-                         ? (l - lo.lambda_um) / (hi.lambda_um - lo.lambda_um)
-                         : 1.0;
-    a = (1 - t) * alpha(lo) + t * alpha(hi);
-  }
-  return std::exp(-a * thickness_mm);
+  if (l <= rows.front().lambda_um) return alpha(rows.front());
+  if (l >= rows.back().lambda_um) return alpha(rows.back());
+  size_t i = 1;
+  while (rows[i].lambda_um < l) ++i;
+  const TransmittanceRow &lo = rows[i - 1], &hi = rows[i];
+  const double t =
+      hi.lambda_um > lo.lambda_um ? (l - lo.lambda_um) / (hi.lambda_um - lo.lambda_um) : 1.0;
+  return (1 - t) * alpha(lo) + t * alpha(hi);
 }
 
 double Glass::index(double lambda_nm) const {
@@ -408,6 +406,33 @@ const GlassCatalog& GlassCatalog::builtin() {
         const_cast<CatalogGlass*>(agf)->glass = g.glass;
     }
     all.append(extra);
+    // Crystals and plastics from refractiveindex.info, after the makers' catalogues: a bare
+    // name Zemax's MISC or INFRARED catalogue also has (CAF2, PMMA, ...) keeps meaning theirs.
+    GlassCatalog crystals;
+    crystals.catalogs_ = {"rii"};
+    for (const embedded::CrystalGlass& c : embedded::crystalGlasses()) {
+      ZemaxCoefficients k{};
+      std::copy(std::begin(c.k), std::end(c.k), k.begin());
+      std::vector<std::string> names{c.name};
+      for (std::string_view rest = c.aliases; !rest.empty();) {
+        const size_t sp = rest.find(' ');
+        names.emplace_back(rest.substr(0, sp));
+        rest = sp == std::string_view::npos ? std::string_view() : rest.substr(sp + 1);
+      }
+      for (const std::string& name : names) {
+        CatalogGlass g;
+        g.vendor = "rii";
+        g.name = name;
+        g.catalog = "rii";
+        g.glass = Glass::zemax(g.vendor, name, ZemaxFormula::Sellmeier1, k, c.min_um * 1000,
+                               c.max_um * 1000);
+        // The database lists no n_d or V_d: the formula's own.
+        g.listed_n_d = g.glass.n_d();
+        g.listed_v_d = g.glass.v_d();
+        crystals.glasses_.push_back(std::move(g));
+      }
+    }
+    all.append(crystals);
     return all;
   }();
   return cat;
@@ -520,6 +545,13 @@ constexpr FormerName kFormerNames[] = {
     {"E-LAFH3", "hikari:J-LAFH3"},
 };
 
+// The old names the refractiveindex.info database maps to a successor (glass/embedded.h).
+const embedded::FormerGlassName* sourcedFormerName(std::string_view bare) {
+  for (const embedded::FormerGlassName& f : embedded::formerGlassNames())
+    if (upper(bare) == upper(f.name)) return &f;
+  return nullptr;
+}
+
 }  // namespace
 
 const CatalogGlass* findGlassOrSuccessor(std::string_view name, bool* successor_of,
@@ -537,6 +569,11 @@ const CatalogGlass* findGlassOrSuccessor(std::string_view name, bool* successor_
       return g;
     }
   }
+  if (const embedded::FormerGlassName* f = sourcedFormerName(bare))
+    if (const CatalogGlass* g = cat.find(f->successor)) {
+      if (successor_of) *successor_of = true;
+      return g;
+    }
   return nullptr;
 }
 
@@ -564,6 +601,20 @@ Glass resolveGlass(const GlassSpec& spec, double constant_ior, std::vector<Diagn
     bool successor = false;
     if (const CatalogGlass* g = findGlassOrSuccessor(spec.name, &successor, spec.catalogs);
         g && successor) {
+      std::string_view bare = spec.name;
+      if (const size_t colon = bare.find(':'); colon != std::string_view::npos)
+        bare = bare.substr(colon + 1);
+      if (const embedded::FormerGlassName* f = sourcedFormerName(bare);
+          f && g->qualifiedName() == f->successor) {
+        note(Severity::Warning,
+             fmt::format("{} is {}'s old name; using {} (n_d {:.6f}, V_d {:.2f}): the glass "
+                         "refractiveindex.info lists for it ({}){}",
+                         std::string(bare), f->maker, g->qualifiedName(), g->glass.n_d(),
+                         g->listed_v_d, f->source,
+                         spec.n_d ? fmt::format("; the file's n_d {} is not used", *spec.n_d)
+                                  : std::string()));
+        return g->glass;
+      }
       note(Severity::Warning,
            fmt::format("glass '{}' is not in the catalogue; using {} (n_d {:.6f}, V_d {:.2f}), "
                        "the glass that replaces it{}",

@@ -78,6 +78,9 @@ class Glass {
   /// the absorption coefficient between rows and held at the end rows outside them; 1 for a
   /// glass without rows.
   double internalTransmittance(double lambda_nm, double thickness_mm) const;
+  /// The absorption coefficient (1/mm) internalTransmittance uses: exp(-alpha d) is the
+  /// transmittance of a path d mm long; 0 for a glass without rows.
+  double absorptionCoefficient_per_mm(double lambda_nm) const;
   bool hasTransmittance() const { return transmittance_ && !transmittance_->empty(); }
 
   /// "catalogue", "model" or "constant".
@@ -124,7 +127,8 @@ struct CatalogGlass {
 class GlassCatalog {
  public:
   /// The catalogues compiled into lensim: the AGF files of data/glass/agf/ in the order of
-  /// builtinCatalogNames(), then the glasses of data/glass/catalog.csv that none of them has.
+  /// builtinCatalogNames(), then the glasses of data/glass/catalog.csv that none of them has,
+  /// then "rii", crystals and plastics from refractiveindex.info (glass/embedded.h).
   static const GlassCatalog& builtin();
   /// The built-in AGF catalogues' names (file stems), in search order: schott, ohara, hoya,
   /// cdgm, sumita, hikari, then the others.

@@ -296,6 +296,9 @@ struct Realistic {
   double blade_rotation_deg = 0;           ///< `bladerotation`
   /// `glassmatch`: each element gets the nearest catalogue glass (dispersion for old lenses)
   bool glass_match = false;
+  /// `glassabsorption`: the glasses' internal transmittance (catalogue `IT` data) weighs each
+  /// camera ray by its path through the lens (optics/absorption.h)
+  bool glass_absorption = true;
   /// `configuration` (integer, 1-based) or `focallength` (mm) of a zoom lens; zoom_loc: where
   std::optional<int> configuration;
   std::optional<double> zoom_focal_length_mm;

@@ -107,6 +107,7 @@ void Builder::camera(const Directive& d) {
       // pbrt-v3's default is true; pbrt-v4 has no such parameter (always irradiance).
       r.simple_weighting = ps.getBool({"simpleweighting"}, scene_.legacy_syntax);
       r.glass_match = ps.getBool({"glassmatch"}, false);
+      r.glass_absorption = ps.getBool({"glassabsorption"}, true);
       if (const Param* cf = ps.find({"configuration"}, {ParamType::Integer})) {
         ps.expectCount(*cf, 1);
         if (!(cf->numbers[0] >= 1)) ps.fail(*cf, "expected a configuration number >= 1");
