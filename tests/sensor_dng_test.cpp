@@ -98,7 +98,7 @@ TEST(SensorDng, DcrawAndLibRawDecodeTheMosaicBitForBit) {
       // LibRaw: the CFA pattern of the written window, the black level and the colour matrix.
       const std::string info = run("raw-identify -v " + path, &st);
       ASSERT_EQ(st, 0) << info;
-      const CfaLayout layout = parseCfa(cfa);
+      const CfaPattern layout = parseCfa(cfa);
       std::string pattern;
       for (int k = 0; k < 4; ++k) pattern += "RGB"[cfaChannel(layout, x0 + (k & 1), y0 + (k >> 1))];
       EXPECT_NE(info.find("Filter pattern: " + pattern), std::string::npos)

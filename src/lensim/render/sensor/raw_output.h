@@ -12,12 +12,15 @@
 namespace lensim::scene {
 struct Scene;
 }
+namespace lensim::camera {
+class Camera;
+}
 
 namespace lensim::render {
 
 /// Metadata keys a raw film's image carries (also through parts to lensim merge).
 inline constexpr const char* kRawSensorKey = "lensim:raw_sensor";  ///< SensorConfig::toText
-inline constexpr const char* kRawLensKey = "lensim:raw_lens";      ///< lens name
+inline constexpr const char* kRawLensKey = "lensim:raw_lens";      ///< lens title
 inline constexpr const char* kRawFNumberKey = "lensim:raw_fnumber";
 inline constexpr const char* kRawFocalKey = "lensim:raw_focal_mm";
 inline constexpr const char* kRawWhiteBalanceKey = "lensim:raw_whitebalance";
@@ -33,6 +36,12 @@ scene::SensorConfig rawSensorConfig(const scene::Scene& scene);
 /// The metadata a raw film's image carries (the keys above).
 std::map<std::string, std::string> rawMetadata(const scene::Scene& scene,
                                                const scene::SensorConfig& config);
+
+/// The lens metadata (EXIF FocalLength, FNumber, LensModel) of the camera rendering a raw film:
+/// for a realistic camera its lens's paraxial effective focal length, its f-number at the set
+/// aperture (EFL / entrance pupil diameter, focused at infinity) and its title (the lens file's
+/// first comment line, else its name); none for a camera without a lens (pinhole, perspective).
+std::map<std::string, std::string> rawLensMetadata(const camera::Camera& camera);
 
 /// Whether the image is a raw film's (carries kRawSensorKey).
 bool isRawImage(const io::Image& image);
