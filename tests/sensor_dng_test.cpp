@@ -3,6 +3,7 @@
 // develops a ColorChecker (the shared Ohta 1997 reflectances, independent of the Pascale data
 // the colour matrices are fitted to) to within a mean CIEDE2000 of 3; darktable-cli opens the
 // file; a split render merged by lensim merge has the very same noisy raw values.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "cli_run.h"
+#include "lensim/io/dng.h"
 #include "lensim/io/image.h"
 #include "lensim/render/sensor/raw_output.h"
 #include "lensim/render/sensor/sensor_color.h"
@@ -451,7 +453,7 @@ namespace {
 // region of the lower right quarter below 5 %), which gives the image scale.
 double renderedChartDeltaE(const std::string& name, const std::string& camera, double distance,
                            const std::string& film_extra, double* worst,
-                           bool lensim_develop = false) {
+                           const std::string& developer = "dcraw_emu") {
   std::ifstream csv(std::string(LENSIM_SHARED_DIR) +
                     "/data/colorchecker/colorchecker-ohta1997.csv");
   std::vector<std::string> spectra(24);
@@ -490,10 +492,15 @@ double renderedChartDeltaE(const std::string& name, const std::string& camera, d
   EXPECT_EQ(r.status, 0) << r.out;
   int st = -1;
   std::string developed = dir + "/chart.dng.tiff";
-  if (lensim_develop) {
+  if (developer == "lensim") {
     developed = dir + "/developed.exr";
     r = lensim::test::runLensim("develop -q " + dir + "/chart.dng -o " + developed);
     EXPECT_EQ(r.status, 0) << r.out;
+  } else if (developer == "dcraw") {
+    // dcraw's own X-Trans interpolation (LibRaw 0.20's fails on X-Trans DNGs at -q 3).
+    developed = dir + "/chart.tiff";
+    const std::string log = run("dcraw -w -o 1 -4 -T " + dir + "/chart.dng", &st);
+    EXPECT_EQ(st, 0) << log;
   } else {
     const std::string log = run("dcraw_emu -w -o 1 -4 -q 3 -T " + dir + "/chart.dng", &st);
     EXPECT_EQ(st, 0) << log;
@@ -578,7 +585,7 @@ TEST(SensorDng, ColorCheckerThroughDoubleGaussDevelopedByLensim) {
       "Camera \"realistic\" \"string lensfile\" \"" + std::string(LENSIM_SOURCE_DIR) +
           "/lenses/dgauss.50mm.dat\" \"float aperturediameter\" 12.5 \"float focusdistance\" 6 "
           "\"float shutterclose\" 1",
-      6, "\"float diagonal\" 15", &worst, true);
+      6, "\"float diagonal\" 15", &worst, "lensim");
   std::printf("ColorChecker through the double Gauss, lensim develop: mean dE2000 %.2f, max %.2f\n",
               mean, worst);
   EXPECT_LT(mean, 3.0);
@@ -590,4 +597,269 @@ TEST(SensorDng, ColorCheckerThroughDoubleGaussDevelopedByLensim) {
             std::string::npos)
       << r.out;
   EXPECT_FALSE(std::filesystem::exists(tmpDir("dev_bad") + "/x.png"));
+}
+
+// ---- Other CFA patterns (docs/sensor.md, "Colour filter arrays") ----
+
+namespace {
+
+// The filter letter of pixel (x, y) of a pattern written as rows joined by '/' (the test's own
+// reading of the pattern, not parseCfa's).
+char patternLetter(const std::string& rows_text, int x, int y) {
+  std::vector<std::string> rows;
+  std::stringstream ss(rows_text);
+  for (std::string r; std::getline(ss, r, '/');) rows.push_back(r);
+  const std::string& row = rows[size_t(y) % rows.size()];
+  return row[size_t(x) % row.size()];
+}
+
+// Fujifilm's X-Trans 6x6 tile (as dcraw's built-in xtrans table).
+const char* const kXTrans = "GGRGGB/GGBGGR/BRGRBG/GGBGGR/GGRGGB/RBGBRG";
+
+}  // namespace
+
+TEST(SensorDng, OtherCfaPatternsDecodeBitForBitAndLibRawReadsThem) {
+  const std::string dir = tmpDir("patterns");
+  for (const char* cfa : {kXTrans, "RG/GB/GR/BG", "R/G/B/G", "RG/GB/RG/GB/GR/BG/GR/BG", "RB/GG"})
+    for (const auto& [x0, y0] : std::vector<std::pair<int, int>>{{0, 0}, {1, 0}, {3, 5}}) {
+      SensorConfig cfg;
+      cfg.cfa = cfa;
+      cfg.seed = 9;
+      const io::Image im = electronImage(42, 30, cfg);
+      const std::string path = dir + "/p.dng";
+      writeRawImage(path, im, x0, y0);
+      int st = -1, w = 0, h = 0;
+      const std::string pgm = run("dcraw -D -4 -c " + path, &st);
+      ASSERT_EQ(st, 0) << pgm;
+      const std::vector<uint16_t> got = parsePgm(pgm, w, h);
+      ASSERT_EQ(w, 42);
+      ASSERT_EQ(h, 30);
+      const std::vector<uint16_t> want = expectedDn(im, cfg, x0, y0);
+      EXPECT_EQ(got, want) << cfa << " at " << x0 << "," << y0;
+      // Each DN is the electrons of the channel the pattern puts there (noise off: exact).
+      cfg.noise = false;
+      cfg.read_noise_e = 0;
+      cfg.dark_current_e_s = 0;
+      io::Image quiet = im;
+      quiet.metadata[kRawSensorKey] = cfg.toText();
+      writeRawImage(path, quiet, x0, y0);
+      const std::vector<uint16_t> q = parsePgm(run("dcraw -D -4 -c " + path, &st), w, h);
+      ASSERT_EQ(q.size(), size_t(42 * 30));
+      for (int y = 0; y < 30; y += 7)
+        for (int x = 0; x < 42; x += 5) {
+          const int c = int(std::string("RGB").find(patternLetter(cfa, x0 + x, y0 + y)));
+          const double e = im.at(x, y, c);
+          EXPECT_EQ(q[size_t(y * 42 + x)], uint16_t(std::lround(e * cfg.gainDnPerE()) + 512))
+              << cfa << " pixel " << x << "," << y;
+        }
+      // LibRaw's filter pattern: the colours of rows 0-7, columns 0-1 of the written image.
+      const std::string info = run("raw-identify -v " + path, &st);
+      ASSERT_EQ(st, 0) << info;
+      std::string pattern;
+      for (int i = 0; i < 16; ++i) pattern += patternLetter(cfa, x0 + (i & 1), y0 + (i >> 1));
+      EXPECT_NE(info.find("Filter pattern: " + pattern + "\n"), std::string::npos)
+          << cfa << " " << x0 << "," << y0 << ": expected " << pattern << "\n" << info;
+      EXPECT_NE(info.find("Raw colors: 3"), std::string::npos) << info;
+    }
+}
+
+TEST(SensorDng, CfaPatternsRefusedWithTheReason) {
+  auto message = [](const std::string& text) {
+    try {
+      parseCfa(text, FileLoc{"s.pbrt", 3, 7});
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("RGBW").find("s.pbrt:3:7: error: \"cfa\": \"RGBW\" has a W (panchromatic)"),
+            std::string::npos)
+      << message("RGBW");
+  EXPECT_NE(message("RGGX").find("has the letter 'X'"), std::string::npos);
+  EXPECT_NE(message("RGG").find("has 3 letters, not a square tile"), std::string::npos);
+  EXPECT_NE(message("RG/G").find("has rows of 2 and 1 letters"), std::string::npos);
+  EXPECT_NE(message("RRGG").find("has no B filter"), std::string::npos);
+  EXPECT_NE(message("RGBRGBRGB/R").find("is 9x2"), std::string::npos);
+  EXPECT_NE(message("RG//GB").find("has rows of 2 and 0 letters"), std::string::npos);
+  // Parsed: the letters row by row; "mono".
+  const CfaPattern q = parseCfa("RRGG/RRGG/GGBB/GGBB");
+  EXPECT_EQ(q.width, 4);
+  EXPECT_EQ(q.height, 4);
+  EXPECT_EQ(q.channel(2, 0), 1);
+  EXPECT_EQ(q.channel(6, 3), 2);
+  EXPECT_EQ(q.channel(5, 3), 1);
+  EXPECT_EQ(q.channel(-1, -1), 2);
+  EXPECT_EQ(q.text(), "RRGG/RRGG/GGBB/GGBB");
+  EXPECT_EQ(parseCfa("RGGB"), parseCfa("RG/GB"));
+  EXPECT_TRUE(parseCfa("mono").mono);
+}
+
+TEST(SensorDng, PatternsRefusedForDngAreThoseDcrawMisreads) {
+  // Written anyway (io::writeDng has no such check), dcraw -D decodes some pixels as 0.
+  const std::string dir = tmpDir("misread");
+  for (const char* cfa : {"GR/BG/GB/RG/RG/GB/BG/GR", "G/R/G/B", "RG/GB/BG/GR"}) {
+    const CfaPattern p = parseCfa(cfa);
+    EXPECT_FALSE(p.dngReadable()) << cfa;
+    io::DngImage d;
+    d.width = 32;
+    d.height = 24;
+    d.data.assign(32 * 24, 1000);
+    d.cfa_width = p.width == 1 ? 2 : p.width;
+    d.cfa_height = p.height;
+    d.cfa.clear();
+    for (int y = 0; y < d.cfa_height; ++y)
+      for (int x = 0; x < d.cfa_width; ++x) d.cfa.push_back(uint8_t(p.channel(x, y)));
+    d.color_matrix1 = d.color_matrix2 = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const std::string path = dir + "/x.dng";
+    io::writeDng(path, d);
+    int st = -1, w = 0, h = 0;
+    const std::vector<uint16_t> got = parsePgm(run("dcraw -D -4 -c " + path, &st), w, h);
+    ASSERT_EQ(got.size(), size_t(32 * 24)) << cfa;
+    EXPECT_NE(std::count(got.begin(), got.end(), uint16_t(0)), 0) << cfa;
+    // Refused by lensim's writer, naming the pattern.
+    SensorConfig cfg;
+    cfg.cfa = cfa;
+    try {
+      writeRawImage(path, electronImage(32, 24, cfg), 0, 0);
+      ADD_FAILURE() << cfa << " written";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("\"") + cfa + "\" would be misread"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  for (const char* cfa : {"RG/GB/GR/BG", "R/G/B/G", "RB/GG", "RGGB", "GBRG"})
+    EXPECT_TRUE(parseCfa(cfa).dngReadable()) << cfa;
+}
+
+TEST(SensorDng, QuadBayerWritesExrButRefusesDng) {
+  const std::string dir = tmpDir("quad");
+  SensorConfig cfg;
+  cfg.cfa = "RRGG/RRGG/GGBB/GGBB";
+  const io::Image im = electronImage(24, 24, cfg);
+  EXPECT_THROW(writeRawImage(dir + "/q.dng", im, 0, 0), Error);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/q.dng"));
+  writeRawImage(dir + "/q.exr", im, 0, 0);
+  const io::Image exr = io::readImage(dir + "/q.exr");
+  ASSERT_EQ(exr.channelCount(), 5);
+  const int electrons = exr.channelIndex("electrons").value_or(-1);
+  ASSERT_GE(electrons, 0);
+  // The noise-free mosaic takes each pixel's channel from the 4x4 tile.
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      const int c = (y % 4 < 2 ? 0 : 1) + (x % 4 < 2 ? 0 : 1);
+      EXPECT_EQ(exr.at(x, y, electrons), im.at(x, y, c)) << x << "," << y;
+    }
+  // At the scene's line: the pattern with a .dng output, and a W filter.
+  for (const auto& [cfa, what] : std::vector<std::pair<std::string, std::string>>{
+           {"RRGG/RRGG/GGBB/GGBB", "would be misread by dcraw"},
+           {"RGBW", "W (panchromatic)"}}) {
+    const std::string scene = dir + "/q.pbrt";
+    const std::string line3 = "  \"string filename\" \"q.dng\" \"string cfa\" \"" + cfa + "\"";
+    {
+      std::ofstream f(scene);
+      f << "Camera \"perspective\"\nFilm \"raw\" \"integer xresolution\" 32\n"
+        << line3 << "\nWorldBegin\nLightSource \"infinite\"\n";
+    }
+    const auto r = lensim::test::runLensim("render -q " + scene);
+    EXPECT_EQ(r.status, 1) << r.out;
+    const std::string at =
+        fmt::format("{}:3:{}: error: \"cfa\"", scene, line3.find("\"string cfa\"") + 1);
+    EXPECT_NE(r.out.find(at), std::string::npos) << at << "\n" << r.out;
+    EXPECT_NE(r.out.find(what), std::string::npos) << r.out;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/q.dng"));
+  }
+}
+
+TEST(SensorDng, XTransColorCheckerDevelopedByDcrawAndLensim) {
+  // The rendered chart of the tests above on an X-Trans sensor: dcraw's X-Trans demosaic and
+  // lensim develop's normalised convolution.
+  const std::string film = std::string("\"string cfa\" \"") + kXTrans + "\"";
+  const std::string camera = "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1";
+  double worst = 0;
+  const double dcraw = renderedChartDeltaE("chart_xtrans", camera, 5, film, &worst, "dcraw");
+  std::printf("X-Trans ColorChecker, dcraw: mean dE2000 %.2f, max %.2f\n", dcraw, worst);
+  EXPECT_LT(dcraw, 3.0);
+  const double own = renderedChartDeltaE("chart_xtrans_lensim", camera, 5, film, &worst, "lensim");
+  std::printf("X-Trans ColorChecker, lensim develop: mean dE2000 %.2f, max %.2f\n", own, worst);
+  EXPECT_LT(own, 3.0);
+}
+
+namespace {
+
+// Paraxial y-nu trace of a pbrt lens file (radius, thickness, index, aperture; radius 0 the
+// stop), written here independently of lensim's optics: the effective focal length and the
+// f-number at infinity for a stop of diameter `stop_mm` (EFL / entrance pupil diameter).
+std::pair<double, double> paraxialEflAndFNumber(const std::string& file, double stop_mm) {
+  std::ifstream in(file);
+  double y = 1, nu = 0, n = 1, y_stop = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    double r = 0, t = 0, idx = 0, ap = 0;
+    if (!(ss >> r >> t >> idx >> ap)) continue;
+    const double n2 = idx == 0 ? 1 : idx, c = r == 0 ? 0 : 1 / r;
+    if (r == 0) y_stop = y;
+    nu -= y * c * (n2 - n);
+    y += t * nu / n2;
+    n = n2;
+  }
+  const double efl = -1 / nu;
+  return {efl, efl / (stop_mm / y_stop)};
+}
+
+}  // namespace
+
+TEST(SensorDng, ExifLensFromTheRealisticCamera) {
+  const std::string dir = tmpDir("exif");
+  const std::string lens = std::string(LENSIM_SOURCE_DIR) + "/lenses/dgauss.50mm.dat";
+  for (double stop : {12.5, 6.0}) {
+    const auto [efl, fnum] = paraxialEflAndFNumber(lens, stop);
+    const std::string scene = dir + "/e.pbrt";
+    {
+      std::ofstream f(scene);
+      f << "Camera \"realistic\" \"string lensfile\" \"" << lens
+        << "\" \"float aperturediameter\" " << stop
+        << " \"float focusdistance\" 3\nSampler \"independent\" \"integer pixelsamples\" 1\n"
+           "Film \"raw\" \"integer xresolution\" 36 \"integer yresolution\" 24\n"
+           "WorldBegin\nLightSource \"infinite\"\n";
+    }
+    for (const char* ext : {"dng", "exr"}) {
+      const std::string out = dir + "/e." + ext;
+      const auto r = lensim::test::runLensim("render -q " + scene + " -o " + out);
+      ASSERT_EQ(r.status, 0) << r.out;
+      if (std::string(ext) == "exr") {
+        const io::Image im = io::readImage(out);
+        EXPECT_NEAR(std::stod(im.metadata.at(kRawFocalKey)), efl, 1e-6 * efl);
+        EXPECT_NEAR(std::stod(im.metadata.at(kRawFNumberKey)), fnum, 1e-6 * fnum);
+        continue;
+      }
+      int st = -1;
+      const std::string info = run("raw-identify -v " + out, &st);
+      ASSERT_EQ(st, 0) << info;
+      EXPECT_NE(info.find(fmt::format("Aperture: f/{:.1f}\n", fnum)), std::string::npos)
+          << "f/" << fnum << "\n" << info;
+      EXPECT_NE(info.find(fmt::format("Focal length: {:.1f} mm\n", efl)), std::string::npos)
+          << efl << "\n" << info;
+      EXPECT_NE(info.find("\tLens: D-GAUSS F/2 22deg HFOV\n"), std::string::npos) << info;
+    }
+  }
+  // A pinhole camera has no lens: no focal length, f-number or lens name.
+  const std::string scene = dir + "/p.pbrt";
+  {
+    std::ofstream f(scene);
+    f << "Camera \"perspective\"\nSampler \"independent\" \"integer pixelsamples\" 1\n"
+         "Film \"raw\" \"integer xresolution\" 36 \"integer yresolution\" 24 \"float fnumber\" 2\n"
+         "WorldBegin\nLightSource \"infinite\"\n";
+  }
+  const auto r = lensim::test::runLensim("render -q " + scene + " -o " + dir + "/p.dng");
+  ASSERT_EQ(r.status, 0) << r.out;
+  int st = -1;
+  const std::string info = run("raw-identify -v " + dir + "/p.dng", &st);
+  ASSERT_EQ(st, 0) << info;
+  EXPECT_NE(info.find("Aperture: f/0.0\n"), std::string::npos) << info;
+  EXPECT_NE(info.find("Focal length: 0.0 mm\n"), std::string::npos) << info;
+  const size_t lens_at = info.find("\tLens: ");
+  ASSERT_NE(lens_at, std::string::npos) << info;
+  EXPECT_EQ(info.substr(lens_at, 8), "\tLens: \n") << info;
 }

@@ -29,9 +29,25 @@ std::string CfaPattern::text() const {
 }
 
 bool CfaPattern::dngReadable() const {
-  if (mono) return true;
-  if (width == 6 && height == 6) return true;
-  return (width == 1 || width == 2) && (height == 1 || height == 2 || height == 4 || height == 8);
+  if (mono || (width == 6 && height == 6)) return true;
+  if (!((width == 1 || width == 2) && (height == 1 || height == 2 || height == 4 || height == 8)))
+    return false;
+  // dcraw (dcraw.c 9.28, identify() and main()) holds the tile as `filters`, 2 bits for each
+  // of 8 rows x 2 columns, relabels some greens as a fourth colour (the bit operation below),
+  // then moves those back to green only at every other row (from row FC(1,0) >> 1) and every
+  // other column (from FC(row,1) & 1), zeroing what it visits: a relabelled green it does not
+  // visit, or a green it does, decodes as 0.
+  uint32_t f = 0;
+  for (int i = 15; i >= 0; --i) f = f << 2 | uint32_t(channel(i & 1, i >> 1));
+  f |= ((f >> 2 & 0x22222222u) | (f << 2 & 0x88888888u)) & f << 1;
+  auto fc = [&](int r, int c) { return int(f >> ((((r << 1) & 14) + (c & 1)) << 1) & 3); };
+  const int r0 = fc(1, 0) >> 1;
+  for (int r = 0; r < 8; ++r)
+    for (int c = 0; c < 2; ++c) {
+      const bool copied = (r - r0) % 2 == 0 && c == (fc(r, 1) & 1);
+      if ((fc(r, c) == 3 && !copied) || (fc(r, c) == 1 && copied)) return false;
+    }
+  return true;
 }
 
 CfaPattern parseCfa(const std::string& text, const FileLoc& loc) {
@@ -91,9 +107,10 @@ CfaPattern parseCfa(const std::string& text, const FileLoc& loc) {
 void checkDngCfa(const CfaPattern& cfa, const FileLoc& loc) {
   if (!cfa.dngReadable())
     throw Error(loc, fmt::format("\"cfa\": a DNG of the {}x{} pattern \"{}\" would be misread by "
-                                 "dcraw and LibRaw, which hold a CFA as rows of two columns (or "
-                                 "a 6x6 X-Trans); expected a tile 1 or 2 pixels wide and 1, 2, 4 "
-                                 "or 8 high, or 6x6, or an .exr output",
+                                 "dcraw, which holds a CFA as 8 rows of 2 columns with its "
+                                 "second greens placed as in a Bayer pattern, or as a 6x6 "
+                                 "X-Trans; expected such a tile (1 or 2 pixels wide, 1, 2, 4 or 8 "
+                                 "high), a 6x6 one, or an .exr output",
                                  cfa.width, cfa.height, cfa.text()));
 }
 
