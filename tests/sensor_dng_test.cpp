@@ -18,6 +18,7 @@
 #include "cli_run.h"
 #include "lensim/io/dng.h"
 #include "lensim/io/image.h"
+#include "lensim/render/sensor/develop.h"
 #include "lensim/render/sensor/raw_output.h"
 #include "lensim/render/sensor/sensor_color.h"
 #include "lensim/render/sensor/sensor_model.h"
@@ -862,4 +863,45 @@ TEST(SensorDng, ExifLensFromTheRealisticCamera) {
   const size_t lens_at = info.find("\tLens: ");
   ASSERT_NE(lens_at, std::string::npos) << info;
   EXPECT_EQ(info.substr(lens_at, 8), "\tLens: \n") << info;
+}
+
+TEST(SensorDng, RawPreviewIsNeutralForWhiteAndMatchesLensimDevelop) {
+  // serve's preview of a raw film: a white surface under CIE D 6500 K (the default white
+  // balance) is neutral, and a flat field equals lensim develop's picture of its DNG.
+  SensorConfig cfg;
+  cfg.noise = false;
+  cfg.read_noise_e = 0;
+  cfg.dark_current_e_s = 0;
+  const SensorModel model(cfg);
+  const std::shared_ptr<const Spectrum> d65 = daylightIlluminant(6500);
+  const Vec3 white = cameraResponse(model, *d65);
+  const double k = 20000 / std::max({white.x, white.y, white.z});  // 20000 e- at most
+  io::Image im(24, 24, {"R", "G", "B"});
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      im.at(x, y, 0) = float(white.x * k);
+      im.at(x, y, 1) = float(white.y * k);
+      im.at(x, y, 2) = float(white.z * k);
+    }
+  im.metadata[kRawSensorKey] = cfg.toText();
+  const io::Image p = previewRawImage(im);
+  ASSERT_EQ(p.channelCount(), 3);
+  EXPECT_NEAR(p.at(5, 5, 0) / p.at(5, 5, 1), 1.0, 0.01);
+  EXPECT_NEAR(p.at(5, 5, 2) / p.at(5, 5, 1), 1.0, 0.01);
+  // Another colour (more red, less blue), against the developed DNG's centre.
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      im.at(x, y, 0) *= 1.5f;
+      im.at(x, y, 2) *= 0.6f;
+    }
+  const io::Image q = previewRawImage(im);
+  const std::string path = tmpDir("preview") + "/flat.dng";
+  writeRawImage(path, im, 0, 0);
+  const io::Image d = developRaw(io::readDng(path));
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(q.at(12, 12, c), d.at(12, 12, c), 2e-3 * d.at(12, 12, 1)) << c;
+  // Not a raw image: returned as it is.
+  io::Image plain(2, 2, {"R", "G", "B"});
+  plain.at(1, 1, 2) = 0.25f;
+  EXPECT_EQ(previewRawImage(plain).at(1, 1, 2), 0.25f);
 }

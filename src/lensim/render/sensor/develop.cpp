@@ -31,6 +31,19 @@ constexpr double kRBAtBR[5][5] = {{0, 0, -1.5, 0, 0}, {0, 2, 0, 2, 0}, {-1.5, 0,
 
 }  // namespace
 
+Mat3d srgbFromCamera(const std::array<double, 9>& color_matrix) {
+  // dcraw's cam_xyz_coeff: camera from sRGB, rows normalised to sum 1, inverted.
+  const Mat3d xyz_from_srgb = {0.4124564, 0.3575761, 0.1804375, 0.2126729, 0.7151522,
+                               0.0721750, 0.0193339, 0.1191920, 0.9503041};
+  Mat3d cam_rgb = mulMat3(color_matrix, xyz_from_srgb);
+  for (int r = 0; r < 3; ++r) {
+    double s = 0;
+    for (int c = 0; c < 3; ++c) s += cam_rgb[size_t(3 * r + c)];
+    for (int c = 0; c < 3; ++c) cam_rgb[size_t(3 * r + c)] /= s != 0 ? s : 1;
+  }
+  return invertMat3(cam_rgb);
+}
+
 io::Image developRaw(const io::DngImage& raw, double exposure_ev) {
   const int w = raw.width, h = raw.height;
   const double black = raw.black_level, range = double(raw.white_level) - black;
@@ -59,18 +72,8 @@ io::Image developRaw(const io::DngImage& raw, double exposure_ev) {
           out.at(x, y, c) = float(std::max(0.0, m[size_t(y) * size_t(w) + size_t(x)] * gain));
     return out;
   }
-  // 4: camera to sRGB (dcraw's cam_xyz_coeff).
-  const Mat3d xyz_from_srgb = {0.4124564, 0.3575761, 0.1804375, 0.2126729, 0.7151522,
-                               0.0721750, 0.0193339, 0.1191920, 0.9503041};
-  Mat3d cm;
-  std::copy(raw.color_matrix2.begin(), raw.color_matrix2.end(), cm.begin());
-  Mat3d cam_rgb = mulMat3(cm, xyz_from_srgb);
-  for (int r = 0; r < 3; ++r) {
-    double s = 0;
-    for (int c = 0; c < 3; ++c) s += cam_rgb[size_t(3 * r + c)];
-    for (int c = 0; c < 3; ++c) cam_rgb[size_t(3 * r + c)] /= s != 0 ? s : 1;
-  }
-  const Mat3d rgb_cam = invertMat3(cam_rgb);
+  // 4: camera to sRGB.
+  const Mat3d rgb_cam = srgbFromCamera(raw.color_matrix2);
   // 3: demosaic.
   auto store = [&](int x, int y, const double (&v)[3]) {
     const Vec3 rgb = mulMat3(rgb_cam, Vec3{v[0], v[1], v[2]});

@@ -15,12 +15,19 @@
 // The sRGB transfer curve (the tone curve) is applied by the image writer for 8-bit outputs.
 #pragma once
 
+#include <array>
+
 #include "lensim/io/dng.h"
 #include "lensim/io/image.h"
+#include "lensim/render/film/pixel_sensor.h"
 
 namespace lensim::render {
 
 /// The developed image (channels R, G, B, linear sRGB).
 io::Image developRaw(const io::DngImage& raw, double exposure_ev = 0);
+
+/// Step 4's matrix: linear sRGB from white-balanced camera values, for a DNG ColorMatrix (XYZ to
+/// camera, row-major).
+Mat3d srgbFromCamera(const std::array<double, 9>& color_matrix);
 
 }  // namespace lensim::render

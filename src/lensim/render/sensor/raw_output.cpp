@@ -10,6 +10,7 @@
 #include "lensim/camera/realistic.h"
 #include "lensim/io/dng.h"
 #include "lensim/render/film/pixel_sensor.h"
+#include "lensim/render/sensor/develop.h"
 #include "lensim/render/sensor/sensor_color.h"
 #include "lensim/render/sensor/sensor_model.h"
 #include "lensim/render/spectra/spectrum.h"
@@ -85,6 +86,41 @@ std::map<std::string, std::string> rawLensMetadata(const camera::Camera& camera)
 }
 
 bool isRawImage(const io::Image& image) { return image.metadata.count(kRawSensorKey) > 0; }
+
+io::Image previewRawImage(const io::Image& image) {
+  auto it = image.metadata.find(kRawSensorKey);
+  if (it == image.metadata.end() || image.channelCount() < 3) return image;
+  auto qe = image.metadata.find(kRawQeKey);
+  const SensorModel model(SensorConfig::fromText(it->second), FileLoc{},
+                          qe == image.metadata.end() ? nullptr : &qe->second);
+  const SensorConfig& cfg = model.config();
+  // Electrons to the linearised raw value (DN above black over the DN range).
+  const double scale = cfg.gainDnPerE() / double(cfg.whiteLevel() - cfg.black_level_dn);
+  Mat3d m = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::array<double, 3> neutral{1, 1, 1};
+  if (!model.cfa().mono) {
+    const DngColor col = fitDngColor(model, metaNumber(image, kRawWhiteBalanceKey));
+    m = srgbFromCamera(col.color_matrix2);
+    neutral = {col.as_shot_neutral.x, col.as_shot_neutral.y, col.as_shot_neutral.z};
+  }
+  io::Image out(image.width, image.height, {"R", "G", "B"});
+  out.metadata = image.metadata;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      Vec3 v;
+      if (model.cfa().mono) {
+        v = Vec3{1, 1, 1} * (image.at(x, y, 0) * scale);
+      } else {
+        v = mulMat3(m, Vec3{image.at(x, y, 0) * scale / neutral[0],
+                            image.at(x, y, 1) * scale / neutral[1],
+                            image.at(x, y, 2) * scale / neutral[2]});
+      }
+      out.at(x, y, 0) = float(std::max(0.0, v.x));
+      out.at(x, y, 1) = float(std::max(0.0, v.y));
+      out.at(x, y, 2) = float(std::max(0.0, v.z));
+    }
+  return out;
+}
 
 bool isDngPath(const std::string& path) { return lowerExtension(path) == "dng"; }
 

@@ -45,6 +45,12 @@ std::map<std::string, std::string> rawLensMetadata(const camera::Camera& camera)
 
 /// Whether the image is a raw film's (carries kRawSensorKey).
 bool isRawImage(const io::Image& image);
+/// A raw film's image of expected electrons as linear sRGB, noise free and without the mosaic:
+/// lensim develop's linearisation, white balance (AsShotNeutral) and colour (ColorMatrix2) on
+/// each pixel's three channels (serve's preview of a raw film). Other images are returned as
+/// they are.
+io::Image previewRawImage(const io::Image& image);
+
 /// Whether `path` names a DNG file (by extension, case-insensitive).
 bool isDngPath(const std::string& path);
 
