@@ -497,6 +497,16 @@ double renderedChartDeltaE(const std::string& name, const std::string& camera, d
     developed = dir + "/developed.exr";
     r = lensim::test::runLensim("develop -q " + dir + "/chart.dng -o " + developed);
     EXPECT_EQ(r.status, 0) << r.out;
+  } else if (developer == "darktable") {
+    // darktable-cli with no workflow defaults (no filmic or base curve: its raw steps, the DNG's
+    // ColorMatrix and as-shot white balance, sRGB output), a fresh configuration, no library.
+    developed = dir + "/darktable.png";
+    std::filesystem::remove(developed);
+    const std::string log =
+        run("timeout 120 darktable-cli " + dir + "/chart.dng " + developed + " --core --configdir " +
+                dir + "/dtconfig --library :memory: --conf plugins/darkroom/workflow=none",
+            &st);
+    EXPECT_EQ(st, 0) << log;
   } else if (developer == "dcraw") {
     // dcraw's own X-Trans interpolation (LibRaw 0.20's fails on X-Trans DNGs at -q 3).
     developed = dir + "/chart.tiff";
@@ -904,4 +914,16 @@ TEST(SensorDng, RawPreviewIsNeutralForWhiteAndMatchesLensimDevelop) {
   io::Image plain(2, 2, {"R", "G", "B"});
   plain.at(1, 1, 2) = 0.25f;
   EXPECT_EQ(previewRawImage(plain).at(1, 1, 2), 0.25f);
+}
+
+TEST(SensorDng, RenderedColorCheckerDevelopedByDarktable) {
+  if (std::system("command -v darktable-cli >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "darktable-cli is not installed (scripts/install-deps installs it)";
+  double worst = 0;
+  const double mean = renderedChartDeltaE(
+      "chart_darktable", "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1",
+      5, "", &worst, "darktable");
+  std::printf("rendered ColorChecker (perspective) through darktable-cli: mean dE2000 %.2f, max %.2f\n",
+              mean, worst);
+  EXPECT_LT(mean, 3.0);
 }
