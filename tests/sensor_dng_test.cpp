@@ -761,6 +761,23 @@ TEST(SensorDng, QuadBayerWritesExrButRefusesDng) {
       const int c = (y % 4 < 2 ? 0 : 1) + (x % 4 < 2 ? 0 : 1);
       EXPECT_EQ(exr.at(x, y, electrons), im.at(x, y, c)) << x << "," << y;
     }
+  // A scene writing an .exr renders; asked for a .dng on the command line, it is refused before
+  // rendering.
+  {
+    std::ofstream f(dir + "/e.pbrt");
+    f << "Camera \"perspective\"\nSampler \"independent\" \"integer pixelsamples\" 1\n"
+         "Film \"raw\" \"integer xresolution\" 32 \"integer yresolution\" 24 \"string cfa\" "
+         "\"RRGG/RRGG/GGBB/GGBB\"\nWorldBegin\nLightSource \"infinite\"\n";
+  }
+  auto ok = lensim::test::runLensim("render -q " + dir + "/e.pbrt -o " + dir + "/e.exr");
+  EXPECT_EQ(ok.status, 0) << ok.out;
+  ok = lensim::test::runLensim("render " + dir + "/e.pbrt -o " + dir + "/e.dng");
+  EXPECT_EQ(ok.status, 1) << ok.out;
+  EXPECT_NE(ok.out.find(dir + "/e.dng: error: \"cfa\": a DNG of the 4x4 pattern"),
+            std::string::npos)
+      << ok.out;
+  EXPECT_EQ(ok.out.find("samples"), std::string::npos) << "rendered first:\n" << ok.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/e.dng"));
   // At the scene's line: the pattern with a .dng output, and a W filter.
   for (const auto& [cfa, what] : std::vector<std::pair<std::string, std::string>>{
            {"RRGG/RRGG/GGBB/GGBB", "would be misread by dcraw"},
