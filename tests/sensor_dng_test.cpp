@@ -3,6 +3,7 @@
 // develops a ColorChecker (the shared Ohta 1997 reflectances, independent of the Pascale data
 // the colour matrices are fitted to) to within a mean CIEDE2000 of 3; darktable-cli opens the
 // file; a split render merged by lensim merge has the very same noisy raw values.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,7 +16,9 @@
 #include <vector>
 
 #include "cli_run.h"
+#include "lensim/io/dng.h"
 #include "lensim/io/image.h"
+#include "lensim/render/sensor/develop.h"
 #include "lensim/render/sensor/raw_output.h"
 #include "lensim/render/sensor/sensor_color.h"
 #include "lensim/render/sensor/sensor_model.h"
@@ -98,7 +101,7 @@ TEST(SensorDng, DcrawAndLibRawDecodeTheMosaicBitForBit) {
       // LibRaw: the CFA pattern of the written window, the black level and the colour matrix.
       const std::string info = run("raw-identify -v " + path, &st);
       ASSERT_EQ(st, 0) << info;
-      const CfaLayout layout = parseCfa(cfa);
+      const CfaPattern layout = parseCfa(cfa);
       std::string pattern;
       for (int k = 0; k < 4; ++k) pattern += "RGB"[cfaChannel(layout, x0 + (k & 1), y0 + (k >> 1))];
       EXPECT_NE(info.find("Filter pattern: " + pattern), std::string::npos)
@@ -451,7 +454,7 @@ namespace {
 // region of the lower right quarter below 5 %), which gives the image scale.
 double renderedChartDeltaE(const std::string& name, const std::string& camera, double distance,
                            const std::string& film_extra, double* worst,
-                           bool lensim_develop = false) {
+                           const std::string& developer = "dcraw_emu") {
   std::ifstream csv(std::string(LENSIM_SHARED_DIR) +
                     "/data/colorchecker/colorchecker-ohta1997.csv");
   std::vector<std::string> spectra(24);
@@ -490,10 +493,25 @@ double renderedChartDeltaE(const std::string& name, const std::string& camera, d
   EXPECT_EQ(r.status, 0) << r.out;
   int st = -1;
   std::string developed = dir + "/chart.dng.tiff";
-  if (lensim_develop) {
+  if (developer == "lensim") {
     developed = dir + "/developed.exr";
     r = lensim::test::runLensim("develop -q " + dir + "/chart.dng -o " + developed);
     EXPECT_EQ(r.status, 0) << r.out;
+  } else if (developer == "darktable") {
+    // darktable-cli with no workflow defaults (no filmic or base curve: its raw steps, the DNG's
+    // ColorMatrix and as-shot white balance, sRGB output), a fresh configuration, no library.
+    developed = dir + "/darktable.png";
+    std::filesystem::remove(developed);
+    const std::string log =
+        run("timeout 120 darktable-cli " + dir + "/chart.dng " + developed + " --core --configdir " +
+                dir + "/dtconfig --library :memory: --conf plugins/darkroom/workflow=none",
+            &st);
+    EXPECT_EQ(st, 0) << log;
+  } else if (developer == "dcraw") {
+    // dcraw's own X-Trans interpolation (LibRaw 0.20's fails on X-Trans DNGs at -q 3).
+    developed = dir + "/chart.tiff";
+    const std::string log = run("dcraw -w -o 1 -4 -T " + dir + "/chart.dng", &st);
+    EXPECT_EQ(st, 0) << log;
   } else {
     const std::string log = run("dcraw_emu -w -o 1 -4 -q 3 -T " + dir + "/chart.dng", &st);
     EXPECT_EQ(st, 0) << log;
@@ -578,7 +596,7 @@ TEST(SensorDng, ColorCheckerThroughDoubleGaussDevelopedByLensim) {
       "Camera \"realistic\" \"string lensfile\" \"" + std::string(LENSIM_SOURCE_DIR) +
           "/lenses/dgauss.50mm.dat\" \"float aperturediameter\" 12.5 \"float focusdistance\" 6 "
           "\"float shutterclose\" 1",
-      6, "\"float diagonal\" 15", &worst, true);
+      6, "\"float diagonal\" 15", &worst, "lensim");
   std::printf("ColorChecker through the double Gauss, lensim develop: mean dE2000 %.2f, max %.2f\n",
               mean, worst);
   EXPECT_LT(mean, 3.0);
@@ -590,4 +608,339 @@ TEST(SensorDng, ColorCheckerThroughDoubleGaussDevelopedByLensim) {
             std::string::npos)
       << r.out;
   EXPECT_FALSE(std::filesystem::exists(tmpDir("dev_bad") + "/x.png"));
+}
+
+// ---- Other CFA patterns (docs/sensor.md, "Colour filter arrays") ----
+
+namespace {
+
+// The filter letter of pixel (x, y) of a pattern written as rows joined by '/' (the test's own
+// reading of the pattern, not parseCfa's).
+char patternLetter(const std::string& rows_text, int x, int y) {
+  std::vector<std::string> rows;
+  std::stringstream ss(rows_text);
+  for (std::string r; std::getline(ss, r, '/');) rows.push_back(r);
+  const std::string& row = rows[size_t(y) % rows.size()];
+  return row[size_t(x) % row.size()];
+}
+
+// Fujifilm's X-Trans 6x6 tile (as dcraw's built-in xtrans table).
+const char* const kXTrans = "GGRGGB/GGBGGR/BRGRBG/GGBGGR/GGRGGB/RBGBRG";
+
+}  // namespace
+
+TEST(SensorDng, OtherCfaPatternsDecodeBitForBitAndLibRawReadsThem) {
+  const std::string dir = tmpDir("patterns");
+  for (const char* cfa : {kXTrans, "RG/GB/GR/BG", "R/G/B/G", "RG/GB/RG/GB/GR/BG/GR/BG", "RB/GG"})
+    for (const auto& [x0, y0] : std::vector<std::pair<int, int>>{{0, 0}, {1, 0}, {3, 5}}) {
+      SensorConfig cfg;
+      cfg.cfa = cfa;
+      cfg.seed = 9;
+      const io::Image im = electronImage(42, 30, cfg);
+      const std::string path = dir + "/p.dng";
+      writeRawImage(path, im, x0, y0);
+      int st = -1, w = 0, h = 0;
+      const std::string pgm = run("dcraw -D -4 -c " + path, &st);
+      ASSERT_EQ(st, 0) << pgm;
+      const std::vector<uint16_t> got = parsePgm(pgm, w, h);
+      ASSERT_EQ(w, 42);
+      ASSERT_EQ(h, 30);
+      const std::vector<uint16_t> want = expectedDn(im, cfg, x0, y0);
+      EXPECT_EQ(got, want) << cfa << " at " << x0 << "," << y0;
+      // Each DN is the electrons of the channel the pattern puts there (noise off: exact).
+      cfg.noise = false;
+      cfg.read_noise_e = 0;
+      cfg.dark_current_e_s = 0;
+      io::Image quiet = im;
+      quiet.metadata[kRawSensorKey] = cfg.toText();
+      writeRawImage(path, quiet, x0, y0);
+      const std::vector<uint16_t> q = parsePgm(run("dcraw -D -4 -c " + path, &st), w, h);
+      ASSERT_EQ(q.size(), size_t(42 * 30));
+      for (int y = 0; y < 30; y += 7)
+        for (int x = 0; x < 42; x += 5) {
+          const int c = int(std::string("RGB").find(patternLetter(cfa, x0 + x, y0 + y)));
+          const double e = im.at(x, y, c);
+          EXPECT_EQ(q[size_t(y * 42 + x)], uint16_t(std::lround(e * cfg.gainDnPerE()) + 512))
+              << cfa << " pixel " << x << "," << y;
+        }
+      // LibRaw's filter pattern: the colours of rows 0-7, columns 0-1 of the written image.
+      const std::string info = run("raw-identify -v " + path, &st);
+      ASSERT_EQ(st, 0) << info;
+      std::string pattern;
+      for (int i = 0; i < 16; ++i) pattern += patternLetter(cfa, x0 + (i & 1), y0 + (i >> 1));
+      EXPECT_NE(info.find("Filter pattern: " + pattern + "\n"), std::string::npos)
+          << cfa << " " << x0 << "," << y0 << ": expected " << pattern << "\n" << info;
+      EXPECT_NE(info.find("Raw colors: 3"), std::string::npos) << info;
+    }
+}
+
+TEST(SensorDng, CfaPatternsRefusedWithTheReason) {
+  auto message = [](const std::string& text) {
+    try {
+      parseCfa(text, FileLoc{"s.pbrt", 3, 7});
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("RGBW").find("s.pbrt:3:7: error: \"cfa\": \"RGBW\" has a W (panchromatic)"),
+            std::string::npos)
+      << message("RGBW");
+  EXPECT_NE(message("RGGX").find("has the letter 'X'"), std::string::npos);
+  EXPECT_NE(message("RGG").find("has 3 letters, not a square tile"), std::string::npos);
+  EXPECT_NE(message("RG/G").find("has rows of 2 and 1 letters"), std::string::npos);
+  EXPECT_NE(message("RRGG").find("has no B filter"), std::string::npos);
+  EXPECT_NE(message("RGBRGBRGB/R").find("is 9x2"), std::string::npos);
+  EXPECT_NE(message("RG//GB").find("has rows of 2 and 0 letters"), std::string::npos);
+  // Parsed: the letters row by row; "mono".
+  const CfaPattern q = parseCfa("RRGG/RRGG/GGBB/GGBB");
+  EXPECT_EQ(q.width, 4);
+  EXPECT_EQ(q.height, 4);
+  EXPECT_EQ(q.channel(2, 0), 1);
+  EXPECT_EQ(q.channel(6, 3), 2);
+  EXPECT_EQ(q.channel(5, 3), 1);
+  EXPECT_EQ(q.channel(-1, -1), 2);
+  EXPECT_EQ(q.text(), "RRGG/RRGG/GGBB/GGBB");
+  EXPECT_EQ(parseCfa("RGGB"), parseCfa("RG/GB"));
+  EXPECT_TRUE(parseCfa("mono").mono);
+}
+
+TEST(SensorDng, PatternsRefusedForDngAreThoseDcrawMisreads) {
+  // Written anyway (io::writeDng has no such check), dcraw -D decodes some pixels as 0.
+  const std::string dir = tmpDir("misread");
+  for (const char* cfa : {"GR/BG/GB/RG/RG/GB/BG/GR", "G/R/G/B", "RG/GB/BG/GR"}) {
+    const CfaPattern p = parseCfa(cfa);
+    EXPECT_FALSE(p.dngReadable()) << cfa;
+    io::DngImage d;
+    d.width = 32;
+    d.height = 24;
+    d.data.assign(32 * 24, 1000);
+    d.cfa_width = p.width == 1 ? 2 : p.width;
+    d.cfa_height = p.height;
+    d.cfa.clear();
+    for (int y = 0; y < d.cfa_height; ++y)
+      for (int x = 0; x < d.cfa_width; ++x) d.cfa.push_back(uint8_t(p.channel(x, y)));
+    d.color_matrix1 = d.color_matrix2 = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const std::string path = dir + "/x.dng";
+    io::writeDng(path, d);
+    int st = -1, w = 0, h = 0;
+    const std::vector<uint16_t> got = parsePgm(run("dcraw -D -4 -c " + path, &st), w, h);
+    ASSERT_EQ(got.size(), size_t(32 * 24)) << cfa;
+    EXPECT_NE(std::count(got.begin(), got.end(), uint16_t(0)), 0) << cfa;
+    // Refused by lensim's writer, naming the pattern.
+    SensorConfig cfg;
+    cfg.cfa = cfa;
+    try {
+      writeRawImage(path, electronImage(32, 24, cfg), 0, 0);
+      ADD_FAILURE() << cfa << " written";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("\"") + cfa + "\" would be misread"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  for (const char* cfa : {"RG/GB/GR/BG", "R/G/B/G", "RB/GG", "RGGB", "GBRG"})
+    EXPECT_TRUE(parseCfa(cfa).dngReadable()) << cfa;
+}
+
+TEST(SensorDng, QuadBayerWritesExrButRefusesDng) {
+  const std::string dir = tmpDir("quad");
+  SensorConfig cfg;
+  cfg.cfa = "RRGG/RRGG/GGBB/GGBB";
+  const io::Image im = electronImage(24, 24, cfg);
+  EXPECT_THROW(writeRawImage(dir + "/q.dng", im, 0, 0), Error);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/q.dng"));
+  writeRawImage(dir + "/q.exr", im, 0, 0);
+  const io::Image exr = io::readImage(dir + "/q.exr");
+  ASSERT_EQ(exr.channelCount(), 5);
+  const int electrons = exr.channelIndex("electrons").value_or(-1);
+  ASSERT_GE(electrons, 0);
+  // The noise-free mosaic takes each pixel's channel from the 4x4 tile.
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      const int c = (y % 4 < 2 ? 0 : 1) + (x % 4 < 2 ? 0 : 1);
+      EXPECT_EQ(exr.at(x, y, electrons), im.at(x, y, c)) << x << "," << y;
+    }
+  // A scene writing an .exr renders; asked for a .dng on the command line, it is refused before
+  // rendering.
+  {
+    std::ofstream f(dir + "/e.pbrt");
+    f << "Camera \"perspective\"\nSampler \"independent\" \"integer pixelsamples\" 1\n"
+         "Film \"raw\" \"integer xresolution\" 32 \"integer yresolution\" 24 \"string cfa\" "
+         "\"RRGG/RRGG/GGBB/GGBB\"\nWorldBegin\nLightSource \"infinite\"\n";
+  }
+  auto ok = lensim::test::runLensim("render -q " + dir + "/e.pbrt -o " + dir + "/e.exr");
+  EXPECT_EQ(ok.status, 0) << ok.out;
+  ok = lensim::test::runLensim("render " + dir + "/e.pbrt -o " + dir + "/e.dng");
+  EXPECT_EQ(ok.status, 1) << ok.out;
+  EXPECT_NE(ok.out.find(dir + "/e.dng: error: \"cfa\": a DNG of the 4x4 pattern"),
+            std::string::npos)
+      << ok.out;
+  EXPECT_EQ(ok.out.find("samples"), std::string::npos) << "rendered first:\n" << ok.out;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/e.dng"));
+  // At the scene's line: the pattern with a .dng output, and a W filter.
+  for (const auto& [cfa, what] : std::vector<std::pair<std::string, std::string>>{
+           {"RRGG/RRGG/GGBB/GGBB", "would be misread by dcraw"},
+           {"RGBW", "W (panchromatic)"}}) {
+    const std::string scene = dir + "/q.pbrt";
+    const std::string line3 = "  \"string filename\" \"q.dng\" \"string cfa\" \"" + cfa + "\"";
+    {
+      std::ofstream f(scene);
+      f << "Camera \"perspective\"\nFilm \"raw\" \"integer xresolution\" 32\n"
+        << line3 << "\nWorldBegin\nLightSource \"infinite\"\n";
+    }
+    const auto r = lensim::test::runLensim("render -q " + scene);
+    EXPECT_EQ(r.status, 1) << r.out;
+    const std::string at =
+        fmt::format("{}:3:{}: error: \"cfa\"", scene, line3.find("\"string cfa\"") + 1);
+    EXPECT_NE(r.out.find(at), std::string::npos) << at << "\n" << r.out;
+    EXPECT_NE(r.out.find(what), std::string::npos) << r.out;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/q.dng"));
+  }
+}
+
+TEST(SensorDng, XTransColorCheckerDevelopedByDcrawAndLensim) {
+  // The rendered chart of the tests above on an X-Trans sensor: dcraw's X-Trans demosaic and
+  // lensim develop's normalised convolution.
+  const std::string film = std::string("\"string cfa\" \"") + kXTrans + "\"";
+  const std::string camera = "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1";
+  double worst = 0;
+  const double dcraw = renderedChartDeltaE("chart_xtrans", camera, 5, film, &worst, "dcraw");
+  std::printf("X-Trans ColorChecker, dcraw: mean dE2000 %.2f, max %.2f\n", dcraw, worst);
+  EXPECT_LT(dcraw, 3.0);
+  const double own = renderedChartDeltaE("chart_xtrans_lensim", camera, 5, film, &worst, "lensim");
+  std::printf("X-Trans ColorChecker, lensim develop: mean dE2000 %.2f, max %.2f\n", own, worst);
+  EXPECT_LT(own, 3.0);
+}
+
+namespace {
+
+// Paraxial y-nu trace of a pbrt lens file (radius, thickness, index, aperture; radius 0 the
+// stop), written here independently of lensim's optics: the effective focal length and the
+// f-number at infinity for a stop of diameter `stop_mm` (EFL / entrance pupil diameter).
+std::pair<double, double> paraxialEflAndFNumber(const std::string& file, double stop_mm) {
+  std::ifstream in(file);
+  double y = 1, nu = 0, n = 1, y_stop = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ss(line);
+    double r = 0, t = 0, idx = 0, ap = 0;
+    if (!(ss >> r >> t >> idx >> ap)) continue;
+    const double n2 = idx == 0 ? 1 : idx, c = r == 0 ? 0 : 1 / r;
+    if (r == 0) y_stop = y;
+    nu -= y * c * (n2 - n);
+    y += t * nu / n2;
+    n = n2;
+  }
+  const double efl = -1 / nu;
+  return {efl, efl / (stop_mm / y_stop)};
+}
+
+}  // namespace
+
+TEST(SensorDng, ExifLensFromTheRealisticCamera) {
+  const std::string dir = tmpDir("exif");
+  const std::string lens = std::string(LENSIM_SOURCE_DIR) + "/lenses/dgauss.50mm.dat";
+  for (double stop : {12.5, 6.0}) {
+    const auto [efl, fnum] = paraxialEflAndFNumber(lens, stop);
+    const std::string scene = dir + "/e.pbrt";
+    {
+      std::ofstream f(scene);
+      f << "Camera \"realistic\" \"string lensfile\" \"" << lens
+        << "\" \"float aperturediameter\" " << stop
+        << " \"float focusdistance\" 3\nSampler \"independent\" \"integer pixelsamples\" 1\n"
+           "Film \"raw\" \"integer xresolution\" 36 \"integer yresolution\" 24\n"
+           "WorldBegin\nLightSource \"infinite\"\n";
+    }
+    for (const char* ext : {"dng", "exr"}) {
+      const std::string out = dir + "/e." + ext;
+      const auto r = lensim::test::runLensim("render -q " + scene + " -o " + out);
+      ASSERT_EQ(r.status, 0) << r.out;
+      if (std::string(ext) == "exr") {
+        const io::Image im = io::readImage(out);
+        EXPECT_NEAR(std::stod(im.metadata.at(kRawFocalKey)), efl, 1e-6 * efl);
+        EXPECT_NEAR(std::stod(im.metadata.at(kRawFNumberKey)), fnum, 1e-6 * fnum);
+        continue;
+      }
+      int st = -1;
+      const std::string info = run("raw-identify -v " + out, &st);
+      ASSERT_EQ(st, 0) << info;
+      EXPECT_NE(info.find(fmt::format("Aperture: f/{:.1f}\n", fnum)), std::string::npos)
+          << "f/" << fnum << "\n" << info;
+      EXPECT_NE(info.find(fmt::format("Focal length: {:.1f} mm\n", efl)), std::string::npos)
+          << efl << "\n" << info;
+      EXPECT_NE(info.find("\tLens: D-GAUSS F/2 22deg HFOV\n"), std::string::npos) << info;
+    }
+  }
+  // A pinhole camera has no lens: no focal length, f-number or lens name.
+  const std::string scene = dir + "/p.pbrt";
+  {
+    std::ofstream f(scene);
+    f << "Camera \"perspective\"\nSampler \"independent\" \"integer pixelsamples\" 1\n"
+         "Film \"raw\" \"integer xresolution\" 36 \"integer yresolution\" 24 \"float fnumber\" 2\n"
+         "WorldBegin\nLightSource \"infinite\"\n";
+  }
+  const auto r = lensim::test::runLensim("render -q " + scene + " -o " + dir + "/p.dng");
+  ASSERT_EQ(r.status, 0) << r.out;
+  int st = -1;
+  const std::string info = run("raw-identify -v " + dir + "/p.dng", &st);
+  ASSERT_EQ(st, 0) << info;
+  EXPECT_NE(info.find("Aperture: f/0.0\n"), std::string::npos) << info;
+  EXPECT_NE(info.find("Focal length: 0.0 mm\n"), std::string::npos) << info;
+  const size_t lens_at = info.find("\tLens: ");
+  ASSERT_NE(lens_at, std::string::npos) << info;
+  EXPECT_EQ(info.substr(lens_at, 8), "\tLens: \n") << info;
+}
+
+TEST(SensorDng, RawPreviewIsNeutralForWhiteAndMatchesLensimDevelop) {
+  // serve's preview of a raw film: a white surface under CIE D 6500 K (the default white
+  // balance) is neutral, and a flat field equals lensim develop's picture of its DNG.
+  SensorConfig cfg;
+  cfg.noise = false;
+  cfg.read_noise_e = 0;
+  cfg.dark_current_e_s = 0;
+  const SensorModel model(cfg);
+  const std::shared_ptr<const Spectrum> d65 = daylightIlluminant(6500);
+  const Vec3 white = cameraResponse(model, *d65);
+  const double k = 20000 / std::max({white.x, white.y, white.z});  // 20000 e- at most
+  io::Image im(24, 24, {"R", "G", "B"});
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      im.at(x, y, 0) = float(white.x * k);
+      im.at(x, y, 1) = float(white.y * k);
+      im.at(x, y, 2) = float(white.z * k);
+    }
+  im.metadata[kRawSensorKey] = cfg.toText();
+  const io::Image p = previewRawImage(im);
+  ASSERT_EQ(p.channelCount(), 3);
+  EXPECT_NEAR(p.at(5, 5, 0) / p.at(5, 5, 1), 1.0, 0.01);
+  EXPECT_NEAR(p.at(5, 5, 2) / p.at(5, 5, 1), 1.0, 0.01);
+  // Another colour (more red, less blue), against the developed DNG's centre.
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      im.at(x, y, 0) *= 1.5f;
+      im.at(x, y, 2) *= 0.6f;
+    }
+  const io::Image q = previewRawImage(im);
+  const std::string path = tmpDir("preview") + "/flat.dng";
+  writeRawImage(path, im, 0, 0);
+  const io::Image d = developRaw(io::readDng(path));
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(q.at(12, 12, c), d.at(12, 12, c), 2e-3 * d.at(12, 12, 1)) << c;
+  // Not a raw image: returned as it is.
+  io::Image plain(2, 2, {"R", "G", "B"});
+  plain.at(1, 1, 2) = 0.25f;
+  EXPECT_EQ(previewRawImage(plain).at(1, 1, 2), 0.25f);
+}
+
+TEST(SensorDng, RenderedColorCheckerDevelopedByDarktable) {
+  if (std::system("command -v darktable-cli >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "darktable-cli is not installed (scripts/install-deps installs it)";
+  double worst = 0;
+  const double mean = renderedChartDeltaE(
+      "chart_darktable", "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1",
+      5, "", &worst, "darktable");
+  std::printf("rendered ColorChecker (perspective) through darktable-cli: mean dE2000 %.2f, max %.2f\n",
+              mean, worst);
+  EXPECT_LT(mean, 3.0);
 }

@@ -348,17 +348,17 @@ TEST(SensorModel, FullWellAndAdcClip) {
 }
 
 TEST(SensorModel, CfaLayouts) {
-  EXPECT_EQ(cfaChannel(CfaLayout::RGGB, 0, 0), 0);
-  EXPECT_EQ(cfaChannel(CfaLayout::RGGB, 1, 0), 1);
-  EXPECT_EQ(cfaChannel(CfaLayout::RGGB, 0, 1), 1);
-  EXPECT_EQ(cfaChannel(CfaLayout::RGGB, 1, 1), 2);
-  EXPECT_EQ(cfaChannel(CfaLayout::BGGR, 0, 0), 2);
-  EXPECT_EQ(cfaChannel(CfaLayout::BGGR, 3, 3), 0);
-  EXPECT_EQ(cfaChannel(CfaLayout::GRBG, 1, 0), 0);
-  EXPECT_EQ(cfaChannel(CfaLayout::GRBG, 0, 1), 2);
-  EXPECT_EQ(cfaChannel(CfaLayout::GBRG, 1, 0), 2);
-  EXPECT_EQ(cfaChannel(CfaLayout::GBRG, 0, 1), 0);
-  EXPECT_THROW(parseCfa("RGBG"), Error);
+  EXPECT_EQ(cfaChannel(parseCfa("RGGB"), 0, 0), 0);
+  EXPECT_EQ(cfaChannel(parseCfa("RGGB"), 1, 0), 1);
+  EXPECT_EQ(cfaChannel(parseCfa("RGGB"), 0, 1), 1);
+  EXPECT_EQ(cfaChannel(parseCfa("RGGB"), 1, 1), 2);
+  EXPECT_EQ(cfaChannel(parseCfa("BGGR"), 0, 0), 2);
+  EXPECT_EQ(cfaChannel(parseCfa("BGGR"), 3, 3), 0);
+  EXPECT_EQ(cfaChannel(parseCfa("GRBG"), 1, 0), 0);
+  EXPECT_EQ(cfaChannel(parseCfa("GRBG"), 0, 1), 2);
+  EXPECT_EQ(cfaChannel(parseCfa("GBRG"), 1, 0), 2);
+  EXPECT_EQ(cfaChannel(parseCfa("GBRG"), 0, 1), 0);
+  EXPECT_THROW(parseCfa("RGGX"), Error);
 }
 
 TEST(SensorModel, ConfigRoundTripsAndRefusesBadValues) {

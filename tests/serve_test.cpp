@@ -684,3 +684,50 @@ TEST(PreviewRenderer, CancellationIsObservedBeforeAndDuringTheRender) {
       "cancelled preview ran %.1f ms in all\n",
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
 }
+
+// A raw film's preview (docs/sensor.md) is coloured as lensim develop colours the DNG: a D65
+// sky (the default white balance) is neutral, where the camera's electrons are not.
+TEST(PreviewRenderer, RawFilmPreviewIsWhiteBalanced) {
+  Fixture f;
+  writeFile(f.scenes / "raw.pbrt", R"(LookAt 0 0.5 -3  0 0.3 0  0 1 0
+Camera "perspective" "float fov" 40
+Film "raw" "integer xresolution" 60 "integer yresolution" 40 "float nits" 500
+WorldBegin
+LightSource "infinite" "spectrum L" "stdillum-D65"
+)");
+  lensim::serve::PreviewRenderer previews;
+  lensim::serve::PreviewRequest rq;
+  rq.scene_path = (f.scenes / "raw.pbrt").string();
+  rq.lens_path = (f.lenses / "dgauss.50mm.dat").string();
+  rq.aperture_diameter_mm = 8;
+  rq.focus_distance_m = 3;
+  rq.width = 60;
+  rq.max_spp = 4;
+  rq.auto_exposure = true;
+  std::atomic<bool> cancel{false};
+  std::string png;
+  EXPECT_TRUE(previews.run(previews.previewScene(rq), rq, cancel,
+                           [&](const lensim::serve::PreviewFrame& fr) {
+                             png = fr.png;
+                             return true;
+                           }));
+  const Decoded d = decodePng(png);
+  ASSERT_GT(d.width, 0);
+  double mean[3] = {0, 0, 0};
+  for (int y = 0; y < d.height; ++y)
+    for (int x = 0; x < d.width; ++x)
+      for (int c = 0; c < 3; ++c) mean[c] += d.rgb[size_t((y * d.width + x) * 3 + c)];
+  ASSERT_GT(mean[1], 0);
+  EXPECT_NEAR(mean[0] / mean[1], 1.0, 0.05) << mean[0] << " " << mean[1] << " " << mean[2];
+  EXPECT_NEAR(mean[2] / mean[1], 1.0, 0.05) << mean[0] << " " << mean[1] << " " << mean[2];
+  // The film's own values: camera electrons, far from neutral.
+  lensim::render::RenderOptions ro;
+  ro.spp = 1;
+  const auto r = lensim::render::render(lensim::scene::loadScene(rq.scene_path), ro);
+  double e[3] = {0, 0, 0};
+  for (int y = 0; y < r.image.height; ++y)
+    for (int x = 0; x < r.image.width; ++x)
+      for (int c = 0; c < 3; ++c) e[c] += r.image.at(x, y, c);
+  EXPECT_GT(std::abs(e[0] / e[1] - 1) + std::abs(e[2] / e[1] - 1), 0.2)
+      << e[0] << " " << e[1] << " " << e[2];
+}

@@ -220,6 +220,9 @@ void registerRenderCommand(CLI::App& app, Action& action) {
             io::imageFormatFromPath(out) != io::ImageFormat::Exr)
           throw Error(FileLoc{out}, "Film \"raw\" writes a .dng raw file or an .exr of its "
                                     "electrons and raw values: use a .dng or .exr output");
+      for (const std::string& out : outs)  // a CFA tile a DNG cannot carry, before rendering
+        if (raw && !part_mode && render::isDngPath(out))
+          scene::checkDngCfa(scene::parseCfa(s.film.raw_sensor.cfa, s.film.loc), FileLoc{out});
       for (const std::string& out : outs) {  // fail early (an unknown extension too)
         const bool exr = !(raw && render::isDngPath(out)) &&
                          io::imageFormatFromPath(out) == io::ImageFormat::Exr;

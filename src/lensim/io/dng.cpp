@@ -133,9 +133,14 @@ void writeTo(const std::string& path, const DngImage& im) {
   check(TIFFSetField(tif, TIFFTAG_UNIQUECAMERAMODEL, im.unique_model.c_str()), path,
         "UniqueCameraModel");
   if (!im.mono) {
-    const uint16_t dim[2] = {2, 2};
+    if (im.cfa_width < 1 || im.cfa_width > 8 || im.cfa_height < 1 || im.cfa_height > 8 ||
+        im.cfa.size() != size_t(im.cfa_width) * size_t(im.cfa_height))
+      throw Error(FileLoc{path}, fmt::format("a {}x{} CFA pattern of {} colours; expected 1 to 8 "
+                                             "columns and rows",
+                                             im.cfa_width, im.cfa_height, im.cfa.size()));
+    const uint16_t dim[2] = {uint16_t(im.cfa_height), uint16_t(im.cfa_width)};  // rows, columns
     setArray(tif, TIFFTAG_CFAREPEATPATTERNDIM, dim, 2, path);
-    setArray(tif, TIFFTAG_CFAPATTERN, im.cfa.data(), 4, path);
+    setArray(tif, TIFFTAG_CFAPATTERN, im.cfa.data(), int(im.cfa.size()), path);
   }
   const float black = float(im.black_level);
   setArray(tif, TIFFTAG_BLACKLEVEL, &black, 1, path);
@@ -252,14 +257,17 @@ DngImage readDng(const std::string& path) {
   if (!im.mono) {
     const uint16_t* dim = nullptr;
     const uint8_t* pat = nullptr;
-    if (!getArray(tif, TIFFTAG_CFAREPEATPATTERNDIM, dim, n) || n != 2 || dim[0] != 2 ||
-        dim[1] != 2)
-      throw unsupported("no 2x2 CFARepeatPatternDim");
-    if (!getArray(tif, TIFFTAG_CFAPATTERN, pat, n) || n != 4) throw unsupported("no CFAPattern");
-    for (int k = 0; k < 4; ++k) {
-      if (pat[k] > 2) throw unsupported(fmt::format("CFA colour {}", pat[k]));
-      im.cfa[size_t(k)] = pat[k];
-    }
+    if (!getArray(tif, TIFFTAG_CFAREPEATPATTERNDIM, dim, n) || n != 2 || dim[0] < 1 ||
+        dim[0] > 8 || dim[1] < 1 || dim[1] > 8)
+      throw unsupported("no CFARepeatPatternDim of 1 to 8 rows and columns");
+    im.cfa_height = dim[0];
+    im.cfa_width = dim[1];
+    if (!getArray(tif, TIFFTAG_CFAPATTERN, pat, n) || n != im.cfa_width * im.cfa_height)
+      throw unsupported(fmt::format("no CFAPattern of {}x{} colours", im.cfa_width,
+                                    im.cfa_height));
+    im.cfa.assign(pat, pat + n);
+    for (uint8_t c : im.cfa)
+      if (c > 2) throw unsupported(fmt::format("CFA colour {}", c));
   }
   const float* f = nullptr;
   if (getArray(tif, TIFFTAG_BLACKLEVEL, f, n) && n >= 1) im.black_level = uint32_t(f[0]);

@@ -13,7 +13,10 @@ struct DngImage {
   int width = 0, height = 0;
   std::vector<uint16_t> data;            ///< width x height DN, row-major
   bool mono = false;                     ///< LinearRaw with one sample (no CFA, no colour)
-  std::array<uint8_t, 4> cfa{0, 1, 1, 2};  ///< 2x2 CFAPattern (0 red, 1 green, 2 blue), row-major
+  /// CFARepeatPatternDim (columns x rows, each 1 to 8) and CFAPattern (0 red, 1 green, 2 blue),
+  /// row-major.
+  int cfa_width = 2, cfa_height = 2;
+  std::vector<uint8_t> cfa{0, 1, 1, 2};
   int bits = 14;
   uint32_t black_level = 0, white_level = 16383;
   std::array<double, 9> color_matrix1{}, color_matrix2{};      ///< XYZ -> camera
@@ -27,7 +30,7 @@ struct DngImage {
   std::string lens_model;
 };
 
-/// Reads an uncompressed 16-bit DNG with one CFA (2x2 pattern) or LinearRaw image in its first
+/// Reads an uncompressed 16-bit DNG with one CFA (red, green, blue; up to 8x8) or LinearRaw image in its first
 /// directory, as writeDng writes them (colour matrices: ColorMatrix2, else ColorMatrix1, into
 /// color_matrix2); throws lensim::Error naming the file and what is unsupported otherwise.
 DngImage readDng(const std::string& path);

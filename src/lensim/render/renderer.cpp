@@ -20,6 +20,7 @@
 #include "lensim/render/integrators/base.h"
 #include "lensim/render/media/media.h"
 #include "lensim/render/parts.h"
+#include "lensim/render/sensor/raw_output.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/check.h"
@@ -610,6 +611,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const int spp_begin = plan.spp_begin, spp_end = plan.spp_end;
   std::unique_ptr<Filter> filter = makeFilter(scene.filter);
   Film film(scene, bounds);
+  if (film.rawSensor()) film.addRawMetadata(rawLensMetadata(*cam));
   IntegratorSetup setup;
   setup.scene = &scene;
   setup.sc = &sc;

@@ -397,10 +397,10 @@ struct Film {
   std::string gbuffer_coordinates = "camera";
   /// Film "raw" (type "raw", issue 34): the camera sensor (its exposure time, ISO and seed are
   /// filled in from the camera, film and sampler when rendered); `raw_nits`: the luminance
-  /// (cd/m^2) of a unit-luminance scene radiance; `raw_fnumber`: the f-number of a camera
-  /// without a lens (perspective, ...), and the EXIF f-number; `raw_focal_mm`: EXIF focal length.
+  /// (cd/m^2) of a unit-luminance scene radiance; `raw_fnumber`: the f-number that turns the
+  /// radiance a camera without a lens (perspective, ...) records into irradiance.
   SensorConfig raw_sensor;
-  double raw_nits = 1, raw_fnumber = 0, raw_focal_mm = 0;
+  double raw_nits = 1, raw_fnumber = 0;
   int raw_noise_seed = 0;
 };
 

@@ -1,7 +1,9 @@
 // Sensor parameters (sensor_config.h).
 #include "lensim/scene/sensor_config.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <sstream>
 #include <type_traits>
@@ -10,6 +12,107 @@
 
 namespace lensim::scene {
 
+int CfaPattern::channel(int x, int y) const {
+  if (mono) return 0;
+  const int cx = ((x % width) + width) % width, cy = ((y % height) + height) % height;
+  return colors[size_t(cy * width + cx)];
+}
+
+std::string CfaPattern::text() const {
+  if (mono) return "mono";
+  std::string s;
+  for (int y = 0; y < height; ++y) {
+    if (y > 0) s += '/';
+    for (int x = 0; x < width; ++x) s += "RGB"[colors[size_t(y * width + x)]];
+  }
+  return s;
+}
+
+bool CfaPattern::dngReadable() const {
+  if (mono || (width == 6 && height == 6)) return true;
+  if (!((width == 1 || width == 2) && (height == 1 || height == 2 || height == 4 || height == 8)))
+    return false;
+  // dcraw (dcraw.c 9.28, identify() and main()) holds the tile as `filters`, 2 bits for each
+  // of 8 rows x 2 columns, relabels some greens as a fourth colour (the bit operation below),
+  // then moves those back to green only at every other row (from row FC(1,0) >> 1) and every
+  // other column (from FC(row,1) & 1), zeroing what it visits: a relabelled green it does not
+  // visit, or a green it does, decodes as 0.
+  uint32_t f = 0;
+  for (int i = 15; i >= 0; --i) f = f << 2 | uint32_t(channel(i & 1, i >> 1));
+  f |= ((f >> 2 & 0x22222222u) | (f << 2 & 0x88888888u)) & f << 1;
+  auto fc = [&](int r, int c) { return int(f >> ((((r << 1) & 14) + (c & 1)) << 1) & 3); };
+  const int r0 = fc(1, 0) >> 1;
+  for (int r = 0; r < 8; ++r)
+    for (int c = 0; c < 2; ++c) {
+      const bool copied = (r - r0) % 2 == 0 && c == (fc(r, 1) & 1);
+      if ((fc(r, c) == 3 && !copied) || (fc(r, c) == 1 && copied)) return false;
+    }
+  return true;
+}
+
+CfaPattern parseCfa(const std::string& text, const FileLoc& loc) {
+  CfaPattern p;
+  if (text == "mono") {
+    p.mono = true;
+    p.width = p.height = 1;
+    p.colors = {0};
+    return p;
+  }
+  auto bad = [&](const std::string& why) {
+    throw Error(loc, fmt::format("\"cfa\": \"{}\" {}; expected \"mono\" or the filters' letters "
+                                 "R, G, B row by row, rows separated by '/' (\"RG/GB\") or a "
+                                 "square tile (\"RGGB\"), at most 8x8",
+                                 text, why));
+  };
+  std::vector<std::string> rows;
+  if (text.find('/') != std::string::npos) {
+    size_t i = 0;
+    while (true) {
+      const size_t j = text.find('/', i);
+      rows.push_back(text.substr(i, j == std::string::npos ? std::string::npos : j - i));
+      if (j == std::string::npos) break;
+      i = j + 1;
+    }
+  } else {
+    const size_t n = text.size();
+    size_t side = 1;
+    while (side * side < n) ++side;
+    if (n == 0 || side * side != n)
+      bad(fmt::format("has {} letters, not a square tile (use '/' between rows)", n));
+    for (size_t r = 0; r < side; ++r) rows.push_back(text.substr(r * side, side));
+  }
+  p.height = int(rows.size());
+  p.width = int(rows[0].size());
+  if (p.width == 0) bad("has an empty row");
+  if (p.width > 8 || p.height > 8) bad(fmt::format("is {}x{}", p.width, p.height));
+  p.colors.clear();
+  for (const std::string& r : rows) {
+    if (int(r.size()) != p.width)
+      bad(fmt::format("has rows of {} and {} letters", p.width, r.size()));
+    for (char c : r) {
+      if (c == 'W')
+        bad("has a W (panchromatic) filter, which lensim does not model: its film records "
+            "three channels");
+      const char* at = std::strchr("RGB", c);
+      if (c == 0 || !at) bad(fmt::format("has the letter '{}'", c));
+      p.colors.push_back(uint8_t(at - "RGB"));
+    }
+  }
+  for (uint8_t c = 0; c < 3; ++c)
+    if (std::find(p.colors.begin(), p.colors.end(), c) == p.colors.end())
+      bad(fmt::format("has no {} filter", "RGB"[c]));
+  return p;
+}
+
+void checkDngCfa(const CfaPattern& cfa, const FileLoc& loc) {
+  if (!cfa.dngReadable())
+    throw Error(loc, fmt::format("\"cfa\": a DNG of the {}x{} pattern \"{}\" would be misread by "
+                                 "dcraw, which holds a CFA as 8 rows of 2 columns with its "
+                                 "second greens placed as in a Bayer pattern, or as a 6x6 "
+                                 "X-Trans; expected such a tile (1 or 2 pixels wide, 1, 2, 4 or 8 "
+                                 "high), a 6x6 one, or an .exr output",
+                                 cfa.width, cfa.height, cfa.text()));
+}
 
 namespace {
 // Every field with its text name, for toText/fromText.
@@ -93,10 +196,7 @@ void SensorConfig::validate(const FileLoc& loc) const {
     if (!ok) throw Error(loc, fmt::format("\"{}\": {} is out of range; expected {}", key, v,
                                           expected));
   };
-  if (cfa != "RGGB" && cfa != "BGGR" && cfa != "GRBG" && cfa != "GBRG" && cfa != "mono")
-    throw Error(loc, fmt::format("\"cfa\": unknown colour filter array \"{}\"; expected RGGB, "
-                                 "BGGR, GRBG, GBRG or mono",
-                                 cfa));
+  parseCfa(cfa, loc);
   need(peak_qe > 0 && peak_qe <= 1, "peakqe", peak_qe, "(0, 1]");
   need(ircut_nm == 0 || (ircut_nm >= 360 && ircut_nm <= 1100), "ircut", ircut_nm,
        "0 (none) or a wavelength in [360, 1100] nm");

@@ -5,15 +5,42 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "lensim/util/error.h"
 
 namespace lensim::scene {
 
+/// A colour filter array: a width x height tile of filters (0 red, 1 green, 2 blue), row-major,
+/// repeated over the full image from its top-left pixel; or a monochrome sensor (no filters).
+struct CfaPattern {
+  int width = 2, height = 2;
+  std::vector<uint8_t> colors{0, 1, 1, 2};
+  bool mono = false;
+  /// The filter (0 red, 1 green, 2 blue; 0 for mono) over pixel (x, y) of the full image.
+  int channel(int x, int y) const;
+  /// The pattern as scenes write it: "mono", or the rows' letters joined by '/' ("RG/GB").
+  std::string text() const;
+  /// Whether a DNG of this pattern is read right by dcraw and LibRaw, which hold a CFA as 8 rows
+  /// of 2 columns (`filters`) or as Fujifilm's 6x6 X-Trans: a tile 1 or 2 pixels wide and 1, 2, 4
+  /// or 8 high, or 6x6.
+  bool dngReadable() const;
+  bool operator==(const CfaPattern&) const = default;
+};
+
+/// Parses a CFA: "mono"; or the filters' letters R, G, B row by row, rows separated by '/'
+/// ("RGGB/GBRG"), or without '/' a square tile ("RGGB" is 2x2, 16 letters 4x4); at most 8x8,
+/// every colour at least once. Throws lensim::Error at loc naming the bad value otherwise.
+CfaPattern parseCfa(const std::string& text, const FileLoc& loc = {});
+
+/// Throws lensim::Error at loc if a DNG cannot hold `cfa` so that dcraw and LibRaw read it
+/// right (CfaPattern::dngReadable).
+void checkDngCfa(const CfaPattern& cfa, const FileLoc& loc);
+
 /// The sensor's parameters, each in the unit its name says. Defaults: see docs/sensor.md.
 struct SensorConfig {
   std::string qe = "canon_eos_5d_mkiv";  ///< bundled camera curves, or a QE file (docs/sensor.md)
-  std::string cfa = "RGGB";
+  std::string cfa = "RGGB";     ///< parseCfa's text
   double peak_qe = 0.5;          ///< bundled (relative) curves: QE at the highest peak
   double ircut_nm = 0;           ///< IR-cut filter 50 % wavelength (0: none)
   double ircut_width_nm = 10;    ///< its logistic edge width

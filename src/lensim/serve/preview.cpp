@@ -17,6 +17,7 @@
 
 #include "lensim/camera/camera.h"
 #include "lensim/render/renderer.h"
+#include "lensim/render/sensor/raw_output.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
 
@@ -239,9 +240,12 @@ bool PreviewRenderer::run(const scene::Scene& s, const PreviewRequest& rq,
     f.height = image.height;
     f.render_ms = std::chrono::duration<double, std::milli>(Clock::now() - t_pass).count();
     if (cancel.load()) return false;  // no PNG for a cancelled preview
-    if (rq.auto_exposure && f.pass == 0) gain = autoExposureGain(image);
+    // A raw film's expected electrons, shown as lensim develop would colour them.
+    const io::Image raw = render::isRawImage(image) ? render::previewRawImage(image) : io::Image();
+    const io::Image& shown = render::isRawImage(image) ? raw : image;
+    if (rq.auto_exposure && f.pass == 0) gain = autoExposureGain(shown);
     f.exposure_stops = std::log2(gain);
-    f.png = encodePngSrgb(image, gain);
+    f.png = encodePngSrgb(shown, gain);
     f.elapsed_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     const bool go_on = on_frame(f);
     stopped_by_caller = !go_on;

@@ -90,6 +90,10 @@ class Film {
   /// accumulates (in place of RGB; the noise is applied when the image is written,
   /// render/sensor/raw_output.h); null for other films.
   const SensorModel* rawSensor() const { return raw_.get(); }
+  /// Film "raw": adds metadata (raw_output.h's keys) to what the image will carry.
+  void addRawMetadata(const std::map<std::string, std::string>& m) {
+    for (const auto& [k, v] : m) raw_metadata_[k] = v;
+  }
   /// The film's sensor (pbrt-v4's PixelSensor: "cie1931" or a named camera).
   const PixelSensor& sensor() const { return *sensor_; }
   /// The image so far: channels R, G, B, bounds-sized; for the spectral film (pbrt-v4's

@@ -4,7 +4,10 @@
 //   2. white balance: each CFA channel divided by its AsShotNeutral component;
 //   3. demosaic: Malvar, He and Cutler, "High-quality linear interpolation for demosaicing of
 //      Bayer-patterned color images" (ICASSP 2004), 5x5 gradient-corrected kernels, the image
-//      mirrored at its edges;
+//      mirrored at its edges, for a 2x2 Bayer pattern (greens on a diagonal); for another pattern each missing channel
+//      is the tent-weighted mean of that channel's pixels in a window about the pixel
+//      (normalised convolution, weight (r + 1 - |dx|)(r + 1 - |dy|), r half the pattern's
+//      larger side, rounded up);
 //   4. colour: camera to linear sRGB through the DNG's ColorMatrix (D65, else the only one), as
 //      dcraw does: cam_from_rgb = ColorMatrix x XYZ_from_sRGB, rows normalised to sum 1 (so the
 //      balanced neutral stays neutral), inverted;
@@ -12,12 +15,19 @@
 // The sRGB transfer curve (the tone curve) is applied by the image writer for 8-bit outputs.
 #pragma once
 
+#include <array>
+
 #include "lensim/io/dng.h"
 #include "lensim/io/image.h"
+#include "lensim/render/film/pixel_sensor.h"
 
 namespace lensim::render {
 
 /// The developed image (channels R, G, B, linear sRGB).
 io::Image developRaw(const io::DngImage& raw, double exposure_ev = 0);
+
+/// Step 4's matrix: linear sRGB from white-balanced camera values, for a DNG ColorMatrix (XYZ to
+/// camera, row-major).
+Mat3d srgbFromCamera(const std::array<double, 9>& color_matrix);
 
 }  // namespace lensim::render

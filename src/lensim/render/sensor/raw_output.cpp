@@ -7,8 +7,10 @@
 
 #include <fmt/format.h>
 
+#include "lensim/camera/realistic.h"
 #include "lensim/io/dng.h"
 #include "lensim/render/film/pixel_sensor.h"
+#include "lensim/render/sensor/develop.h"
 #include "lensim/render/sensor/sensor_color.h"
 #include "lensim/render/sensor/sensor_model.h"
 #include "lensim/render/spectra/spectrum.h"
@@ -67,19 +69,58 @@ std::map<std::string, std::string> rawMetadata(const scene::Scene& scene,
   if (std::find(names.begin(), names.end(), config.qe) == names.end())
     m[kRawQeKey] = readRegularFile(config.qe, "QE file", uint64_t{16} << 20);
   const scene::Film& f = scene.film;
-  if (f.raw_fnumber > 0) m[kRawFNumberKey] = fmt::format("{:.17g}", f.raw_fnumber);
-  if (f.raw_focal_mm > 0) m[kRawFocalKey] = fmt::format("{:.17g}", f.raw_focal_mm);
   if (f.white_balance_k > 0) m[kRawWhiteBalanceKey] = fmt::format("{:.17g}", f.white_balance_k);
-  if (scene.camera.realistic) {
-    std::string name = scene.camera.realistic->lens_file_as_written;
-    const size_t slash = name.find_last_of("/:");
-    if (slash != std::string::npos) name = name.substr(slash + 1);
-    m[kRawLensKey] = name;
-  }
+  return m;
+}
+
+std::map<std::string, std::string> rawLensMetadata(const camera::Camera& camera) {
+  std::map<std::string, std::string> m;
+  const auto* realistic = dynamic_cast<const camera::RealisticCamera*>(&camera);
+  if (!realistic) return m;
+  const optics::FocusedLens& lens = realistic->lens();
+  const double efl = lens.paraxial.effective_focal_length_mm, n = lens.paraxial.f_number;
+  if (std::isfinite(efl) && efl > 0) m[kRawFocalKey] = fmt::format("{:.17g}", efl);
+  if (std::isfinite(n) && n > 0) m[kRawFNumberKey] = fmt::format("{:.17g}", n);
+  if (!lens.lens->prescription().name.empty()) m[kRawLensKey] = lens.lens->prescription().name;
   return m;
 }
 
 bool isRawImage(const io::Image& image) { return image.metadata.count(kRawSensorKey) > 0; }
+
+io::Image previewRawImage(const io::Image& image) {
+  auto it = image.metadata.find(kRawSensorKey);
+  if (it == image.metadata.end() || image.channelCount() < 3) return image;
+  auto qe = image.metadata.find(kRawQeKey);
+  const SensorModel model(SensorConfig::fromText(it->second), FileLoc{},
+                          qe == image.metadata.end() ? nullptr : &qe->second);
+  const SensorConfig& cfg = model.config();
+  // Electrons to the linearised raw value (DN above black over the DN range).
+  const double scale = cfg.gainDnPerE() / double(cfg.whiteLevel() - cfg.black_level_dn);
+  Mat3d m = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::array<double, 3> neutral{1, 1, 1};
+  if (!model.cfa().mono) {
+    const DngColor col = fitDngColor(model, metaNumber(image, kRawWhiteBalanceKey));
+    m = srgbFromCamera(col.color_matrix2);
+    neutral = {col.as_shot_neutral.x, col.as_shot_neutral.y, col.as_shot_neutral.z};
+  }
+  io::Image out(image.width, image.height, {"R", "G", "B"});
+  out.metadata = image.metadata;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      Vec3 v;
+      if (model.cfa().mono) {
+        v = Vec3{1, 1, 1} * (image.at(x, y, 0) * scale);
+      } else {
+        v = mulMat3(m, Vec3{image.at(x, y, 0) * scale / neutral[0],
+                            image.at(x, y, 1) * scale / neutral[1],
+                            image.at(x, y, 2) * scale / neutral[2]});
+      }
+      out.at(x, y, 0) = float(std::max(0.0, v.x));
+      out.at(x, y, 1) = float(std::max(0.0, v.y));
+      out.at(x, y, 2) = float(std::max(0.0, v.z));
+    }
+  return out;
+}
 
 bool isDngPath(const std::string& path) { return lowerExtension(path) == "dng"; }
 
@@ -120,10 +161,19 @@ void writeRawImage(const std::string& path, const io::Image& image, int x0, int 
   d.width = w;
   d.height = h;
   d.data = dn;
-  d.mono = model.cfa() == CfaLayout::Mono;
-  // The written image's 2x2 pattern starts at (x0, y0) of the full image's.
-  for (int k = 0; k < 4; ++k)
-    d.cfa[size_t(k)] = uint8_t(cfaChannel(model.cfa(), x0 + (k & 1), y0 + (k >> 1)));
+  const CfaPattern& cfa = model.cfa();
+  d.mono = cfa.mono;
+  if (!d.mono) {
+    scene::checkDngCfa(cfa, FileLoc{path});
+    // The written image's tile starts at (x0, y0) of the full image's. A tile one pixel wide is
+    // written two wide: dcraw and LibRaw read a CFAPattern as rows of two columns.
+    d.cfa_width = cfa.width == 1 ? 2 : cfa.width;
+    d.cfa_height = cfa.height;
+    d.cfa.clear();
+    for (int y = 0; y < d.cfa_height; ++y)
+      for (int x = 0; x < d.cfa_width; ++x)
+        d.cfa.push_back(uint8_t(cfa.channel(x0 + x, y0 + y)));
+  }
   d.bits = cfg.adc_bits;
   d.black_level = uint32_t(cfg.black_level_dn);
   d.white_level = uint32_t(cfg.whiteLevel());

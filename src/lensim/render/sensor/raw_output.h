@@ -12,12 +12,15 @@
 namespace lensim::scene {
 struct Scene;
 }
+namespace lensim::camera {
+class Camera;
+}
 
 namespace lensim::render {
 
 /// Metadata keys a raw film's image carries (also through parts to lensim merge).
 inline constexpr const char* kRawSensorKey = "lensim:raw_sensor";  ///< SensorConfig::toText
-inline constexpr const char* kRawLensKey = "lensim:raw_lens";      ///< lens name
+inline constexpr const char* kRawLensKey = "lensim:raw_lens";      ///< lens title
 inline constexpr const char* kRawFNumberKey = "lensim:raw_fnumber";
 inline constexpr const char* kRawFocalKey = "lensim:raw_focal_mm";
 inline constexpr const char* kRawWhiteBalanceKey = "lensim:raw_whitebalance";
@@ -34,8 +37,20 @@ scene::SensorConfig rawSensorConfig(const scene::Scene& scene);
 std::map<std::string, std::string> rawMetadata(const scene::Scene& scene,
                                                const scene::SensorConfig& config);
 
+/// The lens metadata (EXIF FocalLength, FNumber, LensModel) of the camera rendering a raw film:
+/// for a realistic camera its lens's paraxial effective focal length, its f-number at the set
+/// aperture (EFL / entrance pupil diameter, focused at infinity) and its title (the lens file's
+/// first comment line, else its name); none for a camera without a lens (pinhole, perspective).
+std::map<std::string, std::string> rawLensMetadata(const camera::Camera& camera);
+
 /// Whether the image is a raw film's (carries kRawSensorKey).
 bool isRawImage(const io::Image& image);
+/// A raw film's image of expected electrons as linear sRGB, noise free and without the mosaic:
+/// lensim develop's linearisation, white balance (AsShotNeutral) and colour (ColorMatrix2) on
+/// each pixel's three channels (serve's preview of a raw film). Other images are returned as
+/// they are.
+io::Image previewRawImage(const io::Image& image);
+
 /// Whether `path` names a DNG file (by extension, case-insensitive).
 bool isDngPath(const std::string& path);
 

@@ -73,35 +73,6 @@ std::vector<std::string> splitFields(const std::string& line, std::vector<int>& 
 
 }  // namespace
 
-CfaLayout parseCfa(const std::string& name, const FileLoc& loc) {
-  if (name == "RGGB") return CfaLayout::RGGB;
-  if (name == "BGGR") return CfaLayout::BGGR;
-  if (name == "GRBG") return CfaLayout::GRBG;
-  if (name == "GBRG") return CfaLayout::GBRG;
-  if (name == "mono") return CfaLayout::Mono;
-  throw Error(loc, fmt::format("\"cfa\": unknown colour filter array \"{}\"; expected RGGB, "
-                               "BGGR, GRBG, GBRG or mono",
-                               name));
-}
-
-const char* cfaName(CfaLayout cfa) {
-  switch (cfa) {
-    case CfaLayout::RGGB: return "RGGB";
-    case CfaLayout::BGGR: return "BGGR";
-    case CfaLayout::GRBG: return "GRBG";
-    case CfaLayout::GBRG: return "GBRG";
-    case CfaLayout::Mono: return "mono";
-  }
-  return "?";
-}
-
-int cfaChannel(CfaLayout cfa, int x, int y) {
-  const int k = (y & 1) * 2 + (x & 1);  // position in the 2x2 tile, row-major
-  static constexpr int kTiles[4][4] = {{0, 1, 1, 2}, {2, 1, 1, 0}, {1, 0, 2, 1}, {1, 2, 0, 1}};
-  if (cfa == CfaLayout::Mono) return 0;
-  return kTiles[int(cfa)][k];
-}
-
 double SpectralTable::eval(double l) const {
   if (!(l >= kTableMin && l <= kTableMax) || v.empty()) return 0;
   const double t = l - kTableMin;
@@ -193,7 +164,7 @@ SensorModel::SensorModel(SensorConfig config, const FileLoc& loc, const std::str
     }
     for (auto& t : raw)
       for (double& v : t.v) v *= config_.peak_qe / peak;
-    if (cfa_ == CfaLayout::Mono) raw = {raw[1], SpectralTable{}, SpectralTable{}};
+    if (cfa_.mono) raw = {raw[1], SpectralTable{}, SpectralTable{}};
   } else {
     std::vector<SpectralTable> t;
     try {
@@ -208,9 +179,9 @@ SensorModel::SensorModel(SensorConfig config, const FileLoc& loc, const std::str
       }
       throw;
     }
-    if (cfa_ == CfaLayout::Mono && t.size() != 1)
+    if (cfa_.mono && t.size() != 1)
       throw Error(FileLoc{config_.qe}, "a monochrome sensor needs 2 columns (lambda_nm, qe)");
-    if (cfa_ != CfaLayout::Mono && t.size() != 3)
+    if (!cfa_.mono && t.size() != 3)
       throw Error(FileLoc{config_.qe},
                   fmt::format("a {} sensor needs 4 columns (lambda_nm, qe_r, qe_g, qe_b)",
                               config_.cfa));

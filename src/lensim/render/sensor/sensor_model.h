@@ -25,13 +25,10 @@
 
 namespace lensim::render {
 
-enum class CfaLayout { RGGB, BGGR, GRBG, GBRG, Mono };
-
-/// "RGGB", "BGGR", "GRBG", "GBRG" or "mono"; throws lensim::Error (at loc) otherwise.
-CfaLayout parseCfa(const std::string& name, const FileLoc& loc = {});
-const char* cfaName(CfaLayout cfa);
+using scene::CfaPattern;
+using scene::parseCfa;
 /// The channel (0 red, 1 green, 2 blue; 0 for mono) of pixel (x, y) of the full image.
-int cfaChannel(CfaLayout cfa, int x, int y);
+inline int cfaChannel(const CfaPattern& cfa, int x, int y) { return cfa.channel(x, y); }
 
 using scene::SensorConfig;
 
@@ -48,7 +45,7 @@ class SensorModel {
   explicit SensorModel(SensorConfig config, const FileLoc& loc = {},
                        const std::string* qe_text = nullptr);
   const SensorConfig& config() const { return config_; }
-  CfaLayout cfa() const { return cfa_; }
+  const CfaPattern& cfa() const { return cfa_; }
   /// Quantum efficiency of channel c at lambda, including the IR-cut filter.
   double qe(int c, double lambda_nm) const { return qe_[size_t(c)].eval(lambda_nm); }
   /// Expected photo-electrons per channel (noise free, no PRNU) of a pixel whose film value is
@@ -69,7 +66,7 @@ class SensorModel {
 
  private:
   SensorConfig config_;
-  CfaLayout cfa_;
+  CfaPattern cfa_;
   std::array<SpectralTable, 3> qe_, resp_;
   FileLoc loc_;
 };

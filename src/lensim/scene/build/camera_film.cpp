@@ -1,4 +1,5 @@
 // Builder: Camera, Film, Sampler and PixelFilter directives.
+#include <cctype>
 #include <cmath>
 
 #include "lensim/optics/glass/library.h"
@@ -236,7 +237,17 @@ void Builder::rawFilm(ParamSet& ps, Film& f) {
   s.qe = qe.find('/') != std::string::npos || qe.find('.') != std::string::npos
              ? resolve(qe, ps.peek({"qe"})->loc, "QE file")
              : qe;
-  s.cfa = ps.getString({"cfa"}, s.cfa);
+  // "cfa": a pattern's text, or its rows as a string array (["RG" "GB"]).
+  FileLoc cfa_loc = f.loc;
+  if (const Param* p = ps.find({"cfa"}, {ParamType::String})) {
+    cfa_loc = p->loc;
+    s.cfa.clear();
+    for (const std::string& row : p->strings) s.cfa += (s.cfa.empty() ? "" : "/") + row;
+  }
+  const CfaPattern cfa = parseCfa(s.cfa, cfa_loc);
+  std::string out = ps.getString({"filename"}, f.filename);
+  for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (out.size() >= 4 && out.compare(out.size() - 4, 4, ".dng") == 0) checkDngCfa(cfa, cfa_loc);
   s.peak_qe = ps.getFloat({"peakqe"}, s.peak_qe);
   s.ircut_nm = ps.getFloat({"ircut"}, s.ircut_nm);
   s.ircut_width_nm = ps.getFloat({"ircutwidth"}, s.ircut_width_nm);
@@ -259,7 +270,6 @@ void Builder::rawFilm(ParamSet& ps, Film& f) {
   s.noise = ps.getBool({"noise"}, true);
   f.raw_nits = ps.getFloat({"nits"}, 1);
   f.raw_fnumber = ps.getFloat({"fnumber"}, 0);
-  f.raw_focal_mm = ps.getFloat({"focallength"}, 0);
   if (!(f.raw_nits > 0 && f.raw_nits < 1e30))
     throw Error(ps.peek({"nits"})->loc,
                 fmt::format("\"nits\": {} is out of range; expected a positive luminance "
@@ -268,10 +278,6 @@ void Builder::rawFilm(ParamSet& ps, Film& f) {
   if (!(f.raw_fnumber >= 0 && f.raw_fnumber <= 1000))
     throw Error(ps.peek({"fnumber"})->loc,
                 fmt::format("\"fnumber\": {} is out of range; expected (0, 1000]", f.raw_fnumber));
-  if (!(f.raw_focal_mm >= 0 && f.raw_focal_mm <= 1e5))
-    throw Error(ps.peek({"focallength"})->loc,
-                fmt::format("\"focallength\": {} mm is out of range; expected (0, 1e5] mm",
-                            f.raw_focal_mm));
 }
 
 void Builder::film(const Directive& d) {
