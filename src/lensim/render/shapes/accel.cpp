@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstring>
 #include <mutex>
+#include <span>
 
 #include "lensim/render/shapes/accel_curves.h"
 #include "lensim/scene/builder.h"
@@ -27,7 +28,7 @@ struct ShapeRecord {
   int vertices_per_face = 3;
   std::vector<Vec3> p, n;
   std::vector<Vec2> uv;
-  std::vector<int> indices;
+  std::span<const int> indices;  ///< the scene mesh's (the scene outlives the Accel)
   Bounds3 bounds;  ///< in the space
   // Curves (render/accel_curves.*): the Bézier segments in the space.
   const scene::Curve* curve = nullptr;
@@ -336,7 +337,7 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
         r.n.push_back(length(nn) > 0 ? normalize(nn) : nn);
       }
       for (const auto& t : mesh.uvs) r.uv.push_back({t[0], t[1]});
-      r.indices = mesh.indices;
+      r.indices = mesh.indices;  // a view: a copy would cost 12 bytes per triangle
     } else if (s.type == scene::ShapeType::Curve) {
       if (s.curve < 0) continue;
       const scene::Curve& c = scene.curves[static_cast<size_t>(s.curve)];
@@ -386,19 +387,24 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
         v[3 * k] = float(r.p[k].x), v[3 * k + 1] = float(r.p[k].y), v[3 * k + 2] = float(r.p[k].z);
       }
       const size_t faces = r.indices.size() / static_cast<size_t>(r.vertices_per_face);
-      auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-          g, RTC_BUFFER_TYPE_INDEX, 0, quads ? RTC_FORMAT_UINT4 : RTC_FORMAT_UINT3,
-          (quads ? 4 : 3) * sizeof(unsigned), faces));
-      for (size_t f = 0; f < faces; ++f) {
-        if (quads) {
+      if (quads) {
+        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+            g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), faces));
+        for (size_t f = 0; f < faces; ++f) {
           // pbrt's patch (p00, p10, p01, p11) as Embree's cyclic quad (p00, p10, p11, p01).
           idx[4 * f] = unsigned(r.indices[4 * f]);
           idx[4 * f + 1] = unsigned(r.indices[4 * f + 1]);
           idx[4 * f + 2] = unsigned(r.indices[4 * f + 3]);
           idx[4 * f + 3] = unsigned(r.indices[4 * f + 2]);
-        } else {
-          for (int c = 0; c < 3; ++c) idx[3 * f + c] = unsigned(r.indices[3 * f + c]);
         }
+      } else {
+        // Embree reads the scene mesh's indices in place (the builder checked them against the
+        // vertex count; an int and an unsigned share their representation for those values):
+        // no second copy of 12 bytes per triangle. Embree never writes an index buffer.
+        static_assert(sizeof(int) == sizeof(unsigned));
+        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                   const_cast<int*>(r.indices.data()), 0, 3 * sizeof(unsigned),
+                                   faces);
       }
       if (s.object < 0 && s.area_light >= 0) {  // kept only for emitters (light sampling)
         WorldMesh wm;
@@ -407,7 +413,7 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
         wm.n = r.n;
         wm.uv = r.uv;
         wm.flip = r.flip;
-        wm.indices = r.indices;
+        wm.indices.assign(r.indices.begin(), r.indices.end());
         m.shape_world_mesh[static_cast<size_t>(r.shape)] = static_cast<int>(m.world_meshes.size());
         m.world_meshes.push_back(std::move(wm));
       }
