@@ -360,13 +360,25 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
       top_primitives += r.indices.size() / static_cast<size_t>(r.vertices_per_face);
   if (top_primitives > kHighQualityBuildLimit)
     rtcSetSceneBuildQuality(m.top, RTC_BUILD_QUALITY_MEDIUM);
+  // Object definitions of millions of primitives (scenes built to be instanced at scale) get
+  // Embree's compact BVH, which leaves the vertices in the vertex buffer instead of copying
+  // them into its leaves: 24 % less peak memory and a faster build on 3 M unique triangles
+  // (docs/performance.md) for a render within a few per cent; the hits are the same.
+  size_t object_primitives = 0;
+  for (const ShapeRecord& r : m.records)
+    if (r.desc->object >= 0 && r.vertices_per_face > 0)
+      object_primitives += r.indices.size() / static_cast<size_t>(r.vertices_per_face);
+  const bool compact_objects = object_primitives > kHighQualityBuildLimit;
   for (size_t ri = 0; ri < m.records.size(); ++ri) {
     ShapeRecord& r = m.records[ri];
     const scene::Shape& s = *r.desc;
     RTCScene target = m.top;
     if (s.object >= 0) {
       RTCScene& os = m.object_scenes[static_cast<size_t>(s.object)];
-      if (!os) os = rtcNewScene(m.device);
+      if (!os) {
+        os = rtcNewScene(m.device);
+        if (compact_objects) rtcSetSceneFlags(os, RTC_SCENE_FLAG_COMPACT);
+      }
       target = os;
     }
     RTCScene parent = target;
