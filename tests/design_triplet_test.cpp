@@ -1,0 +1,143 @@
+// Textbook case (issue 33): the Cooke triplet of tests/data/design/cooke-triplet.dat (ray-optics'
+// sample after Kingslake; source in the file) re-optimised for EFL 50 mm, f/4 and a 20 degree
+// half field reaches an RMS spot no worse than the published design's, both at their best
+// focus. lensim's RMS spot is checked on axis by a meridional exact trace written here.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <vector>
+
+#include "lensim/optics/design/design_job.h"
+#include "lensim/optics/design/tolerance.h"
+#include "lensim/optics/prescription.h"
+#include "scene_test_util.h"
+#include "test_paths.h"
+
+namespace {
+
+using namespace lensim::optics;
+using namespace lensim::optics::design;
+
+constexpr double kD = 587.5618;
+
+// RMS radius (mm) on the film of an axial bundle from infinity filling the paraxial entrance
+// pupil, at the d line, with the catalogue's n_d given per medium (n_after[i]: after row i).
+// Exact meridional trace through spheres; by symmetry the spot is a function of the pupil
+// radius rho only, rms^2 = integral of r(rho)^2 2 rho d rho / a^2 (midpoint rule).
+double axialRms(const LensPrescription& p, const std::vector<double>& n_after) {
+  const size_t m = p.surfaces.size();
+  std::vector<double> zv(m);
+  for (size_t i = 1; i < m; ++i) zv[i] = zv[i - 1] + p.surfaces[i - 1].thickness_mm;
+  const double film = zv[m - 1] + p.surfaces.back().thickness_mm;
+  // Paraxial entrance pupil: the stop's radius over the height there of a unit parallel ray.
+  int stop = -1;
+  double y = 1, nu = 0, n = 1, a = 0;
+  for (size_t i = 0; i < m; ++i) {
+    if (p.surfaces[i].radius_mm == 0 && n_after[i] == 0) {
+      stop = static_cast<int>(i);
+      a = 0.5 * p.surfaces[i].aperture_diameter_mm / y;
+    }
+    const double c = p.surfaces[i].radius_mm == 0 ? 0 : 1 / p.surfaces[i].radius_mm;
+    const double n2 = n_after[i] == 0 ? n : n_after[i];
+    nu -= y * c * (n2 - n);
+    n = n2;
+    y += p.surfaces[i].thickness_mm * nu / n;
+  }
+  EXPECT_GE(stop, 0);
+  auto filmHeight = [&](double h) {
+    double ry = h, rz = zv[0] - 1, dy = 0, dz = 1, ni = 1;  // position, unit direction
+    for (size_t i = 0; i < m; ++i) {
+      const double R = p.surfaces[i].radius_mm;
+      const double n2 = n_after[i] == 0 ? ni : n_after[i];
+      double ny, nz;  // unit normal, pointing along +z at the vertex
+      if (R == 0) {
+        const double t = (zv[i] - rz) / dz;
+        ry += t * dy;
+        rz += t * dz;
+        ny = 0;
+        nz = 1;
+      } else {
+        const double cz = zv[i] + R;  // centre
+        const double oy = ry, oz = rz - cz;
+        const double b = oy * dy + oz * dz, cc = oy * oy + oz * oz - R * R;
+        const double disc = b * b - cc;
+        if (disc < 0) return std::nan("");
+        const double t = R > 0 ? -b - std::sqrt(disc) : -b + std::sqrt(disc);
+        ry += t * dy;
+        rz += t * dz;
+        ny = -ry / R;
+        nz = -(rz - cz) / R;
+        if (nz < 0) ny = -ny, nz = -nz;
+      }
+      // Vector refraction: d' = mu d + (mu cos_i - cos_t) (-n)... written with n along +z.
+      const double mu = ni / n2, ci = dy * ny + dz * nz;
+      const double k = 1 - mu * mu * (1 - ci * ci);
+      if (k < 0) return std::nan("");
+      const double g = std::sqrt(k) - mu * ci;
+      dy = mu * dy + g * ny;
+      dz = mu * dz + g * nz;
+      ni = n2;
+    }
+    return ry + (film - rz) / dz * dy;
+  };
+  const int N = 4000;
+  double s = 0;
+  for (int k = 0; k < N; ++k) {
+    const double rho = (k + 0.5) / N;
+    const double r = filmHeight(rho * a);
+    s += r * r * 2 * rho / N;
+  }
+  return std::sqrt(s);
+}
+
+TEST(DesignTextbook, CookeTripletNoWorseThanThePublishedDesign) {
+  lensim::testutil::TempDir dir("lensim-triplet");
+  const std::string lens = lensim::test::dataPath("design/cooke-triplet.dat");
+  std::ofstream(dir.path() / "job.json") << R"({
+  "lens": ")" << lens << R"(",
+  "wavelengths_nm": [587.5618, 486.1327, 656.2725],
+  "fields_deg": [0, 14, 20],
+  "max_iterations": 30,
+  "variables": [
+    {"type": "curvature", "surface": 0}, {"type": "curvature", "surface": 1},
+    {"type": "curvature", "surface": 3}, {"type": "curvature", "surface": 4},
+    {"type": "curvature", "surface": 5}, {"type": "curvature", "surface": 6},
+    {"type": "thickness", "surface": 6, "min": 30, "max": 50}
+  ],
+  "operands": [
+    {"type": "efl", "target": 50, "weight": 10000},
+    {"type": "f_number", "target": 4, "weight": 10000},
+    {"type": "image_height", "field_deg": 20, "min": 17, "max": 19, "weight": 100},
+    {"type": "rms_spot", "weight": 1000}
+  ]
+}
+)";
+  const DesignJob job = readDesignJob((dir.path() / "job.json").string());
+  const DesignResult r = optimiseDesign(job);
+  // Stated first-order targets.
+  EXPECT_NEAR(r.values[0], 50, 0.01);
+  EXPECT_NEAR(r.values[1], 4, 0.01);
+
+  // The criterion: RMS over the 3 fields x 3 wavelengths of the RMS spot, each lens at the film
+  // that minimises it (the back-focus compensator), published against optimised.
+  double dz_pub = 0, dz_opt = 0;
+  const double pub = toleranceCriterion(job, job.start, &dz_pub);
+  const double opt = toleranceCriterion(job, r.lens, &dz_opt);
+  EXPECT_LE(opt, pub) << "optimised " << opt << " mm, published " << pub << " mm";
+
+  // lensim's axial d-line spot against the independent trace, both lenses at their best focus.
+  const std::vector<double> n_after{1.69100, 1, 0, 1.67271, 1, 1.69100, 1};
+  for (int k = 0; k < 2; ++k) {
+    LensPrescription p = k == 0 ? job.start : r.lens;
+    p.surfaces.back().thickness_mm += k == 0 ? dz_pub : dz_opt;
+    const double mine = axialRms(p, n_after);
+    const double lensim_rms = rmsSpot_mm(p, 0, kD, kD, 12);
+    EXPECT_NEAR(lensim_rms, mine, 0.02 * mine + 1e-5) << (k == 0 ? "published" : "optimised");
+  }
+  std::printf("triplet: published %.6f mm, optimised %.6f mm, %d iterations, %d evaluations, %s, EFL %.6f f/%.6f\n", pub, opt,
+              r.iterations, r.evaluations, r.stop_reason.c_str(), r.values[0], r.values[1]);
+}
+
+}  // namespace
