@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "lensim/optics/design/design_job.h"
+#include "meridional_trace.h"
 #include "scene_test_util.h"
 
 namespace {
@@ -129,6 +130,24 @@ TEST(DesignTextbook, AchromaticDoubletMatchesTheThinLensSolution) {
       << "design " << secondary << " mm, thin lens " << thin_secondary << " mm";
   // lensim's own longitudinal_color operand agrees with this trace.
   EXPECT_NEAR(r.values[1], fc, 1e-4) << r.values[1];
+
+  // The lateral_color operand (real chief-ray image height at F minus at C) against the exact
+  // meridional trace: the stop is the first row, so the chief ray at field theta enters through
+  // its centre. The sign is the film height of the chief ray rising toward +y.
+  DesignJob lat = job;
+  Operand o;
+  o.kind = Operand::Kind::LateralColor;
+  o.field_deg = 5;
+  lat.operands = {o};
+  const double th = 5 * M_PI / 180;
+  auto chief = [&](double l) {
+    const std::vector<lensim::test::MeridionalRow> rows{
+        {0, t[0], 1}, {R[1], t[1], kNBK7.n(l)}, {R[2], t[2], kNF2.n(l)}, {R[3], t[3], 1}};
+    return lensim::test::meridionalFilmHeight(rows, -std::tan(th), th);
+  };
+  const double lateral = chief(kF) - chief(kC);
+  EXPECT_GT(std::abs(lateral), 1e-4);  // the doublet is not corrected for it
+  EXPECT_NEAR(operandValues(lat, r.lens)[0], lateral, 1e-6) << operandValues(lat, r.lens)[0];
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "lensim/optics/design/design_job.h"
 #include "lensim/optics/design/tolerance.h"
 #include "lensim/optics/prescription.h"
+#include "meridional_trace.h"
 #include "scene_test_util.h"
 #include "test_paths.h"
 
@@ -24,13 +25,10 @@ constexpr double kD = 587.5618;
 
 // RMS radius (mm) on the film of an axial bundle from infinity filling the paraxial entrance
 // pupil, at the d line, with the catalogue's n_d given per medium (n_after[i]: after row i).
-// Exact meridional trace through spheres; by symmetry the spot is a function of the pupil
+// Exact meridional trace (meridional_trace.h); by symmetry the spot is a function of the pupil
 // radius rho only, rms^2 = integral of r(rho)^2 2 rho d rho / a^2 (midpoint rule).
 double axialRms(const LensPrescription& p, const std::vector<double>& n_after) {
   const size_t m = p.surfaces.size();
-  std::vector<double> zv(m);
-  for (size_t i = 1; i < m; ++i) zv[i] = zv[i - 1] + p.surfaces[i - 1].thickness_mm;
-  const double film = zv[m - 1] + p.surfaces.back().thickness_mm;
   // Paraxial entrance pupil: the stop's radius over the height there of a unit parallel ray.
   int stop = -1;
   double y = 1, nu = 0, n = 1, a = 0;
@@ -46,42 +44,10 @@ double axialRms(const LensPrescription& p, const std::vector<double>& n_after) {
     y += p.surfaces[i].thickness_mm * nu / n;
   }
   EXPECT_GE(stop, 0);
-  auto filmHeight = [&](double h) {
-    double ry = h, rz = zv[0] - 1, dy = 0, dz = 1, ni = 1;  // position, unit direction
-    for (size_t i = 0; i < m; ++i) {
-      const double R = p.surfaces[i].radius_mm;
-      const double n2 = n_after[i] == 0 ? ni : n_after[i];
-      double ny, nz;  // unit normal, pointing along +z at the vertex
-      if (R == 0) {
-        const double t = (zv[i] - rz) / dz;
-        ry += t * dy;
-        rz += t * dz;
-        ny = 0;
-        nz = 1;
-      } else {
-        const double cz = zv[i] + R;  // centre
-        const double oy = ry, oz = rz - cz;
-        const double b = oy * dy + oz * dz, cc = oy * oy + oz * oz - R * R;
-        const double disc = b * b - cc;
-        if (disc < 0) return std::nan("");
-        const double t = R > 0 ? -b - std::sqrt(disc) : -b + std::sqrt(disc);
-        ry += t * dy;
-        rz += t * dz;
-        ny = -ry / R;
-        nz = -(rz - cz) / R;
-        if (nz < 0) ny = -ny, nz = -nz;
-      }
-      // Vector refraction: d' = mu d + (mu cos_i - cos_t) (-n)... written with n along +z.
-      const double mu = ni / n2, ci = dy * ny + dz * nz;
-      const double k = 1 - mu * mu * (1 - ci * ci);
-      if (k < 0) return std::nan("");
-      const double g = std::sqrt(k) - mu * ci;
-      dy = mu * dy + g * ny;
-      dz = mu * dz + g * nz;
-      ni = n2;
-    }
-    return ry + (film - rz) / dz * dy;
-  };
+  std::vector<lensim::test::MeridionalRow> rows;
+  for (size_t i = 0; i < m; ++i)
+    rows.push_back({p.surfaces[i].radius_mm, p.surfaces[i].thickness_mm, n_after[i]});
+  auto filmHeight = [&](double h) { return lensim::test::meridionalFilmHeight(rows, h, 0); };
   const int N = 4000;
   double s = 0;
   for (int k = 0; k < N; ++k) {
