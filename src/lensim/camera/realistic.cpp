@@ -7,10 +7,13 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <filesystem>
 #include <tuple>
 
 #include "lensim/optics/anamorphic.h"
 #include "lensim/optics/configurations.h"
+#include "lensim/optics/design/design_job.h"
+#include "lensim/optics/design/tolerance.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/sampling/sampling.h"
@@ -29,6 +32,34 @@ double processCpuSeconds() {
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
+// Monte Carlo build `as_built` of the design job's tolerancing, exactly as `lens tolerance
+// --write-builds` writes it (optics/design/tolerance.h, asBuiltLens).
+optics::LensPrescription asBuiltPrescription(const RealisticSettings& s) {
+  try {
+    const optics::design::DesignJob job = optics::design::readDesignJob(s.tolerance_job);
+    if (job.tolerance.tolerances.empty())
+      throw Error(fmt::format("design job {} has no \"tolerancing\" section with tolerances",
+                              s.tolerance_job));
+    std::error_code ec;
+    const bool same = job.lens_path == s.lens_path ||
+                      std::filesystem::equivalent(job.lens_path, s.lens_path, ec);
+    if (!same)
+      throw Error(fmt::format("lensfile {} is not the design job's lens {}", s.lens_path,
+                              job.lens_path));
+    if (s.as_built < 0 || s.as_built >= job.tolerance.monte_carlo)
+      throw Error(fmt::format("asbuilt {}: expected a build index from 0 to {} (the job runs {} "
+                              "Monte Carlo builds)",
+                              s.as_built, job.tolerance.monte_carlo - 1,
+                              job.tolerance.monte_carlo));
+    optics::LensPrescription p = optics::design::asBuiltLens(job, s.as_built);
+    logInfo(fmt::format("{}: rendering {}", s.tolerance_loc.str(), p.name));
+    return p;
+  } catch (const Error& e) {
+    if (e.loc().valid() && e.loc().line > 0) throw;
+    throw Error(s.tolerance_loc, e.message());
+  }
+}
+
 }  // namespace
 
 RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::move(settings)) {
@@ -36,7 +67,14 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   const double cpu0 = processCpuSeconds();
   if (!(settings_.film_diagonal_mm > 0))
     throw Error(fmt::format("film diagonal {} mm must be > 0", settings_.film_diagonal_mm));
-  optics::LensPrescription prescription = optics::readLensFile(settings_.lens_path);
+  optics::LensPrescription prescription = settings_.tolerance_job.empty()
+                                              ? optics::readLensFile(settings_.lens_path)
+                                              : asBuiltPrescription(settings_);
+  optics::LensSetup setup = settings_.setup;
+  if (!settings_.tolerance_job.empty() && settings_.as_built_film) {
+    setup.film_distance_mm = prescription.surfaces.back().thickness_mm;
+    setup.focus_distance_m.reset();
+  }
   if (settings_.configuration || settings_.zoom_focal_length_mm) {
     try {
       if (settings_.configuration) {
@@ -57,7 +95,6 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
 
   // The set stop radius (the aperture shape's unit); the physical stop opens to the shape's
   // extent, and the shape decides what passes.
-  optics::LensSetup setup = settings_.setup;
   {
     const std::optional<int> stop = prescription.stopIndex();
     const std::optional<double> max_d =
@@ -698,6 +735,10 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.flare_coating = r.flare_coating;
       s.flare_loc = r.flare_loc;
       s.flare_coating_loc = r.flare_coating_loc;
+      s.tolerance_job = r.tolerance_job;
+      s.as_built = r.as_built;
+      s.as_built_film = !r.focus_given;
+      s.tolerance_loc = r.tolerance_loc;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

@@ -105,6 +105,14 @@ struct RealisticSettings {
   bool flare = false;
   std::string flare_coating;
   FileLoc flare_loc, flare_coating_loc;
+  /// An as-built lens (the scene's "string tolerances" and "integer asbuilt"; docs/design.md):
+  /// Monte Carlo build `as_built` of the design job's tolerancing replaces the lens file, which
+  /// must be the job's lens. `as_built_film`: keep the film where the build's back-focus
+  /// compensator put it (no focusdistance or filmdistance given). tolerance_loc: for errors.
+  std::string tolerance_job;
+  int as_built = -1;
+  bool as_built_film = false;
+  FileLoc tolerance_loc;
 };
 
 class RealisticCamera final : public Camera {

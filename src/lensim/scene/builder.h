@@ -315,6 +315,14 @@ struct Realistic {
   /// lens file's
   std::string flare_coating;
   FileLoc flare_coating_loc;
+  /// `tolerances` (a design job, docs/design.md) and `asbuilt` (a build index): render through
+  /// Monte Carlo build `as_built` of the job's tolerancing, as `lens tolerance --write-builds`
+  /// writes it; tolerance_loc: where. `focus_given`: focusdistance or filmdistance was written
+  /// (otherwise an as-built lens keeps the film where its back-focus compensator put it).
+  std::string tolerance_job;
+  int as_built = -1;
+  FileLoc tolerance_loc;
+  bool focus_given = false;
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 

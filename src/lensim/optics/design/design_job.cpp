@@ -325,6 +325,7 @@ DesignJob parseDesignJob(std::string_view text, const std::string& path) {
   const bool catalogue = lens.rfind("lentil:", 0) == 0 || lens.rfind("lenses:", 0) == 0;
   if (!catalogue && std::filesystem::path(lens).is_relative())
     lens = (std::filesystem::path(path).parent_path() / lens).string();
+  job.lens_path = lens;
   try {
     job.start = readLensFile(lens);
   } catch (const Error& e) {

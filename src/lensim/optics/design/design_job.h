@@ -86,6 +86,7 @@ struct ToleranceSpec {
 
 struct DesignJob {
   std::string path;
+  std::string lens_path;  ///< the starting lens: its file (resolved) or catalogue name
   LensPrescription start;
   std::vector<double> wavelengths_nm;  ///< the first is the primary
   std::vector<double> fields_deg;

@@ -104,6 +104,7 @@ void Builder::camera(const Directive& d) {
                                    ad->numbers[0]));
         r.aperture_diameter_mm = ad->numbers[0];
       }
+      r.focus_given = ps.peek({"focusdistance"}) || ps.peek({"filmdistance"});
       r.focus_distance_m = ps.getFloat({"focusdistance"}, 10.0);
       // pbrt-v3's default is true; pbrt-v4 has no such parameter (always irradiance).
       r.simple_weighting = ps.getBool({"simpleweighting"}, scene_.legacy_syntax);
@@ -179,6 +180,22 @@ void Builder::camera(const Directive& d) {
         if (!r.flare) ps.fail(*fc, "applies only with \"bool flare\" true");
         r.flare_coating = fc->strings[0];
         r.flare_coating_loc = fc->loc;
+      }
+      // As-built lenses (issue 33, docs/design.md "Rendering as-built lenses"): "string
+      // tolerances" names a design job, "integer asbuilt" the Monte Carlo build rendered.
+      const Param* tj = ps.find({"tolerances"}, {ParamType::String});
+      const Param* ab = ps.find({"asbuilt"}, {ParamType::Integer});
+      if (ab) {
+        ps.expectCount(*ab, 1);
+        if (!tj) ps.fail(*ab, "needs \"string tolerances\" naming the design job");
+        if (!(ab->numbers[0] >= 0 && ab->numbers[0] <= 1e9))
+          ps.fail(*ab, fmt::format("{}: expected a build index >= 0", ab->numbers[0]));
+        r.as_built = static_cast<int>(ab->numbers[0]);
+      }
+      if (tj) {
+        if (!ab) ps.fail(*tj, "needs \"integer asbuilt\" (the Monte Carlo build to render)");
+        r.tolerance_job = resolve(tj->strings[0], tj->loc, "design job");
+        r.tolerance_loc = ab ? ab->loc : tj->loc;
       }
       c.realistic = r;
     }
