@@ -37,6 +37,10 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   if (!(settings_.film_diagonal_mm > 0))
     throw Error(fmt::format("film diagonal {} mm must be > 0", settings_.film_diagonal_mm));
   optics::LensPrescription prescription = optics::readLensFile(settings_.lens_path);
+  if (prescription.fold_loc)
+    throw Error(*prescription.fold_loc,
+                "a lens folded by coordinate breaks (TYPE COORDBRK) cannot be rendered: the "
+                "camera models coaxial lenses (`lensim lens info` reads it)");
   if (settings_.configuration || settings_.zoom_focal_length_mm) {
     try {
       if (settings_.configuration) {
