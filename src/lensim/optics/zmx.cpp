@@ -410,9 +410,9 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
       }
     }
     if (z.stop)
-      throw Error(z.loc, fmt::format("surface {}: a coordinate break as the stop is not "
-                                     "supported; put STOP on a real surface",
-                                     z.number));
+      throw Error(z.type_loc, fmt::format("surface {}: TYPE COORDBRK on the stop: a coordinate "
+                                          "break cannot be the stop; put STOP on a real surface",
+                                          z.number));
     if (z.mirror || !z.glass.empty())
       throw Error(z.glass_loc, fmt::format("surface {}: a coordinate break has no glass (GLAS "
                                            "{})",
