@@ -85,6 +85,13 @@ TEST(ZmxCoordinateBreak, FoldMirrorHasItsTwinsFirstOrderData) {
   ASSERT_TRUE(p.fold_loc.has_value());
   EXPECT_EQ(p.fold_loc->line, 26);
   EXPECT_FALSE(parseZmx(twin(), "t.zmx").fold_loc.has_value());
+  // The 45-degree mirror's circle (semi-diameter 15) seen along the axis: 15 by 15 cos 45 (its
+  // tilt about x foreshortens y).
+  const LensSurface& m = p.surfaces[3];
+  ASSERT_TRUE(m.mirror);
+  EXPECT_EQ(m.aperture_shape, ApertureShape::Ellipse);
+  EXPECT_NEAR(m.aperture_half_x_mm, 15, 1e-12);
+  EXPECT_NEAR(m.aperture_half_y_mm, 15 * std::cos(M_PI / 4), 1e-12);
 }
 
 TEST(ZmxCoordinateBreak, AnyFoldAngleAxisAndOrderIsTheSameTwin) {
