@@ -72,6 +72,59 @@ double yNuEfl() {
   return -1 / w;
 }
 
+
+// An independent 3-D trace of fold45.zmx as built in space (not through the reader): a thin ray
+// parallel to the axis at height h; returns the EFL h / sin(u') and the back focal distance
+// (last vertex to the axis crossing, along the folded axis).
+struct V { double x, y, z; };
+V operator+(V a, V b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+V operator*(double s, V a) { return {s * a.x, s * a.y, s * a.z}; }
+double dotV(V a, V b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+void foldTrace3d(double h, double& efl, double& bfl) {
+  const double n = 1.5168;
+  V p{h, 0, -10}, d{0, 0, 1};
+  // A sphere (vertex v, axis a toward the light's travel, curvature c) or plane (c = 0).
+  auto refract = [&](V v, V a, double c, double n1, double n2) {
+    V q;
+    if (c == 0) {
+      q = p + (dotV(v + (-1.0) * p, a) / dotV(d, a)) * d;
+    } else {
+      const V centre = v + (1 / c) * a;
+      const V oc = p + (-1.0) * centre;
+      const double b = dotV(oc, d), cc = dotV(oc, oc) - 1 / (c * c);
+      const double disc = std::sqrt(b * b - cc);
+      const double t1 = -b - disc, t2 = -b + disc;
+      // The intersection nearer the vertex.
+      const V q1 = p + t1 * d, q2 = p + t2 * d;
+      q = dotV(q1 + (-1.0) * v, q1 + (-1.0) * v) < dotV(q2 + (-1.0) * v, q2 + (-1.0) * v) ? q1 : q2;
+    }
+    V nrm = c == 0 ? a : (q + (-1.0) * (v + (1 / c) * a));
+    nrm = (1 / std::sqrt(dotV(nrm, nrm))) * nrm;
+    if (dotV(nrm, d) < 0) nrm = (-1.0) * nrm;
+    const double mu = n1 / n2, ci = dotV(nrm, d);
+    const double ct = std::sqrt(1 - mu * mu * (1 - ci * ci));
+    d = mu * d + (ct - mu * ci) * nrm;
+    p = q;
+  };
+  const V z{0, 0, 1}, y{0, 1, 0};
+  refract({0, 0, 0}, z, 0.02, 1, n);
+  refract({0, 0, 6}, z, -0.005, n, 1);
+  // The plane mirror at (0, 0, 46), normal (0, -1, 1)/sqrt 2: the light leaves along +y.
+  {
+    const V m{0, -std::sqrt(0.5), std::sqrt(0.5)};
+    p = p + (dotV(V{0, 0, 46} + (-1.0) * p, m) / dotV(d, m)) * d;
+    d = d + (-2 * dotV(d, m)) * m;
+  }
+  // Singlet 2 along +y: its front's centre of curvature 100 mm downstream (R = -100 in the
+  // twin, whose light travels toward -z), 4 mm of glass, a plane back.
+  refract({0, 20, 46}, y, 0.01, 1, n);
+  refract({0, 24, 46}, y, 0, n, 1);
+  // u' in the plane of the ray (x, the folded axis y); the crossing of x = 0.
+  efl = h / std::sqrt(d.x * d.x + d.z * d.z);
+  bfl = p.y + (-p.x / d.x) * d.y - 24;
+}
+
 }  // namespace
 
 TEST(ZmxCoordinateBreak, FoldMirrorHasItsTwinsFirstOrderData) {
@@ -92,6 +145,14 @@ TEST(ZmxCoordinateBreak, FoldMirrorHasItsTwinsFirstOrderData) {
   EXPECT_EQ(m.aperture_shape, ApertureShape::Ellipse);
   EXPECT_NEAR(m.aperture_half_x_mm, 15, 1e-12);
   EXPECT_NEAR(m.aperture_half_y_mm, 15 * std::cos(M_PI / 4), 1e-12);
+}
+
+TEST(ZmxCoordinateBreak, FoldAgreesWithAnIndependent3dTrace) {
+  double efl = 0, bfl = 0;
+  foldTrace3d(1e-4, efl, bfl);
+  const ParaxialData f = firstOrder(fold(), "fold45.zmx");
+  EXPECT_NEAR(std::abs(f.effective_focal_length_mm), efl, 1e-6);
+  EXPECT_NEAR(std::abs(f.back_focal_length_mm), bfl, 1e-6);
 }
 
 TEST(ZmxCoordinateBreak, AnyFoldAngleAxisAndOrderIsTheSameTwin) {
