@@ -395,7 +395,9 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
     f.plane = z.curv == 0 && parms_zero && !z.xdat_loc && z.type != "TOROIDAL";
     f.symmetric = z.type != "TOROIDAL" && z.aperture_shape == ApertureShape::Circle;
     if (!f.coordbrk) continue;
-    if (z.has_disz && !z.disz)
+    if (!z.has_disz)
+      throw Error(z.loc, fmt::format("surface {}: no DISZ (thickness) line", z.number));
+    if (!z.disz)
       throw Error(z.disz_loc, fmt::format("surface {}: a coordinate break's thickness must be "
                                           "finite",
                                           z.number));
