@@ -118,10 +118,15 @@ TEST(ZmxReader, UnsupportedThingsAreRefusedAtTheirLine) {
   };
   std::string base = singletZmx("MM", 1);
   std::string cb = base;
-  cb.replace(cb.find("SURF 2\n  TYPE EVENASPH"), 22, "SURF 2\n  TYPE COORDBRK");
-  EXPECT_NE(errorOf(cb).find("x.zmx:21:3: error: surface 2: TYPE COORDBRK is not supported"),
+  cb.replace(cb.find("SURF 2\n  TYPE EVENASPH"), 22, "SURF 2\n  TYPE DGRATING");
+  EXPECT_NE(errorOf(cb).find("x.zmx:21:3: error: surface 2: TYPE DGRATING is not supported"),
             std::string::npos)
       << errorOf(cb);
+  // A coordinate break carries no glass (optics_coordbrk_test.cpp tests the breaks).
+  std::string cbg = base;
+  cbg.replace(cbg.find("SURF 2\n  TYPE EVENASPH"), 22, "SURF 2\n  TYPE COORDBRK");
+  EXPECT_NE(errorOf(cbg).find("a coordinate break has no glass"), std::string::npos)
+      << errorOf(cbg);
   // A mirror followed by a positive thickness would send the light backward: refused at DISZ.
   std::string mirror = base;
   mirror.replace(mirror.find("GLAS ___BLANK"), 13, "GLAS MIRROR");

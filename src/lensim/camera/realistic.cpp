@@ -70,6 +70,10 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   optics::LensPrescription prescription = settings_.tolerance_job.empty()
                                               ? optics::readLensFile(settings_.lens_path)
                                               : asBuiltPrescription(settings_);
+  if (prescription.fold_loc)
+    throw Error(*prescription.fold_loc,
+                "a lens folded by coordinate breaks (TYPE COORDBRK) cannot be rendered: the "
+                "camera models coaxial lenses (`lensim lens info` reads it)");
   optics::LensSetup setup = settings_.setup;
   if (!settings_.tolerance_job.empty() && settings_.as_built_film) {
     setup.film_distance_mm = prescription.surfaces.back().thickness_mm;

@@ -153,6 +153,11 @@ struct LensPrescription {
   /// changes that row's thickness by rate * x (an inner group: +1 on the gap before it, -1 on
   /// the gap after). Empty: the whole lens moves to focus (unit focusing). focusLens solves x.
   std::vector<std::pair<int, double>> focus_group;
+  /// Set when the file folds its axis with coordinate breaks and plane mirrors (Zemax
+  /// COORDBRK, optics/coordinate_break.h): the first break. `surfaces` then holds the coaxial
+  /// twin, whose first-order data and aberrations are the fold's; the image in space is the
+  /// twin's turned and mirrored, which the renderer does not model (it refuses such a lens).
+  std::optional<FileLoc> fold_loc;
   /// Warnings and notes (crossing surfaces, layout guesses); errors are thrown instead.
   std::vector<Diagnostic> diagnostics;
 

@@ -10,11 +10,13 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <numbers>
 
 #include "lensim/optics/auto_semi_diameter.h"
 #include "lensim/optics/coating/lens_coatings.h"
+#include "lensim/optics/coordinate_break.h"
 #include "lensim/optics/glass.h"
 #include "lensim/optics/glass/library.h"
 #include "lensim/optics/lens_formats.h"
@@ -189,6 +191,7 @@ class ZmxParser {
     return z.type_loc.valid() ? z.type_loc : z.loc;
   }
   void readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& shape) const;
+  void resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescription& p) const;
 
  public:
   // Multi-configuration data: `MNUM count active`, then one row per operand and configuration,
@@ -375,6 +378,80 @@ void ZmxParser::readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& sh
                                          "terms) is not supported",
                                          z.number));
   shape.scaleLengths(unit_mm);
+}
+
+// Coordinate breaks (optics/coordinate_break.h): a fold by plane mirrors becomes its coaxial twin
+// (the breaks dropped, thicknesses along the unfolded axis, a tilted mirror's circular aperture
+// its projection, an ellipse); anything else is refused at its break.
+void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescription& p) const {
+  std::vector<FoldSurface> fold(surfs.size());
+  for (size_t k = 0; k < surfs.size(); ++k) {
+    const ZSurface& z = surfs[k];
+    FoldSurface& f = fold[k];
+    f.number = z.number, f.loc = z.loc, f.coordbrk = z.type == "COORDBRK", f.mirror = z.mirror;
+    f.thickness = z.disz ? *z.disz : std::numeric_limits<double>::infinity();
+    bool parms_zero = true;
+    for (const auto& [i, v] : z.parm) parms_zero = parms_zero && v == 0;
+    f.plane = z.curv == 0 && parms_zero && !z.xdat_loc && z.type != "TOROIDAL";
+    f.symmetric = z.type != "TOROIDAL" && z.aperture_shape == ApertureShape::Circle;
+    if (!f.coordbrk) continue;
+    if (!z.has_disz)
+      throw Error(z.loc, fmt::format("surface {}: no DISZ (thickness) line", z.number));
+    if (!z.disz)
+      throw Error(z.disz_loc, fmt::format("surface {}: a coordinate break's thickness must be "
+                                          "finite",
+                                          z.number));
+    for (const auto& [i, v] : z.parm) {
+      if (i >= 1 && i <= 6) {
+        f.parm[size_t(i - 1)] = v;
+        f.parm_loc[size_t(i - 1)] = parmLoc(z, i);
+      } else if (v != 0) {
+        throw Error(parmLoc(z, i), fmt::format("surface {}: COORDBRK PARM {} = {}: a coordinate "
+                                               "break has parameters 1 to 6",
+                                               z.number, i, v));
+      }
+    }
+    if (z.stop)
+      throw Error(z.type_loc, fmt::format("surface {}: TYPE COORDBRK on the stop: a coordinate "
+                                          "break cannot be the stop; put STOP on a real surface",
+                                          z.number));
+    if (z.mirror || !z.glass.empty())
+      throw Error(z.glass_loc, fmt::format("surface {}: a coordinate break has no glass (GLAS "
+                                           "{})",
+                                           z.number, z.mirror ? "MIRROR" : z.glass));
+  }
+  const UnfoldedSystem u = unfoldCoordinateBreaks(fold);
+  if (!u.any_break) return;
+  p.fold_loc = fold[size_t(std::find_if(fold.begin(), fold.end(),
+                                        [](const FoldSurface& f) { return f.coordbrk; }) -
+                          fold.begin())]
+                   .loc;
+  std::vector<ZSurface> twin;
+  for (size_t k = 0; k < u.kept.size(); ++k) {
+    ZSurface z = surfs[u.kept[k]];
+    if (k > 0 && k + 1 < u.kept.size()) z.disz = u.thickness[k];
+    twin.push_back(std::move(z));
+  }
+  for (const FoldMirrorAperture& m : u.tilted_mirrors) {
+    ZSurface& z = twin[m.index];
+    const double r = z.clap_max ? *z.clap_max : z.diam.value_or(0);
+    if (!(r > 0)) continue;  // automatic semi-diameter: computed on the twin
+    z.aperture_shape = ApertureShape::Ellipse;
+    z.half_x = r * m.scale_x, z.half_y = r * m.scale_y;
+    z.clap_max = r;
+    p.diagnostics.push_back(
+        {Severity::Note, z.loc,
+         fmt::format("surface {}: a tilted fold mirror; its semi-diameter {} is clipped as its "
+                     "projection along the axis, an ellipse {} x {} (exact for rays parallel to "
+                     "the axis)",
+                     z.number, r, z.half_x, z.half_y)});
+  }
+  p.diagnostics.push_back(
+      {Severity::Note, *p.fold_loc,
+       fmt::format("coordinate breaks fold the axis with plane mirrors: traced as the coaxial "
+                   "twin ({} surfaces, breaks removed)",
+                   twin.size())});
+  surfs = std::move(twin);
 }
 
 LensPrescription ZmxParser::parse(std::string_view bytes) {
@@ -579,10 +656,10 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       cur->type = std::string(t[1].text);
       cur->type_loc = loc;
       if (cur->type != "STANDARD" && cur->type != "EVENASPH" && cur->type != "ODDASPH" &&
-          cur->type != "TOROIDAL")
+          cur->type != "TOROIDAL" && cur->type != "COORDBRK")
         throw surfErr(
             fmt::format("TYPE {} is not supported (lensim models STANDARD, EVENASPH, "
-                        "ODDASPH and TOROIDAL surfaces)",
+                        "ODDASPH and TOROIDAL surfaces, and COORDBRK folds)",
                         cur->type));
     } else if (key == "CURV") {
       cur->curv = num(1, "curvature");
@@ -711,6 +788,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                 fmt::format("truncated or empty lens: {} SURF block{} (object, at least one lens "
                             "surface and the image are needed)",
                             surfs.size(), surfs.size() == 1 ? "" : "s"));
+
+  resolveCoordinateBreaks(surfs, p);
 
   // Wavelengths (micrometres in the file).
   {
