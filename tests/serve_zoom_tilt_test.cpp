@@ -35,7 +35,7 @@ class ServeZoomTilt : public ::testing::Test {
   static void SetUpTestSuite() {
     lensim::serve::ServerConfig c;
     c.port = 0;
-    // The second folder's ids are prefixed "2:".
+    // The second folder's ids are prefixed "1:".
     c.lens_folders = {kSource + "/lenses", kSource + "/tests/data/lenses"};
     c.scene = kSource + "/scenes/demo/demo.pbrt";
     server = new lensim::serve::Server(c);
@@ -73,7 +73,7 @@ class ServeZoomTilt : public ::testing::Test {
 };
 
 TEST_F(ServeZoomTilt, ZoomRangeIsReportedOnlyForLensesWithConfigurations) {
-  json z = get("/api/lens?lens=2:nikon_zoom_80_200.zmx&focus=inf&diagonal=43.3");
+  json z = get("/api/lens?lens=1:nikon_zoom_80_200.zmx&focus=inf&diagonal=43.3");
   ASSERT_TRUE(z.contains("zoom")) << z.dump();
   // The range spans the configurations' EFLs, as `lens info --configs` lists them.
   auto r = lensim::test::runLensim("lens info --configs " + kZoom + " --json");
@@ -94,7 +94,7 @@ TEST_F(ServeZoomTilt, ZoomRangeIsReportedOnlyForLensesWithConfigurations) {
 
 TEST_F(ServeZoomTilt, FocalLengthAndConfigurationGiveTheNumbersOfLensInfo) {
   const double want = 135;
-  json j = get("/api/lens?lens=2:nikon_zoom_80_200.zmx&focus=inf&diagonal=43.3&aperture=1000&focal=" +
+  json j = get("/api/lens?lens=1:nikon_zoom_80_200.zmx&focus=inf&diagonal=43.3&aperture=1000&focal=" +
                num(want));
   EXPECT_NEAR(j["zoom"]["requested_focal_length_mm"].get<double>(), want, 1e-12);
   EXPECT_NEAR(j["zoom"]["achieved_effective_focal_length_mm"].get<double>(), want, 1e-7 * want);
@@ -103,15 +103,15 @@ TEST_F(ServeZoomTilt, FocalLengthAndConfigurationGiveTheNumbersOfLensInfo) {
   for (const char* key : {"effective_focal_length_mm", "back_focal_length_mm", "f_number",
                           "total_track_mm", "film_distance_mm"})
     EXPECT_NEAR(j[key].get<double>(), info[key].get<double>(), 1e-9) << key;
-  json c2 = get("/api/lens?lens=2:nikon_zoom_80_200.zmx&focus=inf&diagonal=43.3&config=2");
+  json c2 = get("/api/lens?lens=1:nikon_zoom_80_200.zmx&focus=inf&diagonal=43.3&config=2");
   EXPECT_EQ(c2["zoom"]["configuration"].get<int>(), 2);
   json info2 = lensInfo(kZoom + " --config 2 --focus-distance inf");
   EXPECT_NEAR(c2["effective_focal_length_mm"].get<double>(),
               info2["effective_focal_length_mm"].get<double>(), 1e-9);
   // The diagram follows the zoom.
   httplib::Client c("127.0.0.1", server->port());
-  auto d1 = c.Get("/api/diagram?lens=2:nikon_zoom_80_200.zmx&focal=90");
-  auto d2 = c.Get("/api/diagram?lens=2:nikon_zoom_80_200.zmx&focal=180");
+  auto d1 = c.Get("/api/diagram?lens=1:nikon_zoom_80_200.zmx&focal=90");
+  auto d2 = c.Get("/api/diagram?lens=1:nikon_zoom_80_200.zmx&focal=180");
   ASSERT_TRUE(d1 && d2);
   EXPECT_EQ(d1->status, 200);
   EXPECT_NE(d1->body, d2->body);
@@ -145,7 +145,7 @@ TEST_F(ServeZoomTilt, BadZoomAndTiltValuesAreRefusedWithAMessage) {
     json e = get(path, status);
     EXPECT_NE(e.value("error", "").find(words), std::string::npos) << path << ": " << e.dump();
   };
-  const std::string zoom = "/api/lens?lens=2:nikon_zoom_80_200.zmx";
+  const std::string zoom = "/api/lens?lens=1:nikon_zoom_80_200.zmx";
   error(zoom + "&focal=500", 422, "outside the zoom range");
   error(zoom + "&config=2&focal=100", 400, "not both");
   error(zoom + "&config=99", 422, "99");

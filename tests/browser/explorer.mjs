@@ -153,9 +153,9 @@ try {
     await page.screenshot({ path: path.join(outDir, `explorer-${lens.replace(/\.dat$/, '')}.png`) });
   }
 
-  // A zoom lens (the second lens folder: ids "2:..."): the zoom slider appears; moving it changes
+  // A zoom lens (the second lens folder: ids "1:..."): the zoom slider appears; moving it changes
   // the focal length shown, which is `lens info --focal-length`'s EFL for the focal length asked.
-  const zoomLens = '2:nikon_zoom_80_200.zmx', zoomFile = path.join(root, 'tests/data/lenses/nikon_zoom_80_200.zmx');
+  const zoomLens = '1:nikon_zoom_80_200.zmx', zoomFile = path.join(root, 'tests/data/lenses/nikon_zoom_80_200.zmx');
   check(!last.zoomShown, `${last.lens}: no zoom slider for a lens without configurations`);
   await view('a').locator('.lens-select').selectOption(zoomLens);
   last = await settled('a', last.opticsQuery);
