@@ -102,7 +102,7 @@ function numbersTable(v, d) {
     if (ts.hinge_distance_mm !== undefined) {
       rows.push(['Hinge distance', `<span class="hinge-value" data-value="${ts.hinge_distance_mm}">${fmt(ts.hinge_distance_mm, 3)} mm</span> from the front nodal point (J = f / sin ${fmt(ts.tilt_angle_deg, 2)}°)`]);
       rows.push(['Plane of focus', `${fmt(ts.focus_plane_to_film_deg, 2)}° to the film; ` +
-        (ts.focus_plane_object_distance_mm === null ? 'meets the axis at infinity' : `meets the axis ${fmt(ts.focus_plane_object_distance_mm / 1000, 3)} m in front of the lens`)]);
+        (ts.focus_plane_object_distance_mm === null ? 'meets the axis at infinity' : `meets the axis ${fmt(ts.focus_plane_object_distance_mm / 1000, 3)} m in front of the front principal plane`)]);
     }
   }
   const esc = (t) => String(t).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' })[c]);
