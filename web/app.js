@@ -45,16 +45,41 @@ function sliderForFocus(v, d) {
   return Math.round(999 * Math.log(Math.max(lo, Math.min(hi, d)) / lo) / Math.log(hi / lo));
 }
 
-function query(v) {
+// Zoom slider (lenses with configurations): focal length on a log scale between the extreme
+// configurations' EFLs; the ends are exactly those EFLs (the server refuses anything outside).
+function zoomFor(v) {
+  const t = Number(v.zoomSlider.value) / 1000;
+  const { min, max } = v.zoom;
+  if (t <= 0) return min;
+  if (t >= 1) return max;
+  return Math.min(max, Math.max(min, min * Math.pow(max / min, t)));
+}
+function sliderForZoom(v, f) {
+  const { min, max } = v.zoom;
+  return Math.round(1000 * Math.log(Math.max(min, Math.min(max, f)) / min) / Math.log(max / min));
+}
+// Tilt (degrees) and shift (mm) sliders: tenths.
+const tiltShiftKeys = ['tiltx', 'tilty', 'shiftx', 'shifty'];
+function tiltShiftFor(v, key) { return Number(v[`${key}Slider`].value) / 10; }
+
+// The query of the lens as the preview renders it: the lens file at an aperture and focus.
+function previewQuery(v) {
   const f = focusFor(v);
   return `lens=${encodeURIComponent(v.lens)}&fnumber=${fNumberFor(v).toPrecision(6)}` +
          `&focus=${isFinite(f) ? f.toPrecision(6) : 'inf'}&diagonal=${state.scene.film_diagonal_mm}`;
+}
+// The optics also take the zoom position and the tilt and shift.
+function query(v) {
+  let q = previewQuery(v);
+  if (v.zoom) q += `&focal=${zoomFor(v)}`;
+  for (const k of tiltShiftKeys) { const x = tiltShiftFor(v, k); if (x !== 0) q += `&${k}=${x}`; }
+  return q;
 }
 
 function numbersTable(v, d) {
   const rows = [
     ['Lens', d.lens.name],
-    ['Focal length', `${fmt(d.effective_focal_length_mm)} mm`],
+    ['Focal length', `<span class="efl-value" data-value="${d.effective_focal_length_mm}">${fmt(d.effective_focal_length_mm, 3)} mm</span>`],
     ['f-number', `<span class="fnumber-value" data-value="${d.f_number}">f/${fmt(d.f_number, 3)}</span>`],
     ['Working f-number', `f/${fmt(d.working_f_number, 3)}`],
     ['Stop diameter', `<span class="stop-value" data-value="${d.stop_diameter_mm}">${fmt(d.stop_diameter_mm, 3)} mm</span> of ${fmt(d.max_stop_diameter_mm, 3)}`],
@@ -66,6 +91,20 @@ function numbersTable(v, d) {
     ['Field of view', d.field_of_view_deg === null ? `image circle ⌀ ${fmt(d.image_circle_diameter_mm)} mm` : `${fmt(d.field_of_view_deg)}° diagonal`],
     ['Total track', `${fmt(d.total_track_mm)} mm`],
   ];
+  const z = d.zoom;
+  if (z) {
+    rows.splice(2, 0, ['Zoom', `${z.configurations} configurations, ${fmt(z.min_effective_focal_length_mm)}–${fmt(z.max_effective_focal_length_mm)} mm` +
+      (z.requested_focal_length_mm !== undefined ? `; configurations ${z.configuration_a}–${z.configuration_b} at t = ${fmt(z.t, 4)} for ${fmt(z.requested_focal_length_mm, 3)} mm asked` : '')]);
+  }
+  const ts = d.tilt_shift;
+  if (ts) {
+    rows.push(['Tilt / shift', `tilt (${ts.tilt_deg.join(', ')})°, shift (${ts.shift_mm.join(', ')}) mm; film reaches ${fmt(ts.film_reach_from_axis_mm)} mm from the axis`]);
+    if (ts.hinge_distance_mm !== undefined) {
+      rows.push(['Hinge distance', `<span class="hinge-value" data-value="${ts.hinge_distance_mm}">${fmt(ts.hinge_distance_mm, 3)} mm</span> from the front nodal point (J = f / sin ${fmt(ts.tilt_angle_deg, 2)}°)`]);
+      rows.push(['Plane of focus', `${fmt(ts.focus_plane_to_film_deg, 2)}° to the film; ` +
+        (ts.focus_plane_object_distance_mm === null ? 'meets the axis at infinity' : `meets the axis ${fmt(ts.focus_plane_object_distance_mm / 1000, 3)} m in front of the front principal plane`)]);
+    }
+  }
   const esc = (t) => String(t).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' })[c]);
   rows[0][1] = esc(rows[0][1]);
   // The lens file's notes and warnings (as `lensim lens info` prints them).
@@ -118,11 +157,11 @@ async function updatePreview(v) {
   if (v.previewCtrl) v.previewCtrl.abort();
   const ctrl = new AbortController();
   v.previewCtrl = ctrl;
-  const q = query(v);
+  const q = query(v);  // reported as what the preview shows beside the optics
   const t0 = performance.now();
   let first = true;
   const exposure = $(document, '#autoexposure').checked ? 'auto' : '0';
-  const url = `/api/preview?view=${v.id}&scene=${encodeURIComponent(state.scene.id)}&width=320&spp=256&exposure=${exposure}&${q}`;
+  const url = `/api/preview?view=${v.id}&scene=${encodeURIComponent(state.scene.id)}&width=320&spp=256&exposure=${exposure}&${previewQuery(v)}`;
   v.pstatus.textContent = 'rendering…';
   try {
     const res = await fetch(url, { signal: ctrl.signal });
@@ -170,6 +209,8 @@ function schedule(v) {
     v.pending = false;
     const f = focusFor(v);
     v.focusOut.textContent = isFinite(f) ? `${f.toFixed(f < 10 ? 2 : 1)} m` : '∞';
+    if (v.zoom) v.zoomOut.textContent = `${zoomFor(v).toFixed(1)} mm`;
+    for (const k of tiltShiftKeys) v[`${k}Out`].textContent = `${tiltShiftFor(v, k)}${k.startsWith('tilt') ? '°' : ' mm'}`;
     updateOptics(v);
     updatePreview(v);
   });
@@ -183,6 +224,10 @@ async function chooseLens(v, id) {
   // The closest focus depends only on the lens: ask once, focused at infinity.
   const info = await getJson(`/api/lens?lens=${encodeURIComponent(id)}&focus=inf&diagonal=${state.scene.film_diagonal_mm}`);
   v.closest = info.closest_focus_distance_m;
+  // A zoom slider only for lenses with configurations; it starts at the file's surface data.
+  v.zoom = info.zoom ? { min: info.zoom.min_effective_focal_length_mm, max: info.zoom.max_effective_focal_length_mm } : null;
+  v.zoomLabel.hidden = !v.zoom;
+  if (v.zoom) v.zoomSlider.value = sliderForZoom(v, info.effective_focal_length_mm);
   v.el.dataset.lens = id;
   const keepF = v.fWanted || 4;
   v.fSlider.value = sliderForFNumber(v, Math.max(v.minF, keepF));
@@ -200,6 +245,7 @@ function makeView(id, lensId) {
     focusSlider: $(el, '.focus-slider'), focusOut: $(el, '.focus-out'), img: $(el, '.preview-img'),
     pstatus: $(el, '.preview-status'), diagram: $(el, '.diagram'), table: $(el, '.numbers'),
     plots: $(el, '.plots'), timing: $(el, '.timing'), error: $(el, '.error'),
+    zoomSlider: $(el, '.zoom-slider'), zoomOut: $(el, '.zoom-out'), zoomLabel: $(el, '.slider.zoom'), zoom: null,
     minF: 2, closest: 0.5, fWanted: null, focusWanted: state.scene.focus_distance_m || 3,
   };
   // Grouped by folder (the catalogue's subfolders: classic lenses at the top level).
@@ -225,6 +271,12 @@ function makeView(id, lensId) {
   v.lensSelect.addEventListener('change', () => { v.changedAt = performance.now(); chooseLens(v, v.lensSelect.value); });
   v.fSlider.addEventListener('input', () => { v.changedAt ??= performance.now(); v.fWanted = fNumberFor(v); schedule(v); });
   v.focusSlider.addEventListener('input', () => { v.changedAt ??= performance.now(); v.focusWanted = focusFor(v); schedule(v); });
+  v.zoomSlider.addEventListener('input', () => { v.changedAt ??= performance.now(); schedule(v); });
+  for (const k of tiltShiftKeys) {
+    v[`${k}Slider`] = $(el, `.${k}-slider`);
+    v[`${k}Out`] = $(el, `.${k}-out`);
+    v[`${k}Slider`].addEventListener('input', () => { v.changedAt ??= performance.now(); schedule(v); });
+  }
   state.views.push(v);
   chooseLens(v, lensId);
   return v;

@@ -38,7 +38,8 @@ function check(cond, what) {
 }
 
 // The server, on a free port.
-const server = spawn(lensim, ['serve', '--port', '0', '--scene', 'scenes/demo/demo.pbrt', '--lenses', 'lenses'],
+const server = spawn(lensim, ['serve', '--port', '0', '--scene', 'scenes/demo/demo.pbrt', '--lenses', 'lenses',
+  '--lenses', 'tests/data/lenses'],
   { cwd: root, stdio: ['ignore', 'pipe', 'inherit'] });
 const url = await new Promise((resolve, reject) => {
   let text = '';
@@ -80,6 +81,11 @@ try {
   const data = (id) => view(id).evaluate((el) => ({ ...el.dataset,
     diagram: el.querySelector('.diagram').innerHTML,
     fText: el.querySelector('.fnumber-value')?.textContent,
+    efl: el.querySelector('.efl-value')?.dataset.value,
+    eflText: el.querySelector('.efl-value')?.textContent,
+    hinge: el.querySelector('.hinge-value')?.dataset.value,
+    hingeText: el.querySelector('.hinge-value')?.textContent,
+    zoomShown: !el.querySelector('.slider.zoom').hidden && el.querySelector('.slider.zoom').offsetWidth > 0,
     stop: el.querySelector('.stop-value')?.dataset.value,
     focus: el.querySelector('.focus-value')?.dataset.value ?? 'inf',
     plots: [...el.querySelectorAll('.plots .svg')].map((p) => p.innerHTML.length),
@@ -147,9 +153,63 @@ try {
     await page.screenshot({ path: path.join(outDir, `explorer-${lens.replace(/\.dat$/, '')}.png`) });
   }
 
-  // Two lenses side by side on the same scene.
+  // A zoom lens (the second lens folder: ids "1:..."): the zoom slider appears; moving it changes
+  // the focal length shown, which is `lens info --focal-length`'s EFL for the focal length asked.
+  const zoomLens = '1:nikon_zoom_80_200.zmx', zoomFile = path.join(root, 'tests/data/lenses/nikon_zoom_80_200.zmx');
+  check(!last.zoomShown, `${last.lens}: no zoom slider for a lens without configurations`);
+  await view('a').locator('.lens-select').selectOption(zoomLens);
+  last = await settled('a', last.opticsQuery);
+  check(last.zoomShown, 'zoom lens: the zoom slider is shown');
+  const positions = [300, 700, 1000];
+  for (const pos of positions) {
+    await slide('a', '.zoom-slider', pos);
+    const d = await settled('a', last.opticsQuery);
+    const asked = Number(new URLSearchParams(d.opticsQuery).get('focal'));
+    const info = JSON.parse(execFileSync(lensim, ['lens', 'info', zoomFile, '--focal-length', String(asked),
+      '--focus-distance', d.focus, '--film-diagonal', '43.3', '--json'], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'ignore'] }));
+    check(Math.abs(Number(d.efl) - info.effective_focal_length_mm) < 1e-9 &&
+      d.eflText === `${info.effective_focal_length_mm.toFixed(3)} mm`,
+      `zoom slider ${pos}: EFL shown ${d.eflText}, lens info ${info.effective_focal_length_mm} for ${asked} mm asked`);
+    check(Math.abs(Number(d.efl) - asked) < 1e-6 * asked, `zoom slider ${pos}: EFL ${d.efl} is the ${asked} mm asked`);
+    if (pos !== positions[0]) check(d.diagram !== last.diagram && Number(d.efl) > Number(last.efl), `zoom slider ${pos}: longer focal length, diagram changed`);
+    check(!d.error, `zoom slider ${pos}: no error shown (${d.error})`);
+    last = d;
+  }
+  await page.screenshot({ path: path.join(outDir, 'explorer-zoom.png') });
+  // Tilt and shift: the hinge distance shown is `lens info --tilt --shift`'s, and J = f / sin(tilt).
   await view('a').locator('.lens-select').selectOption('dgauss.50mm.dat');
   last = await settled('a', last.opticsQuery);
+  check(!last.zoomShown && last.hinge === undefined, 'dgauss: no zoom slider, no hinge before a tilt');
+  await slide('a', '.tiltx-slider', -60);
+  await slide('a', '.shifty-slider', 50);
+  let d = await settled('a', last.opticsQuery);
+  {
+    const info = JSON.parse(execFileSync(lensim, ['lens', 'info', path.join(root, 'lenses/dgauss.50mm.dat'),
+      '--aperture-diameter', String(d.stop), '--focus-distance', d.focus, '--film-diagonal', '43.3',
+      '--tilt=-6,0', '--shift=0,5', '--json'], { encoding: 'utf8' }));
+    const j = info.tilt_shift.hinge_distance_mm;
+    check(d.hinge !== undefined && Math.abs(Number(d.hinge) - j) < 1e-9 && d.hingeText === `${j.toFixed(3)} mm`,
+      `tilt: hinge shown ${d.hingeText}, lens info ${j}`);
+    const closed = info.effective_focal_length_mm / Math.sin(6 * Math.PI / 180);
+    check(Math.abs(Number(d.hinge) - closed) < 1e-6 * closed, `tilt: hinge ${d.hinge} = f / sin 6° = ${closed}`);
+    check(d.img.startsWith('data:image/png') && !d.error, `tilt: preview and no error (${d.error})`);
+  }
+  last = d;
+  await slide('a', '.tiltx-slider', -120);
+  d = await settled('a', last.opticsQuery);
+  check(Number(d.hinge) < Number(last.hinge), `tilt: more tilt, shorter hinge distance (${last.hinge} to ${d.hinge})`);
+  await page.screenshot({ path: path.join(outDir, 'explorer-tilt.png') });
+  last = d;
+  await slide('a', '.tiltx-slider', 0);
+  await slide('a', '.shifty-slider', 0);
+  last = await settled('a', last.opticsQuery);
+  check(last.hinge === undefined, 'tilt back to 0: no hinge shown');
+
+  // Two lenses side by side on the same scene.
+  if (last.lens !== 'dgauss.50mm.dat') {
+    await view('a').locator('.lens-select').selectOption('dgauss.50mm.dat');
+    last = await settled('a', last.opticsQuery);
+  }
   await page.locator('#compare').check();
   await page.waitForSelector('#view-b');
   await view('b').locator('.lens-select').selectOption('telephoto.250mm.dat');

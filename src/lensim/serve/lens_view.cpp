@@ -21,11 +21,30 @@ SetUpLens setUpLens(const LensSettings& st) {
   if (!(st.film_diagonal_mm > 0) || st.film_diagonal_mm > 1000)
     throw Error(fmt::format("film diagonal {} mm: expected 0 to 1000 mm", st.film_diagonal_mm));
   LensPrescription pr = readLensFile(st.path);
+  SetUpLens out;
+  out.configuration_count = configurationCount(pr);
+  out.tilt_shift = st.tilt_shift;
+  if (st.configuration && st.zoom_focal_length_mm)
+    throw Error("give a configuration or a focal length, not both");
+  if (out.configuration_count > 1) {
+    out.zoom_min_efl_mm = out.zoom_max_efl_mm = configurationEfl_mm(pr, 1);
+    for (int n = 2; n <= out.configuration_count; ++n) {
+      const double efl = configurationEfl_mm(pr, n);
+      out.zoom_min_efl_mm = std::min(out.zoom_min_efl_mm, efl);
+      out.zoom_max_efl_mm = std::max(out.zoom_max_efl_mm, efl);
+    }
+  }
+  if (st.configuration) {
+    pr = selectConfiguration(pr, *st.configuration);
+    out.configuration = st.configuration;
+  } else if (st.zoom_focal_length_mm) {
+    out.zoom = zoomToFocalLength(pr, *st.zoom_focal_length_mm);
+    pr = out.zoom->prescription;
+  }
   // Wide open first: the file's stop, its f-number at infinity.
   LensSetup open;
   open.focus_distance_m = std::numeric_limits<double>::infinity();
   FocusedLens wide = focusLens(pr, open);
-  SetUpLens out;
   out.max_stop_diameter_mm = wide.paraxial.aperture_stop_diameter_mm;
   out.min_f_number = wide.paraxial.f_number;
   out.stop_diameter_mm = out.max_stop_diameter_mm;
@@ -44,6 +63,37 @@ SetUpLens setUpLens(const LensSettings& st) {
   out.lens = focusLens(std::move(pr), setup);
   return out;
 }
+
+namespace {
+
+json vec(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
+
+/// The hinge line and plane of focus of a tilted film (optics::scheimpflug), and how far the
+/// film reaches from a shifted axis; keys as `lens info --tilt --shift --json`.
+json tiltShiftJson(const SetUpLens& s, double film_diagonal_mm) {
+  const TiltShift& ts = s.tilt_shift;
+  json j;
+  j["tilt_deg"] = json::array({ts.tilt_deg.x, ts.tilt_deg.y});
+  j["shift_mm"] = json::array({ts.shift_mm.x, ts.shift_mm.y});
+  j["film_reach_from_axis_mm"] = film_diagonal_mm / 2 + std::hypot(ts.shift_mm.x, ts.shift_mm.y);
+  if (!ts.tilted()) return j;
+  const FilmPlacement placement(ts, s.lens.lens->filmZ_mm());
+  const ScheimpflugData sd = scheimpflug(s.lens.paraxial, placement);
+  j["tilt_angle_deg"] = sd.tilt_deg;
+  j["hinge_distance_mm"] = sd.hinge_distance_mm;
+  j["hinge_point_mm"] = vec(sd.hinge_point_mm);
+  j["hinge_direction"] = vec(sd.hinge_direction);
+  j["focus_plane_normal"] = vec(sd.focus_plane_normal);
+  j["focus_plane_axis_z_mm"] =
+      std::isfinite(sd.focus_plane_axis_z_mm) ? json(sd.focus_plane_axis_z_mm) : json(nullptr);
+  j["focus_plane_object_distance_mm"] =
+      std::isfinite(sd.object_distance_mm) ? json(sd.object_distance_mm) : json(nullptr);
+  j["focus_plane_to_film_deg"] = sd.focus_plane_to_film_deg;
+  j["focus_plane_to_lens_plane_deg"] = sd.focus_plane_to_lens_plane_deg;
+  return j;
+}
+
+}  // namespace
 
 json firstOrderJson(const SetUpLens& s, double film_diagonal_mm) {
   const FocusedLens& fl = s.lens;
@@ -84,6 +134,21 @@ json firstOrderJson(const SetUpLens& s, double film_diagonal_mm) {
   j["stop_diameter_mm"] = s.stop_diameter_mm;
   j["max_stop_diameter_mm"] = s.max_stop_diameter_mm;
   j["min_f_number"] = s.min_f_number;
+  if (s.configuration_count > 1) {
+    json z{{"configurations", s.configuration_count},
+           {"min_effective_focal_length_mm", s.zoom_min_efl_mm},
+           {"max_effective_focal_length_mm", s.zoom_max_efl_mm}};
+    if (s.configuration) z["configuration"] = *s.configuration;
+    if (s.zoom) {
+      z["requested_focal_length_mm"] = s.zoom->requested_efl_mm;
+      z["achieved_effective_focal_length_mm"] = s.zoom->achieved_efl_mm;
+      z["configuration_a"] = s.zoom->config_a;
+      z["configuration_b"] = s.zoom->config_b;
+      z["t"] = s.zoom->t;
+    }
+    j["zoom"] = z;
+  }
+  if (s.tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(s, film_diagonal_mm);
   json diags = json::array();
   for (const Diagnostic& d : fl.allDiagnostics()) diags.push_back(d.str());
   j["diagnostics"] = diags;

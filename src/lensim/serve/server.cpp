@@ -182,6 +182,16 @@ struct Server::Impl {
       throw ApiError{400, "give fnumber or aperture, not both"};
     s.focus_distance_m = focusParam(rq);
     s.film_diagonal_mm = number(rq, "diagonal", 0.1, 1000).value_or(35.0);
+    // A zoom lens: a configuration (1-based) or a focal length between the configurations.
+    if (param(rq, "config")) s.configuration = integer(rq, "config", 1, 1000, 1);
+    s.zoom_focal_length_mm = number(rq, "focal", 0.01, 1e5);
+    if (s.configuration && s.zoom_focal_length_mm)
+      throw ApiError{400, "give config or focal, not both"};
+    // Tilt (degrees about the film's x and y axes, within +-45) and shift (mm), as `lens info`.
+    s.tilt_shift.tilt_deg = {number(rq, "tiltx", -44.99, 44.99).value_or(0.0),
+                             number(rq, "tilty", -44.99, 44.99).value_or(0.0)};
+    s.tilt_shift.shift_mm = {number(rq, "shiftx", -1000, 1000).value_or(0.0),
+                             number(rq, "shifty", -1000, 1000).value_or(0.0)};
     return s;
   }
 
@@ -227,6 +237,9 @@ struct Server::Impl {
   void startPreview(const httplib::Request& rq, httplib::Response& res, const std::string& view,
                     const PreviewViews::Ticket& ticket) {
     LensSettings ls = lensSettings(rq);
+    // The preview renders the scene's lens file as it stands.
+    if (ls.configuration || ls.zoom_focal_length_mm || ls.tilt_shift.any())
+      throw ApiError{400, "the preview does not take config, focal, tilt or shift"};
     const fs::path scene_path = scenePath(rq);
     auto shown = previews.scene(scene_path.string());
     if (!param(rq, "diagonal")) ls.film_diagonal_mm = shown->film.diagonal_mm;
