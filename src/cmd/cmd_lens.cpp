@@ -25,6 +25,7 @@
 #include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_formats.h"
+#include "lensim/optics/lens_report.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/plots.h"
 #include "lensim/util/file.h"
@@ -43,74 +44,8 @@ json vec3Json(const Vec3& v) {
   return json::array({v.x, v.y, v.z});
 }
 
-// Lens length and total track: front to rear vertex and front vertex to film; for a folded
-// (mirror) lens, the axial extent of its surfaces and of its surfaces and film.
-double lensLength(const LensSystem& lens) {
-  if (lens.mirrorCount() == 0) return lens.rearVertexZ_mm();
-  double lo = 0, hi = 0;
-  for (const Interface& s : lens.interfaces()) lo = std::min(lo, s.z_mm), hi = std::max(hi, s.z_mm);
-  return hi - lo;
-}
-double totalTrack(const LensSystem& lens) {
-  if (lens.mirrorCount() == 0) return lens.filmZ_mm();
-  double lo = lens.realFilmZ_mm(), hi = lo;
-  for (const Interface& s : lens.interfaces()) lo = std::min(lo, s.z_mm), hi = std::max(hi, s.z_mm);
-  return hi - lo;
-}
-
-json surfacesJson(const LensSystem& lens) {
-  json arr = json::array();
-  const auto& rows = lens.prescription().surfaces;
-  for (int i = 0; i < lens.surfaceCount(); ++i) {
-    const Interface& s = lens.interfaces()[i];
-    arr.push_back({{"index", i},
-                   {"line", rows[i].loc.line},
-                   {"radius_mm", s.radius_mm},
-                   {"thickness_mm",
-                    i + 1 < lens.surfaceCount() ? rows[i].thickness_mm : lens.filmDistance_mm()},
-                   {"ior", s.ior_after},
-                   {"aperture_diameter_mm", 2 * s.semi_aperture_mm},
-                   {"z_mm", s.z_mm},
-                   {"is_stop", s.is_stop}});
-    if (s.is_mirror) arr.back()["mirror"] = true;
-    if (s.obscuration_radius_mm > 0) arr.back()["obscuration_radius_mm"] = s.obscuration_radius_mm;
-    if (!s.shape.isSpherical()) {
-      json& e = arr.back();
-      e["conic"] = s.shape.conic;
-      if (s.shape.hasPolynomial()) {
-        json a = json::object();
-        for (size_t k = 1; k < s.shape.poly.size(); ++k)
-          if (s.shape.poly[k] != 0) a[std::to_string(k)] = s.shape.poly[k];
-        e["aspheric"] = a;
-      }
-      if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
-      if (s.shape.rotation_radius_mm) e["rotation_radius_mm"] = *s.shape.rotation_radius_mm;
-    }
-  }
-  return arr;
-}
-
 json numberOrNull(double v) {
   return std::isfinite(v) ? json(v) : json(nullptr);
-}
-
-// The glass elements: each medium other than air, with its glass and indices.
-json elementsJson(const LensSystem& lens) {
-  json arr = json::array();
-  const auto& rows = lens.prescription().surfaces;
-  for (int i = 0; i + 1 < lens.surfaceCount(); ++i) {
-    const Glass& g = lens.glasses()[i];
-    if (g.isAir()) continue;
-    arr.push_back({{"front_surface", i},
-                   {"back_surface", i + 1},
-                   {"line", rows[i].loc.line},
-                   {"glass", g.describe()},
-                   {"kind", g.kind()},
-                   {"n_d", g.n_d()},
-                   {"v_d", numberOrNull(g.v_d())},
-                   {"n", lens.interfaces()[i].ior_after}});
-  }
-  return arr;
 }
 
 // The lens's internal transmittance on the axis (optics/absorption.h) at these wavelengths.
@@ -147,12 +82,6 @@ std::string transmittanceText(const LensSystem& lens) {
     s += fmt::format("; element{} {} without data taken as 1", missing.size() == 1 ? "" : "s",
                      fmt::join(missing, ", "));
   return s;
-}
-
-json diagnosticsJson(const FocusedLens& fl) {
-  json arr = json::array();
-  for (const Diagnostic& d : fl.allDiagnostics()) arr.push_back(d.str());
-  return arr;
 }
 
 // `lens info --configs`: first-order data of every configuration, each set up (focus, film)
@@ -425,30 +354,20 @@ int runInfo(const LensArgs& args, bool as_json) {
   if (object_z) magnification = -s_i / (p.principal_plane_front_z_mm - *object_z);
 
   if (as_json) {
-    json j;
-    j["lens"] = {{"path", pr.path},
-                 {"name", pr.name},
-                 {"layout", layoutName(pr.layout)},
-                 {"format", pr.format},
-                 {"surface_count", lens.surfaceCount()}};
+    json j = firstOrderJson(fl, args.film_diagonal_mm);
+    j["lens"]["path"] = pr.path;
+    j["lens"]["format"] = pr.format;
     if (!pr.aperture_spec.empty()) j["lens"]["aperture_spec"] = pr.aperture_spec;
     if (pr.object_distance_mm) j["lens"]["object_distance_mm"] = *pr.object_distance_mm;
     j["lens"]["configurations"] = configurationCount(readLensFile(args.lens_path));
     if (args.configuration) j["lens"]["configuration"] = *args.configuration;
-    if (pr.nominal_focal_length_mm)
-      j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
-    j["effective_focal_length_mm"] = p.effective_focal_length_mm;
-    j["back_focal_length_mm"] = p.back_focal_length_mm;
-    j["front_focal_length_mm"] = p.front_focal_length_mm;
     j["front_focal_point_z_mm"] = p.front_focal_point_z_mm;
     j["back_focal_point_z_mm"] = p.back_focal_point_z_mm;
     j["principal_plane_front_z_mm"] = p.principal_plane_front_z_mm;
     j["principal_plane_back_z_mm"] = p.principal_plane_back_z_mm;
     j["nodal_point_front_z_mm"] = p.nodal_point_front_z_mm;
     j["nodal_point_back_z_mm"] = p.nodal_point_back_z_mm;
-    j["aperture_stop_surface"] = p.aperture_stop_surface;
     j["aperture_stop_is_file_stop"] = p.stop_is_file_stop;
-    j["aperture_stop_diameter_mm"] = p.aperture_stop_diameter_mm;
     j["paraxial_limit_surface"] = p.paraxial_limit_surface;
     j["paraxial_limit_f_number"] = p.paraxial_limit_f_number;
     j["paraxial_f_number"] = p.f_number;
@@ -456,17 +375,7 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["real_image_space_f_number"] = p.real_image_space_f_number;
     j["real_marginal_ray_height_mm"] = p.real_marginal_height_mm;
     j["real_limit_surface"] = p.real_limit_surface;
-    j["entrance_pupil_diameter_mm"] = p.entrance_pupil_diameter_mm;
-    j["entrance_pupil_z_mm"] = p.entrance_pupil_z_mm;
-    j["exit_pupil_diameter_mm"] = p.exit_pupil_diameter_mm;
-    j["exit_pupil_z_mm"] = p.exit_pupil_z_mm;
-    j["f_number"] = p.f_number;
-    j["working_f_number"] = working_f;
-    j["lens_length_mm"] = lensLength(lens);
-    j["total_track_mm"] = totalTrack(lens);
     if (lens.mirrorCount() > 0) j["mirrors"] = lens.mirrorCount();
-    j["film_distance_mm"] = lens.filmDistance_mm();
-    j["focus_distance_m"] = at_inf ? json(nullptr) : json(fl.focus_distance_m);
     j["focus_at_infinity"] = at_inf && !beyond_infinity_mm;
     j["focus_beyond_infinity"] = beyond_infinity_mm.has_value();
     j["film_in_front_of_infinity_focus_mm"] =
@@ -475,14 +384,7 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["magnification"] = magnification ? json(*magnification) : json(nullptr);
     if (!pr.focus_group.empty()) j["group_focusing"] = true;
     j["focus_method"] = focusMethodName(args.focus_method);
-    j["closest_focus_distance_m"] = closest;
-    j["film_diagonal_mm"] = args.film_diagonal_mm;
-    j["field_of_view_deg"] = fov.real_deg ? json(*fov.real_deg) : json(nullptr);
-    j["paraxial_field_of_view_deg"] = fov.paraxial_deg;
-    if (fov.image_circle_diameter_mm) {
-      j["image_circle_diameter_mm"] = *fov.image_circle_diameter_mm;
-      j["field_of_view_max_deg"] = *fov.real_max_deg;
-    }
+    if (fov.image_circle_diameter_mm) j["field_of_view_max_deg"] = *fov.real_max_deg;
     if (!isRotationallySymmetric(pr)) {
       const AnamorphicData ad = anamorphicData(lens);
       j["anamorphic"] = {
@@ -501,7 +403,6 @@ int runInfo(const LensArgs& args, bool as_json) {
     j["elements"] = elementsJson(lens);
     j["internal_transmittance"] = transmittanceJson(lens);
     j["coatings"] = coatingsJson(lens);
-    j["diagnostics"] = diagnosticsJson(fl);
     if (tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
     std::cout << j.dump(2) << "\n";
     return 0;
