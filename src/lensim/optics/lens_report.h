@@ -1,6 +1,6 @@
 // The lens-info JSON: the keys `lensim lens info --json` and the explorer's /api/lens share,
-// built in one place so the two cannot drift apart. Key names and units follow docs/lens-info.md
-// conventions: lengths in mm along the axis (z from the front vertex), distances to objects in m.
+// built in one place so the two cannot drift apart. Lengths in mm along the axis (z from the
+// front vertex), focus distances in m (docs/conventions.md).
 #pragma once
 
 #include <nlohmann/json.hpp>
