@@ -308,6 +308,107 @@ int runInfoUnfocused(const LensArgs& args, bool as_json, const Error& why) {
   return 0;
 }
 
+// Where the film focuses, beyond what the first-order keys say: the film in front of the
+// infinity focus (if it is), the object vergence and the magnification.
+struct InfoFocus {
+  std::optional<double> beyond_infinity_mm;
+  double vergence_dpt = 0;
+  std::optional<double> magnification;
+};
+
+InfoFocus infoFocus(const LensArgs& args, const FocusedLens& fl) {
+  const LensSystem& lens = *fl.lens;
+  const ParaxialData& p = fl.paraxial;
+  const bool at_inf = std::isinf(fl.focus_distance_m);
+  std::optional<double> object_z;
+  if (!at_inf) object_z = lens.filmZ_mm() - fl.focus_distance_m * 1000;
+  InfoFocus f;
+  // Where the film sits relative to the infinity focus (same method): a film in front of it
+  // focuses "beyond infinity" (no real object is sharp), which `focus infinity` would hide.
+  if (at_inf) {
+    try {
+      const double inf_film = filmDistanceForFocus(lens, p, fl.focus_distance_m, args.focus_method);
+      const double offset = lens.filmDistance_mm() - inf_film;
+      if (offset < -1e-6 * std::max(1.0, std::abs(p.effective_focal_length_mm)))
+        f.beyond_infinity_mm = -offset;
+    } catch (const Error&) {
+      // no infinity focus behind the rear vertex: nothing to compare with
+    }
+  }
+  // 1/s_o (dioptres) of the film's conjugate, thick-lens model: 0 at infinity, negative beyond
+  // it (the film is focused for a beam converging toward a point behind the lens).
+  const double s_i = lens.filmZ_mm() - p.principal_plane_back_z_mm;
+  f.vergence_dpt = 1000 * (1 / p.effective_focal_length_mm - 1 / s_i);
+  // Paraxial lateral magnification at the focused distance (object and image in air): -s_i/s_o
+  // from the principal planes.
+  if (object_z) f.magnification = -s_i / (p.principal_plane_front_z_mm - *object_z);
+  return f;
+}
+
+// `lens info --json` of a focused lens.
+void printInfoJson(const LensArgs& args, const FocusedLens& fl, const TiltShift& tilt_shift,
+                   const InfoFocus& focus) {
+  const LensSystem& lens = *fl.lens;
+  const ParaxialData& p = fl.paraxial;
+  const auto& pr = lens.prescription();
+  const bool at_inf = std::isinf(fl.focus_distance_m);
+  const FieldOfView fov = fieldOfView(lens, p, args.film_diagonal_mm);
+  const std::optional<double>& beyond_infinity_mm = focus.beyond_infinity_mm;
+  const std::optional<double>& magnification = focus.magnification;
+  const double vergence_dpt = focus.vergence_dpt;
+  json j = firstOrderJson(fl, args.film_diagonal_mm);
+  j["lens"]["path"] = pr.path;
+  j["lens"]["format"] = pr.format;
+  if (!pr.aperture_spec.empty()) j["lens"]["aperture_spec"] = pr.aperture_spec;
+  if (pr.object_distance_mm) j["lens"]["object_distance_mm"] = *pr.object_distance_mm;
+  j["lens"]["configurations"] = configurationCount(readLensFile(args.lens_path));
+  if (args.configuration) j["lens"]["configuration"] = *args.configuration;
+  j["front_focal_point_z_mm"] = p.front_focal_point_z_mm;
+  j["back_focal_point_z_mm"] = p.back_focal_point_z_mm;
+  j["principal_plane_front_z_mm"] = p.principal_plane_front_z_mm;
+  j["principal_plane_back_z_mm"] = p.principal_plane_back_z_mm;
+  j["nodal_point_front_z_mm"] = p.nodal_point_front_z_mm;
+  j["nodal_point_back_z_mm"] = p.nodal_point_back_z_mm;
+  j["aperture_stop_is_file_stop"] = p.stop_is_file_stop;
+  j["paraxial_limit_surface"] = p.paraxial_limit_surface;
+  j["paraxial_limit_f_number"] = p.paraxial_limit_f_number;
+  j["paraxial_f_number"] = p.f_number;
+  j["real_f_number"] = p.real_f_number;
+  j["real_image_space_f_number"] = p.real_image_space_f_number;
+  j["real_marginal_ray_height_mm"] = p.real_marginal_height_mm;
+  j["real_limit_surface"] = p.real_limit_surface;
+  if (lens.mirrorCount() > 0) j["mirrors"] = lens.mirrorCount();
+  j["focus_at_infinity"] = at_inf && !beyond_infinity_mm;
+  j["focus_beyond_infinity"] = beyond_infinity_mm.has_value();
+  j["film_in_front_of_infinity_focus_mm"] =
+      beyond_infinity_mm ? json(*beyond_infinity_mm) : json(nullptr);
+  j["object_vergence_dpt"] = vergence_dpt;
+  j["magnification"] = magnification ? json(*magnification) : json(nullptr);
+  if (!pr.focus_group.empty()) j["group_focusing"] = true;
+  j["focus_method"] = focusMethodName(args.focus_method);
+  if (fov.image_circle_diameter_mm) j["field_of_view_max_deg"] = *fov.real_max_deg;
+  if (!isRotationallySymmetric(pr)) {
+    const AnamorphicData ad = anamorphicData(lens);
+    j["anamorphic"] = {
+        {"effective_focal_length_x_mm",
+         ad.x ? json(ad.x->effective_focal_length_mm) : json(nullptr)},
+        {"effective_focal_length_y_mm",
+         ad.y ? json(ad.y->effective_focal_length_mm) : json(nullptr)},
+        {"back_focal_length_x_mm", ad.x ? json(ad.x->back_focal_length_mm) : json(nullptr)},
+        {"back_focal_length_y_mm", ad.y ? json(ad.y->back_focal_length_mm) : json(nullptr)},
+        {"squeeze", ad.squeeze}};
+  }
+  j["surfaces"] = surfacesJson(lens);
+  j["wavelength_nm"] = lens.wavelength_nm();
+  j["primary_wavelength_nm"] = primaryWavelength_nm(pr);
+  j["dispersive"] = lens.dispersive();
+  j["elements"] = elementsJson(lens);
+  j["internal_transmittance"] = transmittanceJson(lens);
+  j["coatings"] = coatingsJson(lens);
+  if (tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
+  std::cout << j.dump(2) << "\n";
+}
+
 int runInfo(const LensArgs& args, bool as_json) {
   const TiltShift tilt_shift = parseTiltShift(args.tilt, args.shift);
   std::optional<FocusedLens> set_up;
@@ -331,80 +432,13 @@ int runInfo(const LensArgs& args, bool as_json) {
   const FieldOfView fov = fieldOfView(lens, p, args.film_diagonal_mm);
   const double closest = closestFocusDistance_m(lens, p);
   const auto& pr = lens.prescription();
-  // Where the film sits relative to the infinity focus (same method): a film in front of it
-  // focuses "beyond infinity" (no real object is sharp), which `focus infinity` would hide.
-  std::optional<double> beyond_infinity_mm;
-  if (at_inf) {
-    try {
-      const double inf_film = filmDistanceForFocus(lens, p, fl.focus_distance_m, args.focus_method);
-      const double offset = lens.filmDistance_mm() - inf_film;
-      if (offset < -1e-6 * std::max(1.0, std::abs(p.effective_focal_length_mm)))
-        beyond_infinity_mm = -offset;
-    } catch (const Error&) {
-      // no infinity focus behind the rear vertex: nothing to compare with
-    }
-  }
-  // 1/s_o (dioptres) of the film's conjugate, thick-lens model: 0 at infinity, negative beyond
-  // it (the film is focused for a beam converging toward a point behind the lens).
-  const double s_i = lens.filmZ_mm() - p.principal_plane_back_z_mm;
-  const double vergence_dpt = 1000 * (1 / p.effective_focal_length_mm - 1 / s_i);
-  // Paraxial lateral magnification at the focused distance (object and image in air): -s_i/s_o
-  // from the principal planes.
-  std::optional<double> magnification;
-  if (object_z) magnification = -s_i / (p.principal_plane_front_z_mm - *object_z);
+  const InfoFocus focus = infoFocus(args, fl);
+  const std::optional<double>& beyond_infinity_mm = focus.beyond_infinity_mm;
+  const std::optional<double>& magnification = focus.magnification;
+  const double vergence_dpt = focus.vergence_dpt;
 
   if (as_json) {
-    json j = firstOrderJson(fl, args.film_diagonal_mm);
-    j["lens"]["path"] = pr.path;
-    j["lens"]["format"] = pr.format;
-    if (!pr.aperture_spec.empty()) j["lens"]["aperture_spec"] = pr.aperture_spec;
-    if (pr.object_distance_mm) j["lens"]["object_distance_mm"] = *pr.object_distance_mm;
-    j["lens"]["configurations"] = configurationCount(readLensFile(args.lens_path));
-    if (args.configuration) j["lens"]["configuration"] = *args.configuration;
-    j["front_focal_point_z_mm"] = p.front_focal_point_z_mm;
-    j["back_focal_point_z_mm"] = p.back_focal_point_z_mm;
-    j["principal_plane_front_z_mm"] = p.principal_plane_front_z_mm;
-    j["principal_plane_back_z_mm"] = p.principal_plane_back_z_mm;
-    j["nodal_point_front_z_mm"] = p.nodal_point_front_z_mm;
-    j["nodal_point_back_z_mm"] = p.nodal_point_back_z_mm;
-    j["aperture_stop_is_file_stop"] = p.stop_is_file_stop;
-    j["paraxial_limit_surface"] = p.paraxial_limit_surface;
-    j["paraxial_limit_f_number"] = p.paraxial_limit_f_number;
-    j["paraxial_f_number"] = p.f_number;
-    j["real_f_number"] = p.real_f_number;
-    j["real_image_space_f_number"] = p.real_image_space_f_number;
-    j["real_marginal_ray_height_mm"] = p.real_marginal_height_mm;
-    j["real_limit_surface"] = p.real_limit_surface;
-    if (lens.mirrorCount() > 0) j["mirrors"] = lens.mirrorCount();
-    j["focus_at_infinity"] = at_inf && !beyond_infinity_mm;
-    j["focus_beyond_infinity"] = beyond_infinity_mm.has_value();
-    j["film_in_front_of_infinity_focus_mm"] =
-        beyond_infinity_mm ? json(*beyond_infinity_mm) : json(nullptr);
-    j["object_vergence_dpt"] = vergence_dpt;
-    j["magnification"] = magnification ? json(*magnification) : json(nullptr);
-    if (!pr.focus_group.empty()) j["group_focusing"] = true;
-    j["focus_method"] = focusMethodName(args.focus_method);
-    if (fov.image_circle_diameter_mm) j["field_of_view_max_deg"] = *fov.real_max_deg;
-    if (!isRotationallySymmetric(pr)) {
-      const AnamorphicData ad = anamorphicData(lens);
-      j["anamorphic"] = {
-          {"effective_focal_length_x_mm",
-           ad.x ? json(ad.x->effective_focal_length_mm) : json(nullptr)},
-          {"effective_focal_length_y_mm",
-           ad.y ? json(ad.y->effective_focal_length_mm) : json(nullptr)},
-          {"back_focal_length_x_mm", ad.x ? json(ad.x->back_focal_length_mm) : json(nullptr)},
-          {"back_focal_length_y_mm", ad.y ? json(ad.y->back_focal_length_mm) : json(nullptr)},
-          {"squeeze", ad.squeeze}};
-    }
-    j["surfaces"] = surfacesJson(lens);
-    j["wavelength_nm"] = lens.wavelength_nm();
-    j["primary_wavelength_nm"] = primaryWavelength_nm(pr);
-    j["dispersive"] = lens.dispersive();
-    j["elements"] = elementsJson(lens);
-    j["internal_transmittance"] = transmittanceJson(lens);
-    j["coatings"] = coatingsJson(lens);
-    if (tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
-    std::cout << j.dump(2) << "\n";
+    printInfoJson(args, fl, tilt_shift, focus);
     return 0;
   }
 
