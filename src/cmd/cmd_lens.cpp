@@ -15,6 +15,7 @@
 #include "commands.h"
 #include "flare_report.h"
 #include "lens_analysis.h"
+#include "lens_info_unfocused.h"
 #include "lens_options.h"
 #include "lens_tilt.h"
 #include "lensim/optics/absorption.h"
@@ -25,6 +26,7 @@
 #include "lensim/optics/diagram.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_formats.h"
+#include "lensim/optics/lens_report.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/plots.h"
 #include "lensim/util/file.h"
@@ -43,74 +45,8 @@ json vec3Json(const Vec3& v) {
   return json::array({v.x, v.y, v.z});
 }
 
-// Lens length and total track: front to rear vertex and front vertex to film; for a folded
-// (mirror) lens, the axial extent of its surfaces and of its surfaces and film.
-double lensLength(const LensSystem& lens) {
-  if (lens.mirrorCount() == 0) return lens.rearVertexZ_mm();
-  double lo = 0, hi = 0;
-  for (const Interface& s : lens.interfaces()) lo = std::min(lo, s.z_mm), hi = std::max(hi, s.z_mm);
-  return hi - lo;
-}
-double totalTrack(const LensSystem& lens) {
-  if (lens.mirrorCount() == 0) return lens.filmZ_mm();
-  double lo = lens.realFilmZ_mm(), hi = lo;
-  for (const Interface& s : lens.interfaces()) lo = std::min(lo, s.z_mm), hi = std::max(hi, s.z_mm);
-  return hi - lo;
-}
-
-json surfacesJson(const LensSystem& lens) {
-  json arr = json::array();
-  const auto& rows = lens.prescription().surfaces;
-  for (int i = 0; i < lens.surfaceCount(); ++i) {
-    const Interface& s = lens.interfaces()[i];
-    arr.push_back({{"index", i},
-                   {"line", rows[i].loc.line},
-                   {"radius_mm", s.radius_mm},
-                   {"thickness_mm",
-                    i + 1 < lens.surfaceCount() ? rows[i].thickness_mm : lens.filmDistance_mm()},
-                   {"ior", s.ior_after},
-                   {"aperture_diameter_mm", 2 * s.semi_aperture_mm},
-                   {"z_mm", s.z_mm},
-                   {"is_stop", s.is_stop}});
-    if (s.is_mirror) arr.back()["mirror"] = true;
-    if (s.obscuration_radius_mm > 0) arr.back()["obscuration_radius_mm"] = s.obscuration_radius_mm;
-    if (!s.shape.isSpherical()) {
-      json& e = arr.back();
-      e["conic"] = s.shape.conic;
-      if (s.shape.hasPolynomial()) {
-        json a = json::object();
-        for (size_t k = 1; k < s.shape.poly.size(); ++k)
-          if (s.shape.poly[k] != 0) a[std::to_string(k)] = s.shape.poly[k];
-        e["aspheric"] = a;
-      }
-      if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;
-      if (s.shape.rotation_radius_mm) e["rotation_radius_mm"] = *s.shape.rotation_radius_mm;
-    }
-  }
-  return arr;
-}
-
 json numberOrNull(double v) {
   return std::isfinite(v) ? json(v) : json(nullptr);
-}
-
-// The glass elements: each medium other than air, with its glass and indices.
-json elementsJson(const LensSystem& lens) {
-  json arr = json::array();
-  const auto& rows = lens.prescription().surfaces;
-  for (int i = 0; i + 1 < lens.surfaceCount(); ++i) {
-    const Glass& g = lens.glasses()[i];
-    if (g.isAir()) continue;
-    arr.push_back({{"front_surface", i},
-                   {"back_surface", i + 1},
-                   {"line", rows[i].loc.line},
-                   {"glass", g.describe()},
-                   {"kind", g.kind()},
-                   {"n_d", g.n_d()},
-                   {"v_d", numberOrNull(g.v_d())},
-                   {"n", lens.interfaces()[i].ior_after}});
-  }
-  return arr;
 }
 
 // The lens's internal transmittance on the axis (optics/absorption.h) at these wavelengths.
@@ -147,12 +83,6 @@ std::string transmittanceText(const LensSystem& lens) {
     s += fmt::format("; element{} {} without data taken as 1", missing.size() == 1 ? "" : "s",
                      fmt::join(missing, ", "));
   return s;
-}
-
-json diagnosticsJson(const FocusedLens& fl) {
-  json arr = json::array();
-  for (const Diagnostic& d : fl.allDiagnostics()) arr.push_back(d.str());
-  return arr;
 }
 
 // `lens info --configs`: first-order data of every configuration, each set up (focus, film)
@@ -197,186 +127,105 @@ int runConfigs(const LensArgs& args, bool as_json) {
   return 0;
 }
 
-// The surface and element tables of `lens info`, and the shapes of the non-spherical surfaces.
-void printSurfaceTables(const LensSystem& lens) {
-  const auto& pr = lens.prescription();
-  std::cout << fmt::format("\n  {:>3} {:>5} {:>12} {:>11} {:>8} {:>10} {:>11}\n", "#", "line",
-                           "radius", "thickness", "index", "aperture", "z");
-  for (int i = 0; i < lens.surfaceCount(); ++i) {
-    const Interface& s = lens.interfaces()[i];
-    const double t =
-        i + 1 < lens.surfaceCount() ? pr.surfaces[i].thickness_mm : lens.filmDistance_mm();
-    // A plane stop shows as "stop"; a curved stop (a mirror) keeps its radius, marked below.
-    std::cout << fmt::format(
-        "  {:>3} {:>5} {:>12} {:>11.4f} {:>8.4f} {:>10.4f} {:>11.4f}{}{}{}\n", i,
-        pr.surfaces[i].loc.line,
-        s.is_stop && s.radius_mm == 0 ? std::string("stop") : fmt::format("{:.4f}", s.radius_mm), t,
-        s.ior_after, 2 * s.semi_aperture_mm, s.z_mm, s.is_mirror ? "  mirror" : "",
-        s.is_stop && s.radius_mm != 0 ? "  stop" : "",
-        s.obscuration_radius_mm > 0 ? fmt::format("  obscured r < {:.4f}", s.obscuration_radius_mm)
-                                    : std::string());
+// Where the film focuses, beyond what the first-order keys say: the film in front of the
+// infinity focus (if it is), the object vergence and the magnification.
+struct InfoFocus {
+  std::optional<double> beyond_infinity_mm;
+  double vergence_dpt = 0;
+  std::optional<double> magnification;
+};
+
+InfoFocus infoFocus(const LensArgs& args, const FocusedLens& fl) {
+  const LensSystem& lens = *fl.lens;
+  const ParaxialData& p = fl.paraxial;
+  const bool at_inf = std::isinf(fl.focus_distance_m);
+  std::optional<double> object_z;
+  if (!at_inf) object_z = lens.filmZ_mm() - fl.focus_distance_m * 1000;
+  InfoFocus f;
+  // Where the film sits relative to the infinity focus (same method): a film in front of it
+  // focuses "beyond infinity" (no real object is sharp), which `focus infinity` would hide.
+  if (at_inf) {
+    try {
+      const double inf_film = filmDistanceForFocus(lens, p, fl.focus_distance_m, args.focus_method);
+      const double offset = lens.filmDistance_mm() - inf_film;
+      if (offset < -1e-6 * std::max(1.0, std::abs(p.effective_focal_length_mm)))
+        f.beyond_infinity_mm = -offset;
+    } catch (const Error&) {
+      // no infinity focus behind the rear vertex: nothing to compare with
+    }
   }
-  if (lens.mirrorCount() > 0)
-    std::cout << fmt::format(
-        "  {} mirror{}: thicknesses are signed z distances (negative after an odd number of "
-        "mirrors){}\n",
-        lens.mirrorCount(), lens.mirrorCount() == 1 ? "" : "s",
-        lens.imageSpaceReversed()
-            ? fmt::format("; the image lies toward -z, at z = {:.4f} mm (image-side z above are "
-                          "unfolded about the rear vertex plane)",
-                          lens.realFilmZ_mm())
-            : "");
-  // Per element: the glass, n_d, V_d and the index at the analysis wavelength.
-  std::cout << fmt::format("\n  {:>8} {:>5}  {:<28} {:>9} {:>8} {:>10}\n", "element", "line",
-                           "glass", "n_d", "V_d", fmt::format("n({:.0f})", lens.wavelength_nm()));
-  for (int i = 0; i + 1 < lens.surfaceCount(); ++i) {
-    const Glass& g = lens.glasses()[i];
-    if (g.isAir()) continue;
-    std::cout << fmt::format("  {:>8} {:>5}  {:<28} {:>9.6f} {:>8} {:>10.6f}\n",
-                             fmt::format("{}-{}", i, i + 1), pr.surfaces[i].loc.line, g.describe(),
-                             g.n_d(), std::isfinite(g.v_d()) ? fmt::format("{:.3f}", g.v_d()) : "-",
-                             lens.interfaces()[i].ior_after);
-  }
-  for (int i = 0; i < lens.surfaceCount(); ++i) {
-    const SurfaceShape& sh = lens.interfaces()[i].shape;
-    if (sh.isSpherical()) continue;
-    std::string d = fmt::format("  surface {}: ", i);
-    if (sh.radius_x_mm) d += fmt::format("x-section radius {:.4f} mm, ", *sh.radius_x_mm);
-    if (sh.rotation_radius_mm)
-      d += *sh.rotation_radius_mm != 0
-               ? fmt::format("toroidal, radius of rotation {:.4f} mm, ", *sh.rotation_radius_mm)
-               : std::string("toroidal, radius of rotation infinite (cylinder), ");
-    d += fmt::format("conic {:.6g}", sh.conic);
-    for (size_t k = 1; k < sh.poly.size(); ++k)
-      if (sh.poly[k] != 0)
-        d += fmt::format(", {}^{} {:.6g}", sh.isToroidal() ? "y" : "r", k, sh.poly[k]);
-    std::cout << d << "\n";
-  }
+  // 1/s_o (dioptres) of the film's conjugate, thick-lens model: 0 at infinity, negative beyond
+  // it (the film is focused for a beam converging toward a point behind the lens).
+  const double s_i = lens.filmZ_mm() - p.principal_plane_back_z_mm;
+  f.vergence_dpt = 1000 * (1 / p.effective_focal_length_mm - 1 / s_i);
+  // Paraxial lateral magnification at the focused distance (object and image in air): -s_i/s_o
+  // from the principal planes.
+  if (object_z) f.magnification = -s_i / (p.principal_plane_front_z_mm - *object_z);
+  return f;
 }
 
-// `lens info` for a lens that was read but cannot be set up (afocal, no real ray gets through,
-// a film that would sit inside the lens): the reason as a warning and the data that exist
-// (first-order data where the lens has power, the surface that stops the axial ray, the
-// surfaces and glasses); exit status 0. `render` refuses such a camera.
-int runInfoUnfocused(const LensArgs& args, bool as_json, const Error& why) {
-  LensSystemOptions opts;
-  opts.aperture_diameter_mm = args.aperture_diameter_mm;
-  LensSystem lens(applyConfigurationArgs(args, readLensFile(args.lens_path)), opts);
+// `lens info --json` of a focused lens.
+void printInfoJson(const LensArgs& args, const FocusedLens& fl, const TiltShift& tilt_shift,
+                   const InfoFocus& focus) {
+  const LensSystem& lens = *fl.lens;
+  const ParaxialData& p = fl.paraxial;
   const auto& pr = lens.prescription();
-  logDiagnostics(pr.diagnostics);
-  logDiagnostics(lens.diagnostics());
-  std::vector<Diagnostic> warnings{
-      {Severity::Warning, why.loc().valid() ? why.loc() : FileLoc{args.lens_path},
-       why.message() + "; lens info shows the data that exist (render refuses this lens)"}};
-  std::optional<ParaxialData> p;
-  std::optional<double> angular_magnification;
-  try {
-    p = computeParaxial(lens);
-  } catch (const Error&) {
-    try {
-      p = computeParaxial(lens, false);  // no real ray gets through: first order only
-    } catch (const Error&) {
-      // Afocal: u' = (n / n') D u for the system matrix [A B; 0 D].
-      const RayMatrix m = systemMatrix(lens, 0, lens.surfaceCount() - 1);
-      angular_magnification = m.d * lens.objectIor() / lens.imageIor();
-    }
+  const bool at_inf = std::isinf(fl.focus_distance_m);
+  const FieldOfView fov = fieldOfView(lens, p, args.film_diagonal_mm);
+  const std::optional<double>& beyond_infinity_mm = focus.beyond_infinity_mm;
+  const std::optional<double>& magnification = focus.magnification;
+  const double vergence_dpt = focus.vergence_dpt;
+  json j = firstOrderJson(fl, args.film_diagonal_mm);
+  j["lens"]["path"] = pr.path;
+  j["lens"]["format"] = pr.format;
+  if (!pr.aperture_spec.empty()) j["lens"]["aperture_spec"] = pr.aperture_spec;
+  if (pr.object_distance_mm) j["lens"]["object_distance_mm"] = *pr.object_distance_mm;
+  j["lens"]["configurations"] = configurationCount(readLensFile(args.lens_path));
+  if (args.configuration) j["lens"]["configuration"] = *args.configuration;
+  j["front_focal_point_z_mm"] = p.front_focal_point_z_mm;
+  j["back_focal_point_z_mm"] = p.back_focal_point_z_mm;
+  j["principal_plane_front_z_mm"] = p.principal_plane_front_z_mm;
+  j["principal_plane_back_z_mm"] = p.principal_plane_back_z_mm;
+  j["nodal_point_front_z_mm"] = p.nodal_point_front_z_mm;
+  j["nodal_point_back_z_mm"] = p.nodal_point_back_z_mm;
+  j["aperture_stop_is_file_stop"] = p.stop_is_file_stop;
+  j["paraxial_limit_surface"] = p.paraxial_limit_surface;
+  j["paraxial_limit_f_number"] = p.paraxial_limit_f_number;
+  j["paraxial_f_number"] = p.f_number;
+  j["real_f_number"] = p.real_f_number;
+  j["real_image_space_f_number"] = p.real_image_space_f_number;
+  j["real_marginal_ray_height_mm"] = p.real_marginal_height_mm;
+  j["real_limit_surface"] = p.real_limit_surface;
+  if (lens.mirrorCount() > 0) j["mirrors"] = lens.mirrorCount();
+  j["focus_at_infinity"] = at_inf && !beyond_infinity_mm;
+  j["focus_beyond_infinity"] = beyond_infinity_mm.has_value();
+  j["film_in_front_of_infinity_focus_mm"] =
+      beyond_infinity_mm ? json(*beyond_infinity_mm) : json(nullptr);
+  j["object_vergence_dpt"] = vergence_dpt;
+  j["magnification"] = magnification ? json(*magnification) : json(nullptr);
+  if (!pr.focus_group.empty()) j["group_focusing"] = true;
+  j["focus_method"] = focusMethodName(args.focus_method);
+  if (fov.image_circle_diameter_mm) j["field_of_view_max_deg"] = *fov.real_max_deg;
+  if (!isRotationallySymmetric(pr)) {
+    const AnamorphicData ad = anamorphicData(lens);
+    j["anamorphic"] = {
+        {"effective_focal_length_x_mm",
+         ad.x ? json(ad.x->effective_focal_length_mm) : json(nullptr)},
+        {"effective_focal_length_y_mm",
+         ad.y ? json(ad.y->effective_focal_length_mm) : json(nullptr)},
+        {"back_focal_length_x_mm", ad.x ? json(ad.x->back_focal_length_mm) : json(nullptr)},
+        {"back_focal_length_y_mm", ad.y ? json(ad.y->back_focal_length_mm) : json(nullptr)},
+        {"squeeze", ad.squeeze}};
   }
-  // The ray along the axis (a hair off it), from infinity: where it is stopped, if it is.
-  std::optional<TraceResult> axial;
-  {
-    const double h = 1e-6 * std::max(1e-3, lens.interfaces()[0].semi_aperture_mm);
-    TraceResult r = lens.tracer().traceFromScene(Ray{{h, 0, -1}, {0, 0, 1}});
-    if (!r.ok()) axial = r;
-  }
-  if (axial)
-    warnings.push_back({Severity::Warning,
-                        pr.surfaces[axial->blocked_surface].loc.valid()
-                            ? pr.surfaces[axial->blocked_surface].loc
-                            : FileLoc{args.lens_path},
-                        fmt::format("the ray along the axis is stopped at surface {} ({})",
-                                    axial->blocked_surface, blockReasonName(axial->reason))});
-  for (const Diagnostic& d : warnings) logDiagnostic(d);
-
-  if (as_json) {
-    json j;
-    j["lens"] = {{"path", pr.path},
-                 {"name", pr.name},
-                 {"layout", layoutName(pr.layout)},
-                 {"format", pr.format},
-                 {"surface_count", lens.surfaceCount()}};
-    j["focused"] = false;
-    j["not_focused_reason"] = why.message();
-    j["afocal"] = angular_magnification.has_value();
-    if (angular_magnification) j["angular_magnification"] = *angular_magnification;
-    if (p) {
-      j["effective_focal_length_mm"] = p->effective_focal_length_mm;
-      j["back_focal_length_mm"] = p->back_focal_length_mm;
-      j["front_focal_length_mm"] = p->front_focal_length_mm;
-      j["principal_plane_front_z_mm"] = p->principal_plane_front_z_mm;
-      j["principal_plane_back_z_mm"] = p->principal_plane_back_z_mm;
-      j["aperture_stop_surface"] = p->aperture_stop_surface;
-      j["entrance_pupil_diameter_mm"] = p->entrance_pupil_diameter_mm;
-      j["entrance_pupil_z_mm"] = p->entrance_pupil_z_mm;
-      j["exit_pupil_diameter_mm"] = p->exit_pupil_diameter_mm;
-      j["exit_pupil_z_mm"] = p->exit_pupil_z_mm;
-      j["f_number"] = p->f_number;
-      j["paraxial_f_number"] = p->f_number;
-      j["paraxial_limit_surface"] = p->paraxial_limit_surface;
-      j["paraxial_limit_f_number"] = p->paraxial_limit_f_number;
-      if (p->real_limit_surface >= 0) {
-        j["real_f_number"] = p->real_f_number;
-        j["real_image_space_f_number"] = p->real_image_space_f_number;
-        j["real_limit_surface"] = p->real_limit_surface;
-      }
-    }
-    if (axial) {
-      j["axial_ray_blocked_at_surface"] = axial->blocked_surface;
-      j["axial_ray_blocked_reason"] = blockReasonName(axial->reason);
-    }
-    j["lens_length_mm"] = lensLength(lens);
-    j["surfaces"] = surfacesJson(lens);
-    j["wavelength_nm"] = lens.wavelength_nm();
-    j["elements"] = elementsJson(lens);
-    json diags = json::array();
-    for (const Diagnostic& d : pr.diagnostics) diags.push_back(d.str());
-    for (const Diagnostic& d : lens.diagnostics()) diags.push_back(d.str());
-    for (const Diagnostic& d : warnings) diags.push_back(d.str());
-    j["diagnostics"] = diags;
-    std::cout << j.dump(2) << "\n";
-    return 0;
-  }
-  auto line = [](const std::string& k, const std::string& v) {
-    std::cout << fmt::format("  {:<26}{}\n", k, v);
-  };
-  std::cout << fmt::format("{}\n", pr.name);
-  line("file", fmt::format("{} ({}, {} surfaces)", pr.path, pr.format, lens.surfaceCount()));
-  line("not focused", why.message());
-  if (angular_magnification)
-    line("afocal",
-         fmt::format("no optical power; angular magnification {:.6f}", *angular_magnification));
-  if (p) {
-    line("effective focal length", fmt::format("{:.4f} mm", p->effective_focal_length_mm));
-    line("back focal length", fmt::format("{:.4f} mm (rear focal point z = {:.4f})",
-                                          p->back_focal_length_mm, p->back_focal_point_z_mm));
-    line("front focal length", fmt::format("{:.4f} mm (front focal point z = {:.4f})",
-                                           p->front_focal_length_mm, p->front_focal_point_z_mm));
-    line("principal planes z",
-         fmt::format("front {:.4f}, back {:.4f} mm", p->principal_plane_front_z_mm,
-                     p->principal_plane_back_z_mm));
-    line("aperture stop",
-         fmt::format("surface {} (line {}), diameter {:.3f} mm", p->aperture_stop_surface,
-                     pr.surfaces[p->aperture_stop_surface].loc.line, p->aperture_stop_diameter_mm));
-    line("f-number", fmt::format("f/{:.3f} paraxial (infinity)", p->f_number));
-    if (p->real_limit_surface >= 0)
-      line("real f-number", fmt::format("f/{:.3f} (stopped by surface {})", p->real_f_number,
-                                        p->real_limit_surface));
-  }
-  if (axial)
-    line("axial ray",
-         fmt::format("stopped at surface {} (line {}): {}", axial->blocked_surface,
-                     pr.surfaces[axial->blocked_surface].loc.line, blockReasonName(axial->reason)));
-  printSurfaceTables(lens);
-  return 0;
+  j["surfaces"] = surfacesJson(lens);
+  j["wavelength_nm"] = lens.wavelength_nm();
+  j["primary_wavelength_nm"] = primaryWavelength_nm(pr);
+  j["dispersive"] = lens.dispersive();
+  j["elements"] = elementsJson(lens);
+  j["internal_transmittance"] = transmittanceJson(lens);
+  j["coatings"] = coatingsJson(lens);
+  if (tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
+  std::cout << j.dump(2) << "\n";
 }
 
 int runInfo(const LensArgs& args, bool as_json) {
@@ -402,108 +251,13 @@ int runInfo(const LensArgs& args, bool as_json) {
   const FieldOfView fov = fieldOfView(lens, p, args.film_diagonal_mm);
   const double closest = closestFocusDistance_m(lens, p);
   const auto& pr = lens.prescription();
-  // Where the film sits relative to the infinity focus (same method): a film in front of it
-  // focuses "beyond infinity" (no real object is sharp), which `focus infinity` would hide.
-  std::optional<double> beyond_infinity_mm;
-  if (at_inf) {
-    try {
-      const double inf_film = filmDistanceForFocus(lens, p, fl.focus_distance_m, args.focus_method);
-      const double offset = lens.filmDistance_mm() - inf_film;
-      if (offset < -1e-6 * std::max(1.0, std::abs(p.effective_focal_length_mm)))
-        beyond_infinity_mm = -offset;
-    } catch (const Error&) {
-      // no infinity focus behind the rear vertex: nothing to compare with
-    }
-  }
-  // 1/s_o (dioptres) of the film's conjugate, thick-lens model: 0 at infinity, negative beyond
-  // it (the film is focused for a beam converging toward a point behind the lens).
-  const double s_i = lens.filmZ_mm() - p.principal_plane_back_z_mm;
-  const double vergence_dpt = 1000 * (1 / p.effective_focal_length_mm - 1 / s_i);
-  // Paraxial lateral magnification at the focused distance (object and image in air): -s_i/s_o
-  // from the principal planes.
-  std::optional<double> magnification;
-  if (object_z) magnification = -s_i / (p.principal_plane_front_z_mm - *object_z);
+  const InfoFocus focus = infoFocus(args, fl);
+  const std::optional<double>& beyond_infinity_mm = focus.beyond_infinity_mm;
+  const std::optional<double>& magnification = focus.magnification;
+  const double vergence_dpt = focus.vergence_dpt;
 
   if (as_json) {
-    json j;
-    j["lens"] = {{"path", pr.path},
-                 {"name", pr.name},
-                 {"layout", layoutName(pr.layout)},
-                 {"format", pr.format},
-                 {"surface_count", lens.surfaceCount()}};
-    if (!pr.aperture_spec.empty()) j["lens"]["aperture_spec"] = pr.aperture_spec;
-    if (pr.object_distance_mm) j["lens"]["object_distance_mm"] = *pr.object_distance_mm;
-    j["lens"]["configurations"] = configurationCount(readLensFile(args.lens_path));
-    if (args.configuration) j["lens"]["configuration"] = *args.configuration;
-    if (pr.nominal_focal_length_mm)
-      j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
-    j["effective_focal_length_mm"] = p.effective_focal_length_mm;
-    j["back_focal_length_mm"] = p.back_focal_length_mm;
-    j["front_focal_length_mm"] = p.front_focal_length_mm;
-    j["front_focal_point_z_mm"] = p.front_focal_point_z_mm;
-    j["back_focal_point_z_mm"] = p.back_focal_point_z_mm;
-    j["principal_plane_front_z_mm"] = p.principal_plane_front_z_mm;
-    j["principal_plane_back_z_mm"] = p.principal_plane_back_z_mm;
-    j["nodal_point_front_z_mm"] = p.nodal_point_front_z_mm;
-    j["nodal_point_back_z_mm"] = p.nodal_point_back_z_mm;
-    j["aperture_stop_surface"] = p.aperture_stop_surface;
-    j["aperture_stop_is_file_stop"] = p.stop_is_file_stop;
-    j["aperture_stop_diameter_mm"] = p.aperture_stop_diameter_mm;
-    j["paraxial_limit_surface"] = p.paraxial_limit_surface;
-    j["paraxial_limit_f_number"] = p.paraxial_limit_f_number;
-    j["paraxial_f_number"] = p.f_number;
-    j["real_f_number"] = p.real_f_number;
-    j["real_image_space_f_number"] = p.real_image_space_f_number;
-    j["real_marginal_ray_height_mm"] = p.real_marginal_height_mm;
-    j["real_limit_surface"] = p.real_limit_surface;
-    j["entrance_pupil_diameter_mm"] = p.entrance_pupil_diameter_mm;
-    j["entrance_pupil_z_mm"] = p.entrance_pupil_z_mm;
-    j["exit_pupil_diameter_mm"] = p.exit_pupil_diameter_mm;
-    j["exit_pupil_z_mm"] = p.exit_pupil_z_mm;
-    j["f_number"] = p.f_number;
-    j["working_f_number"] = working_f;
-    j["lens_length_mm"] = lensLength(lens);
-    j["total_track_mm"] = totalTrack(lens);
-    if (lens.mirrorCount() > 0) j["mirrors"] = lens.mirrorCount();
-    j["film_distance_mm"] = lens.filmDistance_mm();
-    j["focus_distance_m"] = at_inf ? json(nullptr) : json(fl.focus_distance_m);
-    j["focus_at_infinity"] = at_inf && !beyond_infinity_mm;
-    j["focus_beyond_infinity"] = beyond_infinity_mm.has_value();
-    j["film_in_front_of_infinity_focus_mm"] =
-        beyond_infinity_mm ? json(*beyond_infinity_mm) : json(nullptr);
-    j["object_vergence_dpt"] = vergence_dpt;
-    j["magnification"] = magnification ? json(*magnification) : json(nullptr);
-    if (!pr.focus_group.empty()) j["group_focusing"] = true;
-    j["focus_method"] = focusMethodName(args.focus_method);
-    j["closest_focus_distance_m"] = closest;
-    j["film_diagonal_mm"] = args.film_diagonal_mm;
-    j["field_of_view_deg"] = fov.real_deg ? json(*fov.real_deg) : json(nullptr);
-    j["paraxial_field_of_view_deg"] = fov.paraxial_deg;
-    if (fov.image_circle_diameter_mm) {
-      j["image_circle_diameter_mm"] = *fov.image_circle_diameter_mm;
-      j["field_of_view_max_deg"] = *fov.real_max_deg;
-    }
-    if (!isRotationallySymmetric(pr)) {
-      const AnamorphicData ad = anamorphicData(lens);
-      j["anamorphic"] = {
-          {"effective_focal_length_x_mm",
-           ad.x ? json(ad.x->effective_focal_length_mm) : json(nullptr)},
-          {"effective_focal_length_y_mm",
-           ad.y ? json(ad.y->effective_focal_length_mm) : json(nullptr)},
-          {"back_focal_length_x_mm", ad.x ? json(ad.x->back_focal_length_mm) : json(nullptr)},
-          {"back_focal_length_y_mm", ad.y ? json(ad.y->back_focal_length_mm) : json(nullptr)},
-          {"squeeze", ad.squeeze}};
-    }
-    j["surfaces"] = surfacesJson(lens);
-    j["wavelength_nm"] = lens.wavelength_nm();
-    j["primary_wavelength_nm"] = primaryWavelength_nm(pr);
-    j["dispersive"] = lens.dispersive();
-    j["elements"] = elementsJson(lens);
-    j["internal_transmittance"] = transmittanceJson(lens);
-    j["coatings"] = coatingsJson(lens);
-    j["diagnostics"] = diagnosticsJson(fl);
-    if (tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
-    std::cout << j.dump(2) << "\n";
+    printInfoJson(args, fl, tilt_shift, focus);
     return 0;
   }
 

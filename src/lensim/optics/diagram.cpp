@@ -75,22 +75,10 @@ std::optional<std::pair<double, double>> passingRange(double lo, double hi, Make
   return range;
 }
 
-}  // namespace
-
-LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) {
-  const LensSystem& lens = *fl.lens;
-  const ParaxialData& p = fl.paraxial;
+// The diagram's glass: elements, mirrors, obscurations, bare surfaces, the stop and the film.
+void addLensOutline(LensDiagram& d, const LensSystem& lens, const DiagramOptions& opts) {
   const auto& s = lens.interfaces();
   const int n = lens.surfaceCount();
-  LensDiagram d;
-  d.source = opts.source;
-  d.title = lens.prescription().name;
-  d.annotations.push_back(
-      fmt::format("f = {:.2f} mm · f/{:.2f} · film distance {:.2f} mm · focus {}",
-                  p.effective_focal_length_mm, p.f_number, lens.filmDistance_mm(),
-                  std::isinf(fl.focus_distance_m) ? std::string("at infinity")
-                                                  : fmt::format("{:.4g} m", fl.focus_distance_m)));
-
   // Elements and bare surfaces.
   std::vector<bool> in_element(n, false);
   for (int i = 0; i + 1 < n; ++i) {
@@ -122,6 +110,24 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
   d.film_z_mm = lens.realFilmZ_mm();  // where it is (image space folded back by the mirrors)
   d.film_half_height_mm = opts.film_diagonal_mm / 2;
   d.rear_vertex_z_mm = lens.rearVertexZ_mm();
+}
+
+}  // namespace
+
+LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) {
+  const LensSystem& lens = *fl.lens;
+  const ParaxialData& p = fl.paraxial;
+  const auto& s = lens.interfaces();
+  LensDiagram d;
+  d.source = opts.source;
+  d.title = lens.prescription().name;
+  d.annotations.push_back(
+      fmt::format("f = {:.2f} mm · f/{:.2f} · film distance {:.2f} mm · focus {}",
+                  p.effective_focal_length_mm, p.f_number, lens.filmDistance_mm(),
+                  std::isinf(fl.focus_distance_m) ? std::string("at infinity")
+                                                  : fmt::format("{:.4g} m", fl.focus_distance_m)));
+
+  addLensOutline(d, lens, opts);
 
   double semi_max = 0;
   for (const Interface& si : s) semi_max = std::max(semi_max, si.semi_aperture_mm);

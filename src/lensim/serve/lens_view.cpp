@@ -7,6 +7,7 @@
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/chromatic.h"
 #include "lensim/optics/diagram.h"
+#include "lensim/optics/lens_report.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/plots.h"
 #include "lensim/optics/prescription.h"
@@ -96,40 +97,7 @@ json tiltShiftJson(const SetUpLens& s, double film_diagonal_mm) {
 }  // namespace
 
 json firstOrderJson(const SetUpLens& s, double film_diagonal_mm) {
-  const FocusedLens& fl = s.lens;
-  const LensSystem& lens = *fl.lens;
-  const ParaxialData& p = fl.paraxial;
-  const bool at_inf = std::isinf(fl.focus_distance_m);
-  std::optional<double> object_z;
-  if (!at_inf) object_z = lens.filmZ_mm() - fl.focus_distance_m * 1000;
-  const FieldOfView fov = fieldOfView(lens, p, film_diagonal_mm);
-  const auto& pr = lens.prescription();
-  json j;
-  j["lens"] = {
-      {"name", pr.name}, {"layout", layoutName(pr.layout)}, {"surface_count", lens.surfaceCount()}};
-  if (pr.nominal_focal_length_mm)
-    j["lens"]["nominal_focal_length_mm"] = *pr.nominal_focal_length_mm;
-  j["effective_focal_length_mm"] = p.effective_focal_length_mm;
-  j["back_focal_length_mm"] = p.back_focal_length_mm;
-  j["front_focal_length_mm"] = p.front_focal_length_mm;
-  j["aperture_stop_surface"] = p.aperture_stop_surface;
-  j["aperture_stop_diameter_mm"] = p.aperture_stop_diameter_mm;
-  j["entrance_pupil_diameter_mm"] = p.entrance_pupil_diameter_mm;
-  j["entrance_pupil_z_mm"] = p.entrance_pupil_z_mm;
-  j["exit_pupil_diameter_mm"] = p.exit_pupil_diameter_mm;
-  j["exit_pupil_z_mm"] = p.exit_pupil_z_mm;
-  j["f_number"] = p.f_number;
-  j["working_f_number"] = workingFNumber(lens, p, object_z);
-  j["lens_length_mm"] = lens.rearVertexZ_mm();
-  j["total_track_mm"] = lens.filmZ_mm();
-  j["film_distance_mm"] = lens.filmDistance_mm();
-  j["focus_distance_m"] = at_inf ? json(nullptr) : json(fl.focus_distance_m);
-  j["focus_at_infinity"] = at_inf;
-  j["closest_focus_distance_m"] = closestFocusDistance_m(lens, p);
-  j["film_diagonal_mm"] = film_diagonal_mm;
-  j["field_of_view_deg"] = fov.real_deg ? json(*fov.real_deg) : json(nullptr);
-  j["paraxial_field_of_view_deg"] = fov.paraxial_deg;
-  if (fov.image_circle_diameter_mm) j["image_circle_diameter_mm"] = *fov.image_circle_diameter_mm;
+  json j = optics::firstOrderJson(s.lens, film_diagonal_mm);
   // The explorer's own: the stop it set for the requested f-number, and the range.
   j["stop_diameter_mm"] = s.stop_diameter_mm;
   j["max_stop_diameter_mm"] = s.max_stop_diameter_mm;
@@ -149,9 +117,6 @@ json firstOrderJson(const SetUpLens& s, double film_diagonal_mm) {
     j["zoom"] = z;
   }
   if (s.tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(s, film_diagonal_mm);
-  json diags = json::array();
-  for (const Diagnostic& d : fl.allDiagnostics()) diags.push_back(d.str());
-  j["diagnostics"] = diags;
   return j;
 }
 
