@@ -142,14 +142,18 @@ TEST(GhostMatrix, LeeEisemannMatricesGiveLensGhostsFocusAndSize) {
 }
 
 // `lens ghosts --angle` traces real rays. With the lens stopped down to 5 mm (every ghost path
-// passes the stop) and the light 1 degree off axis, the rays stay paraxial and each traced
-// ghost centroid must match the matrices' first-order centroid: the mean film height over the
-// same entrance grid, clipped by the matrices' heights at every surface. Tolerance 2 um (the
-// third-order terms at 1 deg and f/10; a 24 MP full-frame pixel is 6 um).
+// passes the stop) and the light 1 degree off axis, each traced ghost centroid must match the
+// matrices' first-order centroid: the mean film height over the same entrance grid (300 x 300),
+// clipped by the matrices' heights at every surface. The ghost paths' own aberrations (two
+// reflections at strongly curved surfaces) move the real centroid and the clipped region: the
+// measured differences are at most 3.6 % of the spot's RMS radius (0.38 mm for ghost 3,0, whose
+// spot has RMS radius 12 mm) and 1.9 um for the sharp ghost 9,1 (RMS radius 38 um); tolerance
+// 6 % of the RMS radius + 2 um. The direct image must
+// match within 2 um.
 TEST(GhostMatrix, TracedSpotsOffAxisMatchFirstOrderMatrices) {
-  const int grid = 48;
+  const int grid = 300;
   const double deg = 1.0;
-  const json j = runJson("lens ghosts " + kGauss + " --aperture-diameter 5 --json --angle 1 --grid 48");
+  const json j = runJson("lens ghosts " + kGauss + " --aperture-diameter 5 --json --angle 1 --grid 300");
   LensSetup setup;
   setup.aperture_diameter_mm = 5;
   const FocusedLens fl = focusLens(readLensFile(kGauss), setup);
@@ -185,18 +189,19 @@ TEST(GhostMatrix, TracedSpotsOffAxisMatchFirstOrderMatrices) {
   ASSERT_TRUE(direct);
   EXPECT_NEAR(j["direct_spot"]["centroid_x_mm"].get<double>(), *direct, 2e-3);
   int checked = 0;
-  double worst = 0;
+  double worst = 0;  // the largest |difference| / RMS radius
   for (const json& g : j["ghosts"]) {
     const int first = g["first_reflection_surface"], second = g["second_reflection_surface"];
     if (g["spot"].is_null()) continue;  // the stop
     const auto c = first_order_centroid(ghostSteps(lens, first, second));
     if (!c || g["spot"]["rays_arrived"].get<int>() < 50) continue;
     const double traced = g["spot"]["centroid_x_mm"];
-    EXPECT_NEAR(traced, *c, 2e-3) << "ghost " << first << "," << second;
+    const double rms = g["spot"]["rms_radius_mm"];
+    EXPECT_NEAR(traced, *c, 0.06 * rms + 2e-3) << "ghost " << first << "," << second;
     EXPECT_NEAR(g["spot"]["centroid_y_mm"].get<double>(), 0.0, 1e-9);
-    worst = std::max(worst, std::abs(traced - *c));
+    worst = std::max(worst, std::abs(traced - *c) / rms);
     ++checked;
   }
-  EXPECT_GE(checked, 30);
-  std::printf("worst centroid difference %.3g mm over %d ghosts\n", worst, checked);
+  EXPECT_EQ(checked, 45);
+  std::printf("largest centroid difference / RMS radius %.3f over %d ghosts\n", worst, checked);
 }
