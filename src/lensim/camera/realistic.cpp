@@ -698,6 +698,8 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.flare_coating = r.flare_coating;
       s.flare_loc = r.flare_loc;
       s.flare_coating_loc = r.flare_coating_loc;
+      s.flare_ghosts = r.flare_ghosts;
+      s.flare_ghosts_loc = r.flare_ghosts_loc;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

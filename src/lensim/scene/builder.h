@@ -315,6 +315,9 @@ struct Realistic {
   /// lens file's
   std::string flare_coating;
   FileLoc flare_coating_loc;
+  /// `flareghosts` "I,J;I,J": a diagnostic, only these ghost pairs (docs/flare.md); empty: all
+  std::vector<std::pair<int, int>> flare_ghosts;
+  FileLoc flare_ghosts_loc;
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 
