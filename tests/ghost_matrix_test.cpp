@@ -35,10 +35,18 @@ M2 mul(const M2& p, const M2& q) {
   return {p[0] * q[0] + p[1] * q[2], p[0] * q[1] + p[1] * q[3], p[2] * q[0] + p[3] * q[2],
           p[2] * q[1] + p[3] * q[3]};
 }
-M2 translate(double d) { return {1, d, 0, 1}; }
-M2 refract(double c, double n1, double n2) { return {1, 0, (n1 - n2) * c / n2, n1 / n2}; }
-M2 reflect(double c) { return {1, 0, 2 * c, 1}; }
-double curvature(const Interface& s) { return s.radius_mm == 0 ? 0.0 : 1 / s.radius_mm; }
+M2 translate(double d) {
+  return {1, d, 0, 1};
+}
+M2 refract(double c, double n1, double n2) {
+  return {1, 0, (n1 - n2) * c / n2, n1 / n2};
+}
+M2 reflect(double c) {
+  return {1, 0, 2 * c, 1};
+}
+double curvature(const Interface& s) {
+  return s.radius_mm == 0 ? 0.0 : 1 / s.radius_mm;
+}
 
 // One element of a ghost path: the matrix that carries (y, angle) from the previous vertex
 // through this surface, and the surface's clear semi-aperture (for clipping).
@@ -55,10 +63,10 @@ std::vector<Step> ghostSteps(const LensSystem& lens, int first, int second) {
   std::vector<Step> out;
   double z = s[0].z_mm;
   auto fwd = [&](int k) {
-    out.push_back({mul(refract(curvature(s[size_t(k)]), s[size_t(k)].ior_before,
-                               s[size_t(k)].ior_after),
-                       translate(s[size_t(k)].z_mm - z)),
-                   s[size_t(k)].semi_aperture_mm});
+    out.push_back(
+        {mul(refract(curvature(s[size_t(k)]), s[size_t(k)].ior_before, s[size_t(k)].ior_after),
+             translate(s[size_t(k)].z_mm - z)),
+         s[size_t(k)].semi_aperture_mm});
     z = s[size_t(k)].z_mm;
   };
   if (first < 0) {
@@ -70,15 +78,14 @@ std::vector<Step> ghostSteps(const LensSystem& lens, int first, int second) {
                  s[size_t(first)].semi_aperture_mm});
   z = s[size_t(first)].z_mm;
   for (int k = first - 1; k > second; --k) {
-    out.push_back({mul(refract(-curvature(s[size_t(k)]), s[size_t(k)].ior_after,
-                               s[size_t(k)].ior_before),
-                       translate(z - s[size_t(k)].z_mm)),
-                   s[size_t(k)].semi_aperture_mm});
+    out.push_back(
+        {mul(refract(-curvature(s[size_t(k)]), s[size_t(k)].ior_after, s[size_t(k)].ior_before),
+             translate(z - s[size_t(k)].z_mm)),
+         s[size_t(k)].semi_aperture_mm});
     z = s[size_t(k)].z_mm;
   }
-  out.push_back(
-      {mul(reflect(-curvature(s[size_t(second)])), translate(z - s[size_t(second)].z_mm)),
-       s[size_t(second)].semi_aperture_mm});
+  out.push_back({mul(reflect(-curvature(s[size_t(second)])), translate(z - s[size_t(second)].z_mm)),
+                 s[size_t(second)].semi_aperture_mm});
   z = s[size_t(second)].z_mm;
   for (int k = second + 1; k < n; ++k) fwd(k);
   return out;
@@ -153,7 +160,8 @@ TEST(GhostMatrix, LeeEisemannMatricesGiveLensGhostsFocusAndSize) {
 TEST(GhostMatrix, TracedSpotsOffAxisMatchFirstOrderMatrices) {
   const int grid = 300;
   const double deg = 1.0;
-  const json j = runJson("lens ghosts " + kGauss + " --aperture-diameter 5 --json --angle 1 --grid 300");
+  const json j =
+      runJson("lens ghosts " + kGauss + " --aperture-diameter 5 --json --angle 1 --grid 300");
   LensSetup setup;
   setup.aperture_diameter_mm = 5;
   const FocusedLens fl = focusLens(readLensFile(kGauss), setup);
@@ -204,4 +212,13 @@ TEST(GhostMatrix, TracedSpotsOffAxisMatchFirstOrderMatrices) {
   }
   EXPECT_EQ(checked, 45);
   std::printf("largest centroid difference / RMS radius %.3f over %d ghosts\n", worst, checked);
+}
+
+TEST(GhostMatrix, AngleAndGridRefusals) {
+  const auto a = runLensim("lens ghosts " + kGauss + " --angle 95");
+  EXPECT_EQ(a.status, 1);
+  EXPECT_NE(a.out.find("--angle 95"), std::string::npos) << a.out;
+  const auto g = runLensim("lens ghosts " + kGauss + " --angle 5 --grid 1");
+  EXPECT_EQ(g.status, 1);
+  EXPECT_NE(g.out.find("--grid 1"), std::string::npos) << g.out;
 }

@@ -126,8 +126,8 @@ void printSpots(const GhostAnalysis& g, size_t shown, const TracedSpots& t, doub
     else
       std::cout << fmt::format("  {:>7}  reflects nothing (the stop or a dummy surface)\n", ij);
   }
-  std::cout << "\n  mm on the film; arrived / launched: rays of the grid that reach the film on the "
-               "ghost path / that were launched\n";
+  std::cout << "\n  mm on the film; arrived / launched: rays of the grid that reach the film "
+               "on the ghost path / that were launched\n";
 }
 
 int runGhosts(const LensArgs& args, const GhostArgs& ga) {

@@ -41,10 +41,10 @@ struct GhostSpot {
   double extent_x_mm = 0, extent_y_mm = 0;
 };
 
-/// Traces a square grid (grid x grid, within a disc 1.25 x the front surface's clear aperture) of parallel
-/// rays of a point at infinity whose light comes in at `angle_rad` off the axis in the x-z plane
-/// (direction (sin, 0, cos)) through `tracer` (ghostTracer, or the lens's own for the direct
-/// image) to the film plane `film_z_mm`. `front` is the lens's first surface (where the grid
+/// Traces a square grid (grid x grid, within a disc 1.25 x the front surface's clear aperture)
+/// of parallel rays of a point at infinity whose light comes in at `angle_rad` off the axis in
+/// the x-z plane (direction (sin, 0, cos)) through `tracer` (ghostTracer, or the lens's own for
+/// the direct image) to the film plane `film_z_mm`. `front` is the lens's first surface (where the grid
 /// lies). Throws lensim::Error for a grid outside 2..2000 or an angle not within (-90, 90) deg.
 GhostSpot traceSpot(const LensTracer<double>& tracer, const Interface& front, double film_z_mm,
                     double angle_rad, int grid);
