@@ -1,17 +1,21 @@
 // Lens flare in the renderer (issue 31): the realistic camera's "bool flare", the ghost layer and
 // the refusals. Checked against closed forms computed here (Fresnel's equations, the cone of a
 // flat field), not against the camera's own numbers.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "cli_run.h"
 #include "lensim/camera/realistic.h"
 #include "lensim/io/image.h"
 #include "lensim/optics/coating/ghost_trace.h"
@@ -237,6 +241,13 @@ TEST(FlareRender, Refusals) {
     EXPECT_NE(std::string(e.what()).find("flarecoating"), std::string::npos) << e.what();
   }
   expectError(writeScene("unknown.pbrt", on + " \"string flarecoating\" \"bogus\""), "bogus", 1);
+  // flareghosts: a pair with the stop (surface 5) reflects nothing; malformed; twice.
+  expectError(writeScene("gstop.pbrt", on + " \"string flareghosts\" \"10,9;6,5\""),
+              "6,5 is not a ghost pair", 1);
+  expectError(writeScene("gbad.pbrt", on + " \"string flareghosts\" \"10-9\""),
+              "expected ghost pairs I,J", 1);
+  expectError(writeScene("gtwice.pbrt", on + " \"string flareghosts\" \"10,9;10,9\""),
+              "listed twice", 1);
 }
 
 // A multicoated lens's ghosts are far weaker than the uncoated one's, and its direct
@@ -453,4 +464,103 @@ TEST(FlareRender, OffAxisLightGhostsLieWhereTheTracedGhostsLie) {
   EXPECT_NEAR(ghost_r.power, ghost_t.power, 0.1 * ghost_t.power);
   EXPECT_NEAR(gr.x, gt.x, px);
   EXPECT_NEAR(gr.y, gt.y, px);
+}
+
+// One ghost at a time ("string flareghosts", a diagnostic): a small bright sphere 10 degrees off
+// axis through the double Gauss at 12 mm stop; the ghost layer's centroid and RMS radius on the
+// film against `lens ghosts --angle 10` (real rays on the ghost path, unweighted) and against the
+// beam traced from the light with the coatings' weights (beamImage), within a pixel. Two compact
+// ghosts that lie inside the frame (10,8 and 8,4); with LENSIM_FLARE_TEN_GHOSTS=1
+// (bench/flare_ghost_spots.sh) the 10 brightest, where those that spill over the frame's edge are
+// checked against the traced beam only (lens ghosts' spot is not clipped to the film).
+TEST(FlareRender, EachGhostLiesWhereLensGhostsAngleSaysWithinAPixel) {
+  const double theta = 10 * std::numbers::pi / 180, delta = 2 * std::numbers::pi / 180, L = 250;
+  const int xres = 64, yres = 48;
+  const double diag = 43.3, aspect = double(yres) / xres;
+  const double width = diag / std::sqrt(1 + aspect * aspect), height = aspect * width;
+  const double px = width / xres;
+  auto filmX = [&](int x) { return width / 2 - (x + 0.5) * px; };
+  auto filmY = [&](int y) { return -height / 2 + (y + 0.5) * px; };
+  const auto r = test::runLensim("lens ghosts " + test::lensPath("dgauss.50mm.dat") +
+                                 " --aperture-diameter 12 --focus-distance 10 --angle 10 --json");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out.substr(r.out.find("{\n")));
+  camera::RealisticSettings s;
+  s.lens_path = test::lensPath("dgauss.50mm.dat");
+  s.setup.aperture_diameter_mm = 12;
+  s.setup.focus_distance_m = 10;
+  const camera::RealisticCamera cam(s);
+  const optics::LensSystem& lens = *cam.lens().lens;
+  const Vec3 d{-std::sin(theta), 0, std::cos(theta)};
+  std::vector<std::pair<int, int>> pairs{{10, 8}, {8, 4}};
+  int spp = 64;
+  if (const char* e = std::getenv("LENSIM_FLARE_TEN_GHOSTS"); e && std::string(e) == "1") {
+    pairs.clear();
+    spp = 256;
+    for (const auto& g : j["ghosts"])
+      if (!g["spot"].is_null() && pairs.size() < 10)
+        pairs.emplace_back(g["first_reflection_surface"].get<int>(),
+                           g["second_reflection_surface"].get<int>());
+  }
+  for (const auto& [first, second] : pairs) {
+    const std::string path = testFile(fmt::format("ghost_{}_{}.pbrt", first, second));
+    {
+      std::ofstream f(path);
+      f << "LookAt 0 0 0  0 0 1  0 1 0\n"
+        << "Camera \"realistic\" \"string lensfile\" \"" << test::lensPath("dgauss.50mm.dat")
+        << "\" \"float aperturediameter\" 12 \"float focusdistance\" 10 \"bool flare\" true "
+        << "\"string flareghosts\" \"" << first << "," << second << "\"\n"
+        << "Film \"rgb\" \"integer xresolution\" " << xres << " \"integer yresolution\" " << yres
+        << " \"float diagonal\" " << diag << "\n"
+        << "Sampler \"independent\" \"integer pixelsamples\" " << spp << "\n"
+        << "Integrator \"path\" \"integer maxdepth\" 1\n"
+        << "WorldBegin\nAttributeBegin\nTranslate " << 10 * std::sin(theta) << " 0 "
+        << 10 * std::cos(theta) << "\nAreaLightSource \"diffuse\" \"rgb L\" [" << L << " " << L
+        << " " << L << "]\nShape \"sphere\" \"float radius\" " << 10 * std::sin(delta)
+        << "\nAttributeEnd\n";
+    }
+    render::RenderOptions o;
+    o.seed = 3;
+    o.threads = 2;
+    const io::Image im = render::render(scene::loadScene(path), o).image;
+    double w = 0, sx = 0, sy = 0, sr2 = 0;
+    for (int y = 0; y < yres; ++y)
+      for (int x = 0; x < xres; ++x) {
+        double g = 0;
+        for (int c = 0; c < 3; ++c) g += im.at(x, y, 3 + c) / 3;
+        w += g, sx += g * filmX(x), sy += g * filmY(y);
+        sr2 += g * (filmX(x) * filmX(x) + filmY(y) * filmY(y));
+      }
+    ASSERT_GT(w, 0) << first << "," << second;
+    const double cx = sx / w, cy = sy / w;
+    const double rms = std::sqrt(std::max(0.0, sr2 / w - cx * cx - cy * cy));
+    // The same ghost from the light, with the coatings' weights.
+    const std::vector<optics::Interface> p = optics::ghostPathInterfaces(lens, first, second);
+    std::vector<int> surface_of;
+    for (int k = 0; k < int(p.size()); ++k)
+      surface_of.push_back(optics::ghostPathSurface(first, second, k));
+    Moments t;
+    beamImage(lens, optics::LensTracer<double>(p), p, surface_of, d, 1.0, width / 2, height / 2,
+              200, t);
+    // lens ghosts --angle: light along (+sin, 0, cos), so its x is the mirror image of this one.
+    const nlohmann::json* spot = nullptr;
+    for (const auto& g : j["ghosts"])
+      if (g["first_reflection_surface"] == first && g["second_reflection_surface"] == second)
+        spot = &g["spot"];
+    ASSERT_TRUE(spot && !spot->is_null()) << first << "," << second;
+    const double wx = -(*spot)["centroid_x_mm"].get<double>();
+    const double wrms = (*spot)["rms_radius_mm"];
+    std::printf("ghost %d,%d: render centroid (%.3f, %.3f) rms %.3f mm; lens ghosts --angle "
+                "(%.3f, 0) rms %.3f; traced from the light (%.3f, %.3f); pixel %.3f mm\n",
+                first, second, cx, cy, rms, wx, wrms, t.x / t.power, t.y / t.power, px);
+    EXPECT_NEAR(cx, t.x / t.power, px) << first << "," << second;
+    EXPECT_NEAR(cy, t.y / t.power, px) << first << "," << second;
+    const bool inside =
+        std::abs(wx) + 0.5 * (*spot)["extent_x_mm"].get<double>() < width / 2 - px &&
+        0.5 * (*spot)["extent_y_mm"].get<double>() < height / 2 - px;
+    if (!inside) continue;
+    EXPECT_NEAR(cx, wx, px) << first << "," << second;
+    EXPECT_NEAR(cy, 0.0, px) << first << "," << second;
+    EXPECT_NEAR(rms, wrms, px) << first << "," << second;
+  }
 }

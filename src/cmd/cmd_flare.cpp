@@ -6,11 +6,14 @@
 #include <iostream>
 #include <limits>
 #include <memory>
+#include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "flare_report.h"
 #include "lens_options.h"
+#include "lensim/optics/coating/ghost_trace.h"
 #include "lensim/optics/coating/ghosts.h"
 #include "lensim/optics/coating/lens_coatings.h"
 #include "lensim/optics/diagram.h"
@@ -57,7 +60,75 @@ struct GhostArgs {
   double focus_tolerance_mm = 0.05;
   std::string coating;  // overrides the lens-wide default coating
   bool as_json = false;
+  /// Light angle off axis (deg, meridional x-z plane): each ghost's film spot traced with
+  /// real rays; unset: the paraxial axial analysis only.
+  std::optional<double> angle_deg;
+  int grid = 64;  // rays across the entrance for the traced spots
 };
+
+// The traced film spots of the shown ghosts (nullopt for a pair that reflects nothing: the
+// stop or a dummy surface) and of the direct image, for a light at `angle_deg`.
+struct TracedSpots {
+  GhostSpot direct;
+  std::vector<std::optional<GhostSpot>> ghosts;
+};
+
+TracedSpots traceSpots(const LensSystem& lens, const GhostAnalysis& g, size_t shown,
+                       double angle_deg, int grid) {
+  if (!(std::abs(angle_deg) < 89))
+    throw Error(fmt::format("--angle {}: expected a light angle within -89..89 degrees",
+                            angle_deg));
+  const double a = angle_deg * std::numbers::pi / 180;
+  const Interface& front = lens.interfaces().front();
+  TracedSpots t;
+  t.direct = traceSpot(LensTracer<double>(lens.interfaces()), front, lens.filmZ_mm(), a, grid);
+  for (size_t i = 0; i < shown; ++i) {
+    const Ghost& h = g.ghosts[i];
+    const auto& s = lens.interfaces();
+    if (s[size_t(h.a)].ior_before == s[size_t(h.a)].ior_after ||
+        s[size_t(h.b)].ior_before == s[size_t(h.b)].ior_after) {
+      t.ghosts.emplace_back();
+      continue;
+    }
+    t.ghosts.emplace_back(traceSpot(ghostTracer(lens, h.b, h.a), front, lens.filmZ_mm(), a, grid));
+  }
+  return t;
+}
+
+json spotJson(const GhostSpot& s) {
+  if (s.rays_arrived == 0) return json{{"rays_arrived", 0}, {"rays_launched", s.rays_launched}};
+  return json{{"rays_arrived", s.rays_arrived},     {"rays_launched", s.rays_launched},
+              {"centroid_x_mm", s.centroid_x_mm},   {"centroid_y_mm", s.centroid_y_mm},
+              {"rms_radius_mm", s.rms_radius_mm},   {"extent_x_mm", s.extent_x_mm},
+              {"extent_y_mm", s.extent_y_mm}};
+}
+
+std::string spotLine(const std::string& label, const GhostSpot& s) {
+  if (s.rays_arrived == 0)
+    return fmt::format("  {:>7} {:>9} {:>9}  no ray reaches the film\n", label, 0, s.rays_launched);
+  return fmt::format("  {:>7} {:>9} {:>9} {:>11.4f} {:>11.4f} {:>10.4f} {:>10.4f} {:>10.4f}\n",
+                     label, s.rays_arrived, s.rays_launched, s.centroid_x_mm, s.centroid_y_mm,
+                     s.rms_radius_mm, s.extent_x_mm, s.extent_y_mm);
+}
+
+void printSpots(const GhostAnalysis& g, size_t shown, const TracedSpots& t, double angle_deg,
+                int grid) {
+  std::cout << fmt::format(
+      "\n  traced film spots of a point light {} deg off axis (x-z plane; {}x{} ray grid; lens "
+      "wavelength):\n\n  {:>7} {:>9} {:>9} {:>11} {:>11} {:>10} {:>10} {:>10}\n",
+      angle_deg, grid, grid, "I,J", "arrived", "launched", "centroid x", "centroid y", "rms r",
+      "extent x", "extent y");
+  std::cout << spotLine("direct", t.direct);
+  for (size_t i = 0; i < shown; ++i) {
+    const std::string ij = fmt::format("{},{}", g.ghosts[i].b, g.ghosts[i].a);
+    if (t.ghosts[i])
+      std::cout << spotLine(ij, *t.ghosts[i]);
+    else
+      std::cout << fmt::format("  {:>7}  reflects nothing (the stop or a dummy surface)\n", ij);
+  }
+  std::cout << "\n  mm on the film; arrived / launched: rays of the grid that reach the film "
+               "on the ghost path / that were launched\n";
+}
 
 int runGhosts(const LensArgs& args, const GhostArgs& ga) {
   FocusedLens fl = setUpLens(args);
@@ -103,6 +174,10 @@ int runGhosts(const LensArgs& args, const GhostArgs& ga) {
   for (double t : g.direct_transmittance) direct += t;
   direct /= double(std::max<size_t>(1, g.direct_transmittance.size()));
   const auto& pr = lens.prescription();
+  if (ga.grid < 2 || ga.grid > 2000)
+    throw Error(fmt::format("--grid {}: expected 2 to 2000 rays across", ga.grid));
+  std::optional<TracedSpots> spots;
+  if (ga.angle_deg) spots = traceSpots(lens, g, shown, *ga.angle_deg, ga.grid);
   if (ga.as_json) {
     json j;
     j["lens"] = pr.path;
@@ -125,6 +200,13 @@ int runGhosts(const LensArgs& args, const GhostArgs& ga) {
                      {"defocus_mm", finiteOr(h.defocus_mm)},
                      {"film_diameter_mm", h.film_diameter_mm},
                      {"in_focus", h.film_diameter_mm < ga.focus_tolerance_mm}});
+      if (spots)
+        arr.back()["spot"] = spots->ghosts[i] ? spotJson(*spots->ghosts[i]) : json(nullptr);
+    }
+    if (spots) {
+      j["angle_deg"] = *ga.angle_deg;
+      j["grid"] = ga.grid;
+      j["direct_spot"] = spotJson(spots->direct);
     }
     j["ghosts"] = arr;
     std::cout << j.dump(2) << "\n";
@@ -150,6 +232,7 @@ int runGhosts(const LensArgs& args, const GhostArgs& ga) {
                "ghost energy / direct image energy; aperture: fraction of the entrance beam the "
                "clear apertures pass on the ghost path; focus z, defocus (focus - film) and film "
                "diameter in mm (paraxial)\n";
+  if (spots) printSpots(g, shown, *spots, *ga.angle_deg, ga.grid);
   return 0;
 }
 
@@ -309,6 +392,11 @@ void registerLensGhostsCommand(CLI::App& lens, Action& action) {
   cmd->add_option("--coating", ga->coating,
                   "Lens-wide coating of the air-glass surfaces that name none (uncoated, single, "
                   "multi, or a name of the lens's coating file), instead of the file's");
+  cmd->add_option("--angle", ga->angle_deg,
+                  "Light angle off axis (deg, x-z plane): also trace each shown ghost's film "
+                  "spot (centroid, size) with real rays");
+  cmd->add_option("--grid", ga->grid,
+                  "Rays across the entrance pupil for --angle's traced spots (default 64)");
   cmd->add_flag("--json", ga->as_json, "Print one JSON object");
   cmd->callback([&action, args, ga] {
     action = [args, ga] { return runGhosts(*args, *ga); };

@@ -743,6 +743,9 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.as_built = r.as_built;
       s.as_built_film = !r.focus_given;
       s.tolerance_loc = r.tolerance_loc;
+
+      s.flare_ghosts = r.flare_ghosts;
+      s.flare_ghosts_loc = r.flare_ghosts_loc;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

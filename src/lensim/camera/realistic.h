@@ -113,6 +113,12 @@ struct RealisticSettings {
   int as_built = -1;
   bool as_built_film = false;
   FileLoc tolerance_loc;
+
+  /// A diagnostic ("string flareghosts" "I,J;I,J"): render only these ghost pairs (first
+  /// reflection at I, then at J, as `lens ghosts` lists them); empty: all. Checked against the
+  /// lens at setup (a pair that reflects nothing is refused at flare_ghosts_loc).
+  std::vector<std::pair<int, int>> flare_ghosts;
+  FileLoc flare_ghosts_loc;
 };
 
 class RealisticCamera final : public Camera {

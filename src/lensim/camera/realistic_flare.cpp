@@ -148,6 +148,22 @@ void RealisticCamera::setUpFlare() {
         s[size_t(g.b)].ior_before != s[size_t(g.b)].ior_after)
       pairs.push_back(g);
   if (pairs.empty()) throw Error(loc, "flare: the lens has no pair of reflecting surfaces");
+  // The diagnostic restriction to listed pairs (the estimator stays unbiased for their sum).
+  if (!settings_.flare_ghosts.empty()) {
+    std::vector<optics::Ghost> kept;
+    for (const auto& [i, j] : settings_.flare_ghosts) {
+      const auto it = std::find_if(pairs.begin(), pairs.end(), [&](const optics::Ghost& g) {
+        return g.b == i && g.a == j;
+      });
+      if (it == pairs.end())
+        throw Error(settings_.flare_ghosts_loc,
+                    fmt::format("flareghosts: {},{} is not a ghost pair of the lens (expected "
+                                "I,J with 0 <= J < I <= {}, both surfaces with an index step)",
+                                i, j, n - 1));
+      kept.push_back(*it);
+    }
+    pairs = std::move(kept);
+  }
   double sum = 0;
   for (const optics::Ghost& g : pairs) sum += std::max(0.0, g.relative_intensity);
   const double m = double(pairs.size());

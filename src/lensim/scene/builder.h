@@ -323,6 +323,10 @@ struct Realistic {
   int as_built = -1;
   FileLoc tolerance_loc;
   bool focus_given = false;
+
+  /// `flareghosts` "I,J;I,J": a diagnostic, only these ghost pairs (docs/flare.md); empty: all
+  std::vector<std::pair<int, int>> flare_ghosts;
+  FileLoc flare_ghosts_loc;
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 

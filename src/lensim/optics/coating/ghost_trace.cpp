@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "lensim/util/error.h"
 
@@ -60,6 +62,51 @@ int ghostPathSurface(int first, int second, int index) {
 
 LensTracer<double> ghostTracer(const LensSystem& lens, int first, int second) {
   return LensTracer<double>(ghostPathInterfaces(lens, first, second));
+}
+
+GhostSpot traceSpot(const LensTracer<double>& tracer, const Interface& front, double film_z_mm,
+                    double angle_rad, int grid) {
+  if (grid < 2 || grid > 2000)
+    throw Error(fmt::format("ghost spot: grid {} (expected 2 to 2000 rays across)", grid));
+  if (!(std::abs(angle_rad) < 0.5 * std::numbers::pi))
+    throw Error(fmt::format("ghost spot: light angle {} deg (expected within -90..90)",
+                            angle_rad * 180 / std::numbers::pi));
+  // The grid covers a disc a quarter wider than the clear aperture: oblique rays meet a curved
+  // front surface off their vertex-plane crossing; those that miss the aperture are clipped.
+  const double r = 1.25 * front.semi_aperture_mm;
+  const Vec3T<double> dir{std::sin(angle_rad), 0.0, std::cos(angle_rad)};
+  // Start each ray a little in front of the front surface's sag region, on the line that
+  // crosses the vertex plane at the grid point.
+  const double back = 2 * r + 1;
+  GhostSpot s;
+  double sx = 0, sy = 0, sxx = 0, syy = 0;
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  for (int i = 0; i < grid; ++i)
+    for (int j = 0; j < grid; ++j) {
+      const double gx = r * (-1 + 2 * (i + 0.5) / grid), gy = r * (-1 + 2 * (j + 0.5) / grid);
+      if (gx * gx + gy * gy > r * r) continue;
+      ++s.rays_launched;
+      const double t = back / dir.z;
+      const Ray ray{{gx - t * dir.x, gy, front.z_mm - back}, dir};
+      const TraceResult res = tracer.traceFromScene(ray);
+      if (!res.ok() || !(res.ray.direction.z > 0)) continue;
+      const double u = (film_z_mm - res.ray.origin.z) / res.ray.direction.z;
+      const double x = res.ray.origin.x + u * res.ray.direction.x;
+      const double y = res.ray.origin.y + u * res.ray.direction.y;
+      ++s.rays_arrived;
+      sx += x, sy += y, sxx += x * x, syy += y * y;
+      xmin = std::min(xmin, x), xmax = std::max(xmax, x);
+      ymin = std::min(ymin, y), ymax = std::max(ymax, y);
+    }
+  if (s.rays_arrived == 0) return s;
+  const double n = s.rays_arrived;
+  s.centroid_x_mm = sx / n;
+  s.centroid_y_mm = sy / n;
+  s.rms_radius_mm = std::sqrt(std::max(0.0, sxx / n - s.centroid_x_mm * s.centroid_x_mm +
+                                                syy / n - s.centroid_y_mm * s.centroid_y_mm));
+  s.extent_x_mm = xmax - xmin;
+  s.extent_y_mm = ymax - ymin;
+  return s;
 }
 
 std::optional<double> axisCrossingZ(const Ray& out) {

@@ -29,6 +29,26 @@ int ghostPathSurface(int first, int second, int index);
 /// the film side (its result ray leaves the last surface toward +z).
 LensTracer<double> ghostTracer(const LensSystem& lens, int first, int second);
 
+/// A ghost's image on the film of a distant point light at an angle off axis, from real rays.
+struct GhostSpot {
+  /// Rays of the entrance grid that reached the film, and the grid's rays that met the lens.
+  int rays_arrived = 0, rays_launched = 0;
+  /// Centroid on the film (mm; x in the meridional plane of the light, y = 0 by symmetry).
+  double centroid_x_mm = 0, centroid_y_mm = 0;
+  /// RMS distance of the arriving rays from the centroid (mm).
+  double rms_radius_mm = 0;
+  /// Extent of the arriving rays along x and y (max - min, mm).
+  double extent_x_mm = 0, extent_y_mm = 0;
+};
+
+/// Traces a square grid (grid x grid, within a disc 1.25 x the front surface's clear aperture)
+/// of parallel rays of a point at infinity whose light comes in at `angle_rad` off the axis in
+/// the x-z plane (direction (sin, 0, cos)) through `tracer` (ghostTracer, or the lens's own for
+/// the direct image) to the film plane `film_z_mm`. `front` is the lens's first surface (where the grid
+/// lies). Throws lensim::Error for a grid outside 2..2000 or an angle not within (-90, 90) deg.
+GhostSpot traceSpot(const LensTracer<double>& tracer, const Interface& front, double film_z_mm,
+                    double angle_rad, int grid);
+
 /// Where a ray that left the ghost path crosses the axis (lens space z, mm), from its meridional
 /// height and slope; nullopt when it leaves parallel to the axis.
 std::optional<double> axisCrossingZ(const Ray& out);

@@ -197,6 +197,33 @@ void Builder::camera(const Directive& d) {
         r.tolerance_job = resolve(tj->strings[0], tj->loc, "design job");
         r.tolerance_loc = ab ? ab->loc : tj->loc;
       }
+      // A diagnostic: only the listed ghost pairs, "I,J;I,J" (docs/flare.md).
+      if (const Param* fg = ps.find({"flareghosts"}, {ParamType::String})) {
+        if (!r.flare) ps.fail(*fg, "applies only with \"bool flare\" true");
+        const std::string& text = fg->strings[0];
+        size_t pos = 0;
+        while (pos <= text.size()) {
+          size_t end = text.find(';', pos);
+          if (end == std::string::npos) end = text.size();
+          const std::string item = text.substr(pos, end - pos);
+          const size_t comma = item.find(',');
+          bool ok = comma != std::string::npos && comma > 0 && comma + 1 < item.size() &&
+                    item.size() < 12 &&
+                    item.find_first_not_of("0123456789,") == std::string::npos &&
+                    item.find(',', comma + 1) == std::string::npos;
+          std::pair<int, int> ij{0, 0};
+          if (ok) ij = {std::stoi(item.substr(0, comma)), std::stoi(item.substr(comma + 1))};
+          if (!ok)
+            ps.fail(*fg, fmt::format("'{}': expected ghost pairs I,J separated by ';' (surface "
+                                     "indices as `lens ghosts` lists them)",
+                                     item));
+          for (const auto& p : r.flare_ghosts)
+            if (p == ij) ps.fail(*fg, fmt::format("ghost pair {} is listed twice", item));
+          r.flare_ghosts.push_back(ij);
+          pos = end + 1;
+        }
+        r.flare_ghosts_loc = fg->loc;
+      }
       c.realistic = r;
     }
   } else {
