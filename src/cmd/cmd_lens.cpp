@@ -224,7 +224,8 @@ void printInfoJson(const LensArgs& args, const FocusedLens& fl, const TiltShift&
   j["elements"] = elementsJson(lens);
   j["internal_transmittance"] = transmittanceJson(lens);
   j["coatings"] = coatingsJson(lens);
-  if (tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
+  if (tilt_shift.any())
+    j["tilt_shift"] = optics::tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
   std::cout << j.dump(2) << "\n";
 }
 

@@ -39,39 +39,6 @@ optics::TiltShift parseTiltShift(const std::string& tilt, const std::string& shi
   return ts;
 }
 
-namespace {
-
-json vec(const Vec3& v) {
-  return json::array({v.x, v.y, v.z});
-}
-
-}  // namespace
-
-json tiltShiftJson(const optics::FocusedLens& fl, const optics::TiltShift& ts,
-                   double film_diagonal_mm) {
-  json j;
-  j["tilt_deg"] = json::array({ts.tilt_deg.x, ts.tilt_deg.y});
-  j["shift_mm"] = json::array({ts.shift_mm.x, ts.shift_mm.y});
-  j["film_reach_from_axis_mm"] = film_diagonal_mm / 2 + std::hypot(ts.shift_mm.x, ts.shift_mm.y);
-  if (!ts.tilted()) return j;
-  const optics::FilmPlacement placement(ts, fl.lens->filmZ_mm());
-  const optics::ScheimpflugData s = optics::scheimpflug(fl.paraxial, placement);
-  j["tilt_angle_deg"] = s.tilt_deg;
-  j["hinge_distance_mm"] = s.hinge_distance_mm;
-  j["hinge_point_mm"] = vec(s.hinge_point_mm);
-  j["hinge_direction"] = vec(s.hinge_direction);
-  j["scheimpflug_point_mm"] = vec(s.scheimpflug_point_mm);
-  j["focus_plane_normal"] = vec(s.focus_plane_normal);
-  j["focus_plane_axis_z_mm"] =
-      std::isfinite(s.focus_plane_axis_z_mm) ? json(s.focus_plane_axis_z_mm) : json(nullptr);
-  j["focus_plane_object_distance_mm"] =
-      std::isfinite(s.object_distance_mm) ? json(s.object_distance_mm) : json(nullptr);
-  j["focus_plane_to_film_deg"] = s.focus_plane_to_film_deg;
-  j["focus_plane_to_lens_plane_deg"] = s.focus_plane_to_lens_plane_deg;
-  j["image_distance_mm"] = s.image_distance_mm;
-  return j;
-}
-
 void printTiltShift(const optics::FocusedLens& fl, const optics::TiltShift& ts,
                     double film_diagonal_mm) {
   auto line = [](const std::string& k, const std::string& v) {

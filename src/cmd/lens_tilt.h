@@ -14,10 +14,6 @@ namespace lensim::cmd {
 /// empty texts are zero. Throws lensim::Error naming the option and the bad value.
 optics::TiltShift parseTiltShift(const std::string& tilt, const std::string& shift);
 
-/// The placement's data: for a tilt the hinge line and plane of focus (first-order), for a shift
-/// where the axis meets the film and how far from it the film reaches.
-nlohmann::json tiltShiftJson(const optics::FocusedLens& fl, const optics::TiltShift& ts,
-                             double film_diagonal_mm);
 /// The same as `lens info` lines.
 void printTiltShift(const optics::FocusedLens& fl, const optics::TiltShift& ts,
                     double film_diagonal_mm);

@@ -7,6 +7,7 @@
 
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_system.h"
+#include "lensim/optics/tilt_shift.h"
 
 namespace lensim::optics {
 
@@ -31,5 +32,11 @@ nlohmann::json diagnosticsJson(const FocusedLens& fl);
 /// count, stated focal length), focal lengths, stop, pupils, f-numbers, lengths, focus, field of
 /// view for a film of this diagonal, and "diagnostics". Callers add their own keys.
 nlohmann::json firstOrderJson(const FocusedLens& fl, double film_diagonal_mm);
+
+/// A lens tilted and shifted against the film (tilt_shift.h): the shift and how far from the
+/// axis a film of this diagonal reaches; for a tilt also the hinge line, the Scheimpflug point
+/// and the plane of focus (first-order). Both `lens info --tilt --shift --json` and the
+/// explorer's "tilt_shift" block.
+nlohmann::json tiltShiftJson(const FocusedLens& fl, const TiltShift& ts, double film_diagonal_mm);
 
 }  // namespace lensim::optics

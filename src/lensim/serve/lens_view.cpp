@@ -65,37 +65,6 @@ SetUpLens setUpLens(const LensSettings& st) {
   return out;
 }
 
-namespace {
-
-json vec(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
-
-/// The hinge line and plane of focus of a tilted film (optics::scheimpflug), and how far the
-/// film reaches from a shifted axis; keys as `lens info --tilt --shift --json`.
-json tiltShiftJson(const SetUpLens& s, double film_diagonal_mm) {
-  const TiltShift& ts = s.tilt_shift;
-  json j;
-  j["tilt_deg"] = json::array({ts.tilt_deg.x, ts.tilt_deg.y});
-  j["shift_mm"] = json::array({ts.shift_mm.x, ts.shift_mm.y});
-  j["film_reach_from_axis_mm"] = film_diagonal_mm / 2 + std::hypot(ts.shift_mm.x, ts.shift_mm.y);
-  if (!ts.tilted()) return j;
-  const FilmPlacement placement(ts, s.lens.lens->filmZ_mm());
-  const ScheimpflugData sd = scheimpflug(s.lens.paraxial, placement);
-  j["tilt_angle_deg"] = sd.tilt_deg;
-  j["hinge_distance_mm"] = sd.hinge_distance_mm;
-  j["hinge_point_mm"] = vec(sd.hinge_point_mm);
-  j["hinge_direction"] = vec(sd.hinge_direction);
-  j["focus_plane_normal"] = vec(sd.focus_plane_normal);
-  j["focus_plane_axis_z_mm"] =
-      std::isfinite(sd.focus_plane_axis_z_mm) ? json(sd.focus_plane_axis_z_mm) : json(nullptr);
-  j["focus_plane_object_distance_mm"] =
-      std::isfinite(sd.object_distance_mm) ? json(sd.object_distance_mm) : json(nullptr);
-  j["focus_plane_to_film_deg"] = sd.focus_plane_to_film_deg;
-  j["focus_plane_to_lens_plane_deg"] = sd.focus_plane_to_lens_plane_deg;
-  return j;
-}
-
-}  // namespace
-
 json firstOrderJson(const SetUpLens& s, double film_diagonal_mm) {
   json j = optics::firstOrderJson(s.lens, film_diagonal_mm);
   // The explorer's own: the stop it set for the requested f-number, and the range.
@@ -116,7 +85,8 @@ json firstOrderJson(const SetUpLens& s, double film_diagonal_mm) {
     }
     j["zoom"] = z;
   }
-  if (s.tilt_shift.any()) j["tilt_shift"] = tiltShiftJson(s, film_diagonal_mm);
+  if (s.tilt_shift.any())
+    j["tilt_shift"] = optics::tiltShiftJson(s.lens, s.tilt_shift, film_diagonal_mm);
   return j;
 }
 
