@@ -19,6 +19,16 @@ namespace lensim::optics {
 /// and vendors' glass catalogues are). Throws a located error for malformed UTF-16.
 std::string decodeTextFile(std::string_view bytes, const std::string& path);
 
+/// A whitespace-separated field of a line of a text lens file or glass catalogue, with its
+/// 1-based column (for `file:line:col` errors).
+struct LineField {
+  std::string_view text;
+  int col;
+};
+
+/// The fields of `line` separated by runs of the characters in `separators`.
+std::vector<LineField> splitFields(std::string_view line, std::string_view separators = " \t");
+
 /// Parses a Zemax `.zmx` file (sequential mode). Surfaces: STANDARD, EVENASPH, ODDASPH, TOROIDAL
 /// (with CONI, PARM); UNIT MM/CM/IN/M; GLAS (catalogue name with the file's n_d/V_d, ___BLANK model
 /// glass); DIAM (semi-diameter; without it, or 0, computed from real rays as OpticStudio does:

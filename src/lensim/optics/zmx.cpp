@@ -109,25 +109,23 @@ std::string decodeTextFile(std::string_view bytes, const std::string& path) {
   return out;
 }
 
-namespace {
-
-struct Tok {
-  std::string_view text;
-  int col;
-};
-
-std::vector<Tok> tokens(std::string_view line) {
-  std::vector<Tok> t;
+std::vector<LineField> splitFields(std::string_view line, std::string_view separators) {
+  const auto sep = [&](char c) { return separators.find(c) != std::string_view::npos; };
+  std::vector<LineField> t;
   size_t i = 0;
   while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+    while (i < line.size() && sep(line[i])) ++i;
     if (i >= line.size()) break;
     const size_t s = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+    while (i < line.size() && !sep(line[i])) ++i;
     t.push_back({line.substr(s, i - s), int(s) + 1});
   }
   return t;
 }
+
+namespace {
+
+using Tok = LineField;
 
 struct ZSurface {
   int number = 0;
@@ -492,7 +490,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     pos = (end + 1 < text.size() && text[end] == '\r' && text[end + 1] == '\n') ? end + 2 : end + 1;
     if (end == text.size() && line.empty()) break;
     last_line = line_no;
-    const std::vector<Tok> t = tokens(line);
+    const std::vector<Tok> t = splitFields(line);
     if (t.empty()) continue;
     const std::string_view key = t[0].text;
     const FileLoc loc{path_, line_no, t[0].col};

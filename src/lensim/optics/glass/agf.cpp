@@ -45,24 +45,10 @@ double schottSeries(const ZemaxCoefficients& c, int n, double l2) {
   return s;
 }
 
-bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
+// AGF fields are separated by spaces, tabs, form feeds or vertical tabs.
+constexpr std::string_view kAgfSeparators = " \t\f\v";
 
-struct Token {
-  std::string_view text;
-  int col;
-};
-
-std::vector<Token> tokenize(std::string_view line) {
-  std::vector<Token> t;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && isSpace(line[i])) ++i;
-    const size_t start = i;
-    while (i < line.size() && !isSpace(line[i])) ++i;
-    if (i > start) t.push_back({line.substr(start, i - start), int(start) + 1});
-  }
-  return t;
-}
+using Token = LineField;
 
 }  // namespace
 
@@ -142,7 +128,7 @@ std::vector<AgfGlass> parseAgf(std::string_view bytes, const std::string& path) 
                          text[end + 1] == '\n'
                      ? 2
                      : 1);
-    std::vector<Token> t = tokenize(line);
+    std::vector<Token> t = splitFields(line, kAgfSeparators);
     if (t.empty()) continue;
     const char c0 = t[0].text[0];
     const bool continuation = (c0 >= '0' && c0 <= '9') || c0 == '-' || c0 == '+' || c0 == '.';
