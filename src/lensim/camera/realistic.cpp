@@ -743,7 +743,6 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.as_built = r.as_built;
       s.as_built_film = !r.focus_given;
       s.tolerance_loc = r.tolerance_loc;
-
       s.flare_ghosts = r.flare_ghosts;
       s.flare_ghosts_loc = r.flare_ghosts_loc;
       if (r.blades > 0)
