@@ -280,9 +280,7 @@ std::optional<RealisticCamera::FilmRay> RealisticCamera::placedFilmRay(const Cam
     }
     return f;
   }
-  const double lat = std::hypot(p.x, p.y);
-  const double t_min = (p.z - rear_zmax_mm_) / (p.z - rear_zmin_mm_);
-  const double radius = std::max(rear_semi_mm_, (1 - t_min) * lat + t_min * rear_semi_mm_);
+  const double radius = tiltDiscRadius(p);
   const Vec2 d = render::sampleUniformDiskConcentric(sample.lens);
   const Vec3 q{radius * d.x, radius * d.y, rear_zmax_mm_};
   const Vec3 to = q - p;
@@ -292,6 +290,12 @@ std::optional<RealisticCamera::FilmRay> RealisticCamera::placedFilmRay(const Cam
   if (!(cos_plane > 0) || !(cos_film > 0)) return std::nullopt;
   return FilmRay{optics::RayT<float>{Vec3f(p), Vec3f(dir)}, cos_plane, M_PI * radius * radius,
                  cos_film * cos_plane / r2};
+}
+
+double RealisticCamera::tiltDiscRadius(const Vec3& p) const {
+  const double lat = std::hypot(p.x, p.y);
+  const double t_min = (p.z - rear_zmax_mm_) / (p.z - rear_zmin_mm_);
+  return std::max(rear_semi_mm_, (1 - t_min) * lat + t_min * rear_semi_mm_);
 }
 
 std::pair<double, double> RealisticCamera::surfaceZRange(const optics::Interface& f) {
@@ -670,8 +674,7 @@ std::string RealisticCamera::describe() const {
                                          : std::string()) +
          (placement_
               ? fmt::format(
-                    "; lens shift ({:g}, {:g}) mm, tilt ({:g}, {:g}) deg{} (no "
-                    "camera importance)",
+                    "; lens shift ({:g}, {:g}) mm, tilt ({:g}, {:g}) deg{}",
                     settings_.tilt_shift.shift_mm.x, settings_.tilt_shift.shift_mm.y,
                     settings_.tilt_shift.tilt_deg.x, settings_.tilt_shift.tilt_deg.y,
                     settings_.tilt_shift.tilted() ? ", rays aimed at the rear element's disc" : "")

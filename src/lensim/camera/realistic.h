@@ -149,9 +149,9 @@ class RealisticCamera final : public Camera {
   std::vector<GhostChoice> ghostChoices() const;
 
   // Camera importance (realistic_importance.cpp).
-  /// Not for a tilted or shifted lens (the importance code assumes the film on the lens's
-  /// normal plane, centred on its axis): bdpt and lighttracer refuse such a camera.
-  bool supportsImportance() const override { return !placement_; }
+  /// Also for a tilted or shifted lens (film points on the placed film, the sampled region
+  /// of placedFilmRay).
+  bool supportsImportance() const override { return true; }
   std::optional<CameraWiSample> sampleWi(const Vec3& ref, Vec2 u,
                                          const std::array<double, kCameraWavelengths>& lambda_nm,
                                          double time) const override;
@@ -215,6 +215,9 @@ class RealisticCamera final : public Camera {
   std::optional<optics::ScheimpflugData> scheimpflug_;
   double rear_zmin_mm_ = 0, rear_zmax_mm_ = 0, rear_semi_mm_ = 0;
   void setUpTiltShift(const Vec2& sampled_half_extent_mm);
+  /// A tilted film: the radius of the disc on the plane z = rear_zmax_mm_ that a film point
+  /// (lens space) samples (realistic.cpp, "Tilt and shift").
+  double tiltDiscRadius(const Vec3& film_point_lens_mm) const;
   /// Dispersion (see realistic.cpp, "Dispersive lenses"): whether the lens disperses, and an id
   /// that keys each thread's re-indexed copy of the tracer to this camera.
   bool dispersive_ = false;
@@ -254,8 +257,9 @@ class RealisticCamera final : public Camera {
 
   // Importance (realistic_importance.cpp).
   /// Where the line through o_lens with direction d_lens (lens space, mm; toward +z), coming
-  /// from the scene, meets the film, traced at lambda_nm (0: the primary wavelength): the film
-  /// point's raster position and the importance per unit world area and projected solid angle
+  /// from the scene, meets the film (tilted or shifted: the placed film; film_mm is then in the
+  /// film's frame), traced at lambda_nm (0: the primary wavelength): the film point's raster
+  /// position and the importance per unit world area and projected solid angle
   /// at the front element; nullopt if the lens stops it, it misses the film or no camera ray
   /// could have taken that way. With front_hit: also nullopt unless the line enters the lens
   /// there (its first meeting with the front surface).
@@ -264,6 +268,9 @@ class RealisticCamera final : public Camera {
     double importance = 0;
     Vec2 film_mm;
     double cos_theta = 1;  ///< of the film-side ray to the axis
+    /// The region generateRay samples for this film point (mm^2) and the ray's geometric
+    /// factor there (FilmRay::g_per_mm2: cos^4(theta) / z^2 for an untilted film).
+    double area_mm2 = 0, g_per_mm2 = 0;
   };
   std::optional<FilmHit> traceToFilm(const Vec3& o_lens, const Vec3& d_lens, double lambda_nm,
                                      const Vec3* front_hit = nullptr,

@@ -64,28 +64,44 @@ const Transform& RealisticCamera::cameraFromWorld(double time, Transform& scratc
   return scratch;
 }
 
+// Camera space (camera units, +z toward the scene) and lens space (mm, +z toward the film):
+// without tilt or shift z_lens = z0 - z_cam; with them camera space is the film's frame
+// (realistic.cpp, placeRay), carried to lens space by the film's placement.
 Vec3 RealisticCamera::lensFromWorldPoint(const Vec3& p, double time) const {
   Transform scratch;
   const Vec3 c = cameraFromWorld(time, scratch).applyPoint(p);
   const double u = settings_.camera_units_per_mm;
+  if (placement_) return placement_->lensFromFilmPoint({c.x / u, c.y / u, -c.z / u});
   const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens_.lens->filmZ_mm();
   return {c.x / u, c.y / u, z0 - c.z / u};
 }
 Vec3 RealisticCamera::lensFromWorldVector(const Vec3& v, double time) const {
   Transform scratch;
   const Vec3 c = cameraFromWorld(time, scratch).applyVector(v);
+  if (placement_) return placement_->lensFromFilmVector({c.x, c.y, -c.z});
   return {c.x, c.y, -c.z};
 }
 Vec3 RealisticCamera::worldFromLensPoint(const Vec3& p, double time) const {
   Transform scratch;
   const double u = settings_.camera_units_per_mm;
-  const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens_.lens->filmZ_mm();
-  return settings_.world_from_camera.at(time, scratch)
-      .applyPoint({p.x * u, p.y * u, (z0 - p.z) * u});
+  Vec3 c;
+  if (placement_) {
+    const Vec3 f = placement_->filmFromLensPoint(p);
+    c = {f.x * u, f.y * u, -f.z * u};
+  } else {
+    const double z0 = settings_.origin_at_front_vertex ? 0.0 : lens_.lens->filmZ_mm();
+    c = {p.x * u, p.y * u, (z0 - p.z) * u};
+  }
+  return settings_.world_from_camera.at(time, scratch).applyPoint(c);
 }
 Vec3 RealisticCamera::worldFromLensVector(const Vec3& v, double time) const {
   Transform scratch;
-  return settings_.world_from_camera.at(time, scratch).applyVector({v.x, v.y, -v.z});
+  Vec3 c{v.x, v.y, -v.z};
+  if (placement_) {
+    const Vec3 f = placement_->filmFromLensVector(v);
+    c = {f.x, f.y, -f.z};
+  }
+  return settings_.world_from_camera.at(time, scratch).applyVector(c);
 }
 
 std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3& o_lens,
@@ -121,32 +137,61 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
   const Vec3 ro{r.ray.origin}, rd{r.ray.direction};
   if (!(rd.z > 0)) return std::nullopt;
   const double z_film = lens.filmZ_mm(), z_rear = lens.rearVertexZ_mm();
-  const Vec3 x = ro + rd * ((z_film - ro.z) / rd.z), q = ro + rd * ((z_rear - ro.z) / rd.z);
   FilmHit hit;
-  hit.film_mm = {x.x, x.y};
+  // The film point (film frame with tilt or shift, else lens space) and its lens-space point.
+  Vec3 x;
+  if (placement_) {
+    Vec2 f;
+    double t = 0;
+    if (!placement_->intersectFilm(ro, rd, &f, &t) || !(t > 0)) return std::nullopt;
+    hit.film_mm = f;
+    x = ro + rd * t;
+  } else {
+    x = ro + rd * ((z_film - ro.z) / rd.z);
+    hit.film_mm = {x.x, x.y};
+  }
   hit.raster = rasterPoint(hit.film_mm);
   const Vec2 fr = settings_.filter_radius;
   if (!(hit.raster.x >= 0.5 - fr.x && hit.raster.x < settings_.x_resolution + fr.x - 0.5 &&
         hit.raster.y >= 0.5 - fr.y && hit.raster.y < settings_.y_resolution + fr.y - 0.5))
     return std::nullopt;
-  // Only rays camera rays can take count: through the sampled rear-plane region.
-  if (settings_.rear_disc_only) {
-    const double rr = lens.interfaces().back().semi_aperture_mm;
-    if (q.x * q.x + q.y * q.y > rr * rr) return std::nullopt;
+  // Only rays camera rays can take count: through the region generateRay samples for x, with
+  // the density it samples them at (FilmHit::area_mm2, g_per_mm2).
+  hit.cos_theta = rd.z / length(rd);
+  const double z = lens.filmDistance_mm();
+  if (placement_ && placement_->tiltShift().tilted()) {
+    // The disc on the plane z = rear_zmax_mm_ (placedFilmRay).
+    const Vec3 q = ro + rd * ((rear_zmax_mm_ - ro.z) / rd.z);
+    const double radius = tiltDiscRadius(x);
+    if (q.x * q.x + q.y * q.y > radius * radius) return std::nullopt;
+    const Vec3 to = q - x;
+    const double r2 = dot(to, to);
+    const double cos_film = dot(normalize(rd), placement_->filmNormal());
+    if (!(cos_film > 0) || !(r2 > 0)) return std::nullopt;
+    hit.area_mm2 = M_PI * radius * radius;
+    hit.g_per_mm2 = cos_film * hit.cos_theta / r2;
+  } else {
+    // The exit-pupil bound at x's offset from the axis (shifted or not).
+    const Vec3 q = ro + rd * ((z_rear - ro.z) / rd.z);
+    const Vec2 at{x.x, x.y};
+    if (settings_.rear_disc_only) {
+      const double rr = lens.interfaces().back().semi_aperture_mm;
+      if (q.x * q.x + q.y * q.y > rr * rr) return std::nullopt;
+    }
+    hit.area_mm2 = pupil_->area_mm2(at);
+    if (!(hit.area_mm2 > 0) || !pupil_->contains(at, {q.x, q.y})) return std::nullopt;
+    const double c2 = hit.cos_theta * hit.cos_theta;
+    hit.g_per_mm2 = c2 * c2 / (z * z);
   }
-  if (!(pupil_->area_mm2(hit.film_mm) > 0) || !pupil_->contains(hit.film_mm, {q.x, q.y}))
-    return std::nullopt;
   double transmission = 1;
   if (!settings_.aperture.isRound() && stop_radius_mm_ > 0) {
     transmission = settings_.aperture.transmission(
         Vec2{r.stop_point.x / stop_radius_mm_, r.stop_point.y / stop_radius_mm_});
     if (!(transmission > 0)) return std::nullopt;
   }
-  const double z = lens.filmDistance_mm();
   const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
   const double film_area_mm2 = 4 * half_width_mm_ * half_height_mm_;
   const double units = settings_.camera_units_per_mm;
-  hit.cos_theta = rd.z / length(rd);
   hit.importance = transmission * z * z / (norm * film_area_mm2 * units * units);
   if (absorbs) hit.importance *= pathTransmittance(path, false, lambda_nm);
   return hit;
@@ -221,7 +266,9 @@ void RealisticCamera::buildFrontBounds() const {
         const double n = double((i * kFilm + j) * kPupil * kPupil + a);
         const Vec2 u{std::fmod(0.5 + n * 0.7548776662466927, 1.0),
                      std::fmod(0.5 + n * 0.5698402909980532, 1.0)};
-        const std::optional<FilmRay> f = filmRay(cs, film, pupil_->sample(film, u));
+        cs.lens = u;
+        const std::optional<FilmRay> f =
+            placement_ ? placedFilmRay(cs, film) : filmRay(cs, film, pupil_->sample(film, u));
         if (!f) continue;
         const optics::TraceResultT<float> r = lens.tracerFloat().traceFromFilm(f->ray);
         if (!r.ok()) continue;
@@ -317,23 +364,22 @@ double RealisticCamera::importance(const Vec3& o, const Vec3& d, double lambda_n
 CameraRayPdf RealisticCamera::rayPdf(const Vec3& o, const Vec3& d, double lambda_nm,
                                      double time) const {
   // pdf_pos: sampleWi's density of the front-surface point (so that bdpt's strategies agree on
-  // the camera vertex); pdf_dir: generateRay's joint density of the ray over it. generateRay's
-  // density per unit film area and film-side solid angle is (1/A_film) (1/A(x)) z^2 / cos^3
-  // (film point uniform over the image, as pbrt-v4's PDF_We takes it; rear-plane point uniform
-  // over the region A(x)); per unit front area and solid angle it is that times
-  // cos(n) / cos(theta) (etendue).
+  // the camera vertex); pdf_dir: generateRay's joint density of the ray over it. generateRay
+  // draws the film point uniformly over the image (1/A_film, as pbrt-v4's PDF_We takes it) and
+  // a point uniformly over a region of area A(x) on a plane (the exit-pupil bound on the
+  // rear-vertex plane; with tilt, the disc on the rear surface's plane): per unit film area and
+  // projected solid angle (against the film's normal) that is 1 / (A_film A(x) G), G = cos_film
+  // cos_plane / r^2 (cos^4(theta) / z^2 for an untilted film). The lens conserves that measure
+  // (etendue), so per unit front area and solid angle it is that times cos(n).
   const optics::Interface& front = lens_.lens->interfaces().front();
   const Vec3 o_l = lensFromWorldPoint(o, time), back = normalize(lensFromWorldVector(-d, time));
   const std::optional<FrontPoint> fp = frontPoint(front, o_l.x, o_l.y);
   const std::optional<FilmHit> hit = traceToFilm(o_l, back, lambda_nm);
-  if (!fp || !hit) return {};
-  const double area = pupil_->area_mm2(hit->film_mm);
-  if (!(area > 0)) return {};
+  if (!fp || !hit || !(hit->area_mm2 > 0) || !(hit->g_per_mm2 > 0)) return {};
   const double units = settings_.camera_units_per_mm, R = front.semi_aperture_mm;
-  const double z = lens_.lens->filmDistance_mm(), c = hit->cos_theta;
   const double film_area_mm2 = 4 * half_width_mm_ * half_height_mm_;
-  const double p_film = z * z / (film_area_mm2 * area * c * c * c);  // per mm^2 sr, film side
-  const double p_front = p_film * std::abs(dot(fp->n, back)) / c / (units * units);
+  const double p_proj = 1 / (film_area_mm2 * hit->area_mm2 * hit->g_per_mm2);
+  const double p_front = p_proj * std::abs(dot(fp->n, back)) / (units * units);
   const double pdf_pos = std::abs(fp->n.z) / (M_PI * R * R * units * units);
   return {pdf_pos, p_front / pdf_pos};
 }
