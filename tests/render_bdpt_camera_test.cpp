@@ -164,7 +164,7 @@ Camera "orthographic" "float screenwindow" [-1 1 -1 1] "float lensradius" {}
 
 // For paths the cameras' own rays found, the weights of all strategies sum to one, through a
 // thin lens, the orthographic pinhole and thin lens, and a classic lens (the double Gauss,
-// whose sampleWi aims at part of the front element).
+// whose sampleWi aims at part of the front element), also tilted and shifted.
 TEST(BdptCamera, MisWeightsSumToOneThroughEachCamera) {
   const std::string cameras[] = {std::string(R"(LookAt 0 1.6 -2.4  0 0 0.4  0 1 0
 Camera "perspective" "float fov" 60 "float lensradius" 0.1 "float focaldistance" 3
@@ -172,6 +172,14 @@ Camera "perspective" "float fov" 60 "float lensradius" 0.1 "float focaldistance"
                                  orthoCamera(0), orthoCamera(0.15),
                                  fmt::format(R"(LookAt 0 1.6 -2.4  0 0 0.4  0 1 0
 Camera "realistic" "string lensfile" "{}" "float aperturediameter" 8 "float focusdistance" 3
+Film "rgb" "integer xresolution" 32 "integer yresolution" 32 "float diagonal" 35
+  "string filename" "c.exr"
+)",
+                                             lensim::test::lensPath("dgauss.50mm.dat")),
+                                 // tilted and shifted (placedFilmRay's sampling, docs/zoom.md)
+                                 fmt::format(R"(LookAt 0 1.6 -2.4  0 0 0.4  0 1 0
+Camera "realistic" "string lensfile" "{}" "float aperturediameter" 8 "float focusdistance" 3
+  "float lenstilt" [6 -3] "float lensshift" [2 -4]
 Film "rgb" "integer xresolution" 32 "integer yresolution" 32 "float diagonal" 35
   "string filename" "c.exr"
 )",
