@@ -62,18 +62,24 @@ function sliderForZoom(v, f) {
 const tiltShiftKeys = ['tiltx', 'tilty', 'shiftx', 'shifty'];
 function tiltShiftFor(v, key) { return Number(v[`${key}Slider`].value) / 10; }
 
-// The query of the lens as the preview renders it: the lens file at an aperture and focus.
+// The query of the lens as the preview renders it: the lens file at an aperture and focus (and
+// tilted and shifted: tiltShiftQuery).
 function previewQuery(v) {
   const f = focusFor(v);
   return `lens=${encodeURIComponent(v.lens)}&fnumber=${fNumberFor(v).toPrecision(6)}` +
          `&focus=${isFinite(f) ? f.toPrecision(6) : 'inf'}&diagonal=${state.scene.film_diagonal_mm}`;
 }
-// The optics also take the zoom position and the tilt and shift.
+// The lens's tilt and shift against the film (the optics and the preview take them).
+function tiltShiftQuery(v) {
+  let q = '';
+  for (const k of tiltShiftKeys) { const x = tiltShiftFor(v, k); if (x !== 0) q += `&${k}=${x}`; }
+  return q;
+}
+// The optics also take the zoom position.
 function query(v) {
   let q = previewQuery(v);
   if (v.zoom) q += `&focal=${zoomFor(v)}`;
-  for (const k of tiltShiftKeys) { const x = tiltShiftFor(v, k); if (x !== 0) q += `&${k}=${x}`; }
-  return q;
+  return q + tiltShiftQuery(v);
 }
 
 function numbersTable(v, d) {
@@ -161,7 +167,7 @@ async function updatePreview(v) {
   const t0 = performance.now();
   let first = true;
   const exposure = $(document, '#autoexposure').checked ? 'auto' : '0';
-  const url = `/api/preview?view=${v.id}&scene=${encodeURIComponent(state.scene.id)}&width=320&spp=256&exposure=${exposure}&${previewQuery(v)}`;
+  const url = `/api/preview?view=${v.id}&scene=${encodeURIComponent(state.scene.id)}&width=320&spp=256&exposure=${exposure}&${previewQuery(v)}${tiltShiftQuery(v)}`;
   v.pstatus.textContent = 'rendering…';
   try {
     const res = await fetch(url, { signal: ctrl.signal });

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "lensim/io/image.h"
+#include "lensim/optics/tilt_shift.h"
 
 namespace lensim::scene {
 struct Scene;
@@ -41,6 +42,9 @@ struct PreviewRequest {
   std::string lens_path;   ///< resolved
   double aperture_diameter_mm = 0;
   double focus_distance_m = 10;  ///< may be infinity
+  /// The lens's tilt and shift against the film (the camera's "lenstilt" and "lensshift"; the
+  /// scene's own are replaced: none unless asked).
+  optics::TiltShift tilt_shift;
   int width = 320;               ///< the height follows the scene's aspect ratio
   int max_spp = 64;              ///< stop refining at this many samples per pixel
   int seed = 0;
@@ -62,7 +66,7 @@ struct PreviewFrame {
 /// the renderer builds from their world (acceleration structure, lights, textures, materials,
 /// media: render::prepareWorld); the realistic cameras of the last kCameraCacheSize previews are
 /// kept too (their start-up traces the exit-pupil bounds), keyed by everything that makes them
-/// (scene, lens file and its modification time, stop, focus, preview width). A preview of a
+/// (scene, lens file and its modification time, stop, focus, tilt and shift, preview width). A preview of a
 /// scene and lens seen before starts rendering at once; its image is the same bit for bit as an
 /// uncached render's.
 class PreviewRenderer {
