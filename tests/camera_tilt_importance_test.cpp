@@ -121,6 +121,11 @@ TEST(TiltShiftImportance, TiltedAgreesWithPath) { agreeThrough({"tilt 8 deg", 8,
 TEST(TiltShiftImportance, ShiftedAgreesWithPath) { agreeThrough({"shift 5 mm", 0, 0, 5, 0}); }
 TEST(TiltShiftImportance, TiltedAndShiftedAgreesWithPath) {
   agreeThrough({"tilt and shift", 0, 8, 3, -4});
+  // "simpleweighting" (weights and importance scaled by z^2 / A0): the flat field.
+  const std::string cam = cameraText({"", 0, 8, 3, -4}) + " \"bool simpleweighting\" true";
+  expectAgree(testutil::compareLightTracer(
+                  [&](const char* i) { return sceneText(cam, i, false); }, 32, 128, 4),
+              "light tracer, tilt and shift, simple weighting, flat field");
 }
 
 // The comparison can fail: the light tracer through the shifted lens against the path tracer
@@ -179,4 +184,41 @@ TEST(TiltShiftImportance, ImportanceRetracesCameraRays) {
     EXPECT_LT(worst, 0.01);
     EXPECT_EQ(n_outside, 0) << "camera rays whose front point sampleWi cannot pick";
   }
+}
+
+// A ray held in the lens's frame meets the film exactly the shift farther (in raster units, the
+// raster's x running along -x of the film): camera rays of the centred lens, moved with the lens
+// by the shift, give the shifted camera's importance() that raster point.
+TEST(TiltShiftImportance, ShiftMovesTheImportanceRasterByTheShift) {
+  auto make = [](const Placement& p) {
+    return camera::makeCamera(testutil::buildText(
+        "LookAt 0 0 0  0 0 1  0 1 0\n" + cameraText(p) +
+            "\nFilm \"rgb\" \"integer xresolution\" 36 \"integer yresolution\" 24 \"float "
+            "diagonal\" 43.3\nWorldBegin\n",
+        "shift.pbrt"));
+  };
+  const Vec2 s{2.5, -1.5};  // mm: small enough that the bounds of both cameras hold the rays
+  const auto centred = make({"centred", 0, 0, 0, 0});
+  const auto shifted = make({"shifted", 0, 0, s.x, s.y});
+  const double pitch = 43.3 / std::hypot(36.0, 24.0);  // mm per pixel
+  int checked = 0;
+  double worst = 0;
+  for (int i = 0; i < 300; ++i) {
+    camera::CameraSample cs;
+    cs.film_raster = {6 + 24 * ((i * 0.618034) - std::floor(i * 0.618034)),
+                      4 + 16 * ((i * 0.754878) - std::floor(i * 0.754878))};
+    cs.lens = {(i * 0.569840 + 0.1) - std::floor(i * 0.569840 + 0.1),
+               (i * 0.324718 + 0.3) - std::floor(i * 0.324718 + 0.3)};
+    const auto ray = centred->generateRay(cs);
+    if (!ray) continue;
+    Vec2 r0, r1;
+    if (!(centred->importance(ray->origin, ray->direction, 0, &r0, ray->time) > 0)) continue;
+    const Vec3 moved = ray->origin + Vec3{s.x, s.y, 0} * 1e-3;  // the lens moved in metres
+    if (!(shifted->importance(moved, ray->direction, 0, &r1, ray->time) > 0)) continue;
+    worst = std::max(worst, std::hypot(r1.x - (r0.x - s.x / pitch), r1.y - (r0.y + s.y / pitch)));
+    ++checked;
+  }
+  std::printf("%d rays: raster moved by the shift within %.2g px\n", checked, worst);
+  EXPECT_GT(checked, 200);
+  EXPECT_LT(worst, 1e-3);
 }
