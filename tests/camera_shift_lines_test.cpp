@@ -57,8 +57,8 @@ std::optional<optics::Ray> chiefRay(const optics::LensSystem& lens, const Vec3& 
   const Vec3 stop{0, 0, lens.interfaces()[size_t(*lens.stopIndex())].z_mm};
   Vec2 a{(stop.x - o.x) / (stop.z - o.z), (stop.y - o.y) / (stop.z - o.z)};  // slopes
   auto at = [&](Vec2 s, Vec2* hit) {
-    const optics::TraceResult r = lens.tracer().traceFromScene(
-        optics::Ray{o, normalize(Vec3{s.x, s.y, 1})}, {});
+    const optics::TraceResult r =
+        lens.tracer().traceFromScene(optics::Ray{o, normalize(Vec3{s.x, s.y, 1})}, {});
     *hit = r.stop_point;
     return r;
   };
@@ -106,7 +106,8 @@ double lineResidual(const std::vector<Vec2>& pts) {
   const double angle = 0.5 * std::atan2(2 * sxy, sxx - syy);  // the line's direction
   const Vec2 n{-std::sin(angle), std::cos(angle)};
   double worst = 0;
-  for (const Vec2& p : pts) worst = std::max(worst, std::abs((p.x - m.x) * n.x + (p.y - m.y) * n.y));
+  for (const Vec2& p : pts)
+    worst = std::max(worst, std::abs((p.x - m.x) * n.x + (p.y - m.y) * n.y));
   return worst;
 }
 
@@ -150,8 +151,8 @@ TEST(ShiftLines, DistortionFreeLensImagesLinesStraightWhenShifted) {
   // from the vertices (the paraxial data of a first placement give f and the principal plane).
   const optics::FocusedLens probe = bench(p, 80, 80).fl;
   const double f = probe.paraxial.effective_focal_length_mm;
-  const double d = 2 * f - (probe.paraxial.principal_plane_front_z_mm -
-                            probe.lens->interfaces().front().z_mm);
+  const double d =
+      2 * f - (probe.paraxial.principal_plane_front_z_mm - probe.lens->interfaces().front().z_mm);
   const Bench b = bench(p, d, d);
   const double z_stop = b.fl.lens->interfaces()[2].z_mm;
   ASSERT_NEAR(z_stop - b.fl.lens->interfaces().front().z_mm, 11, 1e-12);
@@ -186,7 +187,8 @@ TEST(ShiftLines, DistortingLensBowsTheLines) {
     std::vector<Vec2> img;
     for (int i = 0; i <= 20; ++i) {
       const Vec2 q = (l.a + (l.b - l.a) * (i / 20.0)) * (scale * 0.8);
-      if (std::optional<Vec2> f = imageOf(b, placed, {q.x, q.y, b.z_object - b.fl.lens->filmZ_mm()}))
+      if (std::optional<Vec2> f =
+              imageOf(b, placed, {q.x, q.y, b.z_object - b.fl.lens->filmZ_mm()}))
         img.push_back(*f);
     }
     ASSERT_GE(img.size(), 15u);

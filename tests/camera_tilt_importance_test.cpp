@@ -40,12 +40,12 @@ std::string cameraText(const Placement& p) {
 // A wall of radiance 1 filling the view (a flat field), or a diffuse wall lit by a point light
 // 1 m in front of it, off the axis (a lit patch whose falloff shows where the image lies).
 std::string sceneText(const std::string& cam, const char* integrator, bool point_light) {
-  const std::string world =
-      point_light ? R"(LightSource "point" "rgb I" [2 2 2] "point3 from" [0.25 0.15 2]
+  const std::string world = point_light
+                                ? R"(LightSource "point" "rgb I" [2 2 2] "point3 from" [0.25 0.15 2]
 Material "diffuse" "rgb reflectance" [0.8 0.8 0.8]
 Shape "trianglemesh" "point3 P" [-3 -3 3  3 -3 3  3 3 3  -3 3 3] "integer indices" [0 2 1 0 3 2]
 )"
-                  : R"(AttributeBegin
+                                : R"(AttributeBegin
   AreaLightSource "diffuse" "rgb L" [1 1 1] "bool twosided" true
   Shape "trianglemesh" "point3 P" [-3 -3 3  3 -3 3  3 3 3  -3 3 3] "integer indices" [0 2 1 0 3 2]
 AttributeEnd
@@ -116,15 +116,21 @@ void agreeThrough(const Placement& p) {
   }
 }
 
-TEST(TiltShiftImportance, CentredAgreesWithPath) { agreeThrough({"centred", 0, 0, 0, 0}); }
-TEST(TiltShiftImportance, TiltedAgreesWithPath) { agreeThrough({"tilt 8 deg", 8, 0, 0, 0}); }
-TEST(TiltShiftImportance, ShiftedAgreesWithPath) { agreeThrough({"shift 5 mm", 0, 0, 5, 0}); }
+TEST(TiltShiftImportance, CentredAgreesWithPath) {
+  agreeThrough({"centred", 0, 0, 0, 0});
+}
+TEST(TiltShiftImportance, TiltedAgreesWithPath) {
+  agreeThrough({"tilt 8 deg", 8, 0, 0, 0});
+}
+TEST(TiltShiftImportance, ShiftedAgreesWithPath) {
+  agreeThrough({"shift 5 mm", 0, 0, 5, 0});
+}
 TEST(TiltShiftImportance, TiltedAndShiftedAgreesWithPath) {
   agreeThrough({"tilt and shift", 0, 8, 3, -4});
   // "simpleweighting" (weights and importance scaled by z^2 / A0): the flat field.
   const std::string cam = cameraText({"", 0, 8, 3, -4}) + " \"bool simpleweighting\" true";
-  expectAgree(testutil::compareLightTracer(
-                  [&](const char* i) { return sceneText(cam, i, false); }, 32, 128, 4),
+  expectAgree(testutil::compareLightTracer([&](const char* i) { return sceneText(cam, i, false); },
+                                           32, 128, 4),
               "light tracer, tilt and shift, simple weighting, flat field");
 }
 
@@ -175,9 +181,10 @@ TEST(TiltShiftImportance, ImportanceRetracesCameraRays) {
         n_outside +=
             cam->pdfWiPos(ray->origin + ray->direction * t, ray->origin, ray->time) > 0 ? 0 : 1;
     }
-    std::printf("%s: %d of %d camera rays retraced (%d with densities), worst raster error %.2g "
-                "px, %d of %d front points outside sampleWi's region\n",
-                p.name, n_found, n_rays, n_pdf, worst, n_outside, 2 * n_rays);
+    std::printf(
+        "%s: %d of %d camera rays retraced (%d with densities), worst raster error %.2g "
+        "px, %d of %d front points outside sampleWi's region\n",
+        p.name, n_found, n_rays, n_pdf, worst, n_outside, 2 * n_rays);
     EXPECT_GT(n_rays, 150);
     EXPECT_GE(n_found, n_rays - n_rays / 100);
     EXPECT_GE(n_pdf, n_rays - n_rays / 100);

@@ -208,9 +208,9 @@ TEST(TiltShiftCamera, RefusalsNameTheParameterOrTheCamera) {
     EXPECT_EQ(m.rfind("test.pbrt:1:", 0), 0u) << p << ": " << m;
   }
   // lighttracer renders a tilted and shifted lens (camera_tilt_importance_test.cpp).
-  EXPECT_EQ(errorOf("\"float lensshift\" [2 0] \"float lenstilt\" [3 0]",
-                    "Integrator \"lighttracer\""),
-            "");
+  EXPECT_EQ(
+      errorOf("\"float lensshift\" [2 0] \"float lenstilt\" [3 0]", "Integrator \"lighttracer\""),
+      "");
   // A tilt that drives the (large) film's corner into the lens.
   {
     const std::string m = errorOf("\"float lenstilt\" [0 40]", "", "\"float diagonal\" [200]");

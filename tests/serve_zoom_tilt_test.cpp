@@ -182,9 +182,9 @@ TEST_F(ServeZoomTilt, PreviewRendersTiltAndShift) {
   auto stream = [](const std::string& extra) {
     httplib::Client c("127.0.0.1", server->port());
     c.set_read_timeout(60, 0);
-    auto r = c.Get(("/api/preview?lens=dgauss.50mm.dat&fnumber=5&focus=3&width=48&spp=2&view=tz" +
-                    extra)
-                       .c_str());
+    auto r =
+        c.Get(("/api/preview?lens=dgauss.50mm.dat&fnumber=5&focus=3&width=48&spp=2&view=tz" + extra)
+                  .c_str());
     EXPECT_TRUE(r);
     if (!r) return std::string();
     EXPECT_EQ(r->status, 200) << r->body.substr(0, 300);
@@ -192,7 +192,8 @@ TEST_F(ServeZoomTilt, PreviewRendersTiltAndShift) {
     // The last frame's PNG.
     const size_t at = r->body.rfind("\"png\":\"");
     EXPECT_NE(at, std::string::npos);
-    return at == std::string::npos ? std::string() : r->body.substr(at, r->body.find('"', at + 7) - at);
+    return at == std::string::npos ? std::string()
+                                   : r->body.substr(at, r->body.find('"', at + 7) - at);
   };
   const std::string level = stream(""), tilted = stream("&tiltx=3&shifty=2");
   EXPECT_GT(tilted.size(), 100u);

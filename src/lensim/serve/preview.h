@@ -66,9 +66,9 @@ struct PreviewFrame {
 /// the renderer builds from their world (acceleration structure, lights, textures, materials,
 /// media: render::prepareWorld); the realistic cameras of the last kCameraCacheSize previews are
 /// kept too (their start-up traces the exit-pupil bounds), keyed by everything that makes them
-/// (scene, lens file and its modification time, stop, focus, tilt and shift, preview width). A preview of a
-/// scene and lens seen before starts rendering at once; its image is the same bit for bit as an
-/// uncached render's.
+/// (scene, lens file and its modification time, stop, focus, tilt and shift, preview width). A
+/// preview of a scene and lens seen before starts rendering at once; its image is the same bit for
+/// bit as an uncached render's.
 class PreviewRenderer {
  public:
   PreviewRenderer();
