@@ -11,7 +11,10 @@
 // area and projected solid angle is T / A_film for every ray that reaches the film, A_film the
 // area of the whole image (the light tracer's normalisation, camera.h), times z^2 / A0 with
 // "simpleweighting" (whose weight has A0 where the irradiance has z^2). No Jacobian of the lens
-// map is needed: the conserved measure carries it.
+// map is needed: the conserved measure carries it. A tilted or shifted film (realistic.cpp,
+// "Tilt and shift") changes none of this: its weight T G A integrates the film-side measure
+// dA_film cos_film d omega (cos_film against the placed film's normal), which the lens conserves
+// too; light traced back meets the placed film, and must pass the region placedFilmRay samples.
 //
 // sampleWi draws a point of the front surface (uniform in its projection on the vertex plane,
 // within the clear semi-aperture: density |n_z| / (pi R^2) per unit surface area, n the surface
