@@ -165,3 +165,35 @@ TEST(LensInfoRobustness, Latin1LensFileGivesUtf8Json) {
       << name;  // U+00D8 in UTF-8
   EXPECT_GT(j.value("effective_focal_length_mm", 0.0), 14.9);
 }
+
+// `lens info --configs` lists a configuration that cannot be focused with its reason and goes on
+// with the others: the Keplerian telescope's gap of 72.333 mm (afocal) and 60 mm (focusable).
+// The focusable one's EFL is checked by a y-nu trace written here.
+TEST(LensInfoRobustness, ConfigsTableListsAnUnfocusableConfiguration) {
+  std::string text = kKeplerian;
+  const std::string end = "\n ]}";
+  text.replace(text.rfind(end), end.size(),
+               "\n ],\n \"configurations\": [{\"thickness_mm\": {\"1\": 72.33333333333333}},"
+               " {\"thickness_mm\": {\"1\": 60}}]}");
+  const std::string lens = tempFile("keplerian-zoom.json", text);
+  const auto r = runLensim("lens info --configs --json " + lens);
+  ASSERT_EQ(r.status, 0) << r.out;
+  EXPECT_TRUE(has(r.out, "warning: configuration 1: the lens is afocal")) << r.out;
+  const json j = jsonOf(r);
+  ASSERT_EQ(j["configurations"].size(), 2u) << r.out;
+  EXPECT_FALSE(j["configurations"][0].value("focused", true));
+  EXPECT_TRUE(has(j["configurations"][0].value("not_focused_reason", std::string()), "afocal"));
+  EXPECT_TRUE(j["configurations"][1].value("focused", false));
+  // y-nu trace of a parallel ray (y = 1): rows (radius, thickness after, index after).
+  const double rows[4][3] = {{25, 2, 1.5}, {0, 60, 1}, {0, 2, 1.5}, {-12.5, 0, 1}};
+  double y = 1, nu = 0, n = 1;
+  for (const auto& row : rows) {
+    if (row[0] != 0) nu -= y * (row[2] - n) / row[0];
+    n = row[2];
+    y += row[1] * nu / n;
+  }
+  EXPECT_NEAR(j["configurations"][1].value("effective_focal_length_mm", 0.0), -1 / nu, 1e-9);
+  const auto t = runLensim("lens info --configs " + lens);
+  EXPECT_EQ(t.status, 0) << t.out;
+  EXPECT_TRUE(has(t.out, "not focused: the lens is afocal")) << t.out;
+}

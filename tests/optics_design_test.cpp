@@ -378,6 +378,39 @@ TEST(LensTolerance, CompensatorMinimisesTheSpot) {
   EXPECT_NEAR(toleranceCriterion(fixed, b), r.builds[3], 1e-9);
 }
 
+TEST(LensTolerance, IndexToleranceOnANonDispersiveMediumMovesTheIndex) {
+  // The singlet's glass is a bare index 1.5168 (no V_d). End-point index builds are n = 1.5168 +- 0.01
+  // and must keep the medium non-dispersive; their BFL is the independent paraxial trace's.
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  std::string text = toleranceJob("singlet.dat", 4, "end_point");
+  const std::string from = "{\"type\": \"thickness\", \"surface\": 1, \"delta\": 0.2";
+  text.replace(text.find(from), from.size(), "{\"type\": \"index\", \"surface\": 1, \"delta\": 0.01");
+  const DesignJob job = readDesignJob(dir.write("job.json", text));
+  const ToleranceResult r = runTolerancing(job);
+  ASSERT_FALSE(r.builds.empty());
+  for (int k = 0; k < 8; ++k) {
+    const LensPrescription b = asBuiltLens(job, k);
+    const double n = b.surfaces[1].ior;
+    EXPECT_NEAR(std::abs(n - 1.5168), 0.01, 1e-12);
+    EXPECT_FALSE(b.surfaces[1].glass.v_d.has_value());
+    std::vector<Row> rows = rowsOf(b);
+    EXPECT_NEAR(r.builds[k], independentBfl(rows), 1e-9);
+  }
+  // An Abbe tolerance on the same medium is refused at its line.
+  std::string abbe = toleranceJob("singlet.dat", 4, "uniform");
+  abbe.replace(abbe.find(from), from.size(), "{\"type\": \"abbe\", \"surface\": 1, \"delta\": 2");
+  try {
+    readDesignJob(dir.write("abbe.json", abbe));
+    ADD_FAILURE() << "an Abbe tolerance on a non-dispersive medium was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("abbe.json:7:7: error: surface 1: the medium after it has "
+                                         "no dispersion"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // --- Errors ----------------------------------------------------------------------------------
 
 TEST(LensDesign, JobErrorsNameTheLineAndValue) {

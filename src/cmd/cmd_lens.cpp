@@ -99,11 +99,26 @@ int runConfigs(const LensArgs& args, bool as_json) {
   for (int n = 1; n <= count; ++n) {
     LensArgs one = args;
     one.configuration = n;
-    const FocusedLens fl = setUpLens(one);
+    std::optional<FocusedLens> set_up;
+    try {
+      set_up.emplace(setUpLens(one));
+    } catch (const LensSetupError& e) {
+      // A configuration that cannot be focused (afocal, no real ray through, film inside the
+      // lens) is listed with its reason, as `lens info --config N` shows it; a focus or film
+      // distance the user gave that cannot be honoured stays an error.
+      if (!args.focus_distance.empty() || args.film_distance_mm) throw;
+      logDiagnostic({Severity::Warning, e.loc().valid() ? e.loc() : FileLoc{args.lens_path},
+                     fmt::format("configuration {}: {}", n, e.message())});
+      arr.push_back({{"configuration", n}, {"focused", false}, {"not_focused_reason", e.message()}});
+      if (!as_json) std::cout << fmt::format("{:>6}   not focused: {}\n", n, e.message());
+      continue;
+    }
+    const FocusedLens& fl = *set_up;
     const ParaxialData& p = fl.paraxial;
     const FieldOfView fov = fieldOfView(*fl.lens, p, args.film_diagonal_mm);
     const double field = fov.real_deg ? *fov.real_deg : fov.paraxial_deg;
     arr.push_back({{"configuration", n},
+                   {"focused", true},
                    {"effective_focal_length_mm", p.effective_focal_length_mm},
                    {"f_number", p.f_number},
                    {"back_focal_length_mm", p.back_focal_length_mm},

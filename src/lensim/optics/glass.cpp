@@ -309,6 +309,7 @@ GlassCatalog GlassCatalog::parse(std::string_view csv, const std::string& path) 
     cat.glasses_.push_back(std::move(g));
   }
   cat.catalogs_ = {"csv"};
+  cat.reindex();
   return cat;
 }
 
@@ -336,6 +337,7 @@ GlassCatalog GlassCatalog::fromAgf(std::string_view bytes, const std::string& pa
                               g.glass.formulaName(), n_d, g.listed_n_d, path, a.loc.line);
     cat.glasses_.push_back(std::move(g));
   }
+  cat.reindex();
   return cat;
 }
 
@@ -361,8 +363,17 @@ GlassCatalog GlassCatalog::load(const std::string& path) {
                                          p.filename().string()));
 }
 
+void GlassCatalog::reindex() {
+  by_name_.clear();
+  for (size_t i = 0; i < glasses_.size(); ++i)
+    by_name_[upper(glasses_[i].name)].push_back(static_cast<std::uint32_t>(i));
+}
+
 void GlassCatalog::append(const GlassCatalog& other) {
+  const size_t first = glasses_.size();
   glasses_.insert(glasses_.end(), other.glasses_.begin(), other.glasses_.end());
+  for (size_t i = first; i < glasses_.size(); ++i)
+    by_name_[upper(glasses_[i].name)].push_back(static_cast<std::uint32_t>(i));
   for (const std::string& c : other.catalogs_)
     if (!hasCatalog(c)) catalogs_.push_back(c);
 }
@@ -459,10 +470,12 @@ const CatalogGlass* GlassCatalog::find(std::string_view name,
       if (equalNoCase(first[i], g.catalog)) return int(i);
     return int(first.size()) + rank(g);
   };
+  const auto it = by_name_.find(upper(bare));
+  if (it == by_name_.end()) return nullptr;
   const CatalogGlass* best = nullptr;
   int best_order = 0;
-  for (const CatalogGlass& g : glasses_) {
-    if (!equalNoCase(g.name, bare)) continue;
+  for (const std::uint32_t i : it->second) {
+    const CatalogGlass& g = glasses_[i];
     if (!prefix.empty() && !equalNoCase(prefix, g.catalog) && !equalNoCase(prefix, g.vendor))
       continue;
     const int o = order(g);

@@ -192,6 +192,10 @@ Tolerance parseTolerance(const json& e, const FileLoc& loc, const LensPrescripti
     const Glass g = resolveGlass(s.glass, s.ior);
     const bool index = t.kind == Tolerance::Kind::Index;
     const double base = index ? g.n_d() - 1 : g.v_d();
+    if (!index && !std::isfinite(base))
+      throw Error(loc, fmt::format("surface {}: the medium after it has no dispersion (index {} "
+                                   "without V_d): an Abbe tolerance needs a dispersive glass",
+                                   t.surface, g.n_d()));
     if (!(t.delta < base))
       throw Error(loc, fmt::format("\"delta\" {} must be below the medium's {} ({}) so that every "
                                    "build is physical",

@@ -53,10 +53,16 @@ LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double v
       const Glass g = resolveGlass(s.glass, s.ior);
       double nd = g.n_d(), vd = g.v_d();
       (t.kind == Tolerance::Kind::Index ? nd : vd) += value;
+      s.ior = nd;
+      if (!std::isfinite(vd)) {
+        // A medium without dispersion (a bare index): the build stays non-dispersive, with the
+        // index moved. The job reader refuses Abbe tolerances on such a medium.
+        s.glass = GlassSpec{};
+        break;
+      }
       s.glass.name.clear();
       s.glass.n_d = nd;
       s.glass.v_d = vd;
-      s.ior = nd;
       break;
     }
   }
