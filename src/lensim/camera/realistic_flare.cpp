@@ -283,6 +283,7 @@ std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& s
   const double geometric = shape * c * c * c * c * area / (dist * dist) *
                            (lens.filmDistance_mm() * lens.filmDistance_mm() / weightNorm());
   CameraRay ray = placeRay(r.ray.origin, r.ray.direction, sample.time);
+  ray.ghost = true;
   for (int i = 0; i < kCameraWavelengths; ++i)
     ray.wavelength_weight[size_t(i)] = geometric * factor[size_t(i)] / path.probability;
   ray.weight = ray.wavelength_weight[0];

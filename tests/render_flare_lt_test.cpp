@@ -1,0 +1,155 @@
+// Lens flare in the light tracer and bdpt (issue 31; docs/flare.md, "Flare in the light tracer
+// and bdpt"): their image and ghost layer against the path tracer's (per-block z-tests, the
+// standard errors from the pixels' scatter) and against Fresnel's equations integrated here.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <string>
+
+#include "lensim/io/image.h"
+#include "lensim/render/renderer.h"
+#include "lensim/scene/builder.h"
+#include "test_paths.h"
+
+using namespace lensim;
+
+namespace {
+
+std::string testFile(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "lensim_render_flare_lt_test";
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
+/// Unpolarised Fresnel reflectance from index n1 into n2 at incidence angle theta.
+double fresnel(double n1, double n2, double theta) {
+  const double ci = std::cos(theta), si = std::sin(theta), st = n1 / n2 * si;
+  if (st >= 1) return 1;
+  const double ct = std::sqrt(1 - st * st);
+  const double rs = (n1 * ci - n2 * ct) / (n1 * ci + n2 * ct);
+  const double rp = (n2 * ci - n1 * ct) / (n2 * ci + n1 * ct);
+  return 0.5 * (rs * rs + rp * rp);
+}
+
+/// An uncoated plate (index n, 5 mm; a 200 m front radius: lensim refuses afocal lenses), a stop
+/// of radius a 2 mm behind it and the film `film_mm` behind the stop. Its clear semi-aperture of
+/// 12 mm never clips a ray (or a ghost ray) that reaches the 3.5 mm film through the stop.
+std::string writePlate(double n, double a, double film_mm) {
+  const std::string path = testFile("plate.json");
+  std::ofstream f(path);
+  f << "{\"format\": \"lensim-lens\", \"name\": \"plate\", \"coating\": \"uncoated\", "
+       "\"surfaces\": ["
+    << "{\"radius_mm\": 2e5, \"thickness_mm\": 5, \"semi_aperture_mm\": 12, \"ior\": " << n << "},"
+    << "{\"radius_mm\": 0, \"thickness_mm\": 2, \"semi_aperture_mm\": 12, \"ior\": 1},"
+    << "{\"radius_mm\": 0, \"thickness_mm\": " << film_mm << ", \"semi_aperture_mm\": " << a
+    << ", \"ior\": 1, \"stop\": true}]}\n";
+  return path;
+}
+
+/// Per block of b x b pixels: the mean of channels c0..c0+2 over its pixels and the standard
+/// error of that mean from the pixels' scatter (which also holds the small variation of the
+/// expected value across a block, so the error is, if anything, overestimated).
+struct Block {
+  double mean = 0, se = 0;
+};
+std::vector<Block> blocks(const io::Image& im, int c0, int b) {
+  std::vector<Block> out;
+  for (int by = 0; by + b <= im.height; by += b)
+    for (int bx = 0; bx + b <= im.width; bx += b) {
+      double s = 0, s2 = 0;
+      for (int y = by; y < by + b; ++y)
+        for (int x = bx; x < bx + b; ++x) {
+          double v = 0;
+          for (int c = 0; c < 3; ++c) v += im.at(x, y, c0 + c) / 3;
+          s += v, s2 += v * v;
+        }
+      const double n = b * b, m = s / n;
+      out.push_back({m, std::sqrt(std::max(0.0, s2 / n - m * m) / (n - 1))});
+    }
+  return out;
+}
+
+io::Image renderScene(const std::string& path, int seed) {
+  render::RenderOptions o;
+  o.seed = seed;
+  o.threads = 2;
+  return render::render(scene::loadScene(path), o).image;
+}
+
+}  // namespace
+
+// A flat field through the uncoated plate: an emitting disc (radiance 1) filling the view of the
+// 3.5 mm film, rendered with flare by path, lighttracer and bdpt. Expected at the film centre
+// (Fresnel's equations integrated over the cone through the stop here): the sum
+// integral of cos (1 - R)^2 (1 + R^2) dOmega, the ghost layer integral of cos R^2 (1 - R)^2
+// dOmega (the plate's one ghost, rear face then front face). Per 4 x 4 block: lighttracer and
+// bdpt against path, and the four central blocks against the quadrature, as z-scores.
+TEST(FlareLightTracing, PlateFlatFieldAgreesWithPathAndFresnel) {
+  const double n = 1.5, a = 5, film = 20;
+  const std::string lens = writePlate(n, a, film);
+  auto scene = [&](const std::string& name, const std::string& integrator, int spp) {
+    const std::string path = testFile(name);
+    std::ofstream f(path);
+    f << "LookAt 0 0 0  0 0 1  0 1 0\n"
+      << "Camera \"realistic\" \"string lensfile\" \"" << lens
+      << "\" \"float aperturediameter\" 10 \"float filmdistance\" " << film
+      << " \"bool flare\" true\n"
+      << "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16 "
+         "\"float diagonal\" 3.5\n"
+      << "Sampler \"independent\" \"integer pixelsamples\" " << spp << "\n"
+      << "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
+      << "Integrator \"" << integrator << "\" \"integer maxdepth\" 1\n"
+      << "WorldBegin\nAttributeBegin\nTranslate 0 0 1\n"
+      << "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\n"
+      << "Shape \"disk\" \"float radius\" 0.5\nAttributeEnd\n";
+    return path;
+  };
+  const io::Image path = renderScene(scene("pt.pbrt", "path", 256), 3);
+  const io::Image lt = renderScene(scene("lt.pbrt", "lighttracer", 8192), 4);
+  const io::Image bd = renderScene(scene("bd.pbrt", "bdpt", 64), 5);
+  ASSERT_EQ(lt.channelCount(), 6);
+  ASSERT_EQ(lt.channels[3], "ghost.R");
+  ASSERT_EQ(bd.channelCount(), 6);
+  // The quadrature over the film centre's cone (half-angle atan(a / film)).
+  const double alpha = std::atan(a / film);
+  double ed = 0, eg = 0;
+  const int steps = 20000;
+  for (int i = 0; i < steps; ++i) {
+    const double t = (i + 0.5) / steps * alpha;
+    const double w = 2 * std::numbers::pi * std::sin(t) * std::cos(t) * alpha / steps;
+    const double r = fresnel(1, n, t);
+    ed += w * (1 - r) * (1 - r);
+    eg += w * r * r * (1 - r) * (1 - r);
+  }
+  const int b = 4;
+  for (int layer : {0, 3}) {
+    const std::vector<Block> p = blocks(path, layer, b);
+    const double expect = layer == 0 ? ed + eg : eg;
+    for (const auto& [name, im] : {std::pair{"lighttracer", &lt}, std::pair{"bdpt", &bd}}) {
+      const std::vector<Block> q = blocks(*im, layer, b);
+      double zmax = 0, zc = 0, mc = 0;
+      for (size_t k = 0; k < q.size(); ++k) {
+        const double z = (q[k].mean - p[k].mean) / std::hypot(q[k].se, p[k].se);
+        zmax = std::max(zmax, std::abs(z));
+        EXPECT_LT(std::abs(z), 4.0) << name << " layer " << layer << " block " << k << ": "
+                                    << q[k].mean << " against path's " << p[k].mean;
+      }
+      // The four central blocks (within 0.9 mm of the axis) against the quadrature.
+      double se2 = 0;
+      for (size_t k : {5u, 6u, 9u, 10u}) mc += q[k].mean / 4, se2 += q[k].se * q[k].se / 16;
+      zc = (mc - expect) / std::sqrt(se2);
+      std::printf(
+          "plate flat field, %s, %s: centre %.6f (quadrature %.6f, z %.2f, relative error "
+          "%.2f%%), path's %.6f; largest block |z| against path %.2f\n",
+          name, layer == 0 ? "sum" : "ghost layer", mc, expect, zc, 100 * std::sqrt(se2) / mc,
+          (p[5].mean + p[6].mean + p[9].mean + p[10].mean) / 4, zmax);
+      EXPECT_LT(std::abs(zc), 4.0) << name << " layer " << layer;
+      // The ratio too, so that a gross error cannot hide in a large standard error.
+      EXPECT_NEAR(mc / expect, 1, layer == 0 ? 0.02 : 0.1) << name << " layer " << layer;
+    }
+  }
+}
