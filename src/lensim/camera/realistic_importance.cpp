@@ -371,10 +371,18 @@ double RealisticCamera::pdfWiPos(const Vec3& ref, const Vec3& p_lens, double tim
 double RealisticCamera::importance(const Vec3& o, const Vec3& d, double lambda_nm,
                                    Vec2* film_raster, double time) const {
   // The ray leaves the lens at o toward d: the line back into the lens runs along -d.
-  const std::optional<FilmHit> hit =
-      traceToFilm(lensFromWorldPoint(o, time), normalize(lensFromWorldVector(-d, time)), lambda_nm);
+  const Vec3 o_l = lensFromWorldPoint(o, time), d_l = normalize(lensFromWorldVector(-d, time));
+  const std::optional<FilmHit> hit = traceToFilm(o_l, d_l, lambda_nm);
   if (!hit) return 0;
   if (film_raster) *film_raster = hit->raster;
+  if (flare_) {  // the direct path's reflection losses, at this wavelength
+    std::array<double, kCameraWavelengths> t{};
+    const double z_start = front_zmin_mm_ - 1;
+    const Vec3 from = o_l.z < z_start ? o_l + d_l * ((z_start - o_l.z) / d_l.z) : o_l;
+    if (!reflectionLossesFromScene(from, d_l, {lambda_nm, lambda_nm, lambda_nm, lambda_nm}, t))
+      return 0;
+    return hit->importance * t[0];
+  }
   return hit->importance;
 }
 
