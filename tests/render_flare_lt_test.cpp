@@ -207,4 +207,16 @@ TEST(FlareLightTracing, OffAxisLightGhostCentroidMatchesThePathTracer) {
   EXPECT_NEAR(dl.x / dl.power, dp.x / dp.power, 0.25);
   EXPECT_NEAR(dl.y / dl.power, dp.y / dp.power, 0.25);
   EXPECT_NEAR(dl.power, dp.power, 0.03 * dp.power);
+  // bdpt: its ghosts are the camera side's ghost paths with bdpt's strategies t >= 2.
+  const io::Image bd = renderScene(scene("off_bd.pbrt", "bdpt", 128), 8);
+  Moments db, gb;
+  moments(bd, db, gb);
+  std::printf("bdpt: ghost power %.4g at (%.2f, %.2f) px; direct %.4g at (%.2f, %.2f)\n",
+              gb.power, gb.x / gb.power, gb.y / gb.power, db.power, db.x / db.power,
+              db.y / db.power);
+  EXPECT_NEAR(gb.x / gb.power, gp.x / gp.power, 1.0);
+  EXPECT_NEAR(gb.y / gb.power, gp.y / gp.power, 1.0);
+  EXPECT_NEAR(gb.power, gp.power, 0.1 * gp.power);
+  EXPECT_NEAR(db.x / db.power, dp.x / dp.power, 0.25);
+  EXPECT_NEAR(db.power, dp.power, 0.03 * dp.power);
 }
