@@ -220,3 +220,73 @@ TEST(FlareLightTracing, OffAxisLightGhostCentroidMatchesThePathTracer) {
   EXPECT_NEAR(db.x / db.power, dp.x / dp.power, 0.25);
   EXPECT_NEAR(db.power, dp.power, 0.03 * dp.power);
 }
+
+// The uncoated double Gauss (12 mm stop) before an emitting disc that fills its view: the light
+// tracer's and bdpt's sum and ghost layer against the path tracer's, per 4 x 4 block (z-scores
+// from the pixels' scatter), and the direct part (sum less ghosts) over the render without flare
+// against the product of the ten index steps' normal-incidence Fresnel transmittances (the real
+// rays' angles add under 1.5 %, as in render_flare_test).
+TEST(FlareLightTracing, DoubleGaussFlatFieldAgreesWithPath) {
+  auto scene = [&](const std::string& name, const std::string& integrator, int spp, bool flare) {
+    const std::string path = testFile(name);
+    std::ofstream f(path);
+    f << "LookAt 0 0 0  0 0 1  0 1 0\n"
+      << "Camera \"realistic\" \"string lensfile\" \"" << test::lensPath("dgauss.50mm.dat")
+      << "\" \"float aperturediameter\" 12 \"float focusdistance\" 3"
+      << (flare ? " \"bool flare\" true" : "") << "\n"
+      << "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16 "
+         "\"float diagonal\" 35\n"
+      << "Sampler \"independent\" \"integer pixelsamples\" " << spp << "\n"
+      << "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
+      << "Integrator \"" << integrator << "\" \"integer maxdepth\" 1\n"
+      << "WorldBegin\nAttributeBegin\nTranslate 0 0 1\n"
+      << "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\n"
+      << "Shape \"disk\" \"float radius\" 1.5\nAttributeEnd\n";
+    return path;
+  };
+  const io::Image off = renderScene(scene("dg_off.pbrt", "path", 64, false), 1);
+  const io::Image path = renderScene(scene("dg_pt.pbrt", "path", 128, true), 3);
+  const io::Image lt = renderScene(scene("dg_lt.pbrt", "lighttracer", 4096, true), 4);
+  const io::Image bd = renderScene(scene("dg_bd.pbrt", "bdpt", 32, true), 5);
+  const double steps[][2] = {{1, 1.67},  {1.67, 1},      {1, 1.67},  {1.67, 1.699}, {1.699, 1},
+                             {1, 1.603}, {1.603, 1.658}, {1.658, 1}, {1, 1.717},    {1.717, 1}};
+  double t = 1;
+  for (const auto& s : steps) t *= 1 - fresnel(s[0], s[1], 0);
+  const int b = 4;
+  const std::vector<Block> o = blocks(off, 0, b);
+  for (int layer : {0, 3}) {
+    const std::vector<Block> p = blocks(path, layer, b);
+    for (const auto& [name, im] : {std::pair{"lighttracer", &lt}, std::pair{"bdpt", &bd}}) {
+      const std::vector<Block> q = blocks(*im, layer, b);
+      double zmax = 0, sum_q = 0, sum_p = 0, var = 0;
+      for (size_t k = 0; k < q.size(); ++k) {
+        const double z = (q[k].mean - p[k].mean) / std::hypot(q[k].se, p[k].se);
+        zmax = std::max(zmax, std::abs(z));
+        sum_q += q[k].mean, sum_p += p[k].mean;
+        var += q[k].se * q[k].se + p[k].se * p[k].se;
+        EXPECT_LT(std::abs(z), 4.0) << name << " layer " << layer << " block " << k << ": "
+                                    << q[k].mean << " against path's " << p[k].mean;
+      }
+      const double z_all = (sum_q - sum_p) / std::sqrt(var);
+      std::printf("double Gauss flat field, %s, %s: image mean %.5f, path's %.5f (z %.2f); "
+                  "largest block |z| %.2f\n",
+                  name, layer == 0 ? "sum" : "ghost layer", sum_q / q.size(), sum_p / p.size(),
+                  z_all, zmax);
+      EXPECT_LT(std::abs(z_all), 4.0) << name << " layer " << layer;
+    }
+  }
+  // The direct part at the four central blocks over the render without flare.
+  for (const auto& [name, im] : {std::pair{"path", &path}, std::pair{"lighttracer", &lt},
+                                 std::pair{"bdpt", &bd}}) {
+    const std::vector<Block> s = blocks(*im, 0, b), g = blocks(*im, 3, b);
+    double direct = 0, plain = 0, se2 = 0;
+    for (size_t k : {5u, 6u, 9u, 10u}) {
+      direct += s[k].mean - g[k].mean, plain += o[k].mean;
+      se2 += s[k].se * s[k].se + o[k].se * o[k].se;
+    }
+    std::printf(
+        "double Gauss flat field, %s: direct / no flare %.4f +- %.4f (normal incidence %.4f)\n",
+        name, direct / plain, std::sqrt(se2) / plain, t);
+    EXPECT_NEAR(direct / plain, t, 0.02) << name;
+  }
+}
