@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "lensim/camera/camera.h"
 #include "lensim/render/film/film.h"
@@ -138,30 +139,29 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
                              rng, counts);
     return !T.isBlack();
   };
+  // The connections from p to the camera: the direct one (u_cam) and, with lens flare, one
+  // through a ghost path (u_ghost). value(cs): the splat before the importance, or nullopt.
+  using Splat = std::optional<SampledSpectrum>;
+  auto toCamera = [&](const Vec3& p, Vec2 u_cam, const std::array<double, 3>& u_ghost,
+                      const auto& value) {
+    if (auto cs = camera_->sampleWi(p, u_cam, wavelengths(), time); cs && cs->pdf > 0)
+      if (const Splat L = value(*cs)) splat(*cs, *L);
+    if (flare_)
+      if (auto cs = camera_->sampleGhostWi(p, u_ghost, wavelengths(), time); cs && cs->pdf > 0)
+        if (const Splat L = value(*cs)) splat(*cs, *L, true);
+  };
   // The light's own point seen by the camera (area lights; a point light is a delta the film
   // cannot see).
-  if (les->on_surface) {
-    if (auto cs = camera_->sampleWi(les->o, u_cam0, wavelengths(), time); cs && cs->pdf > 0) {
+  if (les->on_surface)
+    toCamera(les->o, u_cam0, u_ghost0, [&](const camera::CameraWiSample& cs) -> Splat {
       SurfaceHit h;
       h.ng = les->n;
       h.uv = les->uv;
-      const SampledSpectrum Le = light.L(h, cs->wi, lambda);
+      const SampledSpectrum Le = light.L(h, cs.wi, lambda);
       SampledSpectrum T(1.0);
-      if (!Le.isBlack() && visible(les->o, les->n, *cs, T))
-        splat(*cs, T * Le * (std::abs(dot(les->n, cs->wi)) / (pmf * les->pdf_pos)));
-    }
-    if (flare_)
-      if (auto cs = camera_->sampleGhostWi(les->o, u_ghost0, wavelengths(), time);
-          cs && cs->pdf > 0) {
-        SurfaceHit h;
-        h.ng = les->n;
-        h.uv = les->uv;
-        const SampledSpectrum Le = light.L(h, cs->wi, lambda);
-        SampledSpectrum T(1.0);
-        if (!Le.isBlack() && visible(les->o, les->n, *cs, T))
-          splat(*cs, T * Le * (std::abs(dot(les->n, cs->wi)) / (pmf * les->pdf_pos)), true);
-      }
-  }
+      if (Le.isBlack() || !visible(les->o, les->n, cs, T)) return std::nullopt;
+      return T * Le * (std::abs(dot(les->n, cs.wi)) / (pmf * les->pdf_pos));
+    });
   const double cos0 = les->on_surface ? std::abs(dot(les->n, les->d)) : 1.0;
   SampledSpectrum beta = les->L * (cos0 / (pmf * les->pdf_pos * les->pdf_dir));
   SampledSpectrum r(1.0);  // chromatic media: media_tracking.h
@@ -184,22 +184,13 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
         const HenyeyGreenstein phase(m->g());
         const Vec2 u_cam = sampler.get2D();
         const std::array<double, 3> u_ghost = ghostU();
-        if (auto cs = camera_->sampleWi(ev.p, u_cam, wavelengths(), time); cs && cs->pdf > 0) {
+        toCamera(ev.p, u_cam, u_ghost, [&](const camera::CameraWiSample& cs) -> Splat {
           SampledSpectrum T(1.0);
-          const double ph = phase.p(-dir, cs->wi);
-          if (ph > 0 && visible(ev.p, Vec3{0, 0, 0}, *cs, T)) {
-            if (cs->hero_only) lambda.terminateSecondary();
-            splat(*cs, T * beta * ph / wavelengthMean(r, lambda));
-          }
-        }
-        if (flare_)
-          if (auto cs = camera_->sampleGhostWi(ev.p, u_ghost, wavelengths(), time);
-              cs && cs->pdf > 0) {
-            SampledSpectrum T(1.0);
-            const double ph = phase.p(-dir, cs->wi);
-            if (ph > 0 && visible(ev.p, Vec3{0, 0, 0}, *cs, T))
-              splat(*cs, T * beta * ph / wavelengthMean(r, lambda), true);
-          }
+          const double ph = phase.p(-dir, cs.wi);
+          if (!(ph > 0) || !visible(ev.p, Vec3{0, 0, 0}, cs, T)) return std::nullopt;
+          if (cs.hero_only) lambda.terminateSecondary();
+          return T * beta * ph / wavelengthMean(r, lambda);
+        });
         auto ps = phase.sample(-dir, sampler.get2D());
         if (!ps || ps->pdf <= 0) break;
         beta *= ps->p / ps->pdf;
@@ -228,26 +219,15 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
     // Connect to the camera.
     const Vec2 u_cam = sampler.get2D();
     const std::array<double, 3> u_ghost = ghostU();
-    if (isNonSpecular(bsdf.flags())) {
-      if (auto cs = camera_->sampleWi(h.p, u_cam, wavelengths(), time); cs && cs->pdf > 0) {
+    if (isNonSpecular(bsdf.flags()))
+      toCamera(h.p, u_cam, u_ghost, [&](const camera::CameraWiSample& cs) -> Splat {
         const SampledSpectrum f =
-            bsdf.f(wo, cs->wi, TransportMode::Importance) * std::abs(dot(cs->wi, ns));
+            bsdf.f(wo, cs.wi, TransportMode::Importance) * std::abs(dot(cs.wi, ns));
         SampledSpectrum T(1.0);
-        if (!f.isBlack() && visible(h.p, h.ng, *cs, T)) {
-          if (cs->hero_only) lambda.terminateSecondary();
-          splat(*cs, T * beta * f / wavelengthMean(r, lambda));
-        }
-      }
-      if (flare_)
-        if (auto cs = camera_->sampleGhostWi(h.p, u_ghost, wavelengths(), time);
-            cs && cs->pdf > 0) {
-          const SampledSpectrum f =
-              bsdf.f(wo, cs->wi, TransportMode::Importance) * std::abs(dot(cs->wi, ns));
-          SampledSpectrum T(1.0);
-          if (!f.isBlack() && visible(h.p, h.ng, *cs, T))
-            splat(*cs, T * beta * f / wavelengthMean(r, lambda), true);
-        }
-    }
+        if (f.isBlack() || !visible(h.p, h.ng, cs, T)) return std::nullopt;
+        if (cs.hero_only) lambda.terminateSecondary();
+        return T * beta * f / wavelengthMean(r, lambda);
+      });
     // Continue the path.
     const double uc = sampler.get1D();
     const Vec2 u = sampler.get2D();
