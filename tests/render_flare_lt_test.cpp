@@ -91,13 +91,14 @@ io::Image renderScene(const std::string& path, int seed) {
 TEST(FlareLightTracing, PlateFlatFieldAgreesWithPathAndFresnel) {
   const double n = 1.5, a = 5, film = 20;
   const std::string lens = writePlate(n, a, film);
-  auto scene = [&](const std::string& name, const std::string& integrator, int spp) {
+  auto scene = [&](const std::string& name, const std::string& integrator, int spp,
+                   const std::string& extra = "") {
     const std::string path = testFile(name);
     std::ofstream f(path);
     f << "LookAt 0 0 0  0 0 1  0 1 0\n"
       << "Camera \"realistic\" \"string lensfile\" \"" << lens
       << "\" \"float aperturediameter\" 10 \"float filmdistance\" " << film
-      << " \"bool flare\" true\n"
+      << " \"bool flare\" true" << extra << "\n"
       << "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16 "
          "\"float diagonal\" 3.5\n"
       << "Sampler \"independent\" \"integer pixelsamples\" " << spp << "\n"
@@ -151,6 +152,24 @@ TEST(FlareLightTracing, PlateFlatFieldAgreesWithPathAndFresnel) {
       // The ratio too, so that a gross error cannot hide in a large standard error.
       EXPECT_NEAR(mc / expect, 1, layer == 0 ? 0.02 : 0.1) << name << " layer " << layer;
     }
+  }
+  // A hexagonal stop: the light tracer's ghost connections are passed by the shape where they
+  // cross the stop, as the camera's ghost paths are; per block against path with the same stop.
+  const std::string hex = " \"integer blades\" 6";
+  const io::Image path_hex = renderScene(scene("pt_hex.pbrt", "path", 256, hex), 3);
+  const io::Image lt_hex = renderScene(scene("lt_hex.pbrt", "lighttracer", 8192, hex), 4);
+  for (int layer : {0, 3}) {
+    const std::vector<Block> p = blocks(path_hex, layer, b), q = blocks(lt_hex, layer, b);
+    double zmax = 0, sum_p = 0, sum_q = 0;
+    for (size_t k = 0; k < q.size(); ++k) {
+      const double z = (q[k].mean - p[k].mean) / std::hypot(q[k].se, p[k].se);
+      zmax = std::max(zmax, std::abs(z));
+      sum_p += p[k].mean, sum_q += q[k].mean;
+      EXPECT_LT(std::abs(z), 4.0) << "hexagonal stop, layer " << layer << " block " << k;
+    }
+    std::printf("plate, hexagonal stop, lighttracer %s: image mean %.6g (path's %.6g), largest "
+                "block |z| %.2f\n",
+                layer == 0 ? "sum" : "ghost layer", sum_q / q.size(), sum_p / p.size(), zmax);
   }
 }
 
