@@ -69,6 +69,9 @@ struct CameraRay {
   /// later (at a dispersive material).
   bool per_wavelength = false;
   std::array<double, kCameraWavelengths> wavelength_weight{};
+  /// A lens-flare ghost path (Camera::generateGhostRay): bdpt gives its light-tracing (t = 1)
+  /// strategy no weight (the ghost's t = 1 connection is not the direct one sampleWi makes).
+  bool ghost = false;
 };
 
 /// A connection from a scene point to the camera (pbrt-v4's Camera::SampleWi), for light
@@ -139,6 +142,16 @@ class Camera {
   /// weighted per wavelength (CameraRay::per_wavelength), the film adds to the direct path's in
   /// the same sample; nullopt when the path is blocked (an estimate of zero).
   virtual std::optional<CameraRay> generateGhostRay(const CameraSample& /*sample*/) const {
+    return std::nullopt;
+  }
+  /// The light tracer's side of flare: a connection from the scene point ref through one ghost
+  /// path of the lens (u[0] chooses the pair as generateGhostRay does, u[1], u[2] the point on
+  /// the front element) to the film, with the importance of that path per wavelength (the
+  /// coatings' R at its two reflections and T at every other crossing, over the pair's
+  /// probability) on sampleWi's scale; nullopt when it is blocked or misses the film.
+  virtual std::optional<CameraWiSample> sampleGhostWi(
+      const Vec3& /*ref*/, const std::array<double, 3>& /*u*/,
+      const std::array<double, kCameraWavelengths>& /*lambda_nm*/, double /*time*/) const {
     return std::nullopt;
   }
 

@@ -147,6 +147,9 @@ class RealisticCamera final : public Camera {
     double probability = 0;
   };
   std::vector<GhostChoice> ghostChoices() const;
+  std::optional<CameraWiSample> sampleGhostWi(
+      const Vec3& ref, const std::array<double, 3>& u,
+      const std::array<double, kCameraWavelengths>& lambda_nm, double time) const override;
 
   // Camera importance (realistic_importance.cpp).
   /// Also for a tilted or shifted lens (film points on the placed film, the sampled region
@@ -252,6 +255,25 @@ class RealisticCamera final : public Camera {
   /// With flare: scales the camera ray's weight, per wavelength, by the coatings' transmittance
   /// at every surface the direct path f crosses, at its angles.
   void applyReflectionLosses(const CameraSample& sample, const FilmRay& f, CameraRay& ray) const;
+  /// With flare: the coatings' transmittance, per wavelength, of the direct path that enters
+  /// the lens along the line (o_lens, d_lens) from the scene (lens space, toward +z); false if
+  /// the lens stops it.
+  bool reflectionLossesFromScene(const Vec3& o_lens, const Vec3& d_lens,
+                                 const std::array<double, kCameraWavelengths>& lambda_nm,
+                                 std::array<double, kCameraWavelengths>& t) const;
+  /// A ghost path traced from the scene (realistic_flare.cpp): the line (o_lens, d_lens) through
+  /// ghost pair k (Flare's order) to the film plane. film_mm: where it lands; front: its first
+  /// meeting with the front surface; factor: the aperture shape's transmission times the
+  /// coatings' R and T along the path, per wavelength, over the pair's probability.
+  struct GhostFromScene {
+    Vec2 film_mm;
+    Vec3 front;
+    double cos_theta = 1;  ///< of the film-side ray to the axis
+    std::array<double, kCameraWavelengths> factor{};
+  };
+  std::optional<GhostFromScene> traceGhostFromScene(
+      double u_pair, const Vec3& o_lens, const Vec3& d_lens,
+      const std::array<double, kCameraWavelengths>& lambda_nm) const;
   /// Raster position of a film point (lens space, mm): the inverse of filmPoint.
   Vec2 rasterPoint(Vec2 film_mm) const;
 
@@ -272,6 +294,11 @@ class RealisticCamera final : public Camera {
     /// factor there (FilmRay::g_per_mm2: cos^4(theta) / z^2 for an untilted film).
     double area_mm2 = 0, g_per_mm2 = 0;
   };
+  /// The importance per unit front area and projected solid angle of a ray that reaches the
+  /// film, before the aperture shape and absorption (see the top of realistic_importance.cpp).
+  double importanceScale() const;
+  /// Whether a raster position lies within the image plus the filter's margin.
+  bool onFilm(Vec2 raster) const;
   std::optional<FilmHit> traceToFilm(const Vec3& o_lens, const Vec3& d_lens, double lambda_nm,
                                      const Vec3* front_hit = nullptr,
                                      Vec3* front_out = nullptr) const;

@@ -283,11 +283,87 @@ std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& s
   const double geometric = shape * c * c * c * c * area / (dist * dist) *
                            (lens.filmDistance_mm() * lens.filmDistance_mm() / weightNorm());
   CameraRay ray = placeRay(r.ray.origin, r.ray.direction, sample.time);
+  ray.ghost = true;
   for (int i = 0; i < kCameraWavelengths; ++i)
     ray.wavelength_weight[size_t(i)] = geometric * factor[size_t(i)] / path.probability;
   ray.weight = ray.wavelength_weight[0];
   ray.per_wavelength = true;
   return ray;
+}
+
+}  // namespace lensim::camera
+
+// The light tracer's side (realistic_importance.cpp, sampleWi and sampleGhostWi): the same paths
+// traced from the scene, weighted by the same factors (pathFactor on the points in the film-first
+// order it reads).
+namespace lensim::camera {
+
+namespace {
+
+/// A scene-first trace's points (start, then the hit at each step) in pathFactor's order: the
+/// film point, then the hits from the last step to the first.
+void filmFirst(const std::vector<Vec3>& scene_first, const Vec3& film, std::vector<Vec3>& out) {
+  out.clear();
+  out.push_back(film);
+  for (size_t j = scene_first.size(); j-- > 1;) out.push_back(scene_first[j]);
+}
+
+}  // namespace
+
+bool RealisticCamera::reflectionLossesFromScene(
+    const Vec3& o_lens, const Vec3& d_lens, const std::array<double, kCameraWavelengths>& lambda_nm,
+    std::array<double, kCameraWavelengths>& t) const {
+  const optics::LensSystem& lens = *lens_.lens;
+  thread_local std::vector<Vec3f> ptsf;
+  thread_local std::vector<Vec3> scene_first, pts;
+  ptsf.clear();
+  const optics::TraceResultT<float> r =
+      lens.tracerFloat().traceFromScene(optics::RayT<float>{Vec3f(o_lens), Vec3f(d_lens)}, {},
+                                        &ptsf);
+  if (!r.ok() || !(r.ray.direction.z > 0)) return false;
+  scene_first.clear();
+  for (const Vec3f& p : ptsf) scene_first.push_back(Vec3(p));
+  const Vec3 ro{r.ray.origin}, rd{r.ray.direction};
+  filmFirst(scene_first, ro + rd * ((lens.filmZ_mm() - ro.z) / rd.z), pts);
+  pathFactor(flare_->coatings, flare_->direct, pts, -d_lens, lambda_nm, lens.wavelength_nm(), t);
+  return true;
+}
+
+std::optional<RealisticCamera::GhostFromScene> RealisticCamera::traceGhostFromScene(
+    double u_pair, const Vec3& o_lens, const Vec3& d_lens,
+    const std::array<double, kCameraWavelengths>& lambda_nm) const {
+  if (!flare_) return std::nullopt;
+  const Flare& fl = *flare_;
+  const int k = int(std::lower_bound(fl.cdf.begin(), fl.cdf.end(), u_pair) - fl.cdf.begin());
+  const Flare::Path& path = fl.ghosts[size_t(std::min(k, int(fl.ghosts.size()) - 1))];
+  const optics::LensSystem& lens = *lens_.lens;
+  thread_local std::vector<Vec3> scene_first, pts;
+  scene_first.clear();
+  const optics::TraceResult r =
+      path.tracer.traceFromScene(optics::Ray{o_lens, d_lens}, {}, &scene_first);
+  if (!r.ok() || !(r.ray.direction.z > 0)) return std::nullopt;
+  const int m = int(path.steps.size());
+  if (int(scene_first.size()) != m + 1) return std::nullopt;
+  GhostFromScene g;
+  const Vec3 film = r.ray.origin + r.ray.direction * ((lens.filmZ_mm() - r.ray.origin.z) /
+                                                      r.ray.direction.z);
+  g.film_mm = {film.x, film.y};
+  g.front = scene_first[1];
+  g.cos_theta = r.ray.direction.z / length(r.ray.direction);
+  // A shaped aperture passes the path at every crossing of the stop (as generateGhostRay).
+  double shape = 1;
+  if (!settings_.aperture.isRound() && stop_radius_mm_ > 0) {
+    for (int i = 0; i < m; ++i)
+      if (path.steps[size_t(i)].stop) {
+        const Vec3& p = scene_first[size_t(i + 1)];
+        shape *= settings_.aperture.transmission({p.x / stop_radius_mm_, p.y / stop_radius_mm_});
+      }
+    if (!(shape > 0)) return std::nullopt;
+  }
+  filmFirst(scene_first, film, pts);
+  pathFactor(fl.coatings, path.steps, pts, -d_lens, lambda_nm, lens.wavelength_nm(), g.factor);
+  for (double& f : g.factor) f *= shape / path.probability;
+  return g;
 }
 
 }  // namespace lensim::camera

@@ -107,6 +107,20 @@ Vec3 RealisticCamera::worldFromLensVector(const Vec3& v, double time) const {
   return settings_.world_from_camera.at(time, scratch).applyVector(c);
 }
 
+double RealisticCamera::importanceScale() const {
+  const double z = lens_.lens->filmDistance_mm();
+  const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
+  const double film_area_mm2 = 4 * half_width_mm_ * half_height_mm_;
+  const double units = settings_.camera_units_per_mm;
+  return z * z / (norm * film_area_mm2 * units * units);
+}
+
+bool RealisticCamera::onFilm(Vec2 raster) const {
+  const Vec2 fr = settings_.filter_radius;
+  return raster.x >= 0.5 - fr.x && raster.x < settings_.x_resolution + fr.x - 0.5 &&
+         raster.y >= 0.5 - fr.y && raster.y < settings_.y_resolution + fr.y - 0.5;
+}
+
 std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3& o_lens,
                                                                      const Vec3& d_lens,
                                                                      double lambda_nm,
@@ -154,10 +168,7 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
     hit.film_mm = {x.x, x.y};
   }
   hit.raster = rasterPoint(hit.film_mm);
-  const Vec2 fr = settings_.filter_radius;
-  if (!(hit.raster.x >= 0.5 - fr.x && hit.raster.x < settings_.x_resolution + fr.x - 0.5 &&
-        hit.raster.y >= 0.5 - fr.y && hit.raster.y < settings_.y_resolution + fr.y - 0.5))
-    return std::nullopt;
+  if (!onFilm(hit.raster)) return std::nullopt;
   // Only rays camera rays can take count: through the region generateRay samples for x, with
   // the density it samples them at (FilmHit::area_mm2, g_per_mm2).
   hit.cos_theta = rd.z / length(rd);
@@ -192,10 +203,7 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
         Vec2{r.stop_point.x / stop_radius_mm_, r.stop_point.y / stop_radius_mm_});
     if (!(transmission > 0)) return std::nullopt;
   }
-  const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
-  const double film_area_mm2 = 4 * half_width_mm_ * half_height_mm_;
-  const double units = settings_.camera_units_per_mm;
-  hit.importance = transmission * z * z / (norm * film_area_mm2 * units * units);
+  hit.importance = transmission * importanceScale();
   if (absorbs) hit.importance *= pathTransmittance(path, false, lambda_nm);
   return hit;
 }
@@ -237,6 +245,63 @@ std::optional<CameraWiSample> RealisticCamera::sampleWi(
   } else {
     s.importance.fill(hit->importance);
   }
+  if (flare_) {
+    // The reflection losses of the direct path, as generateRay's weight has them.
+    std::array<double, kCameraWavelengths> t{};
+    const double z_start = front_zmin_mm_ - 1;
+    if (!reflectionLossesFromScene(r_l + d_l * ((z_start - r_l.z) / d_l.z), d_l, lambda_nm, t))
+      return std::nullopt;
+    for (int c = 0; c < kCameraWavelengths; ++c) s.importance[size_t(c)] *= t[size_t(c)];
+  }
+  return s;
+}
+
+// Flare's ghost connections (camera.h, sampleGhostWi). The pair is chosen with the probabilities
+// of the camera side's ghost paths (realistic_flare.cpp); the front point uniformly over the
+// front surface's projection within its clear semi-aperture (density |n_z| / (pi R^2) per unit
+// surface area): each ghost enters through its own part of the front element, which sampleWi's
+// bound (made for the direct path) does not hold. The measure argument above holds for the
+// ghost path too (reflection and refraction conserve etendue), so the importance is the direct
+// path's importanceScale times the aperture shape's transmission and the coatings' factor over
+// the pair's probability. Every ray that reaches the film through a ghost path crosses the rear
+// element, so it lies in the disc the camera side draws ghost directions from: only the film's
+// bounds limit it.
+std::optional<CameraWiSample> RealisticCamera::sampleGhostWi(
+    const Vec3& ref, const std::array<double, 3>& u,
+    const std::array<double, kCameraWavelengths>& lambda_nm, double time) const {
+  if (!flare_) return std::nullopt;
+  const optics::Interface& front = lens_.lens->interfaces().front();
+  const Vec3 r_l = lensFromWorldPoint(ref, time);
+  if (!(r_l.z < front_zmin_mm_)) return std::nullopt;
+  const double R = front.semi_aperture_mm;
+  const Vec2 xy = render::sampleUniformDiskConcentric({u[1], u[2]}) * R;
+  const std::optional<FrontPoint> fp = frontPoint(front, xy.x, xy.y);
+  if (!fp) return std::nullopt;
+  const Vec3 d_l = normalize(fp->p - r_l);
+  if (!(d_l.z > 0)) return std::nullopt;
+  const double z_start = front_zmin_mm_ - 1;
+  const Vec3 o = r_l.z < z_start ? r_l + d_l * ((z_start - r_l.z) / d_l.z) : r_l;
+  const std::optional<GhostFromScene> g = traceGhostFromScene(u[0], o, d_l, lambda_nm);
+  if (!g) return std::nullopt;
+  // The line must enter the lens at the point drawn (another entry point has its own chance).
+  if (length(g->front - fp->p) > 1e-6 * (1 + length(fp->p))) return std::nullopt;
+  CameraWiSample s;
+  s.film_raster = rasterPoint(g->film_mm);
+  if (!onFilm(s.film_raster)) return std::nullopt;
+  s.p_lens = worldFromLensPoint(fp->p, time);
+  const Vec3 to_lens = s.p_lens - ref;
+  s.distance = length(to_lens);
+  if (!(s.distance > 0)) return std::nullopt;
+  s.wi = to_lens / s.distance;
+  s.n_lens = normalize(worldFromLensVector(fp->n, time));
+  const double cos_n = std::abs(dot(s.n_lens, s.wi));
+  if (!(cos_n > 0)) return std::nullopt;
+  const double units = settings_.camera_units_per_mm;
+  const double pdf_area = std::abs(fp->n.z) / (M_PI * R * R * units * units);
+  s.pdf = pdf_area * s.distance * s.distance / cos_n;
+  const double scale = importanceScale();
+  for (int c = 0; c < kCameraWavelengths; ++c)
+    s.importance[size_t(c)] = scale * g->factor[size_t(c)];
   return s;
 }
 
@@ -357,10 +422,18 @@ double RealisticCamera::pdfWiPos(const Vec3& ref, const Vec3& p_lens, double tim
 double RealisticCamera::importance(const Vec3& o, const Vec3& d, double lambda_nm,
                                    Vec2* film_raster, double time) const {
   // The ray leaves the lens at o toward d: the line back into the lens runs along -d.
-  const std::optional<FilmHit> hit =
-      traceToFilm(lensFromWorldPoint(o, time), normalize(lensFromWorldVector(-d, time)), lambda_nm);
+  const Vec3 o_l = lensFromWorldPoint(o, time), d_l = normalize(lensFromWorldVector(-d, time));
+  const std::optional<FilmHit> hit = traceToFilm(o_l, d_l, lambda_nm);
   if (!hit) return 0;
   if (film_raster) *film_raster = hit->raster;
+  if (flare_) {  // the direct path's reflection losses, at this wavelength
+    std::array<double, kCameraWavelengths> t{};
+    const double z_start = front_zmin_mm_ - 1;
+    const Vec3 from = o_l.z < z_start ? o_l + d_l * ((z_start - o_l.z) / d_l.z) : o_l;
+    if (!reflectionLossesFromScene(from, d_l, {lambda_nm, lambda_nm, lambda_nm, lambda_nm}, t))
+      return 0;
+    return hit->importance * t[0];
+  }
   return hit->importance;
 }
 

@@ -622,13 +622,9 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   const std::unique_ptr<Integrator> integrator = makeIntegrator(setup);
   if (integrator->splats()) film.enableSplats(*filter);
   if (cam->flare()) {
-    // Lens flare (docs/flare.md, "Rendering ghosts"): camera paths only, into the ghost layer
+    // Lens flare (docs/flare.md, "Rendering ghosts"): every integrator, into the ghost layer
     // of an RGB film, rendered whole.
     const FileLoc& loc = scene.camera.loc;
-    if (integrator->splats() || integrator->tracesLightPaths())
-      throw Error(loc, fmt::format("realistic camera: \"flare\" is rendered by the path, volpath "
-                                   "and directlighting integrators, not \"{}\"",
-                                   scene.integrator.type));
     if (scene.film.type != "rgb")
       throw Error(loc, fmt::format("realistic camera: \"flare\" needs Film \"rgb\" (its ghost "
                                    "layer), not \"{}\"",

@@ -139,6 +139,7 @@ void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavele
 
 void Film::enableGhostLayer() {
   ghost_.assign(pixels_.size(), {0, 0, 0});
+  ghost_splats_.assign(pixels_.size(), {0, 0, 0});
 }
 
 const std::vector<std::string>& Film::ghostChannels() {
@@ -214,7 +215,9 @@ void Film::enableSplats(const Filter& filter) {
   splat_locks_ = std::make_unique<std::mutex[]>(kSplatLocks);
 }
 
-void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda) {
+void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda,
+                    bool ghost) {
+  ghost = ghost && !ghost_splats_.empty();
   if (!splat_filter_) return;
   const Vec3 sensor_rgb = toSensorRgb(L, lambda);
   const Vec3 rgb = recorded(sensor_rgb, L, lambda);
@@ -233,6 +236,8 @@ void Film::addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& 
       const Int128 v[3] = {toFixed(w * rgb.x), toFixed(w * rgb.y), toFixed(w * rgb.z)};
       std::lock_guard lock(splat_locks_[i % kSplatLocks]);
       for (int c = 0; c < 3; ++c) splats_[i][size_t(c)] += v[c];
+      if (ghost)
+        for (int c = 0; c < 3; ++c) ghost_splats_[i][size_t(c)] += v[c];
       if (!gbuf_.empty()) {
         const Vec3 y = sensor_rgb * w;
         gbuf_[i].splat_sum += y;
@@ -312,6 +317,10 @@ io::Image Film::image() const {
       if (!splats_.empty()) {
         for (int c = 0; c < 3; ++c)
           im.at(x, y, c) += float(double(splats_[i][size_t(c)]) / kFixedScale * splat_scale_);
+        if (!ghost_.empty())
+          for (int c = 0; c < 3; ++c)
+            im.at(x, y, ghost_c0 + c) +=
+                float(double(ghost_splats_[i][size_t(c)]) / kFixedScale * splat_scale_);
         for (int b = 0; b < n_buckets_; ++b)
           im.at(x, y, 3 + b) +=
               float(bucket_splats_[i * size_t(n_buckets_) + size_t(b)] * splat_scale_);

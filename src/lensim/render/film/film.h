@@ -157,7 +157,10 @@ class Film {
   /// of f), so that a splat adds its whole value to the image and the splatted image is filtered
   /// as the sampled one is (pbrt-v4's RGBFilm::AddSplat, src/pbrt/film.cpp, weighs by the raw
   /// filter value, which matches only filters of unit integral). Thread-safe.
-  void addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda);
+  /// `ghost`: a lens-flare ghost path's splat (the light tracer's), also added to the ghost
+  /// layer when the film has one.
+  void addSplat(Vec2 p, const SampledSpectrum& L, const SampledWavelengths& lambda,
+                bool ghost = false);
   /// The factor image() applies to the splat sums: 1 / (light paths per pixel of the full
   /// image), pbrt-v4's 1 / spp for a render of the whole image.
   /// `samples_per_pixel`: the light paths started per pixel rendered, for a gbuffer film's
@@ -206,6 +209,7 @@ class Film {
   void addAux(GBufferPixel& g, double w, const VisibleSurface& vs);
   std::vector<std::array<Int128, 3>> splats_;
   std::vector<std::array<Int128, 3>> ghost_;   ///< per pixel: the ghost paths' RGB sums
+  std::vector<std::array<Int128, 3>> ghost_splats_;  ///< per pixel: the ghost splats' sums
   std::vector<double> bucket_splats_;          ///< spectral films: per pixel, n_buckets_ splat sums
   static constexpr size_t kSplatLocks = 1024;  ///< lock stripes (by pixel index)
   std::unique_ptr<std::mutex[]> splat_locks_;

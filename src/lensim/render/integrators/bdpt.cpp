@@ -492,10 +492,14 @@ double misWeight(const Context& ctx, Vertex* light, Vertex* camera, const Vertex
   auto power = [e](double r) { return e == 1 ? r : std::pow(r, e); };
   double sum_ri = 0;
   double ri = 1;
+  // A ghost camera subpath (lens flare): its t = 1 strategy would be a connection through the
+  // same ghost path, which sampleWi does not make; it gets weight 0 and the other strategies'
+  // weights sum to 1 without it (term i = 1 left out).
+  const bool ghost = t >= 2 && camera[0].ghost;
   for (int i = t - 1; i > 0; --i) {
     ri *= remap0(camera[i].pdf_rev) / remap0(camera[i].pdf_fwd);
     if (i == 1) ri *= pos_ratio;  // the t = 1 strategy picks the camera point by sampleWi
-    if (!camera[i].delta && !camera[i - 1].delta) sum_ri += power(ri);
+    if (!camera[i].delta && !camera[i - 1].delta && !(ghost && i == 1)) sum_ri += power(ri);
   }
   ri = 1;
   for (int i = s - 1; i >= 0; --i) {
@@ -521,16 +525,23 @@ int cameraSubpath(const Context& ctx, const camera::CameraRay& ray, SampledWavel
   v.type = VertexType::Camera;
   v.p = ray.origin;
   v.beta = SampledSpectrum(ray.weight);
+  // Lens flare: the camera weighs each wavelength by the coatings along its path.
+  if (ray.per_wavelength && !lambda.secondaryTerminated())
+    for (int c = 0; c < kSpectrumSamples; ++c) v.beta[c] = ray.wavelength_weight[size_t(c)];
   v.medium = ctx.camera_medium;
   v.time = ray.time;
+  v.ghost = ray.ghost;
+  // A ghost path's own densities are not needed: only generateRay-side strategies (t >= 2)
+  // weigh it, and they read the camera vertex's densities only in the t = 1 term (misWeight).
   const camera::CameraRayPdf rp =
-      ctx.camera->rayPdf(ray.origin, ray.direction, lambda.lambda(0), ray.time);
+      ray.ghost ? camera::CameraRayPdf{}
+                : ctx.camera->rayPdf(ray.origin, ray.direction, lambda.lambda(0), ray.time);
   const int n = randomWalk(ctx, Ray{ray.origin, ray.direction, INFINITY, ray.time}, v.medium,
                            lambda, sampler, rng, v.beta, rp.pdf_dir, max_vertices - 1,
                            TransportMode::Radiance, counts, path, L_medium) +
                 1;
   // The t = 1 strategy can pick this camera point from a surface or a medium vertex.
-  if (n >= 2 && (path[1].onSurface() || path[1].type == VertexType::Medium))
+  if (!ray.ghost && n >= 2 && (path[1].onSurface() || path[1].type == VertexType::Medium))
     path[0].wi_pos_ratio = cameraPositionRatio(ctx, rp.pdf_pos, path[0].p, path[1].p, ray.time);
   return n;
 }
@@ -654,6 +665,7 @@ SampledSpectrum BdptIntegrator::Li(const camera::CameraRay* ray, double time,
       if (depth < 0 || depth > ctx_.max_depth) continue;
       if (s == 1 && t == 1 && !isAreaLightEnd(light_path[0])) continue;
       if (!ray && s == 0) continue;
+      if (t == 1 && ray && ray->ghost) continue;  // weight 0 for ghost paths (misWeight)
       Vec2 raster;
       const SampledSpectrum Lpath =
           connect(ctx_, light_path, camera_path, s, t, lambda, time, sampler, rng, counts, &raster);

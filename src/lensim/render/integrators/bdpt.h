@@ -95,6 +95,9 @@ struct Vertex {
   /// Camera vertex: the density with which the t = 1 strategy (Camera::sampleWi from the next
   /// vertex) picks this position, over generateRay's (rayPdf().pdf_pos); see cameraPositionRatio.
   double wi_pos_ratio = 1;
+  /// Camera vertex: the subpath starts with a lens-flare ghost path (CameraRay::ghost), whose
+  /// light-tracing (t = 1) strategy has no weight (misWeight).
+  bool ghost = false;
   /// The medium around the vertex: medium vertices, camera vertices, light vertices; surface
   /// vertices: the medium the walk reached them in (Scene::media index; -1 vacuum).
   int medium = -1;

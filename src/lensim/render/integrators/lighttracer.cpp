@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "lensim/camera/camera.h"
 #include "lensim/render/film/film.h"
@@ -34,7 +35,8 @@ LightTracer::LightTracer(const SceneContext& sc, const camera::Camera& camera)
     : sc_(&sc),
       camera_(&camera),
       shutter_open_(sc.scene->camera.shutter_open),
-      shutter_close_(sc.scene->camera.shutter_close) {
+      shutter_close_(sc.scene->camera.shutter_close),
+      flare_(camera.flare()) {
   if (!camera.supportsImportance())
     throw Error(sc.scene->camera.loc,
                 fmt::format("integrator \"lighttracer\": the camera ({}) has no importance "
@@ -93,8 +95,8 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
     return lambda_nm;
   };
   int dropped = 0;
-  // Splats beta W / pdf at the connection's film point.
-  auto splat = [&](const camera::CameraWiSample& cs, SampledSpectrum L) {
+  // Splats beta W / pdf at the connection's film point (ghost: into the ghost layer too).
+  auto splat = [&](const camera::CameraWiSample& cs, SampledSpectrum L, bool ghost = false) {
     if (cs.hero_only) lambda.terminateSecondary();
     for (int i = 0; i < kSpectrumSamples; ++i) L[i] *= cs.importance[size_t(i)] / cs.pdf;
     for (int i = 0; i < kSpectrumSamples; ++i)
@@ -102,10 +104,25 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
         ++dropped;
         return;
       }
-    film.addSplat(cs.film_raster, L, lambda);
+    film.addSplat(cs.film_raster, L, lambda, ghost);
+  };
+  // Lens flare: each connection to the camera is also made through one ghost path of the lens
+  // (Camera::sampleGhostWi: a pair drawn with the camera side's probabilities). One pair per
+  // connection rather than all of them: with coatings each ghost path's thin-film stacks cost
+  // tens of microseconds (docs/flare.md), and the pairs' probabilities follow their intensities.
+  // Its random numbers come after the direct connection's, drawn only with flare.
+  auto ghostU = [&] {
+    std::array<double, 3> u{};
+    if (flare_) {
+      u[0] = sampler.get1D();
+      const Vec2 v = sampler.get2D();
+      u[1] = v.x, u[2] = v.y;
+    }
+    return u;
   };
 
   const Vec2 u_cam0 = sampler.get2D();
+  const std::array<double, 3> u_ghost0 = ghostU();
   const std::optional<LightLeSample> les = light.sampleLe(u1, u2, lambda);
   if (!les || !(les->pdf_pos > 0) || !(les->pdf_dir > 0) || les->L.isBlack()) return 0;
   // Media and interface surfaces: connections are traced from the camera, in its medium.
@@ -122,19 +139,29 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
                              rng, counts);
     return !T.isBlack();
   };
+  // The connections from p to the camera: the direct one (u_cam) and, with lens flare, one
+  // through a ghost path (u_ghost). value(cs): the splat before the importance, or nullopt.
+  using Splat = std::optional<SampledSpectrum>;
+  auto toCamera = [&](const Vec3& p, Vec2 u_cam, const std::array<double, 3>& u_ghost,
+                      const auto& value) {
+    if (auto cs = camera_->sampleWi(p, u_cam, wavelengths(), time); cs && cs->pdf > 0)
+      if (const Splat L = value(*cs)) splat(*cs, *L);
+    if (flare_)
+      if (auto cs = camera_->sampleGhostWi(p, u_ghost, wavelengths(), time); cs && cs->pdf > 0)
+        if (const Splat L = value(*cs)) splat(*cs, *L, true);
+  };
   // The light's own point seen by the camera (area lights; a point light is a delta the film
   // cannot see).
-  if (les->on_surface) {
-    if (auto cs = camera_->sampleWi(les->o, u_cam0, wavelengths(), time); cs && cs->pdf > 0) {
+  if (les->on_surface)
+    toCamera(les->o, u_cam0, u_ghost0, [&](const camera::CameraWiSample& cs) -> Splat {
       SurfaceHit h;
       h.ng = les->n;
       h.uv = les->uv;
-      const SampledSpectrum Le = light.L(h, cs->wi, lambda);
+      const SampledSpectrum Le = light.L(h, cs.wi, lambda);
       SampledSpectrum T(1.0);
-      if (!Le.isBlack() && visible(les->o, les->n, *cs, T))
-        splat(*cs, T * Le * (std::abs(dot(les->n, cs->wi)) / (pmf * les->pdf_pos)));
-    }
-  }
+      if (Le.isBlack() || !visible(les->o, les->n, cs, T)) return std::nullopt;
+      return T * Le * (std::abs(dot(les->n, cs.wi)) / (pmf * les->pdf_pos));
+    });
   const double cos0 = les->on_surface ? std::abs(dot(les->n, les->d)) : 1.0;
   SampledSpectrum beta = les->L * (cos0 / (pmf * les->pdf_pos * les->pdf_dir));
   SampledSpectrum r(1.0);  // chromatic media: media_tracking.h
@@ -156,14 +183,14 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
         if (depth++ == sc_->max_depth) break;
         const HenyeyGreenstein phase(m->g());
         const Vec2 u_cam = sampler.get2D();
-        if (auto cs = camera_->sampleWi(ev.p, u_cam, wavelengths(), time); cs && cs->pdf > 0) {
+        const std::array<double, 3> u_ghost = ghostU();
+        toCamera(ev.p, u_cam, u_ghost, [&](const camera::CameraWiSample& cs) -> Splat {
           SampledSpectrum T(1.0);
-          const double ph = phase.p(-dir, cs->wi);
-          if (ph > 0 && visible(ev.p, Vec3{0, 0, 0}, *cs, T)) {
-            if (cs->hero_only) lambda.terminateSecondary();
-            splat(*cs, T * beta * ph / wavelengthMean(r, lambda));
-          }
-        }
+          const double ph = phase.p(-dir, cs.wi);
+          if (!(ph > 0) || !visible(ev.p, Vec3{0, 0, 0}, cs, T)) return std::nullopt;
+          if (cs.hero_only) lambda.terminateSecondary();
+          return T * beta * ph / wavelengthMean(r, lambda);
+        });
         auto ps = phase.sample(-dir, sampler.get2D());
         if (!ps || ps->pdf <= 0) break;
         beta *= ps->p / ps->pdf;
@@ -191,17 +218,16 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
     const BSDF bsdf(ns, h.dpdu, bxdf);
     // Connect to the camera.
     const Vec2 u_cam = sampler.get2D();
-    if (isNonSpecular(bsdf.flags())) {
-      if (auto cs = camera_->sampleWi(h.p, u_cam, wavelengths(), time); cs && cs->pdf > 0) {
+    const std::array<double, 3> u_ghost = ghostU();
+    if (isNonSpecular(bsdf.flags()))
+      toCamera(h.p, u_cam, u_ghost, [&](const camera::CameraWiSample& cs) -> Splat {
         const SampledSpectrum f =
-            bsdf.f(wo, cs->wi, TransportMode::Importance) * std::abs(dot(cs->wi, ns));
+            bsdf.f(wo, cs.wi, TransportMode::Importance) * std::abs(dot(cs.wi, ns));
         SampledSpectrum T(1.0);
-        if (!f.isBlack() && visible(h.p, h.ng, *cs, T)) {
-          if (cs->hero_only) lambda.terminateSecondary();
-          splat(*cs, T * beta * f / wavelengthMean(r, lambda));
-        }
-      }
-    }
+        if (f.isBlack() || !visible(h.p, h.ng, cs, T)) return std::nullopt;
+        if (cs.hero_only) lambda.terminateSecondary();
+        return T * beta * f / wavelengthMean(r, lambda);
+      });
     // Continue the path.
     const double uc = sampler.get1D();
     const Vec2 u = sampler.get2D();

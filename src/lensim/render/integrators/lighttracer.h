@@ -36,6 +36,7 @@ class LightTracer {
   std::vector<double> cdf_;           ///< by power (uniform if no power is known)
   double shutter_open_ = 0, shutter_close_ = 0;
   bool media_ = false;  ///< the scene's media are tracked
+  bool flare_ = false;  ///< the camera's lens flare: ghost connections too (sampleGhostWi)
 };
 
 /// The light tracer as an integrator of the family (base.h): one light path per pixel sample.
