@@ -840,6 +840,20 @@ TEST(SensorDng, XTransColorCheckerDevelopedByDcrawAndLensim) {
   EXPECT_LT(own, 3.0);
 }
 
+TEST(SensorDng, RgbwColorCheckerDevelopedByDcrawEmuAndLensim) {
+  // The rendered chart on an RGBW sensor (RG/BW): LibRaw's four-colour path, and lensim
+  // develop's normalised convolution of the R, G and B pixels.
+  const std::string film = "\"string cfa\" \"RG/BW\"";
+  const std::string camera = "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1";
+  double worst = 0;
+  const double emu = renderedChartDeltaE("chart_rgbw", camera, 5, film, &worst);
+  std::printf("RGBW ColorChecker, dcraw_emu: mean dE2000 %.2f, max %.2f\n", emu, worst);
+  EXPECT_LT(emu, 3.0);
+  const double own = renderedChartDeltaE("chart_rgbw_lensim", camera, 5, film, &worst, "lensim");
+  std::printf("RGBW ColorChecker, lensim develop: mean dE2000 %.2f, max %.2f\n", own, worst);
+  EXPECT_LT(own, 3.0);
+}
+
 namespace {
 
 // Paraxial y-nu trace of a pbrt lens file (radius, thickness, index, aperture; radius 0 the

@@ -291,14 +291,6 @@ TEST(SensorRgbw, TilesDcrawCannotHoldAreRefusedForDngAndWrittenAsExr) {
   EXPECT_EQ(parseCfa("RGBW").text(), "RG/BW");
   EXPECT_TRUE(parseCfa("RGBW").hasW());
   EXPECT_FALSE(parseCfa("RGGB").hasW());
-  // lensim develop refuses an RGBW DNG, naming the W colour.
-  SensorConfig cfg;
-  cfg.cfa = "RGBW";
-  writeRawImage(dir + "/w.dng", electronImage(24, 24, cfg), 0, 0);
-  const auto r = lensim::test::runLensim("develop " + dir + "/w.dng -o " + dir + "/w.png");
-  EXPECT_EQ(r.status, 1) << r.out;
-  EXPECT_NE(r.out.find("CFA colour 6 (W, panchromatic"), std::string::npos) << r.out;
-  EXPECT_FALSE(std::filesystem::exists(dir + "/w.png"));
 }
 
 TEST(SensorRgbw, SplitRenderMergedEqualsOneRender) {

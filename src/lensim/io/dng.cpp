@@ -297,9 +297,17 @@ DngImage readDng(const std::string& path) {
                                     im.cfa_height));
     im.cfa.assign(pat, pat + n);
     for (uint8_t c : im.cfa)
-      if (c > 2)
-        throw unsupported(fmt::format("CFA colour {}{}", c,
-                                      c == kCfaWhite ? " (W, panchromatic: an RGBW sensor)" : ""));
+      if (c > 2 && c != kCfaWhite) throw unsupported(fmt::format("CFA colour {}", c));
+  }
+  // White (W) pixels: four planes, CFAPlaneColor red, green, blue, white (as writeDng writes).
+  const bool has_w =
+      !im.mono && std::find(im.cfa.begin(), im.cfa.end(), kCfaWhite) != im.cfa.end();
+  const int planes = has_w ? 4 : 3;
+  if (has_w) {
+    const uint8_t* pc = nullptr;
+    if (!getArray(tif, TIFFTAG_CFAPLANECOLOR, pc, n) || n != 4 || pc[0] != 0 || pc[1] != 1 ||
+        pc[2] != 2 || pc[3] != kCfaWhite)
+      throw unsupported("a CFA with white pixels without CFAPlaneColor red, green, blue, white");
   }
   const float* f = nullptr;
   if (getArray(tif, TIFFTAG_BLACKLEVEL, f, n) && n >= 1) im.black_level = uint32_t(f[0]);
@@ -310,14 +318,18 @@ DngImage readDng(const std::string& path) {
     throw unsupported(fmt::format("WhiteLevel {} not above BlackLevel {}", im.white_level,
                                   im.black_level));
   if (!im.mono) {
-    if ((getArray(tif, TIFFTAG_COLORMATRIX2, f, n) && n == 9) ||
-        (getArray(tif, TIFFTAG_COLORMATRIX1, f, n) && n == 9)) {
+    if ((getArray(tif, TIFFTAG_COLORMATRIX2, f, n) && n == 3 * planes) ||
+        (getArray(tif, TIFFTAG_COLORMATRIX1, f, n) && n == 3 * planes)) {
       for (int i = 0; i < 9; ++i) im.color_matrix2[size_t(i)] = f[i];
+      if (has_w)
+        for (int i = 0; i < 3; ++i) im.w_color_row2[size_t(i)] = f[9 + i];
     } else {
-      throw unsupported("no 3x3 ColorMatrix1/2");
+      throw unsupported(fmt::format("no {}x3 ColorMatrix1/2", planes));
     }
-    if (getArray(tif, TIFFTAG_ASSHOTNEUTRAL, f, n) && n == 3)
+    if (getArray(tif, TIFFTAG_ASSHOTNEUTRAL, f, n) && n == planes) {
       for (int i = 0; i < 3; ++i) im.as_shot_neutral[size_t(i)] = f[i];
+      if (has_w) im.w_neutral = f[3];
+    }
   }
   return im;
 }

@@ -35,9 +35,10 @@ struct DngImage {
   std::string lens_model;
 };
 
-/// Reads an uncompressed 16-bit DNG with one CFA (red, green, blue; up to 8x8) or LinearRaw image in its first
-/// directory, as writeDng writes them (colour matrices: ColorMatrix2, else ColorMatrix1, into
-/// color_matrix2); throws lensim::Error naming the file and what is unsupported otherwise.
+/// Reads an uncompressed 16-bit DNG with one CFA (red, green, blue, and white with CFAPlaneColor
+/// red, green, blue, white; up to 8x8) or LinearRaw image in its first directory, as writeDng
+/// writes them (colour matrices: ColorMatrix2, else ColorMatrix1, into color_matrix2 and
+/// w_color_row2); throws lensim::Error naming the file and what is unsupported otherwise.
 DngImage readDng(const std::string& path);
 
 /// Writes `image` to `path` (atomically: a temporary file renamed into place); throws

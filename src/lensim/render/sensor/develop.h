@@ -7,7 +7,8 @@
 //      mirrored at its edges, for a 2x2 Bayer pattern (greens on a diagonal); for another pattern each missing channel
 //      is the tent-weighted mean of that channel's pixels in a window about the pixel
 //      (normalised convolution, weight (r + 1 - |dx|)(r + 1 - |dy|), r half the pattern's
-//      larger side, rounded up);
+//      larger side, rounded up); W (white) pixels are not used: R, G and B come from their own
+//      pixels around;
 //   4. colour: camera to linear sRGB through the DNG's ColorMatrix (D65, else the only one), as
 //      dcraw does: cam_from_rgb = ColorMatrix x XYZ_from_sRGB, rows normalised to sum 1 (so the
 //      balanced neutral stays neutral), inverted;
