@@ -885,43 +885,45 @@ TEST(SensorDng, ExifLensFromTheRealisticCamera) {
   // pbrt-v3/v4's realistic camera and pbrt-v2's (CS348B: specfile, filmdistance,
   // aperture_diameter, millimetres), whose lens is the same.
   for (const bool v2 : {false, true})
-  for (double stop : {12.5, 6.0}) {
-    const auto [efl, fnum] = paraxialEflAndFNumber(lens, stop);
-    const std::string scene = dir + "/e.pbrt";
-    {
-      std::ofstream f(scene);
-      if (v2)
-        f << "Camera \"realistic\" \"string specfile\" \"" << lens
-          << "\" \"float filmdistance\" 36.77 \"float aperture_diameter\" " << stop
-          << " \"float filmdiag\" 43.27\n";
-      else
-        f << "Camera \"realistic\" \"string lensfile\" \"" << lens
-          << "\" \"float aperturediameter\" " << stop << " \"float focusdistance\" 3\n";
-      f << "Sampler \"independent\" \"integer pixelsamples\" 1\n"
-           "Film \"raw\" \"integer xresolution\" 36 \"integer yresolution\" 24\n"
-           "WorldBegin\nLightSource \"infinite\"\n";
-    }
-    for (const char* ext : {"dng", "exr"}) {
-      const std::string out = dir + "/e." + ext;
-      const auto r = lensim::test::runLensim("render -q " + scene + " -o " + out);
-      ASSERT_EQ(r.status, 0) << r.out;
-      if (std::string(ext) == "exr") {
-        const io::Image im = io::readImage(out);
-        EXPECT_NEAR(std::stod(im.metadata.at(kRawFocalKey)), efl, 1e-6 * efl) << v2;
-        EXPECT_NEAR(std::stod(im.metadata.at(kRawFNumberKey)), fnum, 1e-6 * fnum) << v2;
-        EXPECT_EQ(im.metadata.at(kRawLensKey), "D-GAUSS F/2 22deg HFOV") << v2;
-        continue;
+    for (double stop : {12.5, 6.0}) {
+      const auto [efl, fnum] = paraxialEflAndFNumber(lens, stop);
+      const std::string scene = dir + "/e.pbrt";
+      {
+        std::ofstream f(scene);
+        if (v2)
+          f << "Camera \"realistic\" \"string specfile\" \"" << lens
+            << "\" \"float filmdistance\" 36.77 \"float aperture_diameter\" " << stop
+            << " \"float filmdiag\" 43.27\n";
+        else
+          f << "Camera \"realistic\" \"string lensfile\" \"" << lens
+            << "\" \"float aperturediameter\" " << stop << " \"float focusdistance\" 3\n";
+        f << "Sampler \"independent\" \"integer pixelsamples\" 1\n"
+             "Film \"raw\" \"integer xresolution\" 36 \"integer yresolution\" 24\n"
+             "WorldBegin\nLightSource \"infinite\"\n";
       }
-      int st = -1;
-      const std::string info = run("raw-identify -v " + out, &st);
-      ASSERT_EQ(st, 0) << info;
-      EXPECT_NE(info.find(fmt::format("Aperture: f/{:.1f}\n", fnum)), std::string::npos)
-          << "f/" << fnum << "\n" << info;
-      EXPECT_NE(info.find(fmt::format("Focal length: {:.1f} mm\n", efl)), std::string::npos)
-          << efl << "\n" << info;
-      EXPECT_NE(info.find("\tLens: D-GAUSS F/2 22deg HFOV\n"), std::string::npos) << info;
+      for (const char* ext : {"dng", "exr"}) {
+        const std::string out = dir + "/e." + ext;
+        const auto r = lensim::test::runLensim("render -q " + scene + " -o " + out);
+        ASSERT_EQ(r.status, 0) << r.out;
+        if (std::string(ext) == "exr") {
+          const io::Image im = io::readImage(out);
+          EXPECT_NEAR(std::stod(im.metadata.at(kRawFocalKey)), efl, 1e-6 * efl) << v2;
+          EXPECT_NEAR(std::stod(im.metadata.at(kRawFNumberKey)), fnum, 1e-6 * fnum) << v2;
+          EXPECT_EQ(im.metadata.at(kRawLensKey), "D-GAUSS F/2 22deg HFOV") << v2;
+          continue;
+        }
+        int st = -1;
+        const std::string info = run("raw-identify -v " + out, &st);
+        ASSERT_EQ(st, 0) << info;
+        EXPECT_NE(info.find(fmt::format("Aperture: f/{:.1f}\n", fnum)), std::string::npos)
+            << "f/" << fnum << "\n"
+            << info;
+        EXPECT_NE(info.find(fmt::format("Focal length: {:.1f} mm\n", efl)), std::string::npos)
+            << efl << "\n"
+            << info;
+        EXPECT_NE(info.find("\tLens: D-GAUSS F/2 22deg HFOV\n"), std::string::npos) << info;
+      }
     }
-  }
   // A pinhole camera has no lens: no focal length, f-number or lens name.
   const std::string scene = dir + "/p.pbrt";
   {

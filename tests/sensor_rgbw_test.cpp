@@ -215,10 +215,12 @@ TEST(SensorRgbw, DcrawDecodesRgbwDngsBitForBitAndLibRawReadsFourColours) {
       ASSERT_EQ(st, 0) << info;
       std::string pattern;
       for (int i = 0; i < 16; ++i)
-        pattern += "GMCY"[std::string("RGBW").find(patternLetter(cfa, x0 + (i & 1), y0 + (i >> 1)))];
+        pattern +=
+            "GMCY"[std::string("RGBW").find(patternLetter(cfa, x0 + (i & 1), y0 + (i >> 1)))];
       EXPECT_NE(info.find("Raw colors: 4"), std::string::npos) << info;
       EXPECT_NE(info.find("Filter pattern: " + pattern + "\n"), std::string::npos)
-          << cfa << " " << x0 << "," << y0 << ": expected " << pattern << "\n" << info;
+          << cfa << " " << x0 << "," << y0 << ": expected " << pattern << "\n"
+          << info;
     }
 }
 
@@ -328,8 +330,8 @@ TEST(SensorRgbw, SplitRenderMergedEqualsOneRender) {
   r = runLensim("merge -q " + dir + "/tiles.dng " + dir + "/tile0.exr " + dir + "/tile1.exr");
   ASSERT_EQ(r.status, 0) << r.out;
   for (const char* range : {"0:2", "2:4"}) {
-    r = runLensim(fmt::format("render -q --spp-range {} {} -o {}/spp{}.exr", range, scene, dir,
-                              range[0]));
+    r = runLensim(
+        fmt::format("render -q --spp-range {} {} -o {}/spp{}.exr", range, scene, dir, range[0]));
     ASSERT_EQ(r.status, 0) << r.out;
   }
   r = runLensim("merge -q " + dir + "/spp.dng " + dir + "/spp0.exr " + dir + "/spp2.exr");
@@ -354,9 +356,9 @@ TEST(SensorRgbw, SplitRenderMergedEqualsOneRender) {
     for (int x = 0; x < 32; ++x) {
       const char f = patternLetter("WG/RW/WB/GW", x, y);
       const float e = exr.at(x, y, electrons);
-      const float want =
-          f == 'W' ? float(double(exr.at(x, y, 0)) + exr.at(x, y, 1) + exr.at(x, y, 2))
-                   : exr.at(x, y, int(std::string("RGB").find(f)));
+      const float want = f == 'W'
+                             ? float(double(exr.at(x, y, 0)) + exr.at(x, y, 1) + exr.at(x, y, 2))
+                             : exr.at(x, y, int(std::string("RGB").find(f)));
       ASSERT_EQ(e, want) << x << "," << y;
       (f == 'W' ? w_sum : rgb_sum) += e;
     }

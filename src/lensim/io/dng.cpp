@@ -300,8 +300,7 @@ DngImage readDng(const std::string& path) {
       if (c > 2 && c != kCfaWhite) throw unsupported(fmt::format("CFA colour {}", c));
   }
   // White (W) pixels: four planes, CFAPlaneColor red, green, blue, white (as writeDng writes).
-  const bool has_w =
-      !im.mono && std::find(im.cfa.begin(), im.cfa.end(), kCfaWhite) != im.cfa.end();
+  const bool has_w = !im.mono && std::find(im.cfa.begin(), im.cfa.end(), kCfaWhite) != im.cfa.end();
   const int planes = has_w ? 4 : 3;
   if (has_w) {
     const uint8_t* pc = nullptr;

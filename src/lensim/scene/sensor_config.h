@@ -34,7 +34,8 @@ struct CfaPattern {
 
 /// Parses a CFA: "mono"; or the filters' letters R, G, B (and W, panchromatic) row by row, rows
 /// separated by '/' ("RGGB/GBRG"), or without '/' a square tile ("RGGB" is 2x2, 16 letters 4x4);
-/// at most 8x8, each of R, G and B at least once. Throws lensim::Error at loc naming the bad value otherwise.
+/// at most 8x8, each of R, G and B at least once. Throws lensim::Error at loc naming the bad value
+/// otherwise.
 CfaPattern parseCfa(const std::string& text, const FileLoc& loc = {});
 
 /// Throws lensim::Error at loc if a DNG cannot hold `cfa` so that dcraw and LibRaw read it
