@@ -2,6 +2,7 @@
 // does not, so they are registered here with a tag extender.
 #include "lensim/io/dng.h"
 
+#include <algorithm>
 #include <cstdarg>
 #include <cstdio>
 #include <mutex>
@@ -18,6 +19,7 @@ namespace {
 
 constexpr ttag_t kForwardMatrix1 = 50964, kForwardMatrix2 = 50965;
 constexpr uint16_t kPhotometricLinearRaw = 34892;  // DNG 1.4, PhotometricInterpretation
+constexpr uint8_t kCfaWhite = 6;  // TIFF/EP CFAPattern colour code of a white (W) filter
 
 const TIFFFieldInfo kExtraFields[] = {
     {kForwardMatrix1, -1, -1, TIFF_SRATIONAL, FIELD_CUSTOM, 1, 1, const_cast<char*>("ForwardMatrix1")},
@@ -113,6 +115,7 @@ void writeTo(const std::string& path, const DngImage& im) {
     ~Closer() { TIFFClose(t); }
   } closer{tif};
   const uint8_t version[4] = {1, 4, 0, 0}, backward[4] = {1, 1, 0, 0};
+  const bool has_w = !im.mono && std::find(im.cfa.begin(), im.cfa.end(), kCfaWhite) != im.cfa.end();
   check(TIFFSetField(tif, TIFFTAG_SUBFILETYPE, 0), path, "NewSubFileType");
   check(TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, uint32_t(im.width)), path, "width");
   check(TIFFSetField(tif, TIFFTAG_IMAGELENGTH, uint32_t(im.height)), path, "height");
@@ -138,20 +141,47 @@ void writeTo(const std::string& path, const DngImage& im) {
       throw Error(FileLoc{path}, fmt::format("a {}x{} CFA pattern of {} colours; expected 1 to 8 "
                                              "columns and rows",
                                              im.cfa_width, im.cfa_height, im.cfa.size()));
+    for (uint8_t c : im.cfa)
+      if (c > 2 && c != kCfaWhite)
+        throw Error(FileLoc{path}, fmt::format("CFA colour {}; expected 0 (red), 1 (green), 2 "
+                                               "(blue) or 6 (white)",
+                                               c));
     const uint16_t dim[2] = {uint16_t(im.cfa_height), uint16_t(im.cfa_width)};  // rows, columns
     setArray(tif, TIFFTAG_CFAREPEATPATTERNDIM, dim, 2, path);
     setArray(tif, TIFFTAG_CFAPATTERN, im.cfa.data(), int(im.cfa.size()), path);
+    if (has_w) {
+      const uint8_t planes[4] = {0, 1, 2, kCfaWhite};
+      setArray(tif, TIFFTAG_CFAPLANECOLOR, planes, 4, path);
+    }
   }
   const float black = float(im.black_level);
   setArray(tif, TIFFTAG_BLACKLEVEL, &black, 1, path);
   const uint32_t white = im.white_level;
   setArray(tif, TIFFTAG_WHITELEVEL, &white, 1, path);
   if (!im.mono) {
-    setFloats(tif, TIFFTAG_COLORMATRIX1, im.color_matrix1.data(), 9, path);
-    setFloats(tif, TIFFTAG_COLORMATRIX2, im.color_matrix2.data(), 9, path);
-    setFloats(tif, kForwardMatrix1, im.forward_matrix1.data(), 9, path);
-    setFloats(tif, kForwardMatrix2, im.forward_matrix2.data(), 9, path);
-    setFloats(tif, TIFFTAG_ASSHOTNEUTRAL, im.as_shot_neutral.data(), 3, path);
+    // ColorMatrix: one row (XYZ) per plane; ForwardMatrix: one column per plane.
+    const int planes = has_w ? 4 : 3;
+    auto colorMatrix = [&](const std::array<double, 9>& m, const std::array<double, 3>& w) {
+      std::array<double, 12> out{};
+      std::copy(m.begin(), m.end(), out.begin());
+      std::copy(w.begin(), w.end(), out.begin() + 9);
+      return out;
+    };
+    auto forwardMatrix = [&](const std::array<double, 9>& m) {
+      std::array<double, 12> out{};
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) out[size_t(r * planes + c)] = m[size_t(r * 3 + c)];
+      return out;
+    };
+    setFloats(tif, TIFFTAG_COLORMATRIX1, colorMatrix(im.color_matrix1, im.w_color_row1).data(),
+              3 * planes, path);
+    setFloats(tif, TIFFTAG_COLORMATRIX2, colorMatrix(im.color_matrix2, im.w_color_row2).data(),
+              3 * planes, path);
+    setFloats(tif, kForwardMatrix1, forwardMatrix(im.forward_matrix1).data(), 3 * planes, path);
+    setFloats(tif, kForwardMatrix2, forwardMatrix(im.forward_matrix2).data(), 3 * planes, path);
+    const std::array<double, 4> neutral{im.as_shot_neutral[0], im.as_shot_neutral[1],
+                                        im.as_shot_neutral[2], im.w_neutral};
+    setFloats(tif, TIFFTAG_ASSHOTNEUTRAL, neutral.data(), planes, path);
     check(TIFFSetField(tif, TIFFTAG_CALIBRATIONILLUMINANT1, uint16_t(im.illuminant1)), path,
           "CalibrationIlluminant1");
     check(TIFFSetField(tif, TIFFTAG_CALIBRATIONILLUMINANT2, uint16_t(im.illuminant2)), path,
@@ -267,7 +297,16 @@ DngImage readDng(const std::string& path) {
                                     im.cfa_height));
     im.cfa.assign(pat, pat + n);
     for (uint8_t c : im.cfa)
-      if (c > 2) throw unsupported(fmt::format("CFA colour {}", c));
+      if (c > 2 && c != kCfaWhite) throw unsupported(fmt::format("CFA colour {}", c));
+  }
+  // White (W) pixels: four planes, CFAPlaneColor red, green, blue, white (as writeDng writes).
+  const bool has_w = !im.mono && std::find(im.cfa.begin(), im.cfa.end(), kCfaWhite) != im.cfa.end();
+  const int planes = has_w ? 4 : 3;
+  if (has_w) {
+    const uint8_t* pc = nullptr;
+    if (!getArray(tif, TIFFTAG_CFAPLANECOLOR, pc, n) || n != 4 || pc[0] != 0 || pc[1] != 1 ||
+        pc[2] != 2 || pc[3] != kCfaWhite)
+      throw unsupported("a CFA with white pixels without CFAPlaneColor red, green, blue, white");
   }
   const float* f = nullptr;
   if (getArray(tif, TIFFTAG_BLACKLEVEL, f, n) && n >= 1) im.black_level = uint32_t(f[0]);
@@ -278,14 +317,18 @@ DngImage readDng(const std::string& path) {
     throw unsupported(fmt::format("WhiteLevel {} not above BlackLevel {}", im.white_level,
                                   im.black_level));
   if (!im.mono) {
-    if ((getArray(tif, TIFFTAG_COLORMATRIX2, f, n) && n == 9) ||
-        (getArray(tif, TIFFTAG_COLORMATRIX1, f, n) && n == 9)) {
+    if ((getArray(tif, TIFFTAG_COLORMATRIX2, f, n) && n == 3 * planes) ||
+        (getArray(tif, TIFFTAG_COLORMATRIX1, f, n) && n == 3 * planes)) {
       for (int i = 0; i < 9; ++i) im.color_matrix2[size_t(i)] = f[i];
+      if (has_w)
+        for (int i = 0; i < 3; ++i) im.w_color_row2[size_t(i)] = f[9 + i];
     } else {
-      throw unsupported("no 3x3 ColorMatrix1/2");
+      throw unsupported(fmt::format("no {}x3 ColorMatrix1/2", planes));
     }
-    if (getArray(tif, TIFFTAG_ASSHOTNEUTRAL, f, n) && n == 3)
+    if (getArray(tif, TIFFTAG_ASSHOTNEUTRAL, f, n) && n == planes) {
       for (int i = 0; i < 3; ++i) im.as_shot_neutral[size_t(i)] = f[i];
+      if (has_w) im.w_neutral = f[3];
+    }
   }
   return im;
 }

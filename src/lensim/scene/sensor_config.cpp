@@ -18,20 +18,29 @@ int CfaPattern::channel(int x, int y) const {
   return colors[size_t(cy * width + cx)];
 }
 
+bool CfaPattern::hasW() const {
+  return !mono && std::find(colors.begin(), colors.end(), kW) != colors.end();
+}
+
 std::string CfaPattern::text() const {
   if (mono) return "mono";
   std::string s;
   for (int y = 0; y < height; ++y) {
     if (y > 0) s += '/';
-    for (int x = 0; x < width; ++x) s += "RGB"[colors[size_t(y * width + x)]];
+    for (int x = 0; x < width; ++x) s += "RGBW"[colors[size_t(y * width + x)]];
   }
   return s;
 }
 
 bool CfaPattern::dngReadable() const {
-  if (mono || (width == 6 && height == 6)) return true;
+  if (mono) return true;
+  // dcraw and LibRaw read an X-Trans tile's colours as 0-2 only (fgetc & 3: W would be 2).
+  if (width == 6 && height == 6) return !hasW();
   if (!((width == 1 || width == 2) && (height == 1 || height == 2 || height == 4 || height == 8)))
     return false;
+  // With W a fourth colour (CFAPlaneColor R, G, B, W) dcraw relabels no greens: `filters` holds
+  // the tile as it is.
+  if (hasW()) return true;
   // dcraw (dcraw.c 9.28, identify() and main()) holds the tile as `filters`, 2 bits for each
   // of 8 rows x 2 columns, relabels some greens as a fourth colour (the bit operation below),
   // then moves those back to green only at every other row (from row FC(1,0) >> 1) and every
@@ -60,7 +69,7 @@ CfaPattern parseCfa(const std::string& text, const FileLoc& loc) {
   }
   auto bad = [&](const std::string& why) {
     throw Error(loc, fmt::format("\"cfa\": \"{}\" {}; expected \"mono\" or the filters' letters "
-                                 "R, G, B row by row, rows separated by '/' (\"RG/GB\") or a "
+                                 "R, G, B, W row by row, rows separated by '/' (\"RG/GB\") or a "
                                  "square tile (\"RGGB\"), at most 8x8",
                                  text, why));
   };
@@ -90,12 +99,9 @@ CfaPattern parseCfa(const std::string& text, const FileLoc& loc) {
     if (int(r.size()) != p.width)
       bad(fmt::format("has rows of {} and {} letters", p.width, r.size()));
     for (char c : r) {
-      if (c == 'W')
-        bad("has a W (panchromatic) filter, which lensim does not model: its film records "
-            "three channels");
-      const char* at = std::strchr("RGB", c);
+      const char* at = std::strchr("RGBW", c);
       if (c == 0 || !at) bad(fmt::format("has the letter '{}'", c));
-      p.colors.push_back(uint8_t(at - "RGB"));
+      p.colors.push_back(uint8_t(at - "RGBW"));
     }
   }
   for (uint8_t c = 0; c < 3; ++c)
@@ -109,8 +115,8 @@ void checkDngCfa(const CfaPattern& cfa, const FileLoc& loc) {
     throw Error(loc, fmt::format("\"cfa\": a DNG of the {}x{} pattern \"{}\" would be misread by "
                                  "dcraw, which holds a CFA as 8 rows of 2 columns with its "
                                  "second greens placed as in a Bayer pattern, or as a 6x6 "
-                                 "X-Trans; expected such a tile (1 or 2 pixels wide, 1, 2, 4 or 8 "
-                                 "high), a 6x6 one, or an .exr output",
+                                 "X-Trans of R, G, B; expected such a tile (1 or 2 pixels wide, "
+                                 "1, 2, 4 or 8 high), a 6x6 one without W, or an .exr output",
                                  cfa.width, cfa.height, cfa.text()));
 }
 

@@ -11,26 +11,31 @@
 
 namespace lensim::scene {
 
-/// A colour filter array: a width x height tile of filters (0 red, 1 green, 2 blue), row-major,
-/// repeated over the full image from its top-left pixel; or a monochrome sensor (no filters).
+/// A colour filter array: a width x height tile of filters (0 red, 1 green, 2 blue, 3 W: no colour
+/// filter, panchromatic), row-major, repeated over the full image from its top-left pixel; or a
+/// monochrome sensor (no filters).
 struct CfaPattern {
+  static constexpr uint8_t kW = 3;  ///< the W (panchromatic) filter's channel
   int width = 2, height = 2;
   std::vector<uint8_t> colors{0, 1, 1, 2};
   bool mono = false;
-  /// The filter (0 red, 1 green, 2 blue; 0 for mono) over pixel (x, y) of the full image.
+  /// The filter (0 red, 1 green, 2 blue, 3 W; 0 for mono) over pixel (x, y) of the full image.
   int channel(int x, int y) const;
+  /// Whether the tile has W (panchromatic) pixels.
+  bool hasW() const;
   /// The pattern as scenes write it: "mono", or the rows' letters joined by '/' ("RG/GB").
   std::string text() const;
   /// Whether a DNG of this pattern is read right by dcraw and LibRaw, which hold a CFA as 8 rows
   /// of 2 columns (`filters`) or as Fujifilm's 6x6 X-Trans: a tile 1 or 2 pixels wide and 1, 2, 4
-  /// or 8 high, or 6x6.
+  /// or 8 high (with R, G, B only, one whose greens dcraw does not misplace), or 6x6 without W.
   bool dngReadable() const;
   bool operator==(const CfaPattern&) const = default;
 };
 
-/// Parses a CFA: "mono"; or the filters' letters R, G, B row by row, rows separated by '/'
-/// ("RGGB/GBRG"), or without '/' a square tile ("RGGB" is 2x2, 16 letters 4x4); at most 8x8,
-/// every colour at least once. Throws lensim::Error at loc naming the bad value otherwise.
+/// Parses a CFA: "mono"; or the filters' letters R, G, B (and W, panchromatic) row by row, rows
+/// separated by '/' ("RGGB/GBRG"), or without '/' a square tile ("RGGB" is 2x2, 16 letters 4x4);
+/// at most 8x8, each of R, G and B at least once. Throws lensim::Error at loc naming the bad value
+/// otherwise.
 CfaPattern parseCfa(const std::string& text, const FileLoc& loc = {});
 
 /// Throws lensim::Error at loc if a DNG cannot hold `cfa` so that dcraw and LibRaw read it

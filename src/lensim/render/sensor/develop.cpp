@@ -10,6 +10,8 @@ namespace lensim::render {
 
 namespace {
 
+constexpr int kWhite = 6;  // DNG CFAPattern code of a white (W) pixel
+
 int mirror(int i, int n) {
   // Reflection about the first and last pixel keeps a pixel's CFA parity.
   while (i < 0 || i >= n) i = i < 0 ? -i : 2 * (n - 1) - i;
@@ -58,7 +60,8 @@ io::Image developRaw(const io::DngImage& raw, double exposure_ev) {
       const size_t i = size_t(y) * size_t(w) + size_t(x);
       double v = (double(raw.data[i]) - black) / range;
       if (!raw.mono) {
-        const double n = raw.as_shot_neutral[size_t(channel(x, y))];
+        const int c = channel(x, y);
+        const double n = c == kWhite ? raw.w_neutral : raw.as_shot_neutral[size_t(c)];
         v /= n > 0 ? n : 1;
       }
       m[i] = v;
@@ -87,7 +90,8 @@ io::Image developRaw(const io::DngImage& raw, double exposure_ev) {
                       (p[1] == 1 && p[2] == 1 && p[0] + p[3] == 2 && p[0] != p[3]));
   if (!bayer) {
     // Another pattern: each missing channel is the tent-weighted mean of that channel's pixels
-    // around (normalised convolution), over a window that holds at least one of them.
+    // around (normalised convolution), over a window that holds at least one of them. W pixels
+    // (no colour filter) hold no R, G or B value of their own: all three come from around.
     const int r0 = std::max(1, (std::max(cw, ch) + 1) / 2);
     auto mean = [&](int c, int x, int y) {
       for (int r = r0;; r *= 2) {

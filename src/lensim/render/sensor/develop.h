@@ -4,10 +4,11 @@
 //   2. white balance: each CFA channel divided by its AsShotNeutral component;
 //   3. demosaic: Malvar, He and Cutler, "High-quality linear interpolation for demosaicing of
 //      Bayer-patterned color images" (ICASSP 2004), 5x5 gradient-corrected kernels, the image
-//      mirrored at its edges, for a 2x2 Bayer pattern (greens on a diagonal); for another pattern each missing channel
-//      is the tent-weighted mean of that channel's pixels in a window about the pixel
-//      (normalised convolution, weight (r + 1 - |dx|)(r + 1 - |dy|), r half the pattern's
-//      larger side, rounded up);
+//      mirrored at its edges, for a 2x2 Bayer pattern (greens on a diagonal); for another pattern
+//      each missing channel is the tent-weighted mean of that channel's pixels in a window about
+//      the pixel (normalised convolution, weight (r + 1 - |dx|)(r + 1 - |dy|), r half the pattern's
+//      larger side, rounded up); W (white) pixels are not used: R, G and B come from their own
+//      pixels around;
 //   4. colour: camera to linear sRGB through the DNG's ColorMatrix (D65, else the only one), as
 //      dcraw does: cam_from_rgb = ColorMatrix x XYZ_from_sRGB, rows normalised to sum 1 (so the
 //      balanced neutral stays neutral), inverted;

@@ -151,7 +151,9 @@ void writeRawImage(const std::string& path, const io::Image& image, int x0, int 
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         for (int c = 0; c < 3; ++c) out.at(x, y, c) = image.at(x, y, c);
-        out.at(x, y, 3) = image.at(x, y, cfaChannel(model.cfa(), x0 + x, y0 + y));
+        out.at(x, y, 3) = float(SensorModel::channelElectrons(
+            cfaChannel(model.cfa(), x0 + x, y0 + y),
+            {image.at(x, y, 0), image.at(x, y, 1), image.at(x, y, 2)}));
         out.at(x, y, 4) = float(dn[size_t(y) * size_t(w) + size_t(x)]);
       }
     io::writeImage(path, out);
@@ -171,8 +173,10 @@ void writeRawImage(const std::string& path, const io::Image& image, int x0, int 
     d.cfa_height = cfa.height;
     d.cfa.clear();
     for (int y = 0; y < d.cfa_height; ++y)
-      for (int x = 0; x < d.cfa_width; ++x)
-        d.cfa.push_back(uint8_t(cfa.channel(x0 + x, y0 + y)));
+      for (int x = 0; x < d.cfa_width; ++x) {
+        const int c = cfa.channel(x0 + x, y0 + y);
+        d.cfa.push_back(uint8_t(c == CfaPattern::kW ? 6 : c));  // TIFF/EP: 6 white
+      }
   }
   d.bits = cfg.adc_bits;
   d.black_level = uint32_t(cfg.black_level_dn);
@@ -184,6 +188,9 @@ void writeRawImage(const std::string& path, const io::Image& image, int x0, int 
     std::copy(col.forward_matrix1.begin(), col.forward_matrix1.end(), d.forward_matrix1.begin());
     std::copy(col.forward_matrix2.begin(), col.forward_matrix2.end(), d.forward_matrix2.begin());
     d.as_shot_neutral = {col.as_shot_neutral.x, col.as_shot_neutral.y, col.as_shot_neutral.z};
+    d.w_color_row1 = {col.w_color_row1.x, col.w_color_row1.y, col.w_color_row1.z};
+    d.w_color_row2 = {col.w_color_row2.x, col.w_color_row2.y, col.w_color_row2.z};
+    d.w_neutral = col.w_neutral;
     d.illuminant1 = DngColor::kIlluminant1;
     d.illuminant2 = DngColor::kIlluminant2;
   }

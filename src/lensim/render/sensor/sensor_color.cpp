@@ -91,6 +91,12 @@ DngColor fitDngColor(const SensorModel& m, double white_balance_k) {
   const ConstantOne one;
   const Vec3 n = cameraResponse(m, ProductSpectrum(one, *wb));
   d.as_shot_neutral = n / std::max({n.x, n.y, n.z});
+  auto rowSum = [](const Mat3d& m) {
+    return Vec3{m[0] + m[3] + m[6], m[1] + m[4] + m[7], m[2] + m[5] + m[8]};
+  };
+  d.w_color_row1 = rowSum(d.color_matrix1);
+  d.w_color_row2 = rowSum(d.color_matrix2);
+  d.w_neutral = d.as_shot_neutral.x + d.as_shot_neutral.y + d.as_shot_neutral.z;
   return d;
 }
 

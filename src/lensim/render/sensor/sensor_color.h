@@ -16,6 +16,10 @@ struct DngColor {
   Mat3d color_matrix1, color_matrix2;      ///< XYZ -> camera, for illuminant A (1), D65 (2)
   Mat3d forward_matrix1, forward_matrix2;  ///< neutral-balanced camera -> XYZ (D50)
   Vec3 as_shot_neutral;                    ///< camera RGB of white, max 1
+  /// A W (panchromatic) plane's ColorMatrix1/2 rows and AsShotNeutral entry: W's response is
+  /// R + G + B (SensorModel::qe), so each is the sum of the R, G and B ones, on their scale.
+  Vec3 w_color_row1, w_color_row2;
+  double w_neutral = 1;
   static constexpr int kIlluminant1 = 17;  ///< EXIF LightSource: standard light A
   static constexpr int kIlluminant2 = 21;  ///< D65
 };

@@ -164,7 +164,12 @@ SensorModel::SensorModel(SensorConfig config, const FileLoc& loc, const std::str
     }
     for (auto& t : raw)
       for (double& v : t.v) v *= config_.peak_qe / peak;
-    if (cfa_.mono) raw = {raw[1], SpectralTable{}, SpectralTable{}};
+    // A monochrome sensor has no colour filters: its QE is the W curve, the sum of the three.
+    if (cfa_.mono) {
+      SpectralTable sum = raw[0];
+      for (size_t i = 0; i < sum.v.size(); ++i) sum.v[i] += raw[1].v[i] + raw[2].v[i];
+      raw = {sum, SpectralTable{}, SpectralTable{}};
+    }
   } else {
     std::vector<SpectralTable> t;
     try {
@@ -200,6 +205,31 @@ SensorModel::SensorModel(SensorConfig config, const FileLoc& loc, const std::str
     }
     resp_[c] = tabulate([&](double l) { return qe_[c].eval(l) * photonsPerUnit(l); });
   }
+  // The W (or bundled monochrome) curve, a sum of curves, must stay a fraction.
+  if (cfa_.hasW() || cfa_.mono) {
+    for (int l = kTableMin; l <= kTableMax; ++l) {
+      const double w = qe(cfa_.mono ? 0 : CfaPattern::kW, l);
+      if (w > 1 + 1e-12)
+        throw Error(loc, fmt::format("\"cfa\" \"{}\" with \"qe\" \"{}\" (peak {}): the {} "
+                                     "quantum efficiency, the sum of the R, G and B curves, is "
+                                     "{:.4g} at {} nm; expected at most 1 (lower \"peakqe\" or "
+                                     "the QE file's curves)",
+                                     cfa_.text(), config_.qe, config_.peak_qe,
+                                     cfa_.mono ? "monochrome" : "W", w, l));
+    }
+  }
+}
+
+double SensorModel::qe(int c, double lambda_nm) const {
+  if (c == CfaPattern::kW)
+    return qe_[0].eval(lambda_nm) + qe_[1].eval(lambda_nm) + qe_[2].eval(lambda_nm);
+  return qe_[size_t(c)].eval(lambda_nm);
+}
+
+double SensorModel::electronsPerUnit(int c, double lambda_nm) const {
+  if (c == CfaPattern::kW)
+    return resp_[0].eval(lambda_nm) + resp_[1].eval(lambda_nm) + resp_[2].eval(lambda_nm);
+  return resp_[size_t(c)].eval(lambda_nm);
 }
 
 double SensorModel::photonsPerUnit(double lambda_nm) const {
@@ -242,7 +272,7 @@ std::pair<double, double> SensorModel::fixedPattern(int x, int y) const {
 
 uint16_t SensorModel::digitize(int x, int y, const std::array<double, 3>& e) const {
   const SensorConfig& c = config_;
-  const double signal = std::max(0.0, e[size_t(cfaChannel(cfa_, x, y))]);
+  const double signal = std::max(0.0, channelElectrons(cfaChannel(cfa_, x, y), e));
   const auto [gain, offset] = fixedPattern(x, y);
   const double mean = signal * gain + c.darkCurrent() * c.exposure_s;
   double n = mean + offset, read = 0;

@@ -27,7 +27,7 @@ namespace lensim::render {
 
 using scene::CfaPattern;
 using scene::parseCfa;
-/// The channel (0 red, 1 green, 2 blue; 0 for mono) of pixel (x, y) of the full image.
+/// The channel (0 red, 1 green, 2 blue, 3 W; 0 for mono) of pixel (x, y) of the full image.
 inline int cfaChannel(const CfaPattern& cfa, int x, int y) { return cfa.channel(x, y); }
 
 using scene::SensorConfig;
@@ -46,16 +46,24 @@ class SensorModel {
                        const std::string* qe_text = nullptr);
   const SensorConfig& config() const { return config_; }
   const CfaPattern& cfa() const { return cfa_; }
-  /// Quantum efficiency of channel c at lambda, including the IR-cut filter.
-  double qe(int c, double lambda_nm) const { return qe_[size_t(c)].eval(lambda_nm); }
+  /// Quantum efficiency of channel c (0 red, 1 green, 2 blue, 3 W) at lambda, including the
+  /// IR-cut filter. W (a pixel without a colour filter) is the sum of the R, G and B curves, so a
+  /// W pixel's electrons are the sum of the film's three channels: the film, its split-render
+  /// parts and lensim merge keep three channels whatever the CFA.
+  double qe(int c, double lambda_nm) const;
   /// Expected photo-electrons per channel (noise free, no PRNU) of a pixel whose film value is
   /// the spectrum L carried by lambda (Monte Carlo estimate over lambda's samples).
   std::array<double, 3> expectedElectrons(const SampledSpectrum& L,
                                           const SampledWavelengths& lambda) const;
   /// The same for a spectrum known everywhere (integrated at 1 nm over 360-830 nm).
   std::array<double, 3> expectedElectrons(const Spectrum& s) const;
-  /// Electrons per unit of film value at lambda for channel c (what expectedElectrons integrates).
-  double electronsPerUnit(int c, double lambda_nm) const { return resp_[size_t(c)].eval(lambda_nm); }
+  /// Electrons per unit of film value at lambda for channel c (what expectedElectrons integrates;
+  /// channel 3, W, the sum of the three).
+  double electronsPerUnit(int c, double lambda_nm) const;
+  /// The expected electrons of channel c (0-2, or 3: W, their sum) from the three channels'.
+  static double channelElectrons(int c, const std::array<double, 3>& e) {
+    return c == CfaPattern::kW ? e[0] + e[1] + e[2] : e[size_t(c)];
+  }
   /// Photons reaching the pixel's collecting area per unit film value at lambda, per nm.
   double photonsPerUnit(double lambda_nm) const;
 
