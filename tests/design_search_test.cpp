@@ -114,8 +114,42 @@ TEST(DesignStoppingRule, WindowRuleStopsACrawlAndNamesIt) {
   EXPECT_NE(r2.stop_reason, r.stop_reason);
 }
 
+// A design job with a global search: no worse than the plain run from the same lens (the first
+// start is that run), and the same lens again from the same seed.
+TEST(DesignGlobalSearch, DesignJobKeepsTheBestStartReproducibly) {
+  fs::path dir =
+      fs::temp_directory_path() / ("lensim_design_g_" + std::to_string(std::random_device{}()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "singlet.dat") << "0 5 1 20\n80 4 1.5168 30\n-120 90 1 30\n";
+  auto job = [&](const std::string& global) {
+    std::ofstream(dir / "job.json")
+        << "{\"lens\": \"singlet.dat\", \"max_iterations\": 30" << global << ",\n"
+        << " \"variables\": [{\"type\": \"curvature\", \"surface\": 1}, {\"type\": \"curvature\", "
+           "\"surface\": 2},\n"
+        << "   {\"type\": \"thickness\", \"surface\": 2, \"min\": 50, \"max\": 150}],\n"
+        << " \"operands\": [{\"type\": \"efl\", \"target\": 100, \"weight\": 1000}, {\"type\": "
+           "\"rms_spot\", \"weight\": 100}]}";
+    return readDesignJob((dir / "job.json").string());
+  };
+  const DesignResult plain = optimiseDesign(job(""));
+  std::vector<std::string> log;
+  const DesignResult g = optimiseDesign(job(", \"global\": {\"starts\": 4, \"seed\": 3}"),
+                                        [&](const std::string& s) { log.push_back(s); });
+  EXPECT_LE(g.merit, plain.merit * (1 + 1e-12));
+  int start_lines = 0;
+  for (const auto& l : log) start_lines += l.rfind("optimise start", 0) == 0;
+  EXPECT_EQ(start_lines, 4);
+  const DesignResult again = optimiseDesign(job(", \"global\": {\"starts\": 4, \"seed\": 3}"));
+  for (size_t i = 0; i < g.lens.surfaces.size(); ++i) {
+    EXPECT_EQ(again.lens.surfaces[i].radius_mm, g.lens.surfaces[i].radius_mm);
+    EXPECT_EQ(again.lens.surfaces[i].thickness_mm, g.lens.surfaces[i].thickness_mm);
+  }
+  fs::remove_all(dir);
+}
+
 TEST(DesignGlobalSearch, JobKeyIsParsedAndChecked) {
-  fs::path dir = fs::temp_directory_path() / ("lensim_design_g_" + std::to_string(std::random_device{}()));
+  fs::path dir =
+      fs::temp_directory_path() / ("lensim_design_g_" + std::to_string(std::random_device{}()));
   fs::create_directories(dir);
   std::ofstream(dir / "singlet.dat") << "0 5 1 20\n80 4 1.5168 30\n-120 90 1 30\n";
   auto job = [&](const std::string& g) {
@@ -134,7 +168,8 @@ TEST(DesignGlobalSearch, JobKeyIsParsedAndChecked) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(err("{\"starts\": 0}").find("job.json:2:2: error: \"starts\" 0 must be an integer 1 to 10000"),
+  EXPECT_NE(err("{\"starts\": 0}")
+                .find("job.json:2:2: error: \"starts\" 0 must be an integer 1 to 10000"),
             std::string::npos)
       << err("{\"starts\": 0}");
   EXPECT_NE(err("{\"starts\": 2, \"sead\": 1}").find("unknown key \"sead\""), std::string::npos);

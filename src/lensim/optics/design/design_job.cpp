@@ -120,11 +120,13 @@ Variable parseVariable(const json& e, const FileLoc& loc, const LensPrescription
 Operand parseOperand(const json& e, const FileLoc& loc, const LensPrescription& p) {
   Operand o;
   o.loc = loc;
-  checkKeys(e, loc, {"type", "target", "weight", "min", "max", "field_deg", "wavelength_nm",
-                     "surface", "frequency", "azimuth"});
+  checkKeys(e, loc,
+            {"type", "target", "weight", "min", "max", "field_deg", "wavelength_nm", "surface",
+             "frequency", "azimuth"});
   static const std::vector<std::string> kinds = {
-      "efl", "f_number", "bfl", "total_track", "rms_spot", "distortion", "lateral_color",
-      "longitudinal_color", "thickness", "image_height", "rms_wavefront", "mtf"};
+      "efl",       "f_number",     "bfl",           "total_track",
+      "rms_spot",  "distortion",   "lateral_color", "longitudinal_color",
+      "thickness", "image_height", "rms_wavefront", "mtf"};
   const std::string t = kindOf(e, loc, kinds);
   o.kind = static_cast<Operand::Kind>(std::find(kinds.begin(), kinds.end(), t) - kinds.begin());
   o.weight = number(e, "weight", loc, 1.0);
@@ -136,12 +138,13 @@ Operand parseOperand(const json& e, const FileLoc& loc, const LensPrescription& 
     throw Error(loc, "give either \"target\" or limits (\"min\", \"max\"), not both");
   if (o.min && o.max && !(*o.min <= *o.max))
     throw Error(loc, fmt::format("\"min\" {} must not exceed \"max\" {}", *o.min, *o.max));
-  const bool zero_target = o.kind == Operand::Kind::RmsSpot || o.kind == Operand::Kind::RmsWavefront;
+  const bool zero_target =
+      o.kind == Operand::Kind::RmsSpot || o.kind == Operand::Kind::RmsWavefront;
   if (o.kind == Operand::Kind::Mtf) {
     o.frequency = number(e, "frequency", loc);
     if (!(o.frequency > 0 && o.frequency <= 5000))
       throw Error(loc, fmt::format("\"frequency\" {} must be in (0, 5000] cycles/mm", o.frequency));
-    const std::string az = !e.contains("azimuth")        ? "tangential"
+    const std::string az = !e.contains("azimuth")     ? "tangential"
                            : e["azimuth"].is_string() ? e["azimuth"].get<std::string>()
                                                       : e["azimuth"].dump();
     if (az != "tangential" && az != "sagittal")
@@ -281,9 +284,9 @@ const char* variableKindName(Variable::Kind k) {
 }
 
 const char* operandKindName(Operand::Kind k) {
-  static const char* names[] = {"efl", "f_number", "bfl", "total_track", "rms_spot", "distortion",
-                                "lateral_color", "longitudinal_color", "thickness", "image_height",
-                                "rms_wavefront", "mtf"};
+  static const char* names[] = {"efl",       "f_number",     "bfl",           "total_track",
+                                "rms_spot",  "distortion",   "lateral_color", "longitudinal_color",
+                                "thickness", "image_height", "rms_wavefront", "mtf"};
   return names[static_cast<int>(k)];
 }
 
@@ -320,8 +323,9 @@ DesignJob parseDesignJob(std::string_view text, const std::string& path) {
   }
   if (!j.is_object()) throw Error(FileLoc{path, 1, 1}, "a design job must be a JSON object");
   const FileLoc top{path, 1, 1};
-  checkKeys(j, top, {"$schema", "lens", "wavelengths_nm", "fields_deg", "rings", "variables",
-                     "operands", "snap_glass", "max_iterations", "tolerancing", "global"});
+  checkKeys(j, top,
+            {"$schema", "lens", "wavelengths_nm", "fields_deg", "rings", "variables", "operands",
+             "snap_glass", "max_iterations", "tolerancing", "global"});
   DesignJob job;
   job.path = path;
   if (!j.contains("lens") || !j["lens"].is_string())
@@ -355,7 +359,8 @@ DesignJob parseDesignJob(std::string_view text, const std::string& path) {
   if (j.contains("global")) {
     const json& g = j["global"];
     const FileLoc gl = keyLoc(text, "global", path);
-    if (!g.is_object()) throw Error(gl, "\"global\" must be an object: {\"starts\": N, \"seed\": S}");
+    if (!g.is_object())
+      throw Error(gl, "\"global\" must be an object: {\"starts\": N, \"seed\": S}");
     checkKeys(g, gl, {"starts", "seed"});
     const double n = number(g, "starts", gl);
     if (n != std::floor(n) || n < 1 || n > 10000)
@@ -371,7 +376,8 @@ DesignJob parseDesignJob(std::string_view text, const std::string& path) {
                                        [&](const json& e, const FileLoc& l) { return parseVariable(e, l, p); });
   std::vector<Operand> ops = parseArray<Operand>(
       j, "operands", text, path, [&](const json& e, const FileLoc& l) { return parseOperand(e, l, p); });
-  // An RMS spot or wavefront without a field or wavelength stands for every field and wavelength of the job.
+  // An RMS spot or wavefront without a field or wavelength stands for every field and wavelength of
+  // the job.
   const auto offs = arrayElementOffsets(text, "operands");
   for (size_t i = 0; i < ops.size(); ++i) {
     const json& e = j["operands"][i];
@@ -497,7 +503,8 @@ SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double 
   // Weighted moments of the hit (x, y) and of the slopes (u, v) = d(x, y)/dz.
   double sw = 0, sx = 0, sy = 0, su = 0, sv = 0, sxx = 0, sxu = 0, suu = 0;
   for (const PupilPoint& q : hexapolarPupil(region, rings)) {
-    const TraceResult r = lens.tracer().traceFromScene(beam.sceneRay(q.offset_mm), TraceOptions{false});
+    const TraceResult r =
+        lens.tracer().traceFromScene(beam.sceneRay(q.offset_mm), TraceOptions{false});
     if (!r.ok() || !(r.ray.direction.z > 0))
       throw Error(fmt::format("a ray of the {} deg beam does not reach the film", field_deg));
     const double t = (film_z - r.ray.origin.z) / r.ray.direction.z;

@@ -116,8 +116,8 @@ double mtfAt(const LensPrescription& p, double field_deg, const std::vector<doub
   std::complex<double> otf = 0;
   for (double nm : lambdas_nm) {
     const LensSystem lens = beam.fl.lens->atWavelength(nm);
-    auto pf = computePupilFunction(lens, beam.bundle, beam.primary.filmZ_mm(), beam.image_point,
-                                   nm, 0, 0.25, 512, 128);
+    auto pf = computePupilFunction(lens, beam.bundle, beam.primary.filmZ_mm(), beam.image_point, nm,
+                                   0, 0.25, 512, 128);
     if (!pf) throw Error(fmt::format("no ray of the {} deg beam gets through", field_deg));
     otf += fourierOptics(*pf).otfAlongAxis(frequency, sagittal);
   }

@@ -232,7 +232,8 @@ LmResult multiStartLevenbergMarquardt(const ResidualFn& f, const std::vector<dou
       if (std::abs(lo) < 1e299 && std::abs(hi) < 1e299) {
         v = lo + (hi - lo) * u;
       } else {
-        const double s = global.spread * std::max(std::abs(x0[j]), global.scales.empty() ? 1.0 : global.scales[j]);
+        const double s = global.spread *
+                         std::max(std::abs(x0[j]), global.scales.empty() ? 1.0 : global.scales[j]);
         v = x0[j] + s * (2 * u - 1);
       }
       xs[k][j] = std::clamp(v, lo, hi);
