@@ -11,6 +11,7 @@
 #include <fstream>
 #include <numbers>
 #include <random>
+#include <thread>
 
 #include "lensim/optics/design/design_job.h"
 #include "lensim/optics/lens_formats.h"
@@ -146,6 +147,19 @@ TEST(DesignWavefrontOperand, OptimisationFindsTheFocus) {
     std::printf("%s: film %.6f mm (focus %.1f), %d iterations, %s\n", op,
                 r.lens.surfaces[2].thickness_mm, kFocus, r.iterations, r.stop_reason.c_str());
   }
+}
+
+// The Jacobian evaluates operands from several threads at once: the MTF's FFTs (whose planner is
+// not thread-safe) must give the serial values.
+TEST(DesignMtfOperand, ConcurrentEvaluationsMatchTheSerialOne) {
+  PerfectLens s("{\"type\": \"mtf\", \"frequency\": 120, \"target\": 1}");
+  const double serial = operandValues(s.job, s.lens)[0];
+  std::vector<double> got(8, -1);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 8; ++t)
+    threads.emplace_back([&, t] { got[t] = operandValues(s.job, s.lens)[0]; });
+  for (std::thread& t : threads) t.join();
+  for (double v : got) EXPECT_EQ(v, serial);
 }
 
 TEST(DesignMtfOperand, JobErrorsNameTheValue) {
