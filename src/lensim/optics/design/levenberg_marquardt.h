@@ -63,7 +63,8 @@ LmResult levenbergMarquardt(const ResidualFn& f, std::vector<double> x0,
 /// within them, else x0_j +- spread * max(|x0_j|, scales_j) uniformly, clamped to its bounds.
 /// The starts run in parallel (TBB); each draws from its own generator seeded by (seed, start),
 /// so a seed reproduces the run exactly whatever the scheduling. The result with the lowest
-/// merit is kept (the lowest start index on a tie). `progress` of opts is not called (the
+/// merit is kept (the lowest start index on a tie), its evaluations counting every start's, its
+/// initial merit the given start's. `progress` of opts is not called (the
 /// starts run concurrently); `on_start` (may be empty) is called once per start, in start order,
 /// after all have finished.
 struct GlobalOptions {
