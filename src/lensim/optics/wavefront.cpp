@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 
 namespace lensim::optics {
@@ -202,6 +203,28 @@ std::optional<PupilFunction> computePupilFunction(const LensSystem& lens, const 
   return pf;
 }
 
+namespace {
+
+// FFTW's planner is not thread-safe (only fftw_execute is): plans are made and destroyed under
+// this lock, so pupil functions can be transformed concurrently (the design operands evaluate
+// them from parallel Jacobian columns).
+std::mutex& fftwPlannerMutex() {
+  static std::mutex m;
+  return m;
+}
+
+fftw_plan planDft2d(int m, fftw_complex* buf, int sign) {
+  std::lock_guard<std::mutex> lock(fftwPlannerMutex());
+  return fftw_plan_dft_2d(m, m, buf, buf, sign, FFTW_ESTIMATE);
+}
+
+void destroyPlan(fftw_plan p) {
+  std::lock_guard<std::mutex> lock(fftwPlannerMutex());
+  fftw_destroy_plan(p);
+}
+
+}  // namespace
+
 FourierOptics fourierOptics(const PupilFunction& pf) {
   const int n = pf.n, m = 2 * n;
   const double lambda_mm = pf.wavelength_nm * 1e-6;
@@ -211,7 +234,7 @@ FourierOptics fourierOptics(const PupilFunction& pf) {
   fo.frequency_step = pf.step / lambda_mm;
   const size_t mm = size_t(m) * m;
   auto* buf = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * mm));
-  fftw_plan plan = fftw_plan_dft_2d(m, m, buf, buf, FFTW_BACKWARD, FFTW_ESTIMATE);
+  fftw_plan plan = planDft2d(m, buf, FFTW_BACKWARD);
   // The pupil, placed so that its centre cell sits at index 0 (a linear phase only moves the
   // PSF; this keeps P' at index 0 of the transform).
   std::fill(reinterpret_cast<double*>(buf), reinterpret_cast<double*>(buf) + 2 * mm, 0.0);
@@ -255,13 +278,13 @@ FourierOptics fourierOptics(const PupilFunction& pf) {
     buf[k][0] = raw[k];
     buf[k][1] = 0;
   }
-  fftw_plan fwd = fftw_plan_dft_2d(m, m, buf, buf, FFTW_FORWARD, FFTW_ESTIMATE);
+  fftw_plan fwd = planDft2d(m, buf, FFTW_FORWARD);
   fftw_execute(fwd);
   fo.otf.resize(mm);
   const double o0 = buf[0][0];
   for (size_t k = 0; k < mm; ++k) fo.otf[k] = {buf[k][0] / o0, buf[k][1] / o0};
-  fftw_destroy_plan(fwd);
-  fftw_destroy_plan(plan);
+  destroyPlan(fwd);
+  destroyPlan(plan);
   fftw_free(buf);
   return fo;
 }

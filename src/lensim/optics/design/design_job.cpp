@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "lensim/optics/chief_ray.h"
+#include "lensim/optics/design/image_quality.h"
 #include "lensim/optics/field_rays.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/glass.h"
@@ -119,11 +120,13 @@ Variable parseVariable(const json& e, const FileLoc& loc, const LensPrescription
 Operand parseOperand(const json& e, const FileLoc& loc, const LensPrescription& p) {
   Operand o;
   o.loc = loc;
-  checkKeys(e, loc, {"type", "target", "weight", "min", "max", "field_deg", "wavelength_nm",
-                     "surface"});
+  checkKeys(e, loc,
+            {"type", "target", "weight", "min", "max", "field_deg", "wavelength_nm", "surface",
+             "frequency", "azimuth"});
   static const std::vector<std::string> kinds = {
-      "efl", "f_number", "bfl", "total_track", "rms_spot", "distortion", "lateral_color",
-      "longitudinal_color", "thickness", "image_height"};
+      "efl",       "f_number",     "bfl",           "total_track",
+      "rms_spot",  "distortion",   "lateral_color", "longitudinal_color",
+      "thickness", "image_height", "rms_wavefront", "mtf"};
   const std::string t = kindOf(e, loc, kinds);
   o.kind = static_cast<Operand::Kind>(std::find(kinds.begin(), kinds.end(), t) - kinds.begin());
   o.weight = number(e, "weight", loc, 1.0);
@@ -135,7 +138,21 @@ Operand parseOperand(const json& e, const FileLoc& loc, const LensPrescription& 
     throw Error(loc, "give either \"target\" or limits (\"min\", \"max\"), not both");
   if (o.min && o.max && !(*o.min <= *o.max))
     throw Error(loc, fmt::format("\"min\" {} must not exceed \"max\" {}", *o.min, *o.max));
-  const bool zero_target = o.kind == Operand::Kind::RmsSpot;
+  const bool zero_target =
+      o.kind == Operand::Kind::RmsSpot || o.kind == Operand::Kind::RmsWavefront;
+  if (o.kind == Operand::Kind::Mtf) {
+    o.frequency = number(e, "frequency", loc);
+    if (!(o.frequency > 0 && o.frequency <= 5000))
+      throw Error(loc, fmt::format("\"frequency\" {} must be in (0, 5000] cycles/mm", o.frequency));
+    const std::string az = !e.contains("azimuth")     ? "tangential"
+                           : e["azimuth"].is_string() ? e["azimuth"].get<std::string>()
+                                                      : e["azimuth"].dump();
+    if (az != "tangential" && az != "sagittal")
+      throw Error(loc, fmt::format("\"azimuth\" \"{}\": expected tangential or sagittal", az));
+    o.sagittal = az == "sagittal";
+  } else if (e.contains("frequency") || e.contains("azimuth")) {
+    throw Error(loc, "\"frequency\" and \"azimuth\" belong to mtf operands");
+  }
   if (o.kind == Operand::Kind::Thickness) {
     if (!limits) throw Error(loc, "a thickness operand needs \"min\" and/or \"max\" (mm)");
     o.surface = surfaceIndex(e, loc, p);
@@ -243,23 +260,6 @@ std::vector<double> numberArray(const json& j, const char* key, std::string_view
   return out;
 }
 
-// The lens the operands are evaluated on: every clear aperture but the stop's doubled, within the
-// surface's extent (floating apertures; the chief-ray searches scale with the largest aperture,
-// so not unbounded), the film at the last thickness.
-FocusedLens evaluationLens(LensPrescription p) {
-  for (LensSurface& s : p.surfaces) {
-    if (s.isStop()) continue;
-    const double extent = sagDomainRadius(s.radius_mm, s.shape);
-    s.aperture_diameter_mm = std::min(2 * 0.999 * extent, 2 * s.aperture_diameter_mm);
-  }
-  LensSetup setup;
-  if (!(p.fileFilmDistance_mm() > 0))
-    throw Error(fmt::format("the film distance (last thickness) {} mm must be > 0",
-                            p.fileFilmDistance_mm()));
-  setup.film_distance_mm = p.fileFilmDistance_mm();
-  return focusLens(std::move(p), setup);
-}
-
 double totalTrack(const LensPrescription& p) {
   double t = 0;
   for (const LensSurface& s : p.surfaces) t += s.thickness_mm;
@@ -288,14 +288,22 @@ const char* variableKindName(Variable::Kind k) {
 }
 
 const char* operandKindName(Operand::Kind k) {
-  static const char* names[] = {"efl", "f_number", "bfl", "total_track", "rms_spot", "distortion",
-                                "lateral_color", "longitudinal_color", "thickness", "image_height"};
+  static const char* names[] = {"efl",       "f_number",     "bfl",           "total_track",
+                                "rms_spot",  "distortion",   "lateral_color", "longitudinal_color",
+                                "thickness", "image_height", "rms_wavefront", "mtf"};
   return names[static_cast<int>(k)];
 }
 
 std::string Operand::label() const {
   switch (kind) {
-    case Kind::RmsSpot: return fmt::format("rms_spot({:g} deg, {:g} nm)", field_deg, wavelength_nm);
+    case Kind::RmsSpot:
+    case Kind::RmsWavefront:
+      return fmt::format("{}({:g} deg, {:g} nm)", operandKindName(kind), field_deg, wavelength_nm);
+    case Kind::Mtf:
+      return wavelength_nm > 0 ? fmt::format("mtf({:g} c/mm, {:g} deg, {}, {:g} nm)", frequency,
+                                             field_deg, sagittal ? "sag" : "tan", wavelength_nm)
+                               : fmt::format("mtf({:g} c/mm, {:g} deg, {})", frequency, field_deg,
+                                             sagittal ? "sag" : "tan");
     case Kind::Distortion:
     case Kind::LateralColor:
     case Kind::ImageHeight: return fmt::format("{}({:g} deg)", operandKindName(kind), field_deg);
@@ -319,8 +327,9 @@ DesignJob parseDesignJob(std::string_view text, const std::string& path) {
   }
   if (!j.is_object()) throw Error(FileLoc{path, 1, 1}, "a design job must be a JSON object");
   const FileLoc top{path, 1, 1};
-  checkKeys(j, top, {"$schema", "lens", "wavelengths_nm", "fields_deg", "rings", "variables",
-                     "operands", "snap_glass", "max_iterations", "tolerancing"});
+  checkKeys(j, top,
+            {"$schema", "lens", "wavelengths_nm", "fields_deg", "rings", "variables", "operands",
+             "snap_glass", "max_iterations", "tolerancing", "global"});
   DesignJob job;
   job.path = path;
   if (!j.contains("lens") || !j["lens"].is_string())
@@ -351,16 +360,32 @@ DesignJob parseDesignJob(std::string_view text, const std::string& path) {
   if (job.max_iterations < 0 || job.max_iterations > 100000)
     throw Error(keyLoc(text, "max_iterations", path), "\"max_iterations\" must be 0 to 100000");
   job.snap_glass = j.value("snap_glass", true);
+  if (j.contains("global")) {
+    const json& g = j["global"];
+    const FileLoc gl = keyLoc(text, "global", path);
+    if (!g.is_object())
+      throw Error(gl, "\"global\" must be an object: {\"starts\": N, \"seed\": S}");
+    checkKeys(g, gl, {"starts", "seed"});
+    const double n = number(g, "starts", gl);
+    if (n != std::floor(n) || n < 1 || n > 10000)
+      throw Error(gl, fmt::format("\"starts\" {} must be an integer 1 to 10000", n));
+    job.global_starts = static_cast<int>(n);
+    const double seed = number(g, "seed", gl, 1.0);
+    if (seed != std::floor(seed) || seed < 0 || seed > 9.0e15)
+      throw Error(gl, fmt::format("\"seed\" {} must be a non-negative integer", seed));
+    job.global_seed = static_cast<std::uint64_t>(seed);
+  }
   const LensPrescription& p = job.start;
   job.variables = parseArray<Variable>(j, "variables", text, path,
                                        [&](const json& e, const FileLoc& l) { return parseVariable(e, l, p); });
   std::vector<Operand> ops = parseArray<Operand>(
       j, "operands", text, path, [&](const json& e, const FileLoc& l) { return parseOperand(e, l, p); });
-  // An RMS spot without a field or wavelength stands for every field and wavelength of the job.
+  // An RMS spot or wavefront without a field or wavelength stands for every field and wavelength of
+  // the job.
   const auto offs = arrayElementOffsets(text, "operands");
   for (size_t i = 0; i < ops.size(); ++i) {
     const json& e = j["operands"][i];
-    if (ops[i].kind != Operand::Kind::RmsSpot) {
+    if (ops[i].kind != Operand::Kind::RmsSpot && ops[i].kind != Operand::Kind::RmsWavefront) {
       job.operands.push_back(ops[i]);
       continue;
     }
@@ -473,13 +498,7 @@ SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double 
   const FocusedLens fl = evaluationLens(p);
   const LensSystem prim = fl.lens->atWavelength(primary_nm);
   const ParaxialData pp = computeParaxial(prim);
-  auto chief = chiefRayFromScene(prim, pp, field_deg);
-  if (!chief) throw Error(fmt::format("no real chief ray at {} deg", field_deg));
-  Vec3 d = normalize(chief->scene_ray.direction);
-  if (d.z < 0) d = -d;
-  const Ray& c = chief->scene_ray;
-  const double t_ep = (pp.entrance_pupil_z_mm - c.origin.z) / c.direction.z;
-  const Vec3 centre = c.origin + c.direction * t_ep;
+  const FieldBundle beam = fieldBundle(prim, pp, field_deg);
   FieldBundle::PupilRegion region;
   region.centre = {0, 0};
   region.radius.assign(4, pp.entrance_pupil_diameter_mm / 2);
@@ -488,9 +507,8 @@ SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double 
   // Weighted moments of the hit (x, y) and of the slopes (u, v) = d(x, y)/dz.
   double sw = 0, sx = 0, sy = 0, su = 0, sv = 0, sxx = 0, sxu = 0, suu = 0;
   for (const PupilPoint& q : hexapolarPupil(region, rings)) {
-    const Vec3 aim = centre + Vec3{q.offset_mm.x, q.offset_mm.y, 0};
-    const double back = (aim.z + 10 * pp.entrance_pupil_diameter_mm + 10) / d.z;
-    const TraceResult r = lens.tracer().traceFromScene({aim - d * back, d}, TraceOptions{false});
+    const TraceResult r =
+        lens.tracer().traceFromScene(beam.sceneRay(q.offset_mm), TraceOptions{false});
     if (!r.ok() || !(r.ray.direction.z > 0))
       throw Error(fmt::format("a ray of the {} deg beam does not reach the film", field_deg));
     const double t = (film_z - r.ray.origin.z) / r.ray.direction.z;
@@ -545,6 +563,14 @@ std::vector<double> operandValues(const DesignJob& job, const LensPrescription& 
         break;
       case Operand::Kind::Thickness: v = p.surfaces[o.surface].thickness_mm; break;
       case Operand::Kind::ImageHeight: v = chiefHeight(*fl.lens, par, o.field_deg); break;
+      case Operand::Kind::RmsWavefront:
+        v = rmsWavefront_waves(p, o.field_deg, o.wavelength_nm, primary);
+        break;
+      case Operand::Kind::Mtf:
+        v = mtfAt(p, o.field_deg,
+                  o.wavelength_nm > 0 ? std::vector<double>{o.wavelength_nm} : job.wavelengths_nm,
+                  primary, o.frequency, o.sagittal);
+        break;
     }
     if (!std::isfinite(v)) throw Error(fmt::format("{} is not finite", o.label()));
     out.push_back(v);

@@ -47,14 +47,18 @@ struct Operand {
     LongitudinalColor,  ///< paraxial back focus at F minus at C (mm)
     Thickness,          ///< centre thickness after a surface (mm), a limit
     ImageHeight,        ///< real chief-ray image height (mm) at a field
+    RmsWavefront,       ///< RMS wave aberration (waves), tilt removed, at a field and wavelength
+    Mtf,  ///< diffraction MTF at a frequency, field and azimuth (wavelength, or all polychromatic)
   };
   Kind kind = Kind::Efl;
   double target = 0;
   double weight = 1;
   std::optional<double> min, max;  ///< limits instead of a target
   double field_deg = 0;
-  double wavelength_nm = 0;  ///< RmsSpot
+  double wavelength_nm = 0;  ///< RmsSpot, RmsWavefront, Mtf (0: Mtf over every wavelength)
   int surface = 0;           ///< Thickness
+  double frequency = 0;      ///< Mtf, cycles/mm
+  bool sagittal = false;     ///< Mtf: sagittal (else tangential)
   FileLoc loc;
   /// "efl", "rms_spot(field 14 deg, 486.1 nm)", ...
   std::string label() const;
@@ -95,6 +99,10 @@ struct DesignJob {
   std::vector<Operand> operands;
   bool snap_glass = true;
   int max_iterations = 50;
+  /// Global search ("global": {"starts", "seed"}): multi-start damped least squares
+  /// (multiStartLevenbergMarquardt); starts 1 is the plain local run.
+  int global_starts = 1;
+  std::uint64_t global_seed = 1;
   ToleranceSpec tolerance;
 };
 

@@ -3,10 +3,13 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include <cstdint>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "lensim/util/error.h"
 
@@ -120,6 +123,7 @@ LmResult levenbergMarquardt(const ResidualFn& f, std::vector<double> x0,
   res.merit = res.initial_merit = sumSquares(res.residuals);
   double lambda = opts.initial_lambda;
   int small_steps = 0;
+  std::vector<double> history{res.merit};  // merit after each iteration, the start first
   std::vector<double> jac, jtj(static_cast<size_t>(n) * n), jtr(n), dx, xt, rt;
   for (int it = 0; it < opts.max_iterations; ++it) {
     if (res.merit <= opts.absolute_tolerance) {
@@ -175,13 +179,98 @@ LmResult levenbergMarquardt(const ResidualFn& f, std::vector<double> x0,
       res.stop_reason = "no step lowers the merit (a minimum within the bounds)";
       return res;
     }
+    history.push_back(res.merit);
     if (small_steps >= 2) {
       res.stop_reason = "merit change below the relative tolerance";
       return res;
     }
+    if (opts.window > 0 && static_cast<int>(history.size()) > opts.window) {
+      const double before = history[history.size() - 1 - opts.window];
+      if (before - res.merit < opts.window_tolerance * before) {
+        res.stop_reason = fmt::format("merit fell by less than {:g} over the last {} iterations",
+                                      opts.window_tolerance, opts.window);
+        return res;
+      }
+    }
   }
   res.stop_reason = fmt::format("iteration limit ({})", opts.max_iterations);
   return res;
+}
+
+namespace {
+
+// SplitMix64: a small, well-mixed generator; one stream per (seed, start).
+struct SplitMix64 {
+  std::uint64_t state;
+  std::uint64_t next() {
+    std::uint64_t z = (state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
+};
+
+}  // namespace
+
+LmResult multiStartLevenbergMarquardt(const ResidualFn& f, const std::vector<double>& x0,
+                                      const std::vector<double>& lower,
+                                      const std::vector<double>& upper, const LmOptions& opts,
+                                      const GlobalOptions& global) {
+  const int n = static_cast<int>(x0.size());
+  if (global.starts < 1) throw Error("multiStartLevenbergMarquardt: starts must be >= 1");
+  if (!global.scales.empty() && static_cast<int>(global.scales.size()) != n)
+    throw Error("multiStartLevenbergMarquardt: scales do not match the variables");
+  std::vector<std::vector<double>> xs(global.starts, x0);
+  for (int k = 1; k < global.starts; ++k) {
+    SplitMix64 rng{global.seed * 0x2545f4914f6cdd1dULL + static_cast<std::uint64_t>(k)};
+    rng.next();
+    for (int j = 0; j < n; ++j) {
+      const double lo = lower.empty() ? -1e300 : lower[j], hi = upper.empty() ? 1e300 : upper[j];
+      const double u = rng.uniform();
+      double v;
+      if (std::abs(lo) < 1e299 && std::abs(hi) < 1e299) {
+        v = lo + (hi - lo) * u;
+      } else {
+        const double s = global.spread *
+                         std::max(std::abs(x0[j]), global.scales.empty() ? 1.0 : global.scales[j]);
+        v = x0[j] + s * (2 * u - 1);
+      }
+      xs[k][j] = std::clamp(v, lo, hi);
+    }
+  }
+  LmOptions quiet = opts;
+  quiet.progress = nullptr;
+  std::vector<std::optional<LmResult>> results(global.starts);
+  std::vector<std::string> errors(global.starts);
+  tbb::parallel_for(0, global.starts, [&](int k) {
+    try {
+      results[k] = levenbergMarquardt(f, xs[k], lower, upper, quiet);
+    } catch (const Error& e) {
+      errors[k] = e.message();  // a random start the merit cannot be evaluated at
+    }
+  });
+  if (!results[0]) throw Error(errors[0]);
+  int best = 0;
+  for (int k = 0; k < global.starts; ++k) {
+    if (global.on_start) {
+      if (results[k]) {
+        global.on_start(k, xs[k], *results[k]);
+      } else {
+        LmResult failed;
+        failed.x = xs[k];
+        failed.stop_reason = "the start cannot be evaluated: " + errors[k];
+        failed.merit = failed.initial_merit = std::numeric_limits<double>::infinity();
+        global.on_start(k, xs[k], failed);
+      }
+    }
+    if (results[k] && results[k]->merit < results[best]->merit) best = k;
+  }
+  LmResult out = *results[best];
+  for (int k = 0; k < global.starts; ++k)
+    if (k != best && results[k]) out.evaluations += results[k]->evaluations;
+  out.initial_merit = results[0]->initial_merit;
+  return out;
 }
 
 }  // namespace lensim::optics::design

@@ -4,11 +4,14 @@
 // Minimises the merit sum_i r_i(x)^2 over x inside [lower, upper]. Each iteration solves
 // (J^T J + lambda diag(J^T J)) dx = -J^T r (Marquardt's scaling, so the step does not depend on
 // the variables' units), clamps x + dx to the bounds, and accepts the step when the merit falls
-// (lambda /= 3) or rejects it (lambda *= 10). The Jacobian is by central differences (one
+// (lambda /= 3) or rejects it (lambda *= 10). It stops when the merit fell by less than
+// window_tolerance (relative) over the last `window` iterations, when no step lowers it, or at the
+// iteration limit. The Jacobian is by central differences (one
 // residual evaluation per side and variable, all concurrent); a side that fails or leaves the
 // bounds falls back to a one-sided difference.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -23,6 +26,12 @@ struct LmOptions {
   int max_iterations = 100;
   /// Stop when an accepted step lowers the merit by less than this fraction, twice in a row.
   double relative_tolerance = 1e-10;
+  /// Stop when the merit fell by less than window_tolerance (relative) over the last `window`
+  /// iterations: a merit that crawls down a shallow valley (a lens near its optimum, the
+  /// Jacobian's finite differences limiting the steps) stops there instead of at the limit.
+  /// 1e-4 of the merit is 5e-5 of the RMS residual. window 0: off.
+  int window = 10;
+  double window_tolerance = 1e-4;
   /// Stop when the merit is below this.
   double absolute_tolerance = 1e-30;
   double initial_lambda = 1e-3;
@@ -48,6 +57,27 @@ struct LmResult {
 LmResult levenbergMarquardt(const ResidualFn& f, std::vector<double> x0,
                             const std::vector<double>& lower, const std::vector<double>& upper,
                             const LmOptions& opts = {});
+
+/// Multi-start global search: `starts` runs of levenbergMarquardt, the first from x0 and the
+/// others from random points: a variable with both bounds finite (|bound| < 1e299) uniform
+/// within them, else x0_j +- spread * max(|x0_j|, scales_j) uniformly, clamped to its bounds.
+/// The starts run in parallel (TBB); each draws from its own generator seeded by (seed, start),
+/// so a seed reproduces the run exactly whatever the scheduling. The result with the lowest
+/// merit is kept (the lowest start index on a tie), its evaluations counting every start's, its
+/// initial merit the given start's. `progress` of opts is not called (the
+/// starts run concurrently); `on_start` (may be empty) is called once per start, in start order,
+/// after all have finished.
+struct GlobalOptions {
+  int starts = 1;
+  std::uint64_t seed = 1;
+  double spread = 0.5;
+  std::vector<double> scales;  ///< per variable (empty: 1)
+  std::function<void(int start, const std::vector<double>& x_start, const LmResult&)> on_start;
+};
+LmResult multiStartLevenbergMarquardt(const ResidualFn& f, const std::vector<double>& x0,
+                                      const std::vector<double>& lower,
+                                      const std::vector<double>& upper, const LmOptions& opts,
+                                      const GlobalOptions& global);
 
 /// The Jacobian (row-major, m x n) by central differences at x, evaluated in parallel; returns
 /// false when a column cannot be evaluated on either side.

@@ -26,6 +26,20 @@ double fdStep(const Variable& v, double x) {
   return 1e-7;
 }
 
+// The scale of a variable's random perturbation in a global search when it is not bounded on
+// both sides: a 100 mm radius, 1 mm, a conic of 1, an aspheric term's r^p at r = 10 mm.
+double searchScale(const Variable& v) {
+  switch (v.kind) {
+    case Variable::Kind::Curvature: return 1e-2;
+    case Variable::Kind::Thickness: return 1;
+    case Variable::Kind::Conic: return 1;
+    case Variable::Kind::Asphere: return std::pow(10.0, -v.power);
+    case Variable::Kind::GlassIndex: return 0.1;
+    case Variable::Kind::GlassAbbe: return 10;
+  }
+  return 1;
+}
+
 }  // namespace
 
 DesignResult optimiseDesign(const DesignJob& job,
@@ -35,7 +49,7 @@ DesignResult optimiseDesign(const DesignJob& job,
   };
   DesignResult out;
   out.lens = job.start;
-  auto stage = [&](const std::vector<Variable>& vars, const char* name) {
+  auto stage = [&](const std::vector<Variable>& vars, const char* name, int starts) {
     const LensPrescription base = out.lens;
     ResidualFn f = [&](const std::vector<double>& x, std::vector<double>& r) {
       try {
@@ -78,7 +92,20 @@ DesignResult optimiseDesign(const DesignJob& job,
                               "that reach the film)",
                               job.path, e.message()));
     }
-    const LmResult res = levenbergMarquardt(f, x0, lo, hi, opts);
+    LmResult res;
+    if (starts > 1) {
+      GlobalOptions g;
+      g.starts = starts;
+      g.seed = job.global_seed;
+      for (const Variable& v : vars) g.scales.push_back(searchScale(v));
+      g.on_start = [&](int k, const std::vector<double>&, const LmResult& r) {
+        say(fmt::format("{} start {:3d}  merit {:.6e} -> {:.6e} in {} iterations ({})", name, k,
+                        r.initial_merit, r.merit, r.iterations, r.stop_reason));
+      };
+      res = multiStartLevenbergMarquardt(f, x0, lo, hi, opts, g);
+    } else {
+      res = levenbergMarquardt(f, x0, lo, hi, opts);
+    }
     out.lens = applyVariables(vars, base, res.x);
     if (out.iterations == 0) out.initial_merit = res.initial_merit;
     out.merit = res.merit;
@@ -95,7 +122,7 @@ DesignResult optimiseDesign(const DesignJob& job,
     out.initial_merit = out.merit = m;
     out.stop_reason = "no variables";
   } else {
-    stage(job.variables, "optimise");
+    stage(job.variables, "optimise", job.global_starts);
   }
   // Model glasses to the nearest catalogue glasses, then the other variables again.
   std::vector<Variable> rest;
@@ -125,7 +152,7 @@ DesignResult optimiseDesign(const DesignJob& job,
       s.glass.v_d = g.listed_v_d;
       s.ior = g.listed_n_d;
     }
-    if (!rest.empty()) stage(rest, "re-optimise");
+    if (!rest.empty()) stage(rest, "re-optimise", 1);
   }
   out.values = operandValues(job, out.lens);
   out.merit = 0;
