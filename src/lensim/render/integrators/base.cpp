@@ -20,6 +20,14 @@
 
 namespace lensim::render {
 
+Vec3 materialShadingNormal(const SceneContext& sc, int material, const TextureEvalContext& tctx,
+                           const SurfaceHit& h) {
+  Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
+  if (sc.materials->hasBump(material))
+    ns = sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+  return ns;
+}
+
 SampledSpectrum RayIntegrator::Li(const camera::CameraRay* ray, double /*time*/,
                                   SampledWavelengths& lambda, Sampler& sampler,
                                   RayCounts& counts, Film& /*film*/,

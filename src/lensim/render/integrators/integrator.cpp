@@ -126,9 +126,7 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, dou
     }
     if (depth++ == sc.max_depth) break;
     auto bxdf = sc.materials->bxdf(material, tctx, lambda, sc.regularize && any_non_specular);
-    Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
-    if (sc.materials->hasBump(material))
-      ns = sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+    const Vec3 ns = materialShadingNormal(sc, material, tctx, h);
     const BSDF bsdf(ns, h.dpdu, bxdf);
     // Next-event estimation.
     const double u_light = sampler.get1D();

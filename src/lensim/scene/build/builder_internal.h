@@ -97,6 +97,7 @@ class Builder {
   void attribute(const Directive& d);
 
   void camera(const Directive& d);
+  LegacyRealistic legacyRealistic(const Directive& d, ParamSet& ps);
 
   void checkSensor(ParamSet& ps, const Film& f);
 
