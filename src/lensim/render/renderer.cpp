@@ -584,6 +584,38 @@ void finishImage(const RenderOptions& opt, const scene::Scene& scene, RenderResu
   if (st.partial) md["lensim:partial"] = "true";
 }
 
+/// Lens flare (docs/flare.md, "Rendering ghosts"): checks that the render can carry it and
+/// turns on the film's ghost layer.
+void enableFlare(const scene::Scene& scene, const RenderOptions& opt, const Integrator& integrator,
+                 Film& film) {
+  // Camera paths only, into the ghost layer of an RGB film, rendered whole.
+  const FileLoc& loc = scene.camera.loc;
+  if (integrator.splats() || integrator.tracesLightPaths())
+    throw Error(loc, fmt::format("realistic camera: \"flare\" is rendered by the path, volpath "
+                                 "and directlighting integrators, not \"{}\"",
+                                 scene.integrator.type));
+  if (scene.film.type != "rgb")
+    throw Error(loc, fmt::format("realistic camera: \"flare\" needs Film \"rgb\" (its ghost "
+                                 "layer), not \"{}\"",
+                                 scene.film.type));
+  if (opt.keep_sums || opt.resume || opt.on_checkpoint)
+    throw Error(loc,
+                "realistic camera: \"flare\" renders cannot be written as parts or "
+                "checkpointed (the ghost layer is not kept in the exact sums)");
+  film.enableGhostLayer();
+}
+
+/// The sample and ray counts of the render into its statistics.
+void addCounts(RenderStats& st, const SharedTally& tally) {
+  st.camera_samples = tally.samples;
+  st.camera_rays = tally.rays;
+  st.ghost_rays = tally.ghost_rays;
+  st.no_ray_samples = tally.no_ray;
+  st.outside_samples = tally.outside;
+  st.nonfinite_samples = tally.nonfinite;
+  st.rays = tally.traced;
+}
+
 }  // namespace
 
 RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
@@ -621,24 +653,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   setup.refuses_splats = splatRefusal(opt);
   const std::unique_ptr<Integrator> integrator = makeIntegrator(setup);
   if (integrator->splats()) film.enableSplats(*filter);
-  if (cam->flare()) {
-    // Lens flare (docs/flare.md, "Rendering ghosts"): camera paths only, into the ghost layer
-    // of an RGB film, rendered whole.
-    const FileLoc& loc = scene.camera.loc;
-    if (integrator->splats() || integrator->tracesLightPaths())
-      throw Error(loc, fmt::format("realistic camera: \"flare\" is rendered by the path, volpath "
-                                   "and directlighting integrators, not \"{}\"",
-                                   scene.integrator.type));
-    if (scene.film.type != "rgb")
-      throw Error(loc, fmt::format("realistic camera: \"flare\" needs Film \"rgb\" (its ghost "
-                                   "layer), not \"{}\"",
-                                   scene.film.type));
-    if (opt.keep_sums || opt.resume || opt.on_checkpoint)
-      throw Error(loc,
-                  "realistic camera: \"flare\" renders cannot be written as parts or "
-                  "checkpointed (the ghost layer is not kept in the exact sums)");
-    film.enableGhostLayer();
-  }
+  if (cam->flare()) enableFlare(scene, opt, *integrator, film);
   // Film "gbuffer" (pbrt-v4's GBufferFilm): its coordinate system and the differential scale
   // pbrt-v4 applies to camera rays, max(1/8, 1/sqrt(samples per pixel)).
   const GBufferFrame gbuffer_frame(scene);
@@ -739,13 +754,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   if (opt.on_checkpoint) opt.on_checkpoint(snapshot(film, done, grid));
 
   st.wall_s = std::chrono::duration<double>(Clock::now() - background.start()).count();
-  st.camera_samples = tally.samples;
-  st.camera_rays = tally.rays;
-  st.ghost_rays = tally.ghost_rays;
-  st.no_ray_samples = tally.no_ray;
-  st.outside_samples = tally.outside;
-  st.nonfinite_samples = tally.nonfinite;
-  st.rays = tally.traced;
+  addCounts(st, tally);
   st.partial = cancelled.load() || tiles_done.load() < n_tiles || pass_begin < spp_end;
   st.invalid_rays = world->accel.invalidRays();
   result.image = film.image();

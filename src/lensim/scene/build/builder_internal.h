@@ -87,6 +87,8 @@ class Builder {
   Input floatInput(ParamSet& ps, ParamSet::Names names, double def);
 
   void directive(const Directive& d);
+  bool transformDirective(const Directive& d);
+  void materialDirective(const Directive& d);
 
   void popState(bool transform_only);
 
