@@ -77,7 +77,8 @@ struct TileGrid {
   int count() const { return tiles_x * tiles_y; }
   /// Tile t's pixels, relative to bounds' corner.
   PixelBounds local(int t) const {
-    CHECK(t >= 0 && t < count());
+    LENSIM_CHECK_GE(t, 0);
+    LENSIM_CHECK_LT(t, count());
     const int tx = t % tiles_x, ty = t / tiles_x;
     return {tx * kTile, std::min(bounds.width(), (tx + 1) * kTile), ty * kTile,
             std::min(bounds.height(), (ty + 1) * kTile)};

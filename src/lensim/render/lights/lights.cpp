@@ -18,6 +18,7 @@
 #include "lensim/render/textures/textures.h"
 #include "lensim/sampling/equal_area.h"
 #include "lensim/scene/builder.h"
+#include "lensim/util/check.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
 
@@ -680,6 +681,10 @@ const Light* LightSet::areaLight(int shape, int prim) const {
 std::optional<LightSet::Choice> LightSet::sample(const LightSampleContext& ctx, double u) const {
   auto s = sampler_->sample(ctx, u);
   if (!s || s->pmf <= 0) return std::nullopt;
+  // A light of this set, chosen with a probability.
+  LENSIM_DCHECK_GE(s->light->index, 0);
+  LENSIM_DCHECK_LT(size_t(s->light->index), lights_.size());
+  LENSIM_DCHECK_LE(s->pmf, 1 + 1e-9);
   return Choice{s->light, s->pmf};
 }
 
