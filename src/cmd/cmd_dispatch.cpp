@@ -118,6 +118,154 @@ std::string yamlString(const std::string& s) {
   return nlohmann::json(s).dump();
 }
 
+/// The render arguments of each part (--tile I/N or --spp-range A:B). Loads the scene (from
+/// the workdir when it is reachable) to check it and to plan the split before anything is
+/// submitted.
+std::vector<std::string> partArguments(const Options& o) {
+  std::string local_scene = o.scene;
+  if (fs::path(o.scene).is_relative() && fs::exists(fs::path(o.workdir) / o.scene))
+    local_scene = (fs::path(o.workdir) / o.scene).string();
+  const scene::Scene s = scene::loadScene(local_scene);
+  render::RenderOptions ro;
+  if (o.spp > 0) ro.spp = o.spp;
+  if (o.has_seed) ro.seed = o.seed;
+  const render::RenderPlan plan = render::planRender(s, ro);
+  std::vector<std::string> part_args;
+  for (int i = 0; i < o.jobs; ++i) {
+    if (o.split == "tiles") {
+      render::tileBounds(plan.full_bounds, i, o.jobs);  // throws if they do not fit
+      part_args.push_back(fmt::format("--tile {}/{}", i, o.jobs));
+    } else {
+      if (o.jobs > plan.spp)
+        throw Error(fmt::format("--jobs {}: more sample slices than the {} samples per pixel",
+                                o.jobs, plan.spp));
+      const int a = int((long long)i * plan.spp / o.jobs);
+      const int b = int((long long)(i + 1) * plan.spp / o.jobs);
+      part_args.push_back(fmt::format("--spp-range {}:{}", a, b));
+    }
+  }
+  return part_args;
+}
+
+/// Writes the Slurm array job of the parts, the merge job and the script that submits both;
+/// returns their paths.
+std::vector<std::string> writeSlurmJobs(const Options& o,
+                                        const std::vector<std::string>& part_args,
+                                        const std::string& name) {
+  const std::string threads =
+      o.threads > 0 ? std::to_string(o.threads) : "\"${SLURM_CPUS_PER_TASK:-0}\"";
+  std::string r = "#!/bin/bash\n";
+  r += fmt::format("# lensim dispatch: render {} as {} parts ({}); submit with submit.sh.\n",
+                   o.scene, o.jobs, o.split);
+  r += fmt::format("#SBATCH --job-name=lensim-{}\n", name);
+  r += fmt::format("#SBATCH --array=0-{}\n", o.jobs - 1);
+  r +=
+      fmt::format("#SBATCH --output={}/logs/part-%a.log\n", fs::absolute(o.outdir).string());
+  r += "#SBATCH --open-mode=append\n#SBATCH --requeue\n";
+  if (o.cpus_per_task > 0)
+    r += fmt::format("#SBATCH --cpus-per-task={}\n", o.cpus_per_task);
+  if (!o.partition.empty()) r += fmt::format("#SBATCH --partition={}\n", o.partition);
+  if (!o.time_limit.empty()) r += fmt::format("#SBATCH --time={}\n", o.time_limit);
+  r += renderScript(o, part_args, "SLURM_ARRAY_TASK_ID", threads);
+  std::string m = "#!/bin/bash\n";
+  m += "# lensim dispatch: merges the parts once the array job has succeeded.\n";
+  m += fmt::format("#SBATCH --job-name=lensim-{}-merge\n", name);
+  m += fmt::format("#SBATCH --output={}/logs/merge.log\n", fs::absolute(o.outdir).string());
+  if (!o.partition.empty()) m += fmt::format("#SBATCH --partition={}\n", o.partition);
+  m += mergeScript(o, false);
+  std::string sub = "#!/bin/bash\n";
+  sub += "# Submits the render array job and the merge that waits for it to succeed.\n";
+  sub += "set -euo pipefail\ncd \"$(dirname \"$0\")\"\n";
+  sub += "array=$(sbatch --parsable render.sbatch)\narray=${array%%;*}\n";
+  sub += "merge=$(sbatch --parsable --dependency=afterok:\"$array\" merge.sbatch)\n";
+  sub += "merge=${merge%%;*}\n";
+  sub += "echo \"lensim: submitted render array job $array and merge job $merge\"\n";
+  sub += "echo \"$array $merge\" > jobids\n";
+  const fs::path dir(o.outdir);
+  writeExecutable((dir / "render.sbatch").string(), r);
+  writeExecutable((dir / "merge.sbatch").string(), m);
+  writeExecutable((dir / "submit.sh").string(), sub);
+  return {(dir / "render.sbatch").string(), (dir / "merge.sbatch").string(),
+          (dir / "submit.sh").string()};
+}
+
+/// Writes job.yaml: an Indexed Job of the parts and a Job that merges them once every part
+/// file is on the volume; returns its path.
+std::vector<std::string> writeKubernetesJobs(const Options& o,
+                                             const std::vector<std::string>& part_args,
+                                             const std::string& name) {
+  const std::string threads = o.threads > 0 ? std::to_string(o.threads) : "0";
+  const nlohmann::json render_cmd = {
+      "/bin/sh", "-c", renderScript(o, part_args, "JOB_COMPLETION_INDEX", threads)};
+  const nlohmann::json merge_cmd = {"/bin/sh", "-c", mergeScript(o, true)};
+  auto container = [&](const std::string& cname, const nlohmann::json& cmd) {
+    std::string c;
+    c += fmt::format("        - name: {}\n", cname);
+    c += fmt::format("          image: {}\n", yamlString(o.image));
+    c += fmt::format("          command: {}\n", cmd.dump());
+    if (!o.cpu_request.empty())
+      c += fmt::format(
+          "          resources:\n            requests:\n              cpu: "
+          "{}\n",
+          yamlString(o.cpu_request));
+    c += fmt::format(
+        "          volumeMounts:\n            - name: data\n              "
+        "mountPath: {}\n",
+        yamlString(o.workdir));
+    return c;
+  };
+  const std::string volumes = fmt::format(
+      "      volumes:\n        - name: data\n          persistentVolumeClaim:\n"
+      "            claimName: {}\n",
+      yamlString(o.pvc));
+  std::string y;
+  y += fmt::format("# lensim dispatch: render {} as {} parts ({}) and merge them.\n",
+                   o.scene, o.jobs, o.split);
+  y +=
+      "# kubectl apply -f job.yaml; the merge Job waits for every part file on the volume.\n";
+  y += "apiVersion: batch/v1\nkind: Job\nmetadata:\n";
+  y += fmt::format("  name: lensim-{}\n", name);
+  y += "  labels:\n    app.kubernetes.io/name: lensim\n";
+  y += "spec:\n  completionMode: Indexed\n";
+  y += fmt::format("  completions: {}\n  parallelism: {}\n", o.jobs,
+                   o.parallelism > 0 ? o.parallelism : o.jobs);
+  y += fmt::format("  backoffLimit: {}\n", 3 * o.jobs);
+  y += "  template:\n    metadata:\n      labels:\n        app.kubernetes.io/name: lensim\n";
+  y += "    spec:\n      restartPolicy: OnFailure\n      containers:\n";
+  y += container("render", render_cmd);
+  y += volumes;
+  y += "---\napiVersion: batch/v1\nkind: Job\nmetadata:\n";
+  y += fmt::format("  name: lensim-{}-merge\n", name);
+  y += "  labels:\n    app.kubernetes.io/name: lensim\n";
+  y += "spec:\n  backoffLimit: 3\n  template:\n";
+  y += "    metadata:\n      labels:\n        app.kubernetes.io/name: lensim\n";
+  y += "    spec:\n      restartPolicy: OnFailure\n      containers:\n";
+  y += container("merge", merge_cmd);
+  y += volumes;
+  const std::string path = (fs::path(o.outdir) / "job.yaml").string();
+  writeFileAtomically(path, y);
+  return {path};
+}
+
+/// `lensim dispatch`: fills in the default workdir and output, plans the parts and writes the
+/// job files.
+int runDispatch(Options& o) {
+  const bool slurm = o.engine == "slurm";
+  if (o.workdir.empty()) o.workdir = slurm ? fs::current_path().string() : "/data";
+  if (o.output.empty())
+    o.output = (fs::path(o.outdir) / (fs::path(o.scene).stem().string() + ".exr")).string();
+  const std::vector<std::string> part_args = partArguments(o);
+  render::parseDuration(o.checkpoint_every);
+  fs::create_directories(fs::path(o.outdir) / "logs");
+  fs::create_directories(fs::path(o.outdir) / "parts");
+  const std::string name = dnsLabel(fs::path(o.scene).stem().string());
+  const std::vector<std::string> written = slurm ? writeSlurmJobs(o, part_args, name)
+                                                : writeKubernetesJobs(o, part_args, name);
+  if (!lensim::quiet())
+    for (const std::string& w : written) logInfo(fmt::format("wrote {}", w));
+  return 0;
+}
+
 }  // namespace
 
 void registerDispatchCommand(CLI::App& app, Action& action) {
@@ -163,133 +311,7 @@ void registerDispatchCommand(CLI::App& app, Action& action) {
   d->add_option("--cpu", o->cpu_request, "Kubernetes: CPU request per part (e.g. 8)");
   d->callback([o, seed, &action]() {
     o->has_seed = seed->count() > 0;
-    action = [o]() -> int {
-      const bool slurm = o->engine == "slurm";
-      if (o->workdir.empty()) o->workdir = slurm ? fs::current_path().string() : "/data";
-      if (o->output.empty())
-        o->output = (fs::path(o->outdir) / (fs::path(o->scene).stem().string() + ".exr")).string();
-      // Load the scene here (from the workdir when it is reachable) to check it and to plan the
-      // split before anything is submitted.
-      std::string local_scene = o->scene;
-      if (fs::path(o->scene).is_relative() && fs::exists(fs::path(o->workdir) / o->scene))
-        local_scene = (fs::path(o->workdir) / o->scene).string();
-      const scene::Scene s = scene::loadScene(local_scene);
-      render::RenderOptions ro;
-      if (o->spp > 0) ro.spp = o->spp;
-      if (o->has_seed) ro.seed = o->seed;
-      const render::RenderPlan plan = render::planRender(s, ro);
-      std::vector<std::string> part_args;
-      for (int i = 0; i < o->jobs; ++i) {
-        if (o->split == "tiles") {
-          render::tileBounds(plan.full_bounds, i, o->jobs);  // throws if they do not fit
-          part_args.push_back(fmt::format("--tile {}/{}", i, o->jobs));
-        } else {
-          if (o->jobs > plan.spp)
-            throw Error(fmt::format("--jobs {}: more sample slices than the {} samples per pixel",
-                                    o->jobs, plan.spp));
-          const int a = int((long long)i * plan.spp / o->jobs);
-          const int b = int((long long)(i + 1) * plan.spp / o->jobs);
-          part_args.push_back(fmt::format("--spp-range {}:{}", a, b));
-        }
-      }
-      render::parseDuration(o->checkpoint_every);
-      fs::create_directories(fs::path(o->outdir) / "logs");
-      fs::create_directories(fs::path(o->outdir) / "parts");
-      const std::string name = dnsLabel(fs::path(o->scene).stem().string());
-      std::vector<std::string> written;
-      if (slurm) {
-        const std::string threads =
-            o->threads > 0 ? std::to_string(o->threads) : "\"${SLURM_CPUS_PER_TASK:-0}\"";
-        std::string r = "#!/bin/bash\n";
-        r += fmt::format("# lensim dispatch: render {} as {} parts ({}); submit with submit.sh.\n",
-                         o->scene, o->jobs, o->split);
-        r += fmt::format("#SBATCH --job-name=lensim-{}\n", name);
-        r += fmt::format("#SBATCH --array=0-{}\n", o->jobs - 1);
-        r +=
-            fmt::format("#SBATCH --output={}/logs/part-%a.log\n", fs::absolute(o->outdir).string());
-        r += "#SBATCH --open-mode=append\n#SBATCH --requeue\n";
-        if (o->cpus_per_task > 0)
-          r += fmt::format("#SBATCH --cpus-per-task={}\n", o->cpus_per_task);
-        if (!o->partition.empty()) r += fmt::format("#SBATCH --partition={}\n", o->partition);
-        if (!o->time_limit.empty()) r += fmt::format("#SBATCH --time={}\n", o->time_limit);
-        r += renderScript(*o, part_args, "SLURM_ARRAY_TASK_ID", threads);
-        std::string m = "#!/bin/bash\n";
-        m += "# lensim dispatch: merges the parts once the array job has succeeded.\n";
-        m += fmt::format("#SBATCH --job-name=lensim-{}-merge\n", name);
-        m += fmt::format("#SBATCH --output={}/logs/merge.log\n", fs::absolute(o->outdir).string());
-        if (!o->partition.empty()) m += fmt::format("#SBATCH --partition={}\n", o->partition);
-        m += mergeScript(*o, false);
-        std::string sub = "#!/bin/bash\n";
-        sub += "# Submits the render array job and the merge that waits for it to succeed.\n";
-        sub += "set -euo pipefail\ncd \"$(dirname \"$0\")\"\n";
-        sub += "array=$(sbatch --parsable render.sbatch)\narray=${array%%;*}\n";
-        sub += "merge=$(sbatch --parsable --dependency=afterok:\"$array\" merge.sbatch)\n";
-        sub += "merge=${merge%%;*}\n";
-        sub += "echo \"lensim: submitted render array job $array and merge job $merge\"\n";
-        sub += "echo \"$array $merge\" > jobids\n";
-        const fs::path dir(o->outdir);
-        writeExecutable((dir / "render.sbatch").string(), r);
-        writeExecutable((dir / "merge.sbatch").string(), m);
-        writeExecutable((dir / "submit.sh").string(), sub);
-        written = {(dir / "render.sbatch").string(), (dir / "merge.sbatch").string(),
-                   (dir / "submit.sh").string()};
-      } else {
-        const std::string threads = o->threads > 0 ? std::to_string(o->threads) : "0";
-        const nlohmann::json render_cmd = {
-            "/bin/sh", "-c", renderScript(*o, part_args, "JOB_COMPLETION_INDEX", threads)};
-        const nlohmann::json merge_cmd = {"/bin/sh", "-c", mergeScript(*o, true)};
-        auto container = [&](const std::string& cname, const nlohmann::json& cmd) {
-          std::string c;
-          c += fmt::format("        - name: {}\n", cname);
-          c += fmt::format("          image: {}\n", yamlString(o->image));
-          c += fmt::format("          command: {}\n", cmd.dump());
-          if (!o->cpu_request.empty())
-            c += fmt::format(
-                "          resources:\n            requests:\n              cpu: "
-                "{}\n",
-                yamlString(o->cpu_request));
-          c += fmt::format(
-              "          volumeMounts:\n            - name: data\n              "
-              "mountPath: {}\n",
-              yamlString(o->workdir));
-          return c;
-        };
-        const std::string volumes = fmt::format(
-            "      volumes:\n        - name: data\n          persistentVolumeClaim:\n"
-            "            claimName: {}\n",
-            yamlString(o->pvc));
-        std::string y;
-        y += fmt::format("# lensim dispatch: render {} as {} parts ({}) and merge them.\n",
-                         o->scene, o->jobs, o->split);
-        y +=
-            "# kubectl apply -f job.yaml; the merge Job waits for every part file on the volume.\n";
-        y += "apiVersion: batch/v1\nkind: Job\nmetadata:\n";
-        y += fmt::format("  name: lensim-{}\n", name);
-        y += "  labels:\n    app.kubernetes.io/name: lensim\n";
-        y += "spec:\n  completionMode: Indexed\n";
-        y += fmt::format("  completions: {}\n  parallelism: {}\n", o->jobs,
-                         o->parallelism > 0 ? o->parallelism : o->jobs);
-        y += fmt::format("  backoffLimit: {}\n", 3 * o->jobs);
-        y += "  template:\n    metadata:\n      labels:\n        app.kubernetes.io/name: lensim\n";
-        y += "    spec:\n      restartPolicy: OnFailure\n      containers:\n";
-        y += container("render", render_cmd);
-        y += volumes;
-        y += "---\napiVersion: batch/v1\nkind: Job\nmetadata:\n";
-        y += fmt::format("  name: lensim-{}-merge\n", name);
-        y += "  labels:\n    app.kubernetes.io/name: lensim\n";
-        y += "spec:\n  backoffLimit: 3\n  template:\n";
-        y += "    metadata:\n      labels:\n        app.kubernetes.io/name: lensim\n";
-        y += "    spec:\n      restartPolicy: OnFailure\n      containers:\n";
-        y += container("merge", merge_cmd);
-        y += volumes;
-        const std::string path = (fs::path(o->outdir) / "job.yaml").string();
-        writeFileAtomically(path, y);
-        written = {path};
-      }
-      if (!lensim::quiet())
-        for (const std::string& w : written) logInfo(fmt::format("wrote {}", w));
-      return 0;
-    };
+    action = [o]() -> int { return runDispatch(*o); };
   });
 }
 

@@ -194,14 +194,15 @@ std::string readGzFile(const std::string& path) {
   return data;
 }
 
-}  // namespace
+/// A PLY header: the body's format, its elements and where the body starts.
+struct Header {
+  Format format = Format::Ascii;
+  std::vector<Element> elements;
+  size_t body_start = 0;
+};
 
-PlyMesh readPly(const std::string& path) {
-  return parsePly(readGzFile(path), path);
-}
-
-PlyMesh parsePly(const std::string& data, const std::string& name) {
-  // Header: lines up to "end_header".
+/// Parses the header: lines up to "end_header".
+Header parseHeader(const std::string& data, const std::string& name) {
   size_t pos = 0;
   auto nextLine = [&]() -> std::string {
     size_t e = data.find('\n', pos);
@@ -261,112 +262,141 @@ PlyMesh parsePly(const std::string& data, const std::string& name) {
     }
   }
   if (!have_format) throw Error(fmt::format("{}: PLY header has no format line", name));
+  return {format, std::move(elements), pos};
+}
 
-  // A small file must not claim a billion elements: each takes a few bytes at least.
-  {
-    const size_t body_bytes = data.size() - pos;
-    for (const Element& e : elements) {
-      const size_t per = std::max<size_t>(1, minElementBytes(e, format));
-      if (e.count > body_bytes / per)
+/// Refuses element counts the body is too short for: a small file must not claim a billion
+/// elements, each takes a few bytes at least.
+void checkElementCounts(const Header& h, size_t data_size, const std::string& name) {
+  const size_t body_bytes = data_size - h.body_start;
+  for (const Element& e : h.elements) {
+    const size_t per = std::max<size_t>(1, minElementBytes(e, h.format));
+    if (e.count > body_bytes / per)
+      throw Error(
+          fmt::format("{}: PLY element \"{}\" claims {} entries, but the file has only "
+                      "{} bytes of data (at least {} bytes an entry)",
+                      name, e.name, e.count, body_bytes, per));
+  }
+}
+
+/// Reads the vertex element e: positions (refused unless finite), and normals and (u, v) where
+/// the element has them.
+void readVertices(const Element& e, BodyReader& body, PlyMesh& mesh, const std::string& name) {
+  int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iu = -1, iv = -1;
+  for (size_t i = 0; i < e.props.size(); ++i) {
+    const std::string& n = e.props[i].name;
+    int k = static_cast<int>(i);
+    if (n == "x")
+      ix = k;
+    else if (n == "y")
+      iy = k;
+    else if (n == "z")
+      iz = k;
+    else if (n == "nx")
+      inx = k;
+    else if (n == "ny")
+      iny = k;
+    else if (n == "nz")
+      inz = k;
+    else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s")
+      iu = k;
+    else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t")
+      iv = k;
+  }
+  if (ix < 0 || iy < 0 || iz < 0)
+    throw Error(fmt::format("{}: PLY vertex element lacks x, y or z", name));
+  bool normals = inx >= 0 && iny >= 0 && inz >= 0, uvs = iu >= 0 && iv >= 0;
+  mesh.positions.reserve(e.count);
+  std::vector<double> vals(e.props.size());
+  for (size_t v = 0; v < e.count; ++v) {
+    for (size_t i = 0; i < e.props.size(); ++i) {
+      const Property& p = e.props[i];
+      if (p.is_list) {
+        size_t n = listLength(body.read(p.count_type), name);
+        for (size_t j = 0; j < n; ++j) body.read(p.type);
+        vals[i] = 0;
+      } else {
+        vals[i] = body.read(p.type);
+      }
+    }
+    for (int k : {ix, iy, iz})
+      if (!(std::abs(vals[static_cast<size_t>(k)]) <= kMaxSceneNumber))
         throw Error(
-            fmt::format("{}: PLY element \"{}\" claims {} entries, but the file has only "
-                        "{} bytes of data (at least {} bytes an entry)",
-                        name, e.name, e.count, body_bytes, per));
+            fmt::format("{}: vertex {} has a coordinate that is not a finite number "
+                        "({})",
+                        name, v, vals[static_cast<size_t>(k)]));
+    mesh.positions.push_back(Vec3f(Vec3{vals[ix], vals[iy], vals[iz]}));
+    if (normals) mesh.normals.push_back(Vec3f(Vec3{vals[inx], vals[iny], vals[inz]}));
+    if (uvs) mesh.uvs.push_back({float(vals[iu]), float(vals[iv])});
+  }
+}
+
+/// Reads the face element e: vertex index lists (checked against the vertices read), quads
+/// kept as bilinear patches, other polygons as triangle fans; "face_indices".
+void readFaces(const Element& e, BodyReader& body, PlyMesh& mesh, const std::string& name) {
+  for (size_t f = 0; f < e.count; ++f) {
+    for (const Property& p : e.props) {
+      if (p.is_list) {
+        size_t n = listLength(body.read(p.count_type), name);
+        std::vector<int> idx(n);
+        for (size_t j = 0; j < n; ++j) {
+          const double x = body.read(p.type);
+          // Out of range or fractional values become -1, which the range check refuses.
+          idx[j] = x >= 0 && x < 2147483647.0 && x == std::floor(x) ? static_cast<int>(x) : -1;
+        }
+        if (p.name != "vertex_indices" && p.name != "vertex_index") continue;
+        for (int i : idx)
+          if (i < 0 || static_cast<size_t>(i) >= mesh.positions.size())
+            throw Error(fmt::format("{}: face {} has vertex index {} out of range [0, {})",
+                                    name, f, i, mesh.positions.size()));
+        if (n < 3) throw Error(fmt::format("{}: face {} has {} vertices", name, f, n));
+        if (n == 4) {
+          // pbrt-v4 order for bilinear patches: p00 p10 p01 p11.
+          mesh.quads.insert(mesh.quads.end(), {idx[0], idx[1], idx[3], idx[2]});
+        } else {
+          for (size_t j = 1; j + 1 < n; ++j)
+            mesh.triangles.insert(mesh.triangles.end(), {idx[0], idx[j], idx[j + 1]});
+        }
+      } else {
+        double v = body.read(p.type);
+        if (p.name == "face_indices")
+          mesh.face_indices.push_back(std::abs(v) < 2147483647.0 ? static_cast<int>(v) : -1);
+      }
     }
   }
-  PlyMesh mesh;
-  BodyReader body(data, pos, format, name);
-  for (const Element& e : elements) {
-    if (e.name == "vertex") {
-      int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iu = -1, iv = -1;
-      for (size_t i = 0; i < e.props.size(); ++i) {
-        const std::string& n = e.props[i].name;
-        int k = static_cast<int>(i);
-        if (n == "x")
-          ix = k;
-        else if (n == "y")
-          iy = k;
-        else if (n == "z")
-          iz = k;
-        else if (n == "nx")
-          inx = k;
-        else if (n == "ny")
-          iny = k;
-        else if (n == "nz")
-          inz = k;
-        else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s")
-          iu = k;
-        else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t")
-          iv = k;
+}
+
+/// Reads past an element lensim does not use.
+void skipElement(const Element& e, BodyReader& body, const std::string& name) {
+  for (size_t k = 0; k < e.count; ++k)
+    for (const Property& p : e.props) {
+      if (p.is_list) {
+        size_t n = listLength(body.read(p.count_type), name);
+        for (size_t j = 0; j < n; ++j) body.read(p.type);
+      } else {
+        body.read(p.type);
       }
-      if (ix < 0 || iy < 0 || iz < 0)
-        throw Error(fmt::format("{}: PLY vertex element lacks x, y or z", name));
-      bool normals = inx >= 0 && iny >= 0 && inz >= 0, uvs = iu >= 0 && iv >= 0;
-      mesh.positions.reserve(e.count);
-      std::vector<double> vals(e.props.size());
-      for (size_t v = 0; v < e.count; ++v) {
-        for (size_t i = 0; i < e.props.size(); ++i) {
-          const Property& p = e.props[i];
-          if (p.is_list) {
-            size_t n = listLength(body.read(p.count_type), name);
-            for (size_t j = 0; j < n; ++j) body.read(p.type);
-            vals[i] = 0;
-          } else {
-            vals[i] = body.read(p.type);
-          }
-        }
-        for (int k : {ix, iy, iz})
-          if (!(std::abs(vals[static_cast<size_t>(k)]) <= kMaxSceneNumber))
-            throw Error(
-                fmt::format("{}: vertex {} has a coordinate that is not a finite number "
-                            "({})",
-                            name, v, vals[static_cast<size_t>(k)]));
-        mesh.positions.push_back(Vec3f(Vec3{vals[ix], vals[iy], vals[iz]}));
-        if (normals) mesh.normals.push_back(Vec3f(Vec3{vals[inx], vals[iny], vals[inz]}));
-        if (uvs) mesh.uvs.push_back({float(vals[iu]), float(vals[iv])});
-      }
-    } else if (e.name == "face") {
-      for (size_t f = 0; f < e.count; ++f) {
-        for (const Property& p : e.props) {
-          if (p.is_list) {
-            size_t n = listLength(body.read(p.count_type), name);
-            std::vector<int> idx(n);
-            for (size_t j = 0; j < n; ++j) {
-              const double x = body.read(p.type);
-              // Out of range or fractional values become -1, which the range check refuses.
-              idx[j] = x >= 0 && x < 2147483647.0 && x == std::floor(x) ? static_cast<int>(x) : -1;
-            }
-            if (p.name != "vertex_indices" && p.name != "vertex_index") continue;
-            for (int i : idx)
-              if (i < 0 || static_cast<size_t>(i) >= mesh.positions.size())
-                throw Error(fmt::format("{}: face {} has vertex index {} out of range [0, {})",
-                                        name, f, i, mesh.positions.size()));
-            if (n < 3) throw Error(fmt::format("{}: face {} has {} vertices", name, f, n));
-            if (n == 4) {
-              // pbrt-v4 order for bilinear patches: p00 p10 p01 p11.
-              mesh.quads.insert(mesh.quads.end(), {idx[0], idx[1], idx[3], idx[2]});
-            } else {
-              for (size_t j = 1; j + 1 < n; ++j)
-                mesh.triangles.insert(mesh.triangles.end(), {idx[0], idx[j], idx[j + 1]});
-            }
-          } else {
-            double v = body.read(p.type);
-            if (p.name == "face_indices")
-              mesh.face_indices.push_back(std::abs(v) < 2147483647.0 ? static_cast<int>(v) : -1);
-          }
-        }
-      }
-    } else {
-      for (size_t k = 0; k < e.count; ++k)
-        for (const Property& p : e.props) {
-          if (p.is_list) {
-            size_t n = listLength(body.read(p.count_type), name);
-            for (size_t j = 0; j < n; ++j) body.read(p.type);
-          } else {
-            body.read(p.type);
-          }
-        }
     }
+}
+
+}  // namespace
+
+PlyMesh readPly(const std::string& path) {
+  return parsePly(readGzFile(path), path);
+}
+
+PlyMesh parsePly(const std::string& data, const std::string& name) {
+  const Header h = parseHeader(data, name);
+  checkElementCounts(h, data.size(), name);
+  PlyMesh mesh;
+  BodyReader body(data, h.body_start, h.format, name);
+  for (const Element& e : h.elements) {
+    if (e.name == "vertex")
+      readVertices(e, body, mesh, name);
+    else if (e.name == "face")
+      readFaces(e, body, mesh, name);
+    else
+      skipElement(e, body, name);
   }
   return mesh;
 }

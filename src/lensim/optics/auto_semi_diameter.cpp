@@ -41,6 +41,149 @@ PupilPlane paraxialEntrancePupil(const LensSystem& sys, int stop) {
   return {b / a, a};
 }
 
+/// What the rays of every field and wavelength share: the lens, the entrance pupil they aim at
+/// and the plane they start from.
+struct RaySetup {
+  const LensPrescription& p;
+  const AutoSemiDiameterSpec& spec;
+  PupilPlane ep;
+  int stop;
+  double rp;         ///< the entrance pupil's radius (mm)
+  double stop_semi;  ///< the stop's semi-diameter (mm)
+  double z_launch;   ///< the plane in front of the lens where rays from infinity start
+  bool finite;       ///< the object is at a finite distance
+  std::vector<bool> computed;  ///< per surface: its semi-diameter is being computed
+};
+
+/// Traces the chief ray and the pupil's edge of field f (number f + 1 in messages) at the
+/// wavelength of sys (lambda nm), aimed at the stop when asked, and widens semi[i] to the
+/// heights at which they cross surfaces[i].
+void widenForField(const RaySetup& c, const LensSystem& sys, double lambda, size_t f,
+                   const std::pair<double, double>& field, const std::vector<int>& surfaces,
+                   std::vector<double>& semi) {
+  // The names the ray constructions below use.
+  const LensPrescription& p = c.p;
+  const AutoSemiDiameterSpec& spec = c.spec;
+  const PupilPlane& ep = c.ep;
+  const int stop = c.stop;
+  const double rp = c.rp, stop_semi = c.stop_semi, z_launch = c.z_launch;
+  const bool finite = c.finite;
+  const std::vector<bool>& computed = c.computed;
+  const TraceOptions unclipped{false, false};
+  std::vector<Vec3> path;
+  const auto [fx, fy] = field;
+  // The ray through the point (u, v) of the entrance pupil's plane.
+  double field_scale = 1;  // < 1 while continuing from the axis (ray aiming)
+  auto rayThrough = [&](double u, double v) {
+    const double ax = field_scale * field.first, ay = field_scale * field.second;
+    const Vec3 pupil{u, v, ep.z_mm};
+    Ray ray;
+    if (spec.object_heights || finite) {
+      Vec3 obj{ax, ay, -*p.object_distance_mm};
+      if (!spec.object_heights) {
+        // A field angle from a finite object: the chief ray's slope through the pupil centre.
+        const double tx = std::tan(ax * std::numbers::pi / 180);
+        const double ty = std::tan(ay * std::numbers::pi / 180);
+        obj = {(obj.z - ep.z_mm) * tx, (obj.z - ep.z_mm) * ty, obj.z};
+      }
+      ray.origin = obj;
+      ray.direction = normalize(pupil - obj);
+    } else {
+      const Vec3 d = normalize(Vec3{std::tan(ax * std::numbers::pi / 180),
+                                    std::tan(ay * std::numbers::pi / 180), 1.0});
+      ray.direction = d;
+      ray.origin = pupil + d * ((z_launch - ep.z_mm) / d.z);
+    }
+    return ray;
+  };
+  // Where the ray through (u, v) meets the stop's plane, if it gets there.
+  auto stopHit = [&](double u, double v, Vec2& at) {
+    path.clear();
+    const TraceResult r = sys.tracer().traceFromScene(rayThrough(u, v), unclipped, &path);
+    if (path.size() <= size_t(stop) + 1) return false;
+    at = {path[size_t(stop) + 1].x, path[size_t(stop) + 1].y};
+    return std::isfinite(at.x) && std::isfinite(at.y) && (r.ok() || r.blocked_surface > stop);
+  };
+  Vec2 guess{0, 0};  // the last aim (the chief ray's for the pupil's edge)
+  for (int k = -1; k < kPupilEdgePoints; ++k) {
+    const double phi = 2 * std::numbers::pi * k / kPupilEdgePoints;
+    const Vec2 pupil{k < 0 ? 0.0 : rp * std::cos(phi), k < 0 ? 0.0 : rp * std::sin(phi)};
+    Vec2 aim = pupil;
+    if (spec.aim_at_stop) {
+      // Real ray aiming: the point of the pupil's plane whose ray meets the stop at the
+      // pupil point scaled to the stop (Newton's method, differences for the Jacobian),
+      // continued from the axis (the chief ray, by field: 32 steps) or from the chief ray
+      // (by pupil radius: 4 steps).
+      const int steps = k < 0 ? 32 : 4;
+      Vec2 target{}, start = k < 0 ? Vec2{0, 0} : guess;
+      bool converged = false;
+      for (int step = 1; step <= steps; ++step) {
+        const double t = double(step) / steps;
+        field_scale = k < 0 ? t : 1.0;
+        target = pupil * (stop_semi / rp) * (k < 0 ? 1.0 : t);
+        aim = start + (k < 0 ? Vec2{0, 0} : pupil * (1.0 / steps));
+        converged = false;
+        for (int it = 0; it < 30 && !converged; ++it) {
+          Vec2 h0, hu, hv;
+          const double e = 1e-6 * rp;
+          if (!stopHit(aim.x, aim.y, h0) || !stopHit(aim.x + e, aim.y, hu) ||
+              !stopHit(aim.x, aim.y + e, hv))
+            break;
+          const Vec2 r = h0 - target;
+          if (std::hypot(r.x, r.y) <= 1e-10 * (stop_semi + 1)) {
+            converged = true;
+            break;
+          }
+          const double a = (hu.x - h0.x) / e, b = (hv.x - h0.x) / e;
+          const double c = (hu.y - h0.y) / e, d = (hv.y - h0.y) / e;
+          const double det = a * d - b * c;
+          if (!(std::abs(det) > 0)) break;
+          aim = aim - Vec2{(d * r.x - b * r.y) / det, (a * r.y - c * r.x) / det};
+        }
+        if (!converged) break;
+        start = aim;
+      }
+      field_scale = 1;
+      if (!converged)
+        throw Error(spec.fields_loc,
+                    fmt::format("automatic semi-diameters with ray aiming: no real ray of "
+                                "field {} ({}, {}) at {:.6g} nm meets the stop at ({:.6g}, "
+                                "{:.6g}) mm",
+                                f + 1, fx, fy, lambda, target.x, target.y));
+      if (k < 0) guess = aim;
+    }
+    path.clear();
+    const TraceResult r =
+        sys.tracer().traceFromScene(rayThrough(aim.x, aim.y), unclipped, &path);
+    // Where the ray is stopped by an aperture the file gives (the stop aside: rays aimed at
+    // the paraxial pupil may pass its rim, as in OpticStudio), it counts no further.
+    size_t reach = path.size() - 1;  // surfaces [0, reach) were met
+    for (size_t j = 0; j < reach; ++j) {
+      const Interface& in = sys.interfaces()[j];
+      if (computed[j] || in.is_stop) continue;
+      if (std::hypot(path[j + 1].x, path[j + 1].y) > in.semi_aperture_mm) {
+        reach = j;
+        break;
+      }
+    }
+    if (!r.ok() && r.blocked_surface >= 0 && size_t(r.blocked_surface) <= reach) {
+      const LensSurface& s = p.surfaces[size_t(r.blocked_surface)];
+      throw Error(s.loc,
+                  fmt::format("automatic semi-diameters: the {} ray of field {} ({}, {}) at "
+                              "{:.6g} nm {} this surface before any aperture the file gives "
+                              "stops it",
+                              k < 0 ? "chief" : "pupil-edge", f + 1, fx, fy, lambda,
+                              r.reason == BlockReason::TotalInternalReflection
+                                  ? "is totally reflected at"
+                                  : "misses"));
+    }
+    for (size_t i = 0; i < surfaces.size(); ++i)
+      if (size_t(surfaces[i]) < reach)
+        semi[i] = std::max(semi[i], std::hypot(path[size_t(surfaces[i]) + 1].x,
+                                               path[size_t(surfaces[i]) + 1].y));
+  }
+}
+
 }  // namespace
 
 std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
@@ -84,125 +227,13 @@ std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
   for (const LensSurface& s : p.surfaces) track += std::abs(s.thickness_mm);
   const double z_launch = std::min(ep.z_mm, 0.0) - track - 10 * rp - 1;
 
-  const TraceOptions unclipped{false, false};
-  std::vector<bool> computed(p.surfaces.size(), false);
-  for (int i : surfaces) computed[size_t(i)] = true;
-  std::vector<Vec3> path;
+  RaySetup setup{p, spec, ep, *stop, rp, stop_semi, z_launch, finite,
+                 std::vector<bool>(p.surfaces.size(), false)};
+  for (int i : surfaces) setup.computed[size_t(i)] = true;
   for (double lambda : waves) {
     const LensSystem sys = base.atWavelength(lambda);
-    for (size_t f = 0; f < fields.size(); ++f) {
-      const auto [fx, fy] = fields[f];
-      // The ray through the point (u, v) of the entrance pupil's plane.
-      double field_scale = 1;  // < 1 while continuing from the axis (ray aiming)
-      auto rayThrough = [&](double u, double v) {
-        const double ax = field_scale * fields[f].first, ay = field_scale * fields[f].second;
-        const Vec3 pupil{u, v, ep.z_mm};
-        Ray ray;
-        if (spec.object_heights || finite) {
-          Vec3 obj{ax, ay, -*p.object_distance_mm};
-          if (!spec.object_heights) {
-            // A field angle from a finite object: the chief ray's slope through the pupil centre.
-            const double tx = std::tan(ax * std::numbers::pi / 180);
-            const double ty = std::tan(ay * std::numbers::pi / 180);
-            obj = {(obj.z - ep.z_mm) * tx, (obj.z - ep.z_mm) * ty, obj.z};
-          }
-          ray.origin = obj;
-          ray.direction = normalize(pupil - obj);
-        } else {
-          const Vec3 d = normalize(Vec3{std::tan(ax * std::numbers::pi / 180),
-                                        std::tan(ay * std::numbers::pi / 180), 1.0});
-          ray.direction = d;
-          ray.origin = pupil + d * ((z_launch - ep.z_mm) / d.z);
-        }
-        return ray;
-      };
-      // Where the ray through (u, v) meets the stop's plane, if it gets there.
-      auto stopHit = [&](double u, double v, Vec2& at) {
-        path.clear();
-        const TraceResult r = sys.tracer().traceFromScene(rayThrough(u, v), unclipped, &path);
-        if (path.size() <= size_t(*stop) + 1) return false;
-        at = {path[size_t(*stop) + 1].x, path[size_t(*stop) + 1].y};
-        return std::isfinite(at.x) && std::isfinite(at.y) && (r.ok() || r.blocked_surface > *stop);
-      };
-      Vec2 guess{0, 0};  // the last aim (the chief ray's for the pupil's edge)
-      for (int k = -1; k < kPupilEdgePoints; ++k) {
-        const double phi = 2 * std::numbers::pi * k / kPupilEdgePoints;
-        const Vec2 pupil{k < 0 ? 0.0 : rp * std::cos(phi), k < 0 ? 0.0 : rp * std::sin(phi)};
-        Vec2 aim = pupil;
-        if (spec.aim_at_stop) {
-          // Real ray aiming: the point of the pupil's plane whose ray meets the stop at the
-          // pupil point scaled to the stop (Newton's method, differences for the Jacobian),
-          // continued from the axis (the chief ray, by field: 32 steps) or from the chief ray
-          // (by pupil radius: 4 steps).
-          const int steps = k < 0 ? 32 : 4;
-          Vec2 target{}, start = k < 0 ? Vec2{0, 0} : guess;
-          bool converged = false;
-          for (int step = 1; step <= steps; ++step) {
-            const double t = double(step) / steps;
-            field_scale = k < 0 ? t : 1.0;
-            target = pupil * (stop_semi / rp) * (k < 0 ? 1.0 : t);
-            aim = start + (k < 0 ? Vec2{0, 0} : pupil * (1.0 / steps));
-            converged = false;
-            for (int it = 0; it < 30 && !converged; ++it) {
-              Vec2 h0, hu, hv;
-              const double e = 1e-6 * rp;
-              if (!stopHit(aim.x, aim.y, h0) || !stopHit(aim.x + e, aim.y, hu) ||
-                  !stopHit(aim.x, aim.y + e, hv))
-                break;
-              const Vec2 r = h0 - target;
-              if (std::hypot(r.x, r.y) <= 1e-10 * (stop_semi + 1)) {
-                converged = true;
-                break;
-              }
-              const double a = (hu.x - h0.x) / e, b = (hv.x - h0.x) / e;
-              const double c = (hu.y - h0.y) / e, d = (hv.y - h0.y) / e;
-              const double det = a * d - b * c;
-              if (!(std::abs(det) > 0)) break;
-              aim = aim - Vec2{(d * r.x - b * r.y) / det, (a * r.y - c * r.x) / det};
-            }
-            if (!converged) break;
-            start = aim;
-          }
-          field_scale = 1;
-          if (!converged)
-            throw Error(spec.fields_loc,
-                        fmt::format("automatic semi-diameters with ray aiming: no real ray of "
-                                    "field {} ({}, {}) at {:.6g} nm meets the stop at ({:.6g}, "
-                                    "{:.6g}) mm",
-                                    f + 1, fx, fy, lambda, target.x, target.y));
-          if (k < 0) guess = aim;
-        }
-        path.clear();
-        const TraceResult r =
-            sys.tracer().traceFromScene(rayThrough(aim.x, aim.y), unclipped, &path);
-        // Where the ray is stopped by an aperture the file gives (the stop aside: rays aimed at
-        // the paraxial pupil may pass its rim, as in OpticStudio), it counts no further.
-        size_t reach = path.size() - 1;  // surfaces [0, reach) were met
-        for (size_t j = 0; j < reach; ++j) {
-          const Interface& in = sys.interfaces()[j];
-          if (computed[j] || in.is_stop) continue;
-          if (std::hypot(path[j + 1].x, path[j + 1].y) > in.semi_aperture_mm) {
-            reach = j;
-            break;
-          }
-        }
-        if (!r.ok() && r.blocked_surface >= 0 && size_t(r.blocked_surface) <= reach) {
-          const LensSurface& s = p.surfaces[size_t(r.blocked_surface)];
-          throw Error(s.loc,
-                      fmt::format("automatic semi-diameters: the {} ray of field {} ({}, {}) at "
-                                  "{:.6g} nm {} this surface before any aperture the file gives "
-                                  "stops it",
-                                  k < 0 ? "chief" : "pupil-edge", f + 1, fx, fy, lambda,
-                                  r.reason == BlockReason::TotalInternalReflection
-                                      ? "is totally reflected at"
-                                      : "misses"));
-        }
-        for (size_t i = 0; i < surfaces.size(); ++i)
-          if (size_t(surfaces[i]) < reach)
-            semi[i] = std::max(semi[i], std::hypot(path[size_t(surfaces[i]) + 1].x,
-                                                   path[size_t(surfaces[i]) + 1].y));
-      }
-    }
+    for (size_t f = 0; f < fields.size(); ++f)
+      widenForField(setup, sys, lambda, f, fields[f], surfaces, semi);
   }
   for (size_t i = 0; i < surfaces.size(); ++i) {
     const LensSurface& s = p.surfaces[size_t(surfaces[i])];

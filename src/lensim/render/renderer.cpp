@@ -77,7 +77,8 @@ struct TileGrid {
   int count() const { return tiles_x * tiles_y; }
   /// Tile t's pixels, relative to bounds' corner.
   PixelBounds local(int t) const {
-    CHECK(t >= 0 && t < count());
+    LENSIM_CHECK_GE(t, 0);
+    LENSIM_CHECK_LT(t, count());
     const int tx = t % tiles_x, ty = t / tiles_x;
     return {tx * kTile, std::min(bounds.width(), (tx + 1) * kTile), ty * kTile,
             std::min(bounds.height(), (ty + 1) * kTile)};
@@ -584,6 +585,33 @@ void finishImage(const RenderOptions& opt, const scene::Scene& scene, RenderResu
   if (st.partial) md["lensim:partial"] = "true";
 }
 
+/// Lens flare (docs/flare.md, "Rendering ghosts"): checks that the render can carry it and
+/// turns on the film's ghost layer.
+void enableFlare(const scene::Scene& scene, const RenderOptions& opt, Film& film) {
+  // Every integrator, into the ghost layer of an RGB film, rendered whole.
+  const FileLoc& loc = scene.camera.loc;
+  if (scene.film.type != "rgb")
+    throw Error(loc, fmt::format("realistic camera: \"flare\" needs Film \"rgb\" (its ghost "
+                                 "layer), not \"{}\"",
+                                 scene.film.type));
+  if (opt.keep_sums || opt.resume || opt.on_checkpoint)
+    throw Error(loc,
+                "realistic camera: \"flare\" renders cannot be written as parts or "
+                "checkpointed (the ghost layer is not kept in the exact sums)");
+  film.enableGhostLayer();
+}
+
+/// The sample and ray counts of the render into its statistics.
+void addCounts(RenderStats& st, const SharedTally& tally) {
+  st.camera_samples = tally.samples;
+  st.camera_rays = tally.rays;
+  st.ghost_rays = tally.ghost_rays;
+  st.no_ray_samples = tally.no_ray;
+  st.outside_samples = tally.outside;
+  st.nonfinite_samples = tally.nonfinite;
+  st.rays = tally.traced;
+}
+
 }  // namespace
 
 RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
@@ -621,20 +649,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   setup.refuses_splats = splatRefusal(opt);
   const std::unique_ptr<Integrator> integrator = makeIntegrator(setup);
   if (integrator->splats()) film.enableSplats(*filter);
-  if (cam->flare()) {
-    // Lens flare (docs/flare.md, "Rendering ghosts"): every integrator, into the ghost layer
-    // of an RGB film, rendered whole.
-    const FileLoc& loc = scene.camera.loc;
-    if (scene.film.type != "rgb")
-      throw Error(loc, fmt::format("realistic camera: \"flare\" needs Film \"rgb\" (its ghost "
-                                   "layer), not \"{}\"",
-                                   scene.film.type));
-    if (opt.keep_sums || opt.resume || opt.on_checkpoint)
-      throw Error(loc,
-                  "realistic camera: \"flare\" renders cannot be written as parts or "
-                  "checkpointed (the ghost layer is not kept in the exact sums)");
-    film.enableGhostLayer();
-  }
+  if (cam->flare()) enableFlare(scene, opt, film);
   // Film "gbuffer" (pbrt-v4's GBufferFilm): its coordinate system and the differential scale
   // pbrt-v4 applies to camera rays, max(1/8, 1/sqrt(samples per pixel)).
   const GBufferFrame gbuffer_frame(scene);
@@ -735,13 +750,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   if (opt.on_checkpoint) opt.on_checkpoint(snapshot(film, done, grid));
 
   st.wall_s = std::chrono::duration<double>(Clock::now() - background.start()).count();
-  st.camera_samples = tally.samples;
-  st.camera_rays = tally.rays;
-  st.ghost_rays = tally.ghost_rays;
-  st.no_ray_samples = tally.no_ray;
-  st.outside_samples = tally.outside;
-  st.nonfinite_samples = tally.nonfinite;
-  st.rays = tally.traced;
+  addCounts(st, tally);
   st.partial = cancelled.load() || tiles_done.load() < n_tiles || pass_begin < spp_end;
   st.invalid_rays = world->accel.invalidRays();
   result.image = film.image();

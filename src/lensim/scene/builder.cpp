@@ -364,7 +364,9 @@ Input Builder::floatInput(ParamSet& ps, ParamSet::Names names, double def) {
 }
 
 // ---- directives ----------------------------------------------------------------------------
-void Builder::directive(const Directive& d) {
+/// The directives that set the current transform (and the named coordinate systems, times,
+/// active transforms and orientation); false for any other directive.
+bool Builder::transformDirective(const Directive& d) {
   const std::string& n = d.name;
   GraphicsState& g = gs_;
   auto apply = [&](const Transform& t, bool concat) {
@@ -407,7 +409,54 @@ void Builder::directive(const Directive& d) {
     g.active[1] = d.word != "StartTime";
   } else if (n == "ReverseOrientation") {
     g.reverse_orientation = !g.reverse_orientation;
-  } else if (n == "WorldBegin") {
+  } else {
+    return false;
+  }
+  return true;
+}
+
+/// Material, MakeNamedMaterial and NamedMaterial: a material made current, or named for later.
+void Builder::materialDirective(const Directive& d) {
+  const std::string& n = d.name;
+  GraphicsState& g = gs_;
+  if (n == "Material") {
+    ParamSet ps(d.params, d.loc, fmt::format("Material \"{}\"", d.strings[0]));
+    ps.addDefaults(g.material_attrs);
+    Material m = material(d.strings[0], ps, d.loc);
+    finish(ps);
+    scene_.materials.push_back(std::move(m));
+    g.material = static_cast<int>(scene_.materials.size()) - 1;
+    g.material_name.clear();
+    g.scoped_material_name.clear();  // pbrt-v3's pbrtMaterial clears currentNamedMaterial
+  } else if (n == "MakeNamedMaterial") {
+    ParamSet ps(d.params, d.loc, fmt::format("MakeNamedMaterial \"{}\"", d.strings[0]));
+    ps.addDefaults(g.material_attrs);
+    auto type = ps.findString({"type"});
+    if (!type)
+      throw Error(d.loc,
+                  fmt::format("MakeNamedMaterial \"{}\": missing \"string type\"", d.strings[0]));
+    Material m = material(*type, ps, d.loc);
+    m.name = d.strings[0];
+    finish(ps);
+    if (scene_.legacy_syntax) return makeNamedMaterialScoped(d, std::move(m));
+    if (named_materials_.count(m.name))
+      warn(d.loc, fmt::format("named material \"{}\" redefined", m.name));
+    scene_.materials.push_back(std::move(m));
+    named_materials_[d.strings[0]] = static_cast<int>(scene_.materials.size()) - 1;
+  } else if (n == "NamedMaterial") {
+    if (scene_.legacy_syntax) return namedMaterialScoped(d);
+    auto it = named_materials_.find(d.strings[0]);
+    g.material = it == named_materials_.end() ? -1 : it->second;
+    g.material_name = it == named_materials_.end() ? d.strings[0] : std::string();
+    g.material_name_loc = d.loc;
+  }
+}
+
+void Builder::directive(const Directive& d) {
+  const std::string& n = d.name;
+  GraphicsState& g = gs_;
+  if (transformDirective(d)) return;  // Identity, Translate, ..., ReverseOrientation
+  if (n == "WorldBegin") {
     g.ctm[0] = g.ctm[1] = Transform();
     named_cs_["world"] = {g.ctm[0], g.ctm[1]};
   } else if (n == "WorldEnd") {
@@ -489,36 +538,8 @@ void Builder::directive(const Directive& d) {
     attribute(d);
   } else if (n == "Shape") {
     shape(d);
-  } else if (n == "Material") {
-    ParamSet ps(d.params, d.loc, fmt::format("Material \"{}\"", d.strings[0]));
-    ps.addDefaults(g.material_attrs);
-    Material m = material(d.strings[0], ps, d.loc);
-    finish(ps);
-    scene_.materials.push_back(std::move(m));
-    g.material = static_cast<int>(scene_.materials.size()) - 1;
-    g.material_name.clear();
-    g.scoped_material_name.clear();  // pbrt-v3's pbrtMaterial clears currentNamedMaterial
-  } else if (n == "MakeNamedMaterial") {
-    ParamSet ps(d.params, d.loc, fmt::format("MakeNamedMaterial \"{}\"", d.strings[0]));
-    ps.addDefaults(g.material_attrs);
-    auto type = ps.findString({"type"});
-    if (!type)
-      throw Error(d.loc,
-                  fmt::format("MakeNamedMaterial \"{}\": missing \"string type\"", d.strings[0]));
-    Material m = material(*type, ps, d.loc);
-    m.name = d.strings[0];
-    finish(ps);
-    if (scene_.legacy_syntax) return makeNamedMaterialScoped(d, std::move(m));
-    if (named_materials_.count(m.name))
-      warn(d.loc, fmt::format("named material \"{}\" redefined", m.name));
-    scene_.materials.push_back(std::move(m));
-    named_materials_[d.strings[0]] = static_cast<int>(scene_.materials.size()) - 1;
-  } else if (n == "NamedMaterial") {
-    if (scene_.legacy_syntax) return namedMaterialScoped(d);
-    auto it = named_materials_.find(d.strings[0]);
-    g.material = it == named_materials_.end() ? -1 : it->second;
-    g.material_name = it == named_materials_.end() ? d.strings[0] : std::string();
-    g.material_name_loc = d.loc;
+  } else if (n == "Material" || n == "MakeNamedMaterial" || n == "NamedMaterial") {
+    materialDirective(d);
   } else if (n == "Texture") {
     texture(d);
   } else if (n == "LightSource") {

@@ -44,15 +44,14 @@ std::string renamed(const std::string& written, const std::string& used) {
   return fmt::format("{} (as {})", written, used);
 }
 
-}  // namespace
+/// The summary's text, one line at a time.
+struct Lines {
+  std::string text;
+  void operator()(const std::string& s) { text += s + "\n"; }
+};
 
-std::string summary(const Scene& scene) {
-  std::string out;
-  auto line = [&](const std::string& s) { out += s + "\n"; };
-  line(fmt::format("scene: {} ({} syntax)", scene.path,
-                   scene.legacy_syntax ? "pbrt-v1–v3" : "pbrt-v4"));
-
-  // Camera.
+/// The camera, its shutter and motion, and the scene's motion blur.
+void cameraSummary(const Scene& scene, Lines& line) {
   const Camera& c = scene.camera;
   if (c.defaulted) {
     line("camera: perspective, fov 90° (default: no Camera directive)");
@@ -98,24 +97,10 @@ std::string summary(const Scene& scene) {
                      moving_shapes, moving_shapes == 1 ? "" : "s", moving_instances,
                      moving_instances == 1 ? "" : "s"));
   }
+}
 
-  const Film& f = scene.film;
-  line(fmt::format("film: {}, {}×{}, output \"{}\"{}", renamed(f.type_as_written, f.type),
-                   f.x_resolution, f.y_resolution, f.filename, f.defaulted ? " (default)" : ""));
-  const Sampler& s = scene.sampler;
-  line(fmt::format("sampler: {}, {} samples per pixel{}", renamed(s.type_as_written, s.type),
-                   s.pixel_samples, s.defaulted ? " (default)" : ""));
-  const Filter& fl = scene.filter;
-  line(fmt::format(
-      "pixel filter: {}, radius {} × {}{}", renamed(fl.type_as_written, fl.type), fl.x_radius,
-      fl.y_radius,
-      fl.defaulted ? (scene.legacy_syntax ? " (pbrt-v1–v3 default)" : " (default)") : ""));
-  const Integrator& in = scene.integrator;
-  line(fmt::format(
-      "integrator: {}, maxdepth {}{}", renamed(in.type_as_written, in.type), in.max_depth,
-      in.defaulted ? (scene.legacy_syntax ? " (pbrt-v1–v3 default)" : " (default)") : ""));
-
-  // Shapes.
+/// Shapes by type, triangles (stored and with instances expanded), objects and instances.
+void geometrySummary(const Scene& scene, Lines& line) {
   std::vector<std::pair<std::string, int>> world, inObjects;
   size_t nWorld = 0, nObj = 0;
   for (const Shape& sh : scene.shapes) {
@@ -157,8 +142,10 @@ std::string summary(const Scene& scene) {
     addCount(inst, fmt::format("\"{}\"", scene.objects[static_cast<size_t>(i.object)].name));
   line(fmt::format("instances: {}{}", scene.instances.size(),
                    inst.empty() ? "" : ": " + countList(inst)));
+}
 
-  // Materials, textures, lights.
+/// Materials by type, and each texture with its inputs.
+void materialsSummary(const Scene& scene, Lines& line) {
   std::vector<std::pair<std::string, int>> mats;
   for (const Material& m : scene.materials) {
     std::string key = m.fallback
@@ -191,6 +178,10 @@ std::string summary(const Scene& scene) {
     }
     line(what);
   }
+}
+
+/// Each light: area lights with the shapes they are on, others with their emission.
+void lightsSummary(const Scene& scene, Lines& line) {
   line(fmt::format("lights: {}", scene.lights.size()));
   for (const Light& l : scene.lights) {
     if (l.type == "diffuse") {
@@ -209,43 +200,74 @@ std::string summary(const Scene& scene) {
                        l.filename.empty() ? "" : fmt::format(", map \"{}\"", l.filename)));
     }
   }
-  if (!scene.media.empty()) {
-    line(fmt::format("media: {}", scene.media.size()));
-    for (const Medium& m : scene.media) {
-      if (m.type.empty()) {
-        line(fmt::format("  \"{}\": {} (not rendered)", m.name, m.type_as_written));
-        continue;
-      }
-      if (m.type == "cloud" || m.type == "nanovdb") {
-        line(fmt::format("  \"{}\": {}{}{}, g {}", m.name, m.type,
-                         m.type == "nanovdb" ? fmt::format(", \"{}\"", m.filename) : "",
-                         m.scale != 1 ? fmt::format(", scale {}", m.scale) : "", m.g));
-        continue;
-      }
-      if (m.type != "homogeneous") {
-        line(fmt::format("  \"{}\": {}, {} × {} × {} voxels{}, g {}", m.name,
-                         renamed(m.type_as_written, m.type), m.nx, m.ny, m.nz,
-                         m.scale != 1 ? fmt::format(", scale {}", m.scale) : "", m.g));
-        continue;
-      }
-      line(fmt::format("  \"{}\": {}, sigma_a {}, sigma_s {}{}{}, g {}{}", m.name, m.type,
-                       m.sigma_a.str(), m.sigma_s.str(),
-                       m.preset.empty() ? "" : fmt::format(" (preset \"{}\")", m.preset),
-                       m.scale != 1 ? fmt::format(", scale {}", m.scale) : "", m.g,
-                       m.Le.rgb == Vec3{0, 0, 0} && m.Le.kind == SpectrumValue::Kind::Rgb
-                           ? ""
-                           : fmt::format(", Le {} x {}", m.Le.str(), m.Le_scale)));
+}
+
+/// Each participating medium, and the one the camera is in.
+void mediaSummary(const Scene& scene, Lines& line) {
+  if (scene.media.empty()) return;
+  line(fmt::format("media: {}", scene.media.size()));
+  for (const Medium& m : scene.media) {
+    if (m.type.empty()) {
+      line(fmt::format("  \"{}\": {} (not rendered)", m.name, m.type_as_written));
+      continue;
     }
-    if (scene.camera.medium >= 0)
-      line(fmt::format("  camera inside \"{}\"",
-                       scene.media[static_cast<size_t>(scene.camera.medium)].name));
+    if (m.type == "cloud" || m.type == "nanovdb") {
+      line(fmt::format("  \"{}\": {}{}{}, g {}", m.name, m.type,
+                       m.type == "nanovdb" ? fmt::format(", \"{}\"", m.filename) : "",
+                       m.scale != 1 ? fmt::format(", scale {}", m.scale) : "", m.g));
+      continue;
+    }
+    if (m.type != "homogeneous") {
+      line(fmt::format("  \"{}\": {}, {} × {} × {} voxels{}, g {}", m.name,
+                       renamed(m.type_as_written, m.type), m.nx, m.ny, m.nz,
+                       m.scale != 1 ? fmt::format(", scale {}", m.scale) : "", m.g));
+      continue;
+    }
+    line(fmt::format("  \"{}\": {}, sigma_a {}, sigma_s {}{}{}, g {}{}", m.name, m.type,
+                     m.sigma_a.str(), m.sigma_s.str(),
+                     m.preset.empty() ? "" : fmt::format(" (preset \"{}\")", m.preset),
+                     m.scale != 1 ? fmt::format(", scale {}", m.scale) : "", m.g,
+                     m.Le.rgb == Vec3{0, 0, 0} && m.Le.kind == SpectrumValue::Kind::Rgb
+                         ? ""
+                         : fmt::format(", Le {} x {}", m.Le.str(), m.Le_scale)));
   }
+  if (scene.camera.medium >= 0)
+    line(fmt::format("  camera inside \"{}\"",
+                     scene.media[static_cast<size_t>(scene.camera.medium)].name));
+}
+
+}  // namespace
+
+std::string summary(const Scene& scene) {
+  Lines line;
+  line(fmt::format("scene: {} ({} syntax)", scene.path,
+                   scene.legacy_syntax ? "pbrt-v1–v3" : "pbrt-v4"));
+  cameraSummary(scene, line);
+  const Film& f = scene.film;
+  line(fmt::format("film: {}, {}×{}, output \"{}\"{}", renamed(f.type_as_written, f.type),
+                   f.x_resolution, f.y_resolution, f.filename, f.defaulted ? " (default)" : ""));
+  const Sampler& s = scene.sampler;
+  line(fmt::format("sampler: {}, {} samples per pixel{}", renamed(s.type_as_written, s.type),
+                   s.pixel_samples, s.defaulted ? " (default)" : ""));
+  const Filter& fl = scene.filter;
+  line(fmt::format(
+      "pixel filter: {}, radius {} × {}{}", renamed(fl.type_as_written, fl.type), fl.x_radius,
+      fl.y_radius,
+      fl.defaulted ? (scene.legacy_syntax ? " (pbrt-v1–v3 default)" : " (default)") : ""));
+  const Integrator& in = scene.integrator;
+  line(fmt::format(
+      "integrator: {}, maxdepth {}{}", renamed(in.type_as_written, in.type), in.max_depth,
+      in.defaulted ? (scene.legacy_syntax ? " (pbrt-v1–v3 default)" : " (default)") : ""));
+  geometrySummary(scene, line);
+  materialsSummary(scene, line);
+  lightsSummary(scene, line);
+  mediaSummary(scene, line);
   size_t warnings = 0;
   for (const Diagnostic& d : scene.diagnostics) warnings += d.severity == Severity::Warning;
   line(fmt::format("warnings: {}", warnings));
   for (const Diagnostic& d : scene.diagnostics)
     if (d.severity == Severity::Warning) line("  " + d.str());
-  return out;
+  return line.text;
 }
 
 namespace {

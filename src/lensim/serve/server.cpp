@@ -342,9 +342,10 @@ struct Server::Impl {
         [this, view, ticket](bool) { views.finish(view, ticket); });
   }
 
-  void routes() {
-    // Bound to this machine, the server answers only requests addressed to it by a loopback name:
-    // a web page elsewhere cannot reach it through a DNS name that resolves to 127.0.0.1.
+  /// Bound to a loopback address, the server answers only requests addressed to it by a
+  /// loopback name: a web page elsewhere cannot reach it through a DNS name that resolves to
+  /// 127.0.0.1.
+  void refuseForeignHosts() {
     const bool loopback = isLoopback(config.host);
     http.set_pre_routing_handler([loopback](const httplib::Request& rq, httplib::Response& res) {
       if (!loopback) return httplib::Server::HandlerResponse::Unhandled;
@@ -361,6 +362,10 @@ struct Server::Impl {
                403);
       return httplib::Server::HandlerResponse::Handled;
     });
+  }
+
+  /// The explorer's web page and its scripts, styles and images.
+  void assetRoutes() {
     size_t n = 0;
     const WebAsset* assets = webAssets(&n);
     for (size_t i = 0; i < n; ++i) {
@@ -376,7 +381,10 @@ struct Server::Impl {
       http.Get(std::string(a.path), handler);
       if (a.path == "/index.html") http.Get("/", handler);
     }
+  }
 
+  /// The server, its lenses and its scenes: /api/info, /api/lenses, /api/scenes, /api/scene.
+  void catalogueRoutes() {
     http.Get("/api/info", guard([this](const httplib::Request&, httplib::Response& res) {
                json kinds = json::array();
                for (const PlotKind& k : plotKinds())
@@ -415,7 +423,10 @@ struct Server::Impl {
                const fs::path p = scenePath(rq);
                sendJson(res, sceneJson(p.lexically_relative(scene_folder).generic_string()));
              }));
+  }
 
+  /// One lens as set up by the request: /api/lens, /api/diagram, /api/plot, /api/view.
+  void lensRoutes() {
     http.Get("/api/lens", guard([this](const httplib::Request& rq, httplib::Response& res) {
                const LensSettings s = lensSettings(rq);
                json j = firstOrderJson(setUpLens(s), s.film_diagonal_mm);
@@ -468,7 +479,10 @@ struct Server::Impl {
                  j["plots"][plotKinds()[i].name] = plots[i].get();
                sendJson(res, j);
              }));
+  }
 
+  /// Scene previews, streamed as server-sent events: /api/preview, /api/cancel.
+  void previewRoutes() {
     http.Get("/api/preview", guard([this](const httplib::Request& rq, httplib::Response& res) {
                const std::string view = param(rq, "view").value_or("default");
                if (view.empty() || view.size() > 32 ||
@@ -493,7 +507,10 @@ struct Server::Impl {
                 const std::string view = param(rq, "view").value_or("default");
                 sendJson(res, {{"cancelled", views.cancel(view)}});
               }));
+  }
 
+  /// JSON messages for unknown paths and uncaught exceptions.
+  void errorHandlers() {
     http.set_error_handler([](const httplib::Request& rq, httplib::Response& res) {
       if (res.body.empty())
         sendJson(res,
@@ -505,6 +522,15 @@ struct Server::Impl {
         [](const httplib::Request&, httplib::Response& res, std::exception_ptr) {
           sendJson(res, {{"error", "internal error"}}, 500);
         });
+  }
+
+  void routes() {
+    refuseForeignHosts();
+    assetRoutes();
+    catalogueRoutes();
+    lensRoutes();
+    previewRoutes();
+    errorHandlers();
   }
 };
 

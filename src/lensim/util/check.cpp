@@ -6,8 +6,9 @@
 
 namespace lensim {
 
-void checkFailed(const char* condition, const char* file, int line) {
-  std::fprintf(stderr, "%s:%d: internal error: check failed: %s\n", file, line, condition);
+void checkFailed(const char* condition, const char* file, int line, const std::string& values) {
+  std::fprintf(stderr, "%s:%d: internal error: check failed: %s%s%s\n", file, line, condition,
+               values.empty() ? "" : " ", values.c_str());
   std::fflush(stderr);
   std::abort();
 }

@@ -110,9 +110,21 @@ void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavele
   addSample(x, y, L, lambda, w, nullptr);
 }
 
+namespace {
+
+/// A pixel sample lands inside the film's pixels (its tile is inside them).
+void checkInBounds(const PixelBounds& b, int x, int y) {
+  LENSIM_DCHECK_GE(x, b.x0);
+  LENSIM_DCHECK_LT(x, b.x1);
+  LENSIM_DCHECK_GE(y, b.y0);
+  LENSIM_DCHECK_LT(y, b.y1);
+}
+
+}  // namespace
+
 void Film::addSample(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
                      double w, const VisibleSurface* vs) {
-  DCHECK(x >= bounds_.x0 && x < bounds_.x1 && y >= bounds_.y0 && y < bounds_.y1);
+  checkInBounds(bounds_, x, y);
   const Vec3 sensor_rgb = toSensorRgb(L, lambda);
   const Vec3 rgb = recorded(sensor_rgb, L, lambda);
   const size_t i = size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0);
@@ -149,7 +161,7 @@ const std::vector<std::string>& Film::ghostChannels() {
 
 void Film::addGhost(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
                     double w) {
-  DCHECK(x >= bounds_.x0 && x < bounds_.x1 && y >= bounds_.y0 && y < bounds_.y1);
+  checkInBounds(bounds_, x, y);
   if (ghost_.empty()) return;
   const Vec3 rgb = recorded(toSensorRgb(L, lambda), L, lambda);
   const size_t i = size_t(y - bounds_.y0) * size_t(bounds_.width()) + size_t(x - bounds_.x0);

@@ -20,12 +20,20 @@
 
 namespace lensim::render {
 
+Vec3 materialShadingNormal(const SceneContext& sc, int material, const TextureEvalContext& tctx,
+                           const SurfaceHit& h) {
+  Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
+  if (sc.materials->hasBump(material))
+    ns = sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+  return ns;
+}
+
 SampledSpectrum RayIntegrator::Li(const camera::CameraRay* ray, double /*time*/,
                                   SampledWavelengths& lambda, Sampler& sampler,
                                   RayCounts& counts, Film& /*film*/,
                                   uint64_t& /*dropped*/) const {
-  DCHECK(ray != nullptr);
-  DCHECK(std::abs(length(ray->direction) - 1) < 1e-6);
+  LENSIM_DCHECK(ray != nullptr);
+  LENSIM_DCHECK_NEAR(length(ray->direction), 1, 1e-6);
   SampledSpectrum L = rayLi(ray->origin, ray->direction, ray->time, lambda, sampler, counts);
   // A dispersive lens that weights each wavelength by its own film point.
   if (ray->per_wavelength && !lambda.secondaryTerminated()) {
@@ -64,7 +72,7 @@ const IntegratorName& lookup(const std::string& type) {
 }  // namespace
 
 std::unique_ptr<Integrator> makeIntegrator(const IntegratorSetup& setup) {
-  CHECK(setup.scene && setup.sc && setup.media && setup.camera);
+  LENSIM_CHECK(setup.scene && setup.sc && setup.media && setup.camera);
   const scene::Scene& scene = *setup.scene;
   SceneContext& sc = *setup.sc;
   const Media& media = *setup.media;

@@ -108,6 +108,11 @@ struct IntegratorSetup {
 /// location for a splatting integrator with setup.refuses_splats set.
 std::unique_ptr<Integrator> makeIntegrator(const IntegratorSetup& setup);
 
+/// The shading normal at the hit h of `material` (texture context tctx): the material's normal
+/// map, then its bump map, applied to the interpolated normal h.ns.
+Vec3 materialShadingNormal(const SceneContext& sc, int material, const TextureEvalContext& tctx,
+                           const SurfaceHit& h);
+
 /// How emission found along a path's ray (an infinite light's where the ray escapes, an area
 /// light's where it hits one) is weighted against next-event estimation at the path's previous
 /// vertex. For each light with non-black emission Le along `ray` (hit: nullptr where the ray

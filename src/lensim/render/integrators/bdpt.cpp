@@ -79,9 +79,7 @@ bool makeSurfaceVertex(const Context& ctx, const SurfaceHit& h, const Vec3& ray_
   const int material = sc.materials->resolve(sc.scene->shapes[size_t(h.shape)].material, tctx, wo);
   if (sc.materials->isInterface(material)) return false;
   auto bxdf = sc.materials->bxdf(material, tctx, lambda, regularize);
-  Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
-  if (sc.materials->hasBump(material))
-    ns = sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+  const Vec3 ns = materialShadingNormal(sc, material, tctx, h);
   v = Vertex{};
   v.type = VertexType::Surface;
   v.p = h.p;

@@ -87,9 +87,7 @@ SampledSpectrum li(Ctx& c, Ray ray, int depth) {
   const Vec3 wo = -ray.d;
   if (const Light* area = c.sc.lights->areaLight(h.shape, h.prim)) L += area->L(h, wo, c.lambda);
   auto bxdf = c.sc.materials->bxdf(material, tctx, c.lambda);
-  Vec3 ns = c.sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
-  if (c.sc.materials->hasBump(material))
-    ns = c.sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+  const Vec3 ns = materialShadingNormal(c.sc, material, tctx, h);
   const BSDF bsdf(ns, h.dpdu, bxdf);
 
   const size_t n_lights = c.sc.lights->size();

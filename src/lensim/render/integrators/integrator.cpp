@@ -126,16 +126,13 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, dou
     }
     if (depth++ == sc.max_depth) break;
     auto bxdf = sc.materials->bxdf(material, tctx, lambda, sc.regularize && any_non_specular);
-    Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
-    if (sc.materials->hasBump(material))
-      ns = sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+    const Vec3 ns = materialShadingNormal(sc, material, tctx, h);
     const BSDF bsdf(ns, h.dpdu, bxdf);
     // Next-event estimation.
     const double u_light = sampler.get1D();
     const Vec2 u_light2 = sampler.get2D();
     if (isNonSpecular(bsdf.flags())) {
       if (auto choice = sc.lights->sample({h.p, ns}, u_light)) {
-        DCHECK(choice->pmf > 0 && choice->pmf <= 1 + 1e-9);
         if (auto ls = choice->light->sampleLi(h.p, u_light2, lambda)) {
           if (ls->pdf > 0 && !ls->L.isBlack()) {
             const SampledSpectrum f = bsdf.f(wo, ls->wi) * std::abs(dot(ls->wi, ns));
@@ -157,7 +154,8 @@ SampledSpectrum pathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, dou
     const Vec2 u = sampler.get2D();
     auto bs = bsdf.sample_f(wo, uc, u);
     if (!bs) break;
-    DCHECK(bs->pdf > 0 && std::isfinite(bs->pdf));
+    LENSIM_DCHECK_GT(bs->pdf, 0);
+    LENSIM_DCHECK_FINITE(bs->pdf);
     beta *= bs->f * (std::abs(dot(bs->wi, ns)) / bs->pdf);
     prev_pdf = bs->pdf_is_proportional ? bsdf.pdf(wo, bs->wi) : bs->pdf;
     specular_bounce = bs->isSpecular();

@@ -212,9 +212,7 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
     }
     if (depth++ == sc_->max_depth) break;
     auto bxdf = sc_->materials->bxdf(material, tctx, lambda, false);
-    Vec3 ns = sc_->materials->shadingNormal(material, tctx, h.ns, h.dpdu);
-    if (sc_->materials->hasBump(material))
-      ns = sc_->materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+    const Vec3 ns = materialShadingNormal(*sc_, material, tctx, h);
     const BSDF bsdf(ns, h.dpdu, bxdf);
     // Connect to the camera.
     const Vec2 u_cam = sampler.get2D();

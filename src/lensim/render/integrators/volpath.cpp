@@ -136,18 +136,128 @@ SampledSpectrum sampleLd(const SceneContext& sc, const Vertex& v, const SampledW
   return beta * f_hat * T_ray * ls->L / wavelengthMean(r_l + r_u, lambda);
 }
 
+/// The state of a volpath path between its vertices (beta, r_u, r_l: see the file comment).
+struct PathState {
+  SampledSpectrum L = SampledSpectrum(0.0), beta = SampledSpectrum(1.0);
+  SampledSpectrum r_u = SampledSpectrum(1.0), r_l = SampledSpectrum(1.0);
+  bool specular_bounce = false, any_non_specular = false;
+  Vec3 prev_p;
+  Vec3 prev_n{0, 0, 0};  ///< the previous vertex's shading normal (zero in a medium)
+  int depth = 0, walk_steps = 0;
+  Ray ray;
+};
+
+/// How the path's ray through a medium ended.
+enum class MediumResult {
+  ReachedSurface,  ///< it passed the medium up to the surface hit (or to infinity)
+  Scattered,       ///< it scattered: the state's ray is the new one
+  Ended,           ///< absorbed, out of depth or of throughput: the path ends
+};
+
+/// Delta tracking of the path's ray through medium m (of index `medium`) up to t_end, the hit's
+/// distance: emission at collisions, absorption, real scattering (with a light sample, except
+/// in a random walk) and null collisions chosen by the hero wavelength's probabilities.
+MediumResult traverseMedium(const SceneContext& sc, const Medium& m, int medium, double t_end,
+                            bool in_walk, double time, PathState& s, Rng& rng,
+                            SampledWavelengths& lambda, Sampler& sampler, RayCounts& counts) {
+  SampledSpectrum &L = s.L, &beta = s.beta, &r_u = s.r_u, &r_l = s.r_l;
+  bool &specular_bounce = s.specular_bounce, &any_non_specular = s.any_non_specular;
+  int &depth = s.depth, &walk_steps = s.walk_steps;
+  Vec3 &prev_p = s.prev_p, &prev_n = s.prev_n;
+  Ray& ray = s.ray;
+  bool scattered = false, terminated = false;
+  const Vec3 dir = ray.d / length(ray.d);
+  const double u = sampler.get1D();
+  double u_mode = sampler.get1D();  // the first collision's; then the stream's
+  const SampledSpectrum T_maj =
+      sampleTmaj(m, ray.o, dir, t_end, u, rng, lambda,
+                 [&](const Vec3& p, const MediumProperties& mp, const SampledSpectrum& smaj,
+                     const SampledSpectrum& Tm) {
+                   if (beta.isBlack()) {
+                     terminated = true;
+                     return false;
+                   }
+                   // Emission at the collision.
+                   if (depth < sc.max_depth && !mp.Le.isBlack()) {
+                     const double pdf = smaj[0] * Tm[0];
+                     const SampledSpectrum betap = beta * Tm / pdf;
+                     const SampledSpectrum r_e = r_u * smaj * Tm / pdf;
+                     if (!r_e.isBlack())
+                       L += betap * mp.sigma_a * mp.Le / wavelengthMean(r_e, lambda);
+                   }
+                   // Absorption, real scattering or a null collision, by the hero's
+                   // probabilities.
+                   const double p_absorb = mp.sigma_a[0] / smaj[0];
+                   const double p_scatter = mp.sigma_s[0] / smaj[0];
+                   const double um = u_mode;
+                   u_mode = rng.uniform();
+                   if (um < p_absorb) {
+                     terminated = true;
+                     return false;
+                   }
+                   if (um < p_absorb + p_scatter) {
+                     if (in_walk ? ++walk_steps > kMaxWalkSteps : depth++ >= sc.max_depth) {
+                       terminated = true;
+                       return false;
+                     }
+                     const double pdf = Tm[0] * mp.sigma_s[0];
+                     beta *= Tm * mp.sigma_s / pdf;
+                     r_u *= Tm * mp.sigma_s / pdf;
+                     if (!beta.isBlack() && !r_u.isBlack()) {
+                       const HenyeyGreenstein phase(m.g());
+                       Vertex v;
+                       v.p = p;
+                       v.time = time;
+                       v.wo = -dir;
+                       v.medium = medium;
+                       v.phase = &phase;
+                       if (!in_walk)
+                         L += sampleLd(sc, v, lambda, sampler, rng, beta, r_u, counts);
+                       auto ps = phase.sample(-dir, sampler.get2D());
+                       if (!ps || ps->pdf <= 0) {
+                         terminated = true;
+                       } else {
+                         beta *= ps->p / ps->pdf;
+                         r_l = r_u / ps->pdf;
+                         prev_p = p;
+                         prev_n = Vec3{0, 0, 0};
+                         scattered = true;
+                         ray = Ray{p, ps->wi, INFINITY, time};
+                         // Without a light sample, emission found next counts in full.
+                         specular_bounce = in_walk;
+                         any_non_specular = true;
+                       }
+                     }
+                     return false;
+                   }
+                   // Null collision (none for homogeneous media, whose majorant is sigma_t).
+                   const SampledSpectrum sigma_n = clampZero(smaj - mp.sigma_a - mp.sigma_s);
+                   const double pdf = Tm[0] * sigma_n[0];
+                   beta *= Tm * sigma_n / pdf;
+                   if (pdf == 0) beta = SampledSpectrum(0.0);
+                   r_u *= Tm * sigma_n / pdf;
+                   r_l *= Tm * smaj / pdf;
+                   return !beta.isBlack() && !r_u.isBlack();
+                 });
+  if (terminated || beta.isBlack() || r_u.isBlack()) return MediumResult::Ended;
+  if (scattered) return MediumResult::Scattered;
+  beta *= T_maj / T_maj[0];
+  r_u *= T_maj / T_maj[0];
+  r_l *= T_maj / T_maj[0];
+  return MediumResult::ReachedSurface;
+}
+
 }  // namespace
 
 SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, double time,
                           int medium, SampledWavelengths& lambda, Sampler& sampler,
                           RayCounts& counts) {
-  SampledSpectrum L(0.0), beta(1.0), r_u(1.0), r_l(1.0);
-  bool specular_bounce = false, any_non_specular = false;
+  PathState s;
+  SampledSpectrum &L = s.L, &beta = s.beta, &r_u = s.r_u, &r_l = s.r_l;
+  bool &specular_bounce = s.specular_bounce, &any_non_specular = s.any_non_specular;
   double eta_scale = 1;
-  Vec3 prev_p;
-  // The previous vertex's shading normal (zero in a medium), for the light sampler.
-  Vec3 prev_n{0, 0, 0};
-  int depth = 0, walk_steps = 0;
+  Vec3 &prev_p = s.prev_p, &prev_n = s.prev_n;
+  int &depth = s.depth, &walk_steps = s.walk_steps;
   InterfaceGuard interfaces;
   // The walk in a textured subsurface material: its medium index and coefficients.
   WalkMedium walk;
@@ -157,94 +267,19 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
   Rng rng;
   if (has_media) rng = pathRng(sampler);
   if (!has_media || !sc.scene_media) medium = -1;
-  Ray ray{o, d, INFINITY, time};
+  Ray& ray = s.ray;
+  ray = Ray{o, d, INFINITY, time};
   for (;;) {
     auto hit = intersectScene(sc, ray, counts);
     // Inside a subsurface shape (a random walk): its boundary is no light's window (it is not
     // an interface), so no light is sampled from inside and scattering is not counted as depth.
     const bool in_walk = has_media && sc.media->isSubsurface(medium);
     if (const Medium* m = has_media ? trackedMedium(sc, medium, walk_index, walk) : nullptr) {
-      bool scattered = false, terminated = false;
-      const double len = length(ray.d);
-      const Vec3 dir = ray.d / len;
-      const double t_end = hit ? hit->t * len : INFINITY;
-      const double u = sampler.get1D();
-      double u_mode = sampler.get1D();  // the first collision's; then the stream's
-      const SampledSpectrum T_maj =
-          sampleTmaj(*m, ray.o, dir, t_end, u, rng, lambda,
-                     [&](const Vec3& p, const MediumProperties& mp, const SampledSpectrum& smaj,
-                         const SampledSpectrum& Tm) {
-                       if (beta.isBlack()) {
-                         terminated = true;
-                         return false;
-                       }
-                       // Emission at the collision.
-                       if (depth < sc.max_depth && !mp.Le.isBlack()) {
-                         const double pdf = smaj[0] * Tm[0];
-                         const SampledSpectrum betap = beta * Tm / pdf;
-                         const SampledSpectrum r_e = r_u * smaj * Tm / pdf;
-                         if (!r_e.isBlack())
-                           L += betap * mp.sigma_a * mp.Le / wavelengthMean(r_e, lambda);
-                       }
-                       // Absorption, real scattering or a null collision, by the hero's
-                       // probabilities.
-                       const double p_absorb = mp.sigma_a[0] / smaj[0];
-                       const double p_scatter = mp.sigma_s[0] / smaj[0];
-                       const double um = u_mode;
-                       u_mode = rng.uniform();
-                       if (um < p_absorb) {
-                         terminated = true;
-                         return false;
-                       }
-                       if (um < p_absorb + p_scatter) {
-                         if (in_walk ? ++walk_steps > kMaxWalkSteps : depth++ >= sc.max_depth) {
-                           terminated = true;
-                           return false;
-                         }
-                         const double pdf = Tm[0] * mp.sigma_s[0];
-                         beta *= Tm * mp.sigma_s / pdf;
-                         r_u *= Tm * mp.sigma_s / pdf;
-                         if (!beta.isBlack() && !r_u.isBlack()) {
-                           const HenyeyGreenstein phase(m->g());
-                           Vertex v;
-                           v.p = p;
-                           v.time = time;
-                           v.wo = -dir;
-                           v.medium = medium;
-                           v.phase = &phase;
-                           if (!in_walk)
-                             L += sampleLd(sc, v, lambda, sampler, rng, beta, r_u, counts);
-                           auto ps = phase.sample(-dir, sampler.get2D());
-                           if (!ps || ps->pdf <= 0) {
-                             terminated = true;
-                           } else {
-                             beta *= ps->p / ps->pdf;
-                             r_l = r_u / ps->pdf;
-                             prev_p = p;
-                             prev_n = Vec3{0, 0, 0};
-                             scattered = true;
-                             ray = Ray{p, ps->wi, INFINITY, time};
-                             // Without a light sample, emission found next counts in full.
-                             specular_bounce = in_walk;
-                             any_non_specular = true;
-                           }
-                         }
-                         return false;
-                       }
-                       // Null collision (none for homogeneous media, whose majorant is sigma_t).
-                       const SampledSpectrum sigma_n = clampZero(smaj - mp.sigma_a - mp.sigma_s);
-                       const double pdf = Tm[0] * sigma_n[0];
-                       beta *= Tm * sigma_n / pdf;
-                       if (pdf == 0) beta = SampledSpectrum(0.0);
-                       r_u *= Tm * sigma_n / pdf;
-                       r_l *= Tm * smaj / pdf;
-                       return !beta.isBlack() && !r_u.isBlack();
-                     });
-      if (terminated || beta.isBlack() || r_u.isBlack()) return L;
-      if (scattered) continue;
-      beta *= T_maj / T_maj[0];
-      r_u *= T_maj / T_maj[0];
-      r_l *= T_maj / T_maj[0];
+      const double t_end = hit ? hit->t * length(ray.d) : INFINITY;
+      const MediumResult r = traverseMedium(sc, *m, medium, t_end, in_walk, time, s, rng, lambda,
+                                            sampler, counts);
+      if (r == MediumResult::Ended) return L;
+      if (r == MediumResult::Scattered) continue;
     }
 
     // Emission found by BSDF or phase sampling: the balance heuristic over the averaged r_u and
@@ -274,9 +309,7 @@ SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, 
     }
     if (in_walk ? ++walk_steps > kMaxWalkSteps : depth++ >= sc.max_depth) break;
     auto bxdf = sc.materials->bxdf(material, tctx, lambda, sc.regularize && any_non_specular);
-    Vec3 ns = sc.materials->shadingNormal(material, tctx, h.ns, h.dpdu);
-    if (sc.materials->hasBump(material))
-      ns = sc.materials->bumpedNormal(material, tctx, ns, h.dpdu, h.dpdv, h.dndu, h.dndv);
+    const Vec3 ns = materialShadingNormal(sc, material, tctx, h);
     const BSDF bsdf(ns, h.dpdu, bxdf);
     if (isNonSpecular(bsdf.flags())) {
       Vertex v;

@@ -22,8 +22,9 @@
 #include "lensim/sampling/sampling.h"
 
 namespace lensim::scene {
+struct Light;
 struct Scene;
-}
+}  // namespace lensim::scene
 
 namespace lensim::render {
 
@@ -140,6 +141,12 @@ class LightSet {
   const std::string& samplerName() const { return sampler_name_; }
 
  private:
+  /// Adds the light `l` (a type other than "diffuse"); radius and centre bound the scene.
+  void addLight(const scene::Light& l, const Textures& textures, double radius,
+                const Vec3& centre);
+  /// Adds the lights of the shapes with an area light (area_lights.cpp).
+  void addAreaLights(const scene::Scene& scene, const Accel& accel, const Textures& textures);
+
   std::vector<std::unique_ptr<Light>> lights_;
   std::vector<const Light*> infinite_;
   std::vector<int> shape_first_light_;  ///< per shape: index of its first light, or -1

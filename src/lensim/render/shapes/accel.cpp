@@ -92,6 +92,14 @@ struct Accel::Impl {
     if (device) rtcReleaseDevice(device);
   }
 
+  /// Creates the Embree geometry of records[ri] and attaches it to its scene (the top level, an
+  /// object definition's, or an animated shape's own scene under a MotionWrapper).
+  void addRecordGeometry(size_t ri, bool compact_objects);
+  /// Attaches the object instances to the top-level scene (after the object scenes are
+  /// committed): Embree instances, or MotionWrappers for instances that move while the shutter
+  /// is open.
+  void addInstances();
+
   void check(const char* what) {
     std::lock_guard lock(error_mutex);
     if (!error.empty()) throw Error(fmt::format("Embree error while {}: {}", what, error));
@@ -280,10 +288,203 @@ RTCGeometry newMotionGeometry(RTCDevice device, MotionWrapper* w) {
   return g;
 }
 
+/// Shape i of the scene in its space (see ShapeRecord); nullopt for a mesh or curve without
+/// primitives.
+std::optional<ShapeRecord> shapeRecord(const scene::Scene& scene, size_t i) {
+  const scene::Shape& s = scene.shapes[i];
+  ShapeRecord r;
+  r.shape = static_cast<int>(i);
+  r.desc = &s;
+  Transform xf = s.transform;  // space from object
+  if (s.motion >= 0) {
+    const AnimatedTransform& motion = scene.motions[static_cast<size_t>(s.motion)];
+    if (auto steady = steadyTransform(scene, motion)) {
+      xf = *steady;
+    } else {
+      r.motion = &motion;
+      xf = Transform();  // the wrapper places the object space
+    }
+  }
+  r.space_from_object = xf;
+  r.object_from_space = inverse(xf);
+  // pbrt-v4 builds an animated shape with an identity render-from-object transform
+  // (BasicSceneBuilder::Shape, src/pbrt/scene.cpp), so only ReverseOrientation flips it; its
+  // normals are then carried out by the interpolated transform.
+  r.flip = r.motion ? s.reverse_orientation : s.flipNormals();
+  if (s.type == scene::ShapeType::TriangleMesh || s.type == scene::ShapeType::BilinearMesh) {
+    if (s.mesh < 0) return std::nullopt;
+    const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(s.mesh)];
+    if (mesh.indices.empty()) return std::nullopt;
+    r.vertices_per_face = mesh.vertices_per_face;
+    r.p.reserve(mesh.positions.size());
+    for (const Vec3f& q : mesh.positions) {
+      r.p.push_back(xf.applyPoint(Vec3(q)));
+      r.bounds.extend(r.p.back());
+    }
+    for (const Vec3f& q : mesh.normals) {
+      Vec3 nn = xf.applyNormal(Vec3(q));
+      r.n.push_back(length(nn) > 0 ? normalize(nn) : nn);
+    }
+    for (const auto& t : mesh.uvs) r.uv.push_back({t[0], t[1]});
+    r.indices = mesh.indices;  // a view: a copy would cost 12 bytes per triangle
+  } else if (s.type == scene::ShapeType::Curve) {
+    if (s.curve < 0) return std::nullopt;
+    const scene::Curve& c = scene.curves[static_cast<size_t>(s.curve)];
+    if (c.cp.empty()) return std::nullopt;
+    r.curve = &c;
+    r.curve_space = curveInSpace(c, xf);
+    r.bounds = r.curve_space.bounds;
+  } else {
+    r.bounds = xf.applyBounds(quadricObjectBounds(s));
+  }
+  return r;
+}
+
+/// An Embree triangle or quad mesh of the record's faces (not committed).
+RTCGeometry newMeshGeometry(RTCDevice device, const ShapeRecord& r) {
+  const bool quads = r.vertices_per_face == 4;
+  RTCGeometry g =
+      rtcNewGeometry(device, quads ? RTC_GEOMETRY_TYPE_QUAD : RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+      g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), r.p.size()));
+  for (size_t k = 0; k < r.p.size(); ++k) {
+    v[3 * k] = float(r.p[k].x), v[3 * k + 1] = float(r.p[k].y), v[3 * k + 2] = float(r.p[k].z);
+  }
+  const size_t faces = r.indices.size() / static_cast<size_t>(r.vertices_per_face);
+  if (quads) {
+    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), faces));
+    for (size_t f = 0; f < faces; ++f) {
+      // pbrt's patch (p00, p10, p01, p11) as Embree's cyclic quad (p00, p10, p11, p01).
+      idx[4 * f] = unsigned(r.indices[4 * f]);
+      idx[4 * f + 1] = unsigned(r.indices[4 * f + 1]);
+      idx[4 * f + 2] = unsigned(r.indices[4 * f + 3]);
+      idx[4 * f + 3] = unsigned(r.indices[4 * f + 2]);
+    }
+  } else {
+    // Embree reads the scene mesh's indices in place (the builder checked them against the
+    // vertex count; an int and an unsigned share their representation for those values):
+    // no second copy of 12 bytes per triangle. Embree never writes an index buffer.
+    static_assert(sizeof(int) == sizeof(unsigned));
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                               const_cast<int*>(r.indices.data()), 0, 3 * sizeof(unsigned),
+                               faces);
+  }
+  return g;
+}
+
 }  // namespace
 
 // Top-level primitives above which the BVH is built with Embree's medium quality.
 constexpr size_t kHighQualityBuildLimit = size_t{1} << 20;
+
+void Accel::Impl::addRecordGeometry(size_t ri, bool compact_objects) {
+  ShapeRecord& r = records[ri];
+  const scene::Shape& s = *r.desc;
+  RTCScene target = top;
+  if (s.object >= 0) {
+    RTCScene& os = object_scenes[static_cast<size_t>(s.object)];
+    if (!os) {
+      os = rtcNewScene(device);
+      if (compact_objects) rtcSetSceneFlags(os, RTC_SCENE_FLAG_COMPACT);
+    }
+    target = os;
+  }
+  RTCScene parent = target;
+  if (r.motion) {
+    target = rtcNewScene(device);
+    rtcSetSceneBuildQuality(target, RTC_BUILD_QUALITY_HIGH);
+    motion_scenes.push_back(target);
+  }
+  RTCGeometry g;
+  if (r.curve) {
+    g = newCurveGeometry(device, *r.curve, r.curve_space);
+  } else if (!r.indices.empty()) {
+    g = newMeshGeometry(device, r);
+    if (s.object < 0 && s.area_light >= 0) {  // kept only for emitters (light sampling)
+      WorldMesh wm;
+      wm.vertices_per_face = r.vertices_per_face;
+      wm.p = r.p;
+      wm.n = r.n;
+      wm.uv = r.uv;
+      wm.flip = r.flip;
+      wm.indices.assign(r.indices.begin(), r.indices.end());
+      shape_world_mesh[static_cast<size_t>(r.shape)] = static_cast<int>(world_meshes.size());
+      world_meshes.push_back(std::move(wm));
+    }
+  } else {
+    g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, 1);
+    rtcSetGeometryUserData(g, &r);
+    rtcSetGeometryBoundsFunction(g, quadricBounds, nullptr);
+    rtcSetGeometryIntersectFunction(g, quadricIntersect);
+    rtcSetGeometryOccludedFunction(g, quadricOccluded);
+  }
+  rtcCommitGeometry(g);
+  unsigned id = rtcAttachGeometry(target, g);
+  rtcReleaseGeometry(g);
+  if (r.motion) {
+    rtcCommitScene(target);
+    auto w = std::make_unique<MotionWrapper>();
+    w->motion = r.motion;
+    w->inner = target;
+    w->bounds =
+        r.motion->motionBounds(r.bounds, scene->camera.shutter_open, scene->camera.shutter_close);
+    RTCGeometry wg = newMotionGeometry(device, w.get());
+    id = rtcAttachGeometry(parent, wg);
+    rtcReleaseGeometry(wg);
+    wrappers.push_back(std::move(w));
+  }
+  auto& map = s.object >= 0 ? object_geom[static_cast<size_t>(s.object)] : top_geom;
+  if (map.size() <= id) map.resize(id + 1, -1);
+  map[id] = static_cast<int>(ri);
+  if (s.object < 0) {
+    if (top_geom_instance.size() <= id) top_geom_instance.resize(id + 1, -1);
+  }
+}
+
+void Accel::Impl::addInstances() {
+  instance_transform.resize(scene->instances.size());
+  instance_motion.assign(scene->instances.size(), nullptr);
+  for (size_t i = 0; i < scene->instances.size(); ++i) {
+    const scene::Instance& inst = scene->instances[i];
+    RTCScene os = object_scenes[static_cast<size_t>(inst.object)];
+    if (!os) continue;  // an empty object
+    std::optional<Transform> steady = inst.transform;
+    if (inst.motion >= 0) steady = steadyTransform(*scene, scene->motions[size_t(inst.motion)]);
+    instance_transform[i] = steady.value_or(Transform());
+    RTCGeometry g;
+    if (steady) {
+      g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+      rtcSetGeometryInstancedScene(g, os);
+      float xfm[12];  // column-major 3x4
+      for (int c = 0; c < 4; ++c)
+        for (int rr = 0; rr < 3; ++rr) xfm[3 * c + rr] = float((*steady)(rr, c));
+      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+      rtcCommitGeometry(g);
+    } else {
+      auto w = std::make_unique<MotionWrapper>();
+      w->motion = &scene->motions[size_t(inst.motion)];
+      w->inner = os;
+      w->instance = static_cast<int>(i);
+      instance_motion[i] = w->motion;
+      RTCBounds ob;
+      rtcGetSceneBounds(os, &ob);
+      Bounds3 object_bounds;
+      object_bounds.extend({ob.lower_x, ob.lower_y, ob.lower_z});
+      object_bounds.extend({ob.upper_x, ob.upper_y, ob.upper_z});
+      w->bounds = w->motion->motionBounds(object_bounds, scene->camera.shutter_open,
+                                          scene->camera.shutter_close);
+      g = newMotionGeometry(device, w.get());
+      wrappers.push_back(std::move(w));
+    }
+    const unsigned id = rtcAttachGeometry(top, g);
+    rtcReleaseGeometry(g);
+    if (top_geom.size() <= id) top_geom.resize(id + 1, -1);
+    if (top_geom_instance.size() <= id) top_geom_instance.resize(id + 1, -1);
+    top_geom_instance[id] = static_cast<int>(i);
+  }
+}
 
 Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
@@ -302,54 +503,10 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
   // Records first (their addresses must not move once Embree holds them).
   m.records.reserve(scene.shapes.size());
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
-    const scene::Shape& s = scene.shapes[i];
-    ShapeRecord r;
-    r.shape = static_cast<int>(i);
-    r.desc = &s;
-    Transform xf = s.transform;  // space from object
-    if (s.motion >= 0) {
-      const AnimatedTransform& motion = scene.motions[static_cast<size_t>(s.motion)];
-      if (auto steady = steadyTransform(scene, motion)) {
-        xf = *steady;
-      } else {
-        r.motion = &motion;
-        xf = Transform();  // the wrapper places the object space
-      }
-    }
-    r.space_from_object = xf;
-    r.object_from_space = inverse(xf);
-    // pbrt-v4 builds an animated shape with an identity render-from-object transform
-    // (BasicSceneBuilder::Shape, src/pbrt/scene.cpp), so only ReverseOrientation flips it; its
-    // normals are then carried out by the interpolated transform.
-    r.flip = r.motion ? s.reverse_orientation : s.flipNormals();
-    if (s.type == scene::ShapeType::TriangleMesh || s.type == scene::ShapeType::BilinearMesh) {
-      if (s.mesh < 0) continue;
-      const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(s.mesh)];
-      if (mesh.indices.empty()) continue;
-      r.vertices_per_face = mesh.vertices_per_face;
-      r.p.reserve(mesh.positions.size());
-      for (const Vec3f& q : mesh.positions) {
-        r.p.push_back(xf.applyPoint(Vec3(q)));
-        r.bounds.extend(r.p.back());
-      }
-      for (const Vec3f& q : mesh.normals) {
-        Vec3 nn = xf.applyNormal(Vec3(q));
-        r.n.push_back(length(nn) > 0 ? normalize(nn) : nn);
-      }
-      for (const auto& t : mesh.uvs) r.uv.push_back({t[0], t[1]});
-      r.indices = mesh.indices;  // a view: a copy would cost 12 bytes per triangle
-    } else if (s.type == scene::ShapeType::Curve) {
-      if (s.curve < 0) continue;
-      const scene::Curve& c = scene.curves[static_cast<size_t>(s.curve)];
-      if (c.cp.empty()) continue;
-      r.curve = &c;
-      r.curve_space = curveInSpace(c, xf);
-      r.bounds = r.curve_space.bounds;
-    } else {
-      r.bounds = xf.applyBounds(quadricObjectBounds(s));
-    }
+    std::optional<ShapeRecord> r = shapeRecord(scene, i);
+    if (!r) continue;
     m.shape_record[i] = static_cast<int>(m.records.size());
-    m.records.push_back(std::move(r));
+    m.records.push_back(std::move(*r));
   }
   // Embree's high-quality build (spatial splits) pays for itself on scenes of moderate size; on
   // millions of top-level primitives it costs more time and memory in the build than it saves in
@@ -369,139 +526,11 @@ Accel::Accel(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) {
     if (r.desc->object >= 0 && r.vertices_per_face > 0)
       object_primitives += r.indices.size() / static_cast<size_t>(r.vertices_per_face);
   const bool compact_objects = object_primitives > kHighQualityBuildLimit;
-  for (size_t ri = 0; ri < m.records.size(); ++ri) {
-    ShapeRecord& r = m.records[ri];
-    const scene::Shape& s = *r.desc;
-    RTCScene target = m.top;
-    if (s.object >= 0) {
-      RTCScene& os = m.object_scenes[static_cast<size_t>(s.object)];
-      if (!os) {
-        os = rtcNewScene(m.device);
-        if (compact_objects) rtcSetSceneFlags(os, RTC_SCENE_FLAG_COMPACT);
-      }
-      target = os;
-    }
-    RTCScene parent = target;
-    if (r.motion) {
-      target = rtcNewScene(m.device);
-      rtcSetSceneBuildQuality(target, RTC_BUILD_QUALITY_HIGH);
-      m.motion_scenes.push_back(target);
-    }
-    RTCGeometry g;
-    if (r.curve) {
-      g = newCurveGeometry(m.device, *r.curve, r.curve_space);
-    } else if (!r.indices.empty()) {
-      const bool quads = r.vertices_per_face == 4;
-      g = rtcNewGeometry(m.device, quads ? RTC_GEOMETRY_TYPE_QUAD : RTC_GEOMETRY_TYPE_TRIANGLE);
-      auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-          g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), r.p.size()));
-      for (size_t k = 0; k < r.p.size(); ++k) {
-        v[3 * k] = float(r.p[k].x), v[3 * k + 1] = float(r.p[k].y), v[3 * k + 2] = float(r.p[k].z);
-      }
-      const size_t faces = r.indices.size() / static_cast<size_t>(r.vertices_per_face);
-      if (quads) {
-        auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-            g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), faces));
-        for (size_t f = 0; f < faces; ++f) {
-          // pbrt's patch (p00, p10, p01, p11) as Embree's cyclic quad (p00, p10, p11, p01).
-          idx[4 * f] = unsigned(r.indices[4 * f]);
-          idx[4 * f + 1] = unsigned(r.indices[4 * f + 1]);
-          idx[4 * f + 2] = unsigned(r.indices[4 * f + 3]);
-          idx[4 * f + 3] = unsigned(r.indices[4 * f + 2]);
-        }
-      } else {
-        // Embree reads the scene mesh's indices in place (the builder checked them against the
-        // vertex count; an int and an unsigned share their representation for those values):
-        // no second copy of 12 bytes per triangle. Embree never writes an index buffer.
-        static_assert(sizeof(int) == sizeof(unsigned));
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                   const_cast<int*>(r.indices.data()), 0, 3 * sizeof(unsigned),
-                                   faces);
-      }
-      if (s.object < 0 && s.area_light >= 0) {  // kept only for emitters (light sampling)
-        WorldMesh wm;
-        wm.vertices_per_face = r.vertices_per_face;
-        wm.p = r.p;
-        wm.n = r.n;
-        wm.uv = r.uv;
-        wm.flip = r.flip;
-        wm.indices.assign(r.indices.begin(), r.indices.end());
-        m.shape_world_mesh[static_cast<size_t>(r.shape)] = static_cast<int>(m.world_meshes.size());
-        m.world_meshes.push_back(std::move(wm));
-      }
-    } else {
-      g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_USER);
-      rtcSetGeometryUserPrimitiveCount(g, 1);
-      rtcSetGeometryUserData(g, &r);
-      rtcSetGeometryBoundsFunction(g, quadricBounds, nullptr);
-      rtcSetGeometryIntersectFunction(g, quadricIntersect);
-      rtcSetGeometryOccludedFunction(g, quadricOccluded);
-    }
-    rtcCommitGeometry(g);
-    unsigned id = rtcAttachGeometry(target, g);
-    rtcReleaseGeometry(g);
-    if (r.motion) {
-      rtcCommitScene(target);
-      auto w = std::make_unique<MotionWrapper>();
-      w->motion = r.motion;
-      w->inner = target;
-      w->bounds =
-          r.motion->motionBounds(r.bounds, scene.camera.shutter_open, scene.camera.shutter_close);
-      RTCGeometry wg = newMotionGeometry(m.device, w.get());
-      id = rtcAttachGeometry(parent, wg);
-      rtcReleaseGeometry(wg);
-      m.wrappers.push_back(std::move(w));
-    }
-    auto& map = s.object >= 0 ? m.object_geom[static_cast<size_t>(s.object)] : m.top_geom;
-    if (map.size() <= id) map.resize(id + 1, -1);
-    map[id] = static_cast<int>(ri);
-    if (s.object < 0) {
-      if (m.top_geom_instance.size() <= id) m.top_geom_instance.resize(id + 1, -1);
-    }
-  }
+  for (size_t ri = 0; ri < m.records.size(); ++ri) m.addRecordGeometry(ri, compact_objects);
   for (RTCScene os : m.object_scenes)
     if (os) rtcCommitScene(os);
   m.check("building object definitions");
-  m.instance_transform.resize(scene.instances.size());
-  m.instance_motion.assign(scene.instances.size(), nullptr);
-  for (size_t i = 0; i < scene.instances.size(); ++i) {
-    const scene::Instance& inst = scene.instances[i];
-    RTCScene os = m.object_scenes[static_cast<size_t>(inst.object)];
-    if (!os) continue;  // an empty object
-    std::optional<Transform> steady = inst.transform;
-    if (inst.motion >= 0) steady = steadyTransform(scene, scene.motions[size_t(inst.motion)]);
-    m.instance_transform[i] = steady.value_or(Transform());
-    RTCGeometry g;
-    if (steady) {
-      g = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_INSTANCE);
-      rtcSetGeometryInstancedScene(g, os);
-      float xfm[12];  // column-major 3x4
-      for (int c = 0; c < 4; ++c)
-        for (int rr = 0; rr < 3; ++rr) xfm[3 * c + rr] = float((*steady)(rr, c));
-      rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
-      rtcCommitGeometry(g);
-    } else {
-      auto w = std::make_unique<MotionWrapper>();
-      w->motion = &scene.motions[size_t(inst.motion)];
-      w->inner = os;
-      w->instance = static_cast<int>(i);
-      m.instance_motion[i] = w->motion;
-      RTCBounds ob;
-      rtcGetSceneBounds(os, &ob);
-      Bounds3 object_bounds;
-      object_bounds.extend({ob.lower_x, ob.lower_y, ob.lower_z});
-      object_bounds.extend({ob.upper_x, ob.upper_y, ob.upper_z});
-      w->bounds = w->motion->motionBounds(object_bounds, scene.camera.shutter_open,
-                                          scene.camera.shutter_close);
-      g = newMotionGeometry(m.device, w.get());
-      m.wrappers.push_back(std::move(w));
-    }
-    const unsigned id = rtcAttachGeometry(m.top, g);
-    rtcReleaseGeometry(g);
-    if (m.top_geom.size() <= id) m.top_geom.resize(id + 1, -1);
-    if (m.top_geom_instance.size() <= id) m.top_geom_instance.resize(id + 1, -1);
-    m.top_geom_instance[id] = static_cast<int>(i);
-  }
+  m.addInstances();
   rtcCommitScene(m.top);
   m.check("building the scene");
   RTCBounds b;
@@ -559,6 +588,125 @@ Vec3 perpendicular(const Vec3& n) {
   return normalize(cross(n, a));
 }
 
+/// A hit's surface in its record's space (world, an instance's or an animated shape's object
+/// space): the fields of SurfaceHit that the record's transform carries to world.
+struct LocalHit {
+  Vec3 p, ng, ns, dpdu;
+  Vec3 dpdv{0, 0, 0}, dndu{0, 0, 0}, dndv{0, 0, 0};
+  Vec2 uv;
+};
+
+/// The surface of a curve segment hit at Embree's (u, v) and ray parameter t.
+LocalHit curveHit(const ShapeRecord& r, int prim, const RTCHit& hit, const Vec3& o, const Vec3& d,
+                  double t) {
+  LocalHit out;
+  const CurveHitGeometry g =
+      curveHitGeometry(*r.curve, r.curve_space, static_cast<size_t>(prim), hit.u, hit.v,
+                       Vec3{hit.Ng_x, hit.Ng_y, hit.Ng_z}, o + d * t, d);
+  out.p = g.p;
+  out.ng = r.flip ? -g.n : g.n;
+  out.ns = out.ng;
+  out.dpdu = g.dpdu;
+  out.dpdv = g.dpdv;
+  out.uv = g.uv;
+  return out;
+}
+
+/// The surface of a quadric hit by the ray (o, d); refines t in double precision from the
+/// object-space ray (Embree's float t is the start).
+LocalHit quadricHit(const ShapeRecord& r, const Vec3& o, const Vec3& d, double& t) {
+  LocalHit out;
+  const Vec3 oo = r.object_from_space.applyPoint(o), od = r.object_from_space.applyVector(d);
+  const double t0 = std::max(0.0, t * (1 - 1e-4) - 1e-7);
+  auto refined = intersectQuadric(*r.desc, oo, od, t0, t * (1 + 1e-4) + 1e-7);
+  if (refined) t = *refined;
+  const LocalGeometry g = quadricGeometry(*r.desc, oo + od * t);
+  out.p = r.space_from_object.applyPoint(g.p);
+  out.ng = normalize(r.space_from_object.applyNormal(g.n));
+  if (r.flip) out.ng = -out.ng;
+  out.ns = out.ng;
+  out.dpdu = r.space_from_object.applyVector(g.dpdu);
+  out.dpdv = r.space_from_object.applyVector(g.dpdv);
+  out.dndu = r.space_from_object.applyNormal(g.dndu);
+  out.dndv = r.space_from_object.applyNormal(g.dndv);
+  out.uv = g.uv;
+  return out;
+}
+
+/// The surface of triangle `prim` at Embree's barycentrics (hit.u, hit.v).
+LocalHit triangleHit(const ShapeRecord& r, int prim, const RTCHit& hit) {
+  LocalHit out;
+  const int* f = &r.indices[3 * static_cast<size_t>(prim)];
+  const Vec3 &p0 = r.p[size_t(f[0])], &p1 = r.p[size_t(f[1])], &p2 = r.p[size_t(f[2])];
+  const double b1 = hit.u, b2 = hit.v, b0 = 1 - b1 - b2;
+  out.p = p0 * b0 + p1 * b1 + p2 * b2;
+  Vec3 n = cross(p0 - p2, p1 - p2);
+  out.ng = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
+  Vec2 uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
+  if (!r.uv.empty()) uv0 = r.uv[size_t(f[0])], uv1 = r.uv[size_t(f[1])], uv2 = r.uv[size_t(f[2])];
+  out.uv = uv0 * b0 + uv1 * b1 + uv2 * b2;
+  const Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
+  const double det = duv02.x * duv12.y - duv02.y * duv12.x;
+  if (std::abs(det) > 1e-12) {
+    out.dpdu = ((p0 - p2) * duv12.y - (p1 - p2) * duv02.y) / det;
+    // pbrt-v4 Triangle::InteractionFromIntersection: dp/dv, and dn/du, dn/dv from the
+    // vertex normals.
+    out.dpdv = ((p1 - p2) * duv02.x - (p0 - p2) * duv12.x) / det;
+    if (!r.n.empty()) {
+      const Vec3 dn1 = r.n[size_t(f[0])] - r.n[size_t(f[2])];
+      const Vec3 dn2 = r.n[size_t(f[1])] - r.n[size_t(f[2])];
+      out.dndu = (dn1 * duv12.y - dn2 * duv02.y) / det;
+      out.dndv = (dn2 * duv02.x - dn1 * duv12.x) / det;
+    }
+  }
+  if (!r.n.empty()) {
+    Vec3 sn = r.n[size_t(f[0])] * b0 + r.n[size_t(f[1])] * b1 + r.n[size_t(f[2])] * b2;
+    out.ns = length(sn) > 0 ? normalize(sn) : out.ng;
+    out.ng = faceForward(out.ng, out.ns);
+  } else {
+    if (r.flip) out.ng = -out.ng;
+    out.ns = out.ng;
+  }
+  return out;
+}
+
+/// The surface of bilinear patch `prim` at Embree's (hit.u, hit.v) on the ray (o, d) at t.
+LocalHit bilinearHit(const ShapeRecord& r, int prim, const RTCHit& hit, const Vec3& o,
+                     const Vec3& d, double t) {
+  LocalHit out;
+  const int* f = &r.indices[4 * static_cast<size_t>(prim)];
+  const Vec3 &p00 = r.p[size_t(f[0])], &p10 = r.p[size_t(f[1])], &p01 = r.p[size_t(f[2])],
+             &p11 = r.p[size_t(f[3])];
+  const double u = hit.u, v = hit.v;
+  // The point on the triangle Embree hit (a warped patch's bilinear point at (u, v) is off
+  // that surface).
+  out.p = o + d * t;
+  out.dpdu = (p10 - p00) * (1 - v) + (p11 - p01) * v;
+  out.dpdv = (p01 - p00) * (1 - u) + (p11 - p10) * u;
+  Vec3 n = cross(out.dpdu, out.dpdv);
+  out.ng = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
+  // The surface Embree intersects is one of the patch's two triangles: its normal (oriented as
+  // the patch's) is the geometric normal, so light pdfs use the surface actually hit.
+  const Vec3 tn{hit.Ng_x, hit.Ng_y, hit.Ng_z};
+  if (length(tn) > 0) out.ng = dot(tn, out.ng) < 0 ? -normalize(tn) : normalize(tn);
+  out.uv = {u, v};
+  if (!r.uv.empty()) {
+    const Vec2 &a = r.uv[size_t(f[0])], &b = r.uv[size_t(f[1])], &c = r.uv[size_t(f[2])],
+               &e = r.uv[size_t(f[3])];
+    out.uv = (a * (1 - u) + b * u) * (1 - v) + (c * (1 - u) + e * u) * v;
+  }
+  if (!r.n.empty()) {
+    const Vec3 sn = (r.n[size_t(f[0])] * (1 - u) + r.n[size_t(f[1])] * u) * (1 - v) +
+                    (r.n[size_t(f[2])] * (1 - u) + r.n[size_t(f[3])] * u) * v;
+    out.ns = length(sn) > 0 ? normalize(sn) : out.ng;
+    out.ng = faceForward(out.ng, out.ns);
+  } else {
+    if (r.flip) out.ng = -out.ng;
+    out.ns = out.ng;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
@@ -613,99 +761,17 @@ std::optional<SurfaceHit> Accel::intersect(const Ray& ray) const {
   }
   h.shape = r.shape;
   h.prim = static_cast<int>(rh.hit.primID);
-  Vec3 p, ng, ns, dpdu;
-  Vec3 dpdv{0, 0, 0}, dndu{0, 0, 0}, dndv{0, 0, 0};
-  Vec2 uv;
-  if (r.curve) {
-    const CurveHitGeometry g =
-        curveHitGeometry(*r.curve, r.curve_space, static_cast<size_t>(h.prim), rh.hit.u, rh.hit.v,
-                         Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, o + d * h.t, d);
-    p = g.p;
-    ng = r.flip ? -g.n : g.n;
-    ns = ng;
-    dpdu = g.dpdu;
-    dpdv = g.dpdv;
-    uv = g.uv;
-  } else if (r.indices.empty()) {
-    // Quadric: refine t in double precision from the object-space ray.
-    const Vec3 oo = r.object_from_space.applyPoint(o), od = r.object_from_space.applyVector(d);
-    const double t0 = std::max(0.0, h.t * (1 - 1e-4) - 1e-7);
-    auto t = intersectQuadric(*r.desc, oo, od, t0, h.t * (1 + 1e-4) + 1e-7);
-    if (t) h.t = *t;
-    const LocalGeometry g = quadricGeometry(*r.desc, oo + od * h.t);
-    p = r.space_from_object.applyPoint(g.p);
-    ng = normalize(r.space_from_object.applyNormal(g.n));
-    if (r.flip) ng = -ng;
-    ns = ng;
-    dpdu = r.space_from_object.applyVector(g.dpdu);
-    dpdv = r.space_from_object.applyVector(g.dpdv);
-    dndu = r.space_from_object.applyNormal(g.dndu);
-    dndv = r.space_from_object.applyNormal(g.dndv);
-    uv = g.uv;
-  } else if (r.vertices_per_face == 3) {
-    const int* f = &r.indices[3 * static_cast<size_t>(h.prim)];
-    const Vec3 &p0 = r.p[size_t(f[0])], &p1 = r.p[size_t(f[1])], &p2 = r.p[size_t(f[2])];
-    const double b1 = rh.hit.u, b2 = rh.hit.v, b0 = 1 - b1 - b2;
-    p = p0 * b0 + p1 * b1 + p2 * b2;
-    Vec3 n = cross(p0 - p2, p1 - p2);
-    ng = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
-    Vec2 uv0{0, 0}, uv1{1, 0}, uv2{1, 1};
-    if (!r.uv.empty()) uv0 = r.uv[size_t(f[0])], uv1 = r.uv[size_t(f[1])], uv2 = r.uv[size_t(f[2])];
-    uv = uv0 * b0 + uv1 * b1 + uv2 * b2;
-    const Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
-    const double det = duv02.x * duv12.y - duv02.y * duv12.x;
-    if (std::abs(det) > 1e-12) {
-      dpdu = ((p0 - p2) * duv12.y - (p1 - p2) * duv02.y) / det;
-      // pbrt-v4 Triangle::InteractionFromIntersection: dp/dv, and dn/du, dn/dv from the
-      // vertex normals.
-      dpdv = ((p1 - p2) * duv02.x - (p0 - p2) * duv12.x) / det;
-      if (!r.n.empty()) {
-        const Vec3 dn1 = r.n[size_t(f[0])] - r.n[size_t(f[2])];
-        const Vec3 dn2 = r.n[size_t(f[1])] - r.n[size_t(f[2])];
-        dndu = (dn1 * duv12.y - dn2 * duv02.y) / det;
-        dndv = (dn2 * duv02.x - dn1 * duv12.x) / det;
-      }
-    }
-    if (!r.n.empty()) {
-      Vec3 sn = r.n[size_t(f[0])] * b0 + r.n[size_t(f[1])] * b1 + r.n[size_t(f[2])] * b2;
-      ns = length(sn) > 0 ? normalize(sn) : ng;
-      ng = faceForward(ng, ns);
-    } else {
-      if (r.flip) ng = -ng;
-      ns = ng;
-    }
-  } else {
-    const int* f = &r.indices[4 * static_cast<size_t>(h.prim)];
-    const Vec3 &p00 = r.p[size_t(f[0])], &p10 = r.p[size_t(f[1])], &p01 = r.p[size_t(f[2])],
-               &p11 = r.p[size_t(f[3])];
-    const double u = rh.hit.u, v = rh.hit.v;
-    // The point on the triangle Embree hit (a warped patch's bilinear point at (u, v) is off
-    // that surface).
-    p = o + d * h.t;
-    dpdu = (p10 - p00) * (1 - v) + (p11 - p01) * v;
-    dpdv = (p01 - p00) * (1 - u) + (p11 - p10) * u;
-    Vec3 n = cross(dpdu, dpdv);
-    ng = length(n) > 0 ? normalize(n) : Vec3{0, 0, 1};
-    // The surface Embree intersects is one of the patch's two triangles: its normal (oriented as
-    // the patch's) is the geometric normal, so light pdfs use the surface actually hit.
-    const Vec3 tn{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
-    if (length(tn) > 0) ng = dot(tn, ng) < 0 ? -normalize(tn) : normalize(tn);
-    uv = {u, v};
-    if (!r.uv.empty()) {
-      const Vec2 &a = r.uv[size_t(f[0])], &b = r.uv[size_t(f[1])], &c = r.uv[size_t(f[2])],
-                 &e = r.uv[size_t(f[3])];
-      uv = (a * (1 - u) + b * u) * (1 - v) + (c * (1 - u) + e * u) * v;
-    }
-    if (!r.n.empty()) {
-      const Vec3 sn = (r.n[size_t(f[0])] * (1 - u) + r.n[size_t(f[1])] * u) * (1 - v) +
-                      (r.n[size_t(f[2])] * (1 - u) + r.n[size_t(f[3])] * u) * v;
-      ns = length(sn) > 0 ? normalize(sn) : ng;
-      ng = faceForward(ng, ns);
-    } else {
-      if (r.flip) ng = -ng;
-      ns = ng;
-    }
-  }
+  LocalHit g;
+  if (r.curve)
+    g = curveHit(r, h.prim, rh.hit, o, d, h.t);
+  else if (r.indices.empty())
+    g = quadricHit(r, o, d, h.t);
+  else if (r.vertices_per_face == 3)
+    g = triangleHit(r, h.prim, rh.hit);
+  else
+    g = bilinearHit(r, h.prim, rh.hit, o, d, h.t);
+  Vec3 p = g.p, ng = g.ng, ns = g.ns, dpdu = g.dpdu, dpdv = g.dpdv, dndu = g.dndu, dndv = g.dndv;
+  const Vec2 uv = g.uv;
   if (world_from_space) {
     p = world_from_space->applyPoint(p);
     ng = normalize(world_from_space->applyNormal(ng));

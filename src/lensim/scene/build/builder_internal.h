@@ -87,6 +87,8 @@ class Builder {
   Input floatInput(ParamSet& ps, ParamSet::Names names, double def);
 
   void directive(const Directive& d);
+  bool transformDirective(const Directive& d);
+  void materialDirective(const Directive& d);
 
   void popState(bool transform_only);
 
@@ -97,6 +99,7 @@ class Builder {
   void attribute(const Directive& d);
 
   void camera(const Directive& d);
+  LegacyRealistic legacyRealistic(const Directive& d, ParamSet& ps);
 
   void checkSensor(ParamSet& ps, const Film& f);
 

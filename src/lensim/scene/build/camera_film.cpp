@@ -7,33 +7,23 @@
 
 namespace lensim::scene::detail {
 
-// ---- camera and options --------------------------------------------------------------------
-void Builder::camera(const Directive& d) {
-  const std::string& type = d.strings[0];
-  if (!scene_.camera.defaulted)
-    warn(d.loc, fmt::format("second Camera (the first is at {}); the last one is used",
-                            scene_.camera.loc.str()));
-  ParamSet ps(d.params, d.loc, fmt::format("Camera \"{}\"", type));
-  Camera c;
-  c.defaulted = false;
-  c.type_as_written = type;
-  c.loc = d.loc;
-  requireInvertible(d.loc, fmt::format("Camera \"{}\"", type));
-  c.camera_from_world = gs_.ctm[0];
-  c.camera_from_world_end = gs_.ctm[1];
-  c.transform_start_time = scene_.transform_start_time;
-  c.transform_end_time = scene_.transform_end_time;
-  if (c.camera_from_world_end != c.camera_from_world)
-    requireInvertible(d.loc, fmt::format("Camera \"{}\" (its end-time transform)", type), 1);
-  named_cs_["camera"] = {inverse(gs_.ctm[0]), inverse(gs_.ctm[1])};
-  pending_media_.push_back({-1, "", gs_.outside_medium, gs_.medium_loc});
+namespace {
+
+/// The parameters every camera has: "shutteropen", "shutterclose" (swapped when out of order,
+/// which returns true) and the clipping distances "hither", "yon".
+bool parseShutterAndClip(ParamSet& ps, Camera& c) {
   c.shutter_open = ps.getFloat({"shutteropen"}, 0);
   c.shutter_close = ps.getFloat({"shutterclose"}, 1);
   c.hither = ps.getFloat({"hither"}, 1e-3);
   c.yon = ps.getFloat({"yon"}, 1e30);
-  if (c.shutter_close < c.shutter_open)
-    warn(d.loc, "shutterclose is before shutteropen; they are swapped");
-  if (c.shutter_close < c.shutter_open) std::swap(c.shutter_open, c.shutter_close);
+  if (!(c.shutter_close < c.shutter_open)) return false;
+  std::swap(c.shutter_open, c.shutter_close);
+  return true;
+}
+
+/// The parameters of the perspective, orthographic and spherical cameras into c; false for
+/// another type.
+bool parseCentralCamera(const std::string& type, ParamSet& ps, Camera& c) {
   auto screen = [&]() {
     c.frame_aspect_ratio = ps.findFloat({"frameaspectratio"});
     if (const Param* p = ps.find({"screenwindow"}, {ParamType::Float})) {
@@ -64,29 +54,70 @@ void Builder::camera(const Directive& d) {
                   fmt::format("spherical camera: unknown mapping \"{}\" (expected "
                               "\"equalarea\" or \"equirectangular\")",
                               c.spherical_mapping));
-  } else if (type == "realistic") {
+  } else {
+    return false;
+  }
+  return true;
+}
+
+/// "string flareghosts", a diagnostic: only the listed ghost pairs, "I,J;I,J" (docs/flare.md).
+void parseFlareGhosts(ParamSet& ps, Realistic& r) {
+  if (const Param* fg = ps.find({"flareghosts"}, {ParamType::String})) {
+    if (!r.flare) ps.fail(*fg, "applies only with \"bool flare\" true");
+    const std::string& text = fg->strings[0];
+    size_t pos = 0;
+    while (pos <= text.size()) {
+      size_t end = text.find(';', pos);
+      if (end == std::string::npos) end = text.size();
+      const std::string item = text.substr(pos, end - pos);
+      const size_t comma = item.find(',');
+      bool ok = comma != std::string::npos && comma > 0 && comma + 1 < item.size() &&
+                item.size() < 12 &&
+                item.find_first_not_of("0123456789,") == std::string::npos &&
+                item.find(',', comma + 1) == std::string::npos;
+      std::pair<int, int> ij{0, 0};
+      if (ok) ij = {std::stoi(item.substr(0, comma)), std::stoi(item.substr(comma + 1))};
+      if (!ok)
+        ps.fail(*fg, fmt::format("'{}': expected ghost pairs I,J separated by ';' (surface "
+                                 "indices as `lens ghosts` lists them)",
+                                 item));
+      for (const auto& p : r.flare_ghosts)
+        if (p == ij) ps.fail(*fg, fmt::format("ghost pair {} is listed twice", item));
+      r.flare_ghosts.push_back(ij);
+      pos = end + 1;
+    }
+    r.flare_ghosts_loc = fg->loc;
+  }
+}
+
+}  // namespace
+
+// ---- camera and options --------------------------------------------------------------------
+void Builder::camera(const Directive& d) {
+  const std::string& type = d.strings[0];
+  if (!scene_.camera.defaulted)
+    warn(d.loc, fmt::format("second Camera (the first is at {}); the last one is used",
+                            scene_.camera.loc.str()));
+  ParamSet ps(d.params, d.loc, fmt::format("Camera \"{}\"", type));
+  Camera c;
+  c.defaulted = false;
+  c.type_as_written = type;
+  c.loc = d.loc;
+  requireInvertible(d.loc, fmt::format("Camera \"{}\"", type));
+  c.camera_from_world = gs_.ctm[0];
+  c.camera_from_world_end = gs_.ctm[1];
+  c.transform_start_time = scene_.transform_start_time;
+  c.transform_end_time = scene_.transform_end_time;
+  if (c.camera_from_world_end != c.camera_from_world)
+    requireInvertible(d.loc, fmt::format("Camera \"{}\" (its end-time transform)", type), 1);
+  named_cs_["camera"] = {inverse(gs_.ctm[0]), inverse(gs_.ctm[1])};
+  pending_media_.push_back({-1, "", gs_.outside_medium, gs_.medium_loc});
+  if (parseShutterAndClip(ps, c))
+    warn(d.loc, "shutterclose is before shutteropen; they are swapped");
+  if (type == "realistic") {
     c.type = "realistic";
     if (ps.peek({"specfile"})) {
-      // pbrt-v1/v2 (CS348B): camera-space millimetres.
-      pbrt_v2_ = true;
-      LegacyRealistic r;
-      const Param* spec = ps.find({"specfile"}, {ParamType::String});
-      r.lens_file_as_written = spec->strings[0];
-      r.lens_file = resolve(spec->strings[0], spec->loc, "lens file");
-      const Param* fd = ps.find({"filmdistance"}, {ParamType::Float});
-      if (!fd) throw Error(d.loc, "realistic camera: missing \"float filmdistance\" (mm)");
-      ps.expectCount(*fd, 1);
-      r.film_distance_mm = fd->numbers[0];
-      const Param* ad = ps.find({"aperture_diameter"}, {ParamType::Float});
-      if (!ad) throw Error(d.loc, "realistic camera: missing \"float aperture_diameter\" (mm)");
-      ps.expectCount(*ad, 1);
-      r.aperture_diameter_mm = ad->numbers[0];
-      r.film_diagonal_mm = ps.getFloat({"filmdiag"}, 35);
-      if (const Param* af = ps.find({"af_zones"}, {ParamType::String}))
-        r.af_zones_file = resolve(af->strings[0], af->loc, "autofocus zone file");
-      if (r.film_distance_mm <= 0) ps.fail(*fd, "film distance must be positive (mm)");
-      if (r.aperture_diameter_mm <= 0) ps.fail(*ad, "aperture diameter must be positive (mm)");
-      c.legacy_realistic = r;
+      c.legacy_realistic = legacyRealistic(d, ps);
     } else {
       Realistic r;
       const Param* lf = ps.find({"lensfile"}, {ParamType::String});
@@ -197,36 +228,10 @@ void Builder::camera(const Directive& d) {
         r.tolerance_job = resolve(tj->strings[0], tj->loc, "design job");
         r.tolerance_loc = ab ? ab->loc : tj->loc;
       }
-      // A diagnostic: only the listed ghost pairs, "I,J;I,J" (docs/flare.md).
-      if (const Param* fg = ps.find({"flareghosts"}, {ParamType::String})) {
-        if (!r.flare) ps.fail(*fg, "applies only with \"bool flare\" true");
-        const std::string& text = fg->strings[0];
-        size_t pos = 0;
-        while (pos <= text.size()) {
-          size_t end = text.find(';', pos);
-          if (end == std::string::npos) end = text.size();
-          const std::string item = text.substr(pos, end - pos);
-          const size_t comma = item.find(',');
-          bool ok = comma != std::string::npos && comma > 0 && comma + 1 < item.size() &&
-                    item.size() < 12 &&
-                    item.find_first_not_of("0123456789,") == std::string::npos &&
-                    item.find(',', comma + 1) == std::string::npos;
-          std::pair<int, int> ij{0, 0};
-          if (ok) ij = {std::stoi(item.substr(0, comma)), std::stoi(item.substr(comma + 1))};
-          if (!ok)
-            ps.fail(*fg, fmt::format("'{}': expected ghost pairs I,J separated by ';' (surface "
-                                     "indices as `lens ghosts` lists them)",
-                                     item));
-          for (const auto& p : r.flare_ghosts)
-            if (p == ij) ps.fail(*fg, fmt::format("ghost pair {} is listed twice", item));
-          r.flare_ghosts.push_back(ij);
-          pos = end + 1;
-        }
-        r.flare_ghosts_loc = fg->loc;
-      }
+      parseFlareGhosts(ps, r);
       c.realistic = r;
     }
-  } else {
+  } else if (!parseCentralCamera(type, ps, c)) {
     ps.markAllUsed();
     warnOnce("camera " + type, d.loc,
              fmt::format("camera \"{}\" is not rendered by lensim; it renders as a perspective "
@@ -235,6 +240,29 @@ void Builder::camera(const Directive& d) {
   }
   finish(ps);
   scene_.camera = std::move(c);
+}
+
+/// The pbrt-v1/v2 realistic camera ("specfile", CS348B): camera-space millimetres.
+LegacyRealistic Builder::legacyRealistic(const Directive& d, ParamSet& ps) {
+  pbrt_v2_ = true;
+  LegacyRealistic r;
+  const Param* spec = ps.find({"specfile"}, {ParamType::String});
+  r.lens_file_as_written = spec->strings[0];
+  r.lens_file = resolve(spec->strings[0], spec->loc, "lens file");
+  const Param* fd = ps.find({"filmdistance"}, {ParamType::Float});
+  if (!fd) throw Error(d.loc, "realistic camera: missing \"float filmdistance\" (mm)");
+  ps.expectCount(*fd, 1);
+  r.film_distance_mm = fd->numbers[0];
+  const Param* ad = ps.find({"aperture_diameter"}, {ParamType::Float});
+  if (!ad) throw Error(d.loc, "realistic camera: missing \"float aperture_diameter\" (mm)");
+  ps.expectCount(*ad, 1);
+  r.aperture_diameter_mm = ad->numbers[0];
+  r.film_diagonal_mm = ps.getFloat({"filmdiag"}, 35);
+  if (const Param* af = ps.find({"af_zones"}, {ParamType::String}))
+    r.af_zones_file = resolve(af->strings[0], af->loc, "autofocus zone file");
+  if (r.film_distance_mm <= 0) ps.fail(*fd, "film distance must be positive (mm)");
+  if (r.aperture_diameter_mm <= 0) ps.fail(*ad, "aperture diameter must be positive (mm)");
+  return r;
 }
 
 // pbrt-v4's "sensor" (src/pbrt/film.cpp, PixelSensor::Create): "cie1931" or one of pbrt-v4's
