@@ -16,6 +16,7 @@
 #include "flare_report.h"
 #include "lens_analysis.h"
 #include "lens_info_unfocused.h"
+#include "lens_info_placed.h"
 #include "lens_options.h"
 #include "lens_tilt.h"
 #include "lensim/optics/absorption.h"
@@ -231,6 +232,7 @@ void printInfoJson(const LensArgs& args, const FocusedLens& fl, const TiltShift&
 
 int runInfo(const LensArgs& args, bool as_json) {
   const TiltShift tilt_shift = parseTiltShift(args.tilt, args.shift);
+  if (const auto status = runInfoIfNonCoaxial(args, tilt_shift.any(), as_json)) return *status;
   std::optional<FocusedLens> set_up;
   try {
     set_up.emplace(setUpLens(args));
@@ -757,6 +759,9 @@ void registerLensCommands(CLI::App& app, Action& action) {
                      "X,Y: the lens tilted against the film about its x and y axes (degrees): "
                      "reports the hinge line and the plane of focus (docs/zoom.md)");
     info->add_option("--shift", args->shift, "X,Y: the lens axis shifted to this film point (mm)");
+    info->add_option("--field", args->fields,
+                     "X,Y (repeatable): a field of a lens with tilted or decentred surfaces: "
+                     "angles in degrees (object at infinity) or the object point in mm");
     info->callback([&action, args, as_json, configs] {
       action = [args, as_json, configs] {
         return *configs ? runConfigs(*args, *as_json) : runInfo(*args, *as_json);

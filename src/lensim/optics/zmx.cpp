@@ -127,6 +127,12 @@ namespace {
 
 using Tok = LineField;
 
+// A frame in lens units scaled to millimetres.
+SurfaceFrame scaledFrame(SurfaceFrame f, double unit_mm) {
+  for (double& c : f.origin_mm) c *= unit_mm;
+  return f;
+}
+
 struct ZSurface {
   int number = 0;
   FileLoc loc;  // the SURF line
@@ -155,6 +161,7 @@ struct ZSurface {
   bool mirror = false;
   std::string coating;  // COAT name
   FileLoc coating_loc;
+  std::optional<SurfaceFrame> frame;  // a non-coaxial lens's placement (lens units)
 };
 
 class ZmxParser {
@@ -418,7 +425,27 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
                                            "{})",
                                            z.number, z.mirror ? "MIRROR" : z.glass));
   }
-  const UnfoldedSystem u = unfoldCoordinateBreaks(fold);
+  const PlacedSystem placed = placeCoordinateBreaks(fold);
+  if (!placed.coaxial) {
+    // No single axis holds the surfaces: each keeps its frame in space (the breaks dropped).
+    p.noncoaxial_loc = placed.refusal->loc();
+    p.noncoaxial_reason = placed.refusal->message();
+    std::vector<ZSurface> kept;
+    for (size_t k = 0; k < surfs.size(); ++k) {
+      if (fold[k].coordbrk) continue;
+      kept.push_back(surfs[k]);
+      kept.back().frame = placed.frames[k];
+    }
+    p.diagnostics.push_back(
+        {Severity::Note, *p.noncoaxial_loc,
+         fmt::format("tilted or decentred surfaces ({}): each surface is placed in space; `lens "
+                     "info` traces real rays through them, the coaxial analyses and the renderer "
+                     "refuse the lens",
+                     p.noncoaxial_reason)});
+    surfs = std::move(kept);
+    return;
+  }
+  const UnfoldedSystem& u = placed.unfolded;
   if (!u.any_break) return;
   p.fold_loc = fold[size_t(std::find_if(fold.begin(), fold.end(),
                                         [](const FoldSurface& f) { return f.coordbrk; }) -
@@ -768,11 +795,16 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
           fmt::format("{} (a surface aperture or obscuration other than circular) is "
                       "not supported",
                       key));
-    } else if (key == "SCBD" || key == "DECX" || key == "DECY" || key == "TILT") {
-      // Surface decentres and tilts: refused unless all zero.
+    } else if (key == "SCBD" || key == "SCAD" || key == "DECX" || key == "DECY" ||
+               key == "TILT") {
+      // A surface's own decentres and tilts (before and after it): refused unless all zero;
+      // their field layout is not documented where it could be checked (COORDBRK surfaces are
+      // read).
       for (size_t i = 2; i < t.size(); ++i)
         if (number(t[i], line_no, "decentre/tilt") != 0)
-          throw surfErr(fmt::format("{}: tilted or decentred surfaces are not supported", key));
+          throw surfErr(fmt::format("{}: a surface's own decentre or tilt is not supported (a "
+                                    "TYPE COORDBRK surface before it is)",
+                                    key));
     }
   }
 
@@ -846,7 +878,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     // Thicknesses are signed (Zemax): negative after an odd number of mirrors, where the light
     // travels toward -z; any other sign would need a ray to go backward.
     mirrors += z.mirror ? 1 : 0;
-    if (*z.disz * (mirrors % 2 ? -1 : 1) < 0)
+    if (!p.noncoaxial_loc && *z.disz * (mirrors % 2 ? -1 : 1) < 0)
       throw Error(z.disz_loc,
                   fmt::format("surface {}: thickness {} is {} after {} mirror{}; lensim models "
                               "lenses whose surfaces follow in the direction the light travels "
@@ -875,6 +907,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
 
     LensSurface s;
     s.loc = z.loc;
+    if (z.frame) s.frame = scaledFrame(*z.frame, unit_mm);
     s.radius_mm = z.curv != 0 ? unit_mm / z.curv : 0.0;
     s.thickness_mm = *z.disz * unit_mm;
     s.aperture_diameter_mm = 2 * semi;
@@ -977,6 +1010,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
         // reach within its aperture (paraxially the same stop).
         LensSurface st;
         st.loc = z.loc;
+        st.frame = s.frame;  // a plane at the same vertex
         st.stop_flag = true;
         st.aperture_diameter_mm = 2 * semi;
         auto sg = surfaceSag(s.radius_mm, s.shape, 0.0, semi * (1 - 1e-9));
@@ -1037,7 +1071,26 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   const ZSurface& stop_z = surfs[size_t(stop_surface)];
   const bool stop_auto = !stop_z.clap_max && (!stop_z.diam || *stop_z.diam == 0);
   std::optional<double> epd_mm;
-  if (stop_index && (enpd || fnum || obna) && !floa) {
+  if (p.noncoaxial_loc) {
+    p.image_frame = scaledFrame(*surfs.back().frame, unit_mm);
+    if (stop_auto)
+      throw Error(stop_z.diam_loc.valid() ? stop_z.diam_loc : stop_z.loc,
+                  fmt::format("surface {} (the stop) has no semi-diameter (no DIAM or DIAM 0): "
+                              "in a tilted or decentred lens lensim does not size the stop from "
+                              "the system aperture; give the stop a DIAM",
+                              stop_z.number));
+    if (floa) {
+      p.aperture_spec = "FLOA (stop semi-diameter from DIAM)";
+    } else if (enpd || fnum || obna) {
+      p.aperture_spec = "the stop's DIAM";
+      p.diagnostics.push_back(
+          {Severity::Note, aperture_loc,
+           fmt::format("a tilted or decentred lens: the stop keeps the semi-diameter DIAM gives "
+                       "({:.6g} mm); the system aperture on this line (which needs the paraxial "
+                       "image of the stop through a coaxial system) is not applied",
+                       p.surfaces[size_t(*stop_index)].semiAperture_mm())});
+    }
+  } else if (stop_index && (enpd || fnum || obna) && !floa) {
     LensSystem sys(p);
     const auto& in = sys.interfaces();
     const int st = *stop_index;
@@ -1112,6 +1165,14 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   }
   (void)inserted_stop;
 
+  if (!auto_rows.empty() && p.noncoaxial_loc) {
+    const ZSurface& z = *auto_rows.front().second;
+    throw Error(z.diam_loc.valid() ? z.diam_loc : z.loc,
+                fmt::format("surface {}: no semi-diameter (no DIAM or DIAM 0): lensim computes "
+                            "semi-diameters for coaxial lenses only, and this one is tilted or "
+                            "decentred ({})",
+                            z.number, p.noncoaxial_reason));
+  }
   if (!auto_rows.empty()) {
     if (vignetting_loc)
       throw Error(*vignetting_loc,
