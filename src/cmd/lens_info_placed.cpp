@@ -47,7 +47,8 @@ FieldReport reportField(const PlacedLens& lens, const PlacedLens::Field& f, std:
   r.label = std::move(label);
   r.field = f;
   if (auto c = aimedRay(lens, f, {0, 0})) r.chief_image = c->first, r.chief_direction = c->second;
-  const double a = lens.stopSemiAperture_mm();
+  // Just inside the stop's edge, so that rounding in the aim does not clip the ray there.
+  const double a = lens.stopSemiAperture_mm() * (1 - 1e-9);
   const std::pair<const char*, Vec2> edges[] = {
       {"+y", {0, a}}, {"-y", {0, -a}}, {"+x", {a, 0}}, {"-x", {-a, 0}}};
   for (const auto& [name, xy] : edges) {
