@@ -7,10 +7,12 @@
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 #include <string>
 
+#include "cli_run.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/placed_lens.h"
@@ -211,4 +213,31 @@ TEST(PlacedLens, ExtremeValuesNeverCrash) {
       }
     }
   EXPECT_GT(read, 0);
+}
+
+// `lens info` on the decentred singlet: the real chief ray per --field and the spot, no
+// first-order data; the options that need a coaxial lens, and --field on one, refused.
+TEST(PlacedLens, LensInfoReportsRealRaysAndNoFirstOrderData) {
+  const std::string lens = test::dataPath(kSinglet);
+  const auto r = test::runLensim("lens info " + lens + " --json --field 0,1 --field 0,-0.5");
+  ASSERT_EQ(r.status, 0) << r.out;
+  const size_t at = r.out.find("{\n");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(r.out.substr(at));
+  EXPECT_EQ(j["noncoaxial"]["line"].get<int>(), 24);
+  EXPECT_FALSE(j.contains("paraxial"));
+  EXPECT_FALSE(j.contains("effective_focal_length_mm"));
+  ASSERT_EQ(j["fields"].size(), 2u);
+  EXPECT_NEAR(j["fields"][0]["chief_ray_image_mm"][1].get<double>(), singletImageY3d(1 * kDeg),
+              1e-9);
+  EXPECT_NEAR(j["fields"][1]["chief_ray_image_mm"][1].get<double>(),
+              singletImageY3d(-0.5 * kDeg), 1e-9);
+  for (const char* m : {"+x", "-x", "+y", "-y"})
+    EXPECT_TRUE(j["fields"][0]["marginal_rays_image_mm"][m].is_array()) << m;
+  EXPECT_GT(j["fields"][0]["spot"]["rms_radius_mm"].get<double>(), 0);
+  EXPECT_EQ(test::runLensim("lens info " + lens + " --tilt 1,0").status, 1);
+  EXPECT_EQ(
+      test::runLensim("lens info " + test::dataPath("lenses/fold45_twin.zmx") + " --field 0,1")
+          .status,
+      1);
 }
