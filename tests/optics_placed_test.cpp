@@ -94,6 +94,15 @@ double singletImageY3d(double theta) {
   return toPlaneZ(r, kStopGap + kThick + kImage).y;
 }
 
+// The same for a finite object point (0, h, -distance) and the ray through the stop's centre.
+double singletImageY3dFinite(double h, double distance) {
+  Ray3 r{{0, h, -distance}, unit(P3{0, -h, distance})};
+  const P3 z{0, 0, 1};
+  refractAt(r, {0, kDecentre, kStopGap}, z, 1 / kRadius, 1, kN);
+  refractAt(r, {0, kDecentre, kStopGap + kThick}, z, 0, kN, 1);
+  return toPlaneZ(r, kStopGap + kThick + kImage).y;
+}
+
 // The same paraxially (y-nu trace about the lens's own axis, then the decentre added back).
 double singletImageYParaxial(double theta) {
   const double u = std::tan(theta);
@@ -133,6 +142,24 @@ TEST(PlacedLens, DecentredSingletChiefRayLandsWhereTheClosedFormSays) {
   const Vec3 img = lens.toImageFrame(lens.trace(lens.fieldRay(on_axis, *e)).ray.origin);
   EXPECT_NEAR(img.y, kDecentre, 1e-4);
   EXPECT_NEAR(singletImageYParaxial(0), kDecentre, 1e-6);
+}
+
+TEST(PlacedLens, FiniteObjectPointsAreTracedFromThePoint) {
+  const std::string text = slurp(test::dataPath(kSinglet));
+  const LensPrescription p =
+      parseZmx(replaceFirst(text, "DISZ INFINITY", "DISZ 500"), "decentred_singlet.zmx");
+  ASSERT_TRUE(p.object_distance_mm.has_value());
+  const PlacedLens lens(p, kD);
+  for (double h : {0.0, 3.0, -7.5}) {
+    PlacedLens::Field f;
+    f.at_infinity = false;
+    f.object_point = {0, h, -500};
+    const auto e = lens.aim(f, {0, 0});
+    ASSERT_TRUE(e.has_value());
+    const TraceResult t = lens.trace(lens.fieldRay(f, *e));
+    ASSERT_TRUE(t.ok());
+    EXPECT_NEAR(lens.toImageFrame(t.ray.origin).y, singletImageY3dFinite(h, 500), 1e-9) << h;
+  }
 }
 
 TEST(PlacedLens, DecentredSingletSpotIsAboutTheDecentredAxis) {
