@@ -268,3 +268,28 @@ TEST(PlacedLens, LensInfoReportsRealRaysAndNoFirstOrderData) {
           .status,
       1);
 }
+
+// Mirrors: the 45-degree fold of optics_coordbrk_test with its image decentred 0.3 mm in x is not
+// coaxial; traced in space it lands where the coaxial tracer puts the unfolded twin's ray (the
+// fold keeps x), less the decentre.
+TEST(PlacedLens, FoldWithADecentredImageMatchesItsCoaxialTwin) {
+  std::string text = slurp(test::dataPath("lenses/fold45.zmx"));
+  text = replaceFirst(text, "SURF 8\n", "SURF 8\n  TYPE COORDBRK\n  PARM 1 0.3\n  DISZ 0\nSURF 9\n");
+  const LensPrescription p = parseZmx(text, "fold45_decentred_image.zmx");
+  ASSERT_TRUE(p.noncoaxial_loc.has_value());
+  const PlacedLens lens(p, kD);
+  const LensSystem twin(parseZmx(slurp(test::dataPath("lenses/fold45_twin.zmx")), "twin.zmx"));
+  for (double h : {0.5, 2.0, -3.0}) {
+    SCOPED_TRACE(h);
+    const TraceResult placed = lens.trace({{h, 0, -10}, {0, 0, 1}});
+    ASSERT_TRUE(placed.ok());
+    const TraceResult tw = twin.tracer().traceFromScene({{h, 0, -10}, {0, 0, 1}});
+    ASSERT_TRUE(tw.ok());
+    const double zf = twin.filmZ_mm();
+    const double x_twin =
+        tw.ray.origin.x + tw.ray.direction.x * (zf - tw.ray.origin.z) / tw.ray.direction.z;
+    const Vec3 img = lens.toImageFrame(placed.ray.origin);
+    EXPECT_NEAR(img.x, x_twin - 0.3, 1e-9);
+    EXPECT_NEAR(img.z, 0, 1e-9);
+  }
+}
