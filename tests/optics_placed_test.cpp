@@ -293,3 +293,22 @@ TEST(PlacedLens, FoldWithADecentredImageMatchesItsCoaxialTwin) {
     EXPECT_NEAR(img.z, 0, 1e-9);
   }
 }
+
+// The system aperture: applied where the surfaces up to the stop sit on the object axis (the
+// singlet's stop comes first: its semi-diameter is ENPD / 2), kept from DIAM with a note where
+// a break comes before the stop.
+TEST(PlacedLens, EntrancePupilDiameterSizesAStopInFrontOfTheBreaks) {
+  const std::string text = slurp(test::dataPath(kSinglet));
+  const LensPrescription p = parseZmx(replaceFirst(text, "ENPD 4", "ENPD 3"), "s.zmx");
+  ASSERT_TRUE(p.noncoaxial_loc.has_value());
+  EXPECT_NEAR(PlacedLens(p, kD).stopSemiAperture_mm(), 1.5, 1e-12);
+  // The stop moved behind the decentred lens: DIAM kept (2 mm), with a note at ENPD.
+  std::string behind = replaceFirst(text, "  STOP\n", "");
+  behind = replaceFirst(behind, "  CURV 0.0\n  DISZ 0\n  DIAM 10", "  STOP\n  CURV 0.0\n  DISZ 0\n  DIAM 2");
+  const LensPrescription q = parseZmx(replaceFirst(behind, "ENPD 4", "ENPD 3"), "s.zmx");
+  EXPECT_NEAR(PlacedLens(q, kD).stopSemiAperture_mm(), 2, 1e-12);
+  bool noted = false;
+  for (const Diagnostic& d : q.diagnostics)
+    noted = noted || (d.loc.line == 7 && d.message.find("not applied") != std::string::npos);
+  EXPECT_TRUE(noted);
+}

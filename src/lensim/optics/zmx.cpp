@@ -614,6 +614,33 @@ void ZmxParser::checkExtent(const ZSurface& z, LensSurface& s, double& semi,
                                         z.number, semi, domain));
 }
 
+namespace {
+
+// Whether rows 0 .. last of a non-coaxial lens sit on the object axis, unturned.
+bool coaxialUpTo(const LensPrescription& p, int last) {
+  for (int i = 0; i <= last; ++i) {
+    const SurfaceFrame& f = *p.surfaces[size_t(i)].frame;
+    if (!(std::abs(f.origin_mm[0]) <= 1e-12 && std::abs(f.origin_mm[1]) <= 1e-12)) return false;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        if (!(std::abs(f.rotation[size_t(r)][size_t(c)] - (r == c ? 1.0 : 0.0)) <= 1e-12))
+          return false;
+  }
+  return true;
+}
+
+// Rows 0 .. last of a non-coaxial lens (coaxialUpTo) as a coaxial prescription.
+LensPrescription coaxialFront(const LensPrescription& p, int last) {
+  LensPrescription q = p;
+  q.surfaces.resize(size_t(last) + 1);
+  for (LensSurface& s : q.surfaces) s.frame.reset();
+  q.noncoaxial_loc.reset();
+  q.configurations.clear();
+  return q;
+}
+
+}  // namespace
+
 // The system aperture sets the stop's size.
 void ZmxParser::sizeStop(LensPrescription& p) {
   // The system aperture sets the stop's size (paraxially: the entrance pupil is the image of the
@@ -621,8 +648,12 @@ void ZmxParser::sizeStop(LensPrescription& p) {
   const auto stop_index = p.stopIndex();
   const ZSurface& stop_z = surfs[size_t(stop_surface)];
   const bool stop_auto = !stop_z.clap_max && (!stop_z.diam || *stop_z.diam == 0);
-  if (p.noncoaxial_loc) {
-    p.image_frame = scaledFrame(*surfs.back().frame, unit_mm);
+  // A non-coaxial lens whose surfaces up to the stop sit on the object axis: its entrance pupil
+  // is the paraxial image of the stop through them, as for any lens.
+  const bool front_coaxial = p.noncoaxial_loc && stop_index && (enpd || obna) && !floa &&
+                             coaxialUpTo(p, *stop_index);
+  if (p.noncoaxial_loc) p.image_frame = scaledFrame(*surfs.back().frame, unit_mm);
+  if (p.noncoaxial_loc && !front_coaxial) {
     if (stop_auto)
       throw Error(stop_z.diam_loc.valid() ? stop_z.diam_loc : stop_z.loc,
                   fmt::format("surface {} (the stop) has no semi-diameter (no DIAM or DIAM 0): "
@@ -641,7 +672,7 @@ void ZmxParser::sizeStop(LensPrescription& p) {
                        p.surfaces[size_t(*stop_index)].semiAperture_mm())});
     }
   } else if (stop_index && (enpd || fnum || obna) && !floa) {
-    LensSystem sys(p);
+    const LensSystem sys(front_coaxial ? coaxialFront(p, *stop_index) : p);
     const auto& in = sys.interfaces();
     const int st = *stop_index;
     // (y, n u) at the stop per unit height (y_stop) and per unit angle (w_stop) of a ray at the
