@@ -263,6 +263,10 @@ TEST(PlacedLens, LensInfoReportsRealRaysAndNoFirstOrderData) {
     EXPECT_TRUE(j["fields"][0]["marginal_rays_image_mm"][m].is_array()) << m;
   EXPECT_GT(j["fields"][0]["spot"]["rms_radius_mm"].get<double>(), 0);
   EXPECT_EQ(test::runLensim("lens info " + lens + " --tilt 1,0").status, 1);
+  const auto configs = test::runLensim("lens info --configs " + lens);
+  EXPECT_EQ(configs.status, 1);
+  EXPECT_EQ(configs.out.find("EFL"), std::string::npos) << configs.out;  // nothing half-printed
+  EXPECT_NE(configs.out.find(":24:10: error:"), std::string::npos) << configs.out;
   EXPECT_EQ(
       test::runLensim("lens info " + test::dataPath("lenses/fold45_twin.zmx") + " --field 0,1")
           .status,

@@ -92,7 +92,13 @@ int runConfigs(const LensArgs& args, bool as_json) {
   if (args.configuration || args.zoom_focal_length_mm)
     throw Error("--configs lists every configuration; it takes neither --config nor --focal-length");
   applyGlassOptions(args);
-  const int count = configurationCount(readLensFile(args.lens_path));
+  const LensPrescription file = readLensFile(args.lens_path);
+  if (file.noncoaxial_loc)  // refused before anything is printed
+    throw Error(*file.noncoaxial_loc,
+                fmt::format("{}: --configs lists first-order data, which a lens with tilted or "
+                            "decentred surfaces does not have",
+                            file.noncoaxial_reason));
+  const int count = configurationCount(file);
   json arr = json::array();
   if (!as_json)
     std::cout << fmt::format("{:>6} {:>12} {:>9} {:>11} {:>11} {:>13}\n", "config", "EFL mm",
