@@ -1,6 +1,7 @@
 // Zemax coordinate breaks (issue 28, optics/coordinate_break.h): a system folded by plane mirrors
 // has the first-order data of its coaxial twin, whatever the fold's angle, axis and order flag;
-// tilted or decentred lenses and extreme angles are refused at the break, never crash.
+// tilted or decentred lenses are placed in space (optics/placed_lens.h) and the coaxial tools
+// refuse them at the break; extreme angles never crash.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -188,7 +189,7 @@ TEST(ZmxCoordinateBreak, AnyFoldAngleAxisAndOrderIsTheSameTwin) {
   }
 }
 
-TEST(ZmxCoordinateBreak, TiltedOrDecentredLensIsRefusedAtTheBreak) {
+TEST(ZmxCoordinateBreak, TiltedOrDecentredLensIsNotCoaxialFromTheBreak) {
   const std::string f = fold();
   struct Case {
     std::string text;
@@ -202,9 +203,15 @@ TEST(ZmxCoordinateBreak, TiltedOrDecentredLensIsRefusedAtTheBreak) {
       {replaceNth(f, "PARM 1 0", "PARM 1 2", 0), 29, "off the axis"},
   };
   for (const Case& c : cases) {
+    const LensPrescription p = parseZmx(c.text, "bad.zmx");
+    ASSERT_TRUE(p.noncoaxial_loc.has_value());
+    EXPECT_EQ(p.noncoaxial_loc->line, c.line);
+    EXPECT_NE(p.noncoaxial_reason.find(c.word), std::string::npos) << p.noncoaxial_reason;
+    EXPECT_FALSE(p.fold_loc.has_value());
+    for (const LensSurface& s : p.surfaces) EXPECT_TRUE(s.frame.has_value());
     try {
-      parseZmx(c.text, "bad.zmx");
-      ADD_FAILURE() << "no error for line " << c.line;
+      LensSystem sys(p);
+      ADD_FAILURE() << "the coaxial system accepted line " << c.line;
     } catch (const Error& e) {
       EXPECT_EQ(e.loc().line, c.line) << e.what();
       EXPECT_NE(std::string(e.what()).find(c.word), std::string::npos) << e.what();

@@ -16,6 +16,7 @@
 #include "flare_report.h"
 #include "lens_analysis.h"
 #include "lens_info_unfocused.h"
+#include "lens_info_placed.h"
 #include "lens_options.h"
 #include "lens_tilt.h"
 #include "lensim/optics/absorption.h"
@@ -91,7 +92,13 @@ int runConfigs(const LensArgs& args, bool as_json) {
   if (args.configuration || args.zoom_focal_length_mm)
     throw Error("--configs lists every configuration; it takes neither --config nor --focal-length");
   applyGlassOptions(args);
-  const int count = configurationCount(readLensFile(args.lens_path));
+  const LensPrescription file = readLensFile(args.lens_path);
+  if (file.noncoaxial_loc)  // refused before anything is printed
+    throw Error(*file.noncoaxial_loc,
+                fmt::format("{}: --configs lists first-order data, which a lens with tilted or "
+                            "decentred surfaces does not have",
+                            file.noncoaxial_reason));
+  const int count = configurationCount(file);
   json arr = json::array();
   if (!as_json)
     std::cout << fmt::format("{:>6} {:>12} {:>9} {:>11} {:>11} {:>13}\n", "config", "EFL mm",
@@ -246,6 +253,7 @@ void printInfoJson(const LensArgs& args, const FocusedLens& fl, const TiltShift&
 
 int runInfo(const LensArgs& args, bool as_json) {
   const TiltShift tilt_shift = parseTiltShift(args.tilt, args.shift);
+  if (const auto status = runInfoIfNonCoaxial(args, tilt_shift.any(), as_json)) return *status;
   std::optional<FocusedLens> set_up;
   try {
     set_up.emplace(setUpLens(args));
@@ -772,6 +780,9 @@ void registerLensCommands(CLI::App& app, Action& action) {
                      "X,Y: the lens tilted against the film about its x and y axes (degrees): "
                      "reports the hinge line and the plane of focus (docs/zoom.md)");
     info->add_option("--shift", args->shift, "X,Y: the lens axis shifted to this film point (mm)");
+    info->add_option("--field", args->fields,
+                     "X,Y (repeatable): a field of a lens with tilted or decentred surfaces: "
+                     "angles in degrees (object at infinity) or the object point in mm");
     info->callback([&action, args, as_json, configs] {
       action = [args, as_json, configs] {
         return *configs ? runConfigs(*args, *as_json) : runInfo(*args, *as_json);

@@ -40,6 +40,9 @@ struct LensArgs {
   bool model_glass = false;
   /// `--glass-extrapolate`: a wavelength outside a glass formula's range is used (a warning).
   bool glass_extrapolate = false;
+  /// `lens info --field X,Y` (repeatable): fields of a tilted or decentred lens (degrees, or mm
+  /// for a finite object).
+  std::vector<std::string> fields;
 };
 
 /// Applies --config / --focal-length to a prescription read from args.lens_path (logs the zoom

@@ -74,6 +74,11 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
     throw Error(*prescription.fold_loc,
                 "a lens folded by coordinate breaks (TYPE COORDBRK) cannot be rendered: the "
                 "camera models coaxial lenses (`lensim lens info` reads it)");
+  if (prescription.noncoaxial_loc)
+    throw Error(*prescription.noncoaxial_loc,
+                fmt::format("{}: a lens with tilted or decentred surfaces cannot be rendered: the "
+                            "camera models coaxial lenses (`lensim lens info` traces it)",
+                            prescription.noncoaxial_reason));
   optics::LensSetup setup = settings_.setup;
   if (!settings_.tolerance_job.empty() && settings_.as_built_film) {
     setup.film_distance_mm = prescription.surfaces.back().thickness_mm;

@@ -48,6 +48,64 @@ FileLoc breakLoc(const FoldSurface& s) {
 
 }  // namespace
 
+std::vector<SurfaceFrame> placeSurfaces(const std::vector<FoldSurface>& surfs) {
+  std::vector<SurfaceFrame> frames(surfs.size());
+  M3 R = identity();
+  V3 O{0, 0, 0};
+  for (size_t i = 1; i < surfs.size(); ++i) {
+    const FoldSurface& s = surfs[i];
+    if (s.coordbrk) {
+      const auto& p = s.parm;
+      const V3 dec{p[0], p[1], 0};
+      if (p[5] == 0) {
+        O = add(O, mul(R, dec));
+        R = mul(mul(mul(R, rotation(0, p[2])), rotation(1, p[3])), rotation(2, p[4]));
+      } else {
+        R = mul(mul(mul(R, rotation(2, p[4])), rotation(1, p[3])), rotation(0, p[2]));
+        O = add(O, mul(R, dec));
+      }
+    }
+    frames[i] = SurfaceFrame{R, O};
+    if (i + 1 < surfs.size()) O = add(O, column(R, 2), s.thickness);
+    bool finite = true;
+    for (int r = 0; r < 3; ++r) {
+      finite = finite && std::isfinite(O[size_t(r)]);
+      for (int c = 0; c < 3; ++c) finite = finite && std::isfinite(R[size_t(r)][size_t(c)]);
+    }
+    if (!finite)
+      throw Error(s.coordbrk ? breakLoc(s) : s.loc,
+                  fmt::format("surface {}: the surfaces after it would lie at a non-finite place "
+                              "(decentres or thicknesses beyond double precision)",
+                              s.number));
+  }
+  return frames;
+}
+
+PlacedSystem placeCoordinateBreaks(const std::vector<FoldSurface>& surfs) {
+  PlacedSystem out;
+  bool any_break = false;
+  for (const FoldSurface& s : surfs) any_break = any_break || s.coordbrk;
+  if (!any_break) {
+    out.unfolded = unfoldCoordinateBreaks(surfs);
+    return out;
+  }
+  if (surfs.size() >= 2 && (surfs.front().coordbrk || surfs.back().coordbrk)) {
+    const FoldSurface& s = surfs.front().coordbrk ? surfs.front() : surfs.back();
+    throw Error(s.loc, fmt::format("surface {}: a coordinate break as the {} surface is not "
+                                   "supported",
+                                   s.number, &s == &surfs.front() ? "object" : "image"));
+  }
+  out.frames = placeSurfaces(surfs);  // refuses non-finite places before anything is traced
+  try {
+    out.unfolded = unfoldCoordinateBreaks(surfs);
+    out.frames.clear();
+  } catch (const Error& e) {
+    out.coaxial = false;
+    out.refusal = e;
+  }
+  return out;
+}
+
 UnfoldedSystem unfoldCoordinateBreaks(const std::vector<FoldSurface>& surfs) {
   UnfoldedSystem out;
   const size_t n = surfs.size();
@@ -67,10 +125,11 @@ UnfoldedSystem unfoldCoordinateBreaks(const std::vector<FoldSurface>& surfs) {
     if (std::isfinite(surfs[i].thickness)) scale += std::abs(surfs[i].thickness);
   const double tol_pos = 1e-9 * scale, tol_dir = 1e-9;
 
-  // The frame of the current surface (global: rotation R, origin O; surface 1 at the origin)
-  // and the unfolding isometry p -> A p + b that undoes the plane mirrors met so far.
-  M3 R = identity(), A = identity();
-  V3 O{0, 0, 0}, b{0, 0, 0};
+  // Every surface's frame (global: rotation R, origin O; surface 1 at the origin) and the
+  // unfolding isometry p -> A p + b that undoes the plane mirrors met so far.
+  const std::vector<SurfaceFrame> frames = placeSurfaces(surfs);
+  M3 A = identity();
+  V3 b{0, 0, 0};
   int mirrors = 0;
   const FoldSurface* last_break = nullptr;
   std::vector<double> z_unfolded;
@@ -82,8 +141,7 @@ UnfoldedSystem unfoldCoordinateBreaks(const std::vector<FoldSurface>& surfs) {
     if (last_break)
       return Error(breakLoc(*last_break),
                    fmt::format("surface {}: after the coordinate break at surface {}, surface "
-                               "{} {}; lensim models coordinate breaks that fold a coaxial "
-                               "system with plane mirrors, not tilted or decentred lenses",
+                               "{} {}",
                                last_break->number, last_break->number, s.number, what));
     return Error(s.loc, fmt::format("surface {}: {}", s.number, what));
   };
@@ -91,19 +149,11 @@ UnfoldedSystem unfoldCoordinateBreaks(const std::vector<FoldSurface>& surfs) {
   for (size_t i = 1; i < n; ++i) {
     const FoldSurface& s = surfs[i];
     if (s.coordbrk) {
-      const auto& p = s.parm;
-      const V3 dec{p[0], p[1], 0};
-      if (p[5] == 0) {
-        O = add(O, mul(R, dec));
-        R = mul(mul(mul(R, rotation(0, p[2])), rotation(1, p[3])), rotation(2, p[4]));
-      } else {
-        R = mul(mul(mul(R, rotation(2, p[4])), rotation(1, p[3])), rotation(0, p[2]));
-        O = add(O, mul(R, dec));
-      }
-      O = add(O, column(R, 2), s.thickness);
       last_break = &s;
       continue;
     }
+    const M3& R = frames[i].rotation;
+    const V3& O = frames[i].origin_mm;
     const V3 g = add(mul(A, O), b);  // the vertex, unfolded
     const M3 G = mul(A, R);          // the surface's axes, unfolded
     const V3 gz = column(G, 2);
@@ -151,7 +201,6 @@ UnfoldedSystem unfoldCoordinateBreaks(const std::vector<FoldSurface>& surfs) {
     out.kept.push_back(i);
     z_unfolded.push_back(g[2]);
     mirrors_after.push_back(mirrors);
-    O = add(O, column(R, 2), s.thickness);
   }
   // Coaxial thicknesses: unfolded gaps, negative after an odd number of mirrors.
   out.thickness.push_back(surfs.front().thickness);

@@ -17,8 +17,10 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <vector>
 
+#include "lensim/optics/prescription.h"
 #include "lensim/util/error.h"
 
 namespace lensim::optics {
@@ -49,6 +51,24 @@ struct UnfoldedSystem {
   std::vector<double> thickness; ///< their coaxial thicknesses (lens units), per kept surface
   std::vector<FoldMirrorAperture> tilted_mirrors;
 };
+
+/// Every surface's frame in space, breaks composed (a break's own frame is the one after its
+/// decentres and tilts); surface 0 (the object) and surface 1 sit at the origin, unturned.
+/// Throws Error at the break (or surface) after which a vertex would lie at a non-finite place.
+std::vector<SurfaceFrame> placeSurfaces(const std::vector<FoldSurface>& surfs);
+
+/// The coordinate breaks resolved either way: into the coaxial twin (a fold by plane mirrors, or
+/// no break), or, when no single axis holds the surfaces, into every surface's frame in space
+/// with the reason the twin was refused (unfoldCoordinateBreaks's error, at its break).
+struct PlacedSystem {
+  bool coaxial = true;
+  UnfoldedSystem unfolded;           ///< coaxial: the twin
+  std::vector<SurfaceFrame> frames;  ///< non-coaxial: placeSurfaces's
+  std::optional<Error> refusal;      ///< non-coaxial: why
+};
+
+/// Throws Error for a break as the object or image surface, or at a non-finite place.
+PlacedSystem placeCoordinateBreaks(const std::vector<FoldSurface>& surfs);
 
 /// Resolves the coordinate breaks of `surfs`; throws Error at the break (or surface) that leaves
 /// the system non-coaxial. Without breaks, returns every surface with its own thickness.

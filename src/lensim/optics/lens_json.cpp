@@ -571,6 +571,11 @@ LensPrescription parseLensJson(std::string_view text, const std::string& path,
 }
 
 std::string writeLensJson(const LensPrescription& p) {
+  if (p.noncoaxial_loc)
+    throw Error(*p.noncoaxial_loc, fmt::format("{}: a lens with tilted or decentred surfaces "
+                                               "cannot be written as a lensim lens file (it "
+                                               "places surfaces on one axis)",
+                                               p.noncoaxial_reason));
   json j;
   j["format"] = "lensim-lens";
   j["version"] = 1;
@@ -635,6 +640,11 @@ std::string writeLensJson(const LensPrescription& p) {
 }
 
 std::string writeLensDat(const LensPrescription& p) {
+  if (p.noncoaxial_loc)
+    throw Error(*p.noncoaxial_loc, fmt::format("{}: a lens with tilted or decentred surfaces "
+                                               "cannot be written as a lensim lens file (it "
+                                               "places surfaces on one axis)",
+                                               p.noncoaxial_reason));
   std::string out =
       fmt::format("# {}\n# converted by lensim from {} ({})\n", p.name, p.path, p.format);
   out +=

@@ -1,5 +1,7 @@
 #include "lensim/optics/lens_system.h"
 
+#include "lensim/optics/refraction.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -67,29 +69,6 @@ void LensTracer<T>::setIndices(const double* before, const double* after) {
 }
 
 namespace {
-
-// Refracts unit direction d at a surface with unit normal n (either orientation), going from
-// index eta_i to eta_t. Returns false on total internal reflection.
-// sin2_out: where given, receives sin^2 of the refracted angle (>= 1: total internal
-// reflection); left alone between equal indices.
-template <typename T>
-[[gnu::always_inline]] inline bool refract(Vec3T<T>& d, Vec3T<T> n, T eta_i, T eta_t,
-                                           T* sin2_out = nullptr) {
-  if (eta_i == eta_t) return true;
-  T cos_i = -dot(n, d);
-  if (cos_i < 0) {  // make the normal face the incoming ray
-    n = -n;
-    cos_i = -cos_i;
-  }
-  T eta = eta_i / eta_t;
-  T sin2_t = eta * eta * std::max(T(0), T(1) - cos_i * cos_i);
-  if (sin2_out) *sin2_out = sin2_t;
-  if (sin2_t >= T(1)) return false;
-  T cos_t = std::sqrt(T(1) - sin2_t);
-  // Unit length for unit d and n (|eta d_tangential|^2 + cos_t^2 = 1); not renormalised.
-  d = d * eta + n * (eta * cos_i - cos_t);
-  return true;
-}
 
 // One surface's term of a ray's margin (LensTracer::marginSquared): (r / semi-aperture)^2 at the
 // hit (infinite for a zero semi-aperture off the axis, 0 on it) and, where the ray goes into a
@@ -534,6 +513,12 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
     : prescription_(std::move(prescription)) {
   const auto& surfaces = prescription_.surfaces;
   if (surfaces.empty()) throw Error(FileLoc{prescription_.path}, "lens has no surfaces");
+  if (prescription_.noncoaxial_loc)
+    throw Error(*prescription_.noncoaxial_loc,
+                fmt::format("{}: a tilted or decentred lens: lensim's coaxial tracers (first-order "
+                            "data, pupils, rendering) do not model it; `lensim lens info` traces "
+                            "real rays through it",
+                            prescription_.noncoaxial_reason));
   double z = 0;
   double ior_before = 1.0;
   int dir = 1;  // direction of travel along z: -1 after an odd number of mirrors

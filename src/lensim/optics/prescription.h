@@ -15,6 +15,7 @@
 // spaces or tabs separate columns; CR, LF and CRLF line endings are all accepted.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -70,6 +71,14 @@ inline bool insideApertureShape(ApertureShape shape, T half_x, T half_y, T x, T 
   return true;
 }
 
+/// A surface's place in space in a non-coaxial lens (tilted or decentred surfaces): the columns
+/// of `rotation` are its local x, y, z axes and `origin_mm` its vertex, both in the frame of the
+/// front surface (mm; z its axis, the light arriving from -z).
+struct SurfaceFrame {
+  std::array<std::array<double, 3>, 3> rotation{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
+  std::array<double, 3> origin_mm{};
+};
+
 struct LensSurface {
   double radius_mm = 0;     ///< signed radius of curvature; > 0: centre toward the film
   double thickness_mm = 0;  ///< axial distance to the next surface (last row: to the film)
@@ -100,6 +109,9 @@ struct LensSurface {
   /// lens-wide default on an air-glass surface, none on a cemented one (coating/lens_coatings.h).
   std::string coating;
   FileLoc coating_loc;
+  /// Its place in space when the lens is not coaxial (LensPrescription::noncoaxial_loc); unset
+  /// otherwise (the vertex on the axis, thickness_mm after the previous one).
+  std::optional<SurfaceFrame> frame;
 
   bool isStop() const { return stop_flag ? *stop_flag : radius_mm == 0; }
   double semiAperture_mm() const { return aperture_diameter_mm / 2; }
@@ -158,6 +170,13 @@ struct LensPrescription {
   /// twin, whose first-order data and aberrations are the fold's; the image in space is the
   /// twin's turned and mirrored, which the renderer does not model (it refuses such a lens).
   std::optional<FileLoc> fold_loc;
+  /// Set when surfaces are tilted or decentred so that no single axis holds them (Zemax
+  /// COORDBRK): where that starts. Every surface then has its `frame`, and `image_frame` is the
+  /// image surface's; thicknesses are the file's and do not place anything. Only the
+  /// non-coaxial tracer (optics/placed_lens.h) models such a lens: LensSystem refuses it.
+  std::optional<FileLoc> noncoaxial_loc;
+  std::string noncoaxial_reason;  ///< why (for messages)
+  SurfaceFrame image_frame;
   /// Warnings and notes (crossing surfaces, layout guesses); errors are thrown instead.
   std::vector<Diagnostic> diagnostics;
 

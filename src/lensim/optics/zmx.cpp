@@ -22,435 +22,11 @@
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/paraxial.h"
+#include "lensim/optics/zmx_parser.h"
 
 namespace lensim::optics {
 
-namespace {
-
-void appendUtf8(std::string& out, std::uint32_t cp) {
-  if (cp < 0x80) {
-    out += char(cp);
-  } else if (cp < 0x800) {
-    out += char(0xC0 | (cp >> 6));
-    out += char(0x80 | (cp & 0x3F));
-  } else if (cp < 0x10000) {
-    out += char(0xE0 | (cp >> 12));
-    out += char(0x80 | ((cp >> 6) & 0x3F));
-    out += char(0x80 | (cp & 0x3F));
-  } else {
-    out += char(0xF0 | (cp >> 18));
-    out += char(0x80 | ((cp >> 12) & 0x3F));
-    out += char(0x80 | ((cp >> 6) & 0x3F));
-    out += char(0x80 | (cp & 0x3F));
-  }
-}
-
-bool validUtf8(std::string_view s) {
-  size_t i = 0;
-  while (i < s.size()) {
-    const auto b = static_cast<unsigned char>(s[i]);
-    const int extra = b < 0x80 ? 0 : (b >> 5) == 6 ? 1 : (b >> 4) == 14 ? 2 : (b >> 3) == 30 ? 3 : -1;
-    if (extra < 0 || i + size_t(extra) >= s.size() + (extra == 0 ? 1 : 0)) return false;
-    for (int k = 1; k <= extra; ++k)
-      if ((static_cast<unsigned char>(s[i + size_t(k)]) >> 6) != 2) return false;
-    i += size_t(extra) + 1;
-  }
-  return true;
-}
-
-}  // namespace
-
-std::string decodeTextFile(std::string_view bytes, const std::string& path) {
-  auto u8 = [&](size_t i) { return static_cast<unsigned char>(bytes[i]); };
-  const bool le = bytes.size() >= 2 && u8(0) == 0xFF && u8(1) == 0xFE;
-  const bool be = bytes.size() >= 2 && u8(0) == 0xFE && u8(1) == 0xFF;
-  if (!le && !be) {
-    if (bytes.size() >= 3 && u8(0) == 0xEF && u8(1) == 0xBB && u8(2) == 0xBF)
-      bytes.remove_prefix(3);
-    if (validUtf8(bytes)) return std::string(bytes);
-    std::string out;  // Latin-1 (ISO 8859-1): each byte is its code point
-    out.reserve(bytes.size() + bytes.size() / 8);
-    for (char c : bytes) appendUtf8(out, static_cast<unsigned char>(c));
-    return out;
-  }
-  std::string out;
-  out.reserve(bytes.size() / 2);
-  int line = 1;
-  auto unit = [&](size_t i) -> std::uint32_t {
-    return le ? (std::uint32_t(u8(i)) | (std::uint32_t(u8(i + 1)) << 8))
-              : ((std::uint32_t(u8(i)) << 8) | std::uint32_t(u8(i + 1)));
-  };
-  const char* enc = le ? "UTF-16 LE" : "UTF-16 BE";
-  const bool odd = bytes.size() % 2 != 0;
-  for (size_t i = 2; i + 1 < bytes.size(); i += 2) {
-    std::uint32_t cu = unit(i);
-    if (cu >= 0xD800 && cu <= 0xDBFF) {
-      if (i + 3 >= bytes.size() || unit(i + 2) < 0xDC00 || unit(i + 2) > 0xDFFF)
-        throw Error(FileLoc{path, line, 0},
-                    fmt::format("malformed {} text: unpaired high surrogate 0x{:04X}", enc, cu));
-      cu = 0x10000 + ((cu - 0xD800) << 10) + (unit(i + 2) - 0xDC00);
-      i += 2;
-    } else if (cu >= 0xDC00 && cu <= 0xDFFF) {
-      throw Error(FileLoc{path, line, 0},
-                  fmt::format("malformed {} text: unpaired low surrogate 0x{:04X}", enc, cu));
-    } else if (cu == 0) {
-      throw Error(
-          FileLoc{path, line, 0},
-          fmt::format("malformed {} text: a NUL character (is the file really {}?)", enc, enc));
-    }
-    if (cu == '\n') ++line;
-    appendUtf8(out, cu);
-  }
-  if (odd)
-    throw Error(FileLoc{path, line, 0},
-                fmt::format("malformed {} file: odd number of bytes ({}); the file is truncated "
-                            "in the middle of a character or is not UTF-16",
-                            enc, bytes.size()));
-  return out;
-}
-
-std::vector<LineField> splitFields(std::string_view line, std::string_view separators) {
-  const auto sep = [&](char c) { return separators.find(c) != std::string_view::npos; };
-  std::vector<LineField> t;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && sep(line[i])) ++i;
-    if (i >= line.size()) break;
-    const size_t s = i;
-    while (i < line.size() && !sep(line[i])) ++i;
-    t.push_back({line.substr(s, i - s), int(s) + 1});
-  }
-  return t;
-}
-
-namespace {
-
-using Tok = LineField;
-
-struct ZSurface {
-  int number = 0;
-  FileLoc loc;  // the SURF line
-  std::string type = "STANDARD";
-  FileLoc type_loc;
-  double curv = 0;
-  std::optional<double> disz;  // nullopt: INFINITY
-  FileLoc disz_loc;
-  bool has_disz = false;
-  std::optional<double> diam;
-  FileLoc diam_loc;
-  bool stop = false;
-  double conic = 0;
-  std::map<int, double> parm;
-  std::map<int, FileLoc> parm_loc;  // the value's place on each PARM line
-  std::optional<FileLoc> xdat_loc;  // the first non-zero XDAT (extra data) value
-  std::string glass;
-  std::optional<double> n_d, v_d;
-  FileLoc glass_loc;
-  std::optional<double> clap_max;  // CLAP's maximum radius, or the circle around SQAP/ELAP's
-  ApertureShape aperture_shape = ApertureShape::Circle;  // SQAP: Rectangle, ELAP: Ellipse
-  double half_x = 0, half_y = 0;                          // their half-widths
-  FileLoc aperture_loc;                                   // the SQAP/ELAP/CLAP line
-  double inner_radius = 0;  // central obscuration (OBSC 0 r, or CLAP's minimum radius)
-  FileLoc inner_loc;
-  bool mirror = false;
-  std::string coating;  // COAT name
-  FileLoc coating_loc;
-};
-
-class ZmxParser {
- public:
-  ZmxParser(const std::string& path) : path_(path) {}
-
-  LensPrescription parse(std::string_view bytes);
-
- private:
-  double number(const Tok& t, int line, const char* what) const {
-    double v = 0;
-    const char* first = t.text.data();
-    const char* last = first + t.text.size();
-    if (first != last && *first == '+') ++first;
-    auto [ptr, ec] = std::from_chars(first, last, v);
-    if (ec != std::errc() || ptr != last || !std::isfinite(v))
-      throw Error(FileLoc{path_, line, t.col},
-                  fmt::format("expected a number for the {}, found '{}'", what, t.text));
-    return v;
-  }
-  void need(const std::vector<Tok>& t, size_t n, int line, const char* what) const {
-    if (t.size() < n)
-      throw Error(FileLoc{path_, line, t.empty() ? 0 : t[0].col},
-                  fmt::format("{} needs {} value{}, found {}", t[0].text, n - 1, n > 2 ? "s" : "",
-                              t.size() - 1));
-    (void)what;
-  }
-
-  // The place of PARM i's value, else the surface's TYPE line.
-  FileLoc parmLoc(const ZSurface& z, int i) const {
-    if (auto it = z.parm_loc.find(i); it != z.parm_loc.end()) return it->second;
-    return z.type_loc.valid() ? z.type_loc : z.loc;
-  }
-  void readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& shape) const;
-  void resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescription& p) const;
-
- public:
-  // Multi-configuration data: `MNUM count active`, then one row per operand and configuration,
-  // `OPERAND argument configuration value ...` (operand-major; the shape OpticStudio writes,
-  // e.g. `THIC 5 2 25.27 0 0 0 1 1 1 0 0 "" 0`; `MOFF` rows are empty operand rows).
-  struct McRow {
-    std::string op;
-    int arg = 0;
-    int config = 1;
-    std::string value;
-    FileLoc loc, value_loc;
-  };
-  int mcCount() const { return mc_count_.value_or(1); }
-  int mcActive() const { return mc_active_; }
-  const FileLoc& mcLoc() const { return mc_loc_; }
-  /// Parse with configuration `n`'s operand values applied over the surface data.
-  void setConfiguration(int n) { apply_config_ = n; }
-
- private:
-  bool readMultiConfig(const std::vector<Tok>& t, int line_no);
-  void applyMultiConfig(std::vector<ZSurface>& surfs, std::optional<double>& enpd,
-                        std::optional<double>& fnum, bool floa, std::map<int, double>& wavm) const;
-
-  std::optional<int> mc_count_;
-  int mc_active_ = 1;
-  FileLoc mc_loc_;
-  std::vector<McRow> mc_rows_;
-  std::optional<int> apply_config_;
-
-  std::string path_;
-};
-
-// One line of multi-configuration data; returns false when the line is not one (it is then read
-// as usual). Operands lensim does not model are refused at their line.
-bool ZmxParser::readMultiConfig(const std::vector<Tok>& t, int line_no) {
-  const std::string_view key = t[0].text;
-  const FileLoc loc{path_, line_no, t[0].col};
-  auto integer = [&](size_t i, const char* what) {
-    const double v = number(t[i], line_no, what);
-    if (v != std::floor(v) || std::abs(v) > 1e6)
-      throw Error(FileLoc{path_, line_no, t[i].col},
-                  fmt::format("expected an integer for the {}, found '{}'", what, t[i].text));
-    return int(v);
-  };
-  if (key == "MNUM") {
-    need(t, 2, line_no, "configuration count");
-    const int n = integer(1, "number of configurations");
-    if (n < 1 || n > 1000)
-      throw Error(FileLoc{path_, line_no, t[1].col},
-                  fmt::format("MNUM {}: expected 1 to 1000 configurations", n));
-    mc_count_ = n;
-    mc_loc_ = loc;
-    if (t.size() >= 3) {
-      mc_active_ = integer(2, "active configuration");
-      if (mc_active_ < 1 || mc_active_ > n)
-        throw Error(FileLoc{path_, line_no, t[2].col},
-                    fmt::format("MNUM {} {}: the active configuration must be 1 to {}", n,
-                                mc_active_, n));
-    }
-    return true;
-  }
-  if (!mc_count_ || key.size() != 4 || t.size() < 3) return false;
-  for (char c : key)
-    if (!(c >= 'A' && c <= 'Z') && !(c >= '0' && c <= '9')) return false;
-  if (key == "MOFF") return true;  // an empty operand row
-  static constexpr std::string_view kModelled[] = {"THIC", "CURV", "CONI", "GLSS", "APER",
-                                                   "SDIA", "STPS", "WAVE"};
-  if (std::find(std::begin(kModelled), std::end(kModelled), key) == std::end(kModelled))
-    throw Error(loc, fmt::format("multi-configuration operand {} is not supported; lensim models "
-                                 "THIC, CURV, CONI, GLSS, APER, SDIA, STPS and WAVE",
-                                 key));
-  need(t, 4, line_no, "operand");
-  McRow r;
-  r.op = std::string(key);
-  r.arg = integer(1, "operand's surface or number");
-  r.config = integer(2, "configuration number");
-  if (r.config < 1 || r.config > *mc_count_)
-    throw Error(FileLoc{path_, line_no, t[2].col},
-                fmt::format("{}: configuration {} is not one of the {} configurations MNUM "
-                            "declares",
-                            key, r.config, *mc_count_));
-  r.value = std::string(t[3].text);
-  if (r.value.size() >= 2 && r.value.front() == '"' && r.value.back() == '"')
-    r.value = r.value.substr(1, r.value.size() - 2);
-  r.loc = loc;
-  r.value_loc = FileLoc{path_, line_no, t[3].col};
-  if (r.op != "GLSS") number(t[3], line_no, "operand value");  // checked now, used later
-  mc_rows_.push_back(std::move(r));
-  return true;
-}
-
-// Puts configuration apply_config_'s operand values over the surface and system data.
-void ZmxParser::applyMultiConfig(std::vector<ZSurface>& surfs, std::optional<double>& enpd,
-                                 std::optional<double>& fnum, bool floa,
-                                 std::map<int, double>& wavm) const {
-  if (!apply_config_) return;
-  const int last_lens = int(surfs.size()) - 2;
-  for (const McRow& r : mc_rows_) {
-    if (r.config != *apply_config_) continue;
-    const double v = r.op == "GLSS" ? 0.0 : std::strtod(r.value.c_str(), nullptr);
-    auto surface = [&](int lo, int hi) -> ZSurface& {
-      if (r.arg < lo || r.arg > hi)
-        throw Error(r.loc, fmt::format("{} {}: expected a surface {} to {}", r.op, r.arg, lo, hi));
-      return surfs[size_t(r.arg)];
-    };
-    if (r.op == "THIC") {
-      ZSurface& z = surface(0, last_lens);
-      z.has_disz = true;
-      if (r.arg == 0 && std::abs(v) >= 1e10)
-        z.disz.reset();  // OpticStudio writes 1e10 for an object at infinity
-      else
-        z.disz = v;
-      z.disz_loc = r.value_loc;
-    } else if (r.op == "CURV") {
-      surface(1, last_lens).curv = v;
-    } else if (r.op == "CONI") {
-      surface(1, last_lens).conic = v;
-    } else if (r.op == "SDIA") {
-      ZSurface& z = surface(1, last_lens);
-      z.diam = v, z.clap_max.reset();
-      z.diam_loc = r.value_loc;
-    } else if (r.op == "GLSS") {
-      ZSurface& z = surface(1, last_lens);
-      if (r.value == "MIRROR")
-        throw Error(r.value_loc, "GLSS MIRROR: a configuration cannot turn a surface into a mirror");
-      z.glass = r.value;
-      z.glass_loc = r.value_loc;
-      z.n_d.reset(), z.v_d.reset();
-    } else if (r.op == "STPS") {
-      const int n = int(v);
-      if (double(n) != v || n < 1 || n > last_lens)
-        throw Error(r.value_loc, fmt::format("STPS {}: expected a surface 1 to {}", r.value,
-                                             last_lens));
-      for (ZSurface& z : surfs) z.stop = false;
-      surfs[size_t(n)].stop = true;
-    } else if (r.op == "APER") {
-      if (floa || (!enpd && !fnum))
-        throw Error(r.loc, "APER: the file's system aperture is not ENPD or FNUM; lensim changes "
-                           "those two per configuration");
-      if (!(v > 0))
-        throw Error(r.value_loc, fmt::format("APER {}: expected a value > 0", r.value));
-      (enpd ? enpd : fnum) = v;
-    } else if (r.op == "WAVE") {
-      if (wavm.find(r.arg) == wavm.end())
-        throw Error(r.loc, fmt::format("WAVE {}: the file has no wavelength {} (WAVM)", r.arg,
-                                       r.arg));
-      if (!(v > 0))
-        throw Error(r.value_loc, fmt::format("WAVE {}: expected a wavelength > 0 um", r.value));
-      wavm[r.arg] = v;
-    }
-  }
-}
-
-// TYPE TOROIDAL, as OpticStudio defines it (OpticStudio User Guide, "Toroidal"; see
-// surface_shape.h): PARM 0 extrapolate (ignored: lensim continues every surface flat beyond its
-// aperture), PARM 1 the radius of rotation R in lens units (0: infinite, a cylinder), PARM 2..8
-// the y-curve terms alpha_1..alpha_7 on y^2, y^4, ..., y^14; PARM 13 the number of Zernike
-// sag terms (PARM 14 their normalisation radius), whose coefficients are extra data (XDAT): not
-// modelled, refused when present.
-void ZmxParser::readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& shape) const {
-  shape.rotation_radius_mm = 0.0;
-  for (const auto& [i, v] : z.parm) {
-    if (i == 0 || i == 14) continue;  // extrapolate; the Zernike normalisation radius
-    if (i == 1) {
-      shape.rotation_radius_mm = v;
-    } else if (i >= 2 && i <= 8) {
-      if (v == 0) continue;
-      const size_t power = size_t(2 * (i - 1));
-      if (shape.poly.size() <= power) shape.poly.resize(power + 1, 0.0);
-      shape.poly[power] = v;
-    } else if (v != 0) {
-      throw Error(parmLoc(z, i),
-                  i == 13 ? fmt::format("surface {}: TOROIDAL PARM {} = {}: Zernike sag terms on a "
-                                        "toroidal surface are not supported",
-                                        z.number, i, v)
-                          : fmt::format("surface {}: TOROIDAL PARM {} = {}: a toroidal surface has "
-                                        "parameters 1 (radius of rotation) and 2-8 (y^2 .. y^14 "
-                                        "terms) only",
-                                        z.number, i, v));
-    }
-  }
-  if (z.xdat_loc)
-    throw Error(*z.xdat_loc, fmt::format("surface {}: TOROIDAL extra data (XDAT, Zernike sag "
-                                         "terms) is not supported",
-                                         z.number));
-  shape.scaleLengths(unit_mm);
-}
-
-// Coordinate breaks (optics/coordinate_break.h): a fold by plane mirrors becomes its coaxial twin
-// (the breaks dropped, thicknesses along the unfolded axis, a tilted mirror's circular aperture
-// its projection, an ellipse); anything else is refused at its break.
-void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescription& p) const {
-  std::vector<FoldSurface> fold(surfs.size());
-  for (size_t k = 0; k < surfs.size(); ++k) {
-    const ZSurface& z = surfs[k];
-    FoldSurface& f = fold[k];
-    f.number = z.number, f.loc = z.loc, f.coordbrk = z.type == "COORDBRK", f.mirror = z.mirror;
-    f.thickness = z.disz ? *z.disz : std::numeric_limits<double>::infinity();
-    bool parms_zero = true;
-    for (const auto& [i, v] : z.parm) parms_zero = parms_zero && v == 0;
-    f.plane = z.curv == 0 && parms_zero && !z.xdat_loc && z.type != "TOROIDAL";
-    f.symmetric = z.type != "TOROIDAL" && z.aperture_shape == ApertureShape::Circle;
-    if (!f.coordbrk) continue;
-    if (!z.has_disz)
-      throw Error(z.loc, fmt::format("surface {}: no DISZ (thickness) line", z.number));
-    if (!z.disz)
-      throw Error(z.disz_loc, fmt::format("surface {}: a coordinate break's thickness must be "
-                                          "finite",
-                                          z.number));
-    for (const auto& [i, v] : z.parm) {
-      if (i >= 1 && i <= 6) {
-        f.parm[size_t(i - 1)] = v;
-        f.parm_loc[size_t(i - 1)] = parmLoc(z, i);
-      } else if (v != 0) {
-        throw Error(parmLoc(z, i), fmt::format("surface {}: COORDBRK PARM {} = {}: a coordinate "
-                                               "break has parameters 1 to 6",
-                                               z.number, i, v));
-      }
-    }
-    if (z.stop)
-      throw Error(z.type_loc, fmt::format("surface {}: TYPE COORDBRK on the stop: a coordinate "
-                                          "break cannot be the stop; put STOP on a real surface",
-                                          z.number));
-    if (z.mirror || !z.glass.empty())
-      throw Error(z.glass_loc, fmt::format("surface {}: a coordinate break has no glass (GLAS "
-                                           "{})",
-                                           z.number, z.mirror ? "MIRROR" : z.glass));
-  }
-  const UnfoldedSystem u = unfoldCoordinateBreaks(fold);
-  if (!u.any_break) return;
-  p.fold_loc = fold[size_t(std::find_if(fold.begin(), fold.end(),
-                                        [](const FoldSurface& f) { return f.coordbrk; }) -
-                          fold.begin())]
-                   .loc;
-  std::vector<ZSurface> twin;
-  for (size_t k = 0; k < u.kept.size(); ++k) {
-    ZSurface z = surfs[u.kept[k]];
-    if (k > 0 && k + 1 < u.kept.size()) z.disz = u.thickness[k];
-    twin.push_back(std::move(z));
-  }
-  for (const FoldMirrorAperture& m : u.tilted_mirrors) {
-    ZSurface& z = twin[m.index];
-    const double r = z.clap_max ? *z.clap_max : z.diam.value_or(0);
-    if (!(r > 0)) continue;  // automatic semi-diameter: computed on the twin
-    z.aperture_shape = ApertureShape::Ellipse;
-    z.half_x = r * m.scale_x, z.half_y = r * m.scale_y;
-    z.clap_max = r;
-    p.diagnostics.push_back(
-        {Severity::Note, z.loc,
-         fmt::format("surface {}: a tilted fold mirror; its semi-diameter {} is clipped as its "
-                     "projection along the axis, an ellipse {} x {} (exact for rays parallel to "
-                     "the axis)",
-                     z.number, r, z.half_x, z.half_y)});
-  }
-  p.diagnostics.push_back(
-      {Severity::Note, *p.fold_loc,
-       fmt::format("coordinate breaks fold the axis with plane mirrors: traced as the coaxial "
-                   "twin ({} surfaces, breaks removed)",
-                   twin.size())});
-  surfs = std::move(twin);
-}
+namespace zmx_detail {
 
 LensPrescription ZmxParser::parse(std::string_view bytes) {
   const std::string text = decodeTextFile(bytes, path_);
@@ -458,26 +34,6 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   p.path = path_;
   p.format = "zmx";
   p.name = std::filesystem::path(path_).stem().string();
-
-  double unit_mm = 1;
-  std::optional<double> enpd, fnum, obna;
-  bool floa = false;
-  FileLoc aperture_loc;
-  std::map<int, double> wavm;  // index -> micrometres
-  std::vector<double> wavl;
-  std::vector<std::string> gcat;  // GCAT: glass catalogues, lower case, in search order
-  std::optional<int> pwav;
-  std::optional<int> n_waves;
-  // Fields (FTYP type and count, XFLN/YFLN values) and ray aiming, for automatic semi-diameters.
-  int field_type = 0, n_fields = 0;
-  FileLoc field_loc;
-  std::vector<double> xfln, yfln;
-  std::optional<FileLoc> vignetting_loc, ray_aiming_loc;
-  std::vector<ZSurface> surfs;
-  ZSurface* cur = nullptr;
-  bool sequential_seen = false;
-  std::string cofn;
-  FileLoc cofn_loc;
 
   int line_no = 0;
   size_t pos = 0;
@@ -495,27 +51,9 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     const std::string_view key = t[0].text;
     const FileLoc loc{path_, line_no, t[0].col};
     if ((key == "MNUM" || mc_count_) && readMultiConfig(t, line_no)) continue;
-    auto num = [&](size_t i, const char* what) {
-      need(t, i + 1, line_no, what);
-      return number(t[i], line_no, what);
-    };
-    // A count or index (surface, wavelength, parameter number): an integer in [-1e6, 1e6], so
-    // that converting it to int is defined.
-    auto inum = [&](size_t i, const char* what) {
-      const double v = num(i, what);
-      if (v != std::floor(v) || std::abs(v) > 1e6)
-        throw Error(FileLoc{path_, line_no, t[i].col},
-                    fmt::format("expected an integer between -1000000 and 1000000 for the {}, "
-                                "found '{}'",
-                                what, t[i].text));
-      return int(v);
-    };
-    auto surfErr = [&](const std::string& msg) {
-      return Error(loc, fmt::format("surface {}: {}", cur ? cur->number : -1, msg));
-    };
-
+    const Line l{t, line, line_no, loc};
     if (key == "SURF") {
-      const int n = inum(1, "surface number");
+      const int n = lineInt(l, 1, "surface number");
       if (n != int(surfs.size()))
         throw Error(loc, fmt::format("surfaces out of order: SURF {} where SURF {} was expected", n,
                                      surfs.size()));
@@ -525,257 +63,292 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       cur->loc = loc;
       continue;
     }
-    if (!cur) {
-      // System data.
-      if (key == "MODE") {
-        need(t, 2, line_no, "mode");
-        if (t[1].text != "SEQ")
-          throw Error(FileLoc{path_, line_no, t[1].col},
-                      fmt::format("MODE {} is not supported: lensim reads sequential (MODE SEQ) "
-                                  "files only",
-                                  t[1].text));
-        sequential_seen = true;
-      } else if (key == "UNIT") {
-        need(t, 2, line_no, "unit");
-        const std::string_view u = t[1].text;
-        if (u == "MM")
-          unit_mm = 1;
-        else if (u == "CM")
-          unit_mm = 10;
-        else if (u == "IN")
-          unit_mm = 25.4;
-        else if (u == "M" || u == "METER" || u == "METERS")
-          unit_mm = 1000;
-        else
-          throw Error(FileLoc{path_, line_no, t[1].col},
-                      fmt::format("unknown lens unit '{}'; expected MM, CM, IN or M", u));
-      } else if (key == "COFN") {
-        // The coating file: the first name ending in .DAT ("COFN [QF] "COATING.DAT" ...").
-        for (size_t i = 1; i < t.size(); ++i) {
-          std::string_view f = t[i].text;
-          if (f.size() >= 2 && f.front() == '"' && f.back() == '"') f = f.substr(1, f.size() - 2);
-          if (f.size() > 4 && (f.substr(f.size() - 4) == ".DAT" || f.substr(f.size() - 4) == ".dat")) {
-            cofn = std::string(f);
-            cofn_loc = FileLoc{path_, line_no, t[i].col};
-            break;
-          }
-        }
-      } else if (key == "GCAT") {
-        // The glass catalogues the GLAS names come from, in the order they are searched.
-        for (size_t i = 1; i < t.size(); ++i) {
-          std::string c(t[i].text);
-          for (char& ch : c) ch = char(std::tolower(static_cast<unsigned char>(ch)));
-          if (!glassLibrary().hasCatalog(c))
-            p.diagnostics.push_back(
-                {Severity::Warning, FileLoc{path_, line_no, t[i].col},
-                 fmt::format("GCAT: lensim has no glass catalogue '{}' (--glass-catalog FILE "
-                             "adds one); its glasses are looked up in the others",
-                             t[i].text)});
-          gcat.push_back(std::move(c));
-        }
-      } else if (key == "NAME") {
-        const size_t s = line.find("NAME") + 4;
-        std::string name(line.substr(std::min(s, line.size())));
-        while (!name.empty() && (name.front() == ' ' || name.front() == '\t')) name.erase(0, 1);
-        while (!name.empty() && (name.back() == ' ' || name.back() == '\t')) name.pop_back();
-        if (!name.empty()) p.name = name;
-      } else if (key == "ENPD") {
-        enpd = num(1, "entrance pupil diameter");
-        aperture_loc = loc;
-        if (!(*enpd > 0))
-          throw Error(FileLoc{path_, line_no, t[1].col},
-                      fmt::format("entrance pupil diameter {} must be > 0", *enpd));
-      } else if (key == "FNUM") {
-        fnum = num(1, "f-number");
-        aperture_loc = loc;
-        if (!(*fnum > 0))
-          throw Error(FileLoc{path_, line_no, t[1].col},
-                      fmt::format("f-number {} must be > 0", *fnum));
-      } else if (key == "FLOA") {
-        floa = true;
-        aperture_loc = loc;
-      } else if (key == "OBNA") {
-        // Object-space numerical aperture (object space is air): sin of the axial marginal ray's
-        // angle; the value is the first number.
-        obna = num(1, "object-space numerical aperture");
-        aperture_loc = FileLoc{path_, line_no, t[1].col};
-        if (!(*obna > 0 && *obna < 1))
-          throw Error(aperture_loc, fmt::format("object-space numerical aperture {} must be > 0 "
-                                                "and < 1 (the object is in air)",
-                                                *obna));
-      } else if (key == "OBSC" || key == "NUMA") {
-        throw Error(loc, fmt::format("system aperture {} (object-space numerical aperture or "
-                                     "cone angle) is not supported; use ENPD, FNUM or FLOA",
-                                     key));
-      } else if (key == "WAVM") {
-        const int i = inum(1, "wavelength number");
-        wavm[i] = num(2, "wavelength (micrometres)");
-        if (!(wavm[i] > 0))
-          throw Error(FileLoc{path_, line_no, t[2].col},
-                      fmt::format("wavelength {} micrometres must be > 0", wavm[i]));
-      } else if (key == "WAVL") {
-        for (size_t i = 1; i < t.size(); ++i) {
-          wavl.push_back(number(t[i], line_no, "wavelength"));
-          if (!(wavl.back() > 0))
-            throw Error(FileLoc{path_, line_no, t[i].col},
-                        fmt::format("wavelength {} micrometres must be > 0", wavl.back()));
-        }
-      } else if (key == "PWAV") {
-        pwav = inum(1, "primary wavelength number");
-      } else if (key == "FTYP") {
-        // FTYP type telecentric fields wavelengths ...
-        if (t.size() >= 2) field_type = inum(1, "field type");
-        if (t.size() >= 4) n_fields = inum(3, "number of fields");
-        if (t.size() >= 5) n_waves = int(number(t[4], line_no, "number of wavelengths"));
-        field_loc = loc;
-      } else if (key == "XFLN" || key == "YFLN") {
-        auto& v = key == "XFLN" ? xfln : yfln;
-        v.clear();
-        for (size_t i = 1; i < t.size(); ++i) v.push_back(number(t[i], line_no, "field value"));
-        if (!field_loc.valid()) field_loc = loc;
-      } else if (key == "VDXN" || key == "VDYN" || key == "VCXN" || key == "VCYN") {
-        // Vignetting factors: they shrink the pupil OpticStudio's automatic apertures use.
-        for (size_t i = 1; i < t.size(); ++i)
-          if (number(t[i], line_no, "vignetting factor") != 0 && !vignetting_loc)
-            vignetting_loc = FileLoc{path_, line_no, t[i].col};
-      } else if (key == "RAIM") {
-        // Ray aiming: the second value is its mode (0 off). Inferred from the optiland sample
-        // circular_aperture_example_*.zmx (`RAIM 0 1 ...`), whose automatic semi-diameters
-        // OpticStudio computed with rays aimed at the real stop (reproduced to 1e-6 that way).
-        if (t.size() >= 3 && number(t[2], line_no, "ray aiming") != 0)
-          ray_aiming_loc = FileLoc{path_, line_no, t[2].col};
-      }
-      continue;
-    }
-
-    // Surface data.
-    if (key == "TYPE") {
-      need(t, 2, line_no, "type");
-      cur->type = std::string(t[1].text);
-      cur->type_loc = loc;
-      if (cur->type != "STANDARD" && cur->type != "EVENASPH" && cur->type != "ODDASPH" &&
-          cur->type != "TOROIDAL" && cur->type != "COORDBRK")
-        throw surfErr(
-            fmt::format("TYPE {} is not supported (lensim models STANDARD, EVENASPH, "
-                        "ODDASPH and TOROIDAL surfaces, and COORDBRK folds)",
-                        cur->type));
-    } else if (key == "CURV") {
-      cur->curv = num(1, "curvature");
-    } else if (key == "DISZ") {
-      need(t, 2, line_no, "thickness");
-      cur->has_disz = true;
-      cur->disz_loc = FileLoc{path_, line_no, t[1].col};
-      if (t[1].text == "INFINITY")
-        cur->disz.reset();
-      else
-        cur->disz = number(t[1], line_no, "thickness");
-    } else if (key == "DIAM") {
-      cur->diam = num(1, "semi-diameter");
-      cur->diam_loc = FileLoc{path_, line_no, t[1].col};
-    } else if (key == "STOP") {
-      cur->stop = true;
-    } else if (key == "CONI") {
-      cur->conic = num(1, "conic constant");
-    } else if (key == "PARM") {
-      const int i = inum(1, "parameter number");
-      cur->parm[i] = num(2, "parameter value");
-      cur->parm_loc[i] = FileLoc{path_, line_no, t[2].col};
-    } else if (key == "XDAT" && cur->type == "TOROIDAL") {
-      // Extra data (`XDAT n value ...`): a toroid's Zernike sag terms (1: the number of terms,
-      // 2: their normalisation radius, 3 on: the coefficients); kept to refuse them. The
-      // radius alone changes nothing.
-      const int n = inum(1, "extra data number");
-      const double v = num(2, "extra data value");
-      if (v != 0 && n != 2 && !cur->xdat_loc) cur->xdat_loc = FileLoc{path_, line_no, t[2].col};
-    } else if (key == "COAT") {
-      // A Zemax coating name (defined in the COFN coating file); "COAT" alone: none.
-      if (t.size() >= 2) {
-        cur->coating = std::string(t[1].text);
-        cur->coating_loc = FileLoc{path_, line_no, t[1].col};
-      }
-    } else if (key == "GLAS") {
-      need(t, 2, line_no, "glass");
-      cur->glass = std::string(t[1].text);
-      cur->glass_loc = FileLoc{path_, line_no, t[1].col};
-      if (cur->glass == "MIRROR") {
-        // A reflecting surface; the medium after it is the one before it.
-        cur->mirror = true;
-        cur->glass.clear();
-      } else if (t.size() >= 6) {
-        cur->n_d = number(t[4], line_no, "glass index n_d");
-        cur->v_d = number(t[5], line_no, "glass Abbe number V_d");
-      }
-    } else if (key == "CLAP" || key == "OBSC") {
-      // Circular aperture `CLAP rmin rmax` (clear between the radii) and circular obscuration
-      // `OBSC rmin rmax` (blocked between them), as Zemax writes them (the samples: `CLAP 0
-      // 25.4 0`, `OBSC 0 25 0`). An annular clear aperture and a central obscuration (rmin 0)
-      // both block the centre; an obscuring ring (OBSC rmin > 0) is not modelled.
-      const double rmin = num(1, "aperture minimum radius");
-      const double rmax = num(2, "aperture maximum radius");
-      const FileLoc vloc{path_, line_no, t[1].col};
-      if (!(rmin >= 0) || !(rmax > rmin))
-        throw Error(vloc, fmt::format("surface {}: {} radii {} .. {}: expected 0 <= minimum < "
-                                      "maximum",
-                                      cur->number, key, rmin, rmax));
-      if (key == "CLAP") {
-        if (cur->aperture_shape != ApertureShape::Circle)
-          throw surfErr("CLAP: the surface already has an aperture (one per surface)");
-        cur->clap_max = rmax;
-        if (rmin > 0) cur->inner_radius = rmin, cur->inner_loc = vloc;
-      } else {
-        if (rmin != 0)
-          throw Error(vloc, fmt::format("surface {}: OBSC {} {}: an obscuring ring (minimum "
-                                        "radius > 0) is not supported; a central obscuration "
-                                        "(OBSC 0 r) is",
-                                        cur->number, rmin, rmax));
-        cur->inner_radius = rmax, cur->inner_loc = FileLoc{path_, line_no, t[2].col};
-      }
-    } else if (key == "OBDC") {
-      // Aperture / obscuration decentre: refused unless zero.
-      for (size_t i = 1; i < t.size(); ++i)
-        if (number(t[i], line_no, "aperture decentre") != 0)
-          throw Error(FileLoc{path_, line_no, t[i].col},
-                      fmt::format("surface {}: OBDC: decentred apertures (off-axis mirrors) are "
-                                  "not supported",
-                                  cur->number));
-    } else if (key == "SQAP" || key == "ELAP") {
-      // Rectangular `SQAP hx hy` and elliptical `ELAP hx hy` apertures, centred (their decentre
-      // is the OBDC line): the half-widths in x and y, as OpticStudio writes them (Thorlabs'
-      // 4 mm x 6 mm cylindrical lens LJ1598L1: `SQAP 3.0 2 0`). Further values are refused
-      // unless 0.
-      const double hx = num(1, "aperture x half-width");
-      const double hy = num(2, "aperture y half-width");
-      if (!(hx > 0) || !(hy > 0) || !std::isfinite(hx) || !std::isfinite(hy))
-        throw Error(FileLoc{path_, line_no, t[!(hx > 0) || !std::isfinite(hx) ? 1 : 2].col},
-                    fmt::format("surface {}: {} half-widths {} {}: expected two finite values "
-                                "> 0",
-                                cur->number, key, hx, hy));
-      for (size_t i = 3; i < t.size(); ++i)
-        if (number(t[i], line_no, "aperture data") != 0)
-          throw Error(FileLoc{path_, line_no, t[i].col},
-                      fmt::format("surface {}: {}: value {} is {}; only centred apertures "
-                                  "(hx hy 0) are supported",
-                                  cur->number, key, i, t[i].text));
-      if (cur->clap_max)
-        throw surfErr(fmt::format("{}: the surface already has an aperture (one per surface)",
-                                  key));
-      cur->aperture_shape = key == "SQAP" ? ApertureShape::Rectangle : ApertureShape::Ellipse;
-      cur->half_x = hx, cur->half_y = hy;
-      cur->clap_max = key == "SQAP" ? std::hypot(hx, hy) : std::max(hx, hy);
-      cur->aperture_loc = FileLoc{path_, line_no, t[0].col};
-    } else if (key == "SQOB" || key == "ELOB" || key == "UDAP" || key == "UDOB") {
-      throw surfErr(
-          fmt::format("{} (a surface aperture or obscuration other than circular) is "
-                      "not supported",
-                      key));
-    } else if (key == "SCBD" || key == "DECX" || key == "DECY" || key == "TILT") {
-      // Surface decentres and tilts: refused unless all zero.
-      for (size_t i = 2; i < t.size(); ++i)
-        if (number(t[i], line_no, "decentre/tilt") != 0)
-          throw surfErr(fmt::format("{}: tilted or decentred surfaces are not supported", key));
-    }
+    if (!cur)
+      systemLine(p, l);
+    else
+      surfaceLine(l);
   }
+  finishSystemData(p, last_line);
+  buildSurfaces(p);
+  sizeStop(p);
+  computeMissingSemiDiameters(p);
+  readCoatingFile(p);
+  return p;
+}
 
+// A line of system data (before the first SURF).
+void ZmxParser::systemLine(LensPrescription& p, const Line& l) {
+  const std::vector<Tok>& t = l.t;
+  const std::string_view line = l.text, key = t[0].text;
+  const int line_no = l.line_no;
+  const FileLoc& loc = l.loc;
+  auto num = [&](size_t i, const char* what) { return lineNumber(l, i, what); };
+  auto inum = [&](size_t i, const char* what) { return lineInt(l, i, what); };
+  // System data.
+  if (key == "MODE") {
+    need(t, 2, line_no, "mode");
+    if (t[1].text != "SEQ")
+      throw Error(FileLoc{path_, line_no, t[1].col},
+                  fmt::format("MODE {} is not supported: lensim reads sequential (MODE SEQ) "
+                              "files only",
+                              t[1].text));
+    sequential_seen = true;
+  } else if (key == "UNIT") {
+    need(t, 2, line_no, "unit");
+    const std::string_view u = t[1].text;
+    if (u == "MM")
+      unit_mm = 1;
+    else if (u == "CM")
+      unit_mm = 10;
+    else if (u == "IN")
+      unit_mm = 25.4;
+    else if (u == "M" || u == "METER" || u == "METERS")
+      unit_mm = 1000;
+    else
+      throw Error(FileLoc{path_, line_no, t[1].col},
+                  fmt::format("unknown lens unit '{}'; expected MM, CM, IN or M", u));
+  } else if (key == "COFN") {
+    // The coating file: the first name ending in .DAT ("COFN [QF] "COATING.DAT" ...").
+    for (size_t i = 1; i < t.size(); ++i) {
+      std::string_view f = t[i].text;
+      if (f.size() >= 2 && f.front() == '"' && f.back() == '"') f = f.substr(1, f.size() - 2);
+      if (f.size() > 4 && (f.substr(f.size() - 4) == ".DAT" || f.substr(f.size() - 4) == ".dat")) {
+        cofn = std::string(f);
+        cofn_loc = FileLoc{path_, line_no, t[i].col};
+        break;
+      }
+    }
+  } else if (key == "GCAT") {
+    // The glass catalogues the GLAS names come from, in the order they are searched.
+    for (size_t i = 1; i < t.size(); ++i) {
+      std::string c(t[i].text);
+      for (char& ch : c) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+      if (!glassLibrary().hasCatalog(c))
+        p.diagnostics.push_back(
+            {Severity::Warning, FileLoc{path_, line_no, t[i].col},
+             fmt::format("GCAT: lensim has no glass catalogue '{}' (--glass-catalog FILE "
+                         "adds one); its glasses are looked up in the others",
+                         t[i].text)});
+      gcat.push_back(std::move(c));
+    }
+  } else if (key == "NAME") {
+    const size_t s = line.find("NAME") + 4;
+    std::string name(line.substr(std::min(s, line.size())));
+    while (!name.empty() && (name.front() == ' ' || name.front() == '\t')) name.erase(0, 1);
+    while (!name.empty() && (name.back() == ' ' || name.back() == '\t')) name.pop_back();
+    if (!name.empty()) p.name = name;
+  } else if (key == "ENPD") {
+    enpd = num(1, "entrance pupil diameter");
+    aperture_loc = loc;
+    if (!(*enpd > 0))
+      throw Error(FileLoc{path_, line_no, t[1].col},
+                  fmt::format("entrance pupil diameter {} must be > 0", *enpd));
+  } else if (key == "FNUM") {
+    fnum = num(1, "f-number");
+    aperture_loc = loc;
+    if (!(*fnum > 0))
+      throw Error(FileLoc{path_, line_no, t[1].col},
+                  fmt::format("f-number {} must be > 0", *fnum));
+  } else if (key == "FLOA") {
+    floa = true;
+    aperture_loc = loc;
+  } else if (key == "OBNA") {
+    // Object-space numerical aperture (object space is air): sin of the axial marginal ray's
+    // angle; the value is the first number.
+    obna = num(1, "object-space numerical aperture");
+    aperture_loc = FileLoc{path_, line_no, t[1].col};
+    if (!(*obna > 0 && *obna < 1))
+      throw Error(aperture_loc, fmt::format("object-space numerical aperture {} must be > 0 "
+                                            "and < 1 (the object is in air)",
+                                            *obna));
+  } else if (key == "OBSC" || key == "NUMA") {
+    throw Error(loc, fmt::format("system aperture {} (object-space numerical aperture or "
+                                 "cone angle) is not supported; use ENPD, FNUM or FLOA",
+                                 key));
+  } else if (key == "WAVM") {
+    const int i = inum(1, "wavelength number");
+    wavm[i] = num(2, "wavelength (micrometres)");
+    if (!(wavm[i] > 0))
+      throw Error(FileLoc{path_, line_no, t[2].col},
+                  fmt::format("wavelength {} micrometres must be > 0", wavm[i]));
+  } else if (key == "WAVL") {
+    for (size_t i = 1; i < t.size(); ++i) {
+      wavl.push_back(number(t[i], line_no, "wavelength"));
+      if (!(wavl.back() > 0))
+        throw Error(FileLoc{path_, line_no, t[i].col},
+                    fmt::format("wavelength {} micrometres must be > 0", wavl.back()));
+    }
+  } else if (key == "PWAV") {
+    pwav = inum(1, "primary wavelength number");
+  } else if (key == "FTYP") {
+    // FTYP type telecentric fields wavelengths ...
+    if (t.size() >= 2) field_type = inum(1, "field type");
+    if (t.size() >= 4) n_fields = inum(3, "number of fields");
+    if (t.size() >= 5) n_waves = int(number(t[4], line_no, "number of wavelengths"));
+    field_loc = loc;
+  } else if (key == "XFLN" || key == "YFLN") {
+    auto& v = key == "XFLN" ? xfln : yfln;
+    v.clear();
+    for (size_t i = 1; i < t.size(); ++i) v.push_back(number(t[i], line_no, "field value"));
+    if (!field_loc.valid()) field_loc = loc;
+  } else if (key == "VDXN" || key == "VDYN" || key == "VCXN" || key == "VCYN") {
+    // Vignetting factors: they shrink the pupil OpticStudio's automatic apertures use.
+    for (size_t i = 1; i < t.size(); ++i)
+      if (number(t[i], line_no, "vignetting factor") != 0 && !vignetting_loc)
+        vignetting_loc = FileLoc{path_, line_no, t[i].col};
+  } else if (key == "RAIM") {
+    // Ray aiming: the second value is its mode (0 off). Inferred from the optiland sample
+    // circular_aperture_example_*.zmx (`RAIM 0 1 ...`), whose automatic semi-diameters
+    // OpticStudio computed with rays aimed at the real stop (reproduced to 1e-6 that way).
+    if (t.size() >= 3 && number(t[2], line_no, "ray aiming") != 0)
+      ray_aiming_loc = FileLoc{path_, line_no, t[2].col};
+  }
+}
+
+// A line of the current surface's data.
+void ZmxParser::surfaceLine(const Line& l) {
+  const std::vector<Tok>& t = l.t;
+  const std::string_view key = t[0].text;
+  const int line_no = l.line_no;
+  const FileLoc& loc = l.loc;
+  auto num = [&](size_t i, const char* what) { return lineNumber(l, i, what); };
+  auto inum = [&](size_t i, const char* what) { return lineInt(l, i, what); };
+  auto surfErr = [&](const std::string& msg) { return surfaceError(l, msg); };
+  if (key == "TYPE") {
+    need(t, 2, line_no, "type");
+    cur->type = std::string(t[1].text);
+    cur->type_loc = loc;
+    if (cur->type != "STANDARD" && cur->type != "EVENASPH" && cur->type != "ODDASPH" &&
+        cur->type != "TOROIDAL" && cur->type != "COORDBRK")
+      throw surfErr(
+          fmt::format("TYPE {} is not supported (lensim models STANDARD, EVENASPH, "
+                      "ODDASPH and TOROIDAL surfaces, and COORDBRK folds)",
+                      cur->type));
+  } else if (key == "CURV") {
+    cur->curv = num(1, "curvature");
+  } else if (key == "DISZ") {
+    need(t, 2, line_no, "thickness");
+    cur->has_disz = true;
+    cur->disz_loc = FileLoc{path_, line_no, t[1].col};
+    if (t[1].text == "INFINITY")
+      cur->disz.reset();
+    else
+      cur->disz = number(t[1], line_no, "thickness");
+  } else if (key == "DIAM") {
+    cur->diam = num(1, "semi-diameter");
+    cur->diam_loc = FileLoc{path_, line_no, t[1].col};
+  } else if (key == "STOP") {
+    cur->stop = true;
+  } else if (key == "CONI") {
+    cur->conic = num(1, "conic constant");
+  } else if (key == "PARM") {
+    const int i = inum(1, "parameter number");
+    cur->parm[i] = num(2, "parameter value");
+    cur->parm_loc[i] = FileLoc{path_, line_no, t[2].col};
+  } else if (key == "XDAT" && cur->type == "TOROIDAL") {
+    // Extra data (`XDAT n value ...`): a toroid's Zernike sag terms (1: the number of terms,
+    // 2: their normalisation radius, 3 on: the coefficients); kept to refuse them. The
+    // radius alone changes nothing.
+    const int n = inum(1, "extra data number");
+    const double v = num(2, "extra data value");
+    if (v != 0 && n != 2 && !cur->xdat_loc) cur->xdat_loc = FileLoc{path_, line_no, t[2].col};
+  } else if (key == "COAT") {
+    // A Zemax coating name (defined in the COFN coating file); "COAT" alone: none.
+    if (t.size() >= 2) {
+      cur->coating = std::string(t[1].text);
+      cur->coating_loc = FileLoc{path_, line_no, t[1].col};
+    }
+  } else if (key == "GLAS") {
+    need(t, 2, line_no, "glass");
+    cur->glass = std::string(t[1].text);
+    cur->glass_loc = FileLoc{path_, line_no, t[1].col};
+    if (cur->glass == "MIRROR") {
+      // A reflecting surface; the medium after it is the one before it.
+      cur->mirror = true;
+      cur->glass.clear();
+    } else if (t.size() >= 6) {
+      cur->n_d = number(t[4], line_no, "glass index n_d");
+      cur->v_d = number(t[5], line_no, "glass Abbe number V_d");
+    }
+  } else if (key == "CLAP" || key == "OBSC") {
+    // Circular aperture `CLAP rmin rmax` (clear between the radii) and circular obscuration
+    // `OBSC rmin rmax` (blocked between them), as Zemax writes them (the samples: `CLAP 0
+    // 25.4 0`, `OBSC 0 25 0`). An annular clear aperture and a central obscuration (rmin 0)
+    // both block the centre; an obscuring ring (OBSC rmin > 0) is not modelled.
+    const double rmin = num(1, "aperture minimum radius");
+    const double rmax = num(2, "aperture maximum radius");
+    const FileLoc vloc{path_, line_no, t[1].col};
+    if (!(rmin >= 0) || !(rmax > rmin))
+      throw Error(vloc, fmt::format("surface {}: {} radii {} .. {}: expected 0 <= minimum < "
+                                    "maximum",
+                                    cur->number, key, rmin, rmax));
+    if (key == "CLAP") {
+      if (cur->aperture_shape != ApertureShape::Circle)
+        throw surfErr("CLAP: the surface already has an aperture (one per surface)");
+      cur->clap_max = rmax;
+      if (rmin > 0) cur->inner_radius = rmin, cur->inner_loc = vloc;
+    } else {
+      if (rmin != 0)
+        throw Error(vloc, fmt::format("surface {}: OBSC {} {}: an obscuring ring (minimum "
+                                      "radius > 0) is not supported; a central obscuration "
+                                      "(OBSC 0 r) is",
+                                      cur->number, rmin, rmax));
+      cur->inner_radius = rmax, cur->inner_loc = FileLoc{path_, line_no, t[2].col};
+    }
+  } else if (key == "OBDC") {
+    // Aperture / obscuration decentre: refused unless zero.
+    for (size_t i = 1; i < t.size(); ++i)
+      if (number(t[i], line_no, "aperture decentre") != 0)
+        throw Error(FileLoc{path_, line_no, t[i].col},
+                    fmt::format("surface {}: OBDC: decentred apertures (off-axis mirrors) are "
+                                "not supported",
+                                cur->number));
+  } else if (key == "SQAP" || key == "ELAP") {
+    // Rectangular `SQAP hx hy` and elliptical `ELAP hx hy` apertures, centred (their decentre
+    // is the OBDC line): the half-widths in x and y, as OpticStudio writes them (Thorlabs'
+    // 4 mm x 6 mm cylindrical lens LJ1598L1: `SQAP 3.0 2 0`). Further values are refused
+    // unless 0.
+    const double hx = num(1, "aperture x half-width");
+    const double hy = num(2, "aperture y half-width");
+    if (!(hx > 0) || !(hy > 0) || !std::isfinite(hx) || !std::isfinite(hy))
+      throw Error(FileLoc{path_, line_no, t[!(hx > 0) || !std::isfinite(hx) ? 1 : 2].col},
+                  fmt::format("surface {}: {} half-widths {} {}: expected two finite values "
+                              "> 0",
+                              cur->number, key, hx, hy));
+    for (size_t i = 3; i < t.size(); ++i)
+      if (number(t[i], line_no, "aperture data") != 0)
+        throw Error(FileLoc{path_, line_no, t[i].col},
+                    fmt::format("surface {}: {}: value {} is {}; only centred apertures "
+                                "(hx hy 0) are supported",
+                                cur->number, key, i, t[i].text));
+    if (cur->clap_max)
+      throw surfErr(fmt::format("{}: the surface already has an aperture (one per surface)",
+                                key));
+    cur->aperture_shape = key == "SQAP" ? ApertureShape::Rectangle : ApertureShape::Ellipse;
+    cur->half_x = hx, cur->half_y = hy;
+    cur->clap_max = key == "SQAP" ? std::hypot(hx, hy) : std::max(hx, hy);
+    cur->aperture_loc = FileLoc{path_, line_no, t[0].col};
+  } else if (key == "SQOB" || key == "ELOB" || key == "UDAP" || key == "UDOB") {
+    throw surfErr(
+        fmt::format("{} (a surface aperture or obscuration other than circular) is "
+                    "not supported",
+                    key));
+  } else if (key == "SCBD" || key == "SCAD" || key == "DECX" || key == "DECY" ||
+             key == "TILT") {
+    // A surface's own decentres and tilts (before and after it): refused unless all zero;
+    // their field layout is not documented where it could be checked (COORDBRK surfaces are
+    // read).
+    for (size_t i = 2; i < t.size(); ++i)
+      if (number(t[i], line_no, "decentre/tilt") != 0)
+        throw surfErr(fmt::format("{}: a surface's own decentre or tilt is not supported (a "
+                                  "TYPE COORDBRK surface before it is)",
+                                  key));
+  }
+}
+
+// Multi-configuration values, the checks on the whole file, coordinate breaks, wavelengths and
+// the object distance.
+void ZmxParser::finishSystemData(LensPrescription& p, int last_line) {
   applyMultiConfig(surfs, enpd, fnum, floa, wavm);
 
   if (!sequential_seen && surfs.empty())
@@ -807,9 +380,12 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   // Object surface.
   const ZSurface& obj = surfs.front();
   if (obj.disz) p.object_distance_mm = *obj.disz * unit_mm;
+}
 
+// The lens surfaces (1 .. N-2; the last is the image) as prescription rows.
+void ZmxParser::buildSurfaces(LensPrescription& p) {
   // Lens surfaces: 1 .. N-2; the last is the image.
-  int stop_surface = -1;
+  stop_surface = -1;
   for (size_t k = 1; k + 1 < surfs.size(); ++k)
     if (surfs[k].stop) stop_surface = int(k);
   if (stop_surface < 0) {
@@ -819,7 +395,6 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   }
   // Surfaces without a semi-diameter (no DIAM, DIAM 0) get one from real rays below; until then
   // a placeholder larger than any ray height (bounded by the surface's extent).
-  std::vector<std::pair<int, const ZSurface*>> auto_rows;  // row in p.surfaces, its surface
   double placeholder_mm = enpd ? *enpd * unit_mm : 0.0;
   for (size_t k = 1; k + 1 < surfs.size(); ++k) {
     if (surfs[k].disz) placeholder_mm += std::abs(*surfs[k].disz) * unit_mm;
@@ -828,13 +403,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   placeholder_mm = std::max(4 * placeholder_mm, 1.0);
   double ior_before = 1;
   GlassSpec glass_before;
-  // Whether the n_d on the file's GLAS lines are the glasses' data: catalogue glasses checked,
-  // those whose n_d disagrees with the catalogue, and the unknown names that fall back on them.
-  int glas_checked = 0, glas_disagree = 0;
-  std::string glas_example;
-  std::vector<std::pair<std::string, FileLoc>> glas_fallbacks;
   int mirrors = 0;
-  std::optional<int> inserted_stop;
   for (size_t k = 1; k + 1 < surfs.size(); ++k) {
     const ZSurface& z = surfs[k];
     if (!z.has_disz)
@@ -846,7 +415,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
     // Thicknesses are signed (Zemax): negative after an odd number of mirrors, where the light
     // travels toward -z; any other sign would need a ray to go backward.
     mirrors += z.mirror ? 1 : 0;
-    if (*z.disz * (mirrors % 2 ? -1 : 1) < 0)
+    if (!p.noncoaxial_loc && *z.disz * (mirrors % 2 ? -1 : 1) < 0)
       throw Error(z.disz_loc,
                   fmt::format("surface {}: thickness {} is {} after {} mirror{}; lensim models "
                               "lenses whose surfaces follow in the direction the light travels "
@@ -873,99 +442,8 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
       throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} must be > 0", z.number,
                                           semi / unit_mm));
 
-    LensSurface s;
-    s.loc = z.loc;
-    s.radius_mm = z.curv != 0 ? unit_mm / z.curv : 0.0;
-    s.thickness_mm = *z.disz * unit_mm;
-    s.aperture_diameter_mm = 2 * semi;
-    s.stop_flag = false;
-    s.shape.conic = z.conic;
-    if (z.type == "EVENASPH" || z.type == "ODDASPH") {
-      for (const auto& [i, v] : z.parm) {
-        if (i < 1 || i > 8 || v == 0) continue;
-        const size_t power = z.type == "EVENASPH" ? size_t(2 * i) : size_t(i);
-        if (s.shape.poly.size() <= power) s.shape.poly.resize(power + 1, 0.0);
-        s.shape.poly[power] = v;
-      }
-      s.shape.scaleLengths(unit_mm);
-    } else if (z.type == "TOROIDAL") {
-      readToroidal(z, unit_mm, s.shape);
-    }
-    s.mirror = z.mirror;
-    s.coating = z.coating;
-    s.coating_loc = z.coating_loc;
-    s.aperture_shape = z.aperture_shape;
-    s.aperture_half_x_mm = z.half_x * unit_mm;
-    s.aperture_half_y_mm = z.half_y * unit_mm;
-    if (z.inner_radius > 0) {
-      s.obscuration_radius_mm = z.inner_radius * unit_mm;
-      if (!(s.obscuration_radius_mm < semi))
-        throw Error(z.inner_loc, fmt::format("surface {}: obscuration radius {} is not inside the "
-                                             "semi-diameter {}",
-                                             z.number, z.inner_radius, semi / unit_mm));
-    }
-    // The medium after the surface.
-    if (z.mirror) {
-      s.ior = ior_before;  // a mirror: the light goes back through the medium it came from
-      s.glass = glass_before;
-    } else if (z.glass.empty()) {
-      s.ior = 1;
-    } else {
-      s.glass.name = z.glass == "___BLANK" ? std::string() : z.glass;
-      s.glass.loc = z.glass_loc;
-      s.glass.n_d = z.n_d;
-      s.glass.v_d = z.v_d;
-      s.glass.catalogs = gcat;
-      s.glass.model_needs_option = true;
-      // The constant index (used where dispersion is not) is the catalogue's n_d for a
-      // catalogue glass, else the n_d written on the GLAS line; resolveGlass (glass.h) gives the
-      // lens system the glass's n(lambda) and warns about a name it does not know.
-      const CatalogGlass* known = z.glass == "___BLANK" ? nullptr : findGlassOrSuccessor(z.glass, nullptr, gcat);
-      if (known) {
-        s.ior = known->listed_n_d;
-        if (z.n_d && z.glass != "___BLANK") {
-          ++glas_checked;
-          if (std::abs(*z.n_d - known->listed_n_d) > 1e-3) {
-            if (glas_disagree++ == 0)
-              glas_example = fmt::format("{} n_d {} on its line, {} in the catalogue", z.glass,
-                                         *z.n_d, known->listed_n_d);
-          }
-        }
-      } else if (z.n_d && *z.n_d >= 1 && (z.glass == "___BLANK" || modelGlassAllowed())) {
-        s.ior = *z.n_d;
-        if (z.glass != "___BLANK") glas_fallbacks.push_back({z.glass, z.glass_loc});
-      } else {
-        resolveGlass(s.glass, 1.0, nullptr);  // throws: unknown glass, with did-you-mean hints
-      }
-    }
-    const double domain = sagDomainRadius(s.radius_mm, s.shape);
-    if (auto_semi && semi >= 0.999 * domain) {
-      semi = 0.999 * domain;
-      s.aperture_diameter_mm = 2 * semi;
-    }
-    if (s.shape.isToroidal() && semi >= domain) {
-      // Within the y curve's own extent, the radius of rotation is what is too small.
-      SurfaceShape y_curve = s.shape;
-      y_curve.rotation_radius_mm = 0.0;
-      if (semi < sagDomainRadius(s.radius_mm, y_curve))
-        throw Error(parmLoc(z, 1), fmt::format("surface {}: radius of rotation {}: the toroid "
-                                               "closes on its axis of rotation {:.6g} mm from "
-                                               "the vertex, inside the semi-diameter {}",
-                                               z.number, z.parm.count(1) ? z.parm.at(1) : 0.0,
-                                               domain / unit_mm, semi / unit_mm));
-    }
-    if (semi >= domain && z.aperture_shape != ApertureShape::Circle)
-      throw Error(z.aperture_loc,
-                  fmt::format("surface {}: the corners of its {} aperture lie {} mm from the "
-                              "axis, beyond the surface's extent ({} mm) in some direction; "
-                              "lensim bounds a surface by a circle about the axis",
-                              z.number, z.aperture_shape == ApertureShape::Rectangle ? "SQAP" : "ELAP",
-                              semi, domain));
-    if (semi >= domain)
-      throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} mm exceeds the surface's "
-                                          "extent ({} mm)",
-                                          z.number, semi, domain));
-
+    LensSurface s = makeSurface(z, semi, ior_before, glass_before);
+    checkExtent(z, s, semi, auto_semi);
     if (int(k) == stop_surface) {
       const bool plane = s.radius_mm == 0 && s.shape.isSpherical();
       // A mirror is its own stop: a plane at its vertex could not be reached in sequence on
@@ -977,6 +455,7 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
         // reach within its aperture (paraxially the same stop).
         LensSurface st;
         st.loc = z.loc;
+        st.frame = s.frame;  // a plane at the same vertex
         st.stop_flag = true;
         st.aperture_diameter_mm = 2 * semi;
         auto sg = surfaceSag(s.radius_mm, s.shape, 0.0, semi * (1 - 1e-9));
@@ -989,7 +468,6 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
         if (before) {
           st.ior = ior_before;
           st.thickness_mm = 0;
-          inserted_stop = int(p.surfaces.size());
           p.surfaces.push_back(st);
           p.surfaces.push_back(s);
         } else {
@@ -998,7 +476,6 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
           st.thickness_mm = s.thickness_mm;
           s.thickness_mm = 0;
           p.surfaces.push_back(s);
-          inserted_stop = int(p.surfaces.size());
           p.surfaces.push_back(st);
         }
         ior_before = s.ior;
@@ -1030,15 +507,172 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                        "not glass data ({} of {} catalogue glasses here disagree with the "
                        "catalogue, e.g. {}); the model glass made from them is probably wrong",
                        name, glas_disagree, glas_checked, glas_example)});
+}
 
+// One surface's row: shape, apertures and the medium after it (semi: its semi-diameter, mm;
+// the medium before it: ior_before, glass_before).
+LensSurface ZmxParser::makeSurface(const ZSurface& z, double semi, double ior_before,
+                                   const GlassSpec& glass_before) {
+  LensSurface s;
+  s.loc = z.loc;
+  if (z.frame) s.frame = scaledFrame(*z.frame, unit_mm);
+  s.radius_mm = z.curv != 0 ? unit_mm / z.curv : 0.0;
+  s.thickness_mm = *z.disz * unit_mm;
+  s.aperture_diameter_mm = 2 * semi;
+  s.stop_flag = false;
+  s.shape.conic = z.conic;
+  if (z.type == "EVENASPH" || z.type == "ODDASPH") {
+    for (const auto& [i, v] : z.parm) {
+      if (i < 1 || i > 8 || v == 0) continue;
+      const size_t power = z.type == "EVENASPH" ? size_t(2 * i) : size_t(i);
+      if (s.shape.poly.size() <= power) s.shape.poly.resize(power + 1, 0.0);
+      s.shape.poly[power] = v;
+    }
+    s.shape.scaleLengths(unit_mm);
+  } else if (z.type == "TOROIDAL") {
+    readToroidal(z, unit_mm, s.shape);
+  }
+  s.mirror = z.mirror;
+  s.coating = z.coating;
+  s.coating_loc = z.coating_loc;
+  s.aperture_shape = z.aperture_shape;
+  s.aperture_half_x_mm = z.half_x * unit_mm;
+  s.aperture_half_y_mm = z.half_y * unit_mm;
+  if (z.inner_radius > 0) {
+    s.obscuration_radius_mm = z.inner_radius * unit_mm;
+    if (!(s.obscuration_radius_mm < semi))
+      throw Error(z.inner_loc, fmt::format("surface {}: obscuration radius {} is not inside the "
+                                           "semi-diameter {}",
+                                           z.number, z.inner_radius, semi / unit_mm));
+  }
+  // The medium after the surface.
+  if (z.mirror) {
+    s.ior = ior_before;  // a mirror: the light goes back through the medium it came from
+    s.glass = glass_before;
+  } else if (z.glass.empty()) {
+    s.ior = 1;
+  } else {
+    s.glass.name = z.glass == "___BLANK" ? std::string() : z.glass;
+    s.glass.loc = z.glass_loc;
+    s.glass.n_d = z.n_d;
+    s.glass.v_d = z.v_d;
+    s.glass.catalogs = gcat;
+    s.glass.model_needs_option = true;
+    // The constant index (used where dispersion is not) is the catalogue's n_d for a
+    // catalogue glass, else the n_d written on the GLAS line; resolveGlass (glass.h) gives the
+    // lens system the glass's n(lambda) and warns about a name it does not know.
+    const CatalogGlass* known = z.glass == "___BLANK" ? nullptr : findGlassOrSuccessor(z.glass, nullptr, gcat);
+    if (known) {
+      s.ior = known->listed_n_d;
+      if (z.n_d && z.glass != "___BLANK") {
+        ++glas_checked;
+        if (std::abs(*z.n_d - known->listed_n_d) > 1e-3) {
+          if (glas_disagree++ == 0)
+            glas_example = fmt::format("{} n_d {} on its line, {} in the catalogue", z.glass,
+                                       *z.n_d, known->listed_n_d);
+        }
+      }
+    } else if (z.n_d && *z.n_d >= 1 && (z.glass == "___BLANK" || modelGlassAllowed())) {
+      s.ior = *z.n_d;
+      if (z.glass != "___BLANK") glas_fallbacks.push_back({z.glass, z.glass_loc});
+    } else {
+      resolveGlass(s.glass, 1.0, nullptr);  // throws: unknown glass, with did-you-mean hints
+    }
+  }
+  return s;
+}
+
+// The semi-diameter against the surface's extent (an automatic one is clipped to it).
+void ZmxParser::checkExtent(const ZSurface& z, LensSurface& s, double& semi,
+                            bool auto_semi) const {
+  const double domain = sagDomainRadius(s.radius_mm, s.shape);
+  if (auto_semi && semi >= 0.999 * domain) {
+    semi = 0.999 * domain;
+    s.aperture_diameter_mm = 2 * semi;
+  }
+  if (s.shape.isToroidal() && semi >= domain) {
+    // Within the y curve's own extent, the radius of rotation is what is too small.
+    SurfaceShape y_curve = s.shape;
+    y_curve.rotation_radius_mm = 0.0;
+    if (semi < sagDomainRadius(s.radius_mm, y_curve))
+      throw Error(parmLoc(z, 1), fmt::format("surface {}: radius of rotation {}: the toroid "
+                                             "closes on its axis of rotation {:.6g} mm from "
+                                             "the vertex, inside the semi-diameter {}",
+                                             z.number, z.parm.count(1) ? z.parm.at(1) : 0.0,
+                                             domain / unit_mm, semi / unit_mm));
+  }
+  if (semi >= domain && z.aperture_shape != ApertureShape::Circle)
+    throw Error(z.aperture_loc,
+                fmt::format("surface {}: the corners of its {} aperture lie {} mm from the "
+                            "axis, beyond the surface's extent ({} mm) in some direction; "
+                            "lensim bounds a surface by a circle about the axis",
+                            z.number, z.aperture_shape == ApertureShape::Rectangle ? "SQAP" : "ELAP",
+                            semi, domain));
+  if (semi >= domain)
+    throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} mm exceeds the surface's "
+                                        "extent ({} mm)",
+                                        z.number, semi, domain));
+}
+
+namespace {
+
+// Whether rows 0 .. last of a non-coaxial lens sit on the object axis, unturned.
+bool coaxialUpTo(const LensPrescription& p, int last) {
+  for (int i = 0; i <= last; ++i) {
+    const SurfaceFrame& f = *p.surfaces[size_t(i)].frame;
+    if (!(std::abs(f.origin_mm[0]) <= 1e-12 && std::abs(f.origin_mm[1]) <= 1e-12)) return false;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        if (!(std::abs(f.rotation[size_t(r)][size_t(c)] - (r == c ? 1.0 : 0.0)) <= 1e-12))
+          return false;
+  }
+  return true;
+}
+
+// Rows 0 .. last of a non-coaxial lens (coaxialUpTo) as a coaxial prescription.
+LensPrescription coaxialFront(const LensPrescription& p, int last) {
+  LensPrescription q = p;
+  q.surfaces.resize(size_t(last) + 1);
+  for (LensSurface& s : q.surfaces) s.frame.reset();
+  q.noncoaxial_loc.reset();
+  q.configurations.clear();
+  return q;
+}
+
+}  // namespace
+
+// The system aperture sets the stop's size.
+void ZmxParser::sizeStop(LensPrescription& p) {
   // The system aperture sets the stop's size (paraxially: the entrance pupil is the image of the
   // stop, so its diameter scales with the stop's).
   const auto stop_index = p.stopIndex();
   const ZSurface& stop_z = surfs[size_t(stop_surface)];
   const bool stop_auto = !stop_z.clap_max && (!stop_z.diam || *stop_z.diam == 0);
-  std::optional<double> epd_mm;
-  if (stop_index && (enpd || fnum || obna) && !floa) {
-    LensSystem sys(p);
+  // A non-coaxial lens whose surfaces up to the stop sit on the object axis: its entrance pupil
+  // is the paraxial image of the stop through them, as for any lens.
+  const bool front_coaxial = p.noncoaxial_loc && stop_index && (enpd || obna) && !floa &&
+                             coaxialUpTo(p, *stop_index);
+  if (p.noncoaxial_loc) p.image_frame = scaledFrame(*surfs.back().frame, unit_mm);
+  if (p.noncoaxial_loc && !front_coaxial) {
+    if (stop_auto)
+      throw Error(stop_z.diam_loc.valid() ? stop_z.diam_loc : stop_z.loc,
+                  fmt::format("surface {} (the stop) has no semi-diameter (no DIAM or DIAM 0): "
+                              "in a tilted or decentred lens lensim does not size the stop from "
+                              "the system aperture; give the stop a DIAM",
+                              stop_z.number));
+    if (floa) {
+      p.aperture_spec = "FLOA (stop semi-diameter from DIAM)";
+    } else if (enpd || fnum || obna) {
+      p.aperture_spec = "the stop's DIAM";
+      p.diagnostics.push_back(
+          {Severity::Note, aperture_loc,
+           fmt::format("a tilted or decentred lens: the stop keeps the semi-diameter DIAM gives "
+                       "({:.6g} mm); the system aperture on this line (which needs the paraxial "
+                       "image of the stop through a coaxial system) is not applied",
+                       p.surfaces[size_t(*stop_index)].semiAperture_mm())});
+    }
+  } else if (stop_index && (enpd || fnum || obna) && !floa) {
+    const LensSystem sys(front_coaxial ? coaxialFront(p, *stop_index) : p);
     const auto& in = sys.interfaces();
     const int st = *stop_index;
     // (y, n u) at the stop per unit height (y_stop) and per unit angle (w_stop) of a ray at the
@@ -1110,8 +744,18 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
   } else if (floa) {
     p.aperture_spec = "FLOA (stop semi-diameter from DIAM)";
   }
-  (void)inserted_stop;
+}
 
+// Semi-diameters the file leaves to OpticStudio, from real rays.
+void ZmxParser::computeMissingSemiDiameters(LensPrescription& p) {
+  if (!auto_rows.empty() && p.noncoaxial_loc) {
+    const ZSurface& z = *auto_rows.front().second;
+    throw Error(z.diam_loc.valid() ? z.diam_loc : z.loc,
+                fmt::format("surface {}: no semi-diameter (no DIAM or DIAM 0): lensim computes "
+                            "semi-diameters for coaxial lenses only, and this one is tilted or "
+                            "decentred ({})",
+                            z.number, p.noncoaxial_reason));
+  }
   if (!auto_rows.empty()) {
     if (vignetting_loc)
       throw Error(*vignetting_loc,
@@ -1170,7 +814,9 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
                                         : "rays through the paraxial entrance pupil")});
     }
   }
+}
 
+void ZmxParser::readCoatingFile(LensPrescription& p) {
   // Coatings: with the coating file beside the lens file, unknown COAT names are refused at
   // their line; without it they are kept and refused where coatings are used (flare analyses),
   // so that the lens still loads for everything else.
@@ -1193,12 +839,13 @@ LensPrescription ZmxParser::parse(std::string_view bytes) {
         }
     }
   }
-  return p;
 }
 
-}  // namespace
+}  // namespace zmx_detail
 
 namespace {
+
+using zmx_detail::ZmxParser;
 
 // Every configuration of a multi-configuration file: the file parsed again with that
 // configuration's operands applied (so that ENPD/FNUM, curved stops and glasses are treated as in
@@ -1229,7 +876,7 @@ void readZmxConfigurations(const ZmxParser& base, std::string_view bytes, const 
 }  // namespace
 
 LensPrescription parseZmx(std::string_view bytes, const std::string& path) {
-  ZmxParser base(path);
+  zmx_detail::ZmxParser base(path);
   LensPrescription p = base.parse(bytes);
   readZmxConfigurations(base, bytes, path, p);
   return p;
