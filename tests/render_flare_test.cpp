@@ -204,7 +204,7 @@ TEST(FlareRender, DoubleGaussFlatField) {
 }
 
 // Refused at the Camera line, with nothing rendered: integrators that splat, films without the
-// ghost layer, dispersive lenses, parts; "flarecoating" without flare or with an unknown name at
+// ghost layer, parts; "flarecoating" without flare or with an unknown name at
 // its parameter.
 TEST(FlareRender, Refusals) {
   const std::string common = "\"string lensfile\" \"" + test::lensPath("dgauss.50mm.dat") +
@@ -230,7 +230,6 @@ TEST(FlareRender, Refusals) {
     f.close();
     expectError(path, "needs Film \"rgb\"", 1);
   }
-  expectError(writeScene("glass.pbrt", on + " \"bool glassmatch\" true"), "disperses", 1);
   render::RenderOptions parts;
   parts.keep_sums = true;
   expectError(writeScene("parts.pbrt", on), "parts", 1, parts);

@@ -517,6 +517,8 @@ class TileRenderer {
     const std::optional<camera::CameraRay> g = j_.cam->generateGhostRay(cs_[k]);
     if (!g) return;
     ++tally.ghost_rays;
+    // A dispersive lens traced the ghost path at the hero wavelength only.
+    if (g->hero_only) lambda.terminateSecondary();
     sampler_->startPixelSample({x, y}, i, path_dimension_);
     const SampledSpectrum L =
         j_.integrator->Li(&*g, g->time, lambda, *sampler_, tally.counts, *j_.film, tally.nonfinite);
