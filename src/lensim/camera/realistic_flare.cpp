@@ -30,6 +30,12 @@
 // through the lens (bdpt's t = 1 strategy) and Hullin-style bundles assume point lights; the split
 // works for every light in the scene (area lights, the sky, reflections) with the unidirectional
 // integrators.
+//
+// A dispersive lens (catalogue glasses): both paths are traced at the sample's hero wavelength
+// only (hero_only; each thread re-indexes its copy of every pair's tracer), the coatings
+// evaluated with that wavelength's indices, and both carry the glasses' internal transmittance
+// over their real lengths in each glass (a ghost path crosses the glasses between its two
+// reflections three times: Path::film_media names the medium of each of its segments).
 #include <fmt/format.h>
 
 #include <algorithm>
