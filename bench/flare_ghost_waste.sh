@@ -23,7 +23,8 @@ PBRT
 }
 through() {  # SCENE -> "ghost rays / camera samples"
   "$bin" render "$1" --threads 2 --stats -o "$work/x.exr" 2>&1 |
-    awk '/^camera samples/ { s = $3 } /^ghost rays/ { g = $3 } END { printf "%.4f\n", g / s }'
+    awk '/^camera samples/ { s = $3 } /^ghost rays/ { g = $3 }
+         END { if (s > 0) printf "%.4f\n", g / s; else print "refused (reflects nothing)" }'
 }
 pairs=$("$bin" lens ghosts "$lens" --json | python3 -c '
 import json, sys
@@ -32,7 +33,7 @@ for g in json.load(sys.stdin)["ghosts"]:
 echo "pair  fraction through"
 for p in $pairs; do
   scene "$work/p.pbrt" "\"string flareghosts\" \"$p\""
-  printf '%-6s %s\n' "$p" "$(through "$work/p.pbrt" 2>/dev/null || echo refused)"
+  printf '%-6s %s\n' "$p" "$(through "$work/p.pbrt" 2>/dev/null || true)"
 done
 scene "$work/all.pbrt" ""
 echo "all pairs (the estimator's mix): $(through "$work/all.pbrt")"
