@@ -203,7 +203,8 @@ TEST(FlareRender, DoubleGaussFlatField) {
   EXPECT_LT(c_ghost / c_off, 0.08);
 }
 
-// Refused at the Camera line, with nothing rendered: films without the ghost layer, dispersive lenses, parts; "flarecoating" without flare or with an unknown name at
+// Refused at the Camera line, with nothing rendered: films without the ghost layer, parts;
+// "flarecoating" without flare or with an unknown name at
 // its parameter.
 TEST(FlareRender, Refusals) {
   const std::string common = "\"string lensfile\" \"" + test::lensPath("dgauss.50mm.dat") +
@@ -227,7 +228,6 @@ TEST(FlareRender, Refusals) {
     f.close();
     expectError(path, "needs Film \"rgb\"", 1);
   }
-  expectError(writeScene("glass.pbrt", on + " \"bool glassmatch\" true"), "disperses", 1);
   render::RenderOptions parts;
   parts.keep_sums = true;
   expectError(writeScene("parts.pbrt", on), "parts", 1, parts);

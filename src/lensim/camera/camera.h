@@ -138,6 +138,8 @@ class Camera {
   /// Whether each camera sample also yields a ghost path (generateGhostRay), and generateRay's
   /// weights include the lens's reflection losses.
   virtual bool flare() const { return false; }
+  /// Whether light paths (lighttracer, bdpt) can carry this camera's flare (sampleGhostWi).
+  virtual bool flareInLightPaths() const { return flare(); }
   /// The ghost path of the sample (sample.ghost_u chooses it): a camera ray whose radiance,
   /// weighted per wavelength (CameraRay::per_wavelength), the film adds to the direct path's in
   /// the same sample; nullopt when the path is blocked (an estimate of zero).

@@ -446,6 +446,27 @@ CameraRay RealisticCamera::placeRay(const Vec3& o_lens, const Vec3& d_lens, doub
 // hero wavelength; its camera weight is then the hero's own (`weight`), as in (b).
 // A non-dispersive lens takes none of this: the batched tracer, and every wavelength kept.
 //
+void RealisticCamera::indicesAt(double lambda_nm, double* before, double* after) const {
+  const optics::LensSystem& lens = *lens_.lens;
+  const double u = (lambda_nm - kIndexFrom_nm) / kIndexStep_nm;
+  const int n = lens.surfaceCount();
+  const int last = int(index_table_.size()) / n - 1;
+  if (!(u >= 0 && u < last)) {
+    lens.indicesAt(lambda_nm, before, after);
+    return;
+  }
+  const int k = int(u);
+  const double a = u - k;
+  const double* r0 = index_table_.data() + ptrdiff_t(k) * n;
+  const double* r1 = r0 + n;
+  double b = 1.0;
+  for (int i = 0; i < n; ++i) {
+    const double next = r0[i] + a * (r1[i] - r0[i]);
+    before[i] = b, after[i] = next;
+    b = next;
+  }
+}
+
 // Each wavelength's tracer must carry the indices at that wavelength: every thread keeps a copy
 // of the float tracer and re-indexes it from a table of the media's indices every 0.25 nm
 // (linear interpolation, error under 2e-8: below the float tracer's rounding), no locks, no
@@ -467,23 +488,7 @@ const optics::LensTracer<float>& RealisticCamera::tracerAt(double lambda_nm) con
     t.lambda_nm = -1;
   }
   if (t.lambda_nm != lambda_nm) {
-    const double u = (lambda_nm - kIndexFrom_nm) / kIndexStep_nm;
-    const int n = lens.surfaceCount();
-    const int last = int(index_table_.size()) / n - 1;
-    if (u >= 0 && u < last) {
-      const int k = int(u);
-      const double a = u - k;
-      const double* r0 = index_table_.data() + ptrdiff_t(k) * n;
-      const double* r1 = r0 + n;
-      double before = 1.0;
-      for (int i = 0; i < n; ++i) {
-        const double after = r0[i] + a * (r1[i] - r0[i]);
-        t.before[size_t(i)] = before, t.after[size_t(i)] = after;
-        before = after;
-      }
-    } else {
-      lens.indicesAt(lambda_nm, t.before.data(), t.after.data());
-    }
+    indicesAt(lambda_nm, t.before.data(), t.after.data());
     t.tracer.setIndices(t.before.data(), t.after.data());
     t.lambda_nm = lambda_nm;
   }
@@ -500,19 +505,29 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
                                                         const FilmRay& f) const {
   if (!(sample.lambda_nm[0] > 0)) {  // no wavelength given: the lens at its primary wavelength
     const optics::TraceResultT<float> r = lens_.lens->tracerFloat().traceFromFilm(f.ray);
-    return r.ok() ? finish(r, f, sample.time) : std::nullopt;
+    std::optional<CameraRay> ray = r.ok() ? finish(r, f, sample.time) : std::nullopt;
+    if (ray && flare_) applyReflectionLosses(sample, f, *ray);
+    return ray;
   }
-  // The paths through the lens, for the glasses' absorption (recorded only where they absorb).
+  // The paths through the lens, for the glasses' absorption and flare's reflection losses
+  // (recorded only where needed).
   thread_local std::vector<Vec3f> path;
   path.clear();
+  const bool record = absorbs_ || flare_;
   const optics::TraceResultT<float> r =
-      tracerAt(sample.lambda_nm[0]).traceFromFilm(f.ray, {}, absorbs_ ? &path : nullptr);
+      tracerAt(sample.lambda_nm[0]).traceFromFilm(f.ray, {}, record ? &path : nullptr);
   if (!r.ok()) return std::nullopt;
   std::optional<CameraRay> ray = finish(r, f, sample.time);
   if (!ray) return ray;
   const double hero_transmittance = pathTransmittance(path, true, sample.lambda_nm[0]);
   ray->weight *= hero_transmittance;
-  // (b) also for a tilted or shifted film: (c)'s densities assume the untilted, centred film.
+  // (b) also for a tilted or shifted film: (c)'s densities assume the untilted, centred film;
+  // and with flare, whose ghost paths are traced at the hero wavelength only.
+  if (flare_) {
+    ray->weight *= heroReflectionLosses(path, r.ray.direction, sample.lambda_nm[0]);
+    ray->hero_only = true;
+    return ray;
+  }
   if (!sample.filter || !(sample.filter_weight != 0) || placement_) {
     ray->hero_only = true;  // (b)
     return ray;

@@ -139,6 +139,9 @@ class RealisticCamera final : public Camera {
 
   // Lens flare (realistic_flare.cpp).
   bool flare() const override { return flare_ != nullptr; }
+  /// The light side's ghost connections use the lens's primary-wavelength indices: not for a
+  /// dispersive lens, whose flare is traced at each sample's hero wavelength.
+  bool flareInLightPaths() const override { return flare() && !dispersive_; }
   std::optional<CameraRay> generateGhostRay(const CameraSample& sample) const override;
   /// The ghost pairs the flare estimator chooses from (first reflection at `first`, then at
   /// `second` < first) and the probability of each; empty without flare.
@@ -239,6 +242,9 @@ class RealisticCamera final : public Camera {
   std::vector<double> index_table_;
   /// The float tracer at the wavelength, a per-thread copy re-indexed for it.
   const optics::LensTracer<float>& tracerAt(double lambda_nm) const;
+  /// The media's indices before and after each surface at the wavelength (surfaceCount() values
+  /// each), from index_table_ (a dispersive lens only).
+  void indicesAt(double lambda_nm, double* before, double* after) const;
   /// A dispersive lens's camera ray for a sample whose film ray is f (realistic.cpp).
   std::optional<CameraRay> dispersiveRay(const CameraSample& sample, const FilmRay& f) const;
   /// The camera ray (world space, shutter time from u_time; weight unset) of a ray leaving the
@@ -274,6 +280,11 @@ class RealisticCamera final : public Camera {
   std::optional<GhostFromScene> traceGhostFromScene(
       double u_pair, const Vec3& o_lens, const Vec3& d_lens,
       const std::array<double, kCameraWavelengths>& lambda_nm) const;
+  /// With flare, a dispersive lens: the coatings' transmittance at every surface of the direct
+  /// path `path` (traced from the film at the hero wavelength lambda_nm, leaving along
+  /// out_dir), at that wavelength's indices.
+  double heroReflectionLosses(const std::vector<Vec3f>& path, const Vec3f& out_dir,
+                              double lambda_nm) const;
   /// Raster position of a film point (lens space, mm): the inverse of filmPoint.
   Vec2 rasterPoint(Vec2 film_mm) const;
 

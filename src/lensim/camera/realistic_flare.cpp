@@ -30,6 +30,12 @@
 // through the lens (bdpt's t = 1 strategy) and Hullin-style bundles assume point lights; the split
 // works for every light in the scene (area lights, the sky, reflections) with the unidirectional
 // integrators.
+//
+// A dispersive lens (catalogue glasses): both paths are traced at the sample's hero wavelength
+// only (hero_only; each thread re-indexes its copy of every pair's tracer), the coatings
+// evaluated with that wavelength's indices, and both carry the glasses' internal transmittance
+// over their real lengths in each glass (a ghost path crosses the glasses between its two
+// reflections three times: Path::film_media names the medium of each of its segments).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -57,6 +63,16 @@ struct Step {
   double coat_from = 1, coat_to = 1;  ///< the surface's media, the light's side first
   bool mirror = false;                ///< the path reflects here (R), else it passes (T)
   bool stop = false;
+  bool backward = false;  ///< the light meets the surface from the film's side
+  /// The indices of the step for the lens's media at a wavelength (before[k], after[k]: those
+  /// of surface k).
+  void setIndices(const double* before, const double* after) {
+    const double near = backward ? after[surface] : before[surface];
+    const double far = backward ? before[surface] : after[surface];
+    n_from = coat_from = near;
+    coat_to = far;
+    n_to = mirror ? near : far;
+  }
 };
 
 }  // namespace
@@ -69,6 +85,9 @@ struct RealisticCamera::Flare {
     double probability = 0;
     optics::LensTracer<double> tracer;
     std::vector<Step> steps;
+    /// The lens medium (after that surface; -1: outside the lens) of each segment of a path
+    /// traced from the film: film_media[j] holds pts[j] -> pts[j + 1].
+    std::vector<int> film_media;
   };
   std::vector<Path> ghosts;
   std::vector<double> cdf;  ///< cumulative probabilities (last = 1)
@@ -84,14 +103,18 @@ namespace {
 /// angles of a ray traced from the film with points pts (pts[0] the film point, pts[j] the hit
 /// at step size - j) leaving along out_dir. Steps without an index step and no mirror are
 /// skipped (T = 1).
+/// `wavelengths`: how many of lambda_nm to evaluate (1: the hero only). `before`, `after`: the
+/// lens's media's indices at the hero wavelength (a dispersive lens; else null: the steps' own).
 void pathFactor(const optics::LensCoatings& coatings, const std::vector<Step>& steps,
                 const std::vector<Vec3>& pts, const Vec3& out_dir,
                 const std::array<double, kCameraWavelengths>& lambda_nm, double primary_nm,
-                std::array<double, kCameraWavelengths>& factor) {
+                std::array<double, kCameraWavelengths>& factor, int wavelengths = kCameraWavelengths,
+                const double* before = nullptr, const double* after = nullptr) {
   factor.fill(1.0);
   const int m = int(steps.size());
   for (int i = 0; i < m; ++i) {
-    const Step& s = steps[size_t(i)];
+    Step s = steps[size_t(i)];
+    if (before) s.setIndices(before, after);
     if (!s.mirror && s.n_from == s.n_to) continue;
     const int j = m - i;
     // a: the traced (film-to-scene) direction arriving at the surface, b: leaving it. Light
@@ -102,7 +125,7 @@ void pathFactor(const optics::LensCoatings& coatings, const std::vector<Step>& s
     const Vec3 nrm = a * s.n_to - b * s.n_from;
     const double len = length(nrm);
     const double cos_i = len > 1e-12 ? std::min(1.0, std::abs(dot(b, nrm)) / len) : 1.0;
-    for (int c = 0; c < kCameraWavelengths; ++c) {
+    for (int c = 0; c < wavelengths; ++c) {
       const double l = lambda_nm[size_t(c)] > 0 ? lambda_nm[size_t(c)] : primary_nm;
       const optics::FilmRTA f = coatings.rta(s.surface, s.coat_from, s.coat_to, l, cos_i);
       factor[size_t(c)] *= s.mirror ? f.R : f.T;
@@ -115,10 +138,6 @@ void pathFactor(const optics::LensCoatings& coatings, const std::vector<Step>& s
 void RealisticCamera::setUpFlare() {
   const optics::LensSystem& lens = *lens_.lens;
   const FileLoc& loc = settings_.flare_loc;
-  if (dispersive_)
-    throw Error(loc,
-                "flare: the lens disperses (a glass with dispersion, or glassmatch); "
-                "flare is rendered for lenses with constant indices only");
   if (lens.mirrorCount() > 0)
     throw Error(loc,
                 "flare: the lens has mirrors (ghosts of catadioptric lenses are not "
@@ -186,6 +205,9 @@ void RealisticCamera::setUpFlare() {
               in.ior_after,
               in.is_mirror,
               s[size_t(k)].is_stop};
+      // Between the reflections (`second` included: it is met from the film side) the light
+      // runs back toward the scene.
+      st.backward = i > p.first && i <= 2 * p.first - p.second;
       // The reflecting surfaces, the indices of the light's side first: `first` is met from the
       // scene side, `second` from the film side.
       if (st.mirror) {
@@ -195,6 +217,19 @@ void RealisticCamera::setUpFlare() {
       }
       p.steps.push_back(st);
     }
+    // The medium after each position of the path (the lens's medium k lies after surface k):
+    // forward, after the surface; going back (the reflection at `first` included), before it;
+    // after the reflection at `second`, forward again in the medium after it.
+    const int len = int(path.size());
+    std::vector<int> after_step(static_cast<size_t>(len));
+    for (int i = 0; i < len; ++i) {
+      const Step& st = p.steps[size_t(i)];
+      const bool back_after = (st.backward && !st.mirror) || (st.mirror && st.surface == p.first);
+      after_step[size_t(i)] = back_after ? st.surface - 1 : st.surface;
+      if (after_step[size_t(i)] >= n - 1) after_step[size_t(i)] = -1;
+    }
+    // From the film, pts[j] -> pts[j + 1] lies between steps m - j and m - 1 - j.
+    for (int j = 0; j < len; ++j) p.film_media.push_back(after_step[size_t(len - 1 - j)]);
     f->ghosts.push_back(std::move(p));
   }
   double c = 0;
@@ -241,12 +276,58 @@ void RealisticCamera::applyReflectionLosses(const CameraSample& sample, const Fi
   ray.per_wavelength = true;
 }
 
+double RealisticCamera::heroReflectionLosses(const std::vector<Vec3f>& path, const Vec3f& out_dir,
+                                             double lambda_nm) const {
+  const int n = lens_.lens->surfaceCount();
+  thread_local std::vector<double> before, after;
+  thread_local std::vector<Vec3> pts;
+  before.resize(size_t(n)), after.resize(size_t(n));
+  indicesAt(lambda_nm, before.data(), after.data());
+  pts.clear();
+  for (const Vec3f& p : path) pts.push_back(Vec3(p));
+  std::array<double, kCameraWavelengths> lambda{}, t{};
+  lambda[0] = lambda_nm;
+  pathFactor(flare_->coatings, flare_->direct, pts, Vec3(out_dir), lambda,
+             lens_.lens->wavelength_nm(), t, 1, before.data(), after.data());
+  return t[0];
+}
+
 std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& sample) const {
   if (!flare_) return std::nullopt;
   const Flare& fl = *flare_;
-  const int k =
-      int(std::lower_bound(fl.cdf.begin(), fl.cdf.end(), sample.ghost_u[0]) - fl.cdf.begin());
-  const Flare::Path& path = fl.ghosts[size_t(std::min(k, int(fl.ghosts.size()) - 1))];
+  const int k = std::min(
+      int(std::lower_bound(fl.cdf.begin(), fl.cdf.end(), sample.ghost_u[0]) - fl.cdf.begin()),
+      int(fl.ghosts.size()) - 1);
+  const Flare::Path& path = fl.ghosts[size_t(k)];
+  // A dispersive lens: the ghost path is traced at the hero wavelength only (each thread keeps
+  // a copy of every pair's tracer, re-indexed for the wavelength), and the ray's other
+  // wavelengths are terminated (hero_only), as for the direct path.
+  const double hero_nm = sample.lambda_nm[0];
+  const bool hero_only = dispersive_ && hero_nm > 0;
+  const optics::LensTracer<double>* tracer = &path.tracer;
+  struct PerThread {
+    std::uint64_t owner = 0;
+    std::vector<optics::LensTracer<double>> tracers;
+    std::vector<double> before, after, path_before, path_after;
+  };
+  thread_local PerThread t;
+  if (hero_only) {
+    const int n = lens_.lens->surfaceCount();
+    if (t.owner != id_) {
+      t.owner = id_;
+      t.tracers.clear();
+      for (const Flare::Path& p : fl.ghosts) t.tracers.push_back(p.tracer);
+      t.before.resize(size_t(n)), t.after.resize(size_t(n));
+    }
+    indicesAt(hero_nm, t.before.data(), t.after.data());
+    t.path_before.clear(), t.path_after.clear();
+    for (Step st : path.steps) {
+      st.setIndices(t.before.data(), t.after.data());
+      t.path_before.push_back(st.n_from), t.path_after.push_back(st.n_to);
+    }
+    t.tracers[size_t(k)].setIndices(t.path_before.data(), t.path_after.data());
+    tracer = &t.tracers[size_t(k)];
+  }
   // Every ray from the film point x that meets the rear element's clear aperture (radius r,
   // between z_lo and z_hi) crosses the plane z_hi at x (1 - t) + s t, t in [t_min, 1]: within
   // r + |x| (1 - t_min) of x (1 - t_min).
@@ -261,7 +342,7 @@ std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& s
   const Vec3 dir = normalize(q - from);
   thread_local std::vector<Vec3> pts;
   pts.clear();
-  const optics::TraceResult r = path.tracer.traceFromFilm(optics::Ray{from, dir}, {}, &pts);
+  const optics::TraceResult r = tracer->traceFromFilm(optics::Ray{from, dir}, {}, &pts);
   if (!r.ok()) return std::nullopt;
   // A shaped aperture passes the path at every crossing of the stop.
   double shape = 1;
@@ -275,8 +356,15 @@ std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& s
     if (!(shape > 0)) return std::nullopt;
   }
   std::array<double, kCameraWavelengths> factor{};
-  pathFactor(fl.coatings, path.steps, pts, r.ray.direction, sample.lambda_nm, lens.wavelength_nm(),
-             factor);
+  if (hero_only) {
+    pathFactor(fl.coatings, path.steps, pts, r.ray.direction, sample.lambda_nm,
+               lens.wavelength_nm(), factor, 1, t.before.data(), t.after.data());
+    // The glasses' absorption over the ghost path's real lengths in each medium.
+    if (absorbs_) factor[0] *= absorption_.alongMedia(pts, path.film_media, hero_nm);
+  } else {
+    pathFactor(fl.coatings, path.steps, pts, r.ray.direction, sample.lambda_nm,
+               lens.wavelength_nm(), factor);
+  }
   // Film irradiance per unit area of the sampling plane at distance D: cos^4(theta) / D^2.
   const double dist = z_film - fl.z_plane_mm, c = -dir.z;
   const double area = M_PI * radius * radius;
@@ -284,6 +372,11 @@ std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& s
                            (lens.filmDistance_mm() * lens.filmDistance_mm() / weightNorm());
   CameraRay ray = placeRay(r.ray.origin, r.ray.direction, sample.time);
   ray.ghost = true;
+  if (hero_only) {
+    ray.weight = geometric * factor[0] / path.probability;
+    ray.hero_only = true;
+    return ray;
+  }
   for (int i = 0; i < kCameraWavelengths; ++i)
     ray.wavelength_weight[size_t(i)] = geometric * factor[size_t(i)] / path.probability;
   ray.weight = ray.wavelength_weight[0];

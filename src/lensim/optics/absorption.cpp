@@ -32,17 +32,14 @@ double LensAbsorption::alpha(size_t i, double lambda_nm) const {
   return lo + a * (hi - lo);
 }
 
-template <typename T>
-double LensAbsorption::alongPath(const std::vector<Vec3T<T>>& path, bool from_film,
-                                 double lambda_nm) const {
+template <typename T, typename MediumOf>
+double LensAbsorption::transmittance(const std::vector<Vec3T<T>>& path, size_t first,
+                                     MediumOf medium_of, double lambda_nm) const {
   if (!any_) return 1;
   const int m = int(media_.size());  // surfaces - 1
   double optical_depth = 0;
-  // Scene: path[k + 1] is on surface k, so path[k + 1] -> path[k + 2] lies in medium k.
-  // Film: path[j] is on surface m + 1 - j (m + 1 surfaces), so path[j] -> path[j + 1] lies in
-  // medium m - j.
-  for (size_t j = 1; j + 1 < path.size(); ++j) {
-    const int medium = from_film ? m - int(j) : int(j) - 1;
+  for (size_t j = first; j + 1 < path.size(); ++j) {
+    const int medium = medium_of(j);
     if (medium < 0 || medium >= m) continue;
     const Glass& g = media_[size_t(medium)];
     if (!g.hasTransmittance()) continue;
@@ -54,8 +51,28 @@ double LensAbsorption::alongPath(const std::vector<Vec3T<T>>& path, bool from_fi
   return std::exp(-optical_depth);
 }
 
+template <typename T>
+double LensAbsorption::alongPath(const std::vector<Vec3T<T>>& path, bool from_film,
+                                 double lambda_nm) const {
+  const int m = int(media_.size());  // surfaces - 1
+  // Scene: path[k + 1] is on surface k, so path[k + 1] -> path[k + 2] lies in medium k.
+  // Film: path[j] is on surface m + 1 - j (m + 1 surfaces), so path[j] -> path[j + 1] lies in
+  // medium m - j.
+  return transmittance(
+      path, 1, [&](size_t j) { return from_film ? m - int(j) : int(j) - 1; }, lambda_nm);
+}
+
+template <typename T>
+double LensAbsorption::alongMedia(const std::vector<Vec3T<T>>& path, const std::vector<int>& media,
+                                  double lambda_nm) const {
+  return transmittance(
+      path, 0, [&](size_t j) { return j < media.size() ? media[j] : -1; }, lambda_nm);
+}
+
 template double LensAbsorption::alongPath(const std::vector<Vec3T<double>>&, bool, double) const;
 template double LensAbsorption::alongPath(const std::vector<Vec3T<float>>&, bool, double) const;
+template double LensAbsorption::alongMedia(const std::vector<Vec3T<double>>&,
+                                           const std::vector<int>&, double) const;
 
 double LensAbsorption::axial(double lambda_nm) const {
   double optical_depth = 0;

@@ -31,6 +31,13 @@ class LensAbsorption {
   /// A path cut short (a blocked ray) counts the media it crossed.
   template <typename T>
   double alongPath(const std::vector<Vec3T<T>>& path, bool from_film, double lambda_nm) const;
+  /// The transmittance of a path whose segments lie in the given media: segment path[j] ->
+  /// path[j + 1] in medium media[j] (the medium after that lens surface; -1 or out of range:
+  /// outside the lens). For paths that do not meet the surfaces in the lens's order (a ghost
+  /// path, which runs back through some media).
+  template <typename T>
+  double alongMedia(const std::vector<Vec3T<T>>& path, const std::vector<int>& media,
+                    double lambda_nm) const;
   /// The transmittance along the optical axis: each medium's axial thickness (its vertex
   /// spacing, a mirror's return included).
   double axial(double lambda_nm) const;
@@ -41,6 +48,11 @@ class LensAbsorption {
   // nanometres, as all of the built-in catalogues' rows below 1000 nm do; elsewhere the error
   // stays inside the nanometre that holds the row), from the glass beyond.
   double alpha(size_t i, double lambda_nm) const;
+  /// exp(-sum alpha L) over the segments j of `path` (1 <= j), medium_of(j) the medium of
+  /// path[j] -> path[j + 1].
+  template <typename T, typename MediumOf>
+  double transmittance(const std::vector<Vec3T<T>>& path, size_t first, MediumOf medium_of,
+                       double lambda_nm) const;
   static constexpr int kFrom_nm = 300, kTo_nm = 1100;
   std::vector<double> table_;     // (kTo_nm - kFrom_nm + 1) rows of media_.size() values
   std::vector<Glass> media_;      // after surface i, i < surfaces - 1

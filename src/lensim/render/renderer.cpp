@@ -518,6 +518,8 @@ class TileRenderer {
     const std::optional<camera::CameraRay> g = j_.cam->generateGhostRay(cs_[k]);
     if (!g) return;
     ++tally.ghost_rays;
+    // A dispersive lens traced the ghost path at the hero wavelength only.
+    if (g->hero_only) lambda.terminateSecondary();
     sampler_->startPixelSample({x, y}, i, path_dimension_);
     const SampledSpectrum L =
         j_.integrator->Li(&*g, g->time, lambda, *sampler_, tally.counts, *j_.film, tally.nonfinite);
@@ -587,9 +589,15 @@ void finishImage(const RenderOptions& opt, const scene::Scene& scene, RenderResu
 
 /// Lens flare (docs/flare.md, "Rendering ghosts"): checks that the render can carry it and
 /// turns on the film's ghost layer.
-void enableFlare(const scene::Scene& scene, const RenderOptions& opt, Film& film) {
+void enableFlare(const scene::Scene& scene, const RenderOptions& opt, const Integrator& integrator,
+                 const camera::Camera& cam, Film& film) {
   // Every integrator, into the ghost layer of an RGB film, rendered whole.
   const FileLoc& loc = scene.camera.loc;
+  if ((integrator.splats() || integrator.tracesLightPaths()) && !cam.flareInLightPaths())
+    throw Error(loc, fmt::format("realistic camera: \"flare\" through a dispersive lens is "
+                                 "rendered by the path, volpath and directlighting integrators, "
+                                 "not \"{}\"",
+                                 scene.integrator.type));
   if (scene.film.type != "rgb")
     throw Error(loc, fmt::format("realistic camera: \"flare\" needs Film \"rgb\" (its ghost "
                                  "layer), not \"{}\"",
@@ -649,7 +657,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   setup.refuses_splats = splatRefusal(opt);
   const std::unique_ptr<Integrator> integrator = makeIntegrator(setup);
   if (integrator->splats()) film.enableSplats(*filter);
-  if (cam->flare()) enableFlare(scene, opt, film);
+  if (cam->flare()) enableFlare(scene, opt, *integrator, *cam, film);
   // Film "gbuffer" (pbrt-v4's GBufferFilm): its coordinate system and the differential scale
   // pbrt-v4 applies to camera rays, max(1/8, 1/sqrt(samples per pixel)).
   const GBufferFrame gbuffer_frame(scene);
