@@ -136,7 +136,9 @@ TEST(OpticsTwins, OneLaneAndSixteenLanesAgree) {
       isect.intersectLanes(kLanes, ox, oy, oz, dx, dy, dz, 0, t, nx, ny, nz, status);
       for (int j = 0; j < kLanes; ++j) {
         const auto one = isect.intersect({ox[j], oy[j], oz[j]}, {dx[j], dy[j], dz[j]}, 0);
-        if (status[j] == 1) EXPECT_FALSE(one.has_value());
+        if (status[j] == 1) {
+          EXPECT_FALSE(one.has_value());
+        }
         if (status[j] != 0) continue;
         ASSERT_TRUE(one.has_value());
         EXPECT_EQ(t[j], one->t);
