@@ -64,19 +64,19 @@ template <bool kGradient, bool kRim = false, bool kClamp = true>
                                                   const double* y, double* z, double* gx,
                                                   double* gy, double* bad,
                                                   double* defined = nullptr) {
-  double f[kLanes], df[kLanes] = {}, yp[kLanes];
+  double f[kLanes], df[kLanes], yp[kLanes];
   for (int j = 0; j < n; ++j) {
     const double xj = x[j], yj = y[j];
     const double arg = 1 - a * yj * yj;
     bad[j] = std::max(xj * xj + yj * yj > bound2 ? 1.0 : 0.0, arg > 0 ? 0.0 : 1.0);
     const double S = std::sqrt(std::max(arg, 0.0));
     f[j] = c * yj * yj / (1 + S);
-    if constexpr (kGradient) {
-      if constexpr (kRim)
-        df[j] = S > 0 ? c * yj / S : (yj != 0 ? std::copysign(kInf, c * yj) : 0.0);
-      else
-        df[j] = c * yj / S;
-    }
+    if constexpr (!kGradient)
+      df[j] = 0;
+    else if constexpr (kRim)
+      df[j] = S > 0 ? c * yj / S : (yj != 0 ? std::copysign(kInf, c * yj) : 0.0);
+    else
+      df[j] = c * yj / S;
     if constexpr (kRim) defined[j] = arg < 0 ? 0.0 : 1.0;
     yp[j] = 1;
   }
@@ -401,18 +401,22 @@ template <bool kGradient, bool kOne>
                                                               double* gx, double* gy,
                                                               double* bad) const {
   const double bound2 = bound_r_ * bound_r_;
+  auto continued = [&] {
+    const SagGradient g = sagContinued(x[0], y[0]);
+    z[0] = g.z;
+    if constexpr (kGradient) gx[0] = g.dzdx, gy[0] = g.dzdy;
+    bad[0] = 0;
+  };
+  if constexpr (kOne) {
+    if (x[0] * x[0] + y[0] * y[0] > bound2) return continued();  // no kernel to run there
+  }
   if (toroidal_)
     toroidSagLanes<kGradient>(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, bound2, n, x, y,
                               z, gx, gy, bad);
   else
     asphereSagLanes<kGradient>(cx_, cy_, ax_, ay_, terms_, bound2, n, x, y, z, gx, gy, bad);
   if constexpr (kOne) {
-    if (bad[0] != 0) {
-      const SagGradient g = sagContinued(x[0], y[0]);
-      z[0] = g.z;
-      if constexpr (kGradient) gx[0] = g.dzdx, gy[0] = g.dzdy;
-      bad[0] = 0;
-    }
+    if (bad[0] != 0) continued();  // the rim of the domain
   }
 }
 
@@ -442,7 +446,7 @@ template <bool kOne>
     double* __restrict status) const {
   const double zero = 0, one = 1, two = 2, kMax = std::numeric_limits<double>::max();
   const double bound2 = bound_r_ * bound_r_;
-  double act[kLanes], sx[kLanes] = {}, sy[kLanes] = {};
+  double act[kLanes], sx[kLanes], sy[kLanes];
   double x[kLanes], y[kLanes], z[kLanes], gx[kLanes], gy[kLanes], bad[kLanes];
   // Whether any lane is still iterating (a loop of its own: a reduction in the lanes' loops
   // would stop their vectorisation).
@@ -451,7 +455,7 @@ template <bool kOne>
     for (int j = 0; j < n; ++j) any = any || act[j] != zero;
     return any;
   };
-  for (int j = 0; j < n; ++j) act[j] = status[j] == zero ? one : zero;
+  for (int j = 0; j < n; ++j) act[j] = status[j] == zero ? one : zero, sx[j] = sy[j] = zero;
   for (int it = 0; it < 12 && anyActive(); ++it) {
     for (int j = 0; j < n; ++j) x[j] = ox[j] + t[j] * dx[j], y[j] = oy[j] + t[j] * dy[j];
     sagLanes<true, kOne>(n, x, y, z, gx, gy, bad);
