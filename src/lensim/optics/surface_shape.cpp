@@ -39,87 +39,45 @@ Coeffs coeffsOf(double radius_mm, const SurfaceShape& shape) {
   return k;
 }
 
-// Toroids (see the header for the definition and its source). The y-z curve f(y) and its slope
-// f'(y); nullopt where the conic square root is undefined.
-struct Profile {
-  double f, df;
-};
-// kSlope false: f only (df left 0; f the same value).
-template <bool kSlope = true>
-std::optional<Profile> toroidProfile(double c, double a, const std::vector<double>& poly,
-                                     double y) {
-  // a = (1 + k) c^2; f = c y^2 / (1 + S), f' = c y / S with S = sqrt(1 - a y^2).
-  const double arg = 1 - a * y * y;
-  if (arg < 0) return std::nullopt;
-  const double S = std::sqrt(arg);
-  Profile p{};
-  p.f = c * y * y / (1 + S);
-  if constexpr (kSlope)
-    p.df = S > 0 ? c * y / S
-                 : (y != 0 ? std::copysign(std::numeric_limits<double>::infinity(), c * y) : 0.0);
-  double yp = 1;  // y^(p-1)
-  for (size_t k = 1; k < poly.size(); ++k) {
-    const double a_p = poly[k];
-    if (kSlope && a_p != 0) p.df += double(k) * a_p * yp;
-    yp *= y;
-    if (a_p != 0) p.f += a_p * yp;
-  }
-  return p;
-}
-
-// The toroid's sag at (x, y): z = f + x^2 / (rho + q), q = sgn(rho) sqrt(rho^2 - x^2),
-// rho = R - f(y); gradient dz/dx = x / q, dz/dy = rho f' / q (from q^2 = rho^2 - x^2).
-// rot = 0: the cylinder z = f(y). `clamp`: rho^2 - x^2 < 0 (just outside the domain, from the
-// sampled domain radius) is taken as 0 instead of failing.
-// kGradient false: the sag only (the gradient left 0; z the same value).
-template <bool kGradient = true>
-std::optional<SagGradient> toroidSag(double c, double a, const std::vector<double>& poly,
-                                     double rot, double x, double y, bool clamp) {
-  const auto pr = toroidProfile<kGradient>(c, a, poly, y);
-  if (!pr) return std::nullopt;
-  if (rot == 0) return SagGradient{pr->f, 0.0, pr->df};
-  const double rho = rot - pr->f;
-  double d = rho * rho - x * x;
-  if (d < 0) {
-    if (!clamp) return std::nullopt;
-    d = 0;
-  }
-  const double q = std::copysign(std::sqrt(d), rho);
-  SagGradient g{};
-  if (rho + q == 0) return std::nullopt;  // rho = 0: the curve meets the axis of rotation
-  g.z = pr->f + x * x / (rho + q);
-  if constexpr (!kGradient) return g;
-  if (q != 0) {
-    g.dzdx = x / q;
-    g.dzdy = rho * pr->df / q;
-  } else {  // the rim of the domain: vertical
-    const double inf = std::numeric_limits<double>::infinity();
-    g.dzdx = x != 0 ? std::copysign(inf, x * rho) : 0.0;
-    g.dzdy = pr->df != 0 ? std::copysign(inf, rho * pr->df) : 0.0;
-  }
-  return g;
-}
-
-// toroidSag<kGradient>(c, a, poly, rot, x, y, clamp = true) for lanes [0, n) side by side, with
-// the same operations (so the same values) where the scalar function, as ShapeIntersector's
-// sagContinued and sagZ call it, takes its common path: r^2 <= bound2 (inside bound_r), the y
-// curve's square root positive and rho^2 - x^2 > 0. bad[j] is 1 for lanes off that path (their
-// values are not used). Conditions are 0/1 doubles so that GCC vectorises the loops.
+// Scalar and batched code are one source here: each kernel below works on lanes [0, n) of
+// arrays, in loops over the lanes with conditions as 0/1 doubles (selects that GCC vectorises,
+// unlike branches), and a scalar evaluation is the kernel on one lane (docs/developer-guide.md,
+// "Scalar and batched code").
 constexpr int kLanes = ShapeIntersector::kLanes;
-template <bool kGradient>
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The toroid (see the header for the definition and its source) at (x[j], y[j]): the y-z curve
+// f = c y^2 / (1 + S) + sum_k a_k y^k with S = sqrt(1 - a y^2), a = (1 + k) c^2, and its slope
+// f' = c y / S + sum_k k a_k y^(k-1); then z = f + x^2 / (rho + q) with rho = rot - f(y) and
+// q = sgn(rho) sqrt(rho^2 - x^2), gradient dz/dx = x / q, dz/dy = rho f' / q (from
+// q^2 = rho^2 - x^2); rot = 0: the cylinder z = f(y). Writes z and, with kGradient, gx and gy.
+// bad[j] is 1 off the common path: x^2 + y^2 > bound2, S not positive or rho^2 - x^2 not
+// positive (the batched intersector leaves those lanes to intersect()).
+// kRim, for the one-lane evaluations: defined[j] is 0 where the sag is undefined (1 - a y^2 < 0;
+// rho^2 - x^2 < 0 unless kClamp, which takes it as 0: just outside the domain, from the sampled
+// domain radius; the curve meeting the axis of rotation), and the slopes at the rim of the domain
+// (S = 0, q = 0) are infinite.
+template <bool kGradient, bool kRim = false, bool kClamp = true>
 [[gnu::always_inline]] inline void toroidSagLanes(double c, double a,
                                                   const std::vector<double>& poly, double rot,
                                                   double bound2, int n, const double* x,
                                                   const double* y, double* z, double* gx,
-                                                  double* gy, double* bad) {
-  double f[kLanes], df[kLanes] = {}, yp[kLanes];
+                                                  double* gy, double* bad,
+                                                  double* defined = nullptr) {
+  double f[kLanes], df[kLanes], yp[kLanes];
   for (int j = 0; j < n; ++j) {
     const double xj = x[j], yj = y[j];
     const double arg = 1 - a * yj * yj;
     bad[j] = std::max(xj * xj + yj * yj > bound2 ? 1.0 : 0.0, arg > 0 ? 0.0 : 1.0);
     const double S = std::sqrt(std::max(arg, 0.0));
     f[j] = c * yj * yj / (1 + S);
-    if constexpr (kGradient) df[j] = c * yj / S;
+    if constexpr (!kGradient)
+      df[j] = 0;
+    else if constexpr (kRim)
+      df[j] = S > 0 ? c * yj / S : (yj != 0 ? std::copysign(kInf, c * yj) : 0.0);
+    else
+      df[j] = c * yj / S;
+    if constexpr (kRim) defined[j] = arg < 0 ? 0.0 : 1.0;
     yp[j] = 1;
   }
   for (size_t k = 1; k < poly.size(); ++k) {
@@ -134,7 +92,7 @@ template <bool kGradient>
       f[j] += a_p * yp[j];
     }
   }
-  if (rot == 0) {  // a cylinder: the y curve itself (gx, gy are null without kGradient)
+  if (rot == 0) {  // a cylinder: the y curve itself (gx, gy may be null without kGradient)
     for (int j = 0; j < n; ++j) z[j] = f[j];
     if constexpr (kGradient)
       for (int j = 0; j < n; ++j) gx[j] = 0, gy[j] = df[j];
@@ -147,17 +105,39 @@ template <bool kGradient>
     bad[j] = std::max(bad[j], d > 0 ? 0.0 : 1.0);
     const double q = std::copysign(std::sqrt(std::max(d, 0.0)), rho);
     z[j] = f[j] + xj * xj / (rho + q);
+    if constexpr (kRim)
+      defined[j] = (kClamp || !(d < 0)) && rho + q != 0 ? defined[j] : 0.0;
     if constexpr (kGradient) {
+      if constexpr (kRim) {
+        if (q == 0) {  // the rim of the domain: vertical
+          gx[j] = xj != 0 ? std::copysign(kInf, xj * rho) : 0.0;
+          gy[j] = df[j] != 0 ? std::copysign(kInf, rho * df[j]) : 0.0;
+          continue;
+        }
+      }
       gx[j] = xj / q;
       gy[j] = rho * df[j] / q;
     }
   }
 }
 
-// ShapeIntersector's sagContinued (kGradient) and sagZ for an asphere on a conic base (the
-// biconic formula with the polynomial terms, powers of r) for lanes [0, n), with the same
-// operations where they take their common path: r^2 <= bound2 and the conic's square root
-// positive; bad[j] is 1 for the other lanes.
+// The toroid's sag at one point (toroidSagLanes on one lane); nullopt where it is undefined.
+// kGradient false: the sag only (the gradient left 0; z the same value).
+template <bool kGradient = true, bool kClamp = true>
+std::optional<SagGradient> toroidSag(double c, double a, const std::vector<double>& poly,
+                                     double rot, double x, double y) {
+  SagGradient g;
+  double bad, defined;
+  toroidSagLanes<kGradient, true, kClamp>(c, a, poly, rot, kInf, 1, &x, &y, &g.z, &g.dzdx,
+                                          &g.dzdy, &bad, &defined);
+  if (defined == 0) return std::nullopt;
+  return g;
+}
+
+// ShapeIntersector's sag of an asphere on a conic base (the biconic formula with the polynomial
+// terms, powers of r) at (x[j], y[j]): z and with kGradient gx, gy (null without); bad[j] is 1
+// off the common path (r^2 > bound2, the conic's square root not positive), where
+// sagContinued's flat continuation or the rim of the domain apply.
 template <bool kGradient>
 [[gnu::always_inline]] inline void asphereSagLanes(double cx, double cy, double ax, double ay,
                                                    const std::vector<std::pair<int, double>>& terms,
@@ -174,13 +154,14 @@ template <bool kGradient>
     const double den = 1 + S;
     z[j] = N / den;
     if constexpr (kGradient) {
+      // d/dx [N / (1 + S)] = (2 cx x (1 + S) - N dS/dx) / (1 + S)^2 with dS/dx = -ax x / S.
       const double inv = 1 / (den * den), nS = N / S;
       gx[j] = (2 * cx * xj * den + nS * ax * xj) * inv;
       gy[j] = (2 * cy * yj * den + nS * ay * yj) * inv;
     }
   }
   if (terms.empty()) return;
-  // polynomialSag: the terms in increasing powers, r^(p-2) kept in rk.
+  // The terms in increasing powers, r^(p-2) kept in rk; slope: the radial slope over r.
   double pz[kLanes];
   for (int j = 0; j < n; ++j) r[j] = std::sqrt(r2[j]), rk[j] = 1, slope[j] = 0, pz[j] = 0;
   int k = 0;
@@ -204,6 +185,41 @@ template <bool kGradient>
     for (int j = 0; j < n; ++j) gx[j] += slope[j] * x[j], gy[j] += slope[j] * y[j];
 }
 
+// The slab [z_lo, z_hi] along a ray not parallel to it: the ray parameters [ta, tb] inside it,
+// from t_min on.
+[[gnu::always_inline]] inline void slabOf(double z_lo, double z_hi, double oz, double dz,
+                                          double t_min, double& ta, double& tb) {
+  const double t0 = (z_lo - oz) / dz, t1 = (z_hi - oz) / dz;
+  ta = std::max(std::min(t0, t1), t_min), tb = std::max(t0, t1);
+}
+
+// The quadric cx x^2 + cy y^2 + e z^2 - 2 z = 0's first root t >= t_min along o + t d on its
+// vertex sheet (1 - e z > 0), from A t^2 + 2 B t + C = 0 with the stable roots. Returns 1 where
+// there is one (t set), else 0. kLinear: with the one root of A = 0 (B != 0) too (one lane: the
+// batched intersector leaves those rays to intersect()).
+template <bool kLinear>
+[[gnu::always_inline]] inline double quadricHit(double cx, double cy, double e, double ox,
+                                                double oy, double oz, double dx, double dy,
+                                                double dz, double t_min, double& t) {
+  const double A = cx * dx * dx + cy * dy * dy + e * dz * dz;
+  const double B = cx * ox * dx + cy * oy * dy + e * oz * dz - dz;
+  const double C = cx * ox * ox + cy * oy * oy + e * oz * oz - 2 * oz;
+  if constexpr (kLinear) {
+    if (A == 0) {
+      t = -C / (2 * B);
+      return B != 0 && t >= t_min && 1 - e * (oz + t * dz) > 0 ? 1.0 : 0.0;
+    }
+  }
+  const double disc = B * B - A * C;
+  const double q = -(B + std::copysign(std::sqrt(std::max(disc, 0.0)), B));
+  const double r0 = q / A, r1 = q != 0 ? C / q : r0;
+  const double lo = std::min(r0, r1), hi = std::max(r0, r1);
+  const double ok_lo = lo >= t_min ? (1 - e * (oz + lo * dz) > 0 ? 1.0 : 0.0) : 0.0;
+  const double ok_hi = hi >= t_min ? (1 - e * (oz + hi * dz) > 0 ? 1.0 : 0.0) : 0.0;
+  t = ok_lo != 0 ? lo : hi;
+  return A != 0 ? (disc >= 0 ? std::max(ok_lo, ok_hi) : 0.0) : 0.0;
+}
+
 double toroidA(double radius_mm, const SurfaceShape& shape) {
   const double c = radius_mm != 0 ? 1 / radius_mm : 0.0;
   return (1 + shape.conic) * c * c;
@@ -214,8 +230,8 @@ double toroidA(double radius_mm, const SurfaceShape& shape) {
 std::optional<SagGradient> surfaceSag(double radius_mm, const SurfaceShape& shape, double x,
                                       double y) {
   if (shape.isToroidal())
-    return toroidSag(radius_mm != 0 ? 1 / radius_mm : 0.0, toroidA(radius_mm, shape), shape.poly,
-                     *shape.rotation_radius_mm, x, y, false);
+    return toroidSag<true, false>(radius_mm != 0 ? 1 / radius_mm : 0.0, toroidA(radius_mm, shape),
+                                  shape.poly, *shape.rotation_radius_mm, x, y);
   const Coeffs k = coeffsOf(radius_mm, shape);
   const double arg = 1 - k.ax * x * x - k.ay * y * y;
   if (arg < 0) return std::nullopt;
@@ -281,9 +297,9 @@ double sagDomainRadius(double radius_mm, const SurfaceShape& shape) {
     constexpr int kSamples = 4096;
     for (int i = 1; i <= kSamples; ++i) {
       const double y = span * i / kSamples;
-      const auto pr = toroidProfile(c, a, shape.poly, y);
-      if (!pr) break;
-      best = std::min(best, std::hypot(rot - pr->f, y));
+      const auto f = toroidSag<false>(c, a, shape.poly, 0.0, 0.0, y);  // rot 0: the y curve
+      if (!f) break;
+      best = std::min(best, std::hypot(rot - f->z, y));
     }
     return best * (1 - 1e-6);
   }
@@ -375,24 +391,140 @@ void ShapeIntersector::boundSagCurvature() {
   hess_bound_ = 2 * most;
 }
 
-// Whether the Newton solve's root t is the first crossing after the slab's entry ta, from the
-// bound on the sag's curvature: g(tau) = z(tau) - sag(x(tau), y(tau)) along the ray has
+// The sag and, with kGradient, its gradient at lanes [0, n) of (x, y), inside bound_r on the
+// common path (asphereSagLanes, toroidSagLanes); bad[j] 1 elsewhere. kOne: one lane (intersect()
+// and the scalar sag), where a point off that path takes sagContinued's value (the flat
+// continuation, the rim of the domain) instead of being marked.
+template <bool kGradient, bool kOne>
+[[gnu::always_inline]] inline void ShapeIntersector::sagLanes(int n, const double* x,
+                                                              const double* y, double* z,
+                                                              double* gx, double* gy,
+                                                              double* bad) const {
+  const double bound2 = bound_r_ * bound_r_;
+  auto continued = [&] {
+    const SagGradient g = sagContinued(x[0], y[0]);
+    z[0] = g.z;
+    if constexpr (kGradient) gx[0] = g.dzdx, gy[0] = g.dzdy;
+    bad[0] = 0;
+  };
+  if constexpr (kOne) {
+    if (x[0] * x[0] + y[0] * y[0] > bound2) return continued();  // no kernel to run there
+  }
+  if (toroidal_)
+    toroidSagLanes<kGradient>(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, bound2, n, x, y,
+                              z, gx, gy, bad);
+  else
+    asphereSagLanes<kGradient>(cx_, cy_, ax_, ay_, terms_, bound2, n, x, y, z, gx, gy, bad);
+  if constexpr (kOne) {
+    if (bad[0] != 0) continued();  // the rim of the domain
+  }
+}
+
+// The Newton solve of a toroid or an asphere on a quadric base for lanes [0, n): from the base
+// quadric's hit t[j] (lanes with status[j] 0; the others are left alone), kept inside the slab
+// [ta[j], tb[j]], then the first-crossing check. On success t[j] is the root and n the unit
+// normal from the gradient at the last iterate (within 1e-13 (1 + |t|) of t: no further
+// evaluation); else status[j] is 2: Newton's method leaving the slab or not converging in 12
+// steps, a zero or infinite slope, a sign change before the root, and without kOne a point off
+// the sag's common path (sagLanes).
+//
+// The first-crossing check: g(tau) = z(tau) - sag(x(tau), y(tau)) along the ray has
 // |g''| <= H |d_xy|^2 (H the bound on the Hessian's norm) wherever the path stays inside the disc
 // of radius bound_r (so from ta to t when both ends do: the disc is convex), so that
 // g(t - delta) = g(t) - g'(t) delta + e with |e| <= H |d_xy|^2 delta^2 / 2: g keeps the sign of
 // -g'(t) for delta up to 2 |g'(t)| / (H |d_xy|^2). Asked for half of that (g'(t) is taken from
-// the gradient at the last iterate, within 1e-13 of t), on [ta, t). Near the axis and at the
-// usual angles it holds by a wide margin (a lens's ray crosses a slab a few millimetres deep at
-// a slope well below 1, where g'' is a few hundredths of g'); where it does not, the solve checks
-// g's sign at points along the ray instead. intersectLanes computes the same expression.
-bool ShapeIntersector::firstCrossingProven(double ox, double oy, double dx, double dy, double dz,
-                                           double ta, double t, double sx, double sy) const {
-  const double xa = ox + ta * dx, ya = oy + ta * dy, xt = ox + t * dx, yt = oy + t * dy;
+// the gradient at the last iterate), on [ta, t), the root is proven the first crossing after the
+// slab's entry. Near the axis and at the usual angles it holds by a wide margin (a lens's ray
+// crosses a slab a few millimetres deep at a slope well below 1, where g'' is a few hundredths of
+// g'); where it does not, g's sign is checked at the slab's entry and 4 points up to the root.
+template <bool kOne>
+[[gnu::always_inline]] inline void ShapeIntersector::newtonLanes(
+    int n, const double* __restrict ox, const double* __restrict oy, const double* __restrict oz,
+    const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
+    const double* __restrict ta, const double* __restrict tb, double* __restrict t,
+    double* __restrict nx, double* __restrict ny, double* __restrict nz,
+    double* __restrict status) const {
+  const double zero = 0, one = 1, two = 2, kMax = std::numeric_limits<double>::max();
   const double bound2 = bound_r_ * bound_r_;
-  const double slope = dz - sx * dx - sy * dy;
-  const double curv = hess_bound_ * (dx * dx + dy * dy);
-  return xa * xa + ya * ya <= bound2 && xt * xt + yt * yt <= bound2 &&
-         (t - ta) * curv < std::abs(slope);
+  double act[kLanes], sx[kLanes], sy[kLanes];
+  double x[kLanes], y[kLanes], z[kLanes], gx[kLanes], gy[kLanes], bad[kLanes];
+  // Whether any lane is still iterating (a loop of its own: a reduction in the lanes' loops
+  // would stop their vectorisation).
+  auto anyActive = [&] {
+    bool any = false;
+    for (int j = 0; j < n; ++j) any = any || act[j] != zero;
+    return any;
+  };
+  for (int j = 0; j < n; ++j) act[j] = status[j] == zero ? one : zero, sx[j] = sy[j] = zero;
+  for (int it = 0; it < 12 && anyActive(); ++it) {
+    for (int j = 0; j < n; ++j) x[j] = ox[j] + t[j] * dx[j], y[j] = oy[j] + t[j] * dy[j];
+    sagLanes<true, kOne>(n, x, y, z, gx, gy, bad);
+    for (int j = 0; j < n; ++j) {
+      const double gt = oz[j] + t[j] * dz[j] - z[j];
+      const double dg = dz[j] - gx[j] * dx[j] - gy[j] * dy[j];
+      const double tn = t[j] - gt / dg;
+      // (0/1 values combined with max: a nested select whose outer branch is a constant stops
+      // the vectoriser.)
+      const double fails =
+          std::max(std::max(bad[j], dg == zero ? one : zero),
+                   std::max(std::abs(dg) <= kMax ? zero : one,
+                            std::max(tn >= ta[j] ? zero : one, tn <= tb[j] ? zero : one)));
+      const double step = std::abs(tn - t[j]);
+      const double done = step <= 1e-13 * (1 + std::abs(tn)) ? one : zero;
+      const double on = act[j] != zero ? one - fails : zero;
+      status[j] = act[j] != zero ? (fails != zero ? two : status[j]) : status[j];
+      t[j] = on != zero ? tn : t[j];
+      sx[j] = on != zero ? gx[j] : sx[j];
+      sy[j] = on != zero ? gy[j] : sy[j];
+      act[j] = on != zero ? one - done : zero;
+    }
+  }
+  // Still iterating after 12 steps: not converged.
+  for (int j = 0; j < n; ++j) {
+    status[j] = act[j] != zero ? two : status[j];
+    act[j] = status[j] == zero ? one : zero;
+  }
+  // The first-crossing check (above): the proof, else g's sign at 5 points along the ray, those
+  // only where a lane needs them.
+  const double hb = hess_bound_;
+  double g0[kLanes], first[kLanes], sag[kLanes], proven[kLanes];
+  for (int j = 0; j < n; ++j) {
+    const double xa = ox[j] + ta[j] * dx[j], ya = oy[j] + ta[j] * dy[j];
+    const double xt = ox[j] + t[j] * dx[j], yt = oy[j] + t[j] * dy[j];
+    const double slope = dz[j] - sx[j] * dx[j] - sy[j] * dy[j];
+    const double curv = hb * (dx[j] * dx[j] + dy[j] * dy[j]);
+    const double in_a = xa * xa + ya * ya <= bound2 ? one : zero;
+    const double in_t = xt * xt + yt * yt <= bound2 ? one : zero;
+    const double near = (t[j] - ta[j]) * curv < std::abs(slope) ? one : zero;
+    proven[j] = std::min(std::min(in_a, in_t), near);
+    first[j] = one;
+  }
+  bool check = false;
+  for (int j = 0; j < n; ++j) check = check || (act[j] != zero && proven[j] == zero);
+  for (int k = 0; k <= 4 && check; ++k) {
+    for (int j = 0; j < n; ++j) {
+      const double tk = k == 0 ? ta[j] : ta[j] + (t[j] - ta[j]) * k / 5.0;
+      x[j] = ox[j] + tk * dx[j], y[j] = oy[j] + tk * dy[j], z[j] = oz[j] + tk * dz[j];
+    }
+    sagLanes<false, kOne>(n, x, y, sag, nullptr, nullptr, bad);
+    if (k == 0)
+      for (int j = 0; j < n; ++j) g0[j] = z[j] - sag[j];
+    for (int j = 0; j < n; ++j) {
+      const double gk = z[j] - sag[j];
+      // gk != 0 with g0's sign (for k = 0: g0 != 0).
+      const double same = gk < zero ? (g0[j] < zero ? one : zero)
+                                    : (gk > zero ? (g0[j] > zero ? one : zero) : zero);
+      first[j] = bad[j] != zero ? zero : std::min(first[j], same);
+    }
+    if constexpr (kOne) check = first[0] != zero;  // (intersect() stops at the first failure)
+  }
+  for (int j = 0; j < n; ++j) {
+    const double finite = std::abs(sx[j]) <= kMax ? (std::abs(sy[j]) <= kMax ? one : zero) : zero;
+    const double len = std::sqrt(sx[j] * sx[j] + sy[j] * sy[j] + 1.0);  // |(sx, sy, -1)|
+    nx[j] = sx[j] / len, ny[j] = sy[j] / len, nz[j] = -1.0 / len;
+    const double ok = std::min(std::max(first[j], proven[j]), finite);
+    status[j] = act[j] != zero ? (ok == zero ? two : status[j]) : status[j];
+  }
 }
 
 double ShapeIntersector::alongRay(const Vec3& o, const Vec3& d, double t, SagGradient* sg) const {
@@ -403,7 +535,7 @@ double ShapeIntersector::alongRay(const Vec3& o, const Vec3& d, double t, SagGra
 }
 
 // The first root of g(t) = z(t) - sag(x(t), y(t)) on [lo, hi], a part of the ray inside the disc
-// of radius bound_r, isolated with the bound on g'' (H |d_xy|^2, as firstCrossingProven): the
+// of radius bound_r, isolated with the bound on g'' (H |d_xy|^2, as newtonLanes' proof): the
 // segments are visited left to right and halved; one whose ends have g of one sign holds no
 // root where g cannot reach 0 between them (it lies within H |d_xy|^2 w^2 / 8 of its chord on a
 // segment of width w), and one whose ends differ in sign holds exactly one where g's slope at
@@ -459,30 +591,10 @@ bool ShapeIntersector::firstBracketInside(const Vec3& o, const Vec3& d, double l
 
 std::optional<double> ShapeIntersector::quadricRoot(const Vec3& o, const Vec3& d,
                                                     double t_min) const {
-  // A t^2 + 2 B t + C = 0; stable roots; the nearest on the vertex sheet.
-  const double A = qcx_ * d.x * d.x + qcy_ * d.y * d.y + qe_ * d.z * d.z;
-  const double B = qcx_ * o.x * d.x + qcy_ * o.y * d.y + qe_ * o.z * d.z - d.z;
-  const double C = qcx_ * o.x * o.x + qcy_ * o.y * o.y + qe_ * o.z * o.z - 2 * o.z;
-  double roots[2];
-  int nr = 0;
-  if (A == 0) {
-    if (B != 0) roots[nr++] = -C / (2 * B);
-  } else {
-    const double disc = B * B - A * C;
-    if (disc >= 0) {
-      const double q = -(B + std::copysign(std::sqrt(disc), B));
-      roots[nr++] = q / A;
-      if (q != 0) roots[nr++] = C / q;
-    }
-  }
-  if (nr == 2 && roots[1] < roots[0]) std::swap(roots[0], roots[1]);
-  for (int i = 0; i < nr; ++i) {
-    const double t = roots[i];
-    if (!(t >= t_min)) continue;
-    if (1 - qe_ * (o.z + t * d.z) <= 0) continue;  // the other sheet
-    return t;
-  }
-  return std::nullopt;
+  double t;
+  if (quadricHit<true>(qcx_, qcy_, qe_, o.x, o.y, o.z, d.x, d.y, d.z, t_min, t) == 0)
+    return std::nullopt;
+  return t;
 }
 
 __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::intersectLanes(
@@ -490,10 +602,9 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
     const double* __restrict dx, const double* __restrict dy, const double* __restrict dz,
     double t_min, double* __restrict t, double* __restrict nx, double* __restrict ny,
     double* __restrict nz, double* __restrict status) const {
-  // intersect()'s operations lane by lane in branch-free loops (selects of 0/1 doubles), so that
-  // the compiler vectorises them and each lane's values are the scalar ones; a lane that would
-  // take another branch there is given status 2 and intersect() traces it.
-  const double zero = 0, one = 1, two = 2, kMax = std::numeric_limits<double>::max();
+  // intersect()'s kernels on the lanes; a lane that would take another branch there is given
+  // status 2 and intersect() traces it.
+  const double zero = 0, one = 1, two = 2;
   // Members as locals: the compiler cannot tell that the stores below leave them alone.
   const bool quadric = quadric_;
   const double quad = quadric ? one : zero;  // (a select on a bool stops the vectoriser)
@@ -501,23 +612,12 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
   n = std::min(n, kLanes);
   double ta[kLanes], tb[kLanes];
   for (int j = 0; j < n; ++j) {
-    // The slab.
-    const double t0 = (z_lo - oz[j]) / dz[j], t1 = (z_hi - oz[j]) / dz[j];
-    ta[j] = std::max(std::min(t0, t1), t_min), tb[j] = std::max(t0, t1);
+    slabOf(z_lo, z_hi, oz[j], dz[j], t_min, ta[j], tb[j]);
     const double flat = std::abs(dz[j]) > 1e-12 ? zero : one;
     const double crosses = ta[j] <= tb[j] ? one : zero;
-    // quadricRoot: A t^2 + 2 B t + C = 0; stable roots; the nearest on the vertex sheet.
-    const double A = cx * dx[j] * dx[j] + cy * dy[j] * dy[j] + e * dz[j] * dz[j];
-    const double B = cx * ox[j] * dx[j] + cy * oy[j] * dy[j] + e * oz[j] * dz[j] - dz[j];
-    const double C = cx * ox[j] * ox[j] + cy * oy[j] * oy[j] + e * oz[j] * oz[j] - 2 * oz[j];
-    const double disc = B * B - A * C;
-    const double q = -(B + std::copysign(std::sqrt(std::max(disc, zero)), B));
-    const double r0 = q / A, r1 = q != zero ? C / q : r0;
-    const double lo = std::min(r0, r1), hi = std::max(r0, r1);
-    const double ok_lo = lo >= t_min ? (1 - e * (oz[j] + lo * dz[j]) > zero ? one : zero) : zero;
-    const double ok_hi = hi >= t_min ? (1 - e * (oz[j] + hi * dz[j]) > zero ? one : zero) : zero;
-    const double tq = ok_lo != zero ? lo : hi;
-    const double root = A != zero ? (disc >= zero ? std::max(ok_lo, ok_hi) : zero) : zero;
+    double tq;
+    const double root =
+        quadricHit<false>(cx, cy, e, ox[j], oy[j], oz[j], dx[j], dy[j], dz[j], t_min, tq);
     t[j] = tq;
     // A Newton solve (toroid, asphere) starts from a quadric hit inside the slab.
     const double in_slab = tq >= ta[j] ? (tq <= tb[j] ? one : zero) : zero;
@@ -533,99 +633,7 @@ __attribute__((target_clones("avx2", "default"))) void ShapeIntersector::interse
     }
     return;
   }
-
-  // A toroid or an asphere on a quadric base: Newton's method from the quadric's hit, kept
-  // inside the slab (as intersect()).
-  const bool toroidal = toroidal_;
-  const double rot = toroidal ? *shape_.rotation_radius_mm : 0.0, bound2 = bound_r_ * bound_r_;
-  const double c = cy_, a = ay_;
-  double act[kLanes], sx[kLanes] = {}, sy[kLanes] = {};
-  double x[kLanes], y[kLanes], z[kLanes], gx[kLanes], gy[kLanes], bad[kLanes];
-  // Whether any lane is still iterating (a loop of its own: a reduction in the lanes' loops
-  // would stop their vectorisation).
-  auto anyActive = [&] {
-    bool any = false;
-    for (int j = 0; j < n; ++j) any = any || act[j] != zero;
-    return any;
-  };
-  for (int j = 0; j < n; ++j) act[j] = status[j] == zero ? one : zero;
-  for (int it = 0; it < 12 && anyActive(); ++it) {
-    for (int j = 0; j < n; ++j) x[j] = ox[j] + t[j] * dx[j], y[j] = oy[j] + t[j] * dy[j];
-    if (toroidal)
-      toroidSagLanes<true>(c, a, shape_.poly, rot, bound2, n, x, y, z, gx, gy, bad);
-    else
-      asphereSagLanes<true>(cx_, cy_, ax_, ay_, terms_, bound2, n, x, y, z, gx, gy, bad);
-    for (int j = 0; j < n; ++j) {
-      const double gt = oz[j] + t[j] * dz[j] - z[j];
-      const double dg = dz[j] - gx[j] * dx[j] - gy[j] * dy[j];
-      const double tn = t[j] - gt / dg;
-      // intersect() stops here. (0/1 values combined with max: a nested select whose outer
-      // branch is a constant stops the vectoriser.)
-      const double fails =
-          std::max(std::max(bad[j], dg == zero ? one : zero),
-                   std::max(std::abs(dg) <= kMax ? zero : one,
-                            std::max(tn >= ta[j] ? zero : one, tn <= tb[j] ? zero : one)));
-      const double step = std::abs(tn - t[j]);
-      const double done = step <= 1e-13 * (1 + std::abs(tn)) ? one : zero;
-      const double on = act[j] != zero ? one - fails : zero;
-      status[j] = act[j] != zero ? (fails != zero ? two : status[j]) : status[j];
-      t[j] = on != zero ? tn : t[j];
-      sx[j] = on != zero ? gx[j] : sx[j];
-      sy[j] = on != zero ? gy[j] : sy[j];
-      act[j] = on != zero ? one - done : zero;
-    }
-  }
-  // Still iterating after 12 steps: not converged.
-  for (int j = 0; j < n; ++j) {
-    status[j] = act[j] != zero ? two : status[j];
-    act[j] = status[j] == zero ? one : zero;
-  }
-  // The first-crossing check: g keeps its sign from the slab's entry to just before the root.
-  // Proven from the bound on the sag's curvature (firstCrossingProven, the same expression), else
-  // checked at 5 points along the ray: those only where a lane needs them.
-  const double hb = hess_bound_;
-  double g0[kLanes], first[kLanes], sag[kLanes], proven[kLanes];
-  for (int j = 0; j < n; ++j) {
-    const double xa = ox[j] + ta[j] * dx[j], ya = oy[j] + ta[j] * dy[j];
-    const double xt = ox[j] + t[j] * dx[j], yt = oy[j] + t[j] * dy[j];
-    const double slope = dz[j] - sx[j] * dx[j] - sy[j] * dy[j];
-    const double curv = hb * (dx[j] * dx[j] + dy[j] * dy[j]);
-    const double in_a = xa * xa + ya * ya <= bound2 ? one : zero;
-    const double in_t = xt * xt + yt * yt <= bound2 ? one : zero;
-    const double near = (t[j] - ta[j]) * curv < std::abs(slope) ? one : zero;
-    proven[j] = std::min(std::min(in_a, in_t), near);
-    first[j] = one;
-  }
-  bool check = false;
-  for (int j = 0; j < n; ++j) check = check || (act[j] != zero && proven[j] == zero);
-  for (int k = 0; k <= 4 && check; ++k) {
-    for (int j = 0; j < n; ++j) {
-      const double tk = k == 0 ? ta[j] : ta[j] + (t[j] - ta[j]) * k / 5.0;
-      x[j] = ox[j] + tk * dx[j], y[j] = oy[j] + tk * dy[j], z[j] = oz[j] + tk * dz[j];
-    }
-    if (toroidal)
-      toroidSagLanes<false>(c, a, shape_.poly, rot, bound2, n, x, y, sag, nullptr, nullptr, bad);
-    else
-      asphereSagLanes<false>(cx_, cy_, ax_, ay_, terms_, bound2, n, x, y, sag, nullptr, nullptr,
-                             bad);
-    if (k == 0)
-      for (int j = 0; j < n; ++j) g0[j] = z[j] - sag[j];
-    for (int j = 0; j < n; ++j) {
-      const double gk = z[j] - sag[j];
-      // gk != 0 with g0's sign (for k = 0: g0 != 0).
-      const double same = gk < zero ? (g0[j] < zero ? one : zero)
-                                    : (gk > zero ? (g0[j] > zero ? one : zero) : zero);
-      first[j] = bad[j] != zero ? zero : std::min(first[j], same);
-    }
-  }
-  for (int j = 0; j < n; ++j) {
-    // The normal from the gradient at the last iterate (as intersect()).
-    const double finite = std::abs(sx[j]) <= kMax ? (std::abs(sy[j]) <= kMax ? one : zero) : zero;
-    const double len = std::sqrt(sx[j] * sx[j] + sy[j] * sy[j] + 1.0);  // |(sx, sy, -1)|
-    nx[j] = sx[j] / len, ny[j] = sy[j] / len, nz[j] = -1.0 / len;
-    const double ok = std::min(std::max(first[j], proven[j]), finite);
-    status[j] = act[j] != zero ? (ok == zero ? two : status[j]) : status[j];
-  }
+  newtonLanes<false>(n, ox, oy, oz, dx, dy, dz, ta, tb, t, nx, ny, nz, status);
 }
 
 SagGradient ShapeIntersector::sagContinued(double x, double y) const {
@@ -635,84 +643,40 @@ SagGradient ShapeIntersector::sagContinued(double x, double y) const {
     const double s = bound_r_ / std::sqrt(r2);
     auto g = surfaceSag(radius_, shape_, x * s, y * s);
     if (!g && toroidal_)
-      g = toroidSag(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x * s, y * s, true);
+      g = toroidSag(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x * s, y * s);
     return {g ? g->z : 0.0, 0.0, 0.0};
   }
-  if (toroidal_) {
-    if (auto g = toroidSag(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x, y, true))
-      return *g;
-    return {0.0, std::numeric_limits<double>::infinity(), 0.0};  // not reached inside bound_r_
-  }
-  // surfaceSag's formula with the coefficients cached (the hot path of the Newton solve).
-  const double arg = std::max(0.0, 1 - ax_ * x * x - ay_ * y * y);
-  const double S = std::sqrt(arg), N = cx_ * x * x + cy_ * y * y, den = 1 + S;
   SagGradient g;
-  g.z = N / den;
-  if (S > 0) {
-    const double inv = 1 / (den * den), nS = N / S;
-    g.dzdx = (2 * cx_ * x * den + nS * ax_ * x) * inv;
-    g.dzdy = (2 * cy_ * y * den + nS * ay_ * y) * inv;
-  } else {
-    return *surfaceSag(radius_, shape_, x, y);  // the domain's rim (not inside bound_r_)
+  double bad;
+  sagLanes<true, false>(1, &x, &y, &g.z, &g.dzdx, &g.dzdy, &bad);
+  if (bad == 0) return g;
+  // The rim of the domain (not reached inside bound_r_).
+  if (toroidal_) {
+    if (auto t = toroidSag(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x, y)) return *t;
+    return {0.0, std::numeric_limits<double>::infinity(), 0.0};
   }
-  if (!terms_.empty()) {
-    double slope_over_r;
-    g.z += polynomialSag(r2, slope_over_r);
-    g.dzdx += slope_over_r * x;
-    g.dzdy += slope_over_r * y;
-  }
-  return g;
+  return *surfaceSag(radius_, shape_, x, y);
 }
 
 double ShapeIntersector::sagZ(double x, double y) const {
-  const double r2 = x * x + y * y;
-  // Inside the bound the plain asphere and the toroid have cheaper forms (no gradient: the same
-  // z); elsewhere the full evaluation.
-  if (r2 > bound_r_ * bound_r_) return sagContinued(x, y).z;
-  if (toroidal_) {  // as sagContinued: 0 where the toroid is undefined (not reached inside)
-    const auto g = toroidSag<false>(cy_, ay_, shape_.poly, *shape_.rotation_radius_mm, x, y, true);
-    return g ? g->z : 0.0;
-  }
-  const double arg = 1 - ax_ * x * x - ay_ * y * y;
-  if (!(arg > 0)) return sagContinued(x, y).z;
-  const double z0 = (cx_ * x * x + cy_ * y * y) / (1 + std::sqrt(arg));
-  if (terms_.empty()) return z0;
-  double slope_over_r;
-  return z0 + polynomialSag(r2, slope_over_r);  // as sagContinued adds it: the same value
-}
-
-double ShapeIntersector::polynomialSag(double r2, double& slope_over_r) const {
-  const double r = std::sqrt(r2);
-  double z = 0;
-  slope_over_r = 0;
-  double rk = 1;  // r^k; the terms come in increasing powers
-  int k = 0;
-  for (const auto& [p, a] : terms_) {
-    if (p == 1) {
-      z += a * r;
-      if (r > 0) slope_over_r += a / r;
-    } else {
-      while (k < p - 2) rk *= r, ++k;
-      z += a * rk * r2;
-      slope_over_r += p * a * rk;
-    }
-  }
+  double z, bad;
+  sagLanes<false, true>(1, &x, &y, &z, nullptr, nullptr, &bad);
   return z;
 }
 
+// The intersection with a ray's general path: the slab, a quadric's closed form, the Newton solve
+// from the base quadric (newtonLanes on one lane), else the bracketed first crossing.
 std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, const Vec3& d,
                                                                  double t_min) const {
   // The part of the ray inside the slab.
   double ta, tb;
   if (std::abs(d.z) > 1e-12) {
-    const double t0 = (z_lo_ - o.z) / d.z, t1 = (z_hi_ - o.z) / d.z;
-    ta = std::min(t0, t1), tb = std::max(t0, t1);
+    slabOf(z_lo_, z_hi_, o.z, d.z, t_min, ta, tb);
   } else {
     if (o.z < z_lo_ || o.z > z_hi_) return std::nullopt;
     ta = t_min;
     tb = t_min + 4 * bound_r_ + std::sqrt(o.x * o.x + o.y * o.y);
   }
-  ta = std::max(ta, t_min);
   if (!(ta <= tb)) return std::nullopt;
   if (quadric_) {
     if (auto t = quadricRoot(o, d, t_min)) {
@@ -723,46 +687,16 @@ std::optional<ShapeIntersector::Hit> ShapeIntersector::intersect(const Vec3& o, 
     // No vertex-sheet hit: the general search below finds the continuation beyond bound_r.
   }
   auto g = [&](double t, SagGradient* sg) { return alongRay(o, d, t, sg); };
-  // Aspheres on a quadric base: Newton's method from the base quadric's hit, accepted when it
-  // converges inside the slab and g keeps its sign from the slab's entry to just before the root
-  // (from the bound on the sag's curvature, else checked at 5 points; so the root is the first
-  // crossing); else the bracketing search below.
+  // Aspheres on a quadric base and toroids: Newton's method from the base quadric's hit inside
+  // the slab, accepted when it converges and is the first crossing (newtonLanes); else the
+  // bracketing search below.
   if (base_quadric_ && !quadric_) {
     if (auto tq = quadricRoot(o, d, t_min); tq && *tq >= ta && *tq <= tb) {
-      double t = *tq;
-      bool converged = false;
-      SagGradient s;  // at the last iterate before t
-      for (int it = 0; it < 12; ++it) {
-        const double gt = g(t, &s);
-        const double dg = d.z - s.dzdx * d.x - s.dzdy * d.y;
-        if (dg == 0 || !std::isfinite(dg)) break;
-        const double tn = t - gt / dg;
-        if (!(tn >= ta && tn <= tb)) break;
-        const double step = std::abs(tn - t);
-        t = tn;
-        if (step <= 1e-13 * (1 + std::abs(t))) {
-          converged = true;
-          break;
-        }
-      }
-      if (converged) {
-        // Else g's sign at the slab's entry and 4 points up to the root.
-        bool first = firstCrossingProven(o.x, o.y, d.x, d.y, d.z, ta, t, s.dzdx, s.dzdy);
-        if (!first) {
-          const double g0 = g(ta, nullptr);
-          first = g0 != 0;
-          for (int k = 1; k <= 4 && first; ++k) {
-            const double gk = g(ta + (t - ta) * k / 5.0, nullptr);
-            first = gk != 0 && (gk < 0) == (g0 < 0);
-          }
-        }
-        if (first) {
-          // The normal from the gradient at the last iterate, which lies within 1e-13 (1 + |t|)
-          // of t: no further evaluation.
-          const Vec3 n{s.dzdx, s.dzdy, -1.0};
-          if (std::isfinite(n.x) && std::isfinite(n.y)) return Hit{t, normalize(n)};
-        }
-      }
+      double t = *tq, status = 0;
+      Vec3 n;
+      newtonLanes<true>(1, &o.x, &o.y, &o.z, &d.x, &d.y, &d.z, &ta, &tb, &t, &n.x, &n.y, &n.z,
+                        &status);
+      if (status == 0) return Hit{t, n};
     }
   }
   // The first crossing along the ray: a bracket [a, b] of it (g(a) and g(b) of opposite signs, or

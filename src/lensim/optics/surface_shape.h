@@ -110,13 +110,13 @@ class ShapeIntersector {
   /// Ray origin relative to the vertex and unit direction; roots below t_min are ignored.
   std::optional<Hit> intersect(const Vec3& rel_origin, const Vec3& dir, double t_min) const;
 
-  /// intersect() for up to kLanes rays side by side (the batch tracers), with the same
-  /// operations, so the same hits: a quadric's closed form, and the Newton solve from the base
-  /// quadric with the first-crossing check of a toroid or an asphere on a quadric base. Origins
-  /// relative to the vertex, unit directions. status[j]: 0 a hit (t[j] and the unit normal set), 1
-  /// a miss (the ray does not cross the surface's slab), 2 not decided here, for intersect() to
-  /// decide: a ray nearly parallel to the slab, no root on the quadric's vertex sheet (a quadratic
-  /// without its leading term), and for a Newton solve a quadric hit outside the slab, Newton's
+  /// intersect() for up to kLanes rays side by side (the batch tracers), from the same source
+  /// (the kernels that intersect() runs on one lane), so the same hits: a quadric's closed form,
+  /// and the Newton solve from the base quadric with the first-crossing check of a toroid or an
+  /// asphere on a quadric base. Origins relative to the vertex, unit directions. status[j]: 0 a
+  /// hit (t[j] and the unit normal set), 1 a miss (the ray does not cross the surface's slab), 2
+  /// not decided here, for intersect() to decide: a ray nearly parallel to the slab, no root on
+  /// the quadric's vertex sheet, and for a Newton solve a quadric hit outside the slab, Newton's
   /// method leaving the slab or not converging, a point beyond bound_r or at the rim of the sag's
   /// domain, or a sign change before the root. Only where hasLanes().
   static constexpr int kLanes = 16;
@@ -131,8 +131,6 @@ class ShapeIntersector {
   double sagZ(double x, double y) const;
 
  private:
-  // The polynomial terms' sag at r^2 = r2 and their slope dz/dr over r (for the gradient).
-  double polynomialSag(double r2, double& slope_over_r) const;
   double radius_ = 0;
   SurfaceShape shape_;
   double cx_ = 0, cy_ = 0, ax_ = 0, ay_ = 0;   // cached section curvatures and (1 + k) c^2
@@ -146,11 +144,17 @@ class ShapeIntersector {
   double qcx_ = 0, qcy_ = 0, qe_ = 0;
   std::optional<double> quadricRoot(const Vec3& o, const Vec3& d, double t_min) const;
   bool toroidal_ = false;
-  // The first-crossing proof of the Newton solve (firstCrossingProven): a bound on the spectral
-  // norm of the sag's Hessian over the disc of radius bound_r (infinite: none).
+  // The first-crossing proof of the Newton solve (newtonLanes): a bound on the spectral norm of
+  // the sag's Hessian over the disc of radius bound_r (infinite: none).
   void boundSagCurvature();
-  bool firstCrossingProven(double ox, double oy, double dx, double dy, double dz, double ta,
-                           double t, double sx, double sy) const;
+  // The kernels intersect() (kOne: one lane) and intersectLanes share (surface_shape.cpp).
+  template <bool kGradient, bool kOne>
+  void sagLanes(int n, const double* x, const double* y, double* z, double* gx, double* gy,
+                double* bad) const;
+  template <bool kOne>
+  void newtonLanes(int n, const double* ox, const double* oy, const double* oz, const double* dx,
+                   const double* dy, const double* dz, const double* ta, const double* tb,
+                   double* t, double* nx, double* ny, double* nz, double* status) const;
   bool firstBracketInside(const Vec3& o, const Vec3& d, double lo, double hi, double& a, double& ga,
                           double& b, double& gb) const;
   // g(t) = z(t) - sag(x(t), y(t)) along the ray o + t d (the continued sag), and where sg is
