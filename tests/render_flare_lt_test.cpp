@@ -309,3 +309,37 @@ TEST(FlareLightTracing, DoubleGaussFlatFieldAgreesWithPath) {
     EXPECT_NEAR(direct / plain, t, 0.02) << name;
   }
 }
+
+// A dispersive lens's flare is traced at each sample's hero wavelength on the camera side; the
+// light side's ghost connections use the primary-wavelength indices, so lighttracer and bdpt
+// refuse it at the Camera line (path renders it).
+TEST(FlareLightTracing, DispersiveLensIsRefusedByLightTracingIntegrators) {
+  const std::string lens = testFile("bk7_plate.json");
+  std::ofstream(lens) << "{\"format\": \"lensim-lens\", \"name\": \"bk7 plate\", \"surfaces\": ["
+                         "{\"radius_mm\": 2e5, \"thickness_mm\": 5, \"semi_aperture_mm\": 12, "
+                         "\"glass\": \"N-BK7\"},"
+                         "{\"radius_mm\": 0, \"thickness_mm\": 2, \"semi_aperture_mm\": 12},"
+                         "{\"radius_mm\": 0, \"thickness_mm\": 20, \"semi_aperture_mm\": 2, "
+                         "\"stop\": true}]}\n";
+  for (const char* integrator : {"lighttracer", "bdpt", "path"}) {
+    const std::string path = testFile(std::string("dispersive_") + integrator + ".pbrt");
+    std::ofstream(path) << "Camera \"realistic\" \"string lensfile\" \"" << lens
+                        << "\" \"bool flare\" true\n"
+                           "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                           "Sampler \"independent\" \"integer pixelsamples\" 1\n"
+                           "Integrator \""
+                        << integrator
+                        << "\"\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n";
+    const bool refused = std::string(integrator) != "path";
+    try {
+      renderScene(path, 1);
+      EXPECT_FALSE(refused) << integrator;
+    } catch (const Error& e) {
+      EXPECT_TRUE(refused) << integrator << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find(path + ":1:1: error: realistic camera: \"flare\" "
+                                           "through a dispersive lens"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
