@@ -317,7 +317,7 @@ TEST(FlareLightTracing, DispersiveLensIsRefusedByLightTracingIntegrators) {
   const std::string lens = testFile("bk7_plate.json");
   std::ofstream(lens) << "{\"format\": \"lensim-lens\", \"name\": \"bk7 plate\", \"surfaces\": ["
                          "{\"radius_mm\": 2e5, \"thickness_mm\": 5, \"semi_aperture_mm\": 12, "
-                         "\"glass\": \"N-BK7\"},"
+                         "\"glass\": {\"name\": \"N-BK7\"}},"
                          "{\"radius_mm\": 0, \"thickness_mm\": 2, \"semi_aperture_mm\": 12},"
                          "{\"radius_mm\": 0, \"thickness_mm\": 20, \"semi_aperture_mm\": 2, "
                          "\"stop\": true}]}\n";
