@@ -6,6 +6,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "lensim/render/materials/bxdf_arena.h"
 #include "lensim/render/materials/hair.h"
 #include "lensim/scene/builder.h"
 
@@ -76,7 +77,7 @@ std::shared_ptr<const BxDF> makeHairBxDF(const scene::Material& m, const Texture
   // convention mirrors the lobes about the fibre relative to a geometric cylinder; it shows only
   // where a fibre spans several pixels.
   const double h = -1 + 2 * ctx.uv.y;
-  return std::make_shared<HairBxDF>(h, eta, sigma_a, beta_m, beta_n, alpha);
+  return makeBxDF<HairBxDF>(h, eta, sigma_a, beta_m, beta_n, alpha);
 }
 
 }  // namespace lensim::render

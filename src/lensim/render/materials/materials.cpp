@@ -3,6 +3,7 @@
 // normal-incidence reflectance; a dielectric eta that varies with wavelength keeps only the
 // hero wavelength).
 #include "lensim/render/materials/materials.h"
+#include "lensim/render/materials/bxdf_arena.h"
 #include "lensim/render/materials/fourier.h"
 #include "lensim/render/materials/measured.h"
 #include "lensim/render/materials/measured_rgl.h"
@@ -158,7 +159,7 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
   auto reg = [&](double alpha) {
     return regularize && alpha < 0.3 ? std::clamp(2 * alpha, 0.1, 0.3) : alpha;
   };
-  if (material < 0) return std::make_shared<DiffuseBxDF>(SampledSpectrum(0.5));
+  if (material < 0) return makeBxDF<DiffuseBxDF>(SampledSpectrum(0.5));
   const scene::Material& m = scene_->materials[size_t(material)];
   const Textures& tx = *textures_;
   auto distribution = [&]() {
@@ -192,28 +193,28 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
   if (scene::isV3Kind(m.kind)) return makeV3BxDF(m, tx, ctx, lambda, regularize);
   switch (m.kind) {
     case K::Fourier:
-      return std::make_shared<FourierBxDF>(fourier_tables_[size_t(material)], lambda);
+      return makeBxDF<FourierBxDF>(fourier_tables_[size_t(material)], lambda);
     case K::Hair:
       return makeHairBxDF(m, tx, ctx, lambda);
     case K::Measured: {
       if (m.measured_rgl)
-        return std::make_shared<RGLMeasuredBxDF>(RGLMeasuredBRDF::loadCached(m.measured_file),
+        return makeBxDF<RGLMeasuredBxDF>(RGLMeasuredBRDF::loadCached(m.measured_file),
                                                  lambda);
-      return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
+      return makeBxDF<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
     }
     case K::Diffuse: {
       const SampledSpectrum r =
           clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo));
       const double sigma = tx.evalFloat(m.sigma, ctx);
-      if (sigma > 0) return std::make_shared<OrenNayarBxDF>(r, sigma);
-      return std::make_shared<DiffuseBxDF>(r);
+      if (sigma > 0) return makeBxDF<OrenNayarBxDF>(r, sigma);
+      return makeBxDF<DiffuseBxDF>(r);
     }
     case K::DiffuseTransmission: {
       const SampledSpectrum r =
           clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo)) * m.scale;
       const SampledSpectrum t =
           clampZero(tx.evalSpectrum(m.transmittance, ctx, lambda, SpectrumType::Albedo)) * m.scale;
-      return std::make_shared<DiffuseTransmissionBxDF>(r, t);
+      return makeBxDF<DiffuseTransmissionBxDF>(r, t);
     }
     case K::CoatedConductor: {
       auto [ceta, ck] = conductorIndex(m.conductor_has_reflectance, m.conductor_reflectance,
@@ -232,24 +233,24 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
       lp.g = tx.evalFloat(m.g, ctx);
       lp.max_depth = m.max_depth;
       lp.n_samples = m.n_samples;
-      return std::make_shared<CoatedBxDF>(
+      return makeBxDF<CoatedBxDF>(
           DielectricBxDF(eta, distribution()),
-          std::make_shared<ConductorBxDF>(TrowbridgeReitz(reg(cu), reg(cv)), ceta, ck), lp);
+          makeBxDF<ConductorBxDF>(TrowbridgeReitz(reg(cu), reg(cv)), ceta, ck), lp);
     }
     case K::Conductor: {
       const auto [eta, k] = conductorIndex(m.has_reflectance, m.reflectance, m.eta, m.k);
-      return std::make_shared<ConductorBxDF>(distribution(), eta, k);
+      return makeBxDF<ConductorBxDF>(distribution(), eta, k);
     }
     case K::Dielectric:
     case K::Subsurface: {  // subsurface: its boundary
       double eta = dielectricEta();
       if (eta == 0) eta = 1;
-      return std::make_shared<DielectricBxDF>(eta, distribution());
+      return makeBxDF<DielectricBxDF>(eta, distribution());
     }
     case K::ThinDielectric: {
       double eta = dielectricEta();
       if (eta == 0) eta = 1;
-      return std::make_shared<ThinDielectricBxDF>(eta);
+      return makeBxDF<ThinDielectricBxDF>(eta);
     }
     case K::CoatedDiffuse: {
       const SampledSpectrum r =
@@ -264,8 +265,8 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
       lp.g = tx.evalFloat(m.g, ctx);
       lp.max_depth = m.max_depth;
       lp.n_samples = m.n_samples;
-      return std::make_shared<CoatedBxDF>(DielectricBxDF(eta, distribution()),
-                                          std::make_shared<DiffuseBxDF>(r), lp);
+      return makeBxDF<CoatedBxDF>(DielectricBxDF(eta, distribution()),
+                                          makeBxDF<DiffuseBxDF>(r), lp);
     }
     case K::Mix:        // resolved before (resolve())
     case K::Interface:  // no BSDF: rays pass (isInterface())
@@ -278,7 +279,7 @@ std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalConte
     case K::Mirror:
       break;
   }
-  return std::make_shared<DiffuseBxDF>(SampledSpectrum(0.5));
+  return makeBxDF<DiffuseBxDF>(SampledSpectrum(0.5));
 }
 
 }  // namespace lensim::render

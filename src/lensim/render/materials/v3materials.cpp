@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lensim/render/materials/bxdf_arena.h"
 #include "lensim/render/materials/microfacet.h"
 #include "lensim/sampling/sampling.h"
 #include "lensim/scene/builder.h"
@@ -482,7 +483,7 @@ std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures&
     // mirror.cpp: SpecularReflection(Kr, FresnelNoOp).
     specular(albedo(m.kr), false, F::NoOp, 1.0);
   }
-  return std::make_shared<V3BSDF>(std::move(lobes));
+  return makeBxDF<V3BSDF>(std::move(lobes));
 }
 
 }  // namespace lensim::render
