@@ -118,6 +118,7 @@ class Builder {
   void integratorDirectLighting(ParamSet& ps, Integrator& it);
 
   void texture(const Directive& d);
+  void imageMapTexture(Texture& t, ParamSet& ps, const FileLoc& loc);  // build/textures.cpp
 
   Material material(const std::string& type, ParamSet& ps, const FileLoc& loc);
   HairParams hairMaterial(ParamSet& ps, const FileLoc& loc);  // build/hair.cpp
