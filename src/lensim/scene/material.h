@@ -185,9 +185,9 @@ enum class MaterialKind : uint8_t {
   Fourier,
 };
 static_assert(std::variant_size_v<MaterialParams> == size_t(MaterialKind::Fourier) + 1);
-static_assert(std::is_same_v<std::variant_alternative_t<size_t(MaterialKind::Fourier),
-                                                        MaterialParams>,
-                             FourierParams>);
+static_assert(
+    std::is_same_v<std::variant_alternative_t<size_t(MaterialKind::Fourier), MaterialParams>,
+                   FourierParams>);
 
 /// True for the pbrt-v3 kinds of render/materials/v3materials.h (plastic ... mirror).
 inline bool isV3Kind(MaterialKind k) {

@@ -36,7 +36,8 @@ double MaterialEvalContext::dielectricEta(const scene::Input& eta) const {
 
 std::pair<SampledSpectrum, SampledSpectrum> MaterialEvalContext::conductorIndex(
     const scene::ConductorIndex& c) const {
-  if (c.has_reflectance) return {SampledSpectrum(1.0), conductorKFromReflectance(albedo(c.reflectance))};
+  if (c.has_reflectance)
+    return {SampledSpectrum(1.0), conductorKFromReflectance(albedo(c.reflectance))};
   return {unbounded(c.eta), unbounded(c.k)};
 }
 

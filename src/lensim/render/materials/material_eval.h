@@ -63,8 +63,7 @@ std::shared_ptr<const BxDF> bxdfOf(const scene::HairParams& p, const MaterialEva
 std::shared_ptr<const BxDF> bxdfOf(const scene::PlasticParams& p, const MaterialEvalContext& c);
 std::shared_ptr<const BxDF> bxdfOf(const scene::SubstrateParams& p, const MaterialEvalContext& c);
 std::shared_ptr<const BxDF> bxdfOf(const scene::UberParams& p, const MaterialEvalContext& c);
-std::shared_ptr<const BxDF> bxdfOf(const scene::TranslucentParams& p,
-                                   const MaterialEvalContext& c);
+std::shared_ptr<const BxDF> bxdfOf(const scene::TranslucentParams& p, const MaterialEvalContext& c);
 std::shared_ptr<const BxDF> bxdfOf(const scene::GlassParams& p, const MaterialEvalContext& c);
 std::shared_ptr<const BxDF> bxdfOf(const scene::MetalParams& p, const MaterialEvalContext& c);
 std::shared_ptr<const BxDF> bxdfOf(const scene::MirrorParams& p, const MaterialEvalContext& c);

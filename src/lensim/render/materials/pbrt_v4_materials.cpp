@@ -44,8 +44,7 @@ std::shared_ptr<const BxDF> bxdfOf(const scene::ConductorParams& p, const Materi
   return makeBxDF<ConductorBxDF>(c.distribution(p.roughness), eta, k);
 }
 
-std::shared_ptr<const BxDF> bxdfOf(const scene::DielectricParams& p,
-                                   const MaterialEvalContext& c) {
+std::shared_ptr<const BxDF> bxdfOf(const scene::DielectricParams& p, const MaterialEvalContext& c) {
   return makeBxDF<DielectricBxDF>(c.dielectricEta(p.eta), c.distribution(p.roughness));
 }
 
@@ -60,8 +59,7 @@ std::shared_ptr<const BxDF> bxdfOf(const scene::DiffuseTransmissionParams& p,
                                            c.albedo(p.transmittance) * p.scale);
 }
 
-std::shared_ptr<const BxDF> bxdfOf(const scene::SubsurfaceParams& p,
-                                   const MaterialEvalContext& c) {
+std::shared_ptr<const BxDF> bxdfOf(const scene::SubsurfaceParams& p, const MaterialEvalContext& c) {
   return makeBxDF<DielectricBxDF>(c.dielectricEta(p.eta), c.distribution(p.roughness));
 }
 

@@ -48,10 +48,10 @@ struct MaterialReader {
   }
   /// eta and k spectra (copper by default).
   std::pair<Input, Input> conductorEtaK(const char* eta_name, const char* k_name) {
-    return {b.spectrumInput(ps, {eta_name})
-                .value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-eta")}),
-            b.spectrumInput(ps, {k_name})
-                .value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-k")})};
+    return {
+        b.spectrumInput(ps, {eta_name})
+            .value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-eta")}),
+        b.spectrumInput(ps, {k_name}).value_or(Input{-1, 0, SpectrumValue::named("metal-Cu-k")})};
   }
   LayerInputs layer() {
     LayerInputs l;
@@ -151,7 +151,8 @@ struct MaterialReader {
     const std::string& name = f->strings[0];
     MeasuredParams m;
     m.file = b.resolve(name, f->loc, "measured BRDF file");
-    m.rgl = name.ends_with(".bsdf") || fileStartsWith(m.file, std::string_view("tensor_file\0", 12));
+    m.rgl =
+        name.ends_with(".bsdf") || fileStartsWith(m.file, std::string_view("tensor_file\0", 12));
     if (!m.rgl && !name.ends_with(".brdf"))
       ps.fail(*f,
               "expected an RGL measured BSDF (a .bsdf tensor file) or a pbrt-v2 irregular "
@@ -257,7 +258,8 @@ Material Builder::material(const std::string& type, ParamSet& ps, const FileLoc&
   m.displacement = floatInput(ps, {"displacement", "bumpmap"});  // bump mapping
   if (const Param* nm = ps.find({"normalmap"}, {ParamType::String}))
     if (!nm->strings[0].empty()) m.normal_map = resolve(nm->strings[0], nm->loc, "normal map");
-  auto it = std::find_if(kKinds.begin(), kKinds.end(), [&](const Kind& k) { return k.name == type; });
+  auto it =
+      std::find_if(kKinds.begin(), kKinds.end(), [&](const Kind& k) { return k.name == type; });
   if (it != kKinds.end()) {
     MaterialReader reader{*this, type, ps, loc};
     m.params = (reader.*(it->read))();

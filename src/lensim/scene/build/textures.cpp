@@ -24,8 +24,8 @@ void readMapping(Texture& t, ParamSet& ps) {
 // spectrum texture; 3-D mapping by the inverse of the declaration's transform.
 void noiseTexture(Texture& t, ParamSet& ps, const FileLoc& loc, bool is_float) {
   if ((t.type == "marble") == is_float)
-    throw Error(loc, fmt::format("texture \"{}\": \"{}\" is a {} texture in pbrt", t.name,
-                                 t.type, is_float ? "spectrum" : "float"));
+    throw Error(loc, fmt::format("texture \"{}\": \"{}\" is a {} texture in pbrt", t.name, t.type,
+                                 is_float ? "spectrum" : "float"));
   if (t.type != "windy") {
     t.octaves = ps.getInt({"octaves"}, 8);
     t.omega = ps.getFloat({"roughness"}, 0.5);
