@@ -248,24 +248,25 @@ Material "hair" "float pheomelanin" 0.5 "float eta" 1.4 "float alpha" 0
 Shape "sphere"
 )");
   ASSERT_EQ(testutil::errorsOf(s), "");
-  using A = scene::Material::HairAbsorption;
+  using A = scene::HairParams::Absorption;
+  auto hair = [&](size_t i) -> const scene::HairParams& { return s.materials[i].as<scene::HairParams>(); };
   ASSERT_GE(s.materials.size(), 5u);
   const auto& m = s.materials;
   EXPECT_EQ(m[0].type, "hair");
-  EXPECT_EQ(m[0].hair_absorption, A::Melanin);
-  EXPECT_EQ(m[0].hair_eumelanin.value, 1.3);  // pbrt-v4's default
-  EXPECT_EQ(m[0].eta.value, 1.55);
-  EXPECT_EQ(m[0].hair_beta_m.value, 0.3);
-  EXPECT_EQ(m[0].hair_beta_n.value, 0.3);
-  EXPECT_EQ(m[0].hair_alpha.value, 2);
-  EXPECT_EQ(m[1].hair_absorption, A::SigmaA);
-  EXPECT_EQ(m[2].hair_absorption, A::Reflectance);  // pbrt-v3's "color"
-  EXPECT_EQ(m[2].hair_beta_m.value, 0.5);
-  EXPECT_EQ(m[3].hair_absorption, A::Reflectance);
-  EXPECT_EQ(m[4].hair_absorption, A::Melanin);
-  EXPECT_EQ(m[4].hair_eumelanin.value, 0);
-  EXPECT_EQ(m[4].hair_pheomelanin.value, 0.5);
-  EXPECT_EQ(m[4].eta.value, 1.4);
+  EXPECT_EQ(hair(0).absorption, A::Melanin);
+  EXPECT_EQ(hair(0).eumelanin.value, 1.3);  // pbrt-v4's default
+  EXPECT_EQ(hair(0).eta.value, 1.55);
+  EXPECT_EQ(hair(0).beta_m.value, 0.3);
+  EXPECT_EQ(hair(0).beta_n.value, 0.3);
+  EXPECT_EQ(hair(0).alpha.value, 2);
+  EXPECT_EQ(hair(1).absorption, A::SigmaA);
+  EXPECT_EQ(hair(2).absorption, A::Reflectance);  // pbrt-v3's "color"
+  EXPECT_EQ(hair(2).beta_m.value, 0.5);
+  EXPECT_EQ(hair(3).absorption, A::Reflectance);
+  EXPECT_EQ(hair(4).absorption, A::Melanin);
+  EXPECT_EQ(hair(4).eumelanin.value, 0);
+  EXPECT_EQ(hair(4).pheomelanin.value, 0.5);
+  EXPECT_EQ(hair(4).eta.value, 1.4);
   int ignored = 0;
   for (const Diagnostic& d : s.diagnostics) {
     EXPECT_EQ(d.message.find("not rendered"), std::string::npos) << d.str();

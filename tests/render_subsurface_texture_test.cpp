@@ -262,12 +262,12 @@ Shape "sphere"
 )");
   ASSERT_EQ(testutil::errorsOf(s), "");
   ASSERT_EQ(s.materials.size(), 2u);
-  EXPECT_TRUE(s.materials[0].ss_from_reflectance);
-  EXPECT_GE(s.materials[0].ss_reflectance.texture, 0);
-  EXPECT_GE(s.materials[0].ss_mfp.texture, 0);
-  EXPECT_GE(s.materials[1].ss_sigma_a.texture, 0);
-  EXPECT_EQ(s.materials[1].ss_sigma_s.texture, -1);
-  EXPECT_EQ(s.materials[1].ss_sigma_s.spectrum.rgb.z, 3);
+  EXPECT_TRUE(s.materials[0].as<scene::SubsurfaceParams>().from_reflectance);
+  EXPECT_GE(s.materials[0].as<scene::SubsurfaceParams>().reflectance.texture, 0);
+  EXPECT_GE(s.materials[0].as<scene::SubsurfaceParams>().mfp.texture, 0);
+  EXPECT_GE(s.materials[1].as<scene::SubsurfaceParams>().sigma_a.texture, 0);
+  EXPECT_EQ(s.materials[1].as<scene::SubsurfaceParams>().sigma_s.texture, -1);
+  EXPECT_EQ(s.materials[1].as<scene::SubsurfaceParams>().sigma_s.spectrum.rgb.z, 3);
   EXPECT_EQ(testutil::errorsOf(testutil::buildText(R"(WorldBegin
 Texture "f" "float" "checkerboard"
 Material "subsurface" "texture reflectance" "f"

@@ -146,7 +146,7 @@ TEST(SharedScenes, DofDragonsDgaussSummary) {
   EXPECT_EQ(s.textures[1].tex2.spectrum.rgb, (Vec3{0.5, 0.5, 0.5}));
   const Shape& floor = s.shapes[1];
   EXPECT_EQ(floor.type, ShapeType::TriangleMesh);
-  EXPECT_EQ(s.materials[static_cast<size_t>(floor.material)].reflectance.texture, 1);
+  EXPECT_EQ(s.materials[static_cast<size_t>(floor.material)].as<DiffuseParams>().reflectance.texture, 1);
   EXPECT_EQ(s.meshes[static_cast<size_t>(floor.mesh)].uvs.size(), 4u);
   // The legacy realistic camera, in millimetres.
   ASSERT_TRUE(s.camera.legacy_realistic);
@@ -183,8 +183,9 @@ TEST(SharedScenes, Hw3MeasuredMaterialsAreBuilt) {
   for (const Material& m : s.materials)
     if (m.type == "measured") {
       ++measured;
-      EXPECT_TRUE(m.measured_file.ends_with(".brdf"));
-      EXPECT_TRUE(std::filesystem::exists(m.measured_file)) << m.measured_file;
+      const MeasuredParams& p = m.as<MeasuredParams>();
+      EXPECT_TRUE(p.file.ends_with(".brdf"));
+      EXPECT_TRUE(std::filesystem::exists(p.file)) << p.file;
     }
   EXPECT_EQ(measured, 5);
   EXPECT_EQ(s.instances.size(), 16u);
@@ -207,8 +208,8 @@ TEST(SharedScenes, BoxDgaussV4RealisticCamera) {
   for (const Material& m : s.materials)
     if (m.type == "conductor") {
       ++conductors;
-      EXPECT_EQ(m.eta.spectrum.name, "metal-Au-eta");
-      EXPECT_EQ(m.uroughness.value, 0.1);
+      EXPECT_EQ(m.as<ConductorParams>().index.eta.spectrum.name, "metal-Au-eta");
+      EXPECT_EQ(m.as<ConductorParams>().roughness.u.value, 0.1);
     }
   EXPECT_EQ(conductors, 1);
 }
@@ -241,19 +242,19 @@ TEST(Params, RenamedParametersAreAcceptedUnderTheirOldNames) {
   EXPECT_EQ(testutil::errorsOf(s), "");
   ASSERT_EQ(s.materials.size(), 6u);
   EXPECT_EQ(s.materials[0].type, "diffuse");
-  EXPECT_EQ(s.materials[0].reflectance.spectrum.rgb, (Vec3{.1, .2, .3}));
+  EXPECT_EQ(s.materials[0].as<DiffuseParams>().reflectance.spectrum.rgb, (Vec3{.1, .2, .3}));
   // pbrt-v3's materials keep their names and are rendered as pbrt-v3 defines them.
   EXPECT_EQ(s.materials[1].type, "plastic");
-  EXPECT_EQ(s.materials[1].uroughness.value, 0.2);
-  EXPECT_EQ(s.materials[1].specular.spectrum.rgb, (Vec3{.1, .1, .1}));
+  EXPECT_EQ(s.materials[1].as<PlasticParams>().roughness.u.value, 0.2);
+  EXPECT_EQ(s.materials[1].as<PlasticParams>().ks.spectrum.rgb, (Vec3{.1, .1, .1}));
   EXPECT_EQ(s.materials[2].type, "uber");
-  EXPECT_EQ(s.materials[2].reflectance.spectrum.rgb, (Vec3{.5, .5, .5}));
+  EXPECT_EQ(s.materials[2].as<UberParams>().kd.spectrum.rgb, (Vec3{.5, .5, .5}));
   EXPECT_EQ(s.materials[3].type, "glass");
-  EXPECT_EQ(s.materials[3].eta.value, 1.7);
+  EXPECT_EQ(s.materials[3].as<GlassParams>().eta.value, 1.7);
   EXPECT_EQ(s.materials[4].type, "metal");
-  EXPECT_EQ(s.materials[4].k.spectrum.name, "metal-Ag-k");
+  EXPECT_EQ(s.materials[4].as<MetalParams>().k.spectrum.name, "metal-Ag-k");
   EXPECT_EQ(s.materials[5].type, "mirror");
-  EXPECT_EQ(s.materials[5].kr.spectrum.rgb, (Vec3{.8, .8, .8}));
+  EXPECT_EQ(s.materials[5].as<MirrorParams>().kr.spectrum.rgb, (Vec3{.8, .8, .8}));
   ASSERT_EQ(s.lights.size(), 2u);
   EXPECT_EQ(s.lights[0].type, "diffuse");
   EXPECT_EQ(s.lights[0].emission.rgb, (Vec3{1, 2, 3}));
@@ -460,7 +461,7 @@ TEST(Builder, TexturesOfAllKinds) {
   EXPECT_EQ(t.textures[1].tex2.texture, 0);
   EXPECT_TRUE(t.textures[1].scale_is_float);
   EXPECT_EQ(t.textures[2].amount.texture, 0);
-  EXPECT_EQ(t.materials[0].reflectance.texture, 2);
+  EXPECT_EQ(t.materials[0].as<DiffuseParams>().reflectance.texture, 2);
 }
 
 TEST(Builder, DefaultsFollowTheSyntaxVersion) {
@@ -597,7 +598,7 @@ TEST(Builder, AlphaTexturesAndNamedMaterials) {
   EXPECT_EQ(s.shapes[0].alpha->texture, 0);
   const Material& m = s.materials[static_cast<size_t>(s.shapes[0].material)];
   EXPECT_EQ(m.name, "glass");
-  EXPECT_EQ(m.eta.spectrum.name, "glass-BK7");
+  EXPECT_EQ(m.as<DielectricParams>().eta.spectrum.name, "glass-BK7");
   Scene bad = testutil::buildText(
       "WorldBegin\nMakeNamedMaterial \"x\" \"rgb reflectance\" [1 1 1]\n", "n.pbrt");
   EXPECT_EQ(testutil::errorsOf(bad),

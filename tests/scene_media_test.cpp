@@ -273,29 +273,30 @@ Shape "sphere"
   ASSERT_EQ(s.materials.size(), 4u);
   const scene::Material& a = s.materials[0];
   EXPECT_EQ(a.type, "subsurface");
-  EXPECT_EQ(a.ss_name, "Skin1");
+  const scene::SubsurfaceParams& ap = a.as<scene::SubsurfaceParams>();
+  EXPECT_EQ(ap.preset, "Skin1");
   scene::SpectrumValue sa, ss;
   ASSERT_TRUE(scene::mediumPreset("Skin1", sa, ss));
-  EXPECT_EQ(a.ss_sigma_a.spectrum.rgb, sa.rgb);
-  EXPECT_EQ(a.ss_sigma_s.spectrum.rgb, ss.rgb);
-  EXPECT_EQ(a.ss_g, 0);  // forced to 0 with a named medium, with a warning
-  EXPECT_EQ(a.scale, 10);
-  EXPECT_EQ(a.eta.value, 1.33);  // pbrt-v4's default
+  EXPECT_EQ(ap.sigma_a.spectrum.rgb, sa.rgb);
+  EXPECT_EQ(ap.sigma_s.spectrum.rgb, ss.rgb);
+  EXPECT_EQ(ap.g, 0);  // forced to 0 with a named medium, with a warning
+  EXPECT_EQ(ap.scale, 10);
+  EXPECT_EQ(ap.eta.value, 1.33);  // pbrt-v4's default
   bool warned = false;
   for (const Diagnostic& d : s.diagnostics)
     warned = warned || d.message.find("\"g\" is ignored") != std::string::npos;
   EXPECT_TRUE(warned);
-  const scene::Material& b = s.materials[1];
-  EXPECT_EQ(b.ss_sigma_s.spectrum.rgb.z, 3);
-  EXPECT_EQ(b.ss_g, 0.3);
+  const scene::SubsurfaceParams& b = s.materials[1].as<scene::SubsurfaceParams>();
+  EXPECT_EQ(b.sigma_s.spectrum.rgb.z, 3);
+  EXPECT_EQ(b.g, 0.3);
   EXPECT_EQ(b.eta.value, 1.5);
-  EXPECT_EQ(b.uroughness.value, 0.2);
-  const scene::Material& c = s.materials[2];
-  EXPECT_TRUE(c.ss_from_reflectance);
-  EXPECT_EQ(c.ss_reflectance.spectrum.rgb.x, 0.8);
-  EXPECT_EQ(c.ss_mfp.spectrum.rgb.z, 3);
+  EXPECT_EQ(b.roughness.u.value, 0.2);
+  const scene::SubsurfaceParams& c = s.materials[2].as<scene::SubsurfaceParams>();
+  EXPECT_TRUE(c.from_reflectance);
+  EXPECT_EQ(c.reflectance.spectrum.rgb.x, 0.8);
+  EXPECT_EQ(c.mfp.spectrum.rgb.z, 3);
   const scene::Material& d = s.materials[3];  // whole milk, as pbrt-v4's default
-  EXPECT_EQ(d.ss_sigma_s.spectrum.rgb.x, 2.55);
+  EXPECT_EQ(d.as<scene::SubsurfaceParams>().sigma_s.spectrum.rgb.x, 2.55);
   EXPECT_FALSE(d.fallback);
   EXPECT_EQ(errorsOf(buildText(R"(WorldBegin
 Material "subsurface" "string name" "Skim milk"

@@ -39,7 +39,7 @@ TEST(Parity, GzipCompressedSceneAndInclude) {
   EXPECT_EQ(s.shapes[1].type, ShapeType::Disk);
   EXPECT_EQ(s.film.x_resolution, 16);
   ASSERT_EQ(s.materials.size(), 2u);  // the sphere's and the default one of the disk
-  EXPECT_EQ(s.materials[0].reflectance.spectrum.rgb.y, 0.4);
+  EXPECT_EQ(s.materials[0].as<DiffuseParams>().reflectance.spectrum.rgb.y, 0.4);
   // Locations name the compressed file the directive came from.
   EXPECT_NE(s.shapes[0].loc.file.find("gz_geometry.pbrt.gz"), std::string::npos);
   EXPECT_EQ(s.shapes[0].loc.line, 4);
@@ -95,8 +95,8 @@ TEST(Parity, DuplicatedParameterTheLastOneWins) {
   EXPECT_DOUBLE_EQ(s.shapes[0].radius, 2);
   EXPECT_DOUBLE_EQ(s.shapes[1].radius, 4);
   const Material& m = s.materials.at(static_cast<size_t>(s.shapes[1].material));
-  EXPECT_EQ(m.reflectance.spectrum.rgb.x, 0.5);
-  EXPECT_EQ(m.reflectance.spectrum.rgb.z, 0.125);
+  EXPECT_EQ(m.as<DiffuseParams>().reflectance.spectrum.rgb.x, 0.5);
+  EXPECT_EQ(m.as<DiffuseParams>().reflectance.spectrum.rgb.z, 0.125);
 }
 
 TEST(Parity, DuplicateWithAnotherTypeWarnsAndUsesTheLastOne) {

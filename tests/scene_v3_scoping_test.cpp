@@ -43,7 +43,7 @@ TEST(NamedMaterialScope, PbrtV3BlocksKeepTheirOwnDefinitions) {
   ASSERT_TRUE(s.legacy_syntax);
   ASSERT_EQ(s.shapes.size(), 2u) << testutil::errorsOf(s);
   EXPECT_EQ(materialOf(s, 0).type_as_written, "matte");
-  EXPECT_EQ(materialOf(s, 0).reflectance.spectrum.rgb, (Vec3{1, 0, 0}));
+  EXPECT_EQ(materialOf(s, 0).as<DiffuseParams>().reflectance.spectrum.rgb, (Vec3{1, 0, 0}));
   EXPECT_EQ(materialOf(s, 1).type_as_written, "mirror");
   EXPECT_FALSE(hasWarning(s, "redefined"));
 }
@@ -107,6 +107,6 @@ TEST(NamedMaterialScope, PbrtV3MixUsesTheScope) {
       "Shape \"sphere\"\nWorldEnd\n");
   ASSERT_EQ(s.shapes.size(), 1u) << testutil::errorsOf(s);
   const Material& mix = materialOf(s, 0);
-  EXPECT_EQ(s.materials[size_t(mix.mix[0])].type_as_written, "mirror");
-  EXPECT_EQ(s.materials[size_t(mix.mix[1])].type_as_written, "metal");
+  EXPECT_EQ(s.materials[size_t(mix.as<MixParams>().materials[0])].type_as_written, "mirror");
+  EXPECT_EQ(s.materials[size_t(mix.as<MixParams>().materials[1])].type_as_written, "metal");
 }

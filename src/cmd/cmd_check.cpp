@@ -36,8 +36,8 @@ void registerCheckCommand(CLI::App& app, Action& action) {
       // RGL measured BSDF files are read as the renderer will (cheap: no table is fitted), so
       // that check reports a truncated or corrupt one.
       for (const scene::Material& m : s.materials)
-        if (m.type == "measured" && m.measured_rgl)
-          (void)render::RGLMeasuredBRDF::loadCached(m.measured_file);
+        if (const auto* measured = std::get_if<scene::MeasuredParams>(&m.params))
+          if (measured->rgl) (void)render::RGLMeasuredBRDF::loadCached(measured->file);
       std::string text = opts->format ? scene::formatPbrtV4(desc) : scene::summary(s);
       // A realistic camera is set up as the renderer will (lens file, focus, pupil bounds), so
       // that check reports a bad lens or an unreachable focus too.

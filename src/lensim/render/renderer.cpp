@@ -211,7 +211,7 @@ SceneContext sceneContext(const scene::Scene& scene, const RenderWorld& world,
   sc.pbrt_v2_epsilon = pbrt_v2_quirks;
   sc.camera_from_world = scene.camera.camera_from_world;
   for (const scene::Material& m : scene.materials)
-    sc.has_interfaces = sc.has_interfaces || m.kind == scene::MaterialKind::Interface;
+    sc.has_interfaces = sc.has_interfaces || m.kind() == scene::MaterialKind::Interface;
   for (const scene::Shape& s : scene.shapes) sc.has_alpha = sc.has_alpha || s.alpha.has_value();
   return sc;
 }

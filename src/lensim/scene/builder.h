@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "lensim/scene/curves.h"
+#include "lensim/scene/material.h"
 #include "lensim/scene/parser.h"
 #include "lensim/util/animated_transform.h"
 #include "lensim/scene/sensor_config.h"
@@ -25,38 +26,6 @@
 #include "lensim/util/vec.h"
 
 namespace lensim::scene {
-
-/// A colour or spectral distribution as written in the scene.
-struct SpectrumValue {
-  enum class Kind { Rgb, Blackbody, Sampled, Named, File };
-  Kind kind = Kind::Rgb;
-  Vec3 rgb{0, 0, 0};                               ///< Kind::Rgb
-  double temperature_k = 0;                        ///< Kind::Blackbody
-  double blackbody_scale = 1;                      ///< pbrt-v3's second blackbody value
-  std::vector<std::pair<double, double>> samples;  ///< Kind::Sampled: (wavelength nm, value)
-  std::string name;  ///< Kind::Named: pbrt-v4 spectrum name; Kind::File: the resolved path
-
-  static SpectrumValue gray(double v) {
-    SpectrumValue s;
-    s.rgb = {v, v, v};
-    return s;
-  }
-  static SpectrumValue named(std::string n) {
-    SpectrumValue s;
-    s.kind = Kind::Named;
-    s.name = std::move(n);
-    return s;
-  }
-  /// pbrt-v4 syntax of the value: `rgb [0.5 0.5 0.5]`, `blackbody 6500`, ...
-  std::string str() const;
-};
-
-/// A texturable material or texture input: a texture (index into Scene::textures) or a constant.
-struct Input {
-  int texture = -1;        ///< index into Scene::textures, or -1 for the constant
-  double value = 0;        ///< the constant of a float input
-  SpectrumValue spectrum;  ///< the constant of a spectrum input
-};
 
 /// Texture value kind, as in pbrt's `Texture "name" "float"|"spectrum" ...`.
 enum class TextureKind { Float, Spectrum };
@@ -96,96 +65,6 @@ struct Texture {
   int octaves = 8;
   double omega = 0.5, variation = 0.2;
   Input v00, v01, v10, v11;
-};
-
-/// The material lensim renders, decided once when the scene is built (Material::kind, from
-/// Material::type), so that shading switches on it instead of comparing type names per hit.
-enum class MaterialKind : uint8_t {
-  Diffuse,
-  CoatedDiffuse,
-  CoatedConductor,
-  Conductor,
-  Dielectric,
-  ThinDielectric,
-  DiffuseTransmission,
-  Mix,
-  Interface,
-  Subsurface,
-  Measured,
-  Hair,
-  // pbrt-v3 materials, rendered as pbrt-v3 defines them (render/materials/v3materials.h).
-  Plastic,
-  Substrate,
-  Uber,
-  Translucent,
-  Glass,
-  Metal,
-  Mirror,
-  Fourier,
-};
-/// The kind of a Material::type name; nullopt for a name lensim does not render.
-std::optional<MaterialKind> materialKindOf(std::string_view type);
-/// True for the pbrt-v3 kinds of render/materials/v3materials.h (plastic ... mirror).
-inline bool isV3Kind(MaterialKind k) {
-  return k >= MaterialKind::Plastic && k <= MaterialKind::Mirror;
-}
-
-/// A material description. `type` is the pbrt-v4 material lensim renders: diffuse,
-/// coateddiffuse, coatedconductor, conductor, dielectric, thindielectric, diffusetransmission,
-/// hair, mix, interface; or a pbrt-v3 one rendered as pbrt-v3 does: plastic, substrate, uber,
-/// translucent, glass, metal, mirror, fourier.
-struct Material {
-  std::string name;  ///< set for MakeNamedMaterial
-  std::string type;
-  MaterialKind kind = MaterialKind::Diffuse;  ///< `type`, decided by the builder
-  std::string type_as_written;
-  FileLoc loc;
-  Input reflectance;  ///< spectrum: diffuse, coateddiffuse; conductor when given
-  bool has_reflectance = false;
-  Input uroughness, vroughness;  ///< float (roughness; 0 = smooth)
-  bool remap_roughness = true;
-  Input eta;  ///< dielectric: float in `value`; conductor: spectrum
-  Input k;    ///< conductor absorption (spectrum)
-  // coateddiffuse: coat thickness (scene units), medium albedo and asymmetry g, random walk.
-  Input thickness, albedo, g;
-  int max_depth = 10, n_samples = 1;
-  Input sigma;  ///< diffuse (pbrt-v1–v3 matte): Oren–Nayar facet slope deviation, degrees
-  // diffusetransmission: reflectance above, transmittance here, both times `scale`.
-  Input transmittance;
-  double scale = 1;
-  // coatedconductor: the conductor under the coat (the coat uses uroughness/vroughness, eta).
-  Input conductor_eta, conductor_k, conductor_reflectance;
-  bool conductor_has_reflectance = false;
-  Input conductor_uroughness, conductor_vroughness;
-  // mix: the two materials (indices into Scene::materials) and the float amount (probability
-  // of the second).
-  std::array<int, 2> mix{-1, -1};
-  Input amount;
-  std::optional<Input> displacement;
-  std::string normal_map;     ///< resolved path
-  std::string measured_file;  ///< measured: resolved `filename` (.brdf or RGL .bsdf data);
-                              ///< fourier: resolved `bsdffile` (pbrt-v3 tabulated BSDF)
-  bool measured_rgl = false;  ///< measured: an RGL .bsdf tensor file (else pbrt-v2 .brdf text)
-  // pbrt-v3 materials rendered as pbrt-v3 defines them (type plastic, substrate, uber,
-  // translucent, glass, metal, mirror; render/v3materials.h): Ks, Kr, Kt, opacity and
-  // translucent's "reflect" (its "transmit" is `transmittance`; Kd is `reflectance`).
-  Input specular, kr, kt, opacity, v3_reflect;
-  // subsurface (pbrt-v4's SubsurfaceMaterial; the boundary is a dielectric of `eta` and
-  // roughness): sigma_a and sigma_s (1/scene unit, times `scale`), from `name` (a measured
-  // medium, g 0) or given; or `reflectance` with the mean free path `mfp`. Each a constant or
-  // a spectrum texture, evaluated where a path enters the shape (render/media/subsurface.h).
-  Input ss_sigma_a, ss_sigma_s, ss_reflectance, ss_mfp;
-  bool ss_from_reflectance = false;
-  std::string ss_name;
-  double ss_g = 0;
-  // hair (pbrt-v4's HairMaterial, render/materials/hair.h): the absorption from one of sigma_a,
-  // `reflectance` above, or the melanin concentrations; `eta` (float), beta_m, beta_n and
-  // alpha (degrees).
-  enum class HairAbsorption { SigmaA, Reflectance, Melanin };
-  HairAbsorption hair_absorption = HairAbsorption::Melanin;
-  Input hair_sigma_a, hair_eumelanin, hair_pheomelanin, hair_beta_m, hair_beta_n, hair_alpha;
-  /// The type in the file is not rendered; the material renders as diffuse grey 0.5.
-  bool fallback = false;
 };
 
 /// Kinds of shape lensim builds; meshes live in Scene::meshes.

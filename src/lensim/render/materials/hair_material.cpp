@@ -1,13 +1,15 @@
-#include "lensim/render/materials/hair_material.h"
-
+// The "hair" material's BxDF at a surface point (pbrt-v4's HairMaterial::GetBxDF,
+// src/pbrt/materials.h): the textures evaluated, beta_m and beta_n clamped to [0.01, 1], the
+// absorption from sigma_a, the reflectance or the melanin concentrations, and h = -1 + 2 v.
 #include <algorithm>
 #include <map>
 #include <mutex>
 #include <unordered_map>
 #include <utility>
 
+#include "lensim/render/materials/bxdf_arena.h"
 #include "lensim/render/materials/hair.h"
-#include "lensim/scene/builder.h"
+#include "lensim/render/materials/material_eval.h"
 
 namespace lensim::render {
 
@@ -46,28 +48,25 @@ SampledSpectrum melaninSigmaA(double ce, double cp, bool constant,
 
 }  // namespace
 
-std::shared_ptr<const BxDF> makeHairBxDF(const scene::Material& m, const Textures& tx,
-                                         const TextureEvalContext& ctx,
-                                         const SampledWavelengths& lambda) {
-  const double beta_m = std::clamp(tx.evalFloat(m.hair_beta_m, ctx), 1e-2, 1.0);
-  const double beta_n = std::clamp(tx.evalFloat(m.hair_beta_n, ctx), 1e-2, 1.0);
-  const double alpha = tx.evalFloat(m.hair_alpha, ctx);
-  const double eta = tx.evalFloat(m.eta, ctx);
+std::shared_ptr<const BxDF> bxdfOf(const scene::HairParams& p, const MaterialEvalContext& c) {
+  const double beta_m = std::clamp(c.evalFloat(p.beta_m), 1e-2, 1.0);
+  const double beta_n = std::clamp(c.evalFloat(p.beta_n), 1e-2, 1.0);
+  const double alpha = c.evalFloat(p.alpha);
+  const double eta = c.evalFloat(p.eta);
   SampledSpectrum sigma_a;
-  using A = scene::Material::HairAbsorption;
-  switch (m.hair_absorption) {
+  using A = scene::HairParams::Absorption;
+  switch (p.absorption) {
     case A::SigmaA:
-      sigma_a = clampZero(tx.evalSpectrum(m.hair_sigma_a, ctx, lambda, SpectrumType::Unbounded));
+      sigma_a = clampZero(c.unbounded(p.sigma_a));
       break;
     case A::Reflectance:
       sigma_a = HairBxDF::sigmaAFromReflectance(
-          tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo), beta_n);
+          c.tx.evalSpectrum(p.reflectance, c.ctx, c.lambda, SpectrumType::Albedo), beta_n);
       break;
     case A::Melanin:
-      sigma_a =
-          melaninSigmaA(std::max(0.0, tx.evalFloat(m.hair_eumelanin, ctx)),
-                        std::max(0.0, tx.evalFloat(m.hair_pheomelanin, ctx)),
-                        m.hair_eumelanin.texture < 0 && m.hair_pheomelanin.texture < 0, lambda);
+      sigma_a = melaninSigmaA(std::max(0.0, c.evalFloat(p.eumelanin)),
+                              std::max(0.0, c.evalFloat(p.pheomelanin)),
+                              p.eumelanin.texture < 0 && p.pheomelanin.texture < 0, c.lambda);
       break;
   }
   // The offset across the fibre from the surface's v (pbrt-v4: h = -1 + 2 uv[1]; for curves v
@@ -75,8 +74,8 @@ std::shared_ptr<const BxDF> makeHairBxDF(const scene::Material& m, const Texture
   // although by the model's geometry (R leaves at phi_o - 2 gamma_o, h = sin gamma_o) this side
   // convention mirrors the lobes about the fibre relative to a geometric cylinder; it shows only
   // where a fibre spans several pixels.
-  const double h = -1 + 2 * ctx.uv.y;
-  return std::make_shared<HairBxDF>(h, eta, sigma_a, beta_m, beta_n, alpha);
+  const double h = -1 + 2 * c.ctx.uv.y;
+  return makeBxDF<HairBxDF>(h, eta, sigma_a, beta_m, beta_n, alpha);
 }
 
 }  // namespace lensim::render

@@ -1,11 +1,9 @@
-// BxDFs from material descriptions with pbrt-v4's parameter semantics (roughness remapped by
-// sqrt unless remaproughness is false; conductor "reflectance" means eta = 1 and k from the
-// normal-incidence reflectance; a dielectric eta that varies with wavelength keeps only the
-// hero wavelength).
+// Materials at render time: normal and bump maps, mix resolution, and the BxDF of each material
+// kind (made by the kind's bxdfOf, material_eval.h).
 #include "lensim/render/materials/materials.h"
+#include "lensim/render/materials/bxdf_arena.h"
 #include "lensim/render/materials/fourier.h"
-#include "lensim/render/materials/measured.h"
-#include "lensim/render/materials/measured_rgl.h"
+#include "lensim/render/materials/material_eval.h"
 
 #include <fmt/format.h>
 
@@ -16,9 +14,6 @@
 #include <utility>
 
 #include "lensim/io/image.h"
-#include "lensim/render/materials/hair_material.h"
-#include "lensim/render/materials/layered.h"
-#include "lensim/render/materials/v3materials.h"
 #include "lensim/sampling/sampling.h"
 #include "lensim/scene/builder.h"
 #include "lensim/util/error.h"
@@ -37,9 +32,9 @@ Materials::Materials(const scene::Scene& scene, const Textures& textures)
   std::map<std::string, std::shared_ptr<NormalMap>> loaded;
   for (size_t i = 0; i < scene.materials.size(); ++i) {
     const scene::Material& m = scene.materials[i];
-    if (m.kind == scene::MaterialKind::Fourier) {
+    if (m.kind() == scene::MaterialKind::Fourier) {
       try {
-        fourier_tables_[i] = FourierBSDFTable::loadCached(m.measured_file);
+        fourier_tables_[i] = FourierBSDFTable::loadCached(m.as<scene::FourierParams>().file);
       } catch (const Error& e) {
         throw Error(m.loc, fmt::format("fourier: {}", nestedMessage(e)));
       }
@@ -78,13 +73,14 @@ Materials::~Materials() = default;
 int Materials::resolve(int material, const TextureEvalContext& ctx, const Vec3& wo) const {
   for (int guard = 0; guard < 16 && material >= 0; ++guard) {
     const scene::Material& m = scene_->materials[size_t(material)];
-    if (m.kind != scene::MaterialKind::Mix) return material;
-    const double a = textures_->evalFloat(m.amount, ctx);
+    if (m.kind() != scene::MaterialKind::Mix) return material;
+    const scene::MixParams& mix = m.as<scene::MixParams>();
+    const double a = textures_->evalFloat(mix.amount, ctx);
     int next;
     if (a <= 0) {
-      next = m.mix[0];
+      next = mix.materials[0];
     } else if (a >= 1) {
-      next = m.mix[1];
+      next = mix.materials[1];
     } else {
       auto bits = [](double v) {
         uint64_t u;
@@ -93,7 +89,7 @@ int Materials::resolve(int material, const TextureEvalContext& ctx, const Vec3& 
       };
       const uint64_t h = hashValues({bits(ctx.p.x), bits(ctx.p.y), bits(ctx.p.z), bits(wo.x),
                                      bits(wo.y), uint64_t(material)});
-      next = double(h >> 11) * 0x1.0p-53 < a ? m.mix[1] : m.mix[0];
+      next = double(h >> 11) * 0x1.0p-53 < a ? mix.materials[1] : mix.materials[0];
     }
     material = next;
   }
@@ -150,135 +146,33 @@ Vec3 Materials::bumpedNormal(int material, const TextureEvalContext& ctx, const 
 
 bool Materials::isInterface(int material) const {
   return material >= 0 &&
-         scene_->materials[size_t(material)].kind == scene::MaterialKind::Interface;
+         scene_->materials[size_t(material)].kind() == scene::MaterialKind::Interface;
 }
+
+namespace {
+template <class... F>
+struct Overloaded : F... {
+  using F::operator()...;
+};
+}  // namespace
 
 std::shared_ptr<const BxDF> Materials::bxdf(int material, const TextureEvalContext& ctx,
                                             SampledWavelengths& lambda, bool regularize) const {
-  auto reg = [&](double alpha) {
-    return regularize && alpha < 0.3 ? std::clamp(2 * alpha, 0.1, 0.3) : alpha;
-  };
-  if (material < 0) return std::make_shared<DiffuseBxDF>(SampledSpectrum(0.5));
-  const scene::Material& m = scene_->materials[size_t(material)];
-  const Textures& tx = *textures_;
-  auto distribution = [&]() {
-    double ur = tx.evalFloat(m.uroughness, ctx), vr = tx.evalFloat(m.vroughness, ctx);
-    if (m.remap_roughness) ur = roughnessToAlpha(ur), vr = roughnessToAlpha(vr);
-    return TrowbridgeReitz(reg(ur), reg(vr));
-  };
-  auto dielectricEta = [&]() -> double {
-    if (m.eta.texture >= 0) return tx.evalFloat(m.eta, ctx);
-    if (m.eta.spectrum.kind == scene::SpectrumValue::Kind::Rgb &&
-        m.eta.spectrum.rgb == Vec3{0, 0, 0})
-      return m.eta.value;  // a float eta
-    SpectrumPtr s = tx.constant(m.eta.spectrum, SpectrumType::Unbounded);
-    const double e = s->eval(lambda.lambda(0));
-    if (s->eval(lambda.lambda(1)) != e) lambda.terminateSecondary();
-    return e;
-  };
-  // A conductor's complex index eta + i k: from its "reflectance" (eta 1 and the k that gives it)
-  // when one was given, else from its eta and k spectra.
-  auto conductorIndex = [&](bool has_reflectance, const scene::Input& reflectance,
-                            const scene::Input& eta_in, const scene::Input& k_in) {
-    if (has_reflectance) {
-      const SampledSpectrum r =
-          clampZero(tx.evalSpectrum(reflectance, ctx, lambda, SpectrumType::Albedo));
-      return std::pair{SampledSpectrum(1.0), conductorKFromReflectance(r)};
-    }
-    return std::pair{tx.evalSpectrum(eta_in, ctx, lambda, SpectrumType::Unbounded),
-                     tx.evalSpectrum(k_in, ctx, lambda, SpectrumType::Unbounded)};
-  };
-  using K = scene::MaterialKind;
-  if (scene::isV3Kind(m.kind)) return makeV3BxDF(m, tx, ctx, lambda, regularize);
-  switch (m.kind) {
-    case K::Fourier:
-      return std::make_shared<FourierBxDF>(fourier_tables_[size_t(material)], lambda);
-    case K::Hair:
-      return makeHairBxDF(m, tx, ctx, lambda);
-    case K::Measured: {
-      if (m.measured_rgl)
-        return std::make_shared<RGLMeasuredBxDF>(RGLMeasuredBRDF::loadCached(m.measured_file),
-                                                 lambda);
-      return std::make_shared<MeasuredBxDF>(MeasuredBRDF::loadCached(m.measured_file), lambda);
-    }
-    case K::Diffuse: {
-      const SampledSpectrum r =
-          clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo));
-      const double sigma = tx.evalFloat(m.sigma, ctx);
-      if (sigma > 0) return std::make_shared<OrenNayarBxDF>(r, sigma);
-      return std::make_shared<DiffuseBxDF>(r);
-    }
-    case K::DiffuseTransmission: {
-      const SampledSpectrum r =
-          clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo)) * m.scale;
-      const SampledSpectrum t =
-          clampZero(tx.evalSpectrum(m.transmittance, ctx, lambda, SpectrumType::Albedo)) * m.scale;
-      return std::make_shared<DiffuseTransmissionBxDF>(r, t);
-    }
-    case K::CoatedConductor: {
-      auto [ceta, ck] = conductorIndex(m.conductor_has_reflectance, m.conductor_reflectance,
-                                       m.conductor_eta, m.conductor_k);
-      double eta = dielectricEta();
-      if (eta == 0) eta = 1;
-      // pbrt-v4: the conductor sits under a medium of index eta, so its index is relative to it.
-      ceta /= eta;
-      ck /= eta;
-      double cu = tx.evalFloat(m.conductor_uroughness, ctx),
-             cv = tx.evalFloat(m.conductor_vroughness, ctx);
-      if (m.remap_roughness) cu = roughnessToAlpha(cu), cv = roughnessToAlpha(cv);
-      LayerParams lp;
-      lp.thickness = tx.evalFloat(m.thickness, ctx);
-      lp.albedo = clampZero(tx.evalSpectrum(m.albedo, ctx, lambda, SpectrumType::Albedo));
-      lp.g = tx.evalFloat(m.g, ctx);
-      lp.max_depth = m.max_depth;
-      lp.n_samples = m.n_samples;
-      return std::make_shared<CoatedBxDF>(
-          DielectricBxDF(eta, distribution()),
-          std::make_shared<ConductorBxDF>(TrowbridgeReitz(reg(cu), reg(cv)), ceta, ck), lp);
-    }
-    case K::Conductor: {
-      const auto [eta, k] = conductorIndex(m.has_reflectance, m.reflectance, m.eta, m.k);
-      return std::make_shared<ConductorBxDF>(distribution(), eta, k);
-    }
-    case K::Dielectric:
-    case K::Subsurface: {  // subsurface: its boundary
-      double eta = dielectricEta();
-      if (eta == 0) eta = 1;
-      return std::make_shared<DielectricBxDF>(eta, distribution());
-    }
-    case K::ThinDielectric: {
-      double eta = dielectricEta();
-      if (eta == 0) eta = 1;
-      return std::make_shared<ThinDielectricBxDF>(eta);
-    }
-    case K::CoatedDiffuse: {
-      const SampledSpectrum r =
-          clampZero(tx.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo));
-      double eta = dielectricEta();
-      if (eta == 0) eta = 1;
-      LayerParams lp;
-      lp.thickness = m.thickness.texture >= 0 || m.thickness.value != 0
-                         ? tx.evalFloat(m.thickness, ctx)
-                         : 0.01;
-      lp.albedo = clampZero(tx.evalSpectrum(m.albedo, ctx, lambda, SpectrumType::Albedo));
-      lp.g = tx.evalFloat(m.g, ctx);
-      lp.max_depth = m.max_depth;
-      lp.n_samples = m.n_samples;
-      return std::make_shared<CoatedBxDF>(DielectricBxDF(eta, distribution()),
-                                          std::make_shared<DiffuseBxDF>(r), lp);
-    }
-    case K::Mix:        // resolved before (resolve())
-    case K::Interface:  // no BSDF: rays pass (isInterface())
-    case K::Plastic:
-    case K::Substrate:
-    case K::Uber:
-    case K::Translucent:
-    case K::Glass:
-    case K::Metal:
-    case K::Mirror:
-      break;
-  }
-  return std::make_shared<DiffuseBxDF>(SampledSpectrum(0.5));
+  if (material < 0) return makeBxDF<DiffuseBxDF>(SampledSpectrum(0.5));
+  const MaterialEvalContext c{*textures_, ctx, lambda, regularize};
+  return std::visit(
+      Overloaded{
+          [&](const scene::FourierParams&) -> std::shared_ptr<const BxDF> {
+            return makeBxDF<FourierBxDF>(fourier_tables_[size_t(material)], lambda);
+          },
+          // mix: resolved before (resolve()); interface: no BSDF, rays pass (isInterface()).
+          [&](const scene::MixParams&) { return makeBxDF<DiffuseBxDF>(SampledSpectrum(0.5)); },
+          [&](const scene::InterfaceParams&) {
+            return makeBxDF<DiffuseBxDF>(SampledSpectrum(0.5));
+          },
+          [&](const auto& params) { return bxdfOf(params, c); },
+      },
+      scene_->materials[size_t(material)].params);
 }
 
 }  // namespace lensim::render

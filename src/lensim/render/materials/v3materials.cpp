@@ -3,9 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lensim/render/materials/bxdf_arena.h"
+#include "lensim/render/materials/material_eval.h"
 #include "lensim/render/materials/microfacet.h"
 #include "lensim/sampling/sampling.h"
-#include "lensim/scene/builder.h"
 
 namespace lensim::render {
 
@@ -360,48 +361,50 @@ double V3BSDF::pdf(const Vec3& wo, const Vec3& wi, TransportMode, ReflTrans allo
 
 // ---- materials ----------------------------------------------------------------------------
 
-std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures& tx,
-                                       const TextureEvalContext& ctx, SampledWavelengths& lambda,
-                                       bool regularize) {
-  auto albedo = [&](const scene::Input& in) {
-    return clampZero(tx.evalSpectrum(in, ctx, lambda, SpectrumType::Albedo));
-  };
-  auto reg = [&](double a) { return regularize && a < 0.3 ? std::clamp(2 * a, 0.1, 0.3) : a; };
-  auto alphas = [&](V3Lobe& l) {
-    double u = tx.evalFloat(m.uroughness, ctx), v = tx.evalFloat(m.vroughness, ctx);
-    if (m.remap_roughness) u = roughnessToAlphaV3(u), v = roughnessToAlphaV3(v);
-    l.alpha_x = reg(std::max(u, 1e-4));
-    l.alpha_y = reg(std::max(v, 1e-4));
-  };
-  auto floatEta = [&]() {
-    const double e = m.eta.texture >= 0 ? tx.evalFloat(m.eta, ctx) : m.eta.value;
-    return e > 0 ? e : 1.5;
-  };
-  auto clamp01 = [](SampledSpectrum s) {
-    for (int i = 0; i < kSpectrumSamples; ++i) s[i] = std::clamp(s[i], 0.0, 1.0);
-    return s;
-  };
+namespace {
+
+// Builds a pbrt-v3 BSDF lobe by lobe from a material's inputs at the point.
+struct V3Lobes {
+  const MaterialEvalContext& c;
+  std::vector<V3Lobe> lobes;
   using K = V3Lobe::Kind;
   using F = V3Lobe::Fresnel;
-  std::vector<V3Lobe> lobes;
-  auto lambert = [&](const SampledSpectrum& r, bool transmit) {
+
+  SampledSpectrum albedo(const scene::Input& in) const { return c.albedo(in); }
+  static SampledSpectrum clamp01(SampledSpectrum s) {
+    for (int i = 0; i < kSpectrumSamples; ++i) s[i] = std::clamp(s[i], 0.0, 1.0);
+    return s;
+  }
+  /// A float eta (pbrt-v3 has no spectral one); 1.5 when not positive.
+  double floatEta(const scene::Input& eta) const {
+    const double e = eta.texture >= 0 ? c.evalFloat(eta) : eta.value;
+    return e > 0 ? e : 1.5;
+  }
+  void alphas(V3Lobe& l, const scene::Roughness& r) const {
+    double u = c.evalFloat(r.u), v = c.evalFloat(r.v);
+    if (r.remap) u = roughnessToAlphaV3(u), v = roughnessToAlphaV3(v);
+    l.alpha_x = c.regularized(std::max(u, 1e-4));
+    l.alpha_y = c.regularized(std::max(v, 1e-4));
+  }
+  void lambert(const SampledSpectrum& r, bool transmit) {
     if (r.isBlack()) return;
     V3Lobe l;
     l.kind = transmit ? K::LambertianTransmission : K::LambertianReflection;
     (transmit ? l.T : l.R) = r;
     lobes.push_back(l);
-  };
-  auto microfacet = [&](const SampledSpectrum& s, bool transmit, double eta_i, double eta_t) {
+  }
+  void microfacet(const SampledSpectrum& s, bool transmit, double eta_i, double eta_t,
+                  const scene::Roughness& r) {
     if (s.isBlack()) return;
     V3Lobe l;
     l.kind = transmit ? K::MicrofacetTransmission : K::MicrofacetReflection;
     (transmit ? l.T : l.R) = s;
     l.fresnel = F::Dielectric;
     l.eta_i = eta_i, l.eta_t = eta_t;
-    alphas(l);
+    alphas(l, r);
     lobes.push_back(l);
-  };
-  auto specular = [&](const SampledSpectrum& s, bool transmit, F fr, double eta_t) {
+  }
+  void specular(const SampledSpectrum& s, bool transmit, F fr, double eta_t) {
     if (s.isBlack()) return;
     V3Lobe l;
     l.kind = transmit ? K::SpecularTransmission : K::SpecularReflection;
@@ -409,80 +412,108 @@ std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures&
     l.fresnel = fr;
     l.eta_i = 1, l.eta_t = eta_t;
     lobes.push_back(l);
-  };
-
-  using MK = scene::MaterialKind;
-  if (m.kind == MK::Plastic) {
-    // plastic.cpp: Lambertian(Kd) + MicrofacetReflection(Ks, FresnelDielectric(1.5, 1)).
-    lambert(albedo(m.reflectance), false);
-    microfacet(albedo(m.specular), false, 1.5, 1.0);
-  } else if (m.kind == MK::Substrate) {
-    // substrate.cpp: FresnelBlend(Kd, Ks, TrowbridgeReitz(u, v)).
-    const SampledSpectrum d = albedo(m.reflectance), s = albedo(m.specular);
-    if (!d.isBlack() || !s.isBlack()) {
-      V3Lobe l;
-      l.kind = K::FresnelBlend;
-      l.R = d, l.T = s;
-      alphas(l);
-      lobes.push_back(l);
-    }
-  } else if (m.kind == MK::Uber) {
-    // uber.cpp: (1 - opacity) passes straight through; the rest is op * (Kd Lambertian, Ks
-    // microfacet and Kr specular reflection with FresnelDielectric(1, eta), Kt specular
-    // transmission).
-    const double eta = floatEta();
-    const SampledSpectrum op = clamp01(albedo(m.opacity));
-    specular(clamp01(SampledSpectrum(1.0) - op), true, F::Dielectric, 1.0);
-    lambert(op * albedo(m.reflectance), false);
-    microfacet(op * albedo(m.specular), false, 1.0, eta);
-    specular(op * albedo(m.kr), false, F::Dielectric, eta);
-    specular(op * albedo(m.kt), true, F::Dielectric, eta);
-  } else if (m.kind == MK::Translucent) {
-    // translucent.cpp: reflect x (Kd Lambertian, Ks microfacet), transmit x (Kd Lambertian
-    // transmission, Ks microfacet transmission), eta 1.5.
-    const SampledSpectrum r = albedo(m.v3_reflect), t = albedo(m.transmittance);
-    const SampledSpectrum kd = albedo(m.reflectance), ks = albedo(m.specular);
-    if (!r.isBlack() || !t.isBlack()) {
-      lambert(r * kd, false);
-      lambert(t * kd, true);
-      microfacet(r * ks, false, 1.0, 1.5);
-      microfacet(t * ks, true, 1.0, 1.5);
-    }
-  } else if (m.kind == MK::Glass) {
-    // glass.cpp: smooth: FresnelSpecular(Kr, Kt, 1, eta); rough: microfacet reflection and
-    // transmission, scaled by Kr and Kt.
-    const double eta = floatEta();
-    const SampledSpectrum R = albedo(m.kr), T = albedo(m.kt);
-    const bool smooth =
-        tx.evalFloat(m.uroughness, ctx) == 0 && tx.evalFloat(m.vroughness, ctx) == 0;
-    if (smooth && !regularize) {
-      if (!R.isBlack() || !T.isBlack()) {
-        V3Lobe l;
-        l.kind = K::FresnelSpecular;
-        l.R = R, l.T = T;
-        l.fresnel = F::Dielectric;
-        l.eta_i = 1, l.eta_t = eta;
-        lobes.push_back(l);
-      }
-    } else {
-      microfacet(R, false, 1.0, eta);
-      microfacet(T, true, 1.0, eta);
-    }
-  } else if (m.kind == MK::Metal) {
-    // metal.cpp: MicrofacetReflection(1, FresnelConductor(1, eta, k)).
-    V3Lobe l;
-    l.kind = K::MicrofacetReflection;
-    l.R = SampledSpectrum(1.0);
-    l.fresnel = F::Conductor;
-    l.cond_eta = tx.evalSpectrum(m.eta, ctx, lambda, SpectrumType::Unbounded);
-    l.cond_k = tx.evalSpectrum(m.k, ctx, lambda, SpectrumType::Unbounded);
-    alphas(l);
-    lobes.push_back(l);
-  } else if (m.kind == MK::Mirror) {
-    // mirror.cpp: SpecularReflection(Kr, FresnelNoOp).
-    specular(albedo(m.kr), false, F::NoOp, 1.0);
   }
-  return std::make_shared<V3BSDF>(std::move(lobes));
+  std::shared_ptr<const BxDF> bsdf() { return makeBxDF<V3BSDF>(std::move(lobes)); }
+};
+
+}  // namespace
+
+// plastic.cpp: Lambertian(Kd) + MicrofacetReflection(Ks, FresnelDielectric(1.5, 1)).
+std::shared_ptr<const BxDF> bxdfOf(const scene::PlasticParams& p, const MaterialEvalContext& c) {
+  V3Lobes b{c, {}};
+  b.lambert(b.albedo(p.kd), false);
+  b.microfacet(b.albedo(p.ks), false, 1.5, 1.0, p.roughness);
+  return b.bsdf();
+}
+
+// substrate.cpp: FresnelBlend(Kd, Ks, TrowbridgeReitz(u, v)).
+std::shared_ptr<const BxDF> bxdfOf(const scene::SubstrateParams& p, const MaterialEvalContext& c) {
+  V3Lobes b{c, {}};
+  const SampledSpectrum d = b.albedo(p.kd), s = b.albedo(p.ks);
+  if (!d.isBlack() || !s.isBlack()) {
+    V3Lobe l;
+    l.kind = V3Lobe::Kind::FresnelBlend;
+    l.R = d, l.T = s;
+    b.alphas(l, p.roughness);
+    b.lobes.push_back(l);
+  }
+  return b.bsdf();
+}
+
+// uber.cpp: (1 - opacity) passes straight through; the rest is op * (Kd Lambertian, Ks
+// microfacet and Kr specular reflection with FresnelDielectric(1, eta), Kt specular
+// transmission).
+std::shared_ptr<const BxDF> bxdfOf(const scene::UberParams& p, const MaterialEvalContext& c) {
+  using F = V3Lobe::Fresnel;
+  V3Lobes b{c, {}};
+  const double eta = b.floatEta(p.eta);
+  const SampledSpectrum op = V3Lobes::clamp01(b.albedo(p.opacity));
+  b.specular(V3Lobes::clamp01(SampledSpectrum(1.0) - op), true, F::Dielectric, 1.0);
+  b.lambert(op * b.albedo(p.kd), false);
+  b.microfacet(op * b.albedo(p.ks), false, 1.0, eta, p.roughness);
+  b.specular(op * b.albedo(p.kr), false, F::Dielectric, eta);
+  b.specular(op * b.albedo(p.kt), true, F::Dielectric, eta);
+  return b.bsdf();
+}
+
+// translucent.cpp: reflect x (Kd Lambertian, Ks microfacet), transmit x (Kd Lambertian
+// transmission, Ks microfacet transmission), eta 1.5.
+std::shared_ptr<const BxDF> bxdfOf(const scene::TranslucentParams& p,
+                                   const MaterialEvalContext& c) {
+  V3Lobes b{c, {}};
+  const SampledSpectrum r = b.albedo(p.reflect), t = b.albedo(p.transmit);
+  const SampledSpectrum kd = b.albedo(p.kd), ks = b.albedo(p.ks);
+  if (!r.isBlack() || !t.isBlack()) {
+    b.lambert(r * kd, false);
+    b.lambert(t * kd, true);
+    b.microfacet(r * ks, false, 1.0, 1.5, p.roughness);
+    b.microfacet(t * ks, true, 1.0, 1.5, p.roughness);
+  }
+  return b.bsdf();
+}
+
+// glass.cpp: smooth: FresnelSpecular(Kr, Kt, 1, eta); rough: microfacet reflection and
+// transmission, scaled by Kr and Kt.
+std::shared_ptr<const BxDF> bxdfOf(const scene::GlassParams& p, const MaterialEvalContext& c) {
+  V3Lobes b{c, {}};
+  const double eta = b.floatEta(p.eta);
+  const SampledSpectrum R = b.albedo(p.kr), T = b.albedo(p.kt);
+  const bool smooth = c.evalFloat(p.roughness.u) == 0 && c.evalFloat(p.roughness.v) == 0;
+  if (smooth && !c.regularize) {
+    if (!R.isBlack() || !T.isBlack()) {
+      V3Lobe l;
+      l.kind = V3Lobe::Kind::FresnelSpecular;
+      l.R = R, l.T = T;
+      l.fresnel = V3Lobe::Fresnel::Dielectric;
+      l.eta_i = 1, l.eta_t = eta;
+      b.lobes.push_back(l);
+    }
+  } else {
+    b.microfacet(R, false, 1.0, eta, p.roughness);
+    b.microfacet(T, true, 1.0, eta, p.roughness);
+  }
+  return b.bsdf();
+}
+
+// metal.cpp: MicrofacetReflection(1, FresnelConductor(1, eta, k)).
+std::shared_ptr<const BxDF> bxdfOf(const scene::MetalParams& p, const MaterialEvalContext& c) {
+  V3Lobes b{c, {}};
+  V3Lobe l;
+  l.kind = V3Lobe::Kind::MicrofacetReflection;
+  l.R = SampledSpectrum(1.0);
+  l.fresnel = V3Lobe::Fresnel::Conductor;
+  l.cond_eta = c.unbounded(p.eta);
+  l.cond_k = c.unbounded(p.k);
+  b.alphas(l, p.roughness);
+  b.lobes.push_back(l);
+  return b.bsdf();
+}
+
+// mirror.cpp: SpecularReflection(Kr, FresnelNoOp).
+std::shared_ptr<const BxDF> bxdfOf(const scene::MirrorParams& p, const MaterialEvalContext& c) {
+  V3Lobes b{c, {}};
+  b.specular(b.albedo(p.kr), false, V3Lobe::Fresnel::NoOp, 1.0);
+  return b.bsdf();
 }
 
 }  // namespace lensim::render

@@ -15,11 +15,6 @@
 #include <vector>
 
 #include "lensim/render/materials/bsdf.h"
-#include "lensim/render/textures/textures.h"
-
-namespace lensim::scene {
-struct Material;
-}
 
 namespace lensim::render {
 
@@ -69,10 +64,5 @@ class V3BSDF final : public BxDF {
   std::vector<V3Lobe> lobes_;
   BxDFFlags flags_ = BxDFFlags::Unset;
 };
-
-/// The BSDF of a pbrt-v3 material at ctx. `regularize` as in Materials::bxdf.
-std::shared_ptr<const BxDF> makeV3BxDF(const scene::Material& m, const Textures& tx,
-                                       const TextureEvalContext& ctx, SampledWavelengths& lambda,
-                                       bool regularize);
 
 }  // namespace lensim::render

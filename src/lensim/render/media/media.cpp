@@ -213,9 +213,10 @@ Media::Media(const scene::Scene& scene) {
   n_scene_ = int(media_.size());
   subsurface_.assign(scene.materials.size(), -1);
   for (size_t i = 0; i < scene.materials.size(); ++i)
-    if (scene.materials[i].kind == scene::MaterialKind::Subsurface) {
+    if (scene.materials[i].kind() == scene::MaterialKind::Subsurface) {
       subsurface_[i] = int(media_.size());
-      auto ss = std::make_unique<SubsurfaceMedium>(scene.materials[i]);
+      auto ss = std::make_unique<SubsurfaceMedium>(
+          scene.materials[i].as<scene::SubsurfaceParams>());
       textured_.push_back(ss->textured() ? ss.get() : nullptr);
       media_.push_back(std::move(ss));
       has_subsurface_ = true;

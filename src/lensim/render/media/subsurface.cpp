@@ -96,22 +96,22 @@ double albedoForDiffuseReflectance(double r) {
   return t.albedo[k - 1] + f * (t.albedo[k] - t.albedo[k - 1]);
 }
 
-SubsurfaceMedium::SubsurfaceMedium(const scene::Material& m) {
+SubsurfaceMedium::SubsurfaceMedium(const scene::SubsurfaceParams& m) {
   scale_ = m.scale;
-  g_ = m.ss_g;
-  from_reflectance_ = m.ss_from_reflectance;
+  g_ = m.g;
+  from_reflectance_ = m.from_reflectance;
   if (from_reflectance_)
-    textured_ = m.ss_reflectance.texture >= 0 || m.ss_mfp.texture >= 0;
+    textured_ = m.reflectance.texture >= 0 || m.mfp.texture >= 0;
   else
-    textured_ = m.ss_sigma_a.texture >= 0 || m.ss_sigma_s.texture >= 0;
+    textured_ = m.sigma_a.texture >= 0 || m.sigma_s.texture >= 0;
   if (textured_) {
     material_ = &m;
   } else if (from_reflectance_) {
-    reflectance_ = makeSpectrum(m.ss_reflectance.spectrum, SpectrumType::Albedo);
-    mfp_ = makeSpectrum(m.ss_mfp.spectrum, SpectrumType::Unbounded);
+    reflectance_ = makeSpectrum(m.reflectance.spectrum, SpectrumType::Albedo);
+    mfp_ = makeSpectrum(m.mfp.spectrum, SpectrumType::Unbounded);
   } else {
-    sigma_a_ = makeSpectrum(m.ss_sigma_a.spectrum, SpectrumType::Unbounded);
-    sigma_s_ = makeSpectrum(m.ss_sigma_s.spectrum, SpectrumType::Unbounded);
+    sigma_a_ = makeSpectrum(m.sigma_a.spectrum, SpectrumType::Unbounded);
+    sigma_s_ = makeSpectrum(m.sigma_s.spectrum, SpectrumType::Unbounded);
   }
 }
 
@@ -145,18 +145,18 @@ MediumProperties SubsurfaceMedium::coefficientsAt(const Textures& textures,
                                                   const TextureEvalContext& ctx,
                                                   const SampledWavelengths& lambda) const {
   if (!material_) return coefficients(lambda);
-  const scene::Material& m = *material_;
+  const scene::SubsurfaceParams& m = *material_;
   // pbrt-v4's GetBSSRDF: sigma_a, sigma_s clamped at zero; reflectance clamped to [0, 1] (by
   // albedoForDiffuseReflectance) with mfp; all times scale.
   if (from_reflectance_)
     return fromReflectance(
-        textures.evalSpectrum(m.ss_reflectance, ctx, lambda, SpectrumType::Albedo),
-        textures.evalSpectrum(m.ss_mfp, ctx, lambda, SpectrumType::Unbounded));
+        textures.evalSpectrum(m.reflectance, ctx, lambda, SpectrumType::Albedo),
+        textures.evalSpectrum(m.mfp, ctx, lambda, SpectrumType::Unbounded));
   MediumProperties mp;
   mp.sigma_a =
-      clampZero(textures.evalSpectrum(m.ss_sigma_a, ctx, lambda, SpectrumType::Unbounded) * scale_);
+      clampZero(textures.evalSpectrum(m.sigma_a, ctx, lambda, SpectrumType::Unbounded) * scale_);
   mp.sigma_s =
-      clampZero(textures.evalSpectrum(m.ss_sigma_s, ctx, lambda, SpectrumType::Unbounded) * scale_);
+      clampZero(textures.evalSpectrum(m.sigma_s, ctx, lambda, SpectrumType::Unbounded) * scale_);
   return mp;
 }
 

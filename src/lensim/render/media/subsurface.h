@@ -12,7 +12,7 @@
 #include "lensim/render/textures/textures.h"
 
 namespace lensim::scene {
-struct Material;
+struct SubsurfaceParams;
 }
 
 namespace lensim::render {
@@ -29,7 +29,7 @@ namespace lensim::render {
 /// the BSDF sample refracts in). at() and majorants() serve untextured materials only.
 class SubsurfaceMedium final : public Medium {
  public:
-  explicit SubsurfaceMedium(const scene::Material& m);
+  explicit SubsurfaceMedium(const scene::SubsurfaceParams& m);
   MediumProperties at(const Vec3& p, const SampledWavelengths& lambda) const override;
   void majorants(const Vec3& o, const Vec3& d, double tmax, const SampledWavelengths& lambda,
                  const SegmentFn& fn) const override;
@@ -44,7 +44,7 @@ class SubsurfaceMedium final : public Medium {
   /// sigma_a, sigma_s from reflectance r and mean free path mfp (before scale) per wavelength.
   MediumProperties fromReflectance(const SampledSpectrum& r, const SampledSpectrum& mfp) const;
   SpectrumPtr sigma_a_, sigma_s_, reflectance_, mfp_;
-  const scene::Material* material_ = nullptr;  ///< the description (textured materials)
+  const scene::SubsurfaceParams* material_ = nullptr;  ///< the description (textured ones)
   bool from_reflectance_ = false, textured_ = false;
   double scale_ = 1;
 };

@@ -52,8 +52,12 @@ struct GraphicsState {
   FileLoc scoped_material_loc;
 };
 
+struct MaterialReader;
+
 class Builder {
  public:
+  friend struct MaterialReader;  // build/materials.cpp: the parameters of each material kind
+
   explicit Builder(const SceneDesc& desc);
 
   bool pbrt_v2_ = false;  // the file uses syntax only pbrt-v1/v2 have
@@ -117,9 +121,10 @@ class Builder {
   void integratorDirectLighting(ParamSet& ps, Integrator& it);
 
   void texture(const Directive& d);
+  void imageMapTexture(Texture& t, ParamSet& ps, const FileLoc& loc);  // build/textures.cpp
 
   Material material(const std::string& type, ParamSet& ps, const FileLoc& loc);
-  void hairMaterial(Material& m, ParamSet& ps, const FileLoc& loc);  // build/hair.cpp
+  HairParams hairMaterial(ParamSet& ps, const FileLoc& loc);  // build/hair.cpp
 
   int currentMaterial();
   /// The named material `name` for a NamedMaterial or a mix: pbrt-v1–v3 files look in the
@@ -183,7 +188,7 @@ class Builder {
   void addNamedMedium(Medium m, ParamSet& ps);
   /// out = the spectrum-valued parameter `name` (rgb, spectrum or blackbody), if given.
   void optionalSpectrum(ParamSet& ps, const char* name, SpectrumValue& out);
-  void subsurfaceCoefficients(Material& m, ParamSet& ps, const FileLoc& loc);
+  void subsurfaceCoefficients(SubsurfaceParams& m, ParamSet& ps, const FileLoc& loc);
 
   int mediumIndex(const std::string& name, const FileLoc& loc);
 

@@ -7,8 +7,8 @@
 
 namespace lensim::scene::detail {
 
-void Builder::hairMaterial(Material& m, ParamSet& ps, const FileLoc& loc) {
-  m.type = "hair";
+HairParams Builder::hairMaterial(ParamSet& ps, const FileLoc& loc) {
+  HairParams m;
   const std::optional<Input> sigma_a = spectrumInput(ps, {"sigma_a"});
   const char* reflectance_name = ps.peek({"reflectance"}) ? "reflectance" : "color";
   const std::optional<Input> reflectance = spectrumInput(ps, {reflectance_name});
@@ -21,30 +21,30 @@ void Builder::hairMaterial(Material& m, ParamSet& ps, const FileLoc& loc) {
                        because));
   };
   if (sigma_a) {
-    m.hair_absorption = Material::HairAbsorption::SigmaA;
-    m.hair_sigma_a = *sigma_a;
+    m.absorption = HairParams::Absorption::SigmaA;
+    m.sigma_a = *sigma_a;
     ignoring(reflectance_name, reflectance.has_value(), "sigma_a");
     ignoring("eumelanin", eumelanin.has_value(), "sigma_a");
     ignoring("pheomelanin", pheomelanin.has_value(), "sigma_a");
   } else if (reflectance) {
-    m.hair_absorption = Material::HairAbsorption::Reflectance;
+    m.absorption = HairParams::Absorption::Reflectance;
     m.reflectance = *reflectance;
-    m.has_reflectance = true;
     ignoring("eumelanin", eumelanin.has_value(), reflectance_name);
     ignoring("pheomelanin", pheomelanin.has_value(), reflectance_name);
   } else {
-    m.hair_absorption = Material::HairAbsorption::Melanin;
+    m.absorption = HairParams::Absorption::Melanin;
     if (eumelanin || pheomelanin) {
-      m.hair_eumelanin = eumelanin.value_or(Input{});
-      m.hair_pheomelanin = pheomelanin.value_or(Input{});
+      m.eumelanin = eumelanin.value_or(Input{});
+      m.pheomelanin = pheomelanin.value_or(Input{});
     } else {
-      m.hair_eumelanin.value = 1.3;  // pbrt-v4's default: brown hair
+      m.eumelanin.value = 1.3;  // pbrt-v4's default: brown hair
     }
   }
   m.eta = floatInput(ps, {"eta"}, 1.55);
-  m.hair_beta_m = floatInput(ps, {"beta_m"}, 0.3);
-  m.hair_beta_n = floatInput(ps, {"beta_n"}, 0.3);
-  m.hair_alpha = floatInput(ps, {"alpha"}, 2);
+  m.beta_m = floatInput(ps, {"beta_m"}, 0.3);
+  m.beta_n = floatInput(ps, {"beta_n"}, 0.3);
+  m.alpha = floatInput(ps, {"alpha"}, 2);
+  return m;
 }
 
 }  // namespace lensim::scene::detail

@@ -235,7 +235,7 @@ void Builder::resolveMedia() {
   // would render a subsurface shape as its bare dielectric boundary.
   bool subsurface = false;
   for (const Shape& sh : scene_.shapes)
-    subsurface = subsurface || (sh.material >= 0 && scene_.materials[size_t(sh.material)].kind ==
+    subsurface = subsurface || (sh.material >= 0 && scene_.materials[size_t(sh.material)].kind() ==
                                                         MaterialKind::Subsurface);
   const FileLoc iloc = scene_.integrator.loc.valid() ? scene_.integrator.loc : scene_.camera.loc;
   if (subsurface && scene_.integrator.type == "bdpt") {
