@@ -310,16 +310,16 @@ TEST(FlareLightTracing, DoubleGaussFlatFieldAgreesWithPath) {
   }
 }
 
-// A dispersive lens's flare is traced at each sample's hero wavelength on the camera side; the
+// A dispersive lens's (an N-BK7 singlet's) flare is traced at each sample's hero wavelength on the camera side; the
 // light side's ghost connections use the primary-wavelength indices, so lighttracer and bdpt
 // refuse it at the Camera line (path renders it).
 TEST(FlareLightTracing, DispersiveLensIsRefusedByLightTracingIntegrators) {
-  const std::string lens = testFile("bk7_plate.json");
-  std::ofstream(lens) << "{\"format\": \"lensim-lens\", \"name\": \"bk7 plate\", \"surfaces\": ["
-                         "{\"radius_mm\": 2e5, \"thickness_mm\": 5, \"semi_aperture_mm\": 12, "
+  const std::string lens = testFile("bk7_singlet.json");
+  std::ofstream(lens) << "{\"format\": \"lensim-lens\", \"name\": \"bk7 singlet\", \"surfaces\": ["
+                         "{\"radius_mm\": 50, \"thickness_mm\": 4, \"semi_aperture_mm\": 12, "
                          "\"glass\": {\"name\": \"N-BK7\"}},"
-                         "{\"radius_mm\": 0, \"thickness_mm\": 2, \"semi_aperture_mm\": 12},"
-                         "{\"radius_mm\": 0, \"thickness_mm\": 20, \"semi_aperture_mm\": 2, "
+                         "{\"radius_mm\": -50, \"thickness_mm\": 2, \"semi_aperture_mm\": 12},"
+                         "{\"radius_mm\": 0, \"thickness_mm\": 45, \"semi_aperture_mm\": 4, "
                          "\"stop\": true}]}\n";
   for (const char* integrator : {"lighttracer", "bdpt", "path"}) {
     const std::string path = testFile(std::string("dispersive_") + integrator + ".pbrt");

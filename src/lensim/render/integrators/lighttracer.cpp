@@ -74,6 +74,33 @@ LightTracer::LightTracer(const SceneContext& sc, const camera::Camera& camera)
                     n, type, n > 1 ? "s" : "", n > 1 ? "are" : "is"));
 }
 
+size_t LightTracer::chooseLight(double u, double* pmf) const {
+  const double x = u * cdf_.back();
+  const size_t k =
+      size_t(std::min<std::ptrdiff_t>(std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin(),
+                                      std::ptrdiff_t(cdf_.size()) - 1));
+  *pmf = (cdf_[k] - (k > 0 ? cdf_[k - 1] : 0.0)) / cdf_.back();
+  return k;
+}
+
+namespace {
+
+// Splats L beta W / pdf at the connection's film point (ghost: into the ghost layer too); a
+// non-finite value is dropped and counted.
+void splatConnection(const camera::CameraWiSample& cs, SampledSpectrum L, SampledWavelengths& lambda,
+                     Film& film, bool ghost, int& dropped) {
+  if (cs.hero_only) lambda.terminateSecondary();
+  for (int i = 0; i < kSpectrumSamples; ++i) L[i] *= cs.importance[size_t(i)] / cs.pdf;
+  for (int i = 0; i < kSpectrumSamples; ++i)
+    if (!std::isfinite(L[i])) {
+      ++dropped;
+      return;
+    }
+  film.addSplat(cs.film_raster, L, lambda, ghost);
+}
+
+}  // namespace
+
 int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
                        RayCounts& counts) const {
   const double u_light = sampler.get1D();
@@ -81,31 +108,15 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
   const Vec2 u1 = sampler.get2D(), u2 = sampler.get2D();
   if (lights_.empty()) return 0;
   const double time = shutter_open_ + u_time * (shutter_close_ - shutter_open_);
-  // The light, by power.
-  const double x = u_light * cdf_.back();
-  const size_t k =
-      size_t(std::min<std::ptrdiff_t>(std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin(),
-                                      std::ptrdiff_t(cdf_.size()) - 1));
-  const double pmf = (cdf_[k] - (k > 0 ? cdf_[k - 1] : 0.0)) / cdf_.back();
+  double pmf = 0;
+  const Light& light = *lights_[chooseLight(u_light, &pmf)];
   if (!(pmf > 0)) return 0;
-  const Light& light = *lights_[k];
   std::array<double, camera::kCameraWavelengths> lambda_nm{};
   auto wavelengths = [&] {
     for (int i = 0; i < kSpectrumSamples; ++i) lambda_nm[size_t(i)] = lambda.lambda(i);
     return lambda_nm;
   };
   int dropped = 0;
-  // Splats beta W / pdf at the connection's film point (ghost: into the ghost layer too).
-  auto splat = [&](const camera::CameraWiSample& cs, SampledSpectrum L, bool ghost = false) {
-    if (cs.hero_only) lambda.terminateSecondary();
-    for (int i = 0; i < kSpectrumSamples; ++i) L[i] *= cs.importance[size_t(i)] / cs.pdf;
-    for (int i = 0; i < kSpectrumSamples; ++i)
-      if (!std::isfinite(L[i])) {
-        ++dropped;
-        return;
-      }
-    film.addSplat(cs.film_raster, L, lambda, ghost);
-  };
   // Lens flare: each connection to the camera is also made through one ghost path of the lens
   // (Camera::sampleGhostWi: a pair drawn with the camera side's probabilities). One pair per
   // connection rather than all of them: with coatings each ghost path's thin-film stacks cost
@@ -145,10 +156,10 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
   auto toCamera = [&](const Vec3& p, Vec2 u_cam, const std::array<double, 3>& u_ghost,
                       const auto& value) {
     if (auto cs = camera_->sampleWi(p, u_cam, wavelengths(), time); cs && cs->pdf > 0)
-      if (const Splat L = value(*cs)) splat(*cs, *L);
+      if (const Splat L = value(*cs)) splatConnection(*cs, *L, lambda, film, false, dropped);
     if (flare_)
       if (auto cs = camera_->sampleGhostWi(p, u_ghost, wavelengths(), time); cs && cs->pdf > 0)
-        if (const Splat L = value(*cs)) splat(*cs, *L, true);
+        if (const Splat L = value(*cs)) splatConnection(*cs, *L, lambda, film, true, dropped);
   };
   // The light's own point seen by the camera (area lights; a point light is a delta the film
   // cannot see).

@@ -28,6 +28,8 @@ class LightTracer {
   /// its random numbers from the sampler as it stands; splats into the film. Returns the number
   /// of splats dropped for non-finite values.
   int trace(SampledWavelengths& lambda, Sampler& sampler, Film& film, RayCounts& counts) const;
+  /// The light that u in [0, 1) chooses by power, and its probability (0: none).
+  size_t chooseLight(double u, double* pmf) const;
 
  private:
   const SceneContext* sc_;
