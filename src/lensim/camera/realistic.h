@@ -336,6 +336,11 @@ class RealisticCamera final : public Camera {
   Vec3 lensFromWorldVector(const Vec3& v, double time) const;
   Vec3 worldFromLensPoint(const Vec3& p, double time) const;
   Vec3 worldFromLensVector(const Vec3& v, double time) const;
+  /// The geometry of a connection from the scene point ref to the front-element point p (normal
+  /// n, lens space) drawn uniformly over a disc of disc_area_mm2 in its projection: p_lens, wi,
+  /// distance, n_lens and the solid-angle pdf of s; false when degenerate.
+  bool connectionGeometry(const Vec3& ref, const Vec3& p, const Vec3& n, double disc_area_mm2,
+                          double time, CameraWiSample& s) const;
   /// Camera from world at `time`: camera_from_world_ when the camera does not move, else
   /// `scratch` filled.
   const Transform& cameraFromWorld(double time, Transform& scratch) const;

@@ -208,6 +208,24 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
   return hit;
 }
 
+bool RealisticCamera::connectionGeometry(const Vec3& ref, const Vec3& p, const Vec3& n,
+                                          double disc_area_mm2, double time,
+                                          CameraWiSample& s) const {
+  s.p_lens = worldFromLensPoint(p, time);
+  const Vec3 to_lens = s.p_lens - ref;
+  s.distance = length(to_lens);
+  if (!(s.distance > 0)) return false;
+  s.wi = to_lens / s.distance;
+  s.n_lens = normalize(worldFromLensVector(n, time));
+  const double cos_n = std::abs(dot(s.n_lens, s.wi));
+  if (!(cos_n > 0)) return false;
+  // Uniform over the disc: |n_z| / area per unit of front-surface area, in world units.
+  const double units = settings_.camera_units_per_mm;
+  const double pdf_area = std::abs(n.z) / (disc_area_mm2 * units * units);
+  s.pdf = pdf_area * s.distance * s.distance / cos_n;
+  return true;
+}
+
 std::optional<CameraWiSample> RealisticCamera::sampleWi(
     const Vec3& ref, Vec2 u, const std::array<double, kCameraWavelengths>& lambda_nm,
     double time) const {
@@ -226,18 +244,8 @@ std::optional<CameraWiSample> RealisticCamera::sampleWi(
   const std::optional<FilmHit> hit = traceToFilm(r_l, d_l, hero, &fp->p);
   if (!hit) return std::nullopt;
   CameraWiSample s;
-  s.p_lens = worldFromLensPoint(fp->p, time);
-  const Vec3 to_lens = s.p_lens - ref;
-  s.distance = length(to_lens);
-  if (!(s.distance > 0)) return std::nullopt;
-  s.wi = to_lens / s.distance;
-  s.n_lens = normalize(worldFromLensVector(fp->n, time));
-  const double cos_n = std::abs(dot(s.n_lens, s.wi));
-  if (!(cos_n > 0)) return std::nullopt;
-  const double units = settings_.camera_units_per_mm;
-  const double pdf_area =
-      std::abs(fp->n.z) / (M_PI * disc.radius * disc.radius * units * units);  // per world area
-  s.pdf = pdf_area * s.distance * s.distance / cos_n;
+  if (!connectionGeometry(ref, fp->p, fp->n, M_PI * disc.radius * disc.radius, time, s))
+    return std::nullopt;
   s.film_raster = hit->raster;
   if (dispersive_ && hero > 0) {
     s.hero_only = true;
@@ -288,17 +296,7 @@ std::optional<CameraWiSample> RealisticCamera::sampleGhostWi(
   CameraWiSample s;
   s.film_raster = rasterPoint(g->film_mm);
   if (!onFilm(s.film_raster)) return std::nullopt;
-  s.p_lens = worldFromLensPoint(fp->p, time);
-  const Vec3 to_lens = s.p_lens - ref;
-  s.distance = length(to_lens);
-  if (!(s.distance > 0)) return std::nullopt;
-  s.wi = to_lens / s.distance;
-  s.n_lens = normalize(worldFromLensVector(fp->n, time));
-  const double cos_n = std::abs(dot(s.n_lens, s.wi));
-  if (!(cos_n > 0)) return std::nullopt;
-  const double units = settings_.camera_units_per_mm;
-  const double pdf_area = std::abs(fp->n.z) / (M_PI * R * R * units * units);
-  s.pdf = pdf_area * s.distance * s.distance / cos_n;
+  if (!connectionGeometry(ref, fp->p, fp->n, M_PI * R * R, time, s)) return std::nullopt;
   const double scale = importanceScale();
   for (int c = 0; c < kCameraWavelengths; ++c)
     s.importance[size_t(c)] = scale * g->factor[size_t(c)];
