@@ -188,21 +188,10 @@ class FaceLight final : public AreaLightBase {
   }
   std::optional<LightLiSample> sampleLi(const Vec3& p, Vec2 u,
                                         const SampledWavelengths& lambda) const override {
-    if (area_ == 0) return std::nullopt;
-    size_t k = 0;
-    if (tris_.size() > 1) {
-      const double x = u.x * area_;
-      k = x < cum_[0] ? 0 : 1;
-      u.x = k == 0 ? x / cum_[0] : (x - cum_[0]) / (area_ - cum_[0]);
-      u.x = std::clamp(u.x, 0.0, 1.0 - 1e-12);
-    }
-    const auto& t = tris_[k];
-    const double su = std::sqrt(u.x);
-    const double b0 = 1 - su, b1 = u.y * su;
-    const Vec3 pl = t[0] * b0 + t[1] * b1 + t[2] * (1 - b0 - b1);
-    const auto& tuv = uvs_[k];
-    const Vec2 uv = tuv[0] * b0 + tuv[1] * b1 + tuv[2] * (1 - b0 - b1);
-    return finish(p, pl, normals_[k], uv, 1 / area_, lambda);
+    Vec3 pl, n;
+    Vec2 uv;
+    if (!samplePoint(u, pl, n, uv)) return std::nullopt;
+    return finish(p, pl, n, uv, 1 / area_, lambda);
   }
   double pdfLi(const Vec3& p, const Vec3& wi, const SurfaceHit* hit) const override {
     return hit ? solidAnglePdf(p, wi, *hit) : 0;

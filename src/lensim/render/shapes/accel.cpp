@@ -596,6 +596,20 @@ struct LocalHit {
   Vec2 uv;
 };
 
+/// A mesh hit's shading normal from its interpolated vertex normals sn (the geometric normal
+/// where sn vanishes), the geometric normal turned to its side.
+void shadingNormal(LocalHit& out, const Vec3& sn) {
+  out.ns = length(sn) > 0 ? normalize(sn) : out.ng;
+  out.ng = faceForward(out.ng, out.ns);
+}
+
+/// A mesh hit without vertex normals: the geometric normal (flipped for reverseorientation)
+/// shades.
+void geometricOnly(LocalHit& out, bool flip) {
+  if (flip) out.ng = -out.ng;
+  out.ns = out.ng;
+}
+
 /// The surface of a curve segment hit at Embree's (u, v) and ray parameter t.
 LocalHit curveHit(const ShapeRecord& r, int prim, const RTCHit& hit, const Vec3& o, const Vec3& d,
                   double t) {
@@ -659,14 +673,10 @@ LocalHit triangleHit(const ShapeRecord& r, int prim, const RTCHit& hit) {
       out.dndv = (dn2 * duv02.x - dn1 * duv12.x) / det;
     }
   }
-  if (!r.n.empty()) {
-    Vec3 sn = r.n[size_t(f[0])] * b0 + r.n[size_t(f[1])] * b1 + r.n[size_t(f[2])] * b2;
-    out.ns = length(sn) > 0 ? normalize(sn) : out.ng;
-    out.ng = faceForward(out.ng, out.ns);
-  } else {
-    if (r.flip) out.ng = -out.ng;
-    out.ns = out.ng;
-  }
+  if (!r.n.empty())
+    shadingNormal(out, r.n[size_t(f[0])] * b0 + r.n[size_t(f[1])] * b1 + r.n[size_t(f[2])] * b2);
+  else
+    geometricOnly(out, r.flip);
   return out;
 }
 
@@ -695,15 +705,11 @@ LocalHit bilinearHit(const ShapeRecord& r, int prim, const RTCHit& hit, const Ve
                &e = r.uv[size_t(f[3])];
     out.uv = (a * (1 - u) + b * u) * (1 - v) + (c * (1 - u) + e * u) * v;
   }
-  if (!r.n.empty()) {
-    const Vec3 sn = (r.n[size_t(f[0])] * (1 - u) + r.n[size_t(f[1])] * u) * (1 - v) +
-                    (r.n[size_t(f[2])] * (1 - u) + r.n[size_t(f[3])] * u) * v;
-    out.ns = length(sn) > 0 ? normalize(sn) : out.ng;
-    out.ng = faceForward(out.ng, out.ns);
-  } else {
-    if (r.flip) out.ng = -out.ng;
-    out.ns = out.ng;
-  }
+  if (!r.n.empty())
+    shadingNormal(out, (r.n[size_t(f[0])] * (1 - u) + r.n[size_t(f[1])] * u) * (1 - v) +
+                           (r.n[size_t(f[2])] * (1 - u) + r.n[size_t(f[3])] * u) * v);
+  else
+    geometricOnly(out, r.flip);
   return out;
 }
 
