@@ -159,17 +159,18 @@ void PlacedRealisticCamera::focus(double distance_m) {
     field.at_infinity = false;
     field.object_point = {0, 0, -1000 * distance_m};
   }
-  // Real rays through a polar grid over the stop (as set), each with its exit point a and
-  // direction d in the image surface's frame: on the plane z = dz it lands at
+  // Real rays through a grid of equal areas over the stop (as set): 6 rings of equal area, 12
+  // rays each, so that the spot's moments are those of a uniformly filled stop. Each ray's exit
+  // point a and direction d in the image surface's frame: on the plane z = dz it lands at
   // a_xy + d_xy / d_z dz, linear in dz, so the spot's second moment about its centroid is
   // quadratic in dz and its minimum is closed-form.
   const double semi = lens_.stopSemiAperture_mm();
   std::vector<Vec2> u, v;  // landing = u + v dz
-  for (int ring = 0; ring <= 6; ++ring) {
-    const double r = semi * 0.95 * ring / 6;
-    const int n = ring == 0 ? 1 : 12;
-    for (int k = 0; k < n; ++k) {
-      const double a = 2 * std::numbers::pi * (k + 0.5 * (ring % 2)) / n;
+  constexpr int kRings = 6, kPerRing = 12;
+  for (int ring = 0; ring < kRings; ++ring) {
+    const double r = semi * std::sqrt((ring + 0.5) / kRings);
+    for (int k = 0; k < kPerRing; ++k) {
+      const double a = 2 * std::numbers::pi * (k + 0.5 * (ring % 2)) / kPerRing;
       const auto e = lens_.aim(field, {r * std::cos(a), r * std::sin(a)});
       if (!e) continue;
       const optics::TraceResult t = lens_.trace(lens_.fieldRay(field, *e));

@@ -25,8 +25,8 @@
 //
 // Focus: `focusdistance` (metres, from the front vertex along the object-space axis; infinity
 // allowed) is honoured by moving the film along the image surface's axis to where the real rays
-// from that object point, through a grid over the stop, have the smallest RMS spot (the spot's
-// second moment is quadratic in the move: solved in closed form).
+// from that object point, through an equal-area grid over the stop (72 rays), have the smallest
+// RMS spot (the spot's second moment is quadratic in the move: solved in closed form).
 //
 // Not supported, refused when the scene asks for them: the pbrt-v1/v2 camera conventions,
 // filmdistance, lenstilt/lensshift, flare, zoom configurations, as-built lenses, simpleweighting;
