@@ -245,7 +245,7 @@ TEST(PlacedRender, DecentredByNothingMatchesTheCoaxialFlatField) {
   const render::CompareResult m = render::compareImages(a, ref, o);
   std::printf("decentred by nothing vs coaxial: mean ratio %.4f, %d of %d blocks beyond z %.2f\n",
               m.mean_ratio, m.z_failures, m.blocks, m.z_bound);
-  EXPECT_NEAR(m.mean_ratio, 1.0, 0.01);
+  EXPECT_NEAR(m.mean_ratio, 1.0, 0.02);
   EXPECT_EQ(m.z_failures, 0);
   // The centre against pi sin^2(theta) of the coaxial lens at that film distance.
   camera::RealisticSettings cs;
@@ -261,6 +261,71 @@ TEST(PlacedRender, DecentredByNothingMatchesTheCoaxialFlatField) {
   const double expected = std::numbers::pi * sin_theta * sin_theta;
   std::printf("flat field centre %.5f, pi sin^2 %.5f\n", centre, expected);
   EXPECT_NEAR(centre, expected, 0.02 * expected);
+}
+
+// The flat field through a lens whose rear surface is tilted (the tilted plate's back face, 20
+// degrees to the film): the film centre's irradiance E = integral of L cos(theta) d(omega) over
+// the directions that pass the lens, computed here by a midpoint rule over a fine grid of
+// direction slopes (each traced backward through the lens, so only the camera's sampling and
+// weights are under test: the disc on the tilted rear plane, its projected-area cosines). A glass
+// of V_d 1e6 keeps the index the same at every wavelength of the render.
+TEST(PlacedRender, FlatFieldThroughATiltedRearSurfaceMatchesTheIntegral) {
+  constexpr double theta_deg = 20, t = 5;
+  const double axial = t / std::cos(theta_deg * std::numbers::pi / 180);
+  const std::string glass = "  GLAS ___BLANK 1 0 1.5168 1000000 0 0 0 0 0 0\n";
+  std::vector<std::string> after = {
+      plane(20, 6),
+      coordbrk(0, 0, theta_deg, 0), plane(0, 4, glass), coordbrk(0, 0, -theta_deg, axial),
+      coordbrk(0, 0, theta_deg, 0), plane(0, 4),        coordbrk(0, 0, -theta_deg, 84)};
+  std::string text = singlet("tilted_rear", 3, {}, after, 0);
+  const size_t at = text.find(kGlass);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, kGlass.size(), glass);
+  const std::string lens = write("tilted_rear.zmx", text);
+  const optics::LensPrescription p = optics::readLensFile(lens);
+  ASSERT_TRUE(p.noncoaxial_loc.has_value());
+  const std::string scene = write(
+      "tilted_rear.pbrt",
+      fmt::format("Camera \"realistic\" \"string lensfile\" \"{}\" \"float aperturediameter\" 6 "
+                  "\"float focusdistance\" 1e6\nFilm \"rgb\" \"integer xresolution\" 30 "
+                  "\"integer yresolution\" 30 \"float diagonal\" 1.2\n"
+                  "Sampler \"independent\" \"integer pixelsamples\" 512\n"
+                  "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
+                  "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n",
+                  lens));
+  const io::Image im = renderScene(scene, 4).image;
+  double mean = 0;
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x)
+      for (int k = 0; k < 3; ++k) mean += im.at(x, y, k) / (3.0 * im.width * im.height);
+  // The integral at the film's centre: the image surface's frame is the object axis's here.
+  camera::RealisticSettings settings;
+  settings.setup.aperture_diameter_mm = 6;
+  settings.setup.focus_distance_m = 1e6;
+  const camera::PlacedRealisticCamera cam(settings, p);
+  const Vec3 film{p.image_frame.origin_mm[0], p.image_frame.origin_mm[1],
+                  p.image_frame.origin_mm[2] + cam.filmOffset_mm()};
+  constexpr int kGrid = 600;
+  constexpr double kSlope = 0.04, h = 2 * kSlope / kGrid;
+  double e = 0;
+  int passed = 0, edge = 0;
+  for (int i = 0; i < kGrid; ++i)
+    for (int j = 0; j < kGrid; ++j) {
+      const double sx = -kSlope + (i + 0.5) * h, sy = -kSlope + (j + 0.5) * h;
+      const Vec3 d = normalize(Vec3{sx, sy, -1});
+      if (!cam.lens().traceBackward({film, d}).ok()) continue;
+      ++passed;
+      if (i == 0 || j == 0 || i == kGrid - 1 || j == kGrid - 1) ++edge;
+      const double q = 1 + sx * sx + sy * sy;
+      e += h * h / (q * q);  // cos(theta) d(omega) = dx dy / (1 + x^2 + y^2)^2
+    }
+  ASSERT_GT(passed, 1000);
+  ASSERT_EQ(edge, 0);  // the grid holds the whole cone
+  std::printf("tilted rear surface: flat field %.6f, integral %.6f (%d of %d directions pass)\n",
+              mean, e, passed, kGrid * kGrid);
+  // 512 spp: the mean's noise is about 0.6% (three seeds at 1024 spp: 1.0001, 0.9956, 1.0033);
+  // a cosine of the tilted plane left out or doubled would be 6% off.
+  EXPECT_NEAR(mean, e, 0.02 * e);
 }
 
 // What the placed camera does not model is refused at the scene's Camera line (bdpt renders as
