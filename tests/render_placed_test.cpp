@@ -328,6 +328,37 @@ TEST(PlacedRender, FlatFieldThroughATiltedRearSurfaceMatchesTheIntegral) {
   EXPECT_NEAR(mean, e, 0.02 * e);
 }
 
+// The backward trace the camera uses retraces the forward one (reciprocity): a ray traced from
+// the object side to the image surface and sent back from there reversed leaves the front
+// surface where it entered, reversed (tilted plate and decentred lens: both media orders).
+TEST(PlacedRender, BackwardTraceRetracesTheForwardOne) {
+  const std::string lens = write(
+      "retrace.zmx",
+      singlet("retrace", 3, {coordbrk(0.2, 0.5, 0, kStopGap)},
+              {plane(20, 6), coordbrk(0, 0, 15, 0), plane(0, 5, kGlass), coordbrk(0, 0, -15, 5),
+               coordbrk(0, 0, 15, 0), plane(0, 5), coordbrk(-0.2, -0.5, -15, 70)},
+              0));
+  const optics::PlacedLens pl(optics::readLensFile(lens), 550);
+  int traced = 0;
+  for (double x : {-2.0, 0.0, 1.5})
+    for (double y : {-2.5, 0.0, 1.0}) {
+      optics::PlacedLens::Field f;
+      f.angle_x_deg = 0.5, f.angle_y_deg = -1;
+      const optics::Ray in = pl.fieldRay(f, {x, y});
+      std::vector<Vec3> path;
+      const optics::TraceResult fwd = pl.trace(in, {}, &path);
+      if (!fwd.ok()) continue;
+      ++traced;
+      const optics::TraceResult back =
+          pl.traceBackward({fwd.ray.origin, -1.0 * fwd.ray.direction});
+      ASSERT_TRUE(back.ok());
+      const Vec3 entry = path[1];  // the front surface's hit
+      EXPECT_NEAR(length(back.ray.origin - entry), 0, 1e-9);
+      EXPECT_NEAR(length(back.ray.direction + in.direction), 0, 1e-9);
+    }
+  EXPECT_GE(traced, 5);
+}
+
 // What the placed camera does not model is refused at the scene's Camera line (bdpt renders as
 // path, warned, as for every camera without importance).
 TEST(PlacedRender, UnsupportedSettingsAreRefused) {
