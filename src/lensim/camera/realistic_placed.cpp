@@ -145,6 +145,14 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings,
                                       "z range [{:.4f}, {:.4f}] mm (its own frame)",
                                       2 * half_width_mm_, 2 * half_height_mm_, film_offset_mm_,
                                       zmin, zmax));
+  // The film must stay on the image side of the last surface, where the file's image surface
+  // is: a focus that moves it across (a virtual image, an object too close) cannot be used.
+  const double image_z = toLocal(rear_frame_, origin(image_frame_) - origin(rear_frame_)).z;
+  if ((above == 4) != (image_z > zmax))
+    throw Error(fmt::format("focusdistance {:g} m: the best focus of real rays lies {:.4f} mm "
+                            "along the image surface's axis, on the object side of the last "
+                            "surface (a virtual image): focus farther",
+                            focus_distance_m_, film_offset_mm_));
   z_near_ = above == 4 ? zmax : zmin;
   z_far_ = above == 4 ? zmin : zmax;
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
