@@ -45,7 +45,9 @@ std::string write(const std::string& name, const std::string& text) {
 }
 
 // Zemax rows.
-std::string surf(int n, const std::string& body) { return fmt::format("SURF {}\n{}", n, body); }
+std::string surf(int n, const std::string& body) {
+  return fmt::format("SURF {}\n{}", n, body);
+}
 std::string plane(double disz, double diam, const std::string& extra = "") {
   return fmt::format("  TYPE STANDARD\n  CURV 0.0\n  DISZ {}\n  DIAM {}\n{}", disz, diam, extra);
 }
@@ -60,11 +62,12 @@ const std::string kHead =
     "VERS 190513 80 123457 L123457\nMODE SEQ\nNAME {}\nUNIT MM X W X CM MR CPMM\n"
     "WAVM 1 0.5875618 1\nPWAV 1\nSURF 0\n  TYPE STANDARD\n  CURV 0.0\n  DISZ INFINITY\n";
 
-// The singlet (R 50 plano-convex, 5 mm, semi-diameter 6 mm) 10 mm behind a stop of semi-diameter stop_semi; `middle`:
-// rows between the stop and the lens, `after`: rows between the lens and the image (which is
-// image_gap behind the last of them).
-std::string singlet(const std::string& name, double stop_semi, const std::vector<std::string>& middle,
-                    const std::vector<std::string>& after, double image_gap) {
+// The singlet (R 50 plano-convex, 5 mm, semi-diameter 6 mm) 10 mm behind a stop of semi-diameter
+// stop_semi; `middle`: rows between the stop and the lens, `after`: rows between the lens and the
+// image (which is image_gap behind the last of them).
+std::string singlet(const std::string& name, double stop_semi,
+                    const std::vector<std::string>& middle, const std::vector<std::string>& after,
+                    double image_gap) {
   std::string s = fmt::format(fmt::runtime(kHead), name);
   int n = 1;
   s += surf(n++, "  STOP\n" + plane(middle.empty() ? kStopGap : 0, stop_semi));
@@ -82,16 +85,17 @@ std::string singlet(const std::string& name, double stop_semi, const std::vector
 // pixels (10 um each).
 std::string lampScene(const std::string& name, const std::string& lens, double aperture_mm,
                       double distance, int spp) {
-  return write(name, fmt::format(
-                         "Camera \"realistic\" \"string lensfile\" \"{}\" \"float aperturediameter\" "
-                         "{} \"float focusdistance\" {}\n"
-                         "Film \"rgb\" \"integer xresolution\" 160 \"integer yresolution\" 160 "
-                         "\"float diagonal\" {}\n"
-                         "Sampler \"independent\" \"integer pixelsamples\" {}\n"
-                         "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
-                         "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
-                         "Translate 0 0 {}\nShape \"sphere\" \"float radius\" 0.001\nAttributeEnd\n",
-                         lens, aperture_mm, distance, 1.6 * std::sqrt(2.0), spp, distance));
+  return write(
+      name,
+      fmt::format("Camera \"realistic\" \"string lensfile\" \"{}\" \"float aperturediameter\" "
+                  "{} \"float focusdistance\" {}\n"
+                  "Film \"rgb\" \"integer xresolution\" 160 \"integer yresolution\" 160 "
+                  "\"float diagonal\" {}\n"
+                  "Sampler \"independent\" \"integer pixelsamples\" {}\n"
+                  "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
+                  "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
+                  "Translate 0 0 {}\nShape \"sphere\" \"float radius\" 0.001\nAttributeEnd\n",
+                  lens, aperture_mm, distance, 1.6 * std::sqrt(2.0), spp, distance));
 }
 
 constexpr double kPixel_mm = 0.01, kHalf_mm = 0.8;
@@ -142,12 +146,11 @@ render::RenderResult renderScene(const std::string& path, int seed, int spp = 0)
 TEST(PlacedRender, DecentredLensDisplacesTheImageByTheParaxialAmount) {
   constexpr double d = 0.5, distance_m = 1;
   const std::string lens = write(
-      "decentred.zmx", singlet("decentred", 3, {coordbrk(0, d, 0, kStopGap)},
-                               {coordbrk(0, -d, 0, kImage)}, 0));
+      "decentred.zmx",
+      singlet("decentred", 3, {coordbrk(0, d, 0, kStopGap)}, {coordbrk(0, -d, 0, kImage)}, 0));
   ASSERT_TRUE(optics::readLensFile(lens).noncoaxial_loc.has_value());
-  const Vec2 c = centroidMm(renderScene(lampScene("decentred.pbrt", lens, 6, distance_m, 32),
-                                        1)
-                                .image);
+  const Vec2 c =
+      centroidMm(renderScene(lampScene("decentred.pbrt", lens, 6, distance_m, 32), 1).image);
   const double image_from_lens_axis = paraxialImageHeight(-d, 1000 * distance_m + kStopGap);
   const double expected = d + image_from_lens_axis;
   std::printf("decentred singlet: image centroid (%.5f, %.5f) mm, paraxial (0, %.5f) mm\n", c.x,
@@ -175,7 +178,8 @@ TEST(PlacedRender, TiltedPlateShiftsTheImageByTheClosedForm) {
   const std::string lens = write("plate.zmx", singlet("plate", 1, {}, after, 0));
   ASSERT_TRUE(optics::readLensFile(lens).noncoaxial_loc.has_value());
   const Vec2 c = centroidMm(renderScene(lampScene("plate.pbrt", lens, 2, 1, 64), 2).image);
-  const double s = std::sin(theta), shift = t * s * (1 - std::cos(theta) / std::sqrt(kN * kN - s * s));
+  const double s = std::sin(theta),
+               shift = t * s * (1 - std::cos(theta) / std::sqrt(kN * kN - s * s));
   std::printf("tilted plate: image centroid (%.5f, %.5f) mm, closed form (0, %.5f) mm\n", c.x, c.y,
               -shift);
   EXPECT_NEAR(c.y, -shift, kPixel_mm);
@@ -189,10 +193,10 @@ TEST(PlacedRender, TiltedPlateShiftsTheImageByTheClosedForm) {
 // pi sin^2 of the real marginal ray's angle, as in RealisticRender.FlatFieldAndExposure.
 TEST(PlacedRender, DecentredByNothingMatchesTheCoaxialFlatField) {
   const std::string coaxial = write("coaxial.zmx", singlet("coaxial", 5, {}, {}, kImage));
-  const std::string placed = write(
-      "dummy.zmx", singlet("dummy", 5,
-                           {coordbrk(0, 3, 0, 0), plane(0, 40), coordbrk(0, -3, 0, kStopGap)}, {},
-                           kImage));
+  const std::string placed =
+      write("dummy.zmx",
+            singlet("dummy", 5, {coordbrk(0, 3, 0, 0), plane(0, 40), coordbrk(0, -3, 0, kStopGap)},
+                    {}, kImage));
   ASSERT_FALSE(optics::readLensFile(coaxial).noncoaxial_loc.has_value());
   ASSERT_TRUE(optics::readLensFile(placed).noncoaxial_loc.has_value());
   const std::string common =
@@ -200,10 +204,10 @@ TEST(PlacedRender, DecentredByNothingMatchesTheCoaxialFlatField) {
       "Sampler \"independent\" \"integer pixelsamples\" 64\n"
       "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
       "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n";
-  const std::string placed_scene = write(
-      "dummy.pbrt", fmt::format("Camera \"realistic\" \"string lensfile\" \"{}\" \"float "
-                                "aperturediameter\" 10 \"float focusdistance\" 1e6\n{}",
-                                placed, common));
+  const std::string placed_scene =
+      write("dummy.pbrt", fmt::format("Camera \"realistic\" \"string lensfile\" \"{}\" \"float "
+                                      "aperturediameter\" 10 \"float focusdistance\" 1e6\n{}",
+                                      placed, common));
   camera::RealisticSettings settings;
   settings.setup.aperture_diameter_mm = 10;
   settings.setup.focus_distance_m = 1e6;
@@ -230,10 +234,10 @@ TEST(PlacedRender, DecentredByNothingMatchesTheCoaxialFlatField) {
     EXPECT_LT(expected, -0.05);
     EXPECT_NEAR(cam.filmOffset_mm(), expected, 0.05 * std::abs(expected));
   }
-  const std::string coaxial_scene = write(
-      "coaxial.pbrt", fmt::format("Camera \"realistic\" \"string lensfile\" \"{}\" \"float "
-                                  "aperturediameter\" 10 \"float filmdistance\" {:.9f}\n{}",
-                                  coaxial, film_mm, common));
+  const std::string coaxial_scene =
+      write("coaxial.pbrt", fmt::format("Camera \"realistic\" \"string lensfile\" \"{}\" \"float "
+                                        "aperturediameter\" 10 \"float filmdistance\" {:.9f}\n{}",
+                                        coaxial, film_mm, common));
   const io::Image a = renderScene(placed_scene, 1).image;
   const io::Image b = renderScene(placed_scene, 2).image;
   const io::Image ref = renderScene(coaxial_scene, 3, 256).image;
@@ -273,10 +277,13 @@ TEST(PlacedRender, FlatFieldThroughATiltedRearSurfaceMatchesTheIntegral) {
   constexpr double theta_deg = 20, t = 5;
   const double axial = t / std::cos(theta_deg * std::numbers::pi / 180);
   const std::string glass = "  GLAS ___BLANK 1 0 1.5168 1000000 0 0 0 0 0 0\n";
-  std::vector<std::string> after = {
-      plane(20, 6),
-      coordbrk(0, 0, theta_deg, 0), plane(0, 4, glass), coordbrk(0, 0, -theta_deg, axial),
-      coordbrk(0, 0, theta_deg, 0), plane(0, 4),        coordbrk(0, 0, -theta_deg, 84)};
+  std::vector<std::string> after = {plane(20, 6),
+                                    coordbrk(0, 0, theta_deg, 0),
+                                    plane(0, 4, glass),
+                                    coordbrk(0, 0, -theta_deg, axial),
+                                    coordbrk(0, 0, theta_deg, 0),
+                                    plane(0, 4),
+                                    coordbrk(0, 0, -theta_deg, 84)};
   std::string text = singlet("tilted_rear", 3, {}, after, 0);
   const size_t at = text.find(kGlass);
   ASSERT_NE(at, std::string::npos);
@@ -349,8 +356,7 @@ TEST(PlacedRender, BackwardTraceRetracesTheForwardOne) {
       const optics::TraceResult fwd = pl.trace(in, {}, &path);
       if (!fwd.ok()) continue;
       ++traced;
-      const optics::TraceResult back =
-          pl.traceBackward({fwd.ray.origin, -1.0 * fwd.ray.direction});
+      const optics::TraceResult back = pl.traceBackward({fwd.ray.origin, -1.0 * fwd.ray.direction});
       ASSERT_TRUE(back.ok());
       const Vec3 entry = path[1];  // the front surface's hit
       EXPECT_NEAR(length(back.ray.origin - entry), 0, 1e-9);

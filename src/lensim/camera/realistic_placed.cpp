@@ -54,15 +54,15 @@ void refuseUnsupported(const RealisticSettings& s) {
     throw Error(at(s.tolerance_loc), fmt::format("tolerances/asbuilt: {}", why));
   if (s.simple_weighting) throw Error(fmt::format("simpleweighting: {}", why));
   if (s.setup.film_distance_mm)
-    throw Error(fmt::format("filmdistance: {} (give focusdistance: the film then moves along the "
-                            "image surface's axis to the best focus of real rays)",
-                            why));
+    throw Error(
+        fmt::format("filmdistance: {} (give focusdistance: the film then moves along the "
+                    "image surface's axis to the best focus of real rays)",
+                    why));
 }
 
 }  // namespace
 
-PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings,
-                                             optics::LensPrescription p)
+PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics::LensPrescription p)
     : settings_(std::move(settings)), lens_([&]() -> optics::PlacedLens {
         refuseUnsupported(settings_);
         if (settings_.glass_match)
@@ -73,12 +73,12 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings,
           optics::LensSurface& s = p.surfaces[size_t(*stop)];
           const double max_d = s.aperture_diameter_mm;
           double d = settings_.setup.aperture_diameter_mm.value_or(max_d);
-          if (!(d > 0))
-            throw Error(fmt::format("aperturediameter {} mm must be > 0", d));
+          if (!(d > 0)) throw Error(fmt::format("aperturediameter {} mm must be > 0", d));
           if (d > max_d) {
-            logWarning(fmt::format("{}: aperturediameter {} mm is larger than the stop's clear "
-                                   "diameter {} mm: using {} mm",
-                                   p.path, d, max_d, max_d));
+            logWarning(
+                fmt::format("{}: aperturediameter {} mm is larger than the stop's clear "
+                            "diameter {} mm: using {} mm",
+                            p.path, d, max_d, max_d));
             d = max_d;
           }
           stop_radius_mm_ = d / 2;
@@ -103,8 +103,8 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings,
     for (int i = 0; i <= 64; ++i)
       for (int k = 0; k < 16; ++k) {
         const double h = rear_semi_mm_ * i / 64, a = 2 * std::numbers::pi * k / 16;
-        if (auto sg = optics::surfaceSag(rear.radius_mm, rear.shape, h * std::cos(a),
-                                         h * std::sin(a))) {
+        if (auto sg =
+                optics::surfaceSag(rear.radius_mm, rear.shape, h * std::cos(a), h * std::sin(a))) {
           zmin = std::min(zmin, sg->z);
           zmax = std::max(zmax, sg->z);
         }
@@ -140,27 +140,27 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings,
       below += q.z < zmin - 1e-6;
     }
   if (above != 4 && below != 4)
-    throw Error(rear.loc, fmt::format("the film ({:.3f} x {:.3f} mm, moved {:.4f} mm along the "
-                                      "image surface's axis) reaches into the last surface's "
-                                      "z range [{:.4f}, {:.4f}] mm (its own frame)",
-                                      2 * half_width_mm_, 2 * half_height_mm_, film_offset_mm_,
-                                      zmin, zmax));
+    throw Error(rear.loc,
+                fmt::format("the film ({:.3f} x {:.3f} mm, moved {:.4f} mm along the "
+                            "image surface's axis) reaches into the last surface's "
+                            "z range [{:.4f}, {:.4f}] mm (its own frame)",
+                            2 * half_width_mm_, 2 * half_height_mm_, film_offset_mm_, zmin, zmax));
   // The film must stay on the image side of the last surface, where the file's image surface
   // is: a focus that moves it across (a virtual image, an object too close) cannot be used.
   const double image_z = toLocal(rear_frame_, origin(image_frame_) - origin(rear_frame_)).z;
   if ((above == 4) != (image_z > zmax))
-    throw Error(fmt::format("focusdistance {:g} m: the best focus of real rays lies {:.4f} mm "
-                            "along the image surface's axis, on the object side of the last "
-                            "surface (a virtual image): focus farther",
-                            focus_distance_m_, film_offset_mm_));
+    throw Error(
+        fmt::format("focusdistance {:g} m: the best focus of real rays lies {:.4f} mm "
+                    "along the image surface's axis, on the object side of the last "
+                    "surface (a virtual image): focus farther",
+                    focus_distance_m_, film_offset_mm_));
   z_near_ = above == 4 ? zmax : zmin;
   z_far_ = above == 4 ? zmin : zmax;
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void PlacedRealisticCamera::focus(double distance_m) {
-  if (!(distance_m > 0))
-    throw Error(fmt::format("focusdistance {} m must be > 0", distance_m));
+  if (!(distance_m > 0)) throw Error(fmt::format("focusdistance {} m must be > 0", distance_m));
   focus_distance_m_ = distance_m;
   optics::PlacedLens::Field field;
   if (std::isfinite(distance_m)) {
@@ -191,9 +191,10 @@ void PlacedRealisticCamera::focus(double distance_m) {
     }
   }
   if (u.size() < 3)
-    throw Error(fmt::format("focusdistance {} m: {} real rays from the object point on the axis "
-                            "reach the image surface (3 or more needed to focus)",
-                            distance_m, u.size()));
+    throw Error(
+        fmt::format("focusdistance {} m: {} real rays from the object point on the axis "
+                    "reach the image surface (3 or more needed to focus)",
+                    distance_m, u.size()));
   Vec2 mu{}, mv{};
   const double share = 1.0 / double(u.size());
   for (size_t i = 0; i < u.size(); ++i) mu = mu + u[i] * share, mv = mv + v[i] * share;
@@ -204,21 +205,22 @@ void PlacedRealisticCamera::focus(double distance_m) {
     vv += dv.x * dv.x + dv.y * dv.y;
   }
   if (!(vv > 0))
-    throw Error(fmt::format("focusdistance {} m: the rays leave the lens parallel (an afocal "
-                            "system): no film position focuses them",
-                            distance_m));
+    throw Error(
+        fmt::format("focusdistance {} m: the rays leave the lens parallel (an afocal "
+                    "system): no film position focuses them",
+                    distance_m));
   film_offset_mm_ = -uv / vv;
   double rms = 0;
   for (size_t i = 0; i < u.size(); ++i) {
     const Vec2 q = (u[i] - mu) + (v[i] - mv) * film_offset_mm_;
     rms += (q.x * q.x + q.y * q.y) / double(u.size());
   }
-  logInfo(fmt::format("{}: focused at {} from the front vertex by moving the film {:.6f} mm along "
-                      "the image surface's axis (RMS spot {:.6f} mm, {} real rays)",
-                      path_.empty() ? name_ : path_,
-                      std::isfinite(distance_m) ? fmt::format("{:g} m", distance_m)
-                                                : std::string("infinity"),
-                      film_offset_mm_, std::sqrt(rms), u.size()));
+  logInfo(fmt::format(
+      "{}: focused at {} from the front vertex by moving the film {:.6f} mm along "
+      "the image surface's axis (RMS spot {:.6f} mm, {} real rays)",
+      path_.empty() ? name_ : path_,
+      std::isfinite(distance_m) ? fmt::format("{:g} m", distance_m) : std::string("infinity"),
+      film_offset_mm_, std::sqrt(rms), u.size()));
 }
 
 Vec2 PlacedRealisticCamera::filmPoint(Vec2 raster) const {
@@ -254,8 +256,8 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
   const Vec3 q = toLocal(rear_frame_, p - origin(rear_frame_));
   const double radius = discRadius(q);
   const Vec2 d = render::sampleUniformDiskConcentric(sample.lens);
-  const Vec3 target = toGlobal(rear_frame_, {radius * d.x, radius * d.y, z_near_}) +
-                      origin(rear_frame_);
+  const Vec3 target =
+      toGlobal(rear_frame_, {radius * d.x, radius * d.y, z_near_}) + origin(rear_frame_);
   const Vec3 to = target - p;
   const double r2 = dot(to, to);
   const Vec3 dir = to / std::sqrt(r2);
@@ -288,7 +290,8 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
   const Vec3 o_cam{r.ray.origin.x * u, r.ray.origin.y * u, -r.ray.origin.z * u};
   const Vec3 d_cam{r.ray.direction.x, r.ray.direction.y, -r.ray.direction.z};
   CameraRay ray;
-  ray.time = settings_.shutter_open + sample.time * (settings_.shutter_close - settings_.shutter_open);
+  ray.time =
+      settings_.shutter_open + sample.time * (settings_.shutter_close - settings_.shutter_open);
   const Transform& cw = settings_.world_from_camera.isAnimated()
                             ? settings_.world_from_camera.interpolate(ray.time)
                             : settings_.world_from_camera.start();
