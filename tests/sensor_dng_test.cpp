@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -859,6 +860,81 @@ TEST(SensorDng, RgbwColorCheckerDevelopedByDcrawEmuAndLensim) {
   std::printf("RGBW ColorChecker, lensim develop --ignore-w: mean dE2000 %.2f, max %.2f\n", no_w,
               worst);
   EXPECT_LT(own, no_w + 0.1);
+}
+
+TEST(SensorDng, QuadBayerRemosaicedToBayerDng) {
+  // "string dngcfa" "bayer": a tile dcraw cannot hold written as an RGGB DNG (from the full
+  // image's top-left pixel), stated in ImageDescription. A noise-free flat field of distinct
+  // R, G and B levels: dcraw -D decodes each pixel as its RGGB filter's level (1 DN per 4 e- at
+  // ISO 100, black 512), at three window origins; LibRaw reports the Bayer pattern.
+  const std::string dir = tmpDir("remosaic");
+  for (const char* cfa : {"RRGG/RRGG/GGBB/GGBB", "WBWG/BWGW/WGWR/GWRW"})
+    for (const auto& [x0, y0] : std::vector<std::pair<int, int>>{{0, 0}, {1, 0}, {3, 5}}) {
+      SensorConfig cfg;
+      cfg.cfa = cfa;
+      cfg.dng_cfa = "bayer";
+      cfg.noise = false;
+      cfg.dark_current_e_s = 0;
+      io::Image im(28, 24, {"R", "G", "B"});
+      const float level[3] = {4000, 10000, 2400};
+      for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 28; ++x)
+          for (int c = 0; c < 3; ++c) im.at(x, y, c) = level[c];
+      im.metadata[kRawSensorKey] = cfg.toText();
+      const std::string path = dir + "/q.dng";
+      writeRawImage(path, im, x0, y0);
+      int st = -1, w = 0, h = 0;
+      const std::vector<uint16_t> got = parsePgm(run("dcraw -D -4 -c " + path, &st), w, h);
+      ASSERT_EQ(st, 0);
+      ASSERT_EQ(got.size(), size_t(28 * 24));
+      for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 28; ++x) {
+          const int fx = (x0 + x) % 2, fy = (y0 + y) % 2;
+          const int c = fy == 0 ? (fx == 0 ? 0 : 1) : (fx == 0 ? 1 : 2);
+          ASSERT_EQ(got[size_t(y * 28 + x)], 512 + int(level[c]) / 4)
+              << cfa << " at " << x << "," << y << " origin " << x0 << "," << y0;
+        }
+      const std::string info = run("raw-identify -v " + path, &st);
+      const char* pattern = x0 % 2 == 0 ? (y0 % 2 == 0 ? "RGGBRGGB" : "GBRGGBRG")
+                                        : (y0 % 2 == 0 ? "GRBGGRBG" : "BGGRBGGR");
+      EXPECT_NE(info.find(std::string("Filter pattern: ") + pattern), std::string::npos)
+          << cfa << " " << x0 << "," << y0 << "\n" << info;
+      EXPECT_NE(info.find("Raw colors: 3"), std::string::npos) << info;
+      std::ifstream in(path, std::ios::binary);
+      const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      EXPECT_NE(bytes.find(std::string("Bayer RGGB remosaic by lensim of the sensor's 4x4 CFA ") +
+                           cfa),
+                std::string::npos);
+    }
+  // A bad value, at its scene line.
+  const std::string scene = dir + "/bad.pbrt";
+  {
+    std::ofstream f(scene);
+    f << "Camera \"perspective\"\nFilm \"raw\" \"integer xresolution\" 32\n"
+         "  \"string dngcfa\" \"quad\"\nWorldBegin\n";
+  }
+  const auto r = lensim::test::runLensim("render -q " + scene + " -o " + dir + "/bad.dng");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find(scene + ":3:3: error: \"dngcfa\": \"quad\"; expected \"native\""),
+            std::string::npos)
+      << r.out;
+}
+
+TEST(SensorDng, QuadBayerColorCheckerRemosaicedDevelopedByDcrawEmu) {
+  // The rendered chart on a Quad Bayer sensor and on Kodak's 4x4 RGBW, written as RGGB DNGs
+  // ("string dngcfa" "bayer") and developed by LibRaw's dcraw_emu (AHD).
+  const std::string camera = "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1";
+  double worst = 0;
+  const double quad = renderedChartDeltaE(
+      "chart_quad", camera, 5, "\"string cfa\" \"RRGG/RRGG/GGBB/GGBB\" \"string dngcfa\" \"bayer\"",
+      &worst);
+  std::printf("Quad Bayer remosaiced to RGGB, dcraw_emu: mean dE2000 %.2f, max %.2f\n", quad, worst);
+  EXPECT_LT(quad, 3.0);
+  const double kodak = renderedChartDeltaE(
+      "chart_kodak", camera, 5, "\"string cfa\" \"WBWG/BWGW/WGWR/GWRW\" \"string dngcfa\" \"bayer\"",
+      &worst);
+  std::printf("4x4 RGBW remosaiced to RGGB, dcraw_emu: mean dE2000 %.2f, max %.2f\n", kodak, worst);
+  EXPECT_LT(kodak, 3.0);
 }
 
 namespace {

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "lensim/render/film/pixel_sensor.h"
+#include "lensim/render/sensor/cfa_interpolate.h"
 
 namespace lensim::render {
 
@@ -30,13 +31,6 @@ constexpr double kAtGCol[5][5] = {{0, 0, -1, 0, 0}, {0, -1, 4, -1, 0}, {0.5, 0, 
 // At a red pixel, blue (and at a blue pixel, red).
 constexpr double kRBAtBR[5][5] = {{0, 0, -1.5, 0, 0}, {0, 2, 0, 2, 0}, {-1.5, 0, 6, 0, -1.5},
                                   {0, 2, 0, 2, 0},    {0, 0, -1.5, 0, 0}};
-
-// A channel's tent-weighted mean about a pixel: its value, the factor sum(k^2) / sum(k)^2 by which
-// the mean's variance is below one pixel's (for independent pixels of equal variance), and the
-// largest pixel value it took in.
-struct TentMean {
-  double value = 0, variance_factor = 1, top = 0;
-};
 
 // Luminance from the W pixels (docs/sensor.md, "lensim develop"). A W pixel's response is
 // proportional to R + G + B (Film "raw" writes W = R + G + B, AsShotNeutral's W entry the sum of
@@ -131,27 +125,8 @@ io::Image developRaw(const io::DngImage& raw, double exposure_ev, WPixels w_pixe
     // Another pattern: each missing channel is the tent-weighted mean of that channel's pixels
     // around (normalised convolution), over a window that holds at least one of them. W pixels
     // (no colour filter) hold no R, G or B value of their own: all three come from around.
-    const int r0 = std::max(1, (std::max(cw, ch) + 1) / 2);
-    auto mean = [&](int c, int x, int y) {
-      TentMean t;
-      for (int r = r0;; r *= 2) {
-        double s = 0, sw = 0, sw2 = 0, top = 0;
-        for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
-          for (int xx = std::max(0, x - r); xx <= std::min(w - 1, x + r); ++xx)
-            if (channel(xx, yy) == c) {
-              const double k = double(r + 1 - std::abs(xx - x)) * double(r + 1 - std::abs(yy - y));
-              const double v = m[size_t(yy) * size_t(w) + size_t(xx)];
-              s += k * v;
-              sw += k;
-              sw2 += k * k;
-              top = std::max(top, v);
-            }
-        if (sw > 0 || r > std::max(w, h)) {
-          if (sw > 0) t = {s / sw, sw2 / (sw * sw), top};
-          return t;
-        }
-      }
-    };
+    const int r0 = tentRadius(cw, ch);
+    auto mean = [&](int c, int x, int y) { return tentMean(m, w, h, channel, c, x, y, r0); };
     const bool fuse = w_pixels == WPixels::kLuminance && raw.w_neutral > 0 &&
                       std::find(p.begin(), p.end(), uint8_t(kWhite)) != p.end();
     double w_top = 0;  // the brightest W pixel (white balanced)
