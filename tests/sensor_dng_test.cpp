@@ -906,6 +906,31 @@ TEST(SensorDng, QuadBayerRemosaicedToBayerDng) {
                            cfa),
                 std::string::npos);
     }
+  // With noise: a pixel whose filter is its Bayer filter keeps the sensor's raw value, bit for
+  // bit the DN of the .exr output (the sensor's own mosaic) of the same frame.
+  SensorConfig cfg;
+  cfg.cfa = "RRGG/RRGG/GGBB/GGBB";
+  cfg.dng_cfa = "bayer";
+  cfg.seed = 5;
+  const io::Image im = electronImage(32, 24, cfg);
+  writeRawImage(dir + "/n.dng", im, 2, 1);
+  writeRawImage(dir + "/n.exr", im, 2, 1);
+  int st = -1, w = 0, h = 0;
+  const std::vector<uint16_t> got = parsePgm(run("dcraw -D -4 -c " + dir + "/n.dng", &st), w, h);
+  ASSERT_EQ(got.size(), size_t(32 * 24));
+  const io::Image exr = io::readImage(dir + "/n.exr");
+  const int dn = exr.channelIndex("DN").value_or(-1);
+  ASSERT_GE(dn, 0);
+  int kept = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const int fx = (2 + x) % 2, fy = (1 + y) % 2;
+      const char bayer = fy == 0 ? (fx == 0 ? 'R' : 'G') : (fx == 0 ? 'G' : 'B');
+      if (patternLetter("RRGG/RRGG/GGBB/GGBB", 2 + x, 1 + y) != bayer) continue;
+      ++kept;
+      ASSERT_EQ(float(got[size_t(y * 32 + x)]), exr.at(x, y, dn)) << x << "," << y;
+    }
+  EXPECT_EQ(kept, 32 * 24 * 3 / 8);  // of a 4x4 tile: 1 of the 4 R sites, 4 of 8 G, 1 of 4 B
   // A bad value, at its scene line.
   const std::string scene = dir + "/bad.pbrt";
   {
@@ -920,9 +945,10 @@ TEST(SensorDng, QuadBayerRemosaicedToBayerDng) {
       << r.out;
 }
 
-TEST(SensorDng, QuadBayerColorCheckerRemosaicedDevelopedByDcrawEmu) {
+TEST(SensorDng, QuadBayerColorCheckerRemosaicedDevelopedByDcrawEmuAndDarktable) {
   // The rendered chart on a Quad Bayer sensor and on Kodak's 4x4 RGBW, written as RGGB DNGs
-  // ("string dngcfa" "bayer") and developed by LibRaw's dcraw_emu (AHD).
+  // ("string dngcfa" "bayer") and developed by LibRaw's dcraw_emu (AHD); the Quad Bayer one also
+  // by darktable-cli (as RenderedColorCheckerDevelopedByDarktable).
   const std::string camera = "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1";
   double worst = 0;
   const double quad = renderedChartDeltaE(
@@ -935,6 +961,13 @@ TEST(SensorDng, QuadBayerColorCheckerRemosaicedDevelopedByDcrawEmu) {
       &worst);
   std::printf("4x4 RGBW remosaiced to RGGB, dcraw_emu: mean dE2000 %.2f, max %.2f\n", kodak, worst);
   EXPECT_LT(kodak, 3.0);
+  if (std::system("command -v darktable-cli >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "darktable-cli is not installed (scripts/install-deps installs it)";
+  const double dt = renderedChartDeltaE(
+      "chart_quad_darktable", camera, 5,
+      "\"string cfa\" \"RRGG/RRGG/GGBB/GGBB\" \"string dngcfa\" \"bayer\"", &worst, "darktable");
+  std::printf("Quad Bayer remosaiced to RGGB, darktable-cli: mean dE2000 %.2f, max %.2f\n", dt, worst);
+  EXPECT_LT(dt, 3.0);
 }
 
 namespace {
