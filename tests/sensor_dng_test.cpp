@@ -931,6 +931,17 @@ TEST(SensorDng, QuadBayerRemosaicedToBayerDng) {
       ASSERT_EQ(float(got[size_t(y * 32 + x)]), exr.at(x, y, dn)) << x << "," << y;
     }
   EXPECT_EQ(kept, 32 * 24 * 3 / 8);  // of a 4x4 tile: 1 of the 4 R sites, 4 of 8 G, 1 of 4 B
+  // A 2x2 Bayer tile other than RGGB is written as it is (the same file as without "dngcfa").
+  SensorConfig gbrg;
+  gbrg.cfa = "GBRG";
+  gbrg.seed = 5;
+  writeRawImage(dir + "/native.dng", electronImage(32, 24, gbrg), 1, 0);
+  gbrg.dng_cfa = "bayer";
+  writeRawImage(dir + "/asis.dng", electronImage(32, 24, gbrg), 1, 0);
+  EXPECT_EQ(parsePgm(run("dcraw -D -4 -c " + dir + "/asis.dng", &st), w, h),
+            parsePgm(run("dcraw -D -4 -c " + dir + "/native.dng", &st), w, h));
+  EXPECT_NE(run("raw-identify -v " + dir + "/asis.dng").find("Filter pattern: BGGRBGGR"),
+            std::string::npos);
   // A bad value, at its scene line.
   const std::string scene = dir + "/bad.pbrt";
   {

@@ -5,10 +5,19 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 #include <vector>
 
 namespace lensim::render {
+
+/// Whether a tile of w x h colour codes (0 red, 1 green, 2 blue), row-major, is a 2x2 Bayer one
+/// (RGGB, BGGR, GRBG, GBRG: the greens on a diagonal).
+inline bool isBayerTile(int w, int h, const std::vector<uint8_t>& c) {
+  return w == 2 && h == 2 && c.size() == 4 &&
+         ((c[0] == 1 && c[3] == 1 && c[1] + c[2] == 2 && c[1] != c[2]) ||
+          (c[1] == 1 && c[2] == 1 && c[0] + c[3] == 2 && c[0] != c[3]));
+}
 
 /// A colour's tent-weighted mean about a pixel: its value, the factor sum(k^2) / sum(k)^2 by which
 /// the mean's variance is below one pixel's (for independent pixels of equal variance), and the

@@ -118,9 +118,7 @@ io::Image developRaw(const io::DngImage& raw, double exposure_ev, WPixels w_pixe
     out.at(x, y, 2) = float(std::max(0.0, rgb.z * gain));
   };
   const auto& p = raw.cfa;
-  const bool bayer = cw == 2 && ch == 2 &&
-                     ((p[0] == 1 && p[3] == 1 && p[1] + p[2] == 2 && p[1] != p[2]) ||
-                      (p[1] == 1 && p[2] == 1 && p[0] + p[3] == 2 && p[0] != p[3]));
+  const bool bayer = isBayerTile(cw, ch, p);
   if (!bayer) {
     // Another pattern: each missing channel is the tent-weighted mean of that channel's pixels
     // around (normalised convolution), over a window that holds at least one of them. W pixels

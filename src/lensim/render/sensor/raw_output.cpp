@@ -10,6 +10,7 @@
 #include "lensim/camera/realistic.h"
 #include "lensim/io/dng.h"
 #include "lensim/render/film/pixel_sensor.h"
+#include "lensim/render/sensor/cfa_interpolate.h"
 #include "lensim/render/sensor/develop.h"
 #include "lensim/render/sensor/remosaic.h"
 #include "lensim/render/sensor/sensor_color.h"
@@ -166,7 +167,7 @@ void writeRawImage(const std::string& path, const io::Image& image, int x0, int 
   d.data = dn;
   const CfaPattern& cfa = model.cfa();
   d.mono = cfa.mono;
-  if (!d.mono && cfg.dng_cfa == "bayer") {
+  if (!d.mono && cfg.dng_cfa == "bayer" && !isBayerTile(cfa.width, cfa.height, cfa.colors)) {
     // Remosaiced to RGGB (from the full image's top-left pixel), stated in ImageDescription.
     d.data = remosaicToBayer(dn, w, h, cfa, x0, y0, cfg.black_level_dn, cfg.whiteLevel());
     d.description = fmt::format("Bayer RGGB remosaic by lensim of the sensor's {}x{} CFA {} "
