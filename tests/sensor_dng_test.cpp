@@ -956,6 +956,39 @@ TEST(SensorDng, QuadBayerRemosaicedToBayerDng) {
       << r.out;
 }
 
+TEST(SensorDng, QuadBayerRemosaicSplitRenderMergedEqualsOneRender) {
+  // The remosaic runs where the noise does, once, on the whole image: two tiles merged by
+  // lensim merge give the very same Bayer DNG as one render.
+  const std::string dir = tmpDir("remosaic_split");
+  const std::string scene = dir + "/q.pbrt";
+  {
+    std::ofstream f(scene);
+    f << "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\" \"float fov\" 40\n"
+         "Sampler \"independent\" \"integer pixelsamples\" 4 \"integer seed\" 5\n"
+         "Film \"raw\" \"integer xresolution\" 32 \"integer yresolution\" 24 \"float nits\" 0.0005\n"
+         "  \"float fnumber\" 2.8 \"string cfa\" \"RRGG/RRGG/GGBB/GGBB\" \"string dngcfa\" \"bayer\"\n"
+         "WorldBegin\nLightSource \"infinite\" \"blackbody L\" [5000]\n"
+         "LightSource \"point\" \"blackbody I\" [3000] \"float scale\" 2\n"
+         "Material \"diffuse\" \"rgb reflectance\" [0.8 0.3 0.2]\nShape \"sphere\" \"float radius\" 1\n";
+  }
+  using lensim::test::runLensim;
+  auto r = runLensim("render -q " + scene + " -o " + dir + "/one.dng");
+  ASSERT_EQ(r.status, 0) << r.out;
+  for (int t = 0; t < 2; ++t) {
+    r = runLensim(fmt::format("render -q --tile {}/2 {} -o {}/tile{}.exr", t, scene, dir, t));
+    ASSERT_EQ(r.status, 0) << r.out;
+  }
+  r = runLensim("merge -q " + dir + "/tiles.dng " + dir + "/tile0.exr " + dir + "/tile1.exr");
+  ASSERT_EQ(r.status, 0) << r.out;
+  int st = -1, w = 0, h = 0;
+  const auto one = parsePgm(run("dcraw -D -4 -c " + dir + "/one.dng", &st), w, h);
+  ASSERT_EQ(one.size(), 32u * 24u);
+  EXPECT_EQ(parsePgm(run("dcraw -D -4 -c " + dir + "/tiles.dng", &st), w, h), one);
+  int lit = 0;
+  for (uint16_t v : one) lit += v > 512 + 50;
+  EXPECT_GT(lit, 100);
+}
+
 TEST(SensorDng, QuadBayerColorCheckerRemosaicedDevelopedByDcrawEmuAndDarktable) {
   // The rendered chart on a Quad Bayer sensor and on Kodak's 4x4 RGBW, written as RGGB DNGs
   // ("string dngcfa" "bayer") and developed by LibRaw's dcraw_emu (AHD); the Quad Bayer one also
