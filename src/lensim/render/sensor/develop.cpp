@@ -40,7 +40,9 @@ constexpr double kRBAtBR[5][5] = {{0, 0, -1.5, 0, 0}, {0, 2, 0, 2, 0}, {-1.5, 0,
 // observation of their sum): each channel moves by v_c / (v_R + v_G + v_B + v_W) times the
 // difference W - (R + G + B), with the variances v from a shot-noise model (a pixel's variance
 // proportional to its mean, the same gain for every channel) and the interpolation's weights.
-// This is unbiased, and lowers the variance of every channel and of any colour made of them. A
+// For given weights this is unbiased (the weights come from the noisy values themselves, a
+// small second-order bias: docs/sensor.md) and lowers the variance of every channel and of any
+// colour made of them. A
 // W estimate that took in a W pixel within 0.1 % of the image's brightest W pixel is taken as
 // clipped (a W pixel, collecting all three channels' light, saturates first), and there the
 // colour pixels alone are used. `t` and `tw` are white balanced (divided by n and n_w); `v`
