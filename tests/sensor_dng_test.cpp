@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -514,9 +515,10 @@ double renderedChartDeltaE(const std::string& name, const std::string& camera, d
   EXPECT_EQ(r.status, 0) << r.out;
   int st = -1;
   std::string developed = dir + "/chart.dng.tiff";
-  if (developer == "lensim") {
+  if (developer == "lensim" || developer == "lensim-ignore-w") {
     developed = dir + "/developed.exr";
-    r = lensim::test::runLensim("develop -q " + dir + "/chart.dng -o " + developed);
+    r = lensim::test::runLensim("develop -q " + dir + "/chart.dng -o " + developed +
+                                (developer == "lensim" ? "" : " --ignore-w"));
     EXPECT_EQ(r.status, 0) << r.out;
   } else if (developer == "darktable") {
     // darktable-cli with no workflow defaults (no filmic or base curve: its raw steps, the DNG's
@@ -842,7 +844,8 @@ TEST(SensorDng, XTransColorCheckerDevelopedByDcrawAndLensim) {
 
 TEST(SensorDng, RgbwColorCheckerDevelopedByDcrawEmuAndLensim) {
   // The rendered chart on an RGBW sensor (RG/BW): LibRaw's four-colour path, and lensim
-  // develop's normalised convolution of the R, G and B pixels.
+  // develop's normalised convolution of the R, G and B pixels, with the W pixels' luminance and
+  // without: using W may not worsen the mean CIEDE2000 by more than 0.1.
   const std::string film = "\"string cfa\" \"RG/BW\"";
   const std::string camera = "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1";
   double worst = 0;
@@ -852,6 +855,163 @@ TEST(SensorDng, RgbwColorCheckerDevelopedByDcrawEmuAndLensim) {
   const double own = renderedChartDeltaE("chart_rgbw_lensim", camera, 5, film, &worst, "lensim");
   std::printf("RGBW ColorChecker, lensim develop: mean dE2000 %.2f, max %.2f\n", own, worst);
   EXPECT_LT(own, 3.0);
+  const double no_w =
+      renderedChartDeltaE("chart_rgbw_lensim_no_w", camera, 5, film, &worst, "lensim-ignore-w");
+  std::printf("RGBW ColorChecker, lensim develop --ignore-w: mean dE2000 %.2f, max %.2f\n", no_w,
+              worst);
+  EXPECT_LT(own, no_w + 0.1);
+}
+
+TEST(SensorDng, QuadBayerRemosaicedToBayerDng) {
+  // "string dngcfa" "bayer": a tile dcraw cannot hold written as an RGGB DNG (from the full
+  // image's top-left pixel), stated in ImageDescription. A noise-free flat field of distinct
+  // R, G and B levels: dcraw -D decodes each pixel as its RGGB filter's level (1 DN per 4 e- at
+  // ISO 100, black 512), at three window origins; LibRaw reports the Bayer pattern.
+  const std::string dir = tmpDir("remosaic");
+  for (const char* cfa : {"RRGG/RRGG/GGBB/GGBB", "WBWG/BWGW/WGWR/GWRW"})
+    for (const auto& [x0, y0] : std::vector<std::pair<int, int>>{{0, 0}, {1, 0}, {3, 5}}) {
+      SensorConfig cfg;
+      cfg.cfa = cfa;
+      cfg.dng_cfa = "bayer";
+      cfg.noise = false;
+      cfg.dark_current_e_s = 0;
+      io::Image im(28, 24, {"R", "G", "B"});
+      const float level[3] = {4000, 10000, 2400};
+      for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 28; ++x)
+          for (int c = 0; c < 3; ++c) im.at(x, y, c) = level[c];
+      im.metadata[kRawSensorKey] = cfg.toText();
+      const std::string path = dir + "/q.dng";
+      writeRawImage(path, im, x0, y0);
+      int st = -1, w = 0, h = 0;
+      const std::vector<uint16_t> got = parsePgm(run("dcraw -D -4 -c " + path, &st), w, h);
+      ASSERT_EQ(st, 0);
+      ASSERT_EQ(got.size(), size_t(28 * 24));
+      for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 28; ++x) {
+          const int fx = (x0 + x) % 2, fy = (y0 + y) % 2;
+          const int c = fy == 0 ? (fx == 0 ? 0 : 1) : (fx == 0 ? 1 : 2);
+          ASSERT_EQ(got[size_t(y * 28 + x)], 512 + int(level[c]) / 4)
+              << cfa << " at " << x << "," << y << " origin " << x0 << "," << y0;
+        }
+      const std::string info = run("raw-identify -v " + path, &st);
+      const char* pattern = x0 % 2 == 0 ? (y0 % 2 == 0 ? "RGGBRGGB" : "GBRGGBRG")
+                                        : (y0 % 2 == 0 ? "GRBGGRBG" : "BGGRBGGR");
+      EXPECT_NE(info.find(std::string("Filter pattern: ") + pattern), std::string::npos)
+          << cfa << " " << x0 << "," << y0 << "\n" << info;
+      EXPECT_NE(info.find("Raw colors: 3"), std::string::npos) << info;
+      std::ifstream in(path, std::ios::binary);
+      const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      EXPECT_NE(bytes.find(std::string("Bayer RGGB remosaic by lensim of the sensor's 4x4 CFA ") +
+                           cfa),
+                std::string::npos);
+    }
+  // With noise: a pixel whose filter is its Bayer filter keeps the sensor's raw value, bit for
+  // bit the DN of the .exr output (the sensor's own mosaic) of the same frame.
+  SensorConfig cfg;
+  cfg.cfa = "RRGG/RRGG/GGBB/GGBB";
+  cfg.dng_cfa = "bayer";
+  cfg.seed = 5;
+  const io::Image im = electronImage(32, 24, cfg);
+  writeRawImage(dir + "/n.dng", im, 2, 1);
+  writeRawImage(dir + "/n.exr", im, 2, 1);
+  int st = -1, w = 0, h = 0;
+  const std::vector<uint16_t> got = parsePgm(run("dcraw -D -4 -c " + dir + "/n.dng", &st), w, h);
+  ASSERT_EQ(got.size(), size_t(32 * 24));
+  const io::Image exr = io::readImage(dir + "/n.exr");
+  const int dn = exr.channelIndex("DN").value_or(-1);
+  ASSERT_GE(dn, 0);
+  int kept = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const int fx = (2 + x) % 2, fy = (1 + y) % 2;
+      const char bayer = fy == 0 ? (fx == 0 ? 'R' : 'G') : (fx == 0 ? 'G' : 'B');
+      if (patternLetter("RRGG/RRGG/GGBB/GGBB", 2 + x, 1 + y) != bayer) continue;
+      ++kept;
+      ASSERT_EQ(float(got[size_t(y * 32 + x)]), exr.at(x, y, dn)) << x << "," << y;
+    }
+  EXPECT_EQ(kept, 32 * 24 * 3 / 8);  // of a 4x4 tile: 1 of the 4 R sites, 4 of 8 G, 1 of 4 B
+  // A 2x2 Bayer tile other than RGGB is written as it is (the same file as without "dngcfa").
+  SensorConfig gbrg;
+  gbrg.cfa = "GBRG";
+  gbrg.seed = 5;
+  writeRawImage(dir + "/native.dng", electronImage(32, 24, gbrg), 1, 0);
+  gbrg.dng_cfa = "bayer";
+  writeRawImage(dir + "/asis.dng", electronImage(32, 24, gbrg), 1, 0);
+  EXPECT_EQ(parsePgm(run("dcraw -D -4 -c " + dir + "/asis.dng", &st), w, h),
+            parsePgm(run("dcraw -D -4 -c " + dir + "/native.dng", &st), w, h));
+  EXPECT_NE(run("raw-identify -v " + dir + "/asis.dng").find("Filter pattern: BGGRBGGR"),
+            std::string::npos);
+  // A bad value, at its scene line.
+  const std::string scene = dir + "/bad.pbrt";
+  {
+    std::ofstream f(scene);
+    f << "Camera \"perspective\"\nFilm \"raw\" \"integer xresolution\" 32\n"
+         "  \"string dngcfa\" \"quad\"\nWorldBegin\n";
+  }
+  const auto r = lensim::test::runLensim("render -q " + scene + " -o " + dir + "/bad.dng");
+  EXPECT_EQ(r.status, 1) << r.out;
+  EXPECT_NE(r.out.find(scene + ":3:3: error: \"dngcfa\": \"quad\"; expected \"native\""),
+            std::string::npos)
+      << r.out;
+}
+
+TEST(SensorDng, QuadBayerRemosaicSplitRenderMergedEqualsOneRender) {
+  // The remosaic runs where the noise does, once, on the whole image: two tiles merged by
+  // lensim merge give the very same Bayer DNG as one render.
+  const std::string dir = tmpDir("remosaic_split");
+  const std::string scene = dir + "/q.pbrt";
+  {
+    std::ofstream f(scene);
+    f << "LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\" \"float fov\" 40\n"
+         "Sampler \"independent\" \"integer pixelsamples\" 4 \"integer seed\" 5\n"
+         "Film \"raw\" \"integer xresolution\" 32 \"integer yresolution\" 24 \"float nits\" 0.0005\n"
+         "  \"float fnumber\" 2.8 \"string cfa\" \"RRGG/RRGG/GGBB/GGBB\" \"string dngcfa\" \"bayer\"\n"
+         "WorldBegin\nLightSource \"infinite\" \"blackbody L\" [5000]\n"
+         "LightSource \"point\" \"blackbody I\" [3000] \"float scale\" 2\n"
+         "Material \"diffuse\" \"rgb reflectance\" [0.8 0.3 0.2]\nShape \"sphere\" \"float radius\" 1\n";
+  }
+  using lensim::test::runLensim;
+  auto r = runLensim("render -q " + scene + " -o " + dir + "/one.dng");
+  ASSERT_EQ(r.status, 0) << r.out;
+  for (int t = 0; t < 2; ++t) {
+    r = runLensim(fmt::format("render -q --tile {}/2 {} -o {}/tile{}.exr", t, scene, dir, t));
+    ASSERT_EQ(r.status, 0) << r.out;
+  }
+  r = runLensim("merge -q " + dir + "/tiles.dng " + dir + "/tile0.exr " + dir + "/tile1.exr");
+  ASSERT_EQ(r.status, 0) << r.out;
+  int st = -1, w = 0, h = 0;
+  const auto one = parsePgm(run("dcraw -D -4 -c " + dir + "/one.dng", &st), w, h);
+  ASSERT_EQ(one.size(), 32u * 24u);
+  EXPECT_EQ(parsePgm(run("dcraw -D -4 -c " + dir + "/tiles.dng", &st), w, h), one);
+  int lit = 0;
+  for (uint16_t v : one) lit += v > 512 + 50;
+  EXPECT_GT(lit, 100);
+}
+
+TEST(SensorDng, QuadBayerColorCheckerRemosaicedDevelopedByDcrawEmuAndDarktable) {
+  // The rendered chart on a Quad Bayer sensor and on Kodak's 4x4 RGBW, written as RGGB DNGs
+  // ("string dngcfa" "bayer") and developed by LibRaw's dcraw_emu (AHD); the Quad Bayer one also
+  // by darktable-cli (as RenderedColorCheckerDevelopedByDarktable).
+  const std::string camera = "Camera \"perspective\" \"float fov\" 10.28 \"float shutterclose\" 1";
+  double worst = 0;
+  const double quad = renderedChartDeltaE(
+      "chart_quad", camera, 5, "\"string cfa\" \"RRGG/RRGG/GGBB/GGBB\" \"string dngcfa\" \"bayer\"",
+      &worst);
+  std::printf("Quad Bayer remosaiced to RGGB, dcraw_emu: mean dE2000 %.2f, max %.2f\n", quad, worst);
+  EXPECT_LT(quad, 3.0);
+  const double kodak = renderedChartDeltaE(
+      "chart_kodak", camera, 5, "\"string cfa\" \"WBWG/BWGW/WGWR/GWRW\" \"string dngcfa\" \"bayer\"",
+      &worst);
+  std::printf("4x4 RGBW remosaiced to RGGB, dcraw_emu: mean dE2000 %.2f, max %.2f\n", kodak, worst);
+  EXPECT_LT(kodak, 3.0);
+  if (std::system("command -v darktable-cli >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "darktable-cli is not installed (scripts/install-deps installs it)";
+  const double dt = renderedChartDeltaE(
+      "chart_quad_darktable", camera, 5,
+      "\"string cfa\" \"RRGG/RRGG/GGBB/GGBB\" \"string dngcfa\" \"bayer\"", &worst, "darktable");
+  std::printf("Quad Bayer remosaiced to RGGB, darktable-cli: mean dE2000 %.2f, max %.2f\n", dt, worst);
+  EXPECT_LT(dt, 3.0);
 }
 
 namespace {

@@ -19,6 +19,7 @@ void registerDevelopCommand(CLI::App& app, Action& action) {
   struct Options {
     std::string in, out;
     double exposure = 0;
+    bool ignore_w = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* d = app.add_subcommand(
@@ -29,6 +30,8 @@ void registerDevelopCommand(CLI::App& app, Action& action) {
   d->add_option("-o,--outfile", o->out, "Output image (.png, .jpg, .tif, .exr: linear)")
       ->required();
   d->add_option("--exposure", o->exposure, "Exposure correction in stops (EV)");
+  d->add_flag("--ignore-w", o->ignore_w,
+              "RGBW: leave the W pixels out (by default they give the luminance with R + G + B)");
   d->callback([o, &action]() {
     action = [o]() -> int {
       io::imageFormatFromPath(o->out);  // fail before reading
@@ -36,7 +39,9 @@ void registerDevelopCommand(CLI::App& app, Action& action) {
         throw Error(fmt::format("--exposure {}: expected a number of stops in [-64, 64]",
                                 o->exposure));
       const io::DngImage raw = io::readDng(o->in);
-      io::writeImage(o->out, render::developRaw(raw, o->exposure));
+      io::writeImage(o->out, render::developRaw(raw, o->exposure,
+                                                     o->ignore_w ? render::WPixels::kIgnore
+                                                                 : render::WPixels::kLuminance));
       if (!lensim::quiet())
         logInfo(fmt::format("developed {} into {} ({}x{})", o->in, o->out, raw.width,
                             raw.height));

@@ -181,7 +181,8 @@ void checkOutputs(const scene::Scene& s, const std::vector<std::string>& outs, b
                                 "electrons and raw values: use a .dng or .exr output");
   for (const std::string& out : outs)  // a CFA tile a DNG cannot carry, before rendering
     if (raw && !part_mode && render::isDngPath(out))
-      scene::checkDngCfa(scene::parseCfa(s.film.raw_sensor.cfa, s.film.loc), FileLoc{out});
+      scene::checkDngCfa(scene::parseCfa(s.film.raw_sensor.cfa, s.film.loc), FileLoc{out},
+                         s.film.raw_sensor.dng_cfa);
   for (const std::string& out : outs) {  // fail early (an unknown extension too)
     const bool exr = !(raw && render::isDngPath(out)) &&
                      io::imageFormatFromPath(out) == io::ImageFormat::Exr;

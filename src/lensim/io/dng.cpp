@@ -131,6 +131,9 @@ void writeTo(const std::string& path, const DngImage& im) {
   check(TIFFSetField(tif, TIFFTAG_MAKE, im.make.c_str()), path, "make");
   check(TIFFSetField(tif, TIFFTAG_MODEL, im.model.c_str()), path, "model");
   check(TIFFSetField(tif, TIFFTAG_SOFTWARE, im.software.c_str()), path, "software");
+  if (!im.description.empty())
+    check(TIFFSetField(tif, TIFFTAG_IMAGEDESCRIPTION, im.description.c_str()), path,
+          "ImageDescription");
   setArray(tif, TIFFTAG_DNGVERSION, version, 4, path);
   setArray(tif, TIFFTAG_DNGBACKWARDVERSION, backward, 4, path);
   check(TIFFSetField(tif, TIFFTAG_UNIQUECAMERAMODEL, im.unique_model.c_str()), path,

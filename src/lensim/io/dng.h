@@ -30,6 +30,7 @@ struct DngImage {
   int illuminant1 = 17, illuminant2 = 21;  ///< EXIF LightSource codes (A, D65)
   std::string make = "lensim", model = "lensim sensor", unique_model = "lensim sensor";
   std::string software = "lensim";
+  std::string description;  ///< ImageDescription (not written if empty)
   // EXIF (0: not written).
   double exposure_s = 0, f_number = 0, focal_length_mm = 0, iso = 0;
   std::string lens_model;

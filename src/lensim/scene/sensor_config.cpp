@@ -110,13 +110,14 @@ CfaPattern parseCfa(const std::string& text, const FileLoc& loc) {
   return p;
 }
 
-void checkDngCfa(const CfaPattern& cfa, const FileLoc& loc) {
-  if (!cfa.dngReadable())
+void checkDngCfa(const CfaPattern& cfa, const FileLoc& loc, const std::string& dng_cfa) {
+  if (!cfa.dngReadable() && dng_cfa != "bayer")
     throw Error(loc, fmt::format("\"cfa\": a DNG of the {}x{} pattern \"{}\" would be misread by "
                                  "dcraw, which holds a CFA as 8 rows of 2 columns with its "
                                  "second greens placed as in a Bayer pattern, or as a 6x6 "
                                  "X-Trans of R, G, B; expected such a tile (1 or 2 pixels wide, "
-                                 "1, 2, 4 or 8 high), a 6x6 one without W, or an .exr output",
+                                 "1, 2, 4 or 8 high), a 6x6 one without W, an .exr output, or "
+                                 "\"string dngcfa\" \"bayer\" (the DNG remosaiced to RGGB)",
                                  cfa.width, cfa.height, cfa.text()));
 }
 
@@ -126,6 +127,7 @@ template <typename F>
 void forEachField(SensorConfig& c, F&& f) {
   f("qe", c.qe);
   f("cfa", c.cfa);
+  f("dngcfa", c.dng_cfa);
   f("peakqe", c.peak_qe);
   f("ircut", c.ircut_nm);
   f("ircutwidth", c.ircut_width_nm);
@@ -203,6 +205,8 @@ void SensorConfig::validate(const FileLoc& loc) const {
                                           expected));
   };
   parseCfa(cfa, loc);
+  if (dng_cfa != "native" && dng_cfa != "bayer")
+    throw Error(loc, fmt::format("\"dngcfa\": \"{}\"; expected \"native\" or \"bayer\"", dng_cfa));
   need(peak_qe > 0 && peak_qe <= 1, "peakqe", peak_qe, "(0, 1]");
   need(ircut_nm == 0 || (ircut_nm >= 360 && ircut_nm <= 1100), "ircut", ircut_nm,
        "0 (none) or a wavelength in [360, 1100] nm");

@@ -39,13 +39,15 @@ struct CfaPattern {
 CfaPattern parseCfa(const std::string& text, const FileLoc& loc = {});
 
 /// Throws lensim::Error at loc if a DNG cannot hold `cfa` so that dcraw and LibRaw read it
-/// right (CfaPattern::dngReadable).
-void checkDngCfa(const CfaPattern& cfa, const FileLoc& loc);
+/// right (CfaPattern::dngReadable), unless `dng_cfa` is "bayer" (the DNG is remosaiced).
+void checkDngCfa(const CfaPattern& cfa, const FileLoc& loc, const std::string& dng_cfa = "native");
 
 /// The sensor's parameters, each in the unit its name says. Defaults: see docs/sensor.md.
 struct SensorConfig {
   std::string qe = "canon_eos_5d_mkiv";  ///< bundled camera curves, or a QE file (docs/sensor.md)
   std::string cfa = "RGGB";     ///< parseCfa's text
+  /// The DNG's mosaic: "native" (the CFA's own) or "bayer" (remosaiced to RGGB)
+  std::string dng_cfa = "native";
   double peak_qe = 0.5;          ///< bundled (relative) curves: QE at the highest peak
   double ircut_nm = 0;           ///< IR-cut filter 50 % wavelength (0: none)
   double ircut_width_nm = 10;    ///< its logistic edge width

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "lensim/render/film/pixel_sensor.h"
+#include "lensim/render/sensor/cfa_interpolate.h"
 
 namespace lensim::render {
 
@@ -31,6 +32,40 @@ constexpr double kAtGCol[5][5] = {{0, 0, -1, 0, 0}, {0, -1, 4, -1, 0}, {0.5, 0, 
 constexpr double kRBAtBR[5][5] = {{0, 0, -1.5, 0, 0}, {0, 2, 0, 2, 0}, {-1.5, 0, 6, 0, -1.5},
                                   {0, 2, 0, 2, 0},    {0, 0, -1.5, 0, 0}};
 
+// Luminance from the W pixels (docs/sensor.md, "lensim develop"). A W pixel's response is
+// proportional to R + G + B (Film "raw" writes W = R + G + B, AsShotNeutral's W entry the sum of
+// the others), so W, scaled by (n_R + n_G + n_B) / n_W, is a further measurement of R + G + B
+// (camera values before white balance). The interpolated R, G, B and that measurement are
+// combined by generalised least squares (the linear minimum-variance update of (R, G, B) by an
+// observation of their sum): each channel moves by v_c / (v_R + v_G + v_B + v_W) times the
+// difference W - (R + G + B), with the variances v from a shot-noise model (a pixel's variance
+// proportional to its mean, the same gain for every channel) and the interpolation's weights.
+// For given weights this is unbiased (the weights come from the noisy values themselves, a
+// small second-order bias: docs/sensor.md) and lowers the variance of every channel and of any
+// colour made of them. A
+// W estimate that took in a W pixel within 0.1 % of the image's brightest W pixel is taken as
+// clipped (a W pixel, collecting all three channels' light, saturates first), and there the
+// colour pixels alone are used. `t` and `tw` are white balanced (divided by n and n_w); `v`
+// receives the white-balanced R, G and B.
+void fuseW(const TentMean (&t)[3], const TentMean& tw, const std::array<double, 3>& n, double n_w,
+           double w_top, double (&v)[3]) {
+  if (tw.top >= 0.999 * w_top) return;
+  const double floor = 1e-9;  // keeps the weights finite in the dark
+  double y = 0, var[3], var_sum = 0;
+  for (int c = 0; c < 3; ++c) {
+    const double u = t[c].value * n[size_t(c)];
+    y += u;
+    var[c] = floor + t[c].variance_factor * std::max(u, 0.0);
+    var_sum += var[c];
+  }
+  const double s = (n[0] + n[1] + n[2]) / n_w;  // W's scale to R + G + B
+  const double uw = tw.value * n_w;
+  const double var_w = floor + tw.variance_factor * std::max(uw, 0.0) * s * s;
+  const double innovation = uw * s - y;
+  for (int c = 0; c < 3; ++c)
+    v[c] += var[c] / (var_sum + var_w) * innovation / n[size_t(c)];
+}
+
 }  // namespace
 
 Mat3d srgbFromCamera(const std::array<double, 9>& color_matrix) {
@@ -46,7 +81,7 @@ Mat3d srgbFromCamera(const std::array<double, 9>& color_matrix) {
   return invertMat3(cam_rgb);
 }
 
-io::Image developRaw(const io::DngImage& raw, double exposure_ev) {
+io::Image developRaw(const io::DngImage& raw, double exposure_ev, WPixels w_pixels) {
   const int w = raw.width, h = raw.height;
   const double black = raw.black_level, range = double(raw.white_level) - black;
   const int cw = raw.cfa_width, ch = raw.cfa_height;
@@ -85,33 +120,34 @@ io::Image developRaw(const io::DngImage& raw, double exposure_ev) {
     out.at(x, y, 2) = float(std::max(0.0, rgb.z * gain));
   };
   const auto& p = raw.cfa;
-  const bool bayer = cw == 2 && ch == 2 &&
-                     ((p[0] == 1 && p[3] == 1 && p[1] + p[2] == 2 && p[1] != p[2]) ||
-                      (p[1] == 1 && p[2] == 1 && p[0] + p[3] == 2 && p[0] != p[3]));
+  const bool bayer = isBayerTile(cw, ch, p);
   if (!bayer) {
     // Another pattern: each missing channel is the tent-weighted mean of that channel's pixels
     // around (normalised convolution), over a window that holds at least one of them. W pixels
     // (no colour filter) hold no R, G or B value of their own: all three come from around.
-    const int r0 = std::max(1, (std::max(cw, ch) + 1) / 2);
-    auto mean = [&](int c, int x, int y) {
-      for (int r = r0;; r *= 2) {
-        double s = 0, sw = 0;
-        for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
-          for (int xx = std::max(0, x - r); xx <= std::min(w - 1, x + r); ++xx)
-            if (channel(xx, yy) == c) {
-              const double k = double(r + 1 - std::abs(xx - x)) * double(r + 1 - std::abs(yy - y));
-              s += k * m[size_t(yy) * size_t(w) + size_t(xx)];
-              sw += k;
-            }
-        if (sw > 0 || r > std::max(w, h)) return sw > 0 ? s / sw : 0.0;
-      }
-    };
+    const int r0 = tentRadius(cw, ch);
+    auto mean = [&](int c, int x, int y) { return tentMean(m, w, h, channel, c, x, y, r0); };
+    const bool fuse = w_pixels == WPixels::kLuminance && raw.w_neutral > 0 &&
+                      std::find(p.begin(), p.end(), uint8_t(kWhite)) != p.end();
+    double w_top = 0;  // the brightest W pixel (white balanced)
+    if (fuse)
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+          if (channel(x, y) == kWhite) w_top = std::max(w_top, m[size_t(y) * size_t(w) + size_t(x)]);
+    const std::array<double, 3> n = {raw.as_shot_neutral[0] > 0 ? raw.as_shot_neutral[0] : 1,
+                                     raw.as_shot_neutral[1] > 0 ? raw.as_shot_neutral[1] : 1,
+                                     raw.as_shot_neutral[2] > 0 ? raw.as_shot_neutral[2] : 1};
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         const int own = channel(x, y);
-        double v[3];
-        for (int c = 0; c < 3; ++c)
-          v[c] = c == own ? m[size_t(y) * size_t(w) + size_t(x)] : mean(c, x, y);
+        const double here = m[size_t(y) * size_t(w) + size_t(x)];
+        TentMean t[3];
+        for (int c = 0; c < 3; ++c) t[c] = c == own ? TentMean{here, 1, here} : mean(c, x, y);
+        double v[3] = {t[0].value, t[1].value, t[2].value};
+        if (fuse) {
+          const TentMean tw = own == kWhite ? TentMean{here, 1, here} : mean(kWhite, x, y);
+          fuseW(t, tw, n, raw.w_neutral, w_top, v);
+        }
         store(x, y, v);
       }
     return out;

@@ -7,8 +7,9 @@
 //      mirrored at its edges, for a 2x2 Bayer pattern (greens on a diagonal); for another pattern
 //      each missing channel is the tent-weighted mean of that channel's pixels in a window about
 //      the pixel (normalised convolution, weight (r + 1 - |dx|)(r + 1 - |dy|), r half the pattern's
-//      larger side, rounded up); W (white) pixels are not used: R, G and B come from their own
-//      pixels around;
+//      larger side, rounded up); R, G and B come from their own pixels around, and with W
+//      (white) pixels the luminance is the inverse-variance combination of W and R + G + B
+//      (WPixels::kLuminance, below; docs/sensor.md);
 //   4. colour: camera to linear sRGB through the DNG's ColorMatrix (D65, else the only one), as
 //      dcraw does: cam_from_rgb = ColorMatrix x XYZ_from_sRGB, rows normalised to sum 1 (so the
 //      balanced neutral stays neutral), inverted;
@@ -24,8 +25,15 @@
 
 namespace lensim::render {
 
+/// What the demosaic does with a CFA's W (white) pixels.
+enum class WPixels {
+  kLuminance,  ///< W and R + G + B combined into the luminance, R:G:B from the colour pixels
+  kIgnore,     ///< W pixels left out: R, G and B from the colour pixels alone
+};
+
 /// The developed image (channels R, G, B, linear sRGB).
-io::Image developRaw(const io::DngImage& raw, double exposure_ev = 0);
+io::Image developRaw(const io::DngImage& raw, double exposure_ev = 0,
+                     WPixels w_pixels = WPixels::kLuminance);
 
 /// Step 4's matrix: linear sRGB from white-balanced camera values, for a DNG ColorMatrix (XYZ to
 /// camera, row-major).

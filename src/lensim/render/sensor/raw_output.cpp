@@ -10,7 +10,9 @@
 #include "lensim/camera/realistic.h"
 #include "lensim/io/dng.h"
 #include "lensim/render/film/pixel_sensor.h"
+#include "lensim/render/sensor/cfa_interpolate.h"
 #include "lensim/render/sensor/develop.h"
+#include "lensim/render/sensor/remosaic.h"
 #include "lensim/render/sensor/sensor_color.h"
 #include "lensim/render/sensor/sensor_model.h"
 #include "lensim/render/spectra/spectrum.h"
@@ -165,7 +167,16 @@ void writeRawImage(const std::string& path, const io::Image& image, int x0, int 
   d.data = dn;
   const CfaPattern& cfa = model.cfa();
   d.mono = cfa.mono;
-  if (!d.mono) {
+  if (!d.mono && cfg.dng_cfa == "bayer" && !isBayerTile(cfa.width, cfa.height, cfa.colors)) {
+    // Remosaiced to RGGB (from the full image's top-left pixel), stated in ImageDescription.
+    d.data = remosaicToBayer(dn, w, h, cfa, x0, y0, cfg.black_level_dn, cfg.whiteLevel());
+    d.description = fmt::format("Bayer RGGB remosaic by lensim of the sensor's {}x{} CFA {} "
+                                "(tent-weighted normalised convolution; W pixels unused)",
+                                cfa.width, cfa.height, cfa.text());
+    d.cfa.clear();
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 2; ++x) d.cfa.push_back(uint8_t(bayerChannel(x0 + x, y0 + y)));
+  } else if (!d.mono) {
     scene::checkDngCfa(cfa, FileLoc{path});
     // The written image's tile starts at (x0, y0) of the full image's. A tile one pixel wide is
     // written two wide: dcraw and LibRaw read a CFAPattern as rows of two columns.

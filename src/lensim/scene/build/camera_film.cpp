@@ -319,7 +319,18 @@ void Builder::rawFilm(ParamSet& ps, Film& f) {
   const CfaPattern cfa = parseCfa(s.cfa, cfa_loc);
   std::string out = ps.getString({"filename"}, f.filename);
   for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (out.size() >= 4 && out.compare(out.size() - 4, 4, ".dng") == 0) checkDngCfa(cfa, cfa_loc);
+  // "dngcfa": the DNG's mosaic, the CFA's own or remosaiced to Bayer RGGB.
+  FileLoc dng_cfa_loc = f.loc;
+  if (const Param* p = ps.find({"dngcfa"}, {ParamType::String})) {
+    dng_cfa_loc = p->loc;
+    s.dng_cfa = p->strings[0];
+    if (s.dng_cfa != "native" && s.dng_cfa != "bayer")
+      throw Error(p->loc, fmt::format("\"dngcfa\": \"{}\"; expected \"native\" (the CFA's own "
+                                      "mosaic) or \"bayer\" (remosaiced to RGGB)",
+                                      s.dng_cfa));
+  }
+  if (out.size() >= 4 && out.compare(out.size() - 4, 4, ".dng") == 0)
+    checkDngCfa(cfa, cfa_loc, s.dng_cfa);
   s.peak_qe = ps.getFloat({"peakqe"}, s.peak_qe);
   s.ircut_nm = ps.getFloat({"ircut"}, s.ircut_nm);
   s.ircut_width_nm = ps.getFloat({"ircutwidth"}, s.ircut_width_nm);
