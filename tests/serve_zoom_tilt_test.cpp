@@ -254,4 +254,28 @@ TEST_F(ServeZoomTilt, PreviewRendersTheZoomPosition) {
   EXPECT_NE(wide, tele_png);
 }
 
+// The diagram shows the tilted and shifted lens: the film drawn across the section, bundles at
+// both ends and the middle; untilted, the film is the usual upright segment.
+TEST_F(ServeZoomTilt, DiagramDrawsTheTiltedAndShiftedFilm) {
+  httplib::Client c("127.0.0.1", server->port());
+  c.set_read_timeout(60, 0);
+  auto level = c.Get("/api/diagram?lens=dgauss.50mm.dat&focus=2");
+  auto tilted = c.Get("/api/diagram?lens=dgauss.50mm.dat&focus=2&tiltx=-8&shifty=4");
+  auto zoomed = c.Get("/api/diagram?lens=1:nikon_zoom_80_200.zmx&focal=120&tilty=3");
+  ASSERT_TRUE(level && tilted && zoomed);
+  ASSERT_EQ(tilted->status, 200) << tilted->body;
+  ASSERT_EQ(zoomed->status, 200) << zoomed->body;
+  EXPECT_EQ(level->body.find("film (tilted/shifted)"), std::string::npos);
+  EXPECT_NE(tilted->body.find("film (tilted/shifted)"), std::string::npos);
+  EXPECT_NE(tilted->body.find("tilt (-8, 0)°, shift (0, 4) mm"), std::string::npos);
+  EXPECT_NE(tilted->body.find("film -"), std::string::npos);  // the bundle at the far end
+  EXPECT_NE(zoomed->body.find("tilt (0, 3)°"), std::string::npos);
+  // The zoomed lens's focal length in the diagram's caption.
+  const json info = lensInfo(kZoom + " --focal-length 120 --focus-distance inf");
+  char caption[64];
+  std::snprintf(caption, sizeof caption, "f = %.2f mm",
+                info["effective_focal_length_mm"].get<double>());
+  EXPECT_NE(zoomed->body.find(caption), std::string::npos) << caption;
+}
+
 }  // namespace
