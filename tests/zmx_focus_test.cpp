@@ -7,6 +7,7 @@
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "cli_run.h"
@@ -213,6 +214,70 @@ TEST(ZmxFocus, CliInfoFocusesWithTheGroup) {
   // Magnification u / u' of an axial ray from the object, traced here.
   const double s = track() - 700, u0 = 1e-3;
   EXPECT_NEAR(j["magnification"].get<double>(), u0 / trace(x, -s * u0, u0)[1], 1e-7);
+}
+
+// lentil's database (the shared copy, ../shared/lenses/lentil/lenses.json) has no zoom or focus
+// data: every design is a prime, none sits in the legend's zoom range 1500-1999, every thickness
+// is one number, and no key beyond those lensim reads or ignores (listed here) appears.
+TEST(LentilZoom, DatabaseHasNoZoomOrFocusData) {
+  const auto db = nlohmann::json::parse(
+      readText(std::string(LENSIM_SHARED_DIR) + "/lenses/lentil/lenses.json"));
+  const std::set<std::string> design_keys = {"commercial",
+                                             "company",
+                                             "focal-length-mm-patent",
+                                             "focal-length-mm-raytraced",
+                                             "fstop",
+                                             "lt-jacobian-fix-required",
+                                             "max-fstop-aperture-radius",
+                                             "notes",
+                                             "notes-to-self",
+                                             "optical-elements-adjusted",
+                                             "optical-elements-patent",
+                                             "patent-location",
+                                             "patent-number",
+                                             "polynomial-optics",
+                                             "prime",
+                                             "product-name",
+                                             "production-ready",
+                                             "year"};
+  const std::set<std::string> element_keys = {"abbe",           "aspherical-equation",
+                                              "housing-radius", "ior",
+                                              "lens-geometry",  "material",
+                                              "radius",         "thickness"};
+  EXPECT_EQ(db.size(), 24u);
+  for (const auto& [key, lens] : db.items()) {
+    EXPECT_TRUE(lens.at("prime").get<bool>()) << key;
+    const int number = std::stoi(key);
+    EXPECT_FALSE(number >= 1500 && number <= 1999) << key;
+    for (const auto& [k, v] : lens.items()) EXPECT_TRUE(design_keys.count(k)) << key << ": " << k;
+    for (const char* arr : {"optical-elements-patent", "optical-elements-adjusted"}) {
+      if (!lens.contains(arr)) continue;
+      for (const auto& e : lens[arr]) {
+        EXPECT_TRUE(e.at("thickness").is_number()) << key;
+        for (const auto& [k, v] : e.items()) EXPECT_TRUE(element_keys.count(k)) << key << ": " << k;
+      }
+    }
+  }
+}
+
+TEST(LentilZoom, DesignMarkedAsZoomIsRefused) {
+  const std::string text = R"({"1501": {"company": "x", "product-name": "zoom", "prime": false,
+  "optical-elements-patent": [
+    {"radius": 50, "thickness": 5, "ior": 1.5, "abbe": 60, "housing-radius": 10,
+     "material": "abbe", "lens-geometry": "spherical"},
+    {"radius": -50, "thickness": 40, "ior": 1, "housing-radius": 10, "material": "air",
+     "lens-geometry": "spherical"}]}})";
+  try {
+    optics::parseLensJson(text, "zoom.json", "1501");
+    ADD_FAILURE() << "read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("\"prime\": false"), std::string::npos) << e.what();
+    EXPECT_EQ(e.loc().line, 1) << e.what();
+  }
+  // The same design as a prime is read.
+  std::string prime = text;
+  prime.replace(prime.find("false"), 5, "true");
+  EXPECT_EQ(optics::parseLensJson(prime, "zoom.json", "1501").surfaces.size(), 2u);
 }
 
 }  // namespace
