@@ -276,6 +276,14 @@ TEST_F(ServeZoomTilt, DiagramDrawsTheTiltedAndShiftedFilm) {
   std::snprintf(caption, sizeof caption, "f = %.2f mm",
                 info["effective_focal_length_mm"].get<double>());
   EXPECT_NE(zoomed->body.find(caption), std::string::npos) << caption;
+  // An anamorphic lens tilted about x cannot be drawn in its x-z section: drawn untilted, saying
+  // so, and the view's numbers still come.
+  auto ana = c.Get("/api/diagram?lens=toroidal-anamorphic.50mm.zmx&tiltx=4");
+  ASSERT_TRUE(ana);
+  EXPECT_EQ(ana->status, 200) << ana->body.substr(0, 300);
+  EXPECT_NE(ana->body.find("drawn untilted and unshifted"), std::string::npos);
+  EXPECT_EQ(ana->body.find("film (tilted/shifted)"), std::string::npos);
+  EXPECT_TRUE(get("/api/view?lens=toroidal-anamorphic.50mm.zmx&tiltx=4").contains("lens"));
 }
 
 }  // namespace
