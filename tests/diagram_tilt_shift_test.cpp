@@ -4,8 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <numbers>
+#include <sstream>
 
+#include "cli_run.h"
 #include "lensim/optics/diagram.h"
 #include "lensim/util/error.h"
 #include "test_paths.h"
@@ -99,6 +102,26 @@ TEST(DiagramTiltShift, RefusedWhereTheSectionCannotShowIt) {
   EXPECT_THROW(buildLensDiagram(fl, opts), Error);
   opts.tilt_shift.tilt_deg = {0, 5};  // about y: the x-z section
   EXPECT_NO_THROW(buildLensDiagram(fl, opts));
+}
+
+TEST(DiagramTiltShift, CliDrawTakesTiltAndShift) {
+  const std::string out = ::testing::TempDir() + "/tilt_draw.svg";
+  const test::CliResult r = test::runLensim("lens draw " + test::lensPath("dgauss.50mm.dat") +
+                                            " --tilt=0,8 --shift=3,0 --focus-distance 2 -o " + out);
+  ASSERT_EQ(r.status, 0) << r.out;
+  std::ifstream f(out);
+  std::stringstream svg;
+  svg << f.rdbuf();
+  EXPECT_NE(svg.str().find("film (tilted/shifted)"), std::string::npos);
+  EXPECT_NE(svg.str().find("tilt (0, 8)°, shift (3, 0) mm"), std::string::npos);
+  const test::CliResult ana = test::runLensim(
+      "lens draw " + test::lensPath("toroidal-anamorphic.50mm.zmx") + " --tilt=3,0 -o " + out);
+  EXPECT_EQ(ana.status, 1) << ana.out;
+  EXPECT_NE(ana.out.find("rotationally symmetric"), std::string::npos) << ana.out;
+  const test::CliResult bad = test::runLensim("lens draw " + test::lensPath("dgauss.50mm.dat") +
+                                              " --tilt=0,8 --fields=-2,0 -o " + out);
+  EXPECT_EQ(bad.status, 1) << bad.out;
+  EXPECT_NE(bad.out.find("--fields -2,0"), std::string::npos) << bad.out;
 }
 
 }  // namespace
