@@ -58,7 +58,9 @@ void checkOnlyThicknessesChange(const ZmxParser& base) {
 
 void readFocusPositions(const ZmxParser& base, LensPrescription& p) {
   const auto& cfgs = p.configurations;
-  if (cfgs.size() < 2) return;
+  // Tilted or decentred surfaces sit where their frames put them, not at the thicknesses a focus
+  // group changes: such a file keeps its configurations.
+  if (cfgs.size() < 2 || p.noncoaxial_loc) return;
   const size_t n = cfgs.size(), rows = cfgs[0].surfaces.size();
   bool distances_differ = false;
   for (const LensConfiguration& c : cfgs)
