@@ -203,6 +203,27 @@ TEST(ZmxFocus, AmbiguousFilesRefusedAtTheLine) {
   EXPECT_TRUE(q.focus_group.empty());
 }
 
+// Two groups moving in a fixed ratio (the element x toward the film, the rear group 0.2 x toward
+// the scene), their gaps written to 4 decimals: one focus group with those rates.
+TEST(ZmxFocus, GroupsInAFixedRatioAreOneFocusGroup) {
+  std::string text = readText(lensPath());
+  for (const auto& [from, to] :
+       std::vector<std::pair<std::string, std::string>>{{"THIC 4 2 1.6752", "THIC 4 2 1.6102"},
+                                                        {"THIC 4 3 1.3423", "THIC 4 3 1.2108"},
+                                                        {"THIC 4 4 0.6509", "THIC 4 4 0.3811"}})
+    text = edited(text, from, to);
+  const std::string tail = " 0 0 0 1 1 1 0 0 \"\" 0\n";
+  for (const char* row : {"THIC 5 1 1.3", "THIC 5 2 1.3650", "THIC 5 3 1.4315", "THIC 5 4 1.5698"})
+    text += row + tail;
+  const optics::LensPrescription p = optics::parseZmx(text, "tessar.zmx");
+  ASSERT_EQ(p.focus_group.size(), 3u);
+  const double want[][2] = {{1, 1 / 1.2}, {3, -1}, {4, 0.2 / 1.2}};
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(p.focus_group[i].first, want[i][0]);
+    EXPECT_NEAR(p.focus_group[i].second, want[i][1], 1e-4);
+  }
+}
+
 TEST(ZmxFocus, CliInfoFocusesWithTheGroup) {
   const test::CliResult r =
       test::runLensim("lens info --json --focus-distance 0.7 " + lensPath() + " 2>/dev/null");

@@ -27,6 +27,10 @@ FileLoc ZmxParser::mcThicknessLoc(int surf_line, int config) const {
 
 namespace {
 
+// How far gaps may miss the rules (the lens's length, the ratio of the moves): a table's rounding
+// to 4 decimals of a millimetre.
+constexpr double kTolerance_mm = 1e-4;
+
 std::string distanceText(const std::optional<double>& d_mm) {
   return d_mm ? fmt::format("{:.6g} mm", *d_mm) : std::string("infinity");
 }
@@ -106,7 +110,7 @@ void readFocusPositions(const ZmxParser& base, LensPrescription& p) {
   // Each configuration's gap changes from the infinity configuration.
   std::vector<std::vector<double>> delta(n, std::vector<double>(moved.size()));
   size_t far = rest;
-  double far_norm = 0, scale = 0;
+  double far_norm = 0;
   for (size_t k = 0; k < n; ++k) {
     double norm = 0, length = 0;
     for (size_t i = 0; i < moved.size(); ++i) {
@@ -115,10 +119,8 @@ void readFocusPositions(const ZmxParser& base, LensPrescription& p) {
       delta[k][i] = d;
       norm += d * d;
       length += d;
-      scale = std::max(scale, std::abs(cfgs[rest].surfaces[moved[i]].thickness_mm));
     }
-    const double tol = 1e-6 * (1 + scale);
-    if (std::abs(length) > tol)
+    if (std::abs(length) > kTolerance_mm)
       throw Error(thicLoc(moved[0], k),
                   fmt::format("configuration {} changes the lens's length by {:.6g} mm against "
                               "the infinity configuration {}: lensim reads focus positions as a "
@@ -135,7 +137,7 @@ void readFocusPositions(const ZmxParser& base, LensPrescription& p) {
     for (size_t i = 0; i < moved.size(); ++i) dot += delta[k][i] * v[i];
     const double c = dot / far_norm;
     for (size_t i = 0; i < moved.size(); ++i)
-      if (std::abs(delta[k][i] - c * v[i]) > 1e-6 * (1 + scale))
+      if (std::abs(delta[k][i] - c * v[i]) > kTolerance_mm)
         throw Error(thicLoc(moved[i], k),
                     fmt::format("configuration {}: the gaps do not move in the ratio of "
                                 "configuration {}'s (this gap changes by {:.6g} mm, {:.6g} mm "
@@ -148,7 +150,7 @@ void readFocusPositions(const ZmxParser& base, LensPrescription& p) {
   for (size_t k = 0; k < n; ++k)
     for (size_t j = 0; j < k; ++j)
       if (cfgs[k].object_distance_mm == cfgs[j].object_distance_mm &&
-          std::abs(position[k] - position[j]) * std::sqrt(far_norm) > 1e-6 * (1 + scale))
+          std::abs(position[k] - position[j]) * std::sqrt(far_norm) > kTolerance_mm)
         throw Error(thicLoc(moved[0], k),
                     fmt::format("configurations {} and {} have the same object distance ({}) and "
                                 "different gaps: which is the focus position is ambiguous",
