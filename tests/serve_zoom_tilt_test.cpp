@@ -15,6 +15,7 @@
 
 #include "cli_run.h"
 #include "lensim/camera/camera.h"
+#include "lensim/camera/realistic.h"
 #include "lensim/scene/builder.h"
 #include "lensim/serve/preview.h"
 #include "lensim/serve/server.h"
@@ -97,8 +98,9 @@ TEST_F(ServeZoomTilt, ZoomRangeIsReportedOnlyForLensesWithConfigurations) {
 
 TEST_F(ServeZoomTilt, FocalLengthAndConfigurationGiveTheNumbersOfLensInfo) {
   const double want = 135;
-  json j = get("/api/lens?lens=1:nikon_zoom_80_200.zmx&focus=inf&diagonal=43.3&aperture=1000&focal=" +
-               num(want));
+  json j =
+      get("/api/lens?lens=1:nikon_zoom_80_200.zmx&focus=inf&diagonal=43.3&aperture=1000&focal=" +
+          num(want));
   EXPECT_NEAR(j["zoom"]["requested_focal_length_mm"].get<double>(), want, 1e-12);
   EXPECT_NEAR(j["zoom"]["achieved_effective_focal_length_mm"].get<double>(), want, 1e-7 * want);
   EXPECT_NEAR(j["effective_focal_length_mm"].get<double>(), want, 1e-7 * want);
@@ -156,7 +158,8 @@ TEST_F(ServeZoomTilt, BadZoomAndTiltValuesAreRefusedWithAMessage) {
   error("/api/lens?lens=dgauss.50mm.dat&focal=50", 422, "single configuration");
   error("/api/lens?lens=dgauss.50mm.dat&tiltx=50", 400, "tiltx");
   error("/api/lens?lens=dgauss.50mm.dat&shifty=nan", 400, "shifty");
-  error("/api/preview?view=z&lens=dgauss.50mm.dat&config=1", 400, "preview");
+  error("/api/preview?view=z&lens=dgauss.50mm.dat&focal=50", 422, "single configuration");
+  error("/api/preview?view=z&lens=1:nikon_zoom_80_200.zmx&focal=500", 422, "zoom range");
 }
 
 // The preview renders through the tilted and shifted lens: the same camera a scene with
@@ -198,6 +201,89 @@ TEST_F(ServeZoomTilt, PreviewRendersTiltAndShift) {
   const std::string level = stream(""), tilted = stream("&tiltx=3&shifty=2");
   EXPECT_GT(tilted.size(), 100u);
   EXPECT_NE(level, tilted);
+}
+
+// The preview renders the zoom position the optics show: the camera gets "focallength" (or
+// "configuration") and its lens has the EFL lens info gives for it; two focal lengths render
+// different pictures.
+TEST_F(ServeZoomTilt, PreviewRendersTheZoomPosition) {
+  lensim::serve::PreviewRenderer previews;
+  lensim::serve::PreviewRequest pr;
+  pr.scene_path = kSource + "/scenes/demo/demo.pbrt";
+  pr.lens_path = kZoom;
+  pr.aperture_diameter_mm = 10;
+  pr.focus_distance_m = 5;
+  pr.width = 48;
+  pr.zoom_focal_length_mm = 100;
+  const lensim::scene::Scene prepared = previews.previewScene(pr);
+  ASSERT_TRUE(prepared.camera.realistic);
+  EXPECT_EQ(prepared.camera.realistic->zoom_focal_length_mm, 100);
+  const json info = lensInfo(kZoom + " --focal-length 100 --focus-distance 5");
+  auto cam = lensim::camera::makeCamera(prepared);
+  auto* realistic = dynamic_cast<const lensim::camera::RealisticCamera*>(cam.get());
+  ASSERT_NE(realistic, nullptr);
+  EXPECT_NEAR(realistic->lens().paraxial.effective_focal_length_mm,
+              info["effective_focal_length_mm"].get<double>(), 1e-9);
+  pr.zoom_focal_length_mm.reset();
+  pr.configuration = 3;
+  auto tele = lensim::camera::makeCamera(previews.previewScene(pr));
+  auto* r3 = dynamic_cast<const lensim::camera::RealisticCamera*>(tele.get());
+  ASSERT_NE(r3, nullptr);
+  EXPECT_NEAR(
+      r3->lens().paraxial.effective_focal_length_mm,
+      lensInfo(kZoom + " --config 3 --focus-distance 5")["effective_focal_length_mm"].get<double>(),
+      1e-9);
+  auto stream = [](const std::string& extra) {
+    httplib::Client c("127.0.0.1", server->port());
+    c.set_read_timeout(60, 0);
+    auto r = c.Get(("/api/preview?lens=1:nikon_zoom_80_200.zmx&fnumber=4&focus=5&width=48&spp=2"
+                    "&view=zz" +
+                    extra)
+                       .c_str());
+    EXPECT_TRUE(r);
+    if (!r) return std::string();
+    EXPECT_EQ(r->status, 200) << r->body.substr(0, 300);
+    EXPECT_NE(r->body.find("event: done"), std::string::npos) << r->body.substr(0, 300);
+    const size_t at = r->body.rfind("\"png\":\"");
+    EXPECT_NE(at, std::string::npos);
+    return at == std::string::npos ? std::string()
+                                   : r->body.substr(at, r->body.find('"', at + 7) - at);
+  };
+  const std::string wide = stream("&focal=90"), tele_png = stream("&focal=180");
+  EXPECT_GT(wide.size(), 100u);
+  EXPECT_NE(wide, tele_png);
+}
+
+// The diagram shows the tilted and shifted lens: the film drawn across the section, bundles at
+// both ends and the middle; untilted, the film is the usual upright segment.
+TEST_F(ServeZoomTilt, DiagramDrawsTheTiltedAndShiftedFilm) {
+  httplib::Client c("127.0.0.1", server->port());
+  c.set_read_timeout(60, 0);
+  auto level = c.Get("/api/diagram?lens=dgauss.50mm.dat&focus=2");
+  auto tilted = c.Get("/api/diagram?lens=dgauss.50mm.dat&focus=2&tiltx=-8&shifty=4");
+  auto zoomed = c.Get("/api/diagram?lens=1:nikon_zoom_80_200.zmx&focal=120&tilty=3");
+  ASSERT_TRUE(level && tilted && zoomed);
+  ASSERT_EQ(tilted->status, 200) << tilted->body;
+  ASSERT_EQ(zoomed->status, 200) << zoomed->body;
+  EXPECT_EQ(level->body.find("film (tilted/shifted)"), std::string::npos);
+  EXPECT_NE(tilted->body.find("film (tilted/shifted)"), std::string::npos);
+  EXPECT_NE(tilted->body.find("tilt (-8, 0)°, shift (0, 4) mm"), std::string::npos);
+  EXPECT_NE(tilted->body.find("film -"), std::string::npos);  // the bundle at the far end
+  EXPECT_NE(zoomed->body.find("tilt (0, 3)°"), std::string::npos);
+  // The zoomed lens's focal length in the diagram's caption.
+  const json info = lensInfo(kZoom + " --focal-length 120 --focus-distance inf");
+  char caption[64];
+  std::snprintf(caption, sizeof caption, "f = %.2f mm",
+                info["effective_focal_length_mm"].get<double>());
+  EXPECT_NE(zoomed->body.find(caption), std::string::npos) << caption;
+  // An anamorphic lens tilted about x cannot be drawn in its x-z section: drawn untilted, saying
+  // so, and the view's numbers still come.
+  auto ana = c.Get("/api/diagram?lens=toroidal-anamorphic.50mm.zmx&tiltx=4");
+  ASSERT_TRUE(ana);
+  EXPECT_EQ(ana->status, 200) << ana->body.substr(0, 300);
+  EXPECT_NE(ana->body.find("drawn untilted and unshifted"), std::string::npos);
+  EXPECT_EQ(ana->body.find("film (tilted/shifted)"), std::string::npos);
+  EXPECT_TRUE(get("/api/view?lens=toroidal-anamorphic.50mm.zmx&tiltx=4").contains("lens"));
 }
 
 }  // namespace

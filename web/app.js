@@ -62,7 +62,7 @@ function sliderForZoom(v, f) {
 const tiltShiftKeys = ['tiltx', 'tilty', 'shiftx', 'shifty'];
 function tiltShiftFor(v, key) { return Number(v[`${key}Slider`].value) / 10; }
 
-// The query of the lens as the preview renders it: the lens file at an aperture and focus (and
+// The lens file at an aperture and focus (and
 // tilted and shifted: tiltShiftQuery).
 function previewQuery(v) {
   const f = focusFor(v);
@@ -75,7 +75,7 @@ function tiltShiftQuery(v) {
   for (const k of tiltShiftKeys) { const x = tiltShiftFor(v, k); if (x !== 0) q += `&${k}=${x}`; }
   return q;
 }
-// The optics also take the zoom position.
+// The optics and the preview take the zoom position too.
 function query(v) {
   let q = previewQuery(v);
   if (v.zoom) q += `&focal=${zoomFor(v)}`;
@@ -167,7 +167,7 @@ async function updatePreview(v) {
   const t0 = performance.now();
   let first = true;
   const exposure = $(document, '#autoexposure').checked ? 'auto' : '0';
-  const url = `/api/preview?view=${v.id}&scene=${encodeURIComponent(state.scene.id)}&width=320&spp=256&exposure=${exposure}&${previewQuery(v)}${tiltShiftQuery(v)}`;
+  const url = `/api/preview?view=${v.id}&scene=${encodeURIComponent(state.scene.id)}&width=320&spp=256&exposure=${exposure}&${q}`;
   v.pstatus.textContent = 'rendering…';
   try {
     const res = await fetch(url, { signal: ctrl.signal });

@@ -474,7 +474,7 @@ std::vector<double> parseList(const std::string& text, const std::string& option
 struct DrawArgs {
   std::vector<std::string> lenses;
   std::string output;
-  std::string fields = "0,0.7,1";
+  std::string fields;  ///< empty: 0,0.7,1 (tilted or shifted: -1,0,1)
   int rays = 11;
   std::string from = "film";
   bool same_scale = false;
@@ -484,6 +484,10 @@ struct DrawArgs {
 
 int runDraw(const LensArgs& common, const DrawArgs& args) {
   if (!args.ghost.empty()) {
+    if (!common.tilt.empty() || !common.shift.empty())
+      throw Error(fmt::format("--ghost {}: draws the lens untilted and unshifted (no --tilt, "
+                              "--shift)",
+                              args.ghost));
     if (args.lenses.size() != 1 || !args.wavelengths.empty())
       throw Error(fmt::format(
           "--ghost {}: draws one lens at its primary wavelength (got {} "
@@ -494,10 +498,16 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     return runGhostDraw(one, args.ghost, args.rays, args.output);
   }
   DiagramOptions opts;
-  opts.fields = parseList(args.fields, "--fields");
+  // Tilted or shifted: the film where it crosses the section through the lens axis (fields are
+  // signed fractions of that chord's half-length).
+  opts.tilt_shift = parseTiltShift(common.tilt, common.shift);
+  const bool placed = opts.tilt_shift.any();
+  const std::string fields = !args.fields.empty() ? args.fields : placed ? "-1,0,1" : "0,0.7,1";
+  opts.fields = parseList(fields, "--fields");
   for (double f : opts.fields)
-    if (f < 0 || f > 1.5)
-      throw Error(fmt::format("--fields {}: each field is a fraction in [0, 1.5]", args.fields));
+    if (f < (placed ? -1.5 : 0) || f > 1.5)
+      throw Error(fmt::format("--fields {}: each field is a fraction in [{}, 1.5]", fields,
+                              placed ? "-1.5" : "0"));
   if (args.rays < 1 || args.rays > 1000)
     throw Error(fmt::format("--rays {}: expected 1 to 1000", args.rays));
   opts.rays = args.rays;
@@ -529,6 +539,11 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
     }
     FocusedLens fl = setUpLens(one);
     logDiagnostics(fl.allDiagnostics());
+    if (placed && !isRotationallySymmetric(fl.lens->prescription()))
+      throw Error(fmt::format("{}: --tilt/--shift draws rotationally symmetric lenses (the "
+                              "explorer draws an anamorphic one tilted about y and shifted "
+                              "along x)",
+                              path));
     if (args.wavelengths.empty()) {
       if (isRotationallySymmetric(fl.lens->prescription())) {
         diagrams.push_back(buildLensDiagram(fl, opts));
@@ -825,6 +840,10 @@ void registerLensCommands(CLI::App& app, Action& action) {
                      "Draw the ghost that reflects at surface I, then at J < I (I,J as `lens "
                      "ghosts` lists them): an axial bundle from infinity, traced exactly");
     draw->add_flag("--same-scale", d->same_scale, "Draw every lens of a sheet at one scale");
+    draw->add_option("--tilt", args->tilt,
+                     "X,Y: the lens tilted against the film (degrees, as `lens info --tilt`): "
+                     "the section through the lens axis holding the film's normal");
+    draw->add_option("--shift", args->shift, "X,Y: the lens axis shifted to this film point (mm)");
     draw->add_option("--wavelengths", d->wavelengths,
                      "Trace the bundles at each wavelength (nm, comma-separated), drawn in their "
                      "colours, e.g. 486.1,587.6,656.3");

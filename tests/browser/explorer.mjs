@@ -172,6 +172,9 @@ try {
       `zoom slider ${pos}: EFL shown ${d.eflText}, lens info ${info.effective_focal_length_mm} for ${asked} mm asked`);
     check(Math.abs(Number(d.efl) - asked) < 1e-6 * asked, `zoom slider ${pos}: EFL ${d.efl} is the ${asked} mm asked`);
     if (pos !== positions[0]) check(d.diagram !== last.diagram && Number(d.efl) > Number(last.efl), `zoom slider ${pos}: longer focal length, diagram changed`);
+    // The preview renders the zoom position too: its query carries the focal length, its picture changes.
+    check(new URLSearchParams(d.previewQuery).get('focal') === String(asked), `zoom slider ${pos}: the preview asked ${asked} mm`);
+    if (pos !== positions[0]) check(d.img !== last.img, `zoom slider ${pos}: preview changed`);
     check(!d.error, `zoom slider ${pos}: no error shown (${d.error})`);
     last = d;
   }
@@ -193,6 +196,8 @@ try {
     const closed = info.effective_focal_length_mm / Math.sin(6 * Math.PI / 180);
     check(Math.abs(Number(d.hinge) - closed) < 1e-6 * closed, `tilt: hinge ${d.hinge} = f / sin 6° = ${closed}`);
     check(d.img.startsWith('data:image/png') && !d.error, `tilt: preview and no error (${d.error})`);
+    check(d.diagram.includes('film (tilted/shifted)') && d.diagram.includes('tilt (-6, 0)°, shift (0, 5) mm'),
+      'tilt: the diagram draws the tilted and shifted film');
   }
   last = d;
   await slide('a', '.tiltx-slider', -120);
@@ -204,6 +209,7 @@ try {
   await slide('a', '.shifty-slider', 0);
   last = await settled('a', last.opticsQuery);
   check(last.hinge === undefined, 'tilt back to 0: no hinge shown');
+  check(!last.diagram.includes('film (tilted/shifted)'), 'tilt back to 0: the diagram\'s film is upright');
 
   // Two lenses side by side on the same scene.
   if (last.lens !== 'dgauss.50mm.dat') {

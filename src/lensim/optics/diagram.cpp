@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/coating/ghost_trace.h"
 #include "lensim/util/plot.h"
@@ -112,6 +113,63 @@ void addLensOutline(LensDiagram& d, const LensSystem& lens, const DiagramOptions
   d.rear_vertex_z_mm = lens.rearVertexZ_mm();
 }
 
+// The film in the drawn section: a line through its axial point along `dir`, with normal
+// `normal` (both in the section's x-z plane); bundles start at `centre_mm + f * half_length_mm`
+// along it.
+struct FilmSection {
+  Vec3 axial_point, dir{1, 0, 0}, normal{0, 0, 1};
+  double centre_mm = 0, half_length_mm = 0;
+  bool placed = false;
+  Vec3 at(double along_mm) const { return axial_point + dir * along_mm; }
+  // The ray parameter where o + t d meets the film plane.
+  double hit(const Vec3& o, const Vec3& d) const {
+    return dot(normal, axial_point - o) / dot(normal, d);
+  }
+};
+
+// For a tilted or shifted lens: the section through the lens axis that holds the film's normal
+// (or the film's centre when only shifted), turned about the axis onto the x-z plane (exact for a
+// rotationally symmetric lens), and where the film crosses it.
+FilmSection filmSection(LensDiagram& d, const LensSystem& lens, const DiagramOptions& opts) {
+  FilmSection f;
+  f.axial_point = {0, 0, lens.filmZ_mm()};
+  f.half_length_mm = d.film_half_height_mm;
+  if (!opts.tilt_shift.any()) return f;
+  const FileLoc where{lens.prescription().path};
+  if (lens.imageSpaceReversed() || lens.realFilmZ_mm() != lens.filmZ_mm())
+    throw Error(where, "lens diagram: a lens with mirrors cannot be drawn tilted or shifted");
+  const FilmPlacement place(opts.tilt_shift, lens.filmZ_mm());
+  const Vec3 n = place.filmNormal(), c = place.lensFromFilm({0, 0});
+  const bool tilted = std::hypot(n.x, n.y) > 1e-12;
+  const double phi = tilted ? std::atan2(n.y, n.x) : std::atan2(c.y, c.x);
+  if (std::abs(std::sin(phi)) > 1e-12 && !isRotationallySymmetric(lens.prescription()))
+    throw Error(where, fmt::format("lens diagram: this tilt and shift is seen in the section "
+                                   "{:.4g} deg from the lens's x-z plane, and the lens is not "
+                                   "rotationally symmetric (draw it tilted about y and shifted "
+                                   "along x only)",
+                                   phi * kDeg));
+  const double cp = std::cos(phi), sp = std::sin(phi);
+  auto turn = [&](const Vec3& v) { return Vec3{v.x * cp + v.y * sp, -v.x * sp + v.y * cp, v.z}; };
+  f.placed = true;
+  f.normal = turn(n);
+  f.normal.y = 0;
+  f.normal = normalize(f.normal);
+  f.dir = Vec3{f.normal.z, 0, -f.normal.x};
+  const Vec3 centre = turn(c);
+  f.centre_mm = dot(centre - f.axial_point, f.dir);
+  const double off = std::abs(centre.y);  // the film centre's distance from the section
+  f.half_length_mm =
+      std::sqrt(std::max(0.0, d.film_half_height_mm * d.film_half_height_mm - off * off));
+  const Vec3 a = f.at(f.centre_mm - f.half_length_mm), b = f.at(f.centre_mm + f.half_length_mm);
+  d.film_segment = std::array<Vec2, 2>{Vec2{a.z, a.x}, Vec2{b.z, b.x}};
+  d.annotations.push_back(fmt::format(
+      "tilt ({:g}, {:g})°, shift ({:g}, {:g}) mm: section at {:.1f}° from x; film "
+      "{:.1f}° to the lens plane, its centre {:.2f} mm off the section",
+      opts.tilt_shift.tilt_deg.x, opts.tilt_shift.tilt_deg.y, opts.tilt_shift.shift_mm.x,
+      opts.tilt_shift.shift_mm.y, phi * kDeg, std::acos(std::min(1.0, f.normal.z)) * kDeg, off));
+  return f;
+}
+
 }  // namespace
 
 LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) {
@@ -128,6 +186,7 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
                                                   : fmt::format("{:.4g} m", fl.focus_distance_m)));
 
   addLensOutline(d, lens, opts);
+  const FilmSection film = filmSection(d, lens, opts);
 
   double semi_max = 0;
   for (const Interface& si : s) semi_max = std::max(semi_max, si.semi_aperture_mm);
@@ -175,10 +234,10 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
     const double frac = opts.fields[f];
     const int field = static_cast<int>(f);
     if (opts.source == DiagramSource::Film) {
-      const double h = frac * d.film_half_height_mm;
+      const double h = frac * film.half_length_mm;
       d.field_values.push_back(h);
-      const Vec3 from{h, 0, lens.filmZ_mm()};
-      const double range = aim_at_xp ? 1.5 * p.exit_pupil_diameter_mm / 2 + std::abs(h)
+      const Vec3 from = film.at(film.centre_mm + h);
+      const double range = aim_at_xp ? 1.5 * p.exit_pupil_diameter_mm / 2 + std::abs(from.x)
                                      : 1.5 * s.back().semi_aperture_mm;
       bundle(
           field, range,
@@ -215,7 +274,7 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
           [&](DiagramRay& ray) {
             const Ray& out = ray.result.ray;
             if (ray.result.ok() && out.direction.z > 0) {
-              const double t = (lens.filmZ_mm() - out.origin.z) / out.direction.z;
+              const double t = film.hit(out.origin, out.direction);
               Vec3 q = out.origin + out.direction * t;
               // The tracer unfolds image space after an odd number of mirrors; fold it back.
               if (lens.imageSpaceReversed()) q.z = 2 * lens.rearVertexZ_mm() - q.z;
@@ -231,6 +290,11 @@ LensDiagram buildLensDiagram(const FocusedLens& fl, const DiagramOptions& opts) 
   d.z_min = std::min(z_front, z_lo - 0.03 * length);
   d.z_max = z_hi + 0.03 * length;
   d.x_max = std::max({semi_max, d.film_half_height_mm, d.stop_outer_mm.value_or(0)});
+  if (d.film_segment)
+    for (const Vec2& e : *d.film_segment) {
+      d.z_max = std::max(d.z_max, e.x + 0.03 * length);
+      d.x_max = std::max(d.x_max, std::abs(e.y));
+    }
   for (const DiagramRay& r : d.rays)
     for (const Vec3& q : r.points) d.x_max = std::max(d.x_max, std::abs(q.x));
   d.x_max = std::min(d.x_max, x_limit);
@@ -305,7 +369,13 @@ void drawLensDiagram(svg::Document& doc, const LensDiagram& d, double x, double 
            {{"class", "axis"}, {"stroke", "#777777"}, {"stroke-dasharray", "8 3 2 3"}});
   doc.line(cx + s * d.rear_vertex_z_mm, cy - s * clip, cx + s * d.rear_vertex_z_mm, cy + s * clip,
            {{"class", "rear-vertex-plane"}, {"stroke", "#aaaaaa"}, {"stroke-dasharray", "2 3"}});
-  {
+  if (d.film_segment) {
+    auto [ax, ay] = P((*d.film_segment)[0].x, (*d.film_segment)[0].y);
+    auto [bx, by] = P((*d.film_segment)[1].x, (*d.film_segment)[1].y);
+    doc.line(ax, ay, bx, by, {{"class", "film"}, {"stroke", "#000000"}, {"stroke-width", "3"}});
+    doc.text(std::max(ax, bx) + 4, std::max(ay, by) + 12, "film (tilted/shifted)",
+             {{"font-size", "10"}, {"text-anchor", "end"}});
+  } else {
     auto [fx, fy0] = P(d.film_z_mm, d.film_half_height_mm);
     auto [fx1, fy1] = P(d.film_z_mm, -d.film_half_height_mm);
     doc.line(fx, fy0, fx1, fy1, {{"class", "film"}, {"stroke", "#000000"}, {"stroke-width", "3"}});

@@ -4,11 +4,13 @@
 // itself, then drawn to scale; the drawing code only maps coordinates.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "lensim/optics/focus.h"
+#include "lensim/optics/tilt_shift.h"
 #include "lensim/util/svg.h"
 
 namespace lensim::optics {
@@ -24,6 +26,12 @@ struct DiagramOptions {
   int rays = 11;                              ///< rays per bundle, across the pupil
   double film_diagonal_mm = 35.0;
   DiagramSource source = DiagramSource::Film;
+  /// The lens tilted and shifted against the film (optics/tilt_shift.h): the diagram is then the
+  /// section through the lens axis that holds the film's normal (or, shifted only, the film's
+  /// centre), drawn with the lens axis horizontal; the film is drawn where it crosses that
+  /// section, and film bundles start on it at `fields` fractions of its half-length there, about
+  /// the point nearest the film's centre (fields {-1, 0, 1} show both ends).
+  TiltShift tilt_shift;
 };
 
 /// One traced ray of a bundle, in lens space (z, x; y = 0).
@@ -55,6 +63,9 @@ struct LensDiagram {
   std::vector<std::vector<Vec2>> obscurations;
   std::optional<double> stop_z_mm, stop_opening_mm, stop_outer_mm;  ///< semi heights
   double film_z_mm = 0, film_half_height_mm = 0, rear_vertex_z_mm = 0;
+  /// A tilted or shifted film: its ends in the section, (z, x) in mm; unset: the film is the
+  /// segment x = +-film_half_height_mm at film_z_mm.
+  std::optional<std::array<Vec2, 2>> film_segment;
   std::vector<double> field_values;  ///< film heights (mm) or field angles (deg) of the bundles
   DiagramSource source = DiagramSource::Film;
   std::vector<DiagramRay> rays;

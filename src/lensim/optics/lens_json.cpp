@@ -449,6 +449,14 @@ LensPrescription parseLentil(const json& db, std::string_view text, const std::s
       design_pos != std::string_view::npos ? locAt(text, design_pos, path) : FileLoc{path, 1, 1};
   if (!els.is_array() || els.empty())
     throw Error(design_loc, fmt::format("lentil lens {}: no optical elements", key));
+  // The database's legend reserves keys 1500-1999 for zooms, but its designs carry one set of
+  // thicknesses each (docs/zoom.md): a design marked as a zoom would be read at one unknown
+  // position, so it is refused.
+  if (auto prime = lens.find("prime"); prime != lens.end() && prime->is_boolean() && !*prime)
+    throw Error(design_loc, fmt::format("lentil lens {} is marked \"prime\": false (a zoom); "
+                                        "lentil's database carries one set of thicknesses per "
+                                        "design and no zoom positions for lensim to read",
+                                        key));
   bool stop_seen = false;
   for (size_t i = 0; i < els.size(); ++i) {
     const json& e = els[i];

@@ -879,6 +879,7 @@ LensPrescription parseZmx(std::string_view bytes, const std::string& path) {
   zmx_detail::ZmxParser base(path);
   LensPrescription p = base.parse(bytes);
   readZmxConfigurations(base, bytes, path, p);
+  zmx_detail::readFocusPositions(base, p);
   return p;
 }
 

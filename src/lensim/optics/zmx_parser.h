@@ -109,6 +109,10 @@ class ZmxParser {
   const FileLoc& mcLoc() const { return mc_loc_; }
   /// Parse with configuration `n`'s operand values applied over the surface data.
   void setConfiguration(int n) { apply_config_ = n; }
+  const std::vector<McRow>& mcRows() const { return mc_rows_; }
+  /// Where configuration `config`'s THIC operand for the surface whose SURF block starts at
+  /// `surf_line` is written; the MNUM line when the file has no such operand.
+  FileLoc mcThicknessLoc(int surf_line, int config) const;
 
  private:
   bool readMultiConfig(const std::vector<Tok>& t, int line_no);
@@ -189,5 +193,11 @@ class ZmxParser {
   std::vector<std::pair<std::string, FileLoc>> glas_fallbacks;
   std::optional<double> epd_mm;
 };
+
+/// Zemax focus positions (zmx_focus.cpp): when the configurations read into `p` differ in the
+/// object distance (THIC 0) and move lens gaps in fixed ratios without changing the lens's
+/// length, they become `p.focus_group` over the infinity configuration; ambiguous files are
+/// refused at the operand's line. Other multi-configuration files are left as they are.
+void readFocusPositions(const ZmxParser& base, LensPrescription& p);
 
 }  // namespace lensim::optics::zmx_detail

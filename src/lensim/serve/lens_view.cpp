@@ -95,7 +95,21 @@ std::string diagramSvg(const SetUpLens& s, double film_diagonal_mm, int rays, bo
   opts.rays = rays;
   opts.film_diagonal_mm = film_diagonal_mm;
   opts.source = from_scene ? DiagramSource::Scene : DiagramSource::Film;
-  return lensDiagramSheet({buildLensDiagram(s.lens, opts)}, false);
+  // Tilted or shifted: the film in the section through the lens axis, both ends and the middle.
+  opts.tilt_shift = s.tilt_shift;
+  if (s.tilt_shift.any() && !from_scene) opts.fields = {-1.0, 0.0, 1.0};
+  try {
+    return lensDiagramSheet({buildLensDiagram(s.lens, opts)}, false);
+  } catch (const Error& e) {
+    // A section the lens cannot be drawn in (an anamorphic lens tilted about x): the lens as it
+    // is on its axis, saying why, so that the numbers and plots of the view still come.
+    if (!s.tilt_shift.any()) throw;
+    opts.tilt_shift = {};
+    opts.fields = DiagramOptions{}.fields;
+    LensDiagram d = buildLensDiagram(s.lens, opts);
+    d.annotations.push_back("drawn untilted and unshifted: " + e.message());
+    return lensDiagramSheet({d}, false);
+  }
 }
 
 const std::vector<PlotKind>& plotKinds() {

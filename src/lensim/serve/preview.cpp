@@ -140,10 +140,11 @@ std::shared_ptr<const camera::Camera> PreviewRenderer::camera(const scene::Scene
   const auto lens_mtime = std::filesystem::last_write_time(rq.lens_path, ec);
   // Everything previewScene(rq) takes to make the camera, the scene by its load generation.
   const std::string key =
-      fmt::format("{}\n{}\n{}\n{}\n{:a}\n{:a}\n{:a} {:a} {:a} {:a}\n{}\n{}", generation,
+      fmt::format("{}\n{}\n{}\n{}\n{:a}\n{:a}\n{:a} {:a} {:a} {:a}\n{} {:a}\n{}\n{}", generation,
                   rq.scene_path, rq.lens_path, lens_mtime.time_since_epoch().count(),
                   rq.aperture_diameter_mm, rq.focus_distance_m, rq.tilt_shift.tilt_deg.x,
                   rq.tilt_shift.tilt_deg.y, rq.tilt_shift.shift_mm.x, rq.tilt_shift.shift_mm.y,
+                  rq.configuration.value_or(0), rq.zoom_focal_length_mm.value_or(0.0),
                   prepared.film.x_resolution, prepared.film.y_resolution);
   {
     std::lock_guard lock(mutex_);
@@ -191,6 +192,8 @@ scene::Scene PreviewRenderer::previewScene(const PreviewRequest& rq) {
   r.focus_method = "thick";
   r.lens_tilt_deg = rq.tilt_shift.tilt_deg;
   r.lens_shift_mm = rq.tilt_shift.shift_mm;
+  r.configuration = rq.configuration;
+  r.zoom_focal_length_mm = rq.zoom_focal_length_mm;
   s.camera.type = "realistic";
   s.camera.realistic = r;
   const double aspect = double(s.film.y_resolution) / s.film.x_resolution;

@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,8 +46,12 @@ struct PreviewRequest {
   /// The lens's tilt and shift against the film (the camera's "lenstilt" and "lensshift"; the
   /// scene's own are replaced: none unless asked).
   optics::TiltShift tilt_shift;
-  int width = 320;               ///< the height follows the scene's aspect ratio
-  int max_spp = 64;              ///< stop refining at this many samples per pixel
+  /// A zoom lens's configuration (1-based) or focal length (mm): the camera's "configuration"
+  /// and "focallength" (the scene's own are replaced: none unless asked).
+  std::optional<int> configuration;
+  std::optional<double> zoom_focal_length_mm;
+  int width = 320;   ///< the height follows the scene's aspect ratio
+  int max_spp = 64;  ///< stop refining at this many samples per pixel
   int seed = 0;
   double exposure_stops = 0;   ///< brightens (or darkens) the image by 2^stops
   bool auto_exposure = false;  ///< meter the first frame instead (then fixed for the stream)
@@ -66,9 +71,9 @@ struct PreviewFrame {
 /// the renderer builds from their world (acceleration structure, lights, textures, materials,
 /// media: render::prepareWorld); the realistic cameras of the last kCameraCacheSize previews are
 /// kept too (their start-up traces the exit-pupil bounds), keyed by everything that makes them
-/// (scene, lens file and its modification time, stop, focus, tilt and shift, preview width). A
-/// preview of a scene and lens seen before starts rendering at once; its image is the same bit for
-/// bit as an uncached render's.
+/// (scene, lens file and its modification time, stop, focus, tilt and shift, zoom, preview width).
+/// A preview of a scene and lens seen before starts rendering at once; its image is the same bit
+/// for bit as an uncached render's.
 class PreviewRenderer {
  public:
   PreviewRenderer();

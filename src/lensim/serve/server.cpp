@@ -237,9 +237,7 @@ struct Server::Impl {
   void startPreview(const httplib::Request& rq, httplib::Response& res, const std::string& view,
                     const PreviewViews::Ticket& ticket) {
     LensSettings ls = lensSettings(rq);
-    // The preview renders the scene's lens file as it stands (tilted and shifted as asked).
-    if (ls.configuration || ls.zoom_focal_length_mm)
-      throw ApiError{400, "the preview does not take config or focal"};
+    // The preview renders the lens as the optics show it: zoomed, tilted and shifted as asked.
     const fs::path scene_path = scenePath(rq);
     auto shown = previews.scene(scene_path.string());
     if (!param(rq, "diagonal")) ls.film_diagonal_mm = shown->film.diagonal_mm;
@@ -253,6 +251,8 @@ struct Server::Impl {
     pr.aperture_diameter_mm = lens.stop_diameter_mm;
     pr.focus_distance_m = *ls.focus_distance_m;
     pr.tilt_shift = ls.tilt_shift;
+    pr.configuration = ls.configuration;
+    pr.zoom_focal_length_mm = ls.zoom_focal_length_mm;
     pr.width = integer(rq, "width", 16, 1920, 320);
     pr.max_spp = integer(rq, "spp", 1, 4096, 64);
     pr.seed = integer(rq, "seed", 0, 1 << 30, 0);
