@@ -8,6 +8,7 @@
 #include <numbers>
 #include <random>
 
+#include "lensim/optics/design/placed_build.h"
 #include "lensim/optics/glass.h"
 
 namespace lensim::optics::design {
@@ -33,21 +34,66 @@ double percentile(std::vector<double> v, double q) {
   return v[i] + (pos - i) * (v[i + 1] - v[i]);
 }
 
+// The spot quadratics summed over the job's fields and wavelengths, and the primary wavelength's
+// chief-ray points (and slopes) on the image surface per field, of a placed lens.
+struct PlacedSums {
+  SpotQuadratic sum;
+  std::vector<Vec2> chief, chief_slope;
+};
+
+PlacedSums placedSums(const DesignJob& job, const LensPrescription& p) {
+  PlacedSums out;
+  const double primary = job.wavelengths_nm.front();
+  for (double f : job.fields_deg)
+    for (double w : job.wavelengths_nm) {
+      const PlacedBeam b = placedBeam(p, f, w, primary, job.rings);
+      out.sum.a += b.spot.a, out.sum.b += b.spot.b, out.sum.c += b.spot.c;
+      if (w == primary && out.chief.size() < job.fields_deg.size())
+        out.chief.push_back(b.chief), out.chief_slope.push_back(b.chief_slope);
+    }
+  return out;
+}
+
 }  // namespace
+
+bool placedTolerancing(const DesignJob& job) {
+  if (job.tolerance.criterion == "boresight") return true;
+  for (const Tolerance& t : job.tolerance.tolerances)
+    if (t.moves()) return true;
+  return false;
+}
 
 LensPrescription toleranceNominal(const DesignJob& job) {
   LensPrescription p = job.start;
   for (const Tolerance& t : job.tolerance.tolerances)
     if (t.kind == Tolerance::Kind::Index || t.kind == Tolerance::Kind::Abbe)
       p = applyTolerance(std::move(p), t, 0);
+  if (placedTolerancing(job)) {
+    const auto& tols = job.tolerance.tolerances;
+    p = placeOnAxis(std::move(p), tols.empty() ? FileLoc{job.path, 1, 1} : tols.front().loc);
+  }
   return p;
 }
 
 LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double value) {
+  if (t.moves()) {
+    p = placeOnAxis(std::move(p), t.loc);
+    const double dx = t.kind == Tolerance::Kind::DecentreX ? value : 0;
+    const double dy = t.kind == Tolerance::Kind::DecentreY ? value : 0;
+    const double tx = t.kind == Tolerance::Kind::TiltX ? value : 0;
+    const double ty = t.kind == Tolerance::Kind::TiltY ? value : 0;
+    moveRows(p, t.surface, t.last_surface, dx, dy, tx, ty);
+    return p;
+  }
   LensSurface& s = p.surfaces[t.surface];
   switch (t.kind) {
     case Tolerance::Kind::Radius: s.radius_mm += value; break;
-    case Tolerance::Kind::Thickness: s.thickness_mm += value; break;
+    case Tolerance::Kind::Thickness:
+      if (p.noncoaxial_loc)
+        changeThickness(p, t.surface, value);
+      else
+        s.thickness_mm += value;
+      break;
     case Tolerance::Kind::Index:
     case Tolerance::Kind::Abbe: {
       const Glass g = resolveGlass(s.glass, s.ior);
@@ -65,6 +111,7 @@ LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double v
       s.glass.v_d = vd;
       break;
     }
+    default: break;
   }
   return p;
 }
@@ -72,7 +119,7 @@ LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double v
 double toleranceCriterion(const DesignJob& job, const LensPrescription& p, double* film_shift_mm) {
   if (film_shift_mm) *film_shift_mm = 0;
   const std::string& c = job.tolerance.criterion;
-  if (c != "rms_spot") {
+  if (c != "rms_spot" && c != "boresight") {
     DesignJob one = job;
     Operand o;
     o.kind = c == "efl"         ? Operand::Kind::Efl
@@ -84,17 +131,36 @@ double toleranceCriterion(const DesignJob& job, const LensPrescription& p, doubl
     return operandValues(one, p)[0];
   }
   // Mean over fields and wavelengths of the squared RMS radius, a quadratic in the film shift.
-  SpotQuadratic sum;
+  const bool placed = p.noncoaxial_loc.has_value() || c == "boresight";
+  PlacedSums ps;
+  SpotQuadratic& sum = ps.sum;
   const double primary = job.wavelengths_nm.front();
-  for (double f : job.fields_deg)
-    for (double w : job.wavelengths_nm) {
-      const SpotQuadratic q = spotQuadratic(p, f, w, primary, job.rings);
-      sum.a += q.a, sum.b += q.b, sum.c += q.c;
-    }
+  if (placed) {
+    ps = placedSums(job, placeOnAxis(p, FileLoc{job.path, 1, 1}));
+  } else {
+    for (double f : job.fields_deg)
+      for (double w : job.wavelengths_nm) {
+        const SpotQuadratic q = spotQuadratic(p, f, w, primary, job.rings);
+        sum.a += q.a, sum.b += q.b, sum.c += q.c;
+      }
+  }
   const double n = static_cast<double>(job.fields_deg.size() * job.wavelengths_nm.size());
   double dz = 0;
   if (job.tolerance.back_focus_compensator && sum.c > 0) dz = -sum.b / sum.c;
   if (film_shift_mm) *film_shift_mm = dz;
+  if (c == "boresight") {
+    // Chief-ray points on the compensated film against the nominal lens's on its own film.
+    const PlacedSums nom = placedSums(job, toleranceNominal(job));
+    double nom_dz = 0;
+    if (job.tolerance.back_focus_compensator && nom.sum.c > 0) nom_dz = -nom.sum.b / nom.sum.c;
+    double s2 = 0;
+    for (size_t i = 0; i < ps.chief.size(); ++i) {
+      const Vec2 a = ps.chief[i] + ps.chief_slope[i] * dz;
+      const Vec2 b = nom.chief[i] + nom.chief_slope[i] * nom_dz;
+      s2 += (a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y);
+    }
+    return std::sqrt(s2 / static_cast<double>(ps.chief.size()));
+  }
   return std::sqrt(std::max(0.0, (sum.a + 2 * sum.b * dz + sum.c * dz * dz) / n));
 }
 
@@ -122,7 +188,10 @@ LensPrescription asBuiltLens(const DesignJob& job, int build) {
                        drawTolerance(tols[i], job.tolerance.seed, build, static_cast<int>(i)));
   double dz = 0;
   toleranceCriterion(job, p, &dz);
-  p.surfaces.back().thickness_mm += dz;
+  if (p.noncoaxial_loc)
+    shiftImage(p, dz);
+  else
+    p.surfaces.back().thickness_mm += dz;
   p.name = fmt::format("{} (as built {}, seed {})", job.start.name, build, job.tolerance.seed);
   return p;
 }
