@@ -14,6 +14,7 @@
 #include "lensim/optics/design/design_job.h"
 #include "lensim/optics/design/placed_build.h"
 #include "lensim/optics/design/tolerance.h"
+#include "lensim/optics/lens_formats.h"
 #include "lensim/optics/placed_lens.h"
 
 namespace fs = std::filesystem;
@@ -244,6 +245,84 @@ TEST(Misalignment, MonteCarloIsReproducibleBySeedAndBuildsKeepTheirCriterion) {
   EXPECT_EQ(c.builds, e.builds);
   EXPECT_NEAR(c.nominal, 0, 1e-12);
   EXPECT_GT(c.mean, 1e-3);
+}
+
+// A cemented doublet and a singlet with model glasses (which a .zmx file can state).
+const char* kGlassLens = R"({"format": "lensim-lens", "version": 1, "units": "mm", "name": "two",
+  "wavelengths_nm": [486.13, 587.56, 656.27], "primary_wavelength_nm": 587.56, "surfaces": [
+  {"radius_mm": 0, "thickness_mm": 3, "semi_aperture_mm": 5, "stop": true},
+  {"radius_mm": 40, "thickness_mm": 5, "semi_aperture_mm": 10, "glass": {"n_d": 1.62, "v_d": 60.3}},
+  {"radius_mm": -30, "thickness_mm": 2, "semi_aperture_mm": 10, "glass": {"n_d": 1.72, "v_d": 29.5}},
+  {"radius_mm": -200, "thickness_mm": 6, "semi_aperture_mm": 10},
+  {"radius_mm": 60, "thickness_mm": 4, "semi_aperture_mm": 10, "glass": {"n_d": 1.5168, "v_d": 64.17},
+   "conic": -0.5, "aspheric": {"4": 1e-6, "6": -2e-9}},
+  {"radius_mm": 0, "thickness_mm": 40, "semi_aperture_mm": 10}]})";
+
+TEST(Misalignment, AsBuiltLensWrittenAsZmxReadsBackWithTheSameTraces) {
+  TempDir dir;
+  dir.write("two.json", kGlassLens);
+  const std::string tols =
+      "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 0.1},\n"
+      "{\"type\": \"tilt\", \"axis\": \"y\", \"element\": 1, \"delta\": 1.5},\n"
+      "{\"type\": \"tilt\", \"axis\": \"x\", \"element\": 4, \"delta\": 2},\n"
+      "{\"type\": \"decentre\", \"axis\": \"y\", \"surface\": 5, \"delta\": 0.2},\n"
+      "{\"type\": \"thickness\", \"surface\": 3, \"delta\": 0.5}";
+  const DesignJob j =
+      readDesignJob(dir.write("j.json", job("two.json", "[0, 4]", "rms_spot", "back_focus", 5, tols, 3)));
+  for (int k = 0; k < 3; ++k) {
+    const LensPrescription built = asBuiltLens(j, k);
+    const std::string zmx = writeLensZmx(built);
+    EXPECT_NE(zmx.find("TYPE COORDBRK"), std::string::npos);
+    const LensPrescription back = readLensFile(dir.write("b.zmx", zmx));
+    ASSERT_TRUE(back.noncoaxial_loc);
+    ASSERT_EQ(back.surfaces.size(), built.surfaces.size());
+    for (size_t i = 0; i < built.surfaces.size(); ++i) {
+      const LensSurface &a = built.surfaces[i], &b = back.surfaces[i];
+      EXPECT_NEAR(a.radius_mm, b.radius_mm, 1e-12 * std::abs(a.radius_mm)) << i;
+      EXPECT_EQ(a.shape.conic, b.shape.conic);
+      EXPECT_EQ(a.glass.n_d, b.glass.n_d);
+      EXPECT_EQ(a.isStop(), b.isStop());
+      for (int r = 0; r < 3; ++r) {
+        EXPECT_NEAR(a.frame->origin_mm[r], b.frame->origin_mm[r], 1e-12) << i;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a.frame->rotation[r][c], b.frame->rotation[r][c], 1e-14) << i;
+      }
+    }
+    for (int r = 0; r < 3; ++r)
+      EXPECT_NEAR(built.image_frame.origin_mm[r], back.image_frame.origin_mm[r], 1e-12);
+    for (double nm : {486.13, 656.27}) {
+      const PlacedLens pa(built, nm), pb(back, nm);
+      for (double h : {-3.0, 0.0, 2.5}) {
+        const Ray in{{h, 0.7 * h, -5}, normalize(Vec3{0.05, -0.02, 1})};
+        const TraceResult ra = pa.trace(in), rb = pb.trace(in);
+        ASSERT_TRUE(ra.ok() && rb.ok());
+        EXPECT_NEAR(ra.ray.origin.x, rb.ray.origin.x, 1e-10);
+        EXPECT_NEAR(ra.ray.origin.y, rb.ray.origin.y, 1e-10);
+        EXPECT_NEAR(ra.ray.direction.x, rb.ray.direction.x, 1e-12);
+      }
+    }
+  }
+  // The nominal (coaxial) lens: no breaks, the rows as they were.
+  const std::string zmx = writeLensZmx(j.start);
+  EXPECT_EQ(zmx.find("COORDBRK"), std::string::npos);
+  const LensPrescription back = readLensFile(dir.write("n.zmx", zmx));
+  ASSERT_FALSE(back.noncoaxial_loc);
+  ASSERT_EQ(back.surfaces.size(), j.start.surfaces.size());
+  for (size_t i = 0; i < back.surfaces.size(); ++i) {
+    EXPECT_NEAR(back.surfaces[i].thickness_mm, j.start.surfaces[i].thickness_mm, 1e-12);
+    EXPECT_NEAR(back.surfaces[i].semiAperture_mm(), j.start.surfaces[i].semiAperture_mm(), 1e-12);
+    EXPECT_EQ(back.surfaces[i].shape.poly, j.start.surfaces[i].shape.poly);
+  }
+  // A medium with an index and no dispersion cannot be stated: refused, naming the surface.
+  dir.write("sym.json", lensJson(kSymmetric));
+  try {
+    writeLensZmx(readLensFile((dir.path / "sym.json").string()));
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("surface 1 cannot be written to .zmx: the medium after it "
+                                         "has index 1.5168 and no dispersion"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Misalignment, JobErrorsNameTheLineAndValue) {

@@ -23,22 +23,25 @@ using nlohmann::json;
 using namespace lensim::optics;
 using namespace lensim::optics::design;
 
-// A lens written in the format its extension names (.json any lens, .dat spherical lenses).
+// A lens written in the format its extension names (.json any coaxial lens, .dat spherical
+// lenses, .zmx tilted and decentred ones too).
 void writeLens(const LensPrescription& p, const std::string& out) {
   const std::string ext = std::filesystem::path(out).extension().string();
-  if (ext != ".json" && ext != ".dat")
-    throw Error(fmt::format("cannot write '{}': lensim writes lenses as .json (any lens) or .dat "
-                            "(spherical lenses)",
+  if (ext != ".json" && ext != ".dat" && ext != ".zmx")
+    throw Error(fmt::format("cannot write '{}': lensim writes lenses as .json (any coaxial lens), "
+                            ".dat (spherical lenses) or .zmx",
                             out));
-  writeFileAtomically(out, ext == ".json" ? writeLensJson(p) : writeLensDat(p));
+  writeFileAtomically(out, ext == ".json"  ? writeLensJson(p)
+                           : ext == ".dat" ? writeLensDat(p)
+                                           : writeLensZmx(p));
 }
 
 int runOptimise(const std::string& job_path, const std::string& out, const std::string& report) {
   const DesignJob job = readDesignJob(job_path);
   // Checked before the run: a bad output name must not cost the optimisation.
   const std::string ext = std::filesystem::path(out).extension().string();
-  if (ext != ".json" && ext != ".dat")
-    throw Error(fmt::format("-o '{}': expected a .json or .dat lens file", out));
+  if (ext != ".json" && ext != ".dat" && ext != ".zmx")
+    throw Error(fmt::format("-o '{}': expected a .json, .dat or .zmx lens file", out));
   DesignResult r = optimiseDesign(job, [](const std::string& s) { std::cout << s << "\n" << std::flush; });
   r.lens.name = job.start.name + " (optimised)";
   writeLens(r.lens, out);
@@ -98,9 +101,11 @@ int runTolerance(const std::string& job_path, const std::string& report, const s
   }
   if (!builds_dir.empty()) {
     std::filesystem::create_directories(builds_dir);
+    // Decentred or tilted builds as .zmx (coordinate breaks), coaxial ones as lensim JSON.
+    const char* ext = placedTolerancing(job) ? "zmx" : "json";
     for (int k = 0; k < build_count; ++k)
       writeLens(asBuiltLens(job, k),
-                (std::filesystem::path(builds_dir) / fmt::format("build-{:04d}.json", k)).string());
+                (std::filesystem::path(builds_dir) / fmt::format("build-{:04d}.{}", k, ext)).string());
     logInfo(fmt::format("wrote {} as-built lenses to {}", build_count, builds_dir));
   }
   return 0;
@@ -131,7 +136,8 @@ void registerDesignCommands(CLI::App* lens, Action& action) {
     auto count = std::make_shared<int>(0);
     tol->add_option("JOB", *job, "Design job with a \"tolerancing\" section")->required();
     tol->add_option("-o,--output", *report, "Write the results as JSON");
-    tol->add_option("--builds-dir", *dir, "Folder for as-built lenses (build-NNNN.json)");
+    tol->add_option("--builds-dir", *dir,
+                    "Folder for as-built lenses (build-NNNN.json; .zmx when decentred or tilted)");
     tol->add_option("--write-builds", *count, "How many as-built lenses to write (first N builds)")
         ->check(CLI::Range(1, 1000000));
     tol->callback([&action, job, report, dir, count] {
