@@ -73,6 +73,9 @@ int runTolerance(const std::string& job_path, const std::string& report, const s
   if (build_count > job.tolerance.monte_carlo)
     throw Error(fmt::format("--write-builds {}: the job runs only {} Monte Carlo builds", build_count,
                             job.tolerance.monte_carlo));
+  // A build that cannot be written is refused before the run (the nominal lens in the builds'
+  // format stands for them all).
+  if (!builds_dir.empty() && placedTolerancing(job)) writeLensZmx(toleranceNominal(job));
   const ToleranceResult r = runTolerancing(job);
   const std::string unit = job.tolerance.criterion == "f_number" ? "" : " mm";
   std::cout << fmt::format("criterion {} (compensator {}), nominal {:.6g}{}\n",

@@ -88,8 +88,9 @@ struct Tolerance {
 struct ToleranceSpec {
   std::vector<Tolerance> tolerances;
   /// The criterion: RMS spot radius (mm) averaged (RMS) over the job's fields and wavelengths,
-  /// "boresight" (the RMS over fields of the real chief ray's displacement on the film from the
-  /// nominal lens's, mm) or a single operand kind's value ("efl", "bfl", ...).
+  /// "boresight" (how far the image of the on-axis object point, where the primary wavelength's
+  /// real chief ray meets the film, lies from the nominal lens's, mm) or a single operand kind's
+  /// value ("efl", "bfl", ...).
   std::string criterion = "rms_spot";
   bool back_focus_compensator = true;
   int monte_carlo = 100;

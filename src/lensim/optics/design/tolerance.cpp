@@ -34,24 +34,24 @@ double percentile(std::vector<double> v, double q) {
   return v[i] + (pos - i) * (v[i + 1] - v[i]);
 }
 
-// The spot quadratics summed over the job's fields and wavelengths, and the primary wavelength's
-// chief-ray points (and slopes) on the image surface per field, of a placed lens.
-struct PlacedSums {
+// The spot quadratics of a placed lens summed over the job's fields and wavelengths.
+SpotQuadratic placedSum(const DesignJob& job, const LensPrescription& p) {
   SpotQuadratic sum;
-  std::vector<Vec2> chief, chief_slope;
-};
-
-PlacedSums placedSums(const DesignJob& job, const LensPrescription& p) {
-  PlacedSums out;
   const double primary = job.wavelengths_nm.front();
   for (double f : job.fields_deg)
     for (double w : job.wavelengths_nm) {
-      const PlacedBeam b = placedBeam(p, f, w, primary, job.rings);
-      out.sum.a += b.spot.a, out.sum.b += b.spot.b, out.sum.c += b.spot.c;
-      if (w == primary && out.chief.size() < job.fields_deg.size())
-        out.chief.push_back(b.chief), out.chief_slope.push_back(b.chief_slope);
+      const SpotQuadratic q = placedBeam(p, f, w, primary, job.rings).spot;
+      sum.a += q.a, sum.b += q.b, sum.c += q.c;
     }
-  return out;
+  return sum;
+}
+
+// Where the on-axis chief ray (primary wavelength) meets the image surface moved by the
+// compensator's shift dz (the best RMS-spot plane over the job's fields), or by none.
+Vec2 boresightPoint(const DesignJob& job, const LensPrescription& p, const SpotQuadratic& sum) {
+  const PlacedBeam b = placedBeam(p, 0, job.wavelengths_nm.front(), job.wavelengths_nm.front(), 1);
+  const double dz = job.tolerance.back_focus_compensator && sum.c > 0 ? -sum.b / sum.c : 0;
+  return b.chief + b.chief_slope * dz;
 }
 
 }  // namespace
@@ -132,11 +132,11 @@ double toleranceCriterion(const DesignJob& job, const LensPrescription& p, doubl
   }
   // Mean over fields and wavelengths of the squared RMS radius, a quadratic in the film shift.
   const bool placed = p.noncoaxial_loc.has_value() || c == "boresight";
-  PlacedSums ps;
-  SpotQuadratic& sum = ps.sum;
+  const LensPrescription pl = placed ? placeOnAxis(p, FileLoc{job.path, 1, 1}) : LensPrescription{};
+  SpotQuadratic sum;
   const double primary = job.wavelengths_nm.front();
   if (placed) {
-    ps = placedSums(job, placeOnAxis(p, FileLoc{job.path, 1, 1}));
+    sum = placedSum(job, pl);
   } else {
     for (double f : job.fields_deg)
       for (double w : job.wavelengths_nm) {
@@ -149,17 +149,11 @@ double toleranceCriterion(const DesignJob& job, const LensPrescription& p, doubl
   if (job.tolerance.back_focus_compensator && sum.c > 0) dz = -sum.b / sum.c;
   if (film_shift_mm) *film_shift_mm = dz;
   if (c == "boresight") {
-    // Chief-ray points on the compensated film against the nominal lens's on its own film.
-    const PlacedSums nom = placedSums(job, toleranceNominal(job));
-    double nom_dz = 0;
-    if (job.tolerance.back_focus_compensator && nom.sum.c > 0) nom_dz = -nom.sum.b / nom.sum.c;
-    double s2 = 0;
-    for (size_t i = 0; i < ps.chief.size(); ++i) {
-      const Vec2 a = ps.chief[i] + ps.chief_slope[i] * dz;
-      const Vec2 b = nom.chief[i] + nom.chief_slope[i] * nom_dz;
-      s2 += (a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y);
-    }
-    return std::sqrt(s2 / static_cast<double>(ps.chief.size()));
+    // The on-axis image point on the compensated film against the nominal lens's on its own.
+    const LensPrescription nominal = toleranceNominal(job);
+    const Vec2 a = boresightPoint(job, pl, sum);
+    const Vec2 b = boresightPoint(job, nominal, placedSum(job, nominal));
+    return std::hypot(a.x - b.x, a.y - b.y);
   }
   return std::sqrt(std::max(0.0, (sum.a + 2 * sum.b * dz + sum.c * dz * dz) / n));
 }

@@ -4,8 +4,8 @@
 // distributions, for N Monte Carlo builds.
 //
 // The criterion is the RMS spot radius over the job's fields and wavelengths (the root of the
-// mean of the squared RMS radii), the boresight (the RMS over fields of the chief ray's shift on
-// the film) or a first-order quantity (efl, bfl, ...). The back-focus
+// mean of the squared RMS radii), the boresight (the on-axis image point's shift on the film)
+// or a first-order quantity (efl, bfl, ...). The back-focus
 // compensator moves the film to the plane that minimises the RMS-spot criterion: the squared
 // spot radius is a quadratic in the film shift (rays are straight behind the lens), so the
 // optimum is exact, not searched.
