@@ -325,6 +325,42 @@ TEST(Misalignment, AsBuiltLensWrittenAsZmxReadsBackWithTheSameTraces) {
   }
 }
 
+TEST(Misalignment, ThirdPartyZmxFilesRewrittenKeepTheirRays) {
+  // OpticStudio files with coordinate breaks (a tilted lens, a system folded with decentres) and
+  // coaxial ones, written by writeLensZmx and read back: the same surfaces, frames and spots.
+  TempDir dir;
+  const std::string zmx = std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/";
+  for (const char* name : {"HoO-V2C18Ex66.zmx", "optiland/complicated_fold_mirrors_setup_v2.zmx",
+                           "US00583336-2-scaled.zmx", "optiland/lens1.zmx"}) {
+    const LensPrescription a = readLensFile(zmx + name);
+    const LensPrescription b = readLensFile(dir.write("re.zmx", writeLensZmx(a)));
+    ASSERT_EQ(a.surfaces.size(), b.surfaces.size()) << name;
+    ASSERT_EQ(a.noncoaxial_loc.has_value(), b.noncoaxial_loc.has_value()) << name;
+    for (size_t i = 0; i < a.surfaces.size(); ++i) {
+      EXPECT_EQ(a.surfaces[i].radius_mm, b.surfaces[i].radius_mm) << name << " " << i;
+      EXPECT_EQ(a.surfaces[i].glass.name, b.surfaces[i].glass.name) << name << " " << i;
+      EXPECT_EQ(a.surfaces[i].ior, b.surfaces[i].ior) << name << " " << i;
+      EXPECT_EQ(a.surfaces[i].semiAperture_mm(), b.surfaces[i].semiAperture_mm()) << name << " " << i;
+      if (!a.noncoaxial_loc) {
+        EXPECT_NEAR(a.surfaces[i].thickness_mm, b.surfaces[i].thickness_mm, 1e-12) << name << " " << i;
+      }
+    }
+    if (!a.noncoaxial_loc) continue;
+    for (size_t i = 0; i < a.surfaces.size(); ++i)
+      for (int r = 0; r < 3; ++r) {
+        EXPECT_NEAR(a.surfaces[i].frame->origin_mm[r], b.surfaces[i].frame->origin_mm[r], 1e-9) << name;
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(a.surfaces[i].frame->rotation[r][c], b.surfaces[i].frame->rotation[r][c], 1e-14);
+      }
+    const PlacedLens la(a, 587.56), lb(b, 587.56);
+    const auto sa = la.spot({true, 0, 1, {}}), sb = lb.spot({true, 0, 1, {}});
+    ASSERT_TRUE(sa && sb) << name;
+    EXPECT_EQ(sa->rays, sb->rays) << name;
+    EXPECT_NEAR(sa->rms_mm, sb->rms_mm, 1e-9) << name;
+    EXPECT_NEAR(sa->centroid.y, sb->centroid.y, 1e-9) << name;
+  }
+}
+
 TEST(Misalignment, JobErrorsNameTheLineAndValue) {
   TempDir dir;
   dir.write("sym.json", lensJson(kSymmetric));
