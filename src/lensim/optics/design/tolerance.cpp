@@ -69,8 +69,14 @@ LensPrescription toleranceNominal(const DesignJob& job) {
     if (t.kind == Tolerance::Kind::Index || t.kind == Tolerance::Kind::Abbe)
       p = applyTolerance(std::move(p), t, 0);
   if (placedTolerancing(job)) {
-    const auto& tols = job.tolerance.tolerances;
-    p = placeOnAxis(std::move(p), tols.empty() ? FileLoc{job.path, 1, 1} : tols.front().loc);
+    // Marked at the first decentre or tilt (the boresight criterion alone: the job).
+    FileLoc loc{job.path, 1, 1};
+    for (const Tolerance& t : job.tolerance.tolerances)
+      if (t.moves()) {
+        loc = t.loc;
+        break;
+      }
+    p = placeOnAxis(std::move(p), loc);
   }
   return p;
 }
@@ -199,9 +205,16 @@ ToleranceResult runTolerancing(const DesignJob& job) {
   tbb::parallel_for(0, static_cast<int>(tols.size()), [&](int i) {
     SensitivityRow& row = r.sensitivity[i];
     row.label = tols[i].label();
-    row.plus = toleranceCriterion(job, applyTolerance(nominal, tols[i], tols[i].delta)) - r.nominal;
-    row.minus =
-        toleranceCriterion(job, applyTolerance(nominal, tols[i], -tols[i].delta)) - r.nominal;
+    auto change = [&](double value) {
+      try {
+        return toleranceCriterion(job, applyTolerance(nominal, tols[i], value)) - r.nominal;
+      } catch (const Error& e) {
+        throw Error(tols[i].loc, fmt::format("the lens with {} at {:+g} cannot be evaluated: {}",
+                                             row.label, value, e.message()));
+      }
+    };
+    row.plus = change(tols[i].delta);
+    row.minus = change(-tols[i].delta);
   });
   double s2 = 0;
   for (const SensitivityRow& row : r.sensitivity) {
