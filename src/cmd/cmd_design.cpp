@@ -81,11 +81,22 @@ int runTolerance(const std::string& job_path, const std::string& report, const s
   std::cout << fmt::format("criterion {} (compensator {}), nominal {:.6g}{}\n",
                            job.tolerance.criterion,
                            job.tolerance.back_focus_compensator ? "back focus" : "none", r.nominal, unit);
-  std::cout << fmt::format("{:<36} {:>13} {:>13}\n", "tolerance", "change at +", "change at -");
+  const bool per_field = !r.nominal_fields.empty();
+  std::string fields_line;
+  for (size_t i = 0; i < r.nominal_fields.size(); ++i)
+    fields_line += fmt::format("{}{:g} deg {:.6g}", i ? ", " : "", job.fields_deg[i], r.nominal_fields[i]);
+  if (per_field) std::cout << "nominal RMS spot per field (mm): " << fields_line << "\n";
+  std::cout << fmt::format("{:<36} {:>13} {:>13}{}\n", "tolerance", "change at +", "change at -",
+                           per_field ? "  RMS spot per field at + / - (mm)" : "");
   json rows = json::array();
   for (const SensitivityRow& s : r.sensitivity) {
-    std::cout << fmt::format("{:<36} {:>13.4e} {:>13.4e}\n", s.label, s.plus, s.minus);
-    rows.push_back({{"tolerance", s.label}, {"plus", s.plus}, {"minus", s.minus}});
+    std::string fields;
+    for (size_t i = 0; i < s.fields_plus.size() && i < s.fields_minus.size(); ++i)
+      fields += fmt::format("  {:.4g}/{:.4g}", s.fields_plus[i], s.fields_minus[i]);
+    std::cout << fmt::format("{:<36} {:>13.4e} {:>13.4e}{}\n", s.label, s.plus, s.minus, fields);
+    json row = {{"tolerance", s.label}, {"plus", s.plus}, {"minus", s.minus}};
+    if (per_field) row["rms_spot_plus"] = s.fields_plus, row["rms_spot_minus"] = s.fields_minus;
+    rows.push_back(row);
   }
   std::cout << fmt::format("root-sum-square change {:.4e}{}\n", r.rss_change, unit);
   if (!r.builds.empty())
@@ -96,7 +107,9 @@ int runTolerance(const std::string& job_path, const std::string& report, const s
   if (!report.empty()) {
     json j = {{"job", job_path}, {"criterion", job.tolerance.criterion},
               {"compensator", job.tolerance.back_focus_compensator ? "back_focus" : "none"},
-              {"nominal", r.nominal}, {"sensitivity", rows}, {"rss_change", r.rss_change},
+              {"nominal", r.nominal}, {"fields_deg", job.fields_deg},
+              {"nominal_rms_spot", r.nominal_fields}, {"sensitivity", rows},
+              {"rss_change", r.rss_change},
               {"seed", job.tolerance.seed}, {"builds", r.builds}, {"mean", r.mean},
               {"stddev", r.stddev}, {"p10", r.p10}, {"p50", r.p50}, {"p90", r.p90},
               {"worst", r.worst}};

@@ -34,16 +34,27 @@ double percentile(std::vector<double> v, double q) {
   return v[i] + (pos - i) * (v[i + 1] - v[i]);
 }
 
-// The spot quadratics of a placed lens summed over the job's fields and wavelengths.
-SpotQuadratic placedSum(const DesignJob& job, const LensPrescription& p) {
+// The spot quadratics summed over the job's fields and wavelengths (`sum`) and over the
+// wavelengths of each field (`fields`), of a coaxial lens or (placed) a placed one.
+struct SpotSums {
   SpotQuadratic sum;
+  std::vector<SpotQuadratic> fields;
+};
+
+SpotSums spotSums(const DesignJob& job, const LensPrescription& p, bool placed) {
+  SpotSums out;
   const double primary = job.wavelengths_nm.front();
-  for (double f : job.fields_deg)
+  for (double f : job.fields_deg) {
+    SpotQuadratic field;
     for (double w : job.wavelengths_nm) {
-      const SpotQuadratic q = placedBeam(p, f, w, primary, job.rings).spot;
-      sum.a += q.a, sum.b += q.b, sum.c += q.c;
+      const SpotQuadratic q = placed ? placedBeam(p, f, w, primary, job.rings).spot
+                                     : spotQuadratic(p, f, w, primary, job.rings);
+      out.sum.a += q.a, out.sum.b += q.b, out.sum.c += q.c;
+      field.a += q.a, field.b += q.b, field.c += q.c;
     }
-  return sum;
+    out.fields.push_back(field);
+  }
+  return out;
 }
 
 // Where the on-axis chief ray (primary wavelength) meets the image surface moved by the
@@ -122,8 +133,10 @@ LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double v
   return p;
 }
 
-double toleranceCriterion(const DesignJob& job, const LensPrescription& p, double* film_shift_mm) {
+double toleranceCriterion(const DesignJob& job, const LensPrescription& p, double* film_shift_mm,
+                          std::vector<double>* field_rms_mm) {
   if (film_shift_mm) *film_shift_mm = 0;
+  if (field_rms_mm) field_rms_mm->clear();
   const std::string& c = job.tolerance.criterion;
   if (c != "rms_spot" && c != "boresight") {
     DesignJob one = job;
@@ -139,29 +152,26 @@ double toleranceCriterion(const DesignJob& job, const LensPrescription& p, doubl
   // Mean over fields and wavelengths of the squared RMS radius, a quadratic in the film shift.
   const bool placed = p.noncoaxial_loc.has_value() || c == "boresight";
   const LensPrescription pl = placed ? placeOnAxis(p, FileLoc{job.path, 1, 1}) : LensPrescription{};
-  SpotQuadratic sum;
-  const double primary = job.wavelengths_nm.front();
-  if (placed) {
-    sum = placedSum(job, pl);
-  } else {
-    for (double f : job.fields_deg)
-      for (double w : job.wavelengths_nm) {
-        const SpotQuadratic q = spotQuadratic(p, f, w, primary, job.rings);
-        sum.a += q.a, sum.b += q.b, sum.c += q.c;
-      }
-  }
-  const double n = static_cast<double>(job.fields_deg.size() * job.wavelengths_nm.size());
+  const SpotSums sums = spotSums(job, placed ? pl : p, placed);
+  const SpotQuadratic& sum = sums.sum;
+  const double nw = static_cast<double>(job.wavelengths_nm.size());
+  const double n = static_cast<double>(job.fields_deg.size()) * nw;
   double dz = 0;
   if (job.tolerance.back_focus_compensator && sum.c > 0) dz = -sum.b / sum.c;
   if (film_shift_mm) *film_shift_mm = dz;
+  auto rms = [&](const SpotQuadratic& q, double count) {
+    return std::sqrt(std::max(0.0, (q.a + 2 * q.b * dz + q.c * dz * dz) / count));
+  };
+  if (field_rms_mm)
+    for (const SpotQuadratic& q : sums.fields) field_rms_mm->push_back(rms(q, nw));
   if (c == "boresight") {
     // The on-axis image point on the compensated film against the nominal lens's on its own.
     const LensPrescription nominal = toleranceNominal(job);
     const Vec2 a = boresightPoint(job, pl, sum);
-    const Vec2 b = boresightPoint(job, nominal, placedSum(job, nominal));
+    const Vec2 b = boresightPoint(job, nominal, spotSums(job, nominal, true).sum);
     return std::hypot(a.x - b.x, a.y - b.y);
   }
-  return std::sqrt(std::max(0.0, (sum.a + 2 * sum.b * dz + sum.c * dz * dz) / n));
+  return rms(sum, n);
 }
 
 double drawTolerance(const Tolerance& t, std::uint64_t seed, int build, int index) {
@@ -199,7 +209,7 @@ LensPrescription asBuiltLens(const DesignJob& job, int build) {
 ToleranceResult runTolerancing(const DesignJob& job) {
   ToleranceResult r;
   const LensPrescription nominal = toleranceNominal(job);
-  r.nominal = toleranceCriterion(job, nominal);
+  r.nominal = toleranceCriterion(job, nominal, nullptr, &r.nominal_fields);
   const auto& tols = job.tolerance.tolerances;
   r.sensitivity.resize(tols.size());
   tbb::parallel_for(0, static_cast<int>(tols.size()), [&](int i) {
@@ -207,7 +217,9 @@ ToleranceResult runTolerancing(const DesignJob& job) {
     row.label = tols[i].label();
     auto change = [&](double value) {
       try {
-        return toleranceCriterion(job, applyTolerance(nominal, tols[i], value)) - r.nominal;
+        return toleranceCriterion(job, applyTolerance(nominal, tols[i], value), nullptr,
+                                  value > 0 ? &row.fields_plus : &row.fields_minus) -
+               r.nominal;
       } catch (const Error& e) {
         throw Error(tols[i].loc, fmt::format("the lens with {} at {:+g} cannot be evaluated: {}",
                                              row.label, value, e.message()));

@@ -44,9 +44,11 @@ LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double v
 /// The criterion of a lens (see above), with the film moved by the compensator when enabled;
 /// `film_shift_mm` receives that shift (0 without compensator). A placed lens (or the boresight
 /// criterion) is traced by the non-coaxial tracer (placed_build.h), the film shifted along the
-/// image surface's axis.
+/// image surface's axis. `field_rms_mm` receives the RMS spot radius of each field (over the
+/// wavelengths) on that film (rms_spot and boresight criteria; empty otherwise).
 double toleranceCriterion(const DesignJob& job, const LensPrescription& p,
-                          double* film_shift_mm = nullptr);
+                          double* film_shift_mm = nullptr,
+                          std::vector<double>* field_rms_mm = nullptr);
 
 /// The draw of one tolerance for build `build` (reproducible, see above): an offset in
 /// [-delta, delta].
@@ -55,10 +57,13 @@ double drawTolerance(const Tolerance& t, std::uint64_t seed, int build, int inde
 struct SensitivityRow {
   std::string label;
   double plus = 0, minus = 0;  ///< criterion change at +delta and -delta
+  /// RMS spot radius (mm) of each job field at +delta and -delta (see toleranceCriterion)
+  std::vector<double> fields_plus, fields_minus;
 };
 
 struct ToleranceResult {
   double nominal = 0;
+  std::vector<double> nominal_fields;  ///< RMS spot radius (mm) of each job field, nominal lens
   std::vector<SensitivityRow> sensitivity;
   /// Root-sum-square of the larger change of each row: the linear estimate of the worst case
   /// spread.
