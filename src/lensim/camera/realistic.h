@@ -46,6 +46,9 @@ namespace lensim::camera {
 /// Everything the realistic camera needs, resolved from a scene description.
 struct RealisticSettings {
   std::string lens_path;
+  /// The lens as already read from lens_path (makeRealisticCamera reads it to choose the
+  /// camera); null: read lens_path.
+  std::shared_ptr<const optics::LensPrescription> prescription;
   optics::LensSetup setup;       ///< stop diameter, focus or film distance, focus method
   double film_diagonal_mm = 35;  ///< sensor diagonal
   int x_resolution = 256, y_resolution = 256;

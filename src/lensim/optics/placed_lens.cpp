@@ -32,7 +32,8 @@ PlacedLens::PlacedLens(const LensPrescription& p, double wavelength_nm)
                                  "surfaces (this one is coaxial)");
   if (!(wavelength_nm > 0) || !std::isfinite(wavelength_nm))
     throw Error(fmt::format("wavelength {} nm must be > 0", wavelength_nm));
-  const std::vector<Glass> glasses = resolveGlasses(p, &diagnostics_);
+  glasses_ = resolveGlasses(p, &diagnostics_);
+  const std::vector<Glass>& glasses = glasses_;
   double n_before = 1;
   const auto stop = p.stopIndex();
   stop_ = stop ? *stop : 0;
@@ -63,7 +64,7 @@ PlacedLens::PlacedLens(const LensPrescription& p, double wavelength_nm)
 }
 
 BlockReason PlacedLens::traceSurface(size_t i, const TraceOptions& opts, Vec3& o, Vec3& d,
-                                     Vec2* local_hit) const {
+                                     Vec2* local_hit, bool backward) const {
   const Surface& s = surfaces_[i];
   const Vec3 rel = toLocal(s, o - s.origin);
   Vec3 dir = normalize(toLocal(s, d));
@@ -79,7 +80,8 @@ BlockReason PlacedLens::traceSurface(size_t i, const TraceOptions& opts, Vec3& o
   }
   if (s.mirror) {
     dir = dir - h->normal * (2 * dot(dir, h->normal));
-  } else if (!refract(dir, h->normal, s.n_before, s.n_after)) {
+  } else if (!refract(dir, h->normal, backward ? s.n_after : s.n_before,
+                      backward ? s.n_before : s.n_after)) {
     return BlockReason::TotalInternalReflection;
   }
   o = toGlobal(s, q) + s.origin;
@@ -117,6 +119,43 @@ TraceResult PlacedLens::trace(const Ray& ray, const TraceOptions& opts,
   if (path) path->push_back(o);
   r.ray = {o, d};
   return r;
+}
+
+TraceResult PlacedLens::traceBackward(const Ray& ray, const TraceOptions& opts,
+                                      std::vector<Vec3>* path) const {
+  TraceResult r;
+  Vec3 o = ray.origin, d = ray.direction;
+  for (size_t k = surfaces_.size(); k-- > 0;) {
+    Vec2 local{};
+    const BlockReason why = traceSurface(k, opts, o, d, &local, true);
+    if (int(k) == stop_) r.stop_point = local;
+    if (why != BlockReason::None) {
+      r.ray = {o, d};
+      r.blocked_surface = int(k);
+      r.reason = why;
+      return r;
+    }
+    if (path) path->push_back(o);
+  }
+  r.ray = {o, d};
+  return r;
+}
+
+void PlacedLens::setWavelength(double wavelength_nm) {
+  if (!(wavelength_nm > 0) || !std::isfinite(wavelength_nm))
+    throw Error(fmt::format("wavelength {} nm must be > 0", wavelength_nm));
+  double n_before = 1;
+  for (size_t i = 0; i < surfaces_.size(); ++i) {
+    surfaces_[i].n_before = n_before;
+    surfaces_[i].n_after = glasses_[i].index(wavelength_nm);
+    n_before = surfaces_[i].n_after;
+  }
+  wavelength_nm_ = wavelength_nm;
+}
+
+bool PlacedLens::dispersive() const {
+  return std::any_of(glasses_.begin(), glasses_.end(),
+                     [](const Glass& g) { return g.dispersive(); });
 }
 
 Vec3 PlacedLens::toImageFrame(const Vec3& global) const {

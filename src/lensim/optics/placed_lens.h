@@ -3,8 +3,9 @@
 // into a surface's own frame (SurfaceFrame), intersected there as the coaxial tracer would
 // intersect that surface on its axis, clipped at its apertures, refracted or reflected, and moved
 // back. Double precision, one ray at a time. Coordinates are those of the front surface's frame
-// (mm, z its axis, the object space's axis). The coaxial tracers (LensTracer, pupils, renderer)
-// refuse such lenses (LensSystem's constructor).
+// (mm, z its axis, the object space's axis). The coaxial tracers (LensTracer, pupils) refuse such
+// lenses (LensSystem's constructor); the realistic camera traces them with this one, backward
+// from the film (camera/realistic_placed.h).
 //
 // On top of the tracer, what a non-coaxial lens allows honestly (no first-order data, which
 // needs rotational symmetry): rays aimed through a point of the stop (the real chief ray through
@@ -16,6 +17,7 @@
 #include <optional>
 #include <vector>
 
+#include "lensim/optics/glass.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/prescription.h"
 #include "lensim/optics/surface_shape.h"
@@ -40,6 +42,19 @@ class PlacedLens {
   /// blocked_surface == surfaceCount() means the ray missed the image plane.
   TraceResult trace(const Ray& ray, const TraceOptions& opts = {},
                     std::vector<Vec3>* path = nullptr) const;
+  /// Traces a ray backward, from the image side (global coordinates, toward the last surface)
+  /// through every surface from the last to the front one, as a camera ray goes. The result's
+  /// ray leaves the front surface toward the object space (global coordinates); stop_point as
+  /// trace's. blocked_surface: the surface that stopped it. path: the hits, last surface first.
+  TraceResult traceBackward(const Ray& ray, const TraceOptions& opts = {},
+                            std::vector<Vec3>* path = nullptr) const;
+  /// Re-indexes every medium at `wavelength_nm` from the glasses (a per-thread copy of the
+  /// lens follows each sample's wavelength this way).
+  void setWavelength(double wavelength_nm);
+  /// The medium after each surface (as resolved at construction).
+  const std::vector<Glass>& glasses() const { return glasses_; }
+  /// Whether some medium's index depends on the wavelength.
+  bool dispersive() const;
   /// A global point in the image surface's own frame (x, y, z).
   Vec3 toImageFrame(const Vec3& global) const;
 
@@ -81,10 +96,12 @@ class PlacedLens {
   static Vec3 toLocal(const Surface& s, const Vec3& v);   // a direction into s's frame
   static Vec3 toGlobal(const Surface& s, const Vec3& v);  // a direction out of it
   // The ray (o, d) through surface i (global), or why it stopped.
+  // backward: the ray comes from the image side (the media swap).
   BlockReason traceSurface(size_t i, const TraceOptions& opts, Vec3& o, Vec3& d,
-                           Vec2* local_hit) const;
+                           Vec2* local_hit, bool backward = false) const;
 
   std::vector<Surface> surfaces_;
+  std::vector<Glass> glasses_;
   Surface image_;
   int stop_ = 0;
   double extent_mm_ = 1;  // a length beyond every vertex and semi-aperture (ray start-up)

@@ -221,8 +221,8 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
     p.diagnostics.push_back(
         {Severity::Note, *p.noncoaxial_loc,
          fmt::format("tilted or decentred surfaces ({}): each surface is placed in space; `lens "
-                     "info` traces real rays through them, the coaxial analyses and the renderer "
-                     "refuse the lens",
+                     "info` and the realistic camera trace real rays through them, the coaxial "
+                     "analyses refuse the lens",
                      p.noncoaxial_reason)});
     surfs = std::move(kept);
     return;

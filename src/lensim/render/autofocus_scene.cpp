@@ -55,7 +55,12 @@ SceneAutofocusResult autofocusScene(const scene::Scene& scene,
   // The search range, from the lens: infinity focus to a near distance, in steps of about the
   // depth of focus (f-number x 2 pixels).
   const auto probe = camera::makeRealisticCamera(scene);
-  const auto& real = dynamic_cast<const camera::RealisticCamera&>(*probe);
+  const auto* coaxial = dynamic_cast<const camera::RealisticCamera*>(probe.get());
+  if (!coaxial)  // camera/realistic_placed.h: no paraxial data to bound the search with
+    throw Error(scene.camera.loc,
+                "autofocus: not supported for a lens with tilted or decentred surfaces (give "
+                "focusdistance: the film moves to the best focus of real rays)");
+  const auto& real = *coaxial;
   const optics::FocusedLens& fl = real.lens();
   const optics::LensSystem& lens = *fl.lens;
   const double s_inf = optics::filmDistanceForFocus(
