@@ -27,7 +27,8 @@ namespace {
 struct TempDir {
   fs::path path;
   TempDir() {
-    path = fs::temp_directory_path() / ("lensim_misalign_" + std::to_string(std::random_device{}()));
+    path =
+        fs::temp_directory_path() / ("lensim_misalign_" + std::to_string(std::random_device{}()));
     fs::create_directories(path);
   }
   ~TempDir() { fs::remove_all(path); }
@@ -43,12 +44,14 @@ struct Row {
   double radius, thickness, semi, n;
 };
 std::string lensJson(const std::vector<Row>& rows) {
-  std::string s = "{\"format\": \"lensim-lens\", \"version\": 1, \"units\": \"mm\", \"surfaces\": [\n";
+  std::string s =
+      "{\"format\": \"lensim-lens\", \"version\": 1, \"units\": \"mm\", \"surfaces\": [\n";
   for (size_t i = 0; i < rows.size(); ++i)
-    s += "  {\"radius_mm\": " + std::to_string(rows[i].radius) + ", \"thickness_mm\": " +
-         std::to_string(rows[i].thickness) + ", \"semi_aperture_mm\": " +
-         std::to_string(rows[i].semi) + ", \"ior\": " + std::to_string(rows[i].n) +
-         (i == 0 ? ", \"stop\": true" : "") + "}" + (i + 1 < rows.size() ? ",\n" : "\n");
+    s += "  {\"radius_mm\": " + std::to_string(rows[i].radius) +
+         ", \"thickness_mm\": " + std::to_string(rows[i].thickness) +
+         ", \"semi_aperture_mm\": " + std::to_string(rows[i].semi) +
+         ", \"ior\": " + std::to_string(rows[i].n) + (i == 0 ? ", \"stop\": true" : "") + "}" +
+         (i + 1 < rows.size() ? ",\n" : "\n");
   return s + "]}\n";
 }
 
@@ -57,8 +60,8 @@ std::string job(const std::string& lens, const std::string& fields, const std::s
                 int builds = 0) {
   return "{\"lens\": \"" + lens + "\", \"fields_deg\": " + fields +
          ", \"wavelengths_nm\": [587.56],\n \"tolerancing\": {\"criterion\": \"" + criterion +
-         "\", \"compensator\": \"" + compensator + "\", \"monte_carlo\": " +
-         std::to_string(builds) + ", \"seed\": " + std::to_string(seed) +
+         "\", \"compensator\": \"" + compensator +
+         "\", \"monte_carlo\": " + std::to_string(builds) + ", \"seed\": " + std::to_string(seed) +
          ",\n  \"tolerances\": [\n" + tolerances + "\n]}}\n";
 }
 
@@ -86,8 +89,8 @@ double paraxialFocus(const std::vector<Row>& rows, size_t first, size_t last) {
 
 // A stop, a biconvex lens, a gap past its focus, a second (relay) lens: rows 0 .. 5.
 std::vector<Row> relayLens() {
-  std::vector<Row> r = {{0, 5, 4, 1},      {50, 4, 10, 1.5168}, {-50, 110, 10, 1},
-                        {30, 3, 10, 1.62}, {-60, 0, 10, 1}};
+  std::vector<Row> r = {
+      {0, 5, 4, 1}, {50, 4, 10, 1.5168}, {-50, 110, 10, 1}, {30, 3, 10, 1.62}, {-60, 0, 10, 1}};
   r.back().thickness = paraxialFocus(r, 0, 4);  // the film at the paraxial image
   return r;
 }
@@ -95,9 +98,10 @@ std::vector<Row> relayLens() {
 TEST(Misalignment, UnmovedPlacedLensMatchesTheCoaxialEvaluation) {
   TempDir dir;
   dir.write("relay.json", lensJson(relayLens()));
-  const DesignJob j = readDesignJob(dir.write(
-      "job.json", job("relay.json", "[0, 3]", "rms_spot", "back_focus", 1,
-                      "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 0.01}")));
+  const DesignJob j = readDesignJob(
+      dir.write("job.json",
+                job("relay.json", "[0, 3]", "rms_spot", "back_focus", 1,
+                    "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 0.01}")));
   const LensPrescription coaxial = j.start;
   const LensPrescription placed = toleranceNominal(j);
   ASSERT_TRUE(placed.noncoaxial_loc);
@@ -123,9 +127,10 @@ TEST(Misalignment, DecentredRelayLensMovesTheImageByDTimesOneMinusM) {
   TempDir dir;
   dir.write("relay.json", lensJson(rows));
   const double d = 0.02;
-  const DesignJob j = readDesignJob(dir.write(
-      "job.json", job("relay.json", "[0]", "boresight", "none", 1,
-                      "{\"type\": \"decentre\", \"axis\": \"y\", \"element\": 3, \"delta\": 0.02}")));
+  const DesignJob j = readDesignJob(
+      dir.write("job.json",
+                job("relay.json", "[0]", "boresight", "none", 1,
+                    "{\"type\": \"decentre\", \"axis\": \"y\", \"element\": 3, \"delta\": 0.02}")));
   ASSERT_EQ(j.tolerance.tolerances[0].last_surface, 4);
   const LensPrescription nominal = toleranceNominal(j);
   for (double sign : {1.0, -1.0}) {
@@ -140,10 +145,11 @@ TEST(Misalignment, DecentredRelayLensMovesTheImageByDTimesOneMinusM) {
   EXPECT_NEAR(r.sensitivity[0].plus, d * (1 - m), 1e-5 * d);
   EXPECT_NEAR(r.sensitivity[0].minus, d * (1 - m), 1e-5 * d);
   // The whole lens decentred (both elements about row 1): infinity is imaged on the moved axis.
-  const DesignJob all = readDesignJob(dir.write(
-      "all.json", job("relay.json", "[0]", "boresight", "none", 1,
-                      "{\"type\": \"decentre\", \"axis\": \"y\", \"element\": 1, \"delta\": 0.02},"
-                      "{\"type\": \"decentre\", \"axis\": \"y\", \"element\": 3, \"delta\": 0.02}")));
+  const DesignJob all = readDesignJob(
+      dir.write("all.json",
+                job("relay.json", "[0]", "boresight", "none", 1,
+                    "{\"type\": \"decentre\", \"axis\": \"y\", \"element\": 1, \"delta\": 0.02},"
+                    "{\"type\": \"decentre\", \"axis\": \"y\", \"element\": 3, \"delta\": 0.02}")));
   LensPrescription both = toleranceNominal(all);
   for (const Tolerance& t : all.tolerance.tolerances) both = applyTolerance(both, t, d);
   EXPECT_NEAR(placedBeam(both, 0, 587.56, 587.56, 6).chief.y, d, 1e-5 * d);
@@ -159,11 +165,12 @@ TEST(Misalignment, TiltedPlateShiftsARayByTheClosedForm) {
   dir.write("plate.json", lensJson(rows));
   for (const char* axis : {"x", "y"})
     for (double deg : {-20.0, 5.0, 30.0}) {
-      const DesignJob j = readDesignJob(dir.write(
-          "job.json", job("plate.json", "[0]", "rms_spot", "none", 1,
-                          std::string("{\"type\": \"tilt\", \"axis\": \"") + axis +
-                              "\", \"element\": 1, \"delta\": 40}")));
-      const LensPrescription p = applyTolerance(toleranceNominal(j), j.tolerance.tolerances[0], deg);
+      const DesignJob j = readDesignJob(
+          dir.write("job.json", job("plate.json", "[0]", "rms_spot", "none", 1,
+                                    std::string("{\"type\": \"tilt\", \"axis\": \"") + axis +
+                                        "\", \"element\": 1, \"delta\": 40}")));
+      const LensPrescription p =
+          applyTolerance(toleranceNominal(j), j.tolerance.tolerances[0], deg);
       const PlacedLens lens(p, 587.56);
       const Ray in{{0.3, -0.2, -5}, {0, 0, 1}};
       const TraceResult r = lens.trace(in);
@@ -174,8 +181,10 @@ TEST(Misalignment, TiltedPlateShiftsARayByTheClosedForm) {
       const double expected = t * s * (1 - std::cos(th) / std::sqrt(n * n - s * s));
       // Tilting about x turns the plate's normal toward -y for a positive angle (right-handed),
       // so the ray moves toward -y; about y, toward +x.
-      const double shift = axis[0] == 'x' ? -(r.ray.origin.y - in.origin.y) : r.ray.origin.x - in.origin.x;
-      const double other = axis[0] == 'x' ? r.ray.origin.x - in.origin.x : r.ray.origin.y - in.origin.y;
+      const double shift =
+          axis[0] == 'x' ? -(r.ray.origin.y - in.origin.y) : r.ray.origin.x - in.origin.x;
+      const double other =
+          axis[0] == 'x' ? r.ray.origin.x - in.origin.x : r.ray.origin.y - in.origin.y;
       EXPECT_NEAR(shift, expected, 1e-12) << axis << " " << deg;
       EXPECT_NEAR(other, 0, 1e-13);
     }
@@ -193,22 +202,22 @@ TEST(Misalignment, SpotOfASymmetricLensIsEvenInTheDecentre) {
       "{\"type\": \"tilt\", \"axis\": \"y\", \"element\": 1, \"delta\": 0.5},\n"
       "{\"type\": \"tilt\", \"axis\": \"x\", \"surface\": 2, \"delta\": 0.5}";
   // On axis every decentre and tilt is even: the lens turned by 180 degrees about the axis.
-  const ToleranceResult axial =
-      runTolerancing(readDesignJob(dir.write("a.json", job("sym.json", "[0]", "rms_spot", "back_focus", 1, tols))));
+  const ToleranceResult axial = runTolerancing(readDesignJob(
+      dir.write("a.json", job("sym.json", "[0]", "rms_spot", "back_focus", 1, tols))));
   for (const SensitivityRow& row : axial.sensitivity) {
     EXPECT_GT(row.plus, 1e-3 * axial.nominal) << row.label;
     EXPECT_NEAR(row.plus, row.minus, 1e-7 * row.plus) << row.label;
   }
   // A field along x: decentre and tilt across the field plane stay even (the mirror y -> -y);
   // within it they are not (coma of the decentred lens adds to or takes from the field's).
-  const ToleranceResult field = runTolerancing(
-      readDesignJob(dir.write("f.json", job("sym.json", "[6]", "rms_spot", "back_focus", 1, tols))));
+  const ToleranceResult field = runTolerancing(readDesignJob(
+      dir.write("f.json", job("sym.json", "[6]", "rms_spot", "back_focus", 1, tols))));
   EXPECT_GT(std::abs(field.sensitivity[0].plus - field.sensitivity[0].minus),
             0.05 * std::abs(field.sensitivity[0].plus));
   // The per-field RMS spots (one compensated film) make up the criterion: the root of their mean
   // square.
-  const ToleranceResult two = runTolerancing(
-      readDesignJob(dir.write("t.json", job("sym.json", "[0, 6]", "rms_spot", "back_focus", 1, tols))));
+  const ToleranceResult two = runTolerancing(readDesignJob(
+      dir.write("t.json", job("sym.json", "[0, 6]", "rms_spot", "back_focus", 1, tols))));
   auto rootMeanSquare = [](const std::vector<double>& v) {
     double s2 = 0;
     for (double x : v) s2 += x * x;
@@ -234,17 +243,19 @@ TEST(Misalignment, MonteCarloIsReproducibleBySeedAndBuildsKeepTheirCriterion) {
   TempDir dir;
   dir.write("sym.json", lensJson(kSymmetric));
   const std::string tols =
-      "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 0.05, \"distribution\": \"normal\"},\n"
+      "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 0.05, "
+      "\"distribution\": \"normal\"},\n"
       "{\"type\": \"tilt\", \"axis\": \"y\", \"element\": 1, \"delta\": 0.3},\n"
-      "{\"type\": \"thickness\", \"surface\": 1, \"delta\": 0.1, \"distribution\": \"end_point\"},\n"
+      "{\"type\": \"thickness\", \"surface\": 1, \"delta\": 0.1, \"distribution\": "
+      "\"end_point\"},\n"
       "{\"type\": \"radius\", \"surface\": 2, \"delta\": 0.5}";
-  const DesignJob j =
-      readDesignJob(dir.write("j.json", job("sym.json", "[0, 5]", "rms_spot", "back_focus", 11, tols, 40)));
+  const DesignJob j = readDesignJob(
+      dir.write("j.json", job("sym.json", "[0, 5]", "rms_spot", "back_focus", 11, tols, 40)));
   const ToleranceResult a = runTolerancing(j), b = runTolerancing(j);
   EXPECT_EQ(a.builds, b.builds);
   EXPECT_GT(a.stddev, 0.01 * a.nominal);
-  const DesignJob other =
-      readDesignJob(dir.write("k.json", job("sym.json", "[0, 5]", "rms_spot", "back_focus", 12, tols, 40)));
+  const DesignJob other = readDesignJob(
+      dir.write("k.json", job("sym.json", "[0, 5]", "rms_spot", "back_focus", 12, tols, 40)));
   EXPECT_NE(runTolerancing(other).builds, a.builds);
   // An as-built lens (compensated image surface included) has its build's criterion, and the
   // compensator finds nothing more to move.
@@ -256,8 +267,8 @@ TEST(Misalignment, MonteCarloIsReproducibleBySeedAndBuildsKeepTheirCriterion) {
     EXPECT_NEAR(dz, 0, 1e-9);
   }
   // Boresight: decentres move the image, so builds have a non-zero boresight; seeds reproduce.
-  const DesignJob bj =
-      readDesignJob(dir.write("b.json", job("sym.json", "[0, 5]", "boresight", "back_focus", 11, tols, 20)));
+  const DesignJob bj = readDesignJob(
+      dir.write("b.json", job("sym.json", "[0, 5]", "boresight", "back_focus", 11, tols, 20)));
   const ToleranceResult c = runTolerancing(bj), e = runTolerancing(bj);
   EXPECT_EQ(c.builds, e.builds);
   EXPECT_NEAR(c.nominal, 0, 1e-12);
@@ -284,8 +295,8 @@ TEST(Misalignment, AsBuiltLensWrittenAsZmxReadsBackWithTheSameTraces) {
       "{\"type\": \"tilt\", \"axis\": \"x\", \"element\": 4, \"delta\": 2},\n"
       "{\"type\": \"decentre\", \"axis\": \"y\", \"surface\": 5, \"delta\": 0.2},\n"
       "{\"type\": \"thickness\", \"surface\": 3, \"delta\": 0.5}";
-  const DesignJob j =
-      readDesignJob(dir.write("j.json", job("two.json", "[0, 4]", "rms_spot", "back_focus", 5, tols, 3)));
+  const DesignJob j = readDesignJob(
+      dir.write("j.json", job("two.json", "[0, 4]", "rms_spot", "back_focus", 5, tols, 3)));
   for (int k = 0; k < 3; ++k) {
     const LensPrescription built = asBuiltLens(j, k);
     const std::string zmx = writeLensZmx(built);
@@ -301,7 +312,8 @@ TEST(Misalignment, AsBuiltLensWrittenAsZmxReadsBackWithTheSameTraces) {
       EXPECT_EQ(a.isStop(), b.isStop());
       for (int r = 0; r < 3; ++r) {
         EXPECT_NEAR(a.frame->origin_mm[r], b.frame->origin_mm[r], 1e-12) << i;
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a.frame->rotation[r][c], b.frame->rotation[r][c], 1e-14) << i;
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(a.frame->rotation[r][c], b.frame->rotation[r][c], 1e-14) << i;
       }
     }
     for (int r = 0; r < 3; ++r)
@@ -357,17 +369,21 @@ TEST(Misalignment, ThirdPartyZmxFilesRewrittenKeepTheirRays) {
       EXPECT_EQ(a.surfaces[i].radius_mm, b.surfaces[i].radius_mm) << name << " " << i;
       EXPECT_EQ(a.surfaces[i].glass.name, b.surfaces[i].glass.name) << name << " " << i;
       EXPECT_EQ(a.surfaces[i].ior, b.surfaces[i].ior) << name << " " << i;
-      EXPECT_EQ(a.surfaces[i].semiAperture_mm(), b.surfaces[i].semiAperture_mm()) << name << " " << i;
+      EXPECT_EQ(a.surfaces[i].semiAperture_mm(), b.surfaces[i].semiAperture_mm())
+          << name << " " << i;
       if (!a.noncoaxial_loc) {
-        EXPECT_NEAR(a.surfaces[i].thickness_mm, b.surfaces[i].thickness_mm, 1e-12) << name << " " << i;
+        EXPECT_NEAR(a.surfaces[i].thickness_mm, b.surfaces[i].thickness_mm, 1e-12)
+            << name << " " << i;
       }
     }
     if (!a.noncoaxial_loc) continue;
     for (size_t i = 0; i < a.surfaces.size(); ++i)
       for (int r = 0; r < 3; ++r) {
-        EXPECT_NEAR(a.surfaces[i].frame->origin_mm[r], b.surfaces[i].frame->origin_mm[r], 1e-9) << name;
+        EXPECT_NEAR(a.surfaces[i].frame->origin_mm[r], b.surfaces[i].frame->origin_mm[r], 1e-9)
+            << name;
         for (int c = 0; c < 3; ++c)
-          EXPECT_NEAR(a.surfaces[i].frame->rotation[r][c], b.surfaces[i].frame->rotation[r][c], 1e-14);
+          EXPECT_NEAR(a.surfaces[i].frame->rotation[r][c], b.surfaces[i].frame->rotation[r][c],
+                      1e-14);
       }
     const PlacedLens la(a, 587.56), lb(b, 587.56);
     const auto sa = la.spot({true, 0, 1, {}}), sb = lb.spot({true, 0, 1, {}});
@@ -393,18 +409,23 @@ TEST(Misalignment, JobErrorsNameTheLineAndValue) {
                 .find("bad.json:4:1: error: \"axis\" missing: expected \"x\" or \"y\""),
             std::string::npos)
       << err("rms_spot", "{\"type\": \"tilt\", \"element\": 1, \"delta\": 0.1}");
-  EXPECT_NE(err("rms_spot", "{\"type\": \"decentre\", \"axis\": \"z\", \"element\": 1, \"delta\": 0.1}")
-                .find("\"axis\" \"z\": expected"),
-            std::string::npos);
-  EXPECT_NE(err("rms_spot", "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 2, \"delta\": 0.1}")
-                .find("\"element\" 2: the medium after that row is air"),
-            std::string::npos);
-  EXPECT_NE(err("rms_spot", "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"surface\": 1, \"delta\": 0.1}")
+  EXPECT_NE(
+      err("rms_spot", "{\"type\": \"decentre\", \"axis\": \"z\", \"element\": 1, \"delta\": 0.1}")
+          .find("\"axis\" \"z\": expected"),
+      std::string::npos);
+  EXPECT_NE(
+      err("rms_spot", "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 2, \"delta\": 0.1}")
+          .find("\"element\" 2: the medium after that row is air"),
+      std::string::npos);
+  EXPECT_NE(err("rms_spot",
+                "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"surface\": 1, "
+                "\"delta\": 0.1}")
                 .find("either \"element\""),
             std::string::npos);
-  EXPECT_NE(err("rms_spot", "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 7}")
-                .find("\"delta\" 7 must be > 0 and below 6 mm"),
-            std::string::npos)
+  EXPECT_NE(
+      err("rms_spot", "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 7}")
+          .find("\"delta\" 7 must be > 0 and below 6 mm"),
+      std::string::npos)
       << err("rms_spot", "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 7}");
   EXPECT_NE(err("efl", "{\"type\": \"tilt\", \"axis\": \"x\", \"element\": 1, \"delta\": 0.1}")
                 .find("bad.json:4:1: error: a decentre or tilt makes the lens non-coaxial"),

@@ -16,7 +16,9 @@ namespace {
 using M3 = std::array<std::array<double, 3>, 3>;  // rows; columns are a frame's axes
 using V3 = std::array<double, 3>;
 
-std::string num(double v) { return fmt::format("{:.17g}", v); }
+std::string num(double v) {
+  return fmt::format("{:.17g}", v);
+}
 
 Error unwritable(const LensSurface& s, size_t row, const std::string& what) {
   return Error(s.loc, fmt::format("surface {} cannot be written to .zmx: {}", row, what));
@@ -29,7 +31,8 @@ std::string surfaceLines(const LensSurface& s, size_t row, double disz) {
   if (s.aperture_shape != ApertureShape::Circle)
     throw unwritable(s, row, "the writer writes circular apertures only");
   bool odd = false;
-  for (size_t k = 1; k < s.shape.poly.size(); ++k) odd = odd || (k % 2 == 1 && s.shape.poly[k] != 0);
+  for (size_t k = 1; k < s.shape.poly.size(); ++k)
+    odd = odd || (k % 2 == 1 && s.shape.poly[k] != 0);
   if (odd) throw unwritable(s, row, "odd aspheric terms (the writer writes EVENASPH)");
   if (s.shape.poly.size() > 17)
     throw unwritable(s, row, "aspheric terms beyond r^16 (EVENASPH has 8)");
@@ -48,18 +51,21 @@ std::string surfaceLines(const LensSurface& s, size_t row, double disz) {
     } else {
       if (!s.glass.v_d || !(*s.glass.v_d > 0))
         throw unwritable(s, row, "a model glass needs V_d > 0");
-      o += fmt::format("  GLAS ___BLANK 1 0 {} {} 0 0 0 0 0 0\n", num(*s.glass.n_d), num(*s.glass.v_d));
+      o += fmt::format("  GLAS ___BLANK 1 0 {} {} 0 0 0 0 0 0\n", num(*s.glass.n_d),
+                       num(*s.glass.v_d));
     }
   } else if (s.ior != 1 && s.ior != 0) {
-    throw unwritable(s, row, fmt::format("the medium after it has index {} and no dispersion, "
-                                         "which a .zmx file cannot state (a model glass needs "
-                                         "V_d > 0); give it a glass or n_d and V_d",
-                                         s.ior));
+    throw unwritable(s, row,
+                     fmt::format("the medium after it has index {} and no dispersion, "
+                                 "which a .zmx file cannot state (a model glass needs "
+                                 "V_d > 0); give it a glass or n_d and V_d",
+                                 s.ior));
   }
   if (!s.coating.empty()) o += fmt::format("  COAT {}\n", s.coating);
   o += fmt::format("  DISZ {}\n", num(disz));
   o += fmt::format("  DIAM {} 1 0 0 1 \"\"\n", num(s.semiAperture_mm()));
-  if (s.obscuration_radius_mm > 0) o += fmt::format("  OBSC 0 {} 0\n", num(s.obscuration_radius_mm));
+  if (s.obscuration_radius_mm > 0)
+    o += fmt::format("  OBSC 0 {} 0\n", num(s.obscuration_radius_mm));
   return o;
 }
 
@@ -74,7 +80,8 @@ std::string breakLines(const SurfaceFrame& a, const SurfaceFrame& b) {
   for (int i = 0; i < 3; ++i) {
     local[i] = ra[0][i] * d[0] + ra[1][i] * d[1] + ra[2][i] * d[2];
     for (int j = 0; j < 3; ++j)
-      rel[i][j] = ra[0][i] * b.rotation[0][j] + ra[1][i] * b.rotation[1][j] + ra[2][i] * b.rotation[2][j];
+      rel[i][j] =
+          ra[0][i] * b.rotation[0][j] + ra[1][i] * b.rotation[1][j] + ra[2][i] * b.rotation[2][j];
   }
   // rel = Rx(tx) Ry(ty) Rz(tz): rel[0][2] = sin ty, rel[1][2] = -sin tx cos ty,
   // rel[2][2] = cos tx cos ty, rel[0][1] = -cos ty sin tz, rel[0][0] = cos ty cos tz.
@@ -86,15 +93,17 @@ std::string breakLines(const SurfaceFrame& a, const SurfaceFrame& b) {
   if (std::abs(local[0]) < eps && std::abs(local[1]) < eps && std::abs(tx) < eps &&
       std::abs(ty) < eps && std::abs(tz) < eps)
     return {};
-  return fmt::format("  TYPE COORDBRK\n  CURV 0\n  PARM 1 {}\n  PARM 2 {}\n  PARM 3 {}\n"
-                     "  PARM 4 {}\n  PARM 5 {}\n  PARM 6 0\n  DISZ 0\n",
-                     num(local[0]), num(local[1]), num(tx), num(ty), num(tz));
+  return fmt::format(
+      "  TYPE COORDBRK\n  CURV 0\n  PARM 1 {}\n  PARM 2 {}\n  PARM 3 {}\n"
+      "  PARM 4 {}\n  PARM 5 {}\n  PARM 6 0\n  DISZ 0\n",
+      num(local[0]), num(local[1]), num(tx), num(ty), num(tz));
 }
 
 // The distance along a's z from a's vertex to b's plane through b's origin, as a thickness.
 double axialGap(const SurfaceFrame& a, const SurfaceFrame& b) {
   double z = 0;
-  for (int k = 0; k < 3; ++k) z += a.rotation[size_t(k)][2] * (b.origin_mm[size_t(k)] - a.origin_mm[size_t(k)]);
+  for (int k = 0; k < 3; ++k)
+    z += a.rotation[size_t(k)][2] * (b.origin_mm[size_t(k)] - a.origin_mm[size_t(k)]);
   return z;
 }
 
@@ -102,8 +111,9 @@ double axialGap(const SurfaceFrame& a, const SurfaceFrame& b) {
 
 std::string writeLensZmx(const LensPrescription& p) {
   if (p.fold_loc)
-    throw Error(*p.fold_loc, "a lens folded by mirrors is written as its coaxial twin only by "
-                             ".json; the .zmx writer does not write folds");
+    throw Error(*p.fold_loc,
+                "a lens folded by mirrors is written as its coaxial twin only by "
+                ".json; the .zmx writer does not write folds");
   if (!p.configurations.empty())
     throw Error("a multi-configuration lens cannot be written to .zmx by lensim");
   if (!p.focus_group.empty())
@@ -133,7 +143,8 @@ std::string writeLensZmx(const LensPrescription& p) {
         throw unwritable(s, i, "the front surface is moved along the axis");
       const std::string cb = breakLines(prev, *s.frame);
       if (!cb.empty()) o += fmt::format("SURF {}\n{}", number++, cb);
-      const SurfaceFrame& next = i + 1 < p.surfaces.size() ? *p.surfaces[i + 1].frame : p.image_frame;
+      const SurfaceFrame& next =
+          i + 1 < p.surfaces.size() ? *p.surfaces[i + 1].frame : p.image_frame;
       disz = axialGap(*s.frame, next);
       prev = *s.frame;
       for (int k = 0; k < 3; ++k) prev.origin_mm[size_t(k)] += disz * prev.rotation[size_t(k)][2];

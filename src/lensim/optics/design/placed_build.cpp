@@ -86,7 +86,8 @@ void changeThickness(LensPrescription& p, int row, double delta) {
 
 void shiftImage(LensPrescription& p, double dz) {
   requirePlaced(p);
-  for (int k = 0; k < 3; ++k) p.image_frame.origin_mm[size_t(k)] += dz * p.image_frame.rotation[size_t(k)][2];
+  for (int k = 0; k < 3; ++k)
+    p.image_frame.origin_mm[size_t(k)] += dz * p.image_frame.rotation[size_t(k)][2];
   p.surfaces.back().thickness_mm += dz;
 }
 
