@@ -1,6 +1,6 @@
 // Lens file formats besides pbrt's `.dat` tables: Zemax `.zmx` (sequential), lentil's JSON
-// database, ISET3d's JSON lens files and lensim's own JSON lens format; writers for `.dat` and
-// lensim JSON; and the catalogue of named lenses shipped in `lenses/`.
+// database, ISET3d's JSON lens files and lensim's own JSON lens format; writers for `.dat`,
+// lensim JSON and `.zmx`; and the catalogue of named lenses shipped in `lenses/`.
 //
 // Every reader fills one LensPrescription (prescription.h) with `file:line` on every surface and
 // throws lensim::Error (`file:line:col: error: ...`) for what it cannot model.

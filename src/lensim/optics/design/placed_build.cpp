@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <numbers>
 
+#include "lensim/optics/coordinate_break.h"
 #include "lensim/optics/design/image_quality.h"
 #include "lensim/optics/field_rays.h"
 #include "lensim/optics/paraxial.h"
@@ -28,16 +28,6 @@ V3 mul(const M3& m, const V3& v) {
           m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
           m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2]};
 }
-// Right-handed rotation by `deg` about x (axis 0) or y (axis 1), as coordinate_break.cpp turns a
-// break's frame.
-M3 rotation(int axis, double deg) {
-  const double a = deg * std::numbers::pi / 180, c = std::cos(a), s = std::sin(a);
-  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
-  M3 r{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
-  r[i][i] = c, r[i][j] = -s, r[j][i] = s, r[j][j] = c;
-  return r;
-}
-
 void requirePlaced(const LensPrescription& p) {
   if (!p.noncoaxial_loc) throw Error("internal: a placed build needs frames (placeOnAxis)");
 }
@@ -62,7 +52,7 @@ LensPrescription placeOnAxis(LensPrescription p, const FileLoc& loc) {
 void moveRows(LensPrescription& p, int first, int last, double dx, double dy, double tx,
               double ty) {
   requirePlaced(p);
-  const M3 r = mul(rotation(0, tx), rotation(1, ty));
+  const M3 r = mul(axisRotation(0, tx), axisRotation(1, ty));
   const V3 pivot = p.surfaces[size_t(first)].frame->origin_mm;
   for (int i = first; i <= last; ++i) {
     SurfaceFrame& f = *p.surfaces[size_t(i)].frame;
