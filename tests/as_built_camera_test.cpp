@@ -141,12 +141,21 @@ TEST_F(AsBuilt, RefusalsNameTheParameter) {
   writeFile(dir_.path() / "job2.json", std::string(kJob).replace(std::string(kJob).find("singlet.dat"), 11, "other.dat"));
   e = errorOf("\"string tolerances\" \"job2.json\" \"integer asbuilt\" 1");
   EXPECT_NE(e.find("is not the design job's lens"), std::string::npos) << e;
-  // Decentre stays refused by the tolerancer, at the job's line.
+  // Irregularity stays refused by the tolerancer, at the job's line.
   writeFile(dir_.path() / "job3.json",
-            std::string(kJob).replace(std::string(kJob).find("\"index\""), 7, "\"decentre\""));
+            std::string(kJob).replace(std::string(kJob).find("\"index\""), 7, "\"irregularity\""));
   e = errorOf("\"string tolerances\" \"job3.json\" \"integer asbuilt\" 1");
   EXPECT_NE(e.find("job3.json:"), std::string::npos) << e;
-  EXPECT_NE(e.find("decentre"), std::string::npos) << e;
+  EXPECT_NE(e.find("irregularity"), std::string::npos) << e;
+  // A decentred build is not coaxial: the camera refuses it at the tolerance's line.
+  std::string job4 = kJob;
+  const std::string index_row = "\"type\": \"index\", \"surface\": 1, \"delta\": 0.002";
+  job4.replace(job4.find(index_row), index_row.size(),
+               "\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 0.05");
+  writeFile(dir_.path() / "job4.json", job4);
+  e = errorOf("\"string tolerances\" \"job4.json\" \"integer asbuilt\" 1");
+  EXPECT_NE(e.find("job4.json:10:"), std::string::npos) << e;
+  EXPECT_NE(e.find("cannot be rendered"), std::string::npos) << e;
 }
 
 }  // namespace

@@ -431,8 +431,9 @@ TEST(LensDesign, JobErrorsNameTheLineAndValue) {
   job.replace(job.find("\"surface\": 2}"), 13, "\"surface\": 7}");
   EXPECT_NE(err(job).find("bad.json:6:5: error: \"surface\" 7 is not a row"), std::string::npos) << err(job);
   std::string tol = toleranceJob("singlet.dat", 1, "uniform");
-  tol.replace(tol.find("\"radius\", \"surface\": 2"), 8, "\"tilt\"");
-  EXPECT_NE(err(tol).find("bad.json:9:7: error: \"tilt\" tolerances are not modelled"), std::string::npos)
+  tol.replace(tol.find("\"radius\", \"surface\": 2"), 8, "\"irregularity\"");
+  EXPECT_NE(err(tol).find("bad.json:9:7: error: \"irregularity\" tolerances are not modelled"),
+            std::string::npos)
       << err(tol);
   tol = toleranceJob("singlet.dat", 1, "uniform");
   tol.replace(tol.find("\"delta\": 0.2"), 12, "\"delta\": 5.0");

@@ -23,22 +23,25 @@ using nlohmann::json;
 using namespace lensim::optics;
 using namespace lensim::optics::design;
 
-// A lens written in the format its extension names (.json any lens, .dat spherical lenses).
+// A lens written in the format its extension names (.json any coaxial lens, .dat spherical
+// lenses, .zmx tilted and decentred ones too).
 void writeLens(const LensPrescription& p, const std::string& out) {
   const std::string ext = std::filesystem::path(out).extension().string();
-  if (ext != ".json" && ext != ".dat")
-    throw Error(fmt::format("cannot write '{}': lensim writes lenses as .json (any lens) or .dat "
-                            "(spherical lenses)",
+  if (ext != ".json" && ext != ".dat" && ext != ".zmx")
+    throw Error(fmt::format("cannot write '{}': lensim writes lenses as .json (any coaxial lens), "
+                            ".dat (spherical lenses) or .zmx",
                             out));
-  writeFileAtomically(out, ext == ".json" ? writeLensJson(p) : writeLensDat(p));
+  writeFileAtomically(out, ext == ".json"  ? writeLensJson(p)
+                           : ext == ".dat" ? writeLensDat(p)
+                                           : writeLensZmx(p));
 }
 
 int runOptimise(const std::string& job_path, const std::string& out, const std::string& report) {
   const DesignJob job = readDesignJob(job_path);
   // Checked before the run: a bad output name must not cost the optimisation.
   const std::string ext = std::filesystem::path(out).extension().string();
-  if (ext != ".json" && ext != ".dat")
-    throw Error(fmt::format("-o '{}': expected a .json or .dat lens file", out));
+  if (ext != ".json" && ext != ".dat" && ext != ".zmx")
+    throw Error(fmt::format("-o '{}': expected a .json, .dat or .zmx lens file", out));
   DesignResult r = optimiseDesign(job, [](const std::string& s) { std::cout << s << "\n" << std::flush; });
   r.lens.name = job.start.name + " (optimised)";
   writeLens(r.lens, out);
@@ -70,16 +73,30 @@ int runTolerance(const std::string& job_path, const std::string& report, const s
   if (build_count > job.tolerance.monte_carlo)
     throw Error(fmt::format("--write-builds {}: the job runs only {} Monte Carlo builds", build_count,
                             job.tolerance.monte_carlo));
+  // A build that cannot be written is refused before the run (the nominal lens in the builds'
+  // format stands for them all).
+  if (!builds_dir.empty() && placedTolerancing(job)) writeLensZmx(toleranceNominal(job));
   const ToleranceResult r = runTolerancing(job);
   const std::string unit = job.tolerance.criterion == "f_number" ? "" : " mm";
   std::cout << fmt::format("criterion {} (compensator {}), nominal {:.6g}{}\n",
                            job.tolerance.criterion,
                            job.tolerance.back_focus_compensator ? "back focus" : "none", r.nominal, unit);
-  std::cout << fmt::format("{:<36} {:>13} {:>13}\n", "tolerance", "change at +", "change at -");
+  const bool per_field = !r.nominal_fields.empty();
+  std::string fields_line;
+  for (size_t i = 0; i < r.nominal_fields.size(); ++i)
+    fields_line += fmt::format("{}{:g} deg {:.6g}", i ? ", " : "", job.fields_deg[i], r.nominal_fields[i]);
+  if (per_field) std::cout << "nominal RMS spot per field (mm): " << fields_line << "\n";
+  std::cout << fmt::format("{:<36} {:>13} {:>13}{}\n", "tolerance", "change at +", "change at -",
+                           per_field ? "  RMS spot per field at + / - (mm)" : "");
   json rows = json::array();
   for (const SensitivityRow& s : r.sensitivity) {
-    std::cout << fmt::format("{:<36} {:>13.4e} {:>13.4e}\n", s.label, s.plus, s.minus);
-    rows.push_back({{"tolerance", s.label}, {"plus", s.plus}, {"minus", s.minus}});
+    std::string fields;
+    for (size_t i = 0; i < s.fields_plus.size() && i < s.fields_minus.size(); ++i)
+      fields += fmt::format("  {:.4g}/{:.4g}", s.fields_plus[i], s.fields_minus[i]);
+    std::cout << fmt::format("{:<36} {:>13.4e} {:>13.4e}{}\n", s.label, s.plus, s.minus, fields);
+    json row = {{"tolerance", s.label}, {"plus", s.plus}, {"minus", s.minus}};
+    if (per_field) row["rms_spot_plus"] = s.fields_plus, row["rms_spot_minus"] = s.fields_minus;
+    rows.push_back(row);
   }
   std::cout << fmt::format("root-sum-square change {:.4e}{}\n", r.rss_change, unit);
   if (!r.builds.empty())
@@ -90,7 +107,9 @@ int runTolerance(const std::string& job_path, const std::string& report, const s
   if (!report.empty()) {
     json j = {{"job", job_path}, {"criterion", job.tolerance.criterion},
               {"compensator", job.tolerance.back_focus_compensator ? "back_focus" : "none"},
-              {"nominal", r.nominal}, {"sensitivity", rows}, {"rss_change", r.rss_change},
+              {"nominal", r.nominal}, {"fields_deg", job.fields_deg},
+              {"nominal_rms_spot", r.nominal_fields}, {"sensitivity", rows},
+              {"rss_change", r.rss_change},
               {"seed", job.tolerance.seed}, {"builds", r.builds}, {"mean", r.mean},
               {"stddev", r.stddev}, {"p10", r.p10}, {"p50", r.p50}, {"p90", r.p90},
               {"worst", r.worst}};
@@ -98,9 +117,11 @@ int runTolerance(const std::string& job_path, const std::string& report, const s
   }
   if (!builds_dir.empty()) {
     std::filesystem::create_directories(builds_dir);
+    // Decentred or tilted builds as .zmx (coordinate breaks), coaxial ones as lensim JSON.
+    const char* ext = placedTolerancing(job) ? "zmx" : "json";
     for (int k = 0; k < build_count; ++k)
       writeLens(asBuiltLens(job, k),
-                (std::filesystem::path(builds_dir) / fmt::format("build-{:04d}.json", k)).string());
+                (std::filesystem::path(builds_dir) / fmt::format("build-{:04d}.{}", k, ext)).string());
     logInfo(fmt::format("wrote {} as-built lenses to {}", build_count, builds_dir));
   }
   return 0;
@@ -131,7 +152,8 @@ void registerDesignCommands(CLI::App* lens, Action& action) {
     auto count = std::make_shared<int>(0);
     tol->add_option("JOB", *job, "Design job with a \"tolerancing\" section")->required();
     tol->add_option("-o,--output", *report, "Write the results as JSON");
-    tol->add_option("--builds-dir", *dir, "Folder for as-built lenses (build-NNNN.json)");
+    tol->add_option("--builds-dir", *dir,
+                    "Folder for as-built lenses (build-NNNN.json; .zmx when decentred or tilted)");
     tol->add_option("--write-builds", *count, "How many as-built lenses to write (first N builds)")
         ->check(CLI::Range(1, 1000000));
     tol->callback([&action, job, report, dir, count] {

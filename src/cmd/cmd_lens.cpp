@@ -402,10 +402,12 @@ int runConvert(const std::string& in, const std::string& out) {
     text = writeLensJson(p);
   else if (ext == ".dat")
     text = writeLensDat(p);
+  else if (ext == ".zmx")
+    text = writeLensZmx(p);
   else
     throw Error(
-        fmt::format("cannot write '{}': lensim writes lenses as .json (any lens) or .dat "
-                    "(spherical lenses)",
+        fmt::format("cannot write '{}': lensim writes lenses as .json (any coaxial lens), .dat "
+                    "(spherical lenses) or .zmx",
                     out));
   writeFileAtomically(out, text);
   logInfo(fmt::format("wrote {} ({} surfaces)", out, p.surfaces.size()));

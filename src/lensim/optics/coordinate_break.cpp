@@ -29,15 +29,7 @@ double dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] *
 M3 identity() { return {V3{1, 0, 0}, V3{0, 1, 0}, V3{0, 0, 1}}; }
 V3 column(const M3& m, int j) { return {m[0][j], m[1][j], m[2][j]}; }
 
-// Right-handed rotation by `deg` degrees about axis 0 (x), 1 (y) or 2 (z).
-M3 rotation(int axis, double deg) {
-  const double a = deg * (M_PI / 180.0);
-  const double c = std::cos(a), s = std::sin(a);
-  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
-  M3 r = identity();
-  r[i][i] = c, r[i][j] = -s, r[j][i] = s, r[j][j] = c;
-  return r;
-}
+M3 rotation(int axis, double deg) { return axisRotation(axis, deg); }
 
 // Where a break's message points: its first non-zero PARM, else its SURF line.
 FileLoc breakLoc(const FoldSurface& s) {
@@ -47,6 +39,15 @@ FileLoc breakLoc(const FoldSurface& s) {
 }
 
 }  // namespace
+
+std::array<std::array<double, 3>, 3> axisRotation(int axis, double deg) {
+  const double a = deg * (M_PI / 180.0);
+  const double c = std::cos(a), s = std::sin(a);
+  const int i = (axis + 1) % 3, j = (axis + 2) % 3;
+  M3 r = identity();
+  r[i][i] = c, r[i][j] = -s, r[j][i] = s, r[j][j] = c;
+  return r;
+}
 
 std::vector<SurfaceFrame> placeSurfaces(const std::vector<FoldSurface>& surfs) {
   std::vector<SurfaceFrame> frames(surfs.size());

@@ -52,6 +52,10 @@ struct UnfoldedSystem {
   std::vector<FoldMirrorAperture> tilted_mirrors;
 };
 
+/// The right-handed rotation by `deg` degrees about axis 0 (x), 1 (y) or 2 (z) with which a
+/// break turns its frame (rows; its columns are the turned axes).
+std::array<std::array<double, 3>, 3> axisRotation(int axis, double deg);
+
 /// Every surface's frame in space, breaks composed (a break's own frame is the one after its
 /// decentres and tilts); surface 0 (the object) and surface 1 sit at the origin, unturned.
 /// Throws Error at the break (or surface) after which a vertex would lie at a non-finite place.

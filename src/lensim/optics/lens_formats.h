@@ -1,6 +1,6 @@
 // Lens file formats besides pbrt's `.dat` tables: Zemax `.zmx` (sequential), lentil's JSON
-// database, ISET3d's JSON lens files and lensim's own JSON lens format; writers for `.dat` and
-// lensim JSON; and the catalogue of named lenses shipped in `lenses/`.
+// database, ISET3d's JSON lens files and lensim's own JSON lens format; writers for `.dat`,
+// lensim JSON and `.zmx`; and the catalogue of named lenses shipped in `lenses/`.
 //
 // Every reader fills one LensPrescription (prescription.h) with `file:line` on every surface and
 // throws lensim::Error (`file:line:col: error: ...`) for what it cannot model.
@@ -45,6 +45,12 @@ LensPrescription parseLensJson(std::string_view text, const std::string& path,
 
 /// Writes a prescription as lensim JSON (always possible).
 std::string writeLensJson(const LensPrescription& p);
+/// Writes a prescription as a Zemax `.zmx` file (sequential, millimetres, FLOA: the stop's
+/// semi-diameter is its DIAM). A lens with tilted or decentred surfaces gets a coordinate break
+/// (order 0) before each surface whose frame is not the previous one's moved along its axis.
+/// Throws lensim::Error naming what cannot be written (non-rotational surfaces, odd aspheric
+/// terms, a medium with an index but no dispersion, folds, configurations).
+std::string writeLensZmx(const LensPrescription& p);
 /// Writes a prescription as a pbrt `.dat` table. Throws lensim::Error naming the surface and
 /// what cannot be written (aspheres, cylinders, a stop with curvature...).
 std::string writeLensDat(const LensPrescription& p);

@@ -172,22 +172,61 @@ Operand parseOperand(const json& e, const FileLoc& loc, const LensPrescription& 
   return o;
 }
 
-Tolerance parseTolerance(const json& e, const FileLoc& loc, const LensPrescription& p) {
-  Tolerance t;
-  t.loc = loc;
-  const std::string k = kindOf(e, loc, {"radius", "thickness", "index", "abbe", "decentre",
-                                        "decenter", "tilt", "irregularity"});
-  if (k == "decentre" || k == "decenter" || k == "tilt" || k == "irregularity")
-    throw Error(loc, fmt::format("\"{}\" tolerances are not modelled: lensim's lenses are "
-                                 "rotationally symmetric about one axis (radius, thickness, index "
-                                 "and abbe are)",
-                                 k));
+// A decentre (mm) or tilt (degrees) of an element (`"element": first row`, through the row after
+// which the medium is air) or of one surface (`"surface": row`), along or about `"axis"` x or y.
+void parseMotionTolerance(const json& e, const FileLoc& loc, const LensPrescription& p, bool tilt,
+                          Tolerance& t) {
+  checkKeys(e, loc, {"type", "axis", "element", "surface", "delta", "distribution"});
+  const std::string axis = e.contains("axis") && e["axis"].is_string() ? e["axis"].get<std::string>()
+                                                                      : std::string();
+  if (axis != "x" && axis != "y")
+    throw Error(loc, fmt::format("\"axis\" {}: expected \"x\" or \"y\"",
+                                 e.contains("axis") ? e["axis"].dump() : "missing"));
+  t.kind = tilt ? (axis == "x" ? Tolerance::Kind::TiltX : Tolerance::Kind::TiltY)
+                : (axis == "x" ? Tolerance::Kind::DecentreX : Tolerance::Kind::DecentreY);
+  if (e.contains("element") == e.contains("surface"))
+    throw Error(loc, "a decentre or tilt names either \"element\" (its first row) or \"surface\"");
+  if (p.fold_loc || p.noncoaxial_loc)
+    throw Error(loc, "decentre and tilt tolerances need a coaxial lens (this one is folded or "
+                     "already tilted)");
+  for (const LensSurface& s : p.surfaces)
+    if (s.mirror)
+      throw Error(loc, "decentre and tilt tolerances are not modelled for lenses with mirrors");
+  const bool element = e.contains("element");
+  json row = e;
+  if (element) row["surface"] = e["element"];
+  t.surface = surfaceIndex(row, loc, p);
+  t.last_surface = t.surface;
+  auto air = [&](int i) {
+    const LensSurface& s = p.surfaces[size_t(i)];
+    return s.glass.empty() && (s.ior == 1 || s.ior == 0);
+  };
+  if (element) {
+    if (air(t.surface))
+      throw Error(loc, fmt::format("\"element\" {}: the medium after that row is air, so no "
+                                   "element starts there (name its first surface)",
+                                   t.surface));
+    const int n = static_cast<int>(p.surfaces.size());
+    while (t.last_surface < n - 1 && !air(t.last_surface)) ++t.last_surface;
+    if (!air(t.last_surface))
+      throw Error(loc, fmt::format("\"element\" {}: the glass runs to the film", t.surface));
+  }
+  t.delta = number(e, "delta", loc);
+  const double limit = tilt ? 45 : 0.5 * p.surfaces[size_t(t.surface)].semiAperture_mm();
+  if (!(t.delta > 0 && t.delta < limit))
+    throw Error(loc, fmt::format("\"delta\" {} must be > 0 and below {} {}", t.delta, limit,
+                                 tilt ? "degrees" : "mm (half the first surface's semi-aperture)"));
+}
+
+void parseAxialTolerance(const json& e, const FileLoc& loc, const LensPrescription& p,
+                         const std::string& k, Tolerance& t) {
   checkKeys(e, loc, {"type", "surface", "delta", "distribution"});
   t.kind = k == "radius"      ? Tolerance::Kind::Radius
            : k == "thickness" ? Tolerance::Kind::Thickness
            : k == "index"     ? Tolerance::Kind::Index
                               : Tolerance::Kind::Abbe;
   t.surface = surfaceIndex(e, loc, p);
+  t.last_surface = t.surface;
   const LensSurface& s = p.surfaces[t.surface];
   t.delta = number(e, "delta", loc);
   if (!(t.delta > 0)) throw Error(loc, fmt::format("\"delta\" {} must be > 0", t.delta));
@@ -217,6 +256,21 @@ Tolerance parseTolerance(const json& e, const FileLoc& loc, const LensPrescripti
       throw Error(loc, fmt::format("\"delta\" {} must be below the medium's {} ({}) so that every "
                                    "build is physical",
                                    t.delta, index ? "n_d - 1" : "V_d", base));
+  }
+}
+
+Tolerance parseTolerance(const json& e, const FileLoc& loc, const LensPrescription& p) {
+  Tolerance t;
+  t.loc = loc;
+  const std::string k = kindOf(e, loc, {"radius", "thickness", "index", "abbe", "decentre",
+                                        "decenter", "tilt", "irregularity"});
+  if (k == "irregularity")
+    throw Error(loc, "\"irregularity\" tolerances are not modelled (radius, thickness, index, "
+                     "abbe, decentre and tilt are)");
+  if (k == "decentre" || k == "decenter" || k == "tilt") {
+    parseMotionTolerance(e, loc, p, k == "tilt", t);
+  } else {
+    parseAxialTolerance(e, loc, p, k, t);
   }
   const std::string d = e.value("distribution", std::string("uniform"));
   if (d == "uniform") t.distribution = Tolerance::Distribution::Uniform;
@@ -313,8 +367,13 @@ std::string Operand::label() const {
 }
 
 std::string Tolerance::label() const {
-  static const char* names[] = {"radius", "thickness", "index", "abbe"};
-  return fmt::format("{} surface {} +-{:g}", names[static_cast<int>(kind)], surface, delta);
+  static const char* names[] = {"radius",     "thickness",  "index",  "abbe",
+                                "decentre x", "decentre y", "tilt x", "tilt y"};
+  const char* name = names[static_cast<int>(kind)];
+  if (!moves()) return fmt::format("{} surface {} +-{:g}", name, surface, delta);
+  const std::string unit = kind >= Kind::TiltX ? " deg" : "";
+  if (last_surface == surface) return fmt::format("{} surface {} +-{:g}{}", name, surface, delta, unit);
+  return fmt::format("{} element {}-{} +-{:g}{}", name, surface, last_surface, delta, unit);
 }
 
 DesignJob parseDesignJob(std::string_view text, const std::string& path) {
@@ -408,11 +467,18 @@ DesignJob parseDesignJob(std::string_view text, const std::string& path) {
     job.tolerance.tolerances = parseArray<Tolerance>(
         t, "tolerances", text, path, [&](const json& e, const FileLoc& l) { return parseTolerance(e, l, p); });
     job.tolerance.criterion = t.value("criterion", std::string("rms_spot"));
-    static const std::vector<std::string> crit = {"rms_spot", "efl", "bfl", "f_number",
+    static const std::vector<std::string> crit = {"rms_spot", "boresight", "efl", "bfl", "f_number",
                                                   "total_track", "longitudinal_color"};
     if (std::find(crit.begin(), crit.end(), job.tolerance.criterion) == crit.end())
       throw Error(tl, fmt::format("\"criterion\" \"{}\": expected one of {}", job.tolerance.criterion,
                                   fmt::join(crit, ", ")));
+    for (const Tolerance& x : job.tolerance.tolerances)
+      if (x.moves() && job.tolerance.criterion != "rms_spot" &&
+          job.tolerance.criterion != "boresight")
+        throw Error(x.loc, fmt::format("a decentre or tilt makes the lens non-coaxial, which has "
+                                       "no first-order \"{}\": use criterion rms_spot or "
+                                       "boresight",
+                                       job.tolerance.criterion));
     const std::string comp = t.value("compensator", std::string("back_focus"));
     if (comp != "back_focus" && comp != "none")
       throw Error(tl, fmt::format("\"compensator\" \"{}\": expected back_focus or none", comp));

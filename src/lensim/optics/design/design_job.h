@@ -67,13 +67,20 @@ const char* operandKindName(Operand::Kind k);
 
 /// A tolerance of the tolerancing section.
 struct Tolerance {
-  enum class Kind { Radius, Thickness, Index, Abbe };
+  enum class Kind { Radius, Thickness, Index, Abbe, DecentreX, DecentreY, TiltX, TiltY };
   enum class Distribution { Uniform, Normal, EndPoint };
   Kind kind = Kind::Radius;
   int surface = 0;
-  double delta = 0;  ///< +- range: radius and thickness in mm, index and Abbe number absolute
+  /// Decentre and tilt: the last row moved with `surface` (the element's last surface for an
+  /// element tolerance, `surface` itself for a surface tolerance).
+  int last_surface = 0;
+  /// +- range: radius, thickness and decentre in mm, tilt in degrees, index and Abbe number
+  /// absolute
+  double delta = 0;
   Distribution distribution = Distribution::Uniform;
   FileLoc loc;
+  /// Decentre or tilt: the build is no longer coaxial (optics/placed_lens.h traces it).
+  bool moves() const { return kind >= Kind::DecentreX; }
   std::string label() const;
 };
 
@@ -81,7 +88,9 @@ struct Tolerance {
 struct ToleranceSpec {
   std::vector<Tolerance> tolerances;
   /// The criterion: RMS spot radius (mm) averaged (RMS) over the job's fields and wavelengths,
-  /// or a single operand kind's value ("efl", "bfl", ...).
+  /// "boresight" (how far the image of the on-axis object point, where the primary wavelength's
+  /// real chief ray meets the film, lies from the nominal lens's, mm) or a single operand kind's
+  /// value ("efl", "bfl", ...).
   std::string criterion = "rms_spot";
   bool back_focus_compensator = true;
   int monte_carlo = 100;

@@ -12,12 +12,16 @@
 
 namespace lensim::optics::design {
 
-FocusedLens evaluationLens(LensPrescription p) {
+void floatApertures(LensPrescription& p) {
   for (LensSurface& s : p.surfaces) {
     if (s.isStop()) continue;
     const double extent = sagDomainRadius(s.radius_mm, s.shape);
     s.aperture_diameter_mm = std::min(2 * 0.999 * extent, 2 * s.aperture_diameter_mm);
   }
+}
+
+FocusedLens evaluationLens(LensPrescription p) {
+  floatApertures(p);
   LensSetup setup;
   if (!(p.fileFilmDistance_mm() > 0))
     throw Error(fmt::format("the film distance (last thickness) {} mm must be > 0",

@@ -11,6 +11,10 @@
 
 namespace lensim::optics::design {
 
+/// Every clear aperture but the stop's doubled, within the surface's extent (the optimiser's
+/// floating apertures).
+void floatApertures(LensPrescription& p);
+
 /// The lens the operands are evaluated on: every clear aperture but the stop's doubled (within
 /// the surface's extent), the film at the last thickness, focused at infinity.
 FocusedLens evaluationLens(LensPrescription p);

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <random>
 
+#include "lensim/optics/design/placed_build.h"
 #include "lensim/optics/glass.h"
 
 namespace lensim::optics::design {
@@ -33,21 +34,83 @@ double percentile(std::vector<double> v, double q) {
   return v[i] + (pos - i) * (v[i + 1] - v[i]);
 }
 
+// The spot quadratics summed over the job's fields and wavelengths (`sum`) and over the
+// wavelengths of each field (`fields`), of a coaxial lens or (placed) a placed one.
+struct SpotSums {
+  SpotQuadratic sum;
+  std::vector<SpotQuadratic> fields;
+};
+
+SpotSums spotSums(const DesignJob& job, const LensPrescription& p, bool placed) {
+  SpotSums out;
+  const double primary = job.wavelengths_nm.front();
+  for (double f : job.fields_deg) {
+    SpotQuadratic field;
+    for (double w : job.wavelengths_nm) {
+      const SpotQuadratic q = placed ? placedBeam(p, f, w, primary, job.rings).spot
+                                     : spotQuadratic(p, f, w, primary, job.rings);
+      out.sum.a += q.a, out.sum.b += q.b, out.sum.c += q.c;
+      field.a += q.a, field.b += q.b, field.c += q.c;
+    }
+    out.fields.push_back(field);
+  }
+  return out;
+}
+
+// Where the on-axis chief ray (primary wavelength) meets the image surface moved by the
+// compensator's shift dz (the best RMS-spot plane over the job's fields), or by none.
+Vec2 boresightPoint(const DesignJob& job, const LensPrescription& p, const SpotQuadratic& sum) {
+  const PlacedBeam b = placedBeam(p, 0, job.wavelengths_nm.front(), job.wavelengths_nm.front(), 1);
+  const double dz = job.tolerance.back_focus_compensator && sum.c > 0 ? -sum.b / sum.c : 0;
+  return b.chief + b.chief_slope * dz;
+}
+
 }  // namespace
+
+bool placedTolerancing(const DesignJob& job) {
+  if (job.tolerance.criterion == "boresight") return true;
+  for (const Tolerance& t : job.tolerance.tolerances)
+    if (t.moves()) return true;
+  return false;
+}
 
 LensPrescription toleranceNominal(const DesignJob& job) {
   LensPrescription p = job.start;
   for (const Tolerance& t : job.tolerance.tolerances)
     if (t.kind == Tolerance::Kind::Index || t.kind == Tolerance::Kind::Abbe)
       p = applyTolerance(std::move(p), t, 0);
+  if (placedTolerancing(job)) {
+    // Marked at the first decentre or tilt (the boresight criterion alone: the job).
+    FileLoc loc{job.path, 1, 1};
+    for (const Tolerance& t : job.tolerance.tolerances)
+      if (t.moves()) {
+        loc = t.loc;
+        break;
+      }
+    p = placeOnAxis(std::move(p), loc);
+  }
   return p;
 }
 
 LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double value) {
+  if (t.moves()) {
+    p = placeOnAxis(std::move(p), t.loc);
+    const double dx = t.kind == Tolerance::Kind::DecentreX ? value : 0;
+    const double dy = t.kind == Tolerance::Kind::DecentreY ? value : 0;
+    const double tx = t.kind == Tolerance::Kind::TiltX ? value : 0;
+    const double ty = t.kind == Tolerance::Kind::TiltY ? value : 0;
+    moveRows(p, t.surface, t.last_surface, dx, dy, tx, ty);
+    return p;
+  }
   LensSurface& s = p.surfaces[t.surface];
   switch (t.kind) {
     case Tolerance::Kind::Radius: s.radius_mm += value; break;
-    case Tolerance::Kind::Thickness: s.thickness_mm += value; break;
+    case Tolerance::Kind::Thickness:
+      if (p.noncoaxial_loc)
+        changeThickness(p, t.surface, value);
+      else
+        s.thickness_mm += value;
+      break;
     case Tolerance::Kind::Index:
     case Tolerance::Kind::Abbe: {
       const Glass g = resolveGlass(s.glass, s.ior);
@@ -65,14 +128,17 @@ LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double v
       s.glass.v_d = vd;
       break;
     }
+    default: break;
   }
   return p;
 }
 
-double toleranceCriterion(const DesignJob& job, const LensPrescription& p, double* film_shift_mm) {
+double toleranceCriterion(const DesignJob& job, const LensPrescription& p, double* film_shift_mm,
+                          std::vector<double>* field_rms_mm) {
   if (film_shift_mm) *film_shift_mm = 0;
+  if (field_rms_mm) field_rms_mm->clear();
   const std::string& c = job.tolerance.criterion;
-  if (c != "rms_spot") {
+  if (c != "rms_spot" && c != "boresight") {
     DesignJob one = job;
     Operand o;
     o.kind = c == "efl"         ? Operand::Kind::Efl
@@ -84,18 +150,28 @@ double toleranceCriterion(const DesignJob& job, const LensPrescription& p, doubl
     return operandValues(one, p)[0];
   }
   // Mean over fields and wavelengths of the squared RMS radius, a quadratic in the film shift.
-  SpotQuadratic sum;
-  const double primary = job.wavelengths_nm.front();
-  for (double f : job.fields_deg)
-    for (double w : job.wavelengths_nm) {
-      const SpotQuadratic q = spotQuadratic(p, f, w, primary, job.rings);
-      sum.a += q.a, sum.b += q.b, sum.c += q.c;
-    }
-  const double n = static_cast<double>(job.fields_deg.size() * job.wavelengths_nm.size());
+  const bool placed = p.noncoaxial_loc.has_value() || c == "boresight";
+  const LensPrescription pl = placed ? placeOnAxis(p, FileLoc{job.path, 1, 1}) : LensPrescription{};
+  const SpotSums sums = spotSums(job, placed ? pl : p, placed);
+  const SpotQuadratic& sum = sums.sum;
+  const double nw = static_cast<double>(job.wavelengths_nm.size());
+  const double n = static_cast<double>(job.fields_deg.size()) * nw;
   double dz = 0;
   if (job.tolerance.back_focus_compensator && sum.c > 0) dz = -sum.b / sum.c;
   if (film_shift_mm) *film_shift_mm = dz;
-  return std::sqrt(std::max(0.0, (sum.a + 2 * sum.b * dz + sum.c * dz * dz) / n));
+  auto rms = [&](const SpotQuadratic& q, double count) {
+    return std::sqrt(std::max(0.0, (q.a + 2 * q.b * dz + q.c * dz * dz) / count));
+  };
+  if (field_rms_mm)
+    for (const SpotQuadratic& q : sums.fields) field_rms_mm->push_back(rms(q, nw));
+  if (c == "boresight") {
+    // The on-axis image point on the compensated film against the nominal lens's on its own.
+    const LensPrescription nominal = toleranceNominal(job);
+    const Vec2 a = boresightPoint(job, pl, sum);
+    const Vec2 b = boresightPoint(job, nominal, spotSums(job, nominal, true).sum);
+    return std::hypot(a.x - b.x, a.y - b.y);
+  }
+  return rms(sum, n);
 }
 
 double drawTolerance(const Tolerance& t, std::uint64_t seed, int build, int index) {
@@ -122,7 +198,10 @@ LensPrescription asBuiltLens(const DesignJob& job, int build) {
                        drawTolerance(tols[i], job.tolerance.seed, build, static_cast<int>(i)));
   double dz = 0;
   toleranceCriterion(job, p, &dz);
-  p.surfaces.back().thickness_mm += dz;
+  if (p.noncoaxial_loc)
+    shiftImage(p, dz);
+  else
+    p.surfaces.back().thickness_mm += dz;
   p.name = fmt::format("{} (as built {}, seed {})", job.start.name, build, job.tolerance.seed);
   return p;
 }
@@ -130,15 +209,24 @@ LensPrescription asBuiltLens(const DesignJob& job, int build) {
 ToleranceResult runTolerancing(const DesignJob& job) {
   ToleranceResult r;
   const LensPrescription nominal = toleranceNominal(job);
-  r.nominal = toleranceCriterion(job, nominal);
+  r.nominal = toleranceCriterion(job, nominal, nullptr, &r.nominal_fields);
   const auto& tols = job.tolerance.tolerances;
   r.sensitivity.resize(tols.size());
   tbb::parallel_for(0, static_cast<int>(tols.size()), [&](int i) {
     SensitivityRow& row = r.sensitivity[i];
     row.label = tols[i].label();
-    row.plus = toleranceCriterion(job, applyTolerance(nominal, tols[i], tols[i].delta)) - r.nominal;
-    row.minus =
-        toleranceCriterion(job, applyTolerance(nominal, tols[i], -tols[i].delta)) - r.nominal;
+    auto change = [&](double value) {
+      try {
+        return toleranceCriterion(job, applyTolerance(nominal, tols[i], value), nullptr,
+                                  value > 0 ? &row.fields_plus : &row.fields_minus) -
+               r.nominal;
+      } catch (const Error& e) {
+        throw Error(tols[i].loc, fmt::format("the lens with {} at {:+g} cannot be evaluated: {}",
+                                             row.label, value, e.message()));
+      }
+    };
+    row.plus = change(tols[i].delta);
+    row.minus = change(-tols[i].delta);
   });
   double s2 = 0;
   for (const SensitivityRow& row : r.sensitivity) {

@@ -1,9 +1,11 @@
 // Tolerancing: how a design degrades when built. Each tolerance (radius, thickness, index, Abbe
-// number of one surface or medium) is applied alone at its +- limits (the sensitivity table),
-// then all at once, drawn from their distributions, for N Monte Carlo builds.
+// number of one surface or medium; decentre and tilt of an element or a surface) is applied
+// alone at its +- limits (the sensitivity table), then all at once, drawn from their
+// distributions, for N Monte Carlo builds.
 //
 // The criterion is the RMS spot radius over the job's fields and wavelengths (the root of the
-// mean of the squared RMS radii) or a first-order quantity (efl, bfl, ...). The back-focus
+// mean of the squared RMS radii), the boresight (the on-axis image point's shift on the film)
+// or a first-order quantity (efl, bfl, ...). The back-focus
 // compensator moves the film to the plane that minimises the RMS-spot criterion: the squared
 // spot radius is a quadratic in the film shift (rays are straight behind the lens), so the
 // optimum is exact, not searched.
@@ -23,19 +25,30 @@
 
 namespace lensim::optics::design {
 
-/// The job's lens as toleranced: media with index or Abbe tolerances become the model glasses
+/// Whether the job's lenses are evaluated by the non-coaxial tracer (a decentre or tilt
+/// tolerance, or the boresight criterion): the nominal lens too, so that every change is
+/// measured by one method.
+bool placedTolerancing(const DesignJob& job);
+
+/// The job's lens as toleranced (placed on its axis when placedTolerancing): media with index or Abbe tolerances become the model glasses
 /// through their (n_d, V_d), so that a zero offset changes nothing.
 LensPrescription toleranceNominal(const DesignJob& job);
 
 /// A prescription with the tolerance applied at offset `value` (radius mm, thickness mm, index,
-/// Abbe number). Index and Abbe tolerances make the medium a model glass through the perturbed
-/// (n_d, V_d).
+/// Abbe number, decentre mm, tilt degrees). Index and Abbe tolerances make the medium a model
+/// glass through the perturbed (n_d, V_d). A decentre or tilt places the lens on its axis first
+/// (placeOnAxis) and moves its rows about the first row's vertex (moveRows); a thickness change
+/// of a placed lens moves the rows behind it along the row's axis.
 LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double value);
 
 /// The criterion of a lens (see above), with the film moved by the compensator when enabled;
-/// `film_shift_mm` receives that shift (0 without compensator).
+/// `film_shift_mm` receives that shift (0 without compensator). A placed lens (or the boresight
+/// criterion) is traced by the non-coaxial tracer (placed_build.h), the film shifted along the
+/// image surface's axis. `field_rms_mm` receives the RMS spot radius of each field (over the
+/// wavelengths) on that film (rms_spot and boresight criteria; empty otherwise).
 double toleranceCriterion(const DesignJob& job, const LensPrescription& p,
-                          double* film_shift_mm = nullptr);
+                          double* film_shift_mm = nullptr,
+                          std::vector<double>* field_rms_mm = nullptr);
 
 /// The draw of one tolerance for build `build` (reproducible, see above): an offset in
 /// [-delta, delta].
@@ -44,10 +57,13 @@ double drawTolerance(const Tolerance& t, std::uint64_t seed, int build, int inde
 struct SensitivityRow {
   std::string label;
   double plus = 0, minus = 0;  ///< criterion change at +delta and -delta
+  /// RMS spot radius (mm) of each job field at +delta and -delta (see toleranceCriterion)
+  std::vector<double> fields_plus, fields_minus;
 };
 
 struct ToleranceResult {
   double nominal = 0;
+  std::vector<double> nominal_fields;  ///< RMS spot radius (mm) of each job field, nominal lens
   std::vector<SensitivityRow> sensitivity;
   /// Root-sum-square of the larger change of each row: the linear estimate of the worst case
   /// spread.
@@ -59,7 +75,8 @@ struct ToleranceResult {
 /// Runs the sensitivity table and the Monte Carlo builds (in parallel).
 ToleranceResult runTolerancing(const DesignJob& job);
 
-/// As-built lens number `build` (0-based) of the Monte Carlo run, compensator applied.
+/// As-built lens number `build` (0-based) of the Monte Carlo run, compensator applied (a
+/// placed lens when the job decentres or tilts).
 LensPrescription asBuiltLens(const DesignJob& job, int build);
 
 }  // namespace lensim::optics::design
