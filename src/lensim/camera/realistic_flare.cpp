@@ -111,6 +111,9 @@ void pathFactor(const optics::LensCoatings& coatings, const std::vector<Step>& s
                 std::array<double, kCameraWavelengths>& factor, int wavelengths = kCameraWavelengths,
                 const double* before = nullptr, const double* after = nullptr) {
   factor.fill(1.0);
+  std::array<double, kCameraWavelengths> l;
+  for (int c = 0; c < wavelengths; ++c)
+    l[size_t(c)] = lambda_nm[size_t(c)] > 0 ? lambda_nm[size_t(c)] : primary_nm;
   const int m = int(steps.size());
   for (int i = 0; i < m; ++i) {
     Step s = steps[size_t(i)];
@@ -125,11 +128,11 @@ void pathFactor(const optics::LensCoatings& coatings, const std::vector<Step>& s
     const Vec3 nrm = a * s.n_to - b * s.n_from;
     const double len = length(nrm);
     const double cos_i = len > 1e-12 ? std::min(1.0, std::abs(dot(b, nrm)) / len) : 1.0;
-    for (int c = 0; c < wavelengths; ++c) {
-      const double l = lambda_nm[size_t(c)] > 0 ? lambda_nm[size_t(c)] : primary_nm;
-      const optics::FilmRTA f = coatings.rta(s.surface, s.coat_from, s.coat_to, l, cos_i);
-      factor[size_t(c)] *= s.mirror ? f.R : f.T;
-    }
+    std::array<optics::FilmRTA, kCameraWavelengths> f;
+    coatings.rtaSpectral(s.surface, s.coat_from, s.coat_to, {l.data(), size_t(wavelengths)}, cos_i,
+                         f.data());
+    for (int c = 0; c < wavelengths; ++c)
+      factor[size_t(c)] *= s.mirror ? f[size_t(c)].R : f[size_t(c)].T;
   }
 }
 
