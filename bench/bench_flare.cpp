@@ -102,9 +102,10 @@ int main(int argc, char** argv) {
     mean_b += sum_w / n;
     m2_b += sum_w2p / n;
   }
-  std::printf("with per-ghost bounds (camera set up in %.2f s): ghost irradiance %.4e, variance "
-              "per sample %.3e (%.2fx less than without)\n",
-              setup_s, mean_b, m2_b - mean_b * mean_b, var_flare / (m2_b - mean_b * mean_b));
+  std::printf(
+      "with per-ghost bounds (camera set up in %.2f s): ghost irradiance %.4e, variance "
+      "per sample %.3e (%.2fx less than without)\n",
+      setup_s, mean_b, m2_b - mean_b * mean_b, var_flare / (m2_b - mean_b * mean_b));
 
   // Cost per camera sample: generateRay alone (flare off) and generateRay + generateGhostRay.
   camera::RealisticSettings off = s;

@@ -460,8 +460,9 @@ TEST(ThinFilm, UnpolarisedFastPathMatchesAiryAndTheComplexPath) {
                                    thinFilmStack(n0, {&l, 1}, ns, lambda, std::cos(t), 'p').R);
           EXPECT_NEAR(got, sp, 1e-12) << n1 << " " << n0 << " " << lambda << " " << deg;
           if (n0 * std::sin(t) >= ns) continue;  // total reflection: Airy's cos t is imaginary
-          EXPECT_NEAR(got, 0.5 * (airyR(n0, n1, ns, 137.0, lambda, t, false) +
-                                  airyR(n0, n1, ns, 137.0, lambda, t, true)),
+          EXPECT_NEAR(got,
+                      0.5 * (airyR(n0, n1, ns, 137.0, lambda, t, false) +
+                             airyR(n0, n1, ns, 137.0, lambda, t, true)),
                       1e-12)
               << n1 << " " << n0 << " " << lambda << " " << deg;
         }
@@ -475,8 +476,8 @@ TEST(ThinFilm, SpectralMatchesOneWavelengthAtATime) {
   const std::vector<FilmLayer> multi{{Cx(1.38, 0), 510.0 / 4 / 1.38},
                                      {Cx(2.05, 0), 510.0 / 2 / 2.05},
                                      {Cx(1.63, 0), 510.0 / 4 / 1.63}};
-  const std::vector<FilmLayer> five{{Cx(1.45, 0), 90}, {Cx(2.2, 0), 60}, {Cx(1.45, 0), 120},
-                                    {Cx(2.2, 0), 30},  {Cx(1.7, 0), 200}};
+  const std::vector<FilmLayer> five{
+      {Cx(1.45, 0), 90}, {Cx(2.2, 0), 60}, {Cx(1.45, 0), 120}, {Cx(2.2, 0), 30}, {Cx(1.7, 0), 200}};
   const std::vector<FilmLayer> absorbing{{Cx(1.38, 0), 99.6}, {Cx(0.96, -6.69), 5}};
   std::vector<double> lambda;
   for (double l = 380; l <= 780; l += 20) lambda.push_back(l);  // 21: three chunks

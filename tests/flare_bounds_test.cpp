@@ -85,9 +85,9 @@ TEST(FlareBounds, NoGhostPathGetsThroughOutsideItsBound) {
         ++inside, inside_through += through;
       } else {
         ++outside, outside_through += through;
-        EXPECT_FALSE(through) << "pair " << pairs[size_t(k)].first << ","
-                              << pairs[size_t(k)].second << " film (" << x.x << ", " << x.y
-                              << ") plane (" << q.x << ", " << q.y << ")";
+        EXPECT_FALSE(through) << "pair " << pairs[size_t(k)].first << "," << pairs[size_t(k)].second
+                              << " film (" << x.x << ", " << x.y << ") plane (" << q.x << ", "
+                              << q.y << ")";
       }
     }
   }
@@ -107,8 +107,9 @@ TEST(FlareBounds, GhostIrradianceAgreesAndMorePathsGetThrough) {
     EXPECT_LT(std::abs(z), 4) << raster.x << " " << raster.y << ": " << a.mean << " +- " << a.se
                               << " against " << b.mean << " +- " << b.se;
     EXPECT_GT(a.through, b.through);
-    std::printf("raster (%g, %g): ghost irradiance %.5e +- %.1e with bounds, %.5e +- %.1e "
-                "without (z %.2f); through %.3f against %.3f\n",
-                raster.x, raster.y, a.mean, a.se, b.mean, b.se, z, a.through, b.through);
+    std::printf(
+        "raster (%g, %g): ghost irradiance %.5e +- %.1e with bounds, %.5e +- %.1e "
+        "without (z %.2f); through %.3f against %.3f\n",
+        raster.x, raster.y, a.mean, a.se, b.mean, b.se, z, a.through, b.through);
   }
 }

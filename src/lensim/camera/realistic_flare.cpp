@@ -18,9 +18,10 @@
 //    sample's film point drawn uniformly over a disc of the plane where the rear element's
 //    clear aperture is nearest the film, large enough to hold every ray from that film point
 //    that reaches the rear element (so no path is missed; rays that miss the lens are blocked
-//    by the tracer and contribute 0); the exact trace of the ghost path (coating/ghost_trace.h);
-//    weight = T_shape cos^4(theta) A_disc / D^2 x (prod R at the two reflections x prod T at
-//    every other crossing, per wavelength, at the actual angles) / p(pair).
+//    by the tracer and contribute 0), or over the pair's own bound when smaller ("Per-ghost
+//    bounds" below); the exact trace of the ghost path (coating/ghost_trace.h);
+//    weight = T_shape cos^4(theta) A / D^2 (A: the region's area) x (prod R at the two reflections
+//    x prod T at every other crossing, per wavelength, at the actual angles) / p(pair).
 // Why: each ghost carries R^2 of the light (~3e-3 uncoated, 1e-5..1e-6 multicoated); Russian
 // roulette at each interface would spend almost every sample on the direct path (the
 // probability of a two-reflection path is ~R^2) and leave the ghosts as rare fireflies: per
@@ -207,51 +208,82 @@ GhostRegion ghostRegion(double spread, double rear_radius_mm, double bin_width_m
 // element, but each ghost path's clear apertures pass only part of it (29 % of all pairs' paths
 // at f/2, 1.2 % for the narrowest pair: bench/flare_ghost_waste.sh). Per pair and per film-radius
 // bin: the ghost path is traced from film points on +x at kBoundRadii radii across the bin to a
-// grid of kBoundGrid x kBoundGrid / 2 points over the disc (v >= 0: the lens is symmetric about
-// the film point's meridian), and the box around the points that get through is widened by twice
-// the grid step (a passing region reaches at most a step beyond its outermost passing grid
-// point unless it is narrower than a step there) plus the most its edges move from one sampled
-// radius to the next. A bin where no grid point passes, or where the region appears or vanishes
-// between sampled radii, keeps the whole disc. tests/flare_bounds_test.cpp traces 10^6 points
-// outside the boxes and finds none that gets through.
-constexpr int kBoundBins = 8, kBoundRadii = 3, kBoundGrid = 32;
+// grid over the disc (v >= 0: the lens is symmetric about the film point's meridian), then to a
+// finer grid over the passing points' extent widened by two coarse steps; the box around the
+// fine grid's passing points is widened by twice its step (a passing region reaches at most a
+// step beyond its outermost passing grid point unless it is narrower than a step there) plus the
+// most that edge moves from one sampled radius to the next. A bin where no grid point passes, or
+// where the region appears or vanishes between sampled radii, keeps the whole disc.
+// tests/flare_bounds_test.cpp traces 10^6 points outside the boxes and finds none that gets
+// through.
+constexpr int kBoundBins = 8, kBoundRadii = 3, kBoundGrid = 24;
+
+// The extent of the grid points of [ulo, uhi] x [0, vhi] (kBoundGrid + 1 columns, kBoundGrid / 2
+// + 1 rows) inside the disc (centre c on +u, radius r) whose ghost path from the film point
+// (rho, 0) gets through; `h`: the larger grid step.
+struct RadiusExtent {
+  bool any = false;
+  double u0 = 1e300, u1 = -1e300, v1 = -1e300, h = 0;
+};
+RadiusExtent passingExtent(const optics::LensTracer<double>& tracer, double rho, double z_film,
+                           double z_plane_mm, double c, double r, double ulo, double uhi,
+                           double vhi) {
+  RadiusExtent x;
+  const double hu = (uhi - ulo) / kBoundGrid, hv = vhi / (kBoundGrid / 2);
+  x.h = std::max(hu, hv);
+  const Vec3 from{rho, 0, z_film};
+  for (int a = 0; a <= kBoundGrid; ++a)
+    for (int e = 0; e <= kBoundGrid / 2; ++e) {
+      const double u = ulo + a * hu, v = e * hv;
+      if ((u - c) * (u - c) + v * v > r * r) continue;
+      const Vec3 dir = normalize(Vec3{u, v, z_plane_mm} - from);
+      if (!tracer.traceFromFilm(optics::Ray{from, dir}).ok()) continue;
+      x.any = true;
+      x.u0 = std::min(x.u0, u), x.u1 = std::max(x.u1, u), x.v1 = std::max(x.v1, v);
+    }
+  return x;
+}
 
 std::vector<GhostBox> ghostBounds(double spread, double rear_radius_mm, double z_plane_mm,
                                   const optics::LensTracer<double>& tracer, double z_film,
                                   double film_radius_mm) {
+  // The passing extent at each sampled film radius (bins share their end radii): a coarse grid
+  // over the disc, then a grid over the coarse extent widened by two coarse steps.
+  const int radii = kBoundBins * (kBoundRadii - 1) + 1;
+  std::vector<RadiusExtent> at(static_cast<size_t>(radii));
+  for (int j = 0; j < radii; ++j) {
+    const double rho = film_radius_mm * j / (radii - 1);
+    const double c = rho * spread, r = rear_radius_mm + rho * spread;
+    const RadiusExtent coarse =
+        passingExtent(tracer, rho, z_film, z_plane_mm, c, r, c - r, c + r, r);
+    if (!coarse.any) continue;
+    const double w = 2 * coarse.h;
+    at[size_t(j)] = passingExtent(tracer, rho, z_film, z_plane_mm, c, r, coarse.u0 - w,
+                                  coarse.u1 + w, std::min(r, coarse.v1 + w));
+  }
   std::vector<GhostBox> out(static_cast<size_t>(kBoundBins));
   for (int b = 0; b < kBoundBins; ++b) {
     GhostBox box{1e300, -1e300, -1e300, false};
-    double moved = 0, step = 0;
-    int passing_radii = 0;
-    std::array<double, 3> prev{};
-    for (int i = 0; i < kBoundRadii; ++i) {
-      const double rho = film_radius_mm / kBoundBins * (b + double(i) / (kBoundRadii - 1));
-      const double c = rho * spread, r = rear_radius_mm + rho * spread;
-      const double h = 2 * r / kBoundGrid;
-      step = std::max(step, h);
-      double u0 = 1e300, u1 = -1e300, v1 = -1e300;
-      for (int a = 0; a <= kBoundGrid; ++a)
-        for (int e = 0; e <= kBoundGrid / 2; ++e) {
-          const double u = c - r + a * h, v = e * h;
-          if ((u - c) * (u - c) + v * v > r * r) continue;
-          const Vec3 from{rho, 0, z_film};
-          const Vec3 dir = normalize(Vec3{u, v, z_plane_mm} - from);
-          if (!tracer.traceFromFilm(optics::Ray{from, dir}).ok()) continue;
-          u0 = std::min(u0, u), u1 = std::max(u1, u), v1 = std::max(v1, v);
-        }
-      if (!(u0 <= u1)) continue;
-      if (passing_radii > 0)
-        moved = std::max({moved, std::abs(u0 - prev[0]), std::abs(u1 - prev[1]),
-                          std::abs(v1 - prev[2])});
-      prev = {u0, u1, v1};
-      ++passing_radii;
-      box.u0 = std::min(box.u0, u0), box.u1 = std::max(box.u1, u1);
-      box.v1 = std::max(box.v1, v1);
+    std::array<double, 3> moved{};  // the most each edge (u0, u1, v1) moves between radii
+    double step = 0;
+    bool all = true;
+    for (int i = 0; i < kBoundRadii && all; ++i) {
+      const RadiusExtent& x = at[size_t(b * (kBoundRadii - 1) + i)];
+      all = x.any;
+      if (!all) break;
+      if (i > 0) {
+        const RadiusExtent& p = at[size_t(b * (kBoundRadii - 1) + i - 1)];
+        moved = {std::max(moved[0], std::abs(x.u0 - p.u0)),
+                 std::max(moved[1], std::abs(x.u1 - p.u1)),
+                 std::max(moved[2], std::abs(x.v1 - p.v1))};
+      }
+      step = std::max(step, x.h);
+      box.u0 = std::min(box.u0, x.u0), box.u1 = std::max(box.u1, x.u1);
+      box.v1 = std::max(box.v1, x.v1);
     }
-    if (passing_radii < kBoundRadii) continue;  // whole
-    const double margin = 2 * step + moved;
-    out[size_t(b)] = {box.u0 - margin, box.u1 + margin, box.v1 + margin, false};
+    if (!all) continue;  // whole
+    out[size_t(b)] = {box.u0 - 2 * step - moved[0], box.u1 + 2 * step + moved[1],
+                      box.v1 + 2 * step + moved[2], false};
   }
   return out;
 }
@@ -380,13 +412,15 @@ void RealisticCamera::setUpFlare() {
   flare_ = std::move(f);
 }
 
-double RealisticCamera::ghostPlaneZ_mm() const { return flare_ ? flare_->z_plane_mm : 0; }
+double RealisticCamera::ghostPlaneZ_mm() const {
+  return flare_ ? flare_->z_plane_mm : 0;
+}
 
 bool RealisticCamera::ghostRegionHolds(int k, Vec2 film_mm, Vec2 q_mm) const {
   if (!flare_ || k < 0 || k >= int(flare_->ghosts.size())) return false;
   const Flare& fl = *flare_;
-  return ghostRegion(1 - fl.t_min, fl.rear_radius_mm, fl.bin_width_mm,
-                     fl.ghosts[size_t(k)].bounds, film_mm)
+  return ghostRegion(1 - fl.t_min, fl.rear_radius_mm, fl.bin_width_mm, fl.ghosts[size_t(k)].bounds,
+                     film_mm)
       .holds(q_mm);
 }
 
