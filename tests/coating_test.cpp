@@ -7,6 +7,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include <unistd.h>
@@ -442,4 +443,96 @@ TEST(CoatedLens, ZemaxCoatNamesResolveThroughTheCoatingFileBesideTheLens) {
               std::string::npos)
         << e.what();
   }
+}
+
+// The unpolarised real-arithmetic path (lossless layers, propagating waves) against the Airy
+// summation written above and against the complex matrix path (s and p separately), at every
+// angle up to grazing, from air and from the glass side (through the critical angle).
+TEST(ThinFilm, UnpolarisedFastPathMatchesAiryAndTheComplexPath) {
+  for (Cx n1 : {Cx(1.38, 0), Cx(2.3, 0)})
+    for (auto [n0, ns] : {std::pair{1.0, 1.62}, std::pair{1.62, 1.0}})
+      for (double lambda = 380; lambda <= 780; lambda += 25)
+        for (double deg = 0; deg < 90; deg += 1.5) {
+          const double t = deg * std::numbers::pi / 180;
+          const FilmLayer l{n1, 137.0};
+          const double got = thinFilmStack(n0, {&l, 1}, ns, lambda, std::cos(t)).R;
+          const double sp = 0.5 * (thinFilmStack(n0, {&l, 1}, ns, lambda, std::cos(t), 's').R +
+                                   thinFilmStack(n0, {&l, 1}, ns, lambda, std::cos(t), 'p').R);
+          EXPECT_NEAR(got, sp, 1e-12) << n1 << " " << n0 << " " << lambda << " " << deg;
+          if (n0 * std::sin(t) >= ns) continue;  // total reflection: Airy's cos t is imaginary
+          EXPECT_NEAR(got,
+                      0.5 * (airyR(n0, n1, ns, 137.0, lambda, t, false) +
+                             airyR(n0, n1, ns, 137.0, lambda, t, true)),
+                      1e-12)
+              << n1 << " " << n0 << " " << lambda << " " << deg;
+        }
+}
+
+// Several wavelengths at one angle (shared angle part, chunks of 8) against one at a time by the
+// complex path, for the multicoating's stack, a five-layer stack and one with an absorbing layer
+// (which takes the complex path); and the quarter-wave closed form at its design wavelength in
+// the middle of a spectral call.
+TEST(ThinFilm, SpectralMatchesOneWavelengthAtATime) {
+  const std::vector<FilmLayer> multi{{Cx(1.38, 0), 510.0 / 4 / 1.38},
+                                     {Cx(2.05, 0), 510.0 / 2 / 2.05},
+                                     {Cx(1.63, 0), 510.0 / 4 / 1.63}};
+  const std::vector<FilmLayer> five{
+      {Cx(1.45, 0), 90}, {Cx(2.2, 0), 60}, {Cx(1.45, 0), 120}, {Cx(2.2, 0), 30}, {Cx(1.7, 0), 200}};
+  const std::vector<FilmLayer> absorbing{{Cx(1.38, 0), 99.6}, {Cx(0.96, -6.69), 5}};
+  std::vector<double> lambda;
+  for (double l = 380; l <= 780; l += 20) lambda.push_back(l);  // 21: three chunks
+  std::vector<FilmRTA> out(lambda.size());
+  for (const auto* stack : {&multi, &five, &absorbing})
+    for (auto [n0, ns] : {std::pair{1.0, 1.75}, std::pair{1.75, 1.0}})
+      for (double c : {1.0, 0.9, 0.6, 0.3, 0.05}) {
+        thinFilmStackSpectral(n0, *stack, ns, lambda, c, out.data());
+        for (size_t w = 0; w < lambda.size(); ++w) {
+          const FilmRTA s = thinFilmStack(n0, *stack, ns, lambda[w], c, 's');
+          const FilmRTA p = thinFilmStack(n0, *stack, ns, lambda[w], c, 'p');
+          EXPECT_NEAR(out[w].R, 0.5 * (s.R + p.R), 1e-12) << lambda[w] << " cos " << c;
+          EXPECT_NEAR(out[w].T, 0.5 * (s.T + p.T), 1e-12) << lambda[w] << " cos " << c;
+          EXPECT_NEAR(out[w].A, 0.5 * (s.A + p.A), 1e-12) << lambda[w] << " cos " << c;
+        }
+      }
+  for (double ns : {1.5168, 1.75, 1.9}) {
+    const FilmLayer qw{Cx(1.38, 0), 550.0 / 4 / 1.38};
+    const std::vector<double> l3{450, 550, 650};
+    std::vector<FilmRTA> r(3);
+    thinFilmStackSpectral(1.0, {&qw, 1}, ns, l3, 1.0, r.data());
+    EXPECT_NEAR(r[1].R, sq((ns - 1.38 * 1.38) / (ns + 1.38 * 1.38)), 1e-12) << ns;
+    EXPECT_NEAR(r[1].R + r[1].T, 1.0, 1e-12);
+  }
+}
+
+// A coated interface's spectral evaluation against one wavelength at a time: built-in coatings
+// (non-dispersive: the shared path) and a Zemax coating of a tabulated, dispersive material (one
+// stack per wavelength), from both sides.
+TEST(Coatings, InterfaceSpectralMatchesOneWavelengthAtATime) {
+  CoatingLibrary lib;
+  lib.addZemaxCoatingFile(
+      "MATE DISP\n"
+      "  0.40 1.48 0.0\n"
+      "  0.70 1.40 0.0\n"
+      "COAT DQW\n"
+      "DISP 0.25\n"
+      "MGF2 0.25\n",
+      "c.dat");
+  const std::vector<double> lambda{400, 455, 510, 587.56, 640, 700};
+  std::vector<FilmRTA> out(lambda.size());
+  for (const char* name : {"uncoated", "single", "multi", "DQW"})
+    for (auto [nb, na] : {std::pair{1.0, 1.6}, std::pair{1.6, 1.0}})
+      for (double c : {1.0, 0.8, 0.4}) {
+        const Coating* coat = lib.find(name);
+        ASSERT_TRUE(coat);
+        lib.interfaceRTASpectral(coat, nb, na, lambda, c, 587.56, out.data());
+        for (size_t w = 0; w < lambda.size(); ++w) {
+          const FilmRTA one = lib.interfaceRTA(coat, nb, na, lambda[w], c, 587.56);
+          EXPECT_NEAR(out[w].R, one.R, 1e-14) << name << " " << lambda[w];
+          EXPECT_NEAR(out[w].T, one.T, 1e-14) << name << " " << lambda[w];
+        }
+      }
+  // The dispersive layer is evaluated at its own index per wavelength: at 400 nm the DQW stack
+  // differs from the same stack with the index held at 700 nm's.
+  lib.interfaceRTASpectral(lib.find("DQW"), 1.0, 1.6, lambda, 1.0, 587.56, out.data());
+  EXPECT_NE(out[0].R, out[5].R);
 }

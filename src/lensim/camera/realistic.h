@@ -122,6 +122,9 @@ struct RealisticSettings {
   /// lens at setup (a pair that reflects nothing is refused at flare_ghosts_loc).
   std::vector<std::pair<int, int>> flare_ghosts;
   FileLoc flare_ghosts_loc;
+  /// Flare: draw each ghost pair's directions from its own bound (realistic_flare.cpp, "Per-ghost
+  /// bounds") rather than the disc that holds every pair's. Off only to compare (tests, bench).
+  bool flare_ghost_bounds = true;
 };
 
 class RealisticCamera final : public Camera {
@@ -153,6 +156,11 @@ class RealisticCamera final : public Camera {
     double probability = 0;
   };
   std::vector<GhostChoice> ghostChoices() const;
+  /// The plane (lens z, mm) in which ghost directions are drawn, and whether ghost pair k
+  /// (ghostChoices' order) draws them, from film point film_mm (lens space, mm), over a region
+  /// of that plane that holds the point q_mm. For tests of the per-ghost bounds.
+  double ghostPlaneZ_mm() const;
+  bool ghostRegionHolds(int k, Vec2 film_mm, Vec2 q_mm) const;
   std::optional<CameraWiSample> sampleGhostWi(
       const Vec3& ref, const std::array<double, 3>& u,
       const std::array<double, kCameraWavelengths>& lambda_nm, double time) const override;

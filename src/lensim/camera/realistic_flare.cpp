@@ -18,9 +18,10 @@
 //    sample's film point drawn uniformly over a disc of the plane where the rear element's
 //    clear aperture is nearest the film, large enough to hold every ray from that film point
 //    that reaches the rear element (so no path is missed; rays that miss the lens are blocked
-//    by the tracer and contribute 0); the exact trace of the ghost path (coating/ghost_trace.h);
-//    weight = T_shape cos^4(theta) A_disc / D^2 x (prod R at the two reflections x prod T at
-//    every other crossing, per wavelength, at the actual angles) / p(pair).
+//    by the tracer and contribute 0), or over the pair's own bound when smaller ("Per-ghost
+//    bounds" below); the exact trace of the ghost path (coating/ghost_trace.h);
+//    weight = T_shape cos^4(theta) A / D^2 (A: the region's area) x (prod R at the two reflections
+//    x prod T at every other crossing, per wavelength, at the actual angles) / p(pair).
 // Why: each ghost carries R^2 of the light (~3e-3 uncoated, 1e-5..1e-6 multicoated); Russian
 // roulette at each interface would spend almost every sample on the direct path (the
 // probability of a two-reflection path is ~R^2) and leave the ghosts as rare fireflies: per
@@ -39,9 +40,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "lensim/camera/realistic.h"
+#include "lensim/optics/anamorphic.h"
 #include "lensim/optics/coating/ghost_trace.h"
 #include "lensim/optics/coating/ghosts.h"
 #include "lensim/optics/coating/lens_coatings.h"
@@ -75,6 +78,14 @@ struct Step {
   }
 };
 
+/// A ghost pair's bound for film points in one film-radius bin: the box [u0, u1] x [-v1, v1] of
+/// the sampling plane in the frame turned so that the film point lies on +u (the lens is
+/// rotationally symmetric); `whole`: no bound, the disc that holds every pair's rays.
+struct GhostBox {
+  double u0 = 0, u1 = 0, v1 = 0;
+  bool whole = true;
+};
+
 }  // namespace
 
 struct RealisticCamera::Flare {
@@ -88,6 +99,8 @@ struct RealisticCamera::Flare {
     /// The lens medium (after that surface; -1: outside the lens) of each segment of a path
     /// traced from the film: film_media[j] holds pts[j] -> pts[j + 1].
     std::vector<int> film_media;
+    /// Per film-radius bin (bin_width_mm wide from the centre): where its directions are drawn.
+    std::vector<GhostBox> bounds;
   };
   std::vector<Path> ghosts;
   std::vector<double> cdf;  ///< cumulative probabilities (last = 1)
@@ -95,6 +108,7 @@ struct RealisticCamera::Flare {
   /// aperture nearest the film; t_min: the least fraction of the way from the film to the rear
   /// element at which a ray to it crosses that plane.
   double z_plane_mm = 0, t_min = 1, rear_radius_mm = 0;
+  double bin_width_mm = 0;  ///< 0: no per-ghost bounds
 };
 
 namespace {
@@ -111,6 +125,9 @@ void pathFactor(const optics::LensCoatings& coatings, const std::vector<Step>& s
                 std::array<double, kCameraWavelengths>& factor, int wavelengths = kCameraWavelengths,
                 const double* before = nullptr, const double* after = nullptr) {
   factor.fill(1.0);
+  std::array<double, kCameraWavelengths> l;
+  for (int c = 0; c < wavelengths; ++c)
+    l[size_t(c)] = lambda_nm[size_t(c)] > 0 ? lambda_nm[size_t(c)] : primary_nm;
   const int m = int(steps.size());
   for (int i = 0; i < m; ++i) {
     Step s = steps[size_t(i)];
@@ -125,12 +142,150 @@ void pathFactor(const optics::LensCoatings& coatings, const std::vector<Step>& s
     const Vec3 nrm = a * s.n_to - b * s.n_from;
     const double len = length(nrm);
     const double cos_i = len > 1e-12 ? std::min(1.0, std::abs(dot(b, nrm)) / len) : 1.0;
-    for (int c = 0; c < wavelengths; ++c) {
-      const double l = lambda_nm[size_t(c)] > 0 ? lambda_nm[size_t(c)] : primary_nm;
-      const optics::FilmRTA f = coatings.rta(s.surface, s.coat_from, s.coat_to, l, cos_i);
-      factor[size_t(c)] *= s.mirror ? f.R : f.T;
-    }
+    std::array<optics::FilmRTA, kCameraWavelengths> f;
+    coatings.rtaSpectral(s.surface, s.coat_from, s.coat_to, {l.data(), size_t(wavelengths)}, cos_i,
+                         f.data());
+    for (int c = 0; c < wavelengths; ++c)
+      factor[size_t(c)] *= s.mirror ? f[size_t(c)].R : f[size_t(c)].T;
   }
+}
+
+}  // namespace
+
+namespace {
+
+/// Where a ghost direction from film point x is drawn in the plane z_plane_mm: the disc that
+/// holds every pair's rays (centre, radius), or, when smaller, the pair's box for x's
+/// film-radius bin cut to that disc's square, in the frame (e_u, e_v) turned so that x lies on
+/// +u.
+struct GhostRegion {
+  bool box = false;
+  Vec2 centre;
+  double radius = 0;
+  Vec2 e_u{1, 0}, e_v{0, 1};
+  double u0 = 0, u1 = 0, v1 = 0;
+  double area() const { return box ? (u1 - u0) * 2 * v1 : M_PI * radius * radius; }
+  /// The point of the region for u in [0, 1)^2 (uniform in area).
+  Vec2 at(Vec2 u) const {
+    if (!box) {
+      const Vec2 d = render::sampleUniformDiskConcentric(u);
+      return {centre.x + radius * d.x, centre.y + radius * d.y};
+    }
+    const double a = u0 + (u1 - u0) * u.x, b = v1 * (2 * u.y - 1);
+    return {e_u.x * a + e_v.x * b, e_u.y * a + e_v.y * b};
+  }
+  bool holds(Vec2 q) const {
+    if (!box) return std::hypot(q.x - centre.x, q.y - centre.y) <= radius;
+    const double a = e_u.x * q.x + e_u.y * q.y, b = e_v.x * q.x + e_v.y * q.y;
+    return a >= u0 && a <= u1 && std::abs(b) <= v1;
+  }
+};
+
+// Every ray from the film point x that meets the rear element's clear aperture (radius r,
+// between z_lo and z_hi) crosses the plane z_hi at x (1 - t) + s t, t in [t_min, 1]: within
+// r + |x| (1 - t_min) of x (1 - t_min).
+// spread = 1 - t_min; bin_width_mm: of the bounds' film-radius bins (0: no bounds).
+GhostRegion ghostRegion(double spread, double rear_radius_mm, double bin_width_mm,
+                        const std::vector<GhostBox>& bounds, Vec2 x) {
+  GhostRegion g;
+  const double rho = std::hypot(x.x, x.y);
+  g.centre = {x.x * spread, x.y * spread};
+  g.radius = rear_radius_mm + rho * spread;
+  if (!(bin_width_mm > 0)) return g;
+  const size_t bin = size_t(rho / bin_width_mm);
+  if (bin >= bounds.size() || bounds[bin].whole) return g;
+  const GhostBox& b = bounds[bin];
+  if (rho > 0) g.e_u = {x.x / rho, x.y / rho}, g.e_v = {-g.e_u.y, g.e_u.x};
+  const double c = rho * spread;
+  g.u0 = std::max(b.u0, c - g.radius), g.u1 = std::min(b.u1, c + g.radius);
+  g.v1 = std::min(b.v1, g.radius);
+  // The box when it is the smaller region (both hold every ray that gets through).
+  g.box = g.u1 > g.u0 && g.v1 > 0 && (g.u1 - g.u0) * 2 * g.v1 < M_PI * g.radius * g.radius;
+  return g;
+}
+
+// Per-ghost bounds. The disc above holds every ray from a film point that reaches the rear
+// element, but each ghost path's clear apertures pass only part of it (29 % of all pairs' paths
+// at f/2, 1.2 % for the narrowest pair: bench/flare_ghost_waste.sh). Per pair and per film-radius
+// bin: the ghost path is traced from film points on +x at kBoundRadii radii across the bin to a
+// grid over the disc (v >= 0: the lens is symmetric about the film point's meridian), then to a
+// finer grid over the passing points' extent widened by two coarse steps; the box around the
+// fine grid's passing points is widened by twice its step (a passing region reaches at most a
+// step beyond its outermost passing grid point unless it is narrower than a step there) plus the
+// most that edge moves from one sampled radius to the next. A bin where no grid point passes, or
+// where the region appears or vanishes between sampled radii, keeps the whole disc.
+// tests/flare_bounds_test.cpp traces 10^6 points outside the boxes and finds none that gets
+// through.
+constexpr int kBoundBins = 8, kBoundRadii = 3, kBoundGrid = 24;
+
+// The extent of the grid points of [ulo, uhi] x [0, vhi] (kBoundGrid + 1 columns, kBoundGrid / 2
+// + 1 rows) inside the disc (centre c on +u, radius r) whose ghost path from the film point
+// (rho, 0) gets through; `h`: the larger grid step.
+struct RadiusExtent {
+  bool any = false;
+  double u0 = 1e300, u1 = -1e300, v1 = -1e300, h = 0;
+};
+RadiusExtent passingExtent(const optics::LensTracer<double>& tracer, double rho, double z_film,
+                           double z_plane_mm, double c, double r, double ulo, double uhi,
+                           double vhi) {
+  RadiusExtent x;
+  const double hu = (uhi - ulo) / kBoundGrid, hv = vhi / (kBoundGrid / 2);
+  x.h = std::max(hu, hv);
+  const Vec3 from{rho, 0, z_film};
+  for (int a = 0; a <= kBoundGrid; ++a)
+    for (int e = 0; e <= kBoundGrid / 2; ++e) {
+      const double u = ulo + a * hu, v = e * hv;
+      if ((u - c) * (u - c) + v * v > r * r) continue;
+      const Vec3 dir = normalize(Vec3{u, v, z_plane_mm} - from);
+      if (!tracer.traceFromFilm(optics::Ray{from, dir}).ok()) continue;
+      x.any = true;
+      x.u0 = std::min(x.u0, u), x.u1 = std::max(x.u1, u), x.v1 = std::max(x.v1, v);
+    }
+  return x;
+}
+
+std::vector<GhostBox> ghostBounds(double spread, double rear_radius_mm, double z_plane_mm,
+                                  const optics::LensTracer<double>& tracer, double z_film,
+                                  double film_radius_mm) {
+  // The passing extent at each sampled film radius (bins share their end radii): a coarse grid
+  // over the disc, then a grid over the coarse extent widened by two coarse steps.
+  const int radii = kBoundBins * (kBoundRadii - 1) + 1;
+  std::vector<RadiusExtent> at(static_cast<size_t>(radii));
+  for (int j = 0; j < radii; ++j) {
+    const double rho = film_radius_mm * j / (radii - 1);
+    const double c = rho * spread, r = rear_radius_mm + rho * spread;
+    const RadiusExtent coarse =
+        passingExtent(tracer, rho, z_film, z_plane_mm, c, r, c - r, c + r, r);
+    if (!coarse.any) continue;
+    const double w = 2 * coarse.h;
+    at[size_t(j)] = passingExtent(tracer, rho, z_film, z_plane_mm, c, r, coarse.u0 - w,
+                                  coarse.u1 + w, std::min(r, coarse.v1 + w));
+  }
+  std::vector<GhostBox> out(static_cast<size_t>(kBoundBins));
+  for (int b = 0; b < kBoundBins; ++b) {
+    GhostBox box{1e300, -1e300, -1e300, false};
+    std::array<double, 3> moved{};  // the most each edge (u0, u1, v1) moves between radii
+    double step = 0;
+    bool all = true;
+    for (int i = 0; i < kBoundRadii && all; ++i) {
+      const RadiusExtent& x = at[size_t(b * (kBoundRadii - 1) + i)];
+      all = x.any;
+      if (!all) break;
+      if (i > 0) {
+        const RadiusExtent& p = at[size_t(b * (kBoundRadii - 1) + i - 1)];
+        moved = {std::max(moved[0], std::abs(x.u0 - p.u0)),
+                 std::max(moved[1], std::abs(x.u1 - p.u1)),
+                 std::max(moved[2], std::abs(x.v1 - p.v1))};
+      }
+      step = std::max(step, x.h);
+      box.u0 = std::min(box.u0, x.u0), box.u1 = std::max(box.u1, x.u1);
+      box.v1 = std::max(box.v1, x.v1);
+    }
+    if (!all) continue;  // whole
+    out[size_t(b)] = {box.u0 - 2 * step - moved[0], box.u1 + 2 * step + moved[1],
+                      box.v1 + 2 * step + moved[2], false};
+  }
+  return out;
 }
 
 }  // namespace
@@ -243,7 +398,30 @@ void RealisticCamera::setUpFlare() {
   f->z_plane_mm = zhi;
   f->t_min = (z_film - zhi) / (z_film - zlo);
   f->rear_radius_mm = s.back().semi_aperture_mm;
+  // Per-ghost bounds: for rotationally symmetric lenses traced at one wavelength (a dispersive
+  // lens's ghost paths move with the hero wavelength: they keep the disc). Film points beyond
+  // the bins (the pixel filter's margin) keep the disc too.
+  if (settings_.flare_ghost_bounds && !dispersive_ &&
+      optics::isRotationallySymmetric(lens.prescription())) {
+    const double film_radius = std::hypot(half_width_mm_, half_height_mm_);
+    f->bin_width_mm = film_radius / kBoundBins;
+    for (Flare::Path& p : f->ghosts)
+      p.bounds = ghostBounds(1 - f->t_min, f->rear_radius_mm, f->z_plane_mm, p.tracer, z_film,
+                             film_radius);
+  }
   flare_ = std::move(f);
+}
+
+double RealisticCamera::ghostPlaneZ_mm() const {
+  return flare_ ? flare_->z_plane_mm : 0;
+}
+
+bool RealisticCamera::ghostRegionHolds(int k, Vec2 film_mm, Vec2 q_mm) const {
+  if (!flare_ || k < 0 || k >= int(flare_->ghosts.size())) return false;
+  const Flare& fl = *flare_;
+  return ghostRegion(1 - fl.t_min, fl.rear_radius_mm, fl.bin_width_mm, fl.ghosts[size_t(k)].bounds,
+                     film_mm)
+      .holds(q_mm);
 }
 
 std::vector<RealisticCamera::GhostChoice> RealisticCamera::ghostChoices() const {
@@ -328,17 +506,15 @@ std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& s
     t.tracers[size_t(k)].setIndices(t.path_before.data(), t.path_after.data());
     tracer = &t.tracers[size_t(k)];
   }
-  // Every ray from the film point x that meets the rear element's clear aperture (radius r,
-  // between z_lo and z_hi) crosses the plane z_hi at x (1 - t) + s t, t in [t_min, 1]: within
-  // r + |x| (1 - t_min) of x (1 - t_min).
+  // The direction: uniform over the pair's region of the plane z_plane (ghostRegion).
   const optics::LensSystem& lens = *lens_.lens;
   const Vec2 x = filmPoint(sample.film_raster);
   const double z_film = lens.filmZ_mm();
-  const double spread = 1 - fl.t_min;
-  const double radius = fl.rear_radius_mm + std::hypot(x.x, x.y) * spread;
-  const Vec2 d = render::sampleUniformDiskConcentric({sample.ghost_u[1], sample.ghost_u[2]});
+  const GhostRegion region =
+      ghostRegion(1 - fl.t_min, fl.rear_radius_mm, fl.bin_width_mm, path.bounds, x);
+  const Vec2 qp = region.at({sample.ghost_u[1], sample.ghost_u[2]});
   const Vec3 from{x.x, x.y, z_film};
-  const Vec3 q{x.x * spread + radius * d.x, x.y * spread + radius * d.y, fl.z_plane_mm};
+  const Vec3 q{qp.x, qp.y, fl.z_plane_mm};
   const Vec3 dir = normalize(q - from);
   thread_local std::vector<Vec3> pts;
   pts.clear();
@@ -367,7 +543,7 @@ std::optional<CameraRay> RealisticCamera::generateGhostRay(const CameraSample& s
   }
   // Film irradiance per unit area of the sampling plane at distance D: cos^4(theta) / D^2.
   const double dist = z_film - fl.z_plane_mm, c = -dir.z;
-  const double area = M_PI * radius * radius;
+  const double area = region.area();
   const double geometric = shape * c * c * c * c * area / (dist * dist) *
                            (lens.filmDistance_mm() * lens.filmDistance_mm() / weightNorm());
   CameraRay ray = placeRay(r.ray.origin, r.ray.direction, sample.time);

@@ -1,6 +1,7 @@
 #include "lensim/optics/coating/coating.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -213,29 +214,66 @@ std::vector<std::string> CoatingLibrary::names() const {
   return out;
 }
 
-std::vector<FilmLayer> CoatingLibrary::layersAt(const Coating& c, double lambda_nm,
-                                                double fallback_design_nm) const {
+void CoatingLibrary::fillLayers(const Coating& c, double lambda_nm, double fallback_design_nm,
+                                bool reversed, FilmLayer* out) const {
   const double design = c.design_wavelength_nm > 0 ? c.design_wavelength_nm : fallback_design_nm;
-  std::vector<FilmLayer> out;
-  out.reserve(c.layers.size());
-  for (const CoatingLayer& l : c.layers) {
+  const size_t q = c.layers.size();
+  for (size_t i = 0; i < q; ++i) {
+    const CoatingLayer& l = c.layers[i];
     const CoatingMaterial& m = materials_[size_t(l.material)];
     const double d = l.absolute ? l.thickness : l.thickness * design / m.index(design).real();
-    out.push_back({m.index(lambda_nm), d});
+    out[reversed ? q - 1 - i : i] = {m.index(lambda_nm), d};
   }
+}
+
+std::vector<FilmLayer> CoatingLibrary::layersAt(const Coating& c, double lambda_nm,
+                                                double fallback_design_nm) const {
+  std::vector<FilmLayer> out(c.layers.size());
+  fillLayers(c, lambda_nm, fallback_design_nm, false, out.data());
   return out;
 }
 
 FilmRTA CoatingLibrary::interfaceRTA(const Coating* c, double n_before, double n_after,
                                      double lambda_nm, double cos_i,
                                      double fallback_design_nm) const {
+  FilmRTA out;
+  interfaceRTASpectral(c, n_before, n_after, {&lambda_nm, 1}, cos_i, fallback_design_nm, &out);
+  return out;
+}
+
+void CoatingLibrary::interfaceRTASpectral(const Coating* c, double n_before, double n_after,
+                                          std::span<const double> lambda_nm, double cos_i,
+                                          double fallback_design_nm, FilmRTA* out) const {
   if (!c || c->layers.empty() || n_before == n_after) {
-    if (n_before == n_after) return FilmRTA{0, 1, 0};
-    return fresnelDielectric(n_before, n_after, cos_i);
+    const FilmRTA f =
+        n_before == n_after ? FilmRTA{0, 1, 0} : fresnelDielectric(n_before, n_after, cos_i);
+    std::fill(out, out + lambda_nm.size(), f);
+    return;
   }
-  std::vector<FilmLayer> layers = layersAt(*c, lambda_nm, fallback_design_nm);
-  if (n_before > n_after) std::reverse(layers.begin(), layers.end());
-  return thinFilmStack(n_before, layers, n_after, lambda_nm, cos_i);
+  // Called for every coated crossing of every camera ray with flare: the layers of an ordinary
+  // coating go in a buffer on the stack rather than a heap allocation.
+  constexpr size_t kStackLayers = 16;
+  std::array<FilmLayer, kStackLayers> buf;
+  std::vector<FilmLayer> heap;
+  FilmLayer* layers = buf.data();
+  if (c->layers.size() > kStackLayers) {
+    heap.resize(c->layers.size());
+    layers = heap.data();
+  }
+  const std::span<const FilmLayer> stack(layers, c->layers.size());
+  const bool reversed = n_before > n_after;
+  const bool dispersive = std::any_of(c->layers.begin(), c->layers.end(), [&](const auto& l) {
+    return materials_[size_t(l.material)].lambda_nm.size() > 1;
+  });
+  if (!dispersive) {
+    fillLayers(*c, lambda_nm[0], fallback_design_nm, reversed, layers);
+    thinFilmStackSpectral(n_before, stack, n_after, lambda_nm, cos_i, out);
+    return;
+  }
+  for (size_t w = 0; w < lambda_nm.size(); ++w) {
+    fillLayers(*c, lambda_nm[w], fallback_design_nm, reversed, layers);
+    out[w] = thinFilmStack(n_before, stack, n_after, lambda_nm[w], cos_i);
+  }
 }
 
 }  // namespace lensim::optics

@@ -22,6 +22,7 @@
 
 #include <map>
 #include <memory>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -83,8 +84,17 @@ class CoatingLibrary {
   /// side of the higher index (the glass); light from that side meets its layers in reverse.
   FilmRTA interfaceRTA(const Coating* c, double n_before, double n_after, double lambda_nm,
                        double cos_i, double fallback_design_nm) const;
+  /// interfaceRTA at every wavelength of lambda_nm (out[w]), sharing the angle's part of the
+  /// thin-film computation when the coating's materials are non-dispersive.
+  void interfaceRTASpectral(const Coating* c, double n_before, double n_after,
+                            std::span<const double> lambda_nm, double cos_i,
+                            double fallback_design_nm, FilmRTA* out) const;
 
  private:
+  /// The layers of `c` at a wavelength into out[0 .. c.layers.size()), in reverse order when
+  /// `reversed` (light from the glass side).
+  void fillLayers(const Coating& c, double lambda_nm, double fallback_design_nm, bool reversed,
+                  FilmLayer* out) const;
   int addMaterial(CoatingMaterial m);
   std::vector<CoatingMaterial> materials_;
   std::map<std::string, int> material_by_name_;  // upper-case name -> index

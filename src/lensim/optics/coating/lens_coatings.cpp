@@ -15,6 +15,13 @@ FilmRTA LensCoatings::rta(int k, double n_before, double n_after, double lambda_
                                design_wavelength_nm);
 }
 
+void LensCoatings::rtaSpectral(int k, double n_before, double n_after,
+                               std::span<const double> lambda_nm, double cos_i,
+                               FilmRTA* out) const {
+  library->interfaceRTASpectral(coating[size_t(k)], n_before, n_after, lambda_nm, cos_i,
+                                design_wavelength_nm, out);
+}
+
 LensCoatings resolveCoatings(const LensPrescription& p) {
   auto lib = std::make_shared<CoatingLibrary>();
   if (!p.coating_file.empty()) {

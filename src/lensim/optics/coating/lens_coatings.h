@@ -8,6 +8,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,9 @@ struct LensCoatings {
   /// R, T, A of surface k between indices n_before and n_after at a wavelength, for light from
   /// the n_before side at cos_i.
   FilmRTA rta(int k, double n_before, double n_after, double lambda_nm, double cos_i) const;
+  /// rta at several wavelengths at once (out[w] for lambda_nm[w]), the indices the same at all.
+  void rtaSpectral(int k, double n_before, double n_after, std::span<const double> lambda_nm,
+                   double cos_i, FilmRTA* out) const;
 };
 
 /// Resolves the prescription's coating names (and reads its coating file). Throws lensim::Error

@@ -11,6 +11,10 @@
 //   R = |(eta0 B - C) / (eta0 B + C)|^2,  T = 4 eta0 Re(eta_sub) / |eta0 B + C|^2,
 //   A = 4 eta0 Re(B C* - eta_sub) / |eta0 B + C|^2,  R + T + A = 1.
 // The incident medium and the substrate are lossless (air and glass); layers may absorb.
+// Unpolarised stacks of lossless layers in which the light propagates (every layer and the
+// substrate below the critical angle: every lens coating short of total internal reflection) are
+// evaluated in real arithmetic, s and p together; absorbing layers, evanescent waves and single
+// polarisations take the complex path. Both are the same formulas (tests/coating_test.cpp).
 #pragma once
 
 #include <complex>
@@ -43,5 +47,11 @@ void fresnelDielectricSP(double n1, double n2, double cos_i, double* rs, double*
 /// or 'u' (unpolarised: the average of s and p). No layers: the bare interface.
 FilmRTA thinFilmStack(double n0, std::span<const FilmLayer> layers, double ns, double lambda_nm,
                       double cos_0, char polarisation = 'u');
+
+/// thinFilmStack(n0, layers, ns, lambda_nm[w], cos_0) (unpolarised) into out[w] for every
+/// wavelength, for layers whose indices are the same at all of them (non-dispersive coating
+/// materials): the angle's part of the computation is shared.
+void thinFilmStackSpectral(double n0, std::span<const FilmLayer> layers, double ns,
+                           std::span<const double> lambda_nm, double cos_0, FilmRTA* out);
 
 }  // namespace lensim::optics
