@@ -69,9 +69,9 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   if (!(settings_.film_diagonal_mm > 0))
     throw Error(fmt::format("film diagonal {} mm must be > 0", settings_.film_diagonal_mm));
   optics::LensPrescription prescription =
-      !settings_.tolerance_job.empty() ? asBuiltPrescription(settings_)
-      : settings_.prescription         ? *settings_.prescription
-                                       : optics::readLensFile(settings_.lens_path);
+      settings_.prescription            ? *settings_.prescription
+      : !settings_.tolerance_job.empty() ? asBuiltPrescription(settings_)
+                                         : optics::readLensFile(settings_.lens_path);
   if (prescription.fold_loc)
     throw Error(*prescription.fold_loc,
                 "a lens folded by coordinate breaks (TYPE COORDBRK) cannot be rendered: the "
@@ -79,8 +79,8 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   if (prescription.noncoaxial_loc)
     throw Error(*prescription.noncoaxial_loc,
                 fmt::format("{}: a lens with tilted or decentred surfaces cannot be rendered "
-                            "here: the pbrt-v1/v2 camera and as-built lenses are coaxial only (a "
-                            "pbrt-v3/v4 realistic camera renders it, camera/realistic_placed.h)",
+                            "here: the pbrt-v1/v2 camera is coaxial only (a pbrt-v3/v4 realistic "
+                            "camera renders it, camera/realistic_placed.h)",
                             prescription.noncoaxial_reason));
   optics::LensSetup setup = settings_.setup;
   if (!settings_.tolerance_job.empty() && settings_.as_built_film) {
@@ -779,9 +779,11 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
     } else {
       throw Error(c.loc, "realistic camera without lens parameters");
     }
-    if (c.realistic && s.tolerance_job.empty()) {
-      // Read once: a lens with tilted or decentred surfaces takes the placed camera.
-      auto p = std::make_shared<optics::LensPrescription>(optics::readLensFile(s.lens_path));
+    if (c.realistic) {
+      // Read (or build) once: a lens with tilted or decentred surfaces, or an as-built lens whose
+      // elements were decentred or tilted, takes the placed camera.
+      auto p = std::make_shared<optics::LensPrescription>(
+          s.tolerance_job.empty() ? optics::readLensFile(s.lens_path) : asBuiltPrescription(s));
       if (p->noncoaxial_loc && !p->fold_loc) {
         logDiagnostics(p->diagnostics);
         return std::make_unique<PlacedRealisticCamera>(std::move(s), std::move(*p));

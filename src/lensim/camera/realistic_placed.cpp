@@ -50,8 +50,6 @@ void refuseUnsupported(const RealisticSettings& s) {
     throw Error(at(s.tilt_shift_loc), fmt::format("lenstilt/lensshift: {}", why));
   if (s.configuration || s.zoom_focal_length_mm)
     throw Error(at(s.zoom_loc), fmt::format("configuration/focallength: {}", why));
-  if (!s.tolerance_job.empty())
-    throw Error(at(s.tolerance_loc), fmt::format("tolerances/asbuilt: {}", why));
   if (s.simple_weighting) throw Error(fmt::format("simpleweighting: {}", why));
   if (s.setup.film_distance_mm)
     throw Error(
@@ -122,7 +120,16 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   half_width_mm_ = width / 2;
   half_height_mm_ = aspect * width / 2;
 
-  focus(settings_.setup.focus_distance_m.value_or(std::numeric_limits<double>::infinity()));
+  if (!settings_.tolerance_job.empty() && settings_.as_built_film) {
+    // An as-built lens without a focusdistance: the film is the build's image surface, where the
+    // tolerancing's back-focus compensator put it (as the coaxial camera does).
+    focus_distance_m_ = std::numeric_limits<double>::infinity();
+    film_offset_mm_ = 0;
+    logInfo(fmt::format("{}: the film is the as-built lens's compensated image surface",
+                        settings_.tolerance_loc.str()));
+  } else {
+    focus(settings_.setup.focus_distance_m.value_or(std::numeric_limits<double>::infinity()));
+  }
 
   // The film, out to the filter's reach beyond the image, must lie wholly on one side of the
   // rear surface's slab (its z is linear over the film: the corners decide); the sampled plane
