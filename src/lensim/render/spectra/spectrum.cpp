@@ -323,6 +323,21 @@ double SigmoidPolynomial::eval(double lambda_nm) const {
   return sigmoid((c[0] * x + c[1]) * x + c[2]);
 }
 
+SampledSpectrum SigmoidPolynomial::sample(const SampledWavelengths& lambda) const {
+  constexpr int n = kSpectrumSamples;
+  double t[n], r[n];
+  for (int i = 0; i < n; ++i) {
+    const double x = normalisedLambda(lambda.lambda(i));
+    t[i] = (c[0] * x + c[1]) * x + c[2];
+  }
+  for (int i = 0; i < n; ++i) r[i] = 0.5 + t[i] / (2.0 * std::sqrt(1.0 + t[i] * t[i]));
+  // sigmoid()'s infinite arguments (greys 0 and 1 have an infinite c[2]) as a select.
+  for (int i = 0; i < n; ++i) r[i] = std::isinf(t[i]) ? (t[i] > 0 ? 1.0 : 0.0) : r[i];
+  SampledSpectrum s;
+  for (int i = 0; i < n; ++i) s[i] = r[i];
+  return s;
+}
+
 double SigmoidPolynomial::maxValue() const {
   // The sigmoid is monotonic: the maximum is at an end or at the parabola's vertex.
   double m = std::max(eval(kLambdaMin_nm), eval(kLambdaMax_nm));
@@ -592,28 +607,27 @@ RGBIlluminantSpectrum::RGBIlluminantSpectrum(const RGBColorSpace& cs, const Vec3
   unboundedFit(cs, rgb, scale_, poly_);
 }
 
+double RGBIlluminantSpectrum::illuminant(double lambda_nm) const {
+  return WavelengthTable::covers(lambda_nm) ? (*illuminant_table_)(lambda_nm)
+                                            : illuminant_->eval(lambda_nm);
+}
+
 double RGBIlluminantSpectrum::eval(double lambda_nm) const {
-  const double illum = WavelengthTable::covers(lambda_nm) ? (*illuminant_table_)(lambda_nm)
-                                                          : illuminant_->eval(lambda_nm);
-  return scale_ * poly_.eval(lambda_nm) * illum;
+  return scale_ * poly_.eval(lambda_nm) * illuminant(lambda_nm);
 }
 
 SampledSpectrum RGBIlluminantSpectrum::sample(const SampledWavelengths& lambda) const {
-  SampledSpectrum s;
-  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = eval(lambda.lambda(i));
+  SampledSpectrum s = poly_.sample(lambda);
+  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = s[i] * scale_ * illuminant(lambda.lambda(i));
   return s;
 }
 
 SampledSpectrum RGBAlbedoSpectrum::sample(const SampledWavelengths& lambda) const {
-  SampledSpectrum s;
-  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = poly_.eval(lambda.lambda(i));
-  return s;
+  return poly_.sample(lambda);
 }
 
 SampledSpectrum RGBUnboundedSpectrum::sample(const SampledWavelengths& lambda) const {
-  SampledSpectrum s;
-  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = scale_ * poly_.eval(lambda.lambda(i));
-  return s;
+  return poly_.sample(lambda) * scale_;
 }
 double RGBIlluminantSpectrum::maxValue() const {
   return scale_ * poly_.maxValue() * illuminant_->maxValue();
