@@ -67,8 +67,8 @@ TEST(SigmoidPolynomialSample, FourWavelengthsMatchTheFormulaAndEval) {
       for (int i = 0; i < kSpectrumSamples; ++i) {
         const double want = static_cast<double>(sigmoidReference(c, w.lambda(i)));
         max_err = std::max(max_err, std::abs(s[i] - want));
-        ASSERT_NEAR(s[i], want, 1e-12) << c[0] << " " << c[1] << " " << c[2] << " at "
-                                       << w.lambda(i);
+        ASSERT_NEAR(s[i], want, 1e-12)
+            << c[0] << " " << c[1] << " " << c[2] << " at " << w.lambda(i);
         // Bit for bit what eval gives (renders stay byte-identical).
         ASSERT_EQ(s[i], poly.eval(w.lambda(i)));
       }
@@ -158,8 +158,12 @@ TEST(TexturesConstantRef, IsTheSharedConstantForManyInputsAndThreads) {
     for (int pass = 0; pass < 3; ++pass) check(tx, pass, failures);
     EXPECT_EQ(failures, 0);
     int f1 = 0, f2 = 0;
-    std::thread t1([&] { for (int pass = 0; pass < 3; ++pass) check(tx, pass, f1); });
-    std::thread t2([&] { for (int pass = 1; pass < 4; ++pass) check(tx, pass, f2); });
+    std::thread t1([&] {
+      for (int pass = 0; pass < 3; ++pass) check(tx, pass, f1);
+    });
+    std::thread t2([&] {
+      for (int pass = 1; pass < 4; ++pass) check(tx, pass, f2);
+    });
     t1.join();
     t2.join();
     EXPECT_EQ(f1, 0);
