@@ -264,7 +264,9 @@ SampledSpectrum BlackbodySpectrum::sample(const SampledWavelengths& lambda) cons
 // ---------------------------------------------------------------------------------------------
 // CIE colorimetry
 
-Vec3 cieXyzBar(double lambda_nm) {
+namespace {
+// cieXyzBar's body, inlined into the film's per-sample sampledToXyz.
+inline Vec3 cmf(double lambda_nm) {
   const double f = (lambda_nm - data::kCieFirst_nm) / data::kCieStep_nm;
   if (f < 0 || f > 94) return {};
   const int i = std::min(static_cast<int>(f), 93);
@@ -272,6 +274,11 @@ Vec3 cieXyzBar(double lambda_nm) {
   const auto& a = data::kCie1931_5nm[i];
   const auto& b = data::kCie1931_5nm[i + 1];
   return {a[0] * (1 - t) + b[0] * t, a[1] * (1 - t) + b[1] * t, a[2] * (1 - t) + b[2] * t};
+}
+}  // namespace
+
+Vec3 cieXyzBar(double lambda_nm) {
+  return cmf(lambda_nm);
 }
 
 namespace {
@@ -297,7 +304,7 @@ Vec3 spectrumToXyz(const Spectrum& s) {
 Vec3 sampledToXyz(const SampledSpectrum& s, const SampledWavelengths& lambda) {
   Vec3 xyz;
   for (int i = 0; i < kSpectrumSamples; ++i)
-    if (lambda.pdf(i) > 0) xyz += cieXyzBar(lambda.lambda(i)) * (s[i] / lambda.pdf(i));
+    if (lambda.pdf(i) > 0) xyz += cmf(lambda.lambda(i)) * (s[i] / lambda.pdf(i));
   return xyz / (kSpectrumSamples * cieYIntegral());
 }
 
