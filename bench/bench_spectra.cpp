@@ -1,7 +1,7 @@
-// Per-hit spectrum evaluation, wavelength sampling and pixel-filter sampling (issue 29): the
-// values a path tracer computes at every intersection or camera sample. Each benchmark iterates
-// over 1024 wavelength draws (stratified u) and evaluates the spectrum at the four wavelengths of
-// each. Counter: calls per second. Run: build/bench/lensim_bench_spectra.
+// Per-hit spectrum evaluation, wavelength sampling, the film's XYZ conversion and pixel-filter
+// sampling (issue 29): the values a path tracer computes at every intersection or camera sample.
+// Each benchmark iterates over 1024 wavelength draws (stratified u) and evaluates the spectrum at
+// the four wavelengths of each. Counter: calls per second. Run: build/bench/lensim_bench_spectra.
 #include <benchmark/benchmark.h>
 
 #include <vector>
@@ -65,6 +65,21 @@ void BM_SampleVisibleWavelengths(benchmark::State& state) {
   state.counters["calls/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
 }
 
+// The film's per-sample conversion of the path's radiance to XYZ (CIE curves at the four
+// wavelengths, divided by their pdfs).
+void BM_SampledToXyz(benchmark::State& state) {
+  const auto w = wavelengths();
+  const SampledSpectrum L(0.8);
+  Vec3 sum;
+  int64_t n = 0;
+  for (auto _ : state) {
+    for (const auto& l : w) sum += sampledToXyz(L, l);
+    n += static_cast<int64_t>(w.size());
+    benchmark::DoNotOptimize(sum);
+  }
+  state.counters["calls/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
+}
+
 void BM_GaussianFilterSample(benchmark::State& state) {
   const GaussianFilter f;
   double sum = 0;
@@ -89,6 +104,7 @@ BENCHMARK(BM_NamedMetalAuEta);
 BENCHMARK(BM_D65);
 BENCHMARK(BM_Blackbody3200);
 BENCHMARK(BM_SampleVisibleWavelengths);
+BENCHMARK(BM_SampledToXyz);
 BENCHMARK(BM_GaussianFilterSample);
 
 BENCHMARK_MAIN();

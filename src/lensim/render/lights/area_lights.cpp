@@ -51,9 +51,7 @@ struct EmissionImage {
     const double m = std::max({c.x, c.y, c.z});
     if (m <= 0) return {};
     const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(c / (2 * m));
-    SampledSpectrum s;
-    for (int i = 0; i < kSpectrumSamples; ++i) s[i] = 2 * m * poly.eval(lambda.lambda(i));
-    return s * RGBColorSpace::sRGB().illuminant()->sample(lambda);
+    return poly.sample(lambda) * (2 * m) * RGBColorSpace::sRGB().illuminant()->sample(lambda);
   }
 };
 

@@ -356,7 +356,7 @@ class ProjectionLight final : public Light {
     if (m <= 0) return std::nullopt;
     const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(c / (2 * m));
     const SampledSpectrum illum = RGBColorSpace::sRGB().illuminant()->sample(lambda);
-    for (int i = 0; i < kSpectrumSamples; ++i) s->L[i] = 2 * m * poly.eval(lambda.lambda(i));
+    s->L = poly.sample(lambda) * (2 * m);
     s->L *= illum * (scale_ / r2);
     return s;
   }
@@ -562,9 +562,7 @@ class ImageInfiniteLight final : public Light {
     const double sc = 2 * m;
     const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(c / sc);
     const SampledSpectrum illum = RGBColorSpace::sRGB().illuminant()->sample(lambda);
-    SampledSpectrum s;
-    for (int i = 0; i < kSpectrumSamples; ++i) s[i] = sc * poly.eval(lambda.lambda(i));
-    return s * illum * scale_;
+    return poly.sample(lambda) * sc * illum * scale_;
   }
   Transform world_from_light_, light_from_world_;
   double scale_, radius_;

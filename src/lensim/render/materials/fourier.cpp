@@ -367,8 +367,7 @@ SampledSpectrum FourierBxDF::value(const double* ak, int m, double cos_phi, doub
   // pbrt-v4's RGBUnboundedSpectrum: scale 2 max(rgb), the sigmoid fit of rgb / scale.
   const double sc = 2 * mx;
   const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(rgb / sc);
-  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = sc * poly.eval(lambda_.lambda(i));
-  return s;
+  return poly.sample(lambda_) * sc;
 }
 
 SampledSpectrum FourierBxDF::f(const Vec3& wo, const Vec3& wi, TransportMode mode) const {

@@ -42,8 +42,7 @@ SampledSpectrum melaninSigmaA(double ce, double cp, bool constant,
   const double scale = 2 * std::max({rgb.x, rgb.y, rgb.z});
   if (!(scale > 0)) return s;
   const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(rgb / scale);
-  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = scale * poly.eval(lambda.lambda(i));
-  return s;
+  return poly.sample(lambda) * scale;
 }
 
 }  // namespace

@@ -27,9 +27,9 @@ double MaterialEvalContext::dielectricEta(const scene::Input& eta) const {
              eta.spectrum.rgb == Vec3{0, 0, 0}) {
     e = eta.value;  // a float eta
   } else {
-    SpectrumPtr s = tx.constant(eta.spectrum, SpectrumType::Unbounded);
-    e = s->eval(lambda.lambda(0));
-    if (s->eval(lambda.lambda(1)) != e) lambda.terminateSecondary();
+    const Spectrum& s = tx.constantRef(eta.spectrum, SpectrumType::Unbounded);
+    e = s.eval(lambda.lambda(0));
+    if (s.eval(lambda.lambda(1)) != e) lambda.terminateSecondary();
   }
   return e == 0 ? 1 : e;
 }

@@ -274,8 +274,7 @@ SampledSpectrum RGLMeasuredBRDF::values(Vec2 sample, double phi_o, double theta_
   if (!(m > 0)) return s;
   const double scale = 2 * m;
   const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(rgb / scale);
-  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = scale * poly.eval(lambda.lambda(i));
-  return s;
+  return poly.sample(lambda) * scale;
 }
 
 SampledSpectrum RGLMeasuredBRDF::f(const Vec3& wo, const Vec3& wi,

@@ -264,7 +264,9 @@ SampledSpectrum BlackbodySpectrum::sample(const SampledWavelengths& lambda) cons
 // ---------------------------------------------------------------------------------------------
 // CIE colorimetry
 
-Vec3 cieXyzBar(double lambda_nm) {
+namespace {
+// cieXyzBar's body, inlined into the film's per-sample sampledToXyz.
+inline Vec3 cmf(double lambda_nm) {
   const double f = (lambda_nm - data::kCieFirst_nm) / data::kCieStep_nm;
   if (f < 0 || f > 94) return {};
   const int i = std::min(static_cast<int>(f), 93);
@@ -272,6 +274,11 @@ Vec3 cieXyzBar(double lambda_nm) {
   const auto& a = data::kCie1931_5nm[i];
   const auto& b = data::kCie1931_5nm[i + 1];
   return {a[0] * (1 - t) + b[0] * t, a[1] * (1 - t) + b[1] * t, a[2] * (1 - t) + b[2] * t};
+}
+}  // namespace
+
+Vec3 cieXyzBar(double lambda_nm) {
+  return cmf(lambda_nm);
 }
 
 namespace {
@@ -297,7 +304,7 @@ Vec3 spectrumToXyz(const Spectrum& s) {
 Vec3 sampledToXyz(const SampledSpectrum& s, const SampledWavelengths& lambda) {
   Vec3 xyz;
   for (int i = 0; i < kSpectrumSamples; ++i)
-    if (lambda.pdf(i) > 0) xyz += cieXyzBar(lambda.lambda(i)) * (s[i] / lambda.pdf(i));
+    if (lambda.pdf(i) > 0) xyz += cmf(lambda.lambda(i)) * (s[i] / lambda.pdf(i));
   return xyz / (kSpectrumSamples * cieYIntegral());
 }
 
@@ -321,6 +328,21 @@ double normalisedLambda(double lambda_nm) {
 double SigmoidPolynomial::eval(double lambda_nm) const {
   const double x = normalisedLambda(lambda_nm);
   return sigmoid((c[0] * x + c[1]) * x + c[2]);
+}
+
+SampledSpectrum SigmoidPolynomial::sample(const SampledWavelengths& lambda) const {
+  constexpr int n = kSpectrumSamples;
+  double t[n], r[n];
+  for (int i = 0; i < n; ++i) {
+    const double x = normalisedLambda(lambda.lambda(i));
+    t[i] = (c[0] * x + c[1]) * x + c[2];
+  }
+  for (int i = 0; i < n; ++i) r[i] = 0.5 + t[i] / (2.0 * std::sqrt(1.0 + t[i] * t[i]));
+  // sigmoid()'s infinite arguments (greys 0 and 1 have an infinite c[2]) as a select.
+  for (int i = 0; i < n; ++i) r[i] = std::isinf(t[i]) ? (t[i] > 0 ? 1.0 : 0.0) : r[i];
+  SampledSpectrum s;
+  for (int i = 0; i < n; ++i) s[i] = r[i];
+  return s;
 }
 
 double SigmoidPolynomial::maxValue() const {
@@ -592,28 +614,27 @@ RGBIlluminantSpectrum::RGBIlluminantSpectrum(const RGBColorSpace& cs, const Vec3
   unboundedFit(cs, rgb, scale_, poly_);
 }
 
+double RGBIlluminantSpectrum::illuminant(double lambda_nm) const {
+  return WavelengthTable::covers(lambda_nm) ? (*illuminant_table_)(lambda_nm)
+                                            : illuminant_->eval(lambda_nm);
+}
+
 double RGBIlluminantSpectrum::eval(double lambda_nm) const {
-  const double illum = WavelengthTable::covers(lambda_nm) ? (*illuminant_table_)(lambda_nm)
-                                                          : illuminant_->eval(lambda_nm);
-  return scale_ * poly_.eval(lambda_nm) * illum;
+  return scale_ * poly_.eval(lambda_nm) * illuminant(lambda_nm);
 }
 
 SampledSpectrum RGBIlluminantSpectrum::sample(const SampledWavelengths& lambda) const {
-  SampledSpectrum s;
-  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = eval(lambda.lambda(i));
+  SampledSpectrum s = poly_.sample(lambda);
+  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = s[i] * scale_ * illuminant(lambda.lambda(i));
   return s;
 }
 
 SampledSpectrum RGBAlbedoSpectrum::sample(const SampledWavelengths& lambda) const {
-  SampledSpectrum s;
-  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = poly_.eval(lambda.lambda(i));
-  return s;
+  return poly_.sample(lambda);
 }
 
 SampledSpectrum RGBUnboundedSpectrum::sample(const SampledWavelengths& lambda) const {
-  SampledSpectrum s;
-  for (int i = 0; i < kSpectrumSamples; ++i) s[i] = scale_ * poly_.eval(lambda.lambda(i));
-  return s;
+  return poly_.sample(lambda) * scale_;
 }
 double RGBIlluminantSpectrum::maxValue() const {
   return scale_ * poly_.maxValue() * illuminant_->maxValue();

@@ -252,6 +252,9 @@ Vec3 sampledToXyz(const SampledSpectrum& s, const SampledWavelengths& lambda);
 struct SigmoidPolynomial {
   std::array<double, 3> c{0.0, 0.0, 0.0};
   double eval(double lambda_nm) const;
+  /// eval at the path's wavelengths: the same operations, bit for bit, done for all of them at
+  /// once without branches (so that the compiler evaluates them as vectors).
+  SampledSpectrum sample(const SampledWavelengths& lambda) const;
   double maxValue() const;
 };
 
@@ -323,6 +326,8 @@ class RGBIlluminantSpectrum final : public Spectrum {
   SampledSpectrum sample(const SampledWavelengths& lambda) const override;
 
  private:
+  /// The colour space's illuminant at lambda_nm (its 1 nm table in the visible range).
+  double illuminant(double lambda_nm) const;
   double scale_ = 0;
   SigmoidPolynomial poly_;
   SpectrumPtr illuminant_;

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <fstream>
@@ -342,13 +343,23 @@ Textures::Textures(const scene::Scene& scene) : impl_(std::make_unique<Impl>()) 
 Textures::~Textures() = default;
 
 SpectrumPtr Textures::constant(const scene::SpectrumValue& v, SpectrumType type) const {
-  // A per-thread cache in front of the shared one: material constants are looked up at every
-  // hit, and a lock there serialises the threads. Keys carry this object's serial number so
-  // that a later Textures at the same address never sees stale entries.
+  std::lock_guard lock(impl_->mutex);
+  const auto key = std::make_pair(&v, int(type));
+  auto it = impl_->constants.find(key);
+  if (it == impl_->constants.end()) it = impl_->constants.emplace(key, makeSpectrum(v, type)).first;
+  return it->second;
+}
+
+const Spectrum& Textures::constantRef(const scene::SpectrumValue& v, SpectrumType type) const {
+  // Material constants are looked up at every hit: per-thread caches in front of the shared map
+  // (whose lock would serialise the threads, and whose shared_ptr copies would make them contend
+  // for the reference count). First a small direct-mapped table, then a hash map. Keys carry
+  // this object's serial number so that a later Textures at the same address never sees stale
+  // entries; the shared map keeps every spectrum alive as long as this object.
   struct Key {
-    uint64_t serial;
-    const void* value;
-    int type;
+    uint64_t serial = 0;
+    const void* value = nullptr;
+    int type = -1;
     bool operator==(const Key&) const = default;
   };
   struct KeyHash {
@@ -357,24 +368,27 @@ SpectrumPtr Textures::constant(const scene::SpectrumValue& v, SpectrumType type)
           hashValues({k.serial, uint64_t(reinterpret_cast<uintptr_t>(k.value)), uint64_t(k.type)}));
     }
   };
-  thread_local std::unordered_map<Key, SpectrumPtr, KeyHash> local;
+  struct Entry {
+    Key key;
+    const Spectrum* spectrum = nullptr;
+  };
+  constexpr size_t kDirect = 64;
+  thread_local std::array<Entry, kDirect> direct;
+  thread_local std::unordered_map<Key, const Spectrum*, KeyHash> local;
   const Key key{impl_->serial, &v, int(type)};
-  if (auto it = local.find(key); it != local.end()) return it->second;
-  SpectrumPtr s;
-  {
-    std::lock_guard lock(impl_->mutex);
-    auto shared_key = std::make_pair(&v, int(type));
-    auto it = impl_->constants.find(shared_key);
-    if (it != impl_->constants.end()) {
-      s = it->second;
-    } else {
-      s = makeSpectrum(v, type);
-      impl_->constants.emplace(shared_key, s);
-    }
+  const uintptr_t a = reinterpret_cast<uintptr_t>(&v);
+  Entry& e = direct[((a >> 3) ^ (a >> 9) ^ (uintptr_t(type) << 4)) & (kDirect - 1)];
+  if (e.key == key) return *e.spectrum;
+  const Spectrum* s;
+  if (auto it = local.find(key); it != local.end()) {
+    s = it->second;
+  } else {
+    s = constant(v, type).get();
+    if (local.size() > 4096) local.clear();
+    local.emplace(key, s);
   }
-  if (local.size() > 4096) local.clear();
-  local.emplace(key, s);
-  return s;
+  e = {key, s};
+  return *s;
 }
 
 double Textures::evalFloat(const scene::Input& in, const TextureEvalContext& ctx) const {
@@ -417,7 +431,7 @@ double Textures::evalFloat(const scene::Input& in, const TextureEvalContext& ctx
 
 SampledSpectrum Textures::evalSpectrum(const scene::Input& in, const TextureEvalContext& ctx,
                                        const SampledWavelengths& lambda, SpectrumType type) const {
-  if (in.texture < 0) return constant(in.spectrum, type)->sample(lambda);
+  if (in.texture < 0) return constantRef(in.spectrum, type).sample(lambda);
   const scene::Texture& t = impl_->scene->textures[size_t(in.texture)];
   using Kind = Impl::Kind;
   const Kind kind = impl_->decided[size_t(in.texture)].kind;
@@ -452,8 +466,7 @@ SampledSpectrum Textures::evalSpectrum(const scene::Input& in, const TextureEval
       if (scale > 0) rgb = rgb / scale;
     }
     const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(rgb);
-    SampledSpectrum s;
-    for (int i = 0; i < kSpectrumSamples; ++i) s[i] = scale * poly.eval(lambda.lambda(i));
+    SampledSpectrum s = poly.sample(lambda) * scale;
     if (type == SpectrumType::Illuminant) s *= RGBColorSpace::sRGB().illuminant()->sample(lambda);
     return s;
   }
@@ -473,9 +486,7 @@ SampledSpectrum Textures::evalSpectrum(const scene::Input& in, const TextureEval
     Vec3 rgb = marbleRgb(p, t.octaves, t.omega, t.variation);
     rgb = {std::clamp(rgb.x, 0.0, 1.0), std::clamp(rgb.y, 0.0, 1.0), std::clamp(rgb.z, 0.0, 1.0)};
     const SigmoidPolynomial poly = RGBColorSpace::sRGB().tableSigmoid(rgb);
-    SampledSpectrum s;
-    for (int i = 0; i < kSpectrumSamples; ++i) s[i] = poly.eval(lambda.lambda(i));
-    return s;
+    return poly.sample(lambda);
   }
   return SampledSpectrum(0.5);
 }

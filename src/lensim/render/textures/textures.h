@@ -59,6 +59,9 @@ class Textures {
                                const SampledWavelengths& lambda, SpectrumType type) const;
   /// The constant of a spectrum input as a spectrum (cached; thread-safe).
   SpectrumPtr constant(const scene::SpectrumValue& v, SpectrumType type) const;
+  /// The same spectrum, for per-hit use: a per-thread cache lookup, no lock and no reference
+  /// count. Valid while this Textures lives.
+  const Spectrum& constantRef(const scene::SpectrumValue& v, SpectrumType type) const;
 
   struct Impl;
 
