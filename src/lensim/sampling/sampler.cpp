@@ -42,41 +42,72 @@ StratifiedSampler::StratifiedSampler(int x_samples, int y_samples, bool jitter, 
     : xs_(x_samples), ys_(y_samples), seed_(seed), jitter_(jitter) {
   if (xs_ <= 0 || ys_ <= 0)
     throw Error(fmt::format("xsamples and ysamples must be positive (got {}, {})", xs_, ys_));
+  pixel_rng_ = pixelRng();
+}
+
+Rng StratifiedSampler::pixelRng() const {
+  return Rng(hashValues({pixelKey(pixel_), static_cast<uint64_t>(seed_), 2}), 0);
 }
 
 void StratifiedSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
-  pixel_ = pixel;
+  if (pixel != pixel_) {
+    if (++stamp_ == 0) {
+      for (DimensionKeys& k : keys_) k.stamp = 0;
+      stamp_ = 1;
+    }
+    pixel_ = pixel;
+    pixel_rng_ = pixelRng();
+  }
   index_ = sample_index;
+  stratum_index_ = static_cast<uint32_t>(index_ % samplesPerPixel());
+  sample_rng_ = pixel_rng_;
+  sample_rng_.advance(static_cast<uint64_t>(index_) << 17);
   dim_ = dimension;
 }
 
 // Jitter for dimension `dim`: a PCG32 stream per pixel, positioned by sample index and
-// dimension, so a value never depends on which dimensions were drawn before it.
+// dimension (2^16 values per sample, 2 per dimension), so a value never depends on which
+// dimensions were drawn before it. (Advancing by a then by b is advancing by a + b.)
 Rng StratifiedSampler::jitterRng(int dim) const {
-  Rng rng(hashValues({pixelKey(pixel_), static_cast<uint64_t>(seed_), 2}), 0);
-  rng.advance((static_cast<uint64_t>(index_) << 17) + 2 * static_cast<uint64_t>(dim));
+  Rng rng = sample_rng_;
+  rng.advance(2 * static_cast<uint64_t>(dim));
   return rng;
 }
 
+// The stratum permutation's keys for dimension `dim` of the current pixel: computed once per
+// pixel and dimension, and every time beyond the cached dimensions.
+const PermutationKeys& StratifiedSampler::keys(int dim) {
+  const size_t d = static_cast<size_t>(dim);
+  DimensionKeys* k = &scratch_;
+  if (d < kSamplerCachedDimensions) {
+    if (d >= keys_.size()) keys_.resize(d + 1);
+    k = &keys_[d];
+    if (k->stamp == stamp_) return k->permutation;
+    k->stamp = stamp_;
+  }
+  k->permutation = PermutationKeys(
+      hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim), static_cast<uint64_t>(seed_)}));
+  return k->permutation;
+}
+
+int StratifiedSampler::stratum(int dim) {
+  return permutationElement(stratum_index_, static_cast<uint32_t>(samplesPerPixel()), keys(dim));
+}
+
 double StratifiedSampler::get1D() {
-  const uint64_t h =
-      hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim_), static_cast<uint64_t>(seed_)});
   const int n = samplesPerPixel();
-  const int stratum = permutationElement(static_cast<uint32_t>(index_ % n), n, h);
+  const int s = stratum(dim_);
   Rng rng = jitterRng(dim_);
   ++dim_;
   const double delta = jitter_ ? rng.uniform() : 0.5;
-  return std::min((stratum + delta) / n, kOneMinusEpsilon);
+  return std::min((s + delta) / n, kOneMinusEpsilon);
 }
 
 Vec2 StratifiedSampler::get2D() {
-  const uint64_t h =
-      hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim_), static_cast<uint64_t>(seed_)});
-  const int n = samplesPerPixel();
-  const int stratum = permutationElement(static_cast<uint32_t>(index_ % n), n, h);
+  const int s = stratum(dim_);
   Rng rng = jitterRng(dim_);
   dim_ += 2;
-  const int x = stratum % xs_, y = stratum / xs_;
+  const int x = s % xs_, y = s / xs_;
   const double dx = jitter_ ? rng.uniform() : 0.5;
   const double dy = jitter_ ? rng.uniform() : 0.5;
   return {std::min((x + dx) / xs_, kOneMinusEpsilon), std::min((y + dy) / ys_, kOneMinusEpsilon)};

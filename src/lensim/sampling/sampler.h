@@ -83,11 +83,25 @@ class StratifiedSampler final : public Sampler {
   std::unique_ptr<Sampler> clone() const override;
 
  private:
+  /// The stratum permutation's keys of a dimension for the current pixel.
+  struct DimensionKeys {
+    PermutationKeys permutation;
+    uint32_t stamp = 0;  ///< valid for the current pixel where stamp == stamp_
+  };
+  const PermutationKeys& keys(int dim);
+  int stratum(int dim);
+  Rng pixelRng() const;
   Rng jitterRng(int dim) const;
   int xs_, ys_, seed_;
   bool jitter_;
   Point2i pixel_{};
   int index_ = 0, dim_ = 0;
+  uint32_t stratum_index_ = 0;  ///< index_ % samplesPerPixel()
+  uint32_t stamp_ = 1;          // 0 marks an entry never written
+  Rng pixel_rng_;               ///< the pixel's jitter stream at its start
+  Rng sample_rng_;              ///< pixel_rng_ advanced to sample index_'s stretch
+  std::vector<DimensionKeys> keys_;
+  DimensionKeys scratch_;  // beyond kSamplerCachedDimensions
 };
 
 /// Padded Sobol sampler: each dimension pair is the first two Sobol dimensions (a (0,2)-sequence

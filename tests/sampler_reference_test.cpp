@@ -1,13 +1,15 @@
-// The padded Sobol sampler and the Sobol building blocks (sampling/sampler) against a plain
-// transcription of their definitions written here: the MurmurHash3 finaliser, the hash chain
-// of (pixel, dimension, seed), the cycle-walking index permutation, the Sobol generator
-// matrices column by column, bit reversal bit by bit and the Laine-Karras/Burley scrambling.
+// The padded Sobol and stratified samplers and the Sobol building blocks (sampling/sampler)
+// against a plain transcription of their definitions written here: the MurmurHash3 finaliser,
+// the hash chain of (pixel, dimension, seed), the cycle-walking index permutation, the Sobol
+// generator matrices column by column, bit reversal bit by bit, the Laine-Karras/Burley
+// scrambling, and PCG32 with a jump ahead by recursive halving.
 // The sampler keeps per-(pixel, dimension) work between calls; the values are compared in
 // orders that reuse and defeat that.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "lensim/sampling/sampler.h"
@@ -103,6 +105,73 @@ struct RefPaddedSobol {
   }
 };
 
+// PCG32 (O'Neill 2014; XSH RR output, pcg32_srandom's initialisation) with a jump of n steps
+// composed from the affine step x -> a x + c by recursive halving.
+struct RefPcg {
+  static constexpr uint64_t kMul = 6364136223846793005ULL;
+  uint64_t state = 0, inc = 1;
+  RefPcg(uint64_t sequence, uint64_t seed) : inc((sequence << 1) | 1) {
+    next();
+    state += seed;
+    next();
+  }
+  uint32_t next() {
+    const uint64_t old = state;
+    state = old * kMul + inc;
+    const uint32_t xorshifted = uint32_t(((old >> 18) ^ old) >> 27);
+    const uint32_t rot = uint32_t(old >> 59);
+    return (xorshifted >> rot) | (xorshifted << ((32 - rot) & 31));
+  }
+  // (a, c) of n steps: x -> a x + c.
+  std::pair<uint64_t, uint64_t> jump(uint64_t n) const {
+    if (n == 0) return {1, 0};
+    auto [a, c] = jump(n / 2);
+    uint64_t a2 = a * a, c2 = a * c + c;  // twice the half
+    if (n % 2) c2 = kMul * c2 + inc, a2 = kMul * a2;  // one more step
+    return {a2, c2};
+  }
+  void advance(uint64_t n) {
+    auto [a, c] = jump(n);
+    state = a * state + c;
+  }
+  double uniform() {
+    const uint64_t hi = next(), lo = next();
+    return double(((hi << 32) | lo) >> 11) * 0x1p-53;
+  }
+};
+
+// Stratified: the sample's stratum is the permuted sample index (per pixel and dimension), the
+// jitter two PCG32 outputs per coordinate from the pixel's stream at index * 2^17 + 2 dim.
+struct RefStratified {
+  int xs, ys, seed;
+  bool jitter;
+  uint64_t pixelKey(int x, int y) const { return (uint64_t(uint32_t(x)) << 32) | uint32_t(y); }
+  uint32_t stratum(int x, int y, int i, int dim) const {
+    const uint32_t n = uint32_t(xs * ys);
+    return refPermutation(uint32_t(i) % n, n,
+                          refHashValues({pixelKey(x, y), uint64_t(dim), uint64_t(seed)}));
+  }
+  RefPcg rng(int x, int y, int i, int dim) const {
+    RefPcg r(refHashValues({pixelKey(x, y), uint64_t(seed), 2}), 0);
+    r.advance((uint64_t(i) << 17) + 2 * uint64_t(dim));
+    return r;
+  }
+  double get1D(int x, int y, int i, int dim) const {
+    const int n = xs * ys;
+    RefPcg r = rng(x, y, i, dim);
+    const double delta = jitter ? r.uniform() : 0.5;
+    return std::min((stratum(x, y, i, dim) + delta) / n, 1 - 0x1p-53);
+  }
+  Vec2 get2D(int x, int y, int i, int dim) const {
+    const uint32_t s = stratum(x, y, i, dim);
+    RefPcg r = rng(x, y, i, dim);
+    const double dx = jitter ? r.uniform() : 0.5;
+    const double dy = jitter ? r.uniform() : 0.5;
+    return {std::min((int(s) % xs + dx) / xs, 1 - 0x1p-53),
+            std::min((int(s) / xs + dy) / ys, 1 - 0x1p-53)};
+  }
+};
+
 // A small deterministic generator for the access order and inputs (not the code under test).
 struct Lcg {
   uint64_t s;
@@ -184,6 +253,42 @@ TEST(PaddedSobolSampler, CloneMatchesItsDefinition) {
   EXPECT_EQ(c->get2D(), ref.get2D(4, 4, 5, 2));
   c->startPixelSample({5, 4}, 5, 2);
   EXPECT_EQ(c->get1D(), ref.get1D(5, 4, 5, 2));
+}
+
+TEST(StratifiedSampler, MatchesItsDefinitionInAnyAccessOrder) {
+  struct Case {
+    int xs, ys;
+    bool jitter;
+    int seed;
+  };
+  for (Case c : {Case{4, 4, true, 0}, Case{5, 3, true, 2}, Case{8, 8, false, 1}, Case{1, 1, true, 0},
+                 Case{7, 1, true, 3}}) {
+    SCOPED_TRACE(testing::Message() << c.xs << "x" << c.ys << " jitter " << c.jitter);
+    StratifiedSampler s(c.xs, c.ys, c.jitter, c.seed);
+    RefStratified ref{c.xs, c.ys, c.seed, c.jitter};
+    const int n = c.xs * c.ys;
+    Lcg rng{uint64_t(n * 13 + c.seed)};
+    const int px[3] = {0, 63, -2}, py[3] = {0, 9, 5};
+    for (int q = 0; q < 1500; ++q) {
+      const int k = q < 500 ? (q / n) % 3 : int(rng.next(3));
+      const int i = q < 500 ? q % n : int(rng.next(uint32_t(3 * n)));
+      const int starts[4] = {0, int(rng.next(12)), 250 + int(rng.next(8)), int(rng.next(300))};
+      int dim = starts[rng.next(4)];
+      s.startPixelSample({px[k], py[k]}, i, dim);
+      for (int draw = 0; draw < 6; ++draw) {
+        ASSERT_EQ(s.dimension(), dim);
+        if (rng.next(2) == 0) {
+          ASSERT_EQ(s.get1D(), ref.get1D(px[k], py[k], i, dim))
+              << "pixel " << px[k] << "," << py[k] << " sample " << i << " dimension " << dim;
+          dim += 1;
+        } else {
+          ASSERT_EQ(s.get2D(), ref.get2D(px[k], py[k], i, dim))
+              << "pixel " << px[k] << "," << py[k] << " sample " << i << " dimension " << dim;
+          dim += 2;
+        }
+      }
+    }
+  }
 }
 
 }  // namespace
