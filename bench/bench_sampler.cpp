@@ -1,7 +1,10 @@
 // The pixel samplers' cost per pixel sample (issue 29): a pixel sample draws the film position
 // and then, per bounce of a five-bounce path, one 1-D and three 2-D values (the pattern of the
 // path integrator: lens, light choice and position, BSDF). 64 spp over a 64 x 64 tile of a
-// 200 x 200 film. Counter: pixel samples per second. Run: build/bench/lensim_bench_sampler.
+// 200 x 200 film (32 spp for ZSobol's odd power of two, 8 x 8 strata for stratified), a pixel's
+// samples in order as the render loop draws them. Counters: pixel samples per second, and
+// values (1-D or 2-D draws, 21 per pixel sample) per second.
+// Run: build/bench/lensim_bench_sampler.
 #include <benchmark/benchmark.h>
 
 #include <memory>
@@ -32,6 +35,7 @@ void drawTile(benchmark::State& state, Sampler& s) {
     benchmark::DoNotOptimize(sum);
   }
   state.counters["samples/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
+  state.counters["values/s"] = benchmark::Counter(21.0 * double(n), benchmark::Counter::kIsRate);
 }
 
 void BM_PaddedSobol(benchmark::State& state) {
@@ -40,6 +44,18 @@ void BM_PaddedSobol(benchmark::State& state) {
 }
 void BM_ZSobol(benchmark::State& state) {
   ZSobolSampler s(64, {200, 200});
+  drawTile(state, s);
+}
+void BM_ZSobol32(benchmark::State& state) {
+  ZSobolSampler s(32, {200, 200});
+  drawTile(state, s);
+}
+void BM_ZSobolOwen(benchmark::State& state) {
+  ZSobolSampler s(64, {200, 200}, SobolRandomization::Owen);
+  drawTile(state, s);
+}
+void BM_Stratified(benchmark::State& state) {
+  StratifiedSampler s(8, 8);
   drawTile(state, s);
 }
 void BM_Independent(benchmark::State& state) {
@@ -51,5 +67,8 @@ void BM_Independent(benchmark::State& state) {
 
 BENCHMARK(BM_PaddedSobol)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ZSobol)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ZSobol32)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ZSobolOwen)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Stratified)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Independent)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -274,5 +274,123 @@ TEST(ZSobol, KeepsTheRequestedCount) {
   EXPECT_EQ(parseSobolRandomization(""), SobolRandomization::FastOwen);
 }
 
+
+// ---- any order of access, every randomisation ---------------------------------------------
+// The sampler keeps per-dimension work for the current pixel and sample block; these tests draw
+// in orders that defeat and reuse it (pixels interleaved, samples out of order, restarts at a
+// dimension, dimensions past the cached ones) and compare each value with the reference.
+
+// pbrt-v4's OwenScrambler (util/lowdiscrepancy.h).
+uint32_t refOwen(uint32_t v, uint32_t seed) {
+  if (seed & 1) v ^= 1u << 31;
+  for (int b = 1; b < 32; ++b) {
+    uint32_t mask = (~0u) << (32 - b);
+    if ((uint32_t)refMixBits((v & mask) ^ seed) & (1u << b)) v ^= 1u << (31 - b);
+  }
+  return v;
+}
+
+uint32_t refRandomize(uint32_t v, uint32_t seed, SobolRandomization r) {
+  switch (r) {
+    case SobolRandomization::None:
+      return v;
+    case SobolRandomization::PermuteDigits:
+      return v ^ seed;
+    case SobolRandomization::FastOwen:
+      return refFastOwen(v, seed);
+    case SobolRandomization::Owen:
+      return refOwen(v, seed);
+  }
+  return v;
+}
+
+// pbrt-v4's Get1D / Get2D at `dimension` of the sample with Morton index `morton`.
+double refGet1D(const RefZSobol& ref, uint64_t morton, int dimension, SobolRandomization r) {
+  const uint64_t si = ref.sampleIndex(morton, dimension);
+  const uint32_t hash = uint32_t(refHash(dimension + 1, ref.seed));
+  return std::min(refRandomize(refSobol(si, 0), hash, r) * 0x1p-32, 1 - 0x1p-53);
+}
+Vec2 refGet2D(const RefZSobol& ref, uint64_t morton, int dimension, SobolRandomization r) {
+  const uint64_t si = ref.sampleIndex(morton, dimension);
+  const uint64_t bits = refHash(dimension + 2, ref.seed);
+  return {std::min(refRandomize(refSobol(si, 0), uint32_t(bits), r) * 0x1p-32, 1 - 0x1p-53),
+          std::min(refRandomize(refSobol(si, 1), uint32_t(bits >> 32), r) * 0x1p-32,
+                   1 - 0x1p-53)};
+}
+
+// A small deterministic generator for the access order (not the code under test).
+struct Lcg {
+  uint64_t s;
+  uint32_t next(uint32_t n) {
+    s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+    return uint32_t((s >> 33) % n);
+  }
+};
+
+TEST(ZSobol, MatchesPbrtV4InAnyAccessOrder) {
+  struct Case {
+    int spp, resx, resy, seed;
+  };
+  for (auto r : {SobolRandomization::FastOwen, SobolRandomization::None,
+                 SobolRandomization::PermuteDigits, SobolRandomization::Owen})
+    for (Case c : {Case{16, 200, 200, 0}, Case{64, 320, 240, 3}, Case{8, 33, 17, 0},
+                   Case{2, 1, 1, 4}, Case{1, 1, 1, 0}, Case{1, 9, 9, 2}, Case{2, 50, 3, 0},
+                   Case{128, 64, 64, 1}, Case{24, 100, 100, -5}, Case{4, 7, 1, 0}}) {
+      SCOPED_TRACE(testing::Message() << "randomization " << int(r) << ", " << c.spp << " spp "
+                                      << c.resx << "x" << c.resy << " seed " << c.seed);
+      RefZSobol ref(c.spp, c.resx, c.resy, c.seed);
+      ZSobolSampler s(c.spp, {c.resx, c.resy}, r, c.seed);
+      Lcg rng{uint64_t(c.spp * 7919 + c.resx)};
+      // Two pixels visited in turn, a pixel's samples in order then at random, starting
+      // dimensions 0, small, and around the end of the cached dimensions.
+      const int px[3] = {0, c.resx - 1, int(rng.next(uint32_t(c.resx)))};
+      const int py[3] = {0, c.resy - 1, int(rng.next(uint32_t(c.resy)))};
+      const int queries = r == SobolRandomization::FastOwen ? 3000 : 600;
+      for (int q = 0; q < queries; ++q) {
+        const int k = q < queries / 3 ? (q / c.spp) % 3 : int(rng.next(3));
+        const int x = px[k], y = py[k];
+        const int i = q < queries / 3 ? q % c.spp : int(rng.next(uint32_t(c.spp)));
+        const int starts[4] = {0, int(rng.next(12)), 250 + int(rng.next(8)), int(rng.next(300))};
+        int dim = starts[rng.next(4)];
+        s.startPixelSample({x, y}, i, dim);
+        const uint64_t morton = (refMorton(uint32_t(x), uint32_t(y)) << ref.log2spp) | uint64_t(i);
+        for (int draw = 0; draw < 8; ++draw) {
+          ASSERT_EQ(s.dimension(), dim);
+          if (rng.next(2) == 0) {
+            ASSERT_EQ(s.get1D(), refGet1D(ref, morton, dim, r))
+                << "pixel " << x << "," << y << " sample " << i << " dimension " << dim;
+            dim += 1;
+          } else {
+            ASSERT_EQ(s.get2D(), refGet2D(ref, morton, dim, r))
+                << "pixel " << x << "," << y << " sample " << i << " dimension " << dim;
+            dim += 2;
+          }
+        }
+      }
+    }
+}
+
+// Many pixels of a film, every sample, the dimensions a path draws: the pattern of a render.
+TEST(ZSobol, MatchesPbrtV4OverAFilm) {
+  const int spp = 16, res = 48;
+  RefZSobol ref(spp, res, res, 9);
+  ZSobolSampler s(spp, {res, res}, SobolRandomization::FastOwen, 9);
+  for (int y = 0; y < res; y += 5)
+    for (int x = 0; x < res; x += 3)
+      for (int i = 0; i < spp; ++i) {
+        s.startPixelSample({x, y}, i);
+        const uint64_t morton = (refMorton(uint32_t(x), uint32_t(y)) << ref.log2spp) | uint64_t(i);
+        for (int dim = 0; dim < 40;) {
+          if (dim % 3 == 0) {
+            ASSERT_EQ(s.get1D(), refGet1D(ref, morton, dim, SobolRandomization::FastOwen));
+            dim += 1;
+          } else {
+            ASSERT_EQ(s.get2D(), refGet2D(ref, morton, dim, SobolRandomization::FastOwen));
+            dim += 2;
+          }
+        }
+      }
+}
+
 }  // namespace
 }  // namespace lensim::render

@@ -42,41 +42,72 @@ StratifiedSampler::StratifiedSampler(int x_samples, int y_samples, bool jitter, 
     : xs_(x_samples), ys_(y_samples), seed_(seed), jitter_(jitter) {
   if (xs_ <= 0 || ys_ <= 0)
     throw Error(fmt::format("xsamples and ysamples must be positive (got {}, {})", xs_, ys_));
+  pixel_rng_ = pixelRng();
+}
+
+Rng StratifiedSampler::pixelRng() const {
+  return Rng(hashValues({pixelKey(pixel_), static_cast<uint64_t>(seed_), 2}), 0);
 }
 
 void StratifiedSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
-  pixel_ = pixel;
+  if (pixel != pixel_) {
+    if (++stamp_ == 0) {
+      for (DimensionKeys& k : keys_) k.stamp = 0;
+      stamp_ = 1;
+    }
+    pixel_ = pixel;
+    pixel_rng_ = pixelRng();
+  }
   index_ = sample_index;
+  stratum_index_ = static_cast<uint32_t>(index_ % samplesPerPixel());
+  sample_rng_ = pixel_rng_;
+  sample_rng_.advance(static_cast<uint64_t>(index_) << 17);
   dim_ = dimension;
 }
 
 // Jitter for dimension `dim`: a PCG32 stream per pixel, positioned by sample index and
-// dimension, so a value never depends on which dimensions were drawn before it.
+// dimension (2^16 values per sample, 2 per dimension), so a value never depends on which
+// dimensions were drawn before it. (Advancing by a then by b is advancing by a + b.)
 Rng StratifiedSampler::jitterRng(int dim) const {
-  Rng rng(hashValues({pixelKey(pixel_), static_cast<uint64_t>(seed_), 2}), 0);
-  rng.advance((static_cast<uint64_t>(index_) << 17) + 2 * static_cast<uint64_t>(dim));
+  Rng rng = sample_rng_;
+  rng.advance(2 * static_cast<uint64_t>(dim));
   return rng;
 }
 
+// The stratum permutation's keys for dimension `dim` of the current pixel: computed once per
+// pixel and dimension, and every time beyond the cached dimensions.
+const PermutationKeys& StratifiedSampler::keys(int dim) {
+  const size_t d = static_cast<size_t>(dim);
+  DimensionKeys* k = &scratch_;
+  if (d < kSamplerCachedDimensions) {
+    if (d >= keys_.size()) keys_.resize(d + 1);
+    k = &keys_[d];
+    if (k->stamp == stamp_) return k->permutation;
+    k->stamp = stamp_;
+  }
+  k->permutation = PermutationKeys(
+      hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim), static_cast<uint64_t>(seed_)}));
+  return k->permutation;
+}
+
+int StratifiedSampler::stratum(int dim) {
+  return permutationElement(stratum_index_, static_cast<uint32_t>(samplesPerPixel()), keys(dim));
+}
+
 double StratifiedSampler::get1D() {
-  const uint64_t h =
-      hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim_), static_cast<uint64_t>(seed_)});
   const int n = samplesPerPixel();
-  const int stratum = permutationElement(static_cast<uint32_t>(index_ % n), n, h);
+  const int s = stratum(dim_);
   Rng rng = jitterRng(dim_);
   ++dim_;
   const double delta = jitter_ ? rng.uniform() : 0.5;
-  return std::min((stratum + delta) / n, kOneMinusEpsilon);
+  return std::min((s + delta) / n, kOneMinusEpsilon);
 }
 
 Vec2 StratifiedSampler::get2D() {
-  const uint64_t h =
-      hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim_), static_cast<uint64_t>(seed_)});
-  const int n = samplesPerPixel();
-  const int stratum = permutationElement(static_cast<uint32_t>(index_ % n), n, h);
+  const int s = stratum(dim_);
   Rng rng = jitterRng(dim_);
   dim_ += 2;
-  const int x = stratum % xs_, y = stratum / xs_;
+  const int x = s % xs_, y = s / xs_;
   const double dx = jitter_ ? rng.uniform() : 0.5;
   const double dy = jitter_ ? rng.uniform() : 0.5;
   return {std::min((x + dx) / xs_, kOneMinusEpsilon), std::min((y + dy) / ys_, kOneMinusEpsilon)};
@@ -88,16 +119,6 @@ std::unique_ptr<Sampler> StratifiedSampler::clone() const {
 
 // ---------------------------------------------------------------------------------------------
 
-uint32_t sobolDimension0(uint32_t index) {
-  // Bit reversal: the generator matrix of the first Sobol dimension is the identity.
-  uint32_t v = index;
-  v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
-  v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
-  v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
-  v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
-  return (v >> 16) | (v << 16);
-}
-
 namespace {
 uint32_t reverseBits(uint32_t x) {
   x = (x << 16) | (x >> 16);
@@ -107,32 +128,46 @@ uint32_t reverseBits(uint32_t x) {
   x = ((x & 0x55555555U) << 1) | ((x & 0xaaaaaaaaU) >> 1);
   return x;
 }
+
+// The second Sobol dimension at `index`, bit-reversed. Its generator matrix (primitive
+// polynomial x + 1, m_1 = 1: direction numbers v_0 = 2^31, v_k = v_{k-1} xor (v_{k-1} >> 1)) is
+// Pascal's triangle mod 2: index bit k sets value bit 31 - j where C(k, j) is odd, that is
+// (Lucas) where the bits of j are a subset of those of k. So reversed bit j is the parity of the
+// index bits at the supersets of j: a superset-xor transform, five shift-and-xor steps.
+uint32_t sobolDimension1Reversed(uint32_t index) {
+  uint32_t x = index;
+  x ^= (x >> 1) & 0x55555555U;
+  x ^= (x >> 2) & 0x33333333U;
+  x ^= (x >> 4) & 0x0f0f0f0fU;
+  x ^= (x >> 8) & 0x00ff00ffU;
+  x ^= (x >> 16) & 0x0000ffffU;
+  return x;
+}
 }  // namespace
 
-uint32_t sobolDimension1(uint32_t index) {
-  // Second Sobol dimension (primitive polynomial x + 1, m_1 = 1): direction numbers
-  // v_0 = 2^31, v_k = v_{k-1} xor (v_{k-1} >> 1); the value is the xor of v_k over set bits k.
-  uint32_t result = 0, v = 1u << 31;
-  for (; index != 0; index >>= 1, v ^= v >> 1)
-    if (index & 1u) result ^= v;
-  return result;
-}
+// The first Sobol dimension's generator matrix is the identity: the value is the index's bits
+// reversed (van der Corput).
+uint32_t sobolDimension0(uint32_t index) { return reverseBits(index); }
 
-uint32_t owenScramble(uint32_t v, uint64_t seed) {
+uint32_t sobolDimension1(uint32_t index) { return reverseBits(sobolDimension1Reversed(index)); }
+
+uint32_t owenScrambleReversed(uint32_t x, uint32_t s) {
   // Nested uniform scrambling by a hash on the bit-reversed value (Laine & Karras 2011, "Stratified
   // sampling for stochastic transparency", with the constants of Burley 2020, "Practical
   // Hash-based Owen Scrambling", JCGT 9(4)): after reversal, multiplication and addition only
   // carry toward higher bits, so the flip of each original bit depends only on the bits above
   // it and every elementary interval is permuted as a whole (Owen 1995). A few operations per
   // value instead of one hash per bit.
-  const uint32_t s = static_cast<uint32_t>(mixBits(seed));
-  uint32_t x = reverseBits(v);
   x ^= x * 0x3d20adeaU;
   x += s;
   x *= (s >> 16) | 1U;
   x ^= x * 0x05526c56U;
   x ^= x * 0x53a22864U;
-  return reverseBits(x);
+  return x;
+}
+
+uint32_t owenScramble(uint32_t v, uint64_t seed) {
+  return reverseBits(owenScrambleReversed(reverseBits(v), static_cast<uint32_t>(mixBits(seed))));
 }
 
 PaddedSobolSampler::PaddedSobolSampler(int samples_per_pixel, int seed) : seed_(seed) {
@@ -142,8 +177,15 @@ PaddedSobolSampler::PaddedSobolSampler(int samples_per_pixel, int seed) : seed_(
 }
 
 void PaddedSobolSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
-  pixel_ = pixel;
+  if (pixel != pixel_) {
+    pixel_ = pixel;
+    if (++stamp_ == 0) {
+      for (DimensionKeys& k : keys_) k.stamp = 0;
+      stamp_ = 1;
+    }
+  }
   index_ = sample_index;
+  index_in_block_ = static_cast<uint32_t>(index_ % spp_);
   dim_ = dimension;
 }
 
@@ -152,20 +194,41 @@ uint64_t PaddedSobolSampler::dimensionHash(int dim) const {
       {pixelKey(pixel_), static_cast<uint64_t>(dim), static_cast<uint64_t>(seed_), 3});
 }
 
+// The keys of dimension `dim` for the current pixel: computed once per pixel and dimension
+// (the pixel's samples follow each other), and every time beyond the cached dimensions.
+const PaddedSobolSampler::DimensionKeys& PaddedSobolSampler::keys(int dim) {
+  const size_t d = static_cast<size_t>(dim);
+  DimensionKeys* k = &scratch_;
+  if (d < kSamplerCachedDimensions) {
+    if (d >= keys_.size()) keys_.resize(d + 1);
+    k = &keys_[d];
+    if (k->stamp == stamp_) return *k;
+    k->stamp = stamp_;
+  }
+  const uint64_t h = dimensionHash(dim);
+  k->permutation = PermutationKeys(h);
+  k->owen[0] = static_cast<uint32_t>(mixBits(mixBits(h + 1)));
+  k->owen[1] = static_cast<uint32_t>(mixBits(mixBits(h + 2)));
+  return *k;
+}
+
+uint32_t PaddedSobolSampler::permutedIndex(const DimensionKeys& k) const {
+  return static_cast<uint32_t>(
+      permutationElement(index_in_block_, static_cast<uint32_t>(spp_), k.permutation));
+}
+
 double PaddedSobolSampler::get1D() {
-  const uint64_t h = dimensionHash(dim_++);
-  const uint32_t i =
-      static_cast<uint32_t>(permutationElement(static_cast<uint32_t>(index_ % spp_), spp_, h));
-  return toUnit(owenScramble(sobolDimension0(i), mixBits(h + 1)));
+  const DimensionKeys& k = keys(dim_++);
+  // Sobol dimension 0 bit-reversed is the index itself.
+  return toUnit(reverseBits(owenScrambleReversed(permutedIndex(k), k.owen[0])));
 }
 
 Vec2 PaddedSobolSampler::get2D() {
-  const uint64_t h = dimensionHash(dim_);
+  const DimensionKeys& k = keys(dim_);
   dim_ += 2;
-  const uint32_t i =
-      static_cast<uint32_t>(permutationElement(static_cast<uint32_t>(index_ % spp_), spp_, h));
-  return {toUnit(owenScramble(sobolDimension0(i), mixBits(h + 1))),
-          toUnit(owenScramble(sobolDimension1(i), mixBits(h + 2)))};
+  const uint32_t i = permutedIndex(k);
+  return {toUnit(reverseBits(owenScrambleReversed(i, k.owen[0]))),
+          toUnit(reverseBits(owenScrambleReversed(sobolDimension1Reversed(i), k.owen[1])))};
 }
 
 std::unique_ptr<Sampler> PaddedSobolSampler::clone() const {
@@ -219,6 +282,12 @@ constexpr uint8_t kDigitPermutations[24] = {0xe4, 0xb4, 0xd8, 0x78, 0x6c, 0x9c, 
                                             0xc9, 0x39, 0x2d, 0x8d, 0xc6, 0x36, 0xd2, 0x72,
                                             0x4e, 0x1e, 0x27, 0x87, 0x1b, 0x4b, 0x63, 0x93};
 
+// The digit permutation (a kDigitPermutations entry) pbrt-v4 picks for a digit whose higher
+// digits are `higher`, at the dimension whose salt is 0x55555555 * dimension.
+uint8_t digitPermutation(uint64_t higher, uint64_t dim_salt) {
+  return kDigitPermutations[(pbrtMixBits(higher ^ dim_salt) >> 24) % 24];
+}
+
 int ceilLog2(uint64_t v) {
   return v <= 1 ? 0 : 64 - std::countl_zero(v - 1);
 }
@@ -248,18 +317,19 @@ ZSobolSampler::ZSobolSampler(int samples_per_pixel, Point2i full_resolution,
       ceilLog2(static_cast<uint64_t>(std::max(full_resolution.x, full_resolution.y)));
   base4_digits_ = res_log2 + (log2_spp_ + 1) / 2;
   pixel_digit_ = (log2_spp_ + 1) / 2;
+  // get1D and get2D hash the dimension after the step: up to two past the last cached one.
+  dim_hash_.resize(kSamplerCachedDimensions + 2);
+  for (size_t d = 0; d < dim_hash_.size(); ++d) dim_hash_[d] = pbrtHash(static_cast<int>(d), seed_);
 }
 
 void ZSobolSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
   dim_ = dimension;
   if (pixel != pixel_) {
     pixel_ = pixel;
-    if (++stamp_ == 0) std::fill(pixel_stamp_.begin(), pixel_stamp_.end(), 0u), stamp_ = 1;
+    pixel_morton_ = (spreadBits2(static_cast<uint32_t>(pixel.y)) << 1) |
+                    spreadBits2(static_cast<uint32_t>(pixel.x));
   }
-  morton_ = (((spreadBits2(static_cast<uint32_t>(pixel.y)) << 1) |
-              spreadBits2(static_cast<uint32_t>(pixel.x)))
-             << log2_spp_) |
-            static_cast<uint64_t>(sample_index);
+  morton_ = (pixel_morton_ << log2_spp_) | static_cast<uint64_t>(sample_index);
 }
 
 // Digits from_digit > i >= to_digit of pbrt-v4 ZSobolSampler::GetSampleIndex: each base-4 digit
@@ -273,54 +343,73 @@ uint64_t ZSobolSampler::permuteDigits(int from_digit, int to_digit) const {
     const int shift = 2 * i - odd;
     const unsigned digit = static_cast<unsigned>(morton_ >> shift) & 3u;
     const uint64_t higher = morton_ >> (shift + 2);
-    const unsigned p = static_cast<unsigned>((pbrtMixBits(higher ^ dim_salt) >> 24) % 24);
-    index |= static_cast<uint64_t>((kDigitPermutations[p] >> (2 * digit)) & 3u) << shift;
+    index |= static_cast<uint64_t>((digitPermutation(higher, dim_salt) >> (2 * digit)) & 3u)
+             << shift;
   }
   return index;
 }
 
 uint64_t ZSobolSampler::sampleIndex() const {
   const int odd = log2_spp_ & 1;
-  // The pixel's digits (cached per dimension), then the sample's.
-  uint64_t index;
+  const uint64_t dim_salt = 0x55555555ULL * static_cast<uint64_t>(dim_);
   const size_t d = static_cast<size_t>(dim_);
-  if (d < pixel_part_.size() && pixel_stamp_[d] == stamp_) {
-    index = pixel_part_[d];
-  } else {
-    index = permuteDigits(base4_digits_, pixel_digit_);
-    if (d < 256) {
-      if (d >= pixel_part_.size()) {
-        pixel_part_.resize(d + 1, 0);
-        pixel_stamp_.resize(d + 1, 0);
-      }
-      pixel_part_[d] = index;
-      pixel_stamp_[d] = stamp_;
-    }
+  if (d >= kSamplerCachedDimensions) {
+    uint64_t index = permuteDigits(base4_digits_, odd);
+    if (odd) index |= (morton_ & 1) ^ (pbrtMixBits((morton_ >> 1) ^ dim_salt) & 1);
+    return index;
   }
-  index |= permuteDigits(pixel_digit_, odd);
-  if (odd)
-    index |= (morton_ & 1) ^
-             (pbrtMixBits((morton_ >> 1) ^ (0x55555555ULL * static_cast<uint64_t>(dim_))) & 1);
+  if (d >= cache_.size()) cache_.resize(d + 1);
+  DimensionCache& c = cache_[d];
+  uint64_t index = 0;
+  // The lowest full digit is digit `odd` (at bit `odd`); where there is none (one or two
+  // samples per pixel on a one-pixel film), only the last bit below.
+  if (base4_digits_ > odd) {
+    const uint64_t key = morton_ >> (odd + 2);
+    if (c.sample_key != key) {
+      // The digits above the lowest: the pixel's (from the pixel entry), then the sample's.
+      const int low_pixel_digit = std::max(pixel_digit_, odd + 1);
+      const uint64_t pixel_key = morton_ >> log2_spp_;
+      if (!c.pixel_valid || c.pixel_key != pixel_key) {
+        c.pixel_part = permuteDigits(base4_digits_, low_pixel_digit);
+        c.pixel_key = pixel_key;
+        c.pixel_valid = true;
+      }
+      c.prefix = c.pixel_part | permuteDigits(low_pixel_digit, odd + 1);
+      c.low_permutation = digitPermutation(key, dim_salt);
+      c.sample_key = key;
+    }
+    const unsigned digit = static_cast<unsigned>(morton_ >> odd) & 3u;
+    index = c.prefix | (static_cast<uint64_t>((c.low_permutation >> (2 * digit)) & 3u) << odd);
+  }
+  if (odd) {
+    const uint64_t key = morton_ >> 1;
+    if (c.flip_key != key) {
+      c.flip = static_cast<uint32_t>(pbrtMixBits(key ^ dim_salt) & 1);
+      c.flip_key = key;
+    }
+    index |= (morton_ & 1) ^ c.flip;
+  }
   return index;
 }
 
-uint32_t ZSobolSampler::scramble(uint32_t v, uint32_t hash) const {
+uint64_t ZSobolSampler::dimensionHash(int dim) const {
+  return static_cast<size_t>(dim) < dim_hash_.size() ? dim_hash_[static_cast<size_t>(dim)]
+                                                      : pbrtHash(dim, seed_);
+}
+
+// The scrambled Sobol value whose bit reversal is `reversed`.
+uint32_t ZSobolSampler::scrambleReversed(uint32_t reversed, uint32_t hash) const {
   switch (randomization_) {
     case SobolRandomization::None:
-      return v;
+      return reverseBits(reversed);
     case SobolRandomization::PermuteDigits:
-      return v ^ hash;
-    case SobolRandomization::FastOwen: {
-      uint32_t x = reverseBits(v);
-      x ^= x * 0x3d20adeaU;
-      x += hash;
-      x *= (hash >> 16) | 1U;
-      x ^= x * 0x05526c56U;
-      x ^= x * 0x53a22864U;
-      return reverseBits(x);
-    }
+      return reverseBits(reversed) ^ hash;
+    case SobolRandomization::FastOwen:
+      // pbrt-v4's FastOwenScrambler is owenScramble's hash with `hash` as the mixed seed.
+      return reverseBits(owenScrambleReversed(reversed, hash));
     case SobolRandomization::Owen: {
       // pbrt-v4 OwenScrambler: bit 31 - b flips by a hash of the b bits above it.
+      uint32_t v = reverseBits(reversed);
       if (hash & 1u) v ^= 1u << 31;
       for (int b = 1; b < 32; ++b) {
         const uint32_t mask = ~0u << (32 - b);
@@ -329,24 +418,23 @@ uint32_t ZSobolSampler::scramble(uint32_t v, uint32_t hash) const {
       return v;
     }
   }
-  return v;
+  return reverseBits(reversed);
 }
 
+// Sobol dimension 0 bit-reversed is the index itself; dimension 1 is sobolDimension1Reversed.
 double ZSobolSampler::get1D() {
   const uint64_t index = sampleIndex();
   ++dim_;
-  const uint32_t hash = static_cast<uint32_t>(pbrtHash(dim_, seed_));
-  return toUnit(scramble(sobolDimension0(static_cast<uint32_t>(index)), hash));
+  const uint32_t hash = static_cast<uint32_t>(dimensionHash(dim_));
+  return toUnit(scrambleReversed(static_cast<uint32_t>(index), hash));
 }
 
 Vec2 ZSobolSampler::get2D() {
-  const uint64_t index = sampleIndex();
+  const uint32_t index = static_cast<uint32_t>(sampleIndex());
   dim_ += 2;
-  const uint64_t bits = pbrtHash(dim_, seed_);
-  return {
-      toUnit(scramble(sobolDimension0(static_cast<uint32_t>(index)), static_cast<uint32_t>(bits))),
-      toUnit(scramble(sobolDimension1(static_cast<uint32_t>(index)),
-                      static_cast<uint32_t>(bits >> 32)))};
+  const uint64_t bits = dimensionHash(dim_);
+  return {toUnit(scrambleReversed(index, static_cast<uint32_t>(bits))),
+          toUnit(scrambleReversed(sobolDimension1Reversed(index), static_cast<uint32_t>(bits >> 32)))};
 }
 
 std::unique_ptr<Sampler> ZSobolSampler::clone() const {

@@ -65,6 +65,10 @@ class IndependentSampler final : public Sampler {
   Rng rng_;
 };
 
+/// Dimensions below this get their per-(pixel, dimension) hash work cached for the current pixel
+/// by the samplers that cache it (a pixel's samples follow each other in the render loop).
+inline constexpr int kSamplerCachedDimensions = 256;
+
 /// Jittered stratification: per dimension, x_samples * y_samples strata (2-D) or that many
 /// intervals (1-D) per pixel, each pixel sample taking a stratum through a per-pixel,
 /// per-dimension random permutation; jitter inside the stratum unless jitter is false.
@@ -79,11 +83,25 @@ class StratifiedSampler final : public Sampler {
   std::unique_ptr<Sampler> clone() const override;
 
  private:
+  /// The stratum permutation's keys of a dimension for the current pixel.
+  struct DimensionKeys {
+    PermutationKeys permutation;
+    uint32_t stamp = 0;  ///< valid for the current pixel where stamp == stamp_
+  };
+  const PermutationKeys& keys(int dim);
+  int stratum(int dim);
+  Rng pixelRng() const;
   Rng jitterRng(int dim) const;
   int xs_, ys_, seed_;
   bool jitter_;
   Point2i pixel_{};
   int index_ = 0, dim_ = 0;
+  uint32_t stratum_index_ = 0;  ///< index_ % samplesPerPixel()
+  uint32_t stamp_ = 1;          // 0 marks an entry never written
+  Rng pixel_rng_;               ///< the pixel's jitter stream at its start
+  Rng sample_rng_;              ///< pixel_rng_ advanced to sample index_'s stretch
+  std::vector<DimensionKeys> keys_;
+  DimensionKeys scratch_;  // beyond kSamplerCachedDimensions
 };
 
 /// Padded Sobol sampler: each dimension pair is the first two Sobol dimensions (a (0,2)-sequence
@@ -101,10 +119,23 @@ class PaddedSobolSampler final : public Sampler {
   std::unique_ptr<Sampler> clone() const override;
 
  private:
+  /// What a dimension's values need of (seed, pixel, dimension): the index permutation's keys
+  /// and the two Owen scrambling seeds.
+  struct DimensionKeys {
+    PermutationKeys permutation;
+    uint32_t owen[2] = {};
+    uint32_t stamp = 0;  ///< valid for the current pixel where stamp == stamp_
+  };
   uint64_t dimensionHash(int dim) const;
+  const DimensionKeys& keys(int dim);
+  uint32_t permutedIndex(const DimensionKeys& k) const;
   int spp_, seed_;
   Point2i pixel_{};
   int index_ = 0, dim_ = 0;
+  uint32_t index_in_block_ = 0;  ///< index_ % spp_
+  uint32_t stamp_ = 1;           // 0 marks an entry never written
+  std::vector<DimensionKeys> keys_;
+  DimensionKeys scratch_;  // beyond kSamplerCachedDimensions
 };
 
 /// Randomisation of pbrt-v4's Sobol samplers ("string randomization").
@@ -132,20 +163,32 @@ class ZSobolSampler final : public Sampler {
   uint64_t sampleIndex() const;
 
  private:
-  uint32_t scramble(uint32_t v, uint32_t hash) const;
+  /// The permuted index digits of the current pixel sample at dimension dim_ above the lowest
+  /// full base-4 digit, and that digit's permutation, for the sample key they were made for;
+  /// the pixel's digits alone for the pixel key. Each is a function of its key and the
+  /// dimension, so an entry is reused while the key stays (a pixel's samples follow each other:
+  /// the pixel part is computed once per pixel and dimension, the rest once per four samples).
+  struct DimensionCache {
+    uint64_t pixel_key = 0, pixel_part = 0;
+    uint64_t sample_key = ~0ULL;  // a key is at most 2^62 - 1: ~0 is never one
+    uint64_t prefix = 0;
+    uint64_t flip_key = ~0ULL;  // odd log2 spp: the last bit's flip, for morton_ >> 1
+    uint32_t flip = 0;
+    uint8_t low_permutation = 0;
+    bool pixel_valid = false;
+  };
+  uint32_t scrambleReversed(uint32_t reversed, uint32_t hash) const;
   uint64_t permuteDigits(int from_digit, int to_digit) const;
+  uint64_t dimensionHash(int dim) const;
   int spp_, seed_, log2_spp_, base4_digits_;
   int pixel_digit_;  ///< the lowest base-4 digit made of pixel bits only
   SobolRandomization randomization_;
   uint64_t morton_ = 0;
   int dim_ = 0;
-  // The permuted pixel digits depend only on (pixel, dimension): kept per dimension for the
-  // current pixel (valid where pixel_stamp_[dim] == stamp_), as a pixel's samples follow
-  // each other.
   Point2i pixel_{-1, -1};
-  uint32_t stamp_ = 1;  // 0 marks an entry never written
-  mutable std::vector<uint64_t> pixel_part_;
-  mutable std::vector<uint32_t> pixel_stamp_;
+  uint64_t pixel_morton_ = ~0ULL;  ///< Morton code of pixel_ (of (-1, -1): all ones)
+  mutable std::vector<DimensionCache> cache_;
+  std::vector<uint64_t> dim_hash_;  ///< pbrt-v4 Hash(d, seed) for small d
 };
 
 /// Parses pbrt-v4's "randomization" values ("none", "permutedigits", "fastowen", "owen"; empty
@@ -158,5 +201,8 @@ uint32_t sobolDimension1(uint32_t index);
 /// Owen (nested uniform) scrambling of a 32-bit fraction: the flip of each bit depends only on
 /// the seed and the bits above it (hash-based, Laine-Karras / Burley 2020).
 uint32_t owenScramble(uint32_t v, uint64_t seed);
+/// owenScramble's core on bit-reversed values: owenScramble(v, seed) is
+/// reverseBits(owenScrambleReversed(reverseBits(v), uint32_t(mixBits(seed)))).
+uint32_t owenScrambleReversed(uint32_t reversed, uint32_t seed);
 
 }  // namespace lensim::render

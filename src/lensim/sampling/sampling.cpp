@@ -196,7 +196,16 @@ double Rng::uniform() {
   return static_cast<double>(((hi << 32) | lo) >> 11) * 0x1.0p-53;
 }
 
-int permutationElement(uint32_t i, uint32_t n, uint64_t seed) {
+PermutationKeys::PermutationKeys(uint64_t seed) {
+  for (int round = 0; round < 3; ++round) {
+    const uint64_t key = mixBits(seed + static_cast<uint64_t>(round));
+    xor_key[round] = static_cast<uint32_t>(key);
+    mul[round] = static_cast<uint32_t>(key >> 32) | 1u;
+    add[round] = static_cast<uint32_t>(key >> 17);
+  }
+}
+
+int permutationElement(uint32_t i, uint32_t n, const PermutationKeys& keys) {
   // Cycle-walking: apply a bijective hash on the smallest power-of-two domain containing n
   // until the value lands in [0, n).
   uint32_t w = n - 1;
@@ -205,16 +214,19 @@ int permutationElement(uint32_t i, uint32_t n, uint64_t seed) {
   do {
     // A bijection on [0, w]: xor with a key, odd multiply, xorshift (all invertible mod 2^k).
     for (int round = 0; round < 3; ++round) {
-      const uint64_t key = mixBits(seed + round);
-      x ^= static_cast<uint32_t>(key) & w;
-      x = (x * (static_cast<uint32_t>(key >> 32) | 1u)) & w;
+      x ^= keys.xor_key[round] & w;
+      x = (x * keys.mul[round]) & w;
       x ^= (x >> 3) & w;
-      x = (x * 0x2c1b3c6dU + static_cast<uint32_t>(key >> 17)) & w;
+      x = (x * 0x2c1b3c6dU + keys.add[round]) & w;
       x ^= (x >> 7);
       x &= w;
     }
   } while (x >= n);
   return static_cast<int>(x);
+}
+
+int permutationElement(uint32_t i, uint32_t n, uint64_t seed) {
+  return permutationElement(i, n, PermutationKeys(seed));
 }
 
 }  // namespace lensim::render

@@ -131,4 +131,14 @@ class Rng {
 /// "Correlated Multi-Jittered Sampling", cycle-walking hash permutation; here built from mixBits).
 int permutationElement(uint32_t i, uint32_t n, uint64_t seed);
 
+/// The round keys permutationElement derives from its seed, for callers that draw many elements
+/// of one permutation: permutationElement(i, n, PermutationKeys(seed)) is
+/// permutationElement(i, n, seed).
+struct PermutationKeys {
+  PermutationKeys() = default;
+  explicit PermutationKeys(uint64_t seed);
+  uint32_t xor_key[3] = {}, mul[3] = {}, add[3] = {};
+};
+int permutationElement(uint32_t i, uint32_t n, const PermutationKeys& keys);
+
 }  // namespace lensim::render
