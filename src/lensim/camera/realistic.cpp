@@ -739,6 +739,9 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.origin_at_front_vertex = true;
     } else if (c.realistic) {
       const scene::Realistic& r = *c.realistic;
+      static_cast<scene::RealisticOptions&>(s) = r;  // the options taken as they are
+      if (!s.tilt_shift_loc.valid()) s.tilt_shift_loc = c.loc;
+      s.as_built_film = !r.focus_given;
       s.lens_path = r.lens_file;
       s.setup.aperture_diameter_mm = r.aperture_diameter_mm;
       if (r.film_distance_mm)
@@ -749,25 +752,6 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.film_diagonal_mm = scene.film.diagonal_mm;
       s.camera_units_per_mm = scene::Realistic::kSceneUnitsPerLensUnit;
       s.exposure_time = c.shutter_close - c.shutter_open;
-      s.simple_weighting = r.simple_weighting;
-      s.glass_match = r.glass_match;
-      s.glass_absorption = r.glass_absorption;
-      s.configuration = r.configuration;
-      s.zoom_focal_length_mm = r.zoom_focal_length_mm;
-      s.zoom_loc = r.zoom_loc;
-      s.tilt_shift.shift_mm = r.lens_shift_mm;
-      s.tilt_shift.tilt_deg = r.lens_tilt_deg;
-      s.tilt_shift_loc = r.tilt_shift_loc.valid() ? r.tilt_shift_loc : c.loc;
-      s.flare = r.flare;
-      s.flare_coating = r.flare_coating;
-      s.flare_loc = r.flare_loc;
-      s.flare_coating_loc = r.flare_coating_loc;
-      s.tolerance_job = r.tolerance_job;
-      s.as_built = r.as_built;
-      s.as_built_film = !r.focus_given;
-      s.tolerance_loc = r.tolerance_loc;
-      s.flare_ghosts = r.flare_ghosts;
-      s.flare_ghosts_loc = r.flare_ghosts_loc;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

@@ -189,8 +189,7 @@ scene::Scene PreviewRenderer::previewScene(const PreviewRequest& rq) {
   r.focus_distance_m = rq.focus_distance_m;
   r.film_distance_mm.reset();
   r.focus_method = "thick";
-  r.lens_tilt_deg = rq.tilt_shift.tilt_deg;
-  r.lens_shift_mm = rq.tilt_shift.shift_mm;
+  r.tilt_shift = rq.tilt_shift;
   s.camera.type = "realistic";
   s.camera.realistic = r;
   const double aspect = double(s.film.y_resolution) / s.film.x_resolution;
