@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# Issue 32's renames, as a script so that they can be re-run on a tree that has gained files since
+# (it works on every file git knows or would add, found by grep, not on a fixed list). Idempotent:
+# a second run changes nothing. Run from anywhere inside the repository; then build and test.
+#   1. sampling/ moves from namespace lensim::render to lensim::sampling. The names it declares
+#      (read from its headers) are requalified where code wrote render::NAME, and files that use
+#      them unqualified, in namespace lensim::render or after `using namespace lensim::render;`,
+#      get `using namespace lensim::sampling;` after that line.
+#   2. scene/builder.h, which holds the scene description (the data model the parser fills), is
+#      renamed scene/description.h (scene/builder.cpp, the builder, keeps its name); includes and
+#      mentions are updated.
+#   3. ExitPupilSampler::area_mm2() becomes areaMm2(), as the other unit-suffixed functions are
+#      spelled (centreAreaMm2()); data members named area_mm2 keep their names.
+# Usage: scripts/dev/rename-32.sh [--dry-run]   (--dry-run: list the files it would change)
+set -euo pipefail
+cd "$(git rev-parse --show-toplevel)"
+dry=0
+[ "${1:-}" = "--dry-run" ] && dry=1
+
+# Every text file git tracks or would add (untracked, not ignored), outside shared data.
+code_files() { git ls-files -co --exclude-standard -- '*.h' '*.hpp' '*.cpp' '*.cc' '*.in'; }
+text_files() {
+  git ls-files -co --exclude-standard -- '*.h' '*.hpp' '*.cpp' '*.cc' '*.in' '*.md' '*.txt' \
+    '*.cmake' '*.py' '*.sh' 'scripts/*' 'bench/*' 'tools/*' | grep -v '^scripts/dev/rename-32.sh$' |
+    while read -r f; do [ -f "$f" ] && grep -Iq . "$f" && echo "$f"; done
+}
+changed=()
+# apply FILE PERL-EXPRESSION: edits FILE in place (the whole file as one string) when the
+# expression changes it.
+tmp=$(mktemp)
+trap 'rm -f "$tmp"' EXIT
+apply() {
+  perl -0777 -pe "$2" "$1" > "$tmp"
+  if ! cmp -s "$tmp" "$1"; then
+    changed+=("$1")
+    [ $dry = 1 ] || cat "$tmp" > "$1"
+  fi
+}
+
+# --- 1. namespace lensim::sampling ---------------------------------------------------------------
+sdir=src/lensim/sampling
+for f in $(git ls-files -co --exclude-standard -- "$sdir/*.h" "$sdir/*.cpp"); do
+  apply "$f" 's/\bnamespace lensim::render\b/namespace lensim::sampling/g'
+done
+# The names sampling/'s headers declare at namespace scope (their style: no indentation there):
+# classes, structs, enums, aliases, constants and functions.
+names=$(cat "$sdir"/*.h | perl -ne '
+  print "$1\n" if /^(?:class|struct|enum class|enum)\s+(\w+)/;
+  print "$1\n" if /^using\s+(\w+)\s*=/;
+  print "$1\n" if /^(?:inline\s+)?constexpr\s+[^=(]*?\b(\w+)\s*=/;
+  print "$1\n" if /^(?!(?:return|namespace|using|template|class|struct|enum)\b)[A-Za-z_][\w:<>,*& ]*?[\s*&](\w+)\(/;
+' | sort -u)
+[ -n "$names" ] || { echo "rename-32: no names found in $sdir/*.h" >&2; exit 1; }
+alt=$(echo "$names" | paste -sd'|')
+for f in $(code_files | grep -v "^$sdir/"); do
+  # render::NAME (or lensim::render::NAME) -> sampling::NAME
+  apply "$f" "s/\\b((?:lensim::)?)render::($alt)\\b/\${1}sampling::\$2/g"
+  # Files in namespace lensim::render (or one inside it), or with `using namespace
+  # lensim::render;`, that use a name unqualified (comments and strings aside).
+  grep -q '^using namespace lensim::sampling;' "$f" && continue
+  perl -0777 -ne "s{//[^\n]*}{}g; s{/\*.*?\*/}{}gs; s{\"(?:[^\"\\\\\n]|\\\\.)*\"}{}g;
+                  exit(!/(?<![\w:.>])(?:$alt)\b/)" "$f" || continue
+  if grep -qE '^namespace lensim::render(::\w+)? \{' "$f"; then
+    apply "$f" 's/^(namespace lensim::render(?:::\w+)? \{\n)/$1\nusing namespace lensim::sampling;\n/m'
+  elif grep -q '^using namespace lensim::render;' "$f"; then
+    apply "$f" 's/^(using namespace lensim::render;\n)/$1using namespace lensim::sampling;\n/m'
+  fi
+done
+
+# --- 2. scene/builder.h -> scene/description.h ---------------------------------------------------
+if [ -f src/lensim/scene/builder.h ]; then
+  changed+=(src/lensim/scene/builder.h)
+  [ $dry = 1 ] || git mv src/lensim/scene/builder.h src/lensim/scene/description.h
+fi
+for f in $(text_files); do
+  apply "$f" 's{\bscene/builder\.h\b}{scene/description.h}g'
+done
+
+# --- 3. area_mm2() -> areaMm2() ------------------------------------------------------------------
+for f in $(code_files); do
+  apply "$f" 's/\b(ExitPupilSampler::|[.>])area_mm2\(/$1areaMm2(/g; s/(\bdouble )area_mm2(\(Vec2 film_mm)/$1areaMm2$2/g'
+done
+
+printf '%s\n' "${changed[@]}" | sort -u | sed "s/^/rename-32: $([ $dry = 1 ] && echo would change || echo changed) /"
+echo "rename-32: ${#changed[@]} edits"
