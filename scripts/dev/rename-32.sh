@@ -55,11 +55,21 @@ alt=$(echo "$names" | paste -sd'|')
 for f in $(code_files | grep -v "^$sdir/"); do
   # render::NAME (or lensim::render::NAME) -> sampling::NAME
   apply "$f" "s/\\b((?:lensim::)?)render::($alt)\\b/\${1}sampling::\$2/g"
+  # Forward declarations of its classes in a `namespace lensim::render { class NAME; }` block
+  # move to a `namespace lensim::sampling` block before it.
+  apply "$f" 's{^namespace lensim::render \{\n((?:(?:class|struct) \w+;\n)+)\}\n}{
+    my ($s, $r) = ("", "");
+    for my $d (split /(?<=\n)/, $1) { if ($d =~ /^(?:class|struct) (?:'"$alt"');/) { $s .= $d } else { $r .= $d } }
+    ($s ? "namespace lensim::sampling {\n${s}}\n" : "") . ($r ? "namespace lensim::render {\n${r}}\n" : "")
+  }gme'
   # Files in namespace lensim::render (or one inside it), or with `using namespace
-  # lensim::render;`, that use a name unqualified (comments and strings aside).
+  # lensim::render;`, that use a name unqualified (comments and strings aside) which they do not
+  # declare themselves.
   grep -q '^using namespace lensim::sampling;' "$f" && continue
-  perl -0777 -ne "s{//[^\n]*}{}g; s{/\*.*?\*/}{}gs; s{\"(?:[^\"\\\\\n]|\\\\.)*\"}{}g;
-                  exit(!/(?<![\w:.>])(?:$alt)\b/)" "$f" || continue
+  perl -0777 -ne "s{//[^\n]*}{}g; s{/\\*.*?\\*/}{}gs; s{\"(?:[^\"\\\\\n]|\\\\.)*\"}{}g;
+                  my %own = map { \$_ => 1 } /\\b(?:class|struct|enum|using|double|int|float|auto)\\s+(\\w+)\\s*[=;{:]/g;
+                  my @used = grep { !\$own{\$_} } /(?<![\\w:.>])($alt)\\b/g;
+                  exit(!@used)" "$f" || continue
   if grep -qE '^namespace lensim::render(::\w+)? \{' "$f"; then
     apply "$f" 's/^(namespace lensim::render(?:::\w+)? \{\n)/$1\nusing namespace lensim::sampling;\n/m'
   elif grep -q '^using namespace lensim::render;' "$f"; then
@@ -78,8 +88,8 @@ done
 
 # --- 3. area_mm2() -> areaMm2() ------------------------------------------------------------------
 for f in $(code_files); do
-  apply "$f" 's/\b(ExitPupilSampler::|[.>])area_mm2\(/$1areaMm2(/g; s/(\bdouble )area_mm2(\(Vec2 film_mm)/$1areaMm2$2/g'
+  apply "$f" 's/(ExitPupilSampler::|\.|->)area_mm2\(/$1areaMm2(/g; s/(\bdouble )area_mm2(\(Vec2 film_mm)/$1areaMm2$2/g'
 done
 
-printf '%s\n' "${changed[@]}" | sort -u | sed "s/^/rename-32: $([ $dry = 1 ] && echo would change || echo changed) /"
+[ ${#changed[@]} = 0 ] || printf '%s\n' "${changed[@]}" | sort -u | sed "s/^/rename-32: $([ $dry = 1 ] && echo would change || echo changed) /"
 echo "rename-32: ${#changed[@]} edits"
