@@ -52,22 +52,31 @@ names=$(cat "$sdir"/*.h | perl -ne '
 ' | sort -u)
 [ -n "$names" ] || { echo "rename-32: no names found in $sdir/*.h" >&2; exit 1; }
 alt=$(echo "$names" | paste -sd'|')
+export RENAME32_NAMES="$alt"
+forward_decls=$(cat <<'PERL'
+my $names = $ENV{RENAME32_NAMES};
+s!^(namespace lensim::render(?:::\w+)? \{\n)(.*?)^\}!
+  my ($open, $body) = ($1, $2);
+  my @moved = $body =~ /^((?:class|struct) (?:$names);\n)/mg;
+  $body =~ s/^(?:class|struct) (?:$names);\n//mg;
+  my $block = @moved ? "namespace lensim::sampling {\n" . join("", @moved) . "}\n" : "";
+  $block . ($body =~ /\S/ ? ($block ? "\n" : "") . $open . $body . "}" : "__DROP__")
+!gmse;
+s{__DROP__\n}{}g;
+PERL
+)
 for f in $(code_files | grep -v "^$sdir/"); do
   # render::NAME (or lensim::render::NAME) -> sampling::NAME
   apply "$f" "s/\\b((?:lensim::)?)render::($alt)\\b/\${1}sampling::\$2/g"
-  # Forward declarations of its classes in a `namespace lensim::render { class NAME; }` block
-  # move to a `namespace lensim::sampling` block before it.
-  apply "$f" 's{^namespace lensim::render \{\n((?:(?:class|struct) \w+;\n)+)\}\n}{
-    my ($s, $r) = ("", "");
-    for my $d (split /(?<=\n)/, $1) { if ($d =~ /^(?:class|struct) (?:'"$alt"');/) { $s .= $d } else { $r .= $d } }
-    ($s ? "namespace lensim::sampling {\n${s}}\n" : "") . ($r ? "namespace lensim::render {\n${r}}\n" : "")
-  }gme'
+  # Forward declarations of its classes inside a namespace lensim::render block move to a
+  # namespace lensim::sampling block before it (the render block is dropped if left empty).
+  apply "$f" "$forward_decls"
   # Files in namespace lensim::render (or one inside it), or with `using namespace
   # lensim::render;`, that use a name unqualified (comments and strings aside) which they do not
   # declare themselves.
   grep -q '^using namespace lensim::sampling;' "$f" && continue
   perl -0777 -ne "s{//[^\n]*}{}g; s{/\\*.*?\\*/}{}gs; s{\"(?:[^\"\\\\\n]|\\\\.)*\"}{}g;
-                  my %own = map { \$_ => 1 } /\\b(?:class|struct|enum|using|double|int|float|auto)\\s+(\\w+)\\s*[=;{:]/g;
+                  my %own = map { \$_ => 1 } /\\b(?:class|struct|enum|using|double|int|float|auto)\\s+(\\w+)\\s*[={:]/g;
                   my @used = grep { !\$own{\$_} } /(?<![\\w:.>])($alt)\\b/g;
                   exit(!@used)" "$f" || continue
   if grep -qE '^namespace lensim::render(::\w+)? \{' "$f"; then
