@@ -71,9 +71,10 @@ for f in $(code_files | grep -v "^$sdir/"); do
   # Forward declarations of its classes inside a namespace lensim::render block move to a
   # namespace lensim::sampling block before it (the render block is dropped if left empty).
   apply "$f" "$forward_decls"
-  # A file that says `using namespace lensim::render;` but includes nothing of render/ (only
-  # sampling/ and lower floors, which no longer declare that namespace) means sampling.
-  if grep -q '^using namespace lensim::render;' "$f" && ! grep -q '^#include "lensim/render/' "$f"; then
+  # A file that says `using namespace lensim::render;` but includes only headers of sampling/
+  # and util/ (which no longer declare that namespace) means sampling.
+  if grep -q '^using namespace lensim::render;' "$f" &&
+     ! grep -qP '^#include "(?!lensim/(sampling|util)/)' "$f"; then
     apply "$f" 's/^using namespace lensim::render;\n(using namespace lensim::sampling;\n)?/using namespace lensim::sampling;\n/m'
   fi
   # Files in namespace lensim::render (or one inside it), or with `using namespace
