@@ -53,6 +53,26 @@ names=$(cat "$sdir"/*.h | perl -ne '
 [ -n "$names" ] || { echo "rename-32: no names found in $sdir/*.h" >&2; exit 1; }
 alt=$(echo "$names" | paste -sd'|')
 export RENAME32_NAMES="$alt"
+# beyond_sampling FILE: whether FILE, or a local header it includes (followed recursively),
+# includes a lensim header other than sampling/'s and util/'s.
+beyond_sampling() {
+  perl -e '
+    my %seen;
+    sub walk {
+      my ($f) = @_;
+      return 0 if $seen{$f}++;
+      open(my $h, "<", $f) or return 0;
+      my $dir = $f =~ m{^(.*)/} ? $1 : ".";
+      while (<$h>) {
+        next unless /^#include "([^"]+)"/;
+        my $i = $1;
+        if ($i =~ m{^lensim/}) { return 1 unless $i =~ m{^lensim/(sampling|util)/}; next }
+        return 1 if walk("$dir/$i");
+      }
+      return 0;
+    }
+    exit(walk($ARGV[0]) ? 0 : 1)' "$1"
+}
 forward_decls=$(cat <<'PERL'
 my $names = $ENV{RENAME32_NAMES};
 s!^(namespace lensim::render(?:::\w+)? \{\n)(.*?)^\}!
@@ -72,9 +92,9 @@ for f in $(code_files | grep -v "^$sdir/"); do
   # namespace lensim::sampling block before it (the render block is dropped if left empty).
   apply "$f" "$forward_decls"
   # A file that says `using namespace lensim::render;` but includes only headers of sampling/
-  # and util/ (which no longer declare that namespace) means sampling.
-  if grep -q '^using namespace lensim::render;' "$f" &&
-     ! grep -qP '^#include "(?!lensim/(sampling|util)/)' "$f"; then
+  # and util/ (which no longer declare that namespace), itself or through local headers, means
+  # sampling.
+  if grep -q '^using namespace lensim::render;' "$f" && ! beyond_sampling "$f"; then
     apply "$f" 's/^using namespace lensim::render;\n(using namespace lensim::sampling;\n)?/using namespace lensim::sampling;\n/m'
   fi
   # Files in namespace lensim::render (or one inside it), or with `using namespace
