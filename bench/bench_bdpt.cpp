@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/scene/parser.h"
 #include "lensim/util/error.h"
 

@@ -90,7 +90,7 @@ void BM_RealisticCameraDispersion(benchmark::State& state, Setup setup, bool dis
   std::uniform_real_distribution<double> u(360, 830);
   // As the renderer hands them over: the path's four wavelengths (the hero and three others
   // equally spaced, wrapping around), the pixel and its filter.
-  const render::GaussianFilter filter;
+  const sampling::GaussianFilter filter;
   for (CameraSample& c : samples) {
     const double l0 = u(rng);
     for (int i = 0; i < kCameraWavelengths; ++i)

@@ -23,7 +23,7 @@
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/log.h"
 
 using namespace lensim;

@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
   cs.lambda_nm = {550, 550, 550, 550};
   for (int i = 0; i < n; ++i) {
     cs.ghost_u[1] = uni(rng), cs.ghost_u[2] = uni(rng);
-    const Vec2 d = render::sampleUniformDiskConcentric({cs.ghost_u[1], cs.ghost_u[2]}) * r;
+    const Vec2 d = sampling::sampleUniformDiskConcentric({cs.ghost_u[1], cs.ghost_u[2]}) * r;
     const double c2 = z * z / (z * z + d.x * d.x + d.y * d.y);
     const double g = c2 * c2 * M_PI * r * r / (z * z);
     double lo = 0, sum_w = 0, sum_w2p = 0;

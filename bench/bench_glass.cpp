@@ -105,7 +105,7 @@ void BM_CameraRayAbsorption(benchmark::State& state) {
   s.x_resolution = s.y_resolution = 256;
   s.glass_absorption = state.range(0) != 0;
   const camera::RealisticCamera cam(s);
-  const render::BoxFilter box;
+  const sampling::BoxFilter box;
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<camera::CameraSample> samples(4096);

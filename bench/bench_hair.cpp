@@ -13,6 +13,7 @@
 
 using namespace lensim;
 using namespace lensim::render;
+using namespace lensim::sampling;
 
 namespace {
 

@@ -16,6 +16,7 @@
 
 using namespace lensim;
 using namespace lensim::render;
+using namespace lensim::sampling;
 
 namespace {
 

@@ -12,7 +12,7 @@
 #include "lensim/sampling/sampler.h"
 
 using namespace lensim;
-using namespace lensim::render;
+using namespace lensim::sampling;
 
 namespace {
 

@@ -11,6 +11,7 @@
 
 using namespace lensim;
 using namespace lensim::render;
+using namespace lensim::sampling;
 
 namespace {
 

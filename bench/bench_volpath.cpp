@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 using namespace lensim;

@@ -19,7 +19,7 @@
 #include "lensim/render/materials/measured.h"
 #include "lensim/render/materials/measured_rgl.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/scene/parser.h"
 #include "lensim/scene/tokenizer.h"
 #include "lensim/util/error.h"

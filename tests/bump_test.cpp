@@ -14,6 +14,8 @@
 #include "render_test_util.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 namespace {
 
 TEST(Bump, LinearDisplacementTiltsTheNormal) {

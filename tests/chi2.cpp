@@ -11,6 +11,7 @@
 namespace lensim::test {
 
 using namespace lensim::render;
+using namespace lensim::sampling;
 
 double gammaQ(double a, double x) {
   if (x <= 0) return 1.0;

@@ -28,7 +28,7 @@
 #include "lensim/io/image.h"
 #include "lensim/render/parts.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace fs = std::filesystem;

@@ -20,6 +20,8 @@
 #include "stats.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 namespace {
 
 using test::RunningStats;

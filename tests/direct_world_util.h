@@ -12,7 +12,7 @@
 #include "lensim/render/media/media.h"
 #include "lensim/render/shapes/accel.h"
 #include "lensim/render/textures/textures.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::testutil {

@@ -166,7 +166,7 @@ camera::RealisticSettings cameraSettings(bool absorb) {
 // 1 / cos(asin(0.07 / 1.5)) = 1.0011 times the axial one: T_axial^1.002 <= ratio <= T_axial.
 TEST(GlassTransmittance, CameraWeighsEachWavelength) {
   const camera::RealisticCamera on(cameraSettings(true)), off(cameraSettings(false));
-  const render::BoxFilter box;
+  const sampling::BoxFilter box;
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(0, 1);
   int hero = 0, each = 0;

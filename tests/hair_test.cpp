@@ -29,6 +29,8 @@
 #include "render_test_util.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 namespace {
 
 constexpr double kPi = std::numbers::pi;

@@ -11,6 +11,8 @@
 #include "render_test_util.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 namespace {
 
 // A unit square (two triangles) at z = 0 and a ball of radius 0.25 at (0.5, 0.5, 0), each an

@@ -21,6 +21,8 @@
 #include "stats.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 namespace {
 
 // Lights of every kind, of very different power, size and orientation.

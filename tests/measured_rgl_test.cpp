@@ -32,6 +32,7 @@
 
 using namespace lensim;
 using namespace lensim::render;
+using namespace lensim::sampling;
 
 namespace {
 

@@ -22,6 +22,7 @@
 
 using namespace lensim;
 using namespace lensim::render;
+using namespace lensim::sampling;
 using lensim::test::RunningStats;
 
 namespace {

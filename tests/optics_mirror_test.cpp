@@ -302,7 +302,7 @@ TEST(Mirror, ExitPupilBoundCutsOutTheObscuredMiddle) {
     samples += kN;
     wasted += kN - pass2;
     const double p1 = double(passing) / kN, p2 = double(pass2) / kN;
-    const double a_disc = 3.141592653589793 * disc * disc, a_bound = sampler.area_mm2(film);
+    const double a_disc = 3.141592653589793 * disc * disc, a_bound = sampler.areaMm2(film);
     const double a1 = a_disc * p1, a2 = a_bound * p2;
     const double se =
         std::hypot(a_disc * std::sqrt(p1 * (1 - p1) / kN), a_bound * std::sqrt(p2 * (1 - p2) / kN));

@@ -153,7 +153,7 @@ TEST(ExitPupilSampler, SamplesLieInTheBoundsAndRotateWithTheFilmPoint) {
     }
     const double mean = sum / n, se = std::sqrt((sum2 / n - mean * mean) / n);
     EXPECT_LT(std::abs(mean), 4.5 * se + 1e-3) << mean << " se " << se;
-    EXPECT_GT(sampler.area_mm2(film), 0);
+    EXPECT_GT(sampler.areaMm2(film), 0);
   }
 }
 
@@ -247,7 +247,7 @@ TEST(ExitPupilSampler, AnamorphicBoundsContainEveryPassingRay) {
           ++outside;
           if (outside < 4)
             std::printf("  outside: film %.3f %.3f (r %.3f) rear %.3f %.3f, area %.3f\n", film.x,
-                        film.y, std::hypot(film.x, film.y), a.x, a.y, sampler.area_mm2(film));
+                        film.y, std::hypot(film.x, film.y), a.x, a.y, sampler.areaMm2(film));
         }
       }
       if (auto s = sampler.sample(film, {u01(rng), u01(rng)})) {
@@ -418,7 +418,7 @@ TEST(ExitPupilSampler, ReshapedBoundsHoldEveryPassingRayInTheCameraSetUp) {
       const Vec2 film{(2 * u(rng) - 1) * half_w, (2 * u(rng) - 1) * half_h};
       const int band = cs.band(size_t(tries));
       const LensSystem& lens = cs.lens(size_t(tries));
-      if (!(sampler.area_mm2(film, band) > 0)) continue;
+      if (!(sampler.areaMm2(film, band) > 0)) continue;
       ++films;
       for (int k = 0; k < b.rear_points; ++k) {
         const Vec2 q{(2 * u(rng) - 1) * rr, (2 * u(rng) - 1) * rr};
@@ -544,8 +544,8 @@ TEST(ExitPupilSampler, AnamorphicBoundsOnAFilmRectangleHoldItsEdgesPassingRays) 
     // node past 12 / sin 67.5 = 13 mm) but inside the film radius, where the disc's bound holds
     // a region.
     const Vec2 beyond{0, 15};
-    EXPECT_GT(disc.area_mm2(beyond), 0.0);
+    EXPECT_GT(disc.areaMm2(beyond), 0.0);
     EXPECT_FALSE(rect.sample(beyond, {0.5, 0.5}));
-    EXPECT_EQ(rect.area_mm2(beyond), 0.0);
+    EXPECT_EQ(rect.areaMm2(beyond), 0.0);
   }
 }

@@ -9,11 +9,13 @@
 #include "lensim/render/textures/procedural.h"
 #include "lensim/render/textures/textures.h"
 #include "lensim/sampling/sampling.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "render_test_util.h"
 #include "stats.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 namespace {
 
 TEST(Procedural, PerlinNoiseClosedFormsAndReferenceValues) {

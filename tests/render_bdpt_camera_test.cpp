@@ -54,7 +54,7 @@ struct Direct : testutil::DirectWorld {
 /// pathsEndingOnLight: ray offsets). Up to `count`.
 std::vector<std::vector<Vertex>> pathsEndingOnLight(const Direct& d, int count, int max_vertices) {
   std::vector<std::vector<Vertex>> out;
-  render::IndependentSampler sampler(1, 11);
+  sampling::IndependentSampler sampler(1, 11);
   std::vector<Vertex> buf(size_t(d.ctx().max_depth) + 3);
   render::RayCounts counts;
   for (int i = 0; i < 400000 && int(out.size()) < count; ++i) {

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "lensim/render/image_compare.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lighttracer_test_util.h"
 #include "render_test_util.h"
 #include "test_paths.h"

@@ -91,12 +91,12 @@ AttributeEnd
 /// complete paths the s = 0 strategy found (the light seen directly included). Up to `count`.
 std::vector<std::vector<Vertex>> pathsEndingOnLight(Direct& d, int count) {
   std::vector<std::vector<Vertex>> out;
-  render::IndependentSampler sampler(1, 7);
+  sampling::IndependentSampler sampler(1, 7);
   std::vector<Vertex> buf(size_t(d.ctx.max_depth) + 3);
   render::RayCounts counts;
   for (int i = 0; i < 200000 && int(out.size()) < count; ++i) {
     sampler.startPixelSample({i, 0}, 0);
-    Vec3 dir = render::sampleUniformHemisphere(sampler.get2D());
+    Vec3 dir = sampling::sampleUniformHemisphere(sampler.get2D());
     camera::CameraRay ray;
     ray.origin = {0, 1, -0.9};
     ray.direction = dir;

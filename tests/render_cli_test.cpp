@@ -12,7 +12,7 @@
 #include "cli_run.h"
 #include "lensim/io/image.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "render_test_util.h"
 
 using lensim::io::Image;

@@ -14,7 +14,7 @@
 #include "lensim/render/materials/bsdf.h"
 #include "lensim/render/spectra/spectrum.h"
 #include "lensim/render/textures/textures.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "render_test_util.h"
 #include "test_paths.h"
 

@@ -12,7 +12,7 @@
 
 #include "lensim/io/image.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "test_paths.h"
 
 using namespace lensim;

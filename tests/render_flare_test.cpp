@@ -23,7 +23,7 @@
 #include "lensim/optics/coating/lens_coatings.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 #include "test_paths.h"
 

@@ -79,7 +79,7 @@ struct Estimate {
 Estimate radiance(const Direct& d, const Vec3& o, const Vec3& dir, int paths) {
   const double u0 = 0.13;
   const render::SampledWavelengths base = render::SampledWavelengths::sampleUniform(u0);
-  render::IndependentSampler sampler(paths, 9);
+  sampling::IndependentSampler sampler(paths, 9);
   render::RayCounts counts;
   double sum[4] = {}, sum2[4] = {};
   for (int k = 0; k < 4; ++k) {

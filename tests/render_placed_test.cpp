@@ -21,7 +21,7 @@
 #include "lensim/optics/lens_system.h"
 #include "lensim/render/image_compare.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 #include "test_paths.h"
 

@@ -15,7 +15,7 @@
 #include "lensim/render/autofocus_scene.h"
 #include "lensim/render/image_compare.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "test_paths.h"
 
 using namespace lensim;

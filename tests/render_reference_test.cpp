@@ -9,7 +9,7 @@
 
 #include "lensim/io/image.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace {
 

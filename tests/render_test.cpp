@@ -236,13 +236,13 @@ LightSource "infinite" "rgb L" [1 1 1]
   lensim::render::LightSet lights(s, accel, tex);
   ASSERT_EQ(lights.size(), 7u);
   const lensim::Vec3 p{0.1, 0.05, -0.1};
-  lensim::render::Rng rng(7, 11);
+  lensim::sampling::Rng rng(7, 11);
   const int n = 400000;
   for (size_t li = 0; li < lights.size(); ++li) {
     const lensim::render::Light& light = lights.light(li);
     double sum = 0, sum2 = 0;
     for (int i = 0; i < n; ++i) {
-      const lensim::Vec3 w = lensim::render::sampleUniformSphere({rng.uniform(), rng.uniform()});
+      const lensim::Vec3 w = lensim::sampling::sampleUniformSphere({rng.uniform(), rng.uniform()});
       double pdf = 0;
       if (light.isInfinite()) {
         pdf = light.pdfLi(p, w, nullptr);
@@ -262,7 +262,7 @@ LightSource "infinite" "rgb L" [1 1 1]
           o = hit->p + w * 1e-6;
         }
       }
-      const double v = pdf / lensim::render::uniformSpherePdf();
+      const double v = pdf / lensim::sampling::uniformSpherePdf();
       sum += v, sum2 += v * v;
     }
     const double mean = sum / n, sem = std::sqrt((sum2 / n - mean * mean) / n);
@@ -480,12 +480,12 @@ AttributeEnd
     ASSERT_EQ(lights.size(), 1u);
     const lensim::render::Light& light = lights.light(0);
     const auto lambda = lensim::render::SampledWavelengths::sampleUniform(0.3);
-    lensim::render::Rng rng(3, 5);
+    lensim::sampling::Rng rng(3, 5);
     const int n = 200000;
     double pdf_sum = 0, pdf_sum2 = 0, uni = 0, uni2 = 0, imp = 0, imp2 = 0;
     for (int i = 0; i < n; ++i) {
       const lensim::Vec2 u{rng.uniform(), rng.uniform()};
-      const lensim::Vec3 wdir = lensim::render::sampleUniformSphere(u);
+      const lensim::Vec3 wdir = lensim::sampling::sampleUniformSphere(u);
       const double p = light.pdfLi({0, 0, 0}, wdir, nullptr) * 4 * M_PI;
       pdf_sum += p, pdf_sum2 += p * p;
       const double lu = light.Le(wdir, lambda)[0] * 4 * M_PI;

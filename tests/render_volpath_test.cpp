@@ -48,7 +48,7 @@ Transmittance transmittance(const Direct& d, const Vec3& o, const Vec3& dir, con
   const double u0 = 0.13;  // wavelengths 421.1, 538.6, 656.1, 773.6 nm
   const render::SampledWavelengths base = render::SampledWavelengths::sampleUniform(u0);
   constexpr int kPaths = 40000;
-  render::IndependentSampler sampler(kPaths, 7);
+  sampling::IndependentSampler sampler(kPaths, 7);
   render::RayCounts counts;
   double sum[4] = {}, sum2[4] = {}, emitted[4] = {};
   for (int k = 0; k < 4; ++k) {
@@ -124,7 +124,7 @@ AttributeEnd
   }
   // Behind a dispersive lens or interface only the hero wavelength is carried: its estimate
   // alone must be unbiased (no averaging with the dropped wavelengths' pdfs).
-  render::IndependentSampler sampler(20000, 11);
+  sampling::IndependentSampler sampler(20000, 11);
   render::RayCounts counts;
   for (int j = 0; j < 4; ++j) {
     render::SampledWavelengths lambda =

@@ -16,6 +16,8 @@
 #include "lensim/sampling/sampling.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 namespace {
 
 // ---- the reference ------------------------------------------------------------------------

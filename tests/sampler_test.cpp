@@ -9,7 +9,7 @@
 #include "stats.h"
 
 using namespace lensim;
-using namespace lensim::render;
+using namespace lensim::sampling;
 
 namespace {
 

@@ -10,7 +10,7 @@
 #include "stats.h"
 
 using namespace lensim;
-using namespace lensim::render;
+using namespace lensim::sampling;
 using lensim::test::RunningStats;
 
 namespace {

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <set>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/scene/format.h"
 #include "scene_test_util.h"
 

@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 using namespace lensim;
 namespace fs = std::filesystem;

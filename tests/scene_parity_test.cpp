@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/scene/parser.h"
 #include "scene_test_util.h"
 

@@ -7,7 +7,7 @@
 
 #include <unistd.h>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/scene/parser.h"
 
 namespace lensim::testutil {

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/transform.h"
 #include "scene_test_util.h"
 

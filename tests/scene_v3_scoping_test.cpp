@@ -3,7 +3,7 @@
 // table.
 #include <gtest/gtest.h>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "scene_test_util.h"
 
 using namespace lensim;

@@ -18,7 +18,7 @@
 
 #include "cli_run.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/serve/preview.h"
 #include "lensim/serve/server.h"
 

@@ -16,7 +16,7 @@
 #include "cli_run.h"
 #include "lensim/camera/camera.h"
 #include "lensim/camera/realistic.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/serve/preview.h"
 #include "lensim/serve/server.h"
 
@@ -177,8 +177,8 @@ TEST_F(ServeZoomTilt, PreviewRendersTiltAndShift) {
   pr.tilt_shift.shift_mm = {0, 2};
   const lensim::scene::Scene prepared = previews.previewScene(pr);
   ASSERT_TRUE(prepared.camera.realistic);
-  EXPECT_EQ(prepared.camera.realistic->lens_tilt_deg.x, 3);
-  EXPECT_EQ(prepared.camera.realistic->lens_shift_mm.y, 2);
+  EXPECT_EQ(prepared.camera.realistic->tilt_shift.tilt_deg.x, 3);
+  EXPECT_EQ(prepared.camera.realistic->tilt_shift.shift_mm.y, 2);
   const std::string described = lensim::camera::makeCamera(prepared)->describe();
   EXPECT_NE(described.find("lens shift (0, 2) mm, tilt (3, 0) deg"), std::string::npos)
       << described;

@@ -14,6 +14,8 @@
 #include "lensim/util/error.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 namespace {
 
 // ---- the reference ------------------------------------------------------------------------

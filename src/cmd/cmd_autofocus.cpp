@@ -8,7 +8,7 @@
 
 #include "commands.h"
 #include "lensim/render/autofocus_scene.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/log.h"
 
 namespace lensim::cmd {

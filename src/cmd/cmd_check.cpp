@@ -7,7 +7,7 @@
 #include "commands.h"
 #include "lensim/camera/realistic.h"
 #include "lensim/render/materials/measured_rgl.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/scene/format.h"
 #include "lensim/scene/parser.h"
 #include "lensim/util/log.h"

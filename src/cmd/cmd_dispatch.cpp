@@ -16,7 +16,7 @@
 #include "commands.h"
 #include "lensim/render/parts.h"
 #include "lensim/render/renderer.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 #include "lensim/util/file.h"
 #include "lensim/util/log.h"

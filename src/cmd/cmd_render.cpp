@@ -20,7 +20,7 @@
 #include "lensim/render/parts.h"
 #include "lensim/render/renderer.h"
 #include "lensim/render/sensor/raw_output.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 #include "lensim/util/interrupt.h"
 #include "lensim/util/log.h"

@@ -19,7 +19,7 @@ namespace lensim::scene {
 struct Scene;
 }
 
-namespace lensim::render {
+namespace lensim::sampling {
 class Filter;
 }
 
@@ -41,7 +41,7 @@ struct CameraSample {
   /// meets the film (realistic.cpp, "Dispersive lenses"). Without a filter it keeps only the
   /// hero wavelength.
   Vec2 pixel_centre;
-  const render::Filter* filter = nullptr;
+  const sampling::Filter* filter = nullptr;
   double filter_weight = 1;
   /// [0,1)^3 for a camera with flare (Camera::flare): the ghost path's choice of surface pair
   /// ([0]) and its direction toward the lens ([1], [2]); unused otherwise.

@@ -3,7 +3,7 @@
 
 #include "lensim/camera/camera.h"
 #include "lensim/camera/projective.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::camera {

@@ -3,7 +3,7 @@
 // that far and a light tracer's splats there must reach those pixels too.
 #pragma once
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/vec.h"
 
 namespace lensim::camera {

@@ -16,7 +16,7 @@
 #include "lensim/camera/film_bounds.h"
 #include "lensim/camera/projective.h"
 #include "lensim/sampling/sampling.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::camera {
@@ -101,7 +101,7 @@ class ProjectiveCamera : public Camera {
     // pbrt-v4's PerspectiveCamera::SampleWi: a uniform point on the lens disc (the eye for a
     // pinhole), its solid-angle density at ref and the importance of the ray toward ref.
     const Vec2 l =
-        lens_radius_ > 0 ? render::sampleUniformDiskConcentric(u) * lens_radius_ : Vec2{0, 0};
+        lens_radius_ > 0 ? sampling::sampleUniformDiskConcentric(u) * lens_radius_ : Vec2{0, 0};
     CameraWiSample s;
     s.p_lens = cw.applyPoint({l.x, l.y, 0});
     const Vec3 d = s.p_lens - ref;
@@ -180,7 +180,7 @@ class ProjectiveCamera : public Camera {
       d = normalize(Vec3{screen.x * tan_half_fov_, screen.y * tan_half_fov_, 1});
     }
     if (lens_radius_ > 0) {
-      const Vec2 lens = render::sampleUniformDiskConcentric(s.lens) * lens_radius_;
+      const Vec2 lens = sampling::sampleUniformDiskConcentric(s.lens) * lens_radius_;
       const double ft = focal_distance_ / d.z;
       const Vec3 focus = o + d * ft;
       o = {o.x + lens.x, o.y + lens.y, 0};
@@ -256,7 +256,7 @@ class ProjectiveCamera : public Camera {
       return s;
     }
     // The lens point fixes the direction; the ray through ref in that direction meets z = 0 at o.
-    const Vec2 l = render::sampleUniformDiskConcentric(u) * lens_radius_;
+    const Vec2 l = sampling::sampleUniformDiskConcentric(u) * lens_radius_;
     const Vec3 d = normalize(Vec3{-l.x, -l.y, focal_distance_});
     const Vec3 o = ref_c - d * (ref_c.z / d.z);
     const double w = orthoWe(o, d, &s.film_raster);

@@ -18,7 +18,7 @@
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/sampling/sampling.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
 
@@ -190,7 +190,7 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
       pupil_options.bands.push_back({&band_lenses[size_t(k)], &band_lenses[size_t(k) + 1]});
   }
   pupil_.emplace(*lens_.lens, lens_.paraxial, film_radius, pupil_options);
-  centre_area_mm2_ = pupil_->area_mm2({0, 0});
+  centre_area_mm2_ = pupil_->areaMm2({0, 0});
   camera_from_world_ = inverse(settings_.world_from_camera.start());
   // The front surface's axial extent (lens space), for light arriving from the scene.
   std::tie(front_zmin_mm_, front_zmax_mm_) = surfaceZRange(lens_.lens->interfaces().front());
@@ -289,7 +289,7 @@ std::optional<RealisticCamera::FilmRay> RealisticCamera::placedFilmRay(const Cam
     return f;
   }
   const double radius = tiltDiscRadius(p);
-  const Vec2 d = render::sampleUniformDiskConcentric(sample.lens);
+  const Vec2 d = sampling::sampleUniformDiskConcentric(sample.lens);
   const Vec3 q{radius * d.x, radius * d.y, rear_zmax_mm_};
   const Vec3 to = q - p;
   const double r2 = dot(to, to);
@@ -537,7 +537,7 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
   }
   // (c): each wavelength's film point for the hero's world ray, its importance and its density.
   const optics::LensSystem& lens = *lens_.lens;
-  const render::Filter& filter = *sample.filter;
+  const sampling::Filter& filter = *sample.filter;
   const double z = lens.filmDistance_mm(), z_film = lens.filmZ_mm(), z_rear = lens.rearVertexZ_mm();
   const double norm = settings_.simple_weighting ? centre_area_mm2_ : z * z;
   auto transmission = [&](Vec2T<float> stop) {
@@ -574,7 +574,7 @@ std::optional<CameraRay> RealisticCamera::dispersiveRay(const CameraSample& samp
     }
     // Wavelength j's own strategy: its band's bound.
     const int band = bandAt(l);
-    const double area = pupil_->area_mm2(xf, band);
+    const double area = pupil_->areaMm2(xf, band);
     if (area > 0 && pupil_->contains(xf, {q.x, q.y}, band))
       p[size_t(j)] = filter.pdf(offset) / area * z * z / (c2 * c2);
   }
@@ -671,9 +671,9 @@ bool RealisticCamera::reachesFilm(const CameraSample& sample) const {
   if (placement_) {
     if (placement_->tiltShift().tilted()) return true;  // the rear disc: no bound to consult
     const Vec3 p = placement_->lensFromFilm(filmPoint(sample.film_raster));
-    return pupil_->area_mm2({p.x, p.y}, bandAt(sample.lambda_nm[0])) > 0;
+    return pupil_->areaMm2({p.x, p.y}, bandAt(sample.lambda_nm[0])) > 0;
   }
-  return pupil_->area_mm2(filmPoint(sample.film_raster), bandAt(sample.lambda_nm[0])) > 0;
+  return pupil_->areaMm2(filmPoint(sample.film_raster), bandAt(sample.lambda_nm[0])) > 0;
 }
 
 std::string RealisticCamera::describe() const {
@@ -742,6 +742,9 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.origin_at_front_vertex = true;
     } else if (c.realistic) {
       const scene::Realistic& r = *c.realistic;
+      static_cast<scene::RealisticOptions&>(s) = r;  // the options taken as they are
+      if (!s.tilt_shift_loc.valid()) s.tilt_shift_loc = c.loc;
+      s.as_built_film = !r.focus_given;
       s.lens_path = r.lens_file;
       s.setup.aperture_diameter_mm = r.aperture_diameter_mm;
       if (r.film_distance_mm)
@@ -752,25 +755,6 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
       s.film_diagonal_mm = scene.film.diagonal_mm;
       s.camera_units_per_mm = scene::Realistic::kSceneUnitsPerLensUnit;
       s.exposure_time = c.shutter_close - c.shutter_open;
-      s.simple_weighting = r.simple_weighting;
-      s.glass_match = r.glass_match;
-      s.glass_absorption = r.glass_absorption;
-      s.configuration = r.configuration;
-      s.zoom_focal_length_mm = r.zoom_focal_length_mm;
-      s.zoom_loc = r.zoom_loc;
-      s.tilt_shift.shift_mm = r.lens_shift_mm;
-      s.tilt_shift.tilt_deg = r.lens_tilt_deg;
-      s.tilt_shift_loc = r.tilt_shift_loc.valid() ? r.tilt_shift_loc : c.loc;
-      s.flare = r.flare;
-      s.flare_coating = r.flare_coating;
-      s.flare_loc = r.flare_loc;
-      s.flare_coating_loc = r.flare_coating_loc;
-      s.tolerance_job = r.tolerance_job;
-      s.as_built = r.as_built;
-      s.as_built_film = !r.focus_given;
-      s.tolerance_loc = r.tolerance_loc;
-      s.flare_ghosts = r.flare_ghosts;
-      s.flare_ghosts_loc = r.flare_ghosts_loc;
       if (r.blades > 0)
         s.aperture = ApertureShape::polygon(r.blades, r.blade_rotation_deg);
       else if (!r.aperture.empty())

@@ -39,12 +39,14 @@
 #include "lensim/optics/focus.h"
 #include "lensim/optics/pupil.h"
 #include "lensim/optics/tilt_shift.h"
+#include "lensim/scene/realistic_options.h"
 #include "lensim/util/transform.h"
 
 namespace lensim::camera {
 
-/// Everything the realistic camera needs, resolved from a scene description.
-struct RealisticSettings {
+/// Everything the realistic camera needs, resolved from a scene description: the options the
+/// scene gives as they are (scene::RealisticOptions) and those resolved from the scene.
+struct RealisticSettings : scene::RealisticOptions {
   std::string lens_path;
   /// The lens as already read from lens_path (makeRealisticCamera reads it to choose the
   /// camera); null: read lens_path.
@@ -73,55 +75,12 @@ struct RealisticSettings {
   /// the ray from the film point one pixel to the right (+x raster) or one pixel down (+y
   /// raster), aimed at the same rear-plane point, is blocked by the lens.
   bool zero_if_neighbour_blocked = false;
-  /// pbrt-v3's "simpleweighting": pixel values on a pinhole camera's scale instead of film
-  /// irradiance. The weight is T cos^4(theta) A / A0, A0 the sampled region's area at the centre
-  /// of the film (pbrt-v3 used cos^4(theta) alone, which loses the vignetting its bounds leave
-  /// out): a flat field of radiance L reads about L at the centre (L times the mean cos^4 of the
-  /// rays and the share of the centre's samples that get through: 0.94 for the double Gauss at
-  /// f/4) and falls off toward the corners as the irradiance does.
-  bool simple_weighting = false;
-  /// Give every element of the lens the catalogue glass nearest to its index (and V_d), as
-  /// `lens info --glass-match` does (the scene's "bool glassmatch"), so an old lens disperses.
-  bool glass_match = false;
-  /// Weigh each wavelength of a camera ray by the internal transmittance of its path through the
-  /// lens's glasses (optics/absorption.h; the scene's "bool glassabsorption", default true).
-  /// Glasses without transmittance data absorb nothing.
-  bool glass_absorption = true;
-  /// A multi-configuration (zoom) lens: configuration N (1-based; the scene's "integer
-  /// configuration"), or the focal length in mm the spacings are interpolated for ("float
-  /// focallength"; optics/configurations.h). `zoom_loc`: the parameter, for errors.
-  std::optional<int> configuration;
-  std::optional<double> zoom_focal_length_mm;
-  FileLoc zoom_loc;
-  /// Tilt and shift (the scene's "lenstilt" and "lensshift"; optics/tilt_shift.h): camera
-  /// space is then the film's frame, the lens turned and shifted in it. tilt_shift_loc: the
-  /// parameter, for errors.
-  optics::TiltShift tilt_shift;
-  FileLoc tilt_shift_loc;
   /// The pixel filter's radius (pixels): film points this far beyond the image's edge still
   /// reach its edge pixels (camera importance accepts them; film_bounds.h).
   Vec2 filter_radius{0.5, 0.5};
-  /// Lens flare (the scene's "bool flare"; realistic_flare.cpp): reflection losses in every
-  /// camera ray's weight and a two-reflection ghost path per sample. `flare_coating`: the
-  /// lens-wide coating instead of the lens file's ("string flarecoating"); the locations, for
-  /// errors.
-  bool flare = false;
-  std::string flare_coating;
-  FileLoc flare_loc, flare_coating_loc;
-  /// An as-built lens (the scene's "string tolerances" and "integer asbuilt"; docs/design.md):
-  /// Monte Carlo build `as_built` of the design job's tolerancing replaces the lens file, which
-  /// must be the job's lens. `as_built_film`: keep the film where the build's back-focus
-  /// compensator put it (no focusdistance or filmdistance given). tolerance_loc: for errors.
-  std::string tolerance_job;
-  int as_built = -1;
+  /// An as-built lens (RealisticOptions::tolerance_job): keep the film where the build's
+  /// back-focus compensator put it (no focusdistance or filmdistance given).
   bool as_built_film = false;
-  FileLoc tolerance_loc;
-
-  /// A diagnostic ("string flareghosts" "I,J;I,J"): render only these ghost pairs (first
-  /// reflection at I, then at J, as `lens ghosts` lists them); empty: all. Checked against the
-  /// lens at setup (a pair that reflects nothing is refused at flare_ghosts_loc).
-  std::vector<std::pair<int, int>> flare_ghosts;
-  FileLoc flare_ghosts_loc;
   /// Flare: draw each ghost pair's directions from its own bound (realistic_flare.cpp, "Per-ghost
   /// bounds") rather than the disc that holds every pair's. Off only to compare (tests, bench).
   bool flare_ghost_bounds = true;

@@ -168,7 +168,7 @@ struct GhostRegion {
   /// The point of the region for u in [0, 1)^2 (uniform in area).
   Vec2 at(Vec2 u) const {
     if (!box) {
-      const Vec2 d = render::sampleUniformDiskConcentric(u);
+      const Vec2 d = sampling::sampleUniformDiskConcentric(u);
       return {centre.x + radius * d.x, centre.y + radius * d.y};
     }
     const double a = u0 + (u1 - u0) * u.x, b = v1 * (2 * u.y - 1);

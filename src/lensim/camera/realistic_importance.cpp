@@ -192,7 +192,7 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
       const double rr = lens.interfaces().back().semi_aperture_mm;
       if (q.x * q.x + q.y * q.y > rr * rr) return std::nullopt;
     }
-    hit.area_mm2 = pupil_->area_mm2(at);
+    hit.area_mm2 = pupil_->areaMm2(at);
     if (!(hit.area_mm2 > 0) || !pupil_->contains(at, {q.x, q.y})) return std::nullopt;
     const double c2 = hit.cos_theta * hit.cos_theta;
     hit.g_per_mm2 = c2 * c2 / (z * z);
@@ -235,7 +235,7 @@ std::optional<CameraWiSample> RealisticCamera::sampleWi(
   const double R = front.semi_aperture_mm;
   const FrontDisc disc = frontDisc(r_l);
   if (!(disc.radius > 0)) return std::nullopt;
-  const Vec2 xy = disc.centre + render::sampleUniformDiskConcentric(u) * disc.radius;
+  const Vec2 xy = disc.centre + sampling::sampleUniformDiskConcentric(u) * disc.radius;
   if (xy.x * xy.x + xy.y * xy.y > R * R) return std::nullopt;
   const std::optional<FrontPoint> fp = frontPoint(front, xy.x, xy.y);
   if (!fp) return std::nullopt;
@@ -282,7 +282,7 @@ std::optional<CameraWiSample> RealisticCamera::sampleGhostWi(
   const Vec3 r_l = lensFromWorldPoint(ref, time);
   if (!(r_l.z < front_zmin_mm_)) return std::nullopt;
   const double R = front.semi_aperture_mm;
-  const Vec2 xy = render::sampleUniformDiskConcentric({u[1], u[2]}) * R;
+  const Vec2 xy = sampling::sampleUniformDiskConcentric({u[1], u[2]}) * R;
   const std::optional<FrontPoint> fp = frontPoint(front, xy.x, xy.y);
   if (!fp) return std::nullopt;
   const Vec3 d_l = normalize(fp->p - r_l);

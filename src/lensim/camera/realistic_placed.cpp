@@ -262,7 +262,7 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
   const Vec3 p = filmToLens(filmPoint(sample.film_raster));
   const Vec3 q = toLocal(rear_frame_, p - origin(rear_frame_));
   const double radius = discRadius(q);
-  const Vec2 d = render::sampleUniformDiskConcentric(sample.lens);
+  const Vec2 d = sampling::sampleUniformDiskConcentric(sample.lens);
   const Vec3 target =
       toGlobal(rear_frame_, {radius * d.x, radius * d.y, z_near_}) + origin(rear_frame_);
   const Vec3 to = target - p;

@@ -17,7 +17,7 @@
 
 #include "lensim/camera/projective.h"
 #include "lensim/sampling/equal_area.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::camera {
 
@@ -77,7 +77,7 @@ class SphericalCamera final : public Camera {
     const double xr = scene_->film.x_resolution, yr = scene_->film.y_resolution;
     double density;
     if (equal_area_) {
-      const Vec2 uv = render::equalAreaSphereToSquare({d.x, d.z, d.y});
+      const Vec2 uv = sampling::equalAreaSphereToSquare({d.x, d.z, d.y});
       *raster = {uv.x * xr, uv.y * yr};
       density = 1 / (4 * M_PI);
     } else {
@@ -103,7 +103,7 @@ class SphericalCamera final : public Camera {
     Vec3 d;
     if (equal_area_) {
       const Vec3 e =
-          render::equalAreaSquareToSphere({std::clamp(u, 0.0, 1.0), std::clamp(v, 0.0, 1.0)});
+          sampling::equalAreaSquareToSphere({std::clamp(u, 0.0, 1.0), std::clamp(v, 0.0, 1.0)});
       d = {e.x, e.z, e.y};
     } else {
       const double theta = M_PI * v, phi = 2 * M_PI * u;

@@ -70,6 +70,11 @@ void LensTracer<T>::setIndices(const double* before, const double* after) {
 
 namespace {
 
+// The smallest distance along a ray at which a surface counts as hit (slightly negative, so that a
+// ray starting on a surface finds it), by the tracer's precision.
+template <typename T>
+constexpr double kTMin = std::is_same_v<T, float> ? -1e-4 : -1e-9;
+
 // One surface's term of a ray's margin (LensTracer::marginSquared): (r / semi-aperture)^2 at the
 // hit (infinite for a zero semi-aperture off the axis, 0 on it) and, where the ray goes into a
 // rarer medium (rarer 1, else 0), sin^2 of the refracted angle. Branch-free, so that the batch
@@ -116,7 +121,7 @@ template <typename T, bool kMargin>
                                               T* fate, T* term, bool* one_by_one) {
   constexpr int kLanes = ShapeIntersector::kLanes;
   static_assert(kLanes >= LensTracer<T>::kBatch);
-  const double t_min = std::is_same_v<T, float> ? -1e-4 : -1e-9, zero = 0, one = 1;
+  const double t_min = kTMin<T>, zero = 0, one = 1;
   const double eta = double(eta_i) / double(eta_t);
   const double refracts = double(eta_i) != double(eta_t) ? one : zero;
   const T rarer = eta_i > eta_t ? T(1) : T(0);
@@ -162,6 +167,76 @@ template <typename T, bool kMargin>
   }
 }
 
+// The lanes [0, nv) of a batch (LensTracer::traceBatch) at a plane (the stop) at z = zv: the hit
+// (p), the direction after it (e; refracted only when kRefract, between different indices, which
+// a stop rarely has: the common case has no refraction, which vectorises) and each lane's fate
+// (0 through, 1 miss, 2 aperture, 3 total internal reflection). kMargin: no clipping, and each
+// lane's margin term in term. Branch-free, so that the loop vectorises.
+template <typename T, bool kMargin, bool kRefract>
+[[gnu::always_inline]] inline void planeLanes(T zv, T semi2, T eta, T rarer, int nv, const T* ox,
+                                              const T* oy, const T* oz, const T* dx, const T* dy,
+                                              const T* dz, T* px, T* py, T* pz, T* ex, T* ey, T* ez,
+                                              T* fate, T* term) {
+  const T t_min = T(kTMin<T>);
+  const T zero(0), one(1);
+  for (int j = 0; j < nv; ++j) {
+    const T rz = oz[j] - zv;
+    const T tq = -rz / dz[j];  // inf or NaN when dz is 0: dropped by the select
+    const T t = dz[j] != zero ? tq : zero;
+    const T hit = dz[j] != zero ? (t >= t_min ? one : zero) : zero;
+    px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
+    const T r2 = px[j] * px[j] + py[j] * py[j];
+    const T inside = kMargin || r2 <= semi2 ? one : zero;
+    T tir = zero, sin2_t = zero;
+    if constexpr (kRefract) {  // the normal (0, 0, -1)
+      refractLane(dx[j], dy[j], dz[j], zero, zero, -one, eta, one, ex[j], ey[j], ez[j], sin2_t,
+                  tir);
+    } else {
+      ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
+    }
+    if constexpr (kMargin) term[j] = marginTerm(r2, semi2, sin2_t, rarer);
+    fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
+  }
+}
+
+// The lanes [0, nv) of a batch at a sphere of radius R (inverse inv_r) with its vertex at z = zv,
+// refracting where `refracts` is 1: outputs as planeLanes. The same operations as the scalar
+// trace (intersection, clipping at the clear aperture, refract()), branch-free.
+template <typename T, bool kMargin>
+[[gnu::always_inline]] inline void sphereLanes(T R, T inv_r, T zv, T semi2, T eta, T refracts,
+                                               T rarer, int nv, const T* ox, const T* oy,
+                                               const T* oz, const T* dx, const T* dy, const T* dz,
+                                               T* px, T* py, T* pz, T* ex, T* ey, T* ez, T* fate,
+                                               T* term) {
+  const T t_min = T(kTMin<T>);
+  const T zero(0), one(1);
+  for (int j = 0; j < nv; ++j) {
+    const T rz = oz[j] - zv;
+    const T b = ox[j] * dx[j] + oy[j] * dy[j] + rz * dz[j] - R * dz[j];
+    const T c = ox[j] * ox[j] + oy[j] * oy[j] + rz * rz - T(2) * R * rz;
+    const T disc = b * b - c;
+    const T root = std::sqrt(std::max(disc, zero));
+    const T q = -(b + (b < zero ? -root : root));  // copysign(root, b) for b != -0
+    const T cq = c / q;  // inf or NaN when q is 0: dropped by the select
+    const T t0 = q, t1 = q != zero ? cq : zero;
+    const T ok0 = t0 >= t_min ? ((rz + t0 * dz[j] - R) * R < zero ? one : zero) : zero;
+    const T ok1 = t1 >= t_min ? ((rz + t1 * dz[j] - R) * R < zero ? one : zero) : zero;
+    const T hit = disc >= zero ? std::max(ok0, ok1) : zero;
+    const T t01 = std::min(t0, t1);
+    const T t = ok0 != zero ? (ok1 != zero ? t01 : t0) : t1;
+    const T nx = (ox[j] + dx[j] * t) * inv_r, ny = (oy[j] + dy[j] * t) * inv_r,
+            nz = (rz + dz[j] * t - R) * inv_r;
+    px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
+    const T r2 = px[j] * px[j] + py[j] * py[j];
+    const T inside = kMargin || r2 <= semi2 ? one : zero;
+    T sin2_t, tir;
+    refractLane(dx[j], dy[j], dz[j], nx, ny, nz, eta, refracts, ex[j], ey[j], ez[j], sin2_t,
+                tir);
+    if constexpr (kMargin) term[j] = marginTerm(r2, semi2, sin2_t, rarer);
+    fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
+  }
+}
+
 }  // namespace
 
 template <typename T>
@@ -180,7 +255,7 @@ BlockReason LensTracer<T>::traceOne(int i, bool from_film, const TraceOptions& o
   if (shape_index_[i] >= 0) return traceShaped(i, from_film, opts, o, d, hit, sin2);
   // A ray may start on the previous surface; accept roots a hair behind the origin so that
   // surfaces touching at the rim do not lose rays to rounding.
-  const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
+  const T t_min = T(kTMin<T>);
   const T R = radius_[i];
   const Vec3T<T> rel{o.x, o.y, o.z - z_[i]};  // origin relative to the vertex
   T t;
@@ -317,7 +392,6 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
     if (reversed_) oz[j] = z_unfold_ - oz[j], dz[j] = -dz[j];
     alive[j] = j < n;
   }
-  const T t_min = std::is_same_v<T, float> ? T(-1e-4) : T(-1e-9);
   const T zero(0), one(1), inf = std::numeric_limits<T>::infinity();
   for (int i = size() - 1; i >= 0; --i) {
     const T R = radius_[i], inv_r = inv_radius_[i], zv = z_[i], semi2 = semi2_[i];
@@ -326,29 +400,6 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
     const T refracts = eta_i != eta_t ? one : zero;
     // kMargin: whether sin^2 of the refracted angle counts (into a rarer medium).
     const T rarer = eta_i > eta_t ? one : zero;
-    // A plane (the stop); refracting only between different indices, which a stop rarely has:
-    // the common case gets its own loop without the refraction, which vectorises.
-    auto planeLanes = [&](auto refract_tag) {
-      constexpr bool kRefract = decltype(refract_tag)::value;
-      for (int j = 0; j < nv; ++j) {
-        const T rz = oz[j] - zv;
-        const T tq = -rz / dz[j];  // inf or NaN when dz is 0: dropped by the select
-        const T t = dz[j] != zero ? tq : zero;
-        const T hit = dz[j] != zero ? (t >= t_min ? one : zero) : zero;
-        px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
-        const T r2 = px[j] * px[j] + py[j] * py[j];
-        const T inside = kMargin || r2 <= semi2 ? one : zero;
-        T tir = zero, sin2_t = zero;
-        if constexpr (kRefract) {  // the normal (0, 0, -1)
-          refractLane(dx[j], dy[j], dz[j], zero, zero, -one, eta, one, ex[j], ey[j], ez[j], sin2_t,
-                      tir);
-        } else {
-          ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
-        }
-        if constexpr (kMargin) term[j] = marginTerm(r2, semi2, sin2_t, rarer);
-        fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
-      }
-    };
     // Lanes to trace one by one (traceOne), after a non-spherical surface's side-by-side loop.
     bool one_by_one[kBatch] = {};
     const bool side_by_side = lanes_[i] != 0;
@@ -379,35 +430,14 @@ __attribute__((target_clones("avx2", "default"))) void LensTracer<T>::traceBatch
         if (why != BlockReason::None) ex[j] = dx[j], ey[j] = dy[j], ez[j] = dz[j];
       }
     } else if (R == zero && refracts == zero) {
-      planeLanes(std::false_type{});
+      planeLanes<T, kMargin, false>(zv, semi2, eta, rarer, nv, ox, oy, oz, dx, dy, dz, px, py, pz,
+                                    ex, ey, ez, fate, term);
     } else if (R == zero) {
-      planeLanes(std::true_type{});
+      planeLanes<T, kMargin, true>(zv, semi2, eta, rarer, nv, ox, oy, oz, dx, dy, dz, px, py, pz, ex,
+                                   ey, ez, fate, term);
     } else {
-      for (int j = 0; j < nv; ++j) {
-        const T rz = oz[j] - zv;
-        const T b = ox[j] * dx[j] + oy[j] * dy[j] + rz * dz[j] - R * dz[j];
-        const T c = ox[j] * ox[j] + oy[j] * oy[j] + rz * rz - T(2) * R * rz;
-        const T disc = b * b - c;
-        const T root = std::sqrt(std::max(disc, zero));
-        const T q = -(b + (b < zero ? -root : root));  // copysign(root, b) for b != -0
-        const T cq = c / q;  // inf or NaN when q is 0: dropped by the select
-        const T t0 = q, t1 = q != zero ? cq : zero;
-        const T ok0 = t0 >= t_min ? ((rz + t0 * dz[j] - R) * R < zero ? one : zero) : zero;
-        const T ok1 = t1 >= t_min ? ((rz + t1 * dz[j] - R) * R < zero ? one : zero) : zero;
-        const T hit = disc >= zero ? std::max(ok0, ok1) : zero;
-        const T t01 = std::min(t0, t1);
-        const T t = ok0 != zero ? (ok1 != zero ? t01 : t0) : t1;
-        const T nx = (ox[j] + dx[j] * t) * inv_r, ny = (oy[j] + dy[j] * t) * inv_r,
-                nz = (rz + dz[j] * t - R) * inv_r;
-        px[j] = ox[j] + dx[j] * t, py[j] = oy[j] + dy[j] * t, pz[j] = oz[j] + dz[j] * t;
-        const T r2 = px[j] * px[j] + py[j] * py[j];
-        const T inside = kMargin || r2 <= semi2 ? one : zero;
-        T sin2_t, tir;
-        refractLane(dx[j], dy[j], dz[j], nx, ny, nz, eta, refracts, ex[j], ey[j], ez[j], sin2_t,
-                    tir);
-        if constexpr (kMargin) term[j] = marginTerm(r2, semi2, sin2_t, rarer);
-        fate[j] = hit != zero ? (inside != zero ? (tir != zero ? T(3) : zero) : T(2)) : one;
-      }
+      sphereLanes<T, kMargin>(R, inv_r, zv, semi2, eta, refracts, rarer, nv, ox, oy, oz, dx, dy, dz,
+                              px, py, pz, ex, ey, ez, fate, term);
     }
     if constexpr (kMargin) {
       for (int j = 0; j < n; ++j) {
@@ -464,7 +494,7 @@ template <typename T>
 BlockReason LensTracer<T>::traceShaped(int i, bool from_film, const TraceOptions& opts, Vec3T<T>& o,
                                        Vec3T<T>& d, Vec3T<T>& hit, T* sin2) const {
   const ShapeIntersector& shape = shapes_[size_t(shape_index_[i])];
-  const double t_min = std::is_same_v<T, float> ? -1e-4 : -1e-9;
+  const double t_min = kTMin<T>;
   const Vec3 rel{double(o.x), double(o.y), double(o.z) - double(z_[i])};
   Vec3 dir{double(d.x), double(d.y), double(d.z)};
   dir = normalize(dir);

@@ -236,7 +236,7 @@ bool ExitPupilSampler::contains(Vec2 film_mm, Vec2 rear_mm, int band) const {
   return cross2(b - a, q - a) >= 0;
 }
 
-double ExitPupilSampler::area_mm2(Vec2 film_mm, int band) const {
+double ExitPupilSampler::areaMm2(Vec2 film_mm, int band) const {
   if (!rotational_) {
     const int nd = directions_;
     int wedge;

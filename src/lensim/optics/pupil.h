@@ -127,7 +127,7 @@ class ExitPupilSampler {
   bool contains(Vec2 film_mm, Vec2 rear_mm, int band = -1) const;
 
   /// The area of the bound for the film point (0 where it sees nothing).
-  double area_mm2(Vec2 film_mm, int band = -1) const;
+  double areaMm2(Vec2 film_mm, int band = -1) const;
   /// The number of wavelength bands (ExitPupilOptions::bands).
   int bands() const { return static_cast<int>(sets_.size()) - 1; }
 

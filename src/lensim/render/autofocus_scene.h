@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "lensim/camera/autofocus.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::render {
 

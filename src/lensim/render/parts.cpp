@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "lensim/io/exr_window.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::render {

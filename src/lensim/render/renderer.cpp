@@ -22,13 +22,15 @@
 #include "lensim/render/parts.h"
 #include "lensim/render/sensor/raw_output.h"
 #include "lensim/sampling/filter.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/check.h"
 #include "lensim/util/error.h"
 #include "lensim/util/limits.h"
 #include "lensim/util/log.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 namespace {
 

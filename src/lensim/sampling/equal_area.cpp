@@ -5,7 +5,7 @@
 #include <cmath>
 #include <utility>
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 Vec3 equalAreaSquareToSphere(Vec2 p) {
   const double u = 2 * p.x - 1, v = 2 * p.y - 1;
@@ -41,4 +41,4 @@ Vec2 equalAreaSphereToSquare(const Vec3& d) {
   return {(u + 1) / 2, (v + 1) / 2};
 }
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

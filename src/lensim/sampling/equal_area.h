@@ -5,11 +5,11 @@
 
 #include "lensim/util/vec.h"
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 /// The unit direction for a point of [0,1]^2; equal areas map to equal solid angles.
 Vec3 equalAreaSquareToSphere(Vec2 p);
 /// The inverse: the point of [0,1]^2 for a unit direction.
 Vec2 equalAreaSphereToSquare(const Vec3& d);
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

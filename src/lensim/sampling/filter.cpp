@@ -8,7 +8,7 @@
 
 #include "lensim/util/error.h"
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 Filter::Filter(Vec2 radius) : radius_(radius) {
   if (!(radius.x > 0) || !(radius.y > 0))
@@ -144,4 +144,4 @@ double TriangleFilter::pdf(Vec2 p) const {
   return tentPdf(p.x, radius().x) * tentPdf(p.y, radius().y);
 }
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

@@ -13,7 +13,7 @@
 #include "lensim/sampling/sampling.h"
 #include "lensim/util/vec.h"
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 /// A filter sample: offset from the pixel centre (pixels) and weight f(p)/pdf(p) (pixels^2).
 struct FilterSample {
@@ -121,4 +121,4 @@ class TriangleFilter final : public Filter {
   double eval1D(double x, double r) const override { return std::max(0.0, r - std::abs(x)); }
 };
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

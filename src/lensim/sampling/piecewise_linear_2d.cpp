@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 namespace {
 
@@ -214,4 +214,4 @@ PiecewiseLinear2D::Sample PiecewiseLinear2D::invert(Vec2 p, std::span<const doub
   return {{x, y}, pdf * (nx_ - 1) * (ny_ - 1)};
 }
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

@@ -16,7 +16,7 @@
 
 #include "lensim/util/vec.h"
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 class PiecewiseLinear2D {
  public:
@@ -72,4 +72,4 @@ class PiecewiseLinear2D {
   std::vector<float> data_, marginal_cdf_, conditional_cdf_;
 };
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

@@ -7,7 +7,7 @@
 
 #include "lensim/util/error.h"
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 namespace {
 double toUnit(uint32_t v) {
@@ -441,4 +441,4 @@ std::unique_ptr<Sampler> ZSobolSampler::clone() const {
   return std::make_unique<ZSobolSampler>(*this);
 }
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

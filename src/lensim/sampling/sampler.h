@@ -15,7 +15,7 @@
 #include "lensim/sampling/sampling.h"
 #include "lensim/util/vec.h"
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 /// Integer pixel coordinates (raster space, x right, y down).
 using Point2i = Vec2T<int>;
@@ -205,4 +205,4 @@ uint32_t owenScramble(uint32_t v, uint64_t seed);
 /// reverseBits(owenScrambleReversed(reverseBits(v), uint32_t(mixBits(seed)))).
 uint32_t owenScrambleReversed(uint32_t reversed, uint32_t seed);
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

@@ -6,7 +6,7 @@
 
 #include "lensim/util/error.h"
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 Vec3 sampleUniformHemisphere(Vec2 u) {
   const double z = u.x;
@@ -229,4 +229,4 @@ int permutationElement(uint32_t i, uint32_t n, uint64_t seed) {
   return permutationElement(i, n, PermutationKeys(seed));
 }
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

@@ -11,7 +11,7 @@
 
 #include "lensim/util/vec.h"
 
-namespace lensim::render {
+namespace lensim::sampling {
 
 inline constexpr double kPi = std::numbers::pi;
 inline constexpr double kInvPi = 1.0 / std::numbers::pi;
@@ -141,4 +141,4 @@ struct PermutationKeys {
 };
 int permutationElement(uint32_t i, uint32_t n, const PermutationKeys& keys);
 
-}  // namespace lensim::render
+}  // namespace lensim::sampling

@@ -1,4 +1,4 @@
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/scene/build/builder_internal.h"
 
 namespace lensim::scene {

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <map>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::scene {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::scene {
 

@@ -13,7 +13,7 @@
 
 #include <vector>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/vec.h"
 
 namespace lensim::scene {

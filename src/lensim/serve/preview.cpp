@@ -18,7 +18,7 @@
 #include "lensim/camera/camera.h"
 #include "lensim/render/renderer.h"
 #include "lensim/render/sensor/raw_output.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::serve {
@@ -190,8 +190,7 @@ scene::Scene PreviewRenderer::previewScene(const PreviewRequest& rq) {
   r.focus_distance_m = rq.focus_distance_m;
   r.film_distance_mm.reset();
   r.focus_method = "thick";
-  r.lens_tilt_deg = rq.tilt_shift.tilt_deg;
-  r.lens_shift_mm = rq.tilt_shift.shift_mm;
+  r.tilt_shift = rq.tilt_shift;
   r.configuration = rq.configuration;
   r.zoom_focal_length_mm = rq.zoom_focal_length_mm;
   s.camera.type = "realistic";

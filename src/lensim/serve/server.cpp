@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/serve/catalog.h"
 #include "lensim/serve/lens_view.h"
 #include "lensim/serve/preview.h"

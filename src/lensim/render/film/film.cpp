@@ -15,11 +15,13 @@
 #include "lensim/render/sensor/raw_output.h"
 #include "lensim/render/sensor/sensor_model.h"
 #include "lensim/sampling/filter.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/scene/film_sensor.h"
 #include "lensim/util/check.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 PixelBounds cropWindowBounds(int x_res, int y_res, const std::array<double, 4>& c) {
   PixelBounds b;

@@ -17,9 +17,14 @@ namespace lensim::scene {
 struct Scene;
 }
 
+namespace lensim::sampling {
+class Filter;
+}
+
 namespace lensim::render {
 
-class Filter;
+using namespace lensim::sampling;
+
 class PixelSensor;
 class SensorModel;
 struct VisibleSurface;

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "lensim/render/materials/bsdf.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::render {
 

@@ -13,12 +13,14 @@
 #include "lensim/render/integrators/lighttracer.h"
 #include "lensim/render/integrators/volpath.h"
 #include "lensim/render/media/media.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/check.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 Vec3 materialShadingNormal(const SceneContext& sc, int material, const TextureEvalContext& tctx,
                            const SurfaceHit& h) {

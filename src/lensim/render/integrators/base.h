@@ -25,6 +25,8 @@ struct CameraRay;
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 class Film;
 class Media;
 

@@ -12,10 +12,12 @@
 #include "lensim/render/film/film.h"
 #include "lensim/render/integrators/media_tracking.h"
 #include "lensim/render/materials/layered.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 namespace bdpt {
 
 namespace {

@@ -65,6 +65,8 @@ struct CameraRay;
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 /// A contribution of a t = 1 strategy: where it meets the film and its value (already divided
 /// by nothing: the renderer adds it with the splat convention).
 struct BdptSplat {

@@ -5,9 +5,11 @@
 #include <cmath>
 
 #include "lensim/render/integrators/base.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 namespace {
 

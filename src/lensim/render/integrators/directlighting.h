@@ -25,6 +25,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 struct DirectLightingOptions {
   bool all_lights = true;  ///< strategy "all"; false: "one"
   int max_depth = 5;       ///< pbrt-v3's maxdepth: specular recursion while depth + 1 < it

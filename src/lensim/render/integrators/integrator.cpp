@@ -11,10 +11,12 @@
 #include <cmath>
 #include <cstring>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/check.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 Vec3 offsetOrigin(const Vec3& p, const Vec3& n, const Vec3& w) {
   const double m = std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});

@@ -18,6 +18,8 @@ struct Scene;
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 class Media;
 
 /// Everything the integrator reads; all of it is immutable during a render.

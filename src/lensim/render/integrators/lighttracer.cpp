@@ -25,11 +25,13 @@
 #include "lensim/render/film/film.h"
 #include "lensim/render/integrators/media_tracking.h"
 #include "lensim/render/materials/layered.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 LightTracer::LightTracer(const SceneContext& sc, const camera::Camera& camera)
     : sc_(&sc),

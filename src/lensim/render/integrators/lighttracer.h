@@ -17,6 +17,8 @@ class Camera;
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 class Film;
 
 class LightTracer {

@@ -3,9 +3,11 @@
 
 #include <cstring>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 int mediumAfter(const SceneContext& sc, const SurfaceHit& h, const Vec3& w, int current,
                 bool subsurface) {

@@ -17,6 +17,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 /// The average of rescaled path pdfs r over the wavelengths that are still carried: the one-sample
 /// MIS over wavelengths. Once a dispersive interface (or lens) has kept only the hero wavelength,
 /// its estimate is the hero's alone (r[0]); averaging in the others' pdfs would bias it.

@@ -12,9 +12,11 @@
 #include "lensim/render/materials/layered.h"
 #include "lensim/render/media/media.h"
 #include "lensim/render/media/subsurface.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 namespace {
 

@@ -13,6 +13,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 /// Radiance along the camera ray (origin o, unit direction d, shutter time `time`), which starts
 /// in medium `medium` (index into Scene::media, -1 for vacuum; SceneContext::media resolves it).
 SampledSpectrum volpathLi(const SceneContext& sc, const Vec3& o, const Vec3& d, double time,

@@ -9,10 +9,12 @@
 #include "lensim/render/lights/lights.h"
 #include "lensim/render/shapes/shapes.h"
 #include "lensim/render/textures/textures.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 namespace {
 

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "lensim/render/spectra/spectrum.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/transform.h"
 
 namespace lensim::render {

@@ -17,12 +17,14 @@
 #include "lensim/render/shapes/shapes.h"
 #include "lensim/render/textures/textures.h"
 #include "lensim/sampling/equal_area.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/check.h"
 #include "lensim/util/error.h"
 #include "lensim/util/log.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 // The helpers declared in light_util.h.
 

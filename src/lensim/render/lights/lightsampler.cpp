@@ -11,6 +11,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 namespace {
 
 constexpr double kOneMinusEpsilon = 1 - 1e-16;

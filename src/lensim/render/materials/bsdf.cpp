@@ -6,6 +6,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 // ---------------------------------------------------------------------------------------------
 // Fresnel and geometry
 

@@ -10,6 +10,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 namespace {
 
 TransportMode adjoint(TransportMode m) {

@@ -15,10 +15,12 @@
 
 #include "lensim/io/image.h"
 #include "lensim/sampling/sampling.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 struct Materials::NormalMap {
   int width = 0, height = 0;

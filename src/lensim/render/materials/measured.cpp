@@ -18,6 +18,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 // ---------------------------------------------------------------------------------------------
 // Reader
 

@@ -27,6 +27,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 /// The contents of an irregular isotropic `.brdf` file.
 struct IrregularBRDFData {
   struct Sample {

@@ -15,6 +15,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 namespace {
 
 // Unit-square coordinates of the parameterisation (pbrt-v4 MeasuredBxDF::theta2u etc.).

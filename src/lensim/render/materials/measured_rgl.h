@@ -40,6 +40,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 /// The most a stored value may be in magnitude (ndf, sigma, spectra); far above real data, low
 /// enough that products stay finite in float.
 inline constexpr double kMaxRGLValue = 1e15;

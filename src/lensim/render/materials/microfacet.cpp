@@ -4,6 +4,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 TrowbridgeReitz::TrowbridgeReitz(double alpha_x, double alpha_y)
     : ax_(std::max(alpha_x, 0.0)), ay_(std::max(alpha_y, 0.0)) {
   // Keep the numerically unstable region out of rough evaluation (the smooth path is used

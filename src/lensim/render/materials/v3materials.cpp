@@ -10,6 +10,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 namespace {
 
 constexpr double kInvPi = 1 / kPi;

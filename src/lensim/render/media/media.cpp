@@ -7,7 +7,7 @@
 #include "lensim/render/media/media_volumes.h"
 #include "lensim/render/media/subsurface.h"
 #include "lensim/render/textures/textures.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::render {
 

@@ -15,7 +15,7 @@
 
 #include "lensim/render/textures/procedural.h"
 #include "lensim/render/textures/textures.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::render {

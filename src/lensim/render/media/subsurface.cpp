@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "lensim/render/textures/textures.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::render {
 

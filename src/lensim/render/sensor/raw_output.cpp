@@ -16,7 +16,7 @@
 #include "lensim/render/sensor/sensor_color.h"
 #include "lensim/render/sensor/sensor_model.h"
 #include "lensim/render/spectra/spectrum.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 #include "lensim/util/file.h"
 

@@ -11,7 +11,7 @@
 #include <span>
 
 #include "lensim/render/shapes/accel_curves.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 
 namespace lensim::render {

@@ -6,7 +6,7 @@
 
 #include <algorithm>
 
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 
 namespace lensim::render {
 

@@ -15,6 +15,8 @@
 
 namespace lensim::render {
 
+using namespace lensim::sampling;
+
 namespace {
 constexpr double kLambdaRange_nm = kLambdaMax_nm - kLambdaMin_nm;
 }

@@ -22,12 +22,14 @@
 #include "lensim/optics/glass.h"
 #include "lensim/render/textures/procedural.h"
 #include "lensim/sampling/sampling.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/util/error.h"
 #include "lensim/util/file.h"
 #include "lensim/util/log.h"
 
 namespace lensim::render {
+
+using namespace lensim::sampling;
 
 namespace {
 

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "lensim/io/ply.h"
-#include "lensim/scene/builder.h"
+#include "lensim/scene/description.h"
 #include "lensim/scene/film_sensor.h"
 #include "lensim/scene/media_presets.h"
 #include "lensim/scene/params.h"

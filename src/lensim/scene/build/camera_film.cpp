@@ -190,14 +190,14 @@ void Builder::camera(const Directive& d) {
         ps.expectCount(*sh, 2);
         for (double v : sh->numbers)
           if (!(std::abs(v) <= 1000)) ps.fail(*sh, "expected a shift within +-1000 mm");
-        r.lens_shift_mm = {sh->numbers[0], sh->numbers[1]};
+        r.tilt_shift.shift_mm = {sh->numbers[0], sh->numbers[1]};
         r.tilt_shift_loc = sh->loc;
       }
       if (const Param* tl = ps.find({"lenstilt"}, {ParamType::Float})) {
         ps.expectCount(*tl, 2);
         for (double v : tl->numbers)
           if (!(std::abs(v) < 45)) ps.fail(*tl, "expected tilt angles within +-45 degrees");
-        r.lens_tilt_deg = {tl->numbers[0], tl->numbers[1]};
+        r.tilt_shift.tilt_deg = {tl->numbers[0], tl->numbers[1]};
         r.tilt_shift_loc = tl->loc;
       }
       // Lens flare (issue 31, docs/flare.md "Rendering ghosts"): "bool flare" and the

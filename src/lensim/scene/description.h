@@ -19,6 +19,7 @@
 #include "lensim/scene/curves.h"
 #include "lensim/scene/material.h"
 #include "lensim/scene/parser.h"
+#include "lensim/scene/realistic_options.h"
 #include "lensim/util/animated_transform.h"
 #include "lensim/scene/sensor_config.h"
 #include "lensim/util/error.h"
@@ -159,53 +160,22 @@ struct LegacyRealistic {
   std::string af_zones_file;        ///< resolved `af_zones`, empty if none
 };
 
-/// pbrt-v3/v4 `realistic` camera: lens data in millimetres, scene in metres.
-struct Realistic {
+/// pbrt-v3/v4 `realistic` camera: lens data in millimetres, scene in metres. The options the
+/// camera takes as they are: RealisticOptions.
+struct Realistic : RealisticOptions {
   std::string lens_file;  ///< resolved path of `lensfile`
   std::string lens_file_as_written;
   double aperture_diameter_mm = 1;
   double focus_distance_m = 10;
   std::string aperture;  ///< pbrt-v4 aperture shape name or image file; empty: circular
-  /// pbrt-v3's `simpleweighting` (its default true in v1–v3 files; false, irradiance, in v4).
-  bool simple_weighting = false;
   // lensim's own extras (documented in docs/scene-support.md):
   std::optional<double> film_distance_mm;  ///< `filmdistance` (mm), instead of focusdistance
   std::string focus_method = "thick";      ///< `focusmethod`: thick (pbrt-v4) or exact
   int blades = 0;                          ///< `blades`: polygonal stop (0: round)
   double blade_rotation_deg = 0;           ///< `bladerotation`
-  /// `glassmatch`: each element gets the nearest catalogue glass (dispersion for old lenses)
-  bool glass_match = false;
-  /// `glassabsorption`: the glasses' internal transmittance (catalogue `IT` data) weighs each
-  /// camera ray by its path through the lens (optics/absorption.h)
-  bool glass_absorption = true;
-  /// `configuration` (integer, 1-based) or `focallength` (mm) of a zoom lens; zoom_loc: where
-  std::optional<int> configuration;
-  std::optional<double> zoom_focal_length_mm;
-  FileLoc zoom_loc;
-  /// `lensshift` [x y] (mm) and `lenstilt` [x y] (degrees): the lens placed off the film's
-  /// centre and turned against it (optics/tilt_shift.h); tilt_shift_loc: the parameter.
-  Vec2 lens_shift_mm{0, 0}, lens_tilt_deg{0, 0};
-  FileLoc tilt_shift_loc;
-
-  /// `flare`: camera rays also take two-reflection ghost paths (docs/flare.md); flare_loc: where
-  bool flare = false;
-  FileLoc flare_loc;
-  /// `flarecoating`: the lens-wide coating for flare (as `lens ghosts --coating`); empty: the
-  /// lens file's
-  std::string flare_coating;
-  FileLoc flare_coating_loc;
-  /// `tolerances` (a design job, docs/design.md) and `asbuilt` (a build index): render through
-  /// Monte Carlo build `as_built` of the job's tolerancing, as `lens tolerance --write-builds`
-  /// writes it; tolerance_loc: where. `focus_given`: focusdistance or filmdistance was written
-  /// (otherwise an as-built lens keeps the film where its back-focus compensator put it).
-  std::string tolerance_job;
-  int as_built = -1;
-  FileLoc tolerance_loc;
+  /// focusdistance or filmdistance was written (otherwise an as-built lens keeps the film where
+  /// its back-focus compensator put it)
   bool focus_given = false;
-
-  /// `flareghosts` "I,J;I,J": a diagnostic, only these ghost pairs (docs/flare.md); empty: all
-  std::vector<std::pair<int, int>> flare_ghosts;
-  FileLoc flare_ghosts_loc;
   static constexpr double kSceneUnitsPerLensUnit = 0.001;  ///< lens mm → scene metres
 };
 
