@@ -17,6 +17,7 @@
 #include "lensim/camera/realistic.h"
 #include "lensim/camera/realistic_placed.h"
 #include "lensim/io/image.h"
+#include "lensim/optics/focus.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
 #include "lensim/render/image_compare.h"
@@ -80,11 +81,12 @@ std::string singlet(const std::string& name, double stop_semi,
   return s;
 }
 
-// A scene: the camera at the origin looking down +z through `lens`, a lamp (an emitting sphere
-// of radius 1 mm) on the axis at `distance` m, focused on it; the film 1.6 mm square at 160
-// pixels (10 um each).
+// A scene: the camera at the origin (the front vertex) looking down +z through `lens`, a lamp
+// (an emitting sphere of radius 1 mm) on the axis at `distance` m, focused on it (focusdistance
+// is measured from the film: `track_mm` from the front vertex to the film, near enough); the
+// film 1.6 mm square at 160 pixels (10 um each).
 std::string lampScene(const std::string& name, const std::string& lens, double aperture_mm,
-                      double distance, int spp) {
+                      double distance, double track_mm, int spp) {
   return write(
       name,
       fmt::format("Camera \"realistic\" \"string lensfile\" \"{}\" \"float aperturediameter\" "
@@ -95,7 +97,8 @@ std::string lampScene(const std::string& name, const std::string& lens, double a
                   "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
                   "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
                   "Translate 0 0 {}\nShape \"sphere\" \"float radius\" 0.001\nAttributeEnd\n",
-                  lens, aperture_mm, distance, 1.6 * std::sqrt(2.0), spp, distance));
+                  lens, aperture_mm, distance + track_mm / 1000, 1.6 * std::sqrt(2.0), spp,
+                  distance));
 }
 
 constexpr double kPixel_mm = 0.01, kHalf_mm = 0.8;
@@ -149,8 +152,10 @@ TEST(PlacedRender, DecentredLensDisplacesTheImageByTheParaxialAmount) {
       "decentred.zmx",
       singlet("decentred", 3, {coordbrk(0, d, 0, kStopGap)}, {coordbrk(0, -d, 0, kImage)}, 0));
   ASSERT_TRUE(optics::readLensFile(lens).noncoaxial_loc.has_value());
-  const Vec2 c =
-      centroidMm(renderScene(lampScene("decentred.pbrt", lens, 6, distance_m, 32), 1).image);
+  const Vec2 c = centroidMm(
+      renderScene(lampScene("decentred.pbrt", lens, 6, distance_m, kStopGap + kThick + kImage, 32),
+                  1)
+          .image);
   const double image_from_lens_axis = paraxialImageHeight(-d, 1000 * distance_m + kStopGap);
   const double expected = d + image_from_lens_axis;
   std::printf("decentred singlet: image centroid (%.5f, %.5f) mm, paraxial (0, %.5f) mm\n", c.x,
@@ -177,7 +182,9 @@ TEST(PlacedRender, TiltedPlateShiftsTheImageByTheClosedForm) {
   after.insert(after.end(), plate.begin(), plate.end());
   const std::string lens = write("plate.zmx", singlet("plate", 1, {}, after, 0));
   ASSERT_TRUE(optics::readLensFile(lens).noncoaxial_loc.has_value());
-  const Vec2 c = centroidMm(renderScene(lampScene("plate.pbrt", lens, 2, 1, 64), 2).image);
+  const Vec2 c = centroidMm(
+      renderScene(lampScene("plate.pbrt", lens, 2, 1, kStopGap + kThick + 20 + axial + 84, 64), 2)
+          .image);
   const double s = std::sin(theta),
                shift = t * s * (1 - std::cos(theta) / std::sqrt(kN * kN - s * s));
   std::printf("tilted plate: image centroid (%.5f, %.5f) mm, closed form (0, %.5f) mm\n", c.x, c.y,
@@ -438,4 +445,108 @@ TEST(PlacedRender, UnsupportedSettingsAreRefused) {
   refused("\"bool flare\" true", "", "flare");
   refused("\"float lensshift\" [1 0]", "", "lenstilt/lensshift");
   refused("", "Integrator \"lighttracer\"\n", "no importance");
+}
+
+// focusdistance is measured from the film to the object (docs/conventions.md) where the object
+// and image axes are parallel: the singlet made non-coaxial only by a decentred dummy surface,
+// stopped to 0.4 mm, focused at 0.5 m, puts its film where an independent paraxial y-nu trace
+// does for an object 0.5 m from that film (solved here by bisection) plus the third-order
+// best-focus shift (2/3 of the exactly traced marginal ray's longitudinal aberration, 0.9 um
+// here; tolerance 0.1 um, about 10 % of it: the camera's 6-ring grid is not a continuous disc),
+// and where the coaxial camera's exact focus puts the plain file's film (0.1 um). Measuring from
+// the front vertex instead would put the film 12 mm nearer.
+TEST(PlacedRender, FocusDistanceIsMeasuredFromTheFilm) {
+  constexpr double distance_m = 0.5, aperture_mm = 0.4;
+  const std::string coaxial = write("focus_coaxial.zmx", singlet("coaxial", 5, {}, {}, kImage));
+  const std::string placed =
+      write("focus_dummy.zmx",
+            singlet("dummy", 5, {coordbrk(0, 3, 0, 0), plane(0, 40), coordbrk(0, -3, 0, kStopGap)},
+                    {}, kImage));
+  ASSERT_TRUE(optics::readLensFile(placed).noncoaxial_loc.has_value());
+  camera::RealisticSettings settings;
+  settings.setup.aperture_diameter_mm = aperture_mm;
+  settings.setup.focus_distance_m = distance_m;
+  settings.x_resolution = settings.y_resolution = 30;
+  settings.film_diagonal_mm = 12;
+  const camera::PlacedRealisticCamera cam(settings, optics::readLensFile(placed));
+  const double film_placed = kImage + cam.filmOffset_mm();  // from the rear vertex
+  EXPECT_NE(cam.describe().find("from the film"), std::string::npos) << cam.describe();
+
+  // Paraxial image distance behind the plane rear surface for an object `object_mm` in front
+  // of the stop (the stop is kStopGap in front of the singlet's curved face).
+  const auto image_distance = [](double object_mm) {
+    const double u = 1e-3;
+    const double h = u * (object_mm + kStopGap);
+    const double nu = u - h * (kN - 1) / kRadius;
+    const double h2 = h + kThick * nu / kN;
+    return -h2 / nu;  // n' = 1 after the plane face
+  };
+  const auto mismatch = [&](double film_mm) {
+    return image_distance(1000 * distance_m - kStopGap - kThick - film_mm) - film_mm;
+  };
+  double lo = kImage, hi = kImage + 100;
+  ASSERT_GT(mismatch(lo), 0);
+  ASSERT_LT(mismatch(hi), 0);
+  for (int i = 0; i < 200; ++i) (mismatch((lo + hi) / 2) > 0 ? lo : hi) = (lo + hi) / 2;
+  const double paraxial = (lo + hi) / 2;
+  const double from_front_vertex = image_distance(1000 * distance_m);
+  // The real marginal ray (stop edge) from the object, traced exactly in the meridional plane
+  // (stop at z = 0): where it crosses the axis behind the rear vertex. Third order: over a
+  // uniformly filled stop the RMS spot is smallest 2/3 of the way from the paraxial focus to it.
+  const auto marginal_focus = [&](double film_mm) {
+    const double object_mm = 1000 * distance_m - kStopGap - kThick - film_mm;
+    const auto refract = [](Vec2 d, Vec2 n, double eta) {  // n faces the incoming ray
+      const double cos_i = -(d.x * n.x + d.y * n.y);
+      const double k = 1 - eta * eta * (1 - cos_i * cos_i);
+      return d * eta + n * (eta * cos_i - std::sqrt(k));
+    };
+    Vec2 p{-object_mm, 0};  // (z, y)
+    Vec2 d = Vec2{object_mm, aperture_mm / 2} * (1 / std::hypot(object_mm, aperture_mm / 2));
+    const Vec2 centre{kStopGap + kRadius, 0};
+    const Vec2 pc = p - centre;
+    const double b = pc.x * d.x + pc.y * d.y, c = pc.x * pc.x + pc.y * pc.y - kRadius * kRadius;
+    p = p + d * (-b - std::sqrt(b * b - c));
+    d = refract(d, (p - centre) * (1 / kRadius), 1 / kN);
+    p = p + d * ((kStopGap + kThick - p.x) / d.x);
+    d = refract(d, Vec2{-1, 0}, kN);
+    return p.x - p.y * d.x / d.y - (kStopGap + kThick);
+  };
+  const double best_third_order = paraxial + 2.0 / 3.0 * (marginal_focus(film_placed) - paraxial);
+
+  camera::RealisticSettings cs;
+  cs.lens_path = coaxial;
+  cs.setup.aperture_diameter_mm = aperture_mm;
+  cs.setup.focus_distance_m = distance_m;
+  cs.setup.focus_method = optics::FocusMethod::Exact;
+  const camera::RealisticCamera coax(cs);
+  const double film_coaxial = coax.lens().lens->filmDistance_mm();
+  std::printf(
+      "focus at %g m from the film: placed %.7f mm, coaxial exact %.7f mm, paraxial %.7f mm "
+      "behind the rear vertex; paraxial + 2/3 LSA %.7f mm (measured from the front vertex: "
+      "%.4f mm)\n",
+      distance_m, film_placed, film_coaxial, paraxial, best_third_order, from_front_vertex);
+  EXPECT_NEAR(film_placed, best_third_order, 1e-4);
+  EXPECT_NEAR(film_placed, film_coaxial, 1e-4);
+  EXPECT_GT(std::abs(from_front_vertex - paraxial), 1.0);  // the test tells the conventions apart
+
+  // An object closer than the film-to-front-vertex distance is refused, not traced.
+  settings.setup.focus_distance_m = 0.08;
+  EXPECT_THROW(camera::PlacedRealisticCamera(settings, optics::readLensFile(placed)), Error);
+}
+
+// A lens whose image surface's axis is not parallel to the object space's (the 20-degree plate
+// left tilted: no net untilt before the image) has no line from the film to the object: its
+// focusdistance stays measured from the front vertex, and describe() says so.
+TEST(PlacedRender, FoldedLensFocusesFromTheFrontVertex) {
+  const std::vector<std::string> after = {plane(20, 6), coordbrk(0, 0, 20, 0), plane(5, 3, kGlass),
+                                          plane(84, 3)};
+  const std::string lens = write("tilted_image.zmx", singlet("tilted", 1, {}, after, 0));
+  ASSERT_TRUE(optics::readLensFile(lens).noncoaxial_loc.has_value());
+  camera::RealisticSettings settings;
+  settings.setup.aperture_diameter_mm = 2;
+  settings.setup.focus_distance_m = 1;
+  settings.x_resolution = settings.y_resolution = 16;
+  settings.film_diagonal_mm = 2;
+  const camera::PlacedRealisticCamera cam(settings, optics::readLensFile(lens));
+  EXPECT_NE(cam.describe().find("from the front vertex"), std::string::npos) << cam.describe();
 }

@@ -166,14 +166,8 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-void PlacedRealisticCamera::focus(double distance_m) {
-  if (!(distance_m > 0)) throw Error(fmt::format("focusdistance {} m must be > 0", distance_m));
-  focus_distance_m_ = distance_m;
-  optics::PlacedLens::Field field;
-  if (std::isfinite(distance_m)) {
-    field.at_infinity = false;
-    field.object_point = {0, 0, -1000 * distance_m};
-  }
+PlacedRealisticCamera::FocusSolve PlacedRealisticCamera::bestFocus(
+    const optics::PlacedLens::Field& field, double distance_m) const {
   // Real rays through a grid of equal areas over the stop (as set): 6 rings of equal area, 12
   // rays each, so that the spot's moments are those of a uniformly filled stop. Each ray's exit
   // point a and direction d in the image surface's frame: on the plane z = dz it lands at
@@ -216,18 +210,76 @@ void PlacedRealisticCamera::focus(double distance_m) {
         fmt::format("focusdistance {} m: the rays leave the lens parallel (an afocal "
                     "system): no film position focuses them",
                     distance_m));
-  film_offset_mm_ = -uv / vv;
-  double rms = 0;
+  FocusSolve f;
+  f.offset_mm = -uv / vv;
+  f.rays = int(u.size());
+  double ms = 0;
   for (size_t i = 0; i < u.size(); ++i) {
-    const Vec2 q = (u[i] - mu) + (v[i] - mv) * film_offset_mm_;
-    rms += (q.x * q.x + q.y * q.y) / double(u.size());
+    const Vec2 q = (u[i] - mu) + (v[i] - mv) * f.offset_mm;
+    ms += (q.x * q.x + q.y * q.y) / double(u.size());
   }
+  f.rms_mm = std::sqrt(ms);
+  return f;
+}
+
+void PlacedRealisticCamera::focus(double distance_m) {
+  if (!(distance_m > 0)) throw Error(fmt::format("focusdistance {} m must be > 0", distance_m));
+  focus_distance_m_ = distance_m;
+  // Where the object space's axis (the front frame's z) and the image surface's axis are
+  // parallel, focusdistance is measured from the film centre along the film's axis, as for the
+  // coaxial camera (docs/conventions.md); a folded lens has no such line, and measures it from
+  // the front vertex along the object axis.
+  film_referenced_ = dot(axisZ(image_frame_), Vec3{0, 0, 1}) > 1 - 1e-12;
+  optics::PlacedLens::Field field;
+  FocusSolve f;
+  int iterations = 0;
+  if (!std::isfinite(distance_m)) {
+    f = bestFocus(field, distance_m);
+  } else if (!film_referenced_) {
+    field.at_infinity = false;
+    field.object_point = {0, 0, -1000 * distance_m};
+    f = bestFocus(field, distance_m);
+  } else {
+    // The film's place depends on the focus: fixed-point iteration on the film offset. Each
+    // step's change is the previous one's times the longitudinal magnification, so it converges
+    // unless the object is near unit magnification or closer.
+    field.at_infinity = false;
+    const Vec3 axis = axisZ(image_frame_);
+    constexpr int kMaxIterations = 60;
+    constexpr double kTolerance_mm = 1e-9;
+    double offset = 0, step = std::numeric_limits<double>::infinity();
+    for (; iterations < kMaxIterations && !(std::abs(step) <= kTolerance_mm); ++iterations) {
+      const Vec3 film_centre = origin(image_frame_) + axis * offset;
+      field.object_point = film_centre - axis * (1000 * distance_m);
+      if (!(field.object_point.z < 0))
+        throw Error(fmt::format(
+            "focusdistance {:g} m: the object, {:g} m from the film centre, would lie {:.4f} mm "
+            "behind the lens's front vertex: focus farther",
+            distance_m, distance_m, field.object_point.z));
+      f = bestFocus(field, distance_m);
+      step = f.offset_mm - offset;
+      offset = f.offset_mm;
+    }
+    if (!(std::abs(step) <= kTolerance_mm))
+      throw Error(fmt::format(
+          "focusdistance {:g} m: the film position (focus measured from the film) did not converge "
+          "in {} "
+          "iterations (last change {:.3g} mm; the object is too close for this lens): focus "
+          "farther",
+          distance_m, kMaxIterations, step));
+  }
+  film_offset_mm_ = f.offset_mm;
   logInfo(fmt::format(
-      "{}: focused at {} from the front vertex by moving the film {:.6f} mm along "
-      "the image surface's axis (RMS spot {:.6f} mm, {} real rays)",
+      "{}: focused at {}{} by moving the film {:.6f} mm along the image surface's axis (RMS "
+      "spot {:.6f} mm, {} real rays{})",
       path_.empty() ? name_ : path_,
       std::isfinite(distance_m) ? fmt::format("{:g} m", distance_m) : std::string("infinity"),
-      film_offset_mm_, std::sqrt(rms), u.size()));
+      !std::isfinite(distance_m) ? ""
+      : film_referenced_         ? " from the film"
+                                 : " from the front vertex (a folded lens: the object and "
+                                   "image axes are not parallel)",
+      film_offset_mm_, f.rms_mm, f.rays,
+      iterations > 0 ? fmt::format(", {} fixed-point iterations", iterations) : std::string()));
 }
 
 Vec2 PlacedRealisticCamera::filmPoint(Vec2 raster) const {
@@ -312,12 +364,15 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
 std::string PlacedRealisticCamera::describe() const {
   return fmt::format(
       "realistic, tilted or decentred lens: {} ({}), exact double-precision trace, film moved "
-      "{:.4f} mm along the image surface's axis (focus {} from the front vertex), {:.1f} x {:.1f} "
+      "{:.4f} mm along the image surface's axis (focus {}{}), {:.1f} x {:.1f} "
       "mm film, aperture {}, rays aimed at the last surface's clear aperture ({:g} mm "
       "semi-diameter){}; no camera importance (path tracing only)",
       name_, path_, film_offset_mm_,
       std::isfinite(focus_distance_m_) ? fmt::format("{:.4g} m", focus_distance_m_)
                                        : std::string("at infinity"),
+      !std::isfinite(focus_distance_m_) ? ""
+      : film_referenced_                ? " from the film"
+                                        : " from the front vertex: folded lens",
       2 * half_width_mm_, 2 * half_height_mm_, settings_.aperture.describe(), rear_semi_mm_,
       dispersive_ ? ", dispersive (hero wavelength only)" : "");
 }

@@ -23,10 +23,15 @@
 // transmission and the glasses' internal transmittance: the coaxial camera's cos^4 A / z^2
 // when both planes face each other along one axis.
 //
-// Focus: `focusdistance` (metres, from the front vertex along the object-space axis; infinity
-// allowed) is honoured by moving the film along the image surface's axis to where the real rays
-// from that object point, through an equal-area grid over the stop (72 rays), have the smallest
-// RMS spot (the spot's second moment is quadratic in the move: solved in closed form).
+// Focus: `focusdistance` (metres; infinity allowed) is honoured by moving the film along the
+// image surface's axis to where the real rays from that object point, through an equal-area
+// grid over the stop (72 rays), have the smallest RMS spot (the spot's second moment is
+// quadratic in the move: solved in closed form). Where the object space's axis and the image
+// surface's axis are parallel (decentred or tilted elements, no net fold) the object lies on the
+// film's axis at focusdistance from the film centre (docs/conventions.md); the film's place
+// depends on the focus, so the move is found by fixed-point iteration to 1e-9 mm (refused if it
+// does not converge in 60 steps). A folded lens measures it from the front vertex along the
+// object axis.
 //
 // Not supported, refused when the scene asks for them: the pbrt-v1/v2 camera conventions,
 // filmdistance, lenstilt/lensshift, flare, zoom configurations, as-built lenses, simpleweighting;
@@ -68,6 +73,12 @@ class PlacedRealisticCamera final : public Camera {
   double discRadius(const Vec3& film_lens) const;
   /// Solves film_offset_mm_ for an object at `distance_m` (see the top of this file).
   void focus(double distance_m);
+  /// The film offset of the smallest RMS spot of real rays from `field` (distance_m for messages).
+  struct FocusSolve {
+    double offset_mm = 0, rms_mm = 0;
+    int rays = 0;
+  };
+  FocusSolve bestFocus(const optics::PlacedLens::Field& field, double distance_m) const;
   /// The lens re-indexed at lambda_nm (a per-thread copy).
   const optics::PlacedLens& lensAt(double lambda_nm) const;
 
@@ -79,6 +90,7 @@ class PlacedRealisticCamera final : public Camera {
   double rear_semi_mm_ = 0, z_near_ = 0, z_far_ = 0;  // the rear surface (its own frame)
   double film_offset_mm_ = 0;
   double focus_distance_m_ = 0;
+  bool film_referenced_ = true;  // focus measured from the film (axes parallel), else the front
   double half_width_mm_ = 0, half_height_mm_ = 0;
   bool dispersive_ = false, absorbs_ = false;
   std::uint64_t id_ = 0;
