@@ -529,9 +529,19 @@ TEST(PlacedRender, FocusDistanceIsMeasuredFromTheFilm) {
   EXPECT_NEAR(film_placed, film_coaxial, 1e-4);
   EXPECT_GT(std::abs(from_front_vertex - paraxial), 1.0);  // the test tells the conventions apart
 
-  // An object closer than the film-to-front-vertex distance is refused, not traced.
-  settings.setup.focus_distance_m = 0.08;
-  EXPECT_THROW(camera::PlacedRealisticCamera(settings, optics::readLensFile(placed)), Error);
+  // An object closer than the film-to-front-vertex distance is refused, not traced; so is one
+  // closer than the lens focuses (object-to-image distance under about 4f).
+  const auto refused = [&](double d, const std::string& needle) {
+    settings.setup.focus_distance_m = d;
+    try {
+      camera::PlacedRealisticCamera c(settings, optics::readLensFile(placed));
+      ADD_FAILURE() << "focusdistance " << d << " accepted: film moved " << c.filmOffset_mm();
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  refused(0.08, "behind the lens's front vertex");
+  refused(0.3, "closer than this lens focuses");
 }
 
 // A lens whose image surface's axis is not parallel to the object space's (the 20-degree plate

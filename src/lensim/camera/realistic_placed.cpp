@@ -245,17 +245,24 @@ void PlacedRealisticCamera::focus(double distance_m) {
     // unless the object is near unit magnification or closer.
     field.at_infinity = false;
     const Vec3 axis = axisZ(image_frame_);
-    constexpr int kMaxIterations = 60;
+    constexpr int kMaxIterations = 200;
     constexpr double kTolerance_mm = 1e-9;
     double offset = 0, step = std::numeric_limits<double>::infinity();
     for (; iterations < kMaxIterations && !(std::abs(step) <= kTolerance_mm); ++iterations) {
       const Vec3 film_centre = origin(image_frame_) + axis * offset;
       field.object_point = film_centre - axis * (1000 * distance_m);
-      if (!(field.object_point.z < 0))
+      if (!(field.object_point.z < 0)) {
+        if (iterations == 0)
+          throw Error(fmt::format(
+              "focusdistance {:g} m: the object, {:g} m from the film centre, would lie {:.4f} "
+              "mm behind the lens's front vertex: focus farther",
+              distance_m, distance_m, field.object_point.z));
         throw Error(fmt::format(
-            "focusdistance {:g} m: the object, {:g} m from the film centre, would lie {:.4f} mm "
-            "behind the lens's front vertex: focus farther",
-            distance_m, distance_m, field.object_point.z));
+            "focusdistance {:g} m (from the film): closer than this lens focuses (the film "
+            "position diverged: after {} fixed-point steps the object would lie behind the "
+            "front vertex): focus farther",
+            distance_m, iterations));
+      }
       f = bestFocus(field, distance_m);
       step = f.offset_mm - offset;
       offset = f.offset_mm;

@@ -30,7 +30,7 @@
 // surface's axis are parallel (decentred or tilted elements, no net fold) the object lies on the
 // film's axis at focusdistance from the film centre (docs/conventions.md); the film's place
 // depends on the focus, so the move is found by fixed-point iteration to 1e-9 mm (refused if it
-// does not converge in 60 steps). A folded lens measures it from the front vertex along the
+// does not converge in 200 steps). A folded lens measures it from the front vertex along the
 // object axis.
 //
 // Not supported, refused when the scene asks for them: the pbrt-v1/v2 camera conventions,
