@@ -434,3 +434,51 @@ TEST(Misalignment, JobErrorsNameTheLineAndValue) {
 }
 
 }  // namespace
+
+TEST(Misalignment, BoresightReferenceComputedOnceGivesTheSameCriterion) {
+  // runTolerancing measures every lens against the nominal on-axis image point computed once
+  // (criterionReference); each value must equal the per-evaluation path (which traces the
+  // nominal lens again) exactly, and the test's own evaluation: the 0-degree chief ray on the
+  // film moved by -sum(b)/sum(c) of the job fields' spot quadratics, against the nominal's.
+  TempDir dir;
+  dir.write("sym.json", lensJson(kSymmetric));
+  const std::string tols =
+      "{\"type\": \"decentre\", \"axis\": \"x\", \"element\": 1, \"delta\": 0.05},\n"
+      "{\"type\": \"tilt\", \"axis\": \"y\", \"element\": 1, \"delta\": 0.3},\n"
+      "{\"type\": \"radius\", \"surface\": 2, \"delta\": 0.5}";
+  for (const char* comp : {"back_focus", "none"}) {
+    const DesignJob j = readDesignJob(
+        dir.write("b.json", job("sym.json", "[0, 5]", "boresight", comp, 5, tols, 12)));
+    auto point = [&](const LensPrescription& p) {
+      double b = 0, c = 0;
+      for (double f : j.fields_deg) {
+        const SpotQuadratic q = placedBeam(p, f, 587.56, 587.56, j.rings).spot;
+        b += q.b, c += q.c;
+      }
+      const PlacedBeam beam = placedBeam(p, 0, 587.56, 587.56, 1);
+      const double dz = j.tolerance.back_focus_compensator ? -b / c : 0;
+      return beam.chief + beam.chief_slope * dz;
+    };
+    const LensPrescription nominal = toleranceNominal(j);
+    const Vec2 p0 = point(nominal);
+    const ToleranceResult r = runTolerancing(j);
+    EXPECT_EQ(r.nominal, 0) << comp;
+    ASSERT_EQ(r.builds.size(), 12u);
+    for (int k = 0; k < 12; ++k) {
+      LensPrescription p = nominal;
+      for (size_t i = 0; i < j.tolerance.tolerances.size(); ++i)
+        p = applyTolerance(p, j.tolerance.tolerances[i],
+                           drawTolerance(j.tolerance.tolerances[i], 5, k, int(i)));
+      EXPECT_EQ(r.builds[size_t(k)], toleranceCriterion(j, p)) << comp << " build " << k;
+      const Vec2 pk = point(p);
+      EXPECT_NEAR(r.builds[size_t(k)], std::hypot(pk.x - p0.x, pk.y - p0.y), 1e-12)
+          << comp << " build " << k;
+    }
+    EXPECT_GT(r.mean, 1e-3) << comp;  // the decentre moves the image: the values are not all 0
+    for (size_t i = 0; i < j.tolerance.tolerances.size(); ++i)
+      EXPECT_EQ(r.sensitivity[i].plus,
+                toleranceCriterion(j, applyTolerance(nominal, j.tolerance.tolerances[i],
+                                                     j.tolerance.tolerances[i].delta)))
+          << comp << " row " << i;
+  }
+}

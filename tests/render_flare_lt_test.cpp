@@ -343,3 +343,53 @@ TEST(FlareLightTracing, DispersiveLensIsRefusedByLightTracingIntegrators) {
     }
   }
 }
+
+// The render statistics count the light-side ghost connections: the light tracer's
+// (sampleGhostWi splats) and bdpt's (strategies s >= 1 of its ghost camera subpaths), on a line
+// of their own; none without flare, and then no line. A diffuse wall behind a two-sided area
+// light gives bdpt's ghost camera subpaths a surface to connect from.
+TEST(FlareLightTracing, GhostConnectionsAreCountedInTheStats) {
+  const std::string lens = writePlate(1.5, 5, 20);
+  for (const std::string integrator : {"lighttracer", "bdpt"})
+    for (const bool flare : {true, false}) {
+      const std::string path = testFile("stats_" + integrator + ".pbrt");
+      {
+        std::ofstream f(path);
+        f << "LookAt 0 0 0  0 0 1  0 1 0\n"
+          << "Camera \"realistic\" \"string lensfile\" \"" << lens
+          << "\" \"float aperturediameter\" 10 \"float filmdistance\" 20 \"bool flare\" "
+          << (flare ? "true" : "false") << "\n"
+          << "Film \"rgb\" \"integer xresolution\" 12 \"integer yresolution\" 12 "
+             "\"float diagonal\" 3.5\n"
+          << "Sampler \"independent\" \"integer pixelsamples\" "
+          << (integrator == "bdpt" ? 16 : 64) << "\n"
+          << "Integrator \"" << integrator << "\" \"integer maxdepth\" 1\n"
+          << "WorldBegin\nAttributeBegin\nTranslate 0 0 1\n"
+          << "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\n"
+          << "Shape \"disk\" \"float radius\" 0.3\nAttributeEnd\n"
+          << "AttributeBegin\nTranslate 0 0 3\nMaterial \"diffuse\" \"rgb reflectance\" [0.8 0.8 "
+             "0.8]\nShape \"disk\" \"float radius\" 10\nAttributeEnd\n";
+      }
+      render::RenderOptions o;
+      o.seed = 7;
+      o.threads = 2;
+      const render::RenderResult r = render::render(scene::loadScene(path), o);
+      const std::string text = render::formatStats(r.stats);
+      const bool line = text.find("ghost connections") != std::string::npos;
+      if (flare) {
+        EXPECT_GT(r.stats.ghost_connections, 0u) << integrator;
+        EXPECT_TRUE(line) << integrator << "\n" << text;
+        // Connections that carried light: the ghost layer is not black.
+        double ghost = 0;
+        for (int y = 0; y < r.image.height; ++y)
+          for (int x = 0; x < r.image.width; ++x) ghost += r.image.at(x, y, 3);
+        EXPECT_GT(ghost, 0) << integrator;
+        std::printf("%s with flare: %llu ghost connections, %llu ghost rays\n",
+                    integrator.c_str(), (unsigned long long)r.stats.ghost_connections,
+                    (unsigned long long)r.stats.ghost_rays);
+      } else {
+        EXPECT_EQ(r.stats.ghost_connections, 0u) << integrator;
+        EXPECT_FALSE(line) << integrator << "\n" << text;
+      }
+    }
+}

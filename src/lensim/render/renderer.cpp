@@ -344,7 +344,7 @@ struct SampleTally {
 };
 struct SharedTally {
   std::atomic<uint64_t> samples{0}, rays{0}, no_ray{0}, outside{0}, nonfinite{0}, traced{0},
-      ghost_rays{0};
+      ghost_rays{0}, ghost_connections{0};
   void add(const SampleTally& t) {
     samples += t.samples;
     ghost_rays += t.ghost_rays;
@@ -353,6 +353,7 @@ struct SharedTally {
     outside += t.outside;
     nonfinite += t.nonfinite;
     traced += t.counts.intersect + t.counts.shadow;
+    ghost_connections += t.counts.ghost_connections;
   }
 };
 
@@ -616,6 +617,7 @@ void addCounts(RenderStats& st, const SharedTally& tally) {
   st.camera_samples = tally.samples;
   st.camera_rays = tally.rays;
   st.ghost_rays = tally.ghost_rays;
+  st.ghost_connections = tally.ghost_connections;
   st.no_ray_samples = tally.no_ray;
   st.outside_samples = tally.outside;
   st.nonfinite_samples = tally.nonfinite;
@@ -788,6 +790,10 @@ std::string formatStats(const RenderStats& s) {
   if (s.ghost_rays > 0)
     out += fmt::format("ghost rays           {} (lens flare: ghost paths through the lens)\n",
                        s.ghost_rays);
+  if (s.ghost_connections > 0)
+    out += fmt::format(
+        "ghost connections    {} (lens flare: light-side connections through ghost paths)\n",
+        s.ghost_connections);
   const uint64_t inside = s.camera_samples - s.outside_samples;
   out += fmt::format(
       "samples without ray  {} ({} where no light reaches the film; {:.2f}% of the other {})\n",

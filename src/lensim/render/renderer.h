@@ -106,6 +106,9 @@ struct RenderStats {
   uint64_t camera_samples = 0;      ///< camera samples taken
   uint64_t camera_rays = 0;         ///< camera samples that produced a ray
   uint64_t ghost_rays = 0;          ///< lens flare: ghost paths that got through the lens
+  /// lens flare: the light tracer's and bdpt's connections through a ghost path that carried
+  /// light (render::RayCounts::ghost_connections)
+  uint64_t ghost_connections = 0;
   uint64_t no_ray_samples = 0;      ///< camera samples without a ray (blocked by the lens)
   uint64_t outside_samples = 0;     ///< of those, samples where no light reaches the film (outside
                                     ///< the image circle: camera::Camera::reachesFilm)

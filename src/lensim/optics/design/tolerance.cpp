@@ -133,7 +133,25 @@ LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double v
   return p;
 }
 
+CriterionReference criterionReference(const DesignJob& job) {
+  CriterionReference ref;
+  if (job.tolerance.criterion != "boresight") return ref;
+  const LensPrescription nominal = toleranceNominal(job);
+  // The field sums only place the compensated film; without the compensator they are unused.
+  const SpotQuadratic sum =
+      job.tolerance.back_focus_compensator ? spotSums(job, nominal, true).sum : SpotQuadratic{};
+  ref.boresight = boresightPoint(job, nominal, sum);
+  ref.has_boresight = true;
+  return ref;
+}
+
 double toleranceCriterion(const DesignJob& job, const LensPrescription& p, double* film_shift_mm,
+                          std::vector<double>* field_rms_mm) {
+  return toleranceCriterion(job, p, criterionReference(job), film_shift_mm, field_rms_mm);
+}
+
+double toleranceCriterion(const DesignJob& job, const LensPrescription& p,
+                          const CriterionReference& ref, double* film_shift_mm,
                           std::vector<double>* field_rms_mm) {
   if (film_shift_mm) *film_shift_mm = 0;
   if (field_rms_mm) field_rms_mm->clear();
@@ -166,9 +184,8 @@ double toleranceCriterion(const DesignJob& job, const LensPrescription& p, doubl
     for (const SpotQuadratic& q : sums.fields) field_rms_mm->push_back(rms(q, nw));
   if (c == "boresight") {
     // The on-axis image point on the compensated film against the nominal lens's on its own.
-    const LensPrescription nominal = toleranceNominal(job);
     const Vec2 a = boresightPoint(job, pl, sum);
-    const Vec2 b = boresightPoint(job, nominal, spotSums(job, nominal, true).sum);
+    const Vec2 b = ref.has_boresight ? ref.boresight : criterionReference(job).boresight;
     return std::hypot(a.x - b.x, a.y - b.y);
   }
   return rms(sum, n);
@@ -209,7 +226,8 @@ LensPrescription asBuiltLens(const DesignJob& job, int build) {
 ToleranceResult runTolerancing(const DesignJob& job) {
   ToleranceResult r;
   const LensPrescription nominal = toleranceNominal(job);
-  r.nominal = toleranceCriterion(job, nominal, nullptr, &r.nominal_fields);
+  const CriterionReference ref = criterionReference(job);  // once per run, read by every thread
+  r.nominal = toleranceCriterion(job, nominal, ref, nullptr, &r.nominal_fields);
   const auto& tols = job.tolerance.tolerances;
   r.sensitivity.resize(tols.size());
   tbb::parallel_for(0, static_cast<int>(tols.size()), [&](int i) {
@@ -217,7 +235,7 @@ ToleranceResult runTolerancing(const DesignJob& job) {
     row.label = tols[i].label();
     auto change = [&](double value) {
       try {
-        return toleranceCriterion(job, applyTolerance(nominal, tols[i], value), nullptr,
+        return toleranceCriterion(job, applyTolerance(nominal, tols[i], value), ref, nullptr,
                                   value > 0 ? &row.fields_plus : &row.fields_minus) -
                r.nominal;
       } catch (const Error& e) {
@@ -242,7 +260,7 @@ ToleranceResult runTolerancing(const DesignJob& job) {
       p = applyTolerance(std::move(p), tols[i],
                          drawTolerance(tols[i], job.tolerance.seed, k, static_cast<int>(i)));
     try {
-      r.builds[k] = toleranceCriterion(job, p);
+      r.builds[k] = toleranceCriterion(job, p, ref);
     } catch (const Error& e) {
       // Leaving the build out would bias the statistics: refuse instead.
       throw Error(fmt::format("Monte Carlo build {} (seed {}) cannot be evaluated: {}", k,

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "lensim/optics/design/design_job.h"
+#include "lensim/util/vec.h"
 
 namespace lensim::optics::design {
 
@@ -48,6 +49,22 @@ LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double v
 /// wavelengths) on that film (rms_spot and boresight criteria; empty otherwise).
 double toleranceCriterion(const DesignJob& job, const LensPrescription& p,
                           double* film_shift_mm = nullptr,
+                          std::vector<double>* field_rms_mm = nullptr);
+
+/// What the criterion measures every lens of a run against, from the nominal lens: for the
+/// boresight criterion the nominal on-axis image point on its compensated film (nothing for
+/// the others). runTolerancing computes it once, before its parallel loops, and every
+/// evaluation reads it; it is immutable, so sharing it between threads is safe.
+struct CriterionReference {
+  bool has_boresight = false;
+  Vec2 boresight;  ///< mm, on the nominal lens's (placed) image surface
+};
+CriterionReference criterionReference(const DesignJob& job);
+
+/// toleranceCriterion against a reference computed once (criterionReference(job)): the same
+/// value, without tracing the nominal lens again for each evaluation.
+double toleranceCriterion(const DesignJob& job, const LensPrescription& p,
+                          const CriterionReference& ref, double* film_shift_mm = nullptr,
                           std::vector<double>* field_rms_mm = nullptr);
 
 /// The draw of one tolerance for build `build` (reproducible, see above): an offset in

@@ -670,6 +670,7 @@ SampledSpectrum BdptIntegrator::Li(const camera::CameraRay* ray, double time,
       const SampledSpectrum Lpath =
           connect(ctx_, light_path, camera_path, s, t, lambda, time, sampler, rng, counts, &raster);
       if (Lpath.isBlack()) continue;
+      if (ray && ray->ghost && s >= 1) ++counts.ghost_connections;
       if (t == 1)
         splats.push_back({raster, Lpath});
       else

@@ -51,6 +51,10 @@ struct SceneContext {
 /// Per-thread ray counts.
 struct RayCounts {
   uint64_t intersect = 0, shadow = 0;
+  /// Lens flare: light-side connections through a ghost path of the lens that carried light
+  /// to the film (the light tracer's sampleGhostWi splats; bdpt's s >= 1 strategies of a ghost
+  /// camera subpath).
+  uint64_t ghost_connections = 0;
 };
 
 /// The closest hit along the ray, skipping surfaces cut out by alpha textures.

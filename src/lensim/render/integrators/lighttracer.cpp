@@ -88,17 +88,18 @@ size_t LightTracer::chooseLight(double u, double* pmf) const {
 namespace {
 
 // Splats L beta W / pdf at the connection's film point (ghost: into the ghost layer too); a
-// non-finite value is dropped and counted.
-void splatConnection(const camera::CameraWiSample& cs, SampledSpectrum L, SampledWavelengths& lambda,
+// non-finite value is dropped and counted. Whether it was splatted.
+bool splatConnection(const camera::CameraWiSample& cs, SampledSpectrum L, SampledWavelengths& lambda,
                      Film& film, bool ghost, int& dropped) {
   if (cs.hero_only) lambda.terminateSecondary();
   for (int i = 0; i < kSpectrumSamples; ++i) L[i] *= cs.importance[size_t(i)] / cs.pdf;
   for (int i = 0; i < kSpectrumSamples; ++i)
     if (!std::isfinite(L[i])) {
       ++dropped;
-      return;
+      return false;
     }
   film.addSplat(cs.film_raster, L, lambda, ghost);
+  return true;
 }
 
 }  // namespace
@@ -161,7 +162,9 @@ int LightTracer::trace(SampledWavelengths& lambda, Sampler& sampler, Film& film,
       if (const Splat L = value(*cs)) splatConnection(*cs, *L, lambda, film, false, dropped);
     if (flare_)
       if (auto cs = camera_->sampleGhostWi(p, u_ghost, wavelengths(), time); cs && cs->pdf > 0)
-        if (const Splat L = value(*cs)) splatConnection(*cs, *L, lambda, film, true, dropped);
+        if (const Splat L = value(*cs))
+          if (splatConnection(*cs, *L, lambda, film, true, dropped) && !L->isBlack())
+            ++counts.ghost_connections;
   };
   // The light's own point seen by the camera (area lights; a point light is a delta the film
   // cannot see).
