@@ -4,12 +4,18 @@
 // 200 x 200 film (32 spp for ZSobol's odd power of two, 8 x 8 strata for stratified), a pixel's
 // samples in order as the render loop draws them. Counters: pixel samples per second, and
 // values (1-D or 2-D draws, 21 per pixel sample) per second.
+// Also the pixel filters' importance sampling (pbrt-v4's defaults of the tabulated filters) and
+// PiecewiseConstant1D::sample on a spiky 1000-cell function, each from 4096 uniform values drawn
+// beforehand. Counters: calls per second.
 // Run: build/bench/lensim_bench_sampler.
 #include <benchmark/benchmark.h>
 
 #include <memory>
+#include <vector>
 
+#include "lensim/sampling/filter.h"
 #include "lensim/sampling/sampler.h"
+#include "lensim/sampling/sampling.h"
 
 using namespace lensim;
 using namespace lensim::sampling;
@@ -63,6 +69,54 @@ void BM_Independent(benchmark::State& state) {
   drawTile(state, s);
 }
 
+std::vector<double> uniforms(size_t n) {
+  Rng rng(29, 1);
+  std::vector<double> u(n);
+  for (double& v : u) v = rng.uniform();
+  return u;
+}
+
+void filterSamples(benchmark::State& state, const Filter& f) {
+  const std::vector<double> u = uniforms(8192);
+  double sum = 0;
+  int64_t n = 0;
+  for (auto _ : state) {
+    for (size_t i = 0; i < u.size(); i += 2) {
+      const FilterSample s = f.sample(Vec2(u[i], u[i + 1]));
+      sum += s.weight + s.p.x;
+    }
+    n += static_cast<int64_t>(u.size() / 2);
+    benchmark::DoNotOptimize(sum);
+  }
+  state.counters["calls/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
+}
+void BM_FilterGaussian(benchmark::State& state) {
+  filterSamples(state, GaussianFilter());
+}
+void BM_FilterMitchell(benchmark::State& state) {
+  filterSamples(state, MitchellFilter());
+}
+void BM_FilterLanczos(benchmark::State& state) {
+  filterSamples(state, LanczosSincFilter());
+}
+
+void BM_PiecewiseConstant1D(benchmark::State& state) {
+  const std::vector<double> u = uniforms(4096);
+  std::vector<double> f = uniforms(1000);
+  for (size_t i = 0; i < f.size(); ++i)
+    if (i % 7 == 0) f[i] = 0;
+    else if (i % 97 == 0) f[i] *= 1000;
+  const PiecewiseConstant1D d(f, -1.0, 2.0);
+  double sum = 0;
+  int64_t n = 0;
+  for (auto _ : state) {
+    for (double v : u) sum += d.sample(v).x;
+    n += static_cast<int64_t>(u.size());
+    benchmark::DoNotOptimize(sum);
+  }
+  state.counters["calls/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
+}
+
 }  // namespace
 
 BENCHMARK(BM_PaddedSobol)->Unit(benchmark::kMillisecond);
@@ -71,4 +125,8 @@ BENCHMARK(BM_ZSobol32)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ZSobolOwen)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Stratified)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Independent)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FilterGaussian);
+BENCHMARK(BM_FilterMitchell);
+BENCHMARK(BM_FilterLanczos);
+BENCHMARK(BM_PiecewiseConstant1D);
 BENCHMARK_MAIN();

@@ -44,10 +44,7 @@ void Filter::init() {
 }
 
 FilterSample Filter::sample(Vec2 u) const {
-  const auto sx = dist_x_.sample(u.x), sy = dist_y_.sample(u.y);
-  const Vec2 p(sx.x, sy.x);
-  const double pdf = sx.pdf * sy.pdf;
-  return {p, pdf > 0 ? eval(p) / pdf : 0.0};
+  return sampleTabulated(u, [this](Vec2 p) { return eval(p); });
 }
 
 double Filter::pdf(Vec2 p) const {
@@ -93,11 +90,20 @@ double GaussianFilter::eval1DExact(double x, double r) const {
   return std::abs(x) > r ? 0.0 : std::max(0.0, g(x) - g(r));
 }
 
+FilterSample GaussianFilter::sample(Vec2 u) const {
+  const Vec2 r = radius();
+  return sampleTabulated(
+      u, [&](Vec2 p) { return lookup(p.x, r.x, table_x_) * lookup(p.y, r.y, table_y_); });
+}
+
 double GaussianFilter::eval1D(double x, double r) const {
+  // eval1D is only called with the filter's own radii.
+  return lookup(x, r, r == radius().x ? table_x_ : table_y_);
+}
+
+double GaussianFilter::lookup(double x, double r, const std::vector<double>& t) {
   const double a = std::abs(x);
   if (a > r) return 0.0;
-  // eval1D is only called with the filter's own radii.
-  const std::vector<double>& t = r == radius().x ? table_x_ : table_y_;
   const double f = a / r * static_cast<double>(t.size() - 2);
   const size_t i = static_cast<size_t>(f);
   const double w = f - static_cast<double>(i);
@@ -106,6 +112,13 @@ double GaussianFilter::eval1D(double x, double r) const {
 
 MitchellFilter::MitchellFilter(Vec2 radius, double b, double c) : Filter(radius), b_(b), c_(c) {
   init();
+}
+
+FilterSample MitchellFilter::sample(Vec2 u) const {
+  // eval(p), with the qualified (non-virtual) call.
+  return sampleTabulated(u, [this](Vec2 p) {
+    return MitchellFilter::eval1D(p.x, radius().x) * MitchellFilter::eval1D(p.y, radius().y);
+  });
 }
 
 double MitchellFilter::mitchell1D(double x) const {
@@ -123,6 +136,12 @@ double MitchellFilter::mitchell1D(double x) const {
 LanczosSincFilter::LanczosSincFilter(Vec2 radius, double tau) : Filter(radius), tau_(tau) {
   if (!(tau > 0)) throw Error(fmt::format("sinc filter tau {} must be positive", tau));
   init();
+}
+
+FilterSample LanczosSincFilter::sample(Vec2 u) const {
+  return sampleTabulated(u, [this](Vec2 p) {
+    return LanczosSincFilter::eval1D(p.x, radius().x) * LanczosSincFilter::eval1D(p.y, radius().y);
+  });
 }
 
 double LanczosSincFilter::eval1D(double x, double r) const {

@@ -43,6 +43,15 @@ class Filter {
   /// Must be called by derived constructors: integrates the profile and tabulates |f1| for
   /// sampling (32 cells per pixel of radius, as pbrt-v4's FilterSampler).
   void init();
+  /// sample() with the filter's value at p given by eval(p): a final filter passes its own
+  /// profile, called without virtual dispatch (same value as eval(p)).
+  template <class Eval>
+  FilterSample sampleTabulated(Vec2 u, Eval eval) const {
+    const auto sx = dist_x_.sample(u.x), sy = dist_y_.sample(u.y);
+    const Vec2 p(sx.x, sy.x);
+    const double pdf = sx.pdf * sy.pdf;
+    return {p, pdf > 0 ? eval(p) / pdf : 0.0};
+  }
 
  private:
   Vec2 radius_;
@@ -72,11 +81,15 @@ class GaussianFilter final : public Filter {
   explicit GaussianFilter(Vec2 radius = {1.5, 1.5}, double sigma = 0.5);
   /// The profile from exp itself (no table), for half-width r.
   double eval1DExact(double x, double r) const;
+  FilterSample sample(Vec2 u) const override;
 
  protected:
   double eval1D(double x, double r) const override;
 
  private:
+  /// The profile read from table t (of half-width r).
+  static double lookup(double x, double r, const std::vector<double>& t);
+
   double sigma_;
   // Profile at |x| = i / kCellsPerPixel for each axis' radius (x then y).
   std::vector<double> table_x_, table_y_;
@@ -89,6 +102,7 @@ class MitchellFilter final : public Filter {
   explicit MitchellFilter(Vec2 radius = {2, 2}, double b = 1.0 / 3.0, double c = 1.0 / 3.0);
   /// The unscaled cubic on [-2, 2].
   double mitchell1D(double x) const;
+  FilterSample sample(Vec2 u) const override;
 
  protected:
   double eval1D(double x, double r) const override { return mitchell1D(2 * x / r); }
@@ -102,6 +116,7 @@ class MitchellFilter final : public Filter {
 class LanczosSincFilter final : public Filter {
  public:
   explicit LanczosSincFilter(Vec2 radius = {4, 4}, double tau = 3);
+  FilterSample sample(Vec2 u) const override;
 
  protected:
   double eval1D(double x, double r) const override;

@@ -63,20 +63,23 @@ double sampleTent(double u, double r) {
 // ---------------------------------------------------------------------------------------------
 
 PiecewiseConstant1D::PiecewiseConstant1D(std::span<const double> f, double min, double max)
-    : func_(f.begin(), f.end()), min_(min), max_(max) {
-  if (func_.empty()) throw Error("piecewise-constant distribution needs at least one value");
-  for (double& v : func_) v = std::abs(v);
-  const size_t n = func_.size();
+    : pdf_(f.begin(), f.end()), min_(min), max_(max) {
+  if (pdf_.empty()) throw Error("piecewise-constant distribution needs at least one value");
+  for (double& v : pdf_) v = std::abs(v);
+  const size_t n = pdf_.size();
   cdf_.assign(n + 1, 0.0);
-  for (size_t i = 1; i <= n; ++i) cdf_[i] = cdf_[i - 1] + func_[i - 1] * (max_ - min_) / n;
+  for (size_t i = 1; i <= n; ++i) cdf_[i] = cdf_[i - 1] + pdf_[i - 1] * (max_ - min_) / n;
   integral_ = cdf_[n];
   if (integral_ == 0) {
     for (size_t i = 1; i <= n; ++i) cdf_[i] = double(i) / n;
   } else {
     for (size_t i = 1; i <= n; ++i) cdf_[i] /= integral_;
   }
+  // The densities, divided once here instead of at every sample.
+  for (double& v : pdf_) v = integral_ > 0 ? v / integral_ : 1.0 / (max_ - min_);
   // A power of two, so that g / steps is exact and floor(u * steps) / steps <= u.
   const size_t steps = std::bit_ceil(n);
+  steps_ = static_cast<double>(steps);
   guide_.resize(steps + 1);
   size_t o = 0;
   for (size_t g = 0; g <= steps; ++g) {
@@ -86,33 +89,11 @@ PiecewiseConstant1D::PiecewiseConstant1D(std::span<const double> f, double min, 
   }
 }
 
-PiecewiseConstant1D::Sample PiecewiseConstant1D::sample(double u) const {
-  // Last cdf entry <= u (cells with zero probability are skipped by upper_bound). For u in
-  // [g, g + 1) / steps it lies between guide_[g] and guide_[g + 1].
-  const int n = size();
-  auto first = cdf_.begin(), last = cdf_.end();
-  const double steps = static_cast<double>(guide_.size() - 1);
-  if (u >= 0 && u < 1) {
-    const size_t g = static_cast<size_t>(u * steps);
-    first = cdf_.begin() + guide_[g] + 1;
-    last = cdf_.begin() + guide_[g + 1] + 1;
-  }
-  int o = static_cast<int>(std::upper_bound(first, last, u) - cdf_.begin()) - 1;
-  o = std::clamp(o, 0, n - 1);
-  double du = u - cdf_[o];
-  const double width = cdf_[o + 1] - cdf_[o];
-  if (width > 0) du /= width;
-  du = std::clamp(du, 0.0, kOneMinusEpsilon);
-  const double pdf = integral_ > 0 ? func_[o] / integral_ : 1.0 / (max_ - min_);
-  const double x = min_ + (o + du) / n * (max_ - min_);
-  return {std::min(x, max_), pdf, o};
-}
-
 double PiecewiseConstant1D::pdf(double x) const {
   if (x < min_ || x > max_) return 0.0;
   const int n = size();
   const int o = std::clamp(static_cast<int>((x - min_) / (max_ - min_) * n), 0, n - 1);
-  return integral_ > 0 ? func_[o] / integral_ : 1.0 / (max_ - min_);
+  return pdf_[static_cast<size_t>(o)];
 }
 
 PiecewiseConstant2D::PiecewiseConstant2D(std::span<const double> f, int nu, int nv, Vec2 min,

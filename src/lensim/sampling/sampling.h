@@ -4,6 +4,7 @@
 // angle (sr^-1) for directions and per unit area for points.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <numbers>
 #include <span>
@@ -68,19 +69,59 @@ class PiecewiseConstant1D {
     double pdf;  ///< per unit of x
     int offset;  ///< cell index
   };
+  /// Inline: the pixel filter draws two per camera sample.
   Sample sample(double u) const;
   /// Density at x (0 outside [min, max]).
   double pdf(double x) const;
   /// Integral of |f| over [min, max].
   double integral() const { return integral_; }
-  int size() const { return static_cast<int>(func_.size()); }
+  int size() const { return static_cast<int>(pdf_.size()); }
 
  private:
-  std::vector<double> func_, cdf_;
+  /// The cell of u: the last o with cdf_[o] <= u (cells of zero probability skipped), in [0, n).
+  int cell(double u) const;
+
+  /// pdf_[o]: the density in cell o, |f_o| / integral (1 / (max - min) where f is all zero).
+  std::vector<double> pdf_, cdf_;
   /// guide_[g] = last index o with cdf_[o] <= g / (guide_.size() - 1).
   std::vector<int> guide_;
-  double min_ = 0, max_ = 1, integral_ = 0;
+  double min_ = 0, max_ = 1, integral_ = 0, steps_ = 1;
 };
+
+inline int PiecewiseConstant1D::cell(double u) const {
+  // For u in [g, g + 1) / steps the cell lies between guide_[g] and guide_[g + 1]: usually one
+  // or two entries apart, scanned; a long run (many narrow cells within one step) is
+  // binary-searched. Outside [0, 1) (and NaN) the whole CDF is searched.
+  const int n = size();
+  int o;
+  if (u >= 0 && u < 1) {
+    const size_t g = static_cast<size_t>(u * steps_);
+    const int lo = guide_[g], hi = guide_[g + 1];
+    if (hi - lo <= 8) {
+      o = lo;
+      while (o < hi && cdf_[static_cast<size_t>(o) + 1] <= u) ++o;
+    } else {
+      o = static_cast<int>(std::upper_bound(cdf_.begin() + lo + 1, cdf_.begin() + hi + 1, u) -
+                           cdf_.begin()) -
+          1;
+    }
+  } else {
+    o = static_cast<int>(std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin()) - 1;
+  }
+  return std::clamp(o, 0, n - 1);
+}
+
+inline PiecewiseConstant1D::Sample PiecewiseConstant1D::sample(double u) const {
+  const int n = size();
+  const int o = cell(u);
+  const size_t i = static_cast<size_t>(o);
+  double du = u - cdf_[i];
+  const double width = cdf_[i + 1] - cdf_[i];
+  if (width > 0) du /= width;
+  du = std::clamp(du, 0.0, kOneMinusEpsilon);
+  const double x = min_ + (o + du) / n * (max_ - min_);
+  return {std::min(x, max_), pdf_[i], o};
+}
 
 /// A density proportional to |f| of a piecewise-constant function on a rectangle, nu x nv cells,
 /// f given row-major (v rows of nu values); marginal in v, conditional in u.
