@@ -3,6 +3,8 @@
 // that far and a light tracer's splats there must reach those pixels too.
 #pragma once
 
+#include <cmath>
+
 #include "lensim/scene/description.h"
 #include "lensim/util/vec.h"
 
@@ -18,5 +20,12 @@ struct FilmSampleBounds {
         y1(scene.film.y_resolution + scene.filter.y_radius - 0.5) {}
   bool inside(Vec2 p) const { return p.x >= x0 && p.x < x1 && p.y >= y0 && p.y < y1; }
 };
+
+/// The film's half width and half height (mm) from its diagonal and the image's aspect ratio.
+inline Vec2 filmHalfExtent_mm(double diagonal_mm, int x_resolution, int y_resolution) {
+  const double aspect = static_cast<double>(y_resolution) / x_resolution;
+  const double width = diagonal_mm / std::sqrt(1 + aspect * aspect);
+  return {width / 2, aspect * width / 2};
+}
 
 }  // namespace lensim::camera

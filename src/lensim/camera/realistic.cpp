@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <tuple>
 
+#include "lensim/camera/film_bounds.h"
 #include "lensim/camera/realistic_placed.h"
 #include "lensim/optics/anamorphic.h"
 #include "lensim/optics/configurations.h"
@@ -143,10 +144,10 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   }
 
   // Film extent from the diagonal and the image's aspect ratio.
-  const double aspect = static_cast<double>(settings_.y_resolution) / settings_.x_resolution;
-  const double width = settings_.film_diagonal_mm / std::sqrt(1 + aspect * aspect);
-  half_width_mm_ = width / 2;
-  half_height_mm_ = aspect * width / 2;
+  const Vec2 half = filmHalfExtent_mm(settings_.film_diagonal_mm, settings_.x_resolution,
+                                      settings_.y_resolution);
+  half_width_mm_ = half.x;
+  half_height_mm_ = half.y;
   optics::ExitPupilOptions pupil_options;
   if (settings_.rear_disc_only) {
     // The disc's edge makes the region change faster across the film: twice the radial nodes

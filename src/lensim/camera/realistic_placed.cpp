@@ -9,6 +9,7 @@
 #include <limits>
 #include <numbers>
 
+#include "lensim/camera/film_bounds.h"
 #include "lensim/optics/glass.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/sampling.h"
@@ -115,10 +116,10 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
     static std::atomic<std::uint64_t> next_id{1};
     id_ = next_id++;
   }
-  const double aspect = static_cast<double>(settings_.y_resolution) / settings_.x_resolution;
-  const double width = settings_.film_diagonal_mm / std::sqrt(1 + aspect * aspect);
-  half_width_mm_ = width / 2;
-  half_height_mm_ = aspect * width / 2;
+  const Vec2 half = filmHalfExtent_mm(settings_.film_diagonal_mm, settings_.x_resolution,
+                                      settings_.y_resolution);
+  half_width_mm_ = half.x;
+  half_height_mm_ = half.y;
 
   if (!settings_.tolerance_job.empty() && settings_.as_built_film) {
     // An as-built lens without a focusdistance: the film is the build's image surface, where the
