@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "lensim/camera/film_bounds.h"
+#include "lensim/optics/frame.h"
 #include "lensim/optics/glass.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/sampling.h"
@@ -22,16 +23,10 @@ namespace {
 
 // A frame's rotation columns are its axes in lens (front-frame) coordinates.
 Vec3 toGlobal(const optics::SurfaceFrame& f, const Vec3& v) {
-  const auto& r = f.rotation;
-  return {r[0][0] * v.x + r[0][1] * v.y + r[0][2] * v.z,
-          r[1][0] * v.x + r[1][1] * v.y + r[1][2] * v.z,
-          r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z};
+  return optics::frame::toGlobal(f.rotation, v);
 }
 Vec3 toLocal(const optics::SurfaceFrame& f, const Vec3& v) {
-  const auto& r = f.rotation;
-  return {r[0][0] * v.x + r[1][0] * v.y + r[2][0] * v.z,
-          r[0][1] * v.x + r[1][1] * v.y + r[2][1] * v.z,
-          r[0][2] * v.x + r[1][2] * v.y + r[2][2] * v.z};
+  return optics::frame::toLocal(f.rotation, v);
 }
 Vec3 origin(const optics::SurfaceFrame& f) {
   return {f.origin_mm[0], f.origin_mm[1], f.origin_mm[2]};

@@ -3,24 +3,16 @@
 #include <cmath>
 #include <fmt/format.h>
 
+#include "lensim/optics/frame.h"
+
 namespace lensim::optics {
 
 namespace {
 
-using V3 = std::array<double, 3>;
-using M3 = std::array<V3, 3>;  // rows
+using frame::M3;
+using frame::mul;
+using frame::V3;
 
-V3 mul(const M3& m, const V3& v) {
-  return {m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
-          m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
-          m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2]};
-}
-M3 mul(const M3& a, const M3& b) {
-  M3 r{};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
-  return r;
-}
 V3 add(V3 a, const V3& b, double s = 1) {
   for (int i = 0; i < 3; ++i) a[i] += s * b[i];
   return a;

@@ -6,24 +6,15 @@
 #include <cmath>
 #include <numbers>
 
+#include "lensim/optics/frame.h"
 #include "lensim/optics/glass.h"
 #include "lensim/optics/refraction.h"
 
 namespace lensim::optics {
 
-Vec3 PlacedLens::toLocal(const Surface& s, const Vec3& v) {
-  const auto& r = s.rotation;  // R^T v: the components along the local axes (R's columns)
-  return {r[0][0] * v.x + r[1][0] * v.y + r[2][0] * v.z,
-          r[0][1] * v.x + r[1][1] * v.y + r[2][1] * v.z,
-          r[0][2] * v.x + r[1][2] * v.y + r[2][2] * v.z};
-}
+Vec3 PlacedLens::toLocal(const Surface& s, const Vec3& v) { return frame::toLocal(s.rotation, v); }
 
-Vec3 PlacedLens::toGlobal(const Surface& s, const Vec3& v) {
-  const auto& r = s.rotation;
-  return {r[0][0] * v.x + r[0][1] * v.y + r[0][2] * v.z,
-          r[1][0] * v.x + r[1][1] * v.y + r[1][2] * v.z,
-          r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z};
-}
+Vec3 PlacedLens::toGlobal(const Surface& s, const Vec3& v) { return frame::toGlobal(s.rotation, v); }
 
 PlacedLens::PlacedLens(const LensPrescription& p, double wavelength_nm)
     : wavelength_nm_(wavelength_nm) {

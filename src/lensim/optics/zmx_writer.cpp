@@ -7,14 +7,15 @@
 #include <cmath>
 #include <numbers>
 
+#include "lensim/optics/frame.h"
 #include "lensim/optics/lens_formats.h"
 
 namespace lensim::optics {
 
 namespace {
 
-using M3 = std::array<std::array<double, 3>, 3>;  // rows; columns are a frame's axes
-using V3 = std::array<double, 3>;
+using frame::M3;  // rows; columns are a frame's axes
+using frame::V3;
 
 std::string num(double v) {
   return fmt::format("{:.17g}", v);
@@ -73,16 +74,11 @@ std::string surfaceLines(const LensSurface& s, size_t row, double disz) {
 // to b's plane along a's z: decentre (x, y) in a's axes, then tilts about x, the new y, the new z
 // (order 0), as coordinate_break.cpp reads them. Empty when b is a's frame moved along its z.
 std::string breakLines(const SurfaceFrame& a, const SurfaceFrame& b) {
-  const M3& ra = a.rotation;
+  const M3 ra_t = frame::transpose(a.rotation);
   const V3 d{b.origin_mm[0] - a.origin_mm[0], b.origin_mm[1] - a.origin_mm[1],
              b.origin_mm[2] - a.origin_mm[2]};
-  double local[3], rel[3][3];
-  for (int i = 0; i < 3; ++i) {
-    local[i] = ra[0][i] * d[0] + ra[1][i] * d[1] + ra[2][i] * d[2];
-    for (int j = 0; j < 3; ++j)
-      rel[i][j] =
-          ra[0][i] * b.rotation[0][j] + ra[1][i] * b.rotation[1][j] + ra[2][i] * b.rotation[2][j];
-  }
+  const V3 local = frame::mul(ra_t, d);
+  const M3 rel = frame::mul(ra_t, b.rotation);
   // rel = Rx(tx) Ry(ty) Rz(tz): rel[0][2] = sin ty, rel[1][2] = -sin tx cos ty,
   // rel[2][2] = cos tx cos ty, rel[0][1] = -cos ty sin tz, rel[0][0] = cos ty cos tz.
   const double deg = 180 / std::numbers::pi;

@@ -7,6 +7,7 @@
 #include "lensim/optics/coordinate_break.h"
 #include "lensim/optics/design/image_quality.h"
 #include "lensim/optics/field_rays.h"
+#include "lensim/optics/frame.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/placed_lens.h"
 
@@ -14,20 +15,10 @@ namespace lensim::optics::design {
 
 namespace {
 
-using M3 = std::array<std::array<double, 3>, 3>;  // rows
-using V3 = std::array<double, 3>;
+using frame::M3;
+using frame::mul;
+using frame::V3;
 
-M3 mul(const M3& a, const M3& b) {
-  M3 r{};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
-  return r;
-}
-V3 mul(const M3& m, const V3& v) {
-  return {m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
-          m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
-          m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2]};
-}
 void requirePlaced(const LensPrescription& p) {
   if (!p.noncoaxial_loc) throw Error("internal: a placed build needs frames (placeOnAxis)");
 }
@@ -108,9 +99,7 @@ PlacedBeam placedBeam(const LensPrescription& p, double field_deg, double lambda
     const Vec3 e = at - d * (at.z / d.z);  // on the front vertex's plane z = 0
     const TraceResult r = lens.trace(lens.fieldRay(field, {e.x, e.y}), TraceOptions{false});
     const Vec3 g = r.ray.direction;
-    const Vec3 dl{rot[0][0] * g.x + rot[1][0] * g.y + rot[2][0] * g.z,
-                  rot[0][1] * g.x + rot[1][1] * g.y + rot[2][1] * g.z,
-                  rot[0][2] * g.x + rot[1][2] * g.y + rot[2][2] * g.z};
+    const Vec3 dl = frame::toLocal(rot, g);
     if (!r.ok() || !(dl.z > 0))
       throw Error(fmt::format("a ray of the {} deg beam does not reach the film", field_deg));
     const Vec3 q = lens.toImageFrame(r.ray.origin);
