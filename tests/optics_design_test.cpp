@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 
 #include "cli_run.h"
@@ -239,6 +240,112 @@ TEST(LensDesign, SpotQuadraticMatchesSpotsOnShiftedFilms) {
     const double rms = rmsSpot_mm(p, 3, kLineD_nm, kLineD_nm, 6);
     EXPECT_NEAR(rms * rms, q.a + 2 * q.b * dz + q.c * dz * dz, 1e-9 * (1 + rms * rms));
   }
+}
+
+// The independent tracer's rays that are lost: a sphere missed or total internal reflection.
+std::optional<std::pair<double, double>> independentTraceLost(const std::vector<Row>& rows,
+                                                              double ox, double oy,
+                                                              const double dir[3]) {
+  double o[3] = {ox, oy, 0}, d[3] = {dir[0], dir[1], dir[2]};
+  double z = 0, n = 1;
+  for (const Row& row : rows) {
+    if (row.radius != 0) {
+      const double R = row.radius, cz = z + R;
+      const double oc[3] = {o[0], o[1], o[2] - cz};
+      const double b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
+      const double c = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - R * R;
+      if (b * b - c < 0) return std::nullopt;
+      const double t = R > 0 ? -b - std::sqrt(b * b - c) : -b + std::sqrt(b * b - c);
+      for (int k = 0; k < 3; ++k) o[k] += t * d[k];
+      const double nrm[3] = {o[0] / R, o[1] / R, (o[2] - cz) / R};
+      const double mu = n / row.n_after;
+      const double cosi = -(nrm[0] * d[0] + nrm[1] * d[1] + nrm[2] * d[2]);
+      const double k2 = 1 - mu * mu * (1 - cosi * cosi);
+      if (k2 < 0) return std::nullopt;
+      for (int k = 0; k < 3; ++k) d[k] = mu * d[k] + (mu * cosi - std::sqrt(k2)) * nrm[k];
+    }
+    n = row.n_after;
+    z += row.thickness;
+  }
+  if (!(d[2] > 0)) return std::nullopt;
+  const double t = (z - o[2]) / d[2];
+  return std::pair{o[0] + t * d[0], o[1] + t * d[1]};
+}
+
+// A stop-first lens whose steep rear surface (R -7 mm) the wide beams partly miss or reflect
+// totally: the beam that reaches the film is the part of the stop whose rays pass.
+const char* kSteepSinglet =
+    "# steep singlet\n"
+    "0      2    1       8\n"
+    "14     7    1.5168  20\n"
+    "-7     14   1       13.9\n";
+
+TEST(LensDesign, RmsSpotOfABeamPartlyLostIsThatOfThePassingRays) {
+  TempDir dir;
+  dir.write("steep.dat", kSteepSinglet);
+  const DesignJob job = readDesignJob(dir.write("job.json", singletJob("steep.dat")));
+  const std::vector<Row> rows = rowsOf(job.start);
+  // Independently: a dense grid over the stop (radius 4 at z = 0, the entrance pupil and its
+  // chief ray's crossing), the rays that pass, their RMS about the centroid on the film.
+  auto dense = [&](double deg, double* lost_share) {
+    const double th = deg * M_PI / 180, dir[3] = {0, std::sin(th), std::cos(th)};
+    const int grid = 400;
+    double sx = 0, sy = 0, sxx = 0;
+    int count = 0, lost = 0;
+    for (int iy = 0; iy < grid; ++iy)
+      for (int ix = 0; ix < grid; ++ix) {
+        const double px = 4 * (2.0 * (ix + 0.5) / grid - 1), py = 4 * (2.0 * (iy + 0.5) / grid - 1);
+        if (px * px + py * py > 16) continue;
+        const auto hit = independentTraceLost(rows, px, py, dir);
+        if (!hit) {
+          ++lost;
+          continue;
+        }
+        sx += hit->first, sy += hit->second, sxx += hit->first * hit->first + hit->second * hit->second;
+        ++count;
+      }
+    *lost_share = double(lost) / (lost + count);
+    const double mx = sx / count, my = sy / count;
+    return std::sqrt(sxx / count - mx * mx - my * my);
+  };
+  double lost_small = 0, lost_wide = 0;
+  const double rms_small = dense(5, &lost_small), rms_wide = dense(30, &lost_wide);
+  EXPECT_EQ(lost_small, 0);
+  EXPECT_GT(lost_wide, 0.05);
+  EXPECT_LT(lost_wide, 0.5);
+  EXPECT_NEAR(rmsSpot_mm(job.start, 5, kLineD_nm, kLineD_nm, 8), rms_small, 0.01 * rms_small);
+  EXPECT_NEAR(rmsSpot_mm(job.start, 30, kLineD_nm, kLineD_nm, 8), rms_wide, 0.02 * rms_wide)
+      << "lost share " << lost_wide;
+  // Continuous as rays start to be lost: the onset angle by bisection on the rim's rays
+  // (independently), and the RMS just below and above it.
+  auto rimLost = [&](double deg) {
+    const double th = deg * M_PI / 180, dir[3] = {0, std::sin(th), std::cos(th)};
+    for (int k = 0; k < 720; ++k) {
+      const double a = 2 * M_PI * k / 720;
+      if (!independentTraceLost(rows, 4 * std::cos(a), 4 * std::sin(a), dir)) return true;
+    }
+    return false;
+  };
+  double lo = 5, hi = 30;
+  for (int it = 0; it < 40; ++it) (rimLost(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+  const double below = rmsSpot_mm(job.start, lo - 1e-4, kLineD_nm, kLineD_nm, 8);
+  const double above = rmsSpot_mm(job.start, hi + 1e-4, kLineD_nm, kLineD_nm, 8);
+  EXPECT_NEAR(above, below, 2e-3 * below) << "onset " << hi << " deg";
+}
+
+TEST(LensDesign, WideFieldsOfAPatentLensAreEvaluated) {
+  // US 583,336 (f/4.5): part of the 14 and 19 deg beams misses a surface; they are evaluated on
+  // the rays that pass, the spot growing with the field.
+  TempDir dir;
+  const DesignJob job = readDesignJob(dir.write(
+      "job.json", std::string("{\"lens\": \"") + LENSIM_SHARED_DIR +
+                      "/lenses/zmx/US00583336-2-scaled.zmx\", \"fields_deg\": [0, 14, 19],\n"
+                      "\"variables\": [{\"type\": \"curvature\", \"surface\": 1}],\n"
+                      "\"operands\": [{\"type\": \"rms_spot\", \"weight\": 1}]}\n"));
+  const std::vector<double> v = operandValues(job, job.start);
+  ASSERT_EQ(v.size(), 3u);
+  for (double x : v) EXPECT_TRUE(std::isfinite(x) && x > 0) << x;
+  EXPECT_LT(v[0], v[1]);
 }
 
 TEST(LensDesign, GlassVariablesSnapToTheCatalogue) {

@@ -565,17 +565,24 @@ SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double 
   const LensSystem prim = fl.lens->atWavelength(primary_nm);
   const ParaxialData pp = computeParaxial(prim);
   const FieldBundle beam = fieldBundle(prim, pp, field_deg);
-  FieldBundle::PupilRegion region;
-  region.centre = {0, 0};
-  region.radius.assign(4, pp.entrance_pupil_diameter_mm / 2);
   const LensSystem lens = fl.lens->atWavelength(lambda_nm);
+  auto trace = [&](Vec2 offset) {
+    return lens.tracer().traceFromScene(beam.sceneRay(offset), TraceOptions{false});
+  };
+  auto reaches = [](const TraceResult& r) { return r.ok() && r.ray.direction.z > 0; };
+  // The beam: the paraxial entrance pupil, less the rays this wavelength cannot pass.
+  const double radius = pp.entrance_pupil_diameter_mm / 2;
+  const FieldBundle::PupilRegion region = passingPupil(
+      radius, [&](Vec2 o) { return reaches(trace(o)); }, field_deg);
+  const bool cut = region.radius.size() != 4;
   const double film_z = lens.filmZ_mm();
   // Weighted moments of the hit (x, y) and of the slopes (u, v) = d(x, y)/dz.
   double sw = 0, sx = 0, sy = 0, su = 0, sv = 0, sxx = 0, sxu = 0, suu = 0;
   for (const PupilPoint& q : hexapolarPupil(region, rings)) {
-    const TraceResult r =
-        lens.tracer().traceFromScene(beam.sceneRay(q.offset_mm), TraceOptions{false});
-    if (!r.ok() || !(r.ray.direction.z > 0))
+    const TraceResult r = trace(q.offset_mm);
+    // In a cut beam a point may fall where the boundary bends in between two azimuths: left out.
+    if (!reaches(r) && cut) continue;
+    if (!reaches(r))
       throw Error(fmt::format("a ray of the {} deg beam does not reach the film", field_deg));
     const double t = (film_z - r.ray.origin.z) / r.ray.direction.z;
     const double x = r.ray.origin.x + r.ray.direction.x * t, y = r.ray.origin.y + r.ray.direction.y * t;
@@ -584,6 +591,8 @@ SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double 
     sw += w, sx += w * x, sy += w * y, su += w * u, sv += w * v;
     sxx += w * (x * x + y * y), sxu += w * (x * u + y * v), suu += w * (u * u + v * v);
   }
+  if (!(sw > 0))
+    throw Error(fmt::format("no ray of the {} deg beam reaches the film", field_deg));
   SpotQuadratic out;
   out.a = std::max(0.0, sxx / sw - (sx * sx + sy * sy) / (sw * sw));
   out.b = sxu / sw - (sx * su + sy * sv) / (sw * sw);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <complex>
+#include <numbers>
 
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/paraxial.h"
@@ -28,6 +29,50 @@ FocusedLens evaluationLens(LensPrescription p) {
                             p.fileFilmDistance_mm()));
   setup.film_distance_mm = p.fileFilmDistance_mm();
   return focusLens(std::move(p), setup);
+}
+
+FieldBundle::PupilRegion passingPupil(double radius_mm, const std::function<bool(Vec2)>& passes,
+                                      double field_deg, int directions) {
+  FieldBundle::PupilRegion region;
+  region.centre = {0, 0};
+  if (!passes({0, 0}))
+    throw Error(fmt::format("the chief ray of the {} deg beam does not reach the film", field_deg));
+  // The rim along every azimuth: where all of it passes, the disc (as four equal radii: the
+  // quadrature of the plain circle, bit for bit).
+  std::vector<Vec2> dirs;
+  bool lost = false;
+  for (int j = 0; j < directions; ++j) {
+    const double a = 2 * std::numbers::pi * j / directions;
+    dirs.push_back({std::cos(a), std::sin(a)});
+    lost = lost || !passes(dirs.back() * radius_mm);
+  }
+  if (!lost) {
+    region.radius.assign(4, radius_mm);
+    return region;
+  }
+  constexpr int kScan = 16;
+  for (const Vec2 u : dirs) {
+    // Outward from the chief ray: the first lost of 16 points out to the rim, then bisection.
+    double lo = 0, hi = radius_mm;
+    bool clear = true;
+    for (int k = 1; k <= kScan && clear; ++k) {
+      const double r = radius_mm * k / kScan;
+      if (passes(u * r))
+        lo = r;
+      else
+        hi = r, clear = false;
+    }
+    if (clear) {
+      region.radius.push_back(radius_mm);
+      continue;
+    }
+    while (hi - lo > 1e-12 * radius_mm) {
+      const double mid = 0.5 * (lo + hi);
+      (passes(u * mid) ? lo : hi) = mid;
+    }
+    region.radius.push_back(lo);
+  }
+  return region;
 }
 
 FieldBundle fieldBundle(const LensSystem& primary, const ParaxialData& pp, double field_deg) {

@@ -3,6 +3,7 @@
 // workbench's pupil-function code (wavefront.h) on the lens the design variables describe.
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "lensim/optics/field_rays.h"
@@ -23,6 +24,20 @@ FocusedLens evaluationLens(LensPrescription p);
 /// stop centre, apertures ignored) and the paraxial entrance pupil about where it crosses the
 /// entrance-pupil plane. Throws lensim::Error when there is no real chief ray.
 FieldBundle fieldBundle(const LensSystem& primary, const ParaxialData& pp, double field_deg);
+
+/// The part of the beam's paraxial entrance pupil (a disc of `radius_mm` about the chief ray)
+/// whose rays reach the film, star-shaped about the chief ray. When the rim passes along every
+/// one of `directions` equally spaced azimuths, the disc itself (four equal radii: the plain
+/// circle's quadrature, so operands are unchanged where nothing is lost). Otherwise, along each
+/// azimuth, the distance to the first lost of 16 points out to the rim, bisected to 1e-12 of the
+/// radius (the rim where none is lost): the region shrinks continuously as rays start to be
+/// lost, so merit functions stay continuous. Rays are lost where they miss a surface's sphere or
+/// are totally reflected: with floating apertures the beam of a wide field can be larger than
+/// the lens passes (OpticStudio stops with "ray missed surface" there and wants vignetting
+/// factors; this finds the passing beam instead). Throws lensim::Error when the chief ray itself
+/// is lost.
+FieldBundle::PupilRegion passingPupil(double radius_mm, const std::function<bool(Vec2)>& passes,
+                                      double field_deg, int directions = 32);
 
 /// RMS wave aberration (waves at lambda_nm) of the beam at field_deg on the film of p, about
 /// the best-fitting reference sphere centred on the film: piston and tilt removed, i.e. the

@@ -93,36 +93,49 @@ PlacedBeam placedBeam(const LensPrescription& p, double field_deg, double lambda
   const PlacedLens lens = lambda_nm == primary_nm ? prim : PlacedLens(floated, lambda_nm);
   const auto& rot = p.image_frame.rotation;
   // A scene ray through the pupil-plane point centre + offset, traced to the image surface:
-  // its hit and slopes in the image surface's frame.
+  // its hit and slopes in the image surface's frame; false when it does not get there.
   auto traceTo = [&](Vec2 offset, Vec2& hit, Vec2& slope) {
     const Vec3 at = centre + Vec3{offset.x, offset.y, 0};
     const Vec3 e = at - d * (at.z / d.z);  // on the front vertex's plane z = 0
     const TraceResult r = lens.trace(lens.fieldRay(field, {e.x, e.y}), TraceOptions{false});
-    const Vec3 g = r.ray.direction;
-    const Vec3 dl = frame::toLocal(rot, g);
-    if (!r.ok() || !(dl.z > 0))
-      throw Error(fmt::format("a ray of the {} deg beam does not reach the film", field_deg));
+    const Vec3 dl = frame::toLocal(rot, r.ray.direction);
+    if (!r.ok() || !(dl.z > 0)) return false;
     const Vec3 q = lens.toImageFrame(r.ray.origin);
     hit = {q.x, q.y};
     slope = {dl.x / dl.z, dl.y / dl.z};
+    return true;
   };
-  FieldBundle::PupilRegion region;
-  region.centre = {0, 0};
-  region.radius.assign(4, pp.entrance_pupil_diameter_mm / 2);
+  auto lost = [&] {
+    return Error(fmt::format("a ray of the {} deg beam does not reach the film", field_deg));
+  };
+  // The beam: the coaxial twin's paraxial entrance pupil, less the rays that cannot pass.
+  const FieldBundle::PupilRegion region = passingPupil(
+      pp.entrance_pupil_diameter_mm / 2,
+      [&](Vec2 o) {
+        Vec2 h, s;
+        return traceTo(o, h, s);
+      },
+      field_deg);
+  const bool cut = region.radius.size() != 4;
   double sw = 0, sx = 0, sy = 0, su = 0, sv = 0, sxx = 0, sxu = 0, suu = 0;
   for (const PupilPoint& q : hexapolarPupil(region, rings)) {
     Vec2 h, s;
-    traceTo(q.offset_mm, h, s);
+    // In a cut beam a point may fall where the boundary bends in between two azimuths: left out.
+    if (!traceTo(q.offset_mm, h, s)) {
+      if (cut) continue;
+      throw lost();
+    }
     const double w = q.weight;
     sw += w, sx += w * h.x, sy += w * h.y, su += w * s.x, sv += w * s.y;
     sxx += w * (h.x * h.x + h.y * h.y), sxu += w * (h.x * s.x + h.y * s.y);
     suu += w * (s.x * s.x + s.y * s.y);
   }
+  if (!(sw > 0)) throw lost();
   PlacedBeam out;
   out.spot.a = std::max(0.0, sxx / sw - (sx * sx + sy * sy) / (sw * sw));
   out.spot.b = sxu / sw - (sx * su + sy * sv) / (sw * sw);
   out.spot.c = std::max(0.0, suu / sw - (su * su + sv * sv) / (sw * sw));
-  traceTo({0, 0}, out.chief, out.chief_slope);
+  if (!traceTo({0, 0}, out.chief, out.chief_slope)) throw lost();
   return out;
 }
 
