@@ -142,12 +142,14 @@ TEST_F(AsBuilt, RefusalsNameTheParameter) {
   writeFile(dir_.path() / "job2.json", std::string(kJob).replace(std::string(kJob).find("singlet.dat"), 11, "other.dat"));
   e = errorOf("\"string tolerances\" \"job2.json\" \"integer asbuilt\" 1");
   EXPECT_NE(e.find("is not the design job's lens"), std::string::npos) << e;
-  // Irregularity stays refused by the tolerancer, at the job's line.
+  // An error in the job keeps the job's line (an irregularity of 0.002 fringes is accepted; on
+  // the stop row it would not be, a negative delta is not).
   writeFile(dir_.path() / "job3.json",
-            std::string(kJob).replace(std::string(kJob).find("\"index\""), 7, "\"irregularity\""));
+            std::string(kJob).replace(std::string(kJob).find("\"index\", \"surface\": 1, \"delta\": 0.002"), 37,
+                                      "\"irregularity\", \"surface\": 1, \"delta\": -2"));
   e = errorOf("\"string tolerances\" \"job3.json\" \"integer asbuilt\" 1");
-  EXPECT_NE(e.find("job3.json:"), std::string::npos) << e;
-  EXPECT_NE(e.find("irregularity"), std::string::npos) << e;
+  EXPECT_NE(e.find("job3.json:10:"), std::string::npos) << e;
+  EXPECT_NE(e.find("\"delta\" -2 fringes must be > 0"), std::string::npos) << e;
 }
 
 TEST_F(AsBuilt, DecentredBuildRendersThroughThePlacedCamera) {

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "lensim/optics/design/design_job.h"
+#include "lensim/optics/design/tolerance.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/util/error.h"
 
@@ -100,6 +101,33 @@ TEST(DesignWavefrontOperand, DefocusMatchesTheClosedForm) {
   }
   // In focus: no aberration (the hyperboloid is perfect).
   EXPECT_LT(operandValues(s.job, s.lens)[0], 1e-3);
+}
+
+TEST(DesignTolerance, IrregularityWavefrontMatchesTheClosedForm) {
+  // W fringes of irregularity on the plane front surface (h = its semi-aperture, 10 mm here,
+  // the beam's radius): the sag departs by A ((r/h)^4 + (y/h)^2), A = W lambda_t / 4 (on a plane
+  // base the astigmatic half is a sphere of curvature 2A/h^2 along y: A (y/h)^2 up to 1e-8 of
+  // it). In collimated light the wavefront follows (n - 1) times the sag departure (first order
+  // in A). Over the unit disc, f = alpha rho^4 + beta rho^2 sin^2(phi) has variance
+  //   alpha^2 (1/5 - 1/9) + alpha beta (1/4 - 1/6) + beta^2 (1/8 - 1/16),
+  // so with alpha = beta = 1, RMS f = sqrt(0.2347222...) = 0.48448 (no tilt to remove).
+  PerfectLens s("{\"type\": \"rms_wavefront\", \"field_deg\": 0}");
+  s.lens.surfaces[1].aperture_diameter_mm = 2 * kStopRadius;
+  for (double w : {1.0, -2.5}) {
+    Tolerance t;
+    t.kind = Tolerance::Kind::Irregularity;
+    t.surface = t.last_surface = 1;
+    t.delta = std::abs(w);
+    t.test_wavelength_nm = 632.8;
+    const LensPrescription p = applyTolerance(s.lens, t, w);
+    const double a = std::abs(w) * 632.8e-6 / 4;
+    const double exact =
+        (kN - 1) * a * std::sqrt(4.0 / 45 + 1.0 / 12 + 1.0 / 16) / (kLambda_nm * 1e-6);
+    const double rms = operandValues(s.job, p)[0];
+    EXPECT_NEAR(rms, exact, 0.03 * exact) << w << " fringes";
+    std::printf("irregularity %g fringes: rms_wavefront %.6f waves, closed form %.6f\n", w, rms,
+                exact);
+  }
 }
 
 TEST(DesignMtfOperand, InFocusMatchesTheCircularPupilMtf) {

@@ -15,6 +15,7 @@
 #include "lensim/optics/design/tolerance.h"
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_formats.h"
+#include "lensim/optics/surface_shape.h"
 
 namespace fs = std::filesystem;
 using namespace lensim;
@@ -485,6 +486,59 @@ TEST(LensTolerance, CompensatorMinimisesTheSpot) {
   EXPECT_NEAR(toleranceCriterion(fixed, b), r.builds[3], 1e-9);
 }
 
+TEST(LensTolerance, IrregularityHasTheStatedSagAndMovesTheParaxialFocus) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  const DesignJob start = readDesignJob(dir.write("start.json", singletJob("singlet.dat")));
+  const LensSurface& s = start.start.surfaces[1];  // R 80 mm, semi-aperture 15 mm
+  const double h = 15, c = 1 / 80.0, w = 3, a = w * 632.8e-6 / 4;
+  LensSurface b = s;
+  applyIrregularity(b, w, 632.8);
+  auto sphere = [](double curv, double r) {
+    return curv * r * r / (1 + std::sqrt(1 - curv * curv * r * r));
+  };
+  for (double t : {0.3, 0.7, 1.0}) {
+    // Along x: the spherical half alone, exactly.
+    const double x = t * h;
+    EXPECT_NEAR(surfaceSag(b.radius_mm, b.shape, x, 0)->z - sphere(c, x), a * std::pow(t, 4),
+                1e-13);
+    // Along y: a sphere of curvature c + 2A/h^2 plus the spherical half; A (y/h)^2 + A (y/h)^4
+    // to lowest order, within (3/4)(c h)^2 A (y/h)^4 and higher terms.
+    const double y = t * h;
+    const double dep = surfaceSag(b.radius_mm, b.shape, 0, y)->z - sphere(c, y);
+    EXPECT_NEAR(dep, sphere(c + 2 * a / (h * h), y) - sphere(c, y) + a * std::pow(t, 4), 1e-13);
+    EXPECT_NEAR(dep, a * (t * t + std::pow(t, 4)), 1.1 * 0.75 * (c * h) * (c * h) * a * std::pow(t, 4));
+  }
+  // A job: the BFL of the builds at +-delta is the independent paraxial trace's with the y
+  // section's curvature moved by +-2A/h^2 (the paraxial focus in the y-z plane).
+  std::string text = toleranceJob("singlet.dat", 4, "end_point");
+  const std::string from = "{\"type\": \"thickness\", \"surface\": 1, \"delta\": 0.2";
+  text.replace(text.find(from), from.size(), "{\"type\": \"irregularity\", \"surface\": 1, \"delta\": 3");
+  text.replace(text.find("2000"), 4, "20");
+  const DesignJob job = readDesignJob(dir.write("job.json", text));
+  const ToleranceResult r = runTolerancing(job);
+  ASSERT_EQ(r.sensitivity.size(), 3u);
+  EXPECT_EQ(r.sensitivity[0].label, "irregularity surface 1 +-3 fringes");
+  for (double sign : {1.0, -1.0}) {
+    std::vector<Row> rows = rowsOf(job.start);
+    rows[1].radius = 1 / (c + sign * 2 * a / (h * h));
+    const double change = independentBfl(rows) - independentBfl(rowsOf(job.start));
+    EXPECT_NEAR(sign > 0 ? r.sensitivity[0].plus : r.sensitivity[0].minus, change,
+                1e-9 + 1e-6 * std::abs(change));
+  }
+  // The stop has no surface to be irregular: refused at the tolerance's line.
+  std::string stop = text;
+  stop.replace(stop.find("\"irregularity\", \"surface\": 1"), 28, "\"irregularity\", \"surface\": 0");
+  try {
+    readDesignJob(dir.write("stop.json", stop));
+    ADD_FAILURE() << "an irregularity on the stop was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("stop.json:7:7: error: surface 0 is the stop"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(LensTolerance, IndexToleranceOnANonDispersiveMediumMovesTheIndex) {
   // The singlet's glass is a bare index 1.5168 (no V_d). End-point index builds are n = 1.5168 +- 0.01
   // and must keep the medium non-dispersive; their BFL is the independent paraxial trace's.
@@ -576,6 +630,21 @@ TEST(LensDesignCli, OptimiseAndToleranceRun) {
   EXPECT_NE(r.out.find("Monte Carlo 2000 builds (seed 5)"), std::string::npos) << r.out;
   EXPECT_TRUE(fs::exists(dir.path / "b" / "build-0001.json"));
   EXPECT_NO_THROW(readLensFile((dir.path / "b" / "build-0000.json").string()));
+  // Decentred builds are written as .zmx, which cannot hold an irregular surface: refused at the
+  // irregularity's line before the run, nothing written.
+  std::string both = toleranceJob("singlet.dat", 5, "normal");
+  const std::string from = "{\"type\": \"thickness\", \"surface\": 1, \"delta\": 0.2";
+  both.replace(both.find(from), from.size(),
+               "{\"type\": \"decentre\", \"axis\": \"y\", \"element\": 1, \"delta\": 0.1},\n"
+               "      {\"type\": \"irregularity\", \"surface\": 1, \"delta\": 1");
+  both.replace(both.find("\"bfl\""), 5, "\"rms_spot\"");
+  r = test::runLensim("lens tolerance " + dir.write("both.json", both) + " --builds-dir " +
+                      (dir.path / "c").string() + " --write-builds 2");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.out.find("both.json:8:7: error: --write-builds: builds with decentres or tilts"),
+            std::string::npos)
+      << r.out;
+  EXPECT_FALSE(fs::exists(dir.path / "c" / "build-0000.zmx"));
 }
 
 }  // namespace

@@ -75,7 +75,15 @@ int runTolerance(const std::string& job_path, const std::string& report, const s
                             job.tolerance.monte_carlo));
   // A build that cannot be written is refused before the run (the nominal lens in the builds'
   // format stands for them all).
-  if (!builds_dir.empty() && placedTolerancing(job)) writeLensZmx(toleranceNominal(job));
+  if (!builds_dir.empty() && placedTolerancing(job)) {
+    for (const Tolerance& t : job.tolerance.tolerances)
+      if (t.kind == Tolerance::Kind::Irregularity)
+        throw Error(t.loc, "--write-builds: builds with decentres or tilts are written as .zmx, "
+                           "whose surfaces cannot hold an irregular one (a biconic with a "
+                           "polynomial term); run the irregularity in a job without them to "
+                           "write its builds");
+    writeLensZmx(toleranceNominal(job));
+  }
   const ToleranceResult r = runTolerancing(job);
   const std::string unit = job.tolerance.criterion == "f_number" ? "" : " mm";
   std::cout << fmt::format("criterion {} (compensator {}), nominal {:.6g}{}\n",

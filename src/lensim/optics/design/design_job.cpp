@@ -10,6 +10,7 @@
 
 #include "lensim/optics/chief_ray.h"
 #include "lensim/optics/design/image_quality.h"
+#include "lensim/optics/design/tolerance.h"
 #include "lensim/optics/field_rays.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/glass.h"
@@ -218,6 +219,43 @@ void parseMotionTolerance(const json& e, const FileLoc& loc, const LensPrescript
                                  tilt ? "degrees" : "mm (half the first surface's semi-aperture)"));
 }
 
+// Surface irregularity (`"delta"` fringes at `"test_wavelength_nm"`) of one refracting or
+// reflecting rotationally symmetric surface: applyIrregularity (tolerance.h) gives the form.
+void parseIrregularity(const json& e, const FileLoc& loc, const LensPrescription& p,
+                       Tolerance& t) {
+  checkKeys(e, loc, {"type", "surface", "delta", "distribution", "test_wavelength_nm"});
+  t.kind = Tolerance::Kind::Irregularity;
+  t.surface = surfaceIndex(e, loc, p);
+  t.last_surface = t.surface;
+  const LensSurface& s = p.surfaces[size_t(t.surface)];
+  t.delta = number(e, "delta", loc);
+  if (!(t.delta > 0 && t.delta <= 100))
+    throw Error(loc, fmt::format("\"delta\" {} fringes must be > 0 and at most 100", t.delta));
+  t.test_wavelength_nm = number(e, "test_wavelength_nm", loc, 632.8);
+  if (!(t.test_wavelength_nm >= 200 && t.test_wavelength_nm <= 20000))
+    throw Error(loc, fmt::format("\"test_wavelength_nm\" {} must be in [200, 20000]",
+                                 t.test_wavelength_nm));
+  if (s.isStop())
+    throw Error(loc, fmt::format("surface {} is the stop: it has no surface to be irregular",
+                                 t.surface));
+  if (!s.shape.isRotational())
+    throw Error(loc, fmt::format("surface {} is not rotationally symmetric (biconic or toroidal): "
+                                 "irregularity is modelled on rotational surfaces",
+                                 t.surface));
+  if (!(s.semiAperture_mm() > 0))
+    throw Error(loc, fmt::format("surface {} has no clear aperture to measure fringes over",
+                                 t.surface));
+  // Both extremes must leave a surface defined over its clear aperture.
+  for (double w : {-t.delta, t.delta}) {
+    LensSurface b = s;
+    applyIrregularity(b, w, t.test_wavelength_nm);
+    if (!(sagDomainRadius(b.radius_mm, b.shape) > b.semiAperture_mm()))
+      throw Error(loc, fmt::format("\"delta\" {} fringes: the irregular surface {} is not defined "
+                                   "out to its semi-aperture {} mm",
+                                   t.delta, t.surface, s.semiAperture_mm()));
+  }
+}
+
 void parseAxialTolerance(const json& e, const FileLoc& loc, const LensPrescription& p,
                          const std::string& k, Tolerance& t) {
   checkKeys(e, loc, {"type", "surface", "delta", "distribution"});
@@ -264,11 +302,10 @@ Tolerance parseTolerance(const json& e, const FileLoc& loc, const LensPrescripti
   t.loc = loc;
   const std::string k = kindOf(e, loc, {"radius", "thickness", "index", "abbe", "decentre",
                                         "decenter", "tilt", "irregularity"});
-  if (k == "irregularity")
-    throw Error(loc, "\"irregularity\" tolerances are not modelled (radius, thickness, index, "
-                     "abbe, decentre and tilt are)");
   if (k == "decentre" || k == "decenter" || k == "tilt") {
     parseMotionTolerance(e, loc, p, k == "tilt", t);
+  } else if (k == "irregularity") {
+    parseIrregularity(e, loc, p, t);
   } else {
     parseAxialTolerance(e, loc, p, k, t);
   }
@@ -367,9 +404,11 @@ std::string Operand::label() const {
 }
 
 std::string Tolerance::label() const {
-  static const char* names[] = {"radius",     "thickness",  "index",  "abbe",
+  static const char* names[] = {"radius",     "thickness",  "index",  "abbe",  "irregularity",
                                 "decentre x", "decentre y", "tilt x", "tilt y"};
   const char* name = names[static_cast<int>(kind)];
+  if (kind == Kind::Irregularity)
+    return fmt::format("{} surface {} +-{:g} fringes", name, surface, delta);
   if (!moves()) return fmt::format("{} surface {} +-{:g}", name, surface, delta);
   const std::string unit = kind >= Kind::TiltX ? " deg" : "";
   if (last_surface == surface) return fmt::format("{} surface {} +-{:g}{}", name, surface, delta, unit);

@@ -67,7 +67,7 @@ const char* operandKindName(Operand::Kind k);
 
 /// A tolerance of the tolerancing section.
 struct Tolerance {
-  enum class Kind { Radius, Thickness, Index, Abbe, DecentreX, DecentreY, TiltX, TiltY };
+  enum class Kind { Radius, Thickness, Index, Abbe, Irregularity, DecentreX, DecentreY, TiltX, TiltY };
   enum class Distribution { Uniform, Normal, EndPoint };
   Kind kind = Kind::Radius;
   int surface = 0;
@@ -75,8 +75,10 @@ struct Tolerance {
   /// element tolerance, `surface` itself for a surface tolerance).
   int last_surface = 0;
   /// +- range: radius, thickness and decentre in mm, tilt in degrees, index and Abbe number
-  /// absolute
+  /// absolute, irregularity in fringes at test_wavelength_nm
   double delta = 0;
+  /// Irregularity: the test wavelength of the fringes (OpticStudio's TWAV; 632.8 nm default).
+  double test_wavelength_nm = 632.8;
   Distribution distribution = Distribution::Uniform;
   FileLoc loc;
   /// Decentre or tilt: the build is no longer coaxial (optics/placed_lens.h traces it).

@@ -92,6 +92,20 @@ LensPrescription toleranceNominal(const DesignJob& job) {
   return p;
 }
 
+void applyIrregularity(LensSurface& s, double fringes, double test_wavelength_nm) {
+  const double a = fringes * test_wavelength_nm * 1e-6 / 4;  // mm of sag at the rim, each half
+  const double h = s.semiAperture_mm();
+  const double c = s.radius_mm != 0 ? 1 / s.radius_mm : 0;
+  if (s.shape.poly.size() < 5) s.shape.poly.resize(5, 0.0);
+  s.shape.poly[4] += a / (h * h * h * h);
+  if (!s.shape.radius_x_mm) {  // else a second irregularity on the surface: x stays as it is
+    s.shape.radius_x_mm = s.radius_mm;  // 0: flat in x, as the nominal plane
+    s.shape.conic_x = s.shape.conic;
+  }
+  const double cy = c + 2 * a / (h * h);
+  s.radius_mm = cy != 0 ? 1 / cy : 0;
+}
+
 LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double value) {
   if (t.moves()) {
     p = placeOnAxis(std::move(p), t.loc);
@@ -105,6 +119,7 @@ LensPrescription applyTolerance(LensPrescription p, const Tolerance& t, double v
   LensSurface& s = p.surfaces[t.surface];
   switch (t.kind) {
     case Tolerance::Kind::Radius: s.radius_mm += value; break;
+    case Tolerance::Kind::Irregularity: applyIrregularity(s, value, t.test_wavelength_nm); break;
     case Tolerance::Kind::Thickness:
       if (p.noncoaxial_loc)
         changeThickness(p, t.surface, value);
@@ -207,12 +222,24 @@ double drawTolerance(const Tolerance& t, std::uint64_t seed, int build, int inde
   return 0;
 }
 
-LensPrescription asBuiltLens(const DesignJob& job, int build) {
-  LensPrescription p = toleranceNominal(job);
+namespace {
+
+// Build `build` of the Monte Carlo run: every tolerance at its drawn value, the irregularities
+// last (they turn a surface into a biconic about its radius as built).
+LensPrescription drawnBuild(const DesignJob& job, LensPrescription p, int build) {
   const auto& tols = job.tolerance.tolerances;
-  for (size_t i = 0; i < tols.size(); ++i)
-    p = applyTolerance(std::move(p), tols[i],
-                       drawTolerance(tols[i], job.tolerance.seed, build, static_cast<int>(i)));
+  for (bool irregular : {false, true})
+    for (size_t i = 0; i < tols.size(); ++i)
+      if ((tols[i].kind == Tolerance::Kind::Irregularity) == irregular)
+        p = applyTolerance(std::move(p), tols[i],
+                           drawTolerance(tols[i], job.tolerance.seed, build, static_cast<int>(i)));
+  return p;
+}
+
+}  // namespace
+
+LensPrescription asBuiltLens(const DesignJob& job, int build) {
+  LensPrescription p = drawnBuild(job, toleranceNominal(job), build);
   double dz = 0;
   toleranceCriterion(job, p, &dz);
   if (p.noncoaxial_loc)
@@ -255,10 +282,7 @@ ToleranceResult runTolerancing(const DesignJob& job) {
   const int n = job.tolerance.monte_carlo;
   r.builds.assign(n, 0);
   tbb::parallel_for(0, n, [&](int k) {
-    LensPrescription p = nominal;
-    for (size_t i = 0; i < tols.size(); ++i)
-      p = applyTolerance(std::move(p), tols[i],
-                         drawTolerance(tols[i], job.tolerance.seed, k, static_cast<int>(i)));
+    const LensPrescription p = drawnBuild(job, nominal, k);
     try {
       r.builds[k] = toleranceCriterion(job, p, ref);
     } catch (const Error& e) {

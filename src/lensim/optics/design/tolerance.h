@@ -35,8 +35,20 @@ bool placedTolerancing(const DesignJob& job);
 /// through their (n_d, V_d), so that a zero offset changes nothing.
 LensPrescription toleranceNominal(const DesignJob& job);
 
+/// Surface irregularity of `fringes` fringes (signed) at the test wavelength, as OpticStudio's
+/// TIRR counts them (a double-pass test: a fringe is half a wavelength of sag) and splits them:
+/// half spherical, half astigmatic, each A = fringes * lambda_t / 4 of sag at the rim, where h is
+/// the surface's clear semi-aperture. The spherical half adds A (r/h)^4 to the sag exactly (the
+/// r^4 polynomial term). The astigmatic half makes the surface a biconic whose y section's vertex
+/// curvature is larger by 2A/h^2, its x section unchanged: its sag departs from the nominal by
+/// A (y/h)^2 along y to lowest order (OpticStudio's form), plus (3/4)(c h)^2 A (y/h)^4 and higher
+/// terms from the base curvature c; it is the surface with two principal curvatures that
+/// astigmatic polishing errors are, expressible in every lens format lensim writes. The surface
+/// must be rotationally symmetric.
+void applyIrregularity(LensSurface& s, double fringes, double test_wavelength_nm);
+
 /// A prescription with the tolerance applied at offset `value` (radius mm, thickness mm, index,
-/// Abbe number, decentre mm, tilt degrees). Index and Abbe tolerances make the medium a model
+/// Abbe number, irregularity fringes, decentre mm, tilt degrees). Index and Abbe tolerances make the medium a model
 /// glass through the perturbed (n_d, V_d). A decentre or tilt places the lens on its axis first
 /// (placeOnAxis) and moves its rows about the first row's vertex (moveRows); a thickness change
 /// of a placed lens moves the rows behind it along the row's axis.
