@@ -395,6 +395,99 @@ TEST(LensDesign, OperandValuesAgreeWithTheIndependentTrace) {
   EXPECT_NEAR(operandResidual(job.operands[5], v[5]), 1.0, 1e-12);
 }
 
+TEST(LensDesign, EdgeThicknessAndClearApertureAgreeWithTheIndependentGeometry) {
+  TempDir dir;
+  dir.write("singlet.dat", kSinglet);
+  std::string text = singletJob("singlet.dat");
+  text.replace(text.find("\"fields_deg\": [0]"), 17, "\"fields_deg\": [0, 6]");
+  const std::string from = "    {\"type\": \"rms_spot\", \"weight\": 100}\n";
+  text.replace(text.find(from), from.size(),
+               "    {\"type\": \"edge_thickness\", \"surface\": 1, \"min\": 1.5},\n"
+               "    {\"type\": \"clear_aperture\", \"surface\": 1},\n"
+               "    {\"type\": \"clear_aperture\", \"surface\": 2, \"max\": 10.5}\n");
+  const DesignJob job = readDesignJob(dir.write("job.json", text));
+  const std::vector<double> v = operandValues(job, job.start);
+  ASSERT_EQ(v.size(), 4u);
+  // Edge: both rows' semi-apertures are 15 mm; the sphere's sag R - sgn(R) sqrt(R^2 - h^2).
+  auto sag = [](double R, double h) { return R - (R > 0 ? 1 : -1) * std::sqrt(R * R - h * h); };
+  EXPECT_NEAR(v[1], 4 + sag(-120, 15) - sag(80, 15), 1e-12);
+  EXPECT_EQ(operandResidual(job.operands[1], v[1]), 0);  // 1.640 mm > 1.5
+  // Clear aperture of row 1: the 6 deg beam's rim ray from (10, 0) at the stop (z = 0) toward
+  // (sin 6, 0, cos 6) meets the sphere R 80 whose vertex is at z = 5: the largest height of the
+  // rims of both beams (the test's own intersection over 720 rim points).
+  double most = 0;
+  for (double deg : {0.0, 6.0})
+    for (int k = 0; k < 720; ++k) {
+      const double th = deg * M_PI / 180, a = 2 * M_PI * k / 720;
+      const double o[3] = {10 * std::cos(a), 10 * std::sin(a), 0}, d[3] = {std::sin(th), 0, std::cos(th)};
+      const double oc[3] = {o[0], o[1], o[2] - 85};
+      const double b = oc[0] * d[0] + oc[1] * d[1] + oc[2] * d[2];
+      const double c = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - 80 * 80;
+      const double t = -b - std::sqrt(b * b - c);
+      most = std::max(most, std::hypot(o[0] + t * d[0], o[1] + t * d[1]));
+    }
+  EXPECT_NEAR(v[2], most, 1e-9);
+  EXPECT_GT(most, 10.4);
+  // Default limit: the row's semi-aperture as written (15 mm): inside, no residual.
+  EXPECT_EQ(operandResidual(job.operands[2], v[2]), 0);
+  // Row 2 with max 10.5: the excess is the residual.
+  EXPECT_GT(v[3], 10.5);
+  EXPECT_NEAR(operandResidual(job.operands[3], v[3]), v[3] - 10.5, 1e-12);
+  EXPECT_EQ(job.operands[3].label(), "clear_aperture(surface 2)");
+}
+
+// Two singlets with the stop between them (rows 1 and 2 are the air gaps on its two sides).
+const char* kStopBetween =
+    "# stop between\n"
+    "40     4    1.5168  20\n"
+    "-200   8    1       20\n"
+    "0      8    1       10\n"
+    "200    4    1.5168  20\n"
+    "-40    45   1       20\n";
+
+TEST(LensDesign, StopPositionSlidesTheStopAndFindsTheScannedOptimum) {
+  TempDir dir;
+  dir.write("stop.dat", kStopBetween);
+  const std::string job_text =
+      "{\"lens\": \"stop.dat\", \"fields_deg\": [12],\n"
+      " \"variables\": [{\"type\": \"stop_position\", \"min\": 1, \"max\": 15}],\n"
+      " \"operands\": [{\"type\": \"distortion\", \"field_deg\": 12, \"target\": 0}]}\n";
+  const DesignJob job = readDesignJob(dir.write("job.json", job_text));
+  ASSERT_EQ(job.variables.size(), 1u);
+  EXPECT_EQ(job.variables[0].surface, 2);
+  EXPECT_EQ(variableValues(job.variables, job.start)[0], 8);
+  // The stop slides; the rows around it keep their sum, the track stays.
+  const LensPrescription moved = applyVariables(job.variables, job.start, {3.0});
+  EXPECT_EQ(moved.surfaces[1].thickness_mm, 3);
+  EXPECT_EQ(moved.surfaces[2].thickness_mm, 13);
+  // Distortion against the stop's position, scanned in the test: the optimiser lands where the
+  // scan's |distortion| is smallest (between its neighbours).
+  double best_x = 0, best = 1e300;
+  for (double x = 1; x <= 15 + 1e-9; x += 0.25) {
+    const double d = std::abs(operandValues(job, applyVariables(job.variables, job.start, {x}))[0]);
+    if (d < best) best = d, best_x = x;
+  }
+  const DesignResult r = optimiseDesign(job);
+  const double x = variableValues(job.variables, r.lens)[0];
+  EXPECT_NEAR(x, best_x, 0.25 + 1e-9) << "scan best " << best_x << " |distortion| " << best;
+  EXPECT_LE(std::abs(r.values[0]), best + 1e-12);
+  // A thickness variable on either side of the stop is refused at its line.
+  const std::string clash =
+      "{\"lens\": \"stop.dat\", \"fields_deg\": [12],\n"
+      " \"variables\": [{\"type\": \"stop_position\"},\n"
+      "   {\"type\": \"thickness\", \"surface\": 1}],\n"
+      " \"operands\": [{\"type\": \"efl\", \"target\": 50}]}\n";
+  try {
+    readDesignJob(dir.write("clash.json", clash));
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("clash.json:3:4: error: a thickness variable of row 1 "
+                                         "and the stop_position variable (line 2)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // --- Tolerancing -------------------------------------------------------------------------------
 
 std::string toleranceJob(const std::string& lens, int seed, const std::string& dist) {
@@ -592,8 +685,9 @@ TEST(LensDesign, JobErrorsNameTheLineAndValue) {
   job.replace(job.find("\"surface\": 2}"), 13, "\"surface\": 7}");
   EXPECT_NE(err(job).find("bad.json:6:5: error: \"surface\" 7 is not a row"), std::string::npos) << err(job);
   std::string tol = toleranceJob("singlet.dat", 1, "uniform");
-  tol.replace(tol.find("\"radius\", \"surface\": 2"), 8, "\"irregularity\"");
-  EXPECT_NE(err(tol).find("bad.json:9:7: error: \"irregularity\" tolerances are not modelled"),
+  tol.replace(tol.find("\"radius\", \"surface\": 2, \"delta\": 0.5"), 36,
+              "\"irregularity\", \"surface\": 2, \"delta\": 500");
+  EXPECT_NE(err(tol).find("bad.json:9:7: error: \"delta\" 500 fringes must be > 0 and at most 100"),
             std::string::npos)
       << err(tol);
   tol = toleranceJob("singlet.dat", 1, "uniform");

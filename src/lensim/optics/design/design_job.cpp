@@ -16,6 +16,7 @@
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/paraxial.h"
+#include "lensim/optics/surface_shape.h"
 #include "lensim/util/file.h"
 
 namespace lensim::optics::design {
@@ -72,12 +73,50 @@ void checkKeys(const json& e, const FileLoc& loc, const std::vector<std::string>
                                    fmt::join(allowed, ", ")));
 }
 
+// The operand kinds' names, in the order of Operand::Kind.
+constexpr const char* kOperandNames[] = {
+    "efl",       "f_number",     "bfl",           "total_track",        "rms_spot",
+    "distortion", "lateral_color", "longitudinal_color", "thickness",    "image_height",
+    "rms_wavefront", "mtf",      "edge_thickness", "clear_aperture"};
+static_assert(std::size(kOperandNames) == static_cast<size_t>(Operand::Kind::ClearAperture) + 1);
+
+// The stop's position between its neighbours: no "surface" (the lens's stop row).
+Variable parseStopPosition(const json& e, const FileLoc& loc, const LensPrescription& p) {
+  Variable v;
+  v.loc = loc;
+  v.kind = Variable::Kind::StopPosition;
+  if (e.contains("surface") || e.contains("power"))
+    throw Error(loc, "a stop_position variable moves the lens's stop row: no \"surface\" or "
+                     "\"power\"");
+  const std::optional<int> stop = p.stopIndex();
+  if (!stop) throw Error(loc, "stop_position: the lens has no stop row (radius 0 row)");
+  if (*stop == 0 || *stop + 1 >= static_cast<int>(p.surfaces.size()))
+    throw Error(loc, fmt::format("stop_position: the stop is row {}, the {} row: it needs a row "
+                                 "before and after it to slide between",
+                                 *stop, *stop == 0 ? "first" : "last"));
+  v.surface = *stop;
+  const double before = p.surfaces[size_t(*stop - 1)].thickness_mm;
+  v.gap_mm = before + p.surfaces[size_t(*stop)].thickness_mm;
+  v.lower = number(e, "min", loc, 0.0);
+  v.upper = number(e, "max", loc, v.gap_mm);
+  if (!(v.lower >= 0 && v.upper <= v.gap_mm && v.lower < v.upper))
+    throw Error(loc, fmt::format("stop_position: \"min\" {} and \"max\" {} must satisfy 0 <= "
+                                 "min < max <= {} mm (the gap the stop slides in)",
+                                 v.lower, v.upper, v.gap_mm));
+  if (!(before >= v.lower && before <= v.upper))
+    throw Error(loc, fmt::format("stop_position: the stop starts {} mm behind row {}, outside "
+                                 "[{}, {}]",
+                                 before, *stop - 1, v.lower, v.upper));
+  return v;
+}
+
 Variable parseVariable(const json& e, const FileLoc& loc, const LensPrescription& p) {
   Variable v;
   v.loc = loc;
   checkKeys(e, loc, {"type", "surface", "power", "min", "max"});
-  const std::string t =
-      kindOf(e, loc, {"curvature", "thickness", "conic", "asphere", "glass_nd", "glass_vd"});
+  const std::string t = kindOf(e, loc, {"curvature", "thickness", "conic", "asphere", "glass_nd",
+                                        "glass_vd", "stop_position"});
+  if (t == "stop_position") return parseStopPosition(e, loc, p);
   v.surface = surfaceIndex(e, loc, p);
   const LensSurface& s = p.surfaces[v.surface];
   if (t == "curvature") {
@@ -124,10 +163,7 @@ Operand parseOperand(const json& e, const FileLoc& loc, const LensPrescription& 
   checkKeys(e, loc,
             {"type", "target", "weight", "min", "max", "field_deg", "wavelength_nm", "surface",
              "frequency", "azimuth"});
-  static const std::vector<std::string> kinds = {
-      "efl",       "f_number",     "bfl",           "total_track",
-      "rms_spot",  "distortion",   "lateral_color", "longitudinal_color",
-      "thickness", "image_height", "rms_wavefront", "mtf"};
+  const std::vector<std::string> kinds(std::begin(kOperandNames), std::end(kOperandNames));
   const std::string t = kindOf(e, loc, kinds);
   o.kind = static_cast<Operand::Kind>(std::find(kinds.begin(), kinds.end(), t) - kinds.begin());
   o.weight = number(e, "weight", loc, 1.0);
@@ -154,9 +190,17 @@ Operand parseOperand(const json& e, const FileLoc& loc, const LensPrescription& 
   } else if (e.contains("frequency") || e.contains("azimuth")) {
     throw Error(loc, "\"frequency\" and \"azimuth\" belong to mtf operands");
   }
-  if (o.kind == Operand::Kind::Thickness) {
-    if (!limits) throw Error(loc, "a thickness operand needs \"min\" and/or \"max\" (mm)");
+  if (o.kind == Operand::Kind::Thickness || o.kind == Operand::Kind::EdgeThickness) {
+    if (!limits) throw Error(loc, fmt::format("a{} thickness operand needs \"min\" and/or \"max\" (mm)",
+                                              o.kind == Operand::Kind::EdgeThickness ? "n edge" : ""));
     o.surface = surfaceIndex(e, loc, p);
+    if (o.kind == Operand::Kind::EdgeThickness && o.surface + 1 >= static_cast<int>(p.surfaces.size()))
+      throw Error(loc, fmt::format("edge_thickness: surface {} is the last row (its thickness is "
+                                   "the film distance)",
+                                   o.surface));
+  } else if (o.kind == Operand::Kind::ClearAperture) {
+    o.surface = surfaceIndex(e, loc, p);
+    if (!limits) o.max = p.surfaces[size_t(o.surface)].semiAperture_mm();
   } else if (!limits) {
     o.target = number(e, "target", loc, zero_target ? std::optional<double>(0.0) : std::nullopt);
   }
@@ -374,16 +418,12 @@ const char* variableKindName(Variable::Kind k) {
     case Variable::Kind::Asphere: return "asphere";
     case Variable::Kind::GlassIndex: return "glass_nd";
     case Variable::Kind::GlassAbbe: return "glass_vd";
+    case Variable::Kind::StopPosition: return "stop_position";
   }
   return "?";
 }
 
-const char* operandKindName(Operand::Kind k) {
-  static const char* names[] = {"efl",       "f_number",     "bfl",           "total_track",
-                                "rms_spot",  "distortion",   "lateral_color", "longitudinal_color",
-                                "thickness", "image_height", "rms_wavefront", "mtf"};
-  return names[static_cast<int>(k)];
-}
+const char* operandKindName(Operand::Kind k) { return kOperandNames[static_cast<int>(k)]; }
 
 std::string Operand::label() const {
   switch (kind) {
@@ -398,7 +438,9 @@ std::string Operand::label() const {
     case Kind::Distortion:
     case Kind::LateralColor:
     case Kind::ImageHeight: return fmt::format("{}({:g} deg)", operandKindName(kind), field_deg);
-    case Kind::Thickness: return fmt::format("thickness(surface {})", surface);
+    case Kind::Thickness:
+    case Kind::EdgeThickness:
+    case Kind::ClearAperture: return fmt::format("{}(surface {})", operandKindName(kind), surface);
     default: return operandKindName(kind);
   }
 }
@@ -476,6 +518,15 @@ DesignJob parseDesignJob(std::string_view text, const std::string& path) {
   const LensPrescription& p = job.start;
   job.variables = parseArray<Variable>(j, "variables", text, path,
                                        [&](const json& e, const FileLoc& l) { return parseVariable(e, l, p); });
+  // The stop's position sets the thicknesses on both sides of it: no other variable may.
+  for (const Variable& sv : job.variables)
+    if (sv.kind == Variable::Kind::StopPosition)
+      for (const Variable& v : job.variables)
+        if (v.kind == Variable::Kind::Thickness &&
+            (v.surface == sv.surface || v.surface == sv.surface - 1))
+          throw Error(v.loc, fmt::format("a thickness variable of row {} and the stop_position "
+                                         "variable (line {}) set the same thickness",
+                                         v.surface, sv.loc.line));
   std::vector<Operand> ops = parseArray<Operand>(
       j, "operands", text, path, [&](const json& e, const FileLoc& l) { return parseOperand(e, l, p); });
   // An RMS spot or wavefront without a field or wavelength stands for every field and wavelength of
@@ -545,6 +596,7 @@ std::vector<double> variableValues(const std::vector<Variable>& vars, const Lens
     switch (v.kind) {
       case Variable::Kind::Curvature: x.push_back(s.radius_mm == 0 ? 0 : 1 / s.radius_mm); break;
       case Variable::Kind::Thickness: x.push_back(s.thickness_mm); break;
+      case Variable::Kind::StopPosition: x.push_back(p.surfaces[size_t(v.surface - 1)].thickness_mm); break;
       case Variable::Kind::Conic: x.push_back(s.shape.conic); break;
       case Variable::Kind::Asphere:
         x.push_back(static_cast<int>(s.shape.poly.size()) > v.power ? s.shape.poly[v.power] : 0);
@@ -569,6 +621,10 @@ LensPrescription applyVariables(const std::vector<Variable>& vars, LensPrescript
     switch (v.kind) {
       case Variable::Kind::Curvature: s.radius_mm = x[k] == 0 ? 0 : 1 / x[k]; break;
       case Variable::Kind::Thickness: s.thickness_mm = x[k]; break;
+      case Variable::Kind::StopPosition:
+        p.surfaces[size_t(v.surface - 1)].thickness_mm = x[k];
+        s.thickness_mm = v.gap_mm - x[k];
+        break;
       case Variable::Kind::Conic: s.shape.conic = x[k]; break;
       case Variable::Kind::Asphere:
         if (static_cast<int>(s.shape.poly.size()) <= v.power) s.shape.poly.resize(v.power + 1, 0);
@@ -644,6 +700,59 @@ double rmsSpot_mm(const LensPrescription& p, double field_deg, double lambda_nm,
   return std::sqrt(spotQuadratic(p, field_deg, lambda_nm, primary_nm, rings).a);
 }
 
+namespace {
+
+// Thickness after row `i` at the element's edge: at the larger of the two rows' semi-apertures,
+// along y.
+double edgeThickness(const LensPrescription& p, int i) {
+  const LensSurface& a = p.surfaces[size_t(i)];
+  const LensSurface& b = p.surfaces[size_t(i + 1)];
+  const double h = std::max(a.semiAperture_mm(), b.semiAperture_mm());
+  auto sag = [&](const LensSurface& s, int row) {
+    const auto g = surfaceSag(s.radius_mm, s.shape, 0, h);
+    if (!g)
+      throw Error(fmt::format("edge_thickness: the sag of row {} is not defined at the edge "
+                              "height {} mm",
+                              row, h));
+    return g->z;
+  };
+  return a.thickness_mm + sag(b, i + 1) - sag(a, i);
+}
+
+// The largest real ray height at row `row` over the rims of the job's field beams (primary
+// wavelength, floating apertures as every operand sees them).
+double clearAperture(const DesignJob& job, const FocusedLens& fl, const ParaxialData& pp, int row) {
+  const LensSystem& lens = *fl.lens;
+  constexpr int kAzimuths = 32;
+  double most = 0;
+  std::vector<Vec3> path;
+  for (double field : job.fields_deg) {
+    const FieldBundle beam = fieldBundle(lens, pp, field);
+    auto trace = [&](Vec2 o, std::vector<Vec3>* at) {
+      const TraceResult r = lens.tracer().traceFromScene(beam.sceneRay(o), TraceOptions{false}, at);
+      return r.ok() && r.ray.direction.z > 0;
+    };
+    const FieldBundle::PupilRegion region = passingPupil(
+        pp.entrance_pupil_diameter_mm / 2, [&](Vec2 o) { return trace(o, nullptr); }, field,
+        kAzimuths);
+    for (int k = 0; k < kAzimuths; ++k) {
+      const double phi = 2 * std::numbers::pi * k / kAzimuths;
+      const double r = region.radiusAt(phi);
+      path.clear();
+      if (!trace({r * std::cos(phi), r * std::sin(phi)}, &path) ||
+          path.size() < static_cast<size_t>(row) + 2)
+        throw Error(fmt::format("clear_aperture: a rim ray of the {} deg beam does not reach the "
+                                "film",
+                                field));
+      const Vec3& q = path[size_t(row) + 1];  // path[0] is the ray's start
+      most = std::max(most, std::hypot(q.x, q.y));
+    }
+  }
+  return most;
+}
+
+}  // namespace
+
 std::vector<double> operandValues(const DesignJob& job, const LensPrescription& p) {
   const double primary = job.wavelengths_nm.front();
   FocusedLens fl = evaluationLens(p);
@@ -676,6 +785,8 @@ std::vector<double> operandValues(const DesignJob& job, const LensPrescription& 
         v = paraxialAt(kLineF_nm).back_focal_length_mm - paraxialAt(kLineC_nm).back_focal_length_mm;
         break;
       case Operand::Kind::Thickness: v = p.surfaces[o.surface].thickness_mm; break;
+      case Operand::Kind::EdgeThickness: v = edgeThickness(p, o.surface); break;
+      case Operand::Kind::ClearAperture: v = clearAperture(job, fl, par, o.surface); break;
       case Operand::Kind::ImageHeight: v = chiefHeight(*fl.lens, par, o.field_deg); break;
       case Operand::Kind::RmsWavefront:
         v = rmsWavefront_waves(p, o.field_deg, o.wavelength_nm, primary);

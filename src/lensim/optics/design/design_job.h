@@ -23,14 +23,17 @@ namespace lensim::optics::design {
 
 /// One optimisation variable: a number of the prescription, with bounds.
 struct Variable {
-  enum class Kind { Curvature, Thickness, Conic, Asphere, GlassIndex, GlassAbbe };
+  /// StopPosition: the stop row's distance behind the row before it, the gap between those
+  /// two rows' neighbours kept (the stop slides between them; `surface` is the stop row).
+  enum class Kind { Curvature, Thickness, Conic, Asphere, GlassIndex, GlassAbbe, StopPosition };
   Kind kind = Kind::Curvature;
   int surface = 0;  ///< 0-based row of the prescription
   int power = 0;    ///< Asphere: the power p of r^p
+  double gap_mm = 0;  ///< StopPosition: the thicknesses before and after the stop, summed
   double lower = -1e300, upper = 1e300;
   FileLoc loc;
 };
-/// "curvature", "thickness", "conic", "asphere", "glass_nd", "glass_vd".
+/// "curvature", "thickness", "conic", "asphere", "glass_nd", "glass_vd", "stop_position".
 const char* variableKindName(Variable::Kind k);
 
 /// One operand of the merit function: residual weight (value - target), or for limits the
@@ -49,6 +52,13 @@ struct Operand {
     ImageHeight,        ///< real chief-ray image height (mm) at a field
     RmsWavefront,       ///< RMS wave aberration (waves), tilt removed, at a field and wavelength
     Mtf,  ///< diffraction MTF at a frequency, field and azimuth (wavelength, or all polychromatic)
+    /// Thickness after a surface at the edge (mm), a limit: at the larger of its and the next
+    /// row's semi-apertures, along y, the thickness plus the next row's sag minus its own.
+    EdgeThickness,
+    /// The largest real ray height (mm) at a surface over the rims of the job's field beams
+    /// (primary wavelength, the beams' passing pupils), a limit (default max: the surface's
+    /// semi-aperture as written).
+    ClearAperture,
   };
   Kind kind = Kind::Efl;
   double target = 0;
@@ -56,7 +66,7 @@ struct Operand {
   std::optional<double> min, max;  ///< limits instead of a target
   double field_deg = 0;
   double wavelength_nm = 0;  ///< RmsSpot, RmsWavefront, Mtf (0: Mtf over every wavelength)
-  int surface = 0;           ///< Thickness
+  int surface = 0;           ///< Thickness, EdgeThickness, ClearAperture
   double frequency = 0;      ///< Mtf, cycles/mm
   bool sagittal = false;     ///< Mtf: sagittal (else tangential)
   FileLoc loc;

@@ -17,7 +17,8 @@ namespace {
 double fdStep(const Variable& v, double x) {
   switch (v.kind) {
     case Variable::Kind::Curvature: return 1e-6 * std::max(std::abs(x), 1e-3);
-    case Variable::Kind::Thickness: return 1e-6 * std::max(std::abs(x), 1.0);
+    case Variable::Kind::Thickness:
+    case Variable::Kind::StopPosition: return 1e-6 * std::max(std::abs(x), 1.0);
     case Variable::Kind::Conic: return 1e-6 * std::max(std::abs(x), 1.0);
     case Variable::Kind::Asphere: return 1e-6 * std::max(std::abs(x), std::pow(10.0, -v.power));
     case Variable::Kind::GlassIndex: return 1e-7;
@@ -31,7 +32,8 @@ double fdStep(const Variable& v, double x) {
 double searchScale(const Variable& v) {
   switch (v.kind) {
     case Variable::Kind::Curvature: return 1e-2;
-    case Variable::Kind::Thickness: return 1;
+    case Variable::Kind::Thickness:
+    case Variable::Kind::StopPosition: return 1;
     case Variable::Kind::Conic: return 1;
     case Variable::Kind::Asphere: return std::pow(10.0, -v.power);
     case Variable::Kind::GlassIndex: return 0.1;
