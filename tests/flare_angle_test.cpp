@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <complex>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <vector>
@@ -203,4 +204,36 @@ TEST(FlareAngle, TracedGhostIntensitiesUseTheCoatingsAtTheRaysAngles) {
     if (!g["spot"].is_null())
       brightest = std::max(brightest, g["spot"]["relative_intensity"].get<double>());
   EXPECT_GE(rank[0]["relative_intensity"].get<double>(), brightest);
+}
+
+// `lens plot ghosts --angle` plots the intensities `lens ghosts --angle` ranks (the same traced
+// rays, default grid), brightest first; --angle with another plot is refused.
+TEST(FlareAngle, PlotGhostsAtAnAngleShowsTheTracedRanking) {
+  const std::string lens_file = test::lensPath("dgauss.50mm.dat");
+  const std::string svg =
+      (std::filesystem::temp_directory_path() / "lensim_flare_angle_plot.svg").string();
+  const test::CliResult plot =
+      test::runLensim("--quiet lens plot ghosts " + lens_file +
+                      " --aperture-diameter 12 --angle 10 --json -o " + svg);
+  ASSERT_EQ(plot.status, 0) << plot.out;
+  const test::CliResult ghosts = test::runLensim(
+      "lens ghosts " + lens_file + " --aperture-diameter 12 --angle 10 --top 20 --json");
+  ASSERT_EQ(ghosts.status, 0) << ghosts.out;
+  const json p = json::parse(plot.out);
+  const json g = json::parse(ghosts.out);
+  EXPECT_EQ(p["angle_deg"].get<double>(), 10.0);
+  const json& bars = p["bars"];
+  ASSERT_GE(bars.size(), 10u);
+  for (size_t i = 0; i < bars.size(); ++i) {
+    const json& r = g["angle_ranking"][i];
+    EXPECT_EQ(bars[i]["first_reflection_surface"], r["first_reflection_surface"]) << i;
+    EXPECT_EQ(bars[i]["second_reflection_surface"], r["second_reflection_surface"]) << i;
+    EXPECT_DOUBLE_EQ(bars[i]["relative_intensity"].get<double>(),
+                     r["relative_intensity"].get<double>())
+        << i;
+  }
+  const test::CliResult bad =
+      test::runLensim("lens plot spot " + lens_file + " --angle 10 -o " + svg);
+  EXPECT_EQ(bad.status, 1) << bad.out;
+  EXPECT_NE(bad.out.find("--angle applies to 'ghosts'"), std::string::npos) << bad.out;
 }

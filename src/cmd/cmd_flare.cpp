@@ -365,15 +365,30 @@ int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
   return 0;
 }
 
-int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json) {
+int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json,
+                 std::optional<double> angle_deg) {
   FocusedLens fl = setUpLens(args);
   logDiagnostics(fl.allDiagnostics());
   const LensSystem& lens = *fl.lens;
   const std::vector<double> band = visibleBand();
-  const GhostAnalysis g = analyseGhosts(lens, resolveCoatings(lens.prescription()), band);
+  const LensCoatings coatings = resolveCoatings(lens.prescription());
+  const GhostAnalysis g = analyseGhosts(lens, coatings, band);
+  // The ghosts to plot, brightest first: (first surface, second surface, intensity), axial
+  // (paraxial) or traced at the angle.
+  struct Bar {
+    int b = 0, a = 0;
+    double intensity = 0;
+  };
+  std::vector<Bar> ranked;
+  if (angle_deg) {
+    const TracedSpots t = traceSpots(lens, coatings, g, *angle_deg, 64);
+    for (size_t i : t.order) ranked.push_back({g.ghosts[i].b, g.ghosts[i].a, t.relative[i]});
+  } else {
+    for (const Ghost& h : g.ghosts) ranked.push_back({h.b, h.a, h.relative_intensity});
+  }
   constexpr size_t kShown = 20;  // the brightest; the rest are orders of magnitude fainter
   // Linear bars in units of the brightest ghost's decade, with room above them for the notes.
-  const double brightest = g.ghosts.empty() ? 0.0 : g.ghosts.front().relative_intensity;
+  const double brightest = ranked.empty() ? 0.0 : ranked.front().intensity;
   if (!(brightest > 0))
     throw Error(fmt::format("{}: no ghost reaches the film (no two surfaces reflect)",
                             lens.prescription().path));
@@ -385,19 +400,20 @@ int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json) 
   chart.y_label = fmt::format("ghost / direct image energy (x 1e{})", decade);
   plot::Series bars;
   bars.style = plot::Style::Bars;
-  bars.name = "axial, 400-700 nm";
+  bars.name = angle_deg ? fmt::format("{} deg off axis, traced, 400-700 nm", *angle_deg)
+                        : std::string("axial, 400-700 nm");
   json ranks = json::array();
   double total = 0;
-  for (const Ghost& h : g.ghosts) total += h.relative_intensity;
+  for (const Bar& h : ranked) total += h.intensity;
   std::string top;
-  for (const Ghost& h : g.ghosts) {
-    if (bars.points.size() == kShown || !(h.relative_intensity > 0)) break;
+  for (const Bar& h : ranked) {
+    if (bars.points.size() == kShown || !(h.intensity > 0)) break;
     const double rank = double(bars.points.size() + 1);
-    bars.points.push_back({rank, h.relative_intensity / unit});
+    bars.points.push_back({rank, h.intensity / unit});
     ranks.push_back({{"rank", rank},
                      {"first_reflection_surface", h.b},
                      {"second_reflection_surface", h.a},
-                     {"relative_intensity", h.relative_intensity}});
+                     {"relative_intensity", h.intensity}});
     if (bars.points.size() <= 6)
       top += fmt::format("{}{}: {},{}", top.empty() ? "" : "  ", bars.points.size(), h.b, h.a);
   }
@@ -411,13 +427,14 @@ int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json) 
   doc.rect(0, 0, 720, 440, {{"fill", "#ffffff"}});
   chart.render(doc, 0, 0, 720, 440);
   writeFileAtomically(output, doc.str());
-  if (as_json)
-    std::cout << json{{"kind", "ghosts"},
-                      {"lens", lens.prescription().path},
-                      {"total_relative_intensity", total},
-                      {"bars", ranks}}
-                     .dump(2)
-              << "\n";
+  if (as_json) {
+    json j{{"kind", "ghosts"},
+           {"lens", lens.prescription().path},
+           {"total_relative_intensity", total},
+           {"bars", ranks}};
+    if (angle_deg) j["angle_deg"] = *angle_deg;
+    std::cout << j.dump(2) << "\n";
+  }
   logInfo(fmt::format("wrote {}", output));
   return 0;
 }
