@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli_run.h"
+#include "lensim/io/exr_window.h"
 #include "lensim/io/image.h"
 #include "lensim/render/parts.h"
 #include "lensim/render/renderer.h"
@@ -130,6 +131,21 @@ TEST(FlareParts, SampleSlicesAndTilesMergeToTheWholeRenderBitForBit) {
   EXPECT_TRUE(
       sameBits(render::sumsImage(merged.bounds, merged.sums, merged.ghost_sums), whole.image));
 
+  // A part file with some but not all of the ghost layer's sum channels is refused, naming it.
+  {
+    io::ExrWindowFile f = io::readExrWindow((d / "part0_0.exr").string());
+    ASSERT_EQ(f.uint_channels.erase("ghost.sum.G.2"), 1u);
+    const std::string cut = (d / "cut.exr").string();
+    io::writeExrWindow(cut, f);
+    try {
+      render::readPart(cut);
+      ADD_FAILURE() << "read a part with 11 of the 12 ghost-layer channels";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("cut.exr"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("11 of the 12 ghost-layer channels"), std::string::npos)
+          << e.what();
+    }
+  }
   // A part without the ghost layer does not merge with those that have it.
   std::vector<render::Part> mixed = parts;
   mixed[1].ghost_sums.clear();
