@@ -203,7 +203,7 @@ TEST(FlareRender, DoubleGaussFlatField) {
   EXPECT_LT(c_ghost / c_off, 0.08);
 }
 
-// Refused at the Camera line, with nothing rendered: films without the ghost layer, parts;
+// Refused at the Camera line, with nothing rendered: films without the ghost layer;
 // "flarecoating" without flare or with an unknown name at
 // its parameter.
 TEST(FlareRender, Refusals) {
@@ -228,9 +228,6 @@ TEST(FlareRender, Refusals) {
     f.close();
     expectError(path, "needs Film \"rgb\"", 1);
   }
-  render::RenderOptions parts;
-  parts.keep_sums = true;
-  expectError(writeScene("parts.pbrt", on), "parts", 1, parts);
   try {
     scene::loadScene(writeScene("coat.pbrt", common + " \"string flarecoating\" \"multi\""));
     ADD_FAILURE() << "flarecoating without flare accepted";

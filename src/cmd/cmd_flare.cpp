@@ -66,32 +66,53 @@ struct GhostArgs {
   int grid = 64;  // rays across the entrance for the traced spots
 };
 
-// The traced film spots of the shown ghosts (nullopt for a pair that reflects nothing: the
-// stop or a dummy surface) and of the direct image, for a light at `angle_deg`.
+// For a light at `angle_deg`: every ghost's traced film spot (nullopt for a pair that reflects
+// nothing: the stop or a dummy surface) and the direct image's, and their light from the same
+// real rays weighted by the coatings at each ray's angles (tracedPathEnergy); `order`: the
+// ghosts' indices, brightest at that angle first.
 struct TracedSpots {
   GhostSpot direct;
+  std::vector<double> direct_energy;
   std::vector<std::optional<GhostSpot>> ghosts;
+  /// Per ghost: its light over the direct image's, per wavelength and their mean.
+  std::vector<std::vector<double>> relative_per_wavelength;
+  std::vector<double> relative;
+  std::vector<size_t> order;
 };
 
-TracedSpots traceSpots(const LensSystem& lens, const GhostAnalysis& g, size_t shown,
+TracedSpots traceSpots(const LensSystem& lens, const LensCoatings& coatings, const GhostAnalysis& g,
                        double angle_deg, int grid) {
   if (!(std::abs(angle_deg) < 89))
     throw Error(fmt::format("--angle {}: expected a light angle within -89..89 degrees",
                             angle_deg));
   const double a = angle_deg * std::numbers::pi / 180;
   const Interface& front = lens.interfaces().front();
+  const std::vector<double>& wl = g.wavelengths_nm;
   TracedSpots t;
   t.direct = traceSpot(LensTracer<double>(lens.interfaces()), front, lens.filmZ_mm(), a, grid);
-  for (size_t i = 0; i < shown; ++i) {
-    const Ghost& h = g.ghosts[i];
+  t.direct_energy = tracedPathEnergy(lens, coatings, -1, -1, a, grid, wl);
+  for (const Ghost& h : g.ghosts) {
     const auto& s = lens.interfaces();
+    std::vector<double> rel(wl.size(), 0.0);
+    double mean = 0;
     if (s[size_t(h.a)].ior_before == s[size_t(h.a)].ior_after ||
         s[size_t(h.b)].ior_before == s[size_t(h.b)].ior_after) {
       t.ghosts.emplace_back();
-      continue;
+    } else {
+      t.ghosts.emplace_back(
+          traceSpot(ghostTracer(lens, h.b, h.a), front, lens.filmZ_mm(), a, grid));
+      const std::vector<double> e = tracedPathEnergy(lens, coatings, h.b, h.a, a, grid, wl);
+      for (size_t w = 0; w < wl.size(); ++w) {
+        rel[w] = t.direct_energy[w] > 0 ? e[w] / t.direct_energy[w] : 0.0;
+        mean += rel[w] / double(wl.size());
+      }
     }
-    t.ghosts.emplace_back(traceSpot(ghostTracer(lens, h.b, h.a), front, lens.filmZ_mm(), a, grid));
+    t.relative_per_wavelength.push_back(std::move(rel));
+    t.relative.push_back(mean);
   }
+  for (size_t i = 0; i < g.ghosts.size(); ++i) t.order.push_back(i);
+  std::stable_sort(t.order.begin(), t.order.end(),
+                   [&](size_t x, size_t y) { return t.relative[x] > t.relative[y]; });
   return t;
 }
 
@@ -103,31 +124,39 @@ json spotJson(const GhostSpot& s) {
               {"extent_y_mm", s.extent_y_mm}};
 }
 
-std::string spotLine(const std::string& label, const GhostSpot& s) {
+std::string spotLine(const std::string& rank, const std::string& label, const GhostSpot& s,
+                     double intensity) {
   if (s.rays_arrived == 0)
-    return fmt::format("  {:>7} {:>9} {:>9}  no ray reaches the film\n", label, 0, s.rays_launched);
-  return fmt::format("  {:>7} {:>9} {:>9} {:>11.4f} {:>11.4f} {:>10.4f} {:>10.4f} {:>10.4f}\n",
-                     label, s.rays_arrived, s.rays_launched, s.centroid_x_mm, s.centroid_y_mm,
-                     s.rms_radius_mm, s.extent_x_mm, s.extent_y_mm);
+    return fmt::format("  {:>4} {:>7} {:>12} {:>9} {:>9}  no ray reaches the film\n", rank, label,
+                       "", 0, s.rays_launched);
+  return fmt::format(
+      "  {:>4} {:>7} {:>12.4e} {:>9} {:>9} {:>11.4f} {:>11.4f} {:>10.4f} {:>10.4f} {:>10.4f}\n",
+      rank, label, intensity, s.rays_arrived, s.rays_launched, s.centroid_x_mm, s.centroid_y_mm,
+      s.rms_radius_mm, s.extent_x_mm, s.extent_y_mm);
 }
 
 void printSpots(const GhostAnalysis& g, size_t shown, const TracedSpots& t, double angle_deg,
                 int grid) {
   std::cout << fmt::format(
       "\n  traced film spots of a point light {} deg off axis (x-z plane; {}x{} ray grid; lens "
-      "wavelength):\n\n  {:>7} {:>9} {:>9} {:>11} {:>11} {:>10} {:>10} {:>10}\n",
-      angle_deg, grid, grid, "I,J", "arrived", "launched", "centroid x", "centroid y", "rms r",
-      "extent x", "extent y");
-  std::cout << spotLine("direct", t.direct);
-  for (size_t i = 0; i < shown; ++i) {
+      "wavelength), brightest at that angle first:\n\n  {:>4} {:>7} {:>12} {:>9} {:>9} {:>11} "
+      "{:>11} {:>10} {:>10} {:>10}\n",
+      angle_deg, grid, grid, "rank", "I,J", "intensity", "arrived", "launched", "centroid x",
+      "centroid y", "rms r", "extent x", "extent y");
+  std::cout << spotLine("", "direct", t.direct, 1.0);
+  for (size_t r = 0; r < shown; ++r) {
+    const size_t i = t.order[r];
     const std::string ij = fmt::format("{},{}", g.ghosts[i].b, g.ghosts[i].a);
     if (t.ghosts[i])
-      std::cout << spotLine(ij, *t.ghosts[i]);
+      std::cout << spotLine(std::to_string(r + 1), ij, *t.ghosts[i], t.relative[i]);
     else
-      std::cout << fmt::format("  {:>7}  reflects nothing (the stop or a dummy surface)\n", ij);
+      std::cout << fmt::format("  {:>4} {:>7}  reflects nothing (the stop or a dummy surface)\n",
+                               r + 1, ij);
   }
-  std::cout << "\n  mm on the film; arrived / launched: rays of the grid that reach the film "
-               "on the ghost path / that were launched\n";
+  std::cout << "\n  intensity: the ghost's light on the film over the direct image's, from the "
+               "traced rays with the coatings' R and T at each ray's angles (mean over the "
+               "wavelengths); mm on the film; arrived / launched: rays of the grid that reach "
+               "the film on the ghost path / that were launched\n";
 }
 
 int runGhosts(const LensArgs& args, const GhostArgs& ga) {
@@ -177,7 +206,7 @@ int runGhosts(const LensArgs& args, const GhostArgs& ga) {
   if (ga.grid < 2 || ga.grid > 2000)
     throw Error(fmt::format("--grid {}: expected 2 to 2000 rays across", ga.grid));
   std::optional<TracedSpots> spots;
-  if (ga.angle_deg) spots = traceSpots(lens, g, shown, *ga.angle_deg, ga.grid);
+  if (ga.angle_deg) spots = traceSpots(lens, coatings, g, *ga.angle_deg, ga.grid);
   if (ga.as_json) {
     json j;
     j["lens"] = pr.path;
@@ -200,13 +229,29 @@ int runGhosts(const LensArgs& args, const GhostArgs& ga) {
                      {"defocus_mm", finiteOr(h.defocus_mm)},
                      {"film_diameter_mm", h.film_diameter_mm},
                      {"in_focus", h.film_diameter_mm < ga.focus_tolerance_mm}});
-      if (spots)
-        arr.back()["spot"] = spots->ghosts[i] ? spotJson(*spots->ghosts[i]) : json(nullptr);
+      if (spots && spots->ghosts[i]) {
+        json spot = spotJson(*spots->ghosts[i]);
+        spot["relative_intensity"] = spots->relative[i];
+        spot["relative_intensity_per_wavelength"] = spots->relative_per_wavelength[i];
+        arr.back()["spot"] = spot;
+      } else if (spots) {
+        arr.back()["spot"] = nullptr;
+      }
     }
     if (spots) {
       j["angle_deg"] = *ga.angle_deg;
       j["grid"] = ga.grid;
       j["direct_spot"] = spotJson(spots->direct);
+      // The ghosts ranked by their traced intensity at the angle (the same count as "ghosts").
+      json ranking = json::array();
+      for (size_t r = 0; r < shown; ++r) {
+        const size_t i = spots->order[r];
+        ranking.push_back({{"rank", r + 1},
+                           {"first_reflection_surface", g.ghosts[i].b},
+                           {"second_reflection_surface", g.ghosts[i].a},
+                           {"relative_intensity", spots->relative[i]}});
+      }
+      j["angle_ranking"] = ranking;
     }
     j["ghosts"] = arr;
     std::cout << j.dump(2) << "\n";
@@ -320,15 +365,30 @@ int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
   return 0;
 }
 
-int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json) {
+int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json,
+                 std::optional<double> angle_deg) {
   FocusedLens fl = setUpLens(args);
   logDiagnostics(fl.allDiagnostics());
   const LensSystem& lens = *fl.lens;
   const std::vector<double> band = visibleBand();
-  const GhostAnalysis g = analyseGhosts(lens, resolveCoatings(lens.prescription()), band);
+  const LensCoatings coatings = resolveCoatings(lens.prescription());
+  const GhostAnalysis g = analyseGhosts(lens, coatings, band);
+  // The ghosts to plot, brightest first: (first surface, second surface, intensity), axial
+  // (paraxial) or traced at the angle.
+  struct Bar {
+    int b = 0, a = 0;
+    double intensity = 0;
+  };
+  std::vector<Bar> ranked;
+  if (angle_deg) {
+    const TracedSpots t = traceSpots(lens, coatings, g, *angle_deg, 64);
+    for (size_t i : t.order) ranked.push_back({g.ghosts[i].b, g.ghosts[i].a, t.relative[i]});
+  } else {
+    for (const Ghost& h : g.ghosts) ranked.push_back({h.b, h.a, h.relative_intensity});
+  }
   constexpr size_t kShown = 20;  // the brightest; the rest are orders of magnitude fainter
   // Linear bars in units of the brightest ghost's decade, with room above them for the notes.
-  const double brightest = g.ghosts.empty() ? 0.0 : g.ghosts.front().relative_intensity;
+  const double brightest = ranked.empty() ? 0.0 : ranked.front().intensity;
   if (!(brightest > 0))
     throw Error(fmt::format("{}: no ghost reaches the film (no two surfaces reflect)",
                             lens.prescription().path));
@@ -340,19 +400,20 @@ int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json) 
   chart.y_label = fmt::format("ghost / direct image energy (x 1e{})", decade);
   plot::Series bars;
   bars.style = plot::Style::Bars;
-  bars.name = "axial, 400-700 nm";
+  bars.name = angle_deg ? fmt::format("{} deg off axis, traced, 400-700 nm", *angle_deg)
+                        : std::string("axial, 400-700 nm");
   json ranks = json::array();
   double total = 0;
-  for (const Ghost& h : g.ghosts) total += h.relative_intensity;
+  for (const Bar& h : ranked) total += h.intensity;
   std::string top;
-  for (const Ghost& h : g.ghosts) {
-    if (bars.points.size() == kShown || !(h.relative_intensity > 0)) break;
+  for (const Bar& h : ranked) {
+    if (bars.points.size() == kShown || !(h.intensity > 0)) break;
     const double rank = double(bars.points.size() + 1);
-    bars.points.push_back({rank, h.relative_intensity / unit});
+    bars.points.push_back({rank, h.intensity / unit});
     ranks.push_back({{"rank", rank},
                      {"first_reflection_surface", h.b},
                      {"second_reflection_surface", h.a},
-                     {"relative_intensity", h.relative_intensity}});
+                     {"relative_intensity", h.intensity}});
     if (bars.points.size() <= 6)
       top += fmt::format("{}{}: {},{}", top.empty() ? "" : "  ", bars.points.size(), h.b, h.a);
   }
@@ -366,13 +427,14 @@ int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json) 
   doc.rect(0, 0, 720, 440, {{"fill", "#ffffff"}});
   chart.render(doc, 0, 0, 720, 440);
   writeFileAtomically(output, doc.str());
-  if (as_json)
-    std::cout << json{{"kind", "ghosts"},
-                      {"lens", lens.prescription().path},
-                      {"total_relative_intensity", total},
-                      {"bars", ranks}}
-                     .dump(2)
-              << "\n";
+  if (as_json) {
+    json j{{"kind", "ghosts"},
+           {"lens", lens.prescription().path},
+           {"total_relative_intensity", total},
+           {"bars", ranks}};
+    if (angle_deg) j["angle_deg"] = *angle_deg;
+    std::cout << j.dump(2) << "\n";
+  }
   logInfo(fmt::format("wrote {}", output));
   return 0;
 }

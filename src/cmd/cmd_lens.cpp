@@ -594,6 +594,7 @@ struct PlotArgs {
   bool fields_given = false;
   bool as_json = false;
   AnalysisArgs analysis;  ///< also holds --wavelengths (spot: one spot per wavelength)
+  std::optional<double> ghost_angle_deg;  ///< ghosts: the light's angle off axis (--angle)
 };
 
 json pairsJson(const std::vector<double>& a, const std::vector<double>& b) {
@@ -665,7 +666,10 @@ std::string breathingPlot(const LensArgs& args, json& j) {
 }
 
 int runPlot(const LensArgs& args, const PlotArgs& pa) {
-  if (pa.kind == "ghosts") return runGhostPlot(args, pa.output, pa.as_json);  // cmd_flare.cpp
+  if (pa.ghost_angle_deg && pa.kind != "ghosts")
+    throw Error(fmt::format("--angle applies to 'ghosts', not to '{}'", pa.kind));
+  if (pa.kind == "ghosts")  // cmd_flare.cpp
+    return runGhostPlot(args, pa.output, pa.as_json, pa.ghost_angle_deg);
   if (pa.kind == "breathing") {
     json j{{"kind", pa.kind}, {"lens", args.lens_path}};
     const std::string svg_text = breathingPlot(args, j);
@@ -875,6 +879,9 @@ void registerLensCommands(CLI::App& app, Action& action) {
         ->each([pa](const std::string&) { pa->fields_given = true; });
     addAnalysisOptions(plot, pa->analysis);
     plot->add_flag("--json", pa->as_json, "Also print the plotted numbers as JSON");
+    plot->add_option("--angle", pa->ghost_angle_deg,
+                     "ghosts: the intensities traced for a point light this far off axis (deg, "
+                     "as lens ghosts --angle) instead of the axial ones");
     plot->callback([&action, args, pa] { action = [args, pa] { return runPlot(*args, *pa); }; });
   }
   {

@@ -53,7 +53,7 @@ void registerMergeCommand(CLI::App& app, Action& action) {
       if (o->keep_sums) {
         render::writePart(o->out, merged);
       } else {
-        io::Image im = render::sumsImage(merged.bounds, merged.sums);
+        io::Image im = render::sumsImage(merged.bounds, merged.sums, merged.ghost_sums);
         for (const auto& [key, value] : merged.metadata)
           if (key != "lensim:part") im.metadata[key] = value;
         // A raw film's parts hold expected electrons: the sensor's noise is applied here, once.

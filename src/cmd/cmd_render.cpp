@@ -150,6 +150,7 @@ void loadResumeState(const std::string& path, const std::map<std::string, std::s
   resume_state.bounds = ck.bounds;
   resume_state.tile_done = std::move(ck.tile_done);
   resume_state.sums = std::move(ck.sums);
+  resume_state.ghost_sums = std::move(ck.ghost_sums);
 }
 
 /// Refuses, before rendering, outputs the film or the mode cannot write: layered films (spectral,
@@ -220,6 +221,7 @@ int renderAndWrite(const Options& o, const scene::Scene& s, const render::Render
     p.x_res = s.film.x_resolution, p.y_res = s.film.y_resolution;
     p.bounds = res.bounds;
     p.sums = std::move(res.sums);
+    p.ghost_sums = std::move(res.ghost_sums);
     for (const std::string& out : outs) render::writePart(out, p);
   } else {
     for (const std::string& out : outs)
@@ -300,6 +302,7 @@ int runRender(const Options& o) {
       p.x_res = s.film.x_resolution, p.y_res = s.film.y_resolution;
       p.bounds = c.bounds;
       p.sums = c.sums;
+      p.ghost_sums = c.ghost_sums;
       p.tile_done = c.tile_done;
       render::writePart(checkpoint, p);
     };

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
 
 #include "commands.h"
 
@@ -26,9 +28,11 @@ int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
                  const std::string& output);
 
 /// `lensim lens plot ghosts LENS -o OUT`: a bar chart of the brightest ghosts' intensities
-/// (log10 of ghost / direct energy, 400..700 nm, the lens's coatings); `as_json` also prints
-/// the plotted numbers.
-int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json);
+/// (ghost / direct energy, 400..700 nm, the lens's coatings): the axial paraxial ones, or with
+/// `angle_deg` those traced for a light at that angle (`lens ghosts --angle`); `as_json` also
+/// prints the plotted numbers.
+int runGhostPlot(const LensArgs& args, const std::string& output, bool as_json,
+                 std::optional<double> angle_deg = std::nullopt);
 
 /// `lensim lens ghosts LENS`: the two-reflection ghosts ranked by intensity.
 void registerLensGhostsCommand(CLI::App& lens, Action& action);

@@ -177,6 +177,21 @@ std::string sumChannel(int c, int word) {
   return fmt::format("sum.{}.{}", kSumNames[c], word);
 }
 
+std::string ghostSumChannel(int c, int word) {
+  return fmt::format("ghost.sum.{}.{}", kSumNames[c], word);
+}
+
+/// The 32-bit word `word` of v's two's-complement bits.
+uint32_t sumWord(Int128 v, int word) {
+  return uint32_t(static_cast<unsigned __int128>(v) >> (32 * word));
+}
+
+/// v with word `word` of its bits or-ed in.
+void orSumWord(Int128& v, uint32_t bits, int word) {
+  v = Int128(static_cast<unsigned __int128>(v) |
+             (static_cast<unsigned __int128>(bits) << (32 * word)));
+}
+
 Int128& component(PixelSum& p, int c) {
   return c < 3 ? p.rgb[c] : p.weight;
 }
@@ -195,11 +210,14 @@ void writePart(const std::string& path, const Part& part) {
   f.x0 = part.bounds.x0, f.y0 = part.bounds.y0;
   f.width = part.bounds.width(), f.height = part.bounds.height();
   f.metadata = part.metadata;
-  const io::Image im = sumsImage(part.bounds, part.sums);
-  for (int c = 0; c < 3; ++c) {
-    auto& v = f.float_channels[kSumNames[c]];
+  const bool ghost = !part.ghost_sums.empty();
+  if (ghost && part.ghost_sums.size() != n)
+    partError(path, "part ghost sums do not match its pixel bounds");
+  const io::Image im = sumsImage(part.bounds, part.sums, part.ghost_sums);
+  for (int c = 0; c < im.channelCount(); ++c) {
+    auto& v = f.float_channels[im.channels[size_t(c)]];
     v.resize(n);
-    for (size_t i = 0; i < n; ++i) v[i] = im.pixels[3 * i + size_t(c)];
+    for (size_t i = 0; i < n; ++i) v[i] = im.pixels[size_t(im.channelCount()) * i + size_t(c)];
   }
   for (int c = 0; c < 4; ++c)
     for (int word = 0; word < 4; ++word) {
@@ -207,9 +225,14 @@ void writePart(const std::string& path, const Part& part) {
       v.resize(n);
       for (size_t i = 0; i < n; ++i) {
         PixelSum p = part.sums[i];
-        const unsigned __int128 bits = static_cast<unsigned __int128>(component(p, c));
-        v[i] = uint32_t(bits >> (32 * word));
+        v[i] = sumWord(component(p, c), word);
       }
+    }
+  for (int c = 0; ghost && c < 3; ++c)
+    for (int word = 0; word < 4; ++word) {
+      auto& v = f.uint_channels[ghostSumChannel(c, word)];
+      v.resize(n);
+      for (size_t i = 0; i < n; ++i) v[i] = sumWord(part.ghost_sums[i][size_t(c)], word);
     }
   if (!part.tile_done.empty()) {
     std::string done(part.tile_done.size(), '0');
@@ -238,12 +261,25 @@ Part readPart(const std::string& path) {
       auto it = f.uint_channels.find(sumChannel(c, word));
       if (it == f.uint_channels.end())
         partError(path, fmt::format("part is missing its channel {}", sumChannel(c, word)));
-      for (size_t i = 0; i < n; ++i) {
-        Int128& v = component(p.sums[i], c);
-        v = Int128(static_cast<unsigned __int128>(v) |
-                   (static_cast<unsigned __int128>(it->second[i]) << (32 * word)));
-      }
+      for (size_t i = 0; i < n; ++i) orSumWord(component(p.sums[i], c), it->second[i], word);
     }
+  // The ghost layer (lens flare): all of its channels or none.
+  int ghost_channels = 0;
+  for (int c = 0; c < 3; ++c)
+    for (int word = 0; word < 4; ++word)
+      ghost_channels += int(f.uint_channels.count(ghostSumChannel(c, word)));
+  if (ghost_channels != 0 && ghost_channels != 12)
+    partError(path, fmt::format("part has {} of the 12 ghost-layer channels ghost.sum.*; expected "
+                                "all of them (a lens-flare render) or none",
+                                ghost_channels));
+  if (ghost_channels == 12) {
+    p.ghost_sums.assign(n, GhostSum{});
+    for (int c = 0; c < 3; ++c)
+      for (int word = 0; word < 4; ++word) {
+        const auto& bits = f.uint_channels.at(ghostSumChannel(c, word));
+        for (size_t i = 0; i < n; ++i) orSumWord(p.ghost_sums[i][size_t(c)], bits[i], word);
+      }
+  }
   if (auto it = f.metadata.find("lensim:checkpoint_tiles"); it != f.metadata.end()) {
     p.tile_done.resize(it->second.size());
     for (size_t t = 0; t < it->second.size(); ++t) p.tile_done[t] = it->second[t] == '1';
@@ -252,11 +288,21 @@ Part readPart(const std::string& path) {
   return p;
 }
 
-io::Image sumsImage(const PixelBounds& b, const std::vector<PixelSum>& sums) {
-  io::Image im(b.width(), b.height(), {"R", "G", "B"});
+io::Image sumsImage(const PixelBounds& b, const std::vector<PixelSum>& sums,
+                    const std::vector<GhostSum>& ghost_sums) {
+  std::vector<std::string> channels = {"R", "G", "B"};
+  const bool ghost = !ghost_sums.empty();
+  if (ghost)
+    for (const std::string& c : Film::ghostChannels()) channels.push_back(c);
+  io::Image im(b.width(), b.height(), std::move(channels));
+  const size_t nc = size_t(im.channelCount());
   for (size_t i = 0; i < sums.size() && i < size_t(b.area()); ++i) {
     const auto v = Film::pixelValue(sums[i]);
-    for (int c = 0; c < 3; ++c) im.pixels[3 * i + size_t(c)] = v[c];
+    for (int c = 0; c < 3; ++c) im.pixels[nc * i + size_t(c)] = v[c];
+    if (ghost && i < ghost_sums.size()) {
+      const auto g = Film::ghostValue(sums[i], ghost_sums[i]);
+      for (int c = 0; c < 3; ++c) im.pixels[nc * i + 3 + size_t(c)] = g[c];
+    }
   }
   return im;
 }
@@ -335,6 +381,13 @@ Part mergeParts(const std::vector<Part>& parts, bool allow_partial_samples) {
       partError(p.path, fmt::format("part pixels {} lie outside the render's pixel bounds {}",
                                     pixelsText(b), pixelsText(full)));
     if (p.sums.size() != size_t(b.area())) partError(p.path, "part sums do not match its size");
+    if (p.ghost_sums.empty() != first.ghost_sums.empty())
+      partError(p.path, fmt::format("cannot merge a part with lens flare's ghost layer and one "
+                                    "without: {} has {}, {} has {}",
+                                    first.path, first.ghost_sums.empty() ? "none" : "one", p.path,
+                                    p.ghost_sums.empty() ? "none" : "one"));
+    if (!p.ghost_sums.empty() && p.ghost_sums.size() != size_t(b.area()))
+      partError(p.path, "part ghost sums do not match its size");
   }
   // Coverage: cut the bounds at every part edge; each cell must have sample ranges that tile
   // [0, total) exactly.
@@ -412,11 +465,18 @@ Part mergeParts(const std::vector<Part>& parts, bool allow_partial_samples) {
   out.x_res = first.x_res, out.y_res = first.y_res;
   out.bounds = full;
   out.sums.assign(size_t(full.area()), PixelSum{});
+  const bool ghost = !first.ghost_sums.empty();
+  if (ghost) out.ghost_sums.assign(size_t(full.area()), GhostSum{});
   for (const Part& p : parts)
     for (int y = p.bounds.y0; y < p.bounds.y1; ++y)
-      for (int x = p.bounds.x0; x < p.bounds.x1; ++x)
-        out.sums[size_t(y - full.y0) * size_t(full.width()) + size_t(x - full.x0)] +=
-            p.sums[size_t(y - p.bounds.y0) * size_t(p.bounds.width()) + size_t(x - p.bounds.x0)];
+      for (int x = p.bounds.x0; x < p.bounds.x1; ++x) {
+        const size_t o = size_t(y - full.y0) * size_t(full.width()) + size_t(x - full.x0);
+        const size_t i =
+            size_t(y - p.bounds.y0) * size_t(p.bounds.width()) + size_t(x - p.bounds.x0);
+        out.sums[o] += p.sums[i];
+        for (int c = 0; ghost && c < 3; ++c)
+          out.ghost_sums[o][size_t(c)] += p.ghost_sums[i][size_t(c)];
+      }
   return out;
 }
 

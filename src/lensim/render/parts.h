@@ -5,7 +5,9 @@
 // A part file is an EXR whose data window is the part's pixels inside the full image (display
 // window). Channels R, G, B hold the part's own image (viewable); UINT channels sum.R.0..3,
 // sum.G.*, sum.B.*, sum.W.* hold the exact 128-bit fixed-point sums of render::PixelSum
-// (little-endian 32-bit words). String attributes:
+// (little-endian 32-bit words). A lens-flare render's parts also hold its ghost layer: float
+// channels ghost.R, ghost.G, ghost.B (viewable) and UINT ghost.sum.R.0..3, ghost.sum.G.*,
+// ghost.sum.B.* (render::GhostSum, over the pixel's sum.W). String attributes:
 //   lensim:part          "1"
 //   lensim:scene         the scene file as given; lensim:scene_hash its identity (below)
 //   lensim:seed, lensim:spp_total, lensim:spp_range "A:B", lensim:tile "I/N"
@@ -66,6 +68,7 @@ struct Part {
   int x_res = 0, y_res = 0;                     ///< the full image
   PixelBounds bounds;                           ///< the pixels it holds
   std::vector<PixelSum> sums;                   ///< bounds-sized, row by row
+  std::vector<GhostSum> ghost_sums;  ///< lens flare: the ghost layer's, as sums (else empty)
   std::vector<uint8_t> tile_done;               ///< checkpoints: the renderer's finished tiles
 };
 
@@ -74,11 +77,14 @@ void writePart(const std::string& path, const Part& part);
 /// Reads a part; throws lensim::Error naming the file if it is not one.
 Part readPart(const std::string& path);
 
-/// The image of exact sums (R, G, B as the renderer's film gives them), bounds-sized.
-io::Image sumsImage(const PixelBounds& bounds, const std::vector<PixelSum>& sums);
+/// The image of exact sums (R, G, B as the renderer's film gives them), bounds-sized; with
+/// `ghost_sums` (lens flare) also its ghost layer, channels Film::ghostChannels().
+io::Image sumsImage(const PixelBounds& bounds, const std::vector<PixelSum>& sums,
+                    const std::vector<GhostSum>& ghost_sums = {});
 
 /// The parts' sum over the whole render. Every part must come from the same render (scene
-/// hash, seed, samples per pixel, resolution, pixel bounds, lens, version) and be complete;
+/// hash, seed, samples per pixel, resolution, pixel bounds, lens, version), be complete and all
+/// hold a ghost layer or none;
 /// together they must cover every pixel of the render's pixel bounds with every sample index
 /// in [0, spp) exactly once. Throws lensim::Error with a message naming the parts otherwise.
 /// The result's metadata is the render's identity; its spp range is the whole range.

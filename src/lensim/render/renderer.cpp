@@ -96,14 +96,19 @@ RenderCheckpoint snapshot(const Film& film, const std::vector<std::atomic<uint8_
   c.bounds = film.bounds();
   c.tile_done.resize(done.size());
   c.sums.assign(film.sums().size(), PixelSum{});
+  c.ghost_sums.assign(film.ghostSums().size(), GhostSum{});
+  const bool ghost = film.ghostLayer();
   const size_t w = size_t(c.bounds.width());
   for (size_t t = 0; t < done.size(); ++t) {
     c.tile_done[t] = done[t].load(std::memory_order_acquire);
     if (!c.tile_done[t]) continue;
     const PixelBounds p = grid.local(int(t));
     for (int y = p.y0; y < p.y1; ++y)
-      for (int x = p.x0; x < p.x1; ++x)
-        c.sums[size_t(y) * w + size_t(x)] = film.sums()[size_t(y) * w + size_t(x)];
+      for (int x = p.x0; x < p.x1; ++x) {
+        const size_t i = size_t(y) * w + size_t(x);
+        c.sums[i] = film.sums()[i];
+        if (ghost) c.ghost_sums[i] = film.ghostSums()[i];
+      }
   }
   return c;
 }
@@ -240,6 +245,13 @@ int resumeTiles(const RenderCheckpoint& r, const TileGrid& grid, Film& film,
                     "this render [{}, {}) x [{}, {})",
                     r.bounds.x0, r.bounds.x1, r.bounds.y0, r.bounds.y1, bounds.x0, bounds.x1,
                     bounds.y0, bounds.y1));
+  // A flare render's checkpoint carries its ghost layer (a scene with flare has another identity
+  // than one without, so this differs only for a checkpoint written without the layer).
+  if (r.ghost_sums.size() != film.ghostSums().size())
+    throw Error(film.ghostLayer()
+                    ? "cannot resume: the render has lens flare's ghost layer and the "
+                      "checkpoint does not hold it"
+                    : "cannot resume: the checkpoint holds a ghost layer and the render has none");
   const size_t w = size_t(bounds.width());
   int resumed = 0;
   for (int t = 0; t < grid.count(); ++t) {
@@ -248,8 +260,11 @@ int resumeTiles(const RenderCheckpoint& r, const TileGrid& grid, Film& film,
     ++resumed;
     const PixelBounds p = grid.local(t);
     for (int y = p.y0; y < p.y1; ++y)
-      for (int x = p.x0; x < p.x1; ++x)
-        film.sums()[size_t(y) * w + size_t(x)] = r.sums[size_t(y) * w + size_t(x)];
+      for (int x = p.x0; x < p.x1; ++x) {
+        const size_t i = size_t(y) * w + size_t(x);
+        film.sums()[i] = r.sums[i];
+        if (film.ghostLayer()) film.ghostSums()[i] = r.ghost_sums[i];
+      }
   }
   return resumed;
 }
@@ -592,23 +607,23 @@ void finishImage(const RenderOptions& opt, const scene::Scene& scene, RenderResu
 
 /// Lens flare (docs/flare.md, "Rendering ghosts"): checks that the render can carry it and
 /// turns on the film's ghost layer.
-void enableFlare(const scene::Scene& scene, const RenderOptions& opt, const Integrator& integrator,
-                 const camera::Camera& cam, Film& film) {
-  // Every integrator, into the ghost layer of an RGB film, rendered whole.
+void enableFlare(const scene::Scene& scene, const Integrator& integrator, const camera::Camera& cam,
+                 Film& film) {
+  // Every integrator, into the ghost layer of an RGB or raw film; as parts and checkpoints too
+  // (the ghost layer's sums are exact like the pixels', RenderResult::ghost_sums). A raw film
+  // adds the ghost paths' expected electrons to its pixels' like the direct paths' (Film::addGhost
+  // records what addSample does), so the sensor's noise and ADC see them once, with the rest of
+  // the light.
   const FileLoc& loc = scene.camera.loc;
   if ((integrator.splats() || integrator.tracesLightPaths()) && !cam.flareInLightPaths())
     throw Error(loc, fmt::format("realistic camera: \"flare\" through a dispersive lens is "
                                  "rendered by the path, volpath and directlighting integrators, "
                                  "not \"{}\"",
                                  scene.integrator.type));
-  if (scene.film.type != "rgb")
-    throw Error(loc, fmt::format("realistic camera: \"flare\" needs Film \"rgb\" (its ghost "
-                                 "layer), not \"{}\"",
+  if (scene.film.type != "rgb" && scene.film.type != "raw")
+    throw Error(loc, fmt::format("realistic camera: \"flare\" needs Film \"rgb\" or \"raw\" "
+                                 "(its ghost layer), not \"{}\"",
                                  scene.film.type));
-  if (opt.keep_sums || opt.resume || opt.on_checkpoint)
-    throw Error(loc,
-                "realistic camera: \"flare\" renders cannot be written as parts or "
-                "checkpointed (the ghost layer is not kept in the exact sums)");
   film.enableGhostLayer();
 }
 
@@ -661,7 +676,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   setup.refuses_splats = splatRefusal(opt);
   const std::unique_ptr<Integrator> integrator = makeIntegrator(setup);
   if (integrator->splats()) film.enableSplats(*filter);
-  if (cam->flare()) enableFlare(scene, opt, *integrator, *cam, film);
+  if (cam->flare()) enableFlare(scene, *integrator, *cam, film);
   // Film "gbuffer" (pbrt-v4's GBufferFilm): its coordinate system and the differential scale
   // pbrt-v4 applies to camera rays, max(1/8, 1/sqrt(samples per pixel)).
   const GBufferFrame gbuffer_frame(scene);
@@ -767,7 +782,10 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   st.invalid_rays = world->accel.invalidRays();
   result.image = film.image();
   finishImage(opt, scene, result);
-  if (opt.keep_sums) result.sums = film.sums();
+  if (opt.keep_sums) {
+    result.sums = film.sums();
+    result.ghost_sums = film.ghostSums();
+  }
   return result;
 }
 

@@ -34,6 +34,8 @@ struct RenderCheckpoint {
   PixelBounds bounds;              ///< the pixels rendered (the part's tile of the image)
   std::vector<uint8_t> tile_done;  ///< 1 for a finished tile
   std::vector<PixelSum> sums;      ///< bounds-sized, row by row
+  /// Lens flare: the ghost layer's sums, bounds-sized (empty for a film without the layer).
+  std::vector<GhostSum> ghost_sums;
   bool complete() const;
   int tilesDone() const;
 };
@@ -129,6 +131,9 @@ struct RenderResult {
   PixelBounds bounds;  ///< the pixels rendered
   PixelBounds full_bounds;     ///< the pixel bounds of the whole render (bounds, unless a tile)
   std::vector<PixelSum> sums;  ///< the exact film sums over bounds (RenderOptions::keep_sums)
+  /// Lens flare: the exact ghost-layer sums over bounds (RenderOptions::keep_sums; empty
+  /// without the layer).
+  std::vector<GhostSum> ghost_sums;
   RenderStats stats;
 };
 

@@ -64,40 +64,52 @@ LensTracer<double> ghostTracer(const LensSystem& lens, int first, int second) {
   return LensTracer<double>(ghostPathInterfaces(lens, first, second));
 }
 
-GhostSpot traceSpot(const LensTracer<double>& tracer, const Interface& front, double film_z_mm,
-                    double angle_rad, int grid) {
+namespace {
+
+/// traceSpot's grid: parallel rays of a point at infinity at angle_rad off the axis (x-z plane)
+/// over a disc a quarter wider than the front surface's clear aperture (oblique rays meet a
+/// curved front surface off their vertex-plane crossing; those that miss the aperture are
+/// clipped), each starting a little in front of the front surface's sag region on the line that
+/// crosses the vertex plane at its grid point.
+std::vector<Ray> gridRays(const Interface& front, double angle_rad, int grid) {
   if (grid < 2 || grid > 2000)
     throw Error(fmt::format("ghost spot: grid {} (expected 2 to 2000 rays across)", grid));
   if (!(std::abs(angle_rad) < 0.5 * std::numbers::pi))
     throw Error(fmt::format("ghost spot: light angle {} deg (expected within -90..90)",
                             angle_rad * 180 / std::numbers::pi));
-  // The grid covers a disc a quarter wider than the clear aperture: oblique rays meet a curved
-  // front surface off their vertex-plane crossing; those that miss the aperture are clipped.
   const double r = 1.25 * front.semi_aperture_mm;
   const Vec3T<double> dir{std::sin(angle_rad), 0.0, std::cos(angle_rad)};
-  // Start each ray a little in front of the front surface's sag region, on the line that
-  // crosses the vertex plane at the grid point.
   const double back = 2 * r + 1;
-  GhostSpot s;
-  double sx = 0, sy = 0, sxx = 0, syy = 0;
-  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  std::vector<Ray> rays;
   for (int i = 0; i < grid; ++i)
     for (int j = 0; j < grid; ++j) {
       const double gx = r * (-1 + 2 * (i + 0.5) / grid), gy = r * (-1 + 2 * (j + 0.5) / grid);
       if (gx * gx + gy * gy > r * r) continue;
-      ++s.rays_launched;
       const double t = back / dir.z;
-      const Ray ray{{gx - t * dir.x, gy, front.z_mm - back}, dir};
-      const TraceResult res = tracer.traceFromScene(ray);
-      if (!res.ok() || !(res.ray.direction.z > 0)) continue;
-      const double u = (film_z_mm - res.ray.origin.z) / res.ray.direction.z;
-      const double x = res.ray.origin.x + u * res.ray.direction.x;
-      const double y = res.ray.origin.y + u * res.ray.direction.y;
-      ++s.rays_arrived;
-      sx += x, sy += y, sxx += x * x, syy += y * y;
-      xmin = std::min(xmin, x), xmax = std::max(xmax, x);
-      ymin = std::min(ymin, y), ymax = std::max(ymax, y);
+      rays.push_back(Ray{{gx - t * dir.x, gy, front.z_mm - back}, dir});
     }
+  return rays;
+}
+
+}  // namespace
+
+GhostSpot traceSpot(const LensTracer<double>& tracer, const Interface& front, double film_z_mm,
+                    double angle_rad, int grid) {
+  GhostSpot s;
+  double sx = 0, sy = 0, sxx = 0, syy = 0;
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  for (const Ray& ray : gridRays(front, angle_rad, grid)) {
+    ++s.rays_launched;
+    const TraceResult res = tracer.traceFromScene(ray);
+    if (!res.ok() || !(res.ray.direction.z > 0)) continue;
+    const double u = (film_z_mm - res.ray.origin.z) / res.ray.direction.z;
+    const double x = res.ray.origin.x + u * res.ray.direction.x;
+    const double y = res.ray.origin.y + u * res.ray.direction.y;
+    ++s.rays_arrived;
+    sx += x, sy += y, sxx += x * x, syy += y * y;
+    xmin = std::min(xmin, x), xmax = std::max(xmax, x);
+    ymin = std::min(ymin, y), ymax = std::max(ymax, y);
+  }
   if (s.rays_arrived == 0) return s;
   const double n = s.rays_arrived;
   s.centroid_x_mm = sx / n;
@@ -107,6 +119,66 @@ GhostSpot traceSpot(const LensTracer<double>& tracer, const Interface& front, do
   s.extent_x_mm = xmax - xmin;
   s.extent_y_mm = ymax - ymin;
   return s;
+}
+
+std::vector<double> tracedPathEnergy(const LensSystem& lens, const LensCoatings& coatings,
+                                     int first, int second, double angle_rad, int grid,
+                                     std::span<const double> wavelengths_nm) {
+  const bool ghost = first >= 0;
+  const std::vector<Interface> path =
+      ghost ? ghostPathInterfaces(lens, first, second) : lens.interfaces();
+  const LensTracer<double> tracer(path);
+  const std::vector<Ray> rays = gridRays(path.front(), angle_rad, grid);
+  const size_t nw = wavelengths_nm.size(), n = size_t(lens.surfaceCount()), m = path.size();
+  // The lens's media at each wavelength; whether they are the same at all of them (the coatings
+  // are then evaluated for all wavelengths at once).
+  std::vector<double> before(nw * n), after(nw * n);
+  for (size_t w = 0; w < nw; ++w)
+    lens.indicesAt(wavelengths_nm[w], before.data() + w * n, after.data() + w * n);
+  bool same = true;
+  for (size_t w = 1; w < nw && same; ++w)
+    for (size_t k = 0; k < n && same; ++k)
+      same = before[w * n + k] == before[k] && after[w * n + k] == after[k];
+  std::vector<double> energy(nw, 0.0), f(nw);
+  std::vector<FilmRTA> rta(nw);
+  std::vector<Vec3T<double>> pts;
+  for (const Ray& ray : rays) {
+    pts.clear();
+    const TraceResult res = tracer.traceFromScene(ray, {}, &pts);
+    if (!res.ok() || !(res.ray.direction.z > 0) || pts.size() != m + 1) continue;
+    std::fill(f.begin(), f.end(), 1.0);
+    for (size_t i = 0; i < m; ++i) {
+      const Interface& in = path[i];
+      if (!in.is_mirror && in.ior_before == in.ior_after) continue;
+      // The incidence angle from the directions before (a) and after (b) the surface: the normal
+      // is parallel to n_before a - n_after b (Snell's law in vector form; a mirror's a - b).
+      const Vec3T<double> a = normalize(pts[i + 1] - pts[i]);
+      const Vec3T<double> b = i + 1 < m ? normalize(pts[i + 2] - pts[i + 1]) : res.ray.direction;
+      const Vec3T<double> nrm = a * in.ior_before - b * in.ior_after;
+      const double len = length(nrm);
+      const double cos_i = len > 1e-12 ? std::min(1.0, std::abs(dot(a, nrm)) / len) : 1.0;
+      const int k = ghost ? ghostPathSurface(first, second, int(i)) : int(i);
+      // Between the reflections (the second one included) the light meets the surfaces from the
+      // film's side: the coating sees the lens's media the other way round.
+      const bool backward = ghost && int(i) > first && int(i) <= 2 * first - second;
+      auto media = [&](size_t w) {
+        const double nb = before[w * n + size_t(k)], na = after[w * n + size_t(k)];
+        return backward ? std::pair{na, nb} : std::pair{nb, na};
+      };
+      if (same) {
+        const auto [from, to] = media(0);
+        coatings.rtaSpectral(k, from, to, wavelengths_nm, cos_i, rta.data());
+      } else {
+        for (size_t w = 0; w < nw; ++w) {
+          const auto [from, to] = media(w);
+          rta[w] = coatings.rta(k, from, to, wavelengths_nm[w], cos_i);
+        }
+      }
+      for (size_t w = 0; w < nw; ++w) f[w] *= in.is_mirror ? rta[w].R : rta[w].T;
+    }
+    for (size_t w = 0; w < nw; ++w) energy[w] += f[w];
+  }
+  return energy;
 }
 
 std::optional<double> axisCrossingZ(const Ray& out) {

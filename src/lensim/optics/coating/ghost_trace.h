@@ -9,8 +9,10 @@
 #pragma once
 
 #include <optional>
+#include <span>
 #include <vector>
 
+#include "lensim/optics/coating/lens_coatings.h"
 #include "lensim/optics/lens_system.h"
 
 namespace lensim::optics {
@@ -48,6 +50,19 @@ struct GhostSpot {
 /// lies). Throws lensim::Error for a grid outside 2..2000 or an angle not within (-90, 90) deg.
 GhostSpot traceSpot(const LensTracer<double>& tracer, const Interface& front, double film_z_mm,
                     double angle_rad, int grid);
+
+/// The light a distant point at `angle_rad` off the axis brings to the film along a path, per
+/// wavelength: traceSpot's grid of rays traced through the ghost path (first, second), or through
+/// the lens itself when `first` < 0, each ray that reaches the film plane weighted by the
+/// coatings' reflectance at the path's two reflections and transmittance at every other crossing
+/// of an index step, at that ray's own angle of incidence on each surface (LensCoatings::rta:
+/// Fresnel's equations or the thin-film stack at that angle), summed over the rays (so in units
+/// of one grid ray's light; a ghost's over the direct path's is its intensity relative to the
+/// direct image). Geometry at the lens's wavelength, the coatings' indices at each wavelength.
+/// Throws as traceSpot and ghostPathInterfaces do.
+std::vector<double> tracedPathEnergy(const LensSystem& lens, const LensCoatings& coatings,
+                                     int first, int second, double angle_rad, int grid,
+                                     std::span<const double> wavelengths_nm);
 
 /// Where a ray that left the ghost path crosses the axis (lens space z, mm), from its meridional
 /// height and slope; nullopt when it leaves parallel to the axis.

@@ -161,6 +161,12 @@ const std::vector<std::string>& Film::ghostChannels() {
   return c;
 }
 
+std::array<float, 3> Film::ghostValue(const PixelSum& p, const GhostSum& g) {
+  if (p.weight == 0) return {0.0f, 0.0f, 0.0f};
+  const double w = double(p.weight);
+  return {float(double(g[0]) / w), float(double(g[1]) / w), float(double(g[2]) / w)};
+}
+
 void Film::addGhost(int x, int y, const SampledSpectrum& L, const SampledWavelengths& lambda,
                     double w) {
   checkInBounds(bounds_, x, y);
@@ -324,10 +330,10 @@ io::Image Film::image() const {
         for (int b = 0; b < n_buckets_; ++b)
           im.at(x, y, 3 + b) = float(bucket_sums_[i * size_t(n_buckets_) + size_t(b)] / w);
       }
-      if (!ghost_.empty() && pixels_[i].weight != 0)
-        for (int c = 0; c < 3; ++c)
-          im.at(x, y, ghost_c0 + c) =
-              float(double(ghost_[i][size_t(c)]) / double(pixels_[i].weight));
+      if (!ghost_.empty()) {
+        const auto g = ghostValue(pixels_[i], ghost_[i]);
+        for (int c = 0; c < 3; ++c) im.at(x, y, ghost_c0 + c) = g[c];
+      }
       if (!splats_.empty()) {
         for (int c = 0; c < 3; ++c)
           im.at(x, y, c) += float(double(splats_[i][size_t(c)]) / kFixedScale * splat_scale_);

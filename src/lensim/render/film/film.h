@@ -58,6 +58,11 @@ struct PixelSum {
   bool operator==(const PixelSum&) const = default;
 };
 
+/// A pixel's ghost-layer sums (lens flare, Film::enableGhostLayer): the filter-weighted RGB of
+/// its camera samples' ghost paths, in PixelSum's fixed-point units; the pixel's PixelSum holds
+/// their weight. Exact like PixelSum, so parts and checkpoints carry the ghost layer too.
+using GhostSum = std::array<Int128, 3>;
+
 /// Chromaticity (x, y) of CIE daylight of correlated colour temperature T (the CIE daylight
 /// locus, 4000-25000 K); below 4000 K, of a blackbody at T.
 Vec2 daylightChromaticity(double temperature_k);
@@ -115,6 +120,14 @@ class Film {
   bool ghostLayer() const { return !ghost_.empty(); }
   /// The channel names of the ghost layer.
   static const std::vector<std::string>& ghostChannels();
+  /// The ghost layer's value of a pixel with sums `p` and ghost sums `g` (over p's weight; 0
+  /// where the weight is 0), as floats.
+  static std::array<float, 3> ghostValue(const PixelSum& p, const GhostSum& g);
+  /// The ghost layer's accumulators, row by row over bounds() (empty without the layer), for
+  /// parts, checkpoints and resuming. Splats (the light tracer's ghost connections) are not
+  /// among them: splatting renders are not written as parts.
+  const std::vector<GhostSum>& ghostSums() const { return ghost_; }
+  std::vector<GhostSum>& ghostSums() { return ghost_; }
   /// Adds the ghost path of a camera sample whose direct path addSample added (or will add)
   /// with the same filter weight w: to the pixel's RGB sums and the ghost layer, not to its
   /// weight (both paths belong to one sample). Not thread-safe for the same pixel.
@@ -213,7 +226,7 @@ class Film {
   int splat_spp_ = 1;
   void addAux(GBufferPixel& g, double w, const VisibleSurface& vs);
   std::vector<std::array<Int128, 3>> splats_;
-  std::vector<std::array<Int128, 3>> ghost_;   ///< per pixel: the ghost paths' RGB sums
+  std::vector<GhostSum> ghost_;                      ///< per pixel: the ghost paths' RGB sums
   std::vector<std::array<Int128, 3>> ghost_splats_;  ///< per pixel: the ghost splats' sums
   std::vector<double> bucket_splats_;          ///< spectral films: per pixel, n_buckets_ splat sums
   static constexpr size_t kSplatLocks = 1024;  ///< lock stripes (by pixel index)

@@ -2,6 +2,7 @@
 #include "lensim/render/sensor/raw_output.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 
@@ -9,6 +10,7 @@
 
 #include "lensim/camera/realistic.h"
 #include "lensim/io/dng.h"
+#include "lensim/render/film/film.h"
 #include "lensim/render/film/pixel_sensor.h"
 #include "lensim/render/sensor/cfa_interpolate.h"
 #include "lensim/render/sensor/develop.h"
@@ -148,11 +150,21 @@ void writeRawImage(const std::string& path, const io::Image& image, int x0, int 
           image.at(x, y, c);
   const std::vector<uint16_t> dn = digitizeImage(model, rgb, w, h, x0, y0);
   if (ext == "exr") {
-    io::Image out(w, h, {"R", "G", "B", "electrons", "DN"});
+    // Lens flare: the ghost layer's expected electrons (already in R, G, B) after the others.
+    std::vector<std::string> channels = {"R", "G", "B", "electrons", "DN"};
+    std::array<int, 3> ghost{-1, -1, -1};
+    for (int c = 0; c < 3; ++c)
+      if (const auto i = image.channelIndex(Film::ghostChannels()[size_t(c)])) {
+        ghost[size_t(c)] = *i;
+        channels.push_back(Film::ghostChannels()[size_t(c)]);
+      }
+    io::Image out(w, h, std::move(channels));
     out.metadata = image.metadata;
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         for (int c = 0; c < 3; ++c) out.at(x, y, c) = image.at(x, y, c);
+        for (int c = 0, k = 5; c < 3; ++c)
+          if (ghost[size_t(c)] >= 0) out.at(x, y, k++) = image.at(x, y, ghost[size_t(c)]);
         out.at(x, y, 3) = float(SensorModel::channelElectrons(
             cfaChannel(model.cfa(), x0 + x, y0 + y),
             {image.at(x, y, 0), image.at(x, y, 1), image.at(x, y, 2)}));

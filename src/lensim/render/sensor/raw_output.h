@@ -56,7 +56,8 @@ bool isDngPath(const std::string& path);
 
 /// Writes a raw film's image whose top-left pixel is (x0, y0) of the full image: a .dng (the DN
 /// mosaic with the colour calibration), or an .exr with channels R, G, B (expected electrons per
-/// channel), "electrons" (the noise-free mosaic) and "DN" (the noisy raw values); throws
+/// channel), "electrons" (the noise-free mosaic) and "DN" (the noisy raw values), then a lens-flare
+/// render's ghost layer (ghost.R, ghost.G, ghost.B: the ghost paths' part of R, G, B); throws
 /// lensim::Error for another extension.
 void writeRawImage(const std::string& path, const io::Image& image, int x0, int y0);
 
