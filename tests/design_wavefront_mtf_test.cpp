@@ -5,6 +5,7 @@
 // closed forms, with the numerical aperture from the hyperbola's sag written here.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -157,6 +158,44 @@ TEST(DesignMtfOperand, InFocusMatchesTheCircularPupilMtf) {
 // Optimised through the operands: the film distance from 0.03 mm (a quarter wave of W020) out of
 // focus back to the focus. (From farther out, an MTF at a high frequency passes through zeros and
 // side lobes as the film moves: its merit has local minima there.)
+TEST(DesignTolerance, MtfCriterionMatchesTheCircularPupilAndFallsWithDefocus) {
+  // The criterion "mtf": on the lens perfect on axis, the nominal is the aberration-free MTF at
+  // the frequency (both azimuths); an error of the film distance defocuses it, and the back-focus
+  // compensator (the best RMS-spot plane) restores it.
+  PerfectLens s("{\"type\": \"efl\", \"target\": 100}");
+  const double cutoff = 2 * marginalNa() / (kLambda_nm * 1e-6);
+  DesignJob job = s.job;
+  job.start = s.lens;
+  job.fields_deg = {0};
+  job.tolerance.criterion = "mtf";
+  job.tolerance.mtf_frequency = 0.5 * cutoff;
+  job.tolerance.monte_carlo = 6;
+  Tolerance t;
+  t.kind = Tolerance::Kind::Thickness;
+  t.surface = t.last_surface = 2;
+  t.delta = 0.02;
+  t.distribution = Tolerance::Distribution::EndPoint;
+  job.tolerance.tolerances = {t};
+  for (bool compensate : {false, true}) {
+    job.tolerance.back_focus_compensator = compensate;
+    const ToleranceResult r = runTolerancing(job);
+    EXPECT_NEAR(r.nominal, circularPupilMtf(0.5), 0.005) << compensate;
+    if (!compensate) {
+      // 0.02 mm of defocus: W020 = dz NA^2 / 2 of 0.17 waves.
+      EXPECT_LT(r.sensitivity[0].plus, -0.02);
+      EXPECT_LT(r.sensitivity[0].minus, -0.02);
+      EXPECT_EQ(r.worst, *std::min_element(r.builds.begin(), r.builds.end()));
+      EXPECT_LT(r.worst, r.nominal - 0.02);
+    } else {
+      EXPECT_NEAR(r.sensitivity[0].plus, 0, 0.005);
+      EXPECT_NEAR(r.sensitivity[0].minus, 0, 0.005);
+    }
+    std::printf("mtf criterion (compensator %d): nominal %.5f (closed form %.5f), +%.4f / %.4f\n",
+                compensate, r.nominal, circularPupilMtf(0.5), r.sensitivity[0].plus,
+                r.sensitivity[0].minus);
+  }
+}
+
 TEST(DesignWavefrontOperand, OptimisationFindsTheFocus) {
   for (const char* op : {"{\"type\": \"rms_wavefront\"}",
                          "{\"type\": \"mtf\", \"frequency\": 100, \"target\": 1}"}) {

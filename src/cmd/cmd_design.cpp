@@ -85,7 +85,8 @@ int runTolerance(const std::string& job_path, const std::string& report, const s
     writeLensZmx(toleranceNominal(job));
   }
   const ToleranceResult r = runTolerancing(job);
-  const std::string unit = job.tolerance.criterion == "f_number" ? "" : " mm";
+  const std::string unit =
+      job.tolerance.criterion == "f_number" || job.tolerance.criterion == "mtf" ? "" : " mm";
   std::cout << fmt::format("criterion {} (compensator {}), nominal {:.6g}{}\n",
                            job.tolerance.criterion,
                            job.tolerance.back_focus_compensator ? "back focus" : "none", r.nominal, unit);

@@ -553,21 +553,36 @@ DesignJob parseDesignJob(std::string_view text, const std::string& path) {
     const json& t = j["tolerancing"];
     const FileLoc tl = keyLoc(text, "tolerancing", path);
     if (!t.is_object()) throw Error(tl, "\"tolerancing\" must be an object");
-    checkKeys(t, tl, {"tolerances", "criterion", "compensator", "monte_carlo", "seed"});
+    checkKeys(t, tl, {"tolerances", "criterion", "compensator", "monte_carlo", "seed", "frequency",
+                      "azimuth"});
     job.tolerance.tolerances = parseArray<Tolerance>(
         t, "tolerances", text, path, [&](const json& e, const FileLoc& l) { return parseTolerance(e, l, p); });
     job.tolerance.criterion = t.value("criterion", std::string("rms_spot"));
-    static const std::vector<std::string> crit = {"rms_spot", "boresight", "efl", "bfl", "f_number",
-                                                  "total_track", "longitudinal_color"};
+    static const std::vector<std::string> crit = {"rms_spot", "boresight", "mtf", "efl", "bfl",
+                                                  "f_number", "total_track", "longitudinal_color"};
     if (std::find(crit.begin(), crit.end(), job.tolerance.criterion) == crit.end())
       throw Error(tl, fmt::format("\"criterion\" \"{}\": expected one of {}", job.tolerance.criterion,
                                   fmt::join(crit, ", ")));
+    if (job.tolerance.criterion == "mtf") {
+      job.tolerance.mtf_frequency = number(t, "frequency", tl);
+      if (!(job.tolerance.mtf_frequency > 0 && job.tolerance.mtf_frequency <= 5000))
+        throw Error(tl, fmt::format("\"frequency\" {} must be in (0, 5000] cycles/mm",
+                                    job.tolerance.mtf_frequency));
+      job.tolerance.mtf_azimuth = t.value("azimuth", std::string("both"));
+      if (job.tolerance.mtf_azimuth != "both" && job.tolerance.mtf_azimuth != "tangential" &&
+          job.tolerance.mtf_azimuth != "sagittal")
+        throw Error(tl, fmt::format("\"azimuth\" \"{}\": expected both, tangential or sagittal",
+                                    job.tolerance.mtf_azimuth));
+    } else if (t.contains("frequency") || t.contains("azimuth")) {
+      throw Error(tl, "\"frequency\" and \"azimuth\" belong to the mtf criterion");
+    }
     for (const Tolerance& x : job.tolerance.tolerances)
       if (x.moves() && job.tolerance.criterion != "rms_spot" &&
           job.tolerance.criterion != "boresight")
         throw Error(x.loc, fmt::format("a decentre or tilt makes the lens non-coaxial, which has "
-                                       "no first-order \"{}\": use criterion rms_spot or "
-                                       "boresight",
+                                       "no {} \"{}\": use criterion rms_spot or boresight",
+                                       job.tolerance.criterion == "mtf" ? "coaxial pupil function for"
+                                                                        : "first-order",
                                        job.tolerance.criterion));
     const std::string comp = t.value("compensator", std::string("back_focus"));
     if (comp != "back_focus" && comp != "none")

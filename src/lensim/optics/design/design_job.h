@@ -104,6 +104,11 @@ struct ToleranceSpec {
   /// real chief ray meets the film, lies from the nominal lens's, mm) or a single operand kind's
   /// value ("efl", "bfl", ...).
   std::string criterion = "rms_spot";
+  /// Criterion "mtf": the diffraction MTF at `mtf_frequency` cycles/mm (the wavelengths' OTFs
+  /// summed, as the mtf operand), averaged over the job's fields and, unless one is named, over
+  /// the tangential and sagittal azimuths ("both", "tangential", "sagittal").
+  double mtf_frequency = 0;
+  std::string mtf_azimuth = "both";
   bool back_focus_compensator = true;
   int monte_carlo = 100;
   std::uint64_t seed = 1;

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <random>
 
+#include "lensim/optics/design/image_quality.h"
 #include "lensim/optics/design/placed_build.h"
 #include "lensim/optics/glass.h"
 
@@ -171,7 +172,7 @@ double toleranceCriterion(const DesignJob& job, const LensPrescription& p,
   if (film_shift_mm) *film_shift_mm = 0;
   if (field_rms_mm) field_rms_mm->clear();
   const std::string& c = job.tolerance.criterion;
-  if (c != "rms_spot" && c != "boresight") {
+  if (c != "rms_spot" && c != "boresight" && c != "mtf") {
     DesignJob one = job;
     Operand o;
     o.kind = c == "efl"         ? Operand::Kind::Efl
@@ -197,6 +198,23 @@ double toleranceCriterion(const DesignJob& job, const LensPrescription& p,
   };
   if (field_rms_mm)
     for (const SpotQuadratic& q : sums.fields) field_rms_mm->push_back(rms(q, nw));
+  if (c == "mtf") {
+    // On the compensated film (the smallest RMS spot's plane): the mean over fields and the
+    // asked azimuths of the polychromatic MTF at the frequency.
+    LensPrescription f = p;
+    f.surfaces.back().thickness_mm += dz;
+    const std::string& az = job.tolerance.mtf_azimuth;
+    double total = 0;
+    int count = 0;
+    for (double field : job.fields_deg)
+      for (bool sagittal : {false, true}) {
+        if ((az == "tangential" && sagittal) || (az == "sagittal" && !sagittal)) continue;
+        total += mtfAt(f, field, job.wavelengths_nm, job.wavelengths_nm.front(),
+                       job.tolerance.mtf_frequency, sagittal);
+        ++count;
+      }
+    return total / count;
+  }
   if (c == "boresight") {
     // The on-axis image point on the compensated film against the nominal lens's on its own.
     const Vec2 a = boresightPoint(job, pl, sum);
@@ -301,7 +319,9 @@ ToleranceResult runTolerancing(const DesignJob& job) {
     r.p10 = percentile(r.builds, 0.1);
     r.p50 = percentile(r.builds, 0.5);
     r.p90 = percentile(r.builds, 0.9);
-    r.worst = *std::max_element(r.builds.begin(), r.builds.end());
+    // The worst build: the lowest MTF, else the largest value.
+    r.worst = job.tolerance.criterion == "mtf" ? *std::min_element(r.builds.begin(), r.builds.end())
+                                               : *std::max_element(r.builds.begin(), r.builds.end());
   }
   return r;
 }
