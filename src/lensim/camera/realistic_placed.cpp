@@ -56,7 +56,8 @@ void refuseUnsupported(const RealisticSettings& s) {
 
 }  // namespace
 
-PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics::LensPrescription p)
+PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics::LensPrescription p,
+                                             bool pupil_bounds)
     : settings_(std::move(settings)), lens_([&]() -> optics::PlacedLens {
         refuseUnsupported(settings_);
         if (settings_.glass_match)
@@ -159,6 +160,7 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
                     focus_distance_m_, film_offset_mm_));
   z_near_ = above == 4 ? zmax : zmin;
   z_far_ = above == 4 ? zmin : zmax;
+  if (pupil_bounds) buildBounds(reach);
   startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -299,6 +301,50 @@ double PlacedRealisticCamera::discRadius(const Vec3& q) const {
   return std::max(rear_semi_mm_, (1 - t_min) * std::hypot(q.x, q.y) + t_min * rear_semi_mm_);
 }
 
+Vec3 PlacedRealisticCamera::planePoint(Vec2 q) const {
+  return toGlobal(rear_frame_, {q.x, q.y, z_near_}) + origin(rear_frame_);
+}
+
+void PlacedRealisticCamera::buildBounds(Vec2 reach) {
+  // A dispersive lens's beam moves with the wavelength: bound it at the rendered range's ends
+  // (the renderer's hero wavelengths, render/spectra/spectrum.h) and the primary wavelength.
+  constexpr double kLambdaMin_nm = 360, kLambdaMax_nm = 830;
+  std::vector<double> lambdas{lens_.wavelength_nm()};
+  if (dispersive_) lambdas.insert(lambdas.end(), {kLambdaMin_nm, kLambdaMax_nm});
+  bounds_ = PlacedPupilBounds(
+      reach, lambdas,
+      [&](Vec2 film) {
+        return discRadius(toLocal(rear_frame_, filmToLens(film) - origin(rear_frame_)));
+      },
+      [&](Vec2 film, Vec2 q, double lambda_nm) {
+        const optics::PlacedLens& lens = dispersive_ ? lensAt(lambda_nm) : lens_;
+        const Vec3 p = filmToLens(film);
+        return lens.traceBackward({p, normalize(planePoint(q) - p)}).ok();
+      });
+}
+
+double PlacedRealisticCamera::SamplingRegion::area() const {
+  return box ? box->area() : std::numbers::pi * disc_radius * disc_radius;
+}
+
+bool PlacedRealisticCamera::SamplingRegion::holds(Vec2 q) const {
+  return box ? box->holds(q) : q.x * q.x + q.y * q.y <= disc_radius * disc_radius;
+}
+
+PlacedRealisticCamera::SamplingRegion PlacedRealisticCamera::samplingRegion(Vec2 film) const {
+  SamplingRegion s;
+  s.disc_radius = discRadius(toLocal(rear_frame_, filmToLens(film) - origin(rear_frame_)));
+  const double r = s.disc_radius;
+  if (const std::optional<PlacedBox> b = bounds_.box(film)) {
+    // Clipped to the disc's square (no ray outside the disc gets through); the box when it is
+    // the smaller region.
+    const PlacedBox c{std::max(b->x0, -r), std::min(b->x1, r), std::max(b->y0, -r),
+                      std::min(b->y1, r)};
+    if (c.x1 > c.x0 && c.y1 > c.y0 && c.area() < std::numbers::pi * r * r) s.box = c;
+  }
+  return s;
+}
+
 const optics::PlacedLens& PlacedRealisticCamera::lensAt(double lambda_nm) const {
   struct PerThread {
     std::uint64_t owner = 0;
@@ -314,13 +360,17 @@ const optics::PlacedLens& PlacedRealisticCamera::lensAt(double lambda_nm) const 
 }
 
 std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& sample) const {
-  const Vec3 p = filmToLens(filmPoint(sample.film_raster));
-  const Vec3 q = toLocal(rear_frame_, p - origin(rear_frame_));
-  const double radius = discRadius(q);
-  const Vec2 d = sampling::sampleUniformDiskConcentric(sample.lens);
-  const Vec3 target =
-      toGlobal(rear_frame_, {radius * d.x, radius * d.y, z_near_}) + origin(rear_frame_);
-  const Vec3 to = target - p;
+  const Vec2 film = filmPoint(sample.film_raster);
+  const Vec3 p = filmToLens(film);
+  const SamplingRegion region = samplingRegion(film);
+  Vec2 q;
+  if (region.box) {
+    const PlacedBox& b = *region.box;
+    q = {b.x0 + sample.lens.x * (b.x1 - b.x0), b.y0 + sample.lens.y * (b.y1 - b.y0)};
+  } else {
+    q = sampling::sampleUniformDiskConcentric(sample.lens) * region.disc_radius;
+  }
+  const Vec3 to = planePoint(q) - p;
   const double r2 = dot(to, to);
   const Vec3 dir = to / std::sqrt(r2);
   const double cos_plane = std::abs(dot(dir, axisZ(rear_frame_)));
@@ -333,7 +383,7 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
   const optics::TraceResult r =
       lens.traceBackward({p, dir}, {}, absorbs_ && hero > 0 ? &path : nullptr);
   if (!r.ok()) return std::nullopt;
-  double w = cos_film * cos_plane / r2 * std::numbers::pi * radius * radius;
+  double w = cos_film * cos_plane / r2 * region.area();
   if (!settings_.aperture.isRound() && stop_radius_mm_ > 0) {
     w *= settings_.aperture.transmission(
         Vec2{r.stop_point.x / stop_radius_mm_, r.stop_point.y / stop_radius_mm_});
@@ -369,7 +419,7 @@ std::string PlacedRealisticCamera::describe() const {
       "realistic, tilted or decentred lens: {} ({}), exact double-precision trace, film moved "
       "{:.4f} mm along the image surface's axis (focus {}{}), {:.1f} x {:.1f} "
       "mm film, aperture {}, rays aimed at the last surface's clear aperture ({:g} mm "
-      "semi-diameter){}; no camera importance (path tracing only)",
+      "semi-diameter){}{}; no camera importance (path tracing only)",
       name_, path_, film_offset_mm_,
       std::isfinite(focus_distance_m_) ? fmt::format("{:.4g} m", focus_distance_m_)
                                        : std::string("at infinity"),
@@ -377,6 +427,10 @@ std::string PlacedRealisticCamera::describe() const {
       : film_referenced_                ? " from the film"
                                         : " from the front vertex: folded lens",
       2 * half_width_mm_, 2 * half_height_mm_, settings_.aperture.describe(), rear_semi_mm_,
+      bounds_.binsX() > 0 ? fmt::format(" within exit-pupil bounds ({} x {} film bins, {} "
+                                        "without a bound)",
+                                        bounds_.binsX(), bounds_.binsY(), bounds_.wholeBins())
+                          : std::string(),
       dispersive_ ? ", dispersive (hero wavelength only)" : "");
 }
 

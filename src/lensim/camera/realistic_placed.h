@@ -10,8 +10,7 @@
 // looks down +z along the object space's axis (a LookAt aims the lens's object-side axis). A
 // raster point at the right of the image lies at -x of the film frame, as for the coaxial camera.
 //
-// Sampling (pbrt's RealisticCamera, without pupil bounds): each film point p aims at a disc on
-// the plane of the rear surface's own frame that touches the surface's extreme toward the film
+// Sampling: each film point p aims at a disc on the plane of the rear surface's own frame that touches the surface's extreme toward the film
 // (z_near; z_far the other extreme over the clear aperture a). Every ray from p that reaches the
 // rear surface's clear aperture crosses that plane within radius max(a, (1 - t_min)|p_xy| +
 // t_min a) of the rear surface's axis, t_min = (p_z - z_near) / (p_z - z_far) (all in the rear
@@ -22,6 +21,13 @@
 // from the film point to the disc point, R the disc's radius, T the aperture shape's
 // transmission and the glasses' internal transmittance: the coaxial camera's cos^4 A / z^2
 // when both planes face each other along one axis.
+//
+// Exit-pupil bounds (camera/placed_pupil.h): most of the disc carries no light (the beam fills
+// a small part of it, moved with the film point), so at start-up each bin of a 2-D grid over
+// the film gets a box of that plane holding every passing ray from its film points, found by
+// tracing grids from the bin's corners, edge middles and centre. A film point samples its
+// bin's box uniformly (clipped to the disc's square) when smaller than the disc, with the box's
+// area in place of pi R^2.
 //
 // Focus: `focusdistance` (metres; infinity allowed) is honoured by moving the film along the
 // image surface's axis to where the real rays from that object point, through an equal-area
@@ -40,9 +46,11 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "lensim/camera/placed_pupil.h"
 #include "lensim/camera/realistic.h"
 #include "lensim/optics/placed_lens.h"
 
@@ -52,7 +60,9 @@ class PlacedRealisticCamera final : public Camera {
  public:
   /// The camera for `prescription` (non-coaxial) with `settings` (as makeRealisticCamera fills
   /// them). Throws lensim::Error for settings it does not support or a lens no ray passes.
-  PlacedRealisticCamera(RealisticSettings settings, optics::LensPrescription prescription);
+  /// pupil_bounds false: every film point samples its whole disc (to compare: tests, bench).
+  PlacedRealisticCamera(RealisticSettings settings, optics::LensPrescription prescription,
+                        bool pupil_bounds = true);
 
   std::optional<CameraRay> generateRay(const CameraSample& sample) const override;
   double startupSeconds() const override { return startup_seconds_; }
@@ -64,6 +74,18 @@ class PlacedRealisticCamera final : public Camera {
   double filmOffset_mm() const { return film_offset_mm_; }
   /// The film point (the image surface's own frame, mm) of a raster position.
   Vec2 filmPoint(Vec2 raster) const;
+  /// What a film point (the image surface's frame, mm) samples on the plane z = samplingPlaneZ
+  /// of the rear surface's frame: the disc of disc_radius about its axis, or the box when given.
+  struct SamplingRegion {
+    double disc_radius = 0;
+    std::optional<PlacedBox> box;
+    double area() const;
+    bool holds(Vec2 q) const;
+  };
+  SamplingRegion samplingRegion(Vec2 film) const;
+  double samplingPlaneZ_mm() const { return z_near_; }
+  /// The exit-pupil bounds (empty without them).
+  const PlacedPupilBounds& pupilBounds() const { return bounds_; }
 
  private:
   /// The film point (image frame, z = the film offset) in the front surface's frame.
@@ -71,6 +93,10 @@ class PlacedRealisticCamera final : public Camera {
   /// The radius of the disc a film point (lens coordinates) samples; its plane is z_near_ in
   /// the rear surface's frame.
   double discRadius(const Vec3& film_lens) const;
+  /// The point q of the sampling plane in lens coordinates.
+  Vec3 planePoint(Vec2 q) const;
+  /// Builds bounds_ for the film out to `reach` (mm, half extents).
+  void buildBounds(Vec2 reach);
   /// Solves film_offset_mm_ for an object at `distance_m` (see the top of this file).
   void focus(double distance_m);
   /// The film offset of the smallest RMS spot of real rays from `field` (distance_m for messages).
@@ -94,6 +120,7 @@ class PlacedRealisticCamera final : public Camera {
   double half_width_mm_ = 0, half_height_mm_ = 0;
   bool dispersive_ = false, absorbs_ = false;
   std::uint64_t id_ = 0;
+  PlacedPupilBounds bounds_;
   double startup_seconds_ = 0;
 };
 
