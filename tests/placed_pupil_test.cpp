@@ -78,17 +78,21 @@ TEST(PlacedPupil, NoPassingRayOutsideTheBounds) {
   for (int i = 0; i < 1000000; ++i) {
     const Vec2 x{corner.x * (2 * uni(rng) - 1), corner.y * (2 * uni(rng) - 1)};
     const camera::PlacedRealisticCamera::SamplingRegion region = cam->samplingRegion(x);
-    ASSERT_TRUE(region.box.has_value());
-    // Half the points over the disc's square, half over the box widened to twice its size (the
-    // boundary's neighbourhood).
+    ASSERT_TRUE(region.polygon.has_value());
+    // Half the points over the disc's square, half over the polygon's bounding box widened to
+    // twice its size (the boundary's neighbourhood).
     Vec2 q;
     if (i % 2 == 0) {
       const double r = region.disc_radius;
       q = {r * (2 * uni(rng) - 1), r * (2 * uni(rng) - 1)};
     } else {
-      const camera::PlacedBox& b = *region.box;
-      const double wx = b.x1 - b.x0, wy = b.y1 - b.y0;
-      q = {b.x0 - wx / 2 + 2 * wx * uni(rng), b.y0 - wy / 2 + 2 * wy * uni(rng)};
+      Vec2 lo{1e300, 1e300}, hi{-1e300, -1e300};
+      for (int k = 0; k < region.polygon->n; ++k) {
+        const Vec2 v = region.polygon->v[size_t(k)];
+        lo = {std::min(lo.x, v.x), std::min(lo.y, v.y)}, hi = {std::max(hi.x, v.x), std::max(hi.y, v.y)};
+      }
+      const double wx = hi.x - lo.x, wy = hi.y - lo.y;
+      q = {lo.x - wx / 2 + 2 * wx * uni(rng), lo.y - wy / 2 + 2 * wy * uni(rng)};
     }
     const Vec3 from = place(p.image_frame, {x.x, x.y, cam->filmOffset_mm()});
     const Vec3 to = place(rear, {q.x, q.y, z_plane});
@@ -227,8 +231,8 @@ TEST(PlacedPupil, DebugDump) {
   const optics::SurfaceFrame& rear = *p.surfaces.back().frame;
   for (Vec2 x : {Vec2{0, 0}, Vec2{10, 5}, Vec2{-17, -11}}) {
     const auto r = cam->samplingRegion(x);
-    const auto b = cam->pupilBounds().box(x);
-    std::printf("film %g %g disc %g box %g %g %g %g\n", x.x, x.y, r.disc_radius, b ? b->x0 : 0, b ? b->x1 : 0, b ? b->y0 : 0, b ? b->y1 : 0);
+    std::printf("film %g %g disc %g poly area %g\n", x.x, x.y, r.disc_radius, r.area());
+    for (int k = 0; k < r.polygon->n; ++k) std::printf("  %g %g\n", r.polygon->v[size_t(k)].x, r.polygon->v[size_t(k)].y);
     const Vec3 from = place(p.image_frame, {x.x, x.y, cam->filmOffset_mm()});
     const int n = 40;
     for (int j = n; j >= -n; j -= 2) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 
 namespace lensim::camera {
 
@@ -19,18 +20,22 @@ constexpr int kBinsLong = 8, kGrid = 12, kBisect = 7;
 // over wavelengths widens by this share of the most an edge moves between neighbouring ones.
 constexpr double kCheckFactor = 1.5, kWavelengthShare = 0.5;
 
-using Box = PlacedBox;
+using Support = PlacedPupilBounds::Support;
+constexpr int kDirections = PlacedPupilBounds::kDirections;
 
-// The passing region's extent from one film point at one wavelength (see the header): a grid
-// over the disc's square finds passing points; each grid row's leftmost and rightmost passing
-// point (each column's lowest and highest) is moved out to the boundary by bisection, keeping
-// the blocked end; an edge is the extreme row's (column's) value, widened by the most it differs
-// from its neighbouring rows' (columns') values: for a convex region that bounds the boundary
-// between grid rows (the boundary's tangent through the extreme row and its neighbour lies
-// outside it), and one grid step when no neighbouring row passes.
+// The grid steps along the directions (k x 45 degrees).
+constexpr std::array<std::array<int, 2>, kDirections> kStep{
+    {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}, {1, -1}}};
+
+Vec2 unit(int k) {
+  const double a = k * std::numbers::pi / 4;
+  return {std::cos(a), std::sin(a)};
+}
+
+// The passing region's supports from one film point at one wavelength (see the header).
 struct Extent {
   bool any = false;
-  Box box{};
+  Support s{};
   std::uint64_t traces = 0;
 };
 
@@ -41,79 +46,89 @@ class ExtentFinder {
 
   Extent find() {
     Extent e;
-    std::array<std::array<bool, kGrid + 1>, kGrid + 1> pass{};  // [row j][column i]
     for (int j = 0; j <= kGrid; ++j)
       for (int i = 0; i <= kGrid; ++i) {
         const Vec2 q = at(i, j);
         if (q.x * q.x + q.y * q.y > r_ * r_) continue;  // no ray outside the disc gets through
-        pass[size_t(j)][size_t(i)] = test(q);
-        e.any = e.any || pass[size_t(j)][size_t(i)];
+        pass_[size_t(j)][size_t(i)] = test(q);
+        e.any = e.any || pass_[size_t(j)][size_t(i)];
       }
-    if (e.any) {
-      e.box.x0 = edge(pass, false, false), e.box.x1 = edge(pass, false, true);
-      e.box.y0 = edge(pass, true, false), e.box.y1 = edge(pass, true, true);
-    }
+    if (e.any)
+      for (int k = 0; k < kDirections; ++k) e.s[size_t(k)] = support(k);
     e.traces = traces_;
     return e;
   }
 
  private:
+  static constexpr int kKeys = 4 * kGrid + 1;  // grid lines along a direction, indexed + 2 kGrid
+
   Vec2 at(int i, int j) const { return {-r_ + i * h_, -r_ + j * h_}; }
   bool test(Vec2 q) {
     ++traces_;
     return passes_(film_, q, lambda_);
   }
-  // The edge along x (columns: along y), toward + when `high`: per grid line, the outermost
-  // passing point moved out by bisection; then the extreme over the lines and its widening.
-  double edge(const std::array<std::array<bool, kGrid + 1>, kGrid + 1>& pass, bool columns,
-              bool high) {
-    const double s = high ? 1 : -1;
-    std::array<double, kGrid + 1> value{};
-    std::array<bool, kGrid + 1> has{};
-    for (int l = 0; l <= kGrid; ++l) {
-      int outer = -1;
-      for (int k = 0; k <= kGrid; ++k) {
-        const int m = high ? kGrid - k : k;
-        if (columns ? pass[size_t(m)][size_t(l)] : pass[size_t(l)][size_t(m)]) {
-          outer = m;
-          break;
-        }
+  // The support along direction k: on each grid line along it, the outermost passing point
+  // moved out to the boundary by bisection; the extreme over the lines, widened.
+  double support(int k) {
+    const int gx = kStep[size_t(k)][0], gy = kStep[size_t(k)][1];
+    const Vec2 n = unit(k), g{h_ * gx, h_ * gy};
+    std::array<int, kKeys> outer_i{}, outer_t{};
+    std::array<bool, kKeys> has{};
+    for (int j = 0; j <= kGrid; ++j)
+      for (int i = 0; i <= kGrid; ++i) {
+        if (!pass_[size_t(j)][size_t(i)]) continue;
+        const int key = gx * j - gy * i + 2 * kGrid, t = gx * i + gy * j;
+        if (!has[size_t(key)] || t > outer_t[size_t(key)])
+          has[size_t(key)] = true, outer_t[size_t(key)] = t, outer_i[size_t(key)] = j * (kGrid + 1) + i;
       }
-      if (outer < 0) continue;
-      has[size_t(l)] = true;
-      const Vec2 p = columns ? at(l, outer) : at(outer, l);
-      double a = columns ? p.y : p.x, b = a + s * h_;  // passing, blocked
-      if (s * b > r_) {
-        value[size_t(l)] = s * r_;  // the disc's square ends there
-        continue;
-      }
+    std::array<double, kKeys> value{};
+    int best = -1;
+    for (int key = 0; key < kKeys; ++key) {
+      if (!has[size_t(key)]) continue;
+      const Vec2 p = at(outer_i[size_t(key)] % (kGrid + 1), outer_i[size_t(key)] / (kGrid + 1));
+      double a = 0, b = 1;  // along g from p: passing, blocked (the next grid point)
       for (int step = 0; step < kBisect; ++step) {
         const double m = (a + b) / 2;
-        (test(columns ? Vec2{p.x, m} : Vec2{m, p.y}) ? a : b) = m;
+        (test(p + g * m) ? a : b) = m;
       }
-      value[size_t(l)] = b;
+      const Vec2 q = p + g * b;
+      value[size_t(key)] = q.x * n.x + q.y * n.y;
+      if (best < 0 || value[size_t(key)] > value[size_t(best)]) best = key;
     }
-    int best = -1;
-    for (int l = 0; l <= kGrid; ++l)
-      if (has[size_t(l)] && (best < 0 || s * value[size_t(l)] > s * value[size_t(best)])) best = l;
     double widen = -1;
-    for (int n : {best - 1, best + 1})
-      if (n >= 0 && n <= kGrid && has[size_t(n)])
-        widen = std::max(widen, std::abs(value[size_t(best)] - value[size_t(n)]));
-    if (widen < 0) widen = h_;
-    return std::clamp(value[size_t(best)] + s * widen, -r_, r_);
+    for (int nb : {best - 1, best + 1})
+      if (nb >= 0 && nb < kKeys && has[size_t(nb)])
+        widen = std::max(widen, std::abs(value[size_t(best)] - value[size_t(nb)]));
+    if (widen < 0) widen = h_ * std::hypot(gx, gy);
+    return std::min(r_, value[size_t(best)] + widen);
   }
 
   const PlacedPupilBounds::Passes& passes_;
   Vec2 film_;
   double lambda_, r_, h_;
+  std::array<std::array<bool, kGrid + 1>, kGrid + 1> pass_{};  // [row j][column i]
   std::uint64_t traces_ = 0;
 };
 
-Box lerp(const Box& a, const Box& b, double t) {
-  return {a.x0 + (b.x0 - a.x0) * t, a.x1 + (b.x1 - a.x1) * t, a.y0 + (b.y0 - a.y0) * t,
-          a.y1 + (b.y1 - a.y1) * t};
+Support lerp(const Support& a, const Support& b, double t) {
+  Support r;
+  for (size_t k = 0; k < r.size(); ++k) r[k] = a[k] + (b[k] - a[k]) * t;
+  return r;
 }
+
+// The convex polygon p cut by the half-plane q . n <= s.
+PlacedPolygon clip(const PlacedPolygon& p, Vec2 n, double s) {
+  PlacedPolygon out;
+  for (int i = 0; i < p.n; ++i) {
+    const Vec2 a = p.v[size_t(i)], b = p.v[size_t((i + 1) % p.n)];
+    const double da = a.x * n.x + a.y * n.y - s, db = b.x * n.x + b.y * n.y - s;
+    if (da <= 0) out.v[size_t(out.n++)] = a;
+    if ((da < 0 && db > 0) || (da > 0 && db < 0)) out.v[size_t(out.n++)] = a + (b - a) * (da / (da - db));
+  }
+  return out;
+}
+
+double cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
 
 }  // namespace
 
@@ -160,66 +175,57 @@ PlacedPupilBounds::PlacedPupilBounds(Vec2 half_mm, const std::vector<double>& wa
     return ext[size_t(k * points + b * px + a)];
   };
 
-  // Nodes: the union over the wavelengths, widened by a share of the most each edge moves
-  // between neighbouring wavelengths.
+  // Nodes: the largest support over the wavelengths, widened by a share of the most it moves
+  // between neighbouring ones.
   nodes_.assign(size_t((nx_ + 1) * (ny_ + 1)), std::nullopt);
   for (int b = 0; b <= ny_; ++b)
     for (int a = 0; a <= nx_; ++a) {
-      std::vector<Box> boxes;  // by wavelength, sorted
+      std::vector<Support> by_wavelength;  // sorted
       for (double l : sorted) {
         const int k = int(std::find(lambdas.begin(), lambdas.end(), l) - lambdas.begin());
         const Extent& e = at(2 * a, 2 * b, k);
-        if (e.any) boxes.push_back(e.box);
+        if (e.any) by_wavelength.push_back(e.s);
       }
-      if (int(boxes.size()) != nl) continue;
-      Box u = boxes[0];
-      std::array<double, 4> moved{};
-      for (size_t k = 1; k < boxes.size(); ++k) {
-        const Box& e = boxes[k];
-        const Box& f = boxes[k - 1];
-        u = {std::min(u.x0, e.x0), std::max(u.x1, e.x1), std::min(u.y0, e.y0),
-             std::max(u.y1, e.y1)};
-        moved = {std::max(moved[0], std::abs(e.x0 - f.x0)),
-                 std::max(moved[1], std::abs(e.x1 - f.x1)),
-                 std::max(moved[2], std::abs(e.y0 - f.y0)),
-                 std::max(moved[3], std::abs(e.y1 - f.y1))};
-      }
-      const double w = kWavelengthShare;
-      nodes_[size_t(b * (nx_ + 1) + a)] =
-          Box{u.x0 - w * moved[0], u.x1 + w * moved[1], u.y0 - w * moved[2], u.y1 + w * moved[3]};
+      if (int(by_wavelength.size()) != nl) continue;
+      Support u = by_wavelength[0], moved{};
+      for (size_t k = 1; k < by_wavelength.size(); ++k)
+        for (size_t d = 0; d < u.size(); ++d) {
+          u[d] = std::max(u[d], by_wavelength[k][d]);
+          moved[d] = std::max(moved[d], std::abs(by_wavelength[k][d] - by_wavelength[k - 1][d]));
+        }
+      for (size_t d = 0; d < u.size(); ++d) u[d] += kWavelengthShare * moved[d];
+      nodes_[size_t(b * (nx_ + 1) + a)] = u;
     }
 
-  // Bins: the checks against the bilinear blend of the corners' primary-wavelength extents.
+  // Bins: the checks against the bilinear blend of the corners' primary-wavelength supports.
   bins_.assign(size_t(nx_ * ny_), Bin{});
   for (int j = 0; j < ny_; ++j)
     for (int i = 0; i < nx_; ++i) {
       Bin& bin = bins_[size_t(j * nx_ + i)];
       bool all = true;
       for (int b = 0; b <= 1; ++b)
-        for (int a = 0; a <= 1; ++a) all = all && nodes_[size_t((j + b) * (nx_ + 1) + i + a)];
-      std::array<double, 4> margin{};
+        for (int a = 0; a <= 1; ++a)
+          all = all && nodes_[size_t((j + b) * (nx_ + 1) + i + a)].has_value();
+      Support margin{};
       for (int b = 2 * j; b <= 2 * j + 2 && all; ++b)
         for (int a = 2 * i; a <= 2 * i + 2 && all; ++a) {
           const Extent& e = at(a, b, 0);
           all = e.any;
           if (!all || (a % 2 == 0 && b % 2 == 0)) continue;
           const double u = (a - 2 * i) / 2.0, v = (b - 2 * j) / 2.0;
-          const Box blend = lerp(lerp(at(2 * i, 2 * j, 0).box, at(2 * i + 2, 2 * j, 0).box, u),
-                                 lerp(at(2 * i, 2 * j + 2, 0).box, at(2 * i + 2, 2 * j + 2, 0).box, u),
-                                 v);
-          margin = {std::max(margin[0], blend.x0 - e.box.x0),
-                    std::max(margin[1], e.box.x1 - blend.x1),
-                    std::max(margin[2], blend.y0 - e.box.y0),
-                    std::max(margin[3], e.box.y1 - blend.y1)};
+          const Support blend =
+              lerp(lerp(at(2 * i, 2 * j, 0).s, at(2 * i + 2, 2 * j, 0).s, u),
+                   lerp(at(2 * i, 2 * j + 2, 0).s, at(2 * i + 2, 2 * j + 2, 0).s, u), v);
+          for (size_t d = 0; d < margin.size(); ++d)
+            margin[d] = std::max(margin[d], e.s[d] - blend[d]);
         }
       if (!all) continue;  // the whole disc
       bin.bounded = true;
-      bin.margin = {kCheckFactor * margin[0], kCheckFactor * margin[1], kCheckFactor * margin[2],
-                    kCheckFactor * margin[3]};
+      for (size_t d = 0; d < margin.size(); ++d) bin.margin[d] = kCheckFactor * margin[d];
     }
 }
 
-std::optional<PlacedBox> PlacedPupilBounds::box(Vec2 film) const {
+std::optional<PlacedPolygon> PlacedPupilBounds::polygon(Vec2 film, double r) const {
   if (bins_.empty() || !(std::abs(film.x) <= half_.x) || !(std::abs(film.y) <= half_.y))
     return std::nullopt;
   const double fx = (film.x + half_.x) / (2 * half_.x) * nx_,
@@ -227,17 +233,48 @@ std::optional<PlacedBox> PlacedPupilBounds::box(Vec2 film) const {
   const int i = std::min(nx_ - 1, int(fx)), j = std::min(ny_ - 1, int(fy));
   const Bin& bin = bins_[size_t(j * nx_ + i)];
   if (!bin.bounded) return std::nullopt;
-  const auto node = [&](int a, int b) -> const Box& {
+  const auto node = [&](int a, int b) -> const Support& {
     return *nodes_[size_t((j + b) * (nx_ + 1) + i + a)];
   };
   const double u = fx - i, v = fy - j;
-  const Box c = lerp(lerp(node(0, 0), node(1, 0), u), lerp(node(0, 1), node(1, 1), u), v);
-  return Box{c.x0 - bin.margin[0], c.x1 + bin.margin[1], c.y0 - bin.margin[2],
-             c.y1 + bin.margin[3]};
+  const Support s = lerp(lerp(node(0, 0), node(1, 0), u), lerp(node(0, 1), node(1, 1), u), v);
+  PlacedPolygon p;
+  p.n = 4;
+  p.v[0] = {-r, -r}, p.v[1] = {r, -r}, p.v[2] = {r, r}, p.v[3] = {-r, r};
+  for (int k = 0; k < kDirections && p.n >= 3; ++k)
+    p = clip(p, unit(k), s[size_t(k)] + bin.margin[size_t(k)]);
+  if (p.n < 3 || !(p.area() > 0)) return std::nullopt;
+  return p;
 }
 
 int PlacedPupilBounds::wholeBins() const {
   return int(std::count_if(bins_.begin(), bins_.end(), [](const Bin& b) { return !b.bounded; }));
+}
+
+double PlacedPolygon::area() const {
+  double a = 0;
+  for (int i = 1; i + 1 < n; ++i) a += cross(v[size_t(i)] - v[0], v[size_t(i + 1)] - v[0]);
+  return a / 2;
+}
+
+bool PlacedPolygon::holds(Vec2 q) const {
+  for (int i = 0; i < n; ++i)
+    if (cross(v[size_t((i + 1) % n)] - v[size_t(i)], q - v[size_t(i)]) < 0) return false;
+  return true;
+}
+
+Vec2 PlacedPolygon::sample(Vec2 u) const {
+  const double total = area();
+  double t = u.x * total;
+  int i = 1;
+  double a = 0;
+  for (; i + 1 < n; ++i) {
+    a = cross(v[size_t(i)] - v[0], v[size_t(i + 1)] - v[0]) / 2;
+    if (t < a || i + 2 == n) break;
+    t -= a;
+  }
+  const double s = std::sqrt(std::clamp(t / a, 0.0, 1.0));
+  return v[0] * (1 - s) + (v[size_t(i)] * (1 - u.y) + v[size_t(i + 1)] * u.y) * s;
 }
 
 }  // namespace lensim::camera

@@ -324,24 +324,19 @@ void PlacedRealisticCamera::buildBounds(Vec2 reach) {
 }
 
 double PlacedRealisticCamera::SamplingRegion::area() const {
-  return box ? box->area() : std::numbers::pi * disc_radius * disc_radius;
+  return polygon ? polygon->area() : std::numbers::pi * disc_radius * disc_radius;
 }
 
 bool PlacedRealisticCamera::SamplingRegion::holds(Vec2 q) const {
-  return box ? box->holds(q) : q.x * q.x + q.y * q.y <= disc_radius * disc_radius;
+  return polygon ? polygon->holds(q) : q.x * q.x + q.y * q.y <= disc_radius * disc_radius;
 }
 
 PlacedRealisticCamera::SamplingRegion PlacedRealisticCamera::samplingRegion(Vec2 film) const {
   SamplingRegion s;
   s.disc_radius = discRadius(toLocal(rear_frame_, filmToLens(film) - origin(rear_frame_)));
-  const double r = s.disc_radius;
-  if (const std::optional<PlacedBox> b = bounds_.box(film)) {
-    // Clipped to the disc's square (no ray outside the disc gets through); the box when it is
-    // the smaller region.
-    const PlacedBox c{std::max(b->x0, -r), std::min(b->x1, r), std::max(b->y0, -r),
-                      std::min(b->y1, r)};
-    if (c.x1 > c.x0 && c.y1 > c.y0 && c.area() < std::numbers::pi * r * r) s.box = c;
-  }
+  // The polygon (within the disc's square) when it is the smaller region.
+  if (std::optional<PlacedPolygon> p = bounds_.polygon(film, s.disc_radius))
+    if (p->area() < std::numbers::pi * s.disc_radius * s.disc_radius) s.polygon = *p;
   return s;
 }
 
@@ -363,13 +358,9 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
   const Vec2 film = filmPoint(sample.film_raster);
   const Vec3 p = filmToLens(film);
   const SamplingRegion region = samplingRegion(film);
-  Vec2 q;
-  if (region.box) {
-    const PlacedBox& b = *region.box;
-    q = {b.x0 + sample.lens.x * (b.x1 - b.x0), b.y0 + sample.lens.y * (b.y1 - b.y0)};
-  } else {
-    q = sampling::sampleUniformDiskConcentric(sample.lens) * region.disc_radius;
-  }
+  const Vec2 q = region.polygon
+                     ? region.polygon->sample(sample.lens)
+                     : sampling::sampleUniformDiskConcentric(sample.lens) * region.disc_radius;
   const Vec3 to = planePoint(q) - p;
   const double r2 = dot(to, to);
   const Vec3 dir = to / std::sqrt(r2);

@@ -23,11 +23,11 @@
 // when both planes face each other along one axis.
 //
 // Exit-pupil bounds (camera/placed_pupil.h): most of the disc carries no light (the beam fills
-// a small part of it, moved with the film point), so at start-up each bin of a 2-D grid over
-// the film gets a box of that plane holding every passing ray from its film points, found by
-// tracing grids from the bin's corners, edge middles and centre. A film point samples its
-// bin's box uniformly (clipped to the disc's square) when smaller than the disc, with the box's
-// area in place of pi R^2.
+// a small part of it, moved with the film point), so at start-up the film is cut into 2-D bins
+// and each film point gets a convex polygon (an octagon at most, cut from the disc's square) of
+// that plane holding every passing ray from it, blended from its bin's corners, whose grids
+// were traced at start-up. A film point samples its polygon uniformly when smaller than the
+// disc, with the polygon's area in place of pi R^2.
 //
 // Focus: `focusdistance` (metres; infinity allowed) is honoured by moving the film along the
 // image surface's axis to where the real rays from that object point, through an equal-area
@@ -75,10 +75,11 @@ class PlacedRealisticCamera final : public Camera {
   /// The film point (the image surface's own frame, mm) of a raster position.
   Vec2 filmPoint(Vec2 raster) const;
   /// What a film point (the image surface's frame, mm) samples on the plane z = samplingPlaneZ
-  /// of the rear surface's frame: the disc of disc_radius about its axis, or the box when given.
+  /// of the rear surface's frame: the disc of disc_radius about its axis, or the polygon when
+  /// given.
   struct SamplingRegion {
     double disc_radius = 0;
-    std::optional<PlacedBox> box;
+    std::optional<PlacedPolygon> polygon;
     double area() const;
     bool holds(Vec2 q) const;
   };
