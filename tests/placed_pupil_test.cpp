@@ -224,25 +224,3 @@ TEST(PlacedPupil, BoundedRenderMatchesTheUnboundedOne) {
   EXPECT_NEAR(m.mean_ratio, 1.0, 0.02);
   EXPECT_EQ(m.z_failures, 0);
 }
-TEST(PlacedPupil, DebugDump) {
-  const LensSetup s = decentredDoubleGauss();
-  const auto cam = makeCamera(s, true);
-  const optics::LensPrescription p = optics::readLensFile(s.lens);
-  const optics::SurfaceFrame& rear = *p.surfaces.back().frame;
-  for (Vec2 x : {Vec2{0, 0}, Vec2{10, 5}, Vec2{-17, -11}}) {
-    const auto r = cam->samplingRegion(x);
-    std::printf("film %g %g disc %g poly area %g\n", x.x, x.y, r.disc_radius, r.area());
-    for (int k = 0; k < r.polygon->n; ++k) std::printf("  %g %g\n", r.polygon->v[size_t(k)].x, r.polygon->v[size_t(k)].y);
-    const Vec3 from = place(p.image_frame, {x.x, x.y, cam->filmOffset_mm()});
-    const int n = 40;
-    for (int j = n; j >= -n; j -= 2) {
-      std::string line;
-      for (int i = -n; i <= n; ++i) {
-        const Vec2 q{r.disc_radius * i / n, r.disc_radius * j / n};
-        const Vec3 to = place(rear, {q.x, q.y, cam->samplingPlaneZ_mm()});
-        line += cam->lens().traceBackward({from, normalize(to - from)}).ok() ? '#' : (q.x*q.x+q.y*q.y <= r.disc_radius*r.disc_radius ? '.' : ' ');
-      }
-      std::printf("%s\n", line.c_str());
-    }
-  }
-}

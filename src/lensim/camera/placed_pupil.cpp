@@ -15,7 +15,7 @@ namespace {
 // Bins along the film's longer side (the shorter side gets as many as keep them near square);
 // intervals per axis of the grid over the disc; bisection steps on each row's and column's
 // boundary (its bracket ends 1/128 of a grid step wide).
-constexpr int kBinsLong = 8, kGrid = 12, kBisect = 7;
+constexpr int kBinsLong = 6, kGrid = 12, kBisect = 7;
 // Margins: the interpolation error found at a bin's checks counts this many times; a bound
 // over wavelengths widens by this share of the most an edge moves between neighbouring ones.
 constexpr double kCheckFactor = 1.5, kWavelengthShare = 0.5;
@@ -81,20 +81,39 @@ class ExtentFinder {
         if (!has[size_t(key)] || t > outer_t[size_t(key)])
           has[size_t(key)] = true, outer_t[size_t(key)] = t, outer_i[size_t(key)] = j * (kGrid + 1) + i;
       }
+    // Each line's boundary lies within one step past its outermost passing point: lines are
+    // refined in order of that point, until none left can beat the best refined value; then the
+    // best line's neighbours (for the widening).
     std::array<double, kKeys> value{};
-    int best = -1;
-    for (int key = 0; key < kKeys; ++key) {
-      if (!has[size_t(key)]) continue;
+    std::array<bool, kKeys> refined{};
+    const double step = h_ * std::hypot(gx, gy);
+    const auto refine = [&](int key) {
       const Vec2 p = at(outer_i[size_t(key)] % (kGrid + 1), outer_i[size_t(key)] / (kGrid + 1));
       double a = 0, b = 1;  // along g from p: passing, blocked (the next grid point)
-      for (int step = 0; step < kBisect; ++step) {
-        const double m = (a + b) / 2;
-        (test(p + g * m) ? a : b) = m;
+      for (int m = 0; m < kBisect; ++m) {
+        const double mid = (a + b) / 2;
+        (test(p + g * mid) ? a : b) = mid;
       }
       const Vec2 q = p + g * b;
       value[size_t(key)] = q.x * n.x + q.y * n.y;
+      refined[size_t(key)] = true;
+    };
+    std::array<int, kKeys> order{};
+    int lines = 0;
+    for (int key = 0; key < kKeys; ++key)
+      if (has[size_t(key)]) order[size_t(lines++)] = key;
+    std::sort(order.begin(), order.begin() + lines,
+              [&](int a, int b) { return outer_t[size_t(a)] > outer_t[size_t(b)]; });
+    int best = -1;
+    for (int l = 0; l < lines; ++l) {
+      const int key = order[size_t(l)];
+      const Vec2 p = at(outer_i[size_t(key)] % (kGrid + 1), outer_i[size_t(key)] / (kGrid + 1));
+      if (best >= 0 && p.x * n.x + p.y * n.y + step < value[size_t(best)]) break;
+      refine(key);
       if (best < 0 || value[size_t(key)] > value[size_t(best)]) best = key;
     }
+    for (int nb : {best - 1, best + 1})
+      if (nb >= 0 && nb < kKeys && has[size_t(nb)] && !refined[size_t(nb)]) refine(nb);
     double widen = -1;
     for (int nb : {best - 1, best + 1})
       if (nb >= 0 && nb < kKeys && has[size_t(nb)])
