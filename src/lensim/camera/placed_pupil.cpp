@@ -15,7 +15,7 @@ namespace {
 // Bins along the film's longer side (the shorter side gets as many as keep them near square);
 // intervals per axis of the grid over the disc; bisection steps on each row's and column's
 // boundary (its bracket ends 1/128 of a grid step wide).
-constexpr int kBinsLong = 6, kGrid = 12, kBisect = 7;
+constexpr int kBinsLong = 6, kGrid = 16, kBisect = 7;
 // Margins: the interpolation error found at a bin's checks counts this many times; a bound
 // over wavelengths widens by this share of the most an edge moves between neighbouring ones.
 constexpr double kCheckFactor = 1.5, kWavelengthShare = 0.5;
