@@ -80,10 +80,12 @@ Containment containment(const LensSetup& s, int n) {
   const optics::LensPrescription p = optics::readLensFile(s.lens);
   EXPECT_TRUE(p.noncoaxial_loc.has_value());
   EXPECT_GT(cam->pupilBounds().binsX() * cam->pupilBounds().binsY(), 16);
-  std::printf("%s: %d x %d bins (%d without a bound), %llu traces, camera start-up %.3f s\n",
-              s.lens.c_str(), cam->pupilBounds().binsX(), cam->pupilBounds().binsY(),
-              cam->pupilBounds().wholeBins(),
-              static_cast<unsigned long long>(cam->pupilBounds().traces()), cam->startupSeconds());
+  std::printf(
+      "%s: %d x %d bins (%d without a bound), %llu traces, camera start-up %.3f s (%.3f s on one "
+      "core)\n",
+      s.lens.c_str(), cam->pupilBounds().binsX(), cam->pupilBounds().binsY(),
+      cam->pupilBounds().wholeBins(), static_cast<unsigned long long>(cam->pupilBounds().traces()),
+      cam->startupSeconds(), cam->startupCpuSeconds());
   std::vector<optics::PlacedLens> lenses;
   for (int k = 0; k < 48; ++k) lenses.emplace_back(p, 360 + (830 - 360) * (k + 0.5) / 48);
   const optics::SurfaceFrame& rear = *p.surfaces.back().frame;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 
@@ -13,8 +14,8 @@ namespace lensim::camera {
 namespace {
 
 // Bins along the film's longer side (the shorter side gets as many as keep them near square);
-// intervals per axis of the grid over the disc; bisection steps on each row's and column's
-// boundary (its bracket ends 1/128 of a grid step wide).
+// intervals per axis of the grid over the disc; bisection steps on a grid line's boundary (its
+// bracket ends 1/128 of a grid step wide).
 constexpr int kBinsLong = 6, kGrid = 16, kBisect = 7;
 // Margins: the interpolation error found at a bin's checks counts this many times; a bound
 // over wavelengths widens by this share of the most an edge moves between neighbouring ones.
@@ -37,6 +38,7 @@ struct Extent {
   bool any = false;
   Support s{};
   std::uint64_t traces = 0;
+  double seconds = 0;  // the task's time
 };
 
 class ExtentFinder {
@@ -183,13 +185,17 @@ PlacedPupilBounds::PlacedPupilBounds(Vec2 half_mm, const std::vector<double>& wa
                     [&](const tbb::blocked_range<size_t>& range) {
                       for (size_t t = range.begin(); t != range.end(); ++t) {
                         const Task& task = tasks[t];
+                        const auto t0 = std::chrono::steady_clock::now();
                         const Vec2 film = filmAt(task.point % px, task.point / px);
-                        ext[size_t(task.k * points + task.point)] =
-                            ExtentFinder(passes, film, lambdas[size_t(task.k)], disc_radius(film))
+                        Extent& e = ext[size_t(task.k * points + task.point)];
+                        e = ExtentFinder(passes, film, lambdas[size_t(task.k)], disc_radius(film))
                                 .find();
+                        e.seconds = std::chrono::duration<double>(
+                                        std::chrono::steady_clock::now() - t0)
+                                        .count();
                       }
                     });
-  for (const Extent& e : ext) traces_ += e.traces;
+  for (const Extent& e : ext) traces_ += e.traces, task_seconds_ += e.seconds;
   const auto at = [&](int a, int b, int k) -> const Extent& {
     return ext[size_t(k * points + b * px + a)];
   };

@@ -71,6 +71,8 @@ class PlacedPupilBounds {
   /// Bins that keep the whole disc.
   int wholeBins() const;
   std::uint64_t traces() const { return traces_; }
+  /// The build's tasks' times added up: its cost on one core (s).
+  double taskSeconds() const { return task_seconds_; }
 
  private:
   struct Bin {
@@ -82,6 +84,7 @@ class PlacedPupilBounds {
   std::vector<std::optional<Support>> nodes_;  // (nx + 1) x (ny + 1) corners, row-major
   std::vector<Bin> bins_;                      // nx x ny, row-major
   std::uint64_t traces_ = 0;
+  double task_seconds_ = 0;
 };
 
 }  // namespace lensim::camera

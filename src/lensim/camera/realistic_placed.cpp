@@ -160,8 +160,18 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
                     focus_distance_m_, film_offset_mm_));
   z_near_ = above == 4 ? zmax : zmin;
   z_far_ = above == 4 ? zmin : zmax;
+  const auto t_bounds = std::chrono::steady_clock::now();
   if (pupil_bounds) buildBounds(reach);
-  startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto t1 = std::chrono::steady_clock::now();
+  startup_seconds_ = std::chrono::duration<double>(t1 - t0).count();
+  startup_cpu_seconds_ = std::chrono::duration<double>(t_bounds - t0).count() + bounds_.taskSeconds();
+  if (pupil_bounds)
+    logInfo(fmt::format(
+        "{}: exit-pupil bounds: {} x {} film bins ({} without a bound), {} traces, {:.3f} s "
+        "({:.3f} s on one core)",
+        path_.empty() ? name_ : path_, bounds_.binsX(), bounds_.binsY(), bounds_.wholeBins(),
+        bounds_.traces(), std::chrono::duration<double>(t1 - t_bounds).count(),
+        bounds_.taskSeconds()));
 }
 
 PlacedRealisticCamera::FocusSolve PlacedRealisticCamera::bestFocus(
