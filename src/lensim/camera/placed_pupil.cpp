@@ -163,117 +163,161 @@ PlacedPupilBounds::PlacedPupilBounds(Vec2 half_mm, const std::vector<double>& wa
   // The primary wavelength first, the others sorted (neighbours in wavelength are adjacent).
   std::vector<double> lambdas = wavelengths_nm;
   std::sort(lambdas.begin() + 1, lambdas.end());
-  std::vector<double> sorted = lambdas;
-  std::sort(sorted.begin(), sorted.end());
+  std::vector<int> by_wavelength(lambdas.size());  // indices into lambdas, sorted by wavelength
+  for (size_t k = 0; k < lambdas.size(); ++k) by_wavelength[k] = int(k);
+  std::sort(by_wavelength.begin(), by_wavelength.end(),
+            [&](int a, int b) { return lambdas[size_t(a)] < lambdas[size_t(b)]; });
 
-  // Film points on the lattice at half-bin spacing: (a, b) both even are the bins' corners
-  // (nodes, traced at every wavelength), the others their edge middles and centres (checks,
-  // traced at the primary wavelength).
-  const int px = 2 * nx_ + 1, py = 2 * ny_ + 1, points = px * py, nl = int(lambdas.size());
+  // Film points on a lattice at a quarter bin's spacing. A cell (a bin, or a quarter of one) of
+  // side `span` lattice steps has its corners (nodes, traced at every wavelength) and its edge
+  // middles and centre (checks, traced at the primary wavelength) on it.
+  px_ = 4 * nx_ + 1;
+  const int py = 4 * ny_ + 1, points = px_ * py, nl = int(lambdas.size());
   const auto filmAt = [&](int a, int b) {
-    return Vec2{-half_.x + a * half_.x / nx_, -half_.y + b * half_.y / ny_};
+    return Vec2{-half_.x + a * half_.x / (2 * nx_), -half_.y + b * half_.y / (2 * ny_)};
   };
-  struct Task {
-    int point, k;
-  };
-  std::vector<Task> tasks;
-  for (int k = 0; k < nl; ++k)
-    for (int p = 0; p < points; ++p)
-      if (k == 0 || ((p % px) % 2 == 0 && (p / px) % 2 == 0)) tasks.push_back({p, k});
   std::vector<Extent> ext(size_t(points * nl));
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 1),
-                    [&](const tbb::blocked_range<size_t>& range) {
-                      for (size_t t = range.begin(); t != range.end(); ++t) {
-                        const Task& task = tasks[t];
-                        const auto t0 = std::chrono::steady_clock::now();
-                        const Vec2 film = filmAt(task.point % px, task.point / px);
-                        Extent& e = ext[size_t(task.k * points + task.point)];
-                        e = ExtentFinder(passes, film, lambdas[size_t(task.k)], disc_radius(film))
-                                .find();
-                        e.seconds = std::chrono::duration<double>(
-                                        std::chrono::steady_clock::now() - t0)
-                                        .count();
-                      }
-                    });
-  for (const Extent& e : ext) traces_ += e.traces, task_seconds_ += e.seconds;
+  std::vector<bool> done(ext.size());
+  // Traces the cells' lattice points not traced yet, side by side.
+  const auto trace = [&](const std::vector<std::array<int, 3>>& cells) {
+    std::vector<std::array<int, 2>> tasks;  // point, wavelength
+    for (const auto& [a0, b0, span] : cells)
+      for (int b = b0; b <= b0 + span; b += span / 2)
+        for (int a = a0; a <= a0 + span; a += span / 2) {
+          const bool node = (a - a0) % span == 0 && (b - b0) % span == 0;
+          for (int k = 0; k < (node ? nl : 1); ++k) {
+            const size_t t = size_t(k * points + b * px_ + a);
+            if (!done[t]) done[t] = true, tasks.push_back({b * px_ + a, k});
+          }
+        }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t t = range.begin(); t != range.end(); ++t) {
+                          const auto t0 = std::chrono::steady_clock::now();
+                          const auto [point, k] = tasks[t];
+                          const Vec2 film = filmAt(point % px_, point / px_);
+                          Extent& e = ext[size_t(k * points + point)];
+                          e = ExtentFinder(passes, film, lambdas[size_t(k)], disc_radius(film))
+                                  .find();
+                          e.seconds = std::chrono::duration<double>(
+                                          std::chrono::steady_clock::now() - t0)
+                                          .count();
+                        }
+                      });
+  };
   const auto at = [&](int a, int b, int k) -> const Extent& {
-    return ext[size_t(k * points + b * px + a)];
+    return ext[size_t(k * points + b * px_ + a)];
+  };
+  nodes_.assign(size_t(points), std::nullopt);
+  // A node's support: the largest over the wavelengths, widened by a share of the most it
+  // moves between neighbouring ones; nullopt where some wavelength sees nothing.
+  const auto node = [&](int a, int b) -> const std::optional<Support>& {
+    std::optional<Support>& n = nodes_[size_t(b * px_ + a)];
+    if (n) return n;
+    Support u{}, moved{};
+    for (size_t i = 0; i < by_wavelength.size(); ++i) {
+      const Extent& e = at(a, b, by_wavelength[i]);
+      if (!e.any) return n;
+      for (size_t d = 0; d < u.size(); ++d) {
+        u[d] = i == 0 ? e.s[d] : std::max(u[d], e.s[d]);
+        if (i > 0)
+          moved[d] = std::max(moved[d], std::abs(e.s[d] - at(a, b, by_wavelength[i - 1]).s[d]));
+      }
+    }
+    for (size_t d = 0; d < u.size(); ++d) u[d] += kWavelengthShare * moved[d];
+    return n = u;
+  };
+  // A cell is bounded when every node and check sees a region: the checks against the bilinear
+  // blend of the corners' primary-wavelength supports give its margins.
+  const auto cell = [&](int a0, int b0, int span) {
+    Cell c;
+    for (int b = b0; b <= b0 + span; b += span)
+      for (int a = a0; a <= a0 + span; a += span)
+        if (!node(a, b)) return c;
+    Support margin{};
+    for (int b = b0; b <= b0 + span; b += span / 2)
+      for (int a = a0; a <= a0 + span; a += span / 2) {
+        const Extent& e = at(a, b, 0);
+        if (!e.any) return c;
+        const double u = double(a - a0) / span, v = double(b - b0) / span;
+        const int a1 = a0 + span, b1 = b0 + span;
+        const Support blend = lerp(lerp(at(a0, b0, 0).s, at(a1, b0, 0).s, u),
+                                   lerp(at(a0, b1, 0).s, at(a1, b1, 0).s, u), v);
+        for (size_t d = 0; d < margin.size(); ++d)
+          margin[d] = std::max(margin[d], e.s[d] - blend[d]);
+      }
+    c.bounded = true;
+    for (size_t d = 0; d < margin.size(); ++d) c.margin[d] = kCheckFactor * margin[d];
+    return c;
   };
 
-  // Nodes: the largest support over the wavelengths, widened by a share of the most it moves
-  // between neighbouring ones.
-  nodes_.assign(size_t((nx_ + 1) * (ny_ + 1)), std::nullopt);
-  for (int b = 0; b <= ny_; ++b)
-    for (int a = 0; a <= nx_; ++a) {
-      std::vector<Support> by_wavelength;  // sorted
-      for (double l : sorted) {
-        const int k = int(std::find(lambdas.begin(), lambdas.end(), l) - lambdas.begin());
-        const Extent& e = at(2 * a, 2 * b, k);
-        if (e.any) by_wavelength.push_back(e.s);
-      }
-      if (int(by_wavelength.size()) != nl) continue;
-      Support u = by_wavelength[0], moved{};
-      for (size_t k = 1; k < by_wavelength.size(); ++k)
-        for (size_t d = 0; d < u.size(); ++d) {
-          u[d] = std::max(u[d], by_wavelength[k][d]);
-          moved[d] = std::max(moved[d], std::abs(by_wavelength[k][d] - by_wavelength[k - 1][d]));
-        }
-      for (size_t d = 0; d < u.size(); ++d) u[d] += kWavelengthShare * moved[d];
-      nodes_[size_t(b * (nx_ + 1) + a)] = u;
-    }
-
-  // Bins: the checks against the bilinear blend of the corners' primary-wavelength supports.
+  std::vector<std::array<int, 3>> cells;
+  for (int j = 0; j < ny_; ++j)
+    for (int i = 0; i < nx_; ++i) cells.push_back({4 * i, 4 * j, 4});
+  trace(cells);
   bins_.assign(size_t(nx_ * ny_), Bin{});
+  // A bin that light reaches only in part is cut into quarters (where some of its points see
+  // a region), each bounded on its own where it can be.
+  std::vector<int> split;
   for (int j = 0; j < ny_; ++j)
     for (int i = 0; i < nx_; ++i) {
       Bin& bin = bins_[size_t(j * nx_ + i)];
-      bool all = true;
-      for (int b = 0; b <= 1; ++b)
-        for (int a = 0; a <= 1; ++a)
-          all = all && nodes_[size_t((j + b) * (nx_ + 1) + i + a)].has_value();
-      Support margin{};
-      for (int b = 2 * j; b <= 2 * j + 2 && all; ++b)
-        for (int a = 2 * i; a <= 2 * i + 2 && all; ++a) {
-          const Extent& e = at(a, b, 0);
-          all = e.any;
-          if (!all || (a % 2 == 0 && b % 2 == 0)) continue;
-          const double u = (a - 2 * i) / 2.0, v = (b - 2 * j) / 2.0;
-          const Support blend =
-              lerp(lerp(at(2 * i, 2 * j, 0).s, at(2 * i + 2, 2 * j, 0).s, u),
-                   lerp(at(2 * i, 2 * j + 2, 0).s, at(2 * i + 2, 2 * j + 2, 0).s, u), v);
-          for (size_t d = 0; d < margin.size(); ++d)
-            margin[d] = std::max(margin[d], e.s[d] - blend[d]);
-        }
-      if (!all) continue;  // the whole disc
-      bin.bounded = true;
-      for (size_t d = 0; d < margin.size(); ++d) bin.margin[d] = kCheckFactor * margin[d];
+      bin.whole = cell(4 * i, 4 * j, 4);
+      bool some = false;
+      for (int b = 4 * j; b <= 4 * j + 4; b += 2)
+        for (int a = 4 * i; a <= 4 * i + 4; a += 2) some = some || at(a, b, 0).any;
+      if (!bin.whole.bounded && some) split.push_back(j * nx_ + i);
     }
+  cells.clear();
+  for (int n : split)
+    for (int q = 0; q < 4; ++q) cells.push_back({4 * (n % nx_) + 2 * (q % 2), 4 * (n / nx_) + 2 * (q / 2), 2});
+  trace(cells);
+  for (int n : split) {
+    Bin& bin = bins_[size_t(n)];
+    bin.split = true;
+    for (int q = 0; q < 4; ++q)
+      bin.quarter[size_t(q)] = cell(4 * (n % nx_) + 2 * (q % 2), 4 * (n / nx_) + 2 * (q / 2), 2);
+  }
+  for (const Extent& e : ext) traces_ += e.traces, task_seconds_ += e.seconds;
 }
 
 std::optional<PlacedPolygon> PlacedPupilBounds::polygon(Vec2 film, double r) const {
   if (bins_.empty() || !(std::abs(film.x) <= half_.x) || !(std::abs(film.y) <= half_.y))
     return std::nullopt;
-  const double fx = (film.x + half_.x) / (2 * half_.x) * nx_,
-               fy = (film.y + half_.y) / (2 * half_.y) * ny_;
-  const int i = std::min(nx_ - 1, int(fx)), j = std::min(ny_ - 1, int(fy));
+  // Film position in lattice steps.
+  const double fx = (film.x + half_.x) / (2 * half_.x) * 4 * nx_,
+               fy = (film.y + half_.y) / (2 * half_.y) * 4 * ny_;
+  const int i = std::min(nx_ - 1, int(fx / 4)), j = std::min(ny_ - 1, int(fy / 4));
   const Bin& bin = bins_[size_t(j * nx_ + i)];
-  if (!bin.bounded) return std::nullopt;
+  int a0 = 4 * i, b0 = 4 * j, span = 4;
+  const Cell* c = &bin.whole;
+  if (!c->bounded && bin.split) {
+    const int qa = fx - a0 >= 2 ? 1 : 0, qb = fy - b0 >= 2 ? 1 : 0;
+    c = &bin.quarter[size_t(qb * 2 + qa)];
+    a0 += 2 * qa, b0 += 2 * qb, span = 2;
+  }
+  if (!c->bounded) return std::nullopt;
   const auto node = [&](int a, int b) -> const Support& {
-    return *nodes_[size_t((j + b) * (nx_ + 1) + i + a)];
+    return *nodes_[size_t((b0 + b * span) * px_ + a0 + a * span)];
   };
-  const double u = fx - i, v = fy - j;
+  const double u = std::clamp((fx - a0) / span, 0.0, 1.0), v = std::clamp((fy - b0) / span, 0.0, 1.0);
   const Support s = lerp(lerp(node(0, 0), node(1, 0), u), lerp(node(0, 1), node(1, 1), u), v);
   PlacedPolygon p;
   p.n = 4;
   p.v[0] = {-r, -r}, p.v[1] = {r, -r}, p.v[2] = {r, r}, p.v[3] = {-r, r};
   for (int k = 0; k < kDirections && p.n >= 3; ++k)
-    p = clip(p, unit(k), s[size_t(k)] + bin.margin[size_t(k)]);
+    p = clip(p, unit(k), s[size_t(k)] + c->margin[size_t(k)]);
   if (p.n < 3 || !(p.area() > 0)) return std::nullopt;
   return p;
 }
 
 int PlacedPupilBounds::wholeBins() const {
-  return int(std::count_if(bins_.begin(), bins_.end(), [](const Bin& b) { return !b.bounded; }));
+  return int(std::count_if(bins_.begin(), bins_.end(),
+                           [](const Bin& b) { return !b.whole.bounded; }));
+}
+
+int PlacedPupilBounds::splitBins() const {
+  return int(std::count_if(bins_.begin(), bins_.end(), [](const Bin& b) { return b.split; }));
 }
 
 double PlacedPolygon::area() const {

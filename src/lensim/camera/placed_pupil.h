@@ -68,20 +68,27 @@ class PlacedPupilBounds {
   std::optional<PlacedPolygon> polygon(Vec2 film, double r) const;
   int binsX() const { return nx_; }
   int binsY() const { return ny_; }
-  /// Bins that keep the whole disc.
+  /// Bins without a bound of their own (light reaches only part of them, or none).
   int wholeBins() const;
+  /// Of those, the bins cut into quarters (some quarters may have a bound).
+  int splitBins() const;
   std::uint64_t traces() const { return traces_; }
   /// The build's tasks' times added up: its cost on one core (s).
   double taskSeconds() const { return task_seconds_; }
 
  private:
-  struct Bin {
+  struct Cell {
     bool bounded = false;  // false: the whole disc
     Support margin{};      // widening of the blended supports
   };
-  int nx_ = 0, ny_ = 0;
+  struct Bin {
+    Cell whole;
+    bool split = false;  // not bounded as a whole: its quarters (x, then y)
+    std::array<Cell, 4> quarter{};
+  };
+  int nx_ = 0, ny_ = 0, px_ = 0;
   Vec2 half_{};
-  std::vector<std::optional<Support>> nodes_;  // (nx + 1) x (ny + 1) corners, row-major
+  std::vector<std::optional<Support>> nodes_;  // on the lattice at a quarter bin's spacing
   std::vector<Bin> bins_;                      // nx x ny, row-major
   std::uint64_t traces_ = 0;
   double task_seconds_ = 0;
