@@ -275,3 +275,26 @@ TEST(PlacedPupil, BoundedRenderMatchesTheUnboundedOne) {
   EXPECT_NEAR(m.mean_ratio, 1.0, 0.02);
   EXPECT_EQ(m.z_failures, 0);
 }
+
+// The polygon's sampling is uniform: a pentagon (the square [0, 2]^2 cut by x + y <= 3, area
+// 3.5) sampled 10^5 times puts 2 / 3.5 of its points at x < 1 and 1 / 3.5 at y < 0.5 (areas
+// by hand), all inside it.
+TEST(PlacedPupil, PolygonSamplesUniformly) {
+  camera::PlacedPolygon p;
+  p.n = 5;
+  p.v[0] = {0, 0}, p.v[1] = {2, 0}, p.v[2] = {2, 1}, p.v[3] = {1, 2}, p.v[4] = {0, 2};
+  EXPECT_NEAR(p.area(), 3.5, 1e-12);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> uni(0, 1);
+  const int n = 100000;
+  int left = 0, low = 0, inside = 0;
+  for (int i = 0; i < n; ++i) {
+    const Vec2 q = p.sample({uni(rng), uni(rng)});
+    left += q.x < 1, low += q.y < 0.5, inside += p.holds(q);
+  }
+  EXPECT_EQ(inside, n);
+  EXPECT_NEAR(double(left) / n, 2 / 3.5, 0.006);
+  EXPECT_NEAR(double(low) / n, 1 / 3.5, 0.006);
+  EXPECT_FALSE(p.holds({1.6, 1.6}));
+  EXPECT_TRUE(p.holds({0.5, 1.9}));
+}

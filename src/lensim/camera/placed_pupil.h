@@ -18,8 +18,10 @@
 // (checks); the polygon is the disc's square cut by the 8 half-planes. A dispersive lens's
 // nodes hold the largest support over the rendered range's ends and the primary wavelength,
 // widened by half the most it moves between neighbouring ones. A bin where some node or check
-// sees no grid point pass keeps the whole disc. tests/placed_pupil_test.cpp traces 10^6 random
-// film/plane points at 48 wavelengths and finds no passing ray outside the polygons.
+// sees no grid point pass (light reaches only part of it) is cut into quarters, each with its own
+// nodes and checks, bounded the same way where all of them see a region; the rest keeps the
+// whole disc. tests/placed_pupil_test.cpp traces 10^6 random film/plane points at 48
+// wavelengths and finds no passing ray outside the polygons.
 #pragma once
 
 #include <array>

@@ -167,10 +167,10 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   startup_cpu_seconds_ = std::chrono::duration<double>(t_bounds - t0).count() + bounds_.taskSeconds();
   if (pupil_bounds)
     logInfo(fmt::format(
-        "{}: exit-pupil bounds: {} x {} film bins ({} without a bound), {} traces, {:.3f} s "
-        "({:.3f} s on one core)",
+        "{}: exit-pupil bounds: {} x {} film bins ({} without a bound of their own, {} cut into "
+        "quarters), {} traces, {:.3f} s ({:.3f} s on one core)",
         path_.empty() ? name_ : path_, bounds_.binsX(), bounds_.binsY(), bounds_.wholeBins(),
-        bounds_.traces(), std::chrono::duration<double>(t1 - t_bounds).count(),
+        bounds_.splitBins(), bounds_.traces(), std::chrono::duration<double>(t1 - t_bounds).count(),
         bounds_.taskSeconds()));
 }
 
@@ -428,10 +428,11 @@ std::string PlacedRealisticCamera::describe() const {
       : film_referenced_                ? " from the film"
                                         : " from the front vertex: folded lens",
       2 * half_width_mm_, 2 * half_height_mm_, settings_.aperture.describe(), rear_semi_mm_,
-      bounds_.binsX() > 0 ? fmt::format(" within exit-pupil bounds ({} x {} film bins, {} "
-                                        "without a bound)",
-                                        bounds_.binsX(), bounds_.binsY(), bounds_.wholeBins())
-                          : std::string(),
+      bounds_.binsX() > 0
+          ? fmt::format(" within exit-pupil bounds ({} x {} film bins, {} without a bound of "
+                        "their own, {} of them cut into quarters)",
+                        bounds_.binsX(), bounds_.binsY(), bounds_.wholeBins(), bounds_.splitBins())
+          : std::string(),
       dispersive_ ? ", dispersive (hero wavelength only)" : "");
 }
 
