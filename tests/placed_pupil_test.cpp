@@ -58,8 +58,8 @@ Vec3 place(const optics::SurfaceFrame& f, const Vec3& v) {
 // f/2.75, focused at infinity: light reaches only part of the film.
 LensSetup foldMirrors() {
   LensSetup s;
-  s.lens = std::string(LENSIM_SHARED_DIR) +
-           "/lenses/zmx/optiland/complicated_fold_mirrors_setup_v2.zmx";
+  s.lens =
+      std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/optiland/complicated_fold_mirrors_setup_v2.zmx";
   s.settings.setup.aperture_diameter_mm = 20;
   s.settings.setup.focus_distance_m = 1e6;
   s.settings.x_resolution = s.settings.y_resolution = 40;
@@ -146,7 +146,7 @@ TEST(PlacedPupil, NoPassingRayOutsideTheFoldMirrorsBounds) {
   const LensSetup s = foldMirrors();
   if (!std::filesystem::exists(s.lens)) GTEST_SKIP() << s.lens << " not present";
   const Containment c = containment(s, 500000);
-  EXPECT_GT(c.unbounded, 0);   // bins the light does not wholly reach keep the disc
+  EXPECT_GT(c.unbounded, 0);  // bins the light does not wholly reach keep the disc
   EXPECT_LT(c.unbounded, 400000);
   EXPECT_GT(c.outside, 200000);
   EXPECT_EQ(c.outside_through, 0);
@@ -211,8 +211,8 @@ TEST(PlacedPupil, FlatFieldAgreesWithAndWithoutBounds) {
     const Estimate b = flatField(*whole, lo, hi, n, 200 + uint64_t(region));
     const double z = (a.mean - b.mean) / std::hypot(a.se, b.se);
     EXPECT_LT(std::abs(z), 4) << "raster [" << lo.x << ", " << hi.x << "] x [" << lo.y << ", "
-                              << hi.y << "]: " << a.mean << " +- " << a.se << " against "
-                              << b.mean << " +- " << b.se;
+                              << hi.y << "]: " << a.mean << " +- " << a.se << " against " << b.mean
+                              << " +- " << b.se;
     EXPECT_LT(a.no_ray, b.no_ray);
     EXPECT_LT(a.variance, b.variance);
     std::printf(
@@ -237,15 +237,15 @@ TEST(PlacedPupil, BoundedRenderMatchesTheUnboundedOne) {
                   "\"float yradius\" 0.5\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n",
                   s.lens));
   const std::shared_ptr<const camera::Camera> bounded = makeCamera(s, true),
-                                               whole = makeCamera(s, false);
+                                              whole = makeCamera(s, false);
   const auto render = [&](const std::shared_ptr<const camera::Camera>& cam, int seed) {
     render::RenderOptions o;
     o.seed = seed;
     o.camera = cam;
     return render::render(scene::loadScene(scene), o);
   };
-  const render::RenderResult a = render(bounded, 1), b = render(bounded, 2),
-                             ref = render(whole, 3), ref2 = render(whole, 4);
+  const render::RenderResult a = render(bounded, 1), b = render(bounded, 2), ref = render(whole, 3),
+                             ref2 = render(whole, 4);
   // The render noise at equal samples: the mean squared difference of two seeds' pixels.
   const auto noise = [](const io::Image& x, const io::Image& y) {
     double d2 = 0;

@@ -80,8 +80,11 @@ class ExtentFinder {
       for (int i = 0; i <= kGrid; ++i) {
         if (!pass_[size_t(j)][size_t(i)]) continue;
         const int key = gx * j - gy * i + 2 * kGrid, t = gx * i + gy * j;
-        if (!has[size_t(key)] || t > outer_t[size_t(key)])
-          has[size_t(key)] = true, outer_t[size_t(key)] = t, outer_i[size_t(key)] = j * (kGrid + 1) + i;
+        if (!has[size_t(key)] || t > outer_t[size_t(key)]) {
+          has[size_t(key)] = true;
+          outer_t[size_t(key)] = t;
+          outer_i[size_t(key)] = j * (kGrid + 1) + i;
+        }
       }
     // Each line's boundary lies within one step past its outermost passing point: lines are
     // refined in order of that point, until none left can beat the best refined value; then the
@@ -144,12 +147,15 @@ PlacedPolygon clip(const PlacedPolygon& p, Vec2 n, double s) {
     const Vec2 a = p.v[size_t(i)], b = p.v[size_t((i + 1) % p.n)];
     const double da = a.x * n.x + a.y * n.y - s, db = b.x * n.x + b.y * n.y - s;
     if (da <= 0) out.v[size_t(out.n++)] = a;
-    if ((da < 0 && db > 0) || (da > 0 && db < 0)) out.v[size_t(out.n++)] = a + (b - a) * (da / (da - db));
+    if ((da < 0 && db > 0) || (da > 0 && db < 0))
+      out.v[size_t(out.n++)] = a + (b - a) * (da / (da - db));
   }
   return out;
 }
 
-double cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
+double cross(Vec2 a, Vec2 b) {
+  return a.x * b.y - a.y * b.x;
+}
 
 }  // namespace
 
@@ -190,20 +196,19 @@ PlacedPupilBounds::PlacedPupilBounds(Vec2 half_mm, const std::vector<double>& wa
             if (!done[t]) done[t] = true, tasks.push_back({b * px_ + a, k});
           }
         }
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tasks.size(), 1),
-                      [&](const tbb::blocked_range<size_t>& range) {
-                        for (size_t t = range.begin(); t != range.end(); ++t) {
-                          const auto t0 = std::chrono::steady_clock::now();
-                          const auto [point, k] = tasks[t];
-                          const Vec2 film = filmAt(point % px_, point / px_);
-                          Extent& e = ext[size_t(k * points + point)];
-                          e = ExtentFinder(passes, film, lambdas[size_t(k)], disc_radius(film))
-                                  .find();
-                          e.seconds = std::chrono::duration<double>(
-                                          std::chrono::steady_clock::now() - t0)
-                                          .count();
-                        }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, tasks.size(), 1),
+        [&](const tbb::blocked_range<size_t>& range) {
+          for (size_t t = range.begin(); t != range.end(); ++t) {
+            const auto t0 = std::chrono::steady_clock::now();
+            const auto [point, k] = tasks[t];
+            const Vec2 film = filmAt(point % px_, point / px_);
+            Extent& e = ext[size_t(k * points + point)];
+            e = ExtentFinder(passes, film, lambdas[size_t(k)], disc_radius(film)).find();
+            e.seconds =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          }
+        });
   };
   const auto at = [&](int a, int b, int k) -> const Extent& {
     return ext[size_t(k * points + b * px_ + a)];
@@ -270,7 +275,8 @@ PlacedPupilBounds::PlacedPupilBounds(Vec2 half_mm, const std::vector<double>& wa
     }
   cells.clear();
   for (int n : split)
-    for (int q = 0; q < 4; ++q) cells.push_back({4 * (n % nx_) + 2 * (q % 2), 4 * (n / nx_) + 2 * (q / 2), 2});
+    for (int q = 0; q < 4; ++q)
+      cells.push_back({4 * (n % nx_) + 2 * (q % 2), 4 * (n / nx_) + 2 * (q / 2), 2});
   trace(cells);
   for (int n : split) {
     Bin& bin = bins_[size_t(n)];
@@ -300,7 +306,8 @@ std::optional<PlacedPolygon> PlacedPupilBounds::polygon(Vec2 film, double r) con
   const auto node = [&](int a, int b) -> const Support& {
     return *nodes_[size_t((b0 + b * span) * px_ + a0 + a * span)];
   };
-  const double u = std::clamp((fx - a0) / span, 0.0, 1.0), v = std::clamp((fy - b0) / span, 0.0, 1.0);
+  const double u = std::clamp((fx - a0) / span, 0.0, 1.0),
+               v = std::clamp((fy - b0) / span, 0.0, 1.0);
   const Support s = lerp(lerp(node(0, 0), node(1, 0), u), lerp(node(0, 1), node(1, 1), u), v);
   PlacedPolygon p;
   p.n = 4;
@@ -312,8 +319,8 @@ std::optional<PlacedPolygon> PlacedPupilBounds::polygon(Vec2 film, double r) con
 }
 
 int PlacedPupilBounds::wholeBins() const {
-  return int(std::count_if(bins_.begin(), bins_.end(),
-                           [](const Bin& b) { return !b.whole.bounded; }));
+  return int(
+      std::count_if(bins_.begin(), bins_.end(), [](const Bin& b) { return !b.whole.bounded; }));
 }
 
 int PlacedPupilBounds::splitBins() const {

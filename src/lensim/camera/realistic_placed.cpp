@@ -164,7 +164,8 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   if (pupil_bounds) buildBounds(reach);
   const auto t1 = std::chrono::steady_clock::now();
   startup_seconds_ = std::chrono::duration<double>(t1 - t0).count();
-  startup_cpu_seconds_ = std::chrono::duration<double>(t_bounds - t0).count() + bounds_.taskSeconds();
+  startup_cpu_seconds_ =
+      std::chrono::duration<double>(t_bounds - t0).count() + bounds_.taskSeconds();
   if (pupil_bounds)
     logInfo(fmt::format(
         "{}: exit-pupil bounds: {} x {} film bins ({} without a bound of their own, {} cut into "

@@ -10,8 +10,9 @@
 // looks down +z along the object space's axis (a LookAt aims the lens's object-side axis). A
 // raster point at the right of the image lies at -x of the film frame, as for the coaxial camera.
 //
-// Sampling: each film point p aims at a disc on the plane of the rear surface's own frame that touches the surface's extreme toward the film
-// (z_near; z_far the other extreme over the clear aperture a). Every ray from p that reaches the
+// Sampling: each film point p aims at a disc on the plane of the rear surface's own frame that
+// touches the surface's extreme toward the film (z_near; z_far the other extreme over the clear
+// aperture a). Every ray from p that reaches the
 // rear surface's clear aperture crosses that plane within radius max(a, (1 - t_min)|p_xy| +
 // t_min a) of the rear surface's axis, t_min = (p_z - z_near) / (p_z - z_far) (all in the rear
 // surface's frame): the disc is a superset of what can carry light, so the estimate is unbiased
@@ -25,9 +26,9 @@
 // Exit-pupil bounds (camera/placed_pupil.h): most of the disc carries no light (the beam fills
 // a small part of it, moved with the film point), so at start-up the film is cut into 2-D bins
 // and each film point gets a convex polygon (an octagon at most, cut from the disc's square) of
-// that plane holding every passing ray from it, blended from its bin's corners, whose grids
-// were traced at start-up. A film point samples its polygon uniformly when smaller than the
-// disc, with the polygon's area in place of pi R^2.
+// that plane holding every passing ray from it, blended from its bin's (or the bin's quarter's)
+// corners, whose grids were traced at start-up. A film point samples its polygon uniformly when
+// smaller than the disc, with the polygon's area in place of pi R^2.
 //
 // Focus: `focusdistance` (metres; infinity allowed) is honoured by moving the film along the
 // image surface's axis to where the real rays from that object point, through an equal-area
