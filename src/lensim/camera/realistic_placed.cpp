@@ -56,7 +56,8 @@ void refuseUnsupported(const RealisticSettings& s) {
 
 }  // namespace
 
-PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics::LensPrescription p)
+PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics::LensPrescription p,
+                                             bool pupil_bounds)
     : settings_(std::move(settings)), lens_([&]() -> optics::PlacedLens {
         refuseUnsupported(settings_);
         if (settings_.glass_match)
@@ -159,7 +160,19 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
                     focus_distance_m_, film_offset_mm_));
   z_near_ = above == 4 ? zmax : zmin;
   z_far_ = above == 4 ? zmin : zmax;
-  startup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto t_bounds = std::chrono::steady_clock::now();
+  if (pupil_bounds) buildBounds(reach);
+  const auto t1 = std::chrono::steady_clock::now();
+  startup_seconds_ = std::chrono::duration<double>(t1 - t0).count();
+  startup_cpu_seconds_ =
+      std::chrono::duration<double>(t_bounds - t0).count() + bounds_.taskSeconds();
+  if (pupil_bounds)
+    logInfo(fmt::format(
+        "{}: exit-pupil bounds: {} x {} film bins ({} without a bound of their own, {} cut into "
+        "quarters), {} traces, {:.3f} s ({:.3f} s on one core)",
+        path_.empty() ? name_ : path_, bounds_.binsX(), bounds_.binsY(), bounds_.wholeBins(),
+        bounds_.splitBins(), bounds_.traces(), std::chrono::duration<double>(t1 - t_bounds).count(),
+        bounds_.taskSeconds()));
 }
 
 PlacedRealisticCamera::FocusSolve PlacedRealisticCamera::bestFocus(
@@ -299,6 +312,45 @@ double PlacedRealisticCamera::discRadius(const Vec3& q) const {
   return std::max(rear_semi_mm_, (1 - t_min) * std::hypot(q.x, q.y) + t_min * rear_semi_mm_);
 }
 
+Vec3 PlacedRealisticCamera::planePoint(Vec2 q) const {
+  return toGlobal(rear_frame_, {q.x, q.y, z_near_}) + origin(rear_frame_);
+}
+
+void PlacedRealisticCamera::buildBounds(Vec2 reach) {
+  // A dispersive lens's beam moves with the wavelength: bound it at the rendered range's ends
+  // (the renderer's hero wavelengths, render/spectra/spectrum.h) and the primary wavelength.
+  constexpr double kLambdaMin_nm = 360, kLambdaMax_nm = 830;
+  std::vector<double> lambdas{lens_.wavelength_nm()};
+  if (dispersive_) lambdas.insert(lambdas.end(), {kLambdaMin_nm, kLambdaMax_nm});
+  bounds_ = PlacedPupilBounds(
+      reach, lambdas,
+      [&](Vec2 film) {
+        return discRadius(toLocal(rear_frame_, filmToLens(film) - origin(rear_frame_)));
+      },
+      [&](Vec2 film, Vec2 q, double lambda_nm) {
+        const optics::PlacedLens& lens = dispersive_ ? lensAt(lambda_nm) : lens_;
+        const Vec3 p = filmToLens(film);
+        return lens.traceBackward({p, normalize(planePoint(q) - p)}).ok();
+      });
+}
+
+double PlacedRealisticCamera::SamplingRegion::area() const {
+  return polygon ? polygon->area() : std::numbers::pi * disc_radius * disc_radius;
+}
+
+bool PlacedRealisticCamera::SamplingRegion::holds(Vec2 q) const {
+  return polygon ? polygon->holds(q) : q.x * q.x + q.y * q.y <= disc_radius * disc_radius;
+}
+
+PlacedRealisticCamera::SamplingRegion PlacedRealisticCamera::samplingRegion(Vec2 film) const {
+  SamplingRegion s;
+  s.disc_radius = discRadius(toLocal(rear_frame_, filmToLens(film) - origin(rear_frame_)));
+  // The polygon (within the disc's square) when it is the smaller region.
+  if (std::optional<PlacedPolygon> p = bounds_.polygon(film, s.disc_radius))
+    if (p->area() < std::numbers::pi * s.disc_radius * s.disc_radius) s.polygon = *p;
+  return s;
+}
+
 const optics::PlacedLens& PlacedRealisticCamera::lensAt(double lambda_nm) const {
   struct PerThread {
     std::uint64_t owner = 0;
@@ -314,13 +366,13 @@ const optics::PlacedLens& PlacedRealisticCamera::lensAt(double lambda_nm) const 
 }
 
 std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& sample) const {
-  const Vec3 p = filmToLens(filmPoint(sample.film_raster));
-  const Vec3 q = toLocal(rear_frame_, p - origin(rear_frame_));
-  const double radius = discRadius(q);
-  const Vec2 d = sampling::sampleUniformDiskConcentric(sample.lens);
-  const Vec3 target =
-      toGlobal(rear_frame_, {radius * d.x, radius * d.y, z_near_}) + origin(rear_frame_);
-  const Vec3 to = target - p;
+  const Vec2 film = filmPoint(sample.film_raster);
+  const Vec3 p = filmToLens(film);
+  const SamplingRegion region = samplingRegion(film);
+  const Vec2 q = region.polygon
+                     ? region.polygon->sample(sample.lens)
+                     : sampling::sampleUniformDiskConcentric(sample.lens) * region.disc_radius;
+  const Vec3 to = planePoint(q) - p;
   const double r2 = dot(to, to);
   const Vec3 dir = to / std::sqrt(r2);
   const double cos_plane = std::abs(dot(dir, axisZ(rear_frame_)));
@@ -333,7 +385,7 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
   const optics::TraceResult r =
       lens.traceBackward({p, dir}, {}, absorbs_ && hero > 0 ? &path : nullptr);
   if (!r.ok()) return std::nullopt;
-  double w = cos_film * cos_plane / r2 * std::numbers::pi * radius * radius;
+  double w = cos_film * cos_plane / r2 * region.area();
   if (!settings_.aperture.isRound() && stop_radius_mm_ > 0) {
     w *= settings_.aperture.transmission(
         Vec2{r.stop_point.x / stop_radius_mm_, r.stop_point.y / stop_radius_mm_});
@@ -369,7 +421,7 @@ std::string PlacedRealisticCamera::describe() const {
       "realistic, tilted or decentred lens: {} ({}), exact double-precision trace, film moved "
       "{:.4f} mm along the image surface's axis (focus {}{}), {:.1f} x {:.1f} "
       "mm film, aperture {}, rays aimed at the last surface's clear aperture ({:g} mm "
-      "semi-diameter){}; no camera importance (path tracing only)",
+      "semi-diameter){}{}; no camera importance (path tracing only)",
       name_, path_, film_offset_mm_,
       std::isfinite(focus_distance_m_) ? fmt::format("{:.4g} m", focus_distance_m_)
                                        : std::string("at infinity"),
@@ -377,6 +429,11 @@ std::string PlacedRealisticCamera::describe() const {
       : film_referenced_                ? " from the film"
                                         : " from the front vertex: folded lens",
       2 * half_width_mm_, 2 * half_height_mm_, settings_.aperture.describe(), rear_semi_mm_,
+      bounds_.binsX() > 0
+          ? fmt::format(" within exit-pupil bounds ({} x {} film bins, {} without a bound of "
+                        "their own, {} of them cut into quarters)",
+                        bounds_.binsX(), bounds_.binsY(), bounds_.wholeBins(), bounds_.splitBins())
+          : std::string(),
       dispersive_ ? ", dispersive (hero wavelength only)" : "");
 }
 

@@ -10,9 +10,9 @@
 // looks down +z along the object space's axis (a LookAt aims the lens's object-side axis). A
 // raster point at the right of the image lies at -x of the film frame, as for the coaxial camera.
 //
-// Sampling (pbrt's RealisticCamera, without pupil bounds): each film point p aims at a disc on
-// the plane of the rear surface's own frame that touches the surface's extreme toward the film
-// (z_near; z_far the other extreme over the clear aperture a). Every ray from p that reaches the
+// Sampling: each film point p aims at a disc on the plane of the rear surface's own frame that
+// touches the surface's extreme toward the film (z_near; z_far the other extreme over the clear
+// aperture a). Every ray from p that reaches the
 // rear surface's clear aperture crosses that plane within radius max(a, (1 - t_min)|p_xy| +
 // t_min a) of the rear surface's axis, t_min = (p_z - z_near) / (p_z - z_far) (all in the rear
 // surface's frame): the disc is a superset of what can carry light, so the estimate is unbiased
@@ -22,6 +22,13 @@
 // from the film point to the disc point, R the disc's radius, T the aperture shape's
 // transmission and the glasses' internal transmittance: the coaxial camera's cos^4 A / z^2
 // when both planes face each other along one axis.
+//
+// Exit-pupil bounds (camera/placed_pupil.h): most of the disc carries no light (the beam fills
+// a small part of it, moved with the film point), so at start-up the film is cut into 2-D bins
+// and each film point gets a convex polygon (an octagon at most, cut from the disc's square) of
+// that plane holding every passing ray from it, blended from its bin's (or the bin's quarter's)
+// corners, whose grids were traced at start-up. A film point samples its polygon uniformly when
+// smaller than the disc, with the polygon's area in place of pi R^2.
 //
 // Focus: `focusdistance` (metres; infinity allowed) is honoured by moving the film along the
 // image surface's axis to where the real rays from that object point, through an equal-area
@@ -40,9 +47,11 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "lensim/camera/placed_pupil.h"
 #include "lensim/camera/realistic.h"
 #include "lensim/optics/placed_lens.h"
 
@@ -52,10 +61,14 @@ class PlacedRealisticCamera final : public Camera {
  public:
   /// The camera for `prescription` (non-coaxial) with `settings` (as makeRealisticCamera fills
   /// them). Throws lensim::Error for settings it does not support or a lens no ray passes.
-  PlacedRealisticCamera(RealisticSettings settings, optics::LensPrescription prescription);
+  /// pupil_bounds false: every film point samples its whole disc (to compare: tests, bench).
+  PlacedRealisticCamera(RealisticSettings settings, optics::LensPrescription prescription,
+                        bool pupil_bounds = true);
 
   std::optional<CameraRay> generateRay(const CameraSample& sample) const override;
   double startupSeconds() const override { return startup_seconds_; }
+  /// The start-up's time on one core: the exit-pupil bounds' traces are built side by side.
+  double startupCpuSeconds() const override { return startup_cpu_seconds_; }
   std::string describe() const override;
 
   /// The lens at its primary wavelength, with the stop set to the aperture.
@@ -64,6 +77,19 @@ class PlacedRealisticCamera final : public Camera {
   double filmOffset_mm() const { return film_offset_mm_; }
   /// The film point (the image surface's own frame, mm) of a raster position.
   Vec2 filmPoint(Vec2 raster) const;
+  /// What a film point (the image surface's frame, mm) samples on the plane z = samplingPlaneZ
+  /// of the rear surface's frame: the disc of disc_radius about its axis, or the polygon when
+  /// given.
+  struct SamplingRegion {
+    double disc_radius = 0;
+    std::optional<PlacedPolygon> polygon;
+    double area() const;
+    bool holds(Vec2 q) const;
+  };
+  SamplingRegion samplingRegion(Vec2 film) const;
+  double samplingPlaneZ_mm() const { return z_near_; }
+  /// The exit-pupil bounds (empty without them).
+  const PlacedPupilBounds& pupilBounds() const { return bounds_; }
 
  private:
   /// The film point (image frame, z = the film offset) in the front surface's frame.
@@ -71,6 +97,10 @@ class PlacedRealisticCamera final : public Camera {
   /// The radius of the disc a film point (lens coordinates) samples; its plane is z_near_ in
   /// the rear surface's frame.
   double discRadius(const Vec3& film_lens) const;
+  /// The point q of the sampling plane in lens coordinates.
+  Vec3 planePoint(Vec2 q) const;
+  /// Builds bounds_ for the film out to `reach` (mm, half extents).
+  void buildBounds(Vec2 reach);
   /// Solves film_offset_mm_ for an object at `distance_m` (see the top of this file).
   void focus(double distance_m);
   /// The film offset of the smallest RMS spot of real rays from `field` (distance_m for messages).
@@ -94,7 +124,8 @@ class PlacedRealisticCamera final : public Camera {
   double half_width_mm_ = 0, half_height_mm_ = 0;
   bool dispersive_ = false, absorbs_ = false;
   std::uint64_t id_ = 0;
-  double startup_seconds_ = 0;
+  PlacedPupilBounds bounds_;
+  double startup_seconds_ = 0, startup_cpu_seconds_ = 0;
 };
 
 }  // namespace lensim::camera
