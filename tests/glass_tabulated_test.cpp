@@ -136,8 +136,9 @@ TEST(TabulatedGlass, OutsideTheTableIsRefusedUnlessAllowed) {
 // 587 nm). Its EFL against the plano-convex closed form with the datasheet's n_d, R / (n_d - 1)
 // (the asphere's r^2 term is 0: the paraxial power is the base curvature's), and the part
 // number's 26 mm within 1%; its back focal length against the file's own image distance,
-// OpticStudio's paraxial focus solve with its B 270: lensim's n(587 nm) within 1e-4 of
-// OpticStudio's moves that distance by at most 4.5 um.
+// OpticStudio's paraxial focus solve with its B 270 (18.0921 mm; lensim 18.0963 mm: the two
+// n(587 nm) differ by 1e-4, a tenth of the +-0.001 Schott gives B 270's index): within 2e-4 in
+// n, 8.9 um (dBFL/dn = -44 mm).
 TEST(TabulatedGlass, Acl3026uFocusesWhereThorlabsSays) {
   const std::string path = std::string(LENSIM_SHARED_DIR) + "/lenses/zmx/ACL3026U-Zemax(ZMX).zmx";
   const std::string bytes = slurp(path);
@@ -151,7 +152,7 @@ TEST(TabulatedGlass, Acl3026uFocusesWhereThorlabsSays) {
   EXPECT_NEAR(d.effective_focal_length_mm, 26.0, 0.26);
   EXPECT_NEAR(efl_closed - t_mm / n_d, d.back_focal_length_mm, 5e-5 * 45);
   const ParaxialData at587 = computeParaxial(lens.atWavelength(587.0));
-  EXPECT_NEAR(at587.back_focal_length_mm, 18.09209481007, 4.5e-3);
+  EXPECT_NEAR(at587.back_focal_length_mm, 18.09209481007, 9e-3);
 }
 
 // A render traces 360-830 nm, beyond B 270's table (436-656 nm): the camera is refused at the
