@@ -102,7 +102,7 @@ std::pair<CLI::Option*, CLI::Option*> addRenderOptions(CLI::App* r, Options* o) 
               "A lens glass in no catalogue becomes a model glass from the n_d and V_d its lens "
               "file gives; without it such a glass is an error");
   r->add_flag("--glass-extrapolate", o->glass_extrapolate,
-              "A lens glass whose formula is not valid over 405-706.5 nm is used there anyway, "
+              "A lens glass whose formula is not valid over 405-700 nm is used there anyway, "
               "with a warning; without it such a glass is an error at the Camera line");
   return {seed, every};
 }

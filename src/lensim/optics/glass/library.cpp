@@ -133,7 +133,7 @@ void checkRenderGlassRanges(const std::vector<Glass>& glasses, double from_nm, d
     const std::string what = fmt::format("{} ({}-{} nm)", g.describe(), lo, hi);
     if (std::find(seen.begin(), seen.end(), what) != seen.end()) continue;
     seen.push_back(what);
-    // 1e-9 nm: a range given in micrometres (0.7065) and scaled may fall short by rounding.
+    // 1e-9 nm: a range given in micrometres (0.7) and scaled may fall short by rounding.
     if (lo <= kRenderGlassFrom_nm + 1e-9 && hi >= kRenderGlassTo_nm - 1e-9) {
       extended.push_back(what);
       continue;
