@@ -130,7 +130,7 @@ void checkRenderGlassRanges(const std::vector<Glass>& glasses, double from_nm, d
     if (!g.dispersive()) continue;
     const double lo = g.minWavelength_nm(), hi = g.maxWavelength_nm();
     if (lo <= from_nm && hi >= to_nm) continue;
-    const std::string what = fmt::format("{} ({}-{} nm)", g.describe(), lo, hi);
+    const std::string what = fmt::format("{} ({:g}-{:g} nm)", g.describe(), lo, hi);
     if (std::find(seen.begin(), seen.end(), what) != seen.end()) continue;
     seen.push_back(what);
     // 1e-9 nm: a range given in micrometres (0.7) and scaled may fall short by rounding.
@@ -139,8 +139,8 @@ void checkRenderGlassRanges(const std::vector<Glass>& glasses, double from_nm, d
       continue;
     }
     const std::string msg =
-        fmt::format("glass {} is valid for {}-{} nm only; renders trace {}-{} nm and need a "
-                    "glass valid over {}-{} nm at least",
+        fmt::format("glass {} is valid for {:g}-{:g} nm only; renders trace {:g}-{:g} nm and need "
+                    "a glass valid over {:g}-{:g} nm at least",
                     g.describe(), lo, hi, from_nm, to_nm, kRenderGlassFrom_nm, kRenderGlassTo_nm);
     if (!glassExtrapolationAllowed())
       throw Error(msg + "; --glass-extrapolate uses its formula there anyway");
@@ -153,8 +153,8 @@ void checkRenderGlassRanges(const std::vector<Glass>& glasses, double from_nm, d
   for (const std::string& e : extended) list += (list.empty() ? "" : ", ") + e;
   diagnostics->push_back(
       {Severity::Note, FileLoc{lens},
-       fmt::format("renders trace {}-{} nm: the formulas of {} are used there beyond their "
-                   "valid ranges, which span {}-{} nm (docs/glass.md)",
+       fmt::format("renders trace {:g}-{:g} nm: the formulas of {} are used there beyond "
+                   "their valid ranges, which span {:g}-{:g} nm (docs/glass.md)",
                    from_nm, to_nm, list, kRenderGlassFrom_nm, kRenderGlassTo_nm)});
 }
 
