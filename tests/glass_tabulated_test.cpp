@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "lensim/optics/glass.h"
+#include "lensim/optics/glass/embedded.h"
 #include "lensim/optics/glass/library.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
@@ -84,6 +85,19 @@ TEST(TabulatedGlass, ReproducesEveryTabulatedPoint) {
     const Glass& g = builtinGlass(std::string("rii:") + name);
     EXPECT_EQ(&builtinGlass(name), &g) << "a bare name finds it";
     for (const auto& [l_um, n] : table) EXPECT_NEAR(g.index(l_um * 1000), n, 5e-5) << l_um;
+    // The copy lensim carries (glass/crystal_data.cpp) is the file's table.
+    int copies = 0;
+    for (const embedded::CrystalGlass& c : embedded::crystalGlasses()) {
+      if (std::string(c.name) != name) continue;
+      ++copies;
+      EXPECT_EQ(std::string(c.source), yml);
+      ASSERT_EQ(size_t(c.table_points), table.size());
+      for (size_t i = 0; i < table.size(); ++i) {
+        EXPECT_EQ(c.table[2 * i], table[i].first);
+        EXPECT_EQ(c.table[2 * i + 1], table[i].second);
+      }
+    }
+    EXPECT_EQ(copies, 1);
     EXPECT_DOUBLE_EQ(g.minWavelength_nm(), table.front().first * 1000);
     EXPECT_DOUBLE_EQ(g.maxWavelength_nm(), table.back().first * 1000);
   }
