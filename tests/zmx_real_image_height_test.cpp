@@ -151,6 +151,16 @@ TEST(RealImageHeight, AutomaticSemiDiametersAndRefusal) {
   for (size_t i = 0; i < heights.surfaces.size(); ++i)
     EXPECT_NEAR(heights.surfaces[i].semiAperture_mm(), angles.surfaces[i].semiAperture_mm(),
                 1e-9);
+  // A finite object: refused at the FTYP line (real image heights are solved for infinity).
+  std::string finite = lensA("FTYP 3 0 2 1 0 0 0", "YFLN 0 12");
+  finite.replace(finite.find("DISZ INFINITY"), 13, "DISZ 500");
+  try {
+    parseZmx(finite, "finite.zmx");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.loc().line, 4) << e.what();
+    EXPECT_NE(e.message().find("real (3) image heights"), std::string::npos) << e.what();
+  }
   try {
     parseZmx(lensA("FTYP 3 0 2 1 0 0 0", "YFLN 0 1000"), "far.zmx");
     ADD_FAILURE() << "no error";
