@@ -316,6 +316,16 @@ void printCoatings(const LensSystem& lens) {
     t += fmt::format("{:.4f} at {:.0f} nm, ", axialTransmittance(lens, c, l), l);
   std::cout << fmt::format("  {:<26}{}mean {:.4f} over 400..700 nm (reflection losses, axial)\n",
                            "transmittance", t, meanTransmittance(lens, c));
+  // The indices of a glass valid over part of 400..700 nm only are its formula's beyond that.
+  std::string beyond;
+  for (const Glass& g : lens.glasses())
+    if (g.dispersive() && (!g.inRange(400) || !g.inRange(700)) &&
+        beyond.find(g.describe() + " ") == std::string::npos)
+      beyond += fmt::format("{}{} ({:g}-{:g} nm)", beyond.empty() ? "" : ", ", g.describe(),
+                            g.minWavelength_nm(), g.maxWavelength_nm());
+  if (!beyond.empty())
+    std::cout << fmt::format("  {:<26}the formulas of {} are used beyond their valid ranges\n",
+                             "", beyond);
 }
 
 int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,

@@ -47,6 +47,7 @@ struct Options {
   // Glass look-up (docs/glass.md).
   std::vector<std::string> glass_catalogs;
   bool model_glass = false;
+  bool glass_extrapolate = false;
 };
 
 /// Declares the options of `lensim render` on r; returns --seed and --checkpoint-every, whose
@@ -100,6 +101,9 @@ std::pair<CLI::Option*, CLI::Option*> addRenderOptions(CLI::App* r, Options* o) 
   r->add_flag("--model-glass", o->model_glass,
               "A lens glass in no catalogue becomes a model glass from the n_d and V_d its lens "
               "file gives; without it such a glass is an error");
+  r->add_flag("--glass-extrapolate", o->glass_extrapolate,
+              "A lens glass whose formula is not valid over 405-700 nm is used there anyway, "
+              "with a warning; without it such a glass is an error at the Camera line");
   return {seed, every};
 }
 
@@ -253,6 +257,7 @@ int runRender(const Options& o) {
   const bool quiet = o.quiet || lensim::quiet();
   const auto t_load = std::chrono::steady_clock::now();
   optics::setModelGlassAllowed(o.model_glass);
+  optics::setGlassExtrapolationAllowed(o.glass_extrapolate);
   for (const std::string& f : o.glass_catalogs) optics::addGlassCatalogFile(f, FileLoc{f});
   scene::Scene s = scene::loadScene(o.scene);
   const double load_s =

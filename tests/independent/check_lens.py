@@ -332,7 +332,8 @@ def read_zmx(path):
             cur["disz"] = None if tok[1] == "INFINITY" else float(tok[1])
         elif key == "GLAS":
             cur["glass"] = tok[1]
-            cur["n"] = float(tok[4])
+            # A glass whose n_d a datasheet gives replaces the GLAS line's placeholder.
+            cur["n"] = PUBLISHED_ND.get(tok[1], float(tok[4]))
         elif key == "STOP":
             cur["stop"] = True
         elif key == "PARM":
@@ -345,7 +346,7 @@ def read_zmx(path):
         a2 = {"EVENASPH": z["parm"].get(1, 0.0), "ODDASPH": z["parm"].get(2, 0.0)}.get(z["type"], 0.0)
         c += 2 * a2 / unit
         n = z["n"] if z["glass"] else 1.0
-        lens.append(dict(c=c, n1=n, t=z["disz"] * unit))
+        lens.append(dict(c=c, n1=n, t=z["disz"] * unit, glass=z["glass"]))
         if z["stop"]:
             stop = k
     if aperture and aperture[0] == "ENPD":
@@ -367,13 +368,16 @@ def zmx_paraxial(lens):
     return dict(efl=-1.0 / nu_last, bfl=-y_last / nu_last, ffl=-y_first / nu_first)
 
 
+# n_d of glasses lens files name with a placeholder n_d on their GLAS line: B 270, Schott's
+# technical details (1.5230, given to 4 decimals).
+PUBLISHED_ND = {"B270": 1.5230}
+
+
 def check_zmx(lensim, path):
     lens, stop, aperture = read_zmx(path)
     ref = zmx_paraxial(lens)
     # At the d line, where the GLAS line's n_d holds (the file's primary wavelength may differ).
-    # --model-glass: ACL3026U's B270 is in no catalogue; its GLAS line's n_d/V_d make the glass.
-    info = run([lensim, "lens", "info", path, "--json", "--wavelength", "587.5618",
-                "--model-glass"])
+    info = run([lensim, "lens", "info", path, "--json", "--wavelength", "587.5618"])
     if info.returncode != 0:
         fail(f"{path}: lens info exited {info.returncode}: {info.stderr}")
         return
@@ -384,11 +388,13 @@ def check_zmx(lensim, path):
         checks.append(("entrance_pupil_diameter_mm", aperture[1]))
     elif aperture:
         checks.append(("f_number", aperture[1]))
+    # A datasheet's 4-decimal n_d (+-5e-5) moves the first-order data by up to 5e-5 / (n - 1).
+    tol = 1e-4 if any(z["glass"] in PUBLISHED_ND for z in lens) else 1e-6
     for key, mine in checks:
         rel = abs(j[key] - mine) / abs(mine)
-        status = "ok" if rel < 1e-6 else "FAIL"
+        status = "ok" if rel < tol else "FAIL"
         print(f"  {key:28s} lensim {j[key]:14.8f}  independent {mine:14.8f}  rel {rel:.1e} {status}")
-        if rel >= 1e-6:
+        if rel >= tol:
             fail(f"{path}: {key} {j[key]} vs {mine}")
 
 

@@ -16,6 +16,7 @@
 #include "lensim/optics/configurations.h"
 #include "lensim/optics/design/design_job.h"
 #include "lensim/optics/design/tolerance.h"
+#include "lensim/optics/glass/library.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/sampling/sampling.h"
@@ -124,6 +125,12 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
   // Focus is solved at the lens's primary wavelength (the file's, else the d line).
   lens_ = optics::focusLens(std::move(prescription), setup);
   dispersive_ = lens_.lens->dispersive();
+  {
+    std::vector<Diagnostic> ranges;
+    optics::checkRenderGlassRanges(lens_.lens->glasses(), kIndexFrom_nm, kIndexTo_nm,
+                                   lens_.lens->prescription().path, &ranges);
+    logDiagnostics(ranges);
+  }
   // Glasses with transmittance data are catalogue glasses, which disperse: absorption is applied
   // where the wavelengths are (dispersiveRay, traceToFilm).
   absorption_ = optics::LensAbsorption(*lens_.lens);

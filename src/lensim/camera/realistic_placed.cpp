@@ -12,6 +12,7 @@
 #include "lensim/camera/film_bounds.h"
 #include "lensim/optics/frame.h"
 #include "lensim/optics/glass.h"
+#include "lensim/optics/glass/library.h"
 #include "lensim/optics/surface_shape.h"
 #include "lensim/sampling/sampling.h"
 #include "lensim/util/error.h"
@@ -86,6 +87,12 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   name_ = p.name;
   path_ = p.path;
   logDiagnostics(lens_.diagnostics());
+  {
+    // The wavelengths renders trace (render/spectra/spectrum.h's kLambdaMin_nm-kLambdaMax_nm).
+    std::vector<Diagnostic> ranges;
+    optics::checkRenderGlassRanges(lens_.glasses(), 360, 830, path_, &ranges);
+    logDiagnostics(ranges);
+  }
   image_frame_ = p.image_frame;
   const optics::LensSurface& rear = p.surfaces.back();
   rear_frame_ = *rear.frame;

@@ -247,4 +247,82 @@ std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
   return semi;
 }
 
+std::optional<double> realImageHeightFieldAngle(const LensPrescription& p, double image_height_mm,
+                                                bool aim_at_stop) {
+  if (image_height_mm == 0) return 0.0;
+  const LensSystem sys(p);
+  const auto stop = sys.stopIndex();
+  if (!stop) throw Error(p.surfaces.front().loc, "real image height fields need an aperture stop");
+  const PupilPlane ep = paraxialEntrancePupil(sys, *stop);
+  double track = 0;
+  for (const LensSurface& s : p.surfaces) track += std::abs(s.thickness_mm);
+  const double z_launch = std::min(ep.z_mm, 0.0) - track - 1;
+  const TraceOptions unclipped{false, false};
+  // The ray at field angle th (radians) through the point (u, 0) of the entrance pupil's plane.
+  auto rayAt = [&](double th, double u) {
+    const Vec3 d = normalize(Vec3{std::tan(th), 0, 1});
+    const Vec3 pupil{u, 0, ep.z_mm};
+    return Ray{pupil + d * ((z_launch - ep.z_mm) / d.z), d};
+  };
+  std::vector<Vec3> path;
+  auto stopX = [&](double th, double u) -> std::optional<double> {
+    path.clear();
+    const TraceResult r = sys.tracer().traceFromScene(rayAt(th, u), unclipped, &path);
+    if (path.size() <= size_t(*stop) + 1 || (!r.ok() && r.blocked_surface <= *stop))
+      return std::nullopt;
+    const double x = path[size_t(*stop) + 1].x;
+    return std::isfinite(x) ? std::optional<double>(x) : std::nullopt;
+  };
+  // The chief ray's pupil point: the centre, or (aiming) where the ray meets the stop's centre
+  // (secant steps from the centre).
+  auto chiefAim = [&](double th) -> std::optional<double> {
+    if (!aim_at_stop) return 0.0;
+    double u0 = 0, u1 = 1e-3 * (1 + std::abs(ep.z_mm) * std::abs(std::tan(th)));
+    std::optional<double> x0 = stopX(th, u0), x1 = stopX(th, u1);
+    for (int i = 0; i < 60 && x0 && x1; ++i) {
+      if (*x1 == 0 || *x1 == *x0) return u1;
+      const double u2 = u1 - *x1 * (u1 - u0) / (*x1 - *x0);
+      u0 = u1, x0 = x1, u1 = u2, x1 = stopX(th, u1);
+      if (x1 && std::abs(*x1) < 1e-13 * (1 + std::abs(u1))) return u1;
+    }
+    return std::nullopt;
+  };
+  auto height = [&](double th) -> std::optional<double> {
+    const std::optional<double> u = chiefAim(th);
+    if (!u) return std::nullopt;
+    const TraceResult r = sys.tracer().traceFromScene(rayAt(th, *u), unclipped);
+    if (!r.ok() || r.ray.direction.z == 0) return std::nullopt;
+    const double t = (sys.realFilmZ_mm() - r.ray.origin.z) / r.ray.direction.z;
+    const double x = r.ray.origin.x + t * r.ray.direction.x;
+    return std::isfinite(x) ? std::optional<double>(x) : std::nullopt;
+  };
+  constexpr double kStep = 0.25 * std::numbers::pi / 180;
+  const std::optional<double> first = height(kStep);
+  if (!first || *first == 0) return std::nullopt;
+  const double side = *first > 0 ? 1 : -1, target = std::abs(image_height_mm);
+  // Scan for the first bracket, then bisect it to the last representable angle.
+  double lo = 0, hi = 0;
+  bool bracketed = false;
+  for (int k = 1; k * kStep < std::numbers::pi / 2; ++k) {
+    const std::optional<double> h = height(k * kStep);
+    if (!h) break;
+    if (side * *h >= target) {
+      hi = k * kStep;
+      bracketed = true;
+      break;
+    }
+    lo = k * kStep;
+  }
+  if (!bracketed) return std::nullopt;
+  for (int i = 0; i < 200 && hi - lo > 1e-16; ++i) {
+    const double mid = (lo + hi) / 2;
+    if (mid <= lo || mid >= hi) break;
+    const std::optional<double> h = height(mid);
+    if (!h) return std::nullopt;  // a gap between two traced angles: no continuous solution
+    (side * *h >= target ? hi : lo) = mid;
+  }
+  const double sign = (image_height_mm > 0 ? 1 : -1) * side;
+  return sign * (lo + hi) / 2 * 180 / std::numbers::pi;
+}
+
 }  // namespace lensim::optics

@@ -41,4 +41,16 @@ std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
                                              const std::vector<int>& surfaces,
                                              const AutoSemiDiameterSpec& spec);
 
+/// OpticStudio's real image height field (FTYP 3) for an object at infinity: the field angle
+/// (degrees) of the parallel bundle in the x-z plane whose real chief ray, at the lens's
+/// wavelength, meets the image plane (the film plane of LensSystem(p)) at x = image_height_mm.
+/// The chief ray passes the stop's centre (`aim_at_stop`: OpticStudio's ray aiming) or the
+/// paraxial entrance pupil's centre, as the rays of computeAutoSemiDiameters do. Solved by
+/// bisection on the chief ray's image height, bracketed by a scan from the axis in steps of
+/// 0.25 degree (the first crossing); the angle's sign is the height's times that of the image
+/// (negative for a lens whose chief rays land on the side they come from). nullopt when no chief
+/// ray below 90 degrees reaches the height. Throws an Error for a lens without a stop.
+std::optional<double> realImageHeightFieldAngle(const LensPrescription& p, double image_height_mm,
+                                                bool aim_at_stop);
+
 }  // namespace lensim::optics

@@ -417,8 +417,9 @@ const GlassCatalog& GlassCatalog::builtin() {
         const_cast<CatalogGlass*>(agf)->glass = g.glass;
     }
     all.append(extra);
-    // Crystals and plastics from refractiveindex.info, after the makers' catalogues: a bare
-    // name Zemax's MISC or INFRARED catalogue also has (CAF2, PMMA, ...) keeps meaning theirs.
+    // Crystals, plastics and tabulated glasses from refractiveindex.info, after the makers'
+    // catalogues: a bare name Zemax's MISC or INFRARED catalogue also has (CAF2, PMMA, ...)
+    // keeps meaning theirs.
     GlassCatalog crystals;
     crystals.catalogs_ = {"rii"};
     for (const embedded::CrystalGlass& c : embedded::crystalGlasses()) {
@@ -435,8 +436,8 @@ const GlassCatalog& GlassCatalog::builtin() {
         g.vendor = "rii";
         g.name = name;
         g.catalog = "rii";
-        g.glass = Glass::zemax(g.vendor, name, ZemaxFormula::Sellmeier1, k, c.min_um * 1000,
-                               c.max_um * 1000);
+        g.glass = Glass::zemax(g.vendor, name, static_cast<ZemaxFormula>(c.formula), k,
+                               c.min_um * 1000, c.max_um * 1000);
         // The database lists no n_d or V_d: the formula's own.
         g.listed_n_d = g.glass.n_d();
         g.listed_v_d = g.glass.v_d();

@@ -763,13 +763,15 @@ void ZmxParser::computeMissingSemiDiameters(LensPrescription& p) {
                   "DIAM or DIAM 0) are not supported");
     AutoSemiDiameterSpec spec;
     spec.fields_loc = field_loc.valid() ? field_loc : auto_rows.front().second->loc;
-    // Paraxial image heights (type 2) of an object at infinity are the angles atan(h / EFL).
+    // Paraxial image heights (type 2) of an object at infinity are the angles atan(h / EFL);
+    // real image heights (type 3) the angles whose real chief rays land at h.
     const bool image_heights = field_type == 2 && !p.object_distance_mm;
-    if (field_type != 0 && field_type != 1 && !image_heights)
+    const bool real_heights = field_type == 3 && !p.object_distance_mm;
+    if (field_type != 0 && field_type != 1 && !image_heights && !real_heights)
       throw Error(spec.fields_loc,
                   fmt::format("field type {} (FTYP): automatic semi-diameters need field angles "
                               "(0), object heights (1) or, for an object at infinity, paraxial "
-                              "image heights (2)",
+                              "(2) or real (3) image heights",
                               field_type));
     spec.object_heights = field_type == 1;
     double efl = 0;
@@ -787,6 +789,21 @@ void ZmxParser::computeMissingSemiDiameters(LensPrescription& p) {
       if (image_heights) {
         spec.fields.push_back({std::atan(fx * unit_mm / efl) * 180 / std::numbers::pi,
                                std::atan(fy * unit_mm / efl) * 180 / std::numbers::pi});
+        continue;
+      }
+      if (real_heights) {
+        // The chief ray of the radial height, split along the field's azimuth by the tangents
+        // (the bundle's direction (tan x, tan y, 1)).
+        const double h = std::hypot(fx, fy) * unit_mm;
+        const std::optional<double> deg = realImageHeightFieldAngle(p, h, spec.aim_at_stop);
+        if (!deg)
+          throw Error(spec.fields_loc,
+                      fmt::format("field {}: no real chief ray reaches the image height {:.6g} mm "
+                                  "(FTYP 3, real image heights)",
+                                  i + 1, h));
+        const double t = h > 0 ? std::tan(*deg * std::numbers::pi / 180) / h : 0.0;
+        spec.fields.push_back({std::atan(t * fx * unit_mm) * 180 / std::numbers::pi,
+                               std::atan(t * fy * unit_mm) * 180 / std::numbers::pi});
         continue;
       }
       spec.fields.push_back(spec.object_heights ? std::pair{fx * unit_mm, fy * unit_mm}

@@ -123,4 +123,39 @@ void checkGlassRange(const Glass& glass, double lambda_nm, const FileLoc& loc,
     diagnostics->push_back({Severity::Warning, loc, msg + "; its formula is used there anyway"});
 }
 
+void checkRenderGlassRanges(const std::vector<Glass>& glasses, double from_nm, double to_nm,
+                            const std::string& lens, std::vector<Diagnostic>* diagnostics) {
+  std::vector<std::string> seen, extended;
+  for (const Glass& g : glasses) {
+    if (!g.dispersive()) continue;
+    const double lo = g.minWavelength_nm(), hi = g.maxWavelength_nm();
+    if (lo <= from_nm && hi >= to_nm) continue;
+    const std::string what = fmt::format("{} ({:g}-{:g} nm)", g.describe(), lo, hi);
+    if (std::find(seen.begin(), seen.end(), what) != seen.end()) continue;
+    seen.push_back(what);
+    // 1e-9 nm: a range given in micrometres (0.7) and scaled may fall short by rounding.
+    if (lo <= kRenderGlassFrom_nm + 1e-9 && hi >= kRenderGlassTo_nm - 1e-9) {
+      extended.push_back(what);
+      continue;
+    }
+    const std::string msg =
+        fmt::format("glass {} is valid for {:g}-{:g} nm only; renders trace {:g}-{:g} nm and need "
+                    "a glass valid over {:g}-{:g} nm at least",
+                    g.describe(), lo, hi, from_nm, to_nm, kRenderGlassFrom_nm, kRenderGlassTo_nm);
+    if (!glassExtrapolationAllowed())
+      throw Error(msg + "; --glass-extrapolate uses its formula there anyway");
+    if (diagnostics)
+      diagnostics->push_back(
+          {Severity::Warning, FileLoc{lens}, msg + "; its formula is used there anyway"});
+  }
+  if (extended.empty() || !diagnostics) return;
+  std::string list;
+  for (const std::string& e : extended) list += (list.empty() ? "" : ", ") + e;
+  diagnostics->push_back(
+      {Severity::Note, FileLoc{lens},
+       fmt::format("renders trace {:g}-{:g} nm: the formulas of {} are used there beyond "
+                   "their valid ranges, which span {:g}-{:g} nm (docs/glass.md)",
+                   from_nm, to_nm, list, kRenderGlassFrom_nm, kRenderGlassTo_nm)});
+}
+
 }  // namespace lensim::optics
