@@ -23,6 +23,8 @@ const char* blockReasonName(BlockReason r) {
       return "tir";
     case BlockReason::Obscured:
       return "obscured";
+    case BlockReason::Evanescent:
+      return "evanescent";
   }
   return "none";
 }
@@ -545,10 +547,12 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
   if (surfaces.empty()) throw Error(FileLoc{prescription_.path}, "lens has no surfaces");
   if (prescription_.noncoaxial_loc)
     throw Error(*prescription_.noncoaxial_loc,
-                fmt::format("{}: a tilted or decentred lens: lensim's coaxial tracers (first-order "
-                            "data, pupils, rendering) do not model it; `lensim lens info` traces "
-                            "real rays through it",
-                            prescription_.noncoaxial_reason));
+                fmt::format("{}: a {}: lensim's coaxial tracers (first-order data, pupils, "
+                            "rendering) do not model it; `lensim lens info` traces real rays "
+                            "through it",
+                            prescription_.noncoaxial_reason,
+                            firstGrating(prescription_) ? "lens with a diffraction grating"
+                                                      : "tilted or decentred lens"));
   double z = 0;
   double ior_before = 1.0;
   int dir = 1;  // direction of travel along z: -1 after an odd number of mirrors
