@@ -265,6 +265,11 @@ TEST(Grating, OptilandSampleFilesReadAndTheFlatOnesChiefRaysAreExact) {
       EXPECT_EQ(e.loc().line, f.line);
       EXPECT_NE(std::string(e.what()).find("diffraction grating"), std::string::npos) << e.what();
     }
+    // Its rows taken as a coaxial lens (as a placed build's twin is) are refused too.
+    LensPrescription twin = p;
+    twin.noncoaxial_loc.reset();
+    for (LensSurface& s : twin.surfaces) s.frame.reset();
+    EXPECT_THROW(LensSystem{twin}, Error);
   }
   const LensPrescription p =
       readLensFile(optiland("flat_transmission_grating.zmx"));

@@ -545,6 +545,11 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
     : prescription_(std::move(prescription)) {
   const auto& surfaces = prescription_.surfaces;
   if (surfaces.empty()) throw Error(FileLoc{prescription_.path}, "lens has no surfaces");
+  // A grating makes any lens non-coaxial, whether or not the prescription says so (a coaxial
+  // twin built from a placed lens keeps its rows).
+  if (const LensSurface* g = firstGrating(prescription_); g && !prescription_.noncoaxial_loc)
+    throw Error(g->grating->loc, "a lens with a diffraction grating is not rotationally "
+                                 "symmetric: lensim's coaxial tracers do not model it");
   if (prescription_.noncoaxial_loc)
     throw Error(*prescription_.noncoaxial_loc,
                 fmt::format("{}: a {}: lensim's coaxial tracers (first-order data, pupils, "
