@@ -13,6 +13,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
 
@@ -346,6 +347,21 @@ TEST(Grating, LensInfoReadsThemAndTheCameraRefusesThem) {
     EXPECT_EQ(j.status, 0) << j.out;
     EXPECT_NE(j.out.find("\"chief_ray_by_wavelength\""), std::string::npos) << j.out;
   }
+  // The flat grating's chief ray at 10 degrees, per wavelength (the file lists 0.587 um): its
+  // direction's y component sin 10 - 0.587 x 0.2 behind the window, as the closed form says.
+  const test::CliResult j = test::runLensim(
+      "lens info --json --field 0,10 " + optiland("flat_transmission_grating.zmx"));
+  ASSERT_EQ(j.status, 0) << j.out;
+  // The notes (stderr) come first; the JSON document is the rest.
+  const size_t doc = j.out.find("{\n");
+  ASSERT_NE(doc, std::string::npos) << j.out;
+  const nlohmann::json info = nlohmann::json::parse(j.out.substr(doc));
+  const auto& per = info.at("fields").at(0).at("chief_ray_by_wavelength");
+  ASSERT_EQ(per.size(), 1u);
+  EXPECT_EQ(per.at(0).at("wavelength_nm").get<double>(), 587);
+  EXPECT_NEAR(per.at(0).at("direction").at(1).get<double>(), std::sin(10 * kDeg) - 0.587 * 0.2,
+              1e-12);
+  EXPECT_EQ(info.at("surfaces").at(2).at("grating").at("order").get<int>(), -1);
   const std::string dir = (std::filesystem::temp_directory_path() / "lensim_grating_test").string();
   std::filesystem::create_directories(dir);
   const std::string scene = dir + "/grating.pbrt";
