@@ -216,7 +216,8 @@ TEST(Grating, BackwardTraceRetracesTheForwardOne) {
   }
 }
 
-// What a grating's parameters may be: an integer order, parameters 1 and 2 only.
+// What a grating's parameters may be: an integer order, parameters 1 and 2 only; and it is not
+// the object or image surface.
 TEST(Grating, BadParametersAreRefusedAtTheirLine) {
   std::string text = gratingZmx(0.5, 1);
   const auto errorOf = [](const std::string& t) -> Error {
@@ -237,6 +238,11 @@ TEST(Grating, BadParametersAreRefusedAtTheirLine) {
   const Error e2 = errorOf(extra);
   EXPECT_EQ(e2.loc().line, 12) << e2.what();
   EXPECT_NE(std::string(e2.what()).find("PARM 3"), std::string::npos) << e2.what();
+  std::string image = text;
+  image.replace(image.find("SURF 2\n"), 7, "SURF 2\n  TYPE DGRATING\n");
+  const Error e3 = errorOf(image);
+  EXPECT_EQ(e3.loc().line, 15) << e3.what();
+  EXPECT_NE(std::string(e3.what()).find("as the image surface"), std::string::npos) << e3.what();
 }
 
 // The optiland sample files read (their TYPE DGRATING line is where the symmetry is lost), the

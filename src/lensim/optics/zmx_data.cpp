@@ -233,6 +233,11 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
                                            "{})",
                                            z.number, z.mirror ? "MIRROR" : z.glass));
   }
+  for (const ZSurface* z : {&surfs.front(), &surfs.back()})
+    if (z->type == "DGRATING")
+      throw Error(z->type_loc, fmt::format("surface {}: a diffraction grating as the {} surface "
+                                           "is not supported",
+                                           z->number, z == &surfs.front() ? "object" : "image"));
   PlacedSystem placed = placeCoordinateBreaks(fold);
   // A grating breaks rotational symmetry: the lens is placed in space like a tilted one (its
   // surfaces on their axis, folds by mirrors kept as they are in space).
