@@ -216,7 +216,7 @@ TEST(ZmxRefusals, EachAtItsLine) {
     std::string line, what;
   };
   const Case cases[] = {
-      {"  TYPE COORDBRK", "COORDBRK"}, {"  TYPE DGRATING", "DGRATING"},
+      {"  TYPE COORDBRK", "COORDBRK"}, {"  TYPE BINARY_2", "BINARY_2"},
       {"  TYPE QTYPEASP", "QTYPEASP"}, {"  TYPE SZERNSAG", "SZERNSAG"},
       {"  SQOB 2 3 0", "SQOB"},        {"  ELAP 2 3 0.5", "ELAP"},
       {"  OBSC 1 2 0", "OBSC"},        {"  OBDC 0.5 0", "OBDC"},
@@ -302,9 +302,10 @@ TEST(ZmxCorpus, EveryFileReadsOrIsRefusedAtItsLine) {
       {"optiland/circular_aperture_example_without_aperture.zmx", 0, "", true},
       // Decentres after its folds: a surface leaves the axis; placed in space.
       {"optiland/complicated_fold_mirrors_setup_v2.zmx", 0, "off the axis", false, 266},
-      {"optiland/curved_reflective_grating.zmx", 77, "DGRATING", false},
-      {"optiland/curved_transmission_grating.zmx", 102, "DGRATING", false},
-      {"optiland/flat_transmission_grating.zmx", 102, "DGRATING", false},
+      // Diffraction gratings: not rotationally symmetric, placed in space at their TYPE line.
+      {"optiland/curved_reflective_grating.zmx", 0, "diffraction grating", false, 77},
+      {"optiland/curved_transmission_grating.zmx", 0, "diffraction grating", false, 102},
+      {"optiland/flat_transmission_grating.zmx", 0, "diffraction grating", false, 102},
       {"optiland/lens1.zmx", 0, "", true},
       {"optiland/lens2.zmx", 0, "", true},  // Ohara's moldable L-BAL35
       // FLOA with the stop's semi-diameter 8.5 mm: its image, the entrance pupil, is wider

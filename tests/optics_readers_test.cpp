@@ -118,8 +118,8 @@ TEST(ZmxReader, UnsupportedThingsAreRefusedAtTheirLine) {
   };
   std::string base = singletZmx("MM", 1);
   std::string cb = base;
-  cb.replace(cb.find("SURF 2\n  TYPE EVENASPH"), 22, "SURF 2\n  TYPE DGRATING");
-  EXPECT_NE(errorOf(cb).find("x.zmx:21:3: error: surface 2: TYPE DGRATING is not supported"),
+  cb.replace(cb.find("SURF 2\n  TYPE EVENASPH"), 22, "SURF 2\n  TYPE BINARY_2");
+  EXPECT_NE(errorOf(cb).find("x.zmx:21:3: error: surface 2: TYPE BINARY_2 is not supported"),
             std::string::npos)
       << errorOf(cb);
   // A coordinate break carries no glass (optics_coordbrk_test.cpp tests the breaks).

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -18,14 +19,25 @@ using optics::PlacedLens;
 
 namespace {
 
-constexpr const char* kNotComputed =
-    "focal lengths, principal planes, pupils, f-number, field of view, distortion and MTF need a "
-    "rotationally symmetric (coaxial) system; this lens has tilted or decentred surfaces";
+std::string notComputed(const optics::LensPrescription& p) {
+  return fmt::format("focal lengths, principal planes, pupils, f-number, field of view, "
+                     "distortion and MTF need a rotationally symmetric (coaxial) system; this "
+                     "lens has {}",
+                     optics::firstGrating(p) ? "a diffraction grating"
+                                             : "tilted or decentred surfaces");
+}
+
+// The chief ray at one wavelength (a lens with a grating diffracts each its own way).
+struct ChiefAt {
+  double wavelength_nm = 0;
+  std::optional<Vec3> image, direction;  // image surface's frame
+};
 
 struct FieldReport {
   std::string label;
   PlacedLens::Field field;
   std::optional<Vec3> chief_image, chief_direction;  // image surface's frame
+  std::vector<ChiefAt> chief_by_wavelength;          // lenses with a grating
   std::vector<std::pair<std::string, std::optional<Vec3>>> marginal;  // image surface's frame
   std::optional<PlacedLens::Spot> spot;
 };
@@ -59,8 +71,76 @@ FieldReport reportField(const PlacedLens& lens, const PlacedLens::Field& f, std:
   return r;
 }
 
+// The file's wavelengths, each once, in order (the lens's own when the file lists none).
+std::vector<double> distinctWavelengths(const optics::LensPrescription& p, double lambda) {
+  std::vector<double> out;
+  for (double w : p.wavelengths_nm)
+    if (std::find(out.begin(), out.end(), w) == out.end()) out.push_back(w);
+  if (out.empty()) out.push_back(lambda);
+  return out;
+}
+
 json vecJson(const std::optional<Vec3>& v) {
   return v ? json::array({v->x, v->y, v->z}) : json(nullptr);
+}
+
+// `lens info --json` of a non-coaxial lens.
+json placedJson(const optics::LensPrescription& p, const PlacedLens& lens,
+                const std::vector<FieldReport>& fields, double lambda, bool at_inf) {
+  json j;
+  j["lens"] = {{"name", p.name}, {"path", p.path}, {"format", p.format}};
+  j["noncoaxial"] = {{"reason", p.noncoaxial_reason},
+                     {"line", p.noncoaxial_loc->line},
+                     {"not_computed", notComputed(p)}};
+  j["wavelength_nm"] = lambda;
+  j["stop"] = {{"surface_row", lens.stopIndex()},
+               {"semi_diameter_mm", lens.stopSemiAperture_mm()},
+               {"aperture", p.aperture_spec}};
+  json surfaces = json::array();
+  for (const auto& s : p.surfaces) {
+    const auto& f = *s.frame;
+    json row = {{"line", s.loc.line},
+                {"vertex_mm", f.origin_mm},
+                {"axis", {f.rotation[0][2], f.rotation[1][2], f.rotation[2][2]}},
+                {"radius_mm", s.radius_mm},
+                {"semi_diameter_mm", s.semiAperture_mm()},
+                {"mirror", s.mirror}};
+    if (s.grating)
+      row["grating"] = {{"lines_per_um", s.grating->lines_per_um},
+                        {"order", s.grating->order}};
+    surfaces.push_back(row);
+  }
+  j["surfaces"] = surfaces;
+  j["image_surface"] = {{"vertex_mm", p.image_frame.origin_mm},
+                        {"axis", {p.image_frame.rotation[0][2], p.image_frame.rotation[1][2],
+                                  p.image_frame.rotation[2][2]}}};
+  json fj = json::array();
+  for (const FieldReport& r : fields) {
+    json m = json::object();
+    for (const auto& [name, v] : r.marginal) m[name] = vecJson(v);
+    json spot = nullptr;
+    if (r.spot)
+      spot = {{"rays", r.spot->rays},
+              {"centroid_mm", {r.spot->centroid.x, r.spot->centroid.y}},
+              {"rms_radius_mm", r.spot->rms_mm}};
+    json fr = {{"field", r.label},
+               {"field_unit", at_inf ? "degrees" : "mm"},
+               {"chief_ray_image_mm", vecJson(r.chief_image)},
+               {"chief_ray_direction", vecJson(r.chief_direction)},
+               {"marginal_rays_image_mm", m},
+               {"spot", spot}};
+    if (lens.hasGrating()) {
+      json per = json::array();
+      for (const ChiefAt& c : r.chief_by_wavelength)
+        per.push_back({{"wavelength_nm", c.wavelength_nm},
+                       {"image_mm", vecJson(c.image)},
+                       {"direction", vecJson(c.direction)}});
+      fr["chief_ray_by_wavelength"] = per;
+    }
+    fj.push_back(fr);
+  }
+  j["fields"] = fj;
+  return j;
 }
 
 }  // namespace
@@ -90,49 +170,20 @@ int runInfoNonCoaxial(const LensArgs& args, const optics::LensPrescription& p, b
     }
     fields.push_back(reportField(lens, f, spec));
   }
+  if (lens.hasGrating()) {
+    PlacedLens at = lens;
+    for (double w : distinctWavelengths(p, lambda)) {
+      at.setWavelength(w);
+      for (FieldReport& r : fields) {
+        ChiefAt c{w, {}, {}};
+        if (auto ray = aimedRay(at, r.field, {0, 0})) c.image = ray->first, c.direction = ray->second;
+        r.chief_by_wavelength.push_back(c);
+      }
+    }
+  }
 
   if (as_json) {
-    json j;
-    j["lens"] = {{"name", p.name}, {"path", p.path}, {"format", p.format}};
-    j["noncoaxial"] = {{"reason", p.noncoaxial_reason},
-                       {"line", p.noncoaxial_loc->line},
-                       {"not_computed", kNotComputed}};
-    j["wavelength_nm"] = lambda;
-    j["stop"] = {{"surface_row", lens.stopIndex()},
-                 {"semi_diameter_mm", lens.stopSemiAperture_mm()},
-                 {"aperture", p.aperture_spec}};
-    json surfaces = json::array();
-    for (const auto& s : p.surfaces) {
-      const auto& f = *s.frame;
-      surfaces.push_back({{"line", s.loc.line},
-                          {"vertex_mm", f.origin_mm},
-                          {"axis", {f.rotation[0][2], f.rotation[1][2], f.rotation[2][2]}},
-                          {"radius_mm", s.radius_mm},
-                          {"semi_diameter_mm", s.semiAperture_mm()},
-                          {"mirror", s.mirror}});
-    }
-    j["surfaces"] = surfaces;
-    j["image_surface"] = {{"vertex_mm", p.image_frame.origin_mm},
-                          {"axis", {p.image_frame.rotation[0][2], p.image_frame.rotation[1][2],
-                                    p.image_frame.rotation[2][2]}}};
-    json fj = json::array();
-    for (const FieldReport& r : fields) {
-      json m = json::object();
-      for (const auto& [name, v] : r.marginal) m[name] = vecJson(v);
-      json spot = nullptr;
-      if (r.spot)
-        spot = {{"rays", r.spot->rays},
-                {"centroid_mm", {r.spot->centroid.x, r.spot->centroid.y}},
-                {"rms_radius_mm", r.spot->rms_mm}};
-      fj.push_back({{"field", r.label},
-                    {"field_unit", at_inf ? "degrees" : "mm"},
-                    {"chief_ray_image_mm", vecJson(r.chief_image)},
-                    {"chief_ray_direction", vecJson(r.chief_direction)},
-                    {"marginal_rays_image_mm", m},
-                    {"spot", spot}});
-    }
-    j["fields"] = fj;
-    std::cout << j.dump(2) << "\n";
+    std::cout << placedJson(p, lens, fields, lambda, at_inf).dump(2) << "\n";
     return 0;
   }
 
@@ -140,10 +191,10 @@ int runInfoNonCoaxial(const LensArgs& args, const optics::LensPrescription& p, b
     std::cout << fmt::format("  {:<26}{}\n", k, v);
   };
   std::cout << fmt::format("{}\n", p.name);
-  line("file", fmt::format("{} ({}, {} surfaces, tilted or decentred)", p.path, p.format,
-                           p.surfaces.size()));
+  line("file", fmt::format("{} ({}, {} surfaces, {})", p.path, p.format, p.surfaces.size(),
+                           optics::firstGrating(p) ? "with a grating" : "tilted or decentred"));
   line("not coaxial", fmt::format("{} (line {})", p.noncoaxial_reason, p.noncoaxial_loc->line));
-  line("not computed", kNotComputed);
+  line("not computed", notComputed(p));
   line("wavelength", fmt::format("{:.4f} nm", lambda));
   line("stop", fmt::format("row {}, semi-diameter {:.6g} mm ({})", lens.stopIndex(),
                            lens.stopSemiAperture_mm(), p.aperture_spec));
@@ -152,10 +203,14 @@ int runInfoNonCoaxial(const LensArgs& args, const optics::LensPrescription& p, b
     const auto& s = p.surfaces[i];
     const auto& f = *s.frame;
     std::cout << fmt::format("    {:>3}  line {:>5}  vertex ({:.6f}, {:.6f}, {:.6f})  axis "
-                             "({:.6f}, {:.6f}, {:.6f})  R {:.6g}{}\n",
+                             "({:.6f}, {:.6f}, {:.6f})  R {:.6g}{}{}\n",
                              i, s.loc.line, f.origin_mm[0], f.origin_mm[1], f.origin_mm[2],
                              f.rotation[0][2], f.rotation[1][2], f.rotation[2][2], s.radius_mm,
-                             s.mirror ? "  mirror" : "");
+                             s.mirror ? "  mirror" : "",
+                             s.grating ? fmt::format("  grating {:.6g} lines/um (lines along x), "
+                                                     "order {}",
+                                                     s.grating->lines_per_um, s.grating->order)
+                                       : std::string());
   }
   const auto& im = p.image_frame;
   std::cout << fmt::format("    image          vertex ({:.6f}, {:.6f}, {:.6f})  axis ({:.6f}, "
@@ -174,6 +229,13 @@ int runInfoNonCoaxial(const LensArgs& args, const optics::LensPrescription& p, b
       std::cout << fmt::format("      marginal {:<6}{}\n", name,
                                v ? fmt::format("x {:.6f}  y {:.6f}", v->x, v->y)
                                  : std::string("blocked or not found"));
+    for (const ChiefAt& c : r.chief_by_wavelength)
+      std::cout << fmt::format(
+          "      chief ray at {:.4f} nm  {}\n", c.wavelength_nm,
+          c.image ? fmt::format("x {:.6f}  y {:.6f}  direction ({:.9f}, {:.9f}, {:.9f})",
+                                c.image->x, c.image->y, c.direction->x, c.direction->y,
+                                c.direction->z)
+                  : std::string("does not get through"));
     if (r.spot)
       std::cout << fmt::format("      spot           RMS radius {:.6f} mm about ({:.6f}, {:.6f}), "
                                "{} rays\n",

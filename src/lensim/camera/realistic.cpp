@@ -771,12 +771,16 @@ std::unique_ptr<Camera> makeRealisticCamera(const scene::Scene& scene,
     } else {
       throw Error(c.loc, "realistic camera without lens parameters");
     }
-    if (c.realistic) {
+    if (c.realistic || c.legacy_realistic) {
       // Read (or build) once: a lens with tilted or decentred surfaces, or an as-built lens whose
       // elements were decentred or tilted, takes the placed camera.
       auto p = std::make_shared<optics::LensPrescription>(
           s.tolerance_job.empty() ? optics::readLensFile(s.lens_path) : asBuiltPrescription(s));
-      if (p->noncoaxial_loc && !p->fold_loc) {
+      if (const optics::LensSurface* g = optics::firstGrating(*p))
+        throw Error(c.loc, fmt::format("realistic camera: the lens file {} has a diffraction "
+                                       "grating (line {}): {}",
+                                       s.lens_path, g->grating->loc.line, gratingCameraRefusal()));
+      if (c.realistic && p->noncoaxial_loc && !p->fold_loc) {
         logDiagnostics(p->diagnostics);
         return std::make_unique<PlacedRealisticCamera>(std::move(s), std::move(*p));
       }

@@ -61,6 +61,8 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
                                              bool pupil_bounds)
     : settings_(std::move(settings)), lens_([&]() -> optics::PlacedLens {
         refuseUnsupported(settings_);
+        if (const optics::LensSurface* g = optics::firstGrating(p))
+          throw Error(g->grating->loc, gratingCameraRefusal());
         if (settings_.glass_match)
           for (const Diagnostic& d : optics::matchCatalogGlasses(p)) logDiagnostic(d);
         // The set stop radius is the aperture shape's unit; the physical stop opens to the

@@ -57,6 +57,13 @@
 
 namespace lensim::camera {
 
+/// Why the realistic cameras refuse a lens with a diffraction grating.
+inline const char* gratingCameraRefusal() {
+  return "the realistic cameras do not render through diffraction gratings (a grating sends "
+         "each wavelength into its own direction, and its other orders are not modelled); "
+         "`lensim lens info` traces real rays through the lens";
+}
+
 class PlacedRealisticCamera final : public Camera {
  public:
   /// The camera for `prescription` (non-coaxial) with `settings` (as makeRealisticCamera fills

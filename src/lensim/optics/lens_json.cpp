@@ -580,10 +580,12 @@ LensPrescription parseLensJson(std::string_view text, const std::string& path,
 
 std::string writeLensJson(const LensPrescription& p) {
   if (p.noncoaxial_loc)
-    throw Error(*p.noncoaxial_loc, fmt::format("{}: a lens with tilted or decentred surfaces "
-                                               "cannot be written as a lensim lens file (it "
-                                               "places surfaces on one axis)",
-                                               p.noncoaxial_reason));
+    throw Error(*p.noncoaxial_loc, fmt::format("{}: a lens with {} cannot be written as a "
+                                               "lensim lens file (it places rotationally "
+                                               "symmetric surfaces on one axis)",
+                                               p.noncoaxial_reason,
+                                               firstGrating(p) ? "a diffraction grating"
+                                                               : "tilted or decentred surfaces"));
   json j;
   j["format"] = "lensim-lens";
   j["version"] = 1;
@@ -649,10 +651,12 @@ std::string writeLensJson(const LensPrescription& p) {
 
 std::string writeLensDat(const LensPrescription& p) {
   if (p.noncoaxial_loc)
-    throw Error(*p.noncoaxial_loc, fmt::format("{}: a lens with tilted or decentred surfaces "
-                                               "cannot be written as a lensim lens file (it "
-                                               "places surfaces on one axis)",
-                                               p.noncoaxial_reason));
+    throw Error(*p.noncoaxial_loc, fmt::format("{}: a lens with {} cannot be written as a "
+                                               "lensim lens file (it places rotationally "
+                                               "symmetric surfaces on one axis)",
+                                               p.noncoaxial_reason,
+                                               firstGrating(p) ? "a diffraction grating"
+                                                               : "tilted or decentred surfaces"));
   std::string out =
       fmt::format("# {}\n# converted by lensim from {} ({})\n", p.name, p.path, p.format);
   out +=

@@ -23,6 +23,8 @@ const char* blockReasonName(BlockReason r) {
       return "tir";
     case BlockReason::Obscured:
       return "obscured";
+    case BlockReason::Evanescent:
+      return "evanescent";
   }
   return "none";
 }
@@ -543,12 +545,19 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
     : prescription_(std::move(prescription)) {
   const auto& surfaces = prescription_.surfaces;
   if (surfaces.empty()) throw Error(FileLoc{prescription_.path}, "lens has no surfaces");
+  // A grating makes any lens non-coaxial, whether or not the prescription says so (a coaxial
+  // twin built from a placed lens keeps its rows).
+  if (const LensSurface* g = firstGrating(prescription_); g && !prescription_.noncoaxial_loc)
+    throw Error(g->grating->loc, "a lens with a diffraction grating is not rotationally "
+                                 "symmetric: lensim's coaxial tracers do not model it");
   if (prescription_.noncoaxial_loc)
     throw Error(*prescription_.noncoaxial_loc,
-                fmt::format("{}: a tilted or decentred lens: lensim's coaxial tracers (first-order "
-                            "data, pupils, rendering) do not model it; `lensim lens info` traces "
-                            "real rays through it",
-                            prescription_.noncoaxial_reason));
+                fmt::format("{}: a {}: lensim's coaxial tracers (first-order data, pupils, "
+                            "rendering) do not model it; `lensim lens info` traces real rays "
+                            "through it",
+                            prescription_.noncoaxial_reason,
+                            firstGrating(prescription_) ? "lens with a diffraction grating"
+                                                      : "tilted or decentred lens"));
   double z = 0;
   double ior_before = 1.0;
   int dir = 1;  // direction of travel along z: -1 after an odd number of mirrors

@@ -35,9 +35,10 @@ enum class BlockReason : std::uint8_t {
   Miss,      ///< the line misses the sphere (or the plane) entirely
   TotalInternalReflection,
   Obscured,  ///< hit the surface inside its central obscuration
+  Evanescent,  ///< a grating's order has no real direction (|sin| > 1): no ray leaves
 };
 
-/// "aperture", "miss", "tir", "obscured" or "none".
+/// "aperture", "miss", "tir", "obscured", "evanescent" or "none".
 const char* blockReasonName(BlockReason r);
 
 /// The outcome of an exact trace: the ray leaving the last surface, or where and why it stopped.

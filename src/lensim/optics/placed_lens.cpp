@@ -8,6 +8,7 @@
 
 #include "lensim/optics/frame.h"
 #include "lensim/optics/glass.h"
+#include "lensim/optics/grating.h"
 #include "lensim/optics/refraction.h"
 
 namespace lensim::optics {
@@ -42,6 +43,10 @@ PlacedLens::PlacedLens(const LensPrescription& p, double wavelength_nm)
     s.half_x = ls.aperture_half_x_mm, s.half_y = ls.aperture_half_y_mm;
     s.shape = ShapeIntersector(ls.radius_mm, ls.shape, s.semi);
     s.mirror = ls.mirror;
+    if (ls.grating) {
+      s.grating = true;
+      s.order_lines_per_um = ls.grating->order * ls.grating->lines_per_um;
+    }
     s.n_before = n_before;
     s.n_after = glasses[i].index(wavelength_nm);
     n_before = s.n_after;
@@ -69,7 +74,14 @@ BlockReason PlacedLens::traceSurface(size_t i, const TraceOptions& opts, Vec3& o
       return BlockReason::Aperture;
     if (opts.obscurations && r2 < s.inner2) return BlockReason::Obscured;
   }
-  if (s.mirror) {
+  if (s.grating) {
+    // Backward the media swap and the order stays: the reversed ray's tangential n s, minus the
+    // forward one's, gains the same m lambda / d q and leaves reversed.
+    const double k = s.order_lines_per_um * wavelength_nm_ * 1e-3;
+    if (!diffract(dir, h->normal, {0, 1, 0}, backward ? s.n_after : s.n_before,
+                  backward ? s.n_before : s.n_after, k, s.mirror))
+      return BlockReason::Evanescent;
+  } else if (s.mirror) {
     dir = dir - h->normal * (2 * dot(dir, h->normal));
   } else if (!refract(dir, h->normal, backward ? s.n_after : s.n_before,
                       backward ? s.n_before : s.n_after)) {
@@ -147,6 +159,10 @@ void PlacedLens::setWavelength(double wavelength_nm) {
 bool PlacedLens::dispersive() const {
   return std::any_of(glasses_.begin(), glasses_.end(),
                      [](const Glass& g) { return g.dispersive(); });
+}
+
+bool PlacedLens::hasGrating() const {
+  return std::any_of(surfaces_.begin(), surfaces_.end(), [](const Surface& s) { return s.grating; });
 }
 
 Vec3 PlacedLens::toImageFrame(const Vec3& global) const {

@@ -2,7 +2,8 @@
 // holds them (LensPrescription::noncoaxial_loc, from Zemax coordinate breaks). Each ray is moved
 // into a surface's own frame (SurfaceFrame), intersected there as the coaxial tracer would
 // intersect that surface on its axis, clipped at its apertures, refracted or reflected, and moved
-// back. Double precision, one ray at a time. Coordinates are those of the front surface's frame
+// back; a grating surface diffracts it into its order instead (optics/grating.h, at the lens's
+// wavelength). Double precision, one ray at a time. Coordinates are those of the front surface's frame
 // (mm, z its axis, the object space's axis). The coaxial tracers (LensTracer, pupils) refuse such
 // lenses (LensSystem's constructor); the realistic camera traces them with this one, backward
 // from the film (camera/realistic_placed.h).
@@ -55,6 +56,9 @@ class PlacedLens {
   const std::vector<Glass>& glasses() const { return glasses_; }
   /// Whether some medium's index depends on the wavelength.
   bool dispersive() const;
+  /// Whether some surface is a diffraction grating (its rays' directions depend on the
+  /// wavelength even without dispersion).
+  bool hasGrating() const;
   /// A global point in the image surface's own frame (x, y, z).
   Vec3 toImageFrame(const Vec3& global) const;
 
@@ -92,6 +96,9 @@ class PlacedLens {
     double half_x = 0, half_y = 0;
     bool mirror = false;
     double n_before = 1, n_after = 1;
+    // A grating (LensSurface::grating): order * lines per micrometre; 0: none.
+    bool grating = false;
+    double order_lines_per_um = 0;
   };
   static Vec3 toLocal(const Surface& s, const Vec3& v);   // a direction into s's frame
   static Vec3 toGlobal(const Surface& s, const Vec3& v);  // a direction out of it

@@ -79,6 +79,18 @@ struct SurfaceFrame {
   std::array<double, 3> origin_mm{};
 };
 
+/// A diffraction grating ruled on a surface (Zemax `TYPE DGRATING`, the OpticStudio "Diffraction
+/// Grating" surface): its lines are the traces on the surface of equally spaced planes parallel
+/// to the surface's local x-z plane, `lines_per_um` of them per micrometre along local y
+/// (whatever the lens units), and the ray leaves in diffraction order `order`. At a hit point
+/// with unit normal N the tangential part of n s gains order * lambda_um * lines_per_um times
+/// (y - (y . N) N), local y projected into the tangent plane (optics/grating.h).
+struct SurfaceGrating {
+  double lines_per_um = 0;
+  int order = 0;
+  FileLoc loc;  ///< the TYPE line
+};
+
 struct LensSurface {
   double radius_mm = 0;     ///< signed radius of curvature; > 0: centre toward the film
   double thickness_mm = 0;  ///< axial distance to the next surface (last row: to the film)
@@ -112,6 +124,9 @@ struct LensSurface {
   /// Its place in space when the lens is not coaxial (LensPrescription::noncoaxial_loc); unset
   /// otherwise (the vertex on the axis, thickness_mm after the previous one).
   std::optional<SurfaceFrame> frame;
+  /// A grating on this surface; a lens with one is not rotationally symmetric and is traced by
+  /// the non-coaxial tracer only (LensPrescription::noncoaxial_loc is set).
+  std::optional<SurfaceGrating> grating;
 
   bool isStop() const { return stop_flag ? *stop_flag : radius_mm == 0; }
   double semiAperture_mm() const { return aperture_diameter_mm / 2; }
@@ -185,6 +200,13 @@ struct LensPrescription {
   /// The last row's thickness: the lens-to-film distance the file gives (0 when it gives none).
   double fileFilmDistance_mm() const { return surfaces.empty() ? 0 : surfaces.back().thickness_mm; }
 };
+
+/// The first surface with a diffraction grating, or nullptr.
+inline const LensSurface* firstGrating(const LensPrescription& p) {
+  for (const LensSurface& s : p.surfaces)
+    if (s.grating) return &s;
+  return nullptr;
+}
 
 /// Parses prescription text; `path` is used for messages. Throws lensim::Error
 /// (`path:line:col: error: ...`) for malformed input.

@@ -219,10 +219,10 @@ void ZmxParser::surfaceLine(const Line& l) {
     cur->type = std::string(t[1].text);
     cur->type_loc = loc;
     if (cur->type != "STANDARD" && cur->type != "EVENASPH" && cur->type != "ODDASPH" &&
-        cur->type != "TOROIDAL" && cur->type != "COORDBRK")
+        cur->type != "TOROIDAL" && cur->type != "COORDBRK" && cur->type != "DGRATING")
       throw surfErr(
           fmt::format("TYPE {} is not supported (lensim models STANDARD, EVENASPH, "
-                      "ODDASPH and TOROIDAL surfaces, and COORDBRK folds)",
+                      "ODDASPH, TOROIDAL and DGRATING surfaces, and COORDBRK folds)",
                       cur->type));
   } else if (key == "CURV") {
     cur->curv = num(1, "curvature");
@@ -531,6 +531,8 @@ LensSurface ZmxParser::makeSurface(const ZSurface& z, double semi, double ior_be
     s.shape.scaleLengths(unit_mm);
   } else if (z.type == "TOROIDAL") {
     readToroidal(z, unit_mm, s.shape);
+  } else if (z.type == "DGRATING") {
+    s.grating = readGrating(z);
   }
   s.mirror = z.mirror;
   s.coating = z.coating;
@@ -616,9 +618,11 @@ void ZmxParser::checkExtent(const ZSurface& z, LensSurface& s, double& semi,
 
 namespace {
 
-// Whether rows 0 .. last of a non-coaxial lens sit on the object axis, unturned.
+// Whether rows 0 .. last of a non-coaxial lens sit on the object axis, unturned, with no grating
+// before row `last` (the stop's own grating does not change its paraxial image).
 bool coaxialUpTo(const LensPrescription& p, int last) {
   for (int i = 0; i <= last; ++i) {
+    if (i < last && p.surfaces[size_t(i)].grating) return false;
     const SurfaceFrame& f = *p.surfaces[size_t(i)].frame;
     if (!(std::abs(f.origin_mm[0]) <= 1e-12 && std::abs(f.origin_mm[1]) <= 1e-12)) return false;
     for (int r = 0; r < 3; ++r)
@@ -633,7 +637,7 @@ bool coaxialUpTo(const LensPrescription& p, int last) {
 LensPrescription coaxialFront(const LensPrescription& p, int last) {
   LensPrescription q = p;
   q.surfaces.resize(size_t(last) + 1);
-  for (LensSurface& s : q.surfaces) s.frame.reset();
+  for (LensSurface& s : q.surfaces) s.frame.reset(), s.grating.reset();
   q.noncoaxial_loc.reset();
   q.configurations.clear();
   return q;
@@ -752,8 +756,8 @@ void ZmxParser::computeMissingSemiDiameters(LensPrescription& p) {
     const ZSurface& z = *auto_rows.front().second;
     throw Error(z.diam_loc.valid() ? z.diam_loc : z.loc,
                 fmt::format("surface {}: no semi-diameter (no DIAM or DIAM 0): lensim computes "
-                            "semi-diameters for coaxial lenses only, and this one is tilted or "
-                            "decentred ({})",
+                            "semi-diameters for coaxial lenses only, and this one is not "
+                            "coaxial ({})",
                             z.number, p.noncoaxial_reason));
   }
   if (!auto_rows.empty()) {

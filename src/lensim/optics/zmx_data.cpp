@@ -167,6 +167,31 @@ void ZmxParser::readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& sh
   shape.scaleLengths(unit_mm);
 }
 
+// A diffraction grating (OpticStudio's "Diffraction Grating" surface, a standard sphere or conic
+// ruled with lines parallel to its local x axis): PARM 1 the line density in lines per
+// micrometre (whatever the lens units), PARM 2 the diffraction order.
+SurfaceGrating ZmxParser::readGrating(const ZSurface& z) const {
+  SurfaceGrating g;
+  g.loc = z.type_loc.valid() ? z.type_loc : z.loc;
+  for (const auto& [i, v] : z.parm) {
+    if (i == 1) {
+      g.lines_per_um = v;
+    } else if (i == 2) {
+      if (v != std::floor(v) || std::abs(v) > 1e6)
+        throw Error(parmLoc(z, i), fmt::format("surface {}: DGRATING PARM 2 = {}: the "
+                                               "diffraction order must be an integer",
+                                               z.number, v));
+      g.order = int(v);
+    } else if (v != 0) {
+      throw Error(parmLoc(z, i), fmt::format("surface {}: DGRATING PARM {} = {}: a diffraction "
+                                             "grating has parameters 1 (lines per micrometre) "
+                                             "and 2 (diffraction order) only",
+                                             z.number, i, v));
+    }
+  }
+  return g;
+}
+
 // Coordinate breaks (optics/coordinate_break.h): a fold by plane mirrors becomes its coaxial twin
 // (the breaks dropped, thicknesses along the unfolded axis, a tilted mirror's circular aperture
 // its projection, an ellipse); anything else is refused at its break.
@@ -180,7 +205,8 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
     bool parms_zero = true;
     for (const auto& [i, v] : z.parm) parms_zero = parms_zero && v == 0;
     f.plane = z.curv == 0 && parms_zero && !z.xdat_loc && z.type != "TOROIDAL";
-    f.symmetric = z.type != "TOROIDAL" && z.aperture_shape == ApertureShape::Circle;
+    f.symmetric = z.type != "TOROIDAL" && z.type != "DGRATING" &&
+                  z.aperture_shape == ApertureShape::Circle;
     if (!f.coordbrk) continue;
     if (!z.has_disz)
       throw Error(z.loc, fmt::format("surface {}: no DISZ (thickness) line", z.number));
@@ -207,7 +233,24 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
                                            "{})",
                                            z.number, z.mirror ? "MIRROR" : z.glass));
   }
-  const PlacedSystem placed = placeCoordinateBreaks(fold);
+  for (const ZSurface* z : {&surfs.front(), &surfs.back()})
+    if (z->type == "DGRATING")
+      throw Error(z->type_loc, fmt::format("surface {}: a diffraction grating as the {} surface "
+                                           "is not supported",
+                                           z->number, z == &surfs.front() ? "object" : "image"));
+  PlacedSystem placed = placeCoordinateBreaks(fold);
+  // A grating breaks rotational symmetry: the lens is placed in space like a tilted one (its
+  // surfaces on their axis, folds by mirrors kept as they are in space).
+  const auto grating = std::find_if(surfs.begin(), surfs.end(),
+                                    [](const ZSurface& z) { return z.type == "DGRATING"; });
+  if (grating != surfs.end() && placed.coaxial) {
+    placed.coaxial = false;
+    placed.frames = placeSurfaces(fold);
+    placed.refusal = Error(grating->type_loc.valid() ? grating->type_loc : grating->loc,
+                           fmt::format("surface {} is a diffraction grating (TYPE DGRATING), "
+                                       "which is not rotationally symmetric",
+                                       grating->number));
+  }
   if (!placed.coaxial) {
     // No single axis holds the surfaces: each keeps its frame in space (the breaks dropped).
     p.noncoaxial_loc = placed.refusal->loc();
@@ -220,10 +263,14 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
     }
     p.diagnostics.push_back(
         {Severity::Note, *p.noncoaxial_loc,
-         fmt::format("tilted or decentred surfaces ({}): each surface is placed in space; `lens "
-                     "info` and the realistic camera trace real rays through them, the coaxial "
-                     "analyses refuse the lens",
-                     p.noncoaxial_reason)});
+         grating != surfs.end()
+             ? fmt::format("{}: each surface is placed in space; `lens info` traces real rays "
+                           "through it, the coaxial analyses and the cameras refuse the lens",
+                           p.noncoaxial_reason)
+             : fmt::format("tilted or decentred surfaces ({}): each surface is placed in space; "
+                           "`lens info` and the realistic camera trace real rays through them, "
+                           "the coaxial analyses refuse the lens",
+                           p.noncoaxial_reason)});
     surfs = std::move(kept);
     return;
   }

@@ -91,6 +91,7 @@ class ZmxParser {
     return z.type_loc.valid() ? z.type_loc : z.loc;
   }
   void readToroidal(const ZSurface& z, double unit_mm, SurfaceShape& shape) const;
+  SurfaceGrating readGrating(const ZSurface& z) const;
   void resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescription& p) const;
 
  public:

@@ -37,9 +37,15 @@ std::string surfaceLines(const LensSurface& s, size_t row, double disz) {
   if (odd) throw unwritable(s, row, "odd aspheric terms (the writer writes EVENASPH)");
   if (s.shape.poly.size() > 17)
     throw unwritable(s, row, "aspheric terms beyond r^16 (EVENASPH has 8)");
-  std::string o = fmt::format("  TYPE {}\n", s.shape.hasPolynomial() ? "EVENASPH" : "STANDARD");
+  if (s.grating && s.shape.hasPolynomial())
+    throw unwritable(s, row, "a grating on an aspheric surface (DGRATING is a sphere or conic)");
+  std::string o = fmt::format("  TYPE {}\n", s.grating                 ? "DGRATING"
+                                             : s.shape.hasPolynomial() ? "EVENASPH"
+                                                                       : "STANDARD");
   o += fmt::format("  CURV {}\n", s.radius_mm == 0 ? "0" : num(1 / s.radius_mm));
   if (s.shape.conic != 0) o += fmt::format("  CONI {}\n", num(s.shape.conic));
+  if (s.grating)
+    o += fmt::format("  PARM 1 {}\n  PARM 2 {}\n", num(s.grating->lines_per_um), s.grating->order);
   for (size_t k = 2; k < s.shape.poly.size(); k += 2)
     if (s.shape.poly[k] != 0) o += fmt::format("  PARM {} {}\n", k / 2, num(s.shape.poly[k]));
   if (s.isStop()) o += "  STOP\n";
