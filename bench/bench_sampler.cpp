@@ -6,10 +6,12 @@
 // values (1-D or 2-D draws, 21 per pixel sample) per second.
 // Also the pixel filters' importance sampling (pbrt-v4's defaults of the tabulated filters) and
 // PiecewiseConstant1D::sample on a spiky 1000-cell function, each from 4096 uniform values drawn
-// beforehand. Counters: calls per second.
+// beforehand; the cosine-hemisphere and uniform-sphere warps and their sine and cosine.
+// Counters: calls per second.
 // Run: build/bench/lensim_bench_sampler.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -117,6 +119,36 @@ void BM_PiecewiseConstant1D(benchmark::State& state) {
   state.counters["calls/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
 }
 
+// The warps' angles: sampleCosineHemisphere (concentric disk) and sampleUniformSphere on 4096
+// uniform pairs, and libm's sin and cos of 2 pi u for comparison (what the warps called before).
+template <typename F>
+void warp(benchmark::State& state, F f) {
+  const std::vector<double> u = uniforms(8192);
+  double sum = 0;
+  int64_t n = 0;
+  for (auto _ : state) {
+    for (size_t i = 0; i + 1 < u.size(); i += 2) sum += f(Vec2{u[i], u[i + 1]});
+    n += static_cast<int64_t>(u.size() / 2);
+    benchmark::DoNotOptimize(sum);
+  }
+  state.counters["calls/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsRate);
+}
+void BM_CosineHemisphere(benchmark::State& state) {
+  warp(state, [](Vec2 u) { return sampleCosineHemisphere(u).x; });
+}
+void BM_UniformSphere(benchmark::State& state) {
+  warp(state, [](Vec2 u) { return sampleUniformSphere(u).y; });
+}
+void BM_SinCos2Pi(benchmark::State& state) {
+  warp(state, [](Vec2 u) {
+    const SinCos sc = sinCos2Pi(u.y);
+    return sc.sin + sc.cos;
+  });
+}
+void BM_LibmSinCos2Pi(benchmark::State& state) {
+  warp(state, [](Vec2 u) { return std::sin(2 * kPi * u.y) + std::cos(2 * kPi * u.y); });
+}
+
 }  // namespace
 
 BENCHMARK(BM_PaddedSobol)->Unit(benchmark::kMillisecond);
@@ -129,4 +161,8 @@ BENCHMARK(BM_FilterGaussian);
 BENCHMARK(BM_FilterMitchell);
 BENCHMARK(BM_FilterLanczos);
 BENCHMARK(BM_PiecewiseConstant1D);
+BENCHMARK(BM_CosineHemisphere);
+BENCHMARK(BM_UniformSphere);
+BENCHMARK(BM_SinCos2Pi);
+BENCHMARK(BM_LibmSinCos2Pi);
 BENCHMARK_MAIN();

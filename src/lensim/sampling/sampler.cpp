@@ -316,7 +316,6 @@ ZSobolSampler::ZSobolSampler(int samples_per_pixel, Point2i full_resolution,
   const int res_log2 =
       ceilLog2(static_cast<uint64_t>(std::max(full_resolution.x, full_resolution.y)));
   base4_digits_ = res_log2 + (log2_spp_ + 1) / 2;
-  pixel_digit_ = (log2_spp_ + 1) / 2;
   // get1D and get2D hash the dimension after the step: up to two past the last cached one.
   dim_hash_.resize(kSamplerCachedDimensions + 2);
   for (size_t d = 0; d < dim_hash_.size(); ++d) dim_hash_[d] = pbrtHash(static_cast<int>(d), seed_);
@@ -366,15 +365,18 @@ uint64_t ZSobolSampler::sampleIndex() const {
   if (base4_digits_ > odd) {
     const uint64_t key = morton_ >> (odd + 2);
     if (c.sample_key != key) {
-      // The digits above the lowest: the pixel's (from the pixel entry), then the sample's.
-      const int low_pixel_digit = std::max(pixel_digit_, odd + 1);
-      const uint64_t pixel_key = morton_ >> log2_spp_;
-      if (!c.pixel_valid || c.pixel_key != pixel_key) {
-        c.pixel_part = permuteDigits(base4_digits_, low_pixel_digit);
-        c.pixel_key = pixel_key;
-        c.pixel_valid = true;
+      // The digits above the lowest. A permuted digit depends only on the index bits from its
+      // own up, so the digits above the highest bit in which the key differs from the cached
+      // one are kept: consecutive samples and neighbouring pixels share most of them.
+      int from_digit = base4_digits_;
+      uint64_t keep = 0;
+      if (c.sample_key != ~0ULL) {
+        const int high_bit = 63 - std::countl_zero(c.sample_key ^ key) + odd + 2;
+        from_digit = std::min(base4_digits_, (high_bit + odd) / 2 + 1);
+        const int keep_from_bit = 2 * from_digit - odd;
+        keep = keep_from_bit >= 64 ? 0 : ~0ULL << keep_from_bit;
       }
-      c.prefix = c.pixel_part | permuteDigits(low_pixel_digit, odd + 1);
+      c.prefix = (c.prefix & keep) | permuteDigits(from_digit, odd + 1);
       c.low_permutation = digitPermutation(key, dim_salt);
       c.sample_key = key;
     }

@@ -164,24 +164,22 @@ class ZSobolSampler final : public Sampler {
 
  private:
   /// The permuted index digits of the current pixel sample at dimension dim_ above the lowest
-  /// full base-4 digit, and that digit's permutation, for the sample key they were made for;
-  /// the pixel's digits alone for the pixel key. Each is a function of its key and the
-  /// dimension, so an entry is reused while the key stays (a pixel's samples follow each other:
-  /// the pixel part is computed once per pixel and dimension, the rest once per four samples).
+  /// full base-4 digit, and that digit's permutation, for the sample key (the Morton index
+  /// without its lowest digit) they were made for. Each is a function of its key and the
+  /// dimension; for a new key only the digits at and below the highest changed bit are
+  /// permuted again (a pixel's samples follow each other, and neighbouring pixels share the
+  /// high digits: about one or two digits per four samples).
   struct DimensionCache {
-    uint64_t pixel_key = 0, pixel_part = 0;
     uint64_t sample_key = ~0ULL;  // a key is at most 2^62 - 1: ~0 is never one
     uint64_t prefix = 0;
     uint64_t flip_key = ~0ULL;  // odd log2 spp: the last bit's flip, for morton_ >> 1
     uint32_t flip = 0;
     uint8_t low_permutation = 0;
-    bool pixel_valid = false;
   };
   uint32_t scrambleReversed(uint32_t reversed, uint32_t hash) const;
   uint64_t permuteDigits(int from_digit, int to_digit) const;
   uint64_t dimensionHash(int dim) const;
   int spp_, seed_, log2_spp_, base4_digits_;
-  int pixel_digit_;  ///< the lowest base-4 digit made of pixel bits only
   SobolRandomization randomization_;
   uint64_t morton_ = 0;
   int dim_ = 0;

@@ -8,33 +8,65 @@
 
 namespace lensim::sampling {
 
+SinCos sinCosSmall(double x) {
+  // Estrin's scheme in x^2 (short dependency chains) with the reciprocal factorials, each
+  // correctly rounded; the leading terms x and 1 are added last.
+  const double y = x * x, y2 = y * y, y4 = y2 * y2;
+  const double ps = ((-1.0 / 6 + y * (1.0 / 120)) + y2 * (-1.0 / 5040 + y * (1.0 / 362880))) +
+                    y4 * ((-1.0 / 39916800 + y * (1.0 / 6227020800)) +
+                          y2 * (-1.0 / 1307674368000 + y * (1.0 / 355687428096000)));
+  const double pc = ((-0.5 + y * (1.0 / 24)) + y2 * (-1.0 / 720 + y * (1.0 / 40320))) +
+                    y4 * ((-1.0 / 3628800 + y * (1.0 / 479001600)) +
+                          y2 * (-1.0 / 87178291200 + y * (1.0 / 20922789888000)));
+  return {x + (x * y) * ps, 1 + y * pc};
+}
+
+SinCos sinCos2Pi(double u) {
+  // 2 pi u = (pi/2) (q + f) with q whole and f in [-1/2, 1/2]: 4u and its rounding to the
+  // nearest whole number are exact (adding and removing 1.5 * 2^52 rounds any |4u| < 2^51,
+  // without a libm call), so is f; the quarter turns swap and negate.
+  const double v = 4 * u;
+  constexpr double kRound = 0x1.8p52;
+  const double q = (v + kRound) - kRound;
+  const SinCos sc = sinCosSmall((kPi / 2) * (v - q));
+  switch (static_cast<int64_t>(q) & 3) {
+    case 0:
+      return sc;
+    case 1:
+      return {sc.cos, -sc.sin};
+    case 2:
+      return {-sc.sin, -sc.cos};
+    default:
+      return {-sc.cos, sc.sin};
+  }
+}
+
 Vec3 sampleUniformHemisphere(Vec2 u) {
   const double z = u.x;
   const double r = std::sqrt(std::max(0.0, 1 - z * z));
-  const double phi = 2 * kPi * u.y;
-  return {r * std::cos(phi), r * std::sin(phi), z};
+  const SinCos phi = sinCos2Pi(u.y);
+  return {r * phi.cos, r * phi.sin, z};
 }
 
 Vec3 sampleUniformSphere(Vec2 u) {
   const double z = 1 - 2 * u.x;
   const double r = std::sqrt(std::max(0.0, 1 - z * z));
-  const double phi = 2 * kPi * u.y;
-  return {r * std::cos(phi), r * std::sin(phi), z};
+  const SinCos phi = sinCos2Pi(u.y);
+  return {r * phi.cos, r * phi.sin, z};
 }
 
 // Shirley & Chiu 1997, "A Low Distortion Map Between Disk and Square".
 Vec2 sampleUniformDiskConcentric(Vec2 u) {
   const double a = 2 * u.x - 1, b = 2 * u.y - 1;
   if (a == 0 && b == 0) return {0, 0};
-  double r, theta;
+  // theta = (pi/4)(b/a), or pi/2 - (pi/4)(a/b) whose cosine and sine are the sine and
+  // cosine of (pi/4)(a/b).
   if (std::abs(a) > std::abs(b)) {
-    r = a;
-    theta = (kPi / 4) * (b / a);
-  } else {
-    r = b;
-    theta = kPi / 2 - (kPi / 4) * (a / b);
+    const SinCos t = sinCosSmall((kPi / 4) * (b / a));
+    return {a * t.cos, a * t.sin};
   }
-  return {r * std::cos(theta), r * std::sin(theta)};
+  const SinCos t = sinCosSmall((kPi / 4) * (a / b));
+  return {b * t.sin, b * t.cos};
 }
 
 Vec3 sampleCosineHemisphere(Vec2 u) {
@@ -46,8 +78,8 @@ Vec3 sampleCosineHemisphere(Vec2 u) {
 Vec3 sampleUniformCone(Vec2 u, double cos_theta_max) {
   const double cos_theta = (1 - u.x) + u.x * cos_theta_max;
   const double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
-  const double phi = 2 * kPi * u.y;
-  return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+  const SinCos phi = sinCos2Pi(u.y);
+  return {sin_theta * phi.cos, sin_theta * phi.sin, cos_theta};
 }
 
 double sampleTent(double u, double r) {

@@ -1,6 +1,7 @@
 #include "lensim/render/materials/bsdf.h"
 
-#include <complex>
+#include <algorithm>
+#include <cmath>
 
 #include "lensim/sampling/sampling.h"
 
@@ -25,18 +26,33 @@ double frDielectric(double cos_theta_i, double eta) {
   return (r_parl * r_parl + r_perp * r_perp) / 2;
 }
 
+// The complex-index Fresnel equations (pbrt-v4's FrComplex) in real arithmetic: with
+// n = eta + ik and sin^2 = 1 - c^2, the transmitted n cos_t = sqrt(n^2 - sin^2) = a + ib, where
+// a^2 + b^2 = |n^2 - sin^2| and a = sqrt((a^2 + b^2 + Re(n^2 - sin^2)) / 2); then
+//   R_perp = (a^2 + b^2 - 2ac + c^2) / (a^2 + b^2 + 2ac + c^2),
+//   R_parl = R_perp (c^2 (a^2 + b^2) - 2ac sin^2 + sin^4) / (c^2 (a^2 + b^2) + 2ac sin^2 + sin^4)
+// (pbrt-v3's FrConductor). Two square roots and two or three divisions per wavelength, no
+// complex division (libgcc's __divdc3) or complex square root; the four wavelengths vectorise.
 SampledSpectrum frComplex(double cos_theta_i, const SampledSpectrum& eta,
                           const SampledSpectrum& k) {
-  using C = std::complex<double>;
   const double c = std::clamp(cos_theta_i, 0.0, 1.0);
+  const double cos2 = c * c, sin2 = 1 - cos2;
   SampledSpectrum r;
   for (int i = 0; i < kSpectrumSamples; ++i) {
-    const C n(eta[i], k[i]);
-    const C sin2_t = (1 - c * c) / (n * n);
-    const C cos_t = std::sqrt(1.0 - sin2_t);
-    const C r_parl = (n * c - cos_t) / (n * c + cos_t);
-    const C r_perp = (c - n * cos_t) / (c + n * cos_t);
-    r[i] = (std::norm(r_parl) + std::norm(r_perp)) / 2;
+    const double eta2 = eta[i] * eta[i], k2 = k[i] * k[i];
+    const double t0 = eta2 - k2 - sin2;
+    const double a2_plus_b2 = std::sqrt(t0 * t0 + 4 * eta2 * k2);
+    // a b = eta k: where Re(n^2 - sin^2) < 0 (beyond a near-dielectric's critical angle) a
+    // comes from b, without the cancellation of a2_plus_b2 + t0.
+    const double s = std::sqrt((a2_plus_b2 + std::abs(t0)) / 2);
+    const double a = t0 >= 0 ? s : std::abs(eta[i] * k[i]) / s;
+    const double t1 = a2_plus_b2 + cos2, t2 = 2 * c * a;
+    // The numerators are (a - c)^2 + b^2 and (ac - sin^2)^2 + (bc)^2: never negative, but
+    // they cancel to -ulps where n is near 1.
+    const double r_perp = std::max(0.0, t1 - t2) / (t1 + t2);
+    const double t3 = cos2 * a2_plus_b2 + sin2 * sin2, t4 = t2 * sin2;
+    const double r_parl = r_perp * std::max(0.0, t3 - t4) / (t3 + t4);
+    r[i] = (r_parl + r_perp) / 2;
   }
   return r;
 }
