@@ -584,6 +584,10 @@ std::string writeLensJson(const LensPrescription& p) {
                                                "cannot be written as a lensim lens file (it "
                                                "places surfaces on one axis)",
                                                p.noncoaxial_reason));
+  if (p.floating_focus)
+    throw Error(p.floating_focus->loc, "a lens with floating focus (Zemax focus positions whose "
+                                       "gaps move at different rates) cannot be written as a "
+                                       "lensim lens file, which has no such data");
   json j;
   j["format"] = "lensim-lens";
   j["version"] = 1;

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <map>
@@ -117,7 +118,14 @@ class ZmxParser {
  private:
   bool readMultiConfig(const std::vector<Tok>& t, int line_no);
   void applyMultiConfig(std::vector<ZSurface>& surfs, std::optional<double>& enpd,
-                        std::optional<double>& fnum, bool floa, std::map<int, double>& wavm) const;
+                        std::optional<double>& fnum, bool floa, std::map<int, double>& wavm,
+                        std::vector<double>& xf, std::vector<double>& yf) const;
+  // The number of fields: FTYP's count, else as many as XFLN/YFLN list.
+  int fieldCount() const {
+    const int listed = int(std::max(xfln.size(), yfln.size()));
+    return n_fields > 0 ? std::min(n_fields, listed) : listed;
+  }
+  void setFields(LensPrescription& p) const;
 
   std::optional<int> mc_count_;
   int mc_active_ = 1;
