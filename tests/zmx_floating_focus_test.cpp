@@ -203,6 +203,24 @@ TEST(FloatingFocus, OutsideTheFileRangeRefused) {
   }
 }
 
+// Focus positions may list each distance's own fields (object heights there): they describe
+// the object, not the lens, and the lens keeps the infinity configuration's.
+TEST(FloatingFocus, FocusPositionsMayChangeTheFields) {
+  std::ifstream in(lensPath(), std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string text = ss.str();
+  text.replace(text.find("SURF 0"), 6, "FTYP 0 0 2 1 0 0 0\nYFLN 0 20 0 0\nSURF 0");
+  const std::string tail = " 0 0 0 1 1 1 0 0 \"\" 0\n";
+  for (const char* row : {"YFIE 2 1 20", "YFIE 2 2 19.5", "YFIE 2 3 19", "YFIE 2 4 18.5"})
+    text += row + tail;
+  const optics::LensPrescription p = optics::parseZmx(text, "dgauss.zmx");
+  ASSERT_TRUE(p.floating_focus);
+  ASSERT_TRUE(p.fields);
+  EXPECT_EQ(p.fields->xy.size(), 2u);
+  EXPECT_EQ(p.fields->xy[1].second, 20.0);
+}
+
 TEST(FloatingFocus, CliInfoReportsIt) {
   const test::CliResult r =
       test::runLensim("lens info --json --focus-distance 2.5 " + lensPath() + " 2>/dev/null");
