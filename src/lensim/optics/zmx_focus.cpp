@@ -1,7 +1,8 @@
 // Zemax focus positions: configurations that differ only in the object distance and in lens gaps
-// that move in fixed ratios are one focus group (LensPrescription::focus_group), which
-// focusLens (focus.h) positions for any focus distance (docs/zoom.md, "Focus positions in Zemax
-// files").
+// that move in fixed ratios are one focus group (LensPrescription::focus_group); gaps moving at
+// different rates are floating focus (LensPrescription::floating_focus). focusLens (focus.h)
+// positions either for a focus distance (docs/zoom.md, "Focus positions in Zemax files",
+// "Floating focus").
 #include <fmt/format.h>
 
 #include <algorithm>

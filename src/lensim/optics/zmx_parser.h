@@ -203,9 +203,10 @@ class ZmxParser {
 };
 
 /// Zemax focus positions (zmx_focus.cpp): when the configurations read into `p` differ in the
-/// object distance (THIC 0) and move lens gaps in fixed ratios without changing the lens's
-/// length, they become `p.focus_group` over the infinity configuration; ambiguous files are
-/// refused at the operand's line. Other multi-configuration files are left as they are.
+/// object distance (THIC 0) and move lens gaps without changing the lens's length, they become
+/// `p.focus_group` (gaps in fixed ratios) or `p.floating_focus` (at different rates) over the
+/// infinity configuration; ambiguous files are refused at the operand's line. Other
+/// multi-configuration files are left as they are.
 void readFocusPositions(const ZmxParser& base, LensPrescription& p);
 
 }  // namespace lensim::optics::zmx_detail
