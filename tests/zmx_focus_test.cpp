@@ -174,10 +174,6 @@ TEST(ZmxFocus, AmbiguousFilesRefusedAtTheLine) {
       {text + "THIC 8 1 40.930877" + tail + "THIC 8 2 41.5" + tail, "THIC 8 2", "moves the film"},
       // The lens's length changes (only the gap before the element moves in configuration 3).
       {edited(text, "THIC 4 3 1.3423", "THIC 4 3 2"), "THIC 2 3", "changes the lens's length"},
-      // Floating focus: in configuration 4 the gap after the stop moves as well.
-      {edited(text, "THIC 2 4 4.6491", "THIC 2 4 4.5491") + "THIC 5 1 1.3" + tail + "THIC 5 2 1.3" +
-           tail + "THIC 5 3 1.3" + tail + "THIC 5 4 1.4" + tail,
-       "THIC 2 2", "floating focus"},
       // No configuration has the object at infinity.
       {edited(text, "THIC 0 1 10000000000", "THIC 0 1 5000"), "THIC 0 1", "object at infinity"},
       // Two configurations at one distance with different gaps.

@@ -172,6 +172,96 @@ TEST(Zoom, CliConfigsTable) {
   EXPECT_NE(bad.out.find("configurations 1 to 3"), std::string::npos) << bad.out;
 }
 
+// Paraxial image height of a field angle: a chief ray (through the front vertex, surface 1 being
+// the stop) traced with the marginal ray from infinity by y-nu to where the latter crosses the
+// axis (the paraxial image plane).
+double yNuImageHeight(const std::array<double, 3>& gaps, double field_deg) {
+  double yc = 0, nuc = std::tan(field_deg * std::acos(-1.0) / 180), ym = 1, num = 0, n = 1;
+  for (size_t i = 0; i < kTable.size(); ++i) {
+    const double c = kTable[i].r == 0 ? 0 : 1 / (kTable[i].r * kScale);
+    nuc -= yc * (kTable[i].n - n) * c;
+    num -= ym * (kTable[i].n - n) * c;
+    n = kTable[i].n;
+    if (i + 1 == kTable.size()) break;
+    double t = kTable[i].t;
+    if (i == 4) t = gaps[0];
+    if (i == 9) t = gaps[1];
+    if (i == 12) t = gaps[2];
+    yc += t * kScale * nuc / n;
+    ym += t * kScale * num / n;
+  }
+  return std::abs(yc - ym / num * nuc);
+}
+
+// The fields per configuration (YFIE rows appended to the file; config 1's in YFLN): each
+// configuration carries its own, and lens info reports its largest with its image height.
+TEST(Zoom, ZmxFieldsPerConfiguration) {
+  const LensPrescription p = optics::readLensFile(zoomPath());
+  constexpr std::array<std::array<double, 2>, 3> kFields = {
+      {{10.71, 15.12}, {6.63, 9.43}, {4.32, 6.16}}};  // the file's YFIE values
+  for (int n = 1; n <= 3; ++n) {
+    const LensPrescription c = optics::selectConfiguration(p, n);
+    ASSERT_TRUE(c.fields) << n;
+    EXPECT_EQ(c.fields->kind, optics::FileFields::Kind::Angle);
+    ASSERT_EQ(c.fields->xy.size(), 3u);
+    EXPECT_EQ(c.fields->xy[0].second, 0.0);
+    EXPECT_EQ(c.fields->xy[1].second, kFields[size_t(n - 1)][0]);
+    EXPECT_EQ(c.fields->xy[2].second, kFields[size_t(n - 1)][1]);
+  }
+  // The fields hold at the configurations only: a zoom between two that differ drops them.
+  EXPECT_FALSE(optics::zoomToFocalLength(p, 100).prescription.fields);
+
+  const test::CliResult r = test::runLensim("lens info --configs --json " + zoomPath());
+  ASSERT_EQ(r.status, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out.substr(r.out.find('{')));
+  ASSERT_EQ(j["configurations"].size(), 3u);
+  for (size_t k = 0; k < 3; ++k) {
+    const auto& f = j["configurations"][k]["file_field"];
+    EXPECT_EQ(f["kind"], "angle");
+    EXPECT_EQ(f["field"], 3);
+    EXPECT_NEAR(f["value"].get<double>(), kFields[k][1], 1e-12);
+    // Against the y-nu trace written here (and f tan(theta): the two agree paraxially).
+    const double h = yNuImageHeight(kGaps[k], kFields[k][1]);
+    EXPECT_NEAR(f["paraxial_image_height_mm"].get<double>(), h, 1e-6 * h) << k;
+    EXPECT_NEAR(h, yNuEfl(kGaps[k]) * std::tan(kFields[k][1] * std::acos(-1.0) / 180), 1e-9 * h);
+  }
+  // --config N reports that configuration's.
+  const test::CliResult one = test::runLensim("lens info --json --config 2 " + zoomPath());
+  ASSERT_EQ(one.status, 0) << one.out;
+  const auto j2 = nlohmann::json::parse(one.out.substr(one.out.find('{')));
+  EXPECT_NEAR(j2["file_field"]["value"].get<double>(), kFields[1][1], 1e-12);
+  const test::CliResult text = test::runLensim("lens info --configs " + zoomPath());
+  EXPECT_NE(text.out.find("9.4300 deg (angle 3), paraxial image height"), std::string::npos)
+      << text.out;
+
+  // Refused at their line: a field the file does not list, operands not modelled.
+  const std::string file = readText(zoomPath());
+  const int next = lineCount(file) + 1;
+  for (const auto& [line, needle] :
+       std::array<std::pair<const char*, const char*>, 3>{
+           {{"YFIE 4 2 1.0 0 0 0 1 1 1 0 0 \"\" 0", "expected a field 1 to 3"},
+            {"FLWT 2 2 1.0 0 0 0 1 1 1 0 0 \"\" 0", "FLWT is not supported"},
+            {"FVDY 2 2 0.1 0 0 0 1 1 1 0 0 \"\" 0", "FVDY is not supported"}}}) {
+    try {
+      optics::parseZmx(withLine(file, line), "zoom.zmx");
+      ADD_FAILURE() << line;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_EQ(e.loc().line, next) << e.what();
+    }
+  }
+  // A file without fields cannot set one.
+  std::string no_fields = file;
+  no_fields.replace(no_fields.find("FTYP"), 4, "NOTE");
+  for (const char* key : {"XFLN", "YFLN"}) no_fields.replace(no_fields.find(key), 4, "NOTE");
+  try {
+    optics::parseZmx(no_fields, "zoom.zmx");
+    ADD_FAILURE() << "YFIE without fields";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("lists no fields"), std::string::npos) << e.what();
+  }
+}
+
 // Group focusing: a three-element lens whose middle element moves (gap 1 grows by x, gap 3
 // shrinks by x). Checked by a y-nu trace written here: the film stays at the infinity focus's
 // place, and the object at the focus distance images onto it.

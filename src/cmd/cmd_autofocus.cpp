@@ -42,19 +42,47 @@ void registerAutofocusCommand(CLI::App& app, Action& action) {
                          {"focus_distance_m",
                           inf ? nlohmann::json(nullptr) : nlohmann::json(r.focus_distance_m)},
                          {"focus_at_infinity", inf},
+                         {"group_focusing", r.group_focusing},
                          {"zone_film_distance_mm", r.zone_film_distance_mm},
                          {"renders", r.renders},
                          {"seconds", r.seconds}};
+        if (r.group_focusing) {
+          nlohmann::json moved = nlohmann::json::object();
+          for (const auto& [row, t] : r.moved_thickness_mm) moved[std::to_string(row)] = t;
+          j["moved_thickness_mm"] = moved;
+          j["group_travel_mm"] =
+              r.group_travel_mm ? nlohmann::json(*r.group_travel_mm) : nlohmann::json(nullptr);
+          nlohmann::json zones = nlohmann::json::array();
+          for (double d : r.zone_focus_distance_m)
+            zones.push_back(std::isinf(d) ? nlohmann::json(nullptr) : nlohmann::json(d));
+          j["zone_focus_distance_m"] = zones;
+        }
         std::cout << j.dump(2) << "\n";
         return 0;
       }
-      std::cout << fmt::format("film distance {:.4f} mm ({} zone{}), in focus at {}\n",
-                               r.film_distance_mm, r.zones.size(), r.zones.size() == 1 ? "" : "s",
-                               inf ? std::string("infinity")
-                                   : fmt::format("{:.4g} m from the film", r.focus_distance_m));
+      const std::string at = inf ? std::string("infinity")
+                                 : fmt::format("{:.4g} m from the film", r.focus_distance_m);
+      if (r.group_focusing) {
+        std::string moved;
+        for (const auto& [row, t] : r.moved_thickness_mm)
+          moved += fmt::format("{}surface {} {:.4f} mm", moved.empty() ? "" : ", ", row, t);
+        std::cout << fmt::format(
+            "group focusing: in focus at {} ({} zone{}); {}gaps {}; film fixed, {:.4f} mm behind "
+            "the rear vertex\n",
+            at, r.zones.size(), r.zones.size() == 1 ? "" : "s",
+            r.group_travel_mm ? fmt::format("group moved {:.4f} mm; ", *r.group_travel_mm) : "",
+            moved, r.film_distance_mm);
+      } else {
+        std::cout << fmt::format("film distance {:.4f} mm ({} zone{}), in focus at {}\n",
+                                 r.film_distance_mm, r.zones.size(),
+                                 r.zones.size() == 1 ? "" : "s", at);
+      }
       for (size_t k = 0; k < r.zone_film_distance_mm.size(); ++k)
         std::cout << fmt::format("  zone {} ({}): {:.4f} mm\n", k + 1, r.zones[k].loc.str(),
                                  r.zone_film_distance_mm[k]);
+      for (size_t k = 0; k < r.zone_focus_distance_m.size(); ++k)
+        std::cout << fmt::format("  zone {} ({}): in focus at {:.4g} m\n", k + 1,
+                                 r.zones[k].loc.str(), r.zone_focus_distance_m[k]);
       std::cout << fmt::format("{} zone renders in {:.1f} s\n", r.renders, r.seconds);
       return 0;
     };

@@ -25,6 +25,7 @@
 #include "lensim/optics/chromatic.h"
 #include "lensim/optics/configurations.h"
 #include "lensim/optics/diagram.h"
+#include "lensim/optics/file_fields.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_report.h"
@@ -86,6 +87,33 @@ std::string transmittanceText(const LensSystem& lens) {
   return s;
 }
 
+// The largest of the file's design fields (Zemax FTYP/XFLN/YFLN, per configuration XFIE/YFIE)
+// and its paraxial image height; unset when the file lists none.
+std::optional<FileFieldSummary> fileField(const FocusedLens& fl) {
+  const LensPrescription& pr = fl.lens->prescription();
+  if (!pr.fields || pr.fields->xy.empty()) return std::nullopt;
+  return largestFileField(*pr.fields, fl.paraxial, pr.object_distance_mm);
+}
+
+json fileFieldJson(const std::optional<FileFieldSummary>& f) {
+  if (!f) return nullptr;
+  return {{"kind", f->kind},
+          {"unit", f->unit},
+          {"field", f->field},
+          {"value", f->value},
+          {"paraxial_image_height_mm", f->paraxial_image_height_mm
+                                           ? json(*f->paraxial_image_height_mm)
+                                           : json(nullptr)}};
+}
+
+std::string fileFieldText(const FileFieldSummary& f) {
+  return fmt::format("{:.4f} {} ({} {}){}", f.value, f.unit, f.kind, f.field,
+                     f.paraxial_image_height_mm
+                         ? fmt::format(", paraxial image height {:.4f} mm",
+                                       *f.paraxial_image_height_mm)
+                         : std::string());
+}
+
 // `lens info --configs`: first-order data of every configuration, each set up (focus, film)
 // as the other options say.
 int runConfigs(const LensArgs& args, bool as_json) {
@@ -99,10 +127,13 @@ int runConfigs(const LensArgs& args, bool as_json) {
                             "decentred surfaces does not have",
                             file.noncoaxial_reason));
   const int count = configurationCount(file);
+  bool any_fields = file.fields.has_value();
+  for (const LensConfiguration& c : file.configurations) any_fields = any_fields || c.fields;
   json arr = json::array();
   if (!as_json)
-    std::cout << fmt::format("{:>6} {:>12} {:>9} {:>11} {:>11} {:>13}\n", "config", "EFL mm",
-                             "f-number", "BFL mm", "field deg", "track mm");
+    std::cout << fmt::format("{:>6} {:>12} {:>9} {:>11} {:>11} {:>13}{}\n", "config", "EFL mm",
+                             "f-number", "BFL mm", "field deg", "track mm",
+                             any_fields ? "  file's largest field" : "");
   for (int n = 1; n <= count; ++n) {
     LensArgs one = args;
     one.configuration = n;
@@ -132,10 +163,13 @@ int runConfigs(const LensArgs& args, bool as_json) {
                    {"field_of_view_deg", field},
                    {"field_of_view_is_real", fov.real_deg.has_value()},
                    {"total_track_mm", totalTrack(*fl.lens)}});
+    const std::optional<FileFieldSummary> file_field = fileField(fl);
+    if (file_field) arr.back()["file_field"] = fileFieldJson(file_field);
     if (!as_json)
-      std::cout << fmt::format("{:>6} {:>12.4f} {:>9.3f} {:>11.4f} {:>11.3f}{} {:>12.4f}\n", n,
+      std::cout << fmt::format("{:>6} {:>12.4f} {:>9.3f} {:>11.4f} {:>11.3f}{} {:>12.4f}{}\n", n,
                                p.effective_focal_length_mm, p.f_number, p.back_focal_length_mm,
-                               field, fov.real_deg ? " " : "p", totalTrack(*fl.lens));
+                               field, fov.real_deg ? " " : "p", totalTrack(*fl.lens),
+                               file_field ? "  " + fileFieldText(*file_field) : "");
   }
   if (as_json)
     std::cout << json{{"lens", args.lens_path}, {"film_diagonal_mm", args.film_diagonal_mm},
@@ -225,7 +259,8 @@ void printInfoJson(const LensArgs& args, const FocusedLens& fl, const TiltShift&
       beyond_infinity_mm ? json(*beyond_infinity_mm) : json(nullptr);
   j["object_vergence_dpt"] = vergence_dpt;
   j["magnification"] = magnification ? json(*magnification) : json(nullptr);
-  if (!pr.focus_group.empty()) j["group_focusing"] = true;
+  if (!pr.focus_group.empty() || pr.floating_focus) j["group_focusing"] = true;
+  if (pr.floating_focus) j["floating_focus"] = true;
   j["focus_method"] = focusMethodName(args.focus_method);
   if (fov.image_circle_diameter_mm) j["field_of_view_max_deg"] = *fov.real_max_deg;
   if (!isRotationallySymmetric(pr)) {
@@ -248,6 +283,7 @@ void printInfoJson(const LensArgs& args, const FocusedLens& fl, const TiltShift&
   j["coatings"] = coatingsJson(lens);
   if (tilt_shift.any())
     j["tilt_shift"] = optics::tiltShiftJson(fl, tilt_shift, args.film_diagonal_mm);
+  if (const auto f = fileField(fl)) j["file_field"] = fileFieldJson(f);
   std::cout << j.dump(2) << "\n";
 }
 
@@ -362,7 +398,9 @@ int runInfo(const LensArgs& args, bool as_json) {
   if (magnification)
     line("magnification", fmt::format("{:.6f} (paraxial, at the focused distance){}",
                                       *magnification,
-                                      pr.focus_group.empty() ? "" : "; focused by the focus group"));
+                                      pr.floating_focus ? "; floating focus"
+                                      : pr.focus_group.empty() ? ""
+                                                               : "; focused by the focus group"));
   line("film distance",
        fmt::format("{:.4f} mm {} the rear vertex", lens.filmDistance_mm(),
                    lens.imageSpaceReversed() ? "in front of (image space reversed by the mirrors)"
@@ -387,6 +425,7 @@ int runInfo(const LensArgs& args, bool as_json) {
                      "across it (paraxial {:.3f} deg)",
                      *fov.image_circle_diameter_mm, args.film_diagonal_mm, *fov.real_max_deg,
                      fov.paraxial_deg));
+  if (const auto f = fileField(fl)) line("file's largest field", fileFieldText(*f));
   if (tilt_shift.any()) printTiltShift(fl, tilt_shift, args.film_diagonal_mm);
   printCoatings(lens);
   printSurfaceTables(lens);
@@ -621,6 +660,7 @@ std::string breathingPlot(const LensArgs& args, json& j) {
   setup.focus_method = args.focus_method;
   LensPrescription unit = p;
   unit.focus_group.clear();
+  unit.floating_focus.reset();
   const FocusedLens at_inf = focusLens(unit, setup);
   const double closest = closestFocusDistance_m(*at_inf.lens, at_inf.paraxial);
   plot::Chart chart;
@@ -629,7 +669,7 @@ std::string breathingPlot(const LensArgs& args, json& j) {
   chart.y_label = fmt::format("field of view on a {:.1f} mm diagonal (deg)", args.film_diagonal_mm);
   chart.x_log = true;
   std::vector<std::pair<std::string, const LensPrescription*>> kinds = {{"unit", &unit}};
-  if (!p.focus_group.empty()) kinds.push_back({"group", &p});
+  if (!p.focus_group.empty() || p.floating_focus) kinds.push_back({"group", &p});
   const double lo = std::max(closest * 1.02, 1e-3), hi = 100;
   for (size_t k = 0; k < kinds.size(); ++k) {
     plot::Series series;

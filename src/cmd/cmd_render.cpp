@@ -268,10 +268,18 @@ int runRender(const Options& o) {
     af.zones_file = o.zones;
     af.threads = o.threads;
     const render::SceneAutofocusResult f = render::autofocusScene(s, af);
-    render::setFilmDistance(s, f.film_distance_mm);
+    // A lens that focuses by a group keeps its film: the group is set as focusdistance sets it.
+    if (f.group_focusing)
+      render::setFocusDistance(s, f.focus_distance_m);
+    else
+      render::setFilmDistance(s, f.film_distance_mm);
     if (!quiet)
-      logInfo(fmt::format("autofocus: film distance {:.4f} mm ({} zone renders, {:.1f} s)",
-                          f.film_distance_mm, f.renders, f.seconds));
+      logInfo(f.group_focusing
+                  ? fmt::format("autofocus: group focusing, focus distance {:.4g} m ({} zone "
+                                "renders, {:.1f} s)",
+                                f.focus_distance_m, f.renders, f.seconds)
+                  : fmt::format("autofocus: film distance {:.4f} mm ({} zone renders, {:.1f} s)",
+                                f.film_distance_mm, f.renders, f.seconds));
   }
   render::RenderOptions ro = renderOptionsFrom(o, quiet);
   // The first SIGINT or SIGTERM stops the render, which writes what it has (a part with a

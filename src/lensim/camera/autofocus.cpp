@@ -123,8 +123,8 @@ double sharpness(const ZoneImage& img) {
 }
 
 AutofocusResult autofocus(const std::function<double(double)>& score, const AutofocusOptions& o) {
-  if (!(o.film_max_mm > o.film_min_mm) || !(o.film_min_mm > 0))
-    throw Error(fmt::format("autofocus: empty film distance range [{}, {}] mm", o.film_min_mm,
+  if (!(o.film_max_mm > o.film_min_mm) || !(o.film_min_mm >= 0))
+    throw Error(fmt::format("autofocus: empty search range [{}, {}]", o.film_min_mm,
                             o.film_max_mm));
   AutofocusResult r;
   auto eval = [&](double s) {

@@ -39,7 +39,8 @@ struct ZoneImage {
 double sharpness(const ZoneImage& image);
 
 struct AutofocusOptions {
-  double film_min_mm = 0, film_max_mm = 0;  ///< the search range of film distances
+  /// The search range (>= 0): film distances, or object vergences for group focusing.
+  double film_min_mm = 0, film_max_mm = 0;
   int coarse_steps = 16;                    ///< evenly spaced first look, at least
   /// Largest spacing of the first look (mm): about the depth of focus, so that the scan cannot
   /// step over the peak (0: no limit).

@@ -42,6 +42,7 @@ LensPrescription selectConfiguration(const LensPrescription& p, int n) {
   if (!c.aperture_spec.empty()) out.aperture_spec = c.aperture_spec;
   out.object_distance_mm = c.object_distance_mm;
   if (!c.wavelengths_nm.empty()) out.wavelengths_nm = c.wavelengths_nm;
+  if (c.fields) out.fields = c.fields;
   if (p.configurations.size() > 1) out.name = fmt::format("{} (configuration {})", p.name, n);
   return out;
 }
@@ -77,6 +78,10 @@ LensPrescription interpolateConfigurations(const LensPrescription& p, int a, int
     out.surfaces[i].aperture_diameter_mm =
         (1 - t) * x.aperture_diameter_mm + t * y.aperture_diameter_mm;
   }
+  // The file's design fields hold at its configurations only: kept where both agree.
+  const auto& fa = p.configurations[size_t(a - 1)].fields;
+  const auto& fb = p.configurations[size_t(b - 1)].fields;
+  if (!fa || !fb || fa->kind != fb->kind || fa->xy != fb->xy) out.fields.reset();
   out.name = fmt::format("{} (configurations {}-{} at {:.4f})", p.name, a, b, t);
   return out;
 }

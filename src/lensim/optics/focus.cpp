@@ -215,9 +215,11 @@ FocusedLens focusLens(LensPrescription prescription, const LensSetup& setup) {
   LensSystemOptions opts;
   opts.aperture_diameter_mm = setup.aperture_diameter_mm;
   FocusedLens fl;
-  if (!prescription.focus_group.empty() && setup.focus_distance_m &&
-      std::isfinite(*setup.focus_distance_m)) {
-    GroupFocus g = focusByGroup(prescription, setup, *setup.focus_distance_m);
+  if ((!prescription.focus_group.empty() || prescription.floating_focus) &&
+      setup.focus_distance_m && std::isfinite(*setup.focus_distance_m)) {
+    GroupFocus g = prescription.floating_focus
+                       ? focusByFloatingFocus(prescription, setup, *setup.focus_distance_m)
+                       : focusByGroup(prescription, setup, *setup.focus_distance_m);
     fl.lens = std::make_unique<LensSystem>(std::move(g.prescription), opts);
     fl.paraxial = computeParaxial(*fl.lens);
     fl.lens->setFilmDistance_mm(g.film_distance_mm);

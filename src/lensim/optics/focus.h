@@ -80,6 +80,16 @@ struct GroupFocus {
 GroupFocus focusByGroup(const LensPrescription& p, const LensSetup& setup,
                         double focus_distance_m);
 
+/// Floating focus (LensPrescription::floating_focus): the prescription with its moved gaps at
+/// vergence parameter `u_dpt`, each piecewise linear between the file's positions. Throws
+/// lensim::Error when u_dpt lies outside them.
+LensPrescription atFloatingFocus(const LensPrescription& p, double u_dpt);
+/// Solves the vergence parameter (returned in GroupFocus::shift_mm, in dioptres) so that an
+/// object `focus_distance_m` from the film is in focus (by `method`) on the film the infinity
+/// position focuses, by bisection over the file's range; refuses a distance outside it.
+GroupFocus focusByFloatingFocus(const LensPrescription& p, const LensSetup& setup,
+                                double focus_distance_m);
+
 /// Builds and focuses a lens. A lens with a focus group focuses a finite focus distance by
 /// moving the group (focusByGroup); others move the whole lens. With neither distance given: the file's film distance if it has
 /// one (last row thickness > 0), else focus at infinity. Throws lensim::Error on bad settings.

@@ -586,6 +586,10 @@ std::string writeLensJson(const LensPrescription& p) {
                                                p.noncoaxial_reason,
                                                firstGrating(p) ? "a diffraction grating"
                                                                : "tilted or decentred surfaces"));
+  if (p.floating_focus)
+    throw Error(p.floating_focus->loc, "a lens with floating focus (Zemax focus positions whose "
+                                       "gaps move at different rates) cannot be written as a "
+                                       "lensim lens file, which has no such data");
   json j;
   j["format"] = "lensim-lens";
   j["version"] = 1;

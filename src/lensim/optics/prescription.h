@@ -132,6 +132,17 @@ struct LensSurface {
   double semiAperture_mm() const { return aperture_diameter_mm / 2; }
 };
 
+/// The fields a lens file lists for its design (Zemax FTYP with XFLN/YFLN; per configuration
+/// the XFIE/YFIE operands). Reported as the file gives them (lens info); lensim's own field of
+/// view comes from the film, not from these.
+struct FileFields {
+  enum class Kind { Angle, ObjectHeight, ParaxialImageHeight, RealImageHeight };
+  Kind kind = Kind::Angle;
+  /// (x, y) per field: degrees for angles, mm for heights.
+  std::vector<std::pair<double, double>> xy;
+  FileLoc loc;  ///< the FTYP (or first XFLN/YFLN) line
+};
+
 /// One configuration of a multi-configuration lens (a zoom position, a focus position): the
 /// whole surface table as it is in that configuration (rows match LensPrescription::surfaces one
 /// to one), with the configuration's system data.
@@ -140,6 +151,7 @@ struct LensConfiguration {
   std::string aperture_spec;  ///< the system aperture in this configuration, when stated
   std::optional<double> object_distance_mm;  ///< unset: infinity or not given
   std::vector<double> wavelengths_nm;        ///< empty: the prescription's
+  std::optional<FileFields> fields;          ///< unset: the file lists none
   FileLoc loc;  ///< where the configuration (or its first operand) is written
 };
 
@@ -162,6 +174,8 @@ struct LensPrescription {
   /// The file's system aperture, when it states one (Zemax ENPD / FNUM): the stop diameter has
   /// already been set from it; kept for reports.
   std::string aperture_spec;
+  /// The design fields the file lists (Zemax FTYP, XFLN/YFLN); unset: none.
+  std::optional<FileFields> fields;
   /// The coating of the air-glass surfaces that name none (JSON top-level "coating":
   /// "uncoated", "single", "multi" or a coating file's name); empty: uncoated.
   std::string default_coating;
@@ -180,6 +194,19 @@ struct LensPrescription {
   /// changes that row's thickness by rate * x (an inner group: +1 on the gap before it, -1 on
   /// the gap after). Empty: the whole lens moves to focus (unit focusing). focusLens solves x.
   std::vector<std::pair<int, double>> focus_group;
+  /// Floating focus (Zemax focus positions whose gaps move at different rates): the moved rows'
+  /// thicknesses at each of the file's focus positions, by the position's object vergence
+  /// (1000 / d dioptres, d the file's object distance from the front vertex; 0: infinity), in
+  /// increasing vergence. Between positions every thickness is piecewise linear in the
+  /// vergence; focusLens solves the vergence parameter within the file's range. `surfaces`
+  /// holds the infinity position.
+  struct FloatingFocus {
+    std::vector<int> rows;
+    std::vector<double> vergence_dpt;
+    std::vector<std::vector<double>> thickness_mm;  ///< [position][k]: rows[k]'s thickness
+    FileLoc loc;                                    ///< the MNUM line
+  };
+  std::optional<FloatingFocus> floating_focus;
   /// Set when the file folds its axis with coordinate breaks and plane mirrors (Zemax
   /// COORDBRK, optics/coordinate_break.h): the first break. `surfaces` then holds the coaxial
   /// twin, whose first-order data and aberrations are the fold's; the image in space is the

@@ -349,7 +349,7 @@ void ZmxParser::surfaceLine(const Line& l) {
 // Multi-configuration values, the checks on the whole file, coordinate breaks, wavelengths and
 // the object distance.
 void ZmxParser::finishSystemData(LensPrescription& p, int last_line) {
-  applyMultiConfig(surfs, enpd, fnum, floa, wavm);
+  applyMultiConfig(surfs, enpd, fnum, floa, wavm, xfln, yfln);
 
   if (!sequential_seen && surfs.empty())
     throw Error(FileLoc{path_, last_line, 0},
@@ -380,6 +380,22 @@ void ZmxParser::finishSystemData(LensPrescription& p, int last_line) {
   // Object surface.
   const ZSurface& obj = surfs.front();
   if (obj.disz) p.object_distance_mm = *obj.disz * unit_mm;
+  setFields(p);
+}
+
+// The design fields (FTYP type 0: angles, 1: object heights, 2: paraxial image heights, 3: real
+// image heights; heights in lens units). Other field types are not kept.
+void ZmxParser::setFields(LensPrescription& p) const {
+  const int count = fieldCount();
+  if (count == 0 || field_type < 0 || field_type > 3) return;
+  FileFields f;
+  f.kind = FileFields::Kind(field_type);
+  f.loc = field_loc;
+  const double scale = field_type == 0 ? 1.0 : unit_mm;
+  for (size_t i = 0; i < size_t(count); ++i)
+    f.xy.push_back({(i < xfln.size() ? xfln[i] : 0.0) * scale,
+                    (i < yfln.size() ? yfln[i] : 0.0) * scale});
+  p.fields = std::move(f);
 }
 
 // The lens surfaces (1 .. N-2; the last is the image) as prescription rows.
@@ -786,8 +802,7 @@ void ZmxParser::computeMissingSemiDiameters(LensPrescription& p) {
     }
     spec.aim_at_stop = ray_aiming_loc.has_value();
     // FTYP's count of the XFLN/YFLN values (a count beyond them adds no field).
-    const size_t listed = std::max(xfln.size(), yfln.size());
-    const size_t count = n_fields > 0 ? std::min(size_t(n_fields), listed) : listed;
+    const size_t count = size_t(fieldCount());
     for (size_t i = 0; i < count; ++i) {
       const double fx = i < xfln.size() ? xfln[i] : 0.0, fy = i < yfln.size() ? yfln[i] : 0.0;
       if (image_heights) {
@@ -889,6 +904,7 @@ void readZmxConfigurations(const ZmxParser& base, std::string_view bytes, const 
     cfg.aperture_spec = q.aperture_spec;
     cfg.object_distance_mm = q.object_distance_mm;
     cfg.wavelengths_nm = q.wavelengths_nm;
+    cfg.fields = q.fields;
     cfg.loc = base.mcLoc();
     p.configurations.push_back(std::move(cfg));
   }

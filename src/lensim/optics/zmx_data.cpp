@@ -45,10 +45,10 @@ bool ZmxParser::readMultiConfig(const std::vector<Tok>& t, int line_no) {
     if (!(c >= 'A' && c <= 'Z') && !(c >= '0' && c <= '9')) return false;
   if (key == "MOFF") return true;  // an empty operand row
   static constexpr std::string_view kModelled[] = {"THIC", "CURV", "CONI", "GLSS", "APER",
-                                                   "SDIA", "STPS", "WAVE"};
+                                                   "SDIA", "STPS", "WAVE", "XFIE", "YFIE"};
   if (std::find(std::begin(kModelled), std::end(kModelled), key) == std::end(kModelled))
     throw Error(loc, fmt::format("multi-configuration operand {} is not supported; lensim models "
-                                 "THIC, CURV, CONI, GLSS, APER, SDIA, STPS and WAVE",
+                                 "THIC, CURV, CONI, GLSS, APER, SDIA, STPS, WAVE, XFIE and YFIE",
                                  key));
   need(t, 4, line_no, "operand");
   McRow r;
@@ -73,7 +73,8 @@ bool ZmxParser::readMultiConfig(const std::vector<Tok>& t, int line_no) {
 // Puts configuration apply_config_'s operand values over the surface and system data.
 void ZmxParser::applyMultiConfig(std::vector<ZSurface>& surfs, std::optional<double>& enpd,
                                  std::optional<double>& fnum, bool floa,
-                                 std::map<int, double>& wavm) const {
+                                 std::map<int, double>& wavm, std::vector<double>& xf,
+                                 std::vector<double>& yf) const {
   if (!apply_config_) return;
   const int last_lens = int(surfs.size()) - 2;
   for (const McRow& r : mc_rows_) {
@@ -128,6 +129,18 @@ void ZmxParser::applyMultiConfig(std::vector<ZSurface>& surfs, std::optional<dou
       if (!(v > 0))
         throw Error(r.value_loc, fmt::format("WAVE {}: expected a wavelength > 0 um", r.value));
       wavm[r.arg] = v;
+    } else if (r.op == "XFIE" || r.op == "YFIE") {
+      // A field's x or y value (field number 1 .. FTYP's count), in the file's field type.
+      const int count = fieldCount();
+      if (r.arg < 1 || r.arg > count)
+        throw Error(r.loc, count == 0 ? fmt::format("{} {}: the file lists no fields (FTYP with "
+                                                    "XFLN/YFLN)",
+                                                    r.op, r.arg)
+                                      : fmt::format("{} {}: expected a field 1 to {} (FTYP)",
+                                                    r.op, r.arg, count));
+      std::vector<double>& f = r.op == "XFIE" ? xf : yf;
+      if (f.size() < size_t(count)) f.resize(size_t(count), 0.0);
+      f[size_t(r.arg - 1)] = v;
     }
   }
 }

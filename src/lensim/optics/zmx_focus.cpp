@@ -1,7 +1,8 @@
 // Zemax focus positions: configurations that differ only in the object distance and in lens gaps
-// that move in fixed ratios are one focus group (LensPrescription::focus_group), which
-// focusLens (focus.h) positions for any focus distance (docs/zoom.md, "Focus positions in Zemax
-// files").
+// that move in fixed ratios are one focus group (LensPrescription::focus_group); gaps moving at
+// different rates are floating focus (LensPrescription::floating_focus). focusLens (focus.h)
+// positions either for a focus distance (docs/zoom.md, "Focus positions in Zemax files",
+// "Floating focus").
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -40,7 +41,8 @@ std::string distanceText(const std::optional<double>& d_mm) {
 void checkOnlyThicknessesChange(const ZmxParser& base) {
   std::map<std::pair<std::string, int>, const ZmxParser::McRow*> first;
   for (const ZmxParser::McRow& r : base.mcRows()) {
-    if (r.op == "THIC") continue;
+    // Fields describe the object (heights at each distance), not the lens.
+    if (r.op == "THIC" || r.op == "XFIE" || r.op == "YFIE") continue;
     auto [it, fresh] = first.try_emplace({r.op, r.arg}, &r);
     if (fresh) continue;
     const ZmxParser::McRow& a = *it->second;
@@ -56,6 +58,58 @@ void checkOnlyThicknessesChange(const ZmxParser& base) {
                               "supported)",
                               r.op, r.arg, r.config, r.value, a.config, a.value));
   }
+}
+
+// Floating focus: the moved gaps at each focus position, by the object vergence 1000 / d (d from
+// the front vertex; 0 at infinity), over the infinity configuration `rest`.
+void readFloatingFocus(const ZmxParser& base, LensPrescription& p, size_t rest,
+                       const std::vector<size_t>& moved) {
+  const auto& cfgs = p.configurations;
+  std::vector<std::pair<double, size_t>> order;
+  for (size_t k = 0; k < cfgs.size(); ++k) {
+    const std::optional<double>& d = cfgs[k].object_distance_mm;
+    if (d && !(*d > 0)) {
+      FileLoc at = base.mcLoc();
+      for (const ZmxParser::McRow& r : base.mcRows())
+        if (r.op == "THIC" && r.arg == 0 && r.config == int(k + 1)) at = r.value_loc;
+      throw Error(at, fmt::format("configuration {}: object distance {} mm; focus positions need "
+                                  "an object in front of the lens (> 0)",
+                                  k + 1, *d));
+    }
+    order.emplace_back(d ? 1000 / *d : 0.0, k);
+  }
+  std::sort(order.begin(), order.end());
+  LensPrescription::FloatingFocus f;
+  f.loc = base.mcLoc();
+  for (size_t r : moved) f.rows.push_back(int(r));
+  std::string positions;
+  for (const auto& [u, k] : order) {
+    if (!f.vergence_dpt.empty() && f.vergence_dpt.back() == u) continue;  // same gaps (checked)
+    f.vergence_dpt.push_back(u);
+    std::vector<double> t;
+    for (size_t r : moved) t.push_back(cfgs[k].surfaces[r].thickness_mm);
+    positions += fmt::format("{}{}", positions.empty() ? "" : ", ",
+                             distanceText(cfgs[k].object_distance_mm));
+    f.thickness_mm.push_back(std::move(t));
+  }
+  std::string rows;
+  for (size_t r : moved) rows += fmt::format("{}{}", rows.empty() ? "" : ", ", r);
+  LensConfiguration at_rest = cfgs[rest];
+  p.surfaces = std::move(at_rest.surfaces);
+  if (!at_rest.aperture_spec.empty()) p.aperture_spec = at_rest.aperture_spec;
+  p.fields = at_rest.fields;
+  p.object_distance_mm.reset();
+  p.diagnostics.push_back(
+      {Severity::Note, base.mcLoc(),
+       fmt::format("the {} configurations differ in the object distance and in lens gaps that "
+                   "move at different rates: read as floating focus over configuration {} "
+                   "(object at infinity); the gaps of surfaces {} are piecewise linear in the "
+                   "object vergence 1/d between the file's positions ({}), and focusing "
+                   "closer than the last is refused",
+                   cfgs.size(), rest + 1, rows, positions)});
+  p.floating_focus = std::move(f);
+  p.configurations.clear();
+  p.active_configuration = 1;
 }
 
 }  // namespace
@@ -129,32 +183,33 @@ void readFocusPositions(const ZmxParser& base, LensPrescription& p) {
                               k + 1, length, rest + 1));
     if (norm > far_norm) far = k, far_norm = norm;
   }
-  // One group: every configuration's change is a multiple of the largest one.
+  // Configurations at one object distance must agree on the gaps.
+  for (size_t k = 0; k < n; ++k)
+    for (size_t j = 0; j < k; ++j) {
+      if (cfgs[k].object_distance_mm != cfgs[j].object_distance_mm) continue;
+      for (size_t i = 0; i < moved.size(); ++i)
+        if (std::abs(delta[k][i] - delta[j][i]) > kTolerance_mm)
+          throw Error(thicLoc(moved[0], k),
+                      fmt::format("configurations {} and {} have the same object distance ({}) "
+                                  "and different gaps: which is the focus position is ambiguous",
+                                  j + 1, k + 1, distanceText(cfgs[k].object_distance_mm)));
+    }
+  // One group when every configuration's change is a multiple of the largest one; else floating
+  // focus (groups moving at different rates).
   const std::vector<double>& v = delta[far];
   std::vector<double> position(n);
+  bool one_group = true;
   for (size_t k = 0; k < n; ++k) {
     double dot = 0;
     for (size_t i = 0; i < moved.size(); ++i) dot += delta[k][i] * v[i];
-    const double c = dot / far_norm;
+    position[k] = dot / far_norm;
     for (size_t i = 0; i < moved.size(); ++i)
-      if (std::abs(delta[k][i] - c * v[i]) > kTolerance_mm)
-        throw Error(thicLoc(moved[i], k),
-                    fmt::format("configuration {}: the gaps do not move in the ratio of "
-                                "configuration {}'s (this gap changes by {:.6g} mm, {:.6g} mm "
-                                "would keep the ratio): lensim reads one focus group whose gaps "
-                                "move in fixed ratios, not groups moving at different rates "
-                                "(floating focus)",
-                                k + 1, far + 1, delta[k][i], c * v[i]));
-    position[k] = c;
+      one_group = one_group && std::abs(delta[k][i] - position[k] * v[i]) <= kTolerance_mm;
   }
-  for (size_t k = 0; k < n; ++k)
-    for (size_t j = 0; j < k; ++j)
-      if (cfgs[k].object_distance_mm == cfgs[j].object_distance_mm &&
-          std::abs(position[k] - position[j]) * std::sqrt(far_norm) > kTolerance_mm)
-        throw Error(thicLoc(moved[0], k),
-                    fmt::format("configurations {} and {} have the same object distance ({}) and "
-                                "different gaps: which is the focus position is ambiguous",
-                                j + 1, k + 1, distanceText(cfgs[k].object_distance_mm)));
+  if (!one_group) {
+    readFloatingFocus(base, p, rest, moved);
+    return;
+  }
 
   // Rates: the largest is 1 in size, the first moved gap's positive; x is then that gap's change.
   size_t big = 0;
@@ -174,6 +229,7 @@ void readFocusPositions(const ZmxParser& base, LensPrescription& p) {
   LensConfiguration at_rest = cfgs[rest];
   p.surfaces = std::move(at_rest.surfaces);
   if (!at_rest.aperture_spec.empty()) p.aperture_spec = at_rest.aperture_spec;
+  p.fields = at_rest.fields;
   p.object_distance_mm.reset();
   p.focus_group = std::move(group);
   p.diagnostics.push_back(

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <map>
@@ -118,7 +119,14 @@ class ZmxParser {
  private:
   bool readMultiConfig(const std::vector<Tok>& t, int line_no);
   void applyMultiConfig(std::vector<ZSurface>& surfs, std::optional<double>& enpd,
-                        std::optional<double>& fnum, bool floa, std::map<int, double>& wavm) const;
+                        std::optional<double>& fnum, bool floa, std::map<int, double>& wavm,
+                        std::vector<double>& xf, std::vector<double>& yf) const;
+  // The number of fields: FTYP's count, else as many as XFLN/YFLN list.
+  int fieldCount() const {
+    const int listed = int(std::max(xfln.size(), yfln.size()));
+    return n_fields > 0 ? std::min(n_fields, listed) : listed;
+  }
+  void setFields(LensPrescription& p) const;
 
   std::optional<int> mc_count_;
   int mc_active_ = 1;
@@ -196,9 +204,10 @@ class ZmxParser {
 };
 
 /// Zemax focus positions (zmx_focus.cpp): when the configurations read into `p` differ in the
-/// object distance (THIC 0) and move lens gaps in fixed ratios without changing the lens's
-/// length, they become `p.focus_group` over the infinity configuration; ambiguous files are
-/// refused at the operand's line. Other multi-configuration files are left as they are.
+/// object distance (THIC 0) and move lens gaps without changing the lens's length, they become
+/// `p.focus_group` (gaps in fixed ratios) or `p.floating_focus` (at different rates) over the
+/// infinity configuration; ambiguous files are refused at the operand's line. Other
+/// multi-configuration files are left as they are.
 void readFocusPositions(const ZmxParser& base, LensPrescription& p);
 
 }  // namespace lensim::optics::zmx_detail

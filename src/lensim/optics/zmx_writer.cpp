@@ -120,6 +120,8 @@ std::string writeLensZmx(const LensPrescription& p) {
     throw Error("a multi-configuration lens cannot be written to .zmx by lensim");
   if (!p.focus_group.empty())
     throw Error("a lens with a focus group cannot be written to .zmx (write .json)");
+  if (p.floating_focus)
+    throw Error(p.floating_focus->loc, "a lens with floating focus cannot be written to .zmx");
   if (!p.default_coating.empty() || !p.coating_file.empty())
     throw Error(p.default_coating_loc.valid() ? p.default_coating_loc : p.coating_file_loc,
                 "a lens-wide coating or coating file cannot be written to .zmx (write .json)");
