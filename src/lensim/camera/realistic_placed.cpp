@@ -89,6 +89,8 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   const optics::LensSurface& rear = p.surfaces.back();
   rear_frame_ = *rear.frame;
   rear_semi_mm_ = rear.semiAperture_mm();
+  // A decentred aperture (an off-axis mirror): the sampled disc is centred on it.
+  rear_centre_ = {rear.aperture_decentre_mm[0], rear.aperture_decentre_mm[1]};
   if (!(rear_semi_mm_ > 0))
     throw Error(rear.loc, "the last surface has no clear aperture to aim camera rays at");
   // The rear surface's z extent over its clear aperture (its own frame).
@@ -97,8 +99,9 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
     for (int i = 0; i <= 64; ++i)
       for (int k = 0; k < 16; ++k) {
         const double h = rear_semi_mm_ * i / 64, a = 2 * std::numbers::pi * k / 16;
-        if (auto sg =
-                optics::surfaceSag(rear.radius_mm, rear.shape, h * std::cos(a), h * std::sin(a))) {
+        if (auto sg = optics::surfaceSag(rear.radius_mm, rear.shape,
+                                         rear_centre_.x + h * std::cos(a),
+                                         rear_centre_.y + h * std::sin(a))) {
           zmin = std::min(zmin, sg->z);
           zmax = std::max(zmax, sg->z);
         }
@@ -296,7 +299,9 @@ Vec3 PlacedRealisticCamera::filmToLens(Vec2 film) const {
 
 double PlacedRealisticCamera::discRadius(const Vec3& q) const {
   const double t_min = (q.z - z_near_) / (q.z - z_far_);
-  return std::max(rear_semi_mm_, (1 - t_min) * std::hypot(q.x, q.y) + t_min * rear_semi_mm_);
+  return std::max(rear_semi_mm_, (1 - t_min) * std::hypot(q.x - rear_centre_.x,
+                                                          q.y - rear_centre_.y) +
+                                     t_min * rear_semi_mm_);
 }
 
 const optics::PlacedLens& PlacedRealisticCamera::lensAt(double lambda_nm) const {
@@ -319,7 +324,9 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
   const double radius = discRadius(q);
   const Vec2 d = sampling::sampleUniformDiskConcentric(sample.lens);
   const Vec3 target =
-      toGlobal(rear_frame_, {radius * d.x, radius * d.y, z_near_}) + origin(rear_frame_);
+      toGlobal(rear_frame_, {rear_centre_.x + radius * d.x, rear_centre_.y + radius * d.y,
+                             z_near_}) +
+      origin(rear_frame_);
   const Vec3 to = target - p;
   const double r2 = dot(to, to);
   const Vec3 dir = to / std::sqrt(r2);

@@ -69,7 +69,7 @@ class PlacedRealisticCamera final : public Camera {
   /// The film point (image frame, z = the film offset) in the front surface's frame.
   Vec3 filmToLens(Vec2 film) const;
   /// The radius of the disc a film point (lens coordinates) samples; its plane is z_near_ in
-  /// the rear surface's frame.
+  /// the rear surface's frame, its centre the rear aperture's (rear_centre_).
   double discRadius(const Vec3& film_lens) const;
   /// Solves film_offset_mm_ for an object at `distance_m` (see the top of this file).
   void focus(double distance_m);
@@ -88,6 +88,7 @@ class PlacedRealisticCamera final : public Camera {
   optics::PlacedLens lens_;
   optics::SurfaceFrame image_frame_, rear_frame_;
   double rear_semi_mm_ = 0, z_near_ = 0, z_far_ = 0;  // the rear surface (its own frame)
+  Vec2 rear_centre_{};  // its aperture's centre (decentred: an off-axis mirror)
   double film_offset_mm_ = 0;
   double focus_distance_m_ = 0;
   bool film_referenced_ = true;  // focus measured from the film (axes parallel), else the front
