@@ -110,6 +110,8 @@ int runInfoNonCoaxial(const LensArgs& args, const optics::LensPrescription& p, b
                           {"radius_mm", s.radius_mm},
                           {"semi_diameter_mm", s.semiAperture_mm()},
                           {"mirror", s.mirror}});
+      if (s.shape.conic != 0) surfaces.back()["conic"] = s.shape.conic;
+      if (s.apertureDecentred()) surfaces.back()["aperture_decentre_mm"] = s.aperture_decentre_mm;
     }
     j["surfaces"] = surfaces;
     j["image_surface"] = {{"vertex_mm", p.image_frame.origin_mm},
@@ -152,10 +154,18 @@ int runInfoNonCoaxial(const LensArgs& args, const optics::LensPrescription& p, b
     const auto& s = p.surfaces[i];
     const auto& f = *s.frame;
     std::cout << fmt::format("    {:>3}  line {:>5}  vertex ({:.6f}, {:.6f}, {:.6f})  axis "
-                             "({:.6f}, {:.6f}, {:.6f})  R {:.6g}{}\n",
+                             "({:.6f}, {:.6f}, {:.6f})  R {:.6g}{}{}{}\n",
                              i, s.loc.line, f.origin_mm[0], f.origin_mm[1], f.origin_mm[2],
                              f.rotation[0][2], f.rotation[1][2], f.rotation[2][2], s.radius_mm,
-                             s.mirror ? "  mirror" : "");
+                             s.shape.conic != 0 ? fmt::format("  conic {:.6g}", s.shape.conic)
+                                                : std::string(),
+                             s.mirror ? "  mirror" : "",
+                             s.apertureDecentred()
+                                 ? fmt::format("  aperture centred at ({:.6g}, {:.6g}) (an off-axis "
+                                               "part: its parent's first-order data about the "
+                                               "chief ray are not reported)",
+                                               s.aperture_decentre_mm[0], s.aperture_decentre_mm[1])
+                                 : std::string());
   }
   const auto& im = p.image_frame;
   std::cout << fmt::format("    image          vertex ({:.6f}, {:.6f}, {:.6f})  axis ({:.6f}, "
