@@ -93,8 +93,9 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   rear_centre_ = {rear.aperture_decentre_mm[0], rear.aperture_decentre_mm[1]};
   if (!(rear_semi_mm_ > 0))
     throw Error(rear.loc, "the last surface has no clear aperture to aim camera rays at");
-  // The rear surface's z extent over its clear aperture (its own frame).
-  double zmin = 0, zmax = 0;
+  // The rear surface's z extent over its clear aperture (its own frame; about the aperture's
+  // centre, which a decentred aperture moves off the vertex).
+  double zmin = std::numeric_limits<double>::infinity(), zmax = -zmin;
   if (rear.radius_mm != 0 || !rear.shape.isSpherical())
     for (int i = 0; i <= 64; ++i)
       for (int k = 0; k < 16; ++k) {
@@ -106,6 +107,7 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
           zmax = std::max(zmax, sg->z);
         }
       }
+  if (!(zmin <= zmax)) zmin = zmax = 0;  // a plane (or no sample defined): the vertex plane
   dispersive_ = lens_.dispersive();
   absorbs_ = settings_.glass_absorption &&
              std::any_of(lens_.glasses().begin(), lens_.glasses().end(),
@@ -145,12 +147,19 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
       above += q.z > zmax + 1e-6;
       below += q.z < zmin - 1e-6;
     }
+  // A refusal of the lens at these settings, not of a line of its file: the scene's Camera
+  // line reports it, naming the lens file.
   if (above != 4 && below != 4)
-    throw Error(rear.loc,
-                fmt::format("the film ({:.3f} x {:.3f} mm, moved {:.4f} mm along the "
-                            "image surface's axis) reaches into the last surface's "
-                            "z range [{:.4f}, {:.4f}] mm (its own frame)",
-                            2 * half_width_mm_, 2 * half_height_mm_, film_offset_mm_, zmin, zmax));
+    throw Error(fmt::format("the film ({:.3f} x {:.3f} mm, moved {:.4f} mm along the image "
+                            "surface's axis) reaches into the last surface's (line {}) z range "
+                            "[{:.4f}, {:.4f}] mm (its own frame){}",
+                            2 * half_width_mm_, 2 * half_height_mm_, film_offset_mm_,
+                            rear.loc.line, zmin, zmax,
+                            rear.apertureDecentred()
+                                ? "; the camera samples the last surface from a film wholly on "
+                                  "one side of it, and an off-axis mirror's image lies beside "
+                                  "it"
+                                : ""));
   // The film must stay on the image side of the last surface, where the file's image surface
   // is: a focus that moves it across (a virtual image, an object too close) cannot be used.
   const double image_z = toLocal(rear_frame_, origin(image_frame_) - origin(rear_frame_)).z;
