@@ -6,7 +6,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -79,6 +81,7 @@ TEST(OffAxisMirror, EveryRayOfTheFileMeetsTheParabolasFocus) {
   // The focus, R/2 from the vertex along the parabola's axis (the front frame's z).
   const Vec3 focus{0, kBreakDy, kBreakZ + kR / 2};
   int passed = 0;
+  double worst = 0;
   constexpr int kN = 41;
   for (int i = 0; i < kN; ++i)
     for (int j = 0; j < kN; ++j) {
@@ -88,11 +91,13 @@ TEST(OffAxisMirror, EveryRayOfTheFileMeetsTheParabolasFocus) {
       ASSERT_TRUE(t.ok()) << x << " " << y;
       // On the image surface (which the file puts at the focus) and on a line through it.
       EXPECT_LT(length(t.ray.origin - focus), 1e-9) << x << " " << y;
+      worst = std::max(worst, length(t.ray.origin - focus));
       const Vec3 to = focus - t.ray.origin;
       EXPECT_LT(length(to - t.ray.direction * dot(to, t.ray.direction)), 1e-9);
       ++passed;
     }
-  EXPECT_GT(passed, 1200);
+  EXPECT_EQ(passed, 1245);  // the grid's points inside the disc: i^2 + j^2 < 20^2
+  std::printf("off-axis parabola: %d rays, farthest %.3g mm from the focus\n", passed, worst);
   // The image surface's SCBD (tilt about x by 90 degrees) turns it to face the reflected beam:
   // the central ray leaves the mirror along -y (the parabola's slope is 1 there) and meets it
   // at normal incidence.
@@ -206,28 +211,38 @@ TEST(CylinderSqap, TheThickCylinderFocusesOnTheClosedFormLine) {
   const LensSystem lens(p);
   // N-BK7's Sellmeier formula (Schott's data sheet) at the d line.
   const double l2 = 0.5875618 * 0.5875618;
-  const double n = std::sqrt(1 + 1.03961212 * l2 / (l2 - 0.00600069867) +
+  const double n_sellmeier = std::sqrt(1 + 1.03961212 * l2 / (l2 - 0.00600069867) +
                              0.231792344 * l2 / (l2 - 0.0200179144) +
                              1.01046945 * l2 / (l2 - 103.560653));
+  // The index the lens traces with (the catalogue's n_d) is that one, to its 6 decimals; the
+  // closed form below uses it, so that only the geometry is compared.
   int glass_rows = 0;
+  double n_lens = 0;
   for (const Interface& in : lens.interfaces())
     if (in.ior_after > 1) {
-      EXPECT_NEAR(in.ior_after, n, 2e-6);
+      EXPECT_NEAR(in.ior_after, n_sellmeier, 2e-6);
+      n_lens = in.ior_after;
       ++glass_rows;
     }
   EXPECT_EQ(glass_rows, 1);
+  const double n = n_lens;
   const double R = 1 / 4.950495049504951000E-001, t = 3.8;
   const double f = R / (n - 1), line_z = lens.rearVertexZ_mm() + f - t / n;
+  double worst = 0;
   for (double x : {0.0, 1.5, 2.5, 2.95, -2.95}) {
     SCOPED_TRACE(x);
     // A paraxial ray in the curved meridian, 1e-4 mm high (its aberration ~1e-8 mm).
     const TraceResult r = lens.tracer().traceFromScene({{x, 1e-4, -5}, {0, 0, 1}});
     ASSERT_TRUE(r.ok());
     const Ray& o = r.ray;
-    EXPECT_NEAR(o.origin.z - o.origin.y * o.direction.z / o.direction.y, line_z, 2e-5);
+    const double z = o.origin.z - o.origin.y * o.direction.z / o.direction.y;
+    EXPECT_NEAR(z, line_z, 1e-7);
+    worst = std::max(worst, std::abs(z - line_z));
     EXPECT_NEAR(o.direction.x, 0, 1e-12);  // no power in x
     EXPECT_NEAR(o.origin.x, x, 1e-12);
   }
+  std::printf("cylinder: focal line %.6f mm behind the flat face (f %.6f mm), traced within %.3g mm\n",
+              f - t / n, f, worst);
   // The rectangle's edges (3 mm in x, 2 mm in y): its corners pass, beyond them is blocked.
   EXPECT_TRUE(lens.tracer().traceFromScene({{2.99, 1.99, -5}, {0, 0, 1}}).ok());
   EXPECT_TRUE(lens.tracer().traceFromScene({{-2.99, -1.99, -5}, {0, 0, 1}}).ok());
