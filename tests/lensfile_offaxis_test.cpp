@@ -18,6 +18,7 @@
 #include "lensim/camera/camera.h"
 #include "lensim/optics/lens_formats.h"
 #include "lensim/optics/lens_system.h"
+#include "lensim/optics/off_axis_mirror.h"
 #include "lensim/optics/placed_lens.h"
 #include "lensim/scene/description.h"
 #include "lensim/util/error.h"
@@ -56,6 +57,16 @@ int mirrorRow(const LensPrescription& p) {
 // y by -190.6 mm, then the parabola (CONI -1, R -190.6 mm) whose CLAP 25.4 is decentred by
 // OBDC 0 190.6, back onto the beam's axis.
 constexpr double kR = -190.6, kBreakZ = 200, kBreakDy = -190.6, kClap = 25.4;
+
+
+const char* const kSynthetic =
+    "MODE SEQ\nENPD 20\nSURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  CURV 0\n  DISZ 100\n"
+    "  DIAM 10\nSURF 2\n  CURV {}\n  CONI {}\n  DISZ -50\n  GLAS MIRROR\n  DIAM 10\n{}"
+    "  OBDC 0 {}\nSURF 3\n  DISZ 0\n";
+
+std::string synthetic(double curv, double conic, const std::string& aperture, double dy) {
+  return fmt::format(fmt::runtime(kSynthetic), curv, conic, aperture, dy);
+}
 
 }  // namespace
 
@@ -109,6 +120,46 @@ TEST(OffAxisMirror, EveryRayOfTheFileMeetsTheParabolasFocus) {
   EXPECT_NEAR(std::abs(dot(normal, c.ray.direction)), 1, 1e-12);
 }
 
+// What a maker states: the file's NOTE names it "OAPM 90 DEG 50.8 X 190.6" (off-axis angle,
+// diameter, reflected focal length); the traced central ray agrees, and a second mirror matches
+// RFL = (R^2 + h^2) / 2|R| and cos(angle) = (R^2 - h^2) / (R^2 + h^2) for its decentre h.
+TEST(OffAxisMirror, TheMakersFiguresFromTheFile) {
+  const std::string path = zmxPath("zmax_37992.zmx");
+  const std::string text = slurp(path);
+  EXPECT_NE(text.find("OAPM 90 DEG 50.8 X 190.6"), std::string::npos);
+  const LensPrescription p = parseZmx(text, path);
+  const int m = mirrorRow(p);
+  const auto oap = offAxisParabola(p.surfaces[size_t(m)]);
+  ASSERT_TRUE(oap.has_value());
+  EXPECT_NEAR(oap->parent_focal_length_mm, -kR / 2, 1e-9);
+  EXPECT_NEAR(oap->reflected_focal_length_mm, 190.6, 1e-9);
+  EXPECT_NEAR(oap->off_axis_angle_deg, 90, 1e-9);
+  EXPECT_NEAR(2 * p.surfaces[size_t(m)].semiAperture_mm(), 50.8, 1e-9);
+  // The central ray: from its hit on the mirror to the focus, and its turn.
+  const PlacedLens lens(p, 587.6);
+  std::vector<Vec3> hits;
+  const TraceResult c = lens.trace({{0, 0, -50}, {0, 0, 1}}, {}, &hits);
+  ASSERT_TRUE(c.ok());
+  ASSERT_GE(hits.size(), 3u);
+  const Vec3 on_mirror = hits[hits.size() - 2];
+  EXPECT_NEAR(length(c.ray.origin - on_mirror), 190.6, 1e-9);
+  EXPECT_NEAR(std::acos(c.ray.direction.z * -1) * 180 / std::numbers::pi, 90, 1e-9);
+
+  const LensPrescription q = parseZmx(synthetic(-0.01, -1, "  CLAP 0 10 0\n", 50), "q.zmx");
+  const auto o2 = offAxisParabola(q.surfaces[size_t(mirrorRow(q))]);
+  ASSERT_TRUE(o2.has_value());
+  const double R = 100, h = 50;
+  EXPECT_NEAR(o2->parent_focal_length_mm, 50, 1e-12);
+  EXPECT_NEAR(o2->reflected_focal_length_mm, (R * R + h * h) / (2 * R), 1e-12);
+  EXPECT_NEAR(std::cos(o2->off_axis_angle_deg * std::numbers::pi / 180),
+              (R * R - h * h) / (R * R + h * h), 1e-12);
+  // Not an off-axis paraboloid: the centred one, and a decentred sphere.
+  const LensPrescription centred = parseZmx(synthetic(-0.01, -1, "  CLAP 0 10 0\n", 0), "c.zmx");
+  EXPECT_FALSE(offAxisParabola(centred.surfaces[size_t(mirrorRow(centred))]));
+  const LensPrescription sph = parseZmx(synthetic(-0.01, 0, "  CLAP 0 10 0\n", 50), "s.zmx");
+  EXPECT_FALSE(offAxisParabola(sph.surfaces[size_t(mirrorRow(sph))]));
+}
+
 TEST(OffAxisMirror, WrittenToZmxItReadsBackTheSame) {
   const std::string path = zmxPath("zmax_37992.zmx");
   const LensPrescription p = parseZmx(slurp(path), path);
@@ -154,18 +205,6 @@ TEST(OffAxisMirror, TheDecentredDiscClipsAtItsEdge) {
   EXPECT_EQ(far.blocked_surface, m);
 }
 
-namespace {
-
-const char* const kSynthetic =
-    "MODE SEQ\nENPD 20\nSURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  CURV 0\n  DISZ 100\n"
-    "  DIAM 10\nSURF 2\n  CURV {}\n  CONI {}\n  DISZ -50\n  GLAS MIRROR\n  DIAM 10\n{}"
-    "  OBDC 0 {}\nSURF 3\n  DISZ 0\n";
-
-std::string synthetic(double curv, double conic, const std::string& aperture, double dy) {
-  return fmt::format(fmt::runtime(kSynthetic), curv, conic, aperture, dy);
-}
-
-}  // namespace
 
 TEST(OffAxisMirror, ADecentredApertureAloneMakesTheLensNonCoaxial) {
   // No coordinate break: the OBDC line is where the axis of symmetry is lost.

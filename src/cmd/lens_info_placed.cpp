@@ -8,6 +8,7 @@
 
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_formats.h"
+#include "lensim/optics/off_axis_mirror.h"
 #include "lensim/optics/placed_lens.h"
 #include "lensim/util/log.h"
 
@@ -112,6 +113,11 @@ int runInfoNonCoaxial(const LensArgs& args, const optics::LensPrescription& p, b
                           {"mirror", s.mirror}});
       if (s.shape.conic != 0) surfaces.back()["conic"] = s.shape.conic;
       if (s.apertureDecentred()) surfaces.back()["aperture_decentre_mm"] = s.aperture_decentre_mm;
+      if (const auto oap = optics::offAxisParabola(s))
+        surfaces.back()["off_axis_paraboloid"] = {
+            {"parent_focal_length_mm", oap->parent_focal_length_mm},
+            {"reflected_focal_length_mm", oap->reflected_focal_length_mm},
+            {"off_axis_angle_deg", oap->off_axis_angle_deg}};
     }
     j["surfaces"] = surfaces;
     j["image_surface"] = {{"vertex_mm", p.image_frame.origin_mm},
@@ -161,12 +167,17 @@ int runInfoNonCoaxial(const LensArgs& args, const optics::LensPrescription& p, b
                                                 : std::string(),
                              s.mirror ? "  mirror" : "",
                              s.apertureDecentred()
-                                 ? fmt::format("  aperture centred at ({:.6g}, {:.6g}) (an off-axis "
-                                               "part: its parent's first-order data about the "
-                                               "chief ray are not reported)",
+                                 ? fmt::format("  aperture centred at ({:.6g}, {:.6g})",
                                                s.aperture_decentre_mm[0], s.aperture_decentre_mm[1])
                                  : std::string());
   }
+  for (size_t i = 0; i < p.surfaces.size(); ++i)
+    if (const auto oap = optics::offAxisParabola(p.surfaces[i]))
+      std::cout << fmt::format("    {:>3}  off-axis paraboloid: parent focal length {:.6g} mm, "
+                               "reflected focal length {:.6g} mm, off-axis angle {:.6g} deg "
+                               "(for light along the parent's axis)\n",
+                               i, oap->parent_focal_length_mm, oap->reflected_focal_length_mm,
+                               oap->off_axis_angle_deg);
   const auto& im = p.image_frame;
   std::cout << fmt::format("    image          vertex ({:.6f}, {:.6f}, {:.6f})  axis ({:.6f}, "
                            "{:.6f}, {:.6f})\n",
