@@ -317,9 +317,9 @@ TEST(Mirror, ExitPupilBoundCutsOutTheObscuredMiddle) {
 }
 
 // The readers: a positive thickness after one mirror (or negative after none) is refused at its
-// DISZ line; obscuring rings and decentred apertures are refused at their line; a mirror's
-// medium repeats the one before it; JSON round-trips mirrors and obscurations; .dat refuses them
-// naming the surface.
+// DISZ line; obscuring rings and a decentre (OBDC) of no aperture line are refused at their
+// line; a mirror's medium repeats the one before it; JSON round-trips mirrors and obscurations;
+// .dat refuses them naming the surface.
 TEST(Mirror, ReadersLocateErrorsAndRoundTrip) {
   const std::string head =
       "MODE SEQ\nUNIT MM X W X CM MR CPMM\nENPD 20\nSURF 0\n  CURV 0\n  DISZ INFINITY\n"

@@ -171,8 +171,11 @@ TEST(ZmxReader, SharedSamplesReadOrAreRefusedWithReasons) {
   EXPECT_NEAR(pd.f_number, 4.5, 1e-9);  // FNUM 4.5
   EXPECT_EQ(dg.wavelengths_nm.size(), 3u);
   EXPECT_NEAR(*dg.primary_wavelength_nm, 587.5618, 1e-9);
-  EXPECT_THROW(readLensFile(sharedLens("zmx/zmax_37992.zmx")), Error);
-  // Tilted mirrors: read, placed in space; the coaxial system refuses it.
+  // An off-axis parabola (decentred aperture) and tilted mirrors: read, placed in space; the
+  // coaxial system refuses them.
+  const LensPrescription oap = readLensFile(sharedLens("zmx/zmax_37992.zmx"));
+  EXPECT_TRUE(oap.noncoaxial_loc.has_value());
+  EXPECT_THROW(LensSystem{oap}, Error);
   const LensPrescription ex66 = readLensFile(sharedLens("zmx/HoO-V2C18Ex66.zmx"));
   EXPECT_TRUE(ex66.noncoaxial_loc.has_value());
   EXPECT_THROW(LensSystem{ex66}, Error);

@@ -9,6 +9,7 @@
 
 #include "lensim/optics/glass.h"
 #include "lensim/optics/lens_formats.h"
+#include "lensim/optics/off_axis_mirror.h"
 #include "lensim/optics/placed_lens.h"
 #include "lensim/util/log.h"
 
@@ -108,6 +109,12 @@ json placedJson(const optics::LensPrescription& p, const PlacedLens& lens,
     if (s.grating)
       row["grating"] = {{"lines_per_um", s.grating->lines_per_um},
                         {"order", s.grating->order}};
+    if (s.shape.conic != 0) row["conic"] = s.shape.conic;
+    if (s.apertureDecentred()) row["aperture_decentre_mm"] = s.aperture_decentre_mm;
+    if (const auto oap = optics::offAxisParabola(s))
+      row["off_axis_paraboloid"] = {{"parent_focal_length_mm", oap->parent_focal_length_mm},
+                                    {"reflected_focal_length_mm", oap->reflected_focal_length_mm},
+                                    {"off_axis_angle_deg", oap->off_axis_angle_deg}};
     surfaces.push_back(row);
   }
   j["surfaces"] = surfaces;
@@ -203,15 +210,28 @@ int runInfoNonCoaxial(const LensArgs& args, const optics::LensPrescription& p, b
     const auto& s = p.surfaces[i];
     const auto& f = *s.frame;
     std::cout << fmt::format("    {:>3}  line {:>5}  vertex ({:.6f}, {:.6f}, {:.6f})  axis "
-                             "({:.6f}, {:.6f}, {:.6f})  R {:.6g}{}{}\n",
+                             "({:.6f}, {:.6f}, {:.6f})  R {:.6g}{}{}{}{}\n",
                              i, s.loc.line, f.origin_mm[0], f.origin_mm[1], f.origin_mm[2],
                              f.rotation[0][2], f.rotation[1][2], f.rotation[2][2], s.radius_mm,
+                             s.shape.conic != 0 ? fmt::format("  conic {:.6g}", s.shape.conic)
+                                                : std::string(),
                              s.mirror ? "  mirror" : "",
+                             s.apertureDecentred()
+                                 ? fmt::format("  aperture centred at ({:.6g}, {:.6g})",
+                                               s.aperture_decentre_mm[0], s.aperture_decentre_mm[1])
+                                 : std::string(),
                              s.grating ? fmt::format("  grating {:.6g} lines/um (lines along x), "
                                                      "order {}",
                                                      s.grating->lines_per_um, s.grating->order)
                                        : std::string());
   }
+  for (size_t i = 0; i < p.surfaces.size(); ++i)
+    if (const auto oap = optics::offAxisParabola(p.surfaces[i]))
+      std::cout << fmt::format("    {:>3}  off-axis paraboloid: parent focal length {:.6g} mm, "
+                               "reflected focal length {:.6g} mm, off-axis angle {:.6g} deg "
+                               "(for light along the parent's axis)\n",
+                               i, oap->parent_focal_length_mm, oap->reflected_focal_length_mm,
+                               oap->off_axis_angle_deg);
   const auto& im = p.image_frame;
   std::cout << fmt::format("    image          vertex ({:.6f}, {:.6f}, {:.6f})  axis ({:.6f}, "
                            "{:.6f}, {:.6f})\n",

@@ -99,20 +99,25 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   const optics::LensSurface& rear = p.surfaces.back();
   rear_frame_ = *rear.frame;
   rear_semi_mm_ = rear.semiAperture_mm();
+  // A decentred aperture (an off-axis mirror): the sampled disc is centred on it.
+  rear_centre_ = {rear.aperture_decentre_mm[0], rear.aperture_decentre_mm[1]};
   if (!(rear_semi_mm_ > 0))
     throw Error(rear.loc, "the last surface has no clear aperture to aim camera rays at");
-  // The rear surface's z extent over its clear aperture (its own frame).
-  double zmin = 0, zmax = 0;
+  // The rear surface's z extent over its clear aperture (its own frame; about the aperture's
+  // centre, which a decentred aperture moves off the vertex).
+  double zmin = std::numeric_limits<double>::infinity(), zmax = -zmin;
   if (rear.radius_mm != 0 || !rear.shape.isSpherical())
     for (int i = 0; i <= 64; ++i)
       for (int k = 0; k < 16; ++k) {
         const double h = rear_semi_mm_ * i / 64, a = 2 * std::numbers::pi * k / 16;
-        if (auto sg =
-                optics::surfaceSag(rear.radius_mm, rear.shape, h * std::cos(a), h * std::sin(a))) {
+        if (auto sg = optics::surfaceSag(rear.radius_mm, rear.shape,
+                                         rear_centre_.x + h * std::cos(a),
+                                         rear_centre_.y + h * std::sin(a))) {
           zmin = std::min(zmin, sg->z);
           zmax = std::max(zmax, sg->z);
         }
       }
+  if (!(zmin <= zmax)) zmin = zmax = 0;  // a plane (or no sample defined): the vertex plane
   dispersive_ = lens_.dispersive();
   absorbs_ = settings_.glass_absorption &&
              std::any_of(lens_.glasses().begin(), lens_.glasses().end(),
@@ -152,12 +157,19 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
       above += q.z > zmax + 1e-6;
       below += q.z < zmin - 1e-6;
     }
+  // A refusal of the lens at these settings, not of a line of its file: the scene's Camera
+  // line reports it, naming the lens file.
   if (above != 4 && below != 4)
-    throw Error(rear.loc,
-                fmt::format("the film ({:.3f} x {:.3f} mm, moved {:.4f} mm along the "
-                            "image surface's axis) reaches into the last surface's "
-                            "z range [{:.4f}, {:.4f}] mm (its own frame)",
-                            2 * half_width_mm_, 2 * half_height_mm_, film_offset_mm_, zmin, zmax));
+    throw Error(fmt::format("the film ({:.3f} x {:.3f} mm, moved {:.4f} mm along the image "
+                            "surface's axis) reaches into the last surface's (line {}) z range "
+                            "[{:.4f}, {:.4f}] mm (its own frame){}",
+                            2 * half_width_mm_, 2 * half_height_mm_, film_offset_mm_,
+                            rear.loc.line, zmin, zmax,
+                            rear.apertureDecentred()
+                                ? "; the camera samples the last surface from a film wholly on "
+                                  "one side of it, and an off-axis mirror's image lies beside "
+                                  "it"
+                                : ""));
   // The film must stay on the image side of the last surface, where the file's image surface
   // is: a focus that moves it across (a virtual image, an object too close) cannot be used.
   const double image_z = toLocal(rear_frame_, origin(image_frame_) - origin(rear_frame_)).z;
@@ -170,6 +182,8 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   z_near_ = above == 4 ? zmax : zmin;
   z_far_ = above == 4 ? zmin : zmax;
   const auto t_bounds = std::chrono::steady_clock::now();
+  // The bounds are built about the vertex: a decentred rear aperture keeps its disc.
+  pupil_bounds = pupil_bounds && rear_centre_.x == 0 && rear_centre_.y == 0;
   if (pupil_bounds) buildBounds(reach);
   const auto t1 = std::chrono::steady_clock::now();
   startup_seconds_ = std::chrono::duration<double>(t1 - t0).count();
@@ -318,7 +332,9 @@ Vec3 PlacedRealisticCamera::filmToLens(Vec2 film) const {
 
 double PlacedRealisticCamera::discRadius(const Vec3& q) const {
   const double t_min = (q.z - z_near_) / (q.z - z_far_);
-  return std::max(rear_semi_mm_, (1 - t_min) * std::hypot(q.x, q.y) + t_min * rear_semi_mm_);
+  return std::max(rear_semi_mm_, (1 - t_min) * std::hypot(q.x - rear_centre_.x,
+                                                          q.y - rear_centre_.y) +
+                                     t_min * rear_semi_mm_);
 }
 
 Vec3 PlacedRealisticCamera::planePoint(Vec2 q) const {
@@ -348,12 +364,14 @@ double PlacedRealisticCamera::SamplingRegion::area() const {
 }
 
 bool PlacedRealisticCamera::SamplingRegion::holds(Vec2 q) const {
-  return polygon ? polygon->holds(q) : q.x * q.x + q.y * q.y <= disc_radius * disc_radius;
+  const Vec2 d = q - centre;
+  return polygon ? polygon->holds(q) : d.x * d.x + d.y * d.y <= disc_radius * disc_radius;
 }
 
 PlacedRealisticCamera::SamplingRegion PlacedRealisticCamera::samplingRegion(Vec2 film) const {
   SamplingRegion s;
   s.disc_radius = discRadius(toLocal(rear_frame_, filmToLens(film) - origin(rear_frame_)));
+  s.centre = rear_centre_;
   // The polygon (within the disc's square) when it is the smaller region.
   if (std::optional<PlacedPolygon> p = bounds_.polygon(film, s.disc_radius))
     if (p->area() < std::numbers::pi * s.disc_radius * s.disc_radius) s.polygon = *p;
@@ -378,9 +396,9 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
   const Vec2 film = filmPoint(sample.film_raster);
   const Vec3 p = filmToLens(film);
   const SamplingRegion region = samplingRegion(film);
-  const Vec2 q = region.polygon
-                     ? region.polygon->sample(sample.lens)
-                     : sampling::sampleUniformDiskConcentric(sample.lens) * region.disc_radius;
+  const Vec2 q = region.polygon ? region.polygon->sample(sample.lens)
+                                : region.centre + sampling::sampleUniformDiskConcentric(sample.lens) *
+                                                      region.disc_radius;
   const Vec3 to = planePoint(q) - p;
   const double r2 = dot(to, to);
   const Vec3 dir = to / std::sqrt(r2);

@@ -89,6 +89,7 @@ class PlacedRealisticCamera final : public Camera {
   /// given.
   struct SamplingRegion {
     double disc_radius = 0;
+    Vec2 centre{};  ///< the disc's (the rear aperture's centre)
     std::optional<PlacedPolygon> polygon;
     double area() const;
     bool holds(Vec2 q) const;
@@ -102,7 +103,7 @@ class PlacedRealisticCamera final : public Camera {
   /// The film point (image frame, z = the film offset) in the front surface's frame.
   Vec3 filmToLens(Vec2 film) const;
   /// The radius of the disc a film point (lens coordinates) samples; its plane is z_near_ in
-  /// the rear surface's frame.
+  /// the rear surface's frame, its centre the rear aperture's (rear_centre_).
   double discRadius(const Vec3& film_lens) const;
   /// The point q of the sampling plane in lens coordinates.
   Vec3 planePoint(Vec2 q) const;
@@ -125,6 +126,7 @@ class PlacedRealisticCamera final : public Camera {
   optics::PlacedLens lens_;
   optics::SurfaceFrame image_frame_, rear_frame_;
   double rear_semi_mm_ = 0, z_near_ = 0, z_far_ = 0;  // the rear surface (its own frame)
+  Vec2 rear_centre_{};  // its aperture's centre (decentred: an off-axis mirror)
   double film_offset_mm_ = 0;
   double focus_distance_m_ = 0;
   bool film_referenced_ = true;  // focus measured from the film (axes parallel), else the front

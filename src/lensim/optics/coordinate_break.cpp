@@ -1,6 +1,7 @@
 #include "lensim/optics/coordinate_break.h"
 
 #include <cmath>
+#include <string>
 #include <fmt/format.h>
 
 #include "lensim/optics/frame.h"
@@ -28,6 +29,12 @@ FileLoc breakLoc(const FoldSurface& s) {
   for (int i = 0; i < 6; ++i)
     if (s.parm[size_t(i)] != 0 && s.parm_loc[size_t(i)].valid()) return s.parm_loc[size_t(i)];
   return s.loc;
+}
+
+std::string decentredApertureWhat(const FoldSurface& s) {
+  return fmt::format("surface {}: its aperture is decentred (OBDC), so it is not rotationally "
+                     "symmetric about the axis (an off-axis mirror or lens)",
+                     s.number);
 }
 
 }  // namespace
@@ -76,9 +83,12 @@ std::vector<SurfaceFrame> placeSurfaces(const std::vector<FoldSurface>& surfs) {
 
 PlacedSystem placeCoordinateBreaks(const std::vector<FoldSurface>& surfs) {
   PlacedSystem out;
-  bool any_break = false;
-  for (const FoldSurface& s : surfs) any_break = any_break || s.coordbrk;
-  if (!any_break) {
+  bool any_break = false, any_decentred = false;
+  for (const FoldSurface& s : surfs) {
+    any_break = any_break || s.coordbrk;
+    any_decentred = any_decentred || s.decentred_aperture_loc.valid();
+  }
+  if (!any_break && !any_decentred) {
     out.unfolded = unfoldCoordinateBreaks(surfs);
     return out;
   }
@@ -103,6 +113,12 @@ UnfoldedSystem unfoldCoordinateBreaks(const std::vector<FoldSurface>& surfs) {
   UnfoldedSystem out;
   const size_t n = surfs.size();
   for (const FoldSurface& s : surfs) out.any_break = out.any_break || s.coordbrk;
+  // A decentred aperture before any break: no axis of symmetry from there on.
+  for (const FoldSurface& s : surfs) {
+    if (s.coordbrk) break;
+    if (s.decentred_aperture_loc.valid())
+      throw Error(s.decentred_aperture_loc, decentredApertureWhat(s));
+  }
   if (!out.any_break) {
     for (size_t i = 0; i < n; ++i) out.kept.push_back(i), out.thickness.push_back(surfs[i].thickness);
     return out;
@@ -152,6 +168,8 @@ UnfoldedSystem unfoldCoordinateBreaks(const std::vector<FoldSurface>& surfs) {
     const V3 gz = column(G, 2);
     if (!(std::abs(g[0]) <= tol_pos && std::abs(g[1]) <= tol_pos))
       throw refuse(s, fmt::format("lies {:.6g}, {:.6g} off the axis (x, y)", g[0], g[1]));
+    if (s.decentred_aperture_loc.valid())
+      throw Error(s.decentred_aperture_loc, decentredApertureWhat(s));
     const double expected = mirrors % 2 ? -1.0 : 1.0;
     if (s.mirror && s.plane && i + 1 < n) {
       // A plane mirror at any tilt: its normal may leave the axis, not its vertex.

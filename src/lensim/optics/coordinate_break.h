@@ -36,6 +36,9 @@ struct FoldSurface {
   bool mirror = false;                ///< GLAS MIRROR
   bool plane = false;                 ///< no sag at all (curvature and every sag term zero)
   bool symmetric = true;              ///< rotationally symmetric (shape and aperture)
+  /// Valid when the surface's aperture is decentred (Zemax OBDC): the lens is then not coaxial
+  /// even without breaks.
+  FileLoc decentred_aperture_loc;
 };
 
 /// A tilted plane mirror's circular aperture seen along the axis: an ellipse, its semi-axes the

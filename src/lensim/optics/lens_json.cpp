@@ -620,6 +620,10 @@ std::string writeLensJson(const LensPrescription& p) {
                                      s.aperture_shape == ApertureShape::Rectangle ? "rectangular"
                                                                                   : "elliptical",
                                      s.aperture_half_x_mm, s.aperture_half_y_mm));
+    if (s.apertureDecentred())
+      throw Error(s.loc, fmt::format("surface {}: its decentred aperture cannot be written to a "
+                                     "lens JSON file, whose apertures are centred",
+                                     surfs.size()));
     if (!s.coating.empty()) e["coating"] = s.coating;
     if (s.shape.conic != 0) e["conic"] = s.shape.conic;
     if (s.shape.radius_x_mm) e["radius_x_mm"] = *s.shape.radius_x_mm;

@@ -576,6 +576,11 @@ LensSystem::LensSystem(LensPrescription prescription, const LensSystemOptions& o
     in.aperture_shape = s.aperture_shape;
     in.aperture_half_x_mm = s.aperture_half_x_mm;
     in.aperture_half_y_mm = s.aperture_half_y_mm;
+    if (s.apertureDecentred())
+      throw Error(s.loc, fmt::format("surface {}: its aperture is decentred ({}, {} mm), so the "
+                                     "lens is not rotationally symmetric; only the non-coaxial "
+                                     "tracer models it",
+                                     i, s.aperture_decentre_mm[0], s.aperture_decentre_mm[1]));
     if (!(s.obscuration_radius_mm >= 0) || s.obscuration_radius_mm >= s.semiAperture_mm())
       throw Error(s.loc, fmt::format("surface {}: obscuration radius {} mm must be >= 0 and "
                                      "smaller than the semi-aperture {} mm",

@@ -41,7 +41,9 @@ PlacedLens::PlacedLens(const LensPrescription& p, double wavelength_nm)
     s.inner2 = ls.obscuration_radius_mm * ls.obscuration_radius_mm;
     s.aperture_shape = ls.aperture_shape;
     s.half_x = ls.aperture_half_x_mm, s.half_y = ls.aperture_half_y_mm;
-    s.shape = ShapeIntersector(ls.radius_mm, ls.shape, s.semi);
+    s.dec_x = ls.aperture_decentre_mm[0], s.dec_y = ls.aperture_decentre_mm[1];
+    // Defined out to the aperture's farthest point (a decentred aperture lies off the axis).
+    s.shape = ShapeIntersector(ls.radius_mm, ls.shape, ls.apertureReach_mm());
     s.mirror = ls.mirror;
     if (ls.grating) {
       s.grating = true;
@@ -50,7 +52,7 @@ PlacedLens::PlacedLens(const LensPrescription& p, double wavelength_nm)
     s.n_before = n_before;
     s.n_after = glasses[i].index(wavelength_nm);
     n_before = s.n_after;
-    extent_mm_ = std::max(extent_mm_, length(s.origin) + s.semi);
+    extent_mm_ = std::max(extent_mm_, length(s.origin) + ls.apertureReach_mm());
     surfaces_.push_back(std::move(s));
   }
   image_.rotation = p.image_frame.rotation;
@@ -69,8 +71,9 @@ BlockReason PlacedLens::traceSurface(size_t i, const TraceOptions& opts, Vec3& o
   const Vec3 q = rel + dir * h->t;
   if (local_hit) *local_hit = {q.x, q.y};
   if (opts.clip_apertures) {
-    const double r2 = q.x * q.x + q.y * q.y;
-    if (r2 > s.semi2 || !insideApertureShape(s.aperture_shape, s.half_x, s.half_y, q.x, q.y))
+    const double ax = q.x - s.dec_x, ay = q.y - s.dec_y;  // about the aperture's centre
+    const double r2 = ax * ax + ay * ay;
+    if (r2 > s.semi2 || !insideApertureShape(s.aperture_shape, s.half_x, s.half_y, ax, ay))
       return BlockReason::Aperture;
     if (opts.obscurations && r2 < s.inner2) return BlockReason::Obscured;
   }

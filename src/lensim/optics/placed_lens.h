@@ -94,6 +94,7 @@ class PlacedLens {
     double semi = 0, semi2 = 0, inner2 = 0;
     ApertureShape aperture_shape = ApertureShape::Circle;
     double half_x = 0, half_y = 0;
+    double dec_x = 0, dec_y = 0;  // the aperture's centre (LensSurface::aperture_decentre_mm)
     bool mirror = false;
     double n_before = 1, n_after = 1;
     // A grating (LensSurface::grating): order * lines per micrometre; 0: none.

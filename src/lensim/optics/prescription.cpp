@@ -6,7 +6,9 @@
 
 #include <cctype>
 #include <charconv>
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -32,6 +34,58 @@ const char* layoutName(LensFileLayout layout) {
 std::optional<int> LensPrescription::stopIndex() const {
   for (size_t i = 0; i < surfaces.size(); ++i)
     if (surfaces[i].isStop()) return static_cast<int>(i);
+  return std::nullopt;
+}
+
+double LensSurface::apertureReach_mm() const {
+  const double dx = aperture_decentre_mm[0], dy = aperture_decentre_mm[1];
+  if (aperture_shape == ApertureShape::Rectangle)
+    return std::hypot(aperture_half_x_mm + std::abs(dx), aperture_half_y_mm + std::abs(dy));
+  const double off = std::hypot(dx, dy);
+  if (aperture_shape == ApertureShape::Ellipse && off > 0)
+    return off + std::max(aperture_half_x_mm, aperture_half_y_mm);
+  return off + semiAperture_mm();
+}
+
+std::optional<std::array<double, 2>> apertureOutsideSag(const LensSurface& s) {
+  const double dx = s.aperture_decentre_mm[0], dy = s.aperture_decentre_mm[1];
+  if (s.shape.isRotational()) {
+    const double reach = s.apertureReach_mm();
+    if (reach < sagDomainRadius(s.radius_mm, s.shape)) return std::nullopt;
+    const double off = std::hypot(dx, dy);  // the farthest point, along the decentre
+    const double ux = off > 0 ? dx / off : 0.0, uy = off > 0 ? dy / off : 1.0;
+    return std::array<double, 2>{ux * reach, uy * reach};
+  }
+  // The outline, a hair outside (the rim must be inside the domain, not on it).
+  const double grow = 1 + 1e-9;
+  const bool rect = s.aperture_shape == ApertureShape::Rectangle;
+  const double hx = s.aperture_shape == ApertureShape::Circle ? s.semiAperture_mm()
+                                                               : s.aperture_half_x_mm;
+  const double hy = s.aperture_shape == ApertureShape::Circle ? s.semiAperture_mm()
+                                                               : s.aperture_half_y_mm;
+  auto bad = [&](double u, double v) -> std::optional<std::array<double, 2>> {
+    const double x = dx + grow * u, y = dy + grow * v;
+    if (surfaceSag(s.radius_mm, s.shape, x, y)) return std::nullopt;
+    return std::array<double, 2>{x, y};
+  };
+  constexpr int kPoints = 4096;
+  for (int i = 0; i < kPoints; ++i) {
+    double u, v;
+    if (rect) {  // the perimeter, corners and edge midpoints among the points
+      const double a = 4.0 * i / kPoints, f = 2 * (a - std::floor(a)) - 1;
+      const int side = int(a);
+      u = side == 0 ? hx : side == 2 ? -hx : (side == 1 ? -f : f) * hx;
+      v = side == 1 ? hy : side == 3 ? -hy : (side == 0 ? f : -f) * hy;
+    } else {  // the axes' ends among the points
+      const double phi = 2 * std::numbers::pi * i / kPoints;
+      u = hx * std::cos(phi), v = hy * std::sin(phi);
+    }
+    if (auto p = bad(u, v)) return p;
+  }
+  if (rect)
+    for (double u : {-hx, hx})
+      for (double v : {-hy, hy})
+        if (auto p = bad(u, v)) return p;
   return std::nullopt;
 }
 

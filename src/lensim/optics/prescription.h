@@ -117,6 +117,10 @@ struct LensSurface {
   /// semi-aperture is then the radius of the circle around it.
   ApertureShape aperture_shape = ApertureShape::Circle;
   double aperture_half_x_mm = 0, aperture_half_y_mm = 0;
+  /// The centre of the aperture and of the obscuration in the surface's own x, y (Zemax OBDC,
+  /// an off-axis mirror's clear aperture): the tests are made at (x - dx, y - dy). Non-zero only
+  /// on a lens placed in space (`frame` set): the coaxial tracers refuse it.
+  std::array<double, 2> aperture_decentre_mm{};
   /// The coating on this surface as the file names it (JSON "coating", Zemax COAT); empty: the
   /// lens-wide default on an air-glass surface, none on a cemented one (coating/lens_coatings.h).
   std::string coating;
@@ -130,6 +134,13 @@ struct LensSurface {
 
   bool isStop() const { return stop_flag ? *stop_flag : radius_mm == 0; }
   double semiAperture_mm() const { return aperture_diameter_mm / 2; }
+  bool apertureDecentred() const {
+    return aperture_decentre_mm[0] != 0 || aperture_decentre_mm[1] != 0;
+  }
+  /// The farthest any point of the clear aperture lies from the surface's axis (mm): the
+  /// semi-aperture, moved out by the decentre (the rectangle's farthest corner exactly; an
+  /// ellipse's bound |decentre| + its larger half-width).
+  double apertureReach_mm() const;
 };
 
 /// The fields a lens file lists for its design (Zemax FTYP with XFLN/YFLN; per configuration
@@ -142,6 +153,14 @@ struct FileFields {
   std::vector<std::pair<double, double>> xy;
   FileLoc loc;  ///< the FTYP (or first XFLN/YFLN) line
 };
+
+/// A point of `s`'s clear aperture (its own x, y, mm) where the sag is not defined (beyond the
+/// surface's extent), or nullopt when the sag is defined over the whole aperture. Rotationally
+/// symmetric shapes: the disc of sagDomainRadius against apertureReach_mm. Toroids and
+/// biconics, defined out to a different distance in each direction (a cylinder: any x): the
+/// sag is tested along the aperture's outline (every region where it is undefined reaches out
+/// to infinity, so it would cross the outline), at 4096 points and the outline's extremes.
+std::optional<std::array<double, 2>> apertureOutsideSag(const LensSurface& s);
 
 /// One configuration of a multi-configuration lens (a zoom position, a focus position): the
 /// whole surface table as it is in that configuration (rows match LensPrescription::surfaces one

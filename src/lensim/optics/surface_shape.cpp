@@ -339,16 +339,17 @@ ShapeIntersector::ShapeIntersector(double radius_mm, const SurfaceShape& shape,
   const double pad = 0.02 * (hi - lo) + 1e-7;
   z_lo_ = lo - pad, z_hi_ = hi + pad;
   if (toroidal_) {
-    // Not a quadric; the quadric with the toroid's vertex curvatures and the y curve's conic
-    // (exact for a sphere, R = radius and k = 0, and for a cylinder, R = 0) predicts the hit
-    // that Newton's method refines, as for the aspheres.
+    // The quadric with the toroid's vertex curvatures and the y curve's conic predicts the hit
+    // that Newton's method refines, as for the aspheres. A cylinder (R = 0) without polynomial
+    // terms is that quadric: its hits are the closed form's, at any x (its sag is defined for
+    // every x, not only within bound_r).
     const double c = radius_mm != 0 ? 1 / radius_mm : 0.0;
     const double rot = *shape.rotation_radius_mm;
     base_quadric_ = true;
-    quadric_ = false;
+    quadric_ = rot == 0 && !shape.hasPolynomial();
     qcx_ = rot != 0 ? 1 / rot : 0.0, qcy_ = c;
     qe_ = c != 0 ? (1 + shape.conic) * c : qcx_;
-    boundSagCurvature();
+    if (!quadric_) boundSagCurvature();
     return;
   }
   // Quadric when (1 + k) c is the same for every curved section.

@@ -121,6 +121,10 @@ class ShapeIntersector {
   /// domain, or a sign change before the root. Only where hasLanes().
   static constexpr int kLanes = 16;
   bool hasLanes() const { return quadric_ || base_quadric_; }
+  /// Whether the hits are a quadric's closed form (rotational conics, biconics and cylinders
+  /// without polynomial terms), exact beyond bound_r too; else the surface is traced as defined
+  /// within the disc of radius bound_r only (the flat continuation beyond it).
+  bool quadric() const { return quadric_; }
   void intersectLanes(int n, const double* ox, const double* oy, const double* oz, const double* dx,
                       const double* dy, const double* dz, double t_min, double* t, double* nx,
                       double* ny, double* nz, double* status) const;

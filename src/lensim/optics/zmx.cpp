@@ -270,79 +270,10 @@ void ZmxParser::surfaceLine(const Line& l) {
       cur->n_d = number(t[4], line_no, "glass index n_d");
       cur->v_d = number(t[5], line_no, "glass Abbe number V_d");
     }
-  } else if (key == "CLAP" || key == "OBSC") {
-    // Circular aperture `CLAP rmin rmax` (clear between the radii) and circular obscuration
-    // `OBSC rmin rmax` (blocked between them), as Zemax writes them (the samples: `CLAP 0
-    // 25.4 0`, `OBSC 0 25 0`). An annular clear aperture and a central obscuration (rmin 0)
-    // both block the centre; an obscuring ring (OBSC rmin > 0) is not modelled.
-    const double rmin = num(1, "aperture minimum radius");
-    const double rmax = num(2, "aperture maximum radius");
-    const FileLoc vloc{path_, line_no, t[1].col};
-    if (!(rmin >= 0) || !(rmax > rmin))
-      throw Error(vloc, fmt::format("surface {}: {} radii {} .. {}: expected 0 <= minimum < "
-                                    "maximum",
-                                    cur->number, key, rmin, rmax));
-    if (key == "CLAP") {
-      if (cur->aperture_shape != ApertureShape::Circle)
-        throw surfErr("CLAP: the surface already has an aperture (one per surface)");
-      cur->clap_max = rmax;
-      if (rmin > 0) cur->inner_radius = rmin, cur->inner_loc = vloc;
-    } else {
-      if (rmin != 0)
-        throw Error(vloc, fmt::format("surface {}: OBSC {} {}: an obscuring ring (minimum "
-                                      "radius > 0) is not supported; a central obscuration "
-                                      "(OBSC 0 r) is",
-                                      cur->number, rmin, rmax));
-      cur->inner_radius = rmax, cur->inner_loc = FileLoc{path_, line_no, t[2].col};
-    }
-  } else if (key == "OBDC") {
-    // Aperture / obscuration decentre: refused unless zero.
-    for (size_t i = 1; i < t.size(); ++i)
-      if (number(t[i], line_no, "aperture decentre") != 0)
-        throw Error(FileLoc{path_, line_no, t[i].col},
-                    fmt::format("surface {}: OBDC: decentred apertures (off-axis mirrors) are "
-                                "not supported",
-                                cur->number));
-  } else if (key == "SQAP" || key == "ELAP") {
-    // Rectangular `SQAP hx hy` and elliptical `ELAP hx hy` apertures, centred (their decentre
-    // is the OBDC line): the half-widths in x and y, as OpticStudio writes them (Thorlabs'
-    // 4 mm x 6 mm cylindrical lens LJ1598L1: `SQAP 3.0 2 0`). Further values are refused
-    // unless 0.
-    const double hx = num(1, "aperture x half-width");
-    const double hy = num(2, "aperture y half-width");
-    if (!(hx > 0) || !(hy > 0) || !std::isfinite(hx) || !std::isfinite(hy))
-      throw Error(FileLoc{path_, line_no, t[!(hx > 0) || !std::isfinite(hx) ? 1 : 2].col},
-                  fmt::format("surface {}: {} half-widths {} {}: expected two finite values "
-                              "> 0",
-                              cur->number, key, hx, hy));
-    for (size_t i = 3; i < t.size(); ++i)
-      if (number(t[i], line_no, "aperture data") != 0)
-        throw Error(FileLoc{path_, line_no, t[i].col},
-                    fmt::format("surface {}: {}: value {} is {}; only centred apertures "
-                                "(hx hy 0) are supported",
-                                cur->number, key, i, t[i].text));
-    if (cur->clap_max)
-      throw surfErr(fmt::format("{}: the surface already has an aperture (one per surface)",
-                                key));
-    cur->aperture_shape = key == "SQAP" ? ApertureShape::Rectangle : ApertureShape::Ellipse;
-    cur->half_x = hx, cur->half_y = hy;
-    cur->clap_max = key == "SQAP" ? std::hypot(hx, hy) : std::max(hx, hy);
-    cur->aperture_loc = FileLoc{path_, line_no, t[0].col};
-  } else if (key == "SQOB" || key == "ELOB" || key == "UDAP" || key == "UDOB") {
-    throw surfErr(
-        fmt::format("{} (a surface aperture or obscuration other than circular) is "
-                    "not supported",
-                    key));
-  } else if (key == "SCBD" || key == "SCAD" || key == "DECX" || key == "DECY" ||
-             key == "TILT") {
-    // A surface's own decentres and tilts (before and after it): refused unless all zero;
-    // their field layout is not documented where it could be checked (COORDBRK surfaces are
-    // read).
-    for (size_t i = 2; i < t.size(); ++i)
-      if (number(t[i], line_no, "decentre/tilt") != 0)
-        throw surfErr(fmt::format("{}: a surface's own decentre or tilt is not supported (a "
-                                  "TYPE COORDBRK surface before it is)",
-                                  key));
+  } else {
+    // CLAP, OBSC, OBDC, SQAP, ELAP and the surface's own decentres and tilts; other keys are
+    // not read.
+    (void)apertureLine(l);
   }
 }
 
@@ -360,6 +291,7 @@ void ZmxParser::finishSystemData(LensPrescription& p, int last_line) {
                             "surface and the image are needed)",
                             surfs.size(), surfs.size() == 1 ? "" : "s"));
 
+  readSurfaceTilt();
   resolveCoordinateBreaks(surfs, p);
 
   // Wavelengths (micrometres in the file).
@@ -556,6 +488,7 @@ LensSurface ZmxParser::makeSurface(const ZSurface& z, double semi, double ior_be
   s.aperture_shape = z.aperture_shape;
   s.aperture_half_x_mm = z.half_x * unit_mm;
   s.aperture_half_y_mm = z.half_y * unit_mm;
+  s.aperture_decentre_mm = {z.obdc_x * unit_mm, z.obdc_y * unit_mm};
   if (z.inner_radius > 0) {
     s.obscuration_radius_mm = z.inner_radius * unit_mm;
     if (!(s.obscuration_radius_mm < semi))
@@ -608,7 +541,23 @@ void ZmxParser::checkExtent(const ZSurface& z, LensSurface& s, double& semi,
     semi = 0.999 * domain;
     s.aperture_diameter_mm = 2 * semi;
   }
-  if (s.shape.isToroidal() && semi >= domain) {
+  const auto outside = apertureOutsideSag(s);
+  if (!outside) {
+    // A toroid or an asphere-topped biconic is traced within the disc of its domain radius
+    // only (ShapeIntersector's bound); a quadric (a cylinder) everywhere.
+    const double reach = s.apertureReach_mm();
+    if (reach >= domain && !ShapeIntersector(s.radius_mm, s.shape, reach).quadric())
+      throw Error(s.apertureDecentred()     ? z.obdc_loc
+                  : z.aperture_loc.valid() ? z.aperture_loc
+                                           : z.diam_loc,
+                  fmt::format("surface {}: its aperture reaches {:.6g} mm from the axis; lensim "
+                              "traces this toroidal or biconic shape within {:.6g} mm of the "
+                              "axis only (in every direction)",
+                              z.number, reach / unit_mm, domain / unit_mm));
+    return;
+  }
+  const bool shaped = z.aperture_shape != ApertureShape::Circle || s.apertureDecentred();
+  if (s.shape.isToroidal() && !shaped) {
     // Within the y curve's own extent, the radius of rotation is what is too small.
     SurfaceShape y_curve = s.shape;
     y_curve.rotation_radius_mm = 0.0;
@@ -619,17 +568,20 @@ void ZmxParser::checkExtent(const ZSurface& z, LensSurface& s, double& semi,
                                              z.number, z.parm.count(1) ? z.parm.at(1) : 0.0,
                                              domain / unit_mm, semi / unit_mm));
   }
-  if (semi >= domain && z.aperture_shape != ApertureShape::Circle)
-    throw Error(z.aperture_loc,
-                fmt::format("surface {}: the corners of its {} aperture lie {} mm from the "
-                            "axis, beyond the surface's extent ({} mm) in some direction; "
-                            "lensim bounds a surface by a circle about the axis",
-                            z.number, z.aperture_shape == ApertureShape::Rectangle ? "SQAP" : "ELAP",
-                            semi, domain));
-  if (semi >= domain)
-    throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} mm exceeds the surface's "
-                                        "extent ({} mm)",
-                                        z.number, semi, domain));
+  if (shaped) {
+    const char* what = z.aperture_shape == ApertureShape::Rectangle ? "SQAP"
+                       : z.aperture_shape == ApertureShape::Ellipse ? "ELAP"
+                                                                    : "CLAP";
+    throw Error(s.apertureDecentred() ? z.obdc_loc : z.aperture_loc,
+                fmt::format("surface {}: its {} aperture{} reaches the point x {:.6g}, y "
+                            "{:.6g} mm, where the surface is not defined (its sag's square root "
+                            "fails: beyond its extent)",
+                            z.number, what, s.apertureDecentred() ? ", decentred by OBDC," : "",
+                            (*outside)[0] / unit_mm, (*outside)[1] / unit_mm));
+  }
+  throw Error(z.diam_loc, fmt::format("surface {}: semi-diameter {} mm exceeds the surface's "
+                                      "extent ({} mm)",
+                                      z.number, semi, domain));
 }
 
 namespace {

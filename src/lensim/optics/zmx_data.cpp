@@ -220,6 +220,15 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
     f.plane = z.curv == 0 && parms_zero && !z.xdat_loc && z.type != "TOROIDAL";
     f.symmetric = z.type != "TOROIDAL" && z.type != "DGRATING" &&
                   z.aperture_shape == ApertureShape::Circle;
+    if (z.obdc_loc.valid() && k > 0 && k + 1 < surfs.size()) {
+      if (!z.clap_max)
+        throw Error(z.obdc_loc, fmt::format("surface {}: OBDC decentres the surface's aperture "
+                                            "(CLAP, SQAP or ELAP), and it has none; a decentred "
+                                            "DIAM or obscuration alone is not modelled",
+                                            z.number));
+      f.decentred_aperture_loc = z.obdc_loc;
+      f.symmetric = false;
+    }
     if (!f.coordbrk) continue;
     if (!z.has_disz)
       throw Error(z.loc, fmt::format("surface {}: no DISZ (thickness) line", z.number));
@@ -319,6 +328,170 @@ void ZmxParser::resolveCoordinateBreaks(std::vector<ZSurface>& surfs, LensPrescr
                    "twin ({} surfaces, breaks removed)",
                    twin.size())});
   surfs = std::move(twin);
+}
+
+// A line of the current surface's aperture, obscuration or own decentre/tilt data; false when
+// the line is none of these.
+bool ZmxParser::apertureLine(const Line& l) {
+  const std::vector<Tok>& t = l.t;
+  const std::string_view key = t[0].text;
+  const int line_no = l.line_no;
+  const FileLoc& loc = l.loc;
+  auto num = [&](size_t i, const char* what) { return lineNumber(l, i, what); };
+  auto surfErr = [&](const std::string& msg) { return surfaceError(l, msg); };
+  if (key == "CLAP" || key == "OBSC") {
+    // Circular aperture `CLAP rmin rmax` (clear between the radii) and circular obscuration
+    // `OBSC rmin rmax` (blocked between them), as Zemax writes them (the samples: `CLAP 0
+    // 25.4 0`, `OBSC 0 25 0`). An annular clear aperture and a central obscuration (rmin 0)
+    // both block the centre; an obscuring ring (OBSC rmin > 0) is not modelled.
+    const double rmin = num(1, "aperture minimum radius");
+    const double rmax = num(2, "aperture maximum radius");
+    const FileLoc vloc{path_, line_no, t[1].col};
+    if (!(rmin >= 0) || !(rmax > rmin))
+      throw Error(vloc, fmt::format("surface {}: {} radii {} .. {}: expected 0 <= minimum < "
+                                    "maximum",
+                                    cur->number, key, rmin, rmax));
+    if (key == "CLAP") {
+      if (cur->aperture_shape != ApertureShape::Circle)
+        throw surfErr("CLAP: the surface already has an aperture (one per surface)");
+      cur->clap_max = rmax;
+      if (rmin > 0) cur->inner_radius = rmin, cur->inner_loc = vloc;
+    } else {
+      if (rmin != 0)
+        throw Error(vloc, fmt::format("surface {}: OBSC {} {}: an obscuring ring (minimum "
+                                      "radius > 0) is not supported; a central obscuration "
+                                      "(OBSC 0 r) is",
+                                      cur->number, rmin, rmax));
+      cur->inner_radius = rmax, cur->inner_loc = FileLoc{path_, line_no, t[2].col};
+    }
+  } else if (key == "OBDC") {
+    // Aperture / obscuration decentre `OBDC x y` (lens units, in the surface's own x and y): the
+    // surface's aperture and obscuration are centred at (x, y), as on an off-axis parabolic
+    // mirror (zmax_37992.zmx: CLAP 25.4 decentred 190.6 mm in y). Such a surface is not
+    // rotationally symmetric about the axis: the lens is placed in space (non-coaxial).
+    need(t, 3, line_no, "aperture decentre");
+    const double x = num(1, "aperture x decentre"), y = num(2, "aperture y decentre");
+    for (size_t i = 3; i < t.size(); ++i)
+      if (number(t[i], line_no, "aperture decentre") != 0)
+        throw Error(FileLoc{path_, line_no, t[i].col},
+                    fmt::format("surface {}: OBDC: value {} is {}; only the decentres x and y "
+                                "are read",
+                                cur->number, i, t[i].text));
+    cur->obdc_x = x, cur->obdc_y = y;
+    if (x != 0 || y != 0) cur->obdc_loc = FileLoc{path_, line_no, t[x != 0 ? 1 : 2].col};
+  } else if (key == "SQAP" || key == "ELAP") {
+    // Rectangular `SQAP hx hy` and elliptical `ELAP hx hy` apertures, centred (their decentre
+    // is the OBDC line): the half-widths in x and y, as OpticStudio writes them (Thorlabs'
+    // 4 mm x 6 mm cylindrical lens LJ1598L1: `SQAP 3.0 2 0`). Further values are refused
+    // unless 0.
+    const double hx = num(1, "aperture x half-width");
+    const double hy = num(2, "aperture y half-width");
+    if (!(hx > 0) || !(hy > 0) || !std::isfinite(hx) || !std::isfinite(hy))
+      throw Error(FileLoc{path_, line_no, t[!(hx > 0) || !std::isfinite(hx) ? 1 : 2].col},
+                  fmt::format("surface {}: {} half-widths {} {}: expected two finite values "
+                              "> 0",
+                              cur->number, key, hx, hy));
+    for (size_t i = 3; i < t.size(); ++i)
+      if (number(t[i], line_no, "aperture data") != 0)
+        throw Error(FileLoc{path_, line_no, t[i].col},
+                    fmt::format("surface {}: {}: value {} is {}; only centred apertures "
+                                "(hx hy 0) are supported",
+                                cur->number, key, i, t[i].text));
+    if (cur->clap_max)
+      throw surfErr(fmt::format("{}: the surface already has an aperture (one per surface)",
+                                key));
+    cur->aperture_shape = key == "SQAP" ? ApertureShape::Rectangle : ApertureShape::Ellipse;
+    cur->half_x = hx, cur->half_y = hy;
+    cur->clap_max = key == "SQAP" ? std::hypot(hx, hy) : std::max(hx, hy);
+    cur->aperture_loc = FileLoc{path_, line_no, t[0].col};
+  } else if (key == "SQOB" || key == "ELOB" || key == "UDAP" || key == "UDOB") {
+    throw surfErr(
+        fmt::format("{} (a surface aperture or obscuration other than circular) is "
+                    "not supported",
+                    key));
+  } else if (key == "SCBD") {
+    // The surface's own decentre and tilt before it, as OpticStudio writes it
+    // (zmax_37992.zmx's image surface: `SCBD 1 0 0 0 0 90 0 0`): three flags, then decentre x,
+    // y and tilt about x, y, z, the five values of a coordinate break (PARM 1 .. 5). The flags'
+    // meaning (among them the order of decentres and tilts) is not documented where it could be
+    // checked, so only lines on which the order cannot matter are read: flags 2 and 3 zero and
+    // at most one motion (a decentre, or a tilt about one axis).
+    if (t.size() < 9) {
+      for (size_t i = 2; i < t.size(); ++i)
+        if (number(t[i], line_no, "decentre/tilt") != 0)
+          throw Error(FileLoc{path_, line_no, t[i].col},
+                      fmt::format("surface {}: SCBD with {} values: expected 8 (three flags, "
+                                  "decentre x, y, tilt x, y, z)",
+                                  cur->number, t.size() - 1));
+      return true;
+    }
+    std::array<double, 5> v{};
+    bool any = false;
+    for (size_t i = 2; i < t.size(); ++i) {
+      const double x = number(t[i], line_no, "decentre/tilt");
+      if (i <= 3 && x != 0)
+        throw Error(FileLoc{path_, line_no, t[i].col},
+                    fmt::format("surface {}: SCBD flag {} is {}; only 0 is read (its meaning "
+                                "is not documented where it could be checked)",
+                                cur->number, i, t[i].text));
+      if (i >= 9 && x != 0)
+        throw Error(FileLoc{path_, line_no, t[i].col},
+                    fmt::format("surface {}: SCBD value {} is {}; expected 8 values", cur->number,
+                                i, t[i].text));
+      if (i >= 4 && i <= 8) {
+        v[i - 4] = x;
+        cur->scbd_loc[i - 4] = FileLoc{path_, line_no, t[i].col};
+        any = any || x != 0;
+      }
+    }
+    if (!any) return true;
+    const int motions = (v[0] != 0 || v[1] != 0) + (v[2] != 0) + (v[3] != 0) + (v[4] != 0);
+    if (motions > 1)
+      throw surfErr("SCBD: a decentre and tilts, or tilts about more than one axis, on one "
+                    "line; their order is a flag whose place on the line is not documented "
+                    "where it could be checked (a TYPE COORDBRK surface before it is read)");
+    cur->scbd = v;
+    cur->scbd_line = loc;
+  } else if (key == "SCAD" || key == "DECX" || key == "DECY" || key == "TILT") {
+    // A surface's own decentres and tilts after it, and the older forms: refused unless all
+    // zero; their field layout is not documented where it could be checked (COORDBRK surfaces
+    // are read).
+    for (size_t i = 2; i < t.size(); ++i)
+      if (number(t[i], line_no, "decentre/tilt") != 0)
+        throw surfErr(fmt::format("{}: a surface's own decentre or tilt is not supported (a "
+                                  "TYPE COORDBRK surface before it is)",
+                                  key));
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// A surface's own decentre or tilt (SCBD) is read on the image surface, where nothing follows
+// it (whether the frame is restored after the surface does not matter there): a coordinate
+// break just before it.
+void ZmxParser::readSurfaceTilt() {
+  for (size_t k = 0; k < surfs.size(); ++k) {
+    if (!surfs[k].scbd) continue;
+    if (k + 1 != surfs.size())
+      throw Error(surfs[k].scbd_line,
+                  fmt::format("surface {}: SCBD (the surface's own decentre or tilt) is read on "
+                              "the image surface only; put a TYPE COORDBRK surface before this "
+                              "one",
+                              surfs[k].number));
+    ZSurface cb;
+    cb.number = surfs[k].number;
+    cb.loc = cb.type_loc = surfs[k].scbd_line;
+    cb.type = "COORDBRK";
+    cb.has_disz = true;
+    cb.disz = 0.0;
+    for (int i = 0; i < 5; ++i) {
+      cb.parm[i + 1] = (*surfs[k].scbd)[size_t(i)];
+      cb.parm_loc[i + 1] = surfs[k].scbd_loc[size_t(i)];
+    }
+    surfs.insert(surfs.begin() + std::ptrdiff_t(k), std::move(cb));
+    break;
+  }
 }
 
 }  // namespace lensim::optics::zmx_detail

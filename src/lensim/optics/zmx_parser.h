@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <map>
@@ -54,6 +55,13 @@ struct ZSurface {
   FileLoc aperture_loc;                                   // the SQAP/ELAP/CLAP line
   double inner_radius = 0;  // central obscuration (OBSC 0 r, or CLAP's minimum radius)
   FileLoc inner_loc;
+  double obdc_x = 0, obdc_y = 0;  // OBDC: the aperture's (and obscuration's) decentre
+  FileLoc obdc_loc;               // its first non-zero value
+  // SCBD (the surface's own decentre and tilt before it) with non-zero values: decentre x, y,
+  // tilt about x, y, z, and their places; read as a coordinate break before the image surface.
+  std::optional<std::array<double, 5>> scbd;
+  std::array<FileLoc, 5> scbd_loc;
+  FileLoc scbd_line;
   bool mirror = false;
   std::string coating;  // COAT name
   FileLoc coating_loc;
@@ -163,6 +171,8 @@ class ZmxParser {
   }
   void systemLine(LensPrescription& p, const Line& l);
   void surfaceLine(const Line& l);
+  bool apertureLine(const Line& l);
+  void readSurfaceTilt();
   void finishSystemData(LensPrescription& p, int last_line);
   void buildSurfaces(LensPrescription& p);
   LensSurface makeSurface(const ZSurface& z, double semi, double ior_before,

@@ -73,6 +73,9 @@ std::string surfaceLines(const LensSurface& s, size_t row, double disz) {
   o += fmt::format("  DIAM {} 1 0 0 1 \"\"\n", num(s.semiAperture_mm()));
   if (s.obscuration_radius_mm > 0)
     o += fmt::format("  OBSC 0 {} 0\n", num(s.obscuration_radius_mm));
+  if (s.apertureDecentred())  // OBDC decentres an explicit aperture
+    o += fmt::format("  CLAP 0 {} 0\n  OBDC {} {}\n", num(s.semiAperture_mm()), num(s.aperture_decentre_mm[0]),
+                     num(s.aperture_decentre_mm[1]));
   return o;
 }
 
