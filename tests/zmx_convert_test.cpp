@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -33,8 +33,8 @@ std::string zmxDir() {
 
 // A fresh directory for this process, removed at the end.
 struct TempDir {
-  std::filesystem::path path = std::filesystem::temp_directory_path() /
-                               fmt::format("zmx-convert-test-{}", long(getpid()));
+  std::filesystem::path path =
+      std::filesystem::temp_directory_path() / fmt::format("zmx-convert-test-{}", long(getpid()));
   TempDir() {
     std::filesystem::remove_all(path);
     std::filesystem::create_directories(path);
