@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "lensim/optics/lens_system.h"
 #include "lensim/optics/paraxial.h"
@@ -54,6 +57,64 @@ struct RaySetup {
   bool finite;       ///< the object is at a finite distance
   std::vector<bool> computed;  ///< per surface: its semi-diameter is being computed
 };
+
+/// Why no ray fills the stop when the entrance pupil is the stop's paraxial image (FLOA): the
+/// highest point of the stop that real rays from the axial object point reach, scanning the
+/// entrance pupil's plane from the axis out to its paraxial radius until a ray fails. Empty when
+/// the pupil is given (ENPD, FNUM) or some ray reaches the stop's rim (the failure has another
+/// cause then).
+std::string unfilledStopReason(const RaySetup& c, const LensSystem& sys, double lambda) {
+  if (c.spec.entrance_pupil_diameter_mm > 0) return {};
+  constexpr int kSteps = 4000;
+  const TraceOptions unclipped{false, false};
+  std::vector<Vec3> path;
+  double highest = 0, highest_at = 0;
+  std::optional<double> fails_at;
+  bool falling = false;
+  for (int i = 1; i <= kSteps; ++i) {
+    const double v = c.rp * i / kSteps;
+    const Vec3 pupil{0, v, c.ep.z_mm};
+    Ray ray;
+    if (c.finite) {
+      ray.origin = {0, 0, -*c.p.object_distance_mm};
+      ray.direction = normalize(pupil - ray.origin);
+    } else {
+      ray.direction = {0, 0, 1};
+      ray.origin = {0, v, c.z_launch};
+    }
+    path.clear();
+    const TraceResult r = sys.tracer().traceFromScene(ray, unclipped, &path);
+    const size_t at = size_t(c.stop) + 1;
+    if (path.size() <= at || !(r.ok() || r.blocked_surface > c.stop) ||
+        !std::isfinite(path[at].y)) {
+      fails_at = v;
+      break;
+    }
+    // Only the rays whose stop height still grows with their pupil height: past the first
+    // maximum the height falls (and may cross the axis), so ray aiming continued outward from
+    // the axis cannot get beyond it.
+    const double h = std::hypot(path[at].x, path[at].y);
+    if (!falling && h >= highest)
+      highest = h, highest_at = v;
+    else
+      falling = true;
+  }
+  if (highest >= c.stop_semi) return {};
+  return fmt::format(
+      "; the system aperture is the stop's size (FLOA): its semi-diameter {:.6g} mm images to a "
+      "paraxial entrance pupil of radius {:.6g} mm, but real rays {} at {:.6g} nm, traced "
+      "outward from the axis, meet the stop at most {:.6g} mm from its centre (through the "
+      "entrance pupil's plane {:.6g} mm off the axis){}{}: no ray aimed at the paraxial pupil or "
+      "at the stop (RAIM) fills it; give the stop a DIAM of at most {:.6g} mm, or the file an "
+      "ENPD or FNUM",
+      c.stop_semi, c.rp, c.finite ? "from the axial object point" : "parallel to the axis", lambda,
+      highest, highest_at, falling ? ", their stop height falling beyond (aberration)" : "",
+      fails_at ? fmt::format(", and from {:.6g} mm off the axis they miss a surface or are "
+                             "totally reflected",
+                             *fails_at)
+               : std::string(),
+      highest);
+}
 
 /// Traces the chief ray and the pupil's edge of field f (number f + 1 in messages) at the
 /// wavelength of sys (lambda nm), aimed at the stop when asked, and widens semi[i] to the
@@ -148,8 +209,9 @@ void widenForField(const RaySetup& c, const LensSystem& sys, double lambda, size
         throw Error(spec.fields_loc,
                     fmt::format("automatic semi-diameters with ray aiming: no real ray of "
                                 "field {} ({}, {}) at {:.6g} nm meets the stop at ({:.6g}, "
-                                "{:.6g}) mm",
-                                f + 1, fx, fy, lambda, target.x, target.y));
+                                "{:.6g}) mm{}",
+                                f + 1, fx, fy, lambda, target.x, target.y,
+                                k < 0 ? std::string() : unfilledStopReason(c, sys, lambda)));
       if (k < 0) guess = aim;
     }
     path.clear();
@@ -168,14 +230,14 @@ void widenForField(const RaySetup& c, const LensSystem& sys, double lambda, size
     }
     if (!r.ok() && r.blocked_surface >= 0 && size_t(r.blocked_surface) <= reach) {
       const LensSurface& s = p.surfaces[size_t(r.blocked_surface)];
-      throw Error(s.loc,
-                  fmt::format("automatic semi-diameters: the {} ray of field {} ({}, {}) at "
-                              "{:.6g} nm {} this surface before any aperture the file gives "
-                              "stops it",
-                              k < 0 ? "chief" : "pupil-edge", f + 1, fx, fy, lambda,
-                              r.reason == BlockReason::TotalInternalReflection
-                                  ? "is totally reflected at"
-                                  : "misses"));
+      throw Error(s.loc, fmt::format("automatic semi-diameters: the {} ray of field {} ({}, {}) at "
+                                     "{:.6g} nm {} this surface before any aperture the file gives "
+                                     "stops it{}",
+                                     k < 0 ? "chief" : "pupil-edge", f + 1, fx, fy, lambda,
+                                     r.reason == BlockReason::TotalInternalReflection
+                                         ? "is totally reflected at"
+                                         : "misses",
+                                     k < 0 ? std::string() : unfilledStopReason(c, sys, lambda)));
     }
     for (size_t i = 0; i < surfaces.size(); ++i)
       if (size_t(surfaces[i]) < reach)

@@ -36,7 +36,9 @@ struct AutoSemiDiameterSpec {
 /// excepted: rays aimed at the paraxial pupil may pass its rim); the placeholder apertures of the
 /// computed surfaces must lie inside their surfaces' extents. Returns the semi-diameters found
 /// (mm), in the order of `surfaces`. Throws a located Error where a ray misses a surface or is
-/// totally reflected, or where a surface cannot be as large as its rays need.
+/// totally reflected, or where a surface cannot be as large as its rays need; when the pupil is the
+/// stop's image (FLOA) and no real ray from the axial object point reaches the stop's rim, that
+/// error also gives the highest stop height real rays reach and where they stop getting through.
 std::vector<double> computeAutoSemiDiameters(const LensPrescription& p,
                                              const std::vector<int>& surfaces,
                                              const AutoSemiDiameterSpec& spec);

@@ -414,7 +414,10 @@ void ZmxParser::buildSurfaces(LensPrescription& p) {
                          "vertex, {} it",
                          z.number, before ? "just before" : "just after")});
         if (before) {
+          // The plane sits in the medium before the surface: its glass too, or a stop inside
+          // glass would lose the glass's dispersion (and the .zmx writer could not state it).
           st.ior = ior_before;
+          st.glass = glass_before;
           st.thickness_mm = 0;
           p.surfaces.push_back(st);
           p.surfaces.push_back(s);
