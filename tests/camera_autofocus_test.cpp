@@ -3,7 +3,7 @@
 #include <cmath>
 #include <random>
 
-#include "lensim/camera/autofocus.h"
+#include "lensim/camera/focus_search.h"
 #include "lensim/camera/realistic.h"
 #include "test_paths.h"
 

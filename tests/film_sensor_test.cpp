@@ -11,7 +11,7 @@
 
 #include "lensim/render/film/film.h"
 #include "lensim/render/film/pixel_sensor.h"
-#include "lensim/scene/film_sensor.h"
+#include "lensim/scene/sensor_settings.h"
 #include "render_test_util.h"
 
 namespace lensim {

@@ -163,3 +163,48 @@ TEST(SobolDimensions, FirstValuesMatchTheSequence) {
     EXPECT_EQ(sobolDimension1(i) * 0x1p-32, d1[i]);
   }
 }
+
+// The samplers' per-pixel key cache: each dimension's value is made once per pixel below
+// kSamplerCachedDimensions, at every lookup from there on, and again after a new pixel.
+TEST(DimensionCache, MakesOncePerPixelBelowTheCachedDimensions) {
+  DimensionCache<int> cache;
+  int made = 0;
+  auto value = [&](int dim, int pixel) {
+    return cache.get(dim, [&] {
+      ++made;
+      return dim * 1000 + pixel;
+    });
+  };
+  const int last = kSamplerCachedDimensions + 10;
+  for (int pixel = 0; pixel < 3; ++pixel) {
+    cache.newPixel();
+    made = 0;
+    for (int round = 0; round < 2; ++round)
+      for (int dim = 0; dim < last; ++dim) EXPECT_EQ(value(dim, pixel), dim * 1000 + pixel);
+    EXPECT_EQ(made, kSamplerCachedDimensions + 2 * 10) << pixel;
+  }
+}
+
+// The cache is invisible in the values: a sample's values at dimensions below and beyond the
+// cached ones, drawn after other pixels' samples, equal those of a newly made sampler (empty
+// cache) started right at that dimension.
+TEST(Sampler, CachedKeysGiveTheValuesOfANewSampler) {
+  auto samplers = allSamplers(16);
+  for (size_t k = 0; k < samplers.size(); ++k) {
+    Sampler& s = *samplers[k];
+    const int dims[] = {0, 8, kSamplerCachedDimensions - 2, kSamplerCachedDimensions,
+                        kSamplerCachedDimensions + 42};
+    for (Point2i p : {Point2i{3, 4}, Point2i{9, 1}, Point2i{3, 4}})
+      for (int index : {0, 5, 15})
+        for (int dim : dims) {
+          s.startPixelSample(p, index);
+          for (int d = 0; d < dim; d += 2) s.get2D();  // the dimensions before, cached
+          const Vec2 a = s.get2D();
+          const double b = s.get1D();
+          auto fresh = std::move(allSamplers(16)[k]);
+          fresh->startPixelSample(p, index, dim);
+          EXPECT_EQ(fresh->get2D(), a) << k << " " << dim;
+          EXPECT_EQ(fresh->get1D(), b) << k << " " << dim;
+        }
+  }
+}

@@ -11,6 +11,14 @@
 #      mentions are updated.
 #   3. ExitPupilSampler::area_mm2() becomes areaMm2(), as the other unit-suffixed functions are
 #      spelled (centreAreaMm2()); data members named area_mm2 keep their names.
+#   4. Files named for what they hold: camera/autofocus.{h,cpp} (zone files, the sharpness score
+#      and the search over film distances that the scene-level render/autofocus_scene drives)
+#      becomes camera/focus_search; scene/film_sensor.{h,cpp} (the sensor names a scene may give,
+#      the imaging ratio and the white-balance temperature; the sensors themselves are
+#      render/film/pixel_sensor) becomes scene/sensor_settings. Includes, CMake lists and
+#      mentions are updated.
+#   5. render/ builds one library, lensim_render: lensim_engine in CMake files becomes
+#      lensim_render (render/CMakeLists.txt itself is edited by hand).
 # Usage: scripts/dev/rename-32.sh [--dry-run]   (--dry-run: list the files it would change)
 set -euo pipefail
 cd "$(git rev-parse --show-toplevel)"
@@ -124,6 +132,31 @@ done
 # --- 3. area_mm2() -> areaMm2() ------------------------------------------------------------------
 for f in $(code_files); do
   apply "$f" 's/(ExitPupilSampler::|\.|->)area_mm2\(/$1areaMm2(/g; s/(\bdouble )area_mm2(\(Vec2 film_mm)/$1areaMm2$2/g'
+done
+
+# --- 4. camera/focus_search, scene/sensor_settings ----------------------------------------------
+for pair in camera/autofocus:camera/focus_search scene/film_sensor:scene/sensor_settings; do
+  from=${pair%%:*} to=${pair#*:}
+  for ext in h cpp; do
+    if [ -f "src/lensim/$from.$ext" ]; then
+      changed+=("src/lensim/$from.$ext")
+      [ $dry = 1 ] || git mv "src/lensim/$from.$ext" "src/lensim/$to.$ext"
+    fi
+  done
+done
+for f in $(text_files); do
+  apply "$f" 's{\bcamera/autofocus\.(h|cpp)\b}{camera/focus_search.$1}g;
+              s{\bscene/film_sensor\.(h|cpp)\b}{scene/sensor_settings.$1}g;
+              s{\bfilm_sensor\.(h|cpp)\b}{sensor_settings.$1}g'
+done
+for f in src/lensim/camera/CMakeLists.txt src/lensim/scene/CMakeLists.txt; do
+  apply "$f" 's{^(\s+)autofocus\.cpp$}{$1focus_search.cpp}m; s{^(\s+)film_sensor\.cpp$}{$1sensor_settings.cpp}m'
+done
+
+# --- 5. one library for render/ ---------------------------------------------------------------
+for f in $(git ls-files -co --exclude-standard -- 'CMakeLists.txt' '*/CMakeLists.txt' '*.cmake'); do
+  [ "$f" = src/lensim/render/CMakeLists.txt ] && continue
+  apply "$f" 's/\blensim_engine\b/lensim_render/g'
 done
 
 [ ${#changed[@]} = 0 ] || printf '%s\n' "${changed[@]}" | sort -u | sed "s/^/rename-32: $([ $dry = 1 ] && echo would change || echo changed) /"

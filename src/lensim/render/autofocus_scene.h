@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "lensim/camera/autofocus.h"
+#include "lensim/camera/focus_search.h"
 #include "lensim/scene/description.h"
 
 namespace lensim::render {

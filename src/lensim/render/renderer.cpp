@@ -655,7 +655,7 @@ RenderResult render(const scene::Scene& scene, const RenderOptions& opt) {
   SceneContext sc = sceneContext(scene, *world, opt.pbrt_v2_quirks);
 
   // A camera sensor lensim does not bundle is warned once, at its parameter, by the builder
-  // (scene/film_sensor.cpp).
+  // (scene/sensor_settings.cpp).
   const int spp_req = opt.spp.value_or(scene.sampler.pixel_samples);
   if (spp_req <= 0 || spp_req > kMaxSamplesPerPixel)
     throw Error(

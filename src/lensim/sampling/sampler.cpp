@@ -51,10 +51,7 @@ Rng StratifiedSampler::pixelRng() const {
 
 void StratifiedSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
   if (pixel != pixel_) {
-    if (++stamp_ == 0) {
-      for (DimensionKeys& k : keys_) k.stamp = 0;
-      stamp_ = 1;
-    }
+    keys_.newPixel();
     pixel_ = pixel;
     pixel_rng_ = pixelRng();
   }
@@ -77,17 +74,10 @@ Rng StratifiedSampler::jitterRng(int dim) const {
 // The stratum permutation's keys for dimension `dim` of the current pixel: computed once per
 // pixel and dimension, and every time beyond the cached dimensions.
 const PermutationKeys& StratifiedSampler::keys(int dim) {
-  const size_t d = static_cast<size_t>(dim);
-  DimensionKeys* k = &scratch_;
-  if (d < kSamplerCachedDimensions) {
-    if (d >= keys_.size()) keys_.resize(d + 1);
-    k = &keys_[d];
-    if (k->stamp == stamp_) return k->permutation;
-    k->stamp = stamp_;
-  }
-  k->permutation = PermutationKeys(
-      hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim), static_cast<uint64_t>(seed_)}));
-  return k->permutation;
+  return keys_.get(dim, [&] {
+    return PermutationKeys(
+        hashValues({pixelKey(pixel_), static_cast<uint64_t>(dim), static_cast<uint64_t>(seed_)}));
+  });
 }
 
 int StratifiedSampler::stratum(int dim) {
@@ -179,10 +169,7 @@ PaddedSobolSampler::PaddedSobolSampler(int samples_per_pixel, int seed) : seed_(
 void PaddedSobolSampler::startPixelSample(Point2i pixel, int sample_index, int dimension) {
   if (pixel != pixel_) {
     pixel_ = pixel;
-    if (++stamp_ == 0) {
-      for (DimensionKeys& k : keys_) k.stamp = 0;
-      stamp_ = 1;
-    }
+    keys_.newPixel();
   }
   index_ = sample_index;
   index_in_block_ = static_cast<uint32_t>(index_ % spp_);
@@ -197,19 +184,14 @@ uint64_t PaddedSobolSampler::dimensionHash(int dim) const {
 // The keys of dimension `dim` for the current pixel: computed once per pixel and dimension
 // (the pixel's samples follow each other), and every time beyond the cached dimensions.
 const PaddedSobolSampler::DimensionKeys& PaddedSobolSampler::keys(int dim) {
-  const size_t d = static_cast<size_t>(dim);
-  DimensionKeys* k = &scratch_;
-  if (d < kSamplerCachedDimensions) {
-    if (d >= keys_.size()) keys_.resize(d + 1);
-    k = &keys_[d];
-    if (k->stamp == stamp_) return *k;
-    k->stamp = stamp_;
-  }
-  const uint64_t h = dimensionHash(dim);
-  k->permutation = PermutationKeys(h);
-  k->owen[0] = static_cast<uint32_t>(mixBits(mixBits(h + 1)));
-  k->owen[1] = static_cast<uint32_t>(mixBits(mixBits(h + 2)));
-  return *k;
+  return keys_.get(dim, [&] {
+    const uint64_t h = dimensionHash(dim);
+    DimensionKeys k;
+    k.permutation = PermutationKeys(h);
+    k.owen[0] = static_cast<uint32_t>(mixBits(mixBits(h + 1)));
+    k.owen[1] = static_cast<uint32_t>(mixBits(mixBits(h + 2)));
+    return k;
+  });
 }
 
 uint32_t PaddedSobolSampler::permutedIndex(const DimensionKeys& k) const {

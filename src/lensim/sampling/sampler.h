@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "lensim/sampling/dimension_cache.h"
 #include "lensim/sampling/sampling.h"
 #include "lensim/util/vec.h"
 
@@ -65,10 +66,6 @@ class IndependentSampler final : public Sampler {
   Rng rng_;
 };
 
-/// Dimensions below this get their per-(pixel, dimension) hash work cached for the current pixel
-/// by the samplers that cache it (a pixel's samples follow each other in the render loop).
-inline constexpr int kSamplerCachedDimensions = 256;
-
 /// Jittered stratification: per dimension, x_samples * y_samples strata (2-D) or that many
 /// intervals (1-D) per pixel, each pixel sample taking a stratum through a per-pixel,
 /// per-dimension random permutation; jitter inside the stratum unless jitter is false.
@@ -83,11 +80,6 @@ class StratifiedSampler final : public Sampler {
   std::unique_ptr<Sampler> clone() const override;
 
  private:
-  /// The stratum permutation's keys of a dimension for the current pixel.
-  struct DimensionKeys {
-    PermutationKeys permutation;
-    uint32_t stamp = 0;  ///< valid for the current pixel where stamp == stamp_
-  };
   const PermutationKeys& keys(int dim);
   int stratum(int dim);
   Rng pixelRng() const;
@@ -97,11 +89,9 @@ class StratifiedSampler final : public Sampler {
   Point2i pixel_{};
   int index_ = 0, dim_ = 0;
   uint32_t stratum_index_ = 0;  ///< index_ % samplesPerPixel()
-  uint32_t stamp_ = 1;          // 0 marks an entry never written
   Rng pixel_rng_;               ///< the pixel's jitter stream at its start
   Rng sample_rng_;              ///< pixel_rng_ advanced to sample index_'s stretch
-  std::vector<DimensionKeys> keys_;
-  DimensionKeys scratch_;  // beyond kSamplerCachedDimensions
+  DimensionCache<PermutationKeys> keys_;  ///< each dimension's stratum permutation keys
 };
 
 /// Padded Sobol sampler: each dimension pair is the first two Sobol dimensions (a (0,2)-sequence
@@ -124,7 +114,6 @@ class PaddedSobolSampler final : public Sampler {
   struct DimensionKeys {
     PermutationKeys permutation;
     uint32_t owen[2] = {};
-    uint32_t stamp = 0;  ///< valid for the current pixel where stamp == stamp_
   };
   uint64_t dimensionHash(int dim) const;
   const DimensionKeys& keys(int dim);
@@ -133,9 +122,7 @@ class PaddedSobolSampler final : public Sampler {
   Point2i pixel_{};
   int index_ = 0, dim_ = 0;
   uint32_t index_in_block_ = 0;  ///< index_ % spp_
-  uint32_t stamp_ = 1;           // 0 marks an entry never written
-  std::vector<DimensionKeys> keys_;
-  DimensionKeys scratch_;  // beyond kSamplerCachedDimensions
+  DimensionCache<DimensionKeys> keys_;
 };
 
 /// Randomisation of pbrt-v4's Sobol samplers ("string randomization").

@@ -16,7 +16,7 @@
 #include "lensim/render/sensor/sensor_model.h"
 #include "lensim/sampling/filter.h"
 #include "lensim/scene/description.h"
-#include "lensim/scene/film_sensor.h"
+#include "lensim/scene/sensor_settings.h"
 #include "lensim/util/check.h"
 
 namespace lensim::render {

@@ -19,7 +19,7 @@
 
 #include "lensim/io/ply.h"
 #include "lensim/scene/description.h"
-#include "lensim/scene/film_sensor.h"
+#include "lensim/scene/sensor_settings.h"
 #include "lensim/scene/media_presets.h"
 #include "lensim/scene/params.h"
 #include "lensim/scene/shapes_tessellated.h"

@@ -1,5 +1,6 @@
-// Autofocus, as in the CS348B assignment: find the film distance at which chosen zones of the
-// image are sharpest, by rendering them at candidate film distances and scoring their contrast.
+// The focus search of autofocus (as in the CS348B assignment): the zones of the image to focus
+// on, the sharpness score of a zone's image, and the search for the film distance that maximises
+// a score. What renders the zones at each film distance is render/autofocus_scene.h.
 //
 // Zone files (`af_zones`, `lensim autofocus --zones`): one zone per line, `left right top bottom`
 // as fractions of the image width and height (y down). Lines that start with `#`, a space or a tab,

@@ -1,5 +1,5 @@
-// pbrt-v4's film sensor model: names and formulas. See film_sensor.h for the pbrt-v4 sources.
-#include "lensim/scene/film_sensor.h"
+// pbrt-v4's film sensor model: names and formulas. See sensor_settings.h for the pbrt-v4 sources.
+#include "lensim/scene/sensor_settings.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "lensim/camera/autofocus.h"
+#include "lensim/camera/focus_search.h"
 
 #include <fmt/format.h>
 

@@ -1,7 +1,7 @@
-// pbrt-v4's film sensor model (src/pbrt/film.cpp, PixelSensor::Create; src/pbrt/util/spectrum.cpp,
-// the named sensor curves and Spectra::D): the sensor names pbrt-v4 knows, the imaging ratio of
-// ISO and exposure time, and the white-balance temperature. The sensors themselves (curves,
-// matrices) are render/film/pixel_sensor.h.
+// The film sensor settings a scene gives, after pbrt-v4's film sensor model (src/pbrt/film.cpp,
+// PixelSensor::Create; src/pbrt/util/spectrum.cpp, the named sensor curves and Spectra::D): the
+// sensor names pbrt-v4 knows, the imaging ratio of ISO and exposure time, and the white-balance
+// temperature. The sensors themselves (curves, matrices) are render/film/pixel_sensor.h.
 #pragma once
 
 #include <string>
