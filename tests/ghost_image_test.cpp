@@ -208,10 +208,10 @@ TEST(GhostImage, BadOptionsAreRefusedAndNothingIsWritten) {
   const std::string exr = tmpPath("bad.exr"), png = tmpPath("bad.png");
   std::remove(exr.c_str());
   std::remove(png.c_str());
-  const std::string base = "lens plot ghosts " + lens + " --grid 8 --size 32 ";
+  const std::string base = "lens plot ghosts " + lens + " ";
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"--image --size 5 -o " + exr, "--size 5"},
-      {"--image --grid 1 -o " + exr, "--grid 1"},
+      {"--image --size 5 --grid 8 -o " + exr, "--size 5"},
+      {"--image --grid 1 --size 32 -o " + exr, "--grid 1"},
       {"--image --angle 95 -o " + exr, "--angle 95"},
       {"--image --decades 0 -o " + exr, "--decades 0"},
       {"--image --ghost 3,3 -o " + exr, "ghost 3,3"},
@@ -222,7 +222,7 @@ TEST(GhostImage, BadOptionsAreRefusedAndNothingIsWritten) {
       {"--image -o " + tmpPath("bad.svg"), "bad.svg"},
       {"--image -o " + png + " --exr " + tmpPath("bad.tif"), "bad.tif"},
       {"--image -o /nonexistent-dir/x.exr", "nonexistent-dir"},
-      {"-o " + exr, "applies to 'ghosts --image' only"},
+      {"--size 32 -o " + exr, "--size applies to 'ghosts --image' only"},
   };
   for (const auto& [opts, what] : cases) {
     const test::CliResult r = test::runLensim(base + opts);
