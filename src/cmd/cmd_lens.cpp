@@ -954,11 +954,14 @@ void registerLensCommands(CLI::App& app, Action& action) {
     };
     imageOption("--size", pa->image.size, "ghosts --image: pixels across (default 600; 3:2)");
     imageOption("--grid", pa->image.grid,
-                "ghosts --image: rays across the entrance per path (default 128)");
+                "ghosts --image: rays across the entrance per path (default 256)");
     imageOption("--ghost", pa->image.ghost, "ghosts --image: the ghost I,J only (and the direct)");
     imageOption("--decades", pa->image.decades,
-                "ghosts --image: decades of luminance the tone map shows (default 6)");
+                "ghosts --image: decades of luminance the tone map shows (default 8)");
     imageOption("--exr", pa->image.exr, "ghosts --image: also write the unscaled EXR here");
+    imageOption("--coating", pa->image.coating,
+                "ghosts --image: lens-wide coating of the air-glass surfaces that name none "
+                "(uncoated, single, multi, ...), as lens ghosts --coating");
     plot->callback([&action, args, pa] { action = [args, pa] { return runPlot(*args, *pa); }; });
   }
   {

@@ -49,10 +49,11 @@ struct GhostImageArgs {
   bool as_json = false;     ///< --json: print the per-path numbers
   double angle_deg = 0;     ///< --angle: the light's angle off axis (x-z plane)
   int size = 600;           ///< --size: raster width in pixels (height: 2/3 of it)
-  int grid = 128;           ///< --grid: rays across the entrance (traceSpot's grid)
+  int grid = 256;           ///< --grid: rays across the entrance (traceSpot's grid)
   std::string wavelengths;  ///< --wavelengths: nm list; empty: 450,550,650
   std::string ghost;        ///< --ghost I,J: that ghost only (with the direct image)
-  double decades = 6;       ///< --decades: the tone map's range (log10)
+  double decades = 8;       ///< --decades: the tone map's range (log10)
+  std::string coating;      ///< --coating: the lens-wide default coating instead of the file's
 };
 
 /// `lensim lens plot ghosts LENS --image -o OUT`: a point light's film image, direct and every

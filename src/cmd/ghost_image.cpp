@@ -235,7 +235,12 @@ int runGhostImage(const LensArgs& args, const GhostImageArgs& ga) {
   FocusedLens fl = setUpLens(args);
   logDiagnostics(fl.allDiagnostics());
   const LensSystem& lens = *fl.lens;
-  const LensCoatings coatings = resolveCoatings(lens.prescription());
+  LensPrescription pr_coated = lens.prescription();
+  if (!ga.coating.empty()) {
+    pr_coated.default_coating = ga.coating;
+    pr_coated.default_coating_loc = FileLoc{};  // named on the command line
+  }
+  const LensCoatings coatings = resolveCoatings(pr_coated);
   if (only) ghostPathInterfaces(lens, only->first, only->second);  // refuses a bad pair
   const double angle = ga.angle_deg * std::numbers::pi / 180;
 
