@@ -64,8 +64,8 @@ double chiefRayFilmX(const LensSystem& lens, double angle) {
   const double back = 50;
   auto trace = [&](double x0, std::vector<Vec3T<double>>& pts) {
     pts.clear();
-    return tracer.traceFromScene(
-        Ray{{x0 - back * dir.x / dir.z, 0, s[0].z_mm - back}, dir}, {}, &pts);
+    return tracer.traceFromScene(Ray{{x0 - back * dir.x / dir.z, 0, s[0].z_mm - back}, dir}, {},
+                                 &pts);
   };
   std::vector<Vec3T<double>> pts;
   // x at the stop grows with the entrance height (a positive lens in front of the stop).
@@ -92,8 +92,8 @@ TEST(GhostImage, DirectImageLandsAtTheChiefRay) {
   const std::string exr = tmpPath("direct.exr"), png = tmpPath("direct.png");
   const test::CliResult r =
       test::runLensim("--quiet lens plot ghosts " + lens_file +
-                      " --aperture-diameter 4 --image --angle 10 --grid 400 --size 600 -o " +
-                      png + " --exr " + exr);
+                      " --aperture-diameter 4 --image --angle 10 --grid 400 --size 600 -o " + png +
+                      " --exr " + exr);
   ASSERT_EQ(r.status, 0) << r.out;
   const io::Image img = io::readImage(exr);
   ASSERT_EQ(img.width, 600);
@@ -162,6 +162,21 @@ TEST(GhostImage, GhostLightEqualsTheTracedIntensities) {
                 1e-5 * rel)
         << ij;
   }
+  // With the multicoating instead of the file's (uncoated) surfaces: the same equality.
+  const std::string multi = common + " --coating multi";
+  const test::CliResult gm = test::runLensim("lens ghosts " + lens_file + multi + " --json");
+  ASSERT_EQ(gm.status, 0) << gm.out;
+  double want_multi = 0;
+  const json g_multi = json::parse(gm.out);
+  for (const json& h : g_multi["ghosts"])
+    if (!h["spot"].is_null()) want_multi += h["spot"]["relative_intensity"].get<double>();
+  const test::CliResult rm = test::runLensim("--quiet lens plot ghosts " + lens_file + multi +
+                                             " --image --film-diagonal 3000 --size 300 -o " + exr);
+  ASSERT_EQ(rm.status, 0) << rm.out;
+  img = io::readImage(exr);
+  const double got_multi = moments(img, "ghost.G", 3000).sum / moments(img, "direct.G", 3000).sum;
+  EXPECT_LT(want_multi, 0.1 * want);
+  EXPECT_NEAR(got_multi, want_multi, 1e-5 * want_multi);
   std::remove(exr.c_str());
 }
 
@@ -183,9 +198,9 @@ TEST(GhostImage, GhostCentroidsMatchTheTracedSpots) {
     if (h["spot"].is_null() || h["spot"]["rays_arrived"].get<int>() == 0) continue;
     const std::string ij = std::to_string(h["first_reflection_surface"].get<int>()) + "," +
                            std::to_string(h["second_reflection_surface"].get<int>());
-    const test::CliResult r = test::runLensim("--quiet lens plot ghosts " + lens_file + common +
-                                              " --image --film-diagonal 3000 --size 300 --ghost " +
-                                              ij + " -o " + exr);
+    const test::CliResult r =
+        test::runLensim("--quiet lens plot ghosts " + lens_file + common +
+                        " --image --film-diagonal 3000 --size 300 --ghost " + ij + " -o " + exr);
     ASSERT_EQ(r.status, 0) << r.out;
     const Moments m = moments(io::readImage(exr), "ghost.G", diag);
     const json& s = h["spot"];
@@ -196,8 +211,8 @@ TEST(GhostImage, GhostCentroidsMatchTheTracedSpots) {
     EXPECT_LT(std::hypot(dx, dy), 0.05 * rms + 1e-3 * px) << ij << " rms " << rms;
     ++checked;
   }
-  std::printf("%d ghosts: largest centroid difference %.2f %% of the spot's RMS radius\n",
-              checked, 100 * worst);
+  std::printf("%d ghosts: largest centroid difference %.2f %% of the spot's RMS radius\n", checked,
+              100 * worst);
   EXPECT_GE(checked, 8);
   std::remove(exr.c_str());
 }
@@ -219,6 +234,7 @@ TEST(GhostImage, BadOptionsAreRefusedAndNothingIsWritten) {
       {"--image --ghost x -o " + exr, "ghost x"},
       {"--image --wavelengths 550:2 -o " + exr, "550:2"},
       {"--image --wavelengths 5000 -o " + exr, "5000"},
+      {"--image --coating bogus -o " + exr, "bogus"},
       {"--image -o " + tmpPath("bad.svg"), "bad.svg"},
       {"--image -o " + png + " --exr " + tmpPath("bad.tif"), "bad.tif"},
       {"--image -o /nonexistent-dir/x.exr", "nonexistent-dir"},
