@@ -926,7 +926,8 @@ void registerLensCommands(CLI::App& app, Action& action) {
                      "spot, distortion, vignetting, focus, chromatic (focal shift against "
                      "wavelength), lateral-color (F and C image height minus d), mtf, mtf-focus, "
                      "fans, field, psf, breathing (field of view against focus distance) or ghosts "
-                     "(the brightest ghosts' intensities, issue 31)")
+                     "(the brightest ghosts' intensities; with --image a point light's film image, "
+                     "issue 31)")
         ->required()
         ->check(
             CLI::IsMember({"spot", "distortion", "vignetting", "focus", "breathing", "chromatic",
