@@ -169,29 +169,8 @@ int runGhosts(const LensArgs& args, const GhostArgs& ga) {
     pr_coated.default_coating_loc = FileLoc{};  // named on the command line
   }
   const LensCoatings coatings = resolveCoatings(pr_coated);
-  std::vector<double> wl = visibleBand();
-  if (!ga.wavelengths.empty()) {
-    wl.clear();
-    size_t pos = 0;
-    while (pos <= ga.wavelengths.size()) {
-      size_t end = ga.wavelengths.find(',', pos);
-      if (end == std::string::npos) end = ga.wavelengths.size();
-      const std::string item = ga.wavelengths.substr(pos, end - pos);
-      double v = 0;
-      try {
-        size_t used = 0;
-        v = std::stod(item, &used);
-        if (used != item.size()) throw std::invalid_argument(item);
-      } catch (const std::exception&) {
-        throw Error(fmt::format("--wavelengths: '{}' is not a number (expected nm, "
-                                "comma-separated)",
-                                item));
-      }
-      checkWavelength(v, "--wavelengths");
-      wl.push_back(v);
-      pos = end + 1;
-    }
-  }
+  const std::vector<double> wl =
+      ga.wavelengths.empty() ? visibleBand() : parseWavelengthList(ga.wavelengths, "--wavelengths");
   if (!(ga.focus_tolerance_mm > 0))
     throw Error(fmt::format("--focus-tolerance {} must be > 0 (mm)", ga.focus_tolerance_mm));
   GhostAnalysis g = analyseGhosts(lens, coatings, wl);
@@ -283,6 +262,29 @@ int runGhosts(const LensArgs& args, const GhostArgs& ga) {
 
 }  // namespace
 
+std::vector<double> parseWavelengthList(const std::string& text, const char* option) {
+  std::vector<double> wl;
+  size_t pos = 0;
+  while (pos <= text.size()) {
+    size_t end = text.find(',', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string item = text.substr(pos, end - pos);
+    double v = 0;
+    try {
+      size_t used = 0;
+      v = std::stod(item, &used);
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw Error(
+          fmt::format("{}: '{}' is not a number (expected nm, comma-separated)", option, item));
+    }
+    checkWavelength(v, option);
+    wl.push_back(v);
+    pos = end + 1;
+  }
+  return wl;
+}
+
 json coatingsJson(const LensSystem& lens) {
   LensCoatings c;
   try {
@@ -328,8 +330,7 @@ void printCoatings(const LensSystem& lens) {
                              "", beyond);
 }
 
-int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
-                 const std::string& output) {
+std::pair<int, int> parseGhostPair(const std::string& ghost) {
   // I,J: two non-negative integers.
   const size_t comma = ghost.find(',');
   int ij[2] = {0, 0};
@@ -345,6 +346,13 @@ int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
         fmt::format("ghost {}: expected I,J (two surface indices, as `lens ghosts` "
                     "lists them)",
                     ghost));
+  return {ij[0], ij[1]};
+}
+
+int runGhostDraw(const LensArgs& args, const std::string& ghost, int rays,
+                 const std::string& output) {
+  const auto [first, second] = parseGhostPair(ghost);
+  const int ij[2] = {first, second};
   if (rays < 1 || rays > 1000) throw Error(fmt::format("--rays {}: expected 1 to 1000", rays));
   FocusedLens fl = setUpLens(args);
   logDiagnostics(fl.allDiagnostics());

@@ -634,6 +634,9 @@ struct PlotArgs {
   bool as_json = false;
   AnalysisArgs analysis;  ///< also holds --wavelengths (spot: one spot per wavelength)
   std::optional<double> ghost_angle_deg;  ///< ghosts: the light's angle off axis (--angle)
+  bool ghost_image = false;               ///< ghosts --image: the film image (ghost_image.cpp)
+  GhostImageArgs image;                   ///< --image's own options
+  std::vector<std::string> image_options;  ///< --image's options given (refused without it)
 };
 
 json pairsJson(const std::vector<double>& a, const std::vector<double>& b) {
@@ -708,6 +711,23 @@ std::string breathingPlot(const LensArgs& args, json& j) {
 int runPlot(const LensArgs& args, const PlotArgs& pa) {
   if (pa.ghost_angle_deg && pa.kind != "ghosts")
     throw Error(fmt::format("--angle applies to 'ghosts', not to '{}'", pa.kind));
+  if (!pa.image_options.empty() && !pa.ghost_image)
+    throw Error(fmt::format("{} applies to 'ghosts --image' only", pa.image_options.front()));
+  if (pa.ghost_image && pa.kind != "ghosts")
+    throw Error(fmt::format("--image applies to 'ghosts', not to '{}'", pa.kind));
+  if (pa.ghost_image) {  // ghost_image.cpp
+    if (!pa.analysis.wavelengths.empty() && pa.analysis.wavelengths.find(':') != std::string::npos)
+      throw Error(
+          fmt::format("--wavelengths {}: ghosts --image takes plain wavelengths (nm, "
+                      "comma-separated), no weights",
+                      pa.analysis.wavelengths));
+    GhostImageArgs ga = pa.image;
+    ga.output = pa.output;
+    ga.as_json = pa.as_json;
+    ga.angle_deg = pa.ghost_angle_deg.value_or(0.0);
+    ga.wavelengths = pa.analysis.wavelengths;
+    return runGhostImage(args, ga);
+  }
   if (pa.kind == "ghosts")  // cmd_flare.cpp
     return runGhostPlot(args, pa.output, pa.as_json, pa.ghost_angle_deg);
   if (pa.kind == "breathing") {
@@ -906,13 +926,16 @@ void registerLensCommands(CLI::App& app, Action& action) {
                      "spot, distortion, vignetting, focus, chromatic (focal shift against "
                      "wavelength), lateral-color (F and C image height minus d), mtf, mtf-focus, "
                      "fans, field, psf, breathing (field of view against focus distance) or ghosts "
-                     "(the brightest ghosts' intensities, issue 31)")
+                     "(the brightest ghosts' intensities; with --image a point light's film image, "
+                     "issue 31)")
         ->required()
         ->check(
             CLI::IsMember({"spot", "distortion", "vignetting", "focus", "breathing", "chromatic",
                            "lateral-color", "mtf", "mtf-focus", "fans", "field", "psf", "ghosts"}));
     addLensOptions(plot, *args);
-    plot->add_option("-o,--output", pa->output, "Output SVG file")->required();
+    plot->add_option("-o,--output", pa->output,
+                     "Output SVG file (ghosts --image: an image, .exr unscaled, .png ...)")
+        ->required();
     plot->add_option("--fields", pa->fields,
                      "spot, mtf, mtf-focus, fans, psf: fields as fractions of the film "
                      "half-diagonal (default 0,0.5,0.7,1 for spot, else 0,0.7,1)")
@@ -922,6 +945,24 @@ void registerLensCommands(CLI::App& app, Action& action) {
     plot->add_option("--angle", pa->ghost_angle_deg,
                      "ghosts: the intensities traced for a point light this far off axis (deg, "
                      "as lens ghosts --angle) instead of the axial ones");
+    plot->add_flag("--image", pa->ghost_image,
+                   "ghosts: the film image of a point light at --angle (direct and ghosts, "
+                   "traced, in colour); -o .exr unscaled, other formats log tone-mapped");
+    auto imageOption = [plot, pa](const std::string& name, auto& value, const std::string& help) {
+      plot->add_option(name, value, help)->each([pa, name](const std::string&) {
+        pa->image_options.push_back(name);
+      });
+    };
+    imageOption("--size", pa->image.size, "ghosts --image: pixels across (default 600; 3:2)");
+    imageOption("--grid", pa->image.grid,
+                "ghosts --image: rays across the entrance per path (default 256)");
+    imageOption("--ghost", pa->image.ghost, "ghosts --image: the ghost I,J only (and the direct)");
+    imageOption("--decades", pa->image.decades,
+                "ghosts --image: decades of luminance the tone map shows (default 8)");
+    imageOption("--exr", pa->image.exr, "ghosts --image: also write the unscaled EXR here");
+    imageOption("--coating", pa->image.coating,
+                "ghosts --image: lens-wide coating of the air-glass surfaces that name none "
+                "(uncoated, single, multi, ...), as lens ghosts --coating");
     plot->callback([&action, args, pa] { action = [args, pa] { return runPlot(*args, *pa); }; });
   }
   {

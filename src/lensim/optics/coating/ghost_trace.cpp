@@ -121,9 +121,9 @@ GhostSpot traceSpot(const LensTracer<double>& tracer, const Interface& front, do
   return s;
 }
 
-std::vector<double> tracedPathEnergy(const LensSystem& lens, const LensCoatings& coatings,
-                                     int first, int second, double angle_rad, int grid,
-                                     std::span<const double> wavelengths_nm) {
+void forEachPathRay(const LensSystem& lens, const LensCoatings& coatings, int first, int second,
+                    double angle_rad, int grid, std::span<const double> wavelengths_nm,
+                    double film_z_mm, const std::function<void(const PathRay&)>& visit) {
   const bool ghost = first >= 0;
   const std::vector<Interface> path =
       ghost ? ghostPathInterfaces(lens, first, second) : lens.interfaces();
@@ -139,7 +139,7 @@ std::vector<double> tracedPathEnergy(const LensSystem& lens, const LensCoatings&
   for (size_t w = 1; w < nw && same; ++w)
     for (size_t k = 0; k < n && same; ++k)
       same = before[w * n + k] == before[k] && after[w * n + k] == after[k];
-  std::vector<double> energy(nw, 0.0), f(nw);
+  std::vector<double> f(nw);
   std::vector<FilmRTA> rta(nw);
   std::vector<Vec3T<double>> pts;
   for (const Ray& ray : rays) {
@@ -176,8 +176,20 @@ std::vector<double> tracedPathEnergy(const LensSystem& lens, const LensCoatings&
       }
       for (size_t w = 0; w < nw; ++w) f[w] *= in.is_mirror ? rta[w].R : rta[w].T;
     }
-    for (size_t w = 0; w < nw; ++w) energy[w] += f[w];
+    const double u = (film_z_mm - res.ray.origin.z) / res.ray.direction.z;
+    visit(PathRay{res.ray.origin.x + u * res.ray.direction.x,
+                  res.ray.origin.y + u * res.ray.direction.y, f});
   }
+}
+
+std::vector<double> tracedPathEnergy(const LensSystem& lens, const LensCoatings& coatings,
+                                     int first, int second, double angle_rad, int grid,
+                                     std::span<const double> wavelengths_nm) {
+  std::vector<double> energy(wavelengths_nm.size(), 0.0);
+  forEachPathRay(lens, coatings, first, second, angle_rad, grid, wavelengths_nm, lens.filmZ_mm(),
+                 [&](const PathRay& r) {
+                   for (size_t w = 0; w < energy.size(); ++w) energy[w] += r.weight[w];
+                 });
   return energy;
 }
 

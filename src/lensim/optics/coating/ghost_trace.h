@@ -8,6 +8,7 @@
 // clipping, refraction and reflection code as every other trace.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <span>
 #include <vector>
@@ -60,6 +61,20 @@ GhostSpot traceSpot(const LensTracer<double>& tracer, const Interface& front, do
 /// of one grid ray's light; a ghost's over the direct path's is its intensity relative to the
 /// direct image). Geometry at the lens's wavelength, the coatings' indices at each wavelength.
 /// Throws as traceSpot and ghostPathInterfaces do.
+/// One ray of tracedPathEnergy's grid that reached the film plane: where it crosses it (mm) and
+/// its weight per wavelength (the coatings' R and T product along the path).
+struct PathRay {
+  double film_x_mm = 0, film_y_mm = 0;
+  std::span<const double> weight;
+};
+
+/// Calls `visit` for every ray of traceSpot's grid that reaches the film plane `film_z_mm` on the
+/// path (first, second) (the lens itself when `first` < 0), with its weight per wavelength as
+/// tracedPathEnergy defines it (which sums these weights). Throws as tracedPathEnergy does.
+void forEachPathRay(const LensSystem& lens, const LensCoatings& coatings, int first, int second,
+                    double angle_rad, int grid, std::span<const double> wavelengths_nm,
+                    double film_z_mm, const std::function<void(const PathRay&)>& visit);
+
 std::vector<double> tracedPathEnergy(const LensSystem& lens, const LensCoatings& coatings,
                                      int first, int second, double angle_rad, int grid,
                                      std::span<const double> wavelengths_nm);
