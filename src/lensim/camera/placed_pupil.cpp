@@ -22,8 +22,8 @@ constexpr int kBinsLong = 6, kGrid = 16, kBisect = 7;
 // Margins: the interpolation error found at a bin's checks counts this many times; a bound
 // over wavelengths widens by this share of the most an edge moves between neighbouring ones.
 constexpr double kCheckFactor = 1.5, kWavelengthShare = 0.5;
-// The least widening of a support, in grid steps (4 of bisection's final brackets).
-constexpr double kFloor = 1.0 / 32;
+// The least widening of a support, in grid steps (bisection's final bracket).
+constexpr double kFloor = 1.0 / (1 << kBisect);
 
 using Support = PlacedPupilBounds::Support;
 constexpr int kDirections = PlacedPupilBounds::kDirections;
