@@ -12,7 +12,9 @@
 // passing point is moved out to the boundary by bisection (the blocked end kept), and the
 // extreme line's value is widened by the most it differs from its neighbouring lines' (for a
 // convex region that bounds the boundary between lines: the tangent through the extreme line and
-// its neighbour lies outside it), or by a grid step where no neighbouring line passes. A film
+// its neighbour lies outside it), or by a grid step where no neighbouring line passes, and
+// always by at least the bisection's final bracket (the widening alone can come out near zero
+// where the boundary runs along a grid line; a passing ray was then found 0.5 um out). A film
 // point's supports are the bilinear blend of its bin's four nodes', widened by 1.5 times the
 // most the blend falls short of the supports found at the bin's edge middles and centre
 // (checks); the polygon is the disc's square cut by the 8 half-planes. A dispersive lens's
