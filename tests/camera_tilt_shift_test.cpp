@@ -222,13 +222,13 @@ TEST(TiltShiftCamera, RefusalsNameTheParameterOrTheCamera) {
 namespace {
 
 // Squared horizontal contrast per image row (mean square of I(x+1) - I(x) over mean I squared
-// across the middle half of the columns, green channel) of a render of a long checkerboard table, the camera 0.4 m above
-// it pitched 12 degrees down, the double Gauss at f/2 (12.5 cm checks; the table is wider than
-// the frame, so the middle columns see only checks); rows without the table (black) are left
-// out. The mean square is that of the product of two renders' differences (seeds 5 and 6),
-// whose noise is independent: noise does not count as contrast (a noisier sampler scored
-// sharper); a row's value can come out negative. Returns the table's rows, top (far) to bottom
-// (near).
+// across the middle half of the columns, green channel) of a render of a long checkerboard
+// table, the camera 0.4 m above it pitched 12 degrees down, the double Gauss at f/2 (12.5 cm
+// checks; the table is wider than the frame, so the middle columns see only checks); rows
+// without the table (black) are left out. The mean square is that of the product of two
+// renders' differences (seeds 5 and 6), whose noise is independent: noise does not count as
+// contrast (a noisier sampler scored sharper); a row's value can come out negative. Returns the
+// table's rows, top (far) to bottom (near).
 std::vector<double> tableRowContrast(double tilt_x_deg, double shift_y_mm) {
   const std::string lens = lensim::test::lensPath("dgauss.50mm.dat");
   const std::string text =
