@@ -9,6 +9,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "lensim/sampling/sampling.h"
+
 namespace lensim::camera {
 
 namespace {
@@ -20,6 +22,8 @@ constexpr int kBinsLong = 6, kGrid = 16, kBisect = 7;
 // Margins: the interpolation error found at a bin's checks counts this many times; a bound
 // over wavelengths widens by this share of the most an edge moves between neighbouring ones.
 constexpr double kCheckFactor = 1.5, kWavelengthShare = 0.5;
+// The least widening of a support, in grid steps (bisection's final bracket).
+constexpr double kFloor = 1.0 / (1 << kBisect);
 
 using Support = PlacedPupilBounds::Support;
 constexpr int kDirections = PlacedPupilBounds::kDirections;
@@ -124,7 +128,10 @@ class ExtentFinder {
       if (nb >= 0 && nb < kKeys && has[size_t(nb)])
         widen = std::max(widen, std::abs(value[size_t(best)] - value[size_t(nb)]));
     if (widen < 0) widen = h_ * std::hypot(gx, gy);
-    return std::min(r_, value[size_t(best)] + widen);
+    // A floor of kFloor grid steps: the widening above can come out near zero where the
+    // boundary runs along a grid line, and the blend across a bin then decides alone (a
+    // tilted film's bounds missed a passing ray by 0.5 um there).
+    return std::min(r_, value[size_t(best)] + widen + kFloor * h_);
   }
 
   const PlacedPupilBounds::Passes& passes_;
@@ -316,6 +323,28 @@ std::optional<PlacedPolygon> PlacedPupilBounds::polygon(Vec2 film, double r) con
     p = clip(p, unit(k), s[size_t(k)] + c->margin[size_t(k)]);
   if (p.n < 3 || !(p.area() > 0)) return std::nullopt;
   return p;
+}
+
+PupilRegion PlacedPupilBounds::region(Vec2 film, double r) const {
+  PupilRegion s;
+  s.disc_radius = r;
+  if (std::optional<PlacedPolygon> p = polygon(film, r))
+    if (p->area() < std::numbers::pi * r * r) s.polygon = *p;
+  return s;
+}
+
+double PupilRegion::area() const {
+  return polygon ? polygon->area() : std::numbers::pi * disc_radius * disc_radius;
+}
+
+bool PupilRegion::holds(Vec2 q) const {
+  const Vec2 d = q - centre;
+  return polygon ? polygon->holds(q) : d.x * d.x + d.y * d.y <= disc_radius * disc_radius;
+}
+
+Vec2 PupilRegion::sample(Vec2 u) const {
+  return polygon ? polygon->sample(u)
+                 : centre + sampling::sampleUniformDiskConcentric(u) * disc_radius;
 }
 
 int PlacedPupilBounds::wholeBins() const {

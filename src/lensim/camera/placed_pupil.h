@@ -12,7 +12,9 @@
 // passing point is moved out to the boundary by bisection (the blocked end kept), and the
 // extreme line's value is widened by the most it differs from its neighbouring lines' (for a
 // convex region that bounds the boundary between lines: the tangent through the extreme line and
-// its neighbour lies outside it), or by a grid step where no neighbouring line passes. A film
+// its neighbour lies outside it), or by a grid step where no neighbouring line passes, and
+// always by at least the bisection's final bracket (the widening alone can come out near zero
+// where the boundary runs along a grid line; a passing ray was then found 0.5 um out). A film
 // point's supports are the bilinear blend of its bin's four nodes', widened by 1.5 times the
 // most the blend falls short of the supports found at the bin's edge middles and centre
 // (checks); the polygon is the disc's square cut by the 8 half-planes. A dispersive lens's
@@ -22,6 +24,10 @@
 // nodes and checks, bounded the same way where all of them see a region; the rest keeps the
 // whole disc. tests/placed_pupil_test.cpp traces 10^6 random film/plane points at 48
 // wavelengths and finds no passing ray outside the polygons.
+//
+// The bounds know the lens only through the two functions they are given (the disc's radius
+// and whether a film/plane pair passes), so the coaxial camera's tilted film (realistic.cpp,
+// "Tilt and shift") uses them too: its film frame, the plane of its rear surface's extreme.
 #pragma once
 
 #include <array>
@@ -43,6 +49,18 @@ struct PlacedPolygon {
   bool holds(Vec2 q) const;
   /// A point uniform over the polygon from u in [0,1)^2 (a fan of triangles from v[0], one
   /// chosen by area with u.x, which is then reused within it).
+  Vec2 sample(Vec2 u) const;
+};
+
+/// What a film point samples on the plane: the disc of disc_radius about the axis, or the
+/// polygon where it is given (PlacedPupilBounds::region: where it is the smaller).
+struct PupilRegion {
+  double disc_radius = 0;
+  Vec2 centre{};  ///< the disc's centre (a decentred rear aperture's; the polygons' frame else)
+  std::optional<PlacedPolygon> polygon;
+  double area() const;
+  bool holds(Vec2 q) const;
+  /// A point uniform over the region from u in [0,1)^2.
   Vec2 sample(Vec2 u) const;
 };
 
@@ -68,6 +86,8 @@ class PlacedPupilBounds {
   /// The polygon for the film point `film`, within the square [-r, r]^2 of its disc (radius r);
   /// nullopt: the whole disc (outside the bounded film, or a bin without a bound).
   std::optional<PlacedPolygon> polygon(Vec2 film, double r) const;
+  /// The region the film point samples: its polygon where smaller than its disc (radius r).
+  PupilRegion region(Vec2 film, double r) const;
   int binsX() const { return nx_; }
   int binsY() const { return ny_; }
   /// Bins without a bound of their own (light reaches only part of them, or none).

@@ -223,9 +223,13 @@ RealisticCamera::RealisticCamera(RealisticSettings settings) : settings_(std::mo
 //   (x_z - zmin), so within radius max(a, (1 - t_min) |x| + t_min a) of the axis: the disc
 //   holds all of them and the estimate stays unbiased (the tracer stops the rest). The weight
 //   is the film irradiance integrand over that plane, cos_film cos_plane / r^2 times the disc's
-//   area, with cos_film against the tilted film's normal. This wastes more samples than the
-//   bound (the disc is the whole rear element, not the exit pupil's image of the stop): the
-//   price of staying exact for any tilt.
+//   area, with cos_film against the tilted film's normal. The disc is the whole rear element,
+//   not the exit pupil's image of the stop, so most film points sample a smaller region
+//   instead: a convex polygon of the same plane that holds every ray from them that passes
+//   (placed_pupil.h's bounds, built over the tilted film's frame from rays traced through this
+//   lens, the same rays generateRay traces), with the polygon's area in place of pi r^2, where
+//   it is smaller than the disc. Importance (realistic_importance.cpp) accepts a ray only
+//   through the same region.
 void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
   const optics::TiltShift& ts = settings_.tilt_shift;
   if (!ts.any()) return;
@@ -264,6 +268,28 @@ void RealisticCamera::setUpTiltShift(const Vec2& sampled) {
                                      ts.tilt_deg.x, ts.tilt_deg.y, cx * sampled.x, cy * sampled.y,
                                      p.z, rear_zmax_mm_));
     }
+  if (settings_.tilt_pupil_bounds) {
+    // A dispersive lens: bounds holding the rendered range's ends and the primary wavelength.
+    std::vector<double> lambdas{lens.wavelength_nm()};
+    if (dispersive_) lambdas.insert(lambdas.end(), {kIndexFrom_nm, kIndexTo_nm});
+    const auto t0 = std::chrono::steady_clock::now();
+    tilt_bounds_ = PlacedPupilBounds(
+        sampled, lambdas, [&](Vec2 film) { return tiltDiscRadius(placement_->lensFromFilm(film)); },
+        [&](Vec2 film, Vec2 q, double lambda_nm) {
+          const Vec3 p = placement_->lensFromFilm(film);
+          const Vec3 d = normalize(Vec3{q.x, q.y, rear_zmax_mm_} - p);
+          if (!(-dot(d, placement_->filmNormal()) > 0)) return false;  // placedFilmRay's rule
+          const optics::RayT<float> ray{Vec3f(p), Vec3f(d)};
+          return (dispersive_ ? tracerAt(lambda_nm) : lens.tracerFloat()).traceFromFilm(ray).ok();
+        });
+    logInfo(fmt::format(
+        "{}: tilted film's exit-pupil bounds: {} x {} film bins ({} without a bound of their own, "
+        "{} cut into quarters), {} traces, {:.3f} s ({:.3f} s on one core)",
+        where, tilt_bounds_.binsX(), tilt_bounds_.binsY(), tilt_bounds_.wholeBins(),
+        tilt_bounds_.splitBins(), tilt_bounds_.traces(),
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
+        tilt_bounds_.taskSeconds()));
+  }
   try {
     scheimpflug_ = optics::scheimpflug(lens_.paraxial, *placement_);
   } catch (const Error& e) {
@@ -296,16 +322,21 @@ std::optional<RealisticCamera::FilmRay> RealisticCamera::placedFilmRay(const Cam
     }
     return f;
   }
-  const double radius = tiltDiscRadius(p);
-  const Vec2 d = sampling::sampleUniformDiskConcentric(sample.lens);
-  const Vec3 q{radius * d.x, radius * d.y, rear_zmax_mm_};
+  const PupilRegion region = tilt_bounds_.region(film, tiltDiscRadius(p));
+  const Vec2 d = region.sample(sample.lens);
+  const Vec3 q{d.x, d.y, rear_zmax_mm_};
   const Vec3 to = q - p;
   const double r2 = dot(to, to);
   const Vec3 dir = to / std::sqrt(r2);
   const double cos_plane = -dir.z, cos_film = -dot(dir, placement_->filmNormal());
   if (!(cos_plane > 0) || !(cos_film > 0)) return std::nullopt;
-  return FilmRay{optics::RayT<float>{Vec3f(p), Vec3f(dir)}, cos_plane, M_PI * radius * radius,
+  return FilmRay{optics::RayT<float>{Vec3f(p), Vec3f(dir)}, cos_plane, region.area(),
                  cos_film * cos_plane / r2};
+}
+
+PupilRegion RealisticCamera::tiltRegion(Vec2 film) const {
+  if (!placement_ || !placement_->tiltShift().tilted()) return {};
+  return tilt_bounds_.region(film, tiltDiscRadius(placement_->lensFromFilm(film)));
 }
 
 double RealisticCamera::tiltDiscRadius(const Vec3& p) const {
@@ -677,7 +708,7 @@ bool RealisticCamera::reachesFilm(const CameraSample& sample) const {
   // pupil point is drawn and nothing is traced (counting those as wasted put lentil:0007 at
   // 5.7% instead of 4.2%).
   if (placement_) {
-    if (placement_->tiltShift().tilted()) return true;  // the rear disc: no bound to consult
+    if (placement_->tiltShift().tilted()) return true;  // every film point has its region
     const Vec3 p = placement_->lensFromFilm(filmPoint(sample.film_raster));
     return pupil_->areaMm2({p.x, p.y}, bandAt(sample.lambda_nm[0])) > 0;
   }
@@ -708,7 +739,11 @@ std::string RealisticCamera::describe() const {
                     "; lens shift ({:g}, {:g}) mm, tilt ({:g}, {:g}) deg{}",
                     settings_.tilt_shift.shift_mm.x, settings_.tilt_shift.shift_mm.y,
                     settings_.tilt_shift.tilt_deg.x, settings_.tilt_shift.tilt_deg.y,
-                    settings_.tilt_shift.tilted() ? ", rays aimed at the rear element's disc" : "")
+                    settings_.tilt_shift.tilted()
+                        ? (tilt_bounds_.binsX() > 0
+                               ? ", rays aimed at exit-pupil polygons on the rear element's plane"
+                               : ", rays aimed at the rear element's disc")
+                        : "")
               : std::string());
 }
 

@@ -35,6 +35,7 @@
 
 #include "lensim/camera/aperture.h"
 #include "lensim/camera/camera.h"
+#include "lensim/camera/placed_pupil.h"
 #include "lensim/optics/absorption.h"
 #include "lensim/optics/focus.h"
 #include "lensim/optics/pupil.h"
@@ -84,6 +85,9 @@ struct RealisticSettings : scene::RealisticOptions {
   /// Flare: draw each ghost pair's directions from its own bound (realistic_flare.cpp, "Per-ghost
   /// bounds") rather than the disc that holds every pair's. Off only to compare (tests, bench).
   bool flare_ghost_bounds = true;
+  /// A tilted film: draw each film point's rays from its exit-pupil polygon (realistic.cpp, "Tilt
+  /// and shift") where smaller than its disc. Off only to compare (tests, bench).
+  bool tilt_pupil_bounds = true;
 };
 
 class RealisticCamera final : public Camera {
@@ -146,6 +150,11 @@ class RealisticCamera final : public Camera {
   const std::optional<optics::FilmPlacement>& placement() const { return placement_; }
   /// The plane of sharp focus of a tilted film (first-order, optics/tilt_shift.h).
   const std::optional<optics::ScheimpflugData>& scheimpflug() const { return scheimpflug_; }
+  /// A tilted film: the region of the plane z = tiltPlaneZ_mm() (lens space) that the film
+  /// point (film frame, mm) draws its rays from, and the bounds that give its polygon.
+  PupilRegion tiltRegion(Vec2 film) const;
+  double tiltPlaneZ_mm() const { return rear_zmax_mm_; }
+  const PlacedPupilBounds& tiltPupilBounds() const { return tilt_bounds_; }
   /// Diagnostics from setting up the lens (e.g. an aperture clamped to the stop's size).
   std::vector<Diagnostic> diagnostics() const { return lens_.allDiagnostics(); }
 
@@ -194,6 +203,8 @@ class RealisticCamera final : public Camera {
   /// A tilted film: the radius of the disc on the plane z = rear_zmax_mm_ that a film point
   /// (lens space) samples (realistic.cpp, "Tilt and shift").
   double tiltDiscRadius(const Vec3& film_point_lens_mm) const;
+  /// A tilted film's exit-pupil polygons on that plane (empty without them).
+  PlacedPupilBounds tilt_bounds_;
   /// Dispersion (see realistic.cpp, "Dispersive lenses"): whether the lens disperses, and an id
   /// that keys each thread's re-indexed copy of the tracer to this camera.
   bool dispersive_ = false;

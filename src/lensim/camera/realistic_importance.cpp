@@ -174,15 +174,15 @@ std::optional<RealisticCamera::FilmHit> RealisticCamera::traceToFilm(const Vec3&
   hit.cos_theta = rd.z / length(rd);
   const double z = lens.filmDistance_mm();
   if (placement_ && placement_->tiltShift().tilted()) {
-    // The disc on the plane z = rear_zmax_mm_ (placedFilmRay).
+    // The region of the plane z = rear_zmax_mm_ placedFilmRay samples (its polygon or disc).
     const Vec3 q = ro + rd * ((rear_zmax_mm_ - ro.z) / rd.z);
-    const double radius = tiltDiscRadius(x);
-    if (q.x * q.x + q.y * q.y > radius * radius) return std::nullopt;
+    const PupilRegion region = tilt_bounds_.region(hit.film_mm, tiltDiscRadius(x));
+    if (!region.holds({q.x, q.y})) return std::nullopt;
     const Vec3 to = q - x;
     const double r2 = dot(to, to);
     const double cos_film = dot(normalize(rd), placement_->filmNormal());
     if (!(cos_film > 0) || !(r2 > 0)) return std::nullopt;
-    hit.area_mm2 = M_PI * radius * radius;
+    hit.area_mm2 = region.area();
     hit.g_per_mm2 = cos_film * hit.cos_theta / r2;
   } else {
     // The exit-pupil bound at x's offset from the axis (shifted or not).
@@ -441,10 +441,10 @@ CameraRayPdf RealisticCamera::rayPdf(const Vec3& o, const Vec3& d, double lambda
   // the camera vertex); pdf_dir: generateRay's joint density of the ray over it. generateRay
   // draws the film point uniformly over the image (1/A_film, as pbrt-v4's PDF_We takes it) and
   // a point uniformly over a region of area A(x) on a plane (the exit-pupil bound on the
-  // rear-vertex plane; with tilt, the disc on the rear surface's plane): per unit film area and
-  // projected solid angle (against the film's normal) that is 1 / (A_film A(x) G), G = cos_film
-  // cos_plane / r^2 (cos^4(theta) / z^2 for an untilted film). The lens conserves that measure
-  // (etendue), so per unit front area and solid angle it is that times cos(n).
+  // rear-vertex plane; with tilt, the polygon or disc on the rear surface's plane): per unit
+  // film area and projected solid angle (against the film's normal) that is 1 / (A_film A(x) G),
+  // G = cos_film cos_plane / r^2 (cos^4(theta) / z^2 for an untilted film). The lens conserves
+  // that measure (etendue), so per unit front area and solid angle it is that times cos(n).
   const optics::Interface& front = lens_.lens->interfaces().front();
   const Vec3 o_l = lensFromWorldPoint(o, time), back = normalize(lensFromWorldVector(-d, time));
   const std::optional<FrontPoint> fp = frontPoint(front, o_l.x, o_l.y);

@@ -359,23 +359,11 @@ void PlacedRealisticCamera::buildBounds(Vec2 reach) {
       });
 }
 
-double PlacedRealisticCamera::SamplingRegion::area() const {
-  return polygon ? polygon->area() : std::numbers::pi * disc_radius * disc_radius;
-}
-
-bool PlacedRealisticCamera::SamplingRegion::holds(Vec2 q) const {
-  const Vec2 d = q - centre;
-  return polygon ? polygon->holds(q) : d.x * d.x + d.y * d.y <= disc_radius * disc_radius;
-}
-
 PlacedRealisticCamera::SamplingRegion PlacedRealisticCamera::samplingRegion(Vec2 film) const {
-  SamplingRegion s;
-  s.disc_radius = discRadius(toLocal(rear_frame_, filmToLens(film) - origin(rear_frame_)));
-  s.centre = rear_centre_;
-  // The polygon (within the disc's square) when it is the smaller region.
-  if (std::optional<PlacedPolygon> p = bounds_.polygon(film, s.disc_radius))
-    if (p->area() < std::numbers::pi * s.disc_radius * s.disc_radius) s.polygon = *p;
-  return s;
+  SamplingRegion r = bounds_.region(
+      film, discRadius(toLocal(rear_frame_, filmToLens(film) - origin(rear_frame_))));
+  r.centre = rear_centre_;  // the disc's (a decentred rear aperture has no polygons)
+  return r;
 }
 
 const optics::PlacedLens& PlacedRealisticCamera::lensAt(double lambda_nm) const {
@@ -396,9 +384,7 @@ std::optional<CameraRay> PlacedRealisticCamera::generateRay(const CameraSample& 
   const Vec2 film = filmPoint(sample.film_raster);
   const Vec3 p = filmToLens(film);
   const SamplingRegion region = samplingRegion(film);
-  const Vec2 q = region.polygon ? region.polygon->sample(sample.lens)
-                                : region.centre + sampling::sampleUniformDiskConcentric(sample.lens) *
-                                                      region.disc_radius;
+  const Vec2 q = region.sample(sample.lens);
   const Vec3 to = planePoint(q) - p;
   const double r2 = dot(to, to);
   const Vec3 dir = to / std::sqrt(r2);

@@ -87,13 +87,7 @@ class PlacedRealisticCamera final : public Camera {
   /// What a film point (the image surface's frame, mm) samples on the plane z = samplingPlaneZ
   /// of the rear surface's frame: the disc of disc_radius about its axis, or the polygon when
   /// given.
-  struct SamplingRegion {
-    double disc_radius = 0;
-    Vec2 centre{};  ///< the disc's (the rear aperture's centre)
-    std::optional<PlacedPolygon> polygon;
-    double area() const;
-    bool holds(Vec2 q) const;
-  };
+  using SamplingRegion = PupilRegion;
   SamplingRegion samplingRegion(Vec2 film) const;
   double samplingPlaneZ_mm() const { return z_near_; }
   /// The exit-pupil bounds (empty without them).

@@ -578,14 +578,24 @@ LensPrescription parseLensJson(std::string_view text, const std::string& path,
               "database");
 }
 
-std::string writeLensJson(const LensPrescription& p) {
+namespace {
+
+// The coaxial formats (lensim JSON, .dat) place rotationally symmetric surfaces on one axis.
+void refuseNonCoaxial(const LensPrescription& p, const char* format) {
   if (p.noncoaxial_loc)
-    throw Error(*p.noncoaxial_loc, fmt::format("{}: a lens with {} cannot be written as a "
-                                               "lensim lens file (it places rotationally "
-                                               "symmetric surfaces on one axis)",
+    throw Error(*p.noncoaxial_loc, fmt::format("{}: a lens with {} cannot be written as {} (it "
+                                               "places rotationally symmetric surfaces on one "
+                                               "axis)",
                                                p.noncoaxial_reason,
                                                firstGrating(p) ? "a diffraction grating"
-                                                               : "tilted or decentred surfaces"));
+                                                               : "tilted or decentred surfaces",
+                                               format));
+}
+
+}  // namespace
+
+std::string writeLensJson(const LensPrescription& p) {
+  refuseNonCoaxial(p, "a lensim lens file");
   if (p.floating_focus)
     throw Error(p.floating_focus->loc, "a lens with floating focus (Zemax focus positions whose "
                                        "gaps move at different rates) cannot be written as a "
@@ -658,13 +668,7 @@ std::string writeLensJson(const LensPrescription& p) {
 }
 
 std::string writeLensDat(const LensPrescription& p) {
-  if (p.noncoaxial_loc)
-    throw Error(*p.noncoaxial_loc, fmt::format("{}: a lens with {} cannot be written as a "
-                                               "lensim lens file (it places rotationally "
-                                               "symmetric surfaces on one axis)",
-                                               p.noncoaxial_reason,
-                                               firstGrating(p) ? "a diffraction grating"
-                                                               : "tilted or decentred surfaces"));
+  refuseNonCoaxial(p, "a .dat file");
   std::string out =
       fmt::format("# {}\n# converted by lensim from {} ({})\n", p.name, p.path, p.format);
   out +=
