@@ -22,6 +22,7 @@
 #include "lensim/optics/placed_lens.h"
 #include "lensim/scene/description.h"
 #include "lensim/util/error.h"
+#include "cli_run.h"
 #include "test_paths.h"
 
 using namespace lensim;
@@ -303,6 +304,21 @@ TEST(CylinderSqap, ARectangleBeyondTheCurvedDirectionIsRefused) {
     EXPECT_EQ(e.loc().line, 89) << e.what();
     EXPECT_NE(std::string(e.what()).find("not defined"), std::string::npos) << e.what();
   }
+}
+
+// `lens draw` of the cylinder: its x-z section has no power, so only the y-z section is drawn,
+// with a note (it used to fail with "the lens is afocal").
+TEST(CylinderSqap, DrawnInItsCurvedSection) {
+  const std::string out =
+      (std::filesystem::temp_directory_path() / "lensim_cylinder_draw.svg").string();
+  std::filesystem::remove(out);
+  const test::CliResult r =
+      test::runLensim("lens draw " + zmxPath("optiland/thorlabs_lj1598l1.zmx") + " -o " + out);
+  EXPECT_EQ(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("the x-z section has no optical power"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(1 lens)"), std::string::npos) << r.out;
+  EXPECT_NE(slurp(out).find("y-z section"), std::string::npos);
+  std::filesystem::remove(out);
 }
 
 // The realistic camera through the off-axis mirror: its image lies beside the mirror, inside the

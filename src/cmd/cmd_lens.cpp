@@ -592,10 +592,18 @@ int runDraw(const LensArgs& common, const DrawArgs& args) {
       }
       // Anamorphic: the y-z and x-z sections, each as the rotational lens whose meridional rays
       // are the lens's rays in that plane (a biconic's or toroid's section profile), with the
-      // same film plane.
+      // same film plane. A section without power (a cylinder's flat one) has no focus to draw
+      // bundles to: it is left out, and the note says so.
       for (bool x_section : {false, true}) {
         LensPrescription sec =
             x_section ? xSection(fl.lens->prescription()) : ySection(fl.lens->prescription());
+        const LensSystem probe(sec);
+        if (std::abs(systemMatrix(probe, 0, probe.surfaceCount() - 1).c) < 1e-12) {
+          logInfo(fmt::format("{}: the {} section has no optical power (a cylindrical lens's "
+                              "flat section): only the other section is drawn",
+                              path, x_section ? "x-z" : "y-z"));
+          continue;
+        }
         sec.name += x_section ? " (x-z section)" : " (y-z section)";
         LensSetup setup;
         setup.film_distance_mm = fl.lens->filmDistance_mm();
