@@ -669,35 +669,20 @@ LensPrescription applyVariables(const std::vector<Variable>& vars, LensPrescript
   return p;
 }
 
-SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double lambda_nm,
-                            double primary_nm, int rings) {
-  const FocusedLens fl = evaluationLens(p);
-  const LensSystem prim = fl.lens->atWavelength(primary_nm);
-  const ParaxialData pp = computeParaxial(prim);
-  const FieldBundle beam = fieldBundle(prim, pp, field_deg);
-  const LensSystem lens = fl.lens->atWavelength(lambda_nm);
-  auto trace = [&](Vec2 offset) {
-    return lens.tracer().traceFromScene(beam.sceneRay(offset), TraceOptions{false});
-  };
-  auto reaches = [](const TraceResult& r) { return r.ok() && r.ray.direction.z > 0; };
-  // The beam: the paraxial entrance pupil, less the rays this wavelength cannot pass.
-  const double radius = pp.entrance_pupil_diameter_mm / 2;
+SpotQuadratic beamSpot(double pupil_radius_mm, double field_deg, int rings, const LandFn& land) {
+  Vec2 hit, slope;
   const FieldBundle::PupilRegion region = passingPupil(
-      radius, [&](Vec2 o) { return reaches(trace(o)); }, field_deg);
+      pupil_radius_mm, [&](Vec2 o) { return land(o, hit, slope); }, field_deg);
   const bool cut = region.radius.size() != 4;
-  const double film_z = lens.filmZ_mm();
   // Weighted moments of the hit (x, y) and of the slopes (u, v) = d(x, y)/dz.
   double sw = 0, sx = 0, sy = 0, su = 0, sv = 0, sxx = 0, sxu = 0, suu = 0;
   for (const PupilPoint& q : hexapolarPupil(region, rings)) {
-    const TraceResult r = trace(q.offset_mm);
     // In a cut beam a point may fall where the boundary bends in between two azimuths: left out.
-    if (!reaches(r) && cut) continue;
-    if (!reaches(r))
+    if (!land(q.offset_mm, hit, slope)) {
+      if (cut) continue;
       throw Error(fmt::format("a ray of the {} deg beam does not reach the film", field_deg));
-    const double t = (film_z - r.ray.origin.z) / r.ray.direction.z;
-    const double x = r.ray.origin.x + r.ray.direction.x * t, y = r.ray.origin.y + r.ray.direction.y * t;
-    const double u = r.ray.direction.x / r.ray.direction.z, v = r.ray.direction.y / r.ray.direction.z;
-    const double w = q.weight;
+    }
+    const double x = hit.x, y = hit.y, u = slope.x, v = slope.y, w = q.weight;
     sw += w, sx += w * x, sy += w * y, su += w * u, sv += w * v;
     sxx += w * (x * x + y * y), sxu += w * (x * u + y * v), suu += w * (u * u + v * v);
   }
@@ -708,6 +693,28 @@ SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double 
   out.b = sxu / sw - (sx * su + sy * sv) / (sw * sw);
   out.c = std::max(0.0, suu / sw - (su * su + sv * sv) / (sw * sw));
   return out;
+}
+
+SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double lambda_nm,
+                            double primary_nm, int rings) {
+  const FocusedLens fl = evaluationLens(p);
+  const LensSystem prim = fl.lens->atWavelength(primary_nm);
+  const ParaxialData pp = computeParaxial(prim);
+  const FieldBundle beam = fieldBundle(prim, pp, field_deg);
+  const LensSystem lens = fl.lens->atWavelength(lambda_nm);
+  const double film_z = lens.filmZ_mm();
+  return beamSpot(pp.entrance_pupil_diameter_mm / 2, field_deg, rings,
+                  [&](Vec2 offset, Vec2& hit, Vec2& slope) {
+                    const TraceResult r = lens.tracer().traceFromScene(beam.sceneRay(offset),
+                                                                       TraceOptions{false});
+                    if (!r.ok() || !(r.ray.direction.z > 0)) return false;
+                    const double t = (film_z - r.ray.origin.z) / r.ray.direction.z;
+                    hit = {r.ray.origin.x + r.ray.direction.x * t,
+                           r.ray.origin.y + r.ray.direction.y * t};
+                    slope = {r.ray.direction.x / r.ray.direction.z,
+                             r.ray.direction.y / r.ray.direction.z};
+                    return true;
+                  });
 }
 
 double rmsSpot_mm(const LensPrescription& p, double field_deg, double lambda_nm, double primary_nm,

@@ -18,6 +18,7 @@
 
 #include "lensim/optics/prescription.h"
 #include "lensim/util/error.h"
+#include "lensim/util/vec.h"
 
 namespace lensim::optics::design {
 
@@ -162,6 +163,13 @@ struct SpotQuadratic {
 };
 SpotQuadratic spotQuadratic(const LensPrescription& p, double field_deg, double lambda_nm,
                             double primary_nm, int rings);
+/// The spot quadratic of a beam traced by `land`: the ray through the pupil-plane point at
+/// `offset` from the chief ray's, its hit on the film and its slopes d(x, y)/dz there; false
+/// when it does not reach the film. The beam is the part of the paraxial entrance pupil
+/// (`pupil_radius_mm`) whose rays land (passingPupil, image_quality.h), sampled by `rings`
+/// hexapolar rings; the coaxial and the placed evaluations trace it their own way.
+using LandFn = std::function<bool(Vec2 offset, Vec2& hit, Vec2& slope)>;
+SpotQuadratic beamSpot(double pupil_radius_mm, double field_deg, int rings, const LandFn& land);
 
 struct DesignResult {
   LensPrescription lens;

@@ -6,7 +6,6 @@
 
 #include "lensim/optics/coordinate_break.h"
 #include "lensim/optics/design/image_quality.h"
-#include "lensim/optics/field_rays.h"
 #include "lensim/optics/frame.h"
 #include "lensim/optics/paraxial.h"
 #include "lensim/optics/placed_lens.h"
@@ -105,37 +104,11 @@ PlacedBeam placedBeam(const LensPrescription& p, double field_deg, double lambda
     slope = {dl.x / dl.z, dl.y / dl.z};
     return true;
   };
-  auto lost = [&] {
-    return Error(fmt::format("a ray of the {} deg beam does not reach the film", field_deg));
-  };
   // The beam: the coaxial twin's paraxial entrance pupil, less the rays that cannot pass.
-  const FieldBundle::PupilRegion region = passingPupil(
-      pp.entrance_pupil_diameter_mm / 2,
-      [&](Vec2 o) {
-        Vec2 h, s;
-        return traceTo(o, h, s);
-      },
-      field_deg);
-  const bool cut = region.radius.size() != 4;
-  double sw = 0, sx = 0, sy = 0, su = 0, sv = 0, sxx = 0, sxu = 0, suu = 0;
-  for (const PupilPoint& q : hexapolarPupil(region, rings)) {
-    Vec2 h, s;
-    // In a cut beam a point may fall where the boundary bends in between two azimuths: left out.
-    if (!traceTo(q.offset_mm, h, s)) {
-      if (cut) continue;
-      throw lost();
-    }
-    const double w = q.weight;
-    sw += w, sx += w * h.x, sy += w * h.y, su += w * s.x, sv += w * s.y;
-    sxx += w * (h.x * h.x + h.y * h.y), sxu += w * (h.x * s.x + h.y * s.y);
-    suu += w * (s.x * s.x + s.y * s.y);
-  }
-  if (!(sw > 0)) throw lost();
   PlacedBeam out;
-  out.spot.a = std::max(0.0, sxx / sw - (sx * sx + sy * sy) / (sw * sw));
-  out.spot.b = sxu / sw - (sx * su + sy * sv) / (sw * sw);
-  out.spot.c = std::max(0.0, suu / sw - (su * su + sv * sv) / (sw * sw));
-  if (!traceTo({0, 0}, out.chief, out.chief_slope)) throw lost();
+  out.spot = beamSpot(pp.entrance_pupil_diameter_mm / 2, field_deg, rings, traceTo);
+  if (!traceTo({0, 0}, out.chief, out.chief_slope))
+    throw Error(fmt::format("the chief ray of the {} deg beam does not reach the film", field_deg));
   return out;
 }
 
