@@ -27,6 +27,9 @@ namespace lensim::camera {
 
 /// Wavelengths per camera path (render::kSpectrumSamples; the renderer checks they agree).
 inline constexpr int kCameraWavelengths = 4;
+/// The wavelengths renders trace, nm (render::kLambdaMin_nm .. kLambdaMax_nm; the renderer
+/// checks they agree): the range a camera's lens must refract and bound.
+inline constexpr double kRenderedMin_nm = 360, kRenderedMax_nm = 830;
 
 /// What the renderer hands a camera for one sample.
 struct CameraSample {

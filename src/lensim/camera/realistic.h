@@ -219,7 +219,8 @@ class RealisticCamera final : public Camera {
   /// The media's indices (after each surface) every kIndexStep_nm from kIndexFrom_nm, for
   /// re-indexing the tracer by linear interpolation (error < 2e-8, below the float tracer's
   /// rounding; exact evaluation of the formulas costs most of a dispersive camera sample).
-  static constexpr double kIndexFrom_nm = 360, kIndexTo_nm = 830, kIndexStep_nm = 0.25;
+  static constexpr double kIndexFrom_nm = kRenderedMin_nm, kIndexTo_nm = kRenderedMax_nm,
+                          kIndexStep_nm = 0.25;
   std::vector<double> index_table_;
   /// The float tracer at the wavelength, a per-thread copy re-indexed for it.
   const optics::LensTracer<float>& tracerAt(double lambda_nm) const;

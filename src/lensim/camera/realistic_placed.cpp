@@ -90,9 +90,9 @@ PlacedRealisticCamera::PlacedRealisticCamera(RealisticSettings settings, optics:
   path_ = p.path;
   logDiagnostics(lens_.diagnostics());
   {
-    // The wavelengths renders trace (render/spectra/spectrum.h's kLambdaMin_nm-kLambdaMax_nm).
     std::vector<Diagnostic> ranges;
-    optics::checkRenderGlassRanges(lens_.glasses(), 360, 830, path_, &ranges);
+    optics::checkRenderGlassRanges(lens_.glasses(), kRenderedMin_nm, kRenderedMax_nm, path_,
+                                   &ranges);
     logDiagnostics(ranges);
   }
   image_frame_ = p.image_frame;
@@ -343,10 +343,9 @@ Vec3 PlacedRealisticCamera::planePoint(Vec2 q) const {
 
 void PlacedRealisticCamera::buildBounds(Vec2 reach) {
   // A dispersive lens's beam moves with the wavelength: bound it at the rendered range's ends
-  // (the renderer's hero wavelengths, render/spectra/spectrum.h) and the primary wavelength.
-  constexpr double kLambdaMin_nm = 360, kLambdaMax_nm = 830;
+  // and the primary wavelength.
   std::vector<double> lambdas{lens_.wavelength_nm()};
-  if (dispersive_) lambdas.insert(lambdas.end(), {kLambdaMin_nm, kLambdaMax_nm});
+  if (dispersive_) lambdas.insert(lambdas.end(), {kRenderedMin_nm, kRenderedMax_nm});
   bounds_ = PlacedPupilBounds(
       reach, lambdas,
       [&](Vec2 film) {

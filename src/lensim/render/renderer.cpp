@@ -435,6 +435,8 @@ class TileRenderer {
     cs_[k].film_raster = {x + 0.5 + fs_[k].p.x, y + 0.5 + fs_[k].p.y};
     lambdas_[k] = SampledWavelengths::sampleVisible(u_lambda);
     static_assert(camera::kCameraWavelengths == kSpectrumSamples);
+    static_assert(camera::kRenderedMin_nm == kLambdaMin_nm &&
+                  camera::kRenderedMax_nm == kLambdaMax_nm);
     for (int c = 0; c < kSpectrumSamples; ++c) cs_[k].lambda_nm[size_t(c)] = lambdas_[k].lambda(c);
     cs_[k].pixel_centre = {x + 0.5, y + 0.5};
     // bdpt keeps a dispersive lens's hero wavelength only (as pbrt-v4 does): its light
